@@ -1,0 +1,5 @@
+//! Benchmark (divan). Run: `cargo bench --bench krl_parse`.
+
+fn main() {
+    divan::main();
+}

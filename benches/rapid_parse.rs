@@ -1,0 +1,5 @@
+//! Benchmark (divan). Run: `cargo bench --bench rapid_parse`.
+
+fn main() {
+    divan::main();
+}

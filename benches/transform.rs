@@ -1,0 +1,5 @@
+//! Benchmark (divan). Run: `cargo bench --bench transform`.
+
+fn main() {
+    divan::main();
+}

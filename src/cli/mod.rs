@@ -1,0 +1,34 @@
+//! Subcommand implementations. Library calls only; printing and `anyhow` live here.
+
+pub mod inspect;
+pub mod track;
+pub mod transform;
+
+use std::process::ExitCode;
+
+/// The documented exit codes (DESIGN.md §5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Exit {
+    /// 0: everything went well.
+    Ok = 0,
+    /// 1: `check` or `--check` found something.
+    Findings = 1,
+    /// 2: a usage or input error.
+    Usage = 2,
+    /// 3: a transform was refused.
+    Refused = 3,
+}
+
+impl From<Exit> for ExitCode {
+    fn from(e: Exit) -> ExitCode {
+        ExitCode::from(e as u8)
+    }
+}
+
+/// A closed stdout (`trackfix inspect … | head`) is not an error.
+pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}

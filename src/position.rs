@@ -1,0 +1,331 @@
+//! The position model shared by RAPID and KRL.
+//!
+//! A language's parser finds every Cartesian or joint target (declared or inline), every work
+//! object / base / tool declaration and every `Offs`/`RelTool` call, and describes each with the
+//! byte span of each numeric field. Transforms read values from here and write [`Edit`]s to
+//! exactly those spans; nothing else in the file is touched.
+//!
+//! [`Edit`]: crate::syntax::Edit
+
+use std::path::PathBuf;
+
+use crate::geometry::{Pose, abb_quat, kuka_abc};
+use crate::syntax::{Diagnostic, LineIndex, NumLit, Span};
+use nalgebra::{Isometry3, Translation3};
+
+/// Values at or above this are RAPID/KRL "not connected" external axes (`9E9`, `9E+09`).
+pub const NOT_CONNECTED: f64 = 8.9e9;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Language {
+    Rapid,
+    Krl,
+}
+
+/// What a position literal is, by its declared or inferred data type.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PositionKind {
+    /// RAPID `robtarget`.
+    Robtarget,
+    /// RAPID `jointtarget`.
+    Jointtarget,
+    /// KRL `E6POS`.
+    E6Pos,
+    /// KRL `POS`.
+    Pos,
+    /// KRL `FRAME` used as a motion target.
+    Frame,
+    /// KRL `E6AXIS`.
+    E6Axis,
+    /// KRL `AXIS`.
+    Axis,
+}
+
+impl PositionKind {
+    /// The name `inspect` prints (RAPID lower case, KRL upper case, as each language writes it).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            PositionKind::Robtarget => "robtarget",
+            PositionKind::Jointtarget => "jointtarget",
+            PositionKind::E6Pos => "E6POS",
+            PositionKind::Pos => "POS",
+            PositionKind::Frame => "FRAME",
+            PositionKind::E6Axis => "E6AXIS",
+            PositionKind::Axis => "AXIS",
+        }
+    }
+
+    /// Cartesian targets are transformed; joint targets never are (DESIGN.md §4).
+    pub fn is_cartesian(self) -> bool {
+        matches!(
+            self,
+            PositionKind::Robtarget | PositionKind::E6Pos | PositionKind::Pos | PositionKind::Frame
+        )
+    }
+}
+
+/// A numeric literal inside a position, with the span of its text.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NumField {
+    pub span: Span,
+    pub lit: NumLit,
+}
+
+impl NumField {
+    pub fn value(&self) -> f64 {
+        self.lit.value()
+    }
+}
+
+/// A KUKA Status or Turn as written: decimal (`S 6`) or a binary string (`S 'B110'`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BitField {
+    /// The whole token, quotes included for the binary form.
+    pub span: Span,
+    pub value: u32,
+    /// `Some(n)` for `'B…'` with n digits, `None` for a decimal integer.
+    pub binary_digits: Option<usize>,
+}
+
+impl BitField {
+    /// The text for `new` in the same style, or `None` if the value is unchanged.
+    pub fn rewrite(&self, new: u32) -> Option<String> {
+        if new == self.value {
+            return None;
+        }
+        Some(match self.binary_digits {
+            Some(n) => format!("'B{new:0n$b}'"),
+            None => new.to_string(),
+        })
+    }
+}
+
+/// An orientation as written: ABB quaternion or KUKA A, B, C. A field that is not a numeric
+/// literal (an expression) is `None`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Orientation {
+    /// `[q1, q2, q3, q4]`, scalar first.
+    Quaternion([Option<NumField>; 4]),
+    /// `A, B, C` in degrees.
+    Abc([Option<NumField>; 3]),
+}
+
+/// The Cartesian part of a target or frame: translation and orientation fields.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CartesianFields {
+    /// `x, y, z` in mm.
+    pub trans: [Option<NumField>; 3],
+    /// `None` where the literal does not write one (a partial KRL aggregate).
+    pub orient: Option<Orientation>,
+}
+
+fn values<const N: usize>(fields: &[Option<NumField>; N]) -> Option<[f64; N]> {
+    let mut out = [0.0; N];
+    for (o, f) in out.iter_mut().zip(fields) {
+        *o = f.as_ref()?.value();
+    }
+    Some(out)
+}
+
+impl CartesianFields {
+    /// `[x, y, z]` if all three are numeric literals.
+    pub fn translation(&self) -> Option<[f64; 3]> {
+        values(&self.trans)
+    }
+
+    /// The pose, if every field is a numeric literal (and the quaternion is not zero).
+    pub fn pose(&self) -> Option<Pose> {
+        let [x, y, z] = self.translation()?;
+        let rotation = match self.orient.as_ref()? {
+            Orientation::Quaternion(q) => abb_quat(values(q)?)?,
+            Orientation::Abc(abc) => {
+                let [a, b, c] = values(abc)?;
+                kuka_abc(a, b, c)
+            }
+        };
+        Some(Isometry3::from_parts(Translation3::new(x, y, z), rotation))
+    }
+}
+
+/// A robot configuration as written.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Config {
+    /// ABB `[cf1, cf4, cf6, cfx]`.
+    Abb([Option<NumField>; 4]),
+    /// KUKA Status and Turn.
+    Kuka {
+        status: Option<BitField>,
+        turn: Option<BitField>,
+    },
+    /// Not written (POS without S/T, FRAME, joint targets).
+    None,
+}
+
+/// Where and how a target is used by the motion instructions that reference it.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Usage {
+    /// The RAPID work object, or the KRL base (`"BASE_DATA[3]"`), of the first use. `None` if
+    /// never used or unresolved.
+    pub wobj: Option<String>,
+    /// The tool of the first use.
+    pub tool: Option<String>,
+    /// Further distinct work objects the target is used with. Non-empty means the target is
+    /// used with two work objects and cannot be transformed unambiguously.
+    pub other_wobjs: Vec<String>,
+    /// The target is a stationary-tool point (KRL `IPO_FRAME #TCP`, RAPID `robhold TRUE`).
+    pub stationary_tool: bool,
+    /// 1-based lines of the instructions that use it.
+    pub lines: Vec<usize>,
+}
+
+/// One target: a declaration (`name = Some`) or an inline literal in an instruction.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Position {
+    /// Declared name; `None` for an inline literal.
+    pub name: Option<String>,
+    pub kind: PositionKind,
+    /// The literal (aggregate) itself.
+    pub span: Span,
+    /// 1-based line and column of the literal's start.
+    pub line: usize,
+    pub column: usize,
+    /// Translation and orientation, for Cartesian kinds.
+    pub cartesian: Option<CartesianFields>,
+    /// Robot axis values of joint kinds (`rax_1..rax_6`, `A1..A6`), degrees.
+    pub joints: Vec<Option<NumField>>,
+    pub config: Config,
+    /// External axes as written: RAPID `eax_a..eax_f`, KRL `E1..E6` (shorter if fewer are
+    /// written).
+    pub extax: Vec<Option<NumField>>,
+    pub usage: Usage,
+}
+
+/// A skid value read from a target's external axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Skid {
+    At(f64),
+    /// `9E9`: the axis is not connected.
+    NotConnected,
+    /// The axis is not written, or is an expression.
+    Missing,
+}
+
+impl Position {
+    /// The value of external axis `index` (0 = `eax_a` / `E1`) as a skid position.
+    pub fn skid(&self, index: usize) -> Skid {
+        match self.extax.get(index).and_then(Option::as_ref) {
+            Some(f) if f.value().abs() >= NOT_CONNECTED => Skid::NotConnected,
+            Some(f) => Skid::At(f.value()),
+            None => Skid::Missing,
+        }
+    }
+
+    /// A human name for messages: the declared name or `inline <kind>`.
+    pub fn label(&self) -> String {
+        match &self.name {
+            Some(n) => n.clone(),
+            None => format!("inline {}", self.kind.as_str()),
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum FrameKind {
+    /// RAPID `wobjdata`.
+    WorkObject,
+    /// RAPID `tooldata` or KRL `TOOL_DATA[n]`.
+    Tool,
+    /// KRL `BASE_DATA[n]`.
+    Base,
+}
+
+/// A declared work object, tool or base.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameDecl {
+    /// `wobj_car`, `tGun`, `BASE_DATA[3]`, `TOOL_DATA[1]`.
+    pub name: String,
+    pub kind: FrameKind,
+    pub span: Span,
+    pub line: usize,
+    /// RAPID wobjdata `robhold` (the robot holds the work object: stationary tool).
+    pub robhold: Option<bool>,
+    /// RAPID wobjdata `ufprog` (`FALSE`: the user frame is moved by a mechanical unit).
+    pub ufprog: Option<bool>,
+    /// RAPID wobjdata `ufmec`.
+    pub ufmec: Option<String>,
+    /// The frame itself: RAPID wobj `uframe`, tool `tframe`; KRL `BASE_DATA`/`TOOL_DATA` value.
+    pub frame: Option<CartesianFields>,
+    /// RAPID wobj `oframe` (object frame in the user frame).
+    pub oframe: Option<CartesianFields>,
+}
+
+impl FrameDecl {
+    /// The frame in world (work objects: `uframe · oframe`), if every field is numeric.
+    pub fn pose(&self) -> Option<Pose> {
+        let frame = self.frame.as_ref()?.pose()?;
+        match &self.oframe {
+            Some(o) => Some(frame * o.pose()?),
+            None => Some(frame),
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OffsetKind {
+    /// `Offs(p, dx, dy, dz)`: object-frame offsets.
+    Offs,
+    /// `RelTool(p, dx, dy, dz \Rx \Ry \Rz)`: tool-frame offsets and rotations.
+    RelTool,
+}
+
+/// An `Offs` or `RelTool` call with numeric offset fields.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OffsetCall {
+    pub kind: OffsetKind,
+    pub span: Span,
+    pub line: usize,
+    /// The first argument's text (usually a target name).
+    pub target: String,
+    /// `dx, dy, dz` (mm); `None` where not a numeric literal.
+    pub delta: [Option<NumField>; 3],
+    /// `\Rx, \Ry, \Rz` (degrees) of `RelTool`; `None` where absent or not a numeric literal.
+    pub rot: [Option<NumField>; 3],
+}
+
+/// One parsed source file and everything trackfix understands in it.
+#[derive(Clone, Debug)]
+pub struct ParsedFile {
+    pub path: PathBuf,
+    pub language: Language,
+    pub source: Vec<u8>,
+    pub lines: LineIndex,
+    pub positions: Vec<Position>,
+    pub frames: Vec<FrameDecl>,
+    pub offsets: Vec<OffsetCall>,
+    /// Constructs the grammar does not know, kept verbatim.
+    pub opaque: usize,
+    /// Parse errors, unknown constructs and lints, located in this file.
+    pub diagnostics: Vec<Diagnostic>,
+    /// `print(parse(source)) == source`.
+    pub round_trip: bool,
+}
+
+impl ParsedFile {
+    /// `path:line:col` of a byte offset.
+    pub fn location(&self, offset: usize) -> String {
+        let (l, c) = self.lines.line_col(offset);
+        format!("{}:{l}:{c}", self.path.display())
+    }
+
+    /// Renders a diagnostic about this file.
+    pub fn render(&self, d: &Diagnostic) -> String {
+        d.render(&self.path.display().to_string(), &self.source, &self.lines)
+    }
+}
+
+/// A program: one RAPID module, or a KRL `.src`/`.dat` pair (either may be alone).
+#[derive(Clone, Debug)]
+pub struct Program {
+    pub files: Vec<ParsedFile>,
+}

@@ -1,0 +1,89 @@
+//! Byte offset → line and column, for diagnostics.
+
+use super::Span;
+
+/// Start offsets of every line of a source.
+///
+/// A line ends at `\n`, `\r\n` or a bare `\r`: robot controllers and old editors write all three,
+/// sometimes in one file, and a diagnostic must point at the line a user sees in their editor.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LineIndex {
+    starts: Vec<usize>,
+    len: usize,
+}
+
+impl LineIndex {
+    pub fn new(src: &[u8]) -> LineIndex {
+        let mut starts = vec![0];
+        let mut i = 0;
+        while i < src.len() {
+            match src[i] {
+                b'\n' => starts.push(i + 1),
+                b'\r' => {
+                    if src.get(i + 1) == Some(&b'\n') {
+                        i += 1;
+                    }
+                    starts.push(i + 1);
+                }
+                _ => {}
+            }
+            i += 1;
+        }
+        LineIndex {
+            starts,
+            len: src.len(),
+        }
+    }
+
+    /// Number of lines (a final newline opens an empty last line).
+    pub fn line_count(&self) -> usize {
+        self.starts.len()
+    }
+
+    /// 1-based line and 1-based byte column of `offset` (clamped to the source).
+    pub fn line_col(&self, offset: usize) -> (usize, usize) {
+        let offset = offset.min(self.len);
+        let line = match self.starts.binary_search(&offset) {
+            Ok(i) => i,
+            Err(i) => i - 1,
+        };
+        (line + 1, offset - self.starts[line] + 1)
+    }
+
+    /// 1-based line of `offset`.
+    pub fn line(&self, offset: usize) -> usize {
+        self.line_col(offset).0
+    }
+
+    /// The span of 1-based `line` without its terminator; empty past the end.
+    pub fn line_span(&self, src: &[u8], line: usize) -> Span {
+        let Some(&start) = self.starts.get(line.wrapping_sub(1)) else {
+            return Span::new(self.len, self.len);
+        };
+        let mut end = self.starts.get(line).copied().unwrap_or(self.len);
+        while end > start && matches!(src.get(end - 1), Some(b'\n' | b'\r')) {
+            end -= 1;
+        }
+        Span::new(start, end)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mixed_terminators() {
+        let src = b"a\r\nbb\rccc\nd";
+        let idx = LineIndex::new(src);
+        assert_eq!(idx.line_count(), 4);
+        assert_eq!(idx.line_col(0), (1, 1));
+        assert_eq!(idx.line_col(3), (2, 1));
+        assert_eq!(idx.line_col(6), (3, 1));
+        assert_eq!(idx.line_col(8), (3, 3));
+        assert_eq!(idx.line_col(10), (4, 1));
+        assert_eq!(idx.line_span(src, 2).slice(src), b"bb");
+        assert_eq!(idx.line_span(src, 4).slice(src), b"d");
+        assert_eq!(idx.line_span(src, 9).slice(src), b"");
+    }
+}
