@@ -7,6 +7,7 @@
 //!   targets, frames and offsets found in a program ([`position`]);
 //! - [`geometry`]: poses, one constructor per rotation convention, rigid fits;
 //! - [`track`]: the track model from laser-tracker measurements to a profile;
+//! - [`report`]: what `inspect` and `check` say about programs;
 //! - [`transform`]: `correct`, `zero`, `mirror`, `transfer` as edits to programs.
 //!
 //! The library never prints and never panics on input.
@@ -16,6 +17,7 @@ pub mod krl;
 pub mod position;
 pub mod program;
 pub mod rapid;
+pub mod report;
 pub mod syntax;
 pub mod track;
 pub mod transform;

@@ -1,0 +1,1 @@
+//! What `inspect` and `check` report about programs: positions, summaries, lints.
