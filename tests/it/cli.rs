@@ -1,7 +1,6 @@
 //! The command line as a user meets it: help, exit codes, input errors, `inspect`/`check` over
 //! the samples.
 
-use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Runs the built `trackfix` binary from the package root.
@@ -19,26 +18,6 @@ pub fn stdout(o: &Output) -> String {
 
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// Every file below `dir` (relative to the package root) with one of `exts`, sorted.
-pub fn sample_files(dir: &str, exts: &[&str]) -> Vec<PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut out: Vec<PathBuf> = walkdir::WalkDir::new(root.join(dir))
-        .sort_by_file_name()
-        .into_iter()
-        .filter_map(Result::ok)
-        .filter(|e| e.file_type().is_file())
-        .filter(|e| {
-            e.path()
-                .extension()
-                .and_then(|x| x.to_str())
-                .is_some_and(|x| exts.contains(&x.to_ascii_lowercase().as_str()))
-        })
-        .map(|e| e.path().strip_prefix(root).unwrap_or(e.path()).to_owned())
-        .collect();
-    out.sort();
-    out
 }
 
 #[test]
