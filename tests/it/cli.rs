@@ -72,3 +72,15 @@ fn binary_and_xml_program_files_are_skipped_with_a_note() {
     assert!(err.contains("RobotStudio program file"), "{err}");
     assert!(stdout(&o).contains("2 skipped"), "{}", stdout(&o));
 }
+
+#[test]
+fn man_page_and_completions_come_from_the_same_definitions() {
+    let man = trackfix(&["man"]);
+    assert!(man.status.success());
+    let page = stdout(&man);
+    assert!(page.starts_with(".ie"), "roff expected:\n{page}");
+    assert!(page.contains("transfer"), "{page}");
+    let bash = trackfix(&["completions", "bash"]);
+    assert!(bash.status.success());
+    assert!(stdout(&bash).contains("trackfix__subcmd__transfer"));
+}
