@@ -37,7 +37,10 @@ fn module(mb: usize) -> Vec<u8> {
         );
         if i % 10 == 0 {
             let _ = write!(moves, "    ! group {}\r\n", i / 10);
-            let _ = write!(moves, "    MoveL Offs(p{i},0,0,100), v1000, z10, tGun\\WObj:=wCar;\r\n");
+            let _ = write!(
+                moves,
+                "    MoveL Offs(p{i},0,0,100), v1000, z10, tGun\\WObj:=wCar;\r\n"
+            );
         }
         let _ = write!(moves, "    MoveL p{i}, v1000, z10, tGun\\WObj:=wCar;\r\n");
         i += 1;
@@ -50,14 +53,12 @@ fn module(mb: usize) -> Vec<u8> {
 #[divan::bench(args = [1, 10, 50], sample_count = 5, sample_size = 1)]
 fn parse_and_print(bencher: Bencher, mb: usize) {
     let src = module(mb);
-    bencher
-        .counter(BytesCount::new(src.len()))
-        .bench(|| {
-            let parse = trackfix::rapid::parse_tree(black_box(&src));
-            let mut sink = std::io::sink();
-            let _ = parse.tree.write_to(&src, &mut sink);
-            black_box(parse.tree.nodes.len())
-        });
+    bencher.counter(BytesCount::new(src.len())).bench(|| {
+        let parse = trackfix::rapid::parse_tree(black_box(&src));
+        let mut sink = std::io::sink();
+        let _ = parse.tree.write_to(&src, &mut sink);
+        black_box(parse.tree.nodes.len())
+    });
 }
 
 #[divan::bench(args = [1, 10, 50], sample_count = 3, sample_size = 1)]
