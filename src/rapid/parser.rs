@@ -1479,7 +1479,7 @@ impl<'a, 's> Parser<'a, 's> {
                 return Ok(id);
             }
             let id = self.arena.open(ExprKind::Compound, t.start);
-            let inner = self.unary()?;
+            let inner = self.nested_unary()?;
             self.arena.link(id, NONE, inner);
             self.arena.close(id, self.prev_end);
             return Ok(id);
@@ -1487,12 +1487,23 @@ impl<'a, 's> Parser<'a, 's> {
         if self.at_kw(b"NOT") {
             self.bump();
             let id = self.arena.open(ExprKind::Compound, t.start);
-            let inner = self.unary()?;
+            let inner = self.nested_unary()?;
             self.arena.link(id, NONE, inner);
             self.arena.close(id, self.prev_end);
             return Ok(id);
         }
         self.postfix()
+    }
+
+    /// A unary operand under another unary operator, counted against the nesting limit.
+    fn nested_unary(&mut self) -> PResult<u32> {
+        if self.depth > MAX_DEPTH {
+            return Err(self.error("fewer stacked unary operators"));
+        }
+        self.depth += 1;
+        let r = self.unary();
+        self.depth -= 1;
+        r
     }
 
     /// `postfix = primary { "{" expr { "," expr } "}" | "." ident }`

@@ -799,3 +799,59 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn hostile_nesting_is_reported_not_overflowed() {
+    let inputs: Vec<Vec<u8>> = vec![
+        [
+            b"MODULE m\nPROC p()\nx:=".as_slice(),
+            &b"-".repeat(200_000),
+            b"1;\nENDPROC\nENDMODULE",
+        ]
+        .concat(),
+        [
+            b"MODULE m\nPROC p()\nx:=".as_slice(),
+            &b"NOT ".repeat(50_000),
+            b"a;\nENDPROC\nENDMODULE",
+        ]
+        .concat(),
+        [
+            b"MODULE m\nCONST num a:=".as_slice(),
+            &b"[".repeat(200_000),
+            b";\nENDMODULE",
+        ]
+        .concat(),
+        [
+            b"MODULE m\nCONST num a:=".as_slice(),
+            &b"(".repeat(200_000),
+            b";\nENDMODULE",
+        ]
+        .concat(),
+        [
+            b"MODULE m\nPROC p()\n".as_slice(),
+            &b"IF a THEN\n".repeat(20_000),
+            b"ENDPROC\nENDMODULE",
+        ]
+        .concat(),
+        [
+            b"MODULE m\nPROC p()\n".as_slice(),
+            &b"WHILE TRUE DO ".repeat(20_000),
+            b"ENDPROC\nENDMODULE",
+        ]
+        .concat(),
+        [
+            b"MODULE m\nPROC p()\nf ".as_slice(),
+            &b"g(".repeat(100_000),
+            b";\nENDPROC\nENDMODULE",
+        ]
+        .concat(),
+    ];
+    for src in inputs {
+        let f = assert_sound(&src);
+        assert!(
+            f.diagnostics.iter().any(|d| d.severity == Severity::Error),
+            "{:?}",
+            &f.diagnostics[..f.diagnostics.len().min(3)]
+        );
+    }
+}
