@@ -167,14 +167,22 @@ impl<'l> Extractor<'l> {
         (n.kind == ExprKind::Aggregate).then(|| arena.children(id).count())
     }
 
-    /// The kind of target an aggregate literal is, by shape: robtarget
-    /// `[[3],[4],[4],[6]]`, jointtarget `[[6],[6]]`.
+    /// The kind of target an aggregate literal is, by shape: robtarget `[[3],[4],[4],eax]`,
+    /// jointtarget `[[6],eax]`, where `eax` is an aggregate or any expression.
     fn literal_kind(arena: &Arena, id: u32) -> Option<PositionKind> {
-        let parts: Vec<u32> = arena.children(id).take(5).collect();
-        let lens: Vec<Option<usize>> = parts.iter().map(|&c| Self::agg_len(arena, c)).collect();
-        match lens.as_slice() {
-            [Some(3), Some(4), Some(4), Some(6)] => Some(PositionKind::Robtarget),
-            [Some(6), Some(6)] => Some(PositionKind::Jointtarget),
+        let mut lens = [None; 5];
+        let mut count = 0;
+        for (slot, c) in lens.iter_mut().zip(arena.children(id)) {
+            *slot = Some(Self::agg_len(arena, c));
+            count += 1;
+        }
+        // The external axes may be a variable (generators write `rdkExtJoints`), so only the
+        // robot part decides the shape.
+        match (count, lens) {
+            (4, [Some(Some(3)), Some(Some(4)), Some(Some(4)), Some(_), _]) => {
+                Some(PositionKind::Robtarget)
+            }
+            (2, [Some(Some(6)), Some(_), ..]) => Some(PositionKind::Jointtarget),
             _ => None,
         }
     }

@@ -855,3 +855,23 @@ fn hostile_nesting_is_reported_not_overflowed() {
         );
     }
 }
+
+#[test]
+fn inline_targets_with_external_axes_in_a_variable() {
+    let src = b"MODULE m\nPROC p()\n  MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],rdkExtJoints],v100,z1,tool0;\n  MoveAbsJ [[0,0,0,0,90,0],rdkExtJoints],v100,z1,tool0;\n  p1 := [[1,2,3],[1,0,0,0]];\nENDPROC\nENDMODULE\n".to_vec();
+    let f = rapid::parse_file(Path::new("x.mod"), src);
+    let kinds: Vec<PositionKind> = f.positions.iter().map(|p| p.kind).collect();
+    assert_eq!(
+        kinds,
+        vec![PositionKind::Robtarget, PositionKind::Jointtarget]
+    );
+    assert!(
+        f.positions
+            .iter()
+            .all(|p| p.extax.is_empty() && p.skid(0) == Skid::Missing)
+    );
+    assert_eq!(
+        f.positions[0].cartesian.as_ref().unwrap().translation(),
+        Some([1.0, 2.0, 3.0])
+    );
+}
