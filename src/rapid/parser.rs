@@ -42,6 +42,8 @@ pub enum Stmt {
     /// A procedure call; `args` is an [`ExprKind::Args`] node, `name` the routine name (for a
     /// late-binding call, the `%expr%` text).
     Call { name: Span, args: u32 },
+    /// `target := value;` (`target` is the whole left side, e.g. `p.trans.x`).
+    Assign { target: Span, value: u32 },
     /// Any other statement: its expressions are still scanned for inline targets and offsets.
     Other,
 }
@@ -551,13 +553,21 @@ impl<'a, 's> Parser<'a, 's> {
     /// `file = [ BOM ] { header_line } { module | item } EOF`
     fn file(&mut self) {
         let mut outside_warned = false;
+        // The `%%%` line that opened a header block not yet closed.
+        let mut open_header: Option<Token> = None;
         loop {
             match self.tok.kind {
                 TokenKind::Eof => break,
                 TokenKind::HeaderLine => {
-                    let start = self.tok.start;
+                    let t = self.tok;
+                    if self.text(t).starts_with(b"%%%") {
+                        open_header = match open_header {
+                            Some(_) => None,
+                            None => Some(t),
+                        };
+                    }
                     self.bump();
-                    self.leaf(NodeKind::Header, start);
+                    self.leaf(NodeKind::Header, t.start);
                 }
                 _ if self.at_kw(b"MODULE") => self.module(),
                 _ => {
@@ -576,6 +586,17 @@ impl<'a, 's> Parser<'a, 's> {
                     self.item(true);
                 }
             }
+        }
+        if let Some(t) = open_header {
+            self.diagnostics.push(
+                Diagnostic::error(
+                    t.span(),
+                    "`%%%` header block without its closing `%%%` line",
+                )
+                .with_hint(
+                    "close the header with a line `%%%`; everything after it was read as header",
+                ),
+            );
         }
     }
 
@@ -1008,9 +1029,10 @@ impl<'a, 's> Parser<'a, 's> {
         let target = self.postfix()?;
         if self.tok.kind == TokenKind::Assign {
             self.bump();
-            self.expr()?;
+            let value = self.expr()?;
             self.expect_punct(b';', "`;` at the end of the assignment")?;
-            return Ok((NodeKind::Assign, Stmt::Other));
+            let target = self.arena.get(target).map_or(t.span(), |n| n.span());
+            return Ok((NodeKind::Assign, Stmt::Assign { target, value }));
         }
         if self.arena.get(target).map(|n| n.kind) != Some(ExprKind::Ident) {
             return Err(self.error("`:=` in the assignment"));

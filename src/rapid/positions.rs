@@ -65,6 +65,8 @@ pub struct Extractor<'l> {
     offsets: Vec<OffsetCall>,
     symbols: Vec<Symbol>,
     uses: Vec<CallUse>,
+    /// Whole-value assignments `name := [...]` (a frame set at run time).
+    assigned: Vec<Span>,
 }
 
 /// What [`Extractor::finish`] returns.
@@ -104,6 +106,7 @@ impl<'l> Extractor<'l> {
             offsets: Vec::new(),
             symbols: Vec::new(),
             uses: Vec::new(),
+            assigned: Vec::new(),
         }
     }
 
@@ -555,6 +558,29 @@ impl<'l> Extractor<'l> {
                 }
             }
         }
+        // A frame given a whole new value in a routine: the declaration may not be what runs.
+        for &sp in &self.assigned {
+            let k = key_into(&mut buf, src, sp);
+            let Some(f) = self.frames.iter().find(|f| f.name.eq_ignore_ascii_case(k)) else {
+                continue;
+            };
+            let what = match f.kind {
+                FrameKind::Tool => "tool",
+                _ => "work object",
+            };
+            diagnostics.push(
+                Diagnostic::warning(
+                    sp,
+                    format!(
+                        "{what} `{}` is given a new value here; trackfix uses its declaration on line {}",
+                        f.name, f.line
+                    ),
+                )
+                .with_hint(
+                    "declare the frame with the value the program runs with, or give it in the cell file",
+                ),
+            );
+        }
         for p in &self.positions {
             if p.usage.other_wobjs.is_empty() {
                 continue;
@@ -694,6 +720,19 @@ impl StatementSink for Extractor<'_> {
                     }
                 }
                 self.uses.push(u);
+            }
+            Stmt::Assign { target, value } => {
+                self.scan(src, arena, true);
+                if arena
+                    .get(value)
+                    .is_some_and(|v| v.kind == ExprKind::Aggregate)
+                    && target
+                        .slice(src)
+                        .iter()
+                        .all(|b| b.is_ascii_alphanumeric() || *b == b'_')
+                {
+                    self.assigned.push(target);
+                }
             }
             Stmt::Other => {
                 self.scan(src, arena, true);
