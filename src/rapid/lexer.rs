@@ -505,6 +505,47 @@ mod tests {
     }
 
     #[test]
+    fn header_only_at_line_start_and_dos_eof_is_whitespace() {
+        use TokenKind::*;
+        // `%%%` after code is punctuation, not a header; indented `%%%` opens one.
+        let k: Vec<TokenKind> = tokenize(b"a %%%\n  %%%\n x\n%%%\x1A\x0C")
+            .into_iter()
+            .map(|t| t.kind)
+            .collect();
+        assert_eq!(
+            k,
+            vec![
+                Ident, Whitespace, Punct, Punct, Punct, Newline, Whitespace, HeaderLine, Newline,
+                HeaderLine, Newline, HeaderLine
+            ]
+        );
+        assert_eq!(kinds(b"\x1A\x0C\t ")[0].0, Whitespace);
+        assert_eq!(tokenize(b"\x1A\x0C\t ").len(), 1);
+    }
+
+    #[test]
+    fn keywords_are_flagged_in_any_case_names_are_not() {
+        let src = b"EndProc moveL iF Tool0 elseif x";
+        let flags: Vec<bool> = tokenize(src)
+            .into_iter()
+            .filter(|t| t.kind == TokenKind::Ident)
+            .map(|t| t.keyword)
+            .collect();
+        assert_eq!(flags, vec![true, false, true, false, true, false]);
+    }
+
+    #[test]
+    fn a_sign_is_its_own_token_and_exponents_need_digits() {
+        let src = b"-1.5E-3 +.5 2e+ 7.";
+        let texts: Vec<String> = tokenize(src)
+            .into_iter()
+            .filter(|t| t.kind != TokenKind::Whitespace)
+            .map(|t| crate::syntax::latin1(t.text(src)))
+            .collect();
+        assert_eq!(texts, vec!["-", "1.5E-3", "+", ".5", "2", "e", "+", "7."]);
+    }
+
+    #[test]
     fn unknown_bytes_are_kept() {
         let src = b"a \xC3\xA9 \x01b";
         assert_eq!(concat(src), src);
