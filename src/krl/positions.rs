@@ -35,6 +35,8 @@ pub(crate) enum Setting {
     Tcp(bool),
     /// `FDAT_ACT = FP1`: base, tool and IPO mode of that FDAT.
     Fdat(String),
+    /// `FDAT_ACT = {TOOL_NO 1, BASE_NO 2, IPO_FRAME #BASE}` written inline.
+    FdatValue(Fdat),
     BaseOfFdat(String),
     ToolOfFdat(String),
     TcpOfFdat(String),
@@ -440,7 +442,7 @@ pub(crate) fn extract(
                 }
                 let with = with
                     .iter()
-                    .filter_map(|(l, r)| setting(src, lines, l, r, None))
+                    .filter_map(|(l, r)| setting(src, l, r))
                     .collect();
                 out.facts.events.push(Event::Motion {
                     span: stmt.span,
@@ -489,20 +491,12 @@ fn bas_call(src: &[u8], call: &Expr) -> Option<Setting> {
 }
 
 /// `$BASE = …`, `$TOOL = …`, `$IPO_MODE = …`, `FDAT_ACT = …` (also inside `WITH`).
-/// `inline_base` names a `$BASE={…}` frame declared on that line.
-fn setting(
-    src: &[u8],
-    lines: &LineIndex,
-    target: &Expr,
-    value: &Expr,
-    inline_base: Option<&str>,
-) -> Option<Setting> {
-    let _ = lines;
+/// Aggregate values of `$BASE`/`$TOOL` are handled by [`assignment`], which names them.
+fn setting(src: &[u8], target: &Expr, value: &Expr) -> Option<Setting> {
     let fdat_of = || fdat_argument(src, value);
     match upper(src, target.span).as_str() {
-        "$BASE" => Some(match (&value.kind, inline_base) {
-            (ExprKind::Aggregate(_), Some(n)) => Setting::Base(FrameRef::Named(n.to_owned())),
-            (ExprKind::Call(..), _) => fdat_of()
+        "$BASE" => Some(match &value.kind {
+            ExprKind::Call(..) => fdat_of()
                 .map(Setting::BaseOfFdat)
                 .unwrap_or(Setting::Base(FrameRef::Unknown)),
             _ => Setting::Base(frame_ref(src, value)),
@@ -520,6 +514,7 @@ fn setting(
         },
         "FDAT_ACT" => match &value.kind {
             ExprKind::Name => Some(Setting::Fdat(upper(src, value.span))),
+            ExprKind::Aggregate(agg) => Some(Setting::FdatValue(fdat(src, agg))),
             _ => None,
         },
         _ => None,
@@ -535,11 +530,17 @@ fn assignment(
     out: &mut Extracted,
 ) {
     let ExprKind::Aggregate(agg) = &value.kind else {
-        if let Some(s) = setting(src, lines, target, value, None) {
+        if let Some(s) = setting(src, target, value) {
             out.facts.events.push(Event::Set(s));
         }
         return;
     };
+    if upper(src, target.span) == "FDAT_ACT" {
+        if let Some(s) = setting(src, target, value) {
+            out.facts.events.push(Event::Set(s));
+        }
+        return;
+    }
     if let Some((kind, n)) = data_element(src, target) {
         let prefix = if kind == FrameKind::Base {
             "BASE_DATA"
@@ -662,6 +663,11 @@ impl State {
             Setting::Base(r) => self.base = Some(r.clone()),
             Setting::Tool(r) => self.tool = Some(r.clone()),
             Setting::Tcp(t) => self.tcp = *t,
+            Setting::FdatValue(f) => {
+                self.base = Some(data(f.base));
+                self.tool = Some(data(f.tool));
+                self.tcp = f.tcp.unwrap_or(false);
+            }
             Setting::Fdat(name) => {
                 let f = fdats.get(name);
                 self.base = Some(data(f.and_then(|f| f.base)));
@@ -825,6 +831,46 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::Path;
+
+    #[test]
+    fn inline_frames_and_inline_fdat_resolve() {
+        let src = b"DEF r()\n  $BASE = {FRAME: X 100, Y 0, Z 0, A 0, B 0, C 0}\n  $TOOL = {FRAME: X 0, Y 0, Z 200, A 0, B 0, C 0}\n  LIN {X 10, Y 20, Z 30, A 0, B 90, C 0, E1 500} C_DIS\n  FDAT_ACT= {TOOL_NO 11, BASE_NO 1, IPO_FRAME #TCP}\n  BAS(#PTP_PARAMS,100)\n  PTP {X 1,Y 2,Z 3}\n  $BASE = EK(MACHINE_DEF[2].ROOT, MACHINE_DEF[2].MECH_TYPE, BASE_DATA[1])\n  LIN {X 5}\nEND\n";
+        let f = crate::krl::parse_file(Path::new("r.src"), src.to_vec());
+        let names: Vec<_> = f.frames.iter().map(|d| (d.name.as_str(), d.kind)).collect();
+        assert_eq!(
+            names,
+            [
+                ("$BASE (line 2)", FrameKind::Base),
+                ("$TOOL (line 3)", FrameKind::Tool)
+            ]
+        );
+        let usage: Vec<_> = f
+            .positions
+            .iter()
+            .map(|p| {
+                (
+                    p.usage.wobj.as_deref(),
+                    p.usage.tool.as_deref(),
+                    p.usage.stationary_tool,
+                )
+            })
+            .collect();
+        assert_eq!(
+            usage,
+            [
+                (Some("$BASE (line 2)"), Some("$TOOL (line 3)"), false),
+                (Some("BASE_DATA[1]"), Some("TOOL_DATA[11]"), true),
+                (None, Some("TOOL_DATA[11]"), true),
+            ]
+        );
+        let unresolved: Vec<_> = f
+            .diagnostics
+            .iter()
+            .map(|d| (f.lines.line(d.span.start), d.message.as_str()))
+            .collect();
+        assert_eq!(unresolved, [(9, "the base of this motion is not resolved")]);
+    }
 
     #[test]
     fn bit_strings() {

@@ -545,3 +545,79 @@ proptest! {
         }
     }
 }
+
+/// Real programs, not committed (their text is not ours): point `TRACKFIX_KRL_CORPUS` at a
+/// directory of `.src`/`.dat`/`.sub` files and run
+/// `TRACKFIX_KRL_CORPUS=dir cargo test --test it krl::real_corpus -- --ignored --nocapture`.
+/// Every file must round-trip; every `E6POS`/`POS`/`E6AXIS`/`AXIS` declared with a value must
+/// be found.
+#[test]
+#[ignore = "needs TRACKFIX_KRL_CORPUS"]
+fn real_corpus() {
+    let Ok(dir) = std::env::var("TRACKFIX_KRL_CORPUS") else {
+        return;
+    };
+    let mut files: Vec<PathBuf> = walk(Path::new(&dir));
+    files.sort();
+    for path in files {
+        let src = std::fs::read(&path).unwrap();
+        let declared = src
+            .split(|&b| b == b'\n' || b == b'\r')
+            .filter(|l| {
+                let l = String::from_utf8_lossy(l).to_ascii_uppercase();
+                let l = l.trim_start();
+                let l = l.strip_prefix("DECL ").unwrap_or(l);
+                let l = l.strip_prefix("GLOBAL ").unwrap_or(l);
+                ["E6POS ", "POS ", "E6AXIS ", "AXIS "]
+                    .iter()
+                    .any(|t| l.starts_with(t))
+                    && l.contains('=')
+            })
+            .count();
+        let file = krl::parse_file(&path, src);
+        let program = krl::load_program(&path, &LoadOptions::default()).unwrap();
+        let found = file
+            .positions
+            .iter()
+            .filter(|p| p.name.is_some() && p.kind != PositionKind::Frame)
+            .count();
+        let frames_used = program
+            .files
+            .iter()
+            .flat_map(|f| &f.positions)
+            .filter(|p| p.kind == PositionKind::Frame)
+            .count();
+        let errors: Vec<String> = file
+            .diagnostics
+            .iter()
+            .filter(|d| d.severity >= Severity::Warning)
+            .map(|d| file.render(d))
+            .collect();
+        println!(
+            "{}: round_trip={} declared={declared} found={found} frames_used={frames_used} bases/tools={} opaque={} diagnostics={}",
+            path.display(),
+            file.round_trip,
+            file.frames.len(),
+            file.opaque,
+            errors.len()
+        );
+        for e in errors.iter().take(5) {
+            println!("{e}");
+        }
+        assert!(file.round_trip);
+        assert_eq!(declared, found, "{}", path.display());
+    }
+}
+
+fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(walk(&p));
+        } else if trackfix::program::language_of(&p) == Some(trackfix::position::Language::Krl) {
+            out.push(p);
+        }
+    }
+    out
+}
