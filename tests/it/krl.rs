@@ -553,6 +553,7 @@ proptest! {
 /// be found.
 #[test]
 #[ignore = "needs TRACKFIX_KRL_CORPUS"]
+#[allow(clippy::print_stdout)] // the report is the point of this manual check
 fn real_corpus() {
     let Ok(dir) = std::env::var("TRACKFIX_KRL_CORPUS") else {
         return;
