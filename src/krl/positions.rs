@@ -226,46 +226,43 @@ struct Fields {
 fn read_fields(src: &[u8], agg: &Aggregate) -> Fields {
     let mut f = Fields::default();
     for field in &agg.fields {
-        let name = upper(src, field.name);
+        // Field names are compared as bytes: a 50 MB `.dat` has millions of them.
+        let name = field.name.slice(src);
         let v = &field.value;
-        let idx = |prefix: &str| -> Option<usize> {
-            let d = name.strip_prefix(prefix)?;
-            match d.parse::<usize>() {
-                Ok(n @ 1..=6) if d.len() == 1 => Some(n - 1),
-                _ => None,
-            }
+        let upper0 = name.first().map_or(0, u8::to_ascii_uppercase);
+        let digit = match name {
+            [_, d @ b'1'..=b'6'] => Some(usize::from(d - b'1')),
+            _ => None,
         };
-        match name.as_str() {
-            "X" | "Y" | "Z" => {
-                let i = usize::from(name.as_bytes().first().map_or(0, |b| b - b'X'));
-                if let Some(slot) = f.xyz.get_mut(i) {
+        match (name.len(), upper0, digit) {
+            (1, b'X' | b'Y' | b'Z', _) => {
+                if let Some(slot) = f.xyz.get_mut(usize::from(upper0 - b'X')) {
                     *slot = num_field(src, v);
                 }
                 f.cartesian_written = true;
             }
-            "A" | "B" | "C" => {
-                let i = usize::from(name.as_bytes().first().map_or(0, |b| b - b'A'));
-                if let Some(slot) = f.abc.get_mut(i) {
+            (1, b'A' | b'B' | b'C', _) => {
+                if let Some(slot) = f.abc.get_mut(usize::from(upper0 - b'A')) {
                     *slot = num_field(src, v);
                 }
                 f.abc_written = true;
                 f.cartesian_written = true;
             }
-            "S" => f.s = bit_field(src, v),
-            "T" => f.t = bit_field(src, v),
-            _ => {
-                if let Some(i) = idx("A") {
-                    if let Some(slot) = f.axes.get_mut(i) {
-                        *slot = num_field(src, v);
-                    }
-                    f.joints_written = true;
-                } else if let Some(i) = idx("E") {
-                    if let Some(slot) = f.ext.get_mut(i) {
-                        *slot = num_field(src, v);
-                    }
-                    f.ext_written = f.ext_written.max(i + 1);
+            (1, b'S', _) => f.s = bit_field(src, v),
+            (1, b'T', _) => f.t = bit_field(src, v),
+            (2, b'A', Some(i)) => {
+                if let Some(slot) = f.axes.get_mut(i) {
+                    *slot = num_field(src, v);
                 }
+                f.joints_written = true;
             }
+            (2, b'E', Some(i)) => {
+                if let Some(slot) = f.ext.get_mut(i) {
+                    *slot = num_field(src, v);
+                }
+                f.ext_written = f.ext_written.max(i + 1);
+            }
+            _ => {}
         }
     }
     f
@@ -739,7 +736,10 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         .map(|f| vec![false; f.candidates.len()])
         .collect();
     for fi in 0..files.len() {
-        let events = facts.get(fi).map(|f| f.events.clone()).unwrap_or_default();
+        let events = facts
+            .get_mut(fi)
+            .map(|f| std::mem::take(&mut f.events))
+            .unwrap_or_default();
         let mut state = State::default();
         for ev in &events {
             match ev {
