@@ -43,6 +43,24 @@ fn analyse(path: &Path, source: Vec<u8>) -> (ParsedFile, positions::Facts) {
     let lines = LineIndex::new(&source);
     let round_trip = parse.tree.print(&source) == source;
     let mut diagnostics = parse.diagnostics;
+    if !parse
+        .tree
+        .nodes
+        .iter()
+        .any(|n| n.kind == tree::NodeKind::RoutineStart)
+    {
+        let at = parse
+            .tree
+            .tokens
+            .iter()
+            .find(|t| !t.kind.is_trivia())
+            .map_or(crate::syntax::Span::new(0, 0), |t| t.span());
+        diagnostics.insert(
+            0,
+            crate::syntax::Diagnostic::warning(at, "no `DEF` or `DEFDAT` in this file")
+                .with_hint("a KRL module is `DEF name( )` … `END` or `DEFDAT name` … `ENDDAT`, after its `&` header lines"),
+        );
+    }
     let extracted = positions::extract(&source, &parse.tree, &lines, &mut diagnostics);
     let file = ParsedFile {
         path: path.to_owned(),

@@ -60,6 +60,11 @@ const DECL_KEYWORDS: &[&str] = &[
     "STRUC", "ENUM", "SIGNAL", "EXT", "EXTFCT", "EXTP", "EXTFCTP", "IMPORT", "CONST",
 ];
 
+/// Types whose declarations may omit `DECL` (a `.dat` writes `E6POS XP1={…}`, `INT I`).
+const PREDEFINED_TYPES: &[&str] = &[
+    "INT", "REAL", "BOOL", "CHAR", "FRAME", "POS", "E6POS", "AXIS", "E6AXIS", "SIGNAL",
+];
+
 const BINARY_WORDS: &[&str] = &["AND", "OR", "EXOR", "B_AND", "B_OR", "B_EXOR"];
 
 /// Up to 16 bytes of a keyword candidate, upper-cased, without allocating.
@@ -808,7 +813,20 @@ impl<'a> LineParser<'a> {
             return Ok((NodeKind::Label, depth, None));
         }
         if next.is_some_and(|t| t.kind == TokenKind::Ident) {
-            return decl(c).map(|k| (NodeKind::Declaration, depth, Some(k)));
+            let ty = Word::of(head.text(src));
+            let k = decl(c)?;
+            // KRL lets `DECL` be omitted for predefined types only; a misspelt keyword
+            // (`LIX XP1`) would otherwise pass silently as a declaration.
+            if !PREDEFINED_TYPES.contains(&ty.as_str()) {
+                self.out.diagnostics.push(
+                    Diagnostic::warning(
+                        head.span(),
+                        format!("`{}` is not a statement or a predefined type", c.text(head)),
+                    )
+                    .with_hint("write `DECL TYPE name` for a user-defined type, or check the keyword's spelling"),
+                );
+            }
+            return Ok((NodeKind::Declaration, depth, Some(k)));
         }
         if is_punct(src, next, b"=") || is_punct(src, next, b"[") || is_punct(src, next, b".") {
             let target = c.postfix()?;

@@ -535,13 +535,36 @@ proptest! {
             let prefix = format!("{}:", path.display());
             prop_assert!(rendered.starts_with(&prefix));
         }
-        // Damage the parser notices is an opaque node or a located error, never silence
-        // about a lost statement: a statement count that changed by more than the edited
-        // line shows up as diagnostics or opaque nodes.
-        let errors = file.diagnostics.iter().filter(|d| d.severity == Severity::Error).count();
-        if file.opaque == 0 && errors == 0 && !truncate {
-            // The byte landed somewhere harmless (a comment, a digit, whitespace).
-            prop_assert!(file.positions.len() + 1 >= original.positions.len());
+        // Cutting a sample inside a routine (DEF … END, DEFDAT … ENDDAT), or before its first
+        // routine, always leaves a trace: an opaque line, a located error, or a warning.
+        let tree = krl::parse(&original.source).tree;
+        let mut routines = Vec::new();
+        let mut open = None;
+        for node in &tree.nodes {
+            let span = tree.node_span(node);
+            match node.kind {
+                krl::tree::NodeKind::RoutineStart => open = Some(span.start),
+                krl::tree::NodeKind::RoutineEnd => {
+                    if let Some(start) = open.take() {
+                        let end = span.start
+                            + tree.tokens[node.first as usize..node.end as usize]
+                                .iter()
+                                .rev()
+                                .find(|t| !t.kind.is_trivia())
+                                .map_or(0, |t| t.end as usize - span.start);
+                        routines.push((start, end));
+                    }
+                }
+                _ => {}
+            }
+        }
+        let cut_at = src.len();
+        let inside = routines.iter().any(|&(a, b)| a < cut_at && cut_at < b)
+            || routines.first().is_none_or(|&(a, _)| cut_at <= a);
+        if truncate && inside {
+            let noticed = file.opaque > 0
+                || file.diagnostics.iter().any(|d| d.severity >= Severity::Warning);
+            prop_assert!(noticed, "cut at {} of {}", cut_at, path.display());
         }
     }
 }
