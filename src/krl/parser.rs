@@ -1088,6 +1088,38 @@ mod tests {
     }
 
     #[test]
+    fn control_structures_stay_in_sync() {
+        let src = "GLOBAL DEFFCT REAL half(X:IN)\r\n  DECL REAL X\r\n  RETURN X/2\r\nENDFCT\r\n\
+DEF cell( )\r\n  SPLINE WITH $ACC = {CP 2.0}\r\n    SPL XP1\r\n    SLIN XP2\r\n    SCIRC XP3, XP4\r\n  ENDSPLINE\r\n\
+  SWITCH N\r\n  CASE 1, 2\r\n    PTP_REL {A1 10}\r\n  DEFAULT\r\n    EXIT\r\n  ENDSWITCH\r\n\
+  REPEAT\r\n    N = N + 1\r\n  UNTIL (N > 3) OR $IN[2]\r\n  WHILE $IN[1] == TRUE\r\n    WAIT SEC 0.1\r\n  ENDWHILE\r\n\
+  TIME_BLOCK START\r\n  CONST_VEL START = 100 ONSTART\r\n  ANIN ON A = 1.0 * $ANIN[1]\r\n  PULSE($OUT[3], TRUE, 0.5)\r\n\
+  ;FOLD PTP P1  Vel= 100 % PDAT1;%{PE}%R 4.1.15,%MKUKATPBASIS,%CMOVE,%VPTP,%P 1:PTP, 2:P1, 3:, 5:100, 7:PDAT1\r\n\
+  $BWDSTART = FALSE\r\n  PDAT_ACT=PPDAT1\r\n  BAS (#PTP_DAT )\r\n  FDAT_ACT=FP1\r\n  BAS (#FRAMES )\r\n  PTP  XP1\r\n  ;ENDFOLD\r\n\
+  IF half(4.0) > 1 THEN\r\n    GOTO done\r\n  ENDIF\r\n  done:\r\n  HALT\r\nEND\r\n";
+        let p = parse(src.as_bytes());
+        assert!(p.diagnostics.is_empty(), "{:?}", p.diagnostics);
+        assert_eq!(p.opaque, 0);
+        assert_eq!(p.tree.print(src.as_bytes()), src.as_bytes());
+        let depth_of = |text: &str| {
+            p.tree
+                .nodes
+                .iter()
+                .find(|n| {
+                    let span = p.tree.node_span(n);
+                    String::from_utf8_lossy(span.slice(src.as_bytes())).contains(text)
+                })
+                .map(|n| (n.kind, n.depth))
+        };
+        assert_eq!(depth_of("SPL XP1"), Some((NodeKind::Motion, 2)));
+        assert_eq!(depth_of("CASE 1"), Some((NodeKind::BlockMiddle, 1)));
+        assert_eq!(depth_of("PTP_REL"), Some((NodeKind::Motion, 2)));
+        assert_eq!(depth_of("UNTIL"), Some((NodeKind::BlockClose, 1)));
+        assert_eq!(depth_of("done:"), Some((NodeKind::Label, 1)));
+        assert_eq!(depth_of("ENDFCT"), Some((NodeKind::RoutineEnd, 0)));
+    }
+
+    #[test]
     fn block_mismatch_is_reported() {
         let p = parse(b"DEF a()\nIF X THEN\nENDFOR\nEND\nENDIF\n");
         let msgs: Vec<_> = p.diagnostics.iter().map(|d| d.message.as_str()).collect();

@@ -56,6 +56,12 @@ pub(crate) enum Event {
     /// A `DEF`/`DEFFCT`: program order starts again.
     Reset,
     Set(Setting),
+    /// `XPICK = XP3`: until reassigned, a motion to `XPICK` moves to (a copy of) `XP3`, so
+    /// `XP3` is used with that motion's base and tool.
+    Alias {
+        name: String,
+        source: String,
+    },
     Motion {
         span: Span,
         line: usize,
@@ -529,6 +535,16 @@ fn assignment(
     let ExprKind::Aggregate(agg) = &value.kind else {
         if let Some(s) = setting(src, target, value) {
             out.facts.events.push(Event::Set(s));
+        } else if matches!(target.kind, ExprKind::Name | ExprKind::Index(..))
+            && matches!(value.kind, ExprKind::Name | ExprKind::Index(..))
+        {
+            let name = upper(src, target.span);
+            if !name.starts_with('$') {
+                out.facts.events.push(Event::Alias {
+                    name,
+                    source: upper(src, value.span),
+                });
+            }
         }
         return;
     };
@@ -741,9 +757,16 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             .map(|f| std::mem::take(&mut f.events))
             .unwrap_or_default();
         let mut state = State::default();
+        let mut aliases: HashMap<&str, &str> = HashMap::new();
         for ev in &events {
             match ev {
-                Event::Reset => state = State::default(),
+                Event::Reset => {
+                    state = State::default();
+                    aliases.clear();
+                }
+                Event::Alias { name, source } => {
+                    aliases.insert(name, source);
+                }
                 Event::Set(s) => state.apply(s, &fdats),
                 Event::Motion {
                     span,
@@ -770,8 +793,18 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                 }
                             }
                             Ref::Named(n) => {
-                                for &(f2, cand, i) in by_name.get(n).map_or(&[][..], Vec::as_slice)
-                                {
+                                // The name itself, then what it was last copied from.
+                                let mut chain = vec![n.as_str()];
+                                while chain.len() < 8 {
+                                    match chain.last().and_then(|c| aliases.get(c)) {
+                                        Some(next) if !chain.contains(next) => chain.push(next),
+                                        _ => break,
+                                    }
+                                }
+                                let hits = chain.iter().flat_map(|c| {
+                                    by_name.get(*c).map_or(&[][..], Vec::as_slice).iter()
+                                });
+                                for &(f2, cand, i) in hits {
                                     let p = if cand {
                                         if let Some(u) =
                                             used_candidates.get_mut(f2).and_then(|v| v.get_mut(i))
@@ -832,6 +865,16 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
 mod tests {
     use super::*;
     use std::path::Path;
+
+    #[test]
+    fn copies_carry_the_use_to_their_source() {
+        let src = b"DEF a()\n  DECL E6POS XP1={X 1,Y 2,Z 3,A 0,B 0,C 0}\n  DECL E6POS XCOPY\n  $BASE=BASE_DATA[4]\n  XCOPY = XP1\n  XCOPY.Z = XCOPY.Z + 100\n  LIN XCOPY\nEND\n";
+        let f = crate::krl::parse_file(Path::new("a.src"), src.to_vec());
+        assert_eq!(f.positions.len(), 1);
+        let u = &f.positions[0].usage;
+        assert_eq!(u.wobj.as_deref(), Some("BASE_DATA[4]"));
+        assert_eq!(u.lines, [7]);
+    }
 
     #[test]
     fn inline_frames_and_inline_fdat_resolve() {

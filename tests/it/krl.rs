@@ -628,6 +628,16 @@ fn real_corpus() {
         for e in errors.iter().take(5) {
             println!("{e}");
         }
+        for p in program.files.iter().flat_map(|f| &f.positions).take(12) {
+            println!(
+                "    {} {} base={:?} tool={:?} lines={:?}",
+                p.kind.as_str(),
+                p.label(),
+                p.usage.wobj,
+                p.usage.tool,
+                p.usage.lines
+            );
+        }
         assert!(file.round_trip);
         assert_eq!(declared, found, "{}", path.display());
     }
