@@ -112,3 +112,11 @@ fn src_positions(bencher: Bencher, mb: usize) {
             assert!(file.round_trip);
         });
 }
+
+#[divan::bench(args = SIZES, sample_count = 5, sample_size = 1)]
+fn dat_lex_only(bencher: Bencher, mb: usize) {
+    let input = dat(mb);
+    bencher
+        .counter(divan::counter::BytesCount::new(input.len()))
+        .bench(|| trackfix::krl::lexer::lex(black_box(input)).len());
+}

@@ -39,10 +39,13 @@ pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
 
 /// Parses a file and extracts what it holds, before resolution.
 fn analyse(path: &Path, source: Vec<u8>) -> (ParsedFile, positions::Facts) {
-    let parse = parser::parse(&source);
     let lines = LineIndex::new(&source);
+    let mut extractor = positions::Extractor::new(&source, &lines);
+    let parse = parser::parse_with(&source, &mut |stmt| extractor.statement(&stmt));
+    let (extracted, notes) = extractor.finish();
     let round_trip = parse.tree.print(&source) == source;
     let mut diagnostics = parse.diagnostics;
+    diagnostics.extend(notes);
     if !parse
         .tree
         .nodes
@@ -61,7 +64,6 @@ fn analyse(path: &Path, source: Vec<u8>) -> (ParsedFile, positions::Facts) {
                 .with_hint("a KRL module is `DEF name( )` … `END` or `DEFDAT name` … `ENDDAT`, after its `&` header lines"),
         );
     }
-    let extracted = positions::extract(&source, &parse.tree, &lines, &mut diagnostics);
     let file = ParsedFile {
         path: path.to_owned(),
         language: Language::Krl,

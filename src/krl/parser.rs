@@ -445,18 +445,32 @@ fn static_kw(w: &str) -> Option<&'static str> {
 }
 
 /// Parser state across lines.
-struct LineParser<'a> {
+struct LineParser<'a, 'k> {
     src: &'a [u8],
     out: Parse,
+    /// Where parsed statements go: kept in the tree by [`parse`], streamed by [`parse_with`].
+    sink: &'k mut dyn FnMut(Stmt),
     stack: Vec<Open>,
     folds: Vec<Span>,
 }
 
-/// Parses a KRL source (rule `file`). Never fails and never panics.
+/// Parses a KRL source (rule `file`) into a tree that keeps its statements. Never fails and
+/// never panics.
 pub fn parse(src: &[u8]) -> Parse {
+    let mut stmts = Vec::new();
+    let mut out = parse_with(src, &mut |s| stmts.push(s));
+    out.tree.stmts = stmts;
+    out
+}
+
+/// Like [`parse`], but hands each statement to `sink` as soon as it is parsed instead of keeping
+/// it in the tree (`tree.stmts` stays empty). Reading positions this way keeps memory at the
+/// size of the tokens: a 50 MB `.dat` holds millions of aggregate fields.
+pub fn parse_with(src: &[u8], sink: &mut dyn FnMut(Stmt)) -> Parse {
     let mut p = LineParser {
         src,
         out: Parse::default(),
+        sink,
         stack: Vec::new(),
         folds: Vec::new(),
     };
@@ -526,7 +540,7 @@ fn line_eol(tokens: &[Token], i: usize, j: usize) -> Span {
     Span::new(at, at)
 }
 
-impl<'a> LineParser<'a> {
+impl<'a> LineParser<'a, '_> {
     /// Rule `trivia_line`: blank, comment, fold lines.
     fn trivia_line(&mut self, toks: &[Token]) -> NodeKind {
         let Some(c) = toks.iter().find(|t| t.kind == TokenKind::Comment) else {
@@ -715,7 +729,7 @@ impl<'a> LineParser<'a> {
         match result {
             Ok((kind, d, stmt)) => {
                 if let Some(kind) = stmt {
-                    self.out.tree.stmts.push(Stmt {
+                    (self.sink)(Stmt {
                         node,
                         span: stmt_span,
                         kind,

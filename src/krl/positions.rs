@@ -8,7 +8,7 @@
 
 use std::collections::HashMap;
 
-use super::tree::{Aggregate, Expr, ExprKind, StmtKind, Tree};
+use super::tree::{Aggregate, Expr, ExprKind, Stmt, StmtKind};
 use crate::position::{
     BitField, CartesianFields, Config, FrameDecl, FrameKind, NumField, Orientation, ParsedFile,
     Position, PositionKind, Usage,
@@ -353,30 +353,40 @@ fn frame_decl(
     }
 }
 
-/// Reads positions, frames and resolution facts from a parsed file. `diagnostics` receives
-/// notes about what is deliberately not a target (relative motions).
-pub(crate) fn extract(
-    src: &[u8],
-    tree: &Tree,
-    lines: &LineIndex,
-    diagnostics: &mut Vec<Diagnostic>,
-) -> Extracted {
-    let mut declared: HashMap<String, PositionKind> = HashMap::new();
-    for stmt in &tree.stmts {
-        if let StmtKind::Decl { type_name, vars } = &stmt.kind
-            && let Some(kind) = positional_type(&upper(src, *type_name))
-        {
-            for v in vars {
-                declared.insert(upper(src, v.name), kind);
-            }
+/// Reads positions, frames and resolution facts from a file's statements, one at a time and in
+/// source order (KRL declares before use, so a declared type is known when its assignments
+/// come).
+pub(crate) struct Extractor<'a> {
+    src: &'a [u8],
+    lines: &'a LineIndex,
+    declared: HashMap<String, PositionKind>,
+    out: Extracted,
+    /// Notes about what is deliberately not a target (relative motions, computed targets).
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+impl<'a> Extractor<'a> {
+    pub fn new(src: &'a [u8], lines: &'a LineIndex) -> Extractor<'a> {
+        Extractor {
+            src,
+            lines,
+            declared: HashMap::new(),
+            out: Extracted {
+                positions: Vec::new(),
+                frames: Vec::new(),
+                facts: Facts::default(),
+            },
+            diagnostics: Vec::new(),
         }
     }
-    let mut out = Extracted {
-        positions: Vec::new(),
-        frames: Vec::new(),
-        facts: Facts::default(),
-    };
-    for stmt in &tree.stmts {
+
+    pub fn finish(self) -> (Extracted, Vec<Diagnostic>) {
+        (self.out, self.diagnostics)
+    }
+
+    pub fn statement(&mut self, stmt: &Stmt) {
+        let (src, lines) = (self.src, self.lines);
+        let out = &mut self.out;
         match &stmt.kind {
             StmtKind::Routine { keyword, .. } => {
                 if !upper(src, *keyword).starts_with("DEFDAT") {
@@ -385,15 +395,19 @@ pub(crate) fn extract(
             }
             StmtKind::Decl { type_name, vars } => {
                 let ty = upper(src, *type_name);
+                let positional = positional_type(&ty);
                 for v in vars {
+                    if let Some(kind) = positional {
+                        self.declared.insert(upper(src, v.name), kind);
+                    }
                     let Some(init) = &v.init else { continue };
                     let ExprKind::Aggregate(agg) = &init.kind else {
                         continue;
                     };
-                    let name = crate::syntax::latin1(v.name.slice(src));
                     if ty == "FDAT" {
                         out.facts.fdats.insert(upper(src, v.name), fdat(src, agg));
-                    } else if let Some(kind) = positional_type(&ty) {
+                    } else if let Some(kind) = positional {
+                        let name = crate::syntax::latin1(v.name.slice(src));
                         let f = read_fields(src, agg);
                         let p = build_position(lines, init.span, kind, Some(name), f);
                         if kind == PositionKind::Frame {
@@ -405,7 +419,7 @@ pub(crate) fn extract(
                 }
             }
             StmtKind::Assign { target, value } => {
-                assignment(src, lines, &declared, target, value, &mut out);
+                assignment(src, lines, &self.declared, target, value, out);
             }
             StmtKind::Call(call) => {
                 if let Some(s) = bas_call(src, call) {
@@ -419,19 +433,19 @@ pub(crate) fn extract(
             } => {
                 let line = lines.line(stmt.span.start);
                 if upper(src, *keyword).ends_with("_REL") {
-                    diagnostics.push(
+                    self.diagnostics.push(
                         Diagnostic::note(
                             stmt.span,
                             "relative motion: its offset is not a target and is left unchanged",
                         )
                         .with_hint("check this motion by hand after a transform"),
                     );
-                    continue;
+                    return;
                 }
                 let mut refs = Vec::new();
                 for t in targets {
                     if !target_refs(src, lines, t, &mut refs, &mut out.positions) {
-                        diagnostics.push(
+                        self.diagnostics.push(
                             Diagnostic::warning(
                                 t.span,
                                 "computed target (geometric operator `:` or an expression): \
@@ -456,7 +470,6 @@ pub(crate) fn extract(
             }
         }
     }
-    out
 }
 
 fn fdat(src: &[u8], agg: &Aggregate) -> Fdat {
