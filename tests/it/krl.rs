@@ -655,3 +655,19 @@ fn walk(dir: &Path) -> Vec<PathBuf> {
     }
     out
 }
+
+/// The tree, one line per node with its block depth, and the diagnostics: a valid file and a
+/// damaged one (rust-analyzer's `test_data/{ok,err}` in small).
+#[test]
+fn tree_dumps() {
+    let ok = std::fs::read(sample("lower_case.src")).unwrap();
+    insta::assert_snapshot!("tree_lower_case", krl::parse(&ok).tree.dump(&ok));
+    let err: &[u8] = b"DEF broken( )\r\n  IF $IN[1] THEN\r\n    LIN {X 10, Y 20 Z 30} C_DIS\r\n    FROB XP1\r\n    S = \"open\r\n  ENDFOR\r\n  WAIT SEC 1\r\n";
+    let file = krl::parse_file(Path::new("broken.src"), err.to_vec());
+    let mut dump = krl::parse(err).tree.dump(err);
+    for d in &file.diagnostics {
+        dump += &file.render(d);
+    }
+    assert!(file.round_trip);
+    insta::assert_snapshot!("tree_broken", dump);
+}
