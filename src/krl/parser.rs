@@ -113,7 +113,13 @@ struct Cursor<'a> {
     pos: usize,
     /// Where "end of statement" is, for messages.
     eol: Span,
+    /// Nesting of parentheses, aggregates and prefix operators: bounded so that a damaged
+    /// file of ten thousand `(` cannot exhaust the stack.
+    depth: u32,
 }
+
+/// Deeper nesting than any real program writes (nested aggregates in `$config.dat` reach 3).
+const MAX_DEPTH: u32 = 200;
 
 impl<'a> Cursor<'a> {
     fn peek(&self) -> Option<&'a Token> {
@@ -248,6 +254,19 @@ impl<'a> Cursor<'a> {
 
     /// Rule `unary`. A sign written directly in front of a number is part of the literal.
     fn unary(&mut self) -> PResult<Expr> {
+        if self.depth >= MAX_DEPTH {
+            return self.err(
+                "expression nested too deeply".to_owned(),
+                "simplify the expression; check for a damaged line",
+            );
+        }
+        self.depth += 1;
+        let e = self.unary_inner();
+        self.depth -= 1;
+        e
+    }
+
+    fn unary_inner(&mut self) -> PResult<Expr> {
         let sign = self.is_punct(b"-") || self.is_punct(b"+");
         if sign || self.is_kw("NOT") || self.is_kw("B_NOT") {
             let op = self.bump().map(|t| t.span()).unwrap_or(self.eol);
@@ -574,6 +593,7 @@ impl<'a> LineParser<'a, '_> {
             toks: sig,
             pos: 0,
             eol,
+            depth: 0,
         }
     }
 
@@ -1131,6 +1151,17 @@ DEF cell( )\r\n  SPLINE WITH $ACC = {CP 2.0}\r\n    SPL XP1\r\n    SLIN XP2\r\n 
         assert_eq!(depth_of("UNTIL"), Some((NodeKind::BlockClose, 1)));
         assert_eq!(depth_of("done:"), Some((NodeKind::Label, 1)));
         assert_eq!(depth_of("ENDFCT"), Some((NodeKind::RoutineEnd, 0)));
+    }
+
+    #[test]
+    fn deep_nesting_is_an_error_not_a_stack_overflow() {
+        for unit in ["(", "{X ", "- ", "NOT "] {
+            let src = format!("A = {}1\n", unit.repeat(100_000));
+            let p = parse(src.as_bytes());
+            assert_eq!(p.opaque, 1, "{unit}");
+            assert_eq!(p.diagnostics[0].message, "expression nested too deeply");
+            assert_eq!(p.tree.print(src.as_bytes()), src.as_bytes());
+        }
     }
 
     #[test]
