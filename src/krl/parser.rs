@@ -688,17 +688,19 @@ impl<'a> LineParser<'a, '_> {
                 }
                 if c.is_kw("INTERRUPT") {
                     Ok((NodeKind::Simple, depth, None))
+                } else if c.is_kw("STRUC") || c.is_kw("ENUM") || c.is_kw("SIGNAL") {
+                    Ok((NodeKind::Declaration, depth, None))
                 } else {
                     decl(&mut c).map(|k| (NodeKind::Declaration, depth, Some(k)))
                 }
             }
             "INTERRUPT" | "TRIGGER" => Ok((NodeKind::Simple, depth, None)),
+            _ if DECL_KEYWORDS.contains(&w) => Ok((NodeKind::Declaration, depth, None)),
             _ if global => Err(PErr {
                 span: head.span(),
                 message: format!("`GLOBAL` before `{}`", c.text(head)),
-                hint: "`GLOBAL` only qualifies DEF, DEFFCT, DECL and INTERRUPT",
+                hint: "`GLOBAL` only qualifies DEF, DEFFCT, DECL, STRUC, ENUM, SIGNAL and INTERRUPT",
             }),
-            _ if DECL_KEYWORDS.contains(&w) => Ok((NodeKind::Declaration, depth, None)),
             _ if MOTION_KEYWORDS.contains(&w) => {
                 motion(&mut c).map(|k| (NodeKind::Motion, depth, Some(k)))
             }
@@ -1058,6 +1060,9 @@ mod tests {
             "DECL PDAT PPDAT1={VEL 100,ACC 100,APO_DIST 100,APO_MODE #CDIS}",
             "DECL LDAT LCPDAT1={VEL 2,ACC 100,APO_DIST 100,APO_FAC 50.0,ORI_TYP #VAR,CIRC_TYP #BASE,JERK_FAC 50.0,GEAR_JERK 100.0,EXAX_IGN 0}",
             "DECL FRAME F={FRAME: X 1,Y 2}",
+            "GLOBAL STRUC MYPOS_T REAL X, Y, INT N",
+            "GLOBAL ENUM COLOR_T RED, GREEN",
+            "DECL GLOBAL SIGNAL GRIPPER $OUT[3]",
             "DECL POS P={POS: X 1,Y 2,Z 3,A 0,B 0,C 0,S 'B010',T 'B100011'}",
             "DECL MYSTRUC M={A {X 1, Y 2}, B 'H1F'}",
         ] {
