@@ -712,7 +712,11 @@ impl<'a> LineParser<'a, '_> {
                         keyword: "IF",
                         span: head.span(),
                     });
-                    Ok((NodeKind::BlockOpen, depth, None))
+                    Ok((
+                        NodeKind::BlockOpen,
+                        depth,
+                        Some(StmtKind::Branch(head.span())),
+                    ))
                 } else {
                     Err(PErr {
                         span: eol,
@@ -728,12 +732,17 @@ impl<'a> LineParser<'a, '_> {
                         span: head.span(),
                     });
                 }
-                Ok((NodeKind::BlockOpen, depth, None))
+                let branch = (w == "SWITCH").then(|| StmtKind::Branch(head.span()));
+                Ok((NodeKind::BlockOpen, depth, branch))
             }
             "ELSE" | "CASE" | "DEFAULT" => {
                 let parent = if w == "ELSE" { "IF" } else { "SWITCH" };
                 if self.stack.last().is_some_and(|o| o.keyword == parent) {
-                    Ok((NodeKind::BlockMiddle, depth.saturating_sub(1), None))
+                    Ok((
+                        NodeKind::BlockMiddle,
+                        depth.saturating_sub(1),
+                        Some(StmtKind::Branch(head.span())),
+                    ))
                 } else {
                     Err(PErr {
                         span: head.span(),
@@ -743,8 +752,11 @@ impl<'a> LineParser<'a, '_> {
                 }
             }
             "ENDIF" | "ENDFOR" | "ENDWHILE" | "ENDLOOP" | "UNTIL" | "ENDSWITCH" | "ENDSPLINE" => {
+                let matched = self.stack.iter().any(|o| closer_of(o.keyword) == w);
                 let d = self.close(w, head.span());
-                Ok((NodeKind::BlockClose, d, None))
+                let branch = (matched && (w == "ENDIF" || w == "ENDSWITCH"))
+                    .then(|| StmtKind::Branch(head.span()));
+                Ok((NodeKind::BlockClose, d, branch))
             }
             _ => self.other(&mut c, head, stmt_span, depth),
         };

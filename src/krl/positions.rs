@@ -88,6 +88,9 @@ pub(crate) enum Event {
     /// A `DEF`/`DEFFCT`: program order starts again.
     Reset,
     Set(Setting),
+    /// Program order forks (`IF`, `SWITCH`), switches branch (`ELSE`, `CASE`, `DEFAULT`) or
+    /// joins (`ENDIF`, `ENDSWITCH`).
+    Branch(BranchEvent),
     /// `XPICK = XP3`: until reassigned, a motion to `XPICK` moves to (a copy of) `XP3`, so
     /// `XP3` is used with that motion's base and tool.
     Alias {
@@ -100,6 +103,17 @@ pub(crate) enum Event {
         refs: Vec<Ref>,
         with: Vec<Setting>,
     },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum BranchEvent {
+    If,
+    Switch,
+    /// `ELSE` or `DEFAULT`: the branches now cover every case.
+    Otherwise,
+    Case,
+    EndIf,
+    EndSwitch,
 }
 
 /// `DECL FDAT FP1={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE,…}`.
@@ -466,6 +480,17 @@ impl<'a> Extractor<'a> {
                     out.facts.events.push(Event::Set(s));
                 }
             }
+            StmtKind::Branch(keyword) => {
+                let ev = match upper(src, *keyword).as_str() {
+                    "IF" => BranchEvent::If,
+                    "SWITCH" => BranchEvent::Switch,
+                    "ELSE" | "DEFAULT" => BranchEvent::Otherwise,
+                    "CASE" => BranchEvent::Case,
+                    "ENDIF" => BranchEvent::EndIf,
+                    _ => BranchEvent::EndSwitch,
+                };
+                out.facts.events.push(Event::Branch(ev));
+            }
             StmtKind::Motion {
                 keyword,
                 targets,
@@ -715,11 +740,59 @@ pub(crate) fn tool_label(r: &FrameRef) -> Option<String> {
     }
 }
 
-#[derive(Clone, Default)]
+#[derive(Clone, Default, PartialEq)]
 struct State {
     base: Option<FrameRef>,
     tool: Option<FrameRef>,
     tcp: bool,
+}
+
+/// An open `IF`/`SWITCH` while following program order.
+struct Fork {
+    is_if: bool,
+    entry: State,
+    outcomes: Vec<State>,
+    in_branch: bool,
+    exhaustive: bool,
+}
+
+impl Fork {
+    fn new(is_if: bool, entry: &State) -> Fork {
+        Fork {
+            is_if,
+            entry: entry.clone(),
+            outcomes: Vec::new(),
+            // An IF's first branch starts at once; a SWITCH's at its first CASE.
+            in_branch: is_if,
+            exhaustive: false,
+        }
+    }
+
+    /// The state after the join: what every branch agrees on; a base or tool that differs
+    /// between branches is unknown, and #TCP in any branch counts.
+    fn join(mut self, current: State) -> State {
+        if self.in_branch {
+            self.outcomes.push(current);
+        }
+        if !self.exhaustive {
+            self.outcomes.push(self.entry.clone());
+        }
+        let Some(first) = self.outcomes.first().cloned() else {
+            return self.entry;
+        };
+        let agree = |f: fn(&State) -> &Option<FrameRef>| {
+            if self.outcomes.iter().all(|o| f(o) == f(&first)) {
+                f(&first).clone()
+            } else {
+                Some(FrameRef::Unknown)
+            }
+        };
+        State {
+            base: agree(|s| &s.base),
+            tool: agree(|s| &s.tool),
+            tcp: self.outcomes.iter().any(|o| o.tcp),
+        }
+    }
 }
 
 impl State {
@@ -805,12 +878,40 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             .unwrap_or_default();
         let mut state = State::default();
         let mut aliases: HashMap<&str, &str> = HashMap::default();
+        let mut forks: Vec<Fork> = Vec::new();
         for ev in &events {
             match ev {
                 Event::Reset => {
                     state = State::default();
                     aliases.clear();
+                    forks.clear();
                 }
+                Event::Branch(b) => match b {
+                    BranchEvent::If | BranchEvent::Switch => {
+                        forks.push(Fork::new(*b == BranchEvent::If, &state));
+                    }
+                    BranchEvent::Otherwise | BranchEvent::Case => {
+                        if let Some(f) = forks.last_mut() {
+                            if f.in_branch {
+                                f.outcomes.push(state.clone());
+                            }
+                            f.in_branch = true;
+                            f.exhaustive |= *b == BranchEvent::Otherwise;
+                            state = f.entry.clone();
+                        }
+                    }
+                    BranchEvent::EndIf | BranchEvent::EndSwitch => {
+                        // Blocks left open inside are joined on the way out.
+                        let want_if = *b == BranchEvent::EndIf;
+                        while let Some(f) = forks.pop() {
+                            let done = f.is_if == want_if;
+                            state = f.join(std::mem::take(&mut state));
+                            if done {
+                                break;
+                            }
+                        }
+                    }
+                },
                 Event::Alias { name, source } => {
                     aliases.insert(name, source);
                 }
@@ -912,6 +1013,39 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
 mod tests {
     use super::*;
     use std::path::Path;
+
+    #[test]
+    fn branches_that_disagree_leave_the_base_unresolved() {
+        let src = b"DEF b()\n\
+  DECL E6POS XA={X 1}\n  DECL E6POS XB={X 2}\n  DECL E6POS XC={X 3}\n  DECL E6POS XD={X 4}\n\
+  $BASE=BASE_DATA[1]\n\
+  IF $IN[1] THEN\n    $BASE=BASE_DATA[2]\n    LIN XA\n  ELSE\n    $BASE=BASE_DATA[3]\n  ENDIF\n\
+  LIN XB\n\
+  $BASE=BASE_DATA[4]\n  IF $IN[2] THEN\n    $TOOL=TOOL_DATA[1]\n  ENDIF\n  LIN XC\n\
+  SWITCH N\n  CASE 1\n    $BASE=BASE_DATA[4]\n  DEFAULT\n    BAS(#BASE,4)\n  ENDSWITCH\n  LIN XD\n\
+END\n";
+        let f = crate::krl::parse_file(Path::new("b.src"), src.to_vec());
+        let usage: Vec<_> = f
+            .positions
+            .iter()
+            .map(|p| (p.usage.wobj.as_deref(), p.usage.tool.as_deref()))
+            .collect();
+        assert_eq!(
+            usage,
+            [
+                (Some("BASE_DATA[2]"), None),
+                (None, None),
+                (Some("BASE_DATA[4]"), None),
+                (Some("BASE_DATA[4]"), None),
+            ]
+        );
+        let warned: Vec<_> = f
+            .diagnostics
+            .iter()
+            .map(|d| f.lines.line(d.span.start))
+            .collect();
+        assert_eq!(warned, [13]);
+    }
 
     #[test]
     fn copies_carry_the_use_to_their_source() {

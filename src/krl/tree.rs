@@ -158,6 +158,9 @@ pub enum StmtKind {
         value: Expr,
     },
     Call(Expr),
+    /// `IF`, `ELSE`, `ENDIF`, `SWITCH`, `CASE`, `DEFAULT`, `ENDSWITCH` (the keyword): where
+    /// program order forks and joins, for following the base and tool.
+    Branch(Span),
     /// `keyword target` / `keyword aux, target`, then approximation and `WITH` assignments.
     Motion {
         keyword: Span,
