@@ -132,6 +132,11 @@ pub(crate) struct Facts {
     /// Declared `FRAME`s and aggregates assigned to names of unknown type: positions only when
     /// a motion uses them.
     pub candidates: Vec<Position>,
+    /// Per candidate: its kind was guessed from its fields because this file does not declare
+    /// the name (the other file of the pair may).
+    pub inferred: Vec<bool>,
+    /// Positional types this file declares, by upper-case name.
+    pub declared: HashMap<String, PositionKind>,
 }
 
 /// A declared name as motions reference it: upper case, without blanks (`p[ 3 ]` → `P[3]`).
@@ -434,7 +439,8 @@ impl<'a> Extractor<'a> {
         }
     }
 
-    pub fn finish(self) -> (Extracted, Vec<Diagnostic>) {
+    pub fn finish(mut self) -> (Extracted, Vec<Diagnostic>) {
+        self.out.facts.declared = self.declared;
         (self.out, self.diagnostics)
     }
 
@@ -466,6 +472,7 @@ impl<'a> Extractor<'a> {
                         let p = build_position(lines, init.span, kind, Some(name), f);
                         if kind == PositionKind::Frame {
                             out.facts.candidates.push(p);
+                            out.facts.inferred.push(false);
                         } else {
                             out.positions.push(p);
                         }
@@ -672,13 +679,16 @@ fn assignment(
     let f = read_fields(src, agg);
     let name = Some(crate::syntax::latin1(target.span.slice(src)));
     match declared.get(&base) {
-        Some(PositionKind::Frame) => out.facts.candidates.push(build_position(
-            lines,
-            value.span,
-            PositionKind::Frame,
-            name,
-            f,
-        )),
+        Some(PositionKind::Frame) => {
+            out.facts.candidates.push(build_position(
+                lines,
+                value.span,
+                PositionKind::Frame,
+                name,
+                f,
+            ));
+            out.facts.inferred.push(false);
+        }
         Some(&kind) => out
             .positions
             .push(build_position(lines, value.span, kind, name, f)),
@@ -687,6 +697,7 @@ fn assignment(
                 out.facts
                     .candidates
                     .push(build_position(lines, value.span, kind, name, f));
+                out.facts.inferred.push(true);
             }
         }
     }
@@ -871,6 +882,36 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         .iter()
         .map(|f| vec![false; f.candidates.len()])
         .collect();
+    // `XP1={…}` in the `.src` of a point the `.dat` declares (`DECL POS XP1`): the declaration
+    // gives the kind, and a non-FRAME declared point is a position whether or not it moves.
+    let mut declared: HashMap<String, PositionKind> = HashMap::default();
+    for f in facts.iter() {
+        for (k, v) in &f.declared {
+            declared.entry(k.clone()).or_insert(*v);
+        }
+    }
+    for (fact, used) in facts.iter_mut().zip(used_candidates.iter_mut()) {
+        let Facts {
+            candidates,
+            inferred,
+            ..
+        } = fact;
+        for ((p, &guessed), u) in candidates.iter_mut().zip(inferred.iter()).zip(used) {
+            let Some(name) = p.name.as_deref().filter(|_| guessed) else {
+                continue;
+            };
+            let key = name_key(name);
+            let base = key.split('[').next().unwrap_or_default();
+            if let Some(&kind) = declared.get(base) {
+                p.kind = kind;
+                if kind == PositionKind::Frame {
+                    p.config = Config::None;
+                } else {
+                    *u = true;
+                }
+            }
+        }
+    }
     for fi in 0..files.len() {
         let events = facts
             .get_mut(fi)

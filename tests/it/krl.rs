@@ -737,3 +737,48 @@ fn tree_dumps() {
     assert!(file.round_trip);
     insta::assert_snapshot!("tree_broken", dump);
 }
+
+#[test]
+fn pair_lookup_any_case_and_declared_types_across_the_pair() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("Cell.SRC"),
+        "DEF cell( )\r\n  BAS(#BASE,2)\r\n  XP1={X 1,Y 2,Z 3,A 0,B 0,C 0,S 2,T 3}\r\n  F1={X 1}\r\n  XQ={X 5,Y 6,Z 7}\r\n  LIN XQ\r\nEND\r\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("cell.dat"),
+        "DEFDAT cell\r\n  DECL POS XP1\r\n  DECL FRAME F1\r\nENDDAT\r\n",
+    )
+    .unwrap();
+    let named_dat =
+        krl::load_program(&dir.path().join("cell.dat"), &LoadOptions::default()).unwrap();
+    let names: Vec<_> = named_dat
+        .files
+        .iter()
+        .map(|f| f.path.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, ["Cell.SRC", "cell.dat"]);
+    let src = &named_dat.files[0];
+    let found: Vec<_> = src
+        .positions
+        .iter()
+        .map(|p| (p.label(), p.kind, p.usage.wobj.clone()))
+        .collect();
+    assert_eq!(
+        found,
+        [
+            ("XP1".to_owned(), PositionKind::Pos, None),
+            (
+                "XQ".to_owned(),
+                PositionKind::E6Pos,
+                Some("BASE_DATA[2]".to_owned())
+            ),
+        ]
+    );
+    // A lone file loads alone; a .sub never pairs.
+    std::fs::write(dir.path().join("alone.sub"), "DEF alone( )\r\nEND\r\n").unwrap();
+    let alone = krl::load_program(&dir.path().join("alone.sub"), &LoadOptions::default()).unwrap();
+    assert_eq!(alone.files.len(), 1);
+    assert_eq!(krl::partner_of(&dir.path().join("alone.sub")), None);
+}
