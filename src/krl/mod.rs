@@ -14,6 +14,7 @@ pub mod lexer;
 mod pair;
 pub mod parser;
 mod positions;
+mod resolve;
 pub mod tree;
 
 use std::path::Path;
@@ -32,7 +33,7 @@ pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
     let (file, facts) = analyse(path, source);
     let mut files = [file];
     let mut facts = [facts];
-    positions::resolve(&mut files, &mut facts);
+    resolve::resolve(&mut files, &mut facts);
     let [file] = files;
     file
 }

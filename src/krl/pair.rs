@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{analyse, config_dat, positions};
+use super::{analyse, config_dat, resolve};
 use crate::position::Program;
 use crate::program::{LoadError, LoadOptions, read_source};
 
@@ -74,7 +74,7 @@ pub fn load_program(path: &Path, options: &LoadOptions) -> Result<Program, LoadE
         files.push(file);
         facts.push(fact);
     }
-    positions::resolve(&mut files, &mut facts);
+    resolve::resolve(&mut files, &mut facts);
     if let Some(cfg) = &options.krl_config_dat {
         let mut file = config_dat::parse_config(cfg)?;
         file.positions.clear();
