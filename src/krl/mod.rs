@@ -3,6 +3,13 @@
 //!
 //! Owned by issue 3. Grammar: `grammars/krl.ebnf`.
 //!
+//! - [`lexer`]: bytes → `(kind, u32 span)` tokens covering every byte;
+//! - [`parser`] and [`tree`]: one node per line, statements for what trackfix reads, opaque
+//!   nodes with located diagnostics for the rest; `tree.print(src) == src`;
+//! - `positions`: targets, joint positions, `BASE_DATA`/`TOOL_DATA` into the shared model;
+//! - `resolve`: the base and tool of every motion over a `.src`/`.dat` pair;
+//! - [`load_program`] (the pair), [`load_config_dat`] (bases and tools of a `$config.dat`).
+//!
 //! ```
 //! let src = b"DEF a()\r\n  LIN {X 10, Y 20, Z 30, A 0, B 90, C 0} C_DIS ; go\r\nEND";
 //! let parse = trackfix::krl::parse(src);
