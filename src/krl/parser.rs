@@ -236,6 +236,7 @@ impl<'a> Cursor<'a> {
         }
     }
 
+    /// Rule `expr`, from operators of precedence `min` up (`binop`).
     fn binary(&mut self, min: u8) -> PResult<Expr> {
         let mut lhs = self.unary()?;
         while let Some(prec) = self.binary_prec() {
@@ -843,7 +844,7 @@ impl<'a> LineParser<'a, '_> {
         }
     }
 
-    /// Assignments, calls, labels, declarations without `DECL`, else opaque.
+    /// Rules `assignment`, `call`, `label` and `decl_statement` without `DECL`; else `opaque`.
     fn other(
         &mut self,
         c: &mut Cursor<'_>,
