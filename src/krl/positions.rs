@@ -1,0 +1,713 @@
+//! From the KRL tree to the shared position model: `E6POS`/`POS`/`FRAME` targets, `E6AXIS`/`AXIS`
+//! joint positions, `BASE_DATA[n]`/`TOOL_DATA[n]` frames, and the facts needed to resolve which
+//! base and tool each motion uses (`FDAT_ACT`, `$BASE=…`, `BAS(#BASE,n)`, `WITH $BASE=…`).
+//!
+//! Resolution needs both files of a `.src`/`.dat` pair (the `.src` moves, the `.dat` declares
+//! the points and the `FDAT`s), so extraction only records facts per file and
+//! [`super::resolve`] follows them over a whole program.
+
+use super::resolve::HashMap;
+use super::tree::{Aggregate, Expr, ExprKind, Stmt, StmtKind};
+use crate::position::{
+    BitField, CartesianFields, Config, FrameDecl, FrameKind, NumField, Orientation, Position,
+    PositionKind, Usage,
+};
+use crate::syntax::{Diagnostic, LineIndex, NumLit, Span};
+
+/// A base or tool as a motion sees it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) enum FrameRef {
+    /// `BASE_DATA[n]` / `TOOL_DATA[n]`; 0 is the world (base) or the flange (tool).
+    Data(u32),
+    /// A frame declared in the program itself (`$BASE={…}` → `$BASE (line 12)`).
+    Named(String),
+    /// Set by an expression trackfix cannot evaluate.
+    Unknown,
+}
+
+/// A statement that changes the base, the tool or the interpolation mode.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) enum Setting {
+    Base(FrameRef),
+    Tool(FrameRef),
+    /// `$IPO_MODE = #TCP` (true) or `#BASE`.
+    Tcp(bool),
+    /// `FDAT_ACT = FP1`: base, tool and IPO mode of that FDAT.
+    Fdat(String),
+    /// `FDAT_ACT = {TOOL_NO 1, BASE_NO 2, IPO_FRAME #BASE}` written inline.
+    FdatValue(Fdat),
+    BaseOfFdat(String),
+    ToolOfFdat(String),
+    TcpOfFdat(String),
+}
+
+/// A target a motion uses.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) enum Ref {
+    /// A declared name, upper case (`XP1`, `P[3]`).
+    Named(String),
+    /// An inline literal: the span of its position in the same file.
+    Inline(Span),
+}
+
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) enum Event {
+    /// A `DEF`/`DEFFCT`: program order starts again.
+    Reset,
+    Set(Setting),
+    /// Program order forks (`IF`, `SWITCH`), switches branch (`ELSE`, `CASE`, `DEFAULT`) or
+    /// joins (`ENDIF`, `ENDSWITCH`).
+    Branch(BranchEvent),
+    /// `XPICK = XP3`: until reassigned, a motion to `XPICK` moves to (a copy of) `XP3`, so
+    /// `XP3` is used with that motion's base and tool.
+    Alias {
+        name: String,
+        source: String,
+    },
+    Motion {
+        span: Span,
+        line: usize,
+        refs: Vec<Ref>,
+        with: Vec<Setting>,
+    },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum BranchEvent {
+    If,
+    Switch,
+    /// `ELSE` or `DEFAULT`: the branches now cover every case.
+    Otherwise,
+    Case,
+    EndIf,
+    EndSwitch,
+}
+
+/// `DECL FDAT FP1={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE,…}`.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Fdat {
+    pub base: Option<u32>,
+    pub tool: Option<u32>,
+    pub tcp: Option<bool>,
+}
+
+/// What one file contributes to resolving a program.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Facts {
+    pub events: Vec<Event>,
+    pub fdats: HashMap<String, Fdat>,
+    /// Declared `FRAME`s and aggregates assigned to names of unknown type: positions only when
+    /// a motion uses them.
+    pub candidates: Vec<Position>,
+    /// Per candidate: its kind was guessed from its fields because this file does not declare
+    /// the name (the other file of the pair may).
+    pub inferred: Vec<bool>,
+    /// Positional types this file declares, by upper-case name.
+    pub declared: HashMap<String, PositionKind>,
+}
+
+/// A declared name as motions reference it: upper case, without blanks (`p[ 3 ]` → `P[3]`).
+pub(crate) fn name_key(name: &str) -> String {
+    name.chars()
+        .filter(|c| !c.is_ascii_whitespace())
+        .map(|c| c.to_ascii_uppercase())
+        .collect()
+}
+
+fn upper(src: &[u8], span: Span) -> String {
+    span.slice(src)
+        .iter()
+        .filter(|b| !b.is_ascii_whitespace())
+        .map(|b| b.to_ascii_uppercase() as char)
+        .collect()
+}
+
+fn positional_type(name: &str) -> Option<PositionKind> {
+    Some(match name {
+        "E6POS" => PositionKind::E6Pos,
+        "POS" => PositionKind::Pos,
+        "FRAME" => PositionKind::Frame,
+        "E6AXIS" => PositionKind::E6Axis,
+        "AXIS" => PositionKind::Axis,
+        _ => return None,
+    })
+}
+
+/// The plain name an expression stores into (`XP1`, `P` of `P[3]`), upper case.
+fn base_name(src: &[u8], e: &Expr) -> Option<String> {
+    match &e.kind {
+        ExprKind::Name => Some(upper(src, e.span)),
+        ExprKind::Index(b, _) => base_name(src, b),
+        _ => None,
+    }
+}
+
+fn integer(src: &[u8], e: &Expr) -> Option<u32> {
+    if e.kind != ExprKind::Number {
+        return None;
+    }
+    std::str::from_utf8(e.span.slice(src)).ok()?.parse().ok()
+}
+
+/// `BASE_DATA[n]` / `TOOL_DATA[n]` → (kind, n).
+fn data_element(src: &[u8], e: &Expr) -> Option<(FrameKind, u32)> {
+    let ExprKind::Index(b, args) = &e.kind else {
+        return None;
+    };
+    let kind = match upper(src, b.span).as_str() {
+        "BASE_DATA" => FrameKind::Base,
+        "TOOL_DATA" => FrameKind::Tool,
+        _ => return None,
+    };
+    match args.as_slice() {
+        [Some(i)] => Some((kind, integer(src, i)?)),
+        _ => None,
+    }
+}
+
+fn frame_ref(src: &[u8], e: &Expr) -> FrameRef {
+    if let Some((_, n)) = data_element(src, e) {
+        return FrameRef::Data(n);
+    }
+    match (&e.kind, upper(src, e.span).as_str()) {
+        (ExprKind::Name, "$WORLD" | "$NULLFRAME") => FrameRef::Data(0),
+        _ => FrameRef::Unknown,
+    }
+}
+
+/// The FDAT an `S…(FP1.BASE_NO)` / `STOOL2(FP1)` argument names.
+fn fdat_argument(src: &[u8], e: &Expr) -> Option<String> {
+    match &e.kind {
+        ExprKind::Call(_, args) => fdat_argument(src, args.first()?.as_ref()?),
+        ExprKind::Member(b, _) => fdat_argument(src, b),
+        ExprKind::Name => Some(upper(src, e.span)),
+        _ => None,
+    }
+}
+
+/// `'B0101'` → (value, digits). nom keeps the shape of the literal in one line.
+fn bit_string(text: &[u8]) -> Option<(u32, usize)> {
+    use nom::Parser;
+    use nom::bytes::complete::{tag, tag_no_case, take_while1};
+    use nom::combinator::all_consuming;
+    use nom::sequence::{delimited, preceded};
+    let quote = || tag(&b"'"[..]);
+    let mut p = all_consuming(delimited(
+        quote(),
+        preceded(
+            tag_no_case(&b"B"[..]),
+            take_while1(|c: u8| c == b'0' || c == b'1'),
+        ),
+        quote(),
+    ));
+    let r: nom::IResult<&[u8], &[u8]> = p.parse(text);
+    let (_, digits) = r.ok()?;
+    if digits.len() > 32 {
+        return None;
+    }
+    let v = digits
+        .iter()
+        .fold(0u32, |acc, d| (acc << 1) | u32::from(d - b'0'));
+    Some((v, digits.len()))
+}
+
+fn num_field(src: &[u8], e: &Expr) -> Option<NumField> {
+    if e.kind != ExprKind::Number {
+        return None;
+    }
+    Some(NumField {
+        span: e.span,
+        lit: NumLit::parse(e.span.slice(src))?,
+    })
+}
+
+fn bit_field(src: &[u8], e: &Expr) -> Option<BitField> {
+    match e.kind {
+        ExprKind::Number => Some(BitField {
+            span: e.span,
+            value: integer(src, e)?,
+            binary_digits: None,
+        }),
+        ExprKind::Quoted => {
+            let (value, digits) = bit_string(e.span.slice(src))?;
+            Some(BitField {
+                span: e.span,
+                value,
+                binary_digits: Some(digits),
+            })
+        }
+        _ => None,
+    }
+}
+
+/// The fields of a position aggregate, by KRL name.
+#[derive(Default)]
+struct Fields {
+    xyz: [Option<NumField>; 3],
+    abc: [Option<NumField>; 3],
+    abc_written: bool,
+    s: Option<BitField>,
+    t: Option<BitField>,
+    axes: [Option<NumField>; 6],
+    ext: [Option<NumField>; 6],
+    ext_written: usize,
+    cartesian_written: bool,
+    joints_written: bool,
+}
+
+fn read_fields(src: &[u8], agg: &Aggregate) -> Fields {
+    let mut f = Fields::default();
+    for field in &agg.fields {
+        // Field names are compared as bytes: a 50 MB `.dat` has millions of them.
+        let name = field.name.slice(src);
+        let v = &field.value;
+        let upper0 = name.first().map_or(0, u8::to_ascii_uppercase);
+        let digit = match name {
+            [_, d @ b'1'..=b'6'] => Some(usize::from(d - b'1')),
+            _ => None,
+        };
+        match (name.len(), upper0, digit) {
+            (1, b'X' | b'Y' | b'Z', _) => {
+                if let Some(slot) = f.xyz.get_mut(usize::from(upper0 - b'X')) {
+                    *slot = num_field(src, v);
+                }
+                f.cartesian_written = true;
+            }
+            (1, b'A' | b'B' | b'C', _) => {
+                if let Some(slot) = f.abc.get_mut(usize::from(upper0 - b'A')) {
+                    *slot = num_field(src, v);
+                }
+                f.abc_written = true;
+                f.cartesian_written = true;
+            }
+            (1, b'S', _) => f.s = bit_field(src, v),
+            (1, b'T', _) => f.t = bit_field(src, v),
+            (2, b'A', Some(i)) => {
+                if let Some(slot) = f.axes.get_mut(i) {
+                    *slot = num_field(src, v);
+                }
+                f.joints_written = true;
+            }
+            (2, b'E', Some(i)) => {
+                if let Some(slot) = f.ext.get_mut(i) {
+                    *slot = num_field(src, v);
+                }
+                f.ext_written = f.ext_written.max(i + 1);
+            }
+            _ => {}
+        }
+    }
+    f
+}
+
+/// The kind of an aggregate without a declared type: its own `{TYPE: …}`, else its fields.
+fn inferred_kind(src: &[u8], agg: &Aggregate, f: &Fields) -> Option<PositionKind> {
+    if let Some(t) = agg.type_name {
+        return positional_type(&upper(src, t));
+    }
+    if f.joints_written && !f.cartesian_written {
+        Some(PositionKind::E6Axis)
+    } else if f.cartesian_written {
+        Some(PositionKind::E6Pos)
+    } else {
+        None
+    }
+}
+
+fn build_position(
+    lines: &LineIndex,
+    span: Span,
+    kind: PositionKind,
+    name: Option<String>,
+    f: Fields,
+) -> Position {
+    let (line, column) = lines.line_col(span.start);
+    let extax: Vec<Option<NumField>> = f.ext.into_iter().take(f.ext_written).collect();
+    let joint = matches!(kind, PositionKind::E6Axis | PositionKind::Axis);
+    Position {
+        name,
+        kind,
+        span,
+        line,
+        column,
+        cartesian: (!joint).then(|| CartesianFields {
+            trans: f.xyz,
+            orient: f.abc_written.then_some(Orientation::Abc(f.abc)),
+        }),
+        joints: if joint { f.axes.into() } else { Vec::new() },
+        config: match kind {
+            PositionKind::E6Pos | PositionKind::Pos => Config::Kuka {
+                status: f.s,
+                turn: f.t,
+            },
+            _ => Config::None,
+        },
+        extax,
+        usage: Usage::default(),
+    }
+}
+
+/// What [`extract`] found in one file.
+pub(crate) struct Extracted {
+    pub positions: Vec<Position>,
+    pub frames: Vec<FrameDecl>,
+    pub facts: Facts,
+}
+
+fn frame_decl(
+    src: &[u8],
+    lines: &LineIndex,
+    name: String,
+    kind: FrameKind,
+    agg_expr: &Expr,
+    agg: &Aggregate,
+) -> FrameDecl {
+    let f = read_fields(src, agg);
+    FrameDecl {
+        name,
+        kind,
+        span: agg_expr.span,
+        line: lines.line(agg_expr.span.start),
+        robhold: None,
+        ufprog: None,
+        ufmec: None,
+        frame: Some(CartesianFields {
+            trans: f.xyz,
+            orient: f.abc_written.then_some(Orientation::Abc(f.abc)),
+        }),
+        oframe: None,
+    }
+}
+
+/// Reads positions, frames and resolution facts from a file's statements, one at a time and in
+/// source order (KRL declares before use, so a declared type is known when its assignments
+/// come).
+pub(crate) struct Extractor<'a> {
+    src: &'a [u8],
+    lines: &'a LineIndex,
+    declared: HashMap<String, PositionKind>,
+    out: Extracted,
+    /// Notes about what is deliberately not a target (relative motions, computed targets).
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+impl<'a> Extractor<'a> {
+    pub fn new(src: &'a [u8], lines: &'a LineIndex) -> Extractor<'a> {
+        Extractor {
+            src,
+            lines,
+            declared: HashMap::default(),
+            out: Extracted {
+                positions: Vec::new(),
+                frames: Vec::new(),
+                facts: Facts::default(),
+            },
+            diagnostics: Vec::new(),
+        }
+    }
+
+    pub fn finish(mut self) -> (Extracted, Vec<Diagnostic>) {
+        self.out.facts.declared = self.declared;
+        (self.out, self.diagnostics)
+    }
+
+    pub fn statement(&mut self, stmt: &Stmt) {
+        let (src, lines) = (self.src, self.lines);
+        let out = &mut self.out;
+        match &stmt.kind {
+            StmtKind::Routine { keyword, .. } => {
+                if !upper(src, *keyword).starts_with("DEFDAT") {
+                    out.facts.events.push(Event::Reset);
+                }
+            }
+            StmtKind::Decl { type_name, vars } => {
+                let ty = upper(src, *type_name);
+                let positional = positional_type(&ty);
+                for v in vars {
+                    if let Some(kind) = positional {
+                        self.declared.insert(upper(src, v.name), kind);
+                    }
+                    let Some(init) = &v.init else { continue };
+                    let ExprKind::Aggregate(agg) = &init.kind else {
+                        continue;
+                    };
+                    if ty == "FDAT" {
+                        out.facts.fdats.insert(upper(src, v.name), fdat(src, agg));
+                    } else if let Some(kind) = positional {
+                        let name = crate::syntax::latin1(v.name.slice(src));
+                        let f = read_fields(src, agg);
+                        let p = build_position(lines, init.span, kind, Some(name), f);
+                        if kind == PositionKind::Frame {
+                            out.facts.candidates.push(p);
+                            out.facts.inferred.push(false);
+                        } else {
+                            out.positions.push(p);
+                        }
+                    }
+                }
+            }
+            StmtKind::Assign { target, value } => {
+                assignment(src, lines, &self.declared, target, value, out);
+            }
+            StmtKind::Call(call) => {
+                if let Some(s) = bas_call(src, call) {
+                    out.facts.events.push(Event::Set(s));
+                }
+            }
+            StmtKind::Branch(keyword) => {
+                let ev = match upper(src, *keyword).as_str() {
+                    "IF" => BranchEvent::If,
+                    "SWITCH" => BranchEvent::Switch,
+                    "ELSE" | "DEFAULT" => BranchEvent::Otherwise,
+                    "CASE" => BranchEvent::Case,
+                    "ENDIF" => BranchEvent::EndIf,
+                    _ => BranchEvent::EndSwitch,
+                };
+                out.facts.events.push(Event::Branch(ev));
+            }
+            StmtKind::Motion {
+                keyword,
+                targets,
+                with,
+            } => {
+                let line = lines.line(stmt.span.start);
+                if upper(src, *keyword).ends_with("_REL") {
+                    self.diagnostics.push(
+                        Diagnostic::note(
+                            stmt.span,
+                            "relative motion: its offset is not a target and is left unchanged",
+                        )
+                        .with_hint("check this motion by hand after a transform"),
+                    );
+                    return;
+                }
+                let mut refs = Vec::new();
+                for t in targets {
+                    if !target_refs(src, lines, t, &mut refs, &mut out.positions) {
+                        self.diagnostics.push(
+                            Diagnostic::warning(
+                                t.span,
+                                "computed target (geometric operator `:` or an expression): \
+                                 its operands are not treated as targets",
+                            )
+                            .with_hint(
+                                "trackfix cannot transform a composed frame; check this motion by hand",
+                            ),
+                        );
+                    }
+                }
+                let with = with
+                    .iter()
+                    .filter_map(|(l, r)| setting(src, l, r))
+                    .collect();
+                out.facts.events.push(Event::Motion {
+                    span: stmt.span,
+                    line,
+                    refs,
+                    with,
+                });
+            }
+        }
+    }
+}
+
+fn fdat(src: &[u8], agg: &Aggregate) -> Fdat {
+    let mut f = Fdat::default();
+    for field in &agg.fields {
+        match upper(src, field.name).as_str() {
+            "TOOL_NO" => f.tool = integer(src, &field.value),
+            "BASE_NO" => f.base = integer(src, &field.value),
+            "IPO_FRAME" if field.value.kind == ExprKind::Enum => {
+                f.tcp = Some(upper(src, field.value.span) == "#TCP");
+            }
+            _ => {}
+        }
+    }
+    f
+}
+
+/// `BAS(#BASE, n)` / `BAS(#TOOL, n)`.
+fn bas_call(src: &[u8], call: &Expr) -> Option<Setting> {
+    let ExprKind::Call(name, args) = &call.kind else {
+        return None;
+    };
+    if upper(src, name.span) != "BAS" {
+        return None;
+    }
+    let [Some(which), Some(n)] = args.as_slice() else {
+        return None;
+    };
+    let r = integer(src, n).map_or(FrameRef::Unknown, FrameRef::Data);
+    match upper(src, which.span).as_str() {
+        "#BASE" => Some(Setting::Base(r)),
+        "#TOOL" => Some(Setting::Tool(r)),
+        _ => None,
+    }
+}
+
+/// `$BASE = …`, `$TOOL = …`, `$IPO_MODE = …`, `FDAT_ACT = …` (also inside `WITH`).
+/// Aggregate values of `$BASE`/`$TOOL` are handled by [`assignment`], which names them.
+fn setting(src: &[u8], target: &Expr, value: &Expr) -> Option<Setting> {
+    let fdat_of = || fdat_argument(src, value);
+    match upper(src, target.span).as_str() {
+        "$BASE" => Some(match &value.kind {
+            ExprKind::Call(..) => fdat_of()
+                .map(Setting::BaseOfFdat)
+                .unwrap_or(Setting::Base(FrameRef::Unknown)),
+            _ => Setting::Base(frame_ref(src, value)),
+        }),
+        "$TOOL" => Some(match &value.kind {
+            ExprKind::Call(..) => fdat_of()
+                .map(Setting::ToolOfFdat)
+                .unwrap_or(Setting::Tool(FrameRef::Unknown)),
+            _ => Setting::Tool(frame_ref(src, value)),
+        }),
+        "$IPO_MODE" => match &value.kind {
+            ExprKind::Enum => Some(Setting::Tcp(upper(src, value.span) == "#TCP")),
+            ExprKind::Call(..) => fdat_of().map(Setting::TcpOfFdat),
+            _ => None,
+        },
+        "FDAT_ACT" => match &value.kind {
+            ExprKind::Name => Some(Setting::Fdat(upper(src, value.span))),
+            ExprKind::Aggregate(agg) => Some(Setting::FdatValue(fdat(src, agg))),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+fn assignment(
+    src: &[u8],
+    lines: &LineIndex,
+    declared: &HashMap<String, PositionKind>,
+    target: &Expr,
+    value: &Expr,
+    out: &mut Extracted,
+) {
+    let ExprKind::Aggregate(agg) = &value.kind else {
+        if let Some(s) = setting(src, target, value) {
+            out.facts.events.push(Event::Set(s));
+        } else if matches!(target.kind, ExprKind::Name | ExprKind::Index(..))
+            && matches!(value.kind, ExprKind::Name | ExprKind::Index(..))
+        {
+            let name = upper(src, target.span);
+            if !name.starts_with('$') {
+                out.facts.events.push(Event::Alias {
+                    name,
+                    source: upper(src, value.span),
+                });
+            }
+        }
+        return;
+    };
+    if upper(src, target.span) == "FDAT_ACT" {
+        if let Some(s) = setting(src, target, value) {
+            out.facts.events.push(Event::Set(s));
+        }
+        return;
+    }
+    if let Some((kind, n)) = data_element(src, target) {
+        let prefix = if kind == FrameKind::Base {
+            "BASE_DATA"
+        } else {
+            "TOOL_DATA"
+        };
+        let d = frame_decl(src, lines, format!("{prefix}[{n}]"), kind, value, agg);
+        out.frames.push(d);
+        return;
+    }
+    let target_name = upper(src, target.span);
+    if target_name == "$BASE" || target_name == "$TOOL" {
+        let line = lines.line(value.span.start);
+        let name = format!("{target_name} (line {line})");
+        let kind = if target_name == "$BASE" {
+            FrameKind::Base
+        } else {
+            FrameKind::Tool
+        };
+        out.frames
+            .push(frame_decl(src, lines, name.clone(), kind, value, agg));
+        let r = FrameRef::Named(name);
+        out.facts
+            .events
+            .push(Event::Set(if kind == FrameKind::Base {
+                Setting::Base(r)
+            } else {
+                Setting::Tool(r)
+            }));
+        return;
+    }
+    let Some(base) = base_name(src, target) else {
+        return;
+    };
+    if base.starts_with('$') {
+        return;
+    }
+    let f = read_fields(src, agg);
+    let name = Some(crate::syntax::latin1(target.span.slice(src)));
+    match declared.get(&base) {
+        Some(PositionKind::Frame) => {
+            out.facts.candidates.push(build_position(
+                lines,
+                value.span,
+                PositionKind::Frame,
+                name,
+                f,
+            ));
+            out.facts.inferred.push(false);
+        }
+        Some(&kind) => out
+            .positions
+            .push(build_position(lines, value.span, kind, name, f)),
+        None => {
+            if let Some(kind) = inferred_kind(src, agg, &f) {
+                out.facts
+                    .candidates
+                    .push(build_position(lines, value.span, kind, name, f));
+                out.facts.inferred.push(true);
+            }
+        }
+    }
+}
+
+/// The targets of a motion: names and inline literals. Returns false when a target is built
+/// with the geometric operator `:` (or another expression), whose operands are offsets and
+/// frames rather than targets: those are left out and reported by the caller.
+fn target_refs(
+    src: &[u8],
+    lines: &LineIndex,
+    e: &Expr,
+    refs: &mut Vec<Ref>,
+    positions: &mut Vec<Position>,
+) -> bool {
+    match &e.kind {
+        ExprKind::Name | ExprKind::Index(..) => {
+            refs.push(Ref::Named(upper(src, e.span)));
+            true
+        }
+        ExprKind::Aggregate(agg) => {
+            let f = read_fields(src, agg);
+            if let Some(kind) = inferred_kind(src, agg, &f) {
+                positions.push(build_position(lines, e.span, kind, None, f));
+                refs.push(Ref::Inline(e.span));
+            }
+            true
+        }
+        ExprKind::Paren(inner) => target_refs(src, lines, inner, refs, positions),
+        _ => false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bit_strings() {
+        assert_eq!(bit_string(b"'B010'"), Some((2, 3)));
+        assert_eq!(bit_string(b"'b100011'"), Some((35, 6)));
+        assert_eq!(bit_string(b"'H1F'"), None);
+        assert_eq!(bit_string(b"'B'"), None);
+        assert_eq!(bit_string(b"'B012'"), None);
+    }
+}

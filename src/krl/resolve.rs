@@ -1,0 +1,448 @@
+//! Which base and tool each motion of a program uses: program order within each `DEF`, forked
+//! and joined at `IF`/`SWITCH`, over every file of a `.src`/`.dat` pair; the result goes to each
+//! position's [`Usage`].
+
+use std::collections::HashMap as StdHashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use super::positions::{BranchEvent, Event, Facts, Fdat, FrameRef, Ref, Setting, name_key};
+use crate::position::{Config, ParsedFile, PositionKind, Usage};
+use crate::syntax::Diagnostic;
+
+/// Names are short, trusted-enough keys (the file is the user's own program) and a `.dat` holds
+/// hundreds of thousands of them: SipHash showed up as a tenth of the run time. This is the
+/// multiply-rotate hash of rustc's `FxHasher` with a finaliser, written out to avoid a
+/// dependency.
+#[derive(Default, Clone, Copy)]
+pub(crate) struct NameHasher(u64);
+
+impl Hasher for NameHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.0 = (self.0.rotate_left(5) ^ u64::from_le_bytes(word))
+                .wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+        }
+    }
+
+    /// MurmurHash3's finaliser: hashbrown picks buckets from the low bits, which the
+    /// multiply alone leaves equal for names differing only in their last bytes (`XP100001`).
+    fn finish(&self) -> u64 {
+        let mut h = self.0;
+        h ^= h >> 33;
+        h = h.wrapping_mul(0xff51_afd7_ed55_8ccd);
+        h ^= h >> 33;
+        h = h.wrapping_mul(0xc4ce_b9fe_1a85_ec53);
+        h ^ (h >> 33)
+    }
+}
+
+pub(crate) type HashMap<K, V> = StdHashMap<K, V, BuildHasherDefault<NameHasher>>;
+
+/// The name trackfix gives a base: `BASE_DATA[n]`, `$WORLD` for base 0.
+pub(crate) fn base_label(r: &FrameRef) -> Option<String> {
+    match r {
+        FrameRef::Data(0) => Some("$WORLD".to_owned()),
+        FrameRef::Data(n) => Some(format!("BASE_DATA[{n}]")),
+        FrameRef::Named(s) => Some(s.clone()),
+        FrameRef::Unknown => None,
+    }
+}
+
+/// The name trackfix gives a tool: `TOOL_DATA[n]`, `$NULLFRAME` (the flange) for tool 0.
+pub(crate) fn tool_label(r: &FrameRef) -> Option<String> {
+    match r {
+        FrameRef::Data(0) => Some("$NULLFRAME".to_owned()),
+        FrameRef::Data(n) => Some(format!("TOOL_DATA[{n}]")),
+        FrameRef::Named(s) => Some(s.clone()),
+        FrameRef::Unknown => None,
+    }
+}
+
+#[derive(Clone, Default, PartialEq)]
+struct State {
+    base: Option<FrameRef>,
+    tool: Option<FrameRef>,
+    tcp: bool,
+}
+
+/// An open `IF`/`SWITCH` while following program order.
+struct Fork {
+    is_if: bool,
+    entry: State,
+    outcomes: Vec<State>,
+    in_branch: bool,
+    exhaustive: bool,
+}
+
+impl Fork {
+    fn new(is_if: bool, entry: &State) -> Fork {
+        Fork {
+            is_if,
+            entry: entry.clone(),
+            outcomes: Vec::new(),
+            // An IF's first branch starts at once; a SWITCH's at its first CASE.
+            in_branch: is_if,
+            exhaustive: false,
+        }
+    }
+
+    /// The state after the join: what every branch agrees on; a base or tool that differs
+    /// between branches is unknown, and #TCP in any branch counts.
+    fn join(mut self, current: State) -> State {
+        if self.in_branch {
+            self.outcomes.push(current);
+        }
+        if !self.exhaustive {
+            self.outcomes.push(self.entry.clone());
+        }
+        let Some(first) = self.outcomes.first().cloned() else {
+            return self.entry;
+        };
+        let agree = |f: fn(&State) -> &Option<FrameRef>| {
+            if self.outcomes.iter().all(|o| f(o) == f(&first)) {
+                f(&first).clone()
+            } else {
+                Some(FrameRef::Unknown)
+            }
+        };
+        State {
+            base: agree(|s| &s.base),
+            tool: agree(|s| &s.tool),
+            tcp: self.outcomes.iter().any(|o| o.tcp),
+        }
+    }
+}
+
+impl State {
+    fn apply(&mut self, s: &Setting, fdats: &HashMap<String, Fdat>) {
+        let data = |n: Option<u32>| n.map_or(FrameRef::Unknown, FrameRef::Data);
+        match s {
+            Setting::Base(r) => self.base = Some(r.clone()),
+            Setting::Tool(r) => self.tool = Some(r.clone()),
+            Setting::Tcp(t) => self.tcp = *t,
+            Setting::FdatValue(f) => {
+                self.base = Some(data(f.base));
+                self.tool = Some(data(f.tool));
+                self.tcp = f.tcp.unwrap_or(false);
+            }
+            Setting::Fdat(name) => {
+                let f = fdats.get(name);
+                self.base = Some(data(f.and_then(|f| f.base)));
+                self.tool = Some(data(f.and_then(|f| f.tool)));
+                self.tcp = f.and_then(|f| f.tcp).unwrap_or(false);
+            }
+            Setting::BaseOfFdat(name) => {
+                self.base = Some(data(fdats.get(name).and_then(|f| f.base)));
+            }
+            Setting::ToolOfFdat(name) => {
+                self.tool = Some(data(fdats.get(name).and_then(|f| f.tool)));
+            }
+            Setting::TcpOfFdat(name) => {
+                self.tcp = fdats.get(name).and_then(|f| f.tcp).unwrap_or(false);
+            }
+        }
+    }
+}
+
+fn record_use(u: &mut Usage, base: &Option<String>, tool: &Option<String>, tcp: bool, line: usize) {
+    if let Some(b) = base {
+        match &u.wobj {
+            None => u.wobj = Some(b.clone()),
+            Some(w) if w != b && !u.other_wobjs.contains(b) => u.other_wobjs.push(b.clone()),
+            Some(_) => {}
+        }
+    }
+    if u.tool.is_none() {
+        u.tool.clone_from(tool);
+    }
+    u.stationary_tool |= tcp;
+    if !u.lines.contains(&line) {
+        u.lines.push(line);
+    }
+}
+
+/// Resolves base, tool and IPO mode of every motion of a program (files in the same order as
+/// `facts`), fills each used position's [`Usage`], promotes used `FRAME`s and candidate
+/// aggregates to positions, and reports motions whose base stays unknown.
+pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
+    let mut fdats: HashMap<String, Fdat> = HashMap::default();
+    for f in facts.iter() {
+        for (k, v) in &f.fdats {
+            fdats.entry(k.clone()).or_insert_with(|| v.clone());
+        }
+    }
+    // Where each declared name lives: (file, in candidates?, index).
+    let mut by_name: HashMap<String, Vec<(usize, bool, usize)>> = HashMap::default();
+    for (fi, (file, fact)) in files.iter().zip(facts.iter()).enumerate() {
+        for (i, p) in file.positions.iter().enumerate() {
+            if let Some(n) = &p.name {
+                by_name.entry(name_key(n)).or_default().push((fi, false, i));
+            }
+        }
+        for (i, p) in fact.candidates.iter().enumerate() {
+            if let Some(n) = &p.name {
+                by_name.entry(name_key(n)).or_default().push((fi, true, i));
+            }
+        }
+    }
+    let mut used_candidates: Vec<Vec<bool>> = facts
+        .iter()
+        .map(|f| vec![false; f.candidates.len()])
+        .collect();
+    // `XP1={…}` in the `.src` of a point the `.dat` declares (`DECL POS XP1`): the declaration
+    // gives the kind, and a non-FRAME declared point is a position whether or not it moves.
+    let mut declared: HashMap<String, PositionKind> = HashMap::default();
+    for f in facts.iter() {
+        for (k, v) in &f.declared {
+            declared.entry(k.clone()).or_insert(*v);
+        }
+    }
+    for (fact, used) in facts.iter_mut().zip(used_candidates.iter_mut()) {
+        let Facts {
+            candidates,
+            inferred,
+            ..
+        } = fact;
+        for ((p, &guessed), u) in candidates.iter_mut().zip(inferred.iter()).zip(used) {
+            let Some(name) = p.name.as_deref().filter(|_| guessed) else {
+                continue;
+            };
+            let key = name_key(name);
+            let base = key.split('[').next().unwrap_or_default();
+            if let Some(&kind) = declared.get(base) {
+                p.kind = kind;
+                if kind == PositionKind::Frame {
+                    p.config = Config::None;
+                } else {
+                    *u = true;
+                }
+            }
+        }
+    }
+    for fi in 0..files.len() {
+        let events = facts
+            .get_mut(fi)
+            .map(|f| std::mem::take(&mut f.events))
+            .unwrap_or_default();
+        let mut state = State::default();
+        let mut aliases: HashMap<&str, &str> = HashMap::default();
+        let mut forks: Vec<Fork> = Vec::new();
+        for ev in &events {
+            match ev {
+                Event::Reset => {
+                    state = State::default();
+                    aliases.clear();
+                    forks.clear();
+                }
+                Event::Branch(b) => match b {
+                    BranchEvent::If | BranchEvent::Switch => {
+                        forks.push(Fork::new(*b == BranchEvent::If, &state));
+                    }
+                    BranchEvent::Otherwise | BranchEvent::Case => {
+                        if let Some(f) = forks.last_mut() {
+                            if f.in_branch {
+                                f.outcomes.push(state.clone());
+                            }
+                            f.in_branch = true;
+                            f.exhaustive |= *b == BranchEvent::Otherwise;
+                            state = f.entry.clone();
+                        }
+                    }
+                    BranchEvent::EndIf | BranchEvent::EndSwitch => {
+                        // Blocks left open inside are joined on the way out.
+                        let want_if = *b == BranchEvent::EndIf;
+                        while let Some(f) = forks.pop() {
+                            let done = f.is_if == want_if;
+                            state = f.join(std::mem::take(&mut state));
+                            if done {
+                                break;
+                            }
+                        }
+                    }
+                },
+                Event::Alias { name, source } => {
+                    aliases.insert(name, source);
+                }
+                Event::Set(s) => state.apply(s, &fdats),
+                Event::Motion {
+                    span,
+                    line,
+                    refs,
+                    with,
+                } => {
+                    let mut local = state.clone();
+                    for s in with {
+                        local.apply(s, &fdats);
+                    }
+                    let base = local.base.as_ref().and_then(base_label);
+                    let tool = local.tool.as_ref().and_then(tool_label);
+                    let mut found = false;
+                    for r in refs {
+                        match r {
+                            Ref::Inline(s) => {
+                                if let Some(p) = files
+                                    .get_mut(fi)
+                                    .and_then(|f| f.positions.iter_mut().find(|p| p.span == *s))
+                                {
+                                    record_use(&mut p.usage, &base, &tool, local.tcp, *line);
+                                    found = true;
+                                }
+                            }
+                            Ref::Named(n) => {
+                                // The name itself, then what it was last copied from.
+                                let mut chain = vec![n.as_str()];
+                                while chain.len() < 8 {
+                                    match chain.last().and_then(|c| aliases.get(c)) {
+                                        Some(next) if !chain.contains(next) => chain.push(next),
+                                        _ => break,
+                                    }
+                                }
+                                let hits = chain.iter().flat_map(|c| {
+                                    by_name.get(*c).map_or(&[][..], Vec::as_slice).iter()
+                                });
+                                for &(f2, cand, i) in hits {
+                                    let p = if cand {
+                                        if let Some(u) =
+                                            used_candidates.get_mut(f2).and_then(|v| v.get_mut(i))
+                                        {
+                                            *u = true;
+                                        }
+                                        facts.get_mut(f2).and_then(|f| f.candidates.get_mut(i))
+                                    } else {
+                                        files.get_mut(f2).and_then(|f| f.positions.get_mut(i))
+                                    };
+                                    if let Some(p) = p {
+                                        record_use(&mut p.usage, &base, &tool, local.tcp, *line);
+                                        found = true;
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    // A motion to a point outside the program (`XHOME` of $config.dat) is not
+                    // this program's business.
+                    if base.is_none()
+                        && found
+                        && let Some(file) = files.get_mut(fi)
+                    {
+                        file.diagnostics.push(
+                            Diagnostic::warning(*span, "the base of this motion is not resolved")
+                                .with_hint(
+                                    "set FDAT_ACT, $BASE=BASE_DATA[n] or BAS(#BASE,n) before it in the same DEF",
+                                ),
+                        );
+                    }
+                }
+            }
+        }
+    }
+    for (fi, file) in files.iter_mut().enumerate() {
+        let (Some(fact), Some(used)) = (facts.get_mut(fi), used_candidates.get(fi)) else {
+            continue;
+        };
+        let cands = std::mem::take(&mut fact.candidates);
+        let mut promoted = false;
+        for (p, &u) in cands.into_iter().zip(used) {
+            if u {
+                file.positions.push(p);
+                promoted = true;
+            } else {
+                fact.candidates.push(p);
+            }
+        }
+        if promoted {
+            file.positions.sort_by_key(|p| p.span.start);
+        }
+        file.diagnostics.sort_by_key(|d| d.span.start);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::position::FrameKind;
+    use std::path::Path;
+
+    #[test]
+    fn branches_that_disagree_leave_the_base_unresolved() {
+        let src = b"DEF b()\n\
+  DECL E6POS XA={X 1}\n  DECL E6POS XB={X 2}\n  DECL E6POS XC={X 3}\n  DECL E6POS XD={X 4}\n\
+  $BASE=BASE_DATA[1]\n\
+  IF $IN[1] THEN\n    $BASE=BASE_DATA[2]\n    LIN XA\n  ELSE\n    $BASE=BASE_DATA[3]\n  ENDIF\n\
+  LIN XB\n\
+  $BASE=BASE_DATA[4]\n  IF $IN[2] THEN\n    $TOOL=TOOL_DATA[1]\n  ENDIF\n  LIN XC\n\
+  SWITCH N\n  CASE 1\n    $BASE=BASE_DATA[4]\n  DEFAULT\n    BAS(#BASE,4)\n  ENDSWITCH\n  LIN XD\n\
+END\n";
+        let f = crate::krl::parse_file(Path::new("b.src"), src.to_vec());
+        let usage: Vec<_> = f
+            .positions
+            .iter()
+            .map(|p| (p.usage.wobj.as_deref(), p.usage.tool.as_deref()))
+            .collect();
+        assert_eq!(
+            usage,
+            [
+                (Some("BASE_DATA[2]"), None),
+                (None, None),
+                (Some("BASE_DATA[4]"), None),
+                (Some("BASE_DATA[4]"), None),
+            ]
+        );
+        let warned: Vec<_> = f
+            .diagnostics
+            .iter()
+            .map(|d| f.lines.line(d.span.start))
+            .collect();
+        assert_eq!(warned, [13]);
+    }
+
+    #[test]
+    fn copies_carry_the_use_to_their_source() {
+        let src = b"DEF a()\n  DECL E6POS XP1={X 1,Y 2,Z 3,A 0,B 0,C 0}\n  DECL E6POS XCOPY\n  $BASE=BASE_DATA[4]\n  XCOPY = XP1\n  XCOPY.Z = XCOPY.Z + 100\n  LIN XCOPY\nEND\n";
+        let f = crate::krl::parse_file(Path::new("a.src"), src.to_vec());
+        assert_eq!(f.positions.len(), 1);
+        let u = &f.positions[0].usage;
+        assert_eq!(u.wobj.as_deref(), Some("BASE_DATA[4]"));
+        assert_eq!(u.lines, [7]);
+    }
+
+    #[test]
+    fn inline_frames_and_inline_fdat_resolve() {
+        let src = b"DEF r()\n  $BASE = {FRAME: X 100, Y 0, Z 0, A 0, B 0, C 0}\n  $TOOL = {FRAME: X 0, Y 0, Z 200, A 0, B 0, C 0}\n  LIN {X 10, Y 20, Z 30, A 0, B 90, C 0, E1 500} C_DIS\n  FDAT_ACT= {TOOL_NO 11, BASE_NO 1, IPO_FRAME #TCP}\n  BAS(#PTP_PARAMS,100)\n  PTP {X 1,Y 2,Z 3}\n  $BASE = EK(MACHINE_DEF[2].ROOT, MACHINE_DEF[2].MECH_TYPE, BASE_DATA[1])\n  LIN {X 5}\nEND\n";
+        let f = crate::krl::parse_file(Path::new("r.src"), src.to_vec());
+        let names: Vec<_> = f.frames.iter().map(|d| (d.name.as_str(), d.kind)).collect();
+        assert_eq!(
+            names,
+            [
+                ("$BASE (line 2)", FrameKind::Base),
+                ("$TOOL (line 3)", FrameKind::Tool)
+            ]
+        );
+        let usage: Vec<_> = f
+            .positions
+            .iter()
+            .map(|p| {
+                (
+                    p.usage.wobj.as_deref(),
+                    p.usage.tool.as_deref(),
+                    p.usage.stationary_tool,
+                )
+            })
+            .collect();
+        assert_eq!(
+            usage,
+            [
+                (Some("$BASE (line 2)"), Some("$TOOL (line 3)"), false),
+                (Some("BASE_DATA[1]"), Some("TOOL_DATA[11]"), true),
+                (None, Some("TOOL_DATA[11]"), true),
+            ]
+        );
+        let unresolved: Vec<_> = f
+            .diagnostics
+            .iter()
+            .map(|d| (f.lines.line(d.span.start), d.message.as_str()))
+            .collect();
+        assert_eq!(unresolved, [(9, "the base of this motion is not resolved")]);
+    }
+}
