@@ -4,5 +4,7 @@
 //! Owned by issue 4.
 
 pub mod profile;
+pub mod simulate;
+pub mod spline;
 
-pub use profile::{Profile, TrackError};
+pub use profile::{Extrapolate, Gear, Knot, Nominal, Profile, Reference, TrackError};
