@@ -3,6 +3,10 @@
 //!
 //! Owned by issue 4.
 
+pub mod csv_table;
+pub mod frames_csv;
+pub mod identify;
+pub mod nominal;
 pub mod profile;
 pub mod simulate;
 pub mod spline;
