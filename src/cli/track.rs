@@ -338,8 +338,8 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         );
         let _ = writeln!(
             s,
-            "  straightness (peak-to-peak about a line): y {:.4} mm, z {:.4} mm; twist (rx peak-to-peak) {:.4} deg",
-            st.straightness_y_mm, st.straightness_z_mm, st.twist_deg
+            "  straightness (peak-to-peak about a line): sideways {:.4} mm, vertical {:.4} mm; twist about the track {:.4} deg peak-to-peak",
+            st.straightness_sideways_mm, st.straightness_vertical_mm, st.twist_deg
         );
     }
     Ok(s)
