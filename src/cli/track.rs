@@ -365,7 +365,13 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
         if step.is_nan() || step <= 0.0 {
             anyhow::bail!("--step {step}: give a positive step in mm");
         }
-        let n = ((s1 - s0) / step + 1e-9).floor() as usize;
+        let count = (s1 - s0) / step + 1e-9;
+        if count > 1e6 {
+            anyhow::bail!(
+                "--step {step} gives {count:.0} rows over {s0} .. {s1} mm; use a larger step"
+            );
+        }
+        let n = count.floor() as usize;
         let mut v: Vec<f64> = (0..=n).map(|i| s0 + i as f64 * step).collect();
         if v.last().is_some_and(|l| (s1 - l).abs() > 1e-9) {
             v.push(s1);
