@@ -3,6 +3,12 @@
 //!
 //! Owned by issue 4.
 
+pub mod csv_table;
+pub mod frames_csv;
+pub mod identify;
+pub mod nominal;
 pub mod profile;
+pub mod simulate;
+pub mod spline;
 
-pub use profile::{Profile, TrackError};
+pub use profile::{Extrapolate, Gear, Knot, Nominal, Profile, Reference, TrackError};

@@ -1,43 +1,548 @@
-//! `profile.toml`: a fitted track profile and its evaluation `D(s)`.
+//! `profile.toml`: a fitted track profile and its evaluation `D(s)` (DESIGN.md §3, §6).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use crate::geometry::Pose;
+use nalgebra::{Translation3, Vector3};
+use serde::{Deserialize, Serialize};
 
+use super::spline::{CubicSpline, EndCondition, SplineError};
+use crate::geometry::{Pose, pose_xyz_deg, xyz_deg};
+
+/// The format tag every profile file starts with.
+pub const PROFILE_FORMAT: &str = "trackfix-profile/1";
+
+/// Everything that can go wrong in the track model, with the file, line or skid it concerns.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum TrackError {
-    #[error("skid {skid} mm is outside the profile's range [{min}, {max}] mm")]
+    /// `D(s)` asked outside `[s_0, s_N]` with `extrapolate = "error"`.
+    #[error(
+        "skid {skid} mm is outside the profile's range [{min}, {max}] mm (measure further, or set extrapolate = \"clamp\" or \"linear\" in the profile)"
+    )]
     OutOfRange { skid: f64, min: f64, max: f64 },
+    /// A file could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A `profile.toml` that TOML or the profile schema rejects; `message` carries toml's
+    /// line and column.
+    #[error("{}: {message}", path.display())]
+    Toml { path: PathBuf, message: String },
+    /// A profile with a format tag this version does not read.
+    #[error("{}: format = {found:?}, expected {PROFILE_FORMAT:?}", path.display())]
+    Format { path: PathBuf, found: String },
+    /// The knots cannot carry a spline (too few, not increasing, not finite).
+    #[error("{context}: {source}")]
+    Knots {
+        context: String,
+        source: SplineError,
+    },
+    /// A CSV input error at `file:line`, in a named column.
+    #[error("{}:{line}: column `{column}`: {message}", path.display())]
+    Csv {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        message: String,
+    },
+    /// Fewer than 3 point pairs at one skid position.
+    #[error(
+        "skid {skid} mm: {count} point(s) measured, a base frame needs at least 3 non-collinear points"
+    )]
+    TooFewPoints { skid: f64, count: usize },
+    /// Point pairs that do not fix a rigid transform (collinear or coincident).
+    #[error("skid {skid} mm: {reason}")]
+    Degenerate { skid: f64, reason: String },
+    /// Anything else that makes the input unusable.
     #[error("{0}")]
     Invalid(String),
 }
 
-/// A fitted track profile.
+/// One sampling position's deviation `D_i` (mm, degrees; DESIGN.md §2 `rx, ry, rz`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Knot {
+    pub skid: f64,
+    pub dx: f64,
+    pub dy: f64,
+    pub dz: f64,
+    pub rx: f64,
+    pub ry: f64,
+    pub rz: f64,
+}
+
+impl Knot {
+    /// `[dx, dy, dz, rx, ry, rz]`.
+    pub fn components(&self) -> [f64; 6] {
+        [self.dx, self.dy, self.dz, self.rx, self.ry, self.rz]
+    }
+
+    /// The knot's pose `D_i`.
+    pub fn pose(&self) -> Pose {
+        pose_xyz_deg(self.dx, self.dy, self.dz, self.rx, self.ry, self.rz)
+    }
+}
+
+/// What `D(s)` does outside `[s_0, s_N]` (DESIGN.md §3.4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Extrapolate {
+    /// Refuse: [`TrackError::OutOfRange`].
+    Error,
+    /// Hold the end value.
+    Clamp,
+    /// Continue the end tangent.
+    Linear,
+}
+
+/// Which straight line the deviations are taken from (DESIGN.md §3.1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Reference {
+    /// Least-squares line of the origins, mean rotation.
+    Regression,
+    /// The first sampling frame.
+    First,
+}
+
+/// Whether the gear factor's drift stays in the profile (DESIGN.md §3.1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+pub enum Gear {
+    /// Keep the controller's gear factor; its drift is part of `D(s)`.
+    #[serde(rename = "as-is")]
+    #[value(name = "as-is")]
+    AsIs,
+    /// The user enters the new gear factor; the drift is removed from `D(s)`.
+    #[serde(rename = "recalibrated")]
+    Recalibrated,
+}
+
+/// The controller's straight track `N(s) = (R_N, origin + s·step)` in the measurement frame.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Nominal {
+    /// `p_0`, mm.
+    pub origin: [f64; 3],
+    /// Unit track axis `u`.
+    pub direction: [f64; 3],
+    /// `R_N` as `[rx, ry, rz]` degrees.
+    pub rotation: [f64; 3],
+    /// `g = |m|`: measured mm per commanded mm (seed eq. 4.4).
+    pub gear_factor: f64,
+}
+
+impl Nominal {
+    /// The identity track: along x from the origin, gear factor 1.
+    pub fn identity() -> Nominal {
+        Nominal {
+            origin: [0.0; 3],
+            direction: [1.0, 0.0, 0.0],
+            rotation: [0.0; 3],
+            gear_factor: 1.0,
+        }
+    }
+}
+
+/// Figures of the fitted deviations, for reports (not used by `D(s)`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProfileStats {
+    /// Number of knots.
+    pub knots: usize,
+    /// RMS over the knots of `|(dx, dy, dz)|`, mm.
+    pub position_rms_mm: f64,
+    /// Largest `|(dx, dy, dz)|`, mm.
+    pub position_max_mm: f64,
+    /// Largest rotation angle of a knot, degrees.
+    pub rotation_max_deg: f64,
+    /// Peak-to-peak of `dy` about its own straight line, mm (sideways straightness).
+    pub straightness_y_mm: f64,
+    /// Peak-to-peak of `dz` about its own straight line, mm (vertical straightness).
+    pub straightness_z_mm: f64,
+    /// Peak-to-peak of `rx` (twist about the track), degrees.
+    pub twist_deg: f64,
+}
+
+/// The on-disk layout, field order = file order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ProfileFile {
+    format: String,
+    name: String,
+    /// sha256 of the frames file the profile was fitted from (empty when built in code).
+    source_sha256: String,
+    reference: Reference,
+    gear: Gear,
+    extrapolate: Extrapolate,
+    nominal: Nominal,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    stats: Option<ProfileStats>,
+    knot: Vec<Knot>,
+}
+
+/// A fitted track profile: the nominal straight track and six natural cubic splines of the
+/// deviation (DESIGN.md §3).
 #[derive(Clone, Debug)]
-pub struct Profile {}
+pub struct Profile {
+    file: ProfileFile,
+    /// dx, dy, dz, rx, ry, rz over skid.
+    splines: [CubicSpline; 6],
+}
+
+impl PartialEq for Profile {
+    fn eq(&self, other: &Profile) -> bool {
+        self.file == other.file
+    }
+}
 
 impl Profile {
-    /// Reads and validates a `profile.toml`.
+    /// A profile from knots alone: identity nominal, reference `regression`, gear `as-is`.
+    pub fn from_knots(
+        name: impl Into<String>,
+        knots: Vec<Knot>,
+        extrapolate: Extrapolate,
+    ) -> Result<Profile, TrackError> {
+        Profile::from_parts(
+            name.into(),
+            String::new(),
+            Reference::Regression,
+            Gear::AsIs,
+            extrapolate,
+            Nominal::identity(),
+            knots,
+        )
+    }
+
+    /// A profile with every field given; statistics are computed from the knots.
+    pub fn from_parts(
+        name: String,
+        source_sha256: String,
+        reference: Reference,
+        gear: Gear,
+        extrapolate: Extrapolate,
+        nominal: Nominal,
+        knots: Vec<Knot>,
+    ) -> Result<Profile, TrackError> {
+        let splines = build_splines(&knots).map_err(|source| TrackError::Knots {
+            context: format!("profile `{name}`"),
+            source,
+        })?;
+        let stats = Some(compute_stats(&knots));
+        Ok(Profile {
+            file: ProfileFile {
+                format: PROFILE_FORMAT.to_string(),
+                name,
+                source_sha256,
+                reference,
+                gear,
+                extrapolate,
+                nominal,
+                stats,
+                knot: knots,
+            },
+            splines,
+        })
+    }
+
+    /// Reads and validates a `profile.toml`: unknown keys are an error, a missing key names
+    /// itself, errors carry the file and toml's line/column.
     pub fn load(path: &Path) -> Result<Profile, TrackError> {
-        Err(TrackError::Invalid(format!(
-            "{}: profiles are not implemented yet",
-            path.display()
-        )))
+        let text = std::fs::read_to_string(path).map_err(|source| TrackError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Profile::from_toml_str(&text, path)
+    }
+
+    /// Parses profile text; `path` is only used in messages.
+    pub fn from_toml_str(text: &str, path: &Path) -> Result<Profile, TrackError> {
+        let file: ProfileFile = toml::from_str(text).map_err(|e| TrackError::Toml {
+            path: path.to_path_buf(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        if file.format != PROFILE_FORMAT {
+            return Err(TrackError::Format {
+                path: path.to_path_buf(),
+                found: file.format,
+            });
+        }
+        let splines = build_splines(&file.knot).map_err(|source| TrackError::Knots {
+            context: format!("{}: [[knot]]", path.display()),
+            source,
+        })?;
+        Ok(Profile { file, splines })
+    }
+
+    /// The profile as TOML text (what [`Profile::save`] writes).
+    pub fn to_toml_string(&self) -> Result<String, TrackError> {
+        let body = toml::to_string(&self.file)
+            .map_err(|e| TrackError::Invalid(format!("cannot write the profile: {e}")))?;
+        Ok(format!(
+            "# trackfix track profile: deviation D(s) of the real robot base from the nominal \
+             straight track,\n# mm and degrees (R = Rz*Ry*Rx), natural cubic splines through the \
+             knots.\n{body}"
+        ))
+    }
+
+    /// Writes the profile atomically.
+    pub fn save(&self, path: &Path) -> Result<(), TrackError> {
+        let text = self.to_toml_string()?;
+        write_atomic(path, text.as_bytes())
     }
 
     /// `[s_0, s_N]`.
     pub fn skid_range(&self) -> (f64, f64) {
-        (0.0, 0.0)
+        self.splines[0].range()
+    }
+
+    /// The profile's name.
+    pub fn name(&self) -> &str {
+        &self.file.name
+    }
+
+    /// sha256 (hex) of the frames file it was fitted from; empty if built in code.
+    pub fn source_sha256(&self) -> &str {
+        &self.file.source_sha256
+    }
+
+    /// The knots `D_i`.
+    pub fn knots(&self) -> &[Knot] {
+        &self.file.knot
+    }
+
+    /// The controller's straight track.
+    pub fn nominal(&self) -> &Nominal {
+        &self.file.nominal
+    }
+
+    pub fn reference(&self) -> Reference {
+        self.file.reference
+    }
+
+    pub fn gear(&self) -> Gear {
+        self.file.gear
+    }
+
+    pub fn extrapolate(&self) -> Extrapolate {
+        self.file.extrapolate
+    }
+
+    /// Fit statistics, if the file has them.
+    pub fn stats(&self) -> Option<&ProfileStats> {
+        self.file.stats.as_ref()
+    }
+
+    /// The six component splines `dx, dy, dz, rx, ry, rz`.
+    pub fn splines(&self) -> &[CubicSpline; 6] {
+        &self.splines
+    }
+
+    /// Same profile, another extrapolation rule.
+    pub fn with_extrapolate(mut self, extrapolate: Extrapolate) -> Profile {
+        self.file.extrapolate = extrapolate;
+        self
+    }
+
+    /// `[dx, dy, dz, rx, ry, rz]` of `D(s)` (mm, degrees), honouring `extrapolate`.
+    pub fn deviation_components(&self, skid: f64) -> Result<[f64; 6], TrackError> {
+        let (min, max) = self.skid_range();
+        if !skid.is_finite() {
+            return Err(TrackError::OutOfRange { skid, min, max });
+        }
+        // A skid written with fewer decimals than the knots must not fall off the end.
+        let tol = 1e-9 * (1.0 + min.abs().max(max.abs()));
+        let inside = skid >= min - tol && skid <= max + tol;
+        let eval = |s: f64| self.splines.clone().map(|sp| sp.value(s));
+        if inside {
+            return Ok(eval(skid.clamp(min, max)));
+        }
+        match self.file.extrapolate {
+            Extrapolate::Error => Err(TrackError::OutOfRange { skid, min, max }),
+            Extrapolate::Clamp => Ok(eval(skid.clamp(min, max))),
+            Extrapolate::Linear => {
+                let end = skid.clamp(min, max);
+                let mut out = [0.0; 6];
+                for (o, sp) in out.iter_mut().zip(&self.splines) {
+                    *o = sp.value(end) + sp.derivative(end) * (skid - end);
+                }
+                Ok(out)
+            }
+        }
     }
 
     /// `D(s)`: the deviation of the real base from the nominal at skid `s`, in the nominal base
     /// frame (DESIGN.md §3). Outside the range per the profile's `extrapolate` setting.
     pub fn deviation(&self, skid: f64) -> Result<Pose, TrackError> {
-        Err(TrackError::OutOfRange {
+        let [dx, dy, dz, rx, ry, rz] = self.deviation_components(skid)?;
+        Ok(pose_xyz_deg(dx, dy, dz, rx, ry, rz))
+    }
+
+    /// `N(s)`: the nominal base frame in the measurement frame (DESIGN.md §3.1); with gear
+    /// `recalibrated` the step per commanded mm is `g·u`, else `u`.
+    pub fn nominal_frame(&self, skid: f64) -> Pose {
+        let n = &self.file.nominal;
+        let u = Vector3::from(n.direction);
+        let step = match self.file.gear {
+            Gear::AsIs => u,
+            Gear::Recalibrated => u * n.gear_factor,
+        };
+        let p = Vector3::from(n.origin) + step * skid;
+        let [rx, ry, rz] = n.rotation;
+        Pose::from_parts(Translation3::from(p), xyz_deg(rx, ry, rz))
+    }
+
+    /// `N(s)·D(s)`: the modelled real base frame in the measurement frame.
+    pub fn base_frame(&self, skid: f64) -> Result<Pose, TrackError> {
+        Ok(self.nominal_frame(skid) * self.deviation(skid)?)
+    }
+}
+
+fn build_splines(knots: &[Knot]) -> Result<[CubicSpline; 6], SplineError> {
+    let xs: Vec<f64> = knots.iter().map(|k| k.skid).collect();
+    let comp = |i: usize| -> Result<CubicSpline, SplineError> {
+        let ys: Vec<f64> = knots
+            .iter()
+            .map(|k| k.components().get(i).copied().unwrap_or(0.0))
+            .collect();
+        CubicSpline::new(&xs, &ys, EndCondition::Natural)
+    };
+    Ok([comp(0)?, comp(1)?, comp(2)?, comp(3)?, comp(4)?, comp(5)?])
+}
+
+/// Least-squares line `y ≈ a + b·x`: `(intercept, slope)`; a single x gives a flat line.
+pub fn line_fit(x: &[f64], y: &[f64]) -> (f64, f64) {
+    let n = x.len().min(y.len()) as f64;
+    if n == 0.0 {
+        return (0.0, 0.0);
+    }
+    let mx = x.iter().sum::<f64>() / n;
+    let my = y.iter().sum::<f64>() / n;
+    let sxx: f64 = x.iter().map(|v| (v - mx) * (v - mx)).sum();
+    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    (my - slope * mx, slope)
+}
+
+/// `y_i - (a + b·x_i)` for the least-squares line.
+pub fn line_residuals(x: &[f64], y: &[f64]) -> Vec<f64> {
+    let (a, b) = line_fit(x, y);
+    x.iter().zip(y).map(|(xi, yi)| yi - (a + b * xi)).collect()
+}
+
+fn peak_to_peak(v: &[f64]) -> f64 {
+    let max = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let min = v.iter().copied().fold(f64::INFINITY, f64::min);
+    if v.is_empty() { 0.0 } else { max - min }
+}
+
+fn compute_stats(knots: &[Knot]) -> ProfileStats {
+    let n = knots.len().max(1) as f64;
+    let pos: Vec<f64> = knots
+        .iter()
+        .map(|k| (k.dx * k.dx + k.dy * k.dy + k.dz * k.dz).sqrt())
+        .collect();
+    let skids: Vec<f64> = knots.iter().map(|k| k.skid).collect();
+    let dy: Vec<f64> = knots.iter().map(|k| k.dy).collect();
+    let dz: Vec<f64> = knots.iter().map(|k| k.dz).collect();
+    let rx: Vec<f64> = knots.iter().map(|k| k.rx).collect();
+    let round = |v: f64| (v * 1e6).round() / 1e6;
+    ProfileStats {
+        knots: knots.len(),
+        position_rms_mm: round((pos.iter().map(|p| p * p).sum::<f64>() / n).sqrt()),
+        position_max_mm: round(pos.iter().copied().fold(0.0, f64::max)),
+        rotation_max_deg: round(
+            knots
+                .iter()
+                .map(|k| k.pose().rotation.angle().to_degrees())
+                .fold(0.0, f64::max),
+        ),
+        straightness_y_mm: round(peak_to_peak(&line_residuals(&skids, &dy))),
+        straightness_z_mm: round(peak_to_peak(&line_residuals(&skids, &dz))),
+        twist_deg: round(peak_to_peak(&rx)),
+    }
+}
+
+/// Writes `bytes` to `path` through a temporary file and a rename (DESIGN.md §5).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrackError> {
+    use std::io::Write;
+    let io = |source| TrackError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut f = atomic_write_file::AtomicWriteFile::open(path).map_err(io)?;
+    f.write_all(bytes).map_err(io)?;
+    f.commit().map_err(io)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn knot(skid: f64, dz: f64, rx: f64) -> Knot {
+        Knot {
             skid,
-            min: 0.0,
-            max: 0.0,
-        })
+            dx: 0.0,
+            dy: 0.0,
+            dz,
+            rx,
+            ry: 0.0,
+            rz: 0.0,
+        }
+    }
+
+    fn sample() -> Profile {
+        Profile::from_knots(
+            "t",
+            vec![
+                knot(0.0, 0.0, 0.0),
+                knot(1000.0, -1.0, 0.01),
+                knot(2000.0, 0.0, 0.0),
+            ],
+            Extrapolate::Error,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn deviation_passes_through_knots_and_refuses_outside() {
+        let p = sample();
+        let d = p.deviation(1000.0).unwrap();
+        assert!((d.translation.z + 1.0).abs() < 1e-12);
+        match p.deviation(2000.5) {
+            Err(TrackError::OutOfRange { skid, min, max }) => {
+                assert_eq!((skid, min, max), (2000.5, 0.0, 2000.0))
+            }
+            other => panic!("{other:?}"),
+        }
+        let c = p.clone().with_extrapolate(Extrapolate::Clamp);
+        assert_eq!(
+            c.deviation_components(2500.0).unwrap(),
+            c.deviation_components(2000.0).unwrap()
+        );
+        let l = p.with_extrapolate(Extrapolate::Linear);
+        let slope = l.splines()[2].derivative(2000.0);
+        let v = l.deviation_components(2100.0).unwrap()[2];
+        assert!((v - 100.0 * slope).abs() < 1e-12);
+    }
+
+    #[test]
+    fn save_load_round_trip() {
+        let p = sample();
+        let text = p.to_toml_string().unwrap();
+        let back = Profile::from_toml_str(&text, Path::new("p.toml")).unwrap();
+        assert_eq!(back, p);
+    }
+
+    #[test]
+    fn unknown_and_missing_keys_are_named() {
+        let text = sample().to_toml_string().unwrap();
+        let bad = text.replace("name = ", "colour = \"red\"\nname = ");
+        let e = Profile::from_toml_str(&bad, Path::new("p.toml")).unwrap_err();
+        assert!(e.to_string().contains("colour"), "{e}");
+        let missing = text.replace("extrapolate = \"error\"\n", "");
+        let e = Profile::from_toml_str(&missing, Path::new("p.toml")).unwrap_err();
+        assert!(e.to_string().contains("extrapolate"), "{e}");
     }
 }

@@ -1,0 +1,94 @@
+//! `frames.csv`: `skid,x,y,z,rx,ry,rz`, the robot base frame at each skid position in the
+//! measurement frame (DESIGN.md §6).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::csv_table::NumericCsv;
+use super::profile::TrackError;
+use crate::geometry::{Pose, pose_to_xyz_deg, pose_xyz_deg};
+
+/// The header of `frames.csv`.
+pub const FRAMES_HEADER: [&str; 7] = ["skid", "x", "y", "z", "rx", "ry", "rz"];
+
+/// The robot base frame identified at one skid position.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SamplingFrame {
+    pub skid: f64,
+    pub pose: Pose,
+}
+
+/// Reads `frames.csv`; rows must be in strictly increasing skid order.
+pub fn read_frames(path: &Path) -> Result<Vec<SamplingFrame>, TrackError> {
+    let bytes = std::fs::read(path).map_err(|source| TrackError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_frames(path, &bytes)
+}
+
+/// Parses `frames.csv` bytes; `path` is for messages only.
+pub fn parse_frames(path: &Path, bytes: &[u8]) -> Result<Vec<SamplingFrame>, TrackError> {
+    let table = NumericCsv::parse(path, bytes)?;
+    let idx = table.columns(&FRAMES_HEADER)?;
+    let mut frames: Vec<SamplingFrame> = Vec::with_capacity(table.rows.len());
+    for row in &table.rows {
+        let v: Vec<f64> = idx.iter().map(|&i| NumericCsv::get(row, i)).collect();
+        let [skid, x, y, z, rx, ry, rz] = v[..] else {
+            continue;
+        };
+        if let Some(prev) = frames.last()
+            && skid <= prev.skid
+        {
+            return Err(TrackError::Csv {
+                path: path.to_path_buf(),
+                line: row.line,
+                column: "skid".to_string(),
+                message: format!(
+                    "skid {skid} does not follow {} in increasing order; sort the rows and remove duplicates",
+                    prev.skid
+                ),
+            });
+        }
+        frames.push(SamplingFrame {
+            skid,
+            pose: pose_xyz_deg(x, y, z, rx, ry, rz),
+        });
+    }
+    if frames.len() < 2 {
+        return Err(TrackError::Invalid(format!(
+            "{}: {} sampling frame(s), a track model needs at least 2",
+            path.display(),
+            frames.len()
+        )));
+    }
+    Ok(frames)
+}
+
+/// `frames.csv` text: mm with 4 decimals, degrees with 6, angles wrapped to (-180, 180].
+pub fn frames_csv(frames: &[SamplingFrame]) -> String {
+    let mut out = FRAMES_HEADER.join(",");
+    out.push('\n');
+    for f in frames {
+        let [x, y, z, rx, ry, rz] = pose_to_xyz_deg(&f.pose);
+        let _ = writeln!(
+            out,
+            "{},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6}",
+            f.skid,
+            clean(x, 4),
+            clean(y, 4),
+            clean(z, 4),
+            clean(rx, 6),
+            clean(ry, 6),
+            clean(rz, 6)
+        );
+    }
+    out
+}
+
+/// Rounds away a `-0.000000` (a negative value below the written precision).
+pub fn clean(v: f64, decimals: i32) -> f64 {
+    let scale = 10f64.powi(decimals);
+    let r = (v * scale).round() / scale;
+    if r == 0.0 { 0.0 } else { r }
+}
