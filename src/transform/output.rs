@@ -75,6 +75,24 @@ fn identity(path: &Path) -> PathBuf {
     }
 }
 
+/// Where one file of a program goes (`several`: the program has more than one file). `None`
+/// for an unchanged file under `--in-place`, which is left alone.
+pub fn output_path(
+    dest: &Destination,
+    input: &Path,
+    several: bool,
+    changed: bool,
+) -> Option<PathBuf> {
+    match dest {
+        Destination::File(out) => match (several, input.extension()) {
+            (true, Some(ext)) => Some(out.with_extension(ext)),
+            _ => Some(out.clone()),
+        },
+        Destination::Dir(dir) => Some(dir.join(input.file_name().unwrap_or_default())),
+        Destination::InPlace { .. } => changed.then(|| input.to_owned()),
+    }
+}
+
 /// Every write of a run, checked: no input is overwritten (except `--in-place`), no file is
 /// written twice. `--in-place` writes only files that change.
 pub fn plan_writes(
@@ -86,55 +104,30 @@ pub fn plan_writes(
         .flat_map(|p| &p.files)
         .map(|f| identity(&f.path))
         .collect();
+    if let (Destination::File(_), n @ 2..) = (dest, programs.len()) {
+        return Err(OutputError::OneOutputManyPrograms { count: n });
+    }
     let mut writes = Vec::new();
-    match dest {
-        Destination::File(out) => {
-            if programs.len() > 1 {
-                return Err(OutputError::OneOutputManyPrograms {
-                    count: programs.len(),
-                });
-            }
-            for p in programs {
-                let several = p.files.len() > 1;
-                for f in &p.files {
-                    let path = match (several, f.path.extension()) {
-                        (true, Some(ext)) => out.with_extension(ext),
-                        _ => out.clone(),
-                    };
-                    writes.push(PlannedWrite {
-                        path,
-                        bytes: f.output.clone(),
-                    });
-                }
-            }
-        }
-        Destination::Dir(dir) => {
-            for f in programs.iter().flat_map(|p| &p.files) {
-                let name = f.path.file_name().unwrap_or_default();
+    for p in programs {
+        let several = p.files.len() > 1;
+        for f in &p.files {
+            let Some(path) = output_path(dest, &f.path, several, f.changed()) else {
+                continue;
+            };
+            if let Destination::InPlace { backup: true } = dest {
                 writes.push(PlannedWrite {
-                    path: dir.join(name),
-                    bytes: f.output.clone(),
+                    path: backup_path(&f.path),
+                    bytes: f.original.clone(),
                 });
             }
+            writes.push(PlannedWrite {
+                path,
+                bytes: f.output.clone(),
+            });
         }
-        Destination::InPlace { backup } => {
-            for f in programs.iter().flat_map(|p| &p.files) {
-                if !f.changed() {
-                    continue;
-                }
-                if *backup {
-                    writes.push(PlannedWrite {
-                        path: backup_path(&f.path),
-                        bytes: f.original.clone(),
-                    });
-                }
-                writes.push(PlannedWrite {
-                    path: f.path.clone(),
-                    bytes: f.output.clone(),
-                });
-            }
-            return check_duplicates(writes);
-        }
+    }
+    if let Destination::InPlace { .. } = dest {
+        return check_duplicates(writes);
     }
     for w in &writes {
         if inputs.contains(&identity(&w.path)) {
