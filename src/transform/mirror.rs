@@ -346,3 +346,183 @@ fn mirror_frames(file: &ParsedFile, refl: &Reflection, edits: &mut Vec<Edit>) {
 pub fn quaternion_of(p: &Pose) -> [f64; 4] {
     wijk(&p.rotation)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{abb_quat, kuka_abc, pose_xyz_deg};
+    use crate::position::Orientation;
+    use crate::transform::edits::apply;
+    use crate::transform::test_support::{krl, rapid};
+    use proptest::prelude::*;
+
+    const NC: &str = "[9E9,9E9,9E9,9E9,9E9,9E9]";
+
+    fn mirrored_text(p: &Program, s: &MirrorSettings) -> String {
+        let out = apply(p, mirror(p, s)).unwrap();
+        String::from_utf8(out.files[0].output.clone()).unwrap()
+    }
+
+    fn quat_of(p: &Position) -> [f64; 4] {
+        match &p.cartesian.as_ref().unwrap().orient {
+            Some(Orientation::Quaternion(q)) => q.clone().map(|f| f.unwrap().value()),
+            _ => panic!("not a quaternion"),
+        }
+    }
+
+    fn same_up_to_sign(a: [f64; 4], b: [f64; 4], tol: f64) -> bool {
+        let plus = a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol);
+        let minus = a.iter().zip(b).all(|(x, y)| (x + y).abs() <= tol);
+        plus || minus
+    }
+
+    /// `../shared/reference/README.md`: RobotStudio's mirror in the work object's xz plane.
+    // The literals are RobotStudio's printed numbers, not approximations of 1/√2 we chose.
+    #[allow(clippy::approx_constant)]
+    #[test]
+    fn reproduces_robotstudio_mirror_numbers() {
+        let src = format!(
+            "[[298.36,100.97,250.58],[0.000000269,0.707107,0.707107,-0.000000268],[0,-1,0,0],{NC}]\n\
+             [[0,0,0],[0,0.707106781,0.707106781,0],[-1,0,-1,0],{NC}]\n"
+        );
+        let text = mirrored_text(&rapid(&src, "wobj0"), &MirrorSettings::default());
+        let m = rapid(&text, "wobj0");
+        let (t50, t10) = (&m.files[0].positions[0], &m.files[0].positions[1]);
+        let trans = t50.cartesian.as_ref().unwrap().translation().unwrap();
+        assert_eq!(trans, [298.36, -100.97, 250.58]);
+        // Quaternions up to the sign of the whole, to the 6 decimals RobotStudio printed.
+        assert!(same_up_to_sign(
+            quat_of(t50),
+            [2.69e-7, -0.707107, 0.707107, 2.68e-7],
+            1e-6
+        ));
+        assert!(same_up_to_sign(
+            quat_of(t10),
+            [0.0, -0.707106781, 0.707106781, 0.0],
+            1e-9
+        ));
+        let cf = |p: &Position| match &p.config {
+            Config::Abb(c) => c.clone().map(|f| f.unwrap().value()),
+            _ => panic!(),
+        };
+        assert_eq!(cf(t50), [-1.0, 0.0, -1.0, 0.0]);
+        assert_eq!(cf(t10), [0.0, -1.0, 0.0, 0.0]);
+        // Unchanged literals keep their text; 9E9 stays 9E9.
+        assert_eq!(
+            text.lines().next().unwrap(),
+            "[[298.36,-100.970,250.58],[0.000000269,-0.707107,0.707107,0.000000268],[-1,0,-1,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"
+        );
+    }
+
+    #[test]
+    fn kuka_xz_mirror_is_minus_a_b_minus_c_with_turn_toggled() {
+        let src = "{X 1200.5,Y 310.25,Z 845,A 30,B 10,C 170,S 6,T 27,E1 2500}\n";
+        let text = mirrored_text(&krl(src, "BASE_DATA[1]"), &MirrorSettings::default());
+        assert_eq!(
+            text,
+            "{X 1200.5,Y -310.250,Z 845,A -30.0000,B 10,C -170.0000,S 6,T 50,E1 2500}\n"
+        );
+        // The same rule through the rotation, for an arbitrary triple.
+        let refl = Reflection::new(&MirrorSettings::default());
+        let t = Pose::from_parts(Default::default(), kuka_abc(-47.3, 61.2, -118.9));
+        let (m, _) = refl.target(&t);
+        let expected = kuka_abc(47.3, 61.2, 118.9);
+        assert!(m.rotation.angle_to(&expected) < 1e-12);
+    }
+
+    #[test]
+    fn config_keep_and_skid_map() {
+        let src = "[[1,2,3],[1,0,0,0],[0,-1,2,1],[2000,9E9,9E9,9E9,9E9,9E9]]\n";
+        let s = MirrorSettings {
+            config: ConfigRule::Keep,
+            skid_map: (-1.0, 8000.0),
+            ..MirrorSettings::default()
+        };
+        let text = mirrored_text(&rapid(src, "wobj0"), &s);
+        assert_eq!(
+            text,
+            "[[1,-2.000,3],[1,0,0,0],[0,-1,2,1],[6000.000,9E9,9E9,9E9,9E9,9E9]]\n"
+        );
+    }
+
+    fn settings() -> impl Strategy<Value = MirrorSettings> {
+        let frame = (
+            -500.0..500.0f64,
+            -500.0..500.0f64,
+            -500.0..500.0f64,
+            -180.0..180.0f64,
+            -89.0..89.0f64,
+            -180.0..180.0f64,
+        );
+        (
+            frame,
+            prop_oneof![Just(Plane::Xy), Just(Plane::Xz), Just(Plane::Yz)],
+            prop_oneof![Just(Axis::X), Just(Axis::Y), Just(Axis::Z)],
+            any::<bool>(),
+        )
+            .prop_map(
+                |((x, y, z, a, b, c), plane, tool_flip, ident)| MirrorSettings {
+                    frame: if ident {
+                        Pose::identity()
+                    } else {
+                        pose_xyz_deg(x, y, z, a, b, c)
+                    },
+                    plane,
+                    tool_flip,
+                    ..MirrorSettings::default()
+                },
+            )
+    }
+
+    fn unit_quat() -> impl Strategy<Value = [f64; 4]> {
+        (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64)
+            .prop_filter("not tiny", |(a, b, c, d)| {
+                a * a + b * b + c * c + d * d > 0.05
+            })
+            .prop_map(|(a, b, c, d)| {
+                let n = (a * a + b * b + c * c + d * d).sqrt();
+                [a / n, b / n, c / n, d / n]
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(128))]
+
+        /// DESIGN.md §4: mirror(mirror(P)) = P in memory, 1e-6 mm, 1e-9 in quaternion components.
+        #[test]
+        fn mirror_twice_in_memory(s in settings(), q in unit_quat(),
+                                  x in -3000.0..3000.0f64, y in -3000.0..3000.0f64, z in -3000.0..3000.0f64) {
+            let refl = Reflection::new(&s);
+            let t = Pose::from_parts(nalgebra::Translation3::new(x, y, z), abb_quat(q).unwrap());
+            let (once, _) = refl.target(&t);
+            let (twice, _) = refl.target(&once);
+            prop_assert!((twice.translation.vector - t.translation.vector).norm() < 1e-6);
+            let back = wijk(&twice.rotation);
+            prop_assert!(same_up_to_sign(back, q, 1e-9), "{back:?} vs {q:?}");
+            // A mirror is a reflection: proper rotation out, improper nowhere.
+            prop_assert!((once.rotation.norm() - 1.0).abs() < 1e-12);
+        }
+
+        /// Through files: twice gives back the same numbers, to the written precision.
+        #[test]
+        fn mirror_twice_through_text(s in settings(), q in unit_quat(),
+                                     x in -3000.0..3000.0f64, y in -3000.0..3000.0f64, z in -3000.0..3000.0f64,
+                                     cf in (-4i64..4, -4i64..4, -4i64..4, 0i64..8)) {
+            let line = format!(
+                "[[{x:.3},{y:.3},{z:.3}],[{:.6},{:.6},{:.6},{:.6}],[{},{},{},{}],[{:.3},9E9,9E9,9E9,9E9,9E9]]\n",
+                q[0], q[1], q[2], q[3], cf.0, cf.1, cf.2, cf.3, x.abs()
+            );
+            let p0 = rapid(&line, "wobj0");
+            let once = mirrored_text(&p0, &s);
+            let twice = mirrored_text(&rapid(&once, "wobj0"), &s);
+            let (a, b) = (&p0.files[0].positions[0], &rapid(&twice, "wobj0").files[0].positions[0]);
+            let ta = a.cartesian.as_ref().unwrap().translation().unwrap();
+            let tb = b.cartesian.as_ref().unwrap().translation().unwrap();
+            for (u, v) in ta.iter().zip(tb) {
+                prop_assert!((u - v).abs() <= 1.5e-3, "{once}{twice}");
+            }
+            prop_assert!(same_up_to_sign(quat_of(a), quat_of(b), 3e-6), "{line}{once}{twice}");
+            prop_assert_eq!(&a.config, &b.config);
+        }
+    }
+}

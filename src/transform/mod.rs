@@ -23,3 +23,6 @@ pub use mirror::{MirrorSettings, mirror};
 pub use refusal::{Refusal, RefusalKind};
 pub use track_correction::{Deviation, Direction, TrackSetup, track_correction};
 pub use transfer::{TransferError, TransferPlan, reparse, transfer};
+
+#[cfg(test)]
+pub(crate) mod test_support;

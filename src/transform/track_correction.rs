@@ -348,3 +348,191 @@ pub(crate) fn axis_name(language: Language, index: usize) -> String {
         Language::Krl => format!("E{}", index + 1),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{abb_quat, pose_xyz_deg};
+    use crate::position::Orientation;
+    use crate::track::profile::{Extrapolate, Knot};
+    use crate::transform::edits::apply;
+    use crate::transform::test_support::{krl, rapid};
+    use proptest::prelude::*;
+
+    fn setup<'a>(dev: &'a dyn Deviation, base0: Pose, axis: Vector3<f64>) -> TrackSetup<'a> {
+        TrackSetup {
+            base0,
+            track_axis: axis.normalize(),
+            skid_axis: 0,
+            frames: BTreeMap::new(),
+            deviation: dev,
+            default_wobj: None,
+        }
+    }
+
+    fn text_after(p: &Program, s: &TrackSetup, dir: Direction) -> String {
+        let r = apply(p, track_correction(p, s, dir)).unwrap();
+        assert!(
+            r.refusals().next().is_none(),
+            "{:?}",
+            r.refusals().collect::<Vec<_>>()
+        );
+        String::from_utf8(r.files[0].output.clone()).unwrap()
+    }
+
+    /// A smooth deformation of a few tenths of a mm and a few thousandths of a degree.
+    fn wavy(s: f64) -> Result<Pose, TrackError> {
+        let u = s / 8000.0 * std::f64::consts::PI;
+        Ok(pose_xyz_deg(
+            0.2 * u.cos(),
+            0.9 * u.sin(),
+            -2.5 * u.sin(),
+            0.03 * (2.0 * u).sin(),
+            0.004 * u.cos(),
+            -0.002 * u.cos(),
+        ))
+    }
+
+    #[test]
+    fn worked_example_sag_lifts_the_target() {
+        // The rails sag 1 mm at every skid: the real base is 1 mm lower than the controller
+        // thinks, so the corrected target must be 1 mm higher for the TCP to land on the CAD
+        // point. Base at skid 0 in world (0, -1800, 0) turned 90° about z, track along +x.
+        let sag = |_s: f64| -> Result<Pose, TrackError> {
+            Ok(pose_xyz_deg(0.0, 0.0, -1.0, 0.0, 0.0, 0.0))
+        };
+        let s = setup(
+            &sag,
+            pose_xyz_deg(0.0, -1800.0, 0.0, 0.0, 0.0, 90.0),
+            Vector3::x(),
+        );
+        let w = pose_xyz_deg(2000.0, 0.0, 600.0, 0.0, 0.0, 0.0);
+        let c = s.correction(&w, 3000.0, Direction::Correct).unwrap();
+        let t = pose_xyz_deg(100.0, 200.0, 300.0, 0.0, 0.0, 0.0);
+        let v = (c * t).translation.vector - t.translation.vector;
+        assert!((v - Vector3::new(0.0, 0.0, 1.0)).norm() < 1e-12, "{v}");
+        // And the physical check of DESIGN.md §4: B·D·B⁻¹·W·T' = W·T.
+        let b = s.base_at(3000.0);
+        let d = sag(3000.0).unwrap();
+        let reached = b * d * b.inverse() * w * (c * t);
+        assert!((reached.translation.vector - (w * t).translation.vector).norm() < 1e-9);
+    }
+
+    #[test]
+    fn twist_turns_about_the_base_not_the_work_object() {
+        // A twist of 0.01° about the base x axis at skid s, with the target 1 m above the base:
+        // the correction moves it sideways by 1000·sin(0.01°) ≈ 0.1745 mm.
+        let twist = |_s: f64| -> Result<Pose, TrackError> {
+            Ok(pose_xyz_deg(0.0, 0.0, 0.0, 0.01, 0.0, 0.0))
+        };
+        let s = setup(&twist, Pose::identity(), Vector3::x());
+        let c = s
+            .correction(&Pose::identity(), 500.0, Direction::Correct)
+            .unwrap();
+        let t = pose_xyz_deg(500.0, 0.0, 1000.0, 0.0, 0.0, 0.0);
+        let moved = (c * t).translation.vector - t.translation.vector;
+        assert!(
+            (moved.y - 1000.0 * 0.01f64.to_radians().sin()).abs() < 1e-9,
+            "{moved}"
+        );
+    }
+
+    #[test]
+    fn zero_deviation_profile_leaves_files_byte_identical() {
+        let knots = (0..5)
+            .map(|i| Knot {
+                skid: i as f64 * 2000.0,
+                dx: 0.0,
+                dy: 0.0,
+                dz: 0.0,
+                rx: 0.0,
+                ry: 0.0,
+                rz: 0.0,
+            })
+            .collect();
+        let profile = crate::track::Profile::from_knots("flat", knots, Extrapolate::Error).unwrap();
+        let src = "[[1200.5,-310.25,845],[0.0436194,0.0,0.9990482,0.0],[0,-1,0,1],[2500,9E9,9E9,9E9,9E9,9E9]]\n\
+                   [[0,0,0],[0.7071,0,0.7071,0],[0,0,0,0],[0,9E+09,9E9,9E9,9E9,9E9]]\n";
+        let s = setup(
+            &profile,
+            pose_xyz_deg(10.0, -1800.0, 5.0, 0.0, 0.0, 90.0),
+            Vector3::x(),
+        );
+        let mut s = s;
+        s.frames.insert(
+            "wobj_car".into(),
+            pose_xyz_deg(2000.0, 0.0, 600.0, 0.0, 0.0, 180.0),
+        );
+        for dir in [Direction::Correct, Direction::Zero] {
+            assert_eq!(text_after(&rapid(src, "wobj_car"), &s, dir), src);
+        }
+        let k = "{X 1200.5,Y 310.25,Z 845,A 30,B 89.99,C 170,S 6,T 27,E1 7999.5}\n";
+        assert_eq!(text_after(&krl(k, "wobj_car"), &s, Direction::Correct), k);
+    }
+
+    fn quat(p: &Position) -> [f64; 4] {
+        match &p.cartesian.as_ref().unwrap().orient {
+            Some(Orientation::Quaternion(q)) => q.clone().map(|f| f.unwrap().value()),
+            _ => panic!(),
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(128))]
+
+        /// DESIGN.md §4: zero(correct(P)) = P in memory, 1e-6 mm and 1e-9 quaternion.
+        #[test]
+        fn zero_undoes_correct_in_memory(
+            base in (-3000.0..3000.0f64, -3000.0..3000.0f64, -500.0..500.0f64, -180.0..180.0f64),
+            axis in (0.5..1.0f64, -0.2..0.2f64, -0.05..0.05f64),
+            w in (-3000.0..3000.0f64, -3000.0..3000.0f64, 0.0..1500.0f64, -180.0..180.0f64, -30.0..30.0f64),
+            t in (-1500.0..1500.0f64, -1500.0..1500.0f64, -500.0..1500.0f64, -180.0..180.0f64, -80.0..80.0f64, -180.0..180.0f64),
+            skid in 0.0..8000.0f64,
+        ) {
+            let s = setup(&wavy, pose_xyz_deg(base.0, base.1, base.2, 0.0, 0.0, base.3), Vector3::new(axis.0, axis.1, axis.2));
+            let w = pose_xyz_deg(w.0, w.1, w.2, 0.0, w.4, w.3);
+            let t = pose_xyz_deg(t.0, t.1, t.2, t.3, t.4, t.5);
+            let corrected = s.correction(&w, skid, Direction::Correct).unwrap() * t;
+            let back = s.correction(&w, skid, Direction::Zero).unwrap() * corrected;
+            prop_assert!((back.translation.vector - t.translation.vector).norm() < 1e-6);
+            let (a, b) = (back.rotation.quaternion(), t.rotation.quaternion());
+            prop_assert!((a.coords - b.coords).amax() < 1e-9 || (a.coords + b.coords).amax() < 1e-9);
+            // The correction is a real one (tenths of mm), not a no-op.
+            prop_assert!((corrected.translation.vector - t.translation.vector).norm() > 1e-3);
+        }
+
+        /// Through text: zero(correct(file)) gives back the file's numbers to written precision.
+        #[test]
+        fn zero_undoes_correct_through_text(
+            q in (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64).prop_filter("norm", |q| q.0*q.0+q.1*q.1+q.2*q.2+q.3*q.3 > 0.05),
+            x in -1500.0..1500.0f64, y in -1500.0..1500.0f64, z in -500.0..1500.0f64,
+            skid in 0.0..8000.0f64,
+            abc in (-180.0..180.0f64, -85.0..85.0f64, -180.0..180.0f64),
+        ) {
+            let n = (q.0*q.0+q.1*q.1+q.2*q.2+q.3*q.3).sqrt();
+            let q = [q.0/n, q.1/n, q.2/n, q.3/n];
+            let mut s = setup(&wavy, pose_xyz_deg(0.0, -1800.0, 0.0, 0.0, 0.0, 90.0), Vector3::x());
+            s.frames.insert("wobj_car".into(), pose_xyz_deg(2000.0, 0.0, 600.0, 0.0, 0.0, 180.0));
+            let line = format!("[[{x:.3},{y:.3},{z:.3}],[{:.6},{:.6},{:.6},{:.6}],[0,0,0,0],[{skid:.2},9E9,9E9,9E9,9E9,9E9]]\n", q[0], q[1], q[2], q[3]);
+            let p0 = rapid(&line, "wobj_car");
+            let c = text_after(&p0, &s, Direction::Correct);
+            prop_assert_ne!(&c, &line);
+            let back = text_after(&rapid(&c, "wobj_car"), &s, Direction::Zero);
+            let p1 = rapid(&back, "wobj_car");
+            let (a, b) = (&p0.files[0].positions[0], &p1.files[0].positions[0]);
+            let (ta, tb) = (a.cartesian.as_ref().unwrap().translation().unwrap(), b.cartesian.as_ref().unwrap().translation().unwrap());
+            for (u, v) in ta.iter().zip(tb) { prop_assert!((u - v).abs() <= 1.5e-3, "{line}{c}{back}"); }
+            let ra = abb_quat(quat(a)).unwrap();
+            let rb = abb_quat(quat(b)).unwrap();
+            prop_assert!(ra.angle_to(&rb) < 1e-5, "{line}{c}{back}");
+            // KUKA through text as well.
+            let kl = format!("{{X {x:.3},Y {y:.3},Z {z:.3},A {:.4},B {:.4},C {:.4},S 2,T 0,E1 {skid:.2}}}\n", abc.0, abc.1, abc.2);
+            let kc = text_after(&krl(&kl, "wobj_car"), &s, Direction::Correct);
+            let kb = text_after(&krl(&kc, "wobj_car"), &s, Direction::Zero);
+            let (ka, kz) = (krl(&kl, "w").files[0].positions[0].cartesian.clone().unwrap(), krl(&kb, "w").files[0].positions[0].cartesian.clone().unwrap());
+            let (pa, pz) = (ka.pose().unwrap(), kz.pose().unwrap());
+            prop_assert!((pa.translation.vector - pz.translation.vector).amax() <= 1.5e-3, "{kl}{kc}{kb}");
+            prop_assert!(pa.rotation.angle_to(&pz.rotation).to_degrees() < 3e-4, "{kl}{kc}{kb}");
+        }
+    }
+}
