@@ -1,25 +1,70 @@
 //! ABB RAPID: lossless lexer, parser and printer, and the positions found in a module.
 //!
 //! Owned by issue 2. Grammar: `grammars/rapid.ebnf`.
+//!
+//! ```
+//! use std::path::Path;
+//! let src = b"MODULE m\r\n  CONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[500,9E9,9E9,9E9,9E9,9E9]];\r\nENDMODULE".to_vec();
+//! let file = trackfix::rapid::parse_file(Path::new("m.mod"), src.clone());
+//! assert!(file.round_trip);
+//! assert_eq!(trackfix::rapid::print(&src), src);
+//! assert_eq!(file.positions.len(), 1);
+//! ```
+
+pub mod expr;
+pub mod lexer;
+pub mod parser;
+pub mod positions;
+pub mod tree;
 
 use std::path::Path;
 
+pub use parser::{Parse, parse};
+pub use tree::{Node, NodeKind, Tree};
+
 use crate::position::{Language, ParsedFile};
-use crate::syntax::LineIndex;
+use crate::syntax::{Diagnostic, LineIndex};
+
+/// Parses `src` into its lossless tree only (no positions): the fast path.
+pub fn parse_tree(src: &[u8]) -> Parse {
+    parse(src, &mut parser::NoSink)
+}
+
+/// `print(parse(src))`: the bytes the tree prints. Equal to `src` for every input.
+pub fn print(src: &[u8]) -> Vec<u8> {
+    parse_tree(src).tree.print(src)
+}
 
 /// Parses one RAPID module. Never fails: what the grammar does not know is kept verbatim and
 /// reported in the file's diagnostics.
 pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
+    let lines = LineIndex::new(&source);
+    let mut extractor = positions::Extractor::new(&lines);
+    let parsed = parse(&source, &mut extractor);
+    let extracted = extractor.finish();
+    let round_trip = parsed.tree.prints_back(&source);
+    let mut diagnostics = parsed.diagnostics;
+    if !round_trip {
+        diagnostics.push(
+            Diagnostic::error(
+                crate::syntax::Span::new(0, 0),
+                "internal error: the parsed tree does not print back to the file",
+            )
+            .with_hint("please report this file; trackfix will not rewrite it"),
+        );
+    }
+    diagnostics.extend(extracted.diagnostics);
+    diagnostics.sort_by_key(|d| (d.span.start, std::cmp::Reverse(d.severity)));
     ParsedFile {
         path: path.to_owned(),
         language: Language::Rapid,
-        lines: LineIndex::new(&source),
+        lines,
         source,
-        positions: Vec::new(),
-        frames: Vec::new(),
-        offsets: Vec::new(),
-        opaque: 0,
-        diagnostics: Vec::new(),
-        round_trip: true,
+        positions: extracted.positions,
+        frames: extracted.frames,
+        offsets: extracted.offsets,
+        opaque: parsed.opaque,
+        diagnostics,
+        round_trip,
     }
 }

@@ -1,0 +1,418 @@
+//! The RAPID lexer: bytes in, tokens with byte spans out, trivia included.
+//!
+//! Every byte of the source belongs to exactly one token, so concatenating the tokens gives the
+//! source back. Whitespace, each newline (`\n`, `\r\n`, bare `\r`), `!` comments, a BOM and
+//! `%%%` header lines are tokens like any other; the parser skips them but the tree keeps them.
+//!
+//! The lexer streams: it keeps no token vector (a 50 MB module has ~20 M tokens, and a vector of
+//! them would be larger than the file). It dispatches on the first byte by hand; the few
+//! multi-byte shapes (numbers, identifiers) are small nom 8 recognisers over bytes.
+
+use nom::IResult;
+use nom::Parser as _;
+use nom::bytes::complete::{tag_no_case, take_while, take_while1};
+use nom::character::complete::{digit0, digit1, one_of};
+use nom::combinator::{opt, recognize};
+
+use crate::syntax::BOM;
+
+/// What a token is. Trivia kinds are listed first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TokenKind {
+    /// Spaces, tabs, form feeds, a DOS end-of-file byte (0x1A).
+    Whitespace,
+    /// `\n`, `\r\n` or a bare `\r`.
+    Newline,
+    /// `!` up to (not including) the end of the line; any bytes, Latin-1 included.
+    Comment,
+    /// The UTF-8 byte order mark at offset 0.
+    Bom,
+    /// One line of a `%%%` header block, from the opening `%%%` line to the closing one.
+    HeaderLine,
+    /// Letters, digits and `_`, starting with a letter or `_`; keywords are identifiers too
+    /// (RAPID keywords are case-insensitive and resolved by the parser).
+    Ident,
+    /// `12`, `-` excluded; `1.5`, `.5`, `1.`, `9E9`, `9E+09`, `2.69e-7`, `0xFF`, `0b101`, `0o17`.
+    Number,
+    /// `"..."` with `""` for a quote inside; any bytes.
+    Str,
+    /// A string without its closing quote before the end of the line.
+    UnterminatedStr,
+    /// An editor placeholder: `<SMT>`, `<EXP>`, `<ARG>`, `<ID>`, `<DN>`, ...
+    Placeholder,
+    /// `:=`
+    Assign,
+    /// `<=`, `>=`, `<>`
+    Compare2,
+    /// Any other single ASCII punctuation byte: `( ) [ ] { } , ; : = + - * / < > \ . % ? ^`.
+    Punct,
+    /// Bytes that cannot start any token (non-ASCII or control bytes outside comments/strings).
+    Unknown,
+    /// End of input (empty span).
+    Eof,
+}
+
+impl TokenKind {
+    /// Whitespace, newlines, comments, the BOM: what the parser steps over.
+    pub fn is_trivia(self) -> bool {
+        matches!(
+            self,
+            TokenKind::Whitespace | TokenKind::Newline | TokenKind::Comment | TokenKind::Bom
+        )
+    }
+}
+
+/// A token: its kind and the byte range `start..end` of the source (u32 keeps it 12 bytes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Token {
+    pub kind: TokenKind,
+    pub start: u32,
+    pub end: u32,
+}
+
+impl Token {
+    pub fn span(self) -> crate::syntax::Span {
+        crate::syntax::Span::new(self.start as usize, self.end as usize)
+    }
+
+    /// The token's bytes (empty if the token does not fit `src`; never panics).
+    pub fn text(self, src: &[u8]) -> &[u8] {
+        src.get(self.start as usize..self.end as usize)
+            .unwrap_or(&[])
+    }
+
+    /// The single punctuation byte of a [`TokenKind::Punct`] token, else 0.
+    pub fn punct(self, src: &[u8]) -> u8 {
+        if self.kind == TokenKind::Punct {
+            src.get(self.start as usize).copied().unwrap_or(0)
+        } else {
+            0
+        }
+    }
+}
+
+/// Editor placeholders RobotStudio and the FlexPendant write into unfinished code.
+const PLACEHOLDERS: &[&[u8]] = &[
+    b"SMT", b"EXP", b"ARG", b"ID", b"DN", b"VAR", b"PAR", b"TDN", b"DDN", b"RDN", b"DIM", b"CSE",
+    b"ALT", b"EIT", b"TYPE", b"ANY",
+];
+
+/// A streaming lexer. Cheap to copy, which is how the parser looks ahead.
+#[derive(Clone, Copy, Debug)]
+pub struct Lexer<'a> {
+    src: &'a [u8],
+    pos: usize,
+    /// Inside a `%%%` header block (between the opening and closing `%%%` lines).
+    in_header: bool,
+    /// At the start of a line (only whitespace seen since the last newline).
+    line_start: bool,
+}
+
+impl<'a> Lexer<'a> {
+    /// Sources longer than `u32::MAX` bytes are not lexed (the parser reports them).
+    pub fn new(src: &'a [u8]) -> Lexer<'a> {
+        Lexer {
+            src,
+            pos: 0,
+            in_header: false,
+            line_start: true,
+        }
+    }
+
+    pub fn offset(&self) -> usize {
+        self.pos
+    }
+
+    fn token(&mut self, kind: TokenKind, len: usize) -> Token {
+        let start = self.pos;
+        self.pos = (start + len).min(self.src.len());
+        Token {
+            kind,
+            start: start as u32,
+            end: self.pos as u32,
+        }
+    }
+
+    /// The next token; [`TokenKind::Eof`] (empty) at the end, forever.
+    pub fn next_token(&mut self) -> Token {
+        let rest = self.src.get(self.pos..).unwrap_or(&[]);
+        let Some(&b) = rest.first() else {
+            return self.token(TokenKind::Eof, 0);
+        };
+        let at_line_start = self.line_start;
+        self.line_start = false;
+        if b == b'\n' || b == b'\r' {
+            self.line_start = true;
+            let len = if b == b'\r' && rest.get(1) == Some(&b'\n') {
+                2
+            } else {
+                1
+            };
+            return self.token(TokenKind::Newline, len);
+        }
+        if self.in_header || (at_line_start && rest.starts_with(b"%%%")) {
+            // A header line runs to the end of the line; the block closes at the second `%%%`.
+            let len = line_len(rest);
+            if self.in_header && rest.starts_with(b"%%%") {
+                self.in_header = false;
+            } else if !self.in_header {
+                self.in_header = true;
+            }
+            return self.token(TokenKind::HeaderLine, len);
+        }
+        match b {
+            b' ' | b'\t' | 0x0C | 0x1A => {
+                self.line_start = at_line_start;
+                let len = rest
+                    .iter()
+                    .position(|&c| !matches!(c, b' ' | b'\t' | 0x0C | 0x1A))
+                    .unwrap_or(rest.len());
+                self.token(TokenKind::Whitespace, len)
+            }
+            b'!' => self.token(TokenKind::Comment, line_len(rest)),
+            b'"' => {
+                let (kind, len) = string_len(rest);
+                self.token(kind, len)
+            }
+            b'a'..=b'z' | b'A'..=b'Z' | b'_' => {
+                let len = ident(rest).map_or(1, |(_, m)| m.len());
+                self.token(TokenKind::Ident, len)
+            }
+            b'0'..=b'9' => {
+                let len = number(rest).map_or(1, |(_, m)| m.len());
+                self.token(TokenKind::Number, len)
+            }
+            b'.' if rest.get(1).is_some_and(u8::is_ascii_digit) => {
+                let len = number(rest).map_or(1, |(_, m)| m.len());
+                self.token(TokenKind::Number, len)
+            }
+            b':' if rest.get(1) == Some(&b'=') => self.token(TokenKind::Assign, 2),
+            b'<' | b'>' if matches!(rest.get(1), Some(b'=')) => self.token(TokenKind::Compare2, 2),
+            b'<' if rest.get(1) == Some(&b'>') => self.token(TokenKind::Compare2, 2),
+            b'<' => match placeholder_len(rest) {
+                Some(len) => self.token(TokenKind::Placeholder, len),
+                None => self.token(TokenKind::Punct, 1),
+            },
+            0xEF if self.pos == 0 && rest.starts_with(BOM) => {
+                self.line_start = true;
+                self.token(TokenKind::Bom, BOM.len())
+            }
+            b'(' | b')' | b'[' | b']' | b'{' | b'}' | b',' | b';' | b':' | b'=' | b'+' | b'-'
+            | b'*' | b'/' | b'>' | b'\\' | b'.' | b'%' | b'?' | b'^' | b'&' | b'#' | b'@'
+            | b'$' | b'|' | b'\'' | b'~' | b'`' => self.token(TokenKind::Punct, 1),
+            _ => {
+                let len = rest
+                    .iter()
+                    .position(|&c| {
+                        c.is_ascii_graphic() || matches!(c, b' ' | b'\t' | b'\n' | b'\r')
+                    })
+                    .unwrap_or(rest.len())
+                    .max(1);
+                self.token(TokenKind::Unknown, len)
+            }
+        }
+    }
+}
+
+impl Iterator for Lexer<'_> {
+    type Item = Token;
+
+    fn next(&mut self) -> Option<Token> {
+        let t = self.next_token();
+        (t.kind != TokenKind::Eof).then_some(t)
+    }
+}
+
+/// Every token of `src`, trivia included (for tests and tools; the parser streams instead).
+pub fn tokenize(src: &[u8]) -> Vec<Token> {
+    Lexer::new(src).collect()
+}
+
+fn line_len(rest: &[u8]) -> usize {
+    rest.iter()
+        .position(|&c| c == b'\n' || c == b'\r')
+        .unwrap_or(rest.len())
+}
+
+/// A string up to its closing quote (`""` is a quote inside); unterminated at the line's end.
+fn string_len(rest: &[u8]) -> (TokenKind, usize) {
+    let mut i = 1;
+    while let Some(&c) = rest.get(i) {
+        match c {
+            b'"' if rest.get(i + 1) == Some(&b'"') => i += 2,
+            b'"' => return (TokenKind::Str, i + 1),
+            b'\n' | b'\r' => return (TokenKind::UnterminatedStr, i),
+            _ => i += 1,
+        }
+    }
+    (TokenKind::UnterminatedStr, i)
+}
+
+fn placeholder_len(rest: &[u8]) -> Option<usize> {
+    let close = rest.iter().take(7).position(|&c| c == b'>')?;
+    let name = rest.get(1..close)?;
+    PLACEHOLDERS.contains(&name).then_some(close + 1)
+}
+
+/// `ident = letter { letter | digit | "_" }` (grammars/rapid.ebnf).
+fn ident(i: &[u8]) -> IResult<&[u8], &[u8]> {
+    recognize((
+        take_while1(|c: u8| c.is_ascii_alphabetic() || c == b'_'),
+        take_while(|c: u8| c.is_ascii_alphanumeric() || c == b'_'),
+    ))
+    .parse(i)
+}
+
+/// `number = based | decimal [ exponent ]` (grammars/rapid.ebnf). A trailing `E` without
+/// digits is not part of the number (`1E` lexes as `1` then `E`).
+fn number(i: &[u8]) -> IResult<&[u8], &[u8]> {
+    if let Ok(r) = based(i) {
+        return Ok(r);
+    }
+    recognize((
+        digit0,
+        opt((nom::character::complete::char('.'), digit0)),
+        opt((one_of("eE"), opt(one_of("+-")), digit1)),
+    ))
+    .parse(i)
+}
+
+/// `based = "0x" hexdigits | "0b" bits | "0o" octdigits`.
+fn based(i: &[u8]) -> IResult<&[u8], &[u8]> {
+    let (rest, prefix) =
+        nom::branch::alt((tag_no_case("0x"), tag_no_case("0b"), tag_no_case("0o"))).parse(i)?;
+    let radix = match prefix.get(1).map(u8::to_ascii_lowercase) {
+        Some(b'x') => 16,
+        Some(b'b') => 2,
+        _ => 8,
+    };
+    let (rest, _) = take_while1(move |c: u8| (c as char).is_digit(radix)).parse(rest)?;
+    Ok((rest, i.get(..i.len() - rest.len()).unwrap_or(i)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn kinds(src: &[u8]) -> Vec<(TokenKind, String)> {
+        tokenize(src)
+            .into_iter()
+            .map(|t| (t.kind, crate::syntax::latin1(t.text(src))))
+            .collect()
+    }
+
+    fn concat(src: &[u8]) -> Vec<u8> {
+        tokenize(src)
+            .into_iter()
+            .flat_map(|t| t.text(src).to_vec())
+            .collect()
+    }
+
+    #[test]
+    fn every_newline_style_is_one_token() {
+        use TokenKind::*;
+        let src = b"a\r\nb\rc\nd";
+        assert_eq!(
+            kinds(src),
+            vec![
+                (Ident, "a".into()),
+                (Newline, "\r\n".into()),
+                (Ident, "b".into()),
+                (Newline, "\r".into()),
+                (Ident, "c".into()),
+                (Newline, "\n".into()),
+                (Ident, "d".into()),
+            ]
+        );
+    }
+
+    #[test]
+    fn numbers_in_every_style() {
+        for text in [
+            "9E9", "9E+09", "9E+9", "9e9", ".5", "1.", "12", "1.25", "2.69E-07", "0xFF", "0b101",
+            "0o17",
+        ] {
+            let toks = tokenize(text.as_bytes());
+            assert_eq!(toks.len(), 1, "{text}");
+            assert_eq!(toks[0].kind, TokenKind::Number, "{text}");
+        }
+        // `1E` is a number then an identifier: the exponent needs digits.
+        let toks = tokenize(b"1E;");
+        assert_eq!(toks[0].text(b"1E;"), b"1");
+        assert_eq!(toks[1].kind, TokenKind::Ident);
+    }
+
+    #[test]
+    fn strings_with_doubled_quotes_and_latin1() {
+        let src = b"\"say \"\"hi\"\" \xE4\" x";
+        let toks = tokenize(src);
+        assert_eq!(toks[0].kind, TokenKind::Str);
+        assert_eq!(toks[0].end as usize, src.len() - 2);
+        let bad = b"\"open\r\nx";
+        assert_eq!(tokenize(bad)[0].kind, TokenKind::UnterminatedStr);
+        assert_eq!(tokenize(bad)[0].text(bad), b"\"open");
+    }
+
+    #[test]
+    fn comments_keep_windows_1252_bytes() {
+        let src = b"! Schwei\xDFpunkt \x80\r\nx";
+        let toks = tokenize(src);
+        assert_eq!(toks[0].kind, TokenKind::Comment);
+        assert_eq!(toks[0].text(src), b"! Schwei\xDFpunkt \x80");
+        assert_eq!(toks[1].kind, TokenKind::Newline);
+    }
+
+    #[test]
+    fn bom_and_header_block() {
+        let src = b"\xEF\xBB\xBF%%%\r\n  VERSION:1\r\n  LANGUAGE:ENGLISH\r\n%%%\r\n\r\nMODULE m";
+        use TokenKind::*;
+        let k: Vec<TokenKind> = tokenize(src).into_iter().map(|t| t.kind).collect();
+        assert_eq!(
+            k,
+            vec![
+                Bom, HeaderLine, Newline, HeaderLine, Newline, HeaderLine, Newline, HeaderLine,
+                Newline, Newline, Ident, Whitespace, Ident
+            ]
+        );
+        assert_eq!(concat(src), src);
+    }
+
+    #[test]
+    fn percent_inside_code_is_late_binding_not_header() {
+        let src = b"  %\"proc\"+\"1\"%;";
+        let toks = tokenize(src);
+        assert_eq!(toks[1].kind, TokenKind::Punct);
+        assert_eq!(toks[1].text(src), b"%");
+    }
+
+    #[test]
+    fn placeholders_and_operators() {
+        use TokenKind::*;
+        assert_eq!(
+            kinds(b"<SMT> a<=b <> <EXP> x<y"),
+            vec![
+                (Placeholder, "<SMT>".into()),
+                (Whitespace, " ".into()),
+                (Ident, "a".into()),
+                (Compare2, "<=".into()),
+                (Ident, "b".into()),
+                (Whitespace, " ".into()),
+                (Compare2, "<>".into()),
+                (Whitespace, " ".into()),
+                (Placeholder, "<EXP>".into()),
+                (Whitespace, " ".into()),
+                (Ident, "x".into()),
+                (Punct, "<".into()),
+                (Ident, "y".into()),
+            ]
+        );
+        assert_eq!(kinds(b":=")[0].0, Assign);
+    }
+
+    #[test]
+    fn unknown_bytes_are_kept() {
+        let src = b"a \xC3\xA9 \x01b";
+        assert_eq!(concat(src), src);
+        assert!(tokenize(src).iter().any(|t| t.kind == TokenKind::Unknown));
+    }
+}

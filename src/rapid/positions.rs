@@ -1,0 +1,675 @@
+//! Targets, frames and offsets of a RAPID module, into the shared position model.
+//!
+//! The parser hands every statement to [`Extractor`] while the statement's expressions are still
+//! in the arena. Declarations give named targets and frames; any expression may hold inline
+//! robtarget/jointtarget literals and `Offs`/`RelTool` calls; procedure calls give usage (work
+//! object and tool). Usage is resolved at the end, because RAPID lets a routine use data declared
+//! further down the module.
+
+use std::collections::HashMap;
+
+use super::expr::{Arena, ExprKind};
+use super::parser::{StatementSink, Stmt};
+use crate::position::{
+    CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, Orientation,
+    Position, PositionKind, Usage,
+};
+use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, latin1};
+
+/// Instruction name prefixes that move the robot (or set up a move): their targets get the
+/// default work object `wobj0` when no `\WObj` is given.
+const MOTION_PREFIXES: &[&str] = &[
+    "move", "search", "trigg", "arc", "spot", "paint", "cap", "disp", "laser", "glue", "nut", "sm",
+    "trigl", "trigj", "trigc", "contact",
+];
+
+/// What a module-scope name was declared as (for duplicate and tool/wobj detection).
+#[derive(Clone, Debug)]
+struct Symbol {
+    name: String,
+    type_lower: String,
+    span: Span,
+    module_scope: bool,
+}
+
+/// A procedure call, kept until every declaration has been read.
+#[derive(Clone, Debug)]
+struct CallUse {
+    name_lower: String,
+    line: usize,
+    /// `\WObj:=` value text.
+    wobj: Option<String>,
+    /// `\Tool:=` value text.
+    tool: Option<String>,
+    /// Positional arguments that are plain references (`p10`, `pArr{3}`): lookup key and text.
+    positional: Vec<Option<(String, String)>>,
+    /// Targets referenced through `Offs`/`RelTool` first arguments.
+    via_offset: Vec<String>,
+    /// Inline literals written in the call's arguments (indices into `positions`).
+    inline: Vec<usize>,
+}
+
+/// Collects positions, frames, offsets and usage from the parsed statements.
+pub struct Extractor<'l> {
+    lines: &'l LineIndex,
+    positions: Vec<Position>,
+    frames: Vec<FrameDecl>,
+    offsets: Vec<OffsetCall>,
+    symbols: Vec<Symbol>,
+    uses: Vec<CallUse>,
+}
+
+/// What [`Extractor::finish`] returns.
+pub struct Extracted {
+    pub positions: Vec<Position>,
+    pub frames: Vec<FrameDecl>,
+    pub offsets: Vec<OffsetCall>,
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+fn text_of(src: &[u8], span: Span) -> String {
+    latin1(span.slice(src))
+}
+
+/// A reference as a lookup key: lower case, no whitespace (`pArr{ 2 }` → `parr{2}`).
+fn key(src: &[u8], span: Span) -> String {
+    span.slice(src)
+        .iter()
+        .filter(|b| !b.is_ascii_whitespace())
+        .map(|&b| (b as char).to_ascii_lowercase())
+        .collect()
+}
+
+impl<'l> Extractor<'l> {
+    pub fn new(lines: &'l LineIndex) -> Extractor<'l> {
+        Extractor {
+            lines,
+            positions: Vec::new(),
+            frames: Vec::new(),
+            offsets: Vec::new(),
+            symbols: Vec::new(),
+            uses: Vec::new(),
+        }
+    }
+
+    fn num(&self, src: &[u8], arena: &Arena, id: u32) -> Option<NumField> {
+        let n = arena.get(id)?;
+        if n.kind != ExprKind::Num {
+            return None;
+        }
+        let span = n.span();
+        Some(NumField {
+            span,
+            lit: NumLit::parse(span.slice(src))?,
+        })
+    }
+
+    /// The first `N` elements of an aggregate as numeric fields (`None` where not a literal).
+    fn nums<const N: usize>(
+        &self,
+        src: &[u8],
+        arena: &Arena,
+        id: Option<u32>,
+    ) -> [Option<NumField>; N] {
+        let mut out: [Option<NumField>; N] = std::array::from_fn(|_| None);
+        if let Some(id) =
+            id.filter(|&id| arena.get(id).is_some_and(|n| n.kind == ExprKind::Aggregate))
+        {
+            for (slot, child) in out.iter_mut().zip(arena.children(id)) {
+                *slot = self.num(src, arena, child);
+            }
+        }
+        out
+    }
+
+    fn nums_vec(&self, src: &[u8], arena: &Arena, id: Option<u32>) -> Vec<Option<NumField>> {
+        match id.filter(|&id| arena.get(id).is_some_and(|n| n.kind == ExprKind::Aggregate)) {
+            Some(id) => arena
+                .children(id)
+                .map(|c| self.num(src, arena, c))
+                .collect(),
+            None => Vec::new(),
+        }
+    }
+
+    /// `[[x,y,z],[q1,q2,q3,q4]]` (a pose) as Cartesian fields.
+    fn pose_fields(&self, src: &[u8], arena: &Arena, id: Option<u32>) -> Option<CartesianFields> {
+        let id = id?;
+        if arena.get(id)?.kind != ExprKind::Aggregate {
+            return None;
+        }
+        let mut parts = arena.children(id);
+        let trans = parts.next();
+        let rot = parts.next();
+        Some(CartesianFields {
+            trans: self.nums::<3>(src, arena, trans),
+            orient: Some(Orientation::Quaternion(self.nums::<4>(src, arena, rot))),
+        })
+    }
+
+    fn agg_len(arena: &Arena, id: u32) -> Option<usize> {
+        let n = arena.get(id)?;
+        (n.kind == ExprKind::Aggregate).then(|| arena.children(id).count())
+    }
+
+    /// The kind of target an aggregate literal is, by shape: robtarget
+    /// `[[3],[4],[4],[6]]`, jointtarget `[[6],[6]]`.
+    fn literal_kind(arena: &Arena, id: u32) -> Option<PositionKind> {
+        let parts: Vec<u32> = arena.children(id).take(5).collect();
+        let lens: Vec<Option<usize>> = parts.iter().map(|&c| Self::agg_len(arena, c)).collect();
+        match lens.as_slice() {
+            [Some(3), Some(4), Some(4), Some(6)] => Some(PositionKind::Robtarget),
+            [Some(6), Some(6)] => Some(PositionKind::Jointtarget),
+            _ => None,
+        }
+    }
+
+    fn position(
+        &self,
+        src: &[u8],
+        arena: &Arena,
+        id: u32,
+        kind: PositionKind,
+        name: Option<String>,
+    ) -> Option<Position> {
+        let n = arena.get(id)?;
+        if n.kind != ExprKind::Aggregate {
+            return None;
+        }
+        let span = n.span();
+        let (line, column) = self.lines.line_col(span.start);
+        let mut parts = arena.children(id);
+        let (cartesian, joints, config, extax) = match kind {
+            PositionKind::Jointtarget => {
+                let rax = parts.next();
+                let eax = parts.next();
+                (
+                    None,
+                    self.nums_vec(src, arena, rax),
+                    Config::None,
+                    self.nums_vec(src, arena, eax),
+                )
+            }
+            _ => {
+                let trans = parts.next();
+                let rot = parts.next();
+                let conf = parts.next();
+                let eax = parts.next();
+                (
+                    Some(CartesianFields {
+                        trans: self.nums::<3>(src, arena, trans),
+                        orient: Some(Orientation::Quaternion(self.nums::<4>(src, arena, rot))),
+                    }),
+                    Vec::new(),
+                    Config::Abb(self.nums::<4>(src, arena, conf)),
+                    self.nums_vec(src, arena, eax),
+                )
+            }
+        };
+        Some(Position {
+            name,
+            kind,
+            span,
+            line,
+            column,
+            cartesian,
+            joints,
+            config,
+            extax,
+            usage: Usage::default(),
+        })
+    }
+
+    /// The elements of a declared value with `dims` array dimensions, with their 1-based
+    /// indices (`[]` for a scalar).
+    fn elements(
+        arena: &Arena,
+        id: u32,
+        dims: u8,
+        prefix: &mut Vec<usize>,
+        out: &mut Vec<(String, u32)>,
+    ) {
+        if dims == 0 {
+            let suffix = if prefix.is_empty() {
+                String::new()
+            } else {
+                let idx: Vec<String> = prefix.iter().map(usize::to_string).collect();
+                format!("{{{}}}", idx.join(","))
+            };
+            out.push((suffix, id));
+            return;
+        }
+        if arena.get(id).is_some_and(|n| n.kind == ExprKind::Aggregate) {
+            for (k, child) in arena.children(id).enumerate() {
+                prefix.push(k + 1);
+                Self::elements(arena, child, dims - 1, prefix, out);
+                prefix.pop();
+            }
+        }
+    }
+
+    fn bool_of(src: &[u8], arena: &Arena, id: Option<u32>) -> Option<bool> {
+        let n = arena.get(id?)?;
+        if n.kind != ExprKind::Ident {
+            return None;
+        }
+        let t = n.span().slice(src);
+        if t.eq_ignore_ascii_case(b"TRUE") {
+            Some(true)
+        } else if t.eq_ignore_ascii_case(b"FALSE") {
+            Some(false)
+        } else {
+            None
+        }
+    }
+
+    fn frame(
+        &self,
+        src: &[u8],
+        arena: &Arena,
+        id: Option<u32>,
+        kind: FrameKind,
+        name: String,
+        decl_span: Span,
+    ) -> FrameDecl {
+        let agg = id.filter(|&i| arena.get(i).is_some_and(|n| n.kind == ExprKind::Aggregate));
+        let span = agg
+            .and_then(|i| arena.get(i))
+            .map_or(decl_span, |n| n.span());
+        let mut f = FrameDecl {
+            name,
+            kind,
+            span,
+            line: self.lines.line(span.start),
+            robhold: None,
+            ufprog: None,
+            ufmec: None,
+            frame: None,
+            oframe: None,
+        };
+        let Some(agg) = agg else {
+            return f;
+        };
+        let parts: Vec<u32> = arena.children(agg).take(5).collect();
+        let part = |i: usize| parts.get(i).copied();
+        f.robhold = Self::bool_of(src, arena, part(0));
+        match kind {
+            FrameKind::WorkObject => {
+                f.ufprog = Self::bool_of(src, arena, part(1));
+                f.ufmec = part(2)
+                    .and_then(|i| arena.get(i))
+                    .filter(|n| n.kind == ExprKind::Str)
+                    .map(|n| {
+                        let t = text_of(src, n.span());
+                        t.trim_matches('"').replace("\"\"", "\"")
+                    });
+                f.frame = self.pose_fields(src, arena, part(3));
+                f.oframe = self.pose_fields(src, arena, part(4));
+            }
+            _ => f.frame = self.pose_fields(src, arena, part(1)),
+        }
+        f
+    }
+
+    /// Inline target literals and `Offs`/`RelTool` calls anywhere in the statement's
+    /// expressions. Returns the indices of the positions added.
+    fn scan(&mut self, src: &[u8], arena: &Arena, literals: bool) -> (Vec<usize>, Vec<String>) {
+        let mut added = Vec::new();
+        let mut refs = Vec::new();
+        let mut skip_until = 0u32;
+        for (i, n) in arena.nodes.iter().enumerate() {
+            let i = i as u32;
+            match n.kind {
+                ExprKind::Aggregate if literals && i >= skip_until => {
+                    if let Some(kind) = Self::literal_kind(arena, i) {
+                        if let Some(p) = self.position(src, arena, i, kind, None) {
+                            added.push(self.positions.len());
+                            self.positions.push(p);
+                            skip_until = n.subtree_end;
+                        }
+                    }
+                }
+                ExprKind::Call => {
+                    let name = n.name_span().slice(src);
+                    let kind = if name.eq_ignore_ascii_case(b"Offs") {
+                        OffsetKind::Offs
+                    } else if name.eq_ignore_ascii_case(b"RelTool") {
+                        OffsetKind::RelTool
+                    } else {
+                        continue;
+                    };
+                    let mut positional = Vec::new();
+                    let mut rot: [Option<NumField>; 3] = [None, None, None];
+                    for a in arena.children(i) {
+                        let Some(arg) = arena.get(a) else { continue };
+                        let value = arena
+                            .arg_value(a)
+                            .filter(|_| arg.first != super::expr::NONE);
+                        if arg.switch {
+                            let nm = arg.name_span().slice(src);
+                            let slot = if nm.eq_ignore_ascii_case(b"Rx") {
+                                0
+                            } else if nm.eq_ignore_ascii_case(b"Ry") {
+                                1
+                            } else if nm.eq_ignore_ascii_case(b"Rz") {
+                                2
+                            } else {
+                                continue;
+                            };
+                            if let (Some(v), Some(r)) = (value, rot.get_mut(slot)) {
+                                *r = self.num(src, arena, v);
+                            }
+                        } else if let Some(v) = value {
+                            positional.push(v);
+                        }
+                    }
+                    let target = positional
+                        .first()
+                        .and_then(|&v| arena.get(v))
+                        .map(|v| text_of(src, v.span()))
+                        .unwrap_or_default();
+                    if let Some(v) = positional.first().and_then(|&v| arena.get(v)) {
+                        if matches!(v.kind, ExprKind::Ident | ExprKind::Access) {
+                            refs.push(key(src, v.span()));
+                        }
+                    }
+                    let delta =
+                        [1, 2, 3].map(|k| positional.get(k).and_then(|&v| self.num(src, arena, v)));
+                    let span = n.span();
+                    self.offsets.push(OffsetCall {
+                        kind,
+                        span,
+                        line: self.lines.line(span.start),
+                        target,
+                        delta,
+                        rot,
+                    });
+                }
+                _ => {}
+            }
+        }
+        (added, refs)
+    }
+
+    /// Resolves usage and lints; consumes the extractor.
+    pub fn finish(mut self) -> Extracted {
+        let mut diagnostics = Vec::new();
+        // Names declared twice in the module scope.
+        let mut seen: HashMap<String, usize> = HashMap::new();
+        for (i, s) in self.symbols.iter().enumerate() {
+            if !s.module_scope {
+                continue;
+            }
+            let k = s.name.to_ascii_lowercase();
+            if let Some(&first) = seen.get(&k) {
+                let line = self
+                    .symbols
+                    .get(first)
+                    .map_or(0, |f| self.lines.line(f.span.start));
+                diagnostics.push(
+                    Diagnostic::warning(
+                        s.span,
+                        format!(
+                            "`{}` is declared twice in the module (first on line {line})",
+                            s.name
+                        ),
+                    )
+                    .with_hint(
+                        "rename or remove one declaration; RAPID names are case-insensitive",
+                    ),
+                );
+            } else {
+                seen.insert(k, i);
+            }
+        }
+        let type_of: HashMap<String, &str> = self
+            .symbols
+            .iter()
+            .map(|s| (s.name.to_ascii_lowercase(), s.type_lower.as_str()))
+            .collect();
+        let is_tool = |n: &str| n == "tool0" || type_of.get(n).is_some_and(|t| *t == "tooldata");
+        let is_zone = |n: &str| {
+            n == "fine"
+                || (n.len() > 1
+                    && n.starts_with('z')
+                    && n.bytes().skip(1).all(|b| b.is_ascii_digit()))
+                || type_of.get(n).is_some_and(|t| *t == "zonedata")
+        };
+        let is_speed = |n: &str| {
+            n == "vmax"
+                || (n.len() > 1
+                    && n.starts_with('v')
+                    && n.bytes().skip(1).all(|b| b.is_ascii_digit()))
+                || type_of.get(n).is_some_and(|t| *t == "speeddata")
+        };
+        let robhold: HashMap<String, bool> = self
+            .frames
+            .iter()
+            .filter(|f| f.kind == FrameKind::WorkObject)
+            .filter_map(|f| Some((f.name.to_ascii_lowercase(), f.robhold?)))
+            .collect();
+        let mut by_name: HashMap<String, Vec<usize>> = HashMap::new();
+        for (i, p) in self.positions.iter().enumerate() {
+            if let Some(n) = &p.name {
+                let lower = n.to_ascii_lowercase();
+                if let Some(base) = lower.split('{').next().filter(|b| b.len() < lower.len()) {
+                    by_name.entry(base.to_owned()).or_default().push(i);
+                }
+                by_name.entry(lower).or_default().push(i);
+            }
+        }
+        let lookup = |r: &str| -> Vec<usize> {
+            if let Some(v) = by_name.get(r) {
+                return v.clone();
+            }
+            // `pArr{i}` with a variable index: every element of the array may be used.
+            match r.split('{').next() {
+                Some(base) if base.len() < r.len() => {
+                    by_name.get(base).cloned().unwrap_or_default()
+                }
+                _ => Vec::new(),
+            }
+        };
+        for u in &self.uses {
+            let names: Vec<&str> = u
+                .positional
+                .iter()
+                .map(|p| p.as_ref().map_or("", |(k, _)| k.as_str()))
+                .collect();
+            let written = |i: usize| -> Option<String> {
+                u.positional.get(i)?.as_ref().map(|(_, t)| t.clone())
+            };
+            let tool = u.tool.clone().or_else(|| {
+                if let Some(i) = names.iter().position(|n| is_tool(n)) {
+                    return written(i);
+                }
+                let after = names.iter().position(|n| is_zone(n)).or_else(|| {
+                    u.name_lower
+                        .starts_with("search")
+                        .then(|| names.iter().position(|n| is_speed(n)))
+                        .flatten()
+                })?;
+                written(after + 1)
+            });
+            let motion = MOTION_PREFIXES.iter().any(|p| u.name_lower.starts_with(p));
+            let wobj = u
+                .wobj
+                .clone()
+                .or_else(|| (motion || tool.is_some()).then(|| "wobj0".to_owned()));
+            let mut targets: Vec<usize> = u.inline.clone();
+            let refs = u.positional.iter().flatten().map(|(k, _)| k);
+            for r in refs.chain(u.via_offset.iter()) {
+                targets.extend(lookup(r));
+            }
+            targets.sort_unstable();
+            targets.dedup();
+            for t in targets {
+                let Some(p) = self.positions.get_mut(t) else {
+                    continue;
+                };
+                let usage = &mut p.usage;
+                if usage.lines.last() != Some(&u.line) {
+                    usage.lines.push(u.line);
+                }
+                if let Some(w) = &wobj {
+                    match &usage.wobj {
+                        None => usage.wobj = Some(w.clone()),
+                        Some(first) if first.eq_ignore_ascii_case(w) => {}
+                        Some(_) => {
+                            if !usage.other_wobjs.iter().any(|o| o.eq_ignore_ascii_case(w)) {
+                                usage.other_wobjs.push(w.clone());
+                            }
+                        }
+                    }
+                    if robhold.get(&w.to_ascii_lowercase()) == Some(&true) {
+                        usage.stationary_tool = true;
+                    }
+                }
+                if usage.tool.is_none() {
+                    usage.tool = tool.clone();
+                }
+            }
+        }
+        for p in &self.positions {
+            if p.usage.other_wobjs.is_empty() {
+                continue;
+            }
+            let mut all = vec![p.usage.wobj.clone().unwrap_or_default()];
+            all.extend(p.usage.other_wobjs.iter().cloned());
+            let lines: Vec<String> = p.usage.lines.iter().map(usize::to_string).collect();
+            diagnostics.push(
+                Diagnostic::warning(
+                    p.span,
+                    format!(
+                        "target `{}` is used with {} work objects ({}) on lines {}",
+                        p.label(),
+                        all.len(),
+                        all.join(", "),
+                        lines.join(", ")
+                    ),
+                )
+                .with_hint(
+                    "a transform cannot move it for both; declare one target per work object",
+                ),
+            );
+        }
+        Extracted {
+            positions: self.positions,
+            frames: self.frames,
+            offsets: self.offsets,
+            diagnostics,
+        }
+    }
+}
+
+impl StatementSink for Extractor<'_> {
+    fn statement(&mut self, src: &[u8], arena: &Arena, stmt: &Stmt, span: Span) {
+        match *stmt {
+            Stmt::Decl {
+                type_name,
+                name,
+                dims,
+                init,
+                module_scope,
+                ..
+            } => {
+                let ty = type_name.slice(src).to_ascii_lowercase();
+                let name_text = text_of(src, name);
+                self.symbols.push(Symbol {
+                    name: name_text.clone(),
+                    type_lower: latin1(&ty),
+                    span: name,
+                    module_scope,
+                });
+                let target_kind = match ty.as_slice() {
+                    b"robtarget" => Some(PositionKind::Robtarget),
+                    b"jointtarget" => Some(PositionKind::Jointtarget),
+                    _ => None,
+                };
+                let frame_kind = match ty.as_slice() {
+                    b"wobjdata" => Some(FrameKind::WorkObject),
+                    b"tooldata" => Some(FrameKind::Tool),
+                    _ => None,
+                };
+                let mut elements = Vec::new();
+                if let Some(init) = init {
+                    Self::elements(arena, init, dims, &mut Vec::new(), &mut elements);
+                }
+                if let Some(kind) = target_kind {
+                    for (suffix, id) in &elements {
+                        let full = format!("{name_text}{suffix}");
+                        if let Some(p) = self.position(src, arena, *id, kind, Some(full)) {
+                            self.positions.push(p);
+                        }
+                    }
+                    self.scan(src, arena, false);
+                } else if let Some(kind) = frame_kind {
+                    if elements.is_empty() {
+                        let f = self.frame(src, arena, None, kind, name_text.clone(), name);
+                        self.frames.push(f);
+                    }
+                    for (suffix, id) in &elements {
+                        let f = self.frame(
+                            src,
+                            arena,
+                            Some(*id),
+                            kind,
+                            format!("{name_text}{suffix}"),
+                            name,
+                        );
+                        self.frames.push(f);
+                    }
+                    self.scan(src, arena, false);
+                } else {
+                    // Records holding targets: their robtarget-shaped parts are still found.
+                    self.scan(src, arena, true);
+                }
+            }
+            Stmt::Routine { name } => self.symbols.push(Symbol {
+                name: text_of(src, name),
+                type_lower: "routine".to_owned(),
+                span: name,
+                module_scope: true,
+            }),
+            Stmt::Call { name, args } => {
+                let (inline, via_offset) = self.scan(src, arena, true);
+                let mut u = CallUse {
+                    name_lower: text_of(src, name).to_ascii_lowercase(),
+                    line: self.lines.line(span.start),
+                    wobj: None,
+                    tool: None,
+                    positional: Vec::new(),
+                    via_offset,
+                    inline,
+                };
+                for a in arena.children(args) {
+                    let Some(arg) = arena.get(a) else { continue };
+                    let value = if arg.first == super::expr::NONE {
+                        None
+                    } else {
+                        arena.get(arg.first)
+                    };
+                    if arg.switch {
+                        let nm = arg.name_span().slice(src);
+                        let v = value.map(|v| text_of(src, v.span()).trim().to_owned());
+                        if nm.eq_ignore_ascii_case(b"WObj") {
+                            u.wobj = v;
+                        } else if nm.eq_ignore_ascii_case(b"Tool") {
+                            u.tool = v;
+                        }
+                    } else {
+                        u.positional.push(
+                            value
+                                .filter(|v| matches!(v.kind, ExprKind::Ident | ExprKind::Access))
+                                .map(|v| (key(src, v.span()), text_of(src, v.span()))),
+                        );
+                    }
+                }
+                self.uses.push(u);
+            }
+            Stmt::Other => {
+                self.scan(src, arena, true);
+            }
+        }
+    }
+}
