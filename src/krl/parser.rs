@@ -1,0 +1,1085 @@
+//! KRL parser: lines into nodes, statements into [`Stmt`]s. Never fails: a line it does not know
+//! or cannot parse becomes an [`NodeKind::Opaque`] node with a located diagnostic.
+//!
+//! Each function names the `grammars/krl.ebnf` rule it implements.
+
+use super::lexer::{Token, TokenKind, lex};
+use super::tree::{
+    Aggregate, DeclVar, Expr, ExprKind, Field, Node, NodeKind, Stmt, StmtKind, Tree,
+};
+use crate::syntax::{Diagnostic, Span};
+
+/// The result of parsing one file.
+#[derive(Clone, Debug, Default)]
+pub struct Parse {
+    pub tree: Tree,
+    pub diagnostics: Vec<Diagnostic>,
+    /// Lines kept verbatim because the grammar does not know them or could not parse them.
+    pub opaque: usize,
+}
+
+/// Motion keywords (rule `motion`). `_REL` forms move relative to the current position.
+pub const MOTION_KEYWORDS: &[&str] = &[
+    "PTP",
+    "LIN",
+    "CIRC",
+    "SPTP",
+    "SLIN",
+    "SCIRC",
+    "SPL",
+    "PTP_REL",
+    "LIN_REL",
+    "CIRC_REL",
+    "SPTP_REL",
+    "SLIN_REL",
+    "SCIRC_REL",
+];
+
+const APPROXIMATION: &[&str] = &["C_DIS", "C_PTP", "C_VEL", "C_ORI", "C_SPL", "C_AUTO"];
+
+const SIMPLE_KEYWORDS: &[&str] = &[
+    "WAIT",
+    "HALT",
+    "CONTINUE",
+    "EXIT",
+    "GOTO",
+    "RETURN",
+    "INTERRUPT",
+    "TRIGGER",
+    "BRAKE",
+    "RESUME",
+    "ANIN",
+    "ANOUT",
+    "ON_ERROR_PROCEED",
+    "CONST_VEL",
+    "TIME_BLOCK",
+    "STOP",
+];
+
+const DECL_KEYWORDS: &[&str] = &[
+    "STRUC", "ENUM", "SIGNAL", "EXT", "EXTFCT", "EXTP", "EXTFCTP", "IMPORT", "CONST",
+];
+
+const BINARY_WORDS: &[&str] = &["AND", "OR", "EXOR", "B_AND", "B_OR", "B_EXOR"];
+
+/// Up to 16 bytes of a keyword candidate, upper-cased, without allocating.
+#[derive(Clone, Copy)]
+struct Word {
+    buf: [u8; 16],
+    len: usize,
+}
+
+impl Word {
+    fn of(text: &[u8]) -> Word {
+        let mut buf = [0u8; 16];
+        let len = if text.len() <= 16 { text.len() } else { 0 };
+        for (d, s) in buf.iter_mut().zip(text.iter().take(len)) {
+            *d = s.to_ascii_uppercase();
+        }
+        Word { buf, len }
+    }
+
+    fn as_str(&self) -> &str {
+        std::str::from_utf8(self.buf.get(..self.len).unwrap_or(&[])).unwrap_or("")
+    }
+}
+
+fn is_kw(src: &[u8], t: Option<&Token>, kw: &str) -> bool {
+    t.is_some_and(|t| t.kind == TokenKind::Ident && t.text(src).eq_ignore_ascii_case(kw.as_bytes()))
+}
+
+fn is_punct(src: &[u8], t: Option<&Token>, p: &[u8]) -> bool {
+    t.is_some_and(|t| t.kind == TokenKind::Punct && t.text(src) == p)
+}
+
+/// An error inside a statement: where, what, and what to do.
+struct PErr {
+    span: Span,
+    message: String,
+    hint: &'static str,
+}
+
+type PResult<T> = Result<T, PErr>;
+
+/// A cursor over the significant tokens of one line.
+struct Cursor<'a> {
+    src: &'a [u8],
+    toks: &'a [Token],
+    pos: usize,
+    /// Where "end of statement" is, for messages.
+    eol: Span,
+}
+
+impl<'a> Cursor<'a> {
+    fn peek(&self) -> Option<&'a Token> {
+        self.toks.get(self.pos)
+    }
+
+    fn peek_at(&self, n: usize) -> Option<&'a Token> {
+        self.toks.get(self.pos + n)
+    }
+
+    fn bump(&mut self) -> Option<&'a Token> {
+        let t = self.toks.get(self.pos);
+        if t.is_some() {
+            self.pos += 1;
+        }
+        t
+    }
+
+    fn at_end(&self) -> bool {
+        self.pos >= self.toks.len()
+    }
+
+    fn here(&self) -> Span {
+        self.peek().map_or(self.eol, |t| t.span())
+    }
+
+    fn text(&self, t: &Token) -> String {
+        crate::syntax::latin1(t.text(self.src))
+    }
+
+    fn err<T>(&self, message: String, hint: &'static str) -> PResult<T> {
+        Err(PErr {
+            span: self.here(),
+            message,
+            hint,
+        })
+    }
+
+    fn found(&self) -> String {
+        match self.peek() {
+            Some(t) => format!("`{}`", self.text(t)),
+            None => "end of line".to_owned(),
+        }
+    }
+
+    fn expect_punct(&mut self, p: &[u8], hint: &'static str) -> PResult<Span> {
+        if is_punct(self.src, self.peek(), p) {
+            Ok(self.bump().map(|t| t.span()).unwrap_or(self.eol))
+        } else {
+            self.err(
+                format!(
+                    "expected `{}`, found {}",
+                    String::from_utf8_lossy(p),
+                    self.found()
+                ),
+                hint,
+            )
+        }
+    }
+
+    fn expect_ident(&mut self, what: &str, hint: &'static str) -> PResult<Span> {
+        match self.peek() {
+            Some(t) if t.kind == TokenKind::Ident => {
+                self.pos += 1;
+                Ok(t.span())
+            }
+            _ => self.err(format!("expected {what}, found {}", self.found()), hint),
+        }
+    }
+
+    fn expect_end(&self, after: &str) -> PResult<()> {
+        if self.at_end() {
+            Ok(())
+        } else {
+            self.err(
+                format!("unexpected {} after {after}", self.found()),
+                "one KRL statement per line; move the rest to its own line or comment it out with `;`",
+            )
+        }
+    }
+
+    fn is_kw(&self, kw: &str) -> bool {
+        is_kw(self.src, self.peek(), kw)
+    }
+
+    fn is_punct(&self, p: &[u8]) -> bool {
+        is_punct(self.src, self.peek(), p)
+    }
+
+    /// Rule `expr`: precedence climbing; `:` (geometric operator) binds tightest.
+    fn expr(&mut self) -> PResult<Expr> {
+        self.binary(0)
+    }
+
+    fn binary_prec(&self) -> Option<u8> {
+        let t = self.peek()?;
+        match t.kind {
+            TokenKind::Punct => match t.text(self.src) {
+                b":" => Some(6),
+                b"*" | b"/" => Some(5),
+                b"+" | b"-" => Some(4),
+                b"==" | b"<>" | b"<" | b">" | b"<=" | b">=" => Some(3),
+                _ => None,
+            },
+            TokenKind::Ident => {
+                let w = Word::of(t.text(self.src));
+                match w.as_str() {
+                    "AND" | "B_AND" => Some(2),
+                    s if BINARY_WORDS.contains(&s) => Some(1),
+                    _ => None,
+                }
+            }
+            _ => None,
+        }
+    }
+
+    fn binary(&mut self, min: u8) -> PResult<Expr> {
+        let mut lhs = self.unary()?;
+        while let Some(prec) = self.binary_prec() {
+            if prec < min {
+                break;
+            }
+            let op = self.bump().map(|t| t.span()).unwrap_or(self.eol);
+            let rhs = self.binary(prec + 1)?;
+            lhs = Expr {
+                span: lhs.span.cover(rhs.span),
+                kind: ExprKind::Binary(Box::new(lhs), op, Box::new(rhs)),
+            };
+        }
+        Ok(lhs)
+    }
+
+    /// Rule `unary`. A sign written directly in front of a number is part of the literal.
+    fn unary(&mut self) -> PResult<Expr> {
+        let sign = self.is_punct(b"-") || self.is_punct(b"+");
+        if sign || self.is_kw("NOT") || self.is_kw("B_NOT") {
+            let op = self.bump().map(|t| t.span()).unwrap_or(self.eol);
+            let inner = self.unary()?;
+            if sign && inner.kind == ExprKind::Number && inner.span.start == op.end {
+                return Ok(Expr {
+                    span: op.cover(inner.span),
+                    kind: ExprKind::Number,
+                });
+            }
+            return Ok(Expr {
+                span: op.cover(inner.span),
+                kind: ExprKind::Unary(op, Box::new(inner)),
+            });
+        }
+        self.postfix()
+    }
+
+    /// Rule `postfix`: indexing, calls and member access.
+    fn postfix(&mut self) -> PResult<Expr> {
+        let mut e = self.primary()?;
+        loop {
+            if self.is_punct(b"[") {
+                self.pos += 1;
+                let args = self.list(b"]")?;
+                let close = self.expect_punct(b"]", "close the index with `]`")?;
+                e = Expr {
+                    span: e.span.cover(close),
+                    kind: ExprKind::Index(Box::new(e), args),
+                };
+            } else if self.is_punct(b"(") {
+                self.pos += 1;
+                let args = self.list(b")")?;
+                let close = self.expect_punct(b")", "close the argument list with `)`")?;
+                e = Expr {
+                    span: e.span.cover(close),
+                    kind: ExprKind::Call(Box::new(e), args),
+                };
+            } else if self.is_punct(b".") {
+                self.pos += 1;
+                let field = self.expect_ident("a field name after `.`", "write `name.field`")?;
+                e = Expr {
+                    span: e.span.cover(field),
+                    kind: ExprKind::Member(Box::new(e), field),
+                };
+            } else {
+                return Ok(e);
+            }
+        }
+    }
+
+    /// Rule `list`: comma-separated, entries may be empty (`TOOL_NAME[1,]`, `F()`).
+    fn list(&mut self, close: &[u8]) -> PResult<Vec<Option<Expr>>> {
+        let mut out = Vec::new();
+        if self.is_punct(close) {
+            return Ok(out);
+        }
+        loop {
+            if self.is_punct(b",") || self.is_punct(close) {
+                out.push(None);
+            } else {
+                out.push(Some(self.expr()?));
+            }
+            if self.is_punct(b",") {
+                self.pos += 1;
+            } else {
+                return Ok(out);
+            }
+        }
+    }
+
+    /// Rule `primary`.
+    fn primary(&mut self) -> PResult<Expr> {
+        let Some(t) = self.peek() else {
+            return self.err(
+                "expected a value, found end of line".to_owned(),
+                "complete the expression",
+            );
+        };
+        let kind = match t.kind {
+            TokenKind::Number => ExprKind::Number,
+            TokenKind::Str => ExprKind::Str,
+            TokenKind::Quoted => ExprKind::Quoted,
+            TokenKind::Enum => ExprKind::Enum,
+            TokenKind::Ident => ExprKind::Name,
+            TokenKind::Punct if t.text(self.src) == b"{" => return self.aggregate(),
+            TokenKind::Punct if t.text(self.src) == b"(" => {
+                self.pos += 1;
+                let inner = self.expr()?;
+                let close = self.expect_punct(b")", "close the parenthesis")?;
+                return Ok(Expr {
+                    span: t.span().cover(close),
+                    kind: ExprKind::Paren(Box::new(inner)),
+                });
+            }
+            TokenKind::Unterminated => {
+                return self.err(
+                    "string without its closing quote".to_owned(),
+                    "close the string on the same line",
+                );
+            }
+            _ => {
+                return self.err(
+                    format!("expected a value, found {}", self.found()),
+                    "write a number, a name, a string or a `{…}` aggregate here",
+                );
+            }
+        };
+        self.pos += 1;
+        Ok(Expr {
+            span: t.span(),
+            kind,
+        })
+    }
+
+    /// Rule `aggregate`: `{ [TYPE :] field {, field} }`.
+    fn aggregate(&mut self) -> PResult<Expr> {
+        let open = self.bump().map(|t| t.span()).unwrap_or(self.eol);
+        let mut type_name = None;
+        if self.peek().is_some_and(|t| t.kind == TokenKind::Ident)
+            && is_punct(self.src, self.peek_at(1), b":")
+        {
+            type_name = self.peek().map(|t| t.span());
+            self.pos += 2;
+        }
+        let mut fields = Vec::new();
+        if !self.is_punct(b"}") {
+            loop {
+                let name = self.expect_ident(
+                    "a field name",
+                    "aggregates are written `{NAME value, NAME value}`",
+                )?;
+                // Char-array fields: `POINT2[] " "`.
+                if self.is_punct(b"[") && is_punct(self.src, self.peek_at(1), b"]") {
+                    self.pos += 2;
+                }
+                let value = self.expr()?;
+                fields.push(Field { name, value });
+                if self.is_punct(b",") {
+                    self.pos += 1;
+                } else {
+                    break;
+                }
+            }
+        }
+        let close = self.expect_punct(
+            b"}",
+            "separate fields with `,` and close the aggregate with `}` on the same line",
+        )?;
+        Ok(Expr {
+            span: open.cover(close),
+            kind: ExprKind::Aggregate(Aggregate { type_name, fields }),
+        })
+    }
+}
+
+/// An open block, for keeping `END`s in sync.
+#[derive(Clone, Copy)]
+struct Open {
+    keyword: &'static str,
+    span: Span,
+}
+
+fn closer_of(open: &str) -> &'static str {
+    match open {
+        "DEF" => "END",
+        "DEFFCT" => "ENDFCT",
+        "DEFDAT" => "ENDDAT",
+        "IF" => "ENDIF",
+        "FOR" => "ENDFOR",
+        "WHILE" => "ENDWHILE",
+        "LOOP" => "ENDLOOP",
+        "REPEAT" => "UNTIL",
+        "SWITCH" => "ENDSWITCH",
+        "SPLINE" | "PTP_SPLINE" => "ENDSPLINE",
+        _ => "END",
+    }
+}
+
+fn static_kw(w: &str) -> Option<&'static str> {
+    const ALL: &[&str] = &[
+        "DEF",
+        "DEFFCT",
+        "DEFDAT",
+        "IF",
+        "FOR",
+        "WHILE",
+        "LOOP",
+        "REPEAT",
+        "SWITCH",
+        "SPLINE",
+        "PTP_SPLINE",
+    ];
+    ALL.iter().copied().find(|k| *k == w)
+}
+
+/// Parser state across lines.
+struct LineParser<'a> {
+    src: &'a [u8],
+    out: Parse,
+    stack: Vec<Open>,
+    folds: Vec<Span>,
+}
+
+/// Parses a KRL source (rule `file`). Never fails and never panics.
+pub fn parse(src: &[u8]) -> Parse {
+    let mut p = LineParser {
+        src,
+        out: Parse::default(),
+        stack: Vec::new(),
+        folds: Vec::new(),
+    };
+    if src.len() >= u32::MAX as usize {
+        p.out.diagnostics.push(
+            Diagnostic::error(
+                Span::new(0, 0),
+                "file too large for the KRL parser (4 GiB or more)",
+            )
+            .with_hint("split the program; robot controllers do not load files this large"),
+        );
+        p.out.tree.tokens.push(Token {
+            kind: TokenKind::Unknown,
+            start: 0,
+            end: 0,
+        });
+        return p.out;
+    }
+    let tokens = lex(src);
+    let mut sig: Vec<Token> = Vec::with_capacity(64);
+    let mut i = 0;
+    while i < tokens.len() {
+        let mut j = i;
+        while j < tokens.len() && tokens[j].kind != TokenKind::Newline {
+            j += 1;
+        }
+        let end = if j < tokens.len() { j + 1 } else { j };
+        sig.clear();
+        sig.extend(tokens[i..j].iter().filter(|t| !t.kind.is_trivia()));
+        let node_index = p.out.tree.nodes.len() as u32;
+        let depth_before = p.stack.len();
+        let (kind, depth) = if sig.is_empty() {
+            (p.trivia_line(&tokens[i..j]), depth_before)
+        } else {
+            p.statement(&sig, node_index, line_eol(&tokens, i, j))
+        };
+        p.out.tree.nodes.push(Node {
+            kind,
+            first: i as u32,
+            end: end as u32,
+            depth: depth.min(u16::MAX as usize) as u16,
+        });
+        i = end;
+    }
+    for open in std::mem::take(&mut p.stack) {
+        p.out.diagnostics.push(
+            Diagnostic::error(open.span, format!("`{}` is never closed", open.keyword))
+                .with_hint(format!("add `{}` to close it", closer_of(open.keyword))),
+        );
+    }
+    for fold in std::mem::take(&mut p.folds) {
+        p.out.diagnostics.push(
+            Diagnostic::warning(fold, "`;FOLD` without `;ENDFOLD`")
+                .with_hint("add `;ENDFOLD` or the pendant will fold the rest of the file"),
+        );
+    }
+    p.out.tree.tokens = tokens;
+    p.out
+}
+
+/// The empty span at the end of a line's content, for "end of line" messages.
+fn line_eol(tokens: &[Token], i: usize, j: usize) -> Span {
+    let at = tokens
+        .get(i..j)
+        .and_then(|l| l.last())
+        .map_or(0, |t| t.end as usize);
+    Span::new(at, at)
+}
+
+impl<'a> LineParser<'a> {
+    /// Rule `trivia_line`: blank, comment, fold lines.
+    fn trivia_line(&mut self, toks: &[Token]) -> NodeKind {
+        let Some(c) = toks.iter().find(|t| t.kind == TokenKind::Comment) else {
+            return NodeKind::Blank;
+        };
+        let text = c.text(self.src);
+        let body = text.get(1..).unwrap_or(&[]);
+        let body = trim_start(body);
+        if starts_with_ic(body, b"ENDFOLD") {
+            if self.folds.pop().is_none() {
+                self.out.diagnostics.push(
+                    Diagnostic::warning(c.span(), "`;ENDFOLD` without `;FOLD`")
+                        .with_hint("remove it or add the matching `;FOLD` line"),
+                );
+            }
+            NodeKind::FoldEnd
+        } else if starts_with_ic(body, b"FOLD") {
+            self.folds.push(c.span());
+            NodeKind::FoldStart
+        } else {
+            NodeKind::Comment
+        }
+    }
+
+    fn cursor<'s>(&self, sig: &'s [Token], eol: Span) -> Cursor<'s>
+    where
+        'a: 's,
+    {
+        Cursor {
+            src: self.src,
+            toks: sig,
+            pos: 0,
+            eol,
+        }
+    }
+
+    fn error(&mut self, e: PErr) -> NodeKind {
+        self.out
+            .diagnostics
+            .push(Diagnostic::error(e.span, e.message).with_hint(e.hint));
+        self.out.opaque += 1;
+        NodeKind::Opaque
+    }
+
+    fn unknown(&mut self, span: Span, what: String) -> NodeKind {
+        self.out.diagnostics.push(
+            Diagnostic::warning(span, format!("unknown statement {what}; kept verbatim")).with_hint(
+                "trackfix keeps lines it does not know unchanged; check the spelling if this should be KRL",
+            ),
+        );
+        self.out.opaque += 1;
+        NodeKind::Opaque
+    }
+
+    /// Rule `statement`. Returns the node kind and its depth.
+    fn statement(&mut self, sig: &[Token], node: u32, eol: Span) -> (NodeKind, usize) {
+        let depth = self.stack.len();
+        let stmt_span = match (sig.first(), sig.last()) {
+            (Some(f), Some(l)) => f.span().cover(l.span()),
+            _ => eol,
+        };
+        if let Some(bad) = sig
+            .iter()
+            .find(|t| matches!(t.kind, TokenKind::Unknown | TokenKind::Unterminated))
+        {
+            let (message, hint) = if bad.kind == TokenKind::Unknown {
+                (
+                    "bytes outside the KRL character set in code",
+                    "non-ASCII text belongs in a `;` comment or a string",
+                )
+            } else {
+                (
+                    "string without its closing quote",
+                    "close the string on the same line",
+                )
+            };
+            let e = PErr {
+                span: bad.span(),
+                message: message.to_owned(),
+                hint,
+            };
+            return (self.error(e), depth);
+        }
+        let Some(first) = sig.first() else {
+            return (NodeKind::Blank, depth);
+        };
+        if first.kind == TokenKind::Header {
+            return (NodeKind::Header, depth);
+        }
+        if first.kind != TokenKind::Ident {
+            let what = format!(
+                "starting with `{}`",
+                crate::syntax::latin1(first.text(self.src))
+            );
+            return (self.unknown(stmt_span, what), depth);
+        }
+        let mut c = self.cursor(sig, eol);
+        let global = c.is_kw("GLOBAL");
+        if global {
+            c.pos += 1;
+        }
+        let Some(head) = c.peek() else {
+            let e = PErr {
+                span: eol,
+                message: "`GLOBAL` without a declaration".to_owned(),
+                hint: "write `GLOBAL DEF`, `GLOBAL DEFFCT` or `GLOBAL DECL`",
+            };
+            return (self.error(e), depth);
+        };
+        let word = Word::of(head.text(self.src));
+        let w = word.as_str();
+        let result: Result<(NodeKind, usize, Option<StmtKind>), PErr> = match w {
+            "DEF" | "DEFFCT" | "DEFDAT" => self.routine(&mut c, w, head.span()),
+            "END" | "ENDFCT" | "ENDDAT" if !global => {
+                c.pos += 1;
+                c.expect_end(w).map(|()| {
+                    let d = self.close(w, head.span());
+                    (NodeKind::RoutineEnd, d, None)
+                })
+            }
+            "DECL" => {
+                c.pos += 1;
+                while c.is_kw("GLOBAL") || c.is_kw("CONST") {
+                    c.pos += 1;
+                }
+                if c.is_kw("INTERRUPT") {
+                    Ok((NodeKind::Simple, depth, None))
+                } else {
+                    decl(&mut c).map(|k| (NodeKind::Declaration, depth, Some(k)))
+                }
+            }
+            "INTERRUPT" | "TRIGGER" => Ok((NodeKind::Simple, depth, None)),
+            _ if global => Err(PErr {
+                span: head.span(),
+                message: format!("`GLOBAL` before `{}`", c.text(head)),
+                hint: "`GLOBAL` only qualifies DEF, DEFFCT, DECL and INTERRUPT",
+            }),
+            _ if DECL_KEYWORDS.contains(&w) => Ok((NodeKind::Declaration, depth, None)),
+            _ if MOTION_KEYWORDS.contains(&w) => {
+                motion(&mut c).map(|k| (NodeKind::Motion, depth, Some(k)))
+            }
+            _ if SIMPLE_KEYWORDS.contains(&w) => Ok((NodeKind::Simple, depth, None)),
+            "IF" => {
+                let has_then = sig.last().is_some_and(|t| is_kw(self.src, Some(t), "THEN"));
+                if has_then {
+                    self.stack.push(Open {
+                        keyword: "IF",
+                        span: head.span(),
+                    });
+                    Ok((NodeKind::BlockOpen, depth, None))
+                } else {
+                    Err(PErr {
+                        span: eol,
+                        message: "`IF` without `THEN`".to_owned(),
+                        hint: "write `IF condition THEN` on one line",
+                    })
+                }
+            }
+            "FOR" | "WHILE" | "LOOP" | "REPEAT" | "SWITCH" | "SPLINE" | "PTP_SPLINE" => {
+                if let Some(k) = static_kw(w) {
+                    self.stack.push(Open {
+                        keyword: k,
+                        span: head.span(),
+                    });
+                }
+                Ok((NodeKind::BlockOpen, depth, None))
+            }
+            "ELSE" | "CASE" | "DEFAULT" => {
+                let parent = if w == "ELSE" { "IF" } else { "SWITCH" };
+                if self.stack.last().is_some_and(|o| o.keyword == parent) {
+                    Ok((NodeKind::BlockMiddle, depth.saturating_sub(1), None))
+                } else {
+                    Err(PErr {
+                        span: head.span(),
+                        message: format!("`{w}` outside `{parent}`"),
+                        hint: "check the block structure above this line",
+                    })
+                }
+            }
+            "ENDIF" | "ENDFOR" | "ENDWHILE" | "ENDLOOP" | "UNTIL" | "ENDSWITCH" | "ENDSPLINE" => {
+                let d = self.close(w, head.span());
+                Ok((NodeKind::BlockClose, d, None))
+            }
+            _ => self.other(&mut c, head, stmt_span, depth),
+        };
+        match result {
+            Ok((kind, d, stmt)) => {
+                if let Some(kind) = stmt {
+                    self.out.tree.stmts.push(Stmt {
+                        node,
+                        span: stmt_span,
+                        kind,
+                    });
+                }
+                (kind, d)
+            }
+            Err(e) => (self.error(e), depth),
+        }
+    }
+
+    /// Rule `routine`: `DEF name(params)`, `DEFFCT type name(params)`, `DEFDAT name [PUBLIC]`.
+    fn routine(
+        &mut self,
+        c: &mut Cursor<'_>,
+        w: &str,
+        keyword: Span,
+    ) -> PResult<(NodeKind, usize, Option<StmtKind>)> {
+        c.pos += 1;
+        if w == "DEFFCT" {
+            c.expect_ident(
+                "the function's return type",
+                "write `DEFFCT TYPE name(params)`",
+            )?;
+        }
+        let name = c.expect_ident("a name", "write `DEF name()`")?;
+        // Parameters and `PUBLIC` are kept as written.
+        if !self.stack.is_empty() {
+            let open: Vec<Open> = std::mem::take(&mut self.stack);
+            for o in open {
+                self.out.diagnostics.push(
+                    Diagnostic::error(o.span, format!("`{}` is never closed", o.keyword))
+                        .with_hint(format!(
+                            "add `{}` before the next routine",
+                            closer_of(o.keyword)
+                        )),
+                );
+            }
+        }
+        if let Some(k) = static_kw(w) {
+            self.stack.push(Open {
+                keyword: k,
+                span: keyword,
+            });
+        }
+        Ok((
+            NodeKind::RoutineStart,
+            0,
+            Some(StmtKind::Routine {
+                keyword,
+                name: Some(name),
+            }),
+        ))
+    }
+
+    /// Pops the block `closer` closes; reports a closer without its opener. Returns the depth.
+    fn close(&mut self, closer: &str, span: Span) -> usize {
+        if let Some(at) = self
+            .stack
+            .iter()
+            .rposition(|o| closer_of(o.keyword) == closer)
+        {
+            for o in self.stack.drain(at + 1..).collect::<Vec<_>>() {
+                self.out.diagnostics.push(
+                    Diagnostic::error(o.span, format!("`{}` is never closed", o.keyword))
+                        .with_hint(format!("add `{}` before `{closer}`", closer_of(o.keyword))),
+                );
+            }
+            self.stack.truncate(at);
+            at
+        } else {
+            self.out.diagnostics.push(
+                Diagnostic::error(span, format!("`{closer}` without an open block"))
+                    .with_hint("remove it or add the statement that opens the block"),
+            );
+            self.stack.len()
+        }
+    }
+
+    /// Assignments, calls, labels, declarations without `DECL`, else opaque.
+    fn other(
+        &mut self,
+        c: &mut Cursor<'_>,
+        head: &Token,
+        stmt_span: Span,
+        depth: usize,
+    ) -> PResult<(NodeKind, usize, Option<StmtKind>)> {
+        let next = c.peek_at(1);
+        let src = self.src;
+        if next.is_none() {
+            let what = format!("`{}`", c.text(head));
+            return Ok((self.unknown(stmt_span, what), depth, None));
+        }
+        if is_punct(src, next, b":") && c.peek_at(2).is_none() {
+            return Ok((NodeKind::Label, depth, None));
+        }
+        if next.is_some_and(|t| t.kind == TokenKind::Ident) {
+            return decl(c).map(|k| (NodeKind::Declaration, depth, Some(k)));
+        }
+        if is_punct(src, next, b"=") || is_punct(src, next, b"[") || is_punct(src, next, b".") {
+            let target = c.postfix()?;
+            if c.is_punct(b"=") {
+                c.pos += 1;
+                let value = c.expr()?;
+                c.expect_end("the assigned value")?;
+                return Ok((
+                    NodeKind::Assignment,
+                    depth,
+                    Some(StmtKind::Assign { target, value }),
+                ));
+            }
+            if matches!(target.kind, ExprKind::Call(..)) {
+                c.expect_end("the call")?;
+                return Ok((NodeKind::Call, depth, Some(StmtKind::Call(target))));
+            }
+            return c.err(
+                format!("expected `=`, found {}", c.found()),
+                "write `name = value`",
+            );
+        }
+        if is_punct(src, next, b"(") {
+            let call = c.postfix()?;
+            if c.is_punct(b"=") {
+                c.pos += 1;
+                let value = c.expr()?;
+                c.expect_end("the assigned value")?;
+                return Ok((
+                    NodeKind::Assignment,
+                    depth,
+                    Some(StmtKind::Assign {
+                        target: call,
+                        value,
+                    }),
+                ));
+            }
+            c.expect_end("the call")?;
+            return Ok((NodeKind::Call, depth, Some(StmtKind::Call(call))));
+        }
+        let what = format!("`{}`", c.text(head));
+        Ok((self.unknown(stmt_span, what), depth, None))
+    }
+}
+
+/// Rule `decl`: `type name [dims] [= value] {, name [dims] [= value]}` (after `DECL`).
+fn decl(c: &mut Cursor<'_>) -> PResult<StmtKind> {
+    let type_name = c.expect_ident("a data type", "write `DECL TYPE name`")?;
+    let mut vars = Vec::new();
+    loop {
+        let name = c.expect_ident("a variable name", "write `DECL TYPE name`")?;
+        let mut dims = Vec::new();
+        if c.is_punct(b"[") {
+            c.pos += 1;
+            dims = c.list(b"]")?;
+            c.expect_punct(b"]", "close the array size with `]`")?;
+        }
+        let init = if c.is_punct(b"=") {
+            c.pos += 1;
+            Some(c.expr()?)
+        } else {
+            None
+        };
+        vars.push(DeclVar { name, dims, init });
+        if c.is_punct(b",") {
+            c.pos += 1;
+        } else {
+            break;
+        }
+    }
+    c.expect_end("the declaration")?;
+    Ok(StmtKind::Decl { type_name, vars })
+}
+
+/// Rule `motion`: `KEYWORD target`, `CIRC aux, target [, CA angle]`, then approximation
+/// (`C_DIS` …), enums (`#TOOL`) and `WITH` assignments.
+fn motion(c: &mut Cursor<'_>) -> PResult<StmtKind> {
+    let keyword = c.bump().map(|t| t.span()).unwrap_or(c.eol);
+    let kw = Word::of(keyword.slice(c.src));
+    let circ = kw.as_str().contains("CIRC");
+    let mut targets = vec![c.expr()?];
+    if circ {
+        c.expect_punct(
+            b",",
+            "a circular motion takes an auxiliary point and a target",
+        )?;
+        targets.push(c.expr()?);
+        if c.is_punct(b",") {
+            c.pos += 1;
+            if c.is_kw("CA") {
+                c.pos += 1;
+                c.expr()?;
+            } else {
+                return c.err(
+                    format!("expected `CA`, found {}", c.found()),
+                    "write `CIRC aux, target, CA angle`",
+                );
+            }
+        }
+    }
+    let mut with = Vec::new();
+    while let Some(t) = c.peek() {
+        let word = Word::of(t.text(c.src));
+        if (t.kind == TokenKind::Ident && APPROXIMATION.contains(&word.as_str()))
+            || t.kind == TokenKind::Enum
+        {
+            c.pos += 1;
+        } else if t.kind == TokenKind::Ident && word.as_str() == "WITH" {
+            c.pos += 1;
+            loop {
+                let lhs = c.postfix()?;
+                c.expect_punct(b"=", "write `WITH $VAR = value, …`")?;
+                let rhs = c.expr()?;
+                with.push((lhs, rhs));
+                if c.is_punct(b",") {
+                    c.pos += 1;
+                } else {
+                    break;
+                }
+            }
+        } else {
+            return c.err(
+                format!("unexpected {} in a motion statement", c.found()),
+                "after the target, KRL expects C_DIS/C_PTP/C_VEL/C_ORI/C_SPL or WITH",
+            );
+        }
+    }
+    Ok(StmtKind::Motion {
+        keyword,
+        targets,
+        with,
+    })
+}
+
+fn trim_start(b: &[u8]) -> &[u8] {
+    let n = b.iter().take_while(|c| matches!(c, b' ' | b'\t')).count();
+    b.get(n..).unwrap_or(&[])
+}
+
+fn starts_with_ic(b: &[u8], prefix: &[u8]) -> bool {
+    b.get(..prefix.len())
+        .is_some_and(|p| p.eq_ignore_ascii_case(prefix))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::syntax::Severity;
+
+    fn dump(src: &str) -> String {
+        let p = parse(src.as_bytes());
+        assert_eq!(p.tree.print(src.as_bytes()), src.as_bytes());
+        p.tree.dump(src.as_bytes())
+    }
+
+    #[test]
+    fn lines_and_depths() {
+        let src = "&ACCESS RVP\nDEF a()\n  IF X THEN\n    LIN XP1 C_DIS\n  ELSE\n  ENDIF\nEND";
+        assert_eq!(
+            dump(src),
+            "header \"&ACCESS RVP\"\nroutine \"DEF a()\"\n  block \"  IF X THEN\"\n    motion \"    LIN XP1 C_DIS\"\n  middle \"  ELSE\"\n  endblock \"  ENDIF\"\nend \"END\"\n"
+        );
+    }
+
+    #[test]
+    fn folds_are_kept_and_balanced() {
+        let src = ";FOLD LIN P1;%{PE}%R 8.3.31,%MKUKATPBASIS\nLIN XP1\n;ENDFOLD (x)\n";
+        assert_eq!(
+            dump(src),
+            "fold \";FOLD LIN P1;%{PE}%R 8.3.31,%MKUKATPBASIS\"\nmotion \"LIN XP1\"\nendfold \";ENDFOLD (x)\"\n"
+        );
+        let p = parse(b";ENDFOLD\n;FOLD a\n");
+        assert_eq!(p.diagnostics.len(), 2);
+    }
+
+    #[test]
+    fn lowercase_keywords() {
+        let src = "def a()\n  decl e6pos p={x 1}\n  lin p c_dis\nend";
+        let p = parse(src.as_bytes());
+        assert!(p.diagnostics.is_empty(), "{:?}", p.diagnostics);
+        assert_eq!(p.tree.stmts.len(), 3);
+    }
+
+    #[test]
+    fn declarations() {
+        for src in [
+            "DECL E6POS XP1={X 1.0,Y 2,Z -3.5,A 0,B 90,C 0,S 6,T 27,E1 100.0}",
+            "DECL GLOBAL E6POS XP1={X 1}",
+            "GLOBAL DECL FRAME F[5]",
+            "E6POS XP1={X 1}",
+            "INT I",
+            "DECL INT A, B=3, C",
+            "CHAR NAME[24]",
+            "DECL FDAT FP1={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE,POINT2[] \" \",TQ_STATE FALSE}",
+            "DECL PDAT PPDAT1={VEL 100,ACC 100,APO_DIST 100,APO_MODE #CDIS}",
+            "DECL LDAT LCPDAT1={VEL 2,ACC 100,APO_DIST 100,APO_FAC 50.0,ORI_TYP #VAR,CIRC_TYP #BASE,JERK_FAC 50.0,GEAR_JERK 100.0,EXAX_IGN 0}",
+            "DECL FRAME F={FRAME: X 1,Y 2}",
+            "DECL POS P={POS: X 1,Y 2,Z 3,A 0,B 0,C 0,S 'B010',T 'B100011'}",
+            "DECL MYSTRUC M={A {X 1, Y 2}, B 'H1F'}",
+        ] {
+            let p = parse(src.as_bytes());
+            assert!(p.diagnostics.is_empty(), "{src}: {:?}", p.diagnostics);
+            assert_eq!(p.tree.nodes[0].kind, NodeKind::Declaration, "{src}");
+        }
+    }
+
+    #[test]
+    fn statements() {
+        for (src, kind) in [
+            (
+                "BASE_DATA[3]={X 1,Y 2,Z 3,A 0,B 0,C 0}",
+                NodeKind::Assignment,
+            ),
+            ("TOOL_NAME[1,]=\"gun\"", NodeKind::Assignment),
+            ("$BASE=BASE_DATA[1]", NodeKind::Assignment),
+            ("FDAT_ACT=FP1", NodeKind::Assignment),
+            ("BAS(#PTP_PARAMS,100)", NodeKind::Call),
+            ("P2 = P1 : {X 10, Y 0}", NodeKind::Assignment),
+            (
+                "LIN {X 10, Y 20, Z 30, A 0, B 90, C 0} C_DIS",
+                NodeKind::Motion,
+            ),
+            ("PTP XP1 C_PTP C_DIS", NodeKind::Motion),
+            ("CIRC XA, XB, CA 90 C_ORI", NodeKind::Motion),
+            (
+                "SLIN XP1 WITH $VEL = SVEL_CP(2.0, , LCPDAT1), $TOOL = STOOL2(FP1), $BASE = SBASE(FP1.BASE_NO) C_SPL",
+                NodeKind::Motion,
+            ),
+            ("LIN_REL {Z -10} #TOOL", NodeKind::Motion),
+            ("WAIT SEC 0.5", NodeKind::Simple),
+            ("WAIT FOR $IN[1]", NodeKind::Simple),
+            (
+                "TRIGGER WHEN DISTANCE=0 DELAY=0 DO $OUT[1]=TRUE",
+                NodeKind::Simple,
+            ),
+            (
+                "GLOBAL INTERRUPT DECL 3 WHEN $STOPMESS==TRUE DO IR_STOPM()",
+                NodeKind::Simple,
+            ),
+            ("HALT", NodeKind::Simple),
+            ("M1:", NodeKind::Label),
+            ("$OUT[1] = NOT $IN[2] AND (I > 3)", NodeKind::Assignment),
+        ] {
+            let p = parse(src.as_bytes());
+            assert!(p.diagnostics.is_empty(), "{src}: {:?}", p.diagnostics);
+            assert_eq!(p.tree.nodes[0].kind, kind, "{src}");
+        }
+    }
+
+    #[test]
+    fn unknown_and_malformed_lines_are_opaque_and_located() {
+        let src = b"DEF a()\n  FROB 1 2\n  LIN {X 1, Y\n  @@\nEND\n";
+        let p = parse(src);
+        assert_eq!(p.opaque, 3);
+        assert_eq!(p.tree.print(src), src);
+        let sev: Vec<_> = p.diagnostics.iter().map(|d| d.severity).collect();
+        assert_eq!(sev, [Severity::Warning, Severity::Error, Severity::Warning]);
+        assert_eq!(p.diagnostics[1].span, Span::new(32, 32));
+    }
+
+    #[test]
+    fn block_mismatch_is_reported() {
+        let p = parse(b"DEF a()\nIF X THEN\nENDFOR\nEND\nENDIF\n");
+        let msgs: Vec<_> = p.diagnostics.iter().map(|d| d.message.as_str()).collect();
+        assert_eq!(
+            msgs,
+            [
+                "`ENDFOR` without an open block",
+                "`IF` is never closed",
+                "`ENDIF` without an open block"
+            ]
+        );
+    }
+}

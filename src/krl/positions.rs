@@ -1,0 +1,819 @@
+//! From the KRL tree to the shared position model: `E6POS`/`POS`/`FRAME` targets, `E6AXIS`/`AXIS`
+//! joint positions, `BASE_DATA[n]`/`TOOL_DATA[n]` frames, and the facts needed to resolve which
+//! base and tool each motion uses (`FDAT_ACT`, `$BASE=…`, `BAS(#BASE,n)`, `WITH $BASE=…`).
+//!
+//! Resolution needs both files of a `.src`/`.dat` pair (the `.src` moves, the `.dat` declares
+//! the points and the `FDAT`s), so extraction only records facts per file and [`resolve`] runs
+//! over a whole program.
+
+use std::collections::HashMap;
+
+use super::tree::{Aggregate, Expr, ExprKind, StmtKind, Tree};
+use crate::position::{
+    BitField, CartesianFields, Config, FrameDecl, FrameKind, NumField, Orientation, ParsedFile,
+    Position, PositionKind, Usage,
+};
+use crate::syntax::{Diagnostic, LineIndex, NumLit, Span};
+
+/// A base or tool as a motion sees it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) enum FrameRef {
+    /// `BASE_DATA[n]` / `TOOL_DATA[n]`; 0 is the world (base) or the flange (tool).
+    Data(u32),
+    /// A frame declared in the program itself (`$BASE={…}` → `$BASE (line 12)`).
+    Named(String),
+    /// Set by an expression trackfix cannot evaluate.
+    Unknown,
+}
+
+/// A statement that changes the base, the tool or the interpolation mode.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) enum Setting {
+    Base(FrameRef),
+    Tool(FrameRef),
+    /// `$IPO_MODE = #TCP` (true) or `#BASE`.
+    Tcp(bool),
+    /// `FDAT_ACT = FP1`: base, tool and IPO mode of that FDAT.
+    Fdat(String),
+    BaseOfFdat(String),
+    ToolOfFdat(String),
+    TcpOfFdat(String),
+}
+
+/// A target a motion uses.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) enum Ref {
+    /// A declared name, upper case (`XP1`, `P[3]`).
+    Named(String),
+    /// An inline literal: the span of its position in the same file.
+    Inline(Span),
+}
+
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) enum Event {
+    /// A `DEF`/`DEFFCT`: program order starts again.
+    Reset,
+    Set(Setting),
+    Motion {
+        span: Span,
+        line: usize,
+        refs: Vec<Ref>,
+        with: Vec<Setting>,
+    },
+}
+
+/// `DECL FDAT FP1={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE,…}`.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Fdat {
+    pub base: Option<u32>,
+    pub tool: Option<u32>,
+    pub tcp: Option<bool>,
+}
+
+/// What one file contributes to resolving a program.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Facts {
+    pub events: Vec<Event>,
+    pub fdats: HashMap<String, Fdat>,
+    /// Declared `FRAME`s and aggregates assigned to names of unknown type: positions only when
+    /// a motion uses them.
+    pub candidates: Vec<Position>,
+}
+
+fn upper(src: &[u8], span: Span) -> String {
+    span.slice(src)
+        .iter()
+        .filter(|b| !b.is_ascii_whitespace())
+        .map(|b| b.to_ascii_uppercase() as char)
+        .collect()
+}
+
+fn positional_type(name: &str) -> Option<PositionKind> {
+    Some(match name {
+        "E6POS" => PositionKind::E6Pos,
+        "POS" => PositionKind::Pos,
+        "FRAME" => PositionKind::Frame,
+        "E6AXIS" => PositionKind::E6Axis,
+        "AXIS" => PositionKind::Axis,
+        _ => return None,
+    })
+}
+
+/// The plain name an expression stores into (`XP1`, `P` of `P[3]`), upper case.
+fn base_name(src: &[u8], e: &Expr) -> Option<String> {
+    match &e.kind {
+        ExprKind::Name => Some(upper(src, e.span)),
+        ExprKind::Index(b, _) => base_name(src, b),
+        _ => None,
+    }
+}
+
+fn integer(src: &[u8], e: &Expr) -> Option<u32> {
+    if e.kind != ExprKind::Number {
+        return None;
+    }
+    std::str::from_utf8(e.span.slice(src)).ok()?.parse().ok()
+}
+
+/// `BASE_DATA[n]` / `TOOL_DATA[n]` → (kind, n).
+fn data_element(src: &[u8], e: &Expr) -> Option<(FrameKind, u32)> {
+    let ExprKind::Index(b, args) = &e.kind else {
+        return None;
+    };
+    let kind = match upper(src, b.span).as_str() {
+        "BASE_DATA" => FrameKind::Base,
+        "TOOL_DATA" => FrameKind::Tool,
+        _ => return None,
+    };
+    match args.as_slice() {
+        [Some(i)] => Some((kind, integer(src, i)?)),
+        _ => None,
+    }
+}
+
+fn frame_ref(src: &[u8], e: &Expr) -> FrameRef {
+    if let Some((_, n)) = data_element(src, e) {
+        return FrameRef::Data(n);
+    }
+    match (&e.kind, upper(src, e.span).as_str()) {
+        (ExprKind::Name, "$WORLD" | "$NULLFRAME") => FrameRef::Data(0),
+        _ => FrameRef::Unknown,
+    }
+}
+
+/// The FDAT an `S…(FP1.BASE_NO)` / `STOOL2(FP1)` argument names.
+fn fdat_argument(src: &[u8], e: &Expr) -> Option<String> {
+    match &e.kind {
+        ExprKind::Call(_, args) => fdat_argument(src, args.first()?.as_ref()?),
+        ExprKind::Member(b, _) => fdat_argument(src, b),
+        ExprKind::Name => Some(upper(src, e.span)),
+        _ => None,
+    }
+}
+
+/// `'B0101'` → (value, digits). nom keeps the shape of the literal in one line.
+fn bit_string(text: &[u8]) -> Option<(u32, usize)> {
+    use nom::Parser;
+    use nom::bytes::complete::{tag, tag_no_case, take_while1};
+    use nom::combinator::all_consuming;
+    use nom::sequence::{delimited, preceded};
+    let quote = || tag(&b"'"[..]);
+    let mut p = all_consuming(delimited(
+        quote(),
+        preceded(
+            tag_no_case(&b"B"[..]),
+            take_while1(|c: u8| c == b'0' || c == b'1'),
+        ),
+        quote(),
+    ));
+    let r: nom::IResult<&[u8], &[u8]> = p.parse(text);
+    let (_, digits) = r.ok()?;
+    if digits.len() > 32 {
+        return None;
+    }
+    let v = digits
+        .iter()
+        .fold(0u32, |acc, d| (acc << 1) | u32::from(d - b'0'));
+    Some((v, digits.len()))
+}
+
+fn num_field(src: &[u8], e: &Expr) -> Option<NumField> {
+    if e.kind != ExprKind::Number {
+        return None;
+    }
+    Some(NumField {
+        span: e.span,
+        lit: NumLit::parse(e.span.slice(src))?,
+    })
+}
+
+fn bit_field(src: &[u8], e: &Expr) -> Option<BitField> {
+    match e.kind {
+        ExprKind::Number => Some(BitField {
+            span: e.span,
+            value: integer(src, e)?,
+            binary_digits: None,
+        }),
+        ExprKind::Quoted => {
+            let (value, digits) = bit_string(e.span.slice(src))?;
+            Some(BitField {
+                span: e.span,
+                value,
+                binary_digits: Some(digits),
+            })
+        }
+        _ => None,
+    }
+}
+
+/// The fields of a position aggregate, by KRL name.
+#[derive(Default)]
+struct Fields {
+    xyz: [Option<NumField>; 3],
+    abc: [Option<NumField>; 3],
+    abc_written: bool,
+    s: Option<BitField>,
+    t: Option<BitField>,
+    axes: [Option<NumField>; 6],
+    ext: [Option<NumField>; 6],
+    ext_written: usize,
+    cartesian_written: bool,
+    joints_written: bool,
+}
+
+fn read_fields(src: &[u8], agg: &Aggregate) -> Fields {
+    let mut f = Fields::default();
+    for field in &agg.fields {
+        let name = upper(src, field.name);
+        let v = &field.value;
+        let idx = |prefix: &str| -> Option<usize> {
+            let d = name.strip_prefix(prefix)?;
+            match d.parse::<usize>() {
+                Ok(n @ 1..=6) if d.len() == 1 => Some(n - 1),
+                _ => None,
+            }
+        };
+        match name.as_str() {
+            "X" | "Y" | "Z" => {
+                let i = usize::from(name.as_bytes().first().map_or(0, |b| b - b'X'));
+                if let Some(slot) = f.xyz.get_mut(i) {
+                    *slot = num_field(src, v);
+                }
+                f.cartesian_written = true;
+            }
+            "A" | "B" | "C" => {
+                let i = usize::from(name.as_bytes().first().map_or(0, |b| b - b'A'));
+                if let Some(slot) = f.abc.get_mut(i) {
+                    *slot = num_field(src, v);
+                }
+                f.abc_written = true;
+                f.cartesian_written = true;
+            }
+            "S" => f.s = bit_field(src, v),
+            "T" => f.t = bit_field(src, v),
+            _ => {
+                if let Some(i) = idx("A") {
+                    if let Some(slot) = f.axes.get_mut(i) {
+                        *slot = num_field(src, v);
+                    }
+                    f.joints_written = true;
+                } else if let Some(i) = idx("E") {
+                    if let Some(slot) = f.ext.get_mut(i) {
+                        *slot = num_field(src, v);
+                    }
+                    f.ext_written = f.ext_written.max(i + 1);
+                }
+            }
+        }
+    }
+    f
+}
+
+/// The kind of an aggregate without a declared type: its own `{TYPE: …}`, else its fields.
+fn inferred_kind(src: &[u8], agg: &Aggregate, f: &Fields) -> Option<PositionKind> {
+    if let Some(t) = agg.type_name {
+        return positional_type(&upper(src, t));
+    }
+    if f.joints_written && !f.cartesian_written {
+        Some(PositionKind::E6Axis)
+    } else if f.cartesian_written {
+        Some(PositionKind::E6Pos)
+    } else {
+        None
+    }
+}
+
+fn build_position(
+    lines: &LineIndex,
+    span: Span,
+    kind: PositionKind,
+    name: Option<String>,
+    f: Fields,
+) -> Position {
+    let (line, column) = lines.line_col(span.start);
+    let extax: Vec<Option<NumField>> = f.ext.into_iter().take(f.ext_written).collect();
+    let joint = matches!(kind, PositionKind::E6Axis | PositionKind::Axis);
+    Position {
+        name,
+        kind,
+        span,
+        line,
+        column,
+        cartesian: (!joint).then(|| CartesianFields {
+            trans: f.xyz,
+            orient: f.abc_written.then_some(Orientation::Abc(f.abc)),
+        }),
+        joints: if joint { f.axes.into() } else { Vec::new() },
+        config: match kind {
+            PositionKind::E6Pos | PositionKind::Pos => Config::Kuka {
+                status: f.s,
+                turn: f.t,
+            },
+            _ => Config::None,
+        },
+        extax,
+        usage: Usage::default(),
+    }
+}
+
+/// What [`extract`] found in one file.
+pub(crate) struct Extracted {
+    pub positions: Vec<Position>,
+    pub frames: Vec<FrameDecl>,
+    pub facts: Facts,
+}
+
+fn frame_decl(
+    src: &[u8],
+    lines: &LineIndex,
+    name: String,
+    kind: FrameKind,
+    agg_expr: &Expr,
+    agg: &Aggregate,
+) -> FrameDecl {
+    let f = read_fields(src, agg);
+    FrameDecl {
+        name,
+        kind,
+        span: agg_expr.span,
+        line: lines.line(agg_expr.span.start),
+        robhold: None,
+        ufprog: None,
+        ufmec: None,
+        frame: Some(CartesianFields {
+            trans: f.xyz,
+            orient: f.abc_written.then_some(Orientation::Abc(f.abc)),
+        }),
+        oframe: None,
+    }
+}
+
+/// Reads positions, frames and resolution facts from a parsed file. `diagnostics` receives
+/// notes about what is deliberately not a target (relative motions).
+pub(crate) fn extract(
+    src: &[u8],
+    tree: &Tree,
+    lines: &LineIndex,
+    diagnostics: &mut Vec<Diagnostic>,
+) -> Extracted {
+    let mut declared: HashMap<String, PositionKind> = HashMap::new();
+    for stmt in &tree.stmts {
+        if let StmtKind::Decl { type_name, vars } = &stmt.kind
+            && let Some(kind) = positional_type(&upper(src, *type_name))
+        {
+            for v in vars {
+                declared.insert(upper(src, v.name), kind);
+            }
+        }
+    }
+    let mut out = Extracted {
+        positions: Vec::new(),
+        frames: Vec::new(),
+        facts: Facts::default(),
+    };
+    for stmt in &tree.stmts {
+        match &stmt.kind {
+            StmtKind::Routine { keyword, .. } => {
+                if !upper(src, *keyword).starts_with("DEFDAT") {
+                    out.facts.events.push(Event::Reset);
+                }
+            }
+            StmtKind::Decl { type_name, vars } => {
+                let ty = upper(src, *type_name);
+                for v in vars {
+                    let Some(init) = &v.init else { continue };
+                    let ExprKind::Aggregate(agg) = &init.kind else {
+                        continue;
+                    };
+                    let name = crate::syntax::latin1(v.name.slice(src));
+                    if ty == "FDAT" {
+                        out.facts.fdats.insert(upper(src, v.name), fdat(src, agg));
+                    } else if let Some(kind) = positional_type(&ty) {
+                        let f = read_fields(src, agg);
+                        let p = build_position(lines, init.span, kind, Some(name), f);
+                        if kind == PositionKind::Frame {
+                            out.facts.candidates.push(p);
+                        } else {
+                            out.positions.push(p);
+                        }
+                    }
+                }
+            }
+            StmtKind::Assign { target, value } => {
+                assignment(src, lines, &declared, target, value, &mut out);
+            }
+            StmtKind::Call(call) => {
+                if let Some(s) = bas_call(src, call) {
+                    out.facts.events.push(Event::Set(s));
+                }
+            }
+            StmtKind::Motion {
+                keyword,
+                targets,
+                with,
+            } => {
+                let line = lines.line(stmt.span.start);
+                if upper(src, *keyword).ends_with("_REL") {
+                    diagnostics.push(
+                        Diagnostic::note(
+                            stmt.span,
+                            "relative motion: its offset is not a target and is left unchanged",
+                        )
+                        .with_hint("check this motion by hand after a transform"),
+                    );
+                    continue;
+                }
+                let mut refs = Vec::new();
+                for t in targets {
+                    target_refs(src, lines, t, &mut refs, &mut out.positions);
+                }
+                let with = with
+                    .iter()
+                    .filter_map(|(l, r)| setting(src, lines, l, r, None))
+                    .collect();
+                out.facts.events.push(Event::Motion {
+                    span: stmt.span,
+                    line,
+                    refs,
+                    with,
+                });
+            }
+        }
+    }
+    out
+}
+
+fn fdat(src: &[u8], agg: &Aggregate) -> Fdat {
+    let mut f = Fdat::default();
+    for field in &agg.fields {
+        match upper(src, field.name).as_str() {
+            "TOOL_NO" => f.tool = integer(src, &field.value),
+            "BASE_NO" => f.base = integer(src, &field.value),
+            "IPO_FRAME" if field.value.kind == ExprKind::Enum => {
+                f.tcp = Some(upper(src, field.value.span) == "#TCP");
+            }
+            _ => {}
+        }
+    }
+    f
+}
+
+/// `BAS(#BASE, n)` / `BAS(#TOOL, n)`.
+fn bas_call(src: &[u8], call: &Expr) -> Option<Setting> {
+    let ExprKind::Call(name, args) = &call.kind else {
+        return None;
+    };
+    if upper(src, name.span) != "BAS" {
+        return None;
+    }
+    let [Some(which), Some(n)] = args.as_slice() else {
+        return None;
+    };
+    let r = integer(src, n).map_or(FrameRef::Unknown, FrameRef::Data);
+    match upper(src, which.span).as_str() {
+        "#BASE" => Some(Setting::Base(r)),
+        "#TOOL" => Some(Setting::Tool(r)),
+        _ => None,
+    }
+}
+
+/// `$BASE = …`, `$TOOL = …`, `$IPO_MODE = …`, `FDAT_ACT = …` (also inside `WITH`).
+/// `inline_base` names a `$BASE={…}` frame declared on that line.
+fn setting(
+    src: &[u8],
+    lines: &LineIndex,
+    target: &Expr,
+    value: &Expr,
+    inline_base: Option<&str>,
+) -> Option<Setting> {
+    let _ = lines;
+    let fdat_of = || fdat_argument(src, value);
+    match upper(src, target.span).as_str() {
+        "$BASE" => Some(match (&value.kind, inline_base) {
+            (ExprKind::Aggregate(_), Some(n)) => Setting::Base(FrameRef::Named(n.to_owned())),
+            (ExprKind::Call(..), _) => fdat_of()
+                .map(Setting::BaseOfFdat)
+                .unwrap_or(Setting::Base(FrameRef::Unknown)),
+            _ => Setting::Base(frame_ref(src, value)),
+        }),
+        "$TOOL" => Some(match &value.kind {
+            ExprKind::Call(..) => fdat_of()
+                .map(Setting::ToolOfFdat)
+                .unwrap_or(Setting::Tool(FrameRef::Unknown)),
+            _ => Setting::Tool(frame_ref(src, value)),
+        }),
+        "$IPO_MODE" => match &value.kind {
+            ExprKind::Enum => Some(Setting::Tcp(upper(src, value.span) == "#TCP")),
+            ExprKind::Call(..) => fdat_of().map(Setting::TcpOfFdat),
+            _ => None,
+        },
+        "FDAT_ACT" => match &value.kind {
+            ExprKind::Name => Some(Setting::Fdat(upper(src, value.span))),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+fn assignment(
+    src: &[u8],
+    lines: &LineIndex,
+    declared: &HashMap<String, PositionKind>,
+    target: &Expr,
+    value: &Expr,
+    out: &mut Extracted,
+) {
+    let ExprKind::Aggregate(agg) = &value.kind else {
+        if let Some(s) = setting(src, lines, target, value, None) {
+            out.facts.events.push(Event::Set(s));
+        }
+        return;
+    };
+    if let Some((kind, n)) = data_element(src, target) {
+        let prefix = if kind == FrameKind::Base {
+            "BASE_DATA"
+        } else {
+            "TOOL_DATA"
+        };
+        let d = frame_decl(src, lines, format!("{prefix}[{n}]"), kind, value, agg);
+        out.frames.push(d);
+        return;
+    }
+    let target_name = upper(src, target.span);
+    if target_name == "$BASE" || target_name == "$TOOL" {
+        let line = lines.line(value.span.start);
+        let name = format!("{target_name} (line {line})");
+        let kind = if target_name == "$BASE" {
+            FrameKind::Base
+        } else {
+            FrameKind::Tool
+        };
+        out.frames
+            .push(frame_decl(src, lines, name.clone(), kind, value, agg));
+        let r = FrameRef::Named(name);
+        out.facts
+            .events
+            .push(Event::Set(if kind == FrameKind::Base {
+                Setting::Base(r)
+            } else {
+                Setting::Tool(r)
+            }));
+        return;
+    }
+    let Some(base) = base_name(src, target) else {
+        return;
+    };
+    if base.starts_with('$') {
+        return;
+    }
+    let f = read_fields(src, agg);
+    let name = Some(crate::syntax::latin1(target.span.slice(src)));
+    match declared.get(&base) {
+        Some(PositionKind::Frame) => out.facts.candidates.push(build_position(
+            lines,
+            value.span,
+            PositionKind::Frame,
+            name,
+            f,
+        )),
+        Some(&kind) => out
+            .positions
+            .push(build_position(lines, value.span, kind, name, f)),
+        None => {
+            if let Some(kind) = inferred_kind(src, agg, &f) {
+                out.facts
+                    .candidates
+                    .push(build_position(lines, value.span, kind, name, f));
+            }
+        }
+    }
+}
+
+/// The targets of a motion: names, inline literals, and both sides of `:`.
+fn target_refs(
+    src: &[u8],
+    lines: &LineIndex,
+    e: &Expr,
+    refs: &mut Vec<Ref>,
+    positions: &mut Vec<Position>,
+) {
+    match &e.kind {
+        ExprKind::Name | ExprKind::Index(..) => refs.push(Ref::Named(upper(src, e.span))),
+        ExprKind::Aggregate(agg) => {
+            let f = read_fields(src, agg);
+            if let Some(kind) = inferred_kind(src, agg, &f) {
+                positions.push(build_position(lines, e.span, kind, None, f));
+                refs.push(Ref::Inline(e.span));
+            }
+        }
+        ExprKind::Binary(l, _, r) => {
+            target_refs(src, lines, l, refs, positions);
+            target_refs(src, lines, r, refs, positions);
+        }
+        ExprKind::Paren(inner) => target_refs(src, lines, inner, refs, positions),
+        _ => {}
+    }
+}
+
+/// The name trackfix gives a base: `BASE_DATA[n]`, `$WORLD` for base 0.
+pub(crate) fn base_label(r: &FrameRef) -> Option<String> {
+    match r {
+        FrameRef::Data(0) => Some("$WORLD".to_owned()),
+        FrameRef::Data(n) => Some(format!("BASE_DATA[{n}]")),
+        FrameRef::Named(s) => Some(s.clone()),
+        FrameRef::Unknown => None,
+    }
+}
+
+/// The name trackfix gives a tool: `TOOL_DATA[n]`, `$NULLFRAME` (the flange) for tool 0.
+pub(crate) fn tool_label(r: &FrameRef) -> Option<String> {
+    match r {
+        FrameRef::Data(0) => Some("$NULLFRAME".to_owned()),
+        FrameRef::Data(n) => Some(format!("TOOL_DATA[{n}]")),
+        FrameRef::Named(s) => Some(s.clone()),
+        FrameRef::Unknown => None,
+    }
+}
+
+#[derive(Clone, Default)]
+struct State {
+    base: Option<FrameRef>,
+    tool: Option<FrameRef>,
+    tcp: bool,
+}
+
+impl State {
+    fn apply(&mut self, s: &Setting, fdats: &HashMap<String, Fdat>) {
+        let data = |n: Option<u32>| n.map_or(FrameRef::Unknown, FrameRef::Data);
+        match s {
+            Setting::Base(r) => self.base = Some(r.clone()),
+            Setting::Tool(r) => self.tool = Some(r.clone()),
+            Setting::Tcp(t) => self.tcp = *t,
+            Setting::Fdat(name) => {
+                let f = fdats.get(name);
+                self.base = Some(data(f.and_then(|f| f.base)));
+                self.tool = Some(data(f.and_then(|f| f.tool)));
+                self.tcp = f.and_then(|f| f.tcp).unwrap_or(false);
+            }
+            Setting::BaseOfFdat(name) => {
+                self.base = Some(data(fdats.get(name).and_then(|f| f.base)));
+            }
+            Setting::ToolOfFdat(name) => {
+                self.tool = Some(data(fdats.get(name).and_then(|f| f.tool)));
+            }
+            Setting::TcpOfFdat(name) => {
+                self.tcp = fdats.get(name).and_then(|f| f.tcp).unwrap_or(false);
+            }
+        }
+    }
+}
+
+fn record_use(u: &mut Usage, base: &Option<String>, tool: &Option<String>, tcp: bool, line: usize) {
+    if let Some(b) = base {
+        match &u.wobj {
+            None => u.wobj = Some(b.clone()),
+            Some(w) if w != b && !u.other_wobjs.contains(b) => u.other_wobjs.push(b.clone()),
+            Some(_) => {}
+        }
+    }
+    if u.tool.is_none() {
+        u.tool.clone_from(tool);
+    }
+    u.stationary_tool |= tcp;
+    if !u.lines.contains(&line) {
+        u.lines.push(line);
+    }
+}
+
+/// Resolves base, tool and IPO mode of every motion of a program (files in the same order as
+/// `facts`), fills each used position's [`Usage`], promotes used `FRAME`s and candidate
+/// aggregates to positions, and reports motions whose base stays unknown.
+pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
+    let mut fdats: HashMap<String, Fdat> = HashMap::new();
+    for f in facts.iter() {
+        for (k, v) in &f.fdats {
+            fdats.entry(k.clone()).or_insert_with(|| v.clone());
+        }
+    }
+    // Where each declared name lives: (file, in candidates?, index).
+    let mut by_name: HashMap<String, Vec<(usize, bool, usize)>> = HashMap::new();
+    for (fi, (file, fact)) in files.iter().zip(facts.iter()).enumerate() {
+        for (i, p) in file.positions.iter().enumerate() {
+            if let Some(n) = &p.name {
+                by_name
+                    .entry(n.to_ascii_uppercase().replace([' ', '\t'], ""))
+                    .or_default()
+                    .push((fi, false, i));
+            }
+        }
+        for (i, p) in fact.candidates.iter().enumerate() {
+            if let Some(n) = &p.name {
+                by_name
+                    .entry(n.to_ascii_uppercase().replace([' ', '\t'], ""))
+                    .or_default()
+                    .push((fi, true, i));
+            }
+        }
+    }
+    let mut used_candidates: Vec<Vec<bool>> = facts
+        .iter()
+        .map(|f| vec![false; f.candidates.len()])
+        .collect();
+    for fi in 0..files.len() {
+        let events = facts.get(fi).map(|f| f.events.clone()).unwrap_or_default();
+        let mut state = State::default();
+        for ev in &events {
+            match ev {
+                Event::Reset => state = State::default(),
+                Event::Set(s) => state.apply(s, &fdats),
+                Event::Motion {
+                    span,
+                    line,
+                    refs,
+                    with,
+                } => {
+                    let mut local = state.clone();
+                    for s in with {
+                        local.apply(s, &fdats);
+                    }
+                    let base = local.base.as_ref().and_then(base_label);
+                    let tool = local.tool.as_ref().and_then(tool_label);
+                    if base.is_none()
+                        && !refs.is_empty()
+                        && let Some(file) = files.get_mut(fi)
+                    {
+                        file.diagnostics.push(
+                            Diagnostic::warning(*span, "the base of this motion is not resolved")
+                                .with_hint(
+                                    "set FDAT_ACT, $BASE=BASE_DATA[n] or BAS(#BASE,n) before it in the same DEF",
+                                ),
+                        );
+                    }
+                    for r in refs {
+                        match r {
+                            Ref::Inline(s) => {
+                                if let Some(p) = files
+                                    .get_mut(fi)
+                                    .and_then(|f| f.positions.iter_mut().find(|p| p.span == *s))
+                                {
+                                    record_use(&mut p.usage, &base, &tool, local.tcp, *line);
+                                }
+                            }
+                            Ref::Named(n) => {
+                                for &(f2, cand, i) in by_name.get(n).map_or(&[][..], Vec::as_slice)
+                                {
+                                    let p = if cand {
+                                        if let Some(u) =
+                                            used_candidates.get_mut(f2).and_then(|v| v.get_mut(i))
+                                        {
+                                            *u = true;
+                                        }
+                                        facts.get_mut(f2).and_then(|f| f.candidates.get_mut(i))
+                                    } else {
+                                        files.get_mut(f2).and_then(|f| f.positions.get_mut(i))
+                                    };
+                                    if let Some(p) = p {
+                                        record_use(&mut p.usage, &base, &tool, local.tcp, *line);
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    for (fi, file) in files.iter_mut().enumerate() {
+        let (Some(fact), Some(used)) = (facts.get_mut(fi), used_candidates.get(fi)) else {
+            continue;
+        };
+        let cands = std::mem::take(&mut fact.candidates);
+        let mut promoted = false;
+        for (p, &u) in cands.into_iter().zip(used) {
+            if u {
+                file.positions.push(p);
+                promoted = true;
+            } else {
+                fact.candidates.push(p);
+            }
+        }
+        if promoted {
+            file.positions.sort_by_key(|p| p.span.start);
+        }
+        file.diagnostics.sort_by_key(|d| d.span.start);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bit_strings() {
+        assert_eq!(bit_string(b"'B010'"), Some((2, 3)));
+        assert_eq!(bit_string(b"'b100011'"), Some((35, 6)));
+        assert_eq!(bit_string(b"'H1F'"), None);
+        assert_eq!(bit_string(b"'B'"), None);
+        assert_eq!(bit_string(b"'B012'"), None);
+    }
+}
