@@ -1,13 +1,642 @@
-//! `trackfix track identify | fit | show | spectrum`. Owned by issue 4.
+//! `trackfix track identify | fit | show | spectrum` (and the hidden `simulate` that made the
+//! samples). Owned by issue 4.
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use trackfix::geometry::{abb_quat_components, kuka_abc_angles, pose_to_xyz_deg};
+use trackfix::track::adjustment::{chord_bounds, manual_adjustment, twist_diagram};
+use trackfix::track::csv_table::NumericCsv;
+use trackfix::track::frames_csv::{clean, frames_csv, read_frames};
+use trackfix::track::identify::{OUTLIER_FACTOR, identify, read_measurements};
+use trackfix::track::nominal::{FitOptions, fit_track};
+use trackfix::track::plot::{profile_svg, spectrum_svg};
+use trackfix::track::profile::write_atomic;
+use trackfix::track::simulate::{
+    TrackTruth, measurements_csv, sample_tcp_points, scan_csv, simulate_measurements, simulate_scan,
+};
+use trackfix::track::spectrum::{TUKEY_ALPHA, scan_spectrum};
+use trackfix::track::{Extrapolate, Gear, Profile, Reference};
 
 use super::Exit;
 
 #[derive(clap::Subcommand)]
 pub enum TrackCommand {
     /// Identify the robot base frame at each skid position from laser-tracker points.
-    Identify,
+    Identify(IdentifyArgs),
+    /// Fit the nominal straight track, gear factor and deviation splines: frames.csv → profile.toml.
+    Fit(FitArgs),
+    /// Evaluate a profile, or show its adjustment table, twist diagram and error bounds.
+    Show(ShowArgs),
+    /// Recommend a sampling spacing from a continuous scan along the track.
+    Spectrum(SpectrumArgs),
+    /// Simulate a deformed track and its tracker measurements (how the samples were made).
+    #[command(hide = true)]
+    Simulate(SimulateArgs),
 }
 
-pub fn run(_cmd: TrackCommand) -> anyhow::Result<Exit> {
-    anyhow::bail!("track is not implemented yet")
+#[derive(clap::Args)]
+pub struct IdentifyArgs {
+    /// measurements.csv: skid,point,robot_x,robot_y,robot_z,meas_x,meas_y,meas_z
+    pub measurements: PathBuf,
+    /// Where to write frames.csv (skid,x,y,z,rx,ry,rz).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+#[derive(clap::Args)]
+pub struct FitArgs {
+    /// frames.csv: skid,x,y,z,rx,ry,rz in increasing skid order.
+    pub frames: PathBuf,
+    /// Where to write profile.toml.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// The straight line the deviations are taken from.
+    #[arg(long, value_enum, default_value = "regression")]
+    pub reference: Reference,
+    /// Keep the controller's gear factor (its drift goes into the profile) or enter the new one.
+    #[arg(long, value_enum, default_value = "as-is")]
+    pub gear: Gear,
+    /// What D(s) does outside the measured skid range.
+    #[arg(long, value_enum, default_value = "error")]
+    pub extrapolate: Extrapolate,
+    /// Profile name (default: the output file's stem, or its folder's name for profile.toml).
+    #[arg(long)]
+    pub name: Option<String>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ShowFormat {
+    Table,
+    Json,
+    Csv,
+}
+
+#[derive(clap::Args)]
+pub struct ShowArgs {
+    /// profile.toml
+    pub profile: PathBuf,
+    /// Skid positions to evaluate D(s) at, in mm (repeatable, kept in order).
+    #[arg(long = "at", value_name = "S", allow_negative_numbers = true)]
+    pub at: Vec<f64>,
+    /// Evaluate every MM over the profile's range.
+    #[arg(long, value_name = "MM", conflicts_with = "at")]
+    pub step: Option<f64>,
+    /// Output format of the evaluated values.
+    #[arg(long, value_enum, default_value = "table")]
+    pub format: ShowFormat,
+    /// Also write an SVG: the six deviation curves with their knots, and the twist diagram.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+pub struct SpectrumArgs {
+    /// scan.csv: skid,x,y,z (or t,x,y,z with --speed).
+    pub scan: PathBuf,
+    /// Amplitude threshold in mm: frequencies above it must be sampled.
+    #[arg(long, value_name = "MM")]
+    pub threshold: f64,
+    /// Skid speed in mm/s, for a scan timed in seconds (t,x,y,z).
+    #[arg(long, value_name = "MM_PER_S")]
+    pub speed: Option<f64>,
+    /// Also write the amplitude spectrum as SVG.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SampleRobot {
+    R1,
+    R2,
+}
+
+#[derive(clap::Args)]
+pub struct SimulateArgs {
+    /// Which sample track (see samples/track/README.md).
+    #[arg(long, value_enum)]
+    pub robot: SampleRobot,
+    /// Folder for measurements.csv and scan.csv.
+    #[arg(long)]
+    pub out_dir: PathBuf,
+    /// Tracker noise, mm (standard deviation per axis).
+    #[arg(long, default_value_t = 0.02)]
+    pub noise: f64,
+    /// PRNG seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+pub fn run(cmd: TrackCommand) -> anyhow::Result<Exit> {
+    let text = match cmd {
+        TrackCommand::Identify(a) => run_identify(&a)?,
+        TrackCommand::Fit(a) => run_fit(&a)?,
+        TrackCommand::Show(a) => run_show(&a)?,
+        TrackCommand::Spectrum(a) => run_spectrum(&a)?,
+        TrackCommand::Simulate(a) => run_simulate(&a)?,
+    };
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())?;
+    out.flush()?;
+    Ok(Exit::Ok)
+}
+
+fn write_file(path: &Path, text: &str) -> anyhow::Result<()> {
+    write_atomic(path, text.as_bytes())?;
+    Ok(())
+}
+
+fn run_identify(a: &IdentifyArgs) -> anyhow::Result<String> {
+    let rows = read_measurements(&a.measurements)?;
+    let id = identify(&rows).with_context(|| a.measurements.display().to_string())?;
+    write_file(&a.output, &frames_csv(&id.frames()))?;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "identified {} base frame(s) from {} point(s) in {} -> {}",
+        id.fits.len(),
+        rows.len(),
+        a.measurements.display(),
+        a.output.display()
+    );
+    let _ = writeln!(
+        s,
+        "residual = tracker point - fitted base frame * robot point (seed Table 7.2)"
+    );
+    for f in &id.fits {
+        let _ = writeln!(
+            s,
+            "\nskid {} mm: {} points, rms {:.4} mm",
+            f.skid,
+            f.points.len(),
+            f.fit.rms
+        );
+        let _ = writeln!(s, "  point    dx [mm]    dy [mm]    dz [mm]   rms [mm]");
+        for (p, r) in f.points.iter().zip(&f.fit.residuals) {
+            let _ = writeln!(
+                s,
+                "  {:>5} {:>10.4} {:>10.4} {:>10.4} {:>10.4}",
+                p,
+                clean(r.x, 4),
+                clean(r.y, 4),
+                clean(r.z, 4),
+                r.norm()
+            );
+        }
+    }
+    let _ = writeln!(s, "\nrms per skid:");
+    let _ = writeln!(s, "      skid   rms [mm]   max [mm]");
+    for f in &id.fits {
+        let max = f.fit.residual_norms().into_iter().fold(0.0, f64::max);
+        let _ = writeln!(s, "  {:>8} {:>10.4} {:>10.4}", f.skid, f.fit.rms, max);
+    }
+    let limit = OUTLIER_FACTOR * id.median_residual;
+    let _ = write!(
+        s,
+        "\nmedian point residual {:.4} mm; outliers (> {OUTLIER_FACTOR} x median = {limit:.4} mm): ",
+        id.median_residual
+    );
+    if id.outliers.is_empty() {
+        let _ = writeln!(s, "none");
+    } else {
+        let _ = writeln!(s, "{}", id.outliers.len());
+        for o in &id.outliers {
+            let _ = writeln!(
+                s,
+                "  skid {} mm, point {}: {:.4} mm ({:.1} x median) - remeasure or remove the row",
+                o.skid, o.point, o.residual, o.ratio
+            );
+        }
+    }
+    Ok(s)
+}
+
+fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::Digest as _;
+    sha2::Sha256::digest(bytes)
+        .iter()
+        .fold(String::new(), |mut s, b| {
+            let _ = write!(s, "{b:02x}");
+            s
+        })
+}
+
+fn default_name(output: &Path) -> String {
+    let stem = output.file_stem().and_then(|s| s.to_str()).unwrap_or("");
+    if stem == "profile" {
+        if let Some(dir) = output
+            .parent()
+            .and_then(|p| p.file_name())
+            .and_then(|s| s.to_str())
+        {
+            return dir.to_string();
+        }
+    }
+    if stem.is_empty() {
+        "track".to_string()
+    } else {
+        stem.to_string()
+    }
+}
+
+fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
+    let bytes = std::fs::read(&a.frames).with_context(|| a.frames.display().to_string())?;
+    let frames = read_frames(&a.frames)?;
+    let opts = FitOptions {
+        name: a.name.clone().unwrap_or_else(|| default_name(&a.output)),
+        reference: a.reference,
+        gear: a.gear,
+        extrapolate: a.extrapolate,
+        source_sha256: sha256_hex(&bytes),
+    };
+    let fit = fit_track(&frames, &opts).with_context(|| a.frames.display().to_string())?;
+    let p = &fit.profile;
+    p.save(&a.output)?;
+    let (s0, s1) = p.skid_range();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "profile `{}`: {} knots, skid {s0} .. {s1} mm -> {}",
+        p.name(),
+        p.knots().len(),
+        a.output.display()
+    );
+    let _ = writeln!(
+        s,
+        "reference {}, gear {}, extrapolate {}",
+        enum_name(a.reference),
+        enum_name(a.gear),
+        enum_name(a.extrapolate)
+    );
+    let _ = writeln!(s, "\nenter in the controller (measurement frame = world):");
+    let _ = writeln!(
+        s,
+        "  gear factor: the skid moves {:.6} mm per commanded mm ({:+.3} mm over {} mm)",
+        fit.gear_factor,
+        (fit.gear_factor - 1.0) * (s1 - s0),
+        s1 - s0
+    );
+    let _ = writeln!(
+        s,
+        "    new gear factor = {:.6} x current gear factor (seed eq. 4.4){}",
+        fit.gear_factor,
+        match a.gear {
+            Gear::AsIs => "; with --gear as-is the profile keeps the drift instead",
+            Gear::Recalibrated => "; the profile assumes you enter it",
+        }
+    );
+    let u = fit.direction;
+    let ub = fit.direction_in_base();
+    let _ = writeln!(
+        s,
+        "  track direction: [{:.6}, {:.6}, {:.6}] (in the base frame at skid 0: [{:.6}, {:.6}, {:.6}])",
+        clean(u.x, 6),
+        clean(u.y, 6),
+        clean(u.z, 6),
+        clean(ub.x, 6),
+        clean(ub.y, 6),
+        clean(ub.z, 6)
+    );
+    let [x, y, z, rx, ry, rz] = pose_to_xyz_deg(&fit.base_at_zero);
+    let _ = writeln!(
+        s,
+        "  base frame at skid 0: x {x:.3} y {y:.3} z {z:.3} mm, rx {rx:.4} ry {ry:.4} rz {rz:.4} deg"
+    );
+    let q = abb_quat_components(&fit.base_at_zero.rotation, None);
+    let abc = kuka_abc_angles(&fit.base_at_zero.rotation, None);
+    let _ = writeln!(
+        s,
+        "    ABB [[{x:.3},{y:.3},{z:.3}],[{:.6},{:.6},{:.6},{:.6}]]   KUKA {{X {x:.3},Y {y:.3},Z {z:.3},A {:.4},B {:.4},C {:.4}}}",
+        q[0], q[1], q[2], q[3], abc[0], abc[1], abc[2]
+    );
+    let _ = writeln!(
+        s,
+        "\norigins against the skid (least squares, seed eq. 4.54):"
+    );
+    let _ = writeln!(
+        s,
+        "  axis        slope   intercept [mm]   residual rms [mm]   max |residual| [mm]"
+    );
+    for (name, l) in ["x", "y", "z"].iter().zip(&fit.lines) {
+        let n = l.residuals.len().max(1) as f64;
+        let rms = (l.residuals.iter().map(|r| r * r).sum::<f64>() / n).sqrt();
+        let max = l.residuals.iter().map(|r| r.abs()).fold(0.0, f64::max);
+        let _ = writeln!(
+            s,
+            "  {name:>4} {:>12.8} {:>16.4} {:>19.4} {:>21.4}",
+            l.slope, l.intercept, rms, max
+        );
+    }
+    if let Some(st) = p.stats() {
+        let _ = writeln!(s, "\ndeviation from the nominal:");
+        let _ = writeln!(
+            s,
+            "  position rms {:.4} mm, max {:.4} mm; rotation max {:.4} deg",
+            st.position_rms_mm, st.position_max_mm, st.rotation_max_deg
+        );
+        let _ = writeln!(
+            s,
+            "  straightness (peak-to-peak about a line): y {:.4} mm, z {:.4} mm; twist (rx peak-to-peak) {:.4} deg",
+            st.straightness_y_mm, st.straightness_z_mm, st.twist_deg
+        );
+    }
+    Ok(s)
+}
+
+fn enum_name(v: impl clap::ValueEnum) -> String {
+    v.to_possible_value()
+        .map(|p| p.get_name().to_string())
+        .unwrap_or_default()
+}
+
+fn round6(v: f64) -> f64 {
+    clean(v, 6)
+}
+
+fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
+    let p = Profile::load(&a.profile)?;
+    if let Some(path) = &a.plot {
+        write_file(path, &profile_svg(&p)?)?;
+    }
+    let (s0, s1) = p.skid_range();
+    let skids: Vec<f64> = if let Some(step) = a.step {
+        if step.is_nan() || step <= 0.0 {
+            anyhow::bail!("--step {step}: give a positive step in mm");
+        }
+        let n = ((s1 - s0) / step + 1e-9).floor() as usize;
+        let mut v: Vec<f64> = (0..=n).map(|i| s0 + i as f64 * step).collect();
+        if v.last().is_some_and(|l| (s1 - l).abs() > 1e-9) {
+            v.push(s1);
+        }
+        v
+    } else {
+        a.at.clone()
+    };
+    if skids.is_empty() {
+        if a.format != ShowFormat::Table {
+            anyhow::bail!(
+                "--format {} needs --at or --step (the overview is a table)",
+                enum_name(a.format)
+            );
+        }
+        return Ok(overview(&p));
+    }
+    let mut rows = Vec::with_capacity(skids.len());
+    for &skid in &skids {
+        let c = p
+            .deviation_components(skid)
+            .with_context(|| format!("{}: --at {skid}", a.profile.display()))?;
+        rows.push((skid, c));
+    }
+    let mut s = String::new();
+    match a.format {
+        ShowFormat::Json => {
+            let arr: Vec<serde_json::Value> = rows
+                .iter()
+                .map(|(skid, c)| {
+                    serde_json::json!({
+                        "skid": skid,
+                        "dx": round6(c[0]), "dy": round6(c[1]), "dz": round6(c[2]),
+                        "rx": round6(c[3]), "ry": round6(c[4]), "rz": round6(c[5]),
+                    })
+                })
+                .collect();
+            s = serde_json::to_string_pretty(&arr)?;
+            s.push('\n');
+        }
+        ShowFormat::Csv => {
+            s.push_str("skid,dx,dy,dz,rx,ry,rz\n");
+            for (skid, c) in &rows {
+                let _ = writeln!(
+                    s,
+                    "{skid},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6}",
+                    clean(c[0], 4),
+                    clean(c[1], 4),
+                    clean(c[2], 4),
+                    round6(c[3]),
+                    round6(c[4]),
+                    round6(c[5])
+                );
+            }
+        }
+        ShowFormat::Table => {
+            let _ = writeln!(
+                s,
+                "D(s) of profile `{}` (skid {s0} .. {s1} mm, extrapolate {})",
+                p.name(),
+                enum_name(p.extrapolate())
+            );
+            let _ = writeln!(
+                s,
+                "      skid    dx [mm]    dy [mm]    dz [mm]     rx [deg]     ry [deg]     rz [deg]"
+            );
+            for (skid, c) in &rows {
+                let _ = writeln!(
+                    s,
+                    "{:>10} {:>10.4} {:>10.4} {:>10.4} {:>12.6} {:>12.6} {:>12.6}",
+                    skid,
+                    clean(c[0], 4),
+                    clean(c[1], 4),
+                    clean(c[2], 4),
+                    round6(c[3]),
+                    round6(c[4]),
+                    round6(c[5])
+                );
+            }
+        }
+    }
+    Ok(s)
+}
+
+fn overview(p: &Profile) -> String {
+    let (s0, s1) = p.skid_range();
+    let n = p.nominal();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "profile `{}`: {} knots, skid {s0} .. {s1} mm, reference {}, gear {}, extrapolate {}",
+        p.name(),
+        p.knots().len(),
+        enum_name(p.reference()),
+        enum_name(p.gear()),
+        enum_name(p.extrapolate())
+    );
+    let _ = writeln!(
+        s,
+        "nominal: origin [{:.3}, {:.3}, {:.3}] mm, direction [{:.6}, {:.6}, {:.6}], gear factor {:.6}",
+        n.origin[0],
+        n.origin[1],
+        n.origin[2],
+        clean(n.direction[0], 6),
+        clean(n.direction[1], 6),
+        clean(n.direction[2], 6),
+        n.gear_factor
+    );
+    let header = "    dx [mm]    dy [mm]    dz [mm]     rx [deg]     ry [deg]     rz [deg]";
+    let row6 = |c: &[f64; 6]| {
+        format!(
+            "{:>11.4}{:>11.4}{:>11.4}{:>13.6}{:>13.6}{:>13.6}",
+            clean(c[0], 4),
+            clean(c[1], 4),
+            clean(c[2], 4),
+            round6(c[3]),
+            round6(c[4]),
+            round6(c[5])
+        )
+    };
+    let _ = writeln!(
+        s,
+        "\nmanual adjustment: deviation of each component from its own regression line (seed eq. 4.54)"
+    );
+    let _ = writeln!(s, "      skid{header}");
+    for r in manual_adjustment(p) {
+        let _ = writeln!(s, "{:>10}{}", r.skid, row6(&r.residual));
+    }
+    let _ = writeln!(
+        s,
+        "\ntwist diagram: tip of a 1 m lever along +z of each knot, x,y relative to the first (0.1 deg = 1.75 mm)"
+    );
+    let _ = writeln!(s, "      skid     x [mm]     y [mm]");
+    for t in twist_diagram(p) {
+        let _ = writeln!(
+            s,
+            "{:>10} {:>10.4} {:>10.4}",
+            t.skid,
+            clean(t.x, 4),
+            clean(t.y, 4)
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nlargest spline-to-chord distance per interval (seed 4.9-4.12)"
+    );
+    let _ = writeln!(s, "      from        to{header}");
+    for b in chord_bounds(p) {
+        let d = b.distance.map(|c| c.distance.abs());
+        let _ = writeln!(s, "{:>10}{:>10}{}", b.from, b.to, row6(&d));
+    }
+    s
+}
+
+fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
+    if a.threshold.is_nan() || a.threshold <= 0.0 {
+        anyhow::bail!(
+            "--threshold {}: give a positive amplitude in mm",
+            a.threshold
+        );
+    }
+    let table = NumericCsv::read(&a.scan)?;
+    let (pos_col, scale) = match a.speed {
+        Some(v) if v.is_nan() || v <= 0.0 => {
+            anyhow::bail!("--speed {v}: give a positive speed in mm/s")
+        }
+        Some(v) => ("t", v),
+        None => ("skid", 1.0),
+    };
+    let idx = table.columns(&[pos_col, "x", "y", "z"])?;
+    let mut positions = Vec::with_capacity(table.rows.len());
+    let mut points = Vec::with_capacity(table.rows.len());
+    for row in &table.rows {
+        let v: Vec<f64> = idx.iter().map(|&i| NumericCsv::get(row, i)).collect();
+        if let [s, x, y, z] = v[..] {
+            positions.push(s * scale);
+            points.push([x, y, z]);
+        }
+    }
+    let spec = scan_spectrum(&positions, &points, a.threshold)
+        .with_context(|| a.scan.display().to_string())?;
+    if let Some(path) = &a.plot {
+        write_file(path, &spectrum_svg(&spec)?)?;
+    }
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{}: {} samples over {:.1} mm, spacing {:.3} mm{}",
+        a.scan.display(),
+        spec.samples,
+        spec.spacing_mm * (spec.samples.saturating_sub(1)) as f64,
+        spec.spacing_mm,
+        if spec.resampled {
+            " (uneven: resampled linearly to uniform spacing)"
+        } else {
+            ""
+        }
+    );
+    let _ = writeln!(
+        s,
+        "straight-line fit removed; Tukey window (alpha {TUKEY_ALPHA}); frequency resolution {:.6} /mm, Nyquist {:.6} /mm",
+        spec.frequency.get(1).copied().unwrap_or(0.0),
+        spec.nyquist()
+    );
+    let _ = writeln!(s, "\nlargest peaks:");
+    let _ = writeln!(s, "    f [1/mm]  wavelength [mm]  amplitude [mm]");
+    let amp = &spec.amplitude;
+    let mut peaks: Vec<usize> = (1..amp.len())
+        .filter(|&k| {
+            let a = amp[k];
+            a >= amp[k - 1] && amp.get(k + 1).is_none_or(|n| a > *n)
+        })
+        .collect();
+    peaks.sort_by(|&x, &y| amp[y].total_cmp(&amp[x]));
+    for &k in peaks.iter().take(6) {
+        let f = spec.frequency[k];
+        let _ = writeln!(s, "  {f:>10.6} {:>16.1} {:>15.4}", 1.0 / f, amp[k]);
+    }
+    match (spec.highest, spec.recommended_spacing_mm()) {
+        (Some((f, amp)), Some(spacing)) => {
+            let _ = writeln!(
+                s,
+                "\nhighest frequency above {} mm: {f:.6} /mm (wavelength {:.1} mm, amplitude {amp:.4} mm)",
+                a.threshold,
+                1.0 / f
+            );
+            let _ = writeln!(
+                s,
+                "recommended sampling spacing 1/(2f) = {spacing:.1} mm (seed eq. 4.12)"
+            );
+        }
+        _ => {
+            let _ = writeln!(
+                s,
+                "\nno frequency exceeds {} mm: the straight line describes the scan; sample as coarsely as the range allows",
+                a.threshold
+            );
+        }
+    }
+    Ok(s)
+}
+
+fn run_simulate(a: &SimulateArgs) -> anyhow::Result<String> {
+    let truth = match a.robot {
+        SampleRobot::R1 => TrackTruth::sample_r1(),
+        SampleRobot::R2 => TrackTruth::sample_r2(),
+    };
+    std::fs::create_dir_all(&a.out_dir).with_context(|| a.out_dir.display().to_string())?;
+    let skids: Vec<f64> = (0..=16).map(|i| i as f64 * 500.0).collect();
+    let rows = simulate_measurements(&truth, &skids, &sample_tcp_points(), a.noise, a.seed);
+    let m = a.out_dir.join("measurements.csv");
+    write_file(&m, &measurements_csv(&rows))?;
+    let reflector = nalgebra::Point3::new(0.0, 0.0, 250.0);
+    let scan = simulate_scan(
+        &truth,
+        reflector,
+        0.0,
+        8000.0,
+        10.0,
+        a.noise,
+        a.seed.wrapping_add(1000),
+    );
+    let sc = a.out_dir.join("scan.csv");
+    write_file(&sc, &scan_csv(&scan))?;
+    Ok(format!(
+        "wrote {} ({} rows) and {} ({} rows), noise {} mm, seed {}\n",
+        m.display(),
+        rows.len(),
+        sc.display(),
+        scan.len(),
+        a.noise,
+        a.seed
+    ))
 }

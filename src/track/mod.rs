@@ -3,12 +3,16 @@
 //!
 //! Owned by issue 4.
 
+pub mod adjustment;
 pub mod csv_table;
 pub mod frames_csv;
 pub mod identify;
 pub mod nominal;
+pub mod plot;
 pub mod profile;
 pub mod simulate;
+pub mod spectrum;
 pub mod spline;
 
+pub use csv_table::NumericCsv;
 pub use profile::{Extrapolate, Gear, Knot, Nominal, Profile, Reference, TrackError};

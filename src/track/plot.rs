@@ -1,0 +1,178 @@
+//! SVG figures (plotters, SVG backend only): the six deviation curves with their knots and the
+//! twist diagram of a profile, and the amplitude spectrum of a scan. Same input, same bytes:
+//! plotters' SVG backend estimates text size without fonts, so nothing depends on the machine.
+
+use plotters::prelude::*;
+
+use super::adjustment::twist_diagram;
+use super::profile::{Profile, TrackError};
+use super::spectrum::Spectrum;
+
+const CURVE_SAMPLES: usize = 400;
+const LABELS: [&str; 6] = [
+    "dx [mm]", "dy [mm]", "dz [mm]", "rx [deg]", "ry [deg]", "rz [deg]",
+];
+
+fn plot_error(e: impl std::fmt::Display) -> TrackError {
+    TrackError::Invalid(format!("cannot draw the plot: {e}"))
+}
+
+/// A value range with some margin; a flat series gets a small symmetric one.
+fn padded(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() || !hi.is_finite() {
+        return -1.0..1.0;
+    }
+    let span = hi - lo;
+    let pad = if span > 1e-9 {
+        0.08 * span
+    } else {
+        1e-3_f64.max(lo.abs() * 0.1)
+    };
+    (lo - pad)..(hi + pad)
+}
+
+/// The profile figure: six deviation curves (line: spline, dots: knots) and the twist diagram.
+pub fn profile_svg(profile: &Profile) -> Result<String, TrackError> {
+    let (s0, s1) = profile.skid_range();
+    let xs: Vec<f64> = (0..=CURVE_SAMPLES)
+        .map(|i| s0 + (s1 - s0) * i as f64 / CURVE_SAMPLES as f64)
+        .collect();
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1200, 1500)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_error)?;
+        let root = root
+            .titled(
+                &format!(
+                    "track profile `{}`: deviation D(s) from the nominal",
+                    profile.name()
+                ),
+                ("sans-serif", 22),
+            )
+            .map_err(plot_error)?;
+        let areas = root.split_evenly((4, 2));
+        for (c, (area, label)) in areas.iter().zip(LABELS).enumerate() {
+            let Some(spline) = profile.splines().get(c) else {
+                continue;
+            };
+            let curve: Vec<(f64, f64)> = xs.iter().map(|&x| (x, spline.value(x))).collect();
+            let knots: Vec<(f64, f64)> = spline
+                .knots()
+                .iter()
+                .zip(spline.values())
+                .map(|(x, y)| (*x, *y))
+                .collect();
+            let yr = padded(curve.iter().map(|p| p.1));
+            let mut chart = ChartBuilder::on(area)
+                .caption(label, ("sans-serif", 18))
+                .margin(12)
+                .x_label_area_size(32)
+                .y_label_area_size(64)
+                .build_cartesian_2d(s0..s1, yr)
+                .map_err(plot_error)?;
+            chart
+                .configure_mesh()
+                .x_desc("skid [mm]")
+                .y_desc(label)
+                .draw()
+                .map_err(plot_error)?;
+            chart
+                .draw_series(LineSeries::new(curve, BLUE.stroke_width(2)))
+                .map_err(plot_error)?;
+            chart
+                .draw_series(knots.into_iter().map(|p| Circle::new(p, 4, RED.filled())))
+                .map_err(plot_error)?;
+        }
+        if let Some(area) = areas.get(6) {
+            let twist = twist_diagram(profile);
+            let xr = padded(twist.iter().map(|t| t.x));
+            let yr = padded(twist.iter().map(|t| t.y));
+            let mut chart = ChartBuilder::on(area)
+                .caption(
+                    "twist diagram: 1 m lever along +z, relative to the first knot [mm]",
+                    ("sans-serif", 16),
+                )
+                .margin(12)
+                .x_label_area_size(32)
+                .y_label_area_size(64)
+                .build_cartesian_2d(xr, yr)
+                .map_err(plot_error)?;
+            chart
+                .configure_mesh()
+                .x_desc("x [mm]")
+                .y_desc("y [mm]")
+                .draw()
+                .map_err(plot_error)?;
+            let pts: Vec<(f64, f64)> = twist.iter().map(|t| (t.x, t.y)).collect();
+            chart
+                .draw_series(LineSeries::new(pts.clone(), BLUE.stroke_width(1)))
+                .map_err(plot_error)?;
+            chart
+                .draw_series(pts.into_iter().map(|p| Circle::new(p, 4, RED.filled())))
+                .map_err(plot_error)?;
+        }
+        root.present().map_err(plot_error)?;
+    }
+    Ok(svg)
+}
+
+/// The scan figure: amplitude over spatial frequency, the threshold and the reported peak.
+pub fn spectrum_svg(spectrum: &Spectrum) -> Result<String, TrackError> {
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1000, 600)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_error)?;
+        let fmax = spectrum.nyquist().max(1e-9);
+        let amax = spectrum
+            .amplitude
+            .iter()
+            .skip(1)
+            .copied()
+            .fold(spectrum.threshold_mm, f64::max)
+            * 1.1;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                "track scan: amplitude spectrum of the deviation from the straight line",
+                ("sans-serif", 20),
+            )
+            .margin(14)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(0.0..fmax, 0.0..amax.max(1e-6))
+            .map_err(plot_error)?;
+        chart
+            .configure_mesh()
+            .x_desc("spatial frequency [1/mm]")
+            .y_desc("amplitude [mm]")
+            .draw()
+            .map_err(plot_error)?;
+        let pts: Vec<(f64, f64)> = spectrum
+            .frequency
+            .iter()
+            .zip(&spectrum.amplitude)
+            .skip(1)
+            .map(|(f, a)| (*f, *a))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(pts, BLUE.stroke_width(1)))
+            .map_err(plot_error)?;
+        chart
+            .draw_series(LineSeries::new(
+                [(0.0, spectrum.threshold_mm), (fmax, spectrum.threshold_mm)],
+                RED.stroke_width(1),
+            ))
+            .map_err(plot_error)?;
+        if let Some(p) = spectrum.highest {
+            chart
+                .draw_series(std::iter::once(Circle::new(p, 5, RED.filled())))
+                .map_err(plot_error)?;
+        }
+        root.present().map_err(plot_error)?;
+    }
+    Ok(svg)
+}

@@ -1,0 +1,216 @@
+//! `track spectrum`: how densely to sample a track, from a continuous scan (seed 4.9-4.12).
+//!
+//! The straight-line fit of the scanned points is removed, the residual of each coordinate is
+//! Tukey-windowed and transformed (real DFT); the amplitude in mm at spatial frequency `f` (1/mm)
+//! combines the three coordinates (`sqrt(ax² + ay² + az²)`, so it does not depend on how the
+//! tracker was turned). The highest frequency above the threshold `f_max` gives the sampling
+//! spacing `1/(2·f_max)` (seed eq. 4.12: 0.005/mm → 100 mm).
+
+use realfft::RealFftPlanner;
+
+use super::profile::{TrackError, line_residuals};
+
+/// Fraction of the window that is tapered (0 = rectangular, 1 = Hann).
+pub const TUKEY_ALPHA: f64 = 0.5;
+
+/// Spacings that differ by more than this fraction from the mean are resampled.
+const UNIFORM_TOLERANCE: f64 = 0.01;
+
+/// The result of a scan analysis.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spectrum {
+    /// Number of samples transformed.
+    pub samples: usize,
+    /// Sample spacing, mm.
+    pub spacing_mm: f64,
+    /// Whether the scan was linearly resampled to uniform spacing first.
+    pub resampled: bool,
+    /// Spatial frequencies, 1/mm (`k / (n·spacing)`, k = 0..=n/2).
+    pub frequency: Vec<f64>,
+    /// Combined amplitude per frequency, mm.
+    pub amplitude: Vec<f64>,
+    /// Amplitude threshold, mm.
+    pub threshold_mm: f64,
+    /// The highest frequency (above 0) whose amplitude exceeds the threshold, and that amplitude.
+    pub highest: Option<(f64, f64)>,
+}
+
+impl Spectrum {
+    /// `1/(2·f_max)`, mm; `None` when no frequency exceeds the threshold.
+    pub fn recommended_spacing_mm(&self) -> Option<f64> {
+        self.highest.map(|(f, _)| 1.0 / (2.0 * f))
+    }
+
+    /// The Nyquist frequency of the scan, 1/mm.
+    pub fn nyquist(&self) -> f64 {
+        0.5 / self.spacing_mm
+    }
+}
+
+/// The Tukey window of length `n`.
+pub fn tukey_window(n: usize, alpha: f64) -> Vec<f64> {
+    if n < 2 {
+        return vec![1.0; n];
+    }
+    let m = (n - 1) as f64;
+    let edge = alpha * m / 2.0;
+    (0..n)
+        .map(|i| {
+            let x = i as f64;
+            let d = x.min(m - x);
+            if alpha <= 0.0 || d >= edge {
+                1.0
+            } else {
+                0.5 * (1.0 - (std::f64::consts::PI * d / edge).cos())
+            }
+        })
+        .collect()
+}
+
+/// Analyses a scan: `positions` along the track (mm, strictly increasing) and the measured
+/// points.
+pub fn scan_spectrum(
+    positions: &[f64],
+    points: &[[f64; 3]],
+    threshold_mm: f64,
+) -> Result<Spectrum, TrackError> {
+    let n = positions.len();
+    if n != points.len() {
+        return Err(TrackError::Invalid(format!(
+            "{n} positions but {} points",
+            points.len()
+        )));
+    }
+    if n < 8 {
+        return Err(TrackError::Invalid(format!(
+            "{n} scan samples; a spectrum needs at least 8"
+        )));
+    }
+    for (i, w) in positions.windows(2).enumerate() {
+        if let [a, b] = w
+            && b <= a
+        {
+            return Err(TrackError::Invalid(format!(
+                "scan row {}: position {b} does not follow {a} in increasing order",
+                i + 2
+            )));
+        }
+    }
+    let (first, last) = (positions[0], positions[n - 1]);
+    let spacing = (last - first) / (n - 1) as f64;
+    let uniform = positions
+        .windows(2)
+        .all(|w| ((w[1] - w[0]) - spacing).abs() <= UNIFORM_TOLERANCE * spacing);
+    let grid: Vec<f64> = (0..n).map(|i| first + i as f64 * spacing).collect();
+    let mut coords: [Vec<f64>; 3] = [0, 1, 2].map(|a| points.iter().map(|p| p[a]).collect());
+    if !uniform {
+        coords = coords.map(|c| resample(positions, &c, &grid));
+    }
+    let window = tukey_window(n, TUKEY_ALPHA);
+    let gain: f64 = window.iter().sum();
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(n);
+    let bins = n / 2 + 1;
+    let mut power = vec![0.0; bins];
+    for c in &coords {
+        let residual = line_residuals(&grid, c);
+        let mut input: Vec<f64> = residual.iter().zip(&window).map(|(r, w)| r * w).collect();
+        let mut output = fft.make_output_vec();
+        fft.process(&mut input, &mut output)
+            .map_err(|e| TrackError::Invalid(format!("DFT failed: {e}")))?;
+        for (k, (p, x)) in power.iter_mut().zip(&output).enumerate() {
+            // One-sided amplitude: DC and Nyquist are not doubled.
+            let scale = if k == 0 || (n % 2 == 0 && k == n / 2) {
+                1.0
+            } else {
+                2.0
+            };
+            let a = scale * x.norm() / gain;
+            *p += a * a;
+        }
+    }
+    let amplitude: Vec<f64> = power.iter().map(|p| p.sqrt()).collect();
+    let frequency: Vec<f64> = (0..bins).map(|k| k as f64 / (n as f64 * spacing)).collect();
+    // The literal rule: the highest bin above the threshold. The window's main lobe spreads a
+    // line over a neighbouring bin or two, which errs on the safe side (denser sampling).
+    let highest = (1..bins)
+        .rev()
+        .find(|&k| amplitude.get(k).is_some_and(|a| *a > threshold_mm))
+        .map(|k| (frequency[k], amplitude[k]));
+    Ok(Spectrum {
+        samples: n,
+        spacing_mm: spacing,
+        resampled: !uniform,
+        frequency,
+        amplitude,
+        threshold_mm,
+        highest,
+    })
+}
+
+/// Linear interpolation of `(xs, ys)` at `grid` (inside `xs`' range).
+fn resample(xs: &[f64], ys: &[f64], grid: &[f64]) -> Vec<f64> {
+    let mut j = 0;
+    grid.iter()
+        .map(|&g| {
+            while j + 2 < xs.len() && xs[j + 1] < g {
+                j += 1;
+            }
+            let (x0, x1, y0, y1) = (xs[j], xs[j + 1], ys[j], ys[j + 1]);
+            y0 + (y1 - y0) * (g - x0) / (x1 - x0)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn wave(step: f64, amp: f64, freq: f64) -> (Vec<f64>, Vec<[f64; 3]>) {
+        let s: Vec<f64> = (0..800).map(|i| i as f64 * step).collect();
+        let p = s
+            .iter()
+            .map(|&x| {
+                let w = amp * (2.0 * std::f64::consts::PI * freq * x).sin();
+                [x * 0.9998 + 10.0, 0.001 * x + w, -5.0]
+            })
+            .collect();
+        (s, p)
+    }
+
+    #[test]
+    fn finds_a_0_005_per_mm_wave_and_recommends_100_mm() {
+        // Seed eq. 4.12: 0.005/mm → 1/(2·0.005) = 100 mm.
+        let (s, p) = wave(10.0, 0.2, 0.005);
+        let spec = scan_spectrum(&s, &p, 0.05).unwrap();
+        let (f, _) = spec.highest.unwrap();
+        // The main lobe reaches one bin (0.000125/mm) above the line: 0.005125/mm.
+        assert!((f - 0.005).abs() < 0.0002, "{f}");
+        let peak = spec.amplitude.iter().copied().fold(0.0, f64::max);
+        assert!((peak - 0.2).abs() < 1e-3, "{peak}");
+        let spacing = spec.recommended_spacing_mm().unwrap();
+        assert!((spacing - 100.0).abs() < 7.0, "{spacing}");
+        assert!(!spec.resampled);
+    }
+
+    #[test]
+    fn resamples_uneven_scans() {
+        let (mut s, p) = wave(10.0, 0.2, 0.005);
+        for (i, x) in s.iter_mut().enumerate() {
+            if i % 3 == 1 {
+                *x += 2.0;
+            }
+        }
+        let spec = scan_spectrum(&s, &p, 0.05).unwrap();
+        assert!(spec.resampled);
+        assert!(spec.highest.is_some());
+    }
+
+    #[test]
+    fn tukey_is_one_inside_and_zero_at_the_ends() {
+        let w = tukey_window(101, 0.5);
+        assert_eq!(w[0], 0.0);
+        assert_eq!(w[50], 1.0);
+        assert!((w[100]).abs() < 1e-15);
+    }
+}
