@@ -218,6 +218,15 @@ fn load_options(robot: Option<&Robot>) -> LoadOptions {
     }
 }
 
+/// A `$config.dat` is loaded for its bases; it is written only if a transform changed it
+/// (`--mirror-frames`), never copied along.
+fn drop_untouched_config(results: &mut [ProgramResult], config_dat: Option<&Path>) {
+    let Some(cfg) = config_dat else { return };
+    for r in results {
+        r.files.retain(|f| f.changed() || f.path != cfg);
+    }
+}
+
 fn fmt_mm(v: f64) -> String {
     format!("{v:.3}")
 }
@@ -287,15 +296,22 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
         let target = output_path(&dest, &f.path, several, f.changed())
             .map(|p| format!(" → {}", p.display()))
             .unwrap_or_default();
-        writeln!(
-            stderr,
-            "{}: {} target(s) changed, largest {} mm / {:.4}°{skid}, {} refused{target}",
-            f.path.display(),
-            f.changes.len(),
-            fmt_mm(mm),
-            deg,
-            f.refusals.len(),
-        )?;
+        let refused = match f.refusals.len() {
+            0 => String::new(),
+            n => format!(", {n} refused (left unchanged)"),
+        };
+        if f.changes.is_empty() {
+            writeln!(stderr, "{}: unchanged{refused}{target}", f.path.display())?;
+        } else {
+            writeln!(
+                stderr,
+                "{}: {} target(s) changed, largest correction {} mm / {:.4}°{skid}{refused}{target}",
+                f.path.display(),
+                f.changes.len(),
+                fmt_mm(mm),
+                deg,
+            )?;
+        }
     }
     Ok(Exit::Ok)
 }
@@ -311,6 +327,7 @@ fn run_track(a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
     for p in &programs {
         results.push(apply(p, track_correction(p, &setup, dir))?);
     }
+    drop_untouched_config(&mut results, robot.config_dat.as_deref());
     finish(dir.as_str(), &results, &a.out)
 }
 
@@ -373,5 +390,7 @@ pub fn run_transfer(a: TransferArgs) -> anyhow::Result<Exit> {
     for p in &programs {
         results.push(transfer(p, &plan, &load_options(Some(to)))?);
     }
+    drop_untouched_config(&mut results, from.config_dat.as_deref());
+    drop_untouched_config(&mut results, to.config_dat.as_deref());
     finish("transfer", &results, &a.out)
 }

@@ -192,6 +192,7 @@ pub fn unified_diff(path: &Path, old: &[u8], new: &[u8]) -> String {
     let old = latin1(old);
     let new = latin1(new);
     let name = path.display().to_string();
+    let name = name.trim_start_matches('/');
     similar::TextDiff::from_lines(&old, &new)
         .unified_diff()
         .context_radius(1)

@@ -13,7 +13,7 @@ use crate::program::{LoadError, LoadOptions};
 use crate::syntax::EditError;
 
 use super::edits::{FileResult, ProgramResult, TargetChange, apply};
-use super::mirror::{MirrorSettings, mirror};
+use super::mirror::{MirrorSettings, Reflection, mirror};
 use super::rewrite::pose_change;
 use super::track_correction::{Direction, TrackSetup, track_correction};
 
@@ -123,17 +123,26 @@ pub fn transfer(
     )?;
     let last = reparse(&current, &corrected, options)?;
     steps.push(corrected);
-    combine(program, &last, &steps, plan.from.skid_axis)
+    combine(
+        program,
+        &last,
+        &steps,
+        plan.from.skid_axis,
+        plan.mirror.as_ref(),
+    )
 }
 
 /// One result from a chain of steps: the first step's input, the last step's output, every
-/// distinct refusal, and the change of each target from start to end.
+/// distinct refusal, and each changed target's track correction: the change from start to end
+/// beyond the mirror itself (a mirror moves points by metres; the correction is what matters).
 fn combine(
     start: &Program,
     end: &Program,
     steps: &[ProgramResult],
     skid_axis: usize,
+    mirror: Option<&MirrorSettings>,
 ) -> Result<ProgramResult, TransferError> {
+    let reflection = mirror.map(Reflection::new);
     let mut files = Vec::new();
     for (i, (a, b)) in start.files.iter().zip(&end.files).enumerate() {
         if a.positions.len() != b.positions.len() {
@@ -161,6 +170,10 @@ fn combine(
                     .cartesian
                     .as_ref()
                     .and_then(|c| c.pose())
+                    .map(|x| match &reflection {
+                        Some(r) => r.target(&x).0,
+                        None => x,
+                    })
                     .zip(q.cartesian.as_ref().and_then(|c| c.pose()));
                 let (mm, deg) = poses.map_or((0.0, 0.0), |(x, y)| pose_change(&x, &y));
                 let skid = match p.skid(skid_axis) {
