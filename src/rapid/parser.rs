@@ -119,6 +119,8 @@ struct Parser<'a, 's> {
     opaque: usize,
     arena: Arena,
     depth: u32,
+    /// The unknown token already reported as the cause of an error (not reported twice).
+    reported_unknown: Option<u32>,
     sink: &'s mut dyn StatementSink,
 }
 
@@ -244,6 +246,7 @@ impl<'a, 's> Parser<'a, 's> {
             opaque: 0,
             arena: Arena::default(),
             depth: 0,
+            reported_unknown: None,
             sink,
         };
         p.nodes.push(Node {
@@ -280,6 +283,16 @@ impl<'a, 's> Parser<'a, 's> {
 
     fn bump(&mut self) -> Token {
         let t = self.tok;
+        if t.kind == TokenKind::Unknown && self.reported_unknown != Some(t.start) {
+            // Stepped over while recovering from another error: still say where it is.
+            self.diagnostics.push(
+                Diagnostic::error(
+                    t.span(),
+                    format!("{} in the program text", self.describe(t)),
+                )
+                .with_hint("remove the byte or move it into a comment or string"),
+            );
+        }
         if t.kind != TokenKind::Eof {
             self.prev_end = t.end;
             self.tok = self.next_significant();
@@ -434,6 +447,9 @@ impl<'a, 's> Parser<'a, 's> {
     /// block keyword, into an opaque leaf.
     fn recover(&mut self, start: u32, err: SyntaxError) {
         let found = self.describe(err.at);
+        if err.at.kind == TokenKind::Unknown {
+            self.reported_unknown = Some(err.at.start);
+        }
         let hint = match err.at.kind {
             TokenKind::UnterminatedStr => {
                 "close the string with `\"` on the same line (write `\"\"` for a quote inside it)"
@@ -481,21 +497,29 @@ impl<'a, 's> Parser<'a, 's> {
     /// item): an opaque leaf with a warning.
     fn unknown_item(&mut self, start: u32) {
         let first = self.tok;
+        if first.kind == TokenKind::Unknown {
+            self.reported_unknown = Some(first.start);
+        }
         self.skip_to_statement_end(start);
         if self.prev_end <= start {
             self.bump();
         }
         self.opaque += 1;
-        self.diagnostics.push(
-            Diagnostic::warning(
-                first.span(),
-                format!(
-                    "unknown construct at module level starting with {}; kept verbatim",
-                    self.describe(first)
-                ),
-            )
-            .with_hint("trackfix does not read or transform anything in it"),
+        let message = format!(
+            "unknown construct at module level starting with {}; kept verbatim",
+            self.describe(first)
         );
+        // Bytes no RAPID text may hold are an error; an unknown but well-formed construct is
+        // only a warning (trackfix keeps it and does not look inside).
+        let diagnostic = match first.kind {
+            TokenKind::Unknown | TokenKind::UnterminatedStr => {
+                Diagnostic::error(first.span(), message)
+                    .with_hint("remove the bytes or close the string; the text is kept as it is")
+            }
+            _ => Diagnostic::warning(first.span(), message)
+                .with_hint("trackfix does not read or transform anything in it"),
+        };
+        self.diagnostics.push(diagnostic);
         self.leaf(NodeKind::Opaque, start);
     }
 
@@ -567,6 +591,9 @@ impl<'a, 's> Parser<'a, 's> {
             Ok(()) => self.leaf(NodeKind::ModuleHead, start),
             Err(e) => {
                 // Keep the rest of the head line opaque but go on reading the module body.
+                if e.at.kind == TokenKind::Unknown {
+                    self.reported_unknown = Some(e.at.start);
+                }
                 while self.tok.kind != TokenKind::Eof && !self.newline_before_tok() {
                     self.bump();
                 }
@@ -1379,7 +1406,7 @@ impl<'a, 's> Parser<'a, 's> {
         Ok(base)
     }
 
-    /// `primary = number | string | placeholder | aggregate | "(" expr ")"
+    /// `primary = number | string | placeholder | "*" | aggregate | "(" expr ")"
     ///          | ident [ "(" [ arg { [ "," ] arg } ] ")" ]`
     /// with `aggregate = "[" [ expr { "," expr } ] "]"`.
     fn primary(&mut self) -> PResult<u32> {
@@ -1449,6 +1476,13 @@ impl<'a, 's> Parser<'a, 's> {
                 }
                 let close = self.expect_punct(b']', "`,` or `]` in the aggregate")?;
                 self.arena.close(id, close.end);
+                Ok(id)
+            }
+            TokenKind::Punct if t.punct(self.src) == b'*' => {
+                // `MoveL *, v100, ...`: an unnamed target stored by an old editor.
+                self.bump();
+                let id = self.arena.open(ExprKind::Placeholder, t.start);
+                self.arena.close(id, t.end);
                 Ok(id)
             }
             TokenKind::Punct if t.punct(self.src) == b'(' => {

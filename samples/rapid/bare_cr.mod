@@ -1,0 +1,1 @@
+MODULE BareCr  ! Saved by an old editor: bare CR line ends  CONST robtarget pCr1:=[[100,0,400],[0,0,1,0],[0,0,0,0],[800,9E9,9E9,9E9,9E9,9E9]];  CONST robtarget pCr2:=[[150,0,400],[0,0,1,0],[0,0,0,0],[850,9E9,9E9,9E9,9E9,9E9]];  PROC Run()    MoveL pCr1, v100, z10, tool0;    MoveL pCr2, v100, fine, tool0;  ENDPROCENDMODULE
