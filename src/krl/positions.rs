@@ -425,7 +425,18 @@ pub(crate) fn extract(
                 }
                 let mut refs = Vec::new();
                 for t in targets {
-                    target_refs(src, lines, t, &mut refs, &mut out.positions);
+                    if !target_refs(src, lines, t, &mut refs, &mut out.positions) {
+                        diagnostics.push(
+                            Diagnostic::warning(
+                                t.span,
+                                "computed target (geometric operator `:` or an expression): \
+                                 its operands are not treated as targets",
+                            )
+                            .with_hint(
+                                "trackfix cannot transform a composed frame; check this motion by hand",
+                            ),
+                        );
+                    }
                 }
                 let with = with
                     .iter()
@@ -589,29 +600,31 @@ fn assignment(
     }
 }
 
-/// The targets of a motion: names, inline literals, and both sides of `:`.
+/// The targets of a motion: names and inline literals. Returns false when a target is built
+/// with the geometric operator `:` (or another expression), whose operands are offsets and
+/// frames rather than targets: those are left out and reported by the caller.
 fn target_refs(
     src: &[u8],
     lines: &LineIndex,
     e: &Expr,
     refs: &mut Vec<Ref>,
     positions: &mut Vec<Position>,
-) {
+) -> bool {
     match &e.kind {
-        ExprKind::Name | ExprKind::Index(..) => refs.push(Ref::Named(upper(src, e.span))),
+        ExprKind::Name | ExprKind::Index(..) => {
+            refs.push(Ref::Named(upper(src, e.span)));
+            true
+        }
         ExprKind::Aggregate(agg) => {
             let f = read_fields(src, agg);
             if let Some(kind) = inferred_kind(src, agg, &f) {
                 positions.push(build_position(lines, e.span, kind, None, f));
                 refs.push(Ref::Inline(e.span));
             }
-        }
-        ExprKind::Binary(l, _, r) => {
-            target_refs(src, lines, l, refs, positions);
-            target_refs(src, lines, r, refs, positions);
+            true
         }
         ExprKind::Paren(inner) => target_refs(src, lines, inner, refs, positions),
-        _ => {}
+        _ => false,
     }
 }
 
@@ -738,17 +751,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                     }
                     let base = local.base.as_ref().and_then(base_label);
                     let tool = local.tool.as_ref().and_then(tool_label);
-                    if base.is_none()
-                        && !refs.is_empty()
-                        && let Some(file) = files.get_mut(fi)
-                    {
-                        file.diagnostics.push(
-                            Diagnostic::warning(*span, "the base of this motion is not resolved")
-                                .with_hint(
-                                    "set FDAT_ACT, $BASE=BASE_DATA[n] or BAS(#BASE,n) before it in the same DEF",
-                                ),
-                        );
-                    }
+                    let mut found = false;
                     for r in refs {
                         match r {
                             Ref::Inline(s) => {
@@ -757,6 +760,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                     .and_then(|f| f.positions.iter_mut().find(|p| p.span == *s))
                                 {
                                     record_use(&mut p.usage, &base, &tool, local.tcp, *line);
+                                    found = true;
                                 }
                             }
                             Ref::Named(n) => {
@@ -774,10 +778,24 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                     };
                                     if let Some(p) = p {
                                         record_use(&mut p.usage, &base, &tool, local.tcp, *line);
+                                        found = true;
                                     }
                                 }
                             }
                         }
+                    }
+                    // A motion to a point outside the program (`XHOME` of $config.dat) is not
+                    // this program's business.
+                    if base.is_none()
+                        && found
+                        && let Some(file) = files.get_mut(fi)
+                    {
+                        file.diagnostics.push(
+                            Diagnostic::warning(*span, "the base of this motion is not resolved")
+                                .with_hint(
+                                    "set FDAT_ACT, $BASE=BASE_DATA[n] or BAS(#BASE,n) before it in the same DEF",
+                                ),
+                        );
                     }
                 }
             }
