@@ -393,14 +393,27 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
     let mut s = String::new();
     match a.format {
         ShowFormat::Json => {
-            let arr: Vec<serde_json::Value> = rows
+            // A struct keeps the documented key order (a json! map would sort it).
+            #[derive(serde::Serialize)]
+            struct Row {
+                skid: f64,
+                dx: f64,
+                dy: f64,
+                dz: f64,
+                rx: f64,
+                ry: f64,
+                rz: f64,
+            }
+            let arr: Vec<Row> = rows
                 .iter()
-                .map(|(skid, c)| {
-                    serde_json::json!({
-                        "skid": skid,
-                        "dx": round6(c[0]), "dy": round6(c[1]), "dz": round6(c[2]),
-                        "rx": round6(c[3]), "ry": round6(c[4]), "rz": round6(c[5]),
-                    })
+                .map(|(skid, c)| Row {
+                    skid: *skid,
+                    dx: round6(c[0]),
+                    dy: round6(c[1]),
+                    dz: round6(c[2]),
+                    rx: round6(c[3]),
+                    ry: round6(c[4]),
+                    rz: round6(c[5]),
                 })
                 .collect();
             s = serde_json::to_string_pretty(&arr)?;

@@ -23,9 +23,9 @@ pub struct NumericCsv {
 impl NumericCsv {
     /// Reads a file; `#` starts a comment line.
     pub fn read(path: &Path) -> Result<NumericCsv, TrackError> {
-        let bytes = std::fs::read(path).map_err(|source| TrackError::Io {
+        let bytes = std::fs::read(path).map_err(|error| TrackError::Io {
             path: path.to_path_buf(),
-            source,
+            error,
         })?;
         NumericCsv::parse(path, &bytes)
     }

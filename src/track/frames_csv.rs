@@ -20,9 +20,9 @@ pub struct SamplingFrame {
 
 /// Reads `frames.csv`; rows must be in strictly increasing skid order.
 pub fn read_frames(path: &Path) -> Result<Vec<SamplingFrame>, TrackError> {
-    let bytes = std::fs::read(path).map_err(|source| TrackError::Io {
+    let bytes = std::fs::read(path).map_err(|error| TrackError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     })?;
     parse_frames(path, &bytes)
 }

@@ -22,9 +22,9 @@ pub const OUTLIER_FACTOR: f64 = 4.0;
 
 /// Reads `measurements.csv`. A point number repeated at one skid is an error at its line.
 pub fn read_measurements(path: &Path) -> Result<Vec<MeasurementRow>, TrackError> {
-    let bytes = std::fs::read(path).map_err(|source| TrackError::Io {
+    let bytes = std::fs::read(path).map_err(|error| TrackError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     })?;
     parse_measurements(path, &bytes)
 }

@@ -21,10 +21,10 @@ pub enum TrackError {
     )]
     OutOfRange { skid: f64, min: f64, max: f64 },
     /// A file could not be read or written.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {error}", path.display())]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A `profile.toml` that TOML or the profile schema rejects; `message` carries toml's
     /// line and column.
@@ -34,11 +34,8 @@ pub enum TrackError {
     #[error("{}: format = {found:?}, expected {PROFILE_FORMAT:?}", path.display())]
     Format { path: PathBuf, found: String },
     /// The knots cannot carry a spline (too few, not increasing, not finite).
-    #[error("{context}: {source}")]
-    Knots {
-        context: String,
-        source: SplineError,
-    },
+    #[error("{context}: {error}")]
+    Knots { context: String, error: SplineError },
     /// A CSV input error at `file:line`, in a named column.
     #[error("{}:{line}: column `{column}`: {message}", path.display())]
     Csv {
@@ -225,9 +222,9 @@ impl Profile {
         nominal: Nominal,
         knots: Vec<Knot>,
     ) -> Result<Profile, TrackError> {
-        let splines = build_splines(&knots).map_err(|source| TrackError::Knots {
+        let splines = build_splines(&knots).map_err(|error| TrackError::Knots {
             context: format!("profile `{name}`"),
-            source,
+            error,
         })?;
         let stats = Some(compute_stats(&knots));
         Ok(Profile {
@@ -249,9 +246,9 @@ impl Profile {
     /// Reads and validates a `profile.toml`: unknown keys are an error, a missing key names
     /// itself, errors carry the file and toml's line/column.
     pub fn load(path: &Path) -> Result<Profile, TrackError> {
-        let text = std::fs::read_to_string(path).map_err(|source| TrackError::Io {
+        let text = std::fs::read_to_string(path).map_err(|error| TrackError::Io {
             path: path.to_path_buf(),
-            source,
+            error,
         })?;
         Profile::from_toml_str(&text, path)
     }
@@ -268,9 +265,9 @@ impl Profile {
                 found: file.format,
             });
         }
-        let splines = build_splines(&file.knot).map_err(|source| TrackError::Knots {
+        let splines = build_splines(&file.knot).map_err(|error| TrackError::Knots {
             context: format!("{}: [[knot]]", path.display()),
-            source,
+            error,
         })?;
         Ok(Profile { file, splines })
     }
@@ -467,9 +464,9 @@ fn compute_stats(knots: &[Knot]) -> ProfileStats {
 /// Writes `bytes` to `path` through a temporary file and a rename (DESIGN.md §5).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrackError> {
     use std::io::Write;
-    let io = |source| TrackError::Io {
+    let io = |error| TrackError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     };
     let mut f = atomic_write_file::AtomicWriteFile::open(path).map_err(io)?;
     f.write_all(bytes).map_err(io)?;
