@@ -236,7 +236,13 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
     let mut stderr = std::io::stderr().lock();
     let refused: Vec<_> = results.iter().flat_map(|r| r.refusals()).collect();
     for r in &refused {
-        write!(stderr, "{}", r.rendered)?;
+        // Skipped targets are reported as warnings: the run goes on without them.
+        let text = if out.skip_unsupported {
+            r.rendered.replacen(": error: ", ": warning: ", 1)
+        } else {
+            r.rendered.clone()
+        };
+        write!(stderr, "{text}")?;
     }
     if !refused.is_empty() && !out.skip_unsupported {
         writeln!(

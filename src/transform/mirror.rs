@@ -20,9 +20,8 @@ use super::edits::{ProgramEdits, TargetChange};
 use super::refusal::{Refusal, RefusalKind, SKIP_HINT};
 use super::rewrite::{
     MM_DECIMALS, OrientationHint, bits_edit, integer_edit, number_edit, pose_change, pose_edits,
-    wijk,
 };
-use super::track_correction::common_refusal;
+use super::track_correction::{common_refusal, describe};
 
 /// KUKA Turn bits of A1, A4 and A6: a mirror-image robot runs those axes with the opposite sign.
 const TURN_A1_A4_A6: u32 = 0b10_1001;
@@ -214,10 +213,7 @@ pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
                         p.span,
                         label.clone(),
                         RefusalKind::JointTarget,
-                        format!(
-                            "{} `{label}` is a joint target: it is not mirrored",
-                            p.kind.as_str()
-                        ),
+                        format!("{} is a joint target: it is not mirrored", describe(p)),
                         format!("pass --mirror-joints to negate axes 1, 4 and 6, {SKIP_HINT}"),
                     ));
                 }
@@ -342,17 +338,13 @@ fn mirror_frames(file: &ParsedFile, refl: &Reflection, edits: &mut Vec<Edit>) {
     }
 }
 
-/// `[q1..q4]` of a pose's rotation (tests and callers comparing with RobotStudio numbers).
-pub fn quaternion_of(p: &Pose) -> [f64; 4] {
-    wijk(&p.rotation)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::geometry::{abb_quat, kuka_abc, pose_xyz_deg};
     use crate::position::Orientation;
     use crate::transform::edits::apply;
+    use crate::transform::rewrite::wijk;
     use crate::transform::test_support::{krl, rapid};
     use proptest::prelude::*;
 

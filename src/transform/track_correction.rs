@@ -155,6 +155,14 @@ fn resolve_frame(program: &Program, setup: &TrackSetup, name: &str) -> Resolved 
     }
 }
 
+/// `robtarget \`p10\`` for a declared target, `inline robtarget` for a literal in an instruction.
+pub(crate) fn describe(p: &Position) -> String {
+    match &p.name {
+        Some(n) => format!("{} `{n}`", p.kind.as_str()),
+        None => format!("inline {}", p.kind.as_str()),
+    }
+}
+
 /// Checks that every transform makes before touching a Cartesian target; `None` = go ahead.
 pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Refusal> {
     let label = p.label();
@@ -168,18 +176,18 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Refusal>
             format!("{hint}, {SKIP_HINT}"),
         ))
     };
-    let kind = p.kind.as_str();
+    let what = describe(p);
     if !p.kind.is_cartesian() {
         return refuse(
             RefusalKind::JointTarget,
-            format!("{kind} `{label}` is a joint target: it is not changed"),
+            format!("{what} is a joint target: it is not changed"),
             "re-teach it or convert it to a Cartesian target",
         );
     }
     if p.cartesian.as_ref().and_then(|c| c.pose()).is_none() {
         return refuse(
             RefusalKind::Expression,
-            format!("{kind} `{label}` has a position or orientation field that is not a number"),
+            format!("{what} has a position or orientation field that is not a number"),
             "write the fields as numeric literals",
         );
     }
@@ -190,7 +198,7 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Refusal>
         };
         return refuse(
             RefusalKind::StationaryTool,
-            format!("{kind} `{label}` is a stationary-tool point ({what})"),
+            format!("{what} is a stationary-tool point ({what})"),
             "it moves with the work piece, not the track: correct it by hand",
         );
     }
@@ -198,7 +206,7 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Refusal>
         let first = p.usage.wobj.as_deref().unwrap_or("?");
         return refuse(
             RefusalKind::TwoWorkObjects,
-            format!("{kind} `{label}` is used with two work objects (`{first}` and `{other}`)"),
+            format!("{what} is used with two work objects (`{first}` and `{other}`)"),
             "split it into one target per work object",
         );
     }
@@ -238,7 +246,7 @@ fn correct_one(
     dir: Direction,
 ) -> Result<Corrected, Box<Refusal>> {
     let label = p.label();
-    let kind = p.kind.as_str();
+    let what = describe(p);
     let refuse = |k, msg: String, hint: String| {
         Box::new(Refusal::new(
             file,
@@ -255,7 +263,7 @@ fn correct_one(
         Skid::NotConnected => {
             return Err(refuse(
                 RefusalKind::SkidNotConnected,
-                format!("{kind} `{label}` has {axis} = 9E9 (not connected): no skid position"),
+                format!("{what} has {axis} = 9E9 (not connected): no skid position"),
                 format!(
                     "write the skid position into {axis}, or set `skid` for this robot in the cell file"
                 ),
@@ -264,7 +272,7 @@ fn correct_one(
         Skid::Missing => {
             return Err(refuse(
                 RefusalKind::SkidMissing,
-                format!("{kind} `{label}` has no numeric {axis}: no skid position"),
+                format!("{what} has no numeric {axis}: no skid position"),
                 format!("write the skid position into {axis}"),
             ));
         }
@@ -276,9 +284,7 @@ fn correct_one(
             None => {
                 return Err(refuse(
                     RefusalKind::UnresolvedWorkObject,
-                    format!(
-                        "{kind} `{label}` is not used by any motion: its work object is unknown"
-                    ),
+                    format!("{what} is not used by any motion: its work object is unknown"),
                     "pass --default-wobj NAME to transform unused targets in NAME".to_owned(),
                 ));
             }
@@ -286,7 +292,7 @@ fn correct_one(
         (None, false) => {
             return Err(refuse(
                 RefusalKind::UnresolvedWorkObject,
-                format!("{kind} `{label}` is used with a work object that cannot be resolved"),
+                format!("{what} is used with a work object that cannot be resolved"),
                 "name the work object explicitly in the motion instruction".to_owned(),
             ));
         }
@@ -294,7 +300,7 @@ fn correct_one(
     let w = match resolve_frame(program, setup, &wobj_name) {
         Resolved::Frame(w) => w,
         Resolved::Refused(k, msg, hint) => {
-            return Err(refuse(k, format!("{kind} `{label}`: {msg}"), hint));
+            return Err(refuse(k, format!("{what}: {msg}"), hint));
         }
     };
     let correction = setup
@@ -303,14 +309,14 @@ fn correct_one(
             TrackError::OutOfRange { min, max, .. } => refuse(
                 RefusalKind::SkidOutOfRange,
                 format!(
-                    "{kind} `{label}` is at skid {skid} mm, outside the profile's range [{min}, {max}] mm"
+                    "{what} is at skid {skid} mm, outside the profile's range [{min}, {max}] mm"
                 ),
                 "measure the track over this range, or set extrapolate = \"clamp\" or \"linear\" in the profile"
                     .to_owned(),
             ),
             other => refuse(
                 RefusalKind::SkidOutOfRange,
-                format!("{kind} `{label}` at skid {skid} mm: {other}"),
+                format!("{what} at skid {skid} mm: {other}"),
                 "check the profile".to_owned(),
             ),
         })?;
