@@ -295,11 +295,13 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
             Some((lo, hi)) => format!(", skid {}…{} mm", fmt_mm(lo), fmt_mm(hi)),
             None => String::new(),
         };
-        let several = results
+        let first = results
             .iter()
             .find(|r| r.files.iter().any(|g| g.path == f.path))
-            .is_some_and(|r| r.files.len() > 1);
-        let target = output_path(&dest, &f.path, several, f.changed())
+            .filter(|r| r.files.len() > 1)
+            .and_then(|r| r.files.first())
+            .map(|g| g.path.as_path());
+        let target = output_path(&dest, &f.path, first, f.changed())
             .map(|p| format!(" → {}", p.display()))
             .unwrap_or_default();
         let refused = match f.refusals.len() {

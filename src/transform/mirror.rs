@@ -437,6 +437,82 @@ mod tests {
         );
     }
 
+    const MODULE: &str = "MODULE m\n  PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1500,-400,600],[0.996195,0,0,0.087156]],[[100,20,0],[0.999848,0,0.017452,0]]];\n  PERS tooldata tGun:=[TRUE,[[12.5,-3.2,412.8],[0.965926,0,0.258819,0]],[48.5,[0,0,180],[1,0,0,0],0.9,1.1,0.6]];\n  CONST robtarget p1:=[[310.5,-120.25,80],[0.183013,0.683013,0.683013,-0.183013],[0,-1,2,1],[2500,9E9,9E9,9E9,9E9,9E9]];\n  CONST jointtarget jHome:=[[10,-20,30,40,50,-60],[2500,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveAbsJ jHome, v1000, fine, tGun;\n    MoveL Offs(p1,10,-20.5,30), v1000, fine, tGun\\WObj:=wCar;\n    MoveL RelTool(p1,5,6,-7\\Rx:=1\\Ry:=2\\Rz:=3), v1000, fine, tGun\\WObj:=wCar;\n  ENDPROC\nENDMODULE\n";
+
+    fn parse(text: &str) -> Program {
+        Program {
+            files: vec![crate::rapid::parse_file(
+                std::path::Path::new("m.mod"),
+                text.as_bytes().to_vec(),
+            )],
+        }
+    }
+
+    /// `--mirror-frames`: the work object and the tool mirror so that the world pose of the TCP
+    /// is the mirror image of the original in world (`Sa·W·T·Sb`), offsets follow Sa / Sb and
+    /// `--mirror-joints` negates axes 1, 4, 6.
+    #[test]
+    fn frames_offsets_and_joints_through_the_rapid_parser() {
+        let p0 = parse(MODULE);
+        let s = MirrorSettings {
+            mirror_frames: true,
+            mirror_joints: true,
+            ..MirrorSettings::default()
+        };
+        let edits = mirror(&p0, &s);
+        assert!(edits.refusals().next().is_none());
+        let out = apply(&p0, edits).unwrap();
+        let text = String::from_utf8(out.files[0].output.clone()).unwrap();
+        let p1 = parse(&text);
+        let (f0, f1) = (&p0.files[0], &p1.files[0]);
+        let wobj = |f: &ParsedFile| {
+            f.frames
+                .iter()
+                .find(|d| d.name == "wCar")
+                .unwrap()
+                .pose()
+                .unwrap()
+        };
+        let tool = |f: &ParsedFile| {
+            f.frames
+                .iter()
+                .find(|d| d.name == "tGun")
+                .unwrap()
+                .pose()
+                .unwrap()
+        };
+        let target = |f: &ParsedFile| {
+            f.positions
+                .iter()
+                .find(|p| p.name.as_deref() == Some("p1"))
+                .unwrap()
+                .cartesian
+                .as_ref()
+                .unwrap()
+                .pose()
+                .unwrap()
+        };
+        let refl = Reflection::new(&s);
+        let (want, _) = refl.target(&(wobj(f0) * target(f0)));
+        let got = wobj(f1) * target(f1);
+        assert!(
+            (want.translation.vector - got.translation.vector).norm() < 2e-3,
+            "{text}"
+        );
+        assert!(want.rotation.angle_to(&got.rotation) < 1e-5, "{text}");
+        // The flange of the mirror-image robot is Sb·F·Sb, so the tool mirrors as Sb·tool·Sb.
+        let (tw, _) = refl.tool(&tool(f0));
+        assert!((tw.translation.vector - tool(f1).translation.vector).norm() < 1e-3);
+        assert!(text.contains("[[12.5,3.200,412.8]"), "{text}");
+        assert!(text.contains("Offs(p1,10,20.5,30)"), "{text}");
+        assert!(
+            text.contains("RelTool(p1,5,-6,-7\\Rx:=-1\\Ry:=2\\Rz:=-3)"),
+            "{text}"
+        );
+        assert!(text.contains("jHome:=[[-10,-20,30,-40,50,60]"), "{text}");
+        assert!(text.contains("[-1,0,-3,1],[2500,"), "{text}");
+    }
+
     fn settings() -> impl Strategy<Value = MirrorSettings> {
         let frame = (
             -500.0..500.0f64,

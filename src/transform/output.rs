@@ -75,17 +75,24 @@ fn identity(path: &Path) -> PathBuf {
     }
 }
 
-/// Where one file of a program goes (`several`: the program has more than one file). `None`
-/// for an unchanged file under `--in-place`, which is left alone.
+/// Where one file of a program goes (`first`: the program's first file, whose stem names the
+/// program; `None` for a one-file program). `None` for an unchanged file under `--in-place`,
+/// which is left alone. With `-o`, the other file of a KRL pair takes the output's stem and its
+/// own extension; a file with another stem (a mirrored `$config.dat`) keeps its name, beside it.
 pub fn output_path(
     dest: &Destination,
     input: &Path,
-    several: bool,
+    first: Option<&Path>,
     changed: bool,
 ) -> Option<PathBuf> {
     match dest {
-        Destination::File(out) => match (several, input.extension()) {
-            (true, Some(ext)) => Some(out.with_extension(ext)),
+        Destination::File(out) => match (first, input.extension()) {
+            (Some(f), _) if f.file_stem() != input.file_stem() => Some(
+                out.parent()
+                    .unwrap_or(Path::new(""))
+                    .join(input.file_name().unwrap_or_default()),
+            ),
+            (Some(_), Some(ext)) => Some(out.with_extension(ext)),
             _ => Some(out.clone()),
         },
         Destination::Dir(dir) => Some(dir.join(input.file_name().unwrap_or_default())),
@@ -109,9 +116,11 @@ pub fn plan_writes(
     }
     let mut writes = Vec::new();
     for p in programs {
-        let several = p.files.len() > 1;
+        let first = (p.files.len() > 1)
+            .then(|| p.files.first().map(|f| f.path.as_path()))
+            .flatten();
         for f in &p.files {
-            let Some(path) = output_path(dest, &f.path, several, f.changed()) else {
+            let Some(path) = output_path(dest, &f.path, first, f.changed()) else {
                 continue;
             };
             if let Destination::InPlace { backup: true } = dest {
@@ -224,6 +233,16 @@ mod tests {
         let w = plan_writes(&[r], &Destination::File(PathBuf::from("out/b.src"))).unwrap();
         assert_eq!(w[0].path, Path::new("out/b.src"));
         assert_eq!(w[1].path, Path::new("out/b.dat"));
+    }
+
+    #[test]
+    fn a_mirrored_config_dat_keeps_its_name_beside_the_output() {
+        let mut r = result("in/a.src", "x", "y");
+        r.files.push(result("in/a.dat", "x", "y").files.remove(0));
+        r.files
+            .push(result("cfg/$config.dat", "x", "y").files.remove(0));
+        let w = plan_writes(&[r], &Destination::File(PathBuf::from("out/b.src"))).unwrap();
+        assert_eq!(w[2].path, Path::new("out/$config.dat"));
     }
 
     #[test]
