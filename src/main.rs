@@ -10,7 +10,7 @@ mod cli;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 
 const EXAMPLES: &str = "\
 Examples:
@@ -50,6 +50,14 @@ enum Command {
     Mirror(cli::transform::MirrorArgs),
     /// Zero with one robot's track, optionally mirror, correct with another's.
     Transfer(cli::transform::TransferArgs),
+    /// Print a shell completion script (bash, zsh, fish, powershell, elvish).
+    #[command(
+        after_help = "Example:\n  trackfix completions bash > /etc/bash_completion.d/trackfix"
+    )]
+    Completions { shell: clap_complete::Shell },
+    /// Print the man page (roff) to standard output.
+    #[command(after_help = "Example:\n  trackfix man > trackfix.1 && man ./trackfix.1")]
+    Man,
 }
 
 fn main() -> ExitCode {
@@ -62,6 +70,15 @@ fn main() -> ExitCode {
         Command::Zero(a) => cli::transform::run_zero(a),
         Command::Mirror(a) => cli::transform::run_mirror(a),
         Command::Transfer(a) => cli::transform::run_transfer(a),
+        Command::Completions { shell } => {
+            let mut cmd = Cli::command();
+            clap_complete::generate(shell, &mut cmd, "trackfix", &mut std::io::stdout());
+            Ok(cli::Exit::Ok)
+        }
+        Command::Man => clap_mangen::Man::new(Cli::command())
+            .render(&mut std::io::stdout())
+            .map(|()| cli::Exit::Ok)
+            .map_err(Into::into),
     };
     match result {
         Ok(exit) => exit.into(),

@@ -11,7 +11,7 @@ use std::path::PathBuf;
 
 use crate::geometry::{Pose, abb_quat, kuka_abc};
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span};
-use nalgebra::{Isometry3, Translation3};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
 /// Values at or above this are RAPID/KRL "not connected" external axes (`9E9`, `9E+09`).
 pub const NOT_CONNECTED: f64 = 8.9e9;
@@ -134,17 +134,32 @@ impl CartesianFields {
         values(&self.trans)
     }
 
+    /// The orientation, if all its fields are numeric literals (and the quaternion is not zero).
+    pub fn rotation(&self) -> Option<UnitQuaternion<f64>> {
+        match self.orient.as_ref()? {
+            Orientation::Quaternion(q) => abb_quat(values(q)?),
+            Orientation::Abc(abc) => {
+                let [a, b, c] = values(abc)?;
+                Some(kuka_abc(a, b, c))
+            }
+        }
+    }
+
+    /// The quaternion as written, for ABB literals with all four fields numeric.
+    pub fn written_quaternion(&self) -> Option<[f64; 4]> {
+        match self.orient.as_ref()? {
+            Orientation::Quaternion(q) => values(q),
+            Orientation::Abc(_) => None,
+        }
+    }
+
     /// The pose, if every field is a numeric literal (and the quaternion is not zero).
     pub fn pose(&self) -> Option<Pose> {
         let [x, y, z] = self.translation()?;
-        let rotation = match self.orient.as_ref()? {
-            Orientation::Quaternion(q) => abb_quat(values(q)?)?,
-            Orientation::Abc(abc) => {
-                let [a, b, c] = values(abc)?;
-                kuka_abc(a, b, c)
-            }
-        };
-        Some(Isometry3::from_parts(Translation3::new(x, y, z), rotation))
+        Some(Isometry3::from_parts(
+            Translation3::new(x, y, z),
+            self.rotation()?,
+        ))
     }
 }
 
@@ -328,4 +343,35 @@ impl ParsedFile {
 #[derive(Clone, Debug)]
 pub struct Program {
     pub files: Vec<ParsedFile>,
+}
+
+/// Index of an external axis by name: RAPID `eax_a`..`eax_f` or KRL `E1`..`E6` (any case) →
+/// 0..5.
+pub fn external_axis_index(name: &str) -> Option<usize> {
+    let n = name.trim().to_ascii_lowercase();
+    if let Some(letter) = n.strip_prefix("eax_") {
+        return match letter.as_bytes() {
+            [c @ b'a'..=b'f'] => Some((c - b'a') as usize),
+            _ => None,
+        };
+    }
+    match n.as_bytes() {
+        [b'e', d @ b'1'..=b'6'] => Some((d - b'1') as usize),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn axis_names() {
+        assert_eq!(external_axis_index("eax_a"), Some(0));
+        assert_eq!(external_axis_index("EAX_F"), Some(5));
+        assert_eq!(external_axis_index("E1"), Some(0));
+        assert_eq!(external_axis_index("e6"), Some(5));
+        assert_eq!(external_axis_index("E7"), None);
+        assert_eq!(external_axis_index("eax_g"), None);
+    }
 }

@@ -1,1 +1,469 @@
-//! What `inspect` and `check` report about programs: positions, summaries, lints.
+//! What `inspect` and `check` report about programs: positions, frames, summaries, lints.
+//!
+//! The report is built from the shared position model only, so RAPID and KRL get the same shape
+//! (DESIGN.md §5, issue 2 point 6). Rendering returns strings; the binary prints them.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use serde::Serialize;
+
+use crate::geometry::{abb_quat_components, xyz_deg_angles};
+use crate::position::{
+    CartesianFields, Config, FrameDecl, FrameKind, Language, NumField, Orientation, ParsedFile,
+    Position, Program, Skid,
+};
+use crate::syntax::{Diagnostic, Severity, Span};
+
+/// How far `|q|` may stray from 1 before `check` calls a quaternion non-normalised. Six written
+/// decimals give about 1e-6; RobotStudio's own output stays well inside 1e-4.
+pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-4;
+
+/// Options of `inspect`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct InspectOptions {
+    /// External axis holding the skid: 0 = `eax_a` / `E1`.
+    pub skid_axis: usize,
+}
+
+/// The whole `inspect --format json` document: `{"files": [...]}`.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct InspectReport {
+    pub files: Vec<FileReport>,
+}
+
+/// One file of the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct FileReport {
+    pub path: String,
+    pub language: Language,
+    pub positions: Vec<PositionRow>,
+    pub frames: Vec<FrameRow>,
+    /// Constructs kept verbatim that the grammar does not know.
+    pub opaque: usize,
+    /// Positions by kind (`"robtarget": 212`).
+    pub counts: BTreeMap<String, usize>,
+    pub warnings: Vec<Message>,
+}
+
+/// One position of the report. Coordinates that are not numeric literals are `null`.
+#[derive(Clone, Debug, Serialize)]
+pub struct PositionRow {
+    /// Declared name; `null` for an inline literal.
+    pub name: Option<String>,
+    pub kind: &'static str,
+    pub line: usize,
+    pub column: usize,
+    pub x: Option<f64>,
+    pub y: Option<f64>,
+    pub z: Option<f64>,
+    /// Orientation as an ABB quaternion `[q1, q2, q3, q4]` (scalar first), for every language.
+    pub q: Option<[f64; 4]>,
+    /// Orientation as fixed-axis angles, degrees (DESIGN.md §2).
+    pub rx: Option<f64>,
+    pub ry: Option<f64>,
+    pub rz: Option<f64>,
+    /// KRL only: `[A, B, C]` as written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub abc: Option<[Option<f64>; 3]>,
+    /// ABB `[cf1, cf4, cf6, cfx]`; KRL `[Status, Turn]` values.
+    pub config: Vec<Option<f64>>,
+    /// KRL only: Status and Turn as written (`"'B010'"`, `"2"`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub status: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub turn: Option<String>,
+    /// Joint values of joint targets, degrees.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub joints: Vec<Option<f64>>,
+    /// The skid: the configured external axis; `null` when missing or not connected (9E9).
+    pub skid: Option<f64>,
+    pub extax: Vec<Option<f64>>,
+    /// RAPID work object (`wobj`) or KRL base (`base`) of the instructions using it.
+    #[serde(rename = "wobj", skip_serializing_if = "Option::is_none")]
+    pub wobj: Option<Option<String>>,
+    #[serde(rename = "base", skip_serializing_if = "Option::is_none")]
+    pub base: Option<Option<String>>,
+    pub tool: Option<String>,
+}
+
+/// A declared work object, tool or base, with its pose in world.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameRow {
+    pub name: String,
+    pub kind: &'static str,
+    pub line: usize,
+    pub x: Option<f64>,
+    pub y: Option<f64>,
+    pub z: Option<f64>,
+    pub q: Option<[f64; 4]>,
+    pub rx: Option<f64>,
+    pub ry: Option<f64>,
+    pub rz: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub robhold: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ufprog: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ufmec: Option<String>,
+}
+
+/// A located message.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Message {
+    pub line: usize,
+    pub column: usize,
+    pub severity: Severity,
+    pub message: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hint: Option<String>,
+}
+
+fn num(f: &Option<NumField>) -> Option<f64> {
+    f.as_ref().map(NumField::value)
+}
+
+fn nums(fields: &[Option<NumField>]) -> Vec<Option<f64>> {
+    fields.iter().map(num).collect()
+}
+
+/// Quaternion and rx/ry/rz of a Cartesian literal, when its orientation is all numeric (the
+/// translation may still be an expression).
+fn orientation(c: &CartesianFields) -> (Option<[f64; 4]>, Option<[f64; 3]>) {
+    match c.rotation() {
+        Some(r) => (
+            Some(abb_quat_components(&r, c.written_quaternion())),
+            Some(xyz_deg_angles(&r)),
+        ),
+        None => (None, None),
+    }
+}
+
+fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> PositionRow {
+    let (x, y, z) = match &p.cartesian {
+        Some(c) => (num(&c.trans[0]), num(&c.trans[1]), num(&c.trans[2])),
+        None => (None, None, None),
+    };
+    let (q, angles) = p
+        .cartesian
+        .as_ref()
+        .map(orientation)
+        .unwrap_or((None, None));
+    let abc = match p.cartesian.as_ref().and_then(|c| c.orient.as_ref()) {
+        Some(Orientation::Abc(abc)) => Some([num(&abc[0]), num(&abc[1]), num(&abc[2])]),
+        _ => None,
+    };
+    let text = |span: Span| String::from_utf8_lossy(span.slice(&file.source)).into_owned();
+    let (config, status, turn) = match &p.config {
+        Config::Abb(cf) => (nums(cf), None, None),
+        Config::Kuka { status, turn } => (
+            vec![
+                status.as_ref().map(|s| s.value as f64),
+                turn.as_ref().map(|t| t.value as f64),
+            ],
+            status.as_ref().map(|s| text(s.span)),
+            turn.as_ref().map(|t| text(t.span)),
+        ),
+        Config::None => (Vec::new(), None, None),
+    };
+    let skid = match p.skid(options.skid_axis) {
+        Skid::At(s) => Some(s),
+        Skid::NotConnected | Skid::Missing => None,
+    };
+    let (wobj, base) = match file.language {
+        Language::Rapid => (Some(p.usage.wobj.clone()), None),
+        Language::Krl => (None, Some(p.usage.wobj.clone())),
+    };
+    PositionRow {
+        name: p.name.clone(),
+        kind: p.kind.as_str(),
+        line: p.line,
+        column: p.column,
+        x,
+        y,
+        z,
+        q,
+        rx: angles.map(|a| a[0]),
+        ry: angles.map(|a| a[1]),
+        rz: angles.map(|a| a[2]),
+        abc,
+        config,
+        status,
+        turn,
+        joints: nums(&p.joints),
+        skid,
+        extax: nums(&p.extax),
+        wobj,
+        base,
+        tool: p.usage.tool.clone(),
+    }
+}
+
+fn frame_kind(kind: FrameKind) -> &'static str {
+    match kind {
+        FrameKind::WorkObject => "wobjdata",
+        FrameKind::Tool => "tooldata",
+        FrameKind::Base => "base",
+    }
+}
+
+fn frame_row(f: &FrameDecl) -> FrameRow {
+    let pose = f.pose();
+    let t = pose.map(|p| p.translation.vector);
+    let q = pose.map(|p| abb_quat_components(&p.rotation, None));
+    let angles = pose.map(|p| xyz_deg_angles(&p.rotation));
+    FrameRow {
+        name: f.name.clone(),
+        kind: frame_kind(f.kind),
+        line: f.line,
+        x: t.map(|v| v.x),
+        y: t.map(|v| v.y),
+        z: t.map(|v| v.z),
+        q,
+        rx: angles.map(|a| a[0]),
+        ry: angles.map(|a| a[1]),
+        rz: angles.map(|a| a[2]),
+        robhold: f.robhold,
+        ufprog: f.ufprog,
+        ufmec: f.ufmec.clone(),
+    }
+}
+
+fn message(file: &ParsedFile, d: &Diagnostic) -> Message {
+    let (line, column) = file.lines.line_col(d.span.start);
+    Message {
+        line,
+        column,
+        severity: d.severity,
+        message: d.message.clone(),
+        hint: d.hint.clone(),
+    }
+}
+
+/// The report of one parsed file.
+pub fn inspect_file(file: &ParsedFile, options: InspectOptions) -> FileReport {
+    let mut counts = BTreeMap::new();
+    for p in &file.positions {
+        *counts.entry(p.kind.as_str().to_owned()).or_insert(0) += 1;
+    }
+    FileReport {
+        path: file.path.display().to_string(),
+        language: file.language,
+        positions: file
+            .positions
+            .iter()
+            .map(|p| position_row(file, p, options))
+            .collect(),
+        frames: file.frames.iter().map(frame_row).collect(),
+        opaque: file.opaque,
+        counts,
+        warnings: lints(file).iter().map(|d| message(file, d)).collect(),
+    }
+}
+
+/// The reports of every file of a program.
+pub fn inspect_program(program: &Program, options: InspectOptions) -> Vec<FileReport> {
+    program
+        .files
+        .iter()
+        .map(|f| inspect_file(f, options))
+        .collect()
+}
+
+/// Everything `check` says about a file: the parser's diagnostics, a failed round trip, and the
+/// lints of the model (non-normalised quaternions, a target used with two work objects).
+/// Sorted by position.
+pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
+    let mut out = file.diagnostics.clone();
+    if !file.round_trip {
+        out.push(
+            Diagnostic::error(
+                Span::new(0, 0),
+                "printing the parsed file does not give back its bytes",
+            )
+            .with_hint("this is a trackfix bug: please report it with the file attached"),
+        );
+    }
+    for p in &file.positions {
+        if let Some(q) = p
+            .cartesian
+            .as_ref()
+            .and_then(CartesianFields::written_quaternion)
+        {
+            let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
+                out.push(
+                    Diagnostic::warning(
+                        p.span,
+                        format!(
+                            "quaternion of `{}` is not normalised (|q| = {norm:.6})",
+                            p.label()
+                        ),
+                    )
+                    .with_hint(
+                        "the controller rejects it; `trackfix correct` writes normalised quaternions",
+                    ),
+                );
+            }
+        }
+        if !p.usage.other_wobjs.is_empty() {
+            let already = file.diagnostics.iter().any(|d| {
+                d.span.start <= p.span.start
+                    && p.span.start < d.span.end.max(d.span.start + 1)
+                    && d.message.contains("work object")
+            });
+            if !already {
+                let what = match file.language {
+                    Language::Rapid => "work objects",
+                    Language::Krl => "bases",
+                };
+                let mut all = vec![p.usage.wobj.clone().unwrap_or_default()];
+                all.extend(p.usage.other_wobjs.iter().cloned());
+                out.push(
+                    Diagnostic::warning(
+                        p.span,
+                        format!("`{}` is used with two {what}: {}", p.label(), all.join(", ")),
+                    )
+                    .with_hint("a transform cannot move one target for two frames; declare one target per frame"),
+                );
+            }
+        }
+    }
+    out.sort_by_key(|d| (d.span.start, d.span.end));
+    out
+}
+
+/// `inspect --format table`: one block per file.
+pub fn render_table(report: &InspectReport) -> String {
+    let mut out = String::new();
+    for f in &report.files {
+        let _ = writeln!(out, "{} ({})", f.path, language_name(f.language));
+        if !f.positions.is_empty() {
+            let frame_col = match f.language {
+                Language::Rapid => "wobj",
+                Language::Krl => "base",
+            };
+            let _ = writeln!(
+                out,
+                "  {:<20} {:<11} {:>6} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:<12} {:<12}",
+                "name", "kind", "line", "x", "y", "z", "rx", "ry", "rz", "skid", frame_col, "tool"
+            );
+            for p in &f.positions {
+                let frame = p.wobj.clone().or(p.base.clone()).flatten();
+                let _ = writeln!(
+                    out,
+                    "  {:<20} {:<11} {:>6} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:<12} {:<12}",
+                    p.name.as_deref().unwrap_or("*"),
+                    p.kind,
+                    p.line,
+                    cell(p.x, 3),
+                    cell(p.y, 3),
+                    cell(p.z, 3),
+                    cell(p.rx, 4),
+                    cell(p.ry, 4),
+                    cell(p.rz, 4),
+                    cell(p.skid, 1),
+                    frame.as_deref().unwrap_or("-"),
+                    p.tool.as_deref().unwrap_or("-"),
+                );
+            }
+        }
+        for fr in &f.frames {
+            let _ = writeln!(
+                out,
+                "  {} {} (line {}): x {} y {} z {} rx {} ry {} rz {}",
+                fr.kind,
+                fr.name,
+                fr.line,
+                cell(fr.x, 3),
+                cell(fr.y, 3),
+                cell(fr.z, 3),
+                cell(fr.rx, 4),
+                cell(fr.ry, 4),
+                cell(fr.rz, 4),
+            );
+        }
+        let counts: Vec<String> = f.counts.iter().map(|(k, n)| format!("{n} {k}")).collect();
+        let _ = writeln!(
+            out,
+            "  summary: {}; {} frames; {} opaque; {} warnings",
+            if counts.is_empty() {
+                "no positions".to_owned()
+            } else {
+                counts.join(", ")
+            },
+            f.frames.len(),
+            f.opaque,
+            f.warnings.len()
+        );
+        for w in &f.warnings {
+            let _ = writeln!(
+                out,
+                "  {}:{}:{}: {}: {}",
+                f.path,
+                w.line,
+                w.column,
+                w.severity.as_str(),
+                w.message
+            );
+        }
+    }
+    out
+}
+
+/// `inspect --format csv`: one row per position.
+pub fn render_csv(report: &InspectReport) -> String {
+    let mut out =
+        String::from("file,language,name,kind,line,x,y,z,q1,q2,q3,q4,rx,ry,rz,skid,frame,tool\n");
+    for f in &report.files {
+        for p in &f.positions {
+            let q = |i: usize| p.q.map(|q| q[i]);
+            let frame = p.wobj.clone().or(p.base.clone()).flatten();
+            let fields = [
+                csv_text(&f.path),
+                language_name(f.language).to_owned(),
+                csv_text(p.name.as_deref().unwrap_or("")),
+                p.kind.to_owned(),
+                p.line.to_string(),
+                opt(p.x),
+                opt(p.y),
+                opt(p.z),
+                opt(q(0)),
+                opt(q(1)),
+                opt(q(2)),
+                opt(q(3)),
+                opt(p.rx),
+                opt(p.ry),
+                opt(p.rz),
+                opt(p.skid),
+                csv_text(frame.as_deref().unwrap_or("")),
+                csv_text(p.tool.as_deref().unwrap_or("")),
+            ];
+            let _ = writeln!(out, "{}", fields.join(","));
+        }
+    }
+    out
+}
+
+fn language_name(l: Language) -> &'static str {
+    match l {
+        Language::Rapid => "rapid",
+        Language::Krl => "krl",
+    }
+}
+
+fn cell(v: Option<f64>, places: usize) -> String {
+    v.map_or_else(|| "-".to_owned(), |v| crate::syntax::fixed(v, places))
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or_else(String::new, |v| v.to_string())
+}
+
+fn csv_text(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_owned()
+    }
+}

@@ -1,27 +1,217 @@
-//! `trackfix inspect` and `trackfix check`. Owned by issue 2.
+//! `trackfix inspect` and `trackfix check`.
 
+use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
+
+use anyhow::Context;
+use indicatif::{ProgressBar, ProgressStyle};
+use trackfix::position::{Program, external_axis_index};
+use trackfix::program::{LoadError, LoadOptions, collect_inputs, load};
+use trackfix::report::{
+    InspectOptions, InspectReport, inspect_program, lints, render_csv, render_table,
+};
+use trackfix::syntax::Severity;
 
 use super::Exit;
 
+#[derive(Clone, Copy, Debug, Default, clap::ValueEnum)]
+pub enum Format {
+    /// Aligned columns for people.
+    #[default]
+    Table,
+    /// `{"files": [...]}`: a stable shape for scripts.
+    Json,
+    /// One row per position.
+    Csv,
+}
+
+const INSPECT_EXAMPLES: &str = "\
+Examples:
+  trackfix inspect samples/rapid/spot_line.mod
+  trackfix inspect samples/ --format json > positions.json
+  trackfix inspect samples/krl/spot_line.src --config-dat 'samples/krl/$config.dat' --format csv
+
+Directories are searched recursively for .mod .modx .sys .sysx .prg (RAPID) and .src .dat .sub
+(KRL). Naming a KRL .src or .dat reads the pair.";
+
+/// List every position, work object and tool in RAPID/KRL programs.
 #[derive(clap::Args)]
+#[command(after_help = INSPECT_EXAMPLES)]
 pub struct InspectArgs {
     /// Program files or directories (searched recursively).
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Table)]
+    pub format: Format,
+    /// External axis that holds the skid position (eax_a..eax_f, E1..E6).
+    #[arg(long, default_value = "eax_a", value_parser = parse_axis)]
+    pub skid: usize,
+    /// KUKA $config.dat whose BASE_DATA/TOOL_DATA resolve KRL bases and tools.
+    #[arg(long, value_name = "FILE")]
+    pub config_dat: Option<PathBuf>,
 }
 
+const CHECK_EXAMPLES: &str = "\
+Examples:
+  trackfix check samples/
+  trackfix check MainModule.mod CalibData.sys
+
+Exit codes: 0 every file round-trips and is clean, 1 findings, 2 a file could not be read.";
+
+/// Verify the byte-exact round trip and lint programs (exit 1 on findings).
+///
+/// Lints: syntax errors and constructs kept verbatim, non-normalised quaternions, a target used
+/// with two work objects or bases, names declared twice.
 #[derive(clap::Args)]
+#[command(after_help = CHECK_EXAMPLES)]
 pub struct CheckArgs {
     /// Program files or directories (searched recursively).
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
+    /// KUKA $config.dat whose BASE_DATA/TOOL_DATA resolve KRL bases and tools.
+    #[arg(long, value_name = "FILE")]
+    pub config_dat: Option<PathBuf>,
 }
 
-pub fn run_inspect(_args: InspectArgs) -> anyhow::Result<Exit> {
-    anyhow::bail!("inspect is not implemented yet")
+fn parse_axis(name: &str) -> Result<usize, String> {
+    external_axis_index(name)
+        .ok_or_else(|| format!("`{name}` is not an external axis; use eax_a..eax_f or E1..E6"))
 }
 
-pub fn run_check(_args: CheckArgs) -> anyhow::Result<Exit> {
-    anyhow::bail!("check is not implemented yet")
+/// Loads every program named, reporting progress on a terminal. Skipped files (binary,
+/// RobotStudio XML) get a note; unreadable files are errors, and the batch goes on.
+struct Batch {
+    programs: Vec<Program>,
+    errors: usize,
+    skipped: usize,
+}
+
+fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
+    let inputs = collect_inputs(files).context("listing the input files")?;
+    let bar = if std::io::stderr().is_terminal() && inputs.len() > 20 {
+        let bar = ProgressBar::new(inputs.len() as u64);
+        bar.set_style(
+            ProgressStyle::with_template("{bar:40} {pos}/{len} {wide_msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let mut batch = Batch {
+        programs: Vec::new(),
+        errors: 0,
+        skipped: 0,
+    };
+    for path in &inputs {
+        bar.set_message(path.display().to_string());
+        match load(path, options) {
+            Ok(p) => batch.programs.push(p),
+            Err(e) if e.is_skip() => {
+                bar.suspend(|| eprintln!("note: {e}"));
+                batch.skipped += 1;
+            }
+            Err(e) => {
+                bar.suspend(|| eprintln!("error: {e}"));
+                if matches!(e, LoadError::UnknownType { .. }) {
+                    bar.suspend(|| eprintln!("  = help: name RAPID or KRL files, or a directory"));
+                }
+                batch.errors += 1;
+            }
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(batch)
+}
+
+pub fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
+    let options = LoadOptions {
+        krl_config_dat: args.config_dat.clone(),
+    };
+    let batch = load_all(&args.files, &options)?;
+    let inspect = InspectOptions {
+        skid_axis: args.skid,
+    };
+    let report = InspectReport {
+        files: batch
+            .programs
+            .iter()
+            .flat_map(|p| inspect_program(p, inspect))
+            .collect(),
+    };
+    let text = match args.format {
+        Format::Table => render_table(&report),
+        Format::Json => {
+            let mut s = serde_json::to_string_pretty(&report)?;
+            s.push('\n');
+            s
+        }
+        Format::Csv => render_csv(&report),
+    };
+    std::io::stdout().lock().write_all(text.as_bytes())?;
+    if matches!(args.format, Format::Table) {
+        let positions: usize = report.files.iter().map(|f| f.positions.len()).sum();
+        println!(
+            "{} files, {positions} positions{}{}",
+            report.files.len(),
+            plural(batch.skipped, "skipped"),
+            plural(batch.errors, "unreadable")
+        );
+    }
+    Ok(if batch.errors > 0 {
+        Exit::Usage
+    } else {
+        Exit::Ok
+    })
+}
+
+fn plural(n: usize, what: &str) -> String {
+    if n == 0 {
+        String::new()
+    } else {
+        format!(", {n} {what}")
+    }
+}
+
+pub fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
+    let options = LoadOptions {
+        krl_config_dat: args.config_dat.clone(),
+    };
+    let batch = load_all(&args.files, &options)?;
+    let mut out = std::io::stdout().lock();
+    let (mut files, mut round_trips, mut findings, mut files_with_findings) = (0, 0, 0, 0);
+    for program in &batch.programs {
+        for file in &program.files {
+            files += 1;
+            if file.round_trip {
+                round_trips += 1;
+            }
+            let found: Vec<_> = lints(file)
+                .into_iter()
+                .filter(|d| d.severity >= Severity::Warning)
+                .collect();
+            if !found.is_empty() {
+                files_with_findings += 1;
+            }
+            for d in &found {
+                findings += 1;
+                write!(out, "{}", file.render(d))?;
+            }
+        }
+    }
+    writeln!(
+        out,
+        "checked {files} files: {round_trips} round-trip byte for byte, {findings} findings in {files_with_findings} files{}{}",
+        plural(batch.skipped, "skipped"),
+        plural(batch.errors, "unreadable")
+    )?;
+    Ok(if batch.errors > 0 {
+        Exit::Usage
+    } else if findings > 0 {
+        Exit::Findings
+    } else {
+        Exit::Ok
+    })
 }
