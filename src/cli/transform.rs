@@ -238,7 +238,10 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
     for r in &refused {
         // Skipped targets are reported as warnings: the run goes on without them.
         let text = if out.skip_unsupported {
-            r.rendered.replacen(": error: ", ": warning: ", 1)
+            r.rendered.replacen(": error: ", ": warning: ", 1).replace(
+                ", or pass --skip-unsupported to leave it unchanged",
+                " (left unchanged)",
+            )
         } else {
             r.rendered.clone()
         };
