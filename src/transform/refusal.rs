@@ -27,6 +27,8 @@ pub enum RefusalKind {
     SkidOutOfRange,
     /// The work object / base could not be found or has non-numeric fields.
     UnresolvedWorkObject,
+    /// Coordinates beyond any robot cell (over 1 km): a typo or a placeholder, not a target.
+    Implausible,
 }
 
 /// One refused target.

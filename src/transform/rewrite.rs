@@ -30,6 +30,9 @@ pub enum OrientationHint {
 
 /// An edit for `field` showing `new`, if it changes at the written precision.
 pub fn number_edit(field: &Option<NumField>, new: f64, min_decimals: usize) -> Option<Edit> {
+    if !new.is_finite() {
+        return None;
+    }
     let f = field.as_ref()?;
     let text = f.lit.rewrite(new, min_decimals)?;
     Some(Edit::new(f.span, text))
@@ -59,6 +62,13 @@ fn written<const N: usize>(fields: &[Option<NumField>; N]) -> Option<[f64; N]> {
 /// written precision) are kept.
 pub fn pose_edits(fields: &CartesianFields, new: &Pose, hint: OrientationHint) -> Vec<Edit> {
     let mut edits = Vec::new();
+    // Absurd literals (1e300 mm) overflow the composition; a half-written target would be worse
+    // than none, so such a pose changes nothing.
+    let finite = new.translation.vector.iter().all(|v| v.is_finite())
+        && new.rotation.coords.iter().all(|v| v.is_finite());
+    if !finite {
+        return edits;
+    }
     let t = new.translation.vector;
     for (field, v) in fields.trans.iter().zip([t.x, t.y, t.z]) {
         edits.extend(number_edit(field, v, MM_DECIMALS));
@@ -157,6 +167,18 @@ mod tests {
             .map(|e| String::from_utf8(e.text.clone()).unwrap())
             .collect();
         assert_eq!(texts, ["0.707107", "0.707107"]);
+    }
+
+    #[test]
+    fn non_finite_results_write_nothing() {
+        let f = quat_fields(["1e300", "0", "0"], ["1", "0", "0", "0"]);
+        let p = f.pose().unwrap();
+        let huge = Pose::from_parts(
+            nalgebra::Translation3::new(f64::INFINITY, 0.0, 0.0),
+            p.rotation,
+        );
+        assert!(pose_edits(&f, &huge, OrientationHint::NearOriginal).is_empty());
+        assert_eq!(number_edit(&f.trans[1], f64::NAN, 3), None);
     }
 
     #[test]

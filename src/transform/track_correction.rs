@@ -98,6 +98,9 @@ impl<'a> TrackSetup<'a> {
     }
 }
 
+/// Coordinates beyond this (mm) are not a target in a robot cell.
+const PLAUSIBLE_MM: f64 = 1e6;
+
 /// Names that mean "world" when a program does not declare them.
 fn is_world(name: &str) -> bool {
     let n = name.to_ascii_lowercase();
@@ -189,6 +192,18 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Refusal>
             RefusalKind::Expression,
             format!("{what} has a position or orientation field that is not a number"),
             "write the fields as numeric literals",
+        );
+    }
+    let far = p
+        .cartesian
+        .as_ref()
+        .and_then(|c| c.translation())
+        .is_some_and(|t| t.iter().any(|v| v.abs() > PLAUSIBLE_MM));
+    if far {
+        return refuse(
+            RefusalKind::Implausible,
+            format!("{what} lies more than 1 km from its work object's origin"),
+            "check the coordinates (mm)",
         );
     }
     if p.usage.stationary_tool {

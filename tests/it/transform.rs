@@ -189,6 +189,10 @@ fn refusal_messages() {
             "MODULE m\n  CONST robtarget pA:=[[10,20,30],[1,0,0,0],[0,0,0,0],[100,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL pA, v100, fine, tool0\\WObj:=wobj_fixture;\n  ENDPROC\nENDMODULE\n",
         ),
         (
+            "implausible.mod",
+            "MODULE m\n  CONST robtarget pTypo:=[[1e300,20,30],[1,0,0,0],[0,0,0,0],[100,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL pTypo, v100, fine, tool0;\n  ENDPROC\nENDMODULE\n",
+        ),
+        (
             "unused.mod",
             "MODULE m\n  CONST robtarget pSpare:=[[10,20,30],[1,0,0,0],[0,0,0,0],[100,9E9,9E9,9E9,9E9,9E9]];\nENDMODULE\n",
         ),
