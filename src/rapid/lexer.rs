@@ -5,14 +5,13 @@
 //! `%%%` header lines are tokens like any other; the parser skips them but the tree keeps them.
 //!
 //! The lexer streams: it keeps no token vector (a 50 MB module has ~20 M tokens, and a vector of
-//! them would be larger than the file). It dispatches on the first byte by hand; the few
-//! multi-byte shapes (numbers, identifiers) are small nom 8 recognisers over bytes.
+//! them would be larger than the file). It dispatches on the first byte by hand; identifiers
+//! and based numbers are small nom 8 recognisers over bytes, decimal numbers a hand loop.
 
 use nom::IResult;
 use nom::Parser as _;
 use nom::bytes::complete::{tag_no_case, take_while, take_while1};
-use nom::character::complete::{digit0, digit1, one_of};
-use nom::combinator::{opt, recognize};
+use nom::combinator::recognize;
 
 use crate::syntax::BOM;
 
@@ -66,6 +65,9 @@ impl TokenKind {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Token {
     pub kind: TokenKind,
+    /// An identifier spelled like a RAPID keyword (any case): the parser compares keyword text
+    /// only for these, so ordinary names cost one flag test.
+    pub keyword: bool,
     pub start: u32,
     pub end: u32,
 }
@@ -123,11 +125,19 @@ impl<'a> Lexer<'a> {
         self.pos
     }
 
+    /// Continues lexing at `pos`, which must be a token boundary in code (not at a line start,
+    /// not in a header, comment or string): the parser's fast path skips what it read itself.
+    pub fn seek(&mut self, pos: usize) {
+        self.pos = pos.min(self.src.len());
+        self.line_start = false;
+    }
+
     fn token(&mut self, kind: TokenKind, len: usize) -> Token {
         let start = self.pos;
         self.pos = (start + len).min(self.src.len());
         Token {
             kind,
+            keyword: false,
             start: start as u32,
             end: self.pos as u32,
         }
@@ -176,15 +186,13 @@ impl<'a> Lexer<'a> {
             }
             b'a'..=b'z' | b'A'..=b'Z' | b'_' => {
                 let len = ident(rest).map_or(1, |(_, m)| m.len());
-                self.token(TokenKind::Ident, len)
+                let mut t = self.token(TokenKind::Ident, len);
+                t.keyword = rest.get(..len).is_some_and(is_keyword);
+                t
             }
-            b'0'..=b'9' => {
-                let len = number(rest).map_or(1, |(_, m)| m.len());
-                self.token(TokenKind::Number, len)
-            }
+            b'0'..=b'9' => self.token(TokenKind::Number, number_len(rest).max(1)),
             b'.' if rest.get(1).is_some_and(u8::is_ascii_digit) => {
-                let len = number(rest).map_or(1, |(_, m)| m.len());
-                self.token(TokenKind::Number, len)
+                self.token(TokenKind::Number, number_len(rest).max(1))
             }
             b':' if rest.get(1) == Some(&b'=') => self.token(TokenKind::Assign, 2),
             b'<' | b'>' if matches!(rest.get(1), Some(b'=')) => self.token(TokenKind::Compare2, 2),
@@ -264,17 +272,104 @@ fn ident(i: &[u8]) -> IResult<&[u8], &[u8]> {
 }
 
 /// `number = based | decimal [ exponent ]` (grammars/rapid.ebnf). A trailing `E` without
-/// digits is not part of the number (`1E` lexes as `1` then `E`).
-fn number(i: &[u8]) -> IResult<&[u8], &[u8]> {
-    if let Ok(r) = based(i) {
-        return Ok(r);
+/// digits is not part of the number (`1E` lexes as `1` then `E`). Decimal numbers are the
+/// hottest path of a robtarget file, so they are scanned by hand.
+pub fn number_len(rest: &[u8]) -> usize {
+    if rest.first() == Some(&b'0')
+        && rest
+            .get(1)
+            .is_some_and(|c| matches!(c | 0x20, b'x' | b'b' | b'o'))
+    {
+        if let Ok((_, m)) = based(rest) {
+            return m.len();
+        }
     }
-    recognize((
-        digit0,
-        opt((nom::character::complete::char('.'), digit0)),
-        opt((one_of("eE"), opt(one_of("+-")), digit1)),
-    ))
-    .parse(i)
+    let digits = |mut i: usize| {
+        while rest.get(i).is_some_and(u8::is_ascii_digit) {
+            i += 1;
+        }
+        i
+    };
+    let mut i = digits(0);
+    if rest.get(i) == Some(&b'.') {
+        i = digits(i + 1);
+    }
+    if matches!(rest.get(i), Some(b'e' | b'E')) {
+        let mut j = i + 1;
+        if matches!(rest.get(j), Some(b'+' | b'-')) {
+            j += 1;
+        }
+        let k = digits(j);
+        if k > j {
+            i = k;
+        }
+    }
+    i
+}
+
+/// Every word the parser treats as a keyword somewhere (reserved words, operators, `NOT`).
+fn is_keyword(text: &[u8]) -> bool {
+    if text.len() < 2 || text.len() > 9 {
+        return false;
+    }
+    let mut buf = [0u8; 9];
+    for (b, c) in buf.iter_mut().zip(text) {
+        *b = c.to_ascii_uppercase();
+    }
+    matches!(
+        &buf[..text.len()],
+        b"MODULE"
+            | b"ENDMODULE"
+            | b"PROC"
+            | b"ENDPROC"
+            | b"FUNC"
+            | b"ENDFUNC"
+            | b"TRAP"
+            | b"ENDTRAP"
+            | b"RECORD"
+            | b"ENDRECORD"
+            | b"CONST"
+            | b"PERS"
+            | b"VAR"
+            | b"ALIAS"
+            | b"LOCAL"
+            | b"TASK"
+            | b"INOUT"
+            | b"IF"
+            | b"THEN"
+            | b"ELSEIF"
+            | b"ELSE"
+            | b"ENDIF"
+            | b"FOR"
+            | b"FROM"
+            | b"TO"
+            | b"STEP"
+            | b"DO"
+            | b"ENDFOR"
+            | b"WHILE"
+            | b"ENDWHILE"
+            | b"TEST"
+            | b"CASE"
+            | b"DEFAULT"
+            | b"ENDTEST"
+            | b"GOTO"
+            | b"RETURN"
+            | b"RAISE"
+            | b"EXIT"
+            | b"RETRY"
+            | b"TRYNEXT"
+            | b"CONNECT"
+            | b"WITH"
+            | b"ERROR"
+            | b"UNDO"
+            | b"BACKWARD"
+            | b"DIV"
+            | b"MOD"
+            | b"AND"
+            | b"OR"
+            | b"XOR"
+            | b"NOT"
+    )
 }
 
 /// `based = "0x" hexdigits | "0b" bits | "0o" octdigits`.

@@ -39,9 +39,9 @@ pub fn print(src: &[u8]) -> Vec<u8> {
 /// reported in the file's diagnostics.
 pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
     let lines = LineIndex::new(&source);
-    let mut extractor = positions::Extractor::new(&lines);
+    let mut extractor = positions::Extractor::new(&lines, &source);
     let parsed = parse(&source, &mut extractor);
-    let extracted = extractor.finish();
+    let extracted = extractor.finish(&source);
     let round_trip = parsed.tree.prints_back(&source);
     let mut diagnostics = parsed.diagnostics;
     if !round_trip {

@@ -42,6 +42,8 @@ pub enum Stmt {
     /// A procedure call; `args` is an [`ExprKind::Args`] node, `name` the routine name (for a
     /// late-binding call, the `%expr%` text).
     Call { name: Span, args: u32 },
+    /// `target := value;` (`target` is the whole left side, e.g. `p.trans.x`).
+    Assign { target: Span, value: u32 },
     /// Any other statement: its expressions are still scanned for inline targets and offsets.
     Other,
 }
@@ -110,6 +112,8 @@ struct Parser<'a, 's> {
     lex: Lexer<'a>,
     /// The current significant (non-trivia) token.
     tok: Token,
+    /// The token after `tok` and the lexer positioned after it, once looked at.
+    peeked: Option<(Token, Lexer<'a>)>,
     /// End of the last significant token consumed.
     prev_end: u32,
     nodes: Vec<Node>,
@@ -121,6 +125,9 @@ struct Parser<'a, 's> {
     depth: u32,
     /// The unknown token already reported as the cause of an error (not reported twice).
     reported_unknown: Option<u32>,
+    /// Use [`Parser::numeric_aggregate`] (off only in tests that compare it with the general
+    /// path).
+    fast_aggregates: bool,
     sink: &'s mut dyn StatementSink,
 }
 
@@ -236,9 +243,11 @@ impl<'a, 's> Parser<'a, 's> {
             lex: Lexer::new(src),
             tok: Token {
                 kind: TokenKind::Eof,
+                keyword: false,
                 start: 0,
                 end: 0,
             },
+            peeked: None,
             prev_end: 0,
             nodes: Vec::with_capacity(src.len() / 48 + 4),
             leaf_end: 0,
@@ -247,6 +256,7 @@ impl<'a, 's> Parser<'a, 's> {
             arena: Arena::default(),
             depth: 0,
             reported_unknown: None,
+            fast_aggregates: true,
             sink,
         };
         p.nodes.push(Node {
@@ -295,20 +305,31 @@ impl<'a, 's> Parser<'a, 's> {
         }
         if t.kind != TokenKind::Eof {
             self.prev_end = t.end;
-            self.tok = self.next_significant();
+            self.tok = match self.peeked.take() {
+                Some((next, lex)) => {
+                    self.lex = lex;
+                    next
+                }
+                None => self.next_significant(),
+            };
         }
         t
     }
 
-    /// The token after the current one (lexes ahead on a copy of the lexer).
-    fn peek2(&self) -> Token {
+    /// The token after the current one (lexed once on a copy of the lexer, then kept).
+    fn peek2(&mut self) -> Token {
+        if let Some((t, _)) = self.peeked {
+            return t;
+        }
         let mut lex = self.lex;
-        loop {
+        let t = loop {
             let t = lex.next_token();
             if !t.kind.is_trivia() {
-                return t;
+                break t;
             }
-        }
+        };
+        self.peeked = Some((t, lex));
+        t
     }
 
     /// A line break lies between the last consumed token and the current one.
@@ -323,11 +344,15 @@ impl<'a, 's> Parser<'a, 's> {
     }
 
     fn at_kw(&self, kw: &[u8]) -> bool {
-        self.tok.kind == TokenKind::Ident && self.text(self.tok).eq_ignore_ascii_case(kw)
+        self.tok.keyword && self.text(self.tok).eq_ignore_ascii_case(kw)
     }
 
     fn at_any(&self, words: &[&[u8]]) -> bool {
-        self.tok.kind == TokenKind::Ident && is_word_in(self.text(self.tok), words)
+        self.tok.keyword && is_word_in(self.text(self.tok), words)
+    }
+
+    fn is_reserved(&self, t: Token) -> bool {
+        t.keyword && is_word_in(self.text(t), RESERVED)
     }
 
     fn at_punct(&self, c: u8) -> bool {
@@ -360,7 +385,7 @@ impl<'a, 's> Parser<'a, 's> {
     }
 
     fn expect_ident(&mut self, expected: &'static str) -> PResult<Token> {
-        if self.tok.kind == TokenKind::Ident && !is_word_in(self.text(self.tok), RESERVED) {
+        if self.tok.kind == TokenKind::Ident && !self.is_reserved(self.tok) {
             Ok(self.bump())
         } else {
             Err(self.error(expected))
@@ -528,13 +553,21 @@ impl<'a, 's> Parser<'a, 's> {
     /// `file = [ BOM ] { header_line } { module | item } EOF`
     fn file(&mut self) {
         let mut outside_warned = false;
+        // The `%%%` line that opened a header block not yet closed.
+        let mut open_header: Option<Token> = None;
         loop {
             match self.tok.kind {
                 TokenKind::Eof => break,
                 TokenKind::HeaderLine => {
-                    let start = self.tok.start;
+                    let t = self.tok;
+                    if self.text(t).starts_with(b"%%%") {
+                        open_header = match open_header {
+                            Some(_) => None,
+                            None => Some(t),
+                        };
+                    }
                     self.bump();
-                    self.leaf(NodeKind::Header, start);
+                    self.leaf(NodeKind::Header, t.start);
                 }
                 _ if self.at_kw(b"MODULE") => self.module(),
                 _ => {
@@ -553,6 +586,17 @@ impl<'a, 's> Parser<'a, 's> {
                     self.item(true);
                 }
             }
+        }
+        if let Some(t) = open_header {
+            self.diagnostics.push(
+                Diagnostic::error(
+                    t.span(),
+                    "`%%%` header block without its closing `%%%` line",
+                )
+                .with_hint(
+                    "close the header with a line `%%%`; everything after it was read as header",
+                ),
+            );
         }
     }
 
@@ -656,7 +700,7 @@ impl<'a, 's> Parser<'a, 's> {
         let prefixed = self.at_any(&[b"LOCAL", b"TASK"]);
         let kw_is = |words: &[&[u8]]| {
             if prefixed {
-                second.kind == TokenKind::Ident && is_word_in(second_text, words)
+                second.keyword && is_word_in(second_text, words)
             } else {
                 false
             }
@@ -973,7 +1017,7 @@ impl<'a, 's> Parser<'a, 's> {
             self.expect_punct(b';', "`;` at the end of the statement")?;
             return Ok((NodeKind::Jump, Stmt::Other));
         }
-        if is_word_in(self.text(t), RESERVED) {
+        if self.is_reserved(t) {
             return Err(self.error("a statement"));
         }
         // `label:` — a colon, not `:=`.
@@ -985,9 +1029,10 @@ impl<'a, 's> Parser<'a, 's> {
         let target = self.postfix()?;
         if self.tok.kind == TokenKind::Assign {
             self.bump();
-            self.expr()?;
+            let value = self.expr()?;
             self.expect_punct(b';', "`;` at the end of the assignment")?;
-            return Ok((NodeKind::Assign, Stmt::Other));
+            let target = self.arena.get(target).map_or(t.span(), |n| n.span());
+            return Ok((NodeKind::Assign, Stmt::Assign { target, value }));
         }
         if self.arena.get(target).map(|n| n.kind) != Some(ExprKind::Ident) {
             return Err(self.error("`:=` in the assignment"));
@@ -1299,6 +1344,102 @@ impl<'a, 's> Parser<'a, 's> {
         self.close(branch);
     }
 
+    /// Fast path of `aggregate` for the shape that makes up most of a robtarget file:
+    /// brackets, commas, numbers with an attached sign, spaces and newlines — nothing else.
+    /// It builds exactly the nodes the general path would, straight from the bytes; on anything
+    /// else it undoes its nodes and returns `None`, and the general path reads the aggregate.
+    fn numeric_aggregate(&mut self) -> Option<u32> {
+        const MAX: usize = 16;
+        let src = self.src;
+        let mark = self.arena.nodes.len();
+        let mut stack = [(NONE, NONE); MAX];
+        let mut depth = 0usize;
+        let mut i = self.tok.start as usize;
+        // After `[` or `,` an element must follow (or `]` right after `[`).
+        let mut expect_elem = true;
+        let mut just_opened = false;
+        let mut root = NONE;
+        let ok = loop {
+            let Some(&b) = src.get(i) else { break false };
+            match b {
+                b' ' | b'\t' | b'\r' | b'\n' => i += 1,
+                b'[' if expect_elem => {
+                    if depth == MAX {
+                        break false;
+                    }
+                    let id = self.arena.open(ExprKind::Aggregate, i as u32);
+                    if depth > 0 {
+                        let (parent, last) = stack[depth - 1];
+                        self.arena.link(parent, last, id);
+                        stack[depth - 1].1 = id;
+                    } else {
+                        root = id;
+                    }
+                    stack[depth] = (id, NONE);
+                    depth += 1;
+                    i += 1;
+                    just_opened = true;
+                }
+                b']' if !expect_elem || just_opened => {
+                    let Some(d) = depth.checked_sub(1) else {
+                        break false;
+                    };
+                    depth = d;
+                    self.arena.close(stack[depth].0, i as u32 + 1);
+                    i += 1;
+                    if depth == 0 {
+                        break true;
+                    }
+                    expect_elem = false;
+                    just_opened = false;
+                }
+                b',' if !expect_elem => {
+                    i += 1;
+                    expect_elem = true;
+                    just_opened = false;
+                }
+                b'-' | b'+' | b'0'..=b'9' | b'.' if expect_elem && depth > 0 => {
+                    let digits = if matches!(b, b'-' | b'+') { i + 1 } else { i };
+                    let rest = src.get(digits..).unwrap_or(&[]);
+                    let starts_number = match rest.first() {
+                        Some(c) if c.is_ascii_digit() => true,
+                        Some(b'.') => rest.get(1).is_some_and(u8::is_ascii_digit),
+                        _ => false,
+                    };
+                    if !starts_number {
+                        break false;
+                    }
+                    let end = digits + super::lexer::number_len(rest);
+                    // The next byte must end the token the way the lexer would end it.
+                    if src
+                        .get(end)
+                        .is_some_and(|c| c.is_ascii_alphanumeric() || matches!(c, b'_' | b'.'))
+                    {
+                        break false;
+                    }
+                    let id = self.arena.open(ExprKind::Num, i as u32);
+                    self.arena.close(id, end as u32);
+                    let (parent, last) = stack[depth - 1];
+                    self.arena.link(parent, last, id);
+                    stack[depth - 1].1 = id;
+                    i = end;
+                    expect_elem = false;
+                    just_opened = false;
+                }
+                _ => break false,
+            }
+        };
+        if !ok || root == NONE {
+            self.arena.nodes.truncate(mark);
+            return None;
+        }
+        self.lex.seek(i);
+        self.peeked = None;
+        self.prev_end = i as u32;
+        self.tok = self.next_significant();
+        Some(root)
+    }
+
     // ---- expressions --------------------------------------------------------------------
 
     /// `expr = unary { binop unary }` with
@@ -1341,7 +1482,7 @@ impl<'a, 's> Parser<'a, 's> {
                 self.tok.punct(self.src),
                 b'+' | b'-' | b'*' | b'/' | b'=' | b'<' | b'>'
             ),
-            TokenKind::Ident => is_word_in(self.text(self.tok), BINARY_WORDS),
+            TokenKind::Ident => self.tok.keyword && is_word_in(self.text(self.tok), BINARY_WORDS),
             _ => false,
         }
     }
@@ -1360,7 +1501,7 @@ impl<'a, 's> Parser<'a, 's> {
                 return Ok(id);
             }
             let id = self.arena.open(ExprKind::Compound, t.start);
-            let inner = self.unary()?;
+            let inner = self.nested_unary()?;
             self.arena.link(id, NONE, inner);
             self.arena.close(id, self.prev_end);
             return Ok(id);
@@ -1368,12 +1509,23 @@ impl<'a, 's> Parser<'a, 's> {
         if self.at_kw(b"NOT") {
             self.bump();
             let id = self.arena.open(ExprKind::Compound, t.start);
-            let inner = self.unary()?;
+            let inner = self.nested_unary()?;
             self.arena.link(id, NONE, inner);
             self.arena.close(id, self.prev_end);
             return Ok(id);
         }
         self.postfix()
+    }
+
+    /// A unary operand under another unary operator, counted against the nesting limit.
+    fn nested_unary(&mut self) -> PResult<u32> {
+        if self.depth > MAX_DEPTH {
+            return Err(self.error("fewer stacked unary operators"));
+        }
+        self.depth += 1;
+        let r = self.unary();
+        self.depth -= 1;
+        r
     }
 
     /// `postfix = primary { "{" expr { "," expr } "}" | "." ident }`
@@ -1430,7 +1582,7 @@ impl<'a, 's> Parser<'a, 's> {
                 self.arena.close(id, t.end);
                 Ok(id)
             }
-            TokenKind::Ident if !is_word_in(self.text(t), RESERVED) => {
+            TokenKind::Ident if !self.is_reserved(t) => {
                 self.bump();
                 if self.at_punct(b'(') {
                     self.bump();
@@ -1460,6 +1612,11 @@ impl<'a, 's> Parser<'a, 's> {
                 }
             }
             TokenKind::Punct if t.punct(self.src) == b'[' => {
+                if self.fast_aggregates {
+                    if let Some(id) = self.numeric_aggregate() {
+                        return Ok(id);
+                    }
+                }
                 self.bump();
                 let id = self.arena.open(ExprKind::Aggregate, t.start);
                 let mut last = NONE;
@@ -1495,6 +1652,62 @@ impl<'a, 's> Parser<'a, 's> {
                 Ok(id)
             }
             _ => Err(self.error("a value")),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The expression nodes and the following token, read with or without the fast path.
+    fn read(src: &[u8], fast: bool) -> (Vec<super::super::expr::ExprNode>, Option<Token>) {
+        let mut sink = NoSink;
+        let mut p = Parser::new(src, &mut sink);
+        p.fast_aggregates = fast;
+        match p.expr() {
+            Ok(_) => (p.arena.nodes.clone(), Some(p.tok)),
+            Err(_) => (Vec::new(), None),
+        }
+    }
+
+    fn aggregate() -> impl Strategy<Value = String> {
+        let leaf = prop_oneof![
+            "-?[0-9]{1,5}(\\.[0-9]{0,4})?([eE][+-]?[0-9]{1,2})?",
+            "[+-]?\\.[0-9]{1,3}",
+            Just("9E+09".to_owned()),
+            Just("- 5".to_owned()),
+            Just("x".to_owned()),
+            Just("1.5.2".to_owned()),
+            Just("! c\n0".to_owned()),
+            Just("0x1F".to_owned()),
+        ];
+        leaf.prop_recursive(4, 40, 6, |inner| {
+            (
+                proptest::collection::vec(inner, 0..6),
+                "[ \\t\\r\\n]{0,2}",
+                any::<bool>(),
+            )
+                .prop_map(|(items, ws, trailing)| {
+                    let sep = format!(",{ws}");
+                    let tail = if trailing && !items.is_empty() {
+                        ","
+                    } else {
+                        ""
+                    };
+                    format!("[{ws}{}{tail}]", items.join(&sep))
+                })
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+        #[test]
+        fn fast_aggregate_path_builds_what_the_general_path_builds(a in aggregate()) {
+            let src = format!("{a} ;");
+            prop_assert_eq!(read(src.as_bytes(), true), read(src.as_bytes(), false));
         }
     }
 }

@@ -23,28 +23,36 @@ const MOTION_PREFIXES: &[&str] = &[
     "trigl", "trigj", "trigc", "contact",
 ];
 
-/// What a module-scope name was declared as (for duplicate and tool/wobj detection).
+/// The declared types usage resolution cares about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum SymType {
+    Tool,
+    Zone,
+    Speed,
+    Other,
+}
+
+/// A declared name (spans into the source: no copy per declaration).
 #[derive(Clone, Debug)]
 struct Symbol {
-    name: String,
-    type_lower: String,
-    span: Span,
+    name: Span,
+    ty: SymType,
     module_scope: bool,
 }
 
 /// A procedure call, kept until every declaration has been read.
 #[derive(Clone, Debug)]
 struct CallUse {
-    name_lower: String,
+    name: Span,
     line: usize,
-    /// `\WObj:=` value text.
-    wobj: Option<String>,
-    /// `\Tool:=` value text.
-    tool: Option<String>,
-    /// Positional arguments that are plain references (`p10`, `pArr{3}`): lookup key and text.
-    positional: Vec<Option<(String, String)>>,
+    /// `\WObj:=` value.
+    wobj: Option<Span>,
+    /// `\Tool:=` value.
+    tool: Option<Span>,
+    /// Positional arguments that are plain references (`p10`, `pArr{3}`).
+    positional: Vec<Option<Span>>,
     /// Targets referenced through `Offs`/`RelTool` first arguments.
-    via_offset: Vec<String>,
+    via_offset: Vec<Span>,
     /// Inline literals written in the call's arguments (indices into `positions`).
     inline: Vec<usize>,
 }
@@ -57,6 +65,8 @@ pub struct Extractor<'l> {
     offsets: Vec<OffsetCall>,
     symbols: Vec<Symbol>,
     uses: Vec<CallUse>,
+    /// Whole-value assignments `name := [...]` (a frame set at run time).
+    assigned: Vec<Span>,
 }
 
 /// What [`Extractor::finish`] returns.
@@ -71,24 +81,32 @@ fn text_of(src: &[u8], span: Span) -> String {
     latin1(span.slice(src))
 }
 
-/// A reference as a lookup key: lower case, no whitespace (`pArr{ 2 }` → `parr{2}`).
-fn key(src: &[u8], span: Span) -> String {
-    span.slice(src)
-        .iter()
-        .filter(|b| !b.is_ascii_whitespace())
-        .map(|&b| (b as char).to_ascii_lowercase())
-        .collect()
+/// A reference as a lookup key: lower case, no whitespace (`pArr{ 2 }` → `parr{2}`), written
+/// into a reused buffer.
+fn key_into<'b>(buf: &'b mut String, src: &[u8], span: Span) -> &'b str {
+    buf.clear();
+    buf.extend(
+        span.slice(src)
+            .iter()
+            .filter(|b| !b.is_ascii_whitespace())
+            .map(|&b| (b as char).to_ascii_lowercase()),
+    );
+    buf
 }
 
 impl<'l> Extractor<'l> {
-    pub fn new(lines: &'l LineIndex) -> Extractor<'l> {
+    /// `src` is only looked at to size the position list: every target literal starts with
+    /// `[[`, and growing a vector of ~1 KB positions by doubling would copy it several times.
+    pub fn new(lines: &'l LineIndex, src: &[u8]) -> Extractor<'l> {
+        let literals = src.windows(2).filter(|w| w == b"[[").count();
         Extractor {
             lines,
-            positions: Vec::new(),
+            positions: Vec::with_capacity(literals),
             frames: Vec::new(),
             offsets: Vec::new(),
             symbols: Vec::new(),
             uses: Vec::new(),
+            assigned: Vec::new(),
         }
     }
 
@@ -152,14 +170,22 @@ impl<'l> Extractor<'l> {
         (n.kind == ExprKind::Aggregate).then(|| arena.children(id).count())
     }
 
-    /// The kind of target an aggregate literal is, by shape: robtarget
-    /// `[[3],[4],[4],[6]]`, jointtarget `[[6],[6]]`.
+    /// The kind of target an aggregate literal is, by shape: robtarget `[[3],[4],[4],eax]`,
+    /// jointtarget `[[6],eax]`, where `eax` is an aggregate or any expression.
     fn literal_kind(arena: &Arena, id: u32) -> Option<PositionKind> {
-        let parts: Vec<u32> = arena.children(id).take(5).collect();
-        let lens: Vec<Option<usize>> = parts.iter().map(|&c| Self::agg_len(arena, c)).collect();
-        match lens.as_slice() {
-            [Some(3), Some(4), Some(4), Some(6)] => Some(PositionKind::Robtarget),
-            [Some(6), Some(6)] => Some(PositionKind::Jointtarget),
+        let mut lens = [None; 5];
+        let mut count = 0;
+        for (slot, c) in lens.iter_mut().zip(arena.children(id)) {
+            *slot = Some(Self::agg_len(arena, c));
+            count += 1;
+        }
+        // The external axes may be a variable (generators write `rdkExtJoints`), so only the
+        // robot part decides the shape.
+        match (count, lens) {
+            (4, [Some(Some(3)), Some(Some(4)), Some(Some(4)), Some(_), _]) => {
+                Some(PositionKind::Robtarget)
+            }
+            (2, [Some(Some(6)), Some(_), ..]) => Some(PositionKind::Jointtarget),
             _ => None,
         }
     }
@@ -313,7 +339,7 @@ impl<'l> Extractor<'l> {
 
     /// Inline target literals and `Offs`/`RelTool` calls anywhere in the statement's
     /// expressions. Returns the indices of the positions added.
-    fn scan(&mut self, src: &[u8], arena: &Arena, literals: bool) -> (Vec<usize>, Vec<String>) {
+    fn scan(&mut self, src: &[u8], arena: &Arena, literals: bool) -> (Vec<usize>, Vec<Span>) {
         let mut added = Vec::new();
         let mut refs = Vec::new();
         let mut skip_until = 0u32;
@@ -370,7 +396,7 @@ impl<'l> Extractor<'l> {
                         .unwrap_or_default();
                     if let Some(v) = positional.first().and_then(|&v| arena.get(v)) {
                         if matches!(v.kind, ExprKind::Ident | ExprKind::Access) {
-                            refs.push(key(src, v.span()));
+                            refs.push(v.span());
                         }
                     }
                     let delta =
@@ -391,27 +417,29 @@ impl<'l> Extractor<'l> {
         (added, refs)
     }
 
-    /// Resolves usage and lints; consumes the extractor.
-    pub fn finish(mut self) -> Extracted {
+    /// Resolves usage and lints; consumes the extractor. `src` is the source parsed.
+    pub fn finish(mut self, src: &[u8]) -> Extracted {
         let mut diagnostics = Vec::new();
-        // Names declared twice in the module scope.
-        let mut seen: HashMap<String, usize> = HashMap::new();
-        for (i, s) in self.symbols.iter().enumerate() {
+        let mut buf = String::new();
+        // Names declared twice in the module scope; the types of all names.
+        let mut seen: HashMap<String, Span> = HashMap::new();
+        let mut type_of: HashMap<String, SymType> = HashMap::new();
+        for s in &self.symbols {
+            let k = key_into(&mut buf, src, s.name);
+            if s.ty != SymType::Other {
+                type_of.insert(k.to_owned(), s.ty);
+            }
             if !s.module_scope {
                 continue;
             }
-            let k = s.name.to_ascii_lowercase();
-            if let Some(&first) = seen.get(&k) {
-                let line = self
-                    .symbols
-                    .get(first)
-                    .map_or(0, |f| self.lines.line(f.span.start));
+            if let Some(first) = seen.get(k) {
+                let line = self.lines.line(first.start);
                 diagnostics.push(
                     Diagnostic::warning(
-                        s.span,
+                        s.name,
                         format!(
                             "`{}` is declared twice in the module (first on line {line})",
-                            s.name
+                            text_of(src, s.name)
                         ),
                     )
                     .with_hint(
@@ -419,29 +447,17 @@ impl<'l> Extractor<'l> {
                     ),
                 );
             } else {
-                seen.insert(k, i);
+                seen.insert(k.to_owned(), s.name);
             }
         }
-        let type_of: HashMap<String, &str> = self
-            .symbols
-            .iter()
-            .map(|s| (s.name.to_ascii_lowercase(), s.type_lower.as_str()))
-            .collect();
-        let is_tool = |n: &str| n == "tool0" || type_of.get(n).is_some_and(|t| *t == "tooldata");
-        let is_zone = |n: &str| {
-            n == "fine"
-                || (n.len() > 1
-                    && n.starts_with('z')
-                    && n.bytes().skip(1).all(|b| b.is_ascii_digit()))
-                || type_of.get(n).is_some_and(|t| *t == "zonedata")
+        let numbered = |n: &str, prefix: char| {
+            n.len() > 1 && n.starts_with(prefix) && n.bytes().skip(1).all(|b| b.is_ascii_digit())
         };
-        let is_speed = |n: &str| {
-            n == "vmax"
-                || (n.len() > 1
-                    && n.starts_with('v')
-                    && n.bytes().skip(1).all(|b| b.is_ascii_digit()))
-                || type_of.get(n).is_some_and(|t| *t == "speeddata")
-        };
+        let is_tool = |n: &str| n == "tool0" || type_of.get(n) == Some(&SymType::Tool);
+        let is_zone =
+            |n: &str| n == "fine" || numbered(n, 'z') || type_of.get(n) == Some(&SymType::Zone);
+        let is_speed =
+            |n: &str| n == "vmax" || numbered(n, 'v') || type_of.get(n) == Some(&SymType::Speed);
         let robhold: HashMap<String, bool> = self
             .frames
             .iter()
@@ -458,52 +474,66 @@ impl<'l> Extractor<'l> {
                 by_name.entry(lower).or_default().push(i);
             }
         }
-        let lookup = |r: &str| -> Vec<usize> {
+        let lookup = |r: &str| -> &[usize] {
             if let Some(v) = by_name.get(r) {
-                return v.clone();
+                return v;
             }
             // `pArr{i}` with a variable index: every element of the array may be used.
             match r.split('{').next() {
-                Some(base) if base.len() < r.len() => {
-                    by_name.get(base).cloned().unwrap_or_default()
-                }
-                _ => Vec::new(),
+                Some(base) if base.len() < r.len() => by_name.get(base).map_or(&[], Vec::as_slice),
+                _ => &[],
             }
         };
+        let mut targets: Vec<usize> = Vec::new();
+        let mut names: Vec<String> = Vec::new();
         for u in &self.uses {
-            let names: Vec<&str> = u
-                .positional
-                .iter()
-                .map(|p| p.as_ref().map_or("", |(k, _)| k.as_str()))
-                .collect();
+            names.clear();
+            for p in &u.positional {
+                names.push(p.map_or_else(String::new, |sp| key_into(&mut buf, src, sp).to_owned()));
+            }
             let written = |i: usize| -> Option<String> {
-                u.positional.get(i)?.as_ref().map(|(_, t)| t.clone())
+                u.positional
+                    .get(i)
+                    .copied()
+                    .flatten()
+                    .map(|sp| text_of(src, sp))
             };
-            let tool = u.tool.clone().or_else(|| {
-                if let Some(i) = names.iter().position(|n| is_tool(n)) {
-                    return written(i);
-                }
-                let after = names.iter().position(|n| is_zone(n)).or_else(|| {
-                    u.name_lower
-                        .starts_with("search")
-                        .then(|| names.iter().position(|n| is_speed(n)))
-                        .flatten()
-                })?;
-                written(after + 1)
-            });
-            let motion = MOTION_PREFIXES.iter().any(|p| u.name_lower.starts_with(p));
-            let wobj = u
-                .wobj
-                .clone()
-                .or_else(|| (motion || tool.is_some()).then(|| "wobj0".to_owned()));
-            let mut targets: Vec<usize> = u.inline.clone();
-            let refs = u.positional.iter().flatten().map(|(k, _)| k);
-            for r in refs.chain(u.via_offset.iter()) {
-                targets.extend(lookup(r));
+            let name_lower = key_into(&mut buf, src, u.name).to_owned();
+            let tool = u
+                .tool
+                .map(|sp| text_of(src, sp).trim().to_owned())
+                .or_else(|| {
+                    if let Some(i) = names.iter().position(|n| is_tool(n)) {
+                        return written(i);
+                    }
+                    let after = names.iter().position(|n| is_zone(n)).or_else(|| {
+                        name_lower
+                            .starts_with("search")
+                            .then(|| names.iter().position(|n| is_speed(n)))
+                            .flatten()
+                    })?;
+                    written(after + 1)
+                });
+            let motion = MOTION_PREFIXES.iter().any(|p| name_lower.starts_with(p));
+            let wobj = match u.wobj {
+                Some(sp) => Some(text_of(src, sp).trim().to_owned()),
+                None => (motion || tool.is_some()).then(|| "wobj0".to_owned()),
+            };
+            targets.clear();
+            targets.extend_from_slice(&u.inline);
+            for n in names.iter().filter(|n| !n.is_empty()) {
+                targets.extend_from_slice(lookup(n));
+            }
+            for &sp in &u.via_offset {
+                let k = key_into(&mut buf, src, sp);
+                targets.extend_from_slice(lookup(k));
             }
             targets.sort_unstable();
             targets.dedup();
-            for t in targets {
+            let stationary = wobj
+                .as_ref()
+                .is_some_and(|w| robhold.get(&w.to_ascii_lowercase()) == Some(&true));
+            for &t in &targets {
                 let Some(p) = self.positions.get_mut(t) else {
                     continue;
                 };
@@ -521,14 +551,35 @@ impl<'l> Extractor<'l> {
                             }
                         }
                     }
-                    if robhold.get(&w.to_ascii_lowercase()) == Some(&true) {
-                        usage.stationary_tool = true;
-                    }
+                    usage.stationary_tool |= stationary;
                 }
                 if usage.tool.is_none() {
                     usage.tool = tool.clone();
                 }
             }
+        }
+        // A frame given a whole new value in a routine: the declaration may not be what runs.
+        for &sp in &self.assigned {
+            let k = key_into(&mut buf, src, sp);
+            let Some(f) = self.frames.iter().find(|f| f.name.eq_ignore_ascii_case(k)) else {
+                continue;
+            };
+            let what = match f.kind {
+                FrameKind::Tool => "tool",
+                _ => "work object",
+            };
+            diagnostics.push(
+                Diagnostic::warning(
+                    sp,
+                    format!(
+                        "{what} `{}` is given a new value here; trackfix uses its declaration on line {}",
+                        f.name, f.line
+                    ),
+                )
+                .with_hint(
+                    "declare the frame with the value the program runs with, or give it in the cell file",
+                ),
+            );
         }
         for p in &self.positions {
             if p.usage.other_wobjs.is_empty() {
@@ -576,9 +627,13 @@ impl StatementSink for Extractor<'_> {
                 let ty = type_name.slice(src).to_ascii_lowercase();
                 let name_text = text_of(src, name);
                 self.symbols.push(Symbol {
-                    name: name_text.clone(),
-                    type_lower: latin1(&ty),
-                    span: name,
+                    name,
+                    ty: match ty.as_slice() {
+                        b"tooldata" => SymType::Tool,
+                        b"zonedata" => SymType::Zone,
+                        b"speeddata" => SymType::Speed,
+                        _ => SymType::Other,
+                    },
                     module_scope,
                 });
                 let target_kind = match ty.as_slice() {
@@ -626,15 +681,14 @@ impl StatementSink for Extractor<'_> {
                 }
             }
             Stmt::Routine { name } => self.symbols.push(Symbol {
-                name: text_of(src, name),
-                type_lower: "routine".to_owned(),
-                span: name,
+                name,
+                ty: SymType::Other,
                 module_scope: true,
             }),
             Stmt::Call { name, args } => {
                 let (inline, via_offset) = self.scan(src, arena, true);
                 let mut u = CallUse {
-                    name_lower: text_of(src, name).to_ascii_lowercase(),
+                    name,
                     line: self.lines.line(span.start),
                     wobj: None,
                     tool: None,
@@ -651,7 +705,7 @@ impl StatementSink for Extractor<'_> {
                     };
                     if arg.switch {
                         let nm = arg.name_span().slice(src);
-                        let v = value.map(|v| text_of(src, v.span()).trim().to_owned());
+                        let v = value.map(|v| v.span());
                         if nm.eq_ignore_ascii_case(b"WObj") {
                             u.wobj = v;
                         } else if nm.eq_ignore_ascii_case(b"Tool") {
@@ -661,11 +715,24 @@ impl StatementSink for Extractor<'_> {
                         u.positional.push(
                             value
                                 .filter(|v| matches!(v.kind, ExprKind::Ident | ExprKind::Access))
-                                .map(|v| (key(src, v.span()), text_of(src, v.span()))),
+                                .map(|v| v.span()),
                         );
                     }
                 }
                 self.uses.push(u);
+            }
+            Stmt::Assign { target, value } => {
+                self.scan(src, arena, true);
+                if arena
+                    .get(value)
+                    .is_some_and(|v| v.kind == ExprKind::Aggregate)
+                    && target
+                        .slice(src)
+                        .iter()
+                        .all(|b| b.is_ascii_alphanumeric() || *b == b'_')
+                {
+                    self.assigned.push(target);
+                }
             }
             Stmt::Other => {
                 self.scan(src, arena, true);

@@ -119,6 +119,14 @@ impl Tree {
         out
     }
 
+    /// Writes the leaves in order to `out` (printing a large file without a second copy).
+    pub fn write_to(&self, src: &[u8], out: &mut impl std::io::Write) -> std::io::Result<()> {
+        for n in self.nodes.iter().filter(|n| !n.kind.is_branch()) {
+            out.write_all(n.span().slice(src))?;
+        }
+        Ok(())
+    }
+
     /// True if printing gives `src` back, compared leaf by leaf without building the copy.
     pub fn prints_back(&self, src: &[u8]) -> bool {
         let mut pos = 0usize;

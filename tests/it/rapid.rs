@@ -799,3 +799,79 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn hostile_nesting_is_reported_not_overflowed() {
+    let inputs: Vec<Vec<u8>> = vec![
+        [
+            b"MODULE m\nPROC p()\nx:=".as_slice(),
+            &b"-".repeat(200_000),
+            b"1;\nENDPROC\nENDMODULE",
+        ]
+        .concat(),
+        [
+            b"MODULE m\nPROC p()\nx:=".as_slice(),
+            &b"NOT ".repeat(50_000),
+            b"a;\nENDPROC\nENDMODULE",
+        ]
+        .concat(),
+        [
+            b"MODULE m\nCONST num a:=".as_slice(),
+            &b"[".repeat(200_000),
+            b";\nENDMODULE",
+        ]
+        .concat(),
+        [
+            b"MODULE m\nCONST num a:=".as_slice(),
+            &b"(".repeat(200_000),
+            b";\nENDMODULE",
+        ]
+        .concat(),
+        [
+            b"MODULE m\nPROC p()\n".as_slice(),
+            &b"IF a THEN\n".repeat(20_000),
+            b"ENDPROC\nENDMODULE",
+        ]
+        .concat(),
+        [
+            b"MODULE m\nPROC p()\n".as_slice(),
+            &b"WHILE TRUE DO ".repeat(20_000),
+            b"ENDPROC\nENDMODULE",
+        ]
+        .concat(),
+        [
+            b"MODULE m\nPROC p()\nf ".as_slice(),
+            &b"g(".repeat(100_000),
+            b";\nENDPROC\nENDMODULE",
+        ]
+        .concat(),
+    ];
+    for src in inputs {
+        let f = assert_sound(&src);
+        assert!(
+            f.diagnostics.iter().any(|d| d.severity == Severity::Error),
+            "{:?}",
+            &f.diagnostics[..f.diagnostics.len().min(3)]
+        );
+    }
+}
+
+#[test]
+fn inline_targets_with_external_axes_in_a_variable() {
+    let src = b"MODULE m\nPROC p()\n  MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],rdkExtJoints],v100,z1,tool0;\n  MoveAbsJ [[0,0,0,0,90,0],rdkExtJoints],v100,z1,tool0;\n  p1 := [[1,2,3],[1,0,0,0]];\nENDPROC\nENDMODULE\n".to_vec();
+    let f = rapid::parse_file(Path::new("x.mod"), src);
+    let kinds: Vec<PositionKind> = f.positions.iter().map(|p| p.kind).collect();
+    assert_eq!(
+        kinds,
+        vec![PositionKind::Robtarget, PositionKind::Jointtarget]
+    );
+    assert!(
+        f.positions
+            .iter()
+            .all(|p| p.extax.is_empty() && p.skid(0) == Skid::Missing)
+    );
+    assert_eq!(
+        f.positions[0].cartesian.as_ref().unwrap().translation(),
+        Some([1.0, 2.0, 3.0])
+    );
+}
