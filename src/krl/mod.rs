@@ -39,11 +39,31 @@ pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
 
 /// Parses a file and extracts what it holds, before resolution.
 fn analyse(path: &Path, source: Vec<u8>) -> (ParsedFile, positions::Facts) {
-    let parse = parser::parse(&source);
     let lines = LineIndex::new(&source);
+    let mut extractor = positions::Extractor::new(&source, &lines);
+    let parse = parser::parse_with(&source, &mut |stmt| extractor.statement(&stmt));
+    let (extracted, notes) = extractor.finish();
     let round_trip = parse.tree.print(&source) == source;
     let mut diagnostics = parse.diagnostics;
-    let extracted = positions::extract(&source, &parse.tree, &lines, &mut diagnostics);
+    diagnostics.extend(notes);
+    if !parse
+        .tree
+        .nodes
+        .iter()
+        .any(|n| n.kind == tree::NodeKind::RoutineStart)
+    {
+        let at = parse
+            .tree
+            .tokens
+            .iter()
+            .find(|t| !t.kind.is_trivia())
+            .map_or(crate::syntax::Span::new(0, 0), |t| t.span());
+        diagnostics.insert(
+            0,
+            crate::syntax::Diagnostic::warning(at, "no `DEF` or `DEFDAT` in this file")
+                .with_hint("a KRL module is `DEF name( )` … `END` or `DEFDAT name` … `ENDDAT`, after its `&` header lines"),
+        );
+    }
     let file = ParsedFile {
         path: path.to_owned(),
         language: Language::Krl,

@@ -60,6 +60,11 @@ const DECL_KEYWORDS: &[&str] = &[
     "STRUC", "ENUM", "SIGNAL", "EXT", "EXTFCT", "EXTP", "EXTFCTP", "IMPORT", "CONST",
 ];
 
+/// Types whose declarations may omit `DECL` (a `.dat` writes `E6POS XP1={…}`, `INT I`).
+const PREDEFINED_TYPES: &[&str] = &[
+    "INT", "REAL", "BOOL", "CHAR", "FRAME", "POS", "E6POS", "AXIS", "E6AXIS", "SIGNAL",
+];
+
 const BINARY_WORDS: &[&str] = &["AND", "OR", "EXOR", "B_AND", "B_OR", "B_EXOR"];
 
 /// Up to 16 bytes of a keyword candidate, upper-cased, without allocating.
@@ -440,18 +445,32 @@ fn static_kw(w: &str) -> Option<&'static str> {
 }
 
 /// Parser state across lines.
-struct LineParser<'a> {
+struct LineParser<'a, 'k> {
     src: &'a [u8],
     out: Parse,
+    /// Where parsed statements go: kept in the tree by [`parse`], streamed by [`parse_with`].
+    sink: &'k mut dyn FnMut(Stmt),
     stack: Vec<Open>,
     folds: Vec<Span>,
 }
 
-/// Parses a KRL source (rule `file`). Never fails and never panics.
+/// Parses a KRL source (rule `file`) into a tree that keeps its statements. Never fails and
+/// never panics.
 pub fn parse(src: &[u8]) -> Parse {
+    let mut stmts = Vec::new();
+    let mut out = parse_with(src, &mut |s| stmts.push(s));
+    out.tree.stmts = stmts;
+    out
+}
+
+/// Like [`parse`], but hands each statement to `sink` as soon as it is parsed instead of keeping
+/// it in the tree (`tree.stmts` stays empty). Reading positions this way keeps memory at the
+/// size of the tokens: a 50 MB `.dat` holds millions of aggregate fields.
+pub fn parse_with(src: &[u8], sink: &mut dyn FnMut(Stmt)) -> Parse {
     let mut p = LineParser {
         src,
         out: Parse::default(),
+        sink,
         stack: Vec::new(),
         folds: Vec::new(),
     };
@@ -521,7 +540,7 @@ fn line_eol(tokens: &[Token], i: usize, j: usize) -> Span {
     Span::new(at, at)
 }
 
-impl<'a> LineParser<'a> {
+impl<'a> LineParser<'a, '_> {
     /// Rule `trivia_line`: blank, comment, fold lines.
     fn trivia_line(&mut self, toks: &[Token]) -> NodeKind {
         let Some(c) = toks.iter().find(|t| t.kind == TokenKind::Comment) else {
@@ -710,7 +729,7 @@ impl<'a> LineParser<'a> {
         match result {
             Ok((kind, d, stmt)) => {
                 if let Some(kind) = stmt {
-                    self.out.tree.stmts.push(Stmt {
+                    (self.sink)(Stmt {
                         node,
                         span: stmt_span,
                         kind,
@@ -808,7 +827,20 @@ impl<'a> LineParser<'a> {
             return Ok((NodeKind::Label, depth, None));
         }
         if next.is_some_and(|t| t.kind == TokenKind::Ident) {
-            return decl(c).map(|k| (NodeKind::Declaration, depth, Some(k)));
+            let ty = Word::of(head.text(src));
+            let k = decl(c)?;
+            // KRL lets `DECL` be omitted for predefined types only; a misspelt keyword
+            // (`LIX XP1`) would otherwise pass silently as a declaration.
+            if !PREDEFINED_TYPES.contains(&ty.as_str()) {
+                self.out.diagnostics.push(
+                    Diagnostic::warning(
+                        head.span(),
+                        format!("`{}` is not a statement or a predefined type", c.text(head)),
+                    )
+                    .with_hint("write `DECL TYPE name` for a user-defined type, or check the keyword's spelling"),
+                );
+            }
+            return Ok((NodeKind::Declaration, depth, Some(k)));
         }
         if is_punct(src, next, b"=") || is_punct(src, next, b"[") || is_punct(src, next, b".") {
             let target = c.postfix()?;
@@ -1067,6 +1099,38 @@ mod tests {
         let sev: Vec<_> = p.diagnostics.iter().map(|d| d.severity).collect();
         assert_eq!(sev, [Severity::Warning, Severity::Error, Severity::Warning]);
         assert_eq!(p.diagnostics[1].span, Span::new(32, 32));
+    }
+
+    #[test]
+    fn control_structures_stay_in_sync() {
+        let src = "GLOBAL DEFFCT REAL half(X:IN)\r\n  DECL REAL X\r\n  RETURN X/2\r\nENDFCT\r\n\
+DEF cell( )\r\n  SPLINE WITH $ACC = {CP 2.0}\r\n    SPL XP1\r\n    SLIN XP2\r\n    SCIRC XP3, XP4\r\n  ENDSPLINE\r\n\
+  SWITCH N\r\n  CASE 1, 2\r\n    PTP_REL {A1 10}\r\n  DEFAULT\r\n    EXIT\r\n  ENDSWITCH\r\n\
+  REPEAT\r\n    N = N + 1\r\n  UNTIL (N > 3) OR $IN[2]\r\n  WHILE $IN[1] == TRUE\r\n    WAIT SEC 0.1\r\n  ENDWHILE\r\n\
+  TIME_BLOCK START\r\n  CONST_VEL START = 100 ONSTART\r\n  ANIN ON A = 1.0 * $ANIN[1]\r\n  PULSE($OUT[3], TRUE, 0.5)\r\n\
+  ;FOLD PTP P1  Vel= 100 % PDAT1;%{PE}%R 4.1.15,%MKUKATPBASIS,%CMOVE,%VPTP,%P 1:PTP, 2:P1, 3:, 5:100, 7:PDAT1\r\n\
+  $BWDSTART = FALSE\r\n  PDAT_ACT=PPDAT1\r\n  BAS (#PTP_DAT )\r\n  FDAT_ACT=FP1\r\n  BAS (#FRAMES )\r\n  PTP  XP1\r\n  ;ENDFOLD\r\n\
+  IF half(4.0) > 1 THEN\r\n    GOTO done\r\n  ENDIF\r\n  done:\r\n  HALT\r\nEND\r\n";
+        let p = parse(src.as_bytes());
+        assert!(p.diagnostics.is_empty(), "{:?}", p.diagnostics);
+        assert_eq!(p.opaque, 0);
+        assert_eq!(p.tree.print(src.as_bytes()), src.as_bytes());
+        let depth_of = |text: &str| {
+            p.tree
+                .nodes
+                .iter()
+                .find(|n| {
+                    let span = p.tree.node_span(n);
+                    String::from_utf8_lossy(span.slice(src.as_bytes())).contains(text)
+                })
+                .map(|n| (n.kind, n.depth))
+        };
+        assert_eq!(depth_of("SPL XP1"), Some((NodeKind::Motion, 2)));
+        assert_eq!(depth_of("CASE 1"), Some((NodeKind::BlockMiddle, 1)));
+        assert_eq!(depth_of("PTP_REL"), Some((NodeKind::Motion, 2)));
+        assert_eq!(depth_of("UNTIL"), Some((NodeKind::BlockClose, 1)));
+        assert_eq!(depth_of("done:"), Some((NodeKind::Label, 1)));
+        assert_eq!(depth_of("ENDFCT"), Some((NodeKind::RoutineEnd, 0)));
     }
 
     #[test]

@@ -8,7 +8,7 @@
 
 use std::collections::HashMap;
 
-use super::tree::{Aggregate, Expr, ExprKind, StmtKind, Tree};
+use super::tree::{Aggregate, Expr, ExprKind, Stmt, StmtKind};
 use crate::position::{
     BitField, CartesianFields, Config, FrameDecl, FrameKind, NumField, Orientation, ParsedFile,
     Position, PositionKind, Usage,
@@ -35,6 +35,8 @@ pub(crate) enum Setting {
     Tcp(bool),
     /// `FDAT_ACT = FP1`: base, tool and IPO mode of that FDAT.
     Fdat(String),
+    /// `FDAT_ACT = {TOOL_NO 1, BASE_NO 2, IPO_FRAME #BASE}` written inline.
+    FdatValue(Fdat),
     BaseOfFdat(String),
     ToolOfFdat(String),
     TcpOfFdat(String),
@@ -54,6 +56,12 @@ pub(crate) enum Event {
     /// A `DEF`/`DEFFCT`: program order starts again.
     Reset,
     Set(Setting),
+    /// `XPICK = XP3`: until reassigned, a motion to `XPICK` moves to (a copy of) `XP3`, so
+    /// `XP3` is used with that motion's base and tool.
+    Alias {
+        name: String,
+        source: String,
+    },
     Motion {
         span: Span,
         line: usize,
@@ -224,46 +232,43 @@ struct Fields {
 fn read_fields(src: &[u8], agg: &Aggregate) -> Fields {
     let mut f = Fields::default();
     for field in &agg.fields {
-        let name = upper(src, field.name);
+        // Field names are compared as bytes: a 50 MB `.dat` has millions of them.
+        let name = field.name.slice(src);
         let v = &field.value;
-        let idx = |prefix: &str| -> Option<usize> {
-            let d = name.strip_prefix(prefix)?;
-            match d.parse::<usize>() {
-                Ok(n @ 1..=6) if d.len() == 1 => Some(n - 1),
-                _ => None,
-            }
+        let upper0 = name.first().map_or(0, u8::to_ascii_uppercase);
+        let digit = match name {
+            [_, d @ b'1'..=b'6'] => Some(usize::from(d - b'1')),
+            _ => None,
         };
-        match name.as_str() {
-            "X" | "Y" | "Z" => {
-                let i = usize::from(name.as_bytes().first().map_or(0, |b| b - b'X'));
-                if let Some(slot) = f.xyz.get_mut(i) {
+        match (name.len(), upper0, digit) {
+            (1, b'X' | b'Y' | b'Z', _) => {
+                if let Some(slot) = f.xyz.get_mut(usize::from(upper0 - b'X')) {
                     *slot = num_field(src, v);
                 }
                 f.cartesian_written = true;
             }
-            "A" | "B" | "C" => {
-                let i = usize::from(name.as_bytes().first().map_or(0, |b| b - b'A'));
-                if let Some(slot) = f.abc.get_mut(i) {
+            (1, b'A' | b'B' | b'C', _) => {
+                if let Some(slot) = f.abc.get_mut(usize::from(upper0 - b'A')) {
                     *slot = num_field(src, v);
                 }
                 f.abc_written = true;
                 f.cartesian_written = true;
             }
-            "S" => f.s = bit_field(src, v),
-            "T" => f.t = bit_field(src, v),
-            _ => {
-                if let Some(i) = idx("A") {
-                    if let Some(slot) = f.axes.get_mut(i) {
-                        *slot = num_field(src, v);
-                    }
-                    f.joints_written = true;
-                } else if let Some(i) = idx("E") {
-                    if let Some(slot) = f.ext.get_mut(i) {
-                        *slot = num_field(src, v);
-                    }
-                    f.ext_written = f.ext_written.max(i + 1);
+            (1, b'S', _) => f.s = bit_field(src, v),
+            (1, b'T', _) => f.t = bit_field(src, v),
+            (2, b'A', Some(i)) => {
+                if let Some(slot) = f.axes.get_mut(i) {
+                    *slot = num_field(src, v);
                 }
+                f.joints_written = true;
             }
+            (2, b'E', Some(i)) => {
+                if let Some(slot) = f.ext.get_mut(i) {
+                    *slot = num_field(src, v);
+                }
+                f.ext_written = f.ext_written.max(i + 1);
+            }
+            _ => {}
         }
     }
     f
@@ -348,30 +353,40 @@ fn frame_decl(
     }
 }
 
-/// Reads positions, frames and resolution facts from a parsed file. `diagnostics` receives
-/// notes about what is deliberately not a target (relative motions).
-pub(crate) fn extract(
-    src: &[u8],
-    tree: &Tree,
-    lines: &LineIndex,
-    diagnostics: &mut Vec<Diagnostic>,
-) -> Extracted {
-    let mut declared: HashMap<String, PositionKind> = HashMap::new();
-    for stmt in &tree.stmts {
-        if let StmtKind::Decl { type_name, vars } = &stmt.kind
-            && let Some(kind) = positional_type(&upper(src, *type_name))
-        {
-            for v in vars {
-                declared.insert(upper(src, v.name), kind);
-            }
+/// Reads positions, frames and resolution facts from a file's statements, one at a time and in
+/// source order (KRL declares before use, so a declared type is known when its assignments
+/// come).
+pub(crate) struct Extractor<'a> {
+    src: &'a [u8],
+    lines: &'a LineIndex,
+    declared: HashMap<String, PositionKind>,
+    out: Extracted,
+    /// Notes about what is deliberately not a target (relative motions, computed targets).
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+impl<'a> Extractor<'a> {
+    pub fn new(src: &'a [u8], lines: &'a LineIndex) -> Extractor<'a> {
+        Extractor {
+            src,
+            lines,
+            declared: HashMap::new(),
+            out: Extracted {
+                positions: Vec::new(),
+                frames: Vec::new(),
+                facts: Facts::default(),
+            },
+            diagnostics: Vec::new(),
         }
     }
-    let mut out = Extracted {
-        positions: Vec::new(),
-        frames: Vec::new(),
-        facts: Facts::default(),
-    };
-    for stmt in &tree.stmts {
+
+    pub fn finish(self) -> (Extracted, Vec<Diagnostic>) {
+        (self.out, self.diagnostics)
+    }
+
+    pub fn statement(&mut self, stmt: &Stmt) {
+        let (src, lines) = (self.src, self.lines);
+        let out = &mut self.out;
         match &stmt.kind {
             StmtKind::Routine { keyword, .. } => {
                 if !upper(src, *keyword).starts_with("DEFDAT") {
@@ -380,15 +395,19 @@ pub(crate) fn extract(
             }
             StmtKind::Decl { type_name, vars } => {
                 let ty = upper(src, *type_name);
+                let positional = positional_type(&ty);
                 for v in vars {
+                    if let Some(kind) = positional {
+                        self.declared.insert(upper(src, v.name), kind);
+                    }
                     let Some(init) = &v.init else { continue };
                     let ExprKind::Aggregate(agg) = &init.kind else {
                         continue;
                     };
-                    let name = crate::syntax::latin1(v.name.slice(src));
                     if ty == "FDAT" {
                         out.facts.fdats.insert(upper(src, v.name), fdat(src, agg));
-                    } else if let Some(kind) = positional_type(&ty) {
+                    } else if let Some(kind) = positional {
+                        let name = crate::syntax::latin1(v.name.slice(src));
                         let f = read_fields(src, agg);
                         let p = build_position(lines, init.span, kind, Some(name), f);
                         if kind == PositionKind::Frame {
@@ -400,7 +419,7 @@ pub(crate) fn extract(
                 }
             }
             StmtKind::Assign { target, value } => {
-                assignment(src, lines, &declared, target, value, &mut out);
+                assignment(src, lines, &self.declared, target, value, out);
             }
             StmtKind::Call(call) => {
                 if let Some(s) = bas_call(src, call) {
@@ -414,19 +433,19 @@ pub(crate) fn extract(
             } => {
                 let line = lines.line(stmt.span.start);
                 if upper(src, *keyword).ends_with("_REL") {
-                    diagnostics.push(
+                    self.diagnostics.push(
                         Diagnostic::note(
                             stmt.span,
                             "relative motion: its offset is not a target and is left unchanged",
                         )
                         .with_hint("check this motion by hand after a transform"),
                     );
-                    continue;
+                    return;
                 }
                 let mut refs = Vec::new();
                 for t in targets {
                     if !target_refs(src, lines, t, &mut refs, &mut out.positions) {
-                        diagnostics.push(
+                        self.diagnostics.push(
                             Diagnostic::warning(
                                 t.span,
                                 "computed target (geometric operator `:` or an expression): \
@@ -440,7 +459,7 @@ pub(crate) fn extract(
                 }
                 let with = with
                     .iter()
-                    .filter_map(|(l, r)| setting(src, lines, l, r, None))
+                    .filter_map(|(l, r)| setting(src, l, r))
                     .collect();
                 out.facts.events.push(Event::Motion {
                     span: stmt.span,
@@ -451,7 +470,6 @@ pub(crate) fn extract(
             }
         }
     }
-    out
 }
 
 fn fdat(src: &[u8], agg: &Aggregate) -> Fdat {
@@ -489,20 +507,12 @@ fn bas_call(src: &[u8], call: &Expr) -> Option<Setting> {
 }
 
 /// `$BASE = …`, `$TOOL = …`, `$IPO_MODE = …`, `FDAT_ACT = …` (also inside `WITH`).
-/// `inline_base` names a `$BASE={…}` frame declared on that line.
-fn setting(
-    src: &[u8],
-    lines: &LineIndex,
-    target: &Expr,
-    value: &Expr,
-    inline_base: Option<&str>,
-) -> Option<Setting> {
-    let _ = lines;
+/// Aggregate values of `$BASE`/`$TOOL` are handled by [`assignment`], which names them.
+fn setting(src: &[u8], target: &Expr, value: &Expr) -> Option<Setting> {
     let fdat_of = || fdat_argument(src, value);
     match upper(src, target.span).as_str() {
-        "$BASE" => Some(match (&value.kind, inline_base) {
-            (ExprKind::Aggregate(_), Some(n)) => Setting::Base(FrameRef::Named(n.to_owned())),
-            (ExprKind::Call(..), _) => fdat_of()
+        "$BASE" => Some(match &value.kind {
+            ExprKind::Call(..) => fdat_of()
                 .map(Setting::BaseOfFdat)
                 .unwrap_or(Setting::Base(FrameRef::Unknown)),
             _ => Setting::Base(frame_ref(src, value)),
@@ -520,6 +530,7 @@ fn setting(
         },
         "FDAT_ACT" => match &value.kind {
             ExprKind::Name => Some(Setting::Fdat(upper(src, value.span))),
+            ExprKind::Aggregate(agg) => Some(Setting::FdatValue(fdat(src, agg))),
             _ => None,
         },
         _ => None,
@@ -535,11 +546,27 @@ fn assignment(
     out: &mut Extracted,
 ) {
     let ExprKind::Aggregate(agg) = &value.kind else {
-        if let Some(s) = setting(src, lines, target, value, None) {
+        if let Some(s) = setting(src, target, value) {
             out.facts.events.push(Event::Set(s));
+        } else if matches!(target.kind, ExprKind::Name | ExprKind::Index(..))
+            && matches!(value.kind, ExprKind::Name | ExprKind::Index(..))
+        {
+            let name = upper(src, target.span);
+            if !name.starts_with('$') {
+                out.facts.events.push(Event::Alias {
+                    name,
+                    source: upper(src, value.span),
+                });
+            }
         }
         return;
     };
+    if upper(src, target.span) == "FDAT_ACT" {
+        if let Some(s) = setting(src, target, value) {
+            out.facts.events.push(Event::Set(s));
+        }
+        return;
+    }
     if let Some((kind, n)) = data_element(src, target) {
         let prefix = if kind == FrameKind::Base {
             "BASE_DATA"
@@ -662,6 +689,11 @@ impl State {
             Setting::Base(r) => self.base = Some(r.clone()),
             Setting::Tool(r) => self.tool = Some(r.clone()),
             Setting::Tcp(t) => self.tcp = *t,
+            Setting::FdatValue(f) => {
+                self.base = Some(data(f.base));
+                self.tool = Some(data(f.tool));
+                self.tcp = f.tcp.unwrap_or(false);
+            }
             Setting::Fdat(name) => {
                 let f = fdats.get(name);
                 self.base = Some(data(f.and_then(|f| f.base)));
@@ -733,11 +765,21 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         .map(|f| vec![false; f.candidates.len()])
         .collect();
     for fi in 0..files.len() {
-        let events = facts.get(fi).map(|f| f.events.clone()).unwrap_or_default();
+        let events = facts
+            .get_mut(fi)
+            .map(|f| std::mem::take(&mut f.events))
+            .unwrap_or_default();
         let mut state = State::default();
+        let mut aliases: HashMap<&str, &str> = HashMap::new();
         for ev in &events {
             match ev {
-                Event::Reset => state = State::default(),
+                Event::Reset => {
+                    state = State::default();
+                    aliases.clear();
+                }
+                Event::Alias { name, source } => {
+                    aliases.insert(name, source);
+                }
                 Event::Set(s) => state.apply(s, &fdats),
                 Event::Motion {
                     span,
@@ -764,8 +806,18 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                 }
                             }
                             Ref::Named(n) => {
-                                for &(f2, cand, i) in by_name.get(n).map_or(&[][..], Vec::as_slice)
-                                {
+                                // The name itself, then what it was last copied from.
+                                let mut chain = vec![n.as_str()];
+                                while chain.len() < 8 {
+                                    match chain.last().and_then(|c| aliases.get(c)) {
+                                        Some(next) if !chain.contains(next) => chain.push(next),
+                                        _ => break,
+                                    }
+                                }
+                                let hits = chain.iter().flat_map(|c| {
+                                    by_name.get(*c).map_or(&[][..], Vec::as_slice).iter()
+                                });
+                                for &(f2, cand, i) in hits {
                                     let p = if cand {
                                         if let Some(u) =
                                             used_candidates.get_mut(f2).and_then(|v| v.get_mut(i))
@@ -825,6 +877,56 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::Path;
+
+    #[test]
+    fn copies_carry_the_use_to_their_source() {
+        let src = b"DEF a()\n  DECL E6POS XP1={X 1,Y 2,Z 3,A 0,B 0,C 0}\n  DECL E6POS XCOPY\n  $BASE=BASE_DATA[4]\n  XCOPY = XP1\n  XCOPY.Z = XCOPY.Z + 100\n  LIN XCOPY\nEND\n";
+        let f = crate::krl::parse_file(Path::new("a.src"), src.to_vec());
+        assert_eq!(f.positions.len(), 1);
+        let u = &f.positions[0].usage;
+        assert_eq!(u.wobj.as_deref(), Some("BASE_DATA[4]"));
+        assert_eq!(u.lines, [7]);
+    }
+
+    #[test]
+    fn inline_frames_and_inline_fdat_resolve() {
+        let src = b"DEF r()\n  $BASE = {FRAME: X 100, Y 0, Z 0, A 0, B 0, C 0}\n  $TOOL = {FRAME: X 0, Y 0, Z 200, A 0, B 0, C 0}\n  LIN {X 10, Y 20, Z 30, A 0, B 90, C 0, E1 500} C_DIS\n  FDAT_ACT= {TOOL_NO 11, BASE_NO 1, IPO_FRAME #TCP}\n  BAS(#PTP_PARAMS,100)\n  PTP {X 1,Y 2,Z 3}\n  $BASE = EK(MACHINE_DEF[2].ROOT, MACHINE_DEF[2].MECH_TYPE, BASE_DATA[1])\n  LIN {X 5}\nEND\n";
+        let f = crate::krl::parse_file(Path::new("r.src"), src.to_vec());
+        let names: Vec<_> = f.frames.iter().map(|d| (d.name.as_str(), d.kind)).collect();
+        assert_eq!(
+            names,
+            [
+                ("$BASE (line 2)", FrameKind::Base),
+                ("$TOOL (line 3)", FrameKind::Tool)
+            ]
+        );
+        let usage: Vec<_> = f
+            .positions
+            .iter()
+            .map(|p| {
+                (
+                    p.usage.wobj.as_deref(),
+                    p.usage.tool.as_deref(),
+                    p.usage.stationary_tool,
+                )
+            })
+            .collect();
+        assert_eq!(
+            usage,
+            [
+                (Some("$BASE (line 2)"), Some("$TOOL (line 3)"), false),
+                (Some("BASE_DATA[1]"), Some("TOOL_DATA[11]"), true),
+                (None, Some("TOOL_DATA[11]"), true),
+            ]
+        );
+        let unresolved: Vec<_> = f
+            .diagnostics
+            .iter()
+            .map(|d| (f.lines.line(d.span.start), d.message.as_str()))
+            .collect();
+        assert_eq!(unresolved, [(9, "the base of this motion is not resolved")]);
+    }
 
     #[test]
     fn bit_strings() {

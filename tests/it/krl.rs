@@ -535,13 +535,123 @@ proptest! {
             let prefix = format!("{}:", path.display());
             prop_assert!(rendered.starts_with(&prefix));
         }
-        // Damage the parser notices is an opaque node or a located error, never silence
-        // about a lost statement: a statement count that changed by more than the edited
-        // line shows up as diagnostics or opaque nodes.
-        let errors = file.diagnostics.iter().filter(|d| d.severity == Severity::Error).count();
-        if file.opaque == 0 && errors == 0 && !truncate {
-            // The byte landed somewhere harmless (a comment, a digit, whitespace).
-            prop_assert!(file.positions.len() + 1 >= original.positions.len());
+        // Cutting a sample inside a routine (DEF … END, DEFDAT … ENDDAT), or before its first
+        // routine, always leaves a trace: an opaque line, a located error, or a warning.
+        let tree = krl::parse(&original.source).tree;
+        let mut routines = Vec::new();
+        let mut open = None;
+        for node in &tree.nodes {
+            let span = tree.node_span(node);
+            match node.kind {
+                krl::tree::NodeKind::RoutineStart => open = Some(span.start),
+                krl::tree::NodeKind::RoutineEnd => {
+                    if let Some(start) = open.take() {
+                        let end = span.start
+                            + tree.tokens[node.first as usize..node.end as usize]
+                                .iter()
+                                .rev()
+                                .find(|t| !t.kind.is_trivia())
+                                .map_or(0, |t| t.end as usize - span.start);
+                        routines.push((start, end));
+                    }
+                }
+                _ => {}
+            }
+        }
+        let cut_at = src.len();
+        let inside = routines.iter().any(|&(a, b)| a < cut_at && cut_at < b)
+            || routines.first().is_none_or(|&(a, _)| cut_at <= a);
+        if truncate && inside {
+            let noticed = file.opaque > 0
+                || file.diagnostics.iter().any(|d| d.severity >= Severity::Warning);
+            prop_assert!(noticed, "cut at {} of {}", cut_at, path.display());
         }
     }
+}
+
+/// Real programs, not committed (their text is not ours): point `TRACKFIX_KRL_CORPUS` at a
+/// directory of `.src`/`.dat`/`.sub` files and run
+/// `TRACKFIX_KRL_CORPUS=dir cargo test --test it krl::real_corpus -- --ignored --nocapture`.
+/// Every file must round-trip; every `E6POS`/`POS`/`E6AXIS`/`AXIS` declared with a value must
+/// be found.
+#[test]
+#[ignore = "needs TRACKFIX_KRL_CORPUS"]
+#[allow(clippy::print_stdout)] // the report is the point of this manual check
+fn real_corpus() {
+    let Ok(dir) = std::env::var("TRACKFIX_KRL_CORPUS") else {
+        return;
+    };
+    let mut files: Vec<PathBuf> = walk(Path::new(&dir));
+    files.sort();
+    for path in files {
+        let src = std::fs::read(&path).unwrap();
+        let declared = src
+            .split(|&b| b == b'\n' || b == b'\r')
+            .filter(|l| {
+                let l = String::from_utf8_lossy(l).to_ascii_uppercase();
+                let l = l.trim_start();
+                let l = l.strip_prefix("DECL ").unwrap_or(l);
+                let l = l.strip_prefix("GLOBAL ").unwrap_or(l);
+                ["E6POS ", "POS ", "E6AXIS ", "AXIS "]
+                    .iter()
+                    .any(|t| l.starts_with(t))
+                    && l.contains('=')
+            })
+            .count();
+        let file = krl::parse_file(&path, src);
+        let program = krl::load_program(&path, &LoadOptions::default()).unwrap();
+        let found = file
+            .positions
+            .iter()
+            .filter(|p| p.name.is_some() && p.kind != PositionKind::Frame)
+            .count();
+        let frames_used = program
+            .files
+            .iter()
+            .flat_map(|f| &f.positions)
+            .filter(|p| p.kind == PositionKind::Frame)
+            .count();
+        let errors: Vec<String> = file
+            .diagnostics
+            .iter()
+            .filter(|d| d.severity >= Severity::Warning)
+            .map(|d| file.render(d))
+            .collect();
+        println!(
+            "{}: round_trip={} declared={declared} found={found} frames_used={frames_used} bases/tools={} opaque={} diagnostics={}",
+            path.display(),
+            file.round_trip,
+            file.frames.len(),
+            file.opaque,
+            errors.len()
+        );
+        for e in errors.iter().take(5) {
+            println!("{e}");
+        }
+        for p in program.files.iter().flat_map(|f| &f.positions).take(12) {
+            println!(
+                "    {} {} base={:?} tool={:?} lines={:?}",
+                p.kind.as_str(),
+                p.label(),
+                p.usage.wobj,
+                p.usage.tool,
+                p.usage.lines
+            );
+        }
+        assert!(file.round_trip);
+        assert_eq!(declared, found, "{}", path.display());
+    }
+}
+
+fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(walk(&p));
+        } else if trackfix::program::language_of(&p) == Some(trackfix::position::Language::Krl) {
+            out.push(p);
+        }
+    }
+    out
 }
