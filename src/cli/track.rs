@@ -338,8 +338,8 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         );
         let _ = writeln!(
             s,
-            "  straightness (peak-to-peak about a line): y {:.4} mm, z {:.4} mm; twist (rx peak-to-peak) {:.4} deg",
-            st.straightness_y_mm, st.straightness_z_mm, st.twist_deg
+            "  straightness (peak-to-peak about a line): sideways {:.4} mm, vertical {:.4} mm; twist about the track {:.4} deg peak-to-peak",
+            st.straightness_sideways_mm, st.straightness_vertical_mm, st.twist_deg
         );
     }
     Ok(s)
@@ -365,7 +365,13 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
         if step.is_nan() || step <= 0.0 {
             anyhow::bail!("--step {step}: give a positive step in mm");
         }
-        let n = ((s1 - s0) / step + 1e-9).floor() as usize;
+        let count = (s1 - s0) / step + 1e-9;
+        if count > 1e6 {
+            anyhow::bail!(
+                "--step {step} gives {count:.0} rows over {s0} .. {s1} mm; use a larger step"
+            );
+        }
+        let n = count.floor() as usize;
         let mut v: Vec<f64> = (0..=n).map(|i| s0 + i as f64 * step).collect();
         if v.last().is_some_and(|l| (s1 - l).abs() > 1e-9) {
             v.push(s1);

@@ -97,6 +97,11 @@ fn kabsch(source: &[Point3<f64>], target: &[Point3<f64>]) -> Result<Pose, RigidF
         h += a * (q.coords - qc).transpose();
         spread += a * a.transpose();
     }
+    // Coordinates near f64::MAX overflow when squared; an SVD of non-finite numbers never
+    // converges.
+    if !h.iter().chain(spread.iter()).all(|v| v.is_finite()) {
+        return Err(RigidFitError::NotFinite);
+    }
     // Collinear source points leave a rotation about their line undetermined: the second
     // singular value of their spread vanishes relative to the first.
     let sv = spread.symmetric_eigenvalues();
@@ -106,7 +111,9 @@ fn kabsch(source: &[Point3<f64>], target: &[Point3<f64>]) -> Result<Pose, RigidF
     if sorted[0] <= 1e-18 || sorted[1] <= 1e-12 * scale {
         return Err(RigidFitError::Collinear);
     }
-    let svd = h.svd(true, true);
+    let svd = h
+        .try_svd(true, true, f64::EPSILON, 10_000)
+        .ok_or(RigidFitError::Svd)?;
     let (u, v_t) = match (svd.u, svd.v_t) {
         (Some(u), Some(v_t)) => (u, v_t),
         _ => return Err(RigidFitError::Svd),
@@ -144,6 +151,9 @@ fn gauss_newton(source: &[Point3<f64>], target: &[Point3<f64>], start: Pose) -> 
                 }
                 jac[(3 * j + a, 3 + a)] = -1.0;
             }
+        }
+        if !jac.iter().chain(res.iter()).all(|v| v.is_finite()) {
+            break;
         }
         let Ok(pinv) = jac.clone().pseudo_inverse(1e-12) else {
             break;
@@ -198,6 +208,12 @@ mod tests {
 
     #[test]
     fn refuses_collinear_and_too_few() {
+        let huge = vec![
+            Point3::new(1e300, 0.0, 0.0),
+            Point3::new(0.0, 1e300, 0.0),
+            Point3::origin(),
+        ];
+        assert_eq!(fit_rigid(&huge, &huge), Err(RigidFitError::NotFinite));
         let line: Vec<_> = (0..5)
             .map(|i| Point3::new(i as f64 * 100.0, 2.0 * i as f64, 0.0))
             .collect();

@@ -154,11 +154,12 @@ pub struct ProfileStats {
     pub position_max_mm: f64,
     /// Largest rotation angle of a knot, degrees.
     pub rotation_max_deg: f64,
-    /// Peak-to-peak of `dy` about its own straight line, mm (sideways straightness).
-    pub straightness_y_mm: f64,
-    /// Peak-to-peak of `dz` about its own straight line, mm (vertical straightness).
-    pub straightness_z_mm: f64,
-    /// Peak-to-peak of `rx` (twist about the track), degrees.
+    /// Peak-to-peak of the sideways deviation (horizontal, across the track) about its own
+    /// straight line, mm.
+    pub straightness_sideways_mm: f64,
+    /// Peak-to-peak of the vertical deviation (base z) about its own straight line, mm.
+    pub straightness_vertical_mm: f64,
+    /// Peak-to-peak of the rotation about the track axis (twist), degrees.
     pub twist_deg: f64,
 }
 
@@ -226,7 +227,7 @@ impl Profile {
             context: format!("profile `{name}`"),
             error,
         })?;
-        let stats = Some(compute_stats(&knots));
+        let stats = Some(compute_stats(&knots, &nominal));
         Ok(Profile {
             file: ProfileFile {
                 format: PROFILE_FORMAT.to_string(),
@@ -434,30 +435,49 @@ fn peak_to_peak(v: &[f64]) -> f64 {
     if v.is_empty() { 0.0 } else { max - min }
 }
 
-fn compute_stats(knots: &[Knot]) -> ProfileStats {
+impl Nominal {
+    /// The unit track axis in the nominal robot base frame (`R_Nᵀ·u`); base x if degenerate.
+    pub fn axis_in_base(&self) -> Vector3<f64> {
+        let [rx, ry, rz] = self.rotation;
+        (xyz_deg(rx, ry, rz).inverse() * Vector3::from(self.direction))
+            .try_normalize(1e-12)
+            .unwrap_or_else(Vector3::x)
+    }
+}
+
+/// Statistics in track coordinates: along the axis, sideways (`z × axis`), vertical (base z).
+fn compute_stats(knots: &[Knot], nominal: &Nominal) -> ProfileStats {
+    let axis = nominal.axis_in_base();
+    let sideways = Vector3::z()
+        .cross(&axis)
+        .try_normalize(1e-9)
+        .unwrap_or_else(Vector3::y);
     let n = knots.len().max(1) as f64;
-    let pos: Vec<f64> = knots
+    let pos: Vec<Vector3<f64>> = knots
         .iter()
-        .map(|k| (k.dx * k.dx + k.dy * k.dy + k.dz * k.dz).sqrt())
+        .map(|k| Vector3::new(k.dx, k.dy, k.dz))
         .collect();
     let skids: Vec<f64> = knots.iter().map(|k| k.skid).collect();
-    let dy: Vec<f64> = knots.iter().map(|k| k.dy).collect();
-    let dz: Vec<f64> = knots.iter().map(|k| k.dz).collect();
-    let rx: Vec<f64> = knots.iter().map(|k| k.rx).collect();
+    let side: Vec<f64> = pos.iter().map(|p| p.dot(&sideways)).collect();
+    let vert: Vec<f64> = pos.iter().map(|p| p.z).collect();
+    let twist: Vec<f64> = knots
+        .iter()
+        .map(|k| k.pose().rotation.scaled_axis().dot(&axis).to_degrees())
+        .collect();
     let round = |v: f64| (v * 1e6).round() / 1e6;
     ProfileStats {
         knots: knots.len(),
-        position_rms_mm: round((pos.iter().map(|p| p * p).sum::<f64>() / n).sqrt()),
-        position_max_mm: round(pos.iter().copied().fold(0.0, f64::max)),
+        position_rms_mm: round((pos.iter().map(|p| p.norm_squared()).sum::<f64>() / n).sqrt()),
+        position_max_mm: round(pos.iter().map(|p| p.norm()).fold(0.0, f64::max)),
         rotation_max_deg: round(
             knots
                 .iter()
                 .map(|k| k.pose().rotation.angle().to_degrees())
                 .fold(0.0, f64::max),
         ),
-        straightness_y_mm: round(peak_to_peak(&line_residuals(&skids, &dy))),
-        straightness_z_mm: round(peak_to_peak(&line_residuals(&skids, &dz))),
-        twist_deg: round(peak_to_peak(&rx)),
+        straightness_sideways_mm: round(peak_to_peak(&line_residuals(&skids, &side))),
+        straightness_vertical_mm: round(peak_to_peak(&line_residuals(&skids, &vert))),
+        twist_deg: round(peak_to_peak(&twist)),
     }
 }
 

@@ -18,7 +18,7 @@ use std::fmt::Write as _;
 
 use nalgebra::{Point3, Translation3, Vector3};
 
-use crate::geometry::{Pose, pose_xyz_deg, xyz_deg};
+use crate::geometry::{Pose, pose_to_xyz_deg, pose_xyz_deg};
 
 /// splitmix64 with Box-Muller normals: tiny, portable, deterministic.
 #[derive(Clone, Debug)]
@@ -53,18 +53,19 @@ impl SplitMix64 {
 }
 
 /// A smooth deformation of the rails over the track length `L`, as a deviation from the
-/// straight line, in the robot base frame at that skid position (x along the track).
+/// straight line. "Along" is the track axis, "sideways" is horizontal across it (`z × axis` in
+/// the robot base), "vertical" is the base z.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Deformation {
-    /// Vertical sag at mid-track, mm: `dz = -sag·sin(πs/L)`.
+    /// Vertical sag at mid-track, mm: `vertical = -sag·sin(πs/L)`.
     pub sag_mm: f64,
-    /// Sideways bow at mid-track, mm: `dy = bow·sin(πs/L)`.
+    /// Sideways bow at mid-track, mm: `sideways = bow·sin(πs/L)`.
     pub bow_mm: f64,
-    /// Amplitude of a rail waviness in y and z, mm.
+    /// Amplitude of a rail waviness, sideways and vertical, mm.
     pub wave_mm: f64,
     /// Wavelength of that waviness, mm.
     pub wave_length_mm: f64,
-    /// Twist about the track axis, degrees: `rx = twist·sin(2πs/L)`.
+    /// Twist about the track axis, degrees: `twist·sin(2πs/L)`.
     pub twist_deg: f64,
     /// Relative gear error: the skid travels `(1 + gear_error)·s` for a commanded `s`.
     pub gear_error: f64,
@@ -87,21 +88,26 @@ impl Deformation {
 /// The true track: where the robot base really is at every skid position.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TrackTruth {
-    /// The straight track's base frame at skid 0, in the measurement (tracker) frame; the track
-    /// runs along this frame's +x.
+    /// The straight track's base frame at skid 0, in the measurement frame (tracker or world).
     pub start: Pose,
+    /// Unit direction the base moves per commanded mm, in the robot base frame (robots on a
+    /// track usually face across it, e.g. `[0, -1, 0]`). Must be horizontal (no z component)
+    /// for "sideways" and "vertical" to mean what they say.
+    pub axis_in_base: Vector3<f64>,
     /// Track length `L`, mm.
     pub length_mm: f64,
     pub deformation: Deformation,
 }
 
 impl TrackTruth {
-    /// Robot `r1` of the samples: an 8 m track, 2.5 mm sag, 1.5 mm sideways bow, 0.08 mm
-    /// waviness of 2 m wavelength, 0.03° twist, gear error -1.5e-4 (1.2 mm short over 8 m),
-    /// tracker standing off the track and turned 30° about z.
+    /// Robot `r1` of the samples, measured in the world frame of `samples/cell.toml`: base at
+    /// skid 0 at (0, -3500, 0) turned 90° about z, so the track (world +x) runs along base -y.
+    /// An 8 m track with 2.5 mm sag, 1.5 mm sideways bow, 0.08 mm waviness of 2 m wavelength,
+    /// 0.03° twist, gear error -1.5e-4 (1.2 mm short over 8 m).
     pub fn sample_r1() -> TrackTruth {
         TrackTruth {
-            start: pose_xyz_deg(2500.0, -1800.0, -650.0, 0.02, -0.01, 30.0),
+            start: pose_xyz_deg(0.0, -3500.0, 0.0, 0.0, 0.0, 90.0),
+            axis_in_base: Vector3::new(0.0, -1.0, 0.0),
             length_mm: 8000.0,
             deformation: Deformation {
                 sag_mm: 2.5,
@@ -114,12 +120,13 @@ impl TrackTruth {
         }
     }
 
-    /// Robot `r2` of the samples, the opposite robot: 1.2 mm sag, bow -0.9 mm the other way,
-    /// 0.05 mm waviness of 2.5 m wavelength, 0.018° twist, gear error +0.8e-4, another tracker
-    /// station.
+    /// Robot `r2` of the samples, the opposite robot: base at skid 0 at (0, -201.5, 0) turned
+    /// -90° about z (track along base +y). 1.2 mm sag, bow -0.9 mm, 0.05 mm waviness of 2.5 m
+    /// wavelength, 0.018° twist, gear error +0.8e-4.
     pub fn sample_r2() -> TrackTruth {
         TrackTruth {
-            start: pose_xyz_deg(-1200.0, 3100.0, -720.0, -0.01, 0.015, -150.0),
+            start: pose_xyz_deg(0.0, -201.5, 0.0, 0.0, 0.0, -90.0),
+            axis_in_base: Vector3::new(0.0, 1.0, 0.0),
             length_mm: 8000.0,
             deformation: Deformation {
                 sag_mm: 1.2,
@@ -132,43 +139,65 @@ impl TrackTruth {
         }
     }
 
-    /// A perfectly straight track (no deformation, no gear error).
+    /// A perfectly straight track along base +x (no deformation, no gear error).
     pub fn straight(start: Pose, length_mm: f64) -> TrackTruth {
         TrackTruth {
             start,
+            axis_in_base: Vector3::x(),
             length_mm,
             deformation: Deformation::none(),
         }
     }
 
-    /// The straight, undeformed base frame at commanded skid `s`.
-    pub fn straight_frame(&self, skid: f64) -> Pose {
-        self.start * Pose::translation(skid, 0.0, 0.0)
+    /// The unit track axis in the base frame (`x` if `axis_in_base` is degenerate).
+    fn axis(&self) -> Vector3<f64> {
+        self.axis_in_base
+            .try_normalize(1e-12)
+            .unwrap_or_else(Vector3::x)
     }
 
-    /// `[dx, dy, dz, rx, ry, rz]` (mm, degrees) of the true deviation from the straight frame.
-    /// The rotations about y and z follow the rails' slope, as a carriage on them does.
-    pub fn deviation_components(&self, skid: f64) -> [f64; 6] {
+    /// The straight, undeformed base frame at commanded skid `s`.
+    pub fn straight_frame(&self, skid: f64) -> Pose {
+        let t = self.axis() * skid;
+        self.start * Pose::translation(t.x, t.y, t.z)
+    }
+
+    /// `[along, sideways, vertical, twist, pitch, yaw]` (mm, degrees) of the deformation at `s`,
+    /// in track coordinates. Pitch and yaw follow the rails' slope, as a carriage on them does.
+    pub fn track_deformation(&self, skid: f64) -> [f64; 6] {
         let d = &self.deformation;
         let l = self.length_mm.max(1.0);
         let k = PI / l;
         let wl = d.wave_length_mm.max(1.0);
         let w = 2.0 * PI / wl;
-        let dy = d.bow_mm * (k * skid).sin() + d.wave_mm * (w * skid + 0.7).sin();
-        let dz = -d.sag_mm * (k * skid).sin() + d.wave_mm * (w * skid + 2.1).sin();
-        let dy_ds = d.bow_mm * k * (k * skid).cos() + d.wave_mm * w * (w * skid + 0.7).cos();
-        let dz_ds = -d.sag_mm * k * (k * skid).cos() + d.wave_mm * w * (w * skid + 2.1).cos();
-        let rx = d.twist_deg * (2.0 * k * skid).sin();
-        // A positive rotation about y tips +x down (-z); about z turns +x towards +y.
-        let ry = -dz_ds.atan().to_degrees();
-        let rz = dy_ds.atan().to_degrees();
-        [d.gear_error * skid, dy, dz, rx, ry, rz]
+        let side = d.bow_mm * (k * skid).sin() + d.wave_mm * (w * skid + 0.7).sin();
+        let vert = -d.sag_mm * (k * skid).sin() + d.wave_mm * (w * skid + 2.1).sin();
+        let side_ds = d.bow_mm * k * (k * skid).cos() + d.wave_mm * w * (w * skid + 0.7).cos();
+        let vert_ds = -d.sag_mm * k * (k * skid).cos() + d.wave_mm * w * (w * skid + 2.1).cos();
+        let twist = d.twist_deg * (2.0 * k * skid).sin();
+        // A positive rotation about the sideways axis tips the track axis down; about z it
+        // turns the axis towards the sideways direction.
+        let pitch = -vert_ds.atan().to_degrees();
+        let yaw = side_ds.atan().to_degrees();
+        [d.gear_error * skid, side, vert, twist, pitch, yaw]
     }
 
-    /// The true deviation from the straight frame as a pose.
+    /// The true deviation from the straight frame, in the base frame at that skid.
     pub fn deviation(&self, skid: f64) -> Pose {
-        let [dx, dy, dz, rx, ry, rz] = self.deviation_components(skid);
-        Pose::from_parts(Translation3::new(dx, dy, dz), xyz_deg(rx, ry, rz))
+        let [along, side, vert, twist, pitch, yaw] = self.track_deformation(skid);
+        let a = self.axis();
+        let sideways = Vector3::z().cross(&a);
+        let t = a * along + sideways * side + Vector3::z() * vert;
+        let omega = (a * twist + sideways * pitch + Vector3::z() * yaw) * (PI / 180.0);
+        Pose::from_parts(
+            Translation3::from(t),
+            nalgebra::UnitQuaternion::from_scaled_axis(omega),
+        )
+    }
+
+    /// `[dx, dy, dz, rx, ry, rz]` (mm, degrees) of [`TrackTruth::deviation`].
+    pub fn deviation_components(&self, skid: f64) -> [f64; 6] {
+        pose_to_xyz_deg(&self.deviation(skid))
     }
 
     /// The true robot base at commanded skid `s`, in the measurement frame.
@@ -310,9 +339,16 @@ mod tests {
         let t = TrackTruth::sample_r1();
         // At s = 0 only the waviness and the slope rotations remain: a few hundredths of a mm.
         let d = t.deviation_components(0.0);
-        assert!(d[0].abs() < 1e-12 && d[1].abs() < 0.1 && d[2].abs() < 0.1);
-        // Mid-track sag: -2.5 mm plus waviness.
+        assert!(
+            d[0].abs() < 0.1 && d[1].abs() < 1e-12 && d[2].abs() < 0.1,
+            "{d:?}"
+        );
+        // Mid-track: -2.5 mm sag, and the 1.5 mm bow sideways (z × (-y) = +x in the base).
         let mid = t.deviation_components(4000.0);
         assert!((mid[2] + 2.5).abs() < 0.1, "{mid:?}");
+        assert!((mid[0] - 1.5).abs() < 0.1, "{mid:?}");
+        // The gear error moves along the track axis, base -y: -1.2 mm at 8 m.
+        let end = t.deviation_components(8000.0);
+        assert!((end[1] - 1.2).abs() < 0.01, "{end:?}");
     }
 }

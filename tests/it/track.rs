@@ -473,3 +473,67 @@ proptest! {
         prop_assert_eq!(back.deviation_components(mid).unwrap(), p.deviation_components(mid).unwrap());
     }
 }
+
+/// `--gear recalibrated` takes the gear drift out of the profile; `as-is` keeps it along the
+/// track axis (DESIGN.md §3.1).
+#[test]
+fn gear_recalibrated_removes_the_drift() {
+    let truth = TrackTruth::sample_r1();
+    let rows = simulate_measurements(&truth, &skids(), &sample_tcp_points(), 0.0, 1);
+    let frames = identify(&rows).unwrap().frames();
+    let along = |gear| {
+        let opts = FitOptions {
+            gear,
+            ..FitOptions::default()
+        };
+        let fit = fit_track(&frames, &opts).unwrap();
+        let axis = fit.profile.nominal().axis_in_base();
+        let d = fit.profile.deviation(8000.0).unwrap().translation.vector
+            - fit.profile.deviation(0.0).unwrap().translation.vector;
+        (d.dot(&axis), fit.gear_factor)
+    };
+    let (as_is, g) = along(trackfix::track::Gear::AsIs);
+    let (recal, _) = along(trackfix::track::Gear::Recalibrated);
+    // Truth: gear error -1.5e-4, i.e. -1.2 mm over 8 m.
+    assert!((g - (1.0 - 1.5e-4)).abs() < 2e-6, "{g}");
+    assert!((as_is + 1.2).abs() < 0.02, "{as_is}");
+    assert!(recal.abs() < 0.02, "{recal}");
+}
+
+/// A scan timed in seconds with `--speed` gives the same answer as the scan over skid.
+#[test]
+fn spectrum_of_a_timed_scan() {
+    let text = std::fs::read_to_string(root().join("samples/track/scan.csv")).unwrap();
+    let mut timed = String::from("t,x,y,z\n");
+    for line in text.lines().skip(1) {
+        let (s, rest) = line.split_once(',').unwrap();
+        let t: f64 = s.parse::<f64>().unwrap() / 250.0;
+        timed.push_str(&format!("{t},{rest}\n"));
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let p = tmp.path().join("timed.csv");
+    std::fs::write(&p, timed).unwrap();
+    let last = |args: &[&str]| {
+        let (code, out, err) = trackfix(args);
+        assert_eq!(code, 0, "{err}");
+        out.lines().last().unwrap_or_default().to_string()
+    };
+    let a = last(&[
+        "track",
+        "spectrum",
+        "samples/track/scan.csv",
+        "--threshold",
+        "0.05",
+    ]);
+    let b = last(&[
+        "track",
+        "spectrum",
+        p.to_str().unwrap(),
+        "--threshold",
+        "0.05",
+        "--speed",
+        "250",
+    ]);
+    assert_eq!(a, b);
+    assert!(a.contains("1001.2 mm"), "{a}");
+}
