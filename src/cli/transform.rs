@@ -15,8 +15,8 @@ use trackfix::track::Profile;
 use trackfix::transform::cell::skid_axis_index;
 use trackfix::transform::output::{Destination, output_path, plan_writes, unified_diff, write_all};
 use trackfix::transform::{
-    Axis, Cell, ConfigRule, Direction, MirrorSettings, Plane, ProgramResult, Robot, TrackSetup,
-    TransferPlan, apply, mirror, track_correction, transfer,
+    Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, Robot,
+    TrackSetup, TransferPlan, WorldPlane, apply, mirror, track_correction, transfer,
 };
 
 use super::Exit;
@@ -66,7 +66,7 @@ The exact inverse of `correct`: T' = W⁻¹ · B(s) · D(s) · B(s)⁻¹ · W ·
 const MIRROR_EXAMPLES: &str = "\
 Examples:
   trackfix mirror spot_line.mod --plane xz -o spot_line_m.mod
-  trackfix mirror spot_line.mod --cell samples/cell.toml --skid-map 1,250 --diff
+  trackfix mirror spot_line.mod --cell samples/cell.toml --robot r1 --skid-map 1,250 --diff
   trackfix mirror samples/krl/spot_line.src --plane xz --config keep --out-dir out/
 
 T' = M · Sa · M⁻¹ · T · Sb in work-object coordinates; ABB cf1/cf4/cf6 → -cf-1 and KUKA Turn
@@ -142,6 +142,12 @@ pub struct MirrorArgs {
     /// The external axis holding the skid (eax_a … eax_f, E1 … E6) [default: eax_a / E1].
     #[arg(long, value_name = "AXIS")]
     pub skid: Option<String>,
+    /// The robot whose work objects place a world mirror plane (`frame_in = "world"`).
+    #[arg(long, requires = "cell")]
+    pub robot: Option<String>,
+    /// Work object (or KRL base) of declared targets no motion uses (world mirror plane only).
+    #[arg(long, value_name = "NAME")]
+    pub default_wobj: Option<String>,
     #[command(flatten)]
     pub mirror: MirrorOptions,
     #[command(flatten)]
@@ -350,11 +356,29 @@ pub fn run_zero(a: ZeroArgs) -> anyhow::Result<Exit> {
     run_track(a.inner, Direction::Zero)
 }
 
-fn mirror_settings(cell: Option<&Cell>, o: &MirrorOptions, skid_axis: usize) -> MirrorSettings {
+/// The mirror from the cell's `[mirror]` table, overridden by the command line. A plane given
+/// in world (`frame_in = "world"`) resolves work objects with `robot`'s cell entries, then the
+/// program's declarations.
+fn mirror_settings(
+    cell: Option<&Cell>,
+    o: &MirrorOptions,
+    skid_axis: usize,
+    robot: Option<&Robot>,
+    default_wobj: Option<&str>,
+) -> MirrorSettings {
     let table = cell.map(|c| c.mirror.clone()).unwrap_or_default();
     let d = MirrorSettings::default();
-    MirrorSettings {
+    let world = (table.frame_in == FrameIn::World).then(|| WorldPlane {
         frame: table.frame.unwrap_or(d.frame),
+        frames: robot.map(|r| r.frames.clone()).unwrap_or_default(),
+        default_wobj: default_wobj.map(str::to_owned),
+    });
+    MirrorSettings {
+        frame: match world {
+            Some(_) => d.frame,
+            None => table.frame.unwrap_or(d.frame),
+        },
+        world,
         plane: o.plane.or(table.plane).unwrap_or(d.plane),
         tool_flip: o.tool_flip.or(table.tool_flip).unwrap_or(d.tool_flip),
         config: o.config.or(table.config).unwrap_or(d.config),
@@ -372,7 +396,18 @@ pub fn run_mirror(a: MirrorArgs) -> anyhow::Result<Exit> {
             .with_context(|| format!("--skid {s}: use eax_a … eax_f or E1 … E6"))?,
         None => 0,
     };
-    let settings = mirror_settings(cell.as_ref(), &a.mirror, skid_axis);
+    let robot = match (&cell, &a.robot) {
+        (Some(c), Some(name)) => Some(c.robot(name)?),
+        (None, Some(_)) => bail!("--robot needs --cell"),
+        _ => None,
+    };
+    let settings = mirror_settings(
+        cell.as_ref(),
+        &a.mirror,
+        skid_axis,
+        robot,
+        a.default_wobj.as_deref(),
+    );
     let programs = load_programs(&a.files, &LoadOptions::default())?;
     let mut results = Vec::new();
     for p in &programs {
@@ -389,9 +424,15 @@ pub fn run_transfer(a: TransferArgs) -> anyhow::Result<Exit> {
     let to_profile = load_profile(to)?;
     let mut plan = TransferPlan {
         from: TrackSetup::new(from, &from_profile),
-        mirror: a
-            .mirror
-            .then(|| mirror_settings(Some(&cell), &a.mirror_options, from.skid_axis)),
+        mirror: a.mirror.then(|| {
+            mirror_settings(
+                Some(&cell),
+                &a.mirror_options,
+                from.skid_axis,
+                Some(from),
+                a.default_wobj.as_deref(),
+            )
+        }),
         to: TrackSetup::new(to, &to_profile),
     };
     plan.from.default_wobj = a.default_wobj.clone();

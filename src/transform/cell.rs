@@ -12,6 +12,8 @@
 //!
 //! [mirror]
 //! plane = "xz"
+//! frame = { x = 0, y = -1850.75, z = 0, rx = 0, ry = 0, rz = 0 }   # optional
+//! frame_in = "world"                      # or "wobj" (the default)
 //! tool_flip = "y"
 //! config = "mirror"
 //! skid_map = [1.0, 0.0]
@@ -104,6 +106,18 @@ impl Axis {
     }
 }
 
+/// Where the `[mirror]` frame is given.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum FrameIn {
+    /// In each target's work object (DESIGN.md §4; the default).
+    #[default]
+    Wobj,
+    /// In world: the physical plane of the cell, taken into each target's resolved work object
+    /// (`M = W⁻¹·frame`), so targets in different work objects mirror about the same plane.
+    World,
+}
+
 /// What a mirror does to the robot configuration.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
@@ -138,6 +152,7 @@ struct RobotToml {
 struct MirrorToml {
     plane: Option<Plane>,
     frame: Option<FrameXyz>,
+    frame_in: Option<FrameIn>,
     tool_flip: Option<Axis>,
     config: Option<ConfigRule>,
     skid_map: Option<[f64; 2]>,
@@ -166,6 +181,7 @@ pub struct Robot {
 pub struct MirrorTable {
     pub plane: Option<Plane>,
     pub frame: Option<Pose>,
+    pub frame_in: FrameIn,
     pub tool_flip: Option<Axis>,
     pub config: Option<ConfigRule>,
     pub skid_map: Option<(f64, f64)>,
@@ -281,6 +297,7 @@ impl Cell {
             .map(|m| MirrorTable {
                 plane: m.plane,
                 frame: m.frame.map(|f| f.pose()),
+                frame_in: m.frame_in.unwrap_or_default(),
                 tool_flip: m.tool_flip,
                 config: m.config,
                 skid_map: m.skid_map.map(|[a, b]| (a, b)),

@@ -7,6 +7,8 @@
 //! y this is RobotStudio's `[q1, q2, q3, q4] → [q1, -q2, q3, -q4]` and KUKA's
 //! `(A, B, C) → (-A, B, -C)`.
 
+use std::collections::BTreeMap;
+
 use nalgebra::{Quaternion, Translation3, UnitQuaternion, Vector3};
 
 use crate::geometry::Pose;
@@ -21,7 +23,7 @@ use super::refusal::{Refusal, RefusalKind, SKIP_HINT};
 use super::rewrite::{
     MM_DECIMALS, OrientationHint, bits_edit, integer_edit, number_edit, pose_change, pose_edits,
 };
-use super::track_correction::{common_refusal, describe};
+use super::track_correction::{Resolved, common_refusal, describe, resolve_frame, wobj_of};
 
 /// KUKA Turn bits of A1, A4 and A6: a mirror-image robot runs those axes with the opposite sign.
 const TURN_A1_A4_A6: u32 = 0b10_1001;
@@ -42,6 +44,20 @@ pub struct MirrorSettings {
     pub mirror_frames: bool,
     /// Mirror joint targets (axes 1, 4, 6 negated) instead of refusing them.
     pub mirror_joints: bool,
+    /// The plane given in world instead (`frame_in = "world"`): each target mirrors about it
+    /// in its own work object, `M = W⁻¹·plane`.
+    pub world: Option<WorldPlane>,
+}
+
+/// A mirror plane given in world, and what resolves each target's work object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldPlane {
+    /// The plane's frame in world (its `plane` is reflected).
+    pub frame: Pose,
+    /// Work objects / bases overriding the program's (lower-case name → pose in world).
+    pub frames: BTreeMap<String, Pose>,
+    /// The work object of declared targets no motion uses.
+    pub default_wobj: Option<String>,
 }
 
 impl Default for MirrorSettings {
@@ -55,6 +71,7 @@ impl Default for MirrorSettings {
             skid_axis: 0,
             mirror_frames: false,
             mirror_joints: false,
+            world: None,
         }
     }
 }
@@ -76,10 +93,16 @@ pub struct Reflection {
 }
 
 impl Reflection {
+    /// The mirror of `settings` in work-object coordinates (`settings.frame` as `M`).
     pub fn new(settings: &MirrorSettings) -> Reflection {
+        Reflection::about(&settings.frame, settings)
+    }
+
+    /// The mirror about the plane of `frame` (given in the coordinates being mirrored).
+    pub fn about(frame: &Pose, settings: &MirrorSettings) -> Reflection {
         Reflection {
-            point: settings.frame.translation.vector,
-            normal: settings.frame.rotation * unit(settings.plane.normal_axis()),
+            point: frame.translation.vector,
+            normal: frame.rotation * unit(settings.plane.normal_axis()),
             tool_axis: unit(settings.tool_flip.index()),
         }
     }
@@ -220,14 +243,28 @@ pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
                 continue;
             }
             match common_refusal(file, p) {
-                // A mirror works in the target's own work-object coordinates, so a target used
-                // with two work objects mirrors the same way in both.
-                Some(r) if r.kind != RefusalKind::TwoWorkObjects => {
+                // A plane given in the work object mirrors a target used with two work objects
+                // the same way in both; a plane in world does not.
+                Some(r) if r.kind != RefusalKind::TwoWorkObjects || settings.world.is_some() => {
                     fe.refusals.push(r);
                     continue;
                 }
                 _ => {}
             }
+            let refl = match reflection_for(program, p, settings, &refl) {
+                Ok(r) => r,
+                Err((kind, msg, hint)) => {
+                    fe.refusals.push(Refusal::new(
+                        file,
+                        p.span,
+                        p.label(),
+                        kind,
+                        format!("{}: {msg}", describe(p)),
+                        format!("{hint}, {SKIP_HINT}"),
+                    ));
+                    continue;
+                }
+            };
             let Some(fields) = p.cartesian.as_ref() else {
                 continue;
             };
@@ -248,21 +285,88 @@ pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
                 fe.changes.push(TargetChange { mm, deg, skid });
             }
         }
-        mirror_offsets(file, &refl, &mut fe.edits, &mut fe.refusals);
+        mirror_offsets(
+            program,
+            file,
+            settings,
+            &refl,
+            &mut fe.edits,
+            &mut fe.refusals,
+        );
         if settings.mirror_frames {
-            mirror_frames(file, &refl, &mut fe.edits);
+            mirror_frames(file, settings, &refl, &mut fe.edits);
         }
     }
     out
 }
 
+type Why = (RefusalKind, String, String);
+
+/// The reflection for one target: the settings' own, or the world plane taken into the
+/// target's work object.
+pub(crate) fn reflection_for(
+    program: &Program,
+    p: &Position,
+    settings: &MirrorSettings,
+    own: &Reflection,
+) -> Result<Reflection, Why> {
+    let Some(world) = &settings.world else {
+        return Ok(*own);
+    };
+    let name = wobj_of(p, world.default_wobj.as_deref())?;
+    match resolve_frame(program, &world.frames, &name) {
+        Resolved::Frame(w) => Ok(Reflection::about(&(w.inverse() * world.frame), settings)),
+        Resolved::Refused(kind, msg, hint) => Err((kind, msg, hint)),
+    }
+}
+
 fn mirror_offsets(
+    program: &Program,
     file: &ParsedFile,
-    refl: &Reflection,
+    settings: &MirrorSettings,
+    own: &Reflection,
     edits: &mut Vec<Edit>,
     refusals: &mut Vec<Refusal>,
 ) {
     for call in &file.offsets {
+        // Offs offsets are in the work object of the target they offset: with a plane in world
+        // that target's work object decides the plane.
+        let refl = match (&settings.world, call.kind) {
+            (Some(_), OffsetKind::Offs) => {
+                let target = program.files.iter().flat_map(|f| &f.positions).find(|p| {
+                    p.name
+                        .as_deref()
+                        .is_some_and(|n| n.eq_ignore_ascii_case(&call.target))
+                });
+                let resolved = match target {
+                    Some(p) => reflection_for(program, p, settings, own),
+                    None => Err((
+                        RefusalKind::UnresolvedWorkObject,
+                        format!(
+                            "`{}` is not a declared target: its work object is unknown",
+                            call.target
+                        ),
+                        "offset a declared target, or mirror with the plane in the work object"
+                            .to_owned(),
+                    )),
+                };
+                match resolved {
+                    Ok(r) => r,
+                    Err((kind, msg, hint)) => {
+                        refusals.push(Refusal::new(
+                            file,
+                            call.span,
+                            call.target.clone(),
+                            kind,
+                            format!("Offs({}, …): {msg}", call.target),
+                            format!("{hint}, {SKIP_HINT}"),
+                        ));
+                        continue;
+                    }
+                }
+            }
+            _ => *own,
+        };
         let known: Option<Vec<f64>> = call
             .delta
             .iter()
@@ -315,11 +419,27 @@ fn frame_field_edits(fields: &CartesianFields, new: &Pose, expected: [f64; 4]) -
     pose_edits(fields, new, OrientationHint::Expected(expected))
 }
 
-fn mirror_frames(file: &ParsedFile, refl: &Reflection, edits: &mut Vec<Edit>) {
+fn mirror_frames(
+    file: &ParsedFile,
+    settings: &MirrorSettings,
+    own: &Reflection,
+    edits: &mut Vec<Edit>,
+) {
     for d in &file.frames {
         match d.kind {
             FrameKind::WorkObject | FrameKind::Base => {
-                for fields in [&d.frame, &d.oframe].into_iter().flatten() {
+                // A plane in world reflects the user frame (in world) about itself and the
+                // object frame (in the user frame) about the plane seen from the user frame.
+                let uframe = d.frame.as_ref().and_then(|f| f.pose());
+                let (for_uframe, for_oframe) = match (&settings.world, uframe) {
+                    (Some(w), Some(u)) => (
+                        Reflection::about(&w.frame, settings),
+                        Reflection::about(&(u.inverse() * w.frame), settings),
+                    ),
+                    _ => (*own, *own),
+                };
+                for (fields, refl) in [(&d.frame, for_uframe), (&d.oframe, for_oframe)] {
+                    let Some(fields) = fields else { continue };
                     if let Some(f) = fields.pose() {
                         let (new, q) = refl.frame(&f);
                         edits.extend(frame_field_edits(fields, &new, q));
@@ -329,7 +449,7 @@ fn mirror_frames(file: &ParsedFile, refl: &Reflection, edits: &mut Vec<Edit>) {
             FrameKind::Tool => {
                 if let Some(fields) = &d.frame {
                     if let Some(f) = fields.pose() {
-                        let (new, q) = refl.tool(&f);
+                        let (new, q) = own.tool(&f);
                         edits.extend(frame_field_edits(fields, &new, q));
                     }
                 }
@@ -513,6 +633,57 @@ mod tests {
         assert!(text.contains("[-1,0,-3,1],[2500,"), "{text}");
     }
 
+    /// `frame_in = "world"`: a target in a work object and a target in world mirror about the
+    /// same physical plane.
+    #[test]
+    fn world_plane_mirrors_every_work_object_about_one_plane() {
+        let text = "MODULE m\n  PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1500,-1850.75,600],[0.996195,0,0,0.087156]],[[0,0,0],[1,0,0,0]]];\n  CONST robtarget pCar:=[[100,300,50],[1,0,0,0],[0,0,0,0],[2500,9E9,9E9,9E9,9E9,9E9]];\n  CONST robtarget pWorld:=[[1600,-1550.75,650],[1,0,0,0],[0,0,0,0],[2500,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL pCar, v1000, fine, tool0\\WObj:=wCar;\n    MoveL pWorld, v1000, fine, tool0;\n    MoveL Offs(pCar,0,10,0), v1000, fine, tool0\\WObj:=wCar;\n  ENDPROC\nENDMODULE\n";
+        let p0 = parse(text);
+        let plane = pose_xyz_deg(0.0, -1850.75, 0.0, 0.0, 0.0, 0.0);
+        let s = MirrorSettings {
+            world: Some(WorldPlane {
+                frame: plane,
+                frames: BTreeMap::new(),
+                default_wobj: None,
+            }),
+            ..MirrorSettings::default()
+        };
+        let edits = mirror(&p0, &s);
+        assert!(edits.refusals().next().is_none());
+        let out = String::from_utf8(apply(&p0, edits).unwrap().files[0].output.clone()).unwrap();
+        let p1 = parse(&out);
+        let w = p1.files[0].frames[0].pose().unwrap();
+        let pos = |f: &ParsedFile, n: &str| {
+            f.positions
+                .iter()
+                .find(|p| p.name.as_deref() == Some(n))
+                .unwrap()
+                .cartesian
+                .as_ref()
+                .unwrap()
+                .pose()
+                .unwrap()
+        };
+        let world = Reflection::about(&plane, &s);
+        let (want_car, _) = world.target(&(w * pos(&p0.files[0], "pCar")));
+        let got_car = w * pos(&p1.files[0], "pCar");
+        assert!(
+            (want_car.translation.vector - got_car.translation.vector).norm() < 2e-3,
+            "{out}"
+        );
+        assert!(
+            want_car.rotation.angle_to(&got_car.rotation) < 1e-5,
+            "{out}"
+        );
+        let got_world = pos(&p1.files[0], "pWorld").translation.vector;
+        assert!(
+            (got_world - Vector3::new(1600.0, -2150.75, 650.0)).norm() < 1e-9,
+            "{out}"
+        );
+        // The Offs offset is a vector in wCar, turned 10° against the plane.
+        assert!(out.contains("Offs(pCar,-3.420,-9.397,0)"), "{out}");
+    }
+
     fn settings() -> impl Strategy<Value = MirrorSettings> {
         let frame = (
             -500.0..500.0f64,
@@ -569,6 +740,20 @@ mod tests {
             prop_assert!(same_up_to_sign(back, q, 1e-9), "{back:?} vs {q:?}");
             // A mirror is a reflection: proper rotation out, improper nowhere.
             prop_assert!((once.rotation.norm() - 1.0).abs() < 1e-12);
+        }
+
+        /// A plane in world, taken into a work object (`M = W⁻¹·P`), mirrors the target's world
+        /// pose about that plane: `W·T' = P·Sa·P⁻¹·W·T·Sb`.
+        #[test]
+        fn world_plane_equals_mirror_in_world(s in settings(), q in unit_quat(),
+                                              w in (-2000.0..2000.0f64, -2000.0..2000.0f64, -500.0..500.0f64, -180.0..180.0f64, -20.0..20.0f64)) {
+            let t = Pose::from_parts(nalgebra::Translation3::new(120.0, -340.0, 56.0), abb_quat(q).unwrap());
+            let w = pose_xyz_deg(w.0, w.1, w.2, w.4, 0.0, w.3);
+            let (local, _) = Reflection::about(&(w.inverse() * s.frame), &s).target(&t);
+            let (world, _) = Reflection::about(&s.frame, &s).target(&(w * t));
+            let got = w * local;
+            prop_assert!((got.translation.vector - world.translation.vector).norm() < 1e-6);
+            prop_assert!(got.rotation.angle_to(&world.rotation) < 1e-9);
         }
 
         /// Through files: twice gives back the same numbers, to the written precision.

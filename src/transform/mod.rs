@@ -17,9 +17,9 @@ pub mod rewrite;
 pub mod track_correction;
 pub mod transfer;
 
-pub use cell::{Axis, Cell, CellError, ConfigRule, MirrorTable, Plane, Robot};
+pub use cell::{Axis, Cell, CellError, ConfigRule, FrameIn, MirrorTable, Plane, Robot};
 pub use edits::{FileEdits, FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
-pub use mirror::{MirrorSettings, mirror};
+pub use mirror::{MirrorSettings, WorldPlane, mirror};
 pub use refusal::{Refusal, RefusalKind};
 pub use track_correction::{Deviation, Direction, TrackSetup, track_correction};
 pub use transfer::{TransferError, TransferPlan, reparse, transfer};

@@ -110,16 +110,21 @@ fn is_world(name: &str) -> bool {
     )
 }
 
-enum Resolved {
+/// A work object resolved to a pose in world, or why not (kind, message, hint).
+pub(crate) enum Resolved {
     Frame(Pose),
     Refused(RefusalKind, String, String),
 }
 
 /// The work object / base `name` in world: the cell's override, else the program's
 /// declaration, else world for `wobj0`.
-fn resolve_frame(program: &Program, setup: &TrackSetup, name: &str) -> Resolved {
+pub(crate) fn resolve_frame(
+    program: &Program,
+    overrides: &BTreeMap<String, Pose>,
+    name: &str,
+) -> Resolved {
     let lower = name.to_ascii_lowercase();
-    if let Some(p) = setup.frames.get(&lower) {
+    if let Some(p) = overrides.get(&lower) {
         return Resolved::Frame(*p);
     }
     let decl = program.files.iter().flat_map(|f| &f.frames).find(|d| {
@@ -155,6 +160,31 @@ fn resolve_frame(program: &Program, setup: &TrackSetup, name: &str) -> Resolved 
             format!("work object `{name}` is not declared in the program"),
             format!("add `{name}` under [robot.NAME.wobj] in the cell file"),
         ),
+    }
+}
+
+/// The work object (or KRL base) a target is used with: its first use, else `default` for a
+/// declared target no motion uses.
+pub(crate) fn wobj_of(
+    p: &Position,
+    default: Option<&str>,
+) -> Result<String, (RefusalKind, String, String)> {
+    let what = describe(p);
+    match (&p.usage.wobj, p.usage.lines.is_empty()) {
+        (Some(w), _) => Ok(w.clone()),
+        (None, true) => match default {
+            Some(d) => Ok(d.to_owned()),
+            None => Err((
+                RefusalKind::UnresolvedWorkObject,
+                format!("{what} is not used by any motion: its work object is unknown"),
+                "pass --default-wobj NAME to transform unused targets in NAME".to_owned(),
+            )),
+        },
+        (None, false) => Err((
+            RefusalKind::UnresolvedWorkObject,
+            format!("{what} is used with a work object that cannot be resolved"),
+            "name the work object explicitly in the motion instruction".to_owned(),
+        )),
     }
 }
 
@@ -292,27 +322,11 @@ fn correct_one(
             ));
         }
     };
-    let wobj_name = match (&p.usage.wobj, p.usage.lines.is_empty()) {
-        (Some(w), _) => w.clone(),
-        (None, true) => match &setup.default_wobj {
-            Some(d) => d.clone(),
-            None => {
-                return Err(refuse(
-                    RefusalKind::UnresolvedWorkObject,
-                    format!("{what} is not used by any motion: its work object is unknown"),
-                    "pass --default-wobj NAME to transform unused targets in NAME".to_owned(),
-                ));
-            }
-        },
-        (None, false) => {
-            return Err(refuse(
-                RefusalKind::UnresolvedWorkObject,
-                format!("{what} is used with a work object that cannot be resolved"),
-                "name the work object explicitly in the motion instruction".to_owned(),
-            ));
-        }
+    let wobj_name = match wobj_of(p, setup.default_wobj.as_deref()) {
+        Ok(name) => name,
+        Err((k, msg, hint)) => return Err(refuse(k, msg, hint)),
     };
-    let w = match resolve_frame(program, setup, &wobj_name) {
+    let w = match resolve_frame(program, &setup.frames, &wobj_name) {
         Resolved::Frame(w) => w,
         Resolved::Refused(k, msg, hint) => {
             return Err(refuse(k, format!("{what}: {msg}"), hint));

@@ -13,7 +13,7 @@ use crate::program::{LoadError, LoadOptions};
 use crate::syntax::EditError;
 
 use super::edits::{FileResult, ProgramResult, TargetChange, apply};
-use super::mirror::{MirrorSettings, Reflection, mirror};
+use super::mirror::{MirrorSettings, Reflection, mirror, reflection_for};
 use super::rewrite::pose_change;
 use super::track_correction::{Direction, TrackSetup, track_correction};
 
@@ -142,7 +142,7 @@ fn combine(
     skid_axis: usize,
     mirror: Option<&MirrorSettings>,
 ) -> Result<ProgramResult, TransferError> {
-    let reflection = mirror.map(Reflection::new);
+    let own = mirror.map(Reflection::new);
     let mut files = Vec::new();
     for (i, (a, b)) in start.files.iter().zip(&end.files).enumerate() {
         if a.positions.len() != b.positions.len() {
@@ -170,9 +170,12 @@ fn combine(
                     .cartesian
                     .as_ref()
                     .and_then(|c| c.pose())
-                    .map(|x| match &reflection {
-                        Some(r) => r.target(&x).0,
-                        None => x,
+                    .map(|x| match (mirror, &own) {
+                        (Some(m), Some(own)) => match reflection_for(start, p, m, own) {
+                            Ok(r) => r.target(&x).0,
+                            Err(_) => x,
+                        },
+                        _ => x,
                     })
                     .zip(q.cartesian.as_ref().and_then(|c| c.pose()));
                 let (mm, deg) = poses.map_or((0.0, 0.0), |(x, y)| pose_change(&x, &y));
