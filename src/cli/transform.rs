@@ -408,11 +408,12 @@ pub fn run_mirror(a: MirrorArgs) -> anyhow::Result<Exit> {
         robot,
         a.default_wobj.as_deref(),
     );
-    let programs = load_programs(&a.files, &LoadOptions::default())?;
+    let programs = load_programs(&a.files, &load_options(robot))?;
     let mut results = Vec::new();
     for p in &programs {
         results.push(apply(p, mirror(p, &settings))?);
     }
+    drop_untouched_config(&mut results, robot.and_then(|r| r.config_dat.as_deref()));
     finish("mirror", &results, &a.out)
 }
 

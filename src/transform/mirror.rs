@@ -259,7 +259,7 @@ pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
                         p.span,
                         p.label(),
                         kind,
-                        format!("{}: {msg}", describe(p)),
+                        msg,
                         format!("{hint}, {SKIP_HINT}"),
                     ));
                     continue;
@@ -316,8 +316,34 @@ pub(crate) fn reflection_for(
     let name = wobj_of(p, world.default_wobj.as_deref())?;
     match resolve_frame(program, &world.frames, &name) {
         Resolved::Frame(w) => Ok(Reflection::about(&(w.inverse() * world.frame), settings)),
-        Resolved::Refused(kind, msg, hint) => Err((kind, msg, hint)),
+        Resolved::Refused(kind, msg, hint) => Err((kind, format!("{}: {msg}", describe(p)), hint)),
     }
+}
+
+/// The declared target an `Offs` offsets: `p10` in `Offs(p10, …)`, `pBed` in
+/// `Offs(RelTool(pBed, …), …)`, `pGrid` in `Offs(pGrid{r,c}, …)`; every array element of it.
+fn offset_targets<'p>(program: &'p Program, text: &str) -> Vec<&'p Position> {
+    let inner = text.rsplit('(').next().unwrap_or(text).trim_start();
+    let base: String = inner
+        .chars()
+        .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+        .collect();
+    if base.is_empty() {
+        return Vec::new();
+    }
+    let element = format!("{base}{{");
+    program
+        .files
+        .iter()
+        .flat_map(|f| &f.positions)
+        .filter(|p| {
+            p.name.as_deref().is_some_and(|n| {
+                n.eq_ignore_ascii_case(&base)
+                    || n.get(..element.len())
+                        .is_some_and(|h| h.eq_ignore_ascii_case(&element))
+            })
+        })
+        .collect()
 }
 
 fn mirror_offsets(
@@ -333,13 +359,12 @@ fn mirror_offsets(
         // that target's work object decides the plane.
         let refl = match (&settings.world, call.kind) {
             (Some(_), OffsetKind::Offs) => {
-                let target = program.files.iter().flat_map(|f| &f.positions).find(|p| {
-                    p.name
-                        .as_deref()
-                        .is_some_and(|n| n.eq_ignore_ascii_case(&call.target))
-                });
-                let resolved = match target {
-                    Some(p) => reflection_for(program, p, settings, own),
+                let targets = offset_targets(program, &call.target);
+                let reflections: Vec<_> = targets
+                    .iter()
+                    .map(|p| reflection_for(program, p, settings, own))
+                    .collect();
+                let resolved = match reflections.first() {
                     None => Err((
                         RefusalKind::UnresolvedWorkObject,
                         format!(
@@ -349,6 +374,29 @@ fn mirror_offsets(
                         "offset a declared target, or mirror with the plane in the work object"
                             .to_owned(),
                     )),
+                    Some(Err(e)) => Err(e.clone()),
+                    Some(Ok(first)) => {
+                        // Array elements share one declaration; they must share one plane too.
+                        let same = reflections.iter().all(|r| match r {
+                            Ok(r) => {
+                                (r.normal - first.normal).norm() < 1e-12
+                                    && (r.point - first.point).norm() < 1e-9
+                            }
+                            Err(_) => false,
+                        });
+                        if same {
+                            Ok(*first)
+                        } else {
+                            Err((
+                                RefusalKind::TwoWorkObjects,
+                                format!(
+                                    "the elements of `{}` lie in different work objects",
+                                    call.target
+                                ),
+                                "offset one target per work object".to_owned(),
+                            ))
+                        }
+                    }
                 };
                 match resolved {
                     Ok(r) => r,
@@ -367,32 +415,37 @@ fn mirror_offsets(
             }
             _ => *own,
         };
-        let known: Option<Vec<f64>> = call
-            .delta
-            .iter()
-            .map(|f| f.as_ref().map(NumField::value))
-            .collect();
         let (name, frame) = match call.kind {
             OffsetKind::Offs => ("Offs", "object"),
             OffsetKind::RelTool => ("RelTool", "tool"),
         };
-        let v = match known {
-            Some(d) => Vector3::new(d[0], d[1], d[2]),
-            None => {
-                refusals.push(Refusal::new(
-                    file,
-                    call.span,
-                    call.target.clone(),
-                    RefusalKind::Expression,
-                    format!(
-                        "{name}({}, …) has an offset that is not a number: it cannot be mirrored",
-                        call.target
-                    ),
-                    format!("write the {frame}-frame offsets as numbers, {SKIP_HINT}"),
-                ));
-                continue;
-            }
+        // A reflection `I - 2nnᵀ` reads component j only where n_j ≠ 0, and leaves it alone
+        // otherwise: an expression there (Offs(p, 0, 0, zUp)) is fine, anywhere else it is not.
+        let axis = match call.kind {
+            OffsetKind::Offs => refl.normal,
+            OffsetKind::RelTool => refl.tool_axis,
         };
+        let blocked = call
+            .delta
+            .iter()
+            .zip(axis.iter())
+            .any(|(f, n)| f.is_none() && n.abs() > 1e-12);
+        if blocked {
+            refusals.push(Refusal::new(
+                file,
+                call.span,
+                call.target.clone(),
+                RefusalKind::Expression,
+                format!(
+                    "{name}({}, …) has an offset that is not a number where the mirror changes it",
+                    call.target
+                ),
+                format!("write the {frame}-frame offsets as numbers, {SKIP_HINT}"),
+            ));
+            continue;
+        }
+        let d = call.delta.clone().map(|f| f.map_or(0.0, |f| f.value()));
+        let v = Vector3::new(d[0], d[1], d[2]);
         let new = match call.kind {
             OffsetKind::Offs => refl.vector(&v),
             OffsetKind::RelTool => refl.tool_vector(&v),

@@ -237,13 +237,13 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Refusal>
         );
     }
     if p.usage.stationary_tool {
-        let what = match file.language {
+        let setting = match file.language {
             Language::Rapid => "robhold TRUE",
             Language::Krl => "IPO_FRAME #TCP",
         };
         return refuse(
             RefusalKind::StationaryTool,
-            format!("{what} is a stationary-tool point ({what})"),
+            format!("{what} is a stationary-tool point ({setting})"),
             "it moves with the work piece, not the track: correct it by hand",
         );
     }
