@@ -737,6 +737,19 @@ mod tests {
         assert!(out.contains("Offs(pCar,-3.420,-9.397,0)"), "{out}");
     }
 
+    /// An expression in an offset blocks the mirror only where the reflection reads it.
+    #[test]
+    fn offset_expressions_block_only_the_mirrored_component() {
+        let text = "MODULE m\n  VAR num zUp := 5;\n  CONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[100,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL Offs(p1,10,20,zUp), v1000, fine, tool0;\n    MoveL Offs(p1,10,zUp,0), v1000, fine, tool0;\n  ENDPROC\nENDMODULE\n";
+        let p0 = parse(text);
+        let edits = mirror(&p0, &MirrorSettings::default());
+        let refused: Vec<_> = edits.refusals().map(|r| (r.line, r.kind)).collect();
+        assert_eq!(refused, [(6, RefusalKind::Expression)]);
+        let out = String::from_utf8(apply(&p0, edits).unwrap().files[0].output.clone()).unwrap();
+        assert!(out.contains("Offs(p1,10,-20,zUp)"), "{out}");
+        assert!(out.contains("Offs(p1,10,zUp,0)"), "{out}");
+    }
+
     fn settings() -> impl Strategy<Value = MirrorSettings> {
         let frame = (
             -500.0..500.0f64,
