@@ -113,7 +113,13 @@ struct Cursor<'a> {
     pos: usize,
     /// Where "end of statement" is, for messages.
     eol: Span,
+    /// Nesting of parentheses, aggregates and prefix operators: bounded so that a damaged
+    /// file of ten thousand `(` cannot exhaust the stack.
+    depth: u32,
 }
+
+/// Deeper nesting than any real program writes (nested aggregates in `$config.dat` reach 3).
+const MAX_DEPTH: u32 = 200;
 
 impl<'a> Cursor<'a> {
     fn peek(&self) -> Option<&'a Token> {
@@ -248,6 +254,19 @@ impl<'a> Cursor<'a> {
 
     /// Rule `unary`. A sign written directly in front of a number is part of the literal.
     fn unary(&mut self) -> PResult<Expr> {
+        if self.depth >= MAX_DEPTH {
+            return self.err(
+                "expression nested too deeply".to_owned(),
+                "simplify the expression; check for a damaged line",
+            );
+        }
+        self.depth += 1;
+        let e = self.unary_inner();
+        self.depth -= 1;
+        e
+    }
+
+    fn unary_inner(&mut self) -> PResult<Expr> {
         let sign = self.is_punct(b"-") || self.is_punct(b"+");
         if sign || self.is_kw("NOT") || self.is_kw("B_NOT") {
             let op = self.bump().map(|t| t.span()).unwrap_or(self.eol);
@@ -574,6 +593,7 @@ impl<'a> LineParser<'a, '_> {
             toks: sig,
             pos: 0,
             eol,
+            depth: 0,
         }
     }
 
@@ -668,17 +688,19 @@ impl<'a> LineParser<'a, '_> {
                 }
                 if c.is_kw("INTERRUPT") {
                     Ok((NodeKind::Simple, depth, None))
+                } else if c.is_kw("STRUC") || c.is_kw("ENUM") || c.is_kw("SIGNAL") {
+                    Ok((NodeKind::Declaration, depth, None))
                 } else {
                     decl(&mut c).map(|k| (NodeKind::Declaration, depth, Some(k)))
                 }
             }
             "INTERRUPT" | "TRIGGER" => Ok((NodeKind::Simple, depth, None)),
+            _ if DECL_KEYWORDS.contains(&w) => Ok((NodeKind::Declaration, depth, None)),
             _ if global => Err(PErr {
                 span: head.span(),
                 message: format!("`GLOBAL` before `{}`", c.text(head)),
-                hint: "`GLOBAL` only qualifies DEF, DEFFCT, DECL and INTERRUPT",
+                hint: "`GLOBAL` only qualifies DEF, DEFFCT, DECL, STRUC, ENUM, SIGNAL and INTERRUPT",
             }),
-            _ if DECL_KEYWORDS.contains(&w) => Ok((NodeKind::Declaration, depth, None)),
             _ if MOTION_KEYWORDS.contains(&w) => {
                 motion(&mut c).map(|k| (NodeKind::Motion, depth, Some(k)))
             }
@@ -1038,6 +1060,9 @@ mod tests {
             "DECL PDAT PPDAT1={VEL 100,ACC 100,APO_DIST 100,APO_MODE #CDIS}",
             "DECL LDAT LCPDAT1={VEL 2,ACC 100,APO_DIST 100,APO_FAC 50.0,ORI_TYP #VAR,CIRC_TYP #BASE,JERK_FAC 50.0,GEAR_JERK 100.0,EXAX_IGN 0}",
             "DECL FRAME F={FRAME: X 1,Y 2}",
+            "GLOBAL STRUC MYPOS_T REAL X, Y, INT N",
+            "GLOBAL ENUM COLOR_T RED, GREEN",
+            "DECL GLOBAL SIGNAL GRIPPER $OUT[3]",
             "DECL POS P={POS: X 1,Y 2,Z 3,A 0,B 0,C 0,S 'B010',T 'B100011'}",
             "DECL MYSTRUC M={A {X 1, Y 2}, B 'H1F'}",
         ] {
@@ -1131,6 +1156,17 @@ DEF cell( )\r\n  SPLINE WITH $ACC = {CP 2.0}\r\n    SPL XP1\r\n    SLIN XP2\r\n 
         assert_eq!(depth_of("UNTIL"), Some((NodeKind::BlockClose, 1)));
         assert_eq!(depth_of("done:"), Some((NodeKind::Label, 1)));
         assert_eq!(depth_of("ENDFCT"), Some((NodeKind::RoutineEnd, 0)));
+    }
+
+    #[test]
+    fn deep_nesting_is_an_error_not_a_stack_overflow() {
+        for unit in ["(", "{X ", "- ", "NOT "] {
+            let src = format!("A = {}1\n", unit.repeat(100_000));
+            let p = parse(src.as_bytes());
+            assert_eq!(p.opaque, 1, "{unit}");
+            assert_eq!(p.diagnostics[0].message, "expression nested too deeply");
+            assert_eq!(p.tree.print(src.as_bytes()), src.as_bytes());
+        }
     }
 
     #[test]

@@ -6,7 +6,39 @@
 //! the points and the `FDAT`s), so extraction only records facts per file and [`resolve`] runs
 //! over a whole program.
 
-use std::collections::HashMap;
+use std::collections::HashMap as StdHashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// Names are short, trusted-enough keys (the file is the user's own program) and a `.dat` holds
+/// hundreds of thousands of them: SipHash showed up as a tenth of the run time. This is the
+/// multiply-rotate hash of rustc's `FxHasher` with a finaliser, written out to avoid a
+/// dependency.
+#[derive(Default, Clone, Copy)]
+pub(crate) struct NameHasher(u64);
+
+impl Hasher for NameHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.0 = (self.0.rotate_left(5) ^ u64::from_le_bytes(word))
+                .wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+        }
+    }
+
+    /// MurmurHash3's finaliser: hashbrown picks buckets from the low bits, which the
+    /// multiply alone leaves equal for names differing only in their last bytes (`XP100001`).
+    fn finish(&self) -> u64 {
+        let mut h = self.0;
+        h ^= h >> 33;
+        h = h.wrapping_mul(0xff51_afd7_ed55_8ccd);
+        h ^= h >> 33;
+        h = h.wrapping_mul(0xc4ce_b9fe_1a85_ec53);
+        h ^ (h >> 33)
+    }
+}
+
+pub(crate) type HashMap<K, V> = StdHashMap<K, V, BuildHasherDefault<NameHasher>>;
 
 use super::tree::{Aggregate, Expr, ExprKind, Stmt, StmtKind};
 use crate::position::{
@@ -86,6 +118,14 @@ pub(crate) struct Facts {
     /// Declared `FRAME`s and aggregates assigned to names of unknown type: positions only when
     /// a motion uses them.
     pub candidates: Vec<Position>,
+}
+
+/// A declared name as motions reference it: upper case, without blanks (`p[ 3 ]` → `P[3]`).
+fn name_key(name: &str) -> String {
+    name.chars()
+        .filter(|c| !c.is_ascii_whitespace())
+        .map(|c| c.to_ascii_uppercase())
+        .collect()
 }
 
 fn upper(src: &[u8], span: Span) -> String {
@@ -370,7 +410,7 @@ impl<'a> Extractor<'a> {
         Extractor {
             src,
             lines,
-            declared: HashMap::new(),
+            declared: HashMap::default(),
             out: Extracted {
                 positions: Vec::new(),
                 frames: Vec::new(),
@@ -734,29 +774,23 @@ fn record_use(u: &mut Usage, base: &Option<String>, tool: &Option<String>, tcp: 
 /// `facts`), fills each used position's [`Usage`], promotes used `FRAME`s and candidate
 /// aggregates to positions, and reports motions whose base stays unknown.
 pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
-    let mut fdats: HashMap<String, Fdat> = HashMap::new();
+    let mut fdats: HashMap<String, Fdat> = HashMap::default();
     for f in facts.iter() {
         for (k, v) in &f.fdats {
             fdats.entry(k.clone()).or_insert_with(|| v.clone());
         }
     }
     // Where each declared name lives: (file, in candidates?, index).
-    let mut by_name: HashMap<String, Vec<(usize, bool, usize)>> = HashMap::new();
+    let mut by_name: HashMap<String, Vec<(usize, bool, usize)>> = HashMap::default();
     for (fi, (file, fact)) in files.iter().zip(facts.iter()).enumerate() {
         for (i, p) in file.positions.iter().enumerate() {
             if let Some(n) = &p.name {
-                by_name
-                    .entry(n.to_ascii_uppercase().replace([' ', '\t'], ""))
-                    .or_default()
-                    .push((fi, false, i));
+                by_name.entry(name_key(n)).or_default().push((fi, false, i));
             }
         }
         for (i, p) in fact.candidates.iter().enumerate() {
             if let Some(n) = &p.name {
-                by_name
-                    .entry(n.to_ascii_uppercase().replace([' ', '\t'], ""))
-                    .or_default()
-                    .push((fi, true, i));
+                by_name.entry(name_key(n)).or_default().push((fi, true, i));
             }
         }
     }
@@ -770,7 +804,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             .map(|f| std::mem::take(&mut f.events))
             .unwrap_or_default();
         let mut state = State::default();
-        let mut aliases: HashMap<&str, &str> = HashMap::new();
+        let mut aliases: HashMap<&str, &str> = HashMap::default();
         for ev in &events {
             match ev {
                 Event::Reset => {

@@ -459,6 +459,22 @@ fn statement() -> impl Strategy<Value = String> {
         Just(";ENDFOLD".to_owned()),
         Just("".to_owned()),
         Just("  \t".to_owned()),
+        (ident.clone(), num.clone()).prop_map(|(n, x)| format!("E6POS {n}={{X {x},E1 {x}}}")),
+        (ident.clone()).prop_map(|n| format!(
+            "decl fdat F{n}={{TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE,POINT2[] \" \"}}"
+        )),
+        (ident.clone()).prop_map(|n| format!("FDAT_ACT=F{n}")),
+        (ident.clone()).prop_map(|n| format!(
+            "SPTP {n} WITH $BASE=SBASE(F{n}.BASE_NO), $TOOL=STOOL2(F{n}) C_SPL"
+        )),
+        (ident.clone(), ident.clone()).prop_map(|(a, b)| format!("{a} = {a}:{b}")),
+        (num.clone()).prop_map(|x| format!("PTP {{A1 {x},A2 -90,A3 90,A4 0,A5 0,A6 0}}")),
+        (1u32..32, num.clone())
+            .prop_map(|(n, x)| format!("BASE_DATA[{n}]={{X {x},Y 0,Z 0,A 0,B 0,C 0}}")),
+        Just("TRIGGER WHEN DISTANCE=0 DELAY=20 DO $OUT[2]=TRUE PRIO=-1".to_owned()),
+        Just("\t$OUT[3] = NOT $IN[1] AND ($IN[2] OR $IN[3])".to_owned()),
+        Just("INT I".to_owned()),
+        Just("HALT".to_owned()),
         Just("IF $IN[1] THEN".to_owned()),
         Just("ENDIF".to_owned()),
         Just("&REL 3".to_owned()),
@@ -496,6 +512,56 @@ proptest! {
         prop_assert_eq!(parse.opaque, 0);
         let file = krl::parse_file(Path::new("gen.src"), src);
         prop_assert!(file.round_trip);
+    }
+
+    /// Every generated `E6POS` declaration is found, and every field's span holds the text
+    /// that was written for it.
+    #[test]
+    fn generated_dat_positions_are_all_found(
+        points in prop::collection::vec(
+            (
+                prop::array::uniform6(-9999.0f64..9999.0),
+                0u32..8,
+                0u32..64,
+                1.0f64..7999.0,
+                any::<bool>(),
+            ),
+            1..30,
+        ),
+    ) {
+        let mut src = String::from("&ACCESS RVP\r\nDEFDAT gen PUBLIC\r\n");
+        let mut expected = Vec::new();
+        for (i, (v, s, t, e1, binary)) in points.iter().enumerate() {
+            let texts: Vec<String> = v.iter().map(|x| format!("{x:.4}")).collect();
+            let (st, tt) = if *binary {
+                (format!("'B{s:03b}'"), format!("'B{t:06b}'"))
+            } else {
+                (s.to_string(), t.to_string())
+            };
+            src += &format!(
+                "DECL E6POS XP{i}={{X {},Y {},Z {},A {},B {},C {},S {st},T {tt},E1 {e1:.3},E2 0.0}}\r\n",
+                texts[0], texts[1], texts[2], texts[3], texts[4], texts[5]
+            );
+            expected.push((texts, *s, *t, format!("{e1:.3}")));
+        }
+        src += "ENDDAT\r\n";
+        let file = krl::parse_file(Path::new("gen.dat"), src.into_bytes());
+        prop_assert!(file.diagnostics.is_empty(), "{:?}", file.diagnostics);
+        prop_assert_eq!(file.positions.len(), expected.len());
+        for (p, (texts, s, t, e1)) in file.positions.iter().zip(&expected) {
+            let c = p.cartesian.as_ref().unwrap();
+            let Some(Orientation::Abc(abc)) = &c.orient else { panic!() };
+            let got: Vec<&[u8]> = c.trans.iter().chain(abc.iter())
+                .map(|f| f.as_ref().unwrap().span.slice(&file.source))
+                .collect();
+            let want: Vec<&[u8]> = texts.iter().map(|t| t.as_bytes()).collect();
+            prop_assert_eq!(got, want);
+            let Config::Kuka { status, turn } = &p.config else { panic!() };
+            prop_assert_eq!(status.as_ref().unwrap().value, *s);
+            prop_assert_eq!(turn.as_ref().unwrap().value, *t);
+            prop_assert_eq!(p.extax.len(), 2);
+            prop_assert_eq!(p.extax[0].as_ref().unwrap().lit.text(), e1.as_str());
+        }
     }
 
     #[test]
@@ -654,4 +720,20 @@ fn walk(dir: &Path) -> Vec<PathBuf> {
         }
     }
     out
+}
+
+/// The tree, one line per node with its block depth, and the diagnostics: a valid file and a
+/// damaged one (rust-analyzer's `test_data/{ok,err}` in small).
+#[test]
+fn tree_dumps() {
+    let ok = std::fs::read(sample("lower_case.src")).unwrap();
+    insta::assert_snapshot!("tree_lower_case", krl::parse(&ok).tree.dump(&ok));
+    let err: &[u8] = b"DEF broken( )\r\n  IF $IN[1] THEN\r\n    LIN {X 10, Y 20 Z 30} C_DIS\r\n    FROB XP1\r\n    S = \"open\r\n  ENDFOR\r\n  WAIT SEC 1\r\n";
+    let file = krl::parse_file(Path::new("broken.src"), err.to_vec());
+    let mut dump = krl::parse(err).tree.dump(err);
+    for d in &file.diagnostics {
+        dump += &file.render(d);
+    }
+    assert!(file.round_trip);
+    insta::assert_snapshot!("tree_broken", dump);
 }
