@@ -1,4 +1,28 @@
 //! Program transforms (DESIGN.md §4): `correct`, `zero`, `mirror`, `transfer`, and the cell
 //! file that describes robots, tracks and the mirror plane.
 //!
+//! Every transform reads a [`Program`](crate::position::Program) and returns
+//! [`ProgramEdits`]: per file, the [`Edit`](crate::syntax::Edit)s of the numeric literals that
+//! change, the targets it refused, and how much each changed target moved. Nothing is written
+//! here; [`output`] turns applied edits into files, diffs and checks.
+//!
 //! Owned by issue 5.
+
+pub mod cell;
+pub mod edits;
+pub mod mirror;
+pub mod output;
+pub mod refusal;
+pub mod rewrite;
+pub mod track_correction;
+pub mod transfer;
+
+pub use cell::{Axis, Cell, CellError, ConfigRule, FrameIn, MirrorTable, Plane, Robot};
+pub use edits::{FileEdits, FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
+pub use mirror::{MirrorSettings, WorldPlane, mirror};
+pub use refusal::{Refusal, RefusalKind};
+pub use track_correction::{Deviation, Direction, TrackSetup, track_correction};
+pub use transfer::{TransferError, TransferPlan, reparse, transfer};
+
+#[cfg(test)]
+pub(crate) mod test_support;

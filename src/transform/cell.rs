@@ -1,0 +1,399 @@
+//! `cell.toml` (DESIGN.md §6): the robots of a cell, their tracks, frames and the mirror plane.
+//!
+//! ```toml
+//! [robot.r1]
+//! profile = "track/profile.toml"          # relative to this file
+//! base = { x = 0, y = -1800, z = 0, rx = 0, ry = 0, rz = 90 }
+//! track_axis = [1, 0, 0]
+//! skid = "eax_a"                          # or "E1"; the default
+//! [robot.r1.wobj]                         # overrides the program's declarations
+//! wobj_car = { x = 2000, y = 0, z = 600, rx = 0, ry = 0, rz = 0 }
+//! "BASE_DATA[3]" = { x = 2000, y = 0, z = 600, rx = 0, ry = 0, rz = 0 }
+//!
+//! [mirror]
+//! plane = "xz"
+//! frame = { x = 0, y = -1850.75, z = 0, rx = 0, ry = 0, rz = 0 }   # optional
+//! frame_in = "world"                      # or "wobj" (the default)
+//! tool_flip = "y"
+//! config = "mirror"
+//! skid_map = [1.0, 0.0]
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use nalgebra::Vector3;
+use serde::Deserialize;
+use toml::Spanned;
+
+use crate::geometry::{Pose, pose_xyz_deg};
+use crate::syntax::{Diagnostic, LineIndex, Span};
+
+/// Why a cell file could not be used.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum CellError {
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A located syntax or schema error, already rendered as `file:line:col: error: …`.
+    #[error("{rendered}")]
+    Invalid { rendered: String },
+    #[error("{}: no robot `{name}` in the cell file (robots: {})", path.display(), known.join(", "))]
+    UnknownRobot {
+        path: PathBuf,
+        name: String,
+        known: Vec<String>,
+    },
+}
+
+/// A pose written as `{ x, y, z, rx, ry, rz }` (mm, degrees, `R = Rz·Ry·Rx`).
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FrameXyz {
+    pub x: f64,
+    pub y: f64,
+    pub z: f64,
+    pub rx: f64,
+    pub ry: f64,
+    pub rz: f64,
+}
+
+impl FrameXyz {
+    pub fn pose(&self) -> Pose {
+        pose_xyz_deg(self.x, self.y, self.z, self.rx, self.ry, self.rz)
+    }
+}
+
+/// The reflected plane of a mirror, in the mirror frame.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Plane {
+    Xy,
+    Xz,
+    Yz,
+}
+
+impl Plane {
+    /// Index of the plane's normal axis (0 = x).
+    pub fn normal_axis(self) -> usize {
+        match self {
+            Plane::Xy => 2,
+            Plane::Xz => 1,
+            Plane::Yz => 0,
+        }
+    }
+}
+
+/// A tool axis (the one a mirror flips to make the tool frame right-handed again).
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Axis {
+    X,
+    Y,
+    Z,
+}
+
+impl Axis {
+    pub fn index(self) -> usize {
+        match self {
+            Axis::X => 0,
+            Axis::Y => 1,
+            Axis::Z => 2,
+        }
+    }
+}
+
+/// Where the `[mirror]` frame is given.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum FrameIn {
+    /// In each target's work object (DESIGN.md §4; the default).
+    #[default]
+    Wobj,
+    /// In world: the physical plane of the cell, taken into each target's resolved work object
+    /// (`M = W⁻¹·frame`), so targets in different work objects mirror about the same plane.
+    World,
+}
+
+/// What a mirror does to the robot configuration.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum ConfigRule {
+    /// ABB cf1, cf4, cf6 → -cf-1; KUKA Turn bits of A1, A4, A6 toggled (mirror-image robots).
+    Mirror,
+    /// Configuration left as written.
+    Keep,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CellToml {
+    robot: BTreeMap<String, RobotToml>,
+    mirror: Option<MirrorToml>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RobotToml {
+    profile: String,
+    base: FrameXyz,
+    track_axis: Spanned<[f64; 3]>,
+    skid: Option<Spanned<String>>,
+    #[serde(default)]
+    wobj: BTreeMap<String, FrameXyz>,
+    config_dat: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MirrorToml {
+    plane: Option<Plane>,
+    frame: Option<FrameXyz>,
+    frame_in: Option<FrameIn>,
+    tool_flip: Option<Axis>,
+    config: Option<ConfigRule>,
+    skid_map: Option<[f64; 2]>,
+}
+
+/// One robot of the cell, validated.
+#[derive(Clone, Debug)]
+pub struct Robot {
+    pub name: String,
+    /// The profile file, resolved against the cell file's folder.
+    pub profile: PathBuf,
+    /// `B_0`: the controller's robot base in world at skid 0.
+    pub base0: Pose,
+    /// `a`: the unit track direction in world.
+    pub track_axis: Vector3<f64>,
+    /// The external axis holding the skid: 0 = `eax_a` / `E1`.
+    pub skid_axis: usize,
+    /// Work objects / bases that override the program's (lower-case name → pose in world).
+    pub frames: BTreeMap<String, Pose>,
+    /// KUKA `$config.dat`, resolved against the cell file's folder.
+    pub config_dat: Option<PathBuf>,
+}
+
+/// The `[mirror]` table.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MirrorTable {
+    pub plane: Option<Plane>,
+    pub frame: Option<Pose>,
+    pub frame_in: FrameIn,
+    pub tool_flip: Option<Axis>,
+    pub config: Option<ConfigRule>,
+    pub skid_map: Option<(f64, f64)>,
+}
+
+/// A validated cell file.
+#[derive(Clone, Debug)]
+pub struct Cell {
+    pub path: PathBuf,
+    pub robots: BTreeMap<String, Robot>,
+    pub mirror: MirrorTable,
+}
+
+/// `"eax_a"`…`"eax_f"` or `"E1"`…`"E6"` (any case) → 0…5.
+pub fn skid_axis_index(name: &str) -> Option<usize> {
+    let lower = name.trim().to_ascii_lowercase();
+    if let Some(letter) = lower.strip_prefix("eax_") {
+        let b = letter.as_bytes();
+        if b.len() == 1 && (b'a'..=b'f').contains(&b[0]) {
+            return Some((b[0] - b'a') as usize);
+        }
+    } else if let Some(digit) = lower.strip_prefix('e') {
+        let b = digit.as_bytes();
+        if b.len() == 1 && (b'1'..=b'6').contains(&b[0]) {
+            return Some((b[0] - b'1') as usize);
+        }
+    }
+    None
+}
+
+impl Cell {
+    /// Reads and validates a cell file. Every schema error names `file:line:col`.
+    pub fn load(path: &Path) -> Result<Cell, CellError> {
+        let text = std::fs::read_to_string(path).map_err(|source| CellError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Cell::parse(path, &text)
+    }
+
+    /// Validates cell text; relative paths resolve against `path`'s folder.
+    pub fn parse(path: &Path, text: &str) -> Result<Cell, CellError> {
+        let located = |span: Span, message: String, hint: &str| {
+            let index = LineIndex::new(text.as_bytes());
+            let d = Diagnostic::error(span, message).with_hint(hint);
+            CellError::Invalid {
+                rendered: d
+                    .render(&path.display().to_string(), text.as_bytes(), &index)
+                    .trim_end()
+                    .to_owned(),
+            }
+        };
+        let raw: CellToml = toml::from_str(text).map_err(|e| {
+            let span = e.span().map(Span::from).unwrap_or_default();
+            located(
+                span,
+                e.message().trim().to_owned(),
+                "see DESIGN.md §6 or samples/cell.toml for the keys a cell file takes",
+            )
+        })?;
+        let dir = path.parent().unwrap_or(Path::new(""));
+        let mut robots = BTreeMap::new();
+        for (name, r) in raw.robot {
+            let [ux, uy, uz] = *r.track_axis.get_ref();
+            let axis = Vector3::new(ux, uy, uz);
+            let norm = axis.norm();
+            if !norm.is_finite() || norm < 1e-9 {
+                return Err(located(
+                    r.track_axis.span().into(),
+                    format!("robot `{name}`: track_axis has no direction"),
+                    "write the unit vector the base moves along per mm of skid, e.g. [1, 0, 0]",
+                ));
+            }
+            // A hand-typed axis like [0.7071, 0.7071, 0] is meant to be unit; a clearly
+            // non-unit one is more likely a gear factor typed into the wrong place.
+            if (norm - 1.0).abs() > 1e-3 {
+                return Err(located(
+                    r.track_axis.span().into(),
+                    format!("robot `{name}`: track_axis has length {norm:.6}, expected 1"),
+                    "write a unit vector; a gear factor belongs in the profile (track fit --gear)",
+                ));
+            }
+            let skid_axis = match &r.skid {
+                None => 0,
+                Some(s) => skid_axis_index(s.get_ref()).ok_or_else(|| {
+                    located(
+                        s.span().into(),
+                        format!("robot `{name}`: unknown skid axis `{}`", s.get_ref()),
+                        "use \"eax_a\" … \"eax_f\" (RAPID) or \"E1\" … \"E6\" (KRL)",
+                    )
+                })?,
+            };
+            let frames = r
+                .wobj
+                .iter()
+                .map(|(k, f)| (k.to_ascii_lowercase(), f.pose()))
+                .collect();
+            robots.insert(
+                name.clone(),
+                Robot {
+                    name,
+                    profile: dir.join(&r.profile),
+                    base0: r.base.pose(),
+                    track_axis: axis / norm,
+                    skid_axis,
+                    frames,
+                    config_dat: r.config_dat.map(|c| dir.join(c)),
+                },
+            );
+        }
+        let mirror = raw
+            .mirror
+            .map(|m| MirrorTable {
+                plane: m.plane,
+                frame: m.frame.map(|f| f.pose()),
+                frame_in: m.frame_in.unwrap_or_default(),
+                tool_flip: m.tool_flip,
+                config: m.config,
+                skid_map: m.skid_map.map(|[a, b]| (a, b)),
+            })
+            .unwrap_or_default();
+        Ok(Cell {
+            path: path.to_owned(),
+            robots,
+            mirror,
+        })
+    }
+
+    /// The robot called `name`, or an error listing the known ones.
+    pub fn robot(&self, name: &str) -> Result<&Robot, CellError> {
+        self.robots
+            .get(name)
+            .ok_or_else(|| CellError::UnknownRobot {
+                path: self.path.clone(),
+                name: name.to_owned(),
+                known: self.robots.keys().cloned().collect(),
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CELL: &str = r#"
+[robot.r1]
+profile = "track/profile.toml"
+base = { x = 0, y = -1800, z = 0, rx = 0, ry = 0, rz = 90 }
+track_axis = [1, 0, 0]
+skid = "E2"
+[robot.r1.wobj]
+wobj_car = { x = 2000, y = 0, z = 600, rx = 0, ry = 0, rz = 0 }
+
+[mirror]
+plane = "xz"
+skid_map = [1.0, 5.0]
+"#;
+
+    fn err(text: &str) -> String {
+        match Cell::parse(Path::new("cell.toml"), text) {
+            Err(e) => e.to_string(),
+            Ok(_) => "parsed".to_owned(),
+        }
+    }
+
+    #[test]
+    fn reads_robots_and_mirror() {
+        let cell = Cell::parse(Path::new("cells/cell.toml"), CELL).unwrap();
+        let r1 = cell.robot("r1").unwrap();
+        assert_eq!(r1.profile, Path::new("cells/track/profile.toml"));
+        assert_eq!(r1.skid_axis, 1);
+        assert!((r1.base0.translation.vector.y + 1800.0).abs() < 1e-12);
+        assert!(r1.frames.contains_key("wobj_car"));
+        assert_eq!(cell.mirror.plane, Some(Plane::Xz));
+        assert_eq!(cell.mirror.skid_map, Some((1.0, 5.0)));
+        assert!(cell.robot("r9").unwrap_err().to_string().contains("r1"));
+    }
+
+    #[test]
+    fn unknown_and_missing_keys_are_located() {
+        let e = err(&CELL.replace("skid = \"E2\"", "skidd = \"E2\""));
+        assert!(
+            e.starts_with("cell.toml:6:1: error: unknown field `skidd`"),
+            "{e}"
+        );
+        let e = err(&CELL.replace("track_axis = [1, 0, 0]\n", ""));
+        assert!(e.contains("cell.toml:") && e.contains("track_axis"), "{e}");
+        let e = err(&CELL.replace("rz = 90", "rw = 90"));
+        assert!(e.starts_with("cell.toml:4:"), "{e}");
+    }
+
+    #[test]
+    fn rejects_non_unit_axis_and_bad_skid() {
+        let e = err(&CELL.replace("[1, 0, 0]", "[2, 0, 0]"));
+        assert!(e.starts_with("cell.toml:5:14: error: robot `r1`: track_axis has length 2.000000"));
+        let e = err(&CELL.replace("\"E2\"", "\"E7\""));
+        assert!(e.contains("unknown skid axis `E7`"), "{e}");
+        let ok = Cell::parse(
+            Path::new("c.toml"),
+            &CELL.replace("[1, 0, 0]", "[0.7071, 0.7071, 0]"),
+        )
+        .unwrap();
+        assert!((ok.robots["r1"].track_axis.norm() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn skid_names() {
+        assert_eq!(skid_axis_index("eax_a"), Some(0));
+        assert_eq!(skid_axis_index("EAX_F"), Some(5));
+        assert_eq!(skid_axis_index("E1"), Some(0));
+        assert_eq!(skid_axis_index("e6"), Some(5));
+        assert_eq!(skid_axis_index("eax_g"), None);
+        assert_eq!(skid_axis_index("E0"), None);
+    }
+}

@@ -1,0 +1,112 @@
+//! What a transform wants to change in a program, and the bytes that result.
+
+use std::path::PathBuf;
+
+use crate::position::Program;
+use crate::syntax::{Edit, EditError, apply_edits};
+
+use super::refusal::Refusal;
+
+/// How much one changed target moved.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TargetChange {
+    /// Translation change in mm.
+    pub mm: f64,
+    /// Rotation change in degrees.
+    pub deg: f64,
+    /// The skid value the target was transformed at (`None` for transforms that use none).
+    pub skid: Option<f64>,
+}
+
+/// The edits and refusals of one file.
+#[derive(Clone, Debug, Default)]
+pub struct FileEdits {
+    pub edits: Vec<Edit>,
+    pub refusals: Vec<Refusal>,
+    /// One entry per target whose text changes.
+    pub changes: Vec<TargetChange>,
+}
+
+/// The edits of every file of a program, in the program's file order.
+#[derive(Clone, Debug, Default)]
+pub struct ProgramEdits {
+    pub files: Vec<FileEdits>,
+}
+
+impl ProgramEdits {
+    pub fn for_program(program: &Program) -> ProgramEdits {
+        ProgramEdits {
+            files: vec![FileEdits::default(); program.files.len()],
+        }
+    }
+
+    pub fn refusals(&self) -> impl Iterator<Item = &Refusal> {
+        self.files.iter().flat_map(|f| &f.refusals)
+    }
+}
+
+/// One file after a transform.
+#[derive(Clone, Debug)]
+pub struct FileResult {
+    pub path: PathBuf,
+    pub original: Vec<u8>,
+    pub output: Vec<u8>,
+    pub refusals: Vec<Refusal>,
+    pub changes: Vec<TargetChange>,
+}
+
+impl FileResult {
+    pub fn changed(&self) -> bool {
+        self.original != self.output
+    }
+
+    /// Largest translation (mm) and rotation (degrees) change of any target.
+    pub fn largest_change(&self) -> (f64, f64) {
+        self.changes
+            .iter()
+            .fold((0.0, 0.0), |(mm, deg), c| (mm.max(c.mm), deg.max(c.deg)))
+    }
+
+    /// The smallest and largest skid of the changed targets.
+    pub fn skid_range(&self) -> Option<(f64, f64)> {
+        self.changes
+            .iter()
+            .filter_map(|c| c.skid)
+            .fold(None, |acc, s| match acc {
+                None => Some((s, s)),
+                Some((lo, hi)) => Some((f64::min(lo, s), f64::max(hi, s))),
+            })
+    }
+}
+
+/// A program after a transform.
+#[derive(Clone, Debug)]
+pub struct ProgramResult {
+    pub files: Vec<FileResult>,
+}
+
+impl ProgramResult {
+    pub fn refusals(&self) -> impl Iterator<Item = &Refusal> {
+        self.files.iter().flat_map(|f| &f.refusals)
+    }
+
+    pub fn changed(&self) -> bool {
+        self.files.iter().any(FileResult::changed)
+    }
+}
+
+/// Applies a transform's edits to the program's sources.
+pub fn apply(program: &Program, edits: ProgramEdits) -> Result<ProgramResult, EditError> {
+    let mut files = Vec::with_capacity(program.files.len());
+    for (file, fe) in program.files.iter().zip(edits.files) {
+        let output = apply_edits(&file.source, &fe.edits)?;
+        files.push(FileResult {
+            path: file.path.clone(),
+            original: file.source.clone(),
+            output,
+            refusals: fe.refusals,
+            changes: fe.changes,
+        });
+    }
+    Ok(ProgramResult { files })
+}

@@ -1,0 +1,847 @@
+//! `mirror` (DESIGN.md §4): `T' = M·Sa·M⁻¹ · T · Sb` in work-object coordinates.
+//!
+//! `Sa` reflects the normal of the mirror plane, `Sb` flips one tool axis so the tool frame is
+//! right-handed again. A reflection `S = I - 2nnᵀ` is minus the half turn about `n`, whose
+//! quaternion is `[0, n]`; so `Sa·R·Sb = (-Sa)·R·(-Sb)` and the mirrored quaternion is
+//! `[0, na] ⊗ q ⊗ [0, nb]` exactly, without a matrix round trip. For the xz plane and tool flip
+//! y this is RobotStudio's `[q1, q2, q3, q4] → [q1, -q2, q3, -q4]` and KUKA's
+//! `(A, B, C) → (-A, B, -C)`.
+
+use std::collections::BTreeMap;
+
+use nalgebra::{Quaternion, Translation3, UnitQuaternion, Vector3};
+
+use crate::geometry::Pose;
+use crate::position::{
+    CartesianFields, Config, FrameKind, NumField, OffsetKind, ParsedFile, Position, Program, Skid,
+};
+use crate::syntax::Edit;
+
+use super::cell::{Axis, ConfigRule, Plane};
+use super::edits::{ProgramEdits, TargetChange};
+use super::refusal::{Refusal, RefusalKind, SKIP_HINT};
+use super::rewrite::{
+    MM_DECIMALS, OrientationHint, bits_edit, integer_edit, number_edit, pose_change, pose_edits,
+};
+use super::track_correction::{Resolved, common_refusal, describe, resolve_frame, wobj_of};
+
+/// KUKA Turn bits of A1, A4 and A6: a mirror-image robot runs those axes with the opposite sign.
+const TURN_A1_A4_A6: u32 = 0b10_1001;
+
+/// Everything `mirror` needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MirrorSettings {
+    /// `M`: the mirror-plane frame in the work object (identity: the work object's own plane).
+    pub frame: Pose,
+    pub plane: Plane,
+    pub tool_flip: Axis,
+    pub config: ConfigRule,
+    /// `s' = scale·s + offset`.
+    pub skid_map: (f64, f64),
+    /// External axis index of the skid (0 = `eax_a` / `E1`).
+    pub skid_axis: usize,
+    /// Also mirror the program's work objects, bases and tools.
+    pub mirror_frames: bool,
+    /// Mirror joint targets (axes 1, 4, 6 negated) instead of refusing them.
+    pub mirror_joints: bool,
+    /// The plane given in world instead (`frame_in = "world"`): each target mirrors about it
+    /// in its own work object, `M = W⁻¹·plane`.
+    pub world: Option<WorldPlane>,
+}
+
+/// A mirror plane given in world, and what resolves each target's work object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldPlane {
+    /// The plane's frame in world (its `plane` is reflected).
+    pub frame: Pose,
+    /// Work objects / bases overriding the program's (lower-case name → pose in world).
+    pub frames: BTreeMap<String, Pose>,
+    /// The work object of declared targets no motion uses.
+    pub default_wobj: Option<String>,
+}
+
+impl Default for MirrorSettings {
+    fn default() -> MirrorSettings {
+        MirrorSettings {
+            frame: Pose::identity(),
+            plane: Plane::Xz,
+            tool_flip: Axis::Y,
+            config: ConfigRule::Mirror,
+            skid_map: (1.0, 0.0),
+            skid_axis: 0,
+            mirror_frames: false,
+            mirror_joints: false,
+            world: None,
+        }
+    }
+}
+
+fn unit(i: usize) -> Vector3<f64> {
+    let mut v = Vector3::zeros();
+    if let Some(c) = v.get_mut(i) {
+        *c = 1.0;
+    }
+    v
+}
+
+/// The geometry of one mirror: the plane (point and unit normal) and the tool axis.
+#[derive(Clone, Copy, Debug)]
+pub struct Reflection {
+    point: Vector3<f64>,
+    normal: Vector3<f64>,
+    tool_axis: Vector3<f64>,
+}
+
+impl Reflection {
+    /// The mirror of `settings` in work-object coordinates (`settings.frame` as `M`).
+    pub fn new(settings: &MirrorSettings) -> Reflection {
+        Reflection::about(&settings.frame, settings)
+    }
+
+    /// The mirror about the plane of `frame` (given in the coordinates being mirrored).
+    pub fn about(frame: &Pose, settings: &MirrorSettings) -> Reflection {
+        Reflection {
+            point: frame.translation.vector,
+            normal: frame.rotation * unit(settings.plane.normal_axis()),
+            tool_axis: unit(settings.tool_flip.index()),
+        }
+    }
+
+    /// `Sa` applied to a point (reflection about the plane).
+    pub fn point(&self, p: &Vector3<f64>) -> Vector3<f64> {
+        p - 2.0 * (p - self.point).dot(&self.normal) * self.normal
+    }
+
+    /// `Sa` applied to a free vector (an `Offs` offset).
+    pub fn vector(&self, v: &Vector3<f64>) -> Vector3<f64> {
+        v - 2.0 * v.dot(&self.normal) * self.normal
+    }
+
+    /// `Sb` applied to a tool-frame vector (a `RelTool` offset).
+    pub fn tool_vector(&self, v: &Vector3<f64>) -> Vector3<f64> {
+        v - 2.0 * v.dot(&self.tool_axis) * self.tool_axis
+    }
+
+    /// The quaternion of `Sa·R·Sb` (see the module comment), not normalised away from `q`'s sign.
+    fn rotation(&self, r: &UnitQuaternion<f64>, right: Vector3<f64>) -> Quaternion<f64> {
+        let pa = Quaternion::from_parts(0.0, self.normal);
+        let pb = Quaternion::from_parts(0.0, right);
+        -(pa * r.quaternion() * pb)
+    }
+
+    /// `T' = M·Sa·M⁻¹·T·Sb`, with the quaternion the analytic formula gives (sign included).
+    pub fn target(&self, t: &Pose) -> (Pose, [f64; 4]) {
+        let q = self.rotation(&t.rotation, self.tool_axis);
+        let p = self.point(&t.translation.vector);
+        let r = UnitQuaternion::from_quaternion(q);
+        (
+            Pose::from_parts(Translation3::from(p), r),
+            [q.w, q.i, q.j, q.k],
+        )
+    }
+
+    /// A frame in the mirrored space: `A·F·A` (work objects, bases: both sides reflect the
+    /// plane, so `uframe'·oframe'·T' = Sa·uframe·oframe·T·Sb`).
+    pub fn frame(&self, f: &Pose) -> (Pose, [f64; 4]) {
+        let q = self.rotation(&f.rotation, self.normal);
+        let p = self.point(&f.translation.vector);
+        let r = UnitQuaternion::from_quaternion(q);
+        (
+            Pose::from_parts(Translation3::from(p), r),
+            [q.w, q.i, q.j, q.k],
+        )
+    }
+
+    /// A tool in the flange of the mirror-image robot: `Sb·tframe·Sb` (the mirrored flange is
+    /// the flange reflected in its own flip axis).
+    pub fn tool(&self, f: &Pose) -> (Pose, [f64; 4]) {
+        let pa = Quaternion::from_parts(0.0, self.tool_axis);
+        let q = -(pa * f.rotation.quaternion() * pa);
+        let p = self.tool_vector(&f.translation.vector);
+        let r = UnitQuaternion::from_quaternion(q);
+        (
+            Pose::from_parts(Translation3::from(p), r),
+            [q.w, q.i, q.j, q.k],
+        )
+    }
+}
+
+/// An edit for a value that may be an exact sign flip: a flip keeps the original decimals
+/// (`90` → `-90`), anything else gets the house minimum.
+fn flip_or_value_edit(field: &Option<NumField>, new: f64, min_decimals: usize) -> Option<Edit> {
+    let old = field.as_ref()?.value();
+    let decimals = if new == -old { 0 } else { min_decimals };
+    number_edit(field, new, decimals)
+}
+
+fn skid_edit(p: &Position, settings: &MirrorSettings) -> Option<Edit> {
+    let (scale, offset) = settings.skid_map;
+    match p.skid(settings.skid_axis) {
+        Skid::At(s) => number_edit(
+            p.extax.get(settings.skid_axis)?,
+            scale * s + offset,
+            MM_DECIMALS,
+        ),
+        Skid::NotConnected | Skid::Missing => None,
+    }
+}
+
+fn config_edits(config: &Config) -> Vec<Edit> {
+    match config {
+        Config::Abb(cf) => cf
+            .iter()
+            .take(3)
+            .filter_map(|f| {
+                let v = f.as_ref()?.value();
+                integer_edit(f, -(v.round() as i64) - 1)
+            })
+            .collect(),
+        Config::Kuka { turn, .. } => turn
+            .as_ref()
+            .and_then(|t| bits_edit(turn, t.value ^ TURN_A1_A4_A6))
+            .into_iter()
+            .collect(),
+        Config::None => Vec::new(),
+    }
+}
+
+/// `mirror` every target (and, if asked, frame) of `program`.
+pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
+    let refl = Reflection::new(settings);
+    let mut out = ProgramEdits::for_program(program);
+    for (file, fe) in program.files.iter().zip(out.files.iter_mut()) {
+        for p in &file.positions {
+            if !p.kind.is_cartesian() {
+                if settings.mirror_joints {
+                    let mut edits: Vec<Edit> = [0, 3, 5]
+                        .iter()
+                        .filter_map(|&i| {
+                            let f = p.joints.get(i)?;
+                            flip_or_value_edit(f, -f.as_ref()?.value(), 0)
+                        })
+                        .collect();
+                    edits.extend(skid_edit(p, settings));
+                    if !edits.is_empty() {
+                        fe.edits.extend(edits);
+                        fe.changes.push(TargetChange {
+                            mm: 0.0,
+                            deg: 0.0,
+                            skid: None,
+                        });
+                    }
+                } else {
+                    let label = p.label();
+                    fe.refusals.push(Refusal::new(
+                        file,
+                        p.span,
+                        label.clone(),
+                        RefusalKind::JointTarget,
+                        format!("{} is a joint target: it is not mirrored", describe(p)),
+                        format!("pass --mirror-joints to negate axes 1, 4 and 6, {SKIP_HINT}"),
+                    ));
+                }
+                continue;
+            }
+            match common_refusal(file, p) {
+                // A plane given in the work object mirrors a target used with two work objects
+                // the same way in both; a plane in world does not.
+                Some(r) if r.kind != RefusalKind::TwoWorkObjects || settings.world.is_some() => {
+                    fe.refusals.push(r);
+                    continue;
+                }
+                _ => {}
+            }
+            let refl = match reflection_for(program, p, settings, &refl) {
+                Ok(r) => r,
+                Err((kind, msg, hint)) => {
+                    fe.refusals.push(Refusal::new(
+                        file,
+                        p.span,
+                        p.label(),
+                        kind,
+                        msg,
+                        format!("{hint}, {SKIP_HINT}"),
+                    ));
+                    continue;
+                }
+            };
+            let Some(fields) = p.cartesian.as_ref() else {
+                continue;
+            };
+            let Some(t) = fields.pose() else { continue };
+            let (new, expected) = refl.target(&t);
+            let mut edits = pose_edits(fields, &new, OrientationHint::Expected(expected));
+            if settings.config == ConfigRule::Mirror {
+                edits.extend(config_edits(&p.config));
+            }
+            edits.extend(skid_edit(p, settings));
+            if !edits.is_empty() {
+                let (mm, deg) = pose_change(&t, &new);
+                let skid = match p.skid(settings.skid_axis) {
+                    Skid::At(s) => Some(s),
+                    _ => None,
+                };
+                fe.edits.extend(edits);
+                fe.changes.push(TargetChange { mm, deg, skid });
+            }
+        }
+        mirror_offsets(
+            program,
+            file,
+            settings,
+            &refl,
+            &mut fe.edits,
+            &mut fe.refusals,
+        );
+        if settings.mirror_frames {
+            mirror_frames(file, settings, &refl, &mut fe.edits);
+        }
+    }
+    out
+}
+
+type Why = (RefusalKind, String, String);
+
+/// The reflection for one target: the settings' own, or the world plane taken into the
+/// target's work object.
+pub(crate) fn reflection_for(
+    program: &Program,
+    p: &Position,
+    settings: &MirrorSettings,
+    own: &Reflection,
+) -> Result<Reflection, Why> {
+    let Some(world) = &settings.world else {
+        return Ok(*own);
+    };
+    let name = wobj_of(p, world.default_wobj.as_deref())?;
+    match resolve_frame(program, &world.frames, &name) {
+        Resolved::Frame(w) => Ok(Reflection::about(&(w.inverse() * world.frame), settings)),
+        Resolved::Refused(kind, msg, hint) => Err((kind, format!("{}: {msg}", describe(p)), hint)),
+    }
+}
+
+/// The declared target an `Offs` offsets: `p10` in `Offs(p10, …)`, `pBed` in
+/// `Offs(RelTool(pBed, …), …)`, `pGrid` in `Offs(pGrid{r,c}, …)`; every array element of it.
+fn offset_targets<'p>(program: &'p Program, text: &str) -> Vec<&'p Position> {
+    let inner = text.rsplit('(').next().unwrap_or(text).trim_start();
+    let base: String = inner
+        .chars()
+        .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+        .collect();
+    if base.is_empty() {
+        return Vec::new();
+    }
+    let element = format!("{base}{{");
+    program
+        .files
+        .iter()
+        .flat_map(|f| &f.positions)
+        .filter(|p| {
+            p.name.as_deref().is_some_and(|n| {
+                n.eq_ignore_ascii_case(&base)
+                    || n.get(..element.len())
+                        .is_some_and(|h| h.eq_ignore_ascii_case(&element))
+            })
+        })
+        .collect()
+}
+
+fn mirror_offsets(
+    program: &Program,
+    file: &ParsedFile,
+    settings: &MirrorSettings,
+    own: &Reflection,
+    edits: &mut Vec<Edit>,
+    refusals: &mut Vec<Refusal>,
+) {
+    for call in &file.offsets {
+        // Offs offsets are in the work object of the target they offset: with a plane in world
+        // that target's work object decides the plane.
+        let refl = match (&settings.world, call.kind) {
+            (Some(_), OffsetKind::Offs) => {
+                let targets = offset_targets(program, &call.target);
+                let reflections: Vec<_> = targets
+                    .iter()
+                    .map(|p| reflection_for(program, p, settings, own))
+                    .collect();
+                let resolved = match reflections.first() {
+                    None => Err((
+                        RefusalKind::UnresolvedWorkObject,
+                        format!(
+                            "`{}` is not a declared target: its work object is unknown",
+                            call.target
+                        ),
+                        "offset a declared target, or mirror with the plane in the work object"
+                            .to_owned(),
+                    )),
+                    Some(Err(e)) => Err(e.clone()),
+                    Some(Ok(first)) => {
+                        // Array elements share one declaration; they must share one plane too.
+                        let same = reflections.iter().all(|r| match r {
+                            Ok(r) => {
+                                (r.normal - first.normal).norm() < 1e-12
+                                    && (r.point - first.point).norm() < 1e-9
+                            }
+                            Err(_) => false,
+                        });
+                        if same {
+                            Ok(*first)
+                        } else {
+                            Err((
+                                RefusalKind::TwoWorkObjects,
+                                format!(
+                                    "the elements of `{}` lie in different work objects",
+                                    call.target
+                                ),
+                                "offset one target per work object".to_owned(),
+                            ))
+                        }
+                    }
+                };
+                match resolved {
+                    Ok(r) => r,
+                    Err((kind, msg, hint)) => {
+                        refusals.push(Refusal::new(
+                            file,
+                            call.span,
+                            call.target.clone(),
+                            kind,
+                            format!("Offs({}, …): {msg}", call.target),
+                            format!("{hint}, {SKIP_HINT}"),
+                        ));
+                        continue;
+                    }
+                }
+            }
+            _ => *own,
+        };
+        let (name, frame) = match call.kind {
+            OffsetKind::Offs => ("Offs", "object"),
+            OffsetKind::RelTool => ("RelTool", "tool"),
+        };
+        // A reflection `I - 2nnᵀ` reads component j only where n_j ≠ 0, and leaves it alone
+        // otherwise: an expression there (Offs(p, 0, 0, zUp)) is fine, anywhere else it is not.
+        let axis = match call.kind {
+            OffsetKind::Offs => refl.normal,
+            OffsetKind::RelTool => refl.tool_axis,
+        };
+        let blocked = call
+            .delta
+            .iter()
+            .zip(axis.iter())
+            .any(|(f, n)| f.is_none() && n.abs() > 1e-12);
+        if blocked {
+            refusals.push(Refusal::new(
+                file,
+                call.span,
+                call.target.clone(),
+                RefusalKind::Expression,
+                format!(
+                    "{name}({}, …) has an offset that is not a number where the mirror changes it",
+                    call.target
+                ),
+                format!("write the {frame}-frame offsets as numbers, {SKIP_HINT}"),
+            ));
+            continue;
+        }
+        let d = call.delta.clone().map(|f| f.map_or(0.0, |f| f.value()));
+        let v = Vector3::new(d[0], d[1], d[2]);
+        let new = match call.kind {
+            OffsetKind::Offs => refl.vector(&v),
+            OffsetKind::RelTool => refl.tool_vector(&v),
+        };
+        for (f, n) in call.delta.iter().zip([new.x, new.y, new.z]) {
+            edits.extend(flip_or_value_edit(f, n, MM_DECIMALS));
+        }
+        if call.kind == OffsetKind::RelTool {
+            // Sb·Rot(axis, θ)·Sb is the rotation about Sb·axis by -θ: rotations about the
+            // flipped axis keep their sign, the other two change it.
+            for (i, f) in call.rot.iter().enumerate() {
+                let flip = refl.tool_axis[i] == 0.0;
+                if let Some(v) = f.as_ref().map(NumField::value) {
+                    if flip {
+                        edits.extend(flip_or_value_edit(f, -v, 0));
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn frame_field_edits(fields: &CartesianFields, new: &Pose, expected: [f64; 4]) -> Vec<Edit> {
+    pose_edits(fields, new, OrientationHint::Expected(expected))
+}
+
+fn mirror_frames(
+    file: &ParsedFile,
+    settings: &MirrorSettings,
+    own: &Reflection,
+    edits: &mut Vec<Edit>,
+) {
+    for d in &file.frames {
+        match d.kind {
+            FrameKind::WorkObject | FrameKind::Base => {
+                // A plane in world reflects the user frame (in world) about itself and the
+                // object frame (in the user frame) about the plane seen from the user frame.
+                let uframe = d.frame.as_ref().and_then(|f| f.pose());
+                let (for_uframe, for_oframe) = match (&settings.world, uframe) {
+                    (Some(w), Some(u)) => (
+                        Reflection::about(&w.frame, settings),
+                        Reflection::about(&(u.inverse() * w.frame), settings),
+                    ),
+                    _ => (*own, *own),
+                };
+                for (fields, refl) in [(&d.frame, for_uframe), (&d.oframe, for_oframe)] {
+                    let Some(fields) = fields else { continue };
+                    if let Some(f) = fields.pose() {
+                        let (new, q) = refl.frame(&f);
+                        edits.extend(frame_field_edits(fields, &new, q));
+                    }
+                }
+            }
+            FrameKind::Tool => {
+                if let Some(fields) = &d.frame {
+                    if let Some(f) = fields.pose() {
+                        let (new, q) = own.tool(&f);
+                        edits.extend(frame_field_edits(fields, &new, q));
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{abb_quat, kuka_abc, pose_xyz_deg};
+    use crate::position::Orientation;
+    use crate::transform::edits::apply;
+    use crate::transform::rewrite::wijk;
+    use crate::transform::test_support::{krl, rapid};
+    use proptest::prelude::*;
+
+    const NC: &str = "[9E9,9E9,9E9,9E9,9E9,9E9]";
+
+    fn mirrored_text(p: &Program, s: &MirrorSettings) -> String {
+        let out = apply(p, mirror(p, s)).unwrap();
+        String::from_utf8(out.files[0].output.clone()).unwrap()
+    }
+
+    fn quat_of(p: &Position) -> [f64; 4] {
+        match &p.cartesian.as_ref().unwrap().orient {
+            Some(Orientation::Quaternion(q)) => q.clone().map(|f| f.unwrap().value()),
+            _ => panic!("not a quaternion"),
+        }
+    }
+
+    fn same_up_to_sign(a: [f64; 4], b: [f64; 4], tol: f64) -> bool {
+        let plus = a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol);
+        let minus = a.iter().zip(b).all(|(x, y)| (x + y).abs() <= tol);
+        plus || minus
+    }
+
+    /// `../shared/reference/README.md`: RobotStudio's mirror in the work object's xz plane.
+    // The literals are RobotStudio's printed numbers, not approximations of 1/√2 we chose.
+    #[allow(clippy::approx_constant)]
+    #[test]
+    fn reproduces_robotstudio_mirror_numbers() {
+        let src = format!(
+            "[[298.36,100.97,250.58],[0.000000269,0.707107,0.707107,-0.000000268],[0,-1,0,0],{NC}]\n\
+             [[0,0,0],[0,0.707106781,0.707106781,0],[-1,0,-1,0],{NC}]\n"
+        );
+        let text = mirrored_text(&rapid(&src, "wobj0"), &MirrorSettings::default());
+        let m = rapid(&text, "wobj0");
+        let (t50, t10) = (&m.files[0].positions[0], &m.files[0].positions[1]);
+        let trans = t50.cartesian.as_ref().unwrap().translation().unwrap();
+        assert_eq!(trans, [298.36, -100.97, 250.58]);
+        // Quaternions up to the sign of the whole, to the 6 decimals RobotStudio printed.
+        assert!(same_up_to_sign(
+            quat_of(t50),
+            [2.69e-7, -0.707107, 0.707107, 2.68e-7],
+            1e-6
+        ));
+        assert!(same_up_to_sign(
+            quat_of(t10),
+            [0.0, -0.707106781, 0.707106781, 0.0],
+            1e-9
+        ));
+        let cf = |p: &Position| match &p.config {
+            Config::Abb(c) => c.clone().map(|f| f.unwrap().value()),
+            _ => panic!(),
+        };
+        assert_eq!(cf(t50), [-1.0, 0.0, -1.0, 0.0]);
+        assert_eq!(cf(t10), [0.0, -1.0, 0.0, 0.0]);
+        // Unchanged literals keep their text; 9E9 stays 9E9.
+        assert_eq!(
+            text.lines().next().unwrap(),
+            "[[298.36,-100.970,250.58],[0.000000269,-0.707107,0.707107,0.000000268],[-1,0,-1,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"
+        );
+    }
+
+    #[test]
+    fn kuka_xz_mirror_is_minus_a_b_minus_c_with_turn_toggled() {
+        let src = "{X 1200.5,Y 310.25,Z 845,A 30,B 10,C 170,S 6,T 27,E1 2500}\n";
+        let text = mirrored_text(&krl(src, "BASE_DATA[1]"), &MirrorSettings::default());
+        assert_eq!(
+            text,
+            "{X 1200.5,Y -310.250,Z 845,A -30.0000,B 10,C -170.0000,S 6,T 50,E1 2500}\n"
+        );
+        // The same rule through the rotation, for an arbitrary triple.
+        let refl = Reflection::new(&MirrorSettings::default());
+        let t = Pose::from_parts(Default::default(), kuka_abc(-47.3, 61.2, -118.9));
+        let (m, _) = refl.target(&t);
+        let expected = kuka_abc(47.3, 61.2, 118.9);
+        assert!(m.rotation.angle_to(&expected) < 1e-12);
+    }
+
+    #[test]
+    fn config_keep_and_skid_map() {
+        let src = "[[1,2,3],[1,0,0,0],[0,-1,2,1],[2000,9E9,9E9,9E9,9E9,9E9]]\n";
+        let s = MirrorSettings {
+            config: ConfigRule::Keep,
+            skid_map: (-1.0, 8000.0),
+            ..MirrorSettings::default()
+        };
+        let text = mirrored_text(&rapid(src, "wobj0"), &s);
+        assert_eq!(
+            text,
+            "[[1,-2.000,3],[1,0,0,0],[0,-1,2,1],[6000.000,9E9,9E9,9E9,9E9,9E9]]\n"
+        );
+    }
+
+    const MODULE: &str = "MODULE m\n  PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1500,-400,600],[0.996195,0,0,0.087156]],[[100,20,0],[0.999848,0,0.017452,0]]];\n  PERS tooldata tGun:=[TRUE,[[12.5,-3.2,412.8],[0.965926,0,0.258819,0]],[48.5,[0,0,180],[1,0,0,0],0.9,1.1,0.6]];\n  CONST robtarget p1:=[[310.5,-120.25,80],[0.183013,0.683013,0.683013,-0.183013],[0,-1,2,1],[2500,9E9,9E9,9E9,9E9,9E9]];\n  CONST jointtarget jHome:=[[10,-20,30,40,50,-60],[2500,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveAbsJ jHome, v1000, fine, tGun;\n    MoveL Offs(p1,10,-20.5,30), v1000, fine, tGun\\WObj:=wCar;\n    MoveL RelTool(p1,5,6,-7\\Rx:=1\\Ry:=2\\Rz:=3), v1000, fine, tGun\\WObj:=wCar;\n  ENDPROC\nENDMODULE\n";
+
+    fn parse(text: &str) -> Program {
+        Program {
+            files: vec![crate::rapid::parse_file(
+                std::path::Path::new("m.mod"),
+                text.as_bytes().to_vec(),
+            )],
+        }
+    }
+
+    /// `--mirror-frames`: the work object and the tool mirror so that the world pose of the TCP
+    /// is the mirror image of the original in world (`Sa·W·T·Sb`), offsets follow Sa / Sb and
+    /// `--mirror-joints` negates axes 1, 4, 6.
+    #[test]
+    fn frames_offsets_and_joints_through_the_rapid_parser() {
+        let p0 = parse(MODULE);
+        let s = MirrorSettings {
+            mirror_frames: true,
+            mirror_joints: true,
+            ..MirrorSettings::default()
+        };
+        let edits = mirror(&p0, &s);
+        assert!(edits.refusals().next().is_none());
+        let out = apply(&p0, edits).unwrap();
+        let text = String::from_utf8(out.files[0].output.clone()).unwrap();
+        let p1 = parse(&text);
+        let (f0, f1) = (&p0.files[0], &p1.files[0]);
+        let wobj = |f: &ParsedFile| {
+            f.frames
+                .iter()
+                .find(|d| d.name == "wCar")
+                .unwrap()
+                .pose()
+                .unwrap()
+        };
+        let tool = |f: &ParsedFile| {
+            f.frames
+                .iter()
+                .find(|d| d.name == "tGun")
+                .unwrap()
+                .pose()
+                .unwrap()
+        };
+        let target = |f: &ParsedFile| {
+            f.positions
+                .iter()
+                .find(|p| p.name.as_deref() == Some("p1"))
+                .unwrap()
+                .cartesian
+                .as_ref()
+                .unwrap()
+                .pose()
+                .unwrap()
+        };
+        let refl = Reflection::new(&s);
+        let (want, _) = refl.target(&(wobj(f0) * target(f0)));
+        let got = wobj(f1) * target(f1);
+        assert!(
+            (want.translation.vector - got.translation.vector).norm() < 2e-3,
+            "{text}"
+        );
+        assert!(want.rotation.angle_to(&got.rotation) < 1e-5, "{text}");
+        // The flange of the mirror-image robot is Sb·F·Sb, so the tool mirrors as Sb·tool·Sb.
+        let (tw, _) = refl.tool(&tool(f0));
+        assert!((tw.translation.vector - tool(f1).translation.vector).norm() < 1e-3);
+        assert!(text.contains("[[12.5,3.200,412.8]"), "{text}");
+        assert!(text.contains("Offs(p1,10,20.5,30)"), "{text}");
+        assert!(
+            text.contains("RelTool(p1,5,-6,-7\\Rx:=-1\\Ry:=2\\Rz:=-3)"),
+            "{text}"
+        );
+        assert!(text.contains("jHome:=[[-10,-20,30,-40,50,60]"), "{text}");
+        assert!(text.contains("[-1,0,-3,1],[2500,"), "{text}");
+    }
+
+    /// `frame_in = "world"`: a target in a work object and a target in world mirror about the
+    /// same physical plane.
+    #[test]
+    fn world_plane_mirrors_every_work_object_about_one_plane() {
+        let text = "MODULE m\n  PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1500,-1850.75,600],[0.996195,0,0,0.087156]],[[0,0,0],[1,0,0,0]]];\n  CONST robtarget pCar:=[[100,300,50],[1,0,0,0],[0,0,0,0],[2500,9E9,9E9,9E9,9E9,9E9]];\n  CONST robtarget pWorld:=[[1600,-1550.75,650],[1,0,0,0],[0,0,0,0],[2500,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL pCar, v1000, fine, tool0\\WObj:=wCar;\n    MoveL pWorld, v1000, fine, tool0;\n    MoveL Offs(pCar,0,10,0), v1000, fine, tool0\\WObj:=wCar;\n  ENDPROC\nENDMODULE\n";
+        let p0 = parse(text);
+        let plane = pose_xyz_deg(0.0, -1850.75, 0.0, 0.0, 0.0, 0.0);
+        let s = MirrorSettings {
+            world: Some(WorldPlane {
+                frame: plane,
+                frames: BTreeMap::new(),
+                default_wobj: None,
+            }),
+            ..MirrorSettings::default()
+        };
+        let edits = mirror(&p0, &s);
+        assert!(edits.refusals().next().is_none());
+        let out = String::from_utf8(apply(&p0, edits).unwrap().files[0].output.clone()).unwrap();
+        let p1 = parse(&out);
+        let w = p1.files[0].frames[0].pose().unwrap();
+        let pos = |f: &ParsedFile, n: &str| {
+            f.positions
+                .iter()
+                .find(|p| p.name.as_deref() == Some(n))
+                .unwrap()
+                .cartesian
+                .as_ref()
+                .unwrap()
+                .pose()
+                .unwrap()
+        };
+        let world = Reflection::about(&plane, &s);
+        let (want_car, _) = world.target(&(w * pos(&p0.files[0], "pCar")));
+        let got_car = w * pos(&p1.files[0], "pCar");
+        assert!(
+            (want_car.translation.vector - got_car.translation.vector).norm() < 2e-3,
+            "{out}"
+        );
+        assert!(
+            want_car.rotation.angle_to(&got_car.rotation) < 1e-5,
+            "{out}"
+        );
+        let got_world = pos(&p1.files[0], "pWorld").translation.vector;
+        assert!(
+            (got_world - Vector3::new(1600.0, -2150.75, 650.0)).norm() < 1e-9,
+            "{out}"
+        );
+        // The Offs offset is a vector in wCar, turned 10° against the plane.
+        assert!(out.contains("Offs(pCar,-3.420,-9.397,0)"), "{out}");
+    }
+
+    /// An expression in an offset blocks the mirror only where the reflection reads it.
+    #[test]
+    fn offset_expressions_block_only_the_mirrored_component() {
+        let text = "MODULE m\n  VAR num zUp := 5;\n  CONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[100,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL Offs(p1,10,20,zUp), v1000, fine, tool0;\n    MoveL Offs(p1,10,zUp,0), v1000, fine, tool0;\n  ENDPROC\nENDMODULE\n";
+        let p0 = parse(text);
+        let edits = mirror(&p0, &MirrorSettings::default());
+        let refused: Vec<_> = edits.refusals().map(|r| (r.line, r.kind)).collect();
+        assert_eq!(refused, [(6, RefusalKind::Expression)]);
+        let out = String::from_utf8(apply(&p0, edits).unwrap().files[0].output.clone()).unwrap();
+        assert!(out.contains("Offs(p1,10,-20,zUp)"), "{out}");
+        assert!(out.contains("Offs(p1,10,zUp,0)"), "{out}");
+    }
+
+    fn settings() -> impl Strategy<Value = MirrorSettings> {
+        let frame = (
+            -500.0..500.0f64,
+            -500.0..500.0f64,
+            -500.0..500.0f64,
+            -180.0..180.0f64,
+            -89.0..89.0f64,
+            -180.0..180.0f64,
+        );
+        (
+            frame,
+            prop_oneof![Just(Plane::Xy), Just(Plane::Xz), Just(Plane::Yz)],
+            prop_oneof![Just(Axis::X), Just(Axis::Y), Just(Axis::Z)],
+            any::<bool>(),
+        )
+            .prop_map(
+                |((x, y, z, a, b, c), plane, tool_flip, ident)| MirrorSettings {
+                    frame: if ident {
+                        Pose::identity()
+                    } else {
+                        pose_xyz_deg(x, y, z, a, b, c)
+                    },
+                    plane,
+                    tool_flip,
+                    ..MirrorSettings::default()
+                },
+            )
+    }
+
+    fn unit_quat() -> impl Strategy<Value = [f64; 4]> {
+        (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64)
+            .prop_filter("not tiny", |(a, b, c, d)| {
+                a * a + b * b + c * c + d * d > 0.05
+            })
+            .prop_map(|(a, b, c, d)| {
+                let n = (a * a + b * b + c * c + d * d).sqrt();
+                [a / n, b / n, c / n, d / n]
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(128))]
+
+        /// DESIGN.md §4: mirror(mirror(P)) = P in memory, 1e-6 mm, 1e-9 in quaternion components.
+        #[test]
+        fn mirror_twice_in_memory(s in settings(), q in unit_quat(),
+                                  x in -3000.0..3000.0f64, y in -3000.0..3000.0f64, z in -3000.0..3000.0f64) {
+            let refl = Reflection::new(&s);
+            let t = Pose::from_parts(nalgebra::Translation3::new(x, y, z), abb_quat(q).unwrap());
+            let (once, _) = refl.target(&t);
+            let (twice, _) = refl.target(&once);
+            prop_assert!((twice.translation.vector - t.translation.vector).norm() < 1e-6);
+            let back = wijk(&twice.rotation);
+            prop_assert!(same_up_to_sign(back, q, 1e-9), "{back:?} vs {q:?}");
+            // A mirror is a reflection: proper rotation out, improper nowhere.
+            prop_assert!((once.rotation.norm() - 1.0).abs() < 1e-12);
+        }
+
+        /// A plane in world, taken into a work object (`M = W⁻¹·P`), mirrors the target's world
+        /// pose about that plane: `W·T' = P·Sa·P⁻¹·W·T·Sb`.
+        #[test]
+        fn world_plane_equals_mirror_in_world(s in settings(), q in unit_quat(),
+                                              w in (-2000.0..2000.0f64, -2000.0..2000.0f64, -500.0..500.0f64, -180.0..180.0f64, -20.0..20.0f64)) {
+            let t = Pose::from_parts(nalgebra::Translation3::new(120.0, -340.0, 56.0), abb_quat(q).unwrap());
+            let w = pose_xyz_deg(w.0, w.1, w.2, w.4, 0.0, w.3);
+            let (local, _) = Reflection::about(&(w.inverse() * s.frame), &s).target(&t);
+            let (world, _) = Reflection::about(&s.frame, &s).target(&(w * t));
+            let got = w * local;
+            prop_assert!((got.translation.vector - world.translation.vector).norm() < 1e-6);
+            prop_assert!(got.rotation.angle_to(&world.rotation) < 1e-9);
+        }
+
+        /// Through files: twice gives back the same numbers, to the written precision.
+        #[test]
+        fn mirror_twice_through_text(s in settings(), q in unit_quat(),
+                                     x in -3000.0..3000.0f64, y in -3000.0..3000.0f64, z in -3000.0..3000.0f64,
+                                     cf in (-4i64..4, -4i64..4, -4i64..4, 0i64..8)) {
+            let line = format!(
+                "[[{x:.3},{y:.3},{z:.3}],[{:.6},{:.6},{:.6},{:.6}],[{},{},{},{}],[{:.3},9E9,9E9,9E9,9E9,9E9]]\n",
+                q[0], q[1], q[2], q[3], cf.0, cf.1, cf.2, cf.3, x.abs()
+            );
+            let p0 = rapid(&line, "wobj0");
+            let once = mirrored_text(&p0, &s);
+            let twice = mirrored_text(&rapid(&once, "wobj0"), &s);
+            let (a, b) = (&p0.files[0].positions[0], &rapid(&twice, "wobj0").files[0].positions[0]);
+            let ta = a.cartesian.as_ref().unwrap().translation().unwrap();
+            let tb = b.cartesian.as_ref().unwrap().translation().unwrap();
+            for (u, v) in ta.iter().zip(tb) {
+                prop_assert!((u - v).abs() <= 1.5e-3, "{once}{twice}");
+            }
+            prop_assert!(same_up_to_sign(quat_of(a), quat_of(b), 3e-6), "{line}{once}{twice}");
+            prop_assert_eq!(&a.config, &b.config);
+        }
+    }
+}

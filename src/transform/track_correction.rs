@@ -1,0 +1,571 @@
+//! `correct` and `zero` (DESIGN.md §4, seed eq. 4.55).
+//!
+//! For a target `T` in work object `W` at skid `s`, with the controller's nominal base
+//! `B(s) = Trans(s·a)·B_0` and the profile's deviation `D(s)`:
+//! - correct: `T' = W⁻¹ · B(s) · D(s)⁻¹ · B(s)⁻¹ · W · T`
+//! - zero:    `T' = W⁻¹ · B(s) · D(s)   · B(s)⁻¹ · W · T`
+
+use std::collections::BTreeMap;
+
+use nalgebra::{Translation3, Vector3};
+
+use crate::geometry::Pose;
+use crate::position::{FrameKind, Language, ParsedFile, Position, Program, Skid};
+use crate::track::{Profile, TrackError};
+
+use super::cell::Robot;
+use super::edits::{ProgramEdits, TargetChange};
+use super::refusal::{Refusal, RefusalKind, SKIP_HINT};
+use super::rewrite::{OrientationHint, pose_change, pose_edits};
+
+/// `D(s)`: anything that gives the track's deviation at a skid (a [`Profile`], or a test's
+/// closed form).
+pub trait Deviation: Sync {
+    fn deviation(&self, skid: f64) -> Result<Pose, TrackError>;
+}
+
+impl Deviation for Profile {
+    fn deviation(&self, skid: f64) -> Result<Pose, TrackError> {
+        Profile::deviation(self, skid)
+    }
+}
+
+impl<F: Fn(f64) -> Result<Pose, TrackError> + Sync> Deviation for F {
+    fn deviation(&self, skid: f64) -> Result<Pose, TrackError> {
+        self(skid)
+    }
+}
+
+/// `correct` or `zero`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Direction {
+    /// CAD → real track: apply `D⁻¹`.
+    Correct,
+    /// Online-tuned → straight track: apply `D`.
+    Zero,
+}
+
+impl Direction {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Direction::Correct => "correct",
+            Direction::Zero => "zero",
+        }
+    }
+}
+
+/// One robot's track as a transform needs it.
+pub struct TrackSetup<'a> {
+    /// `B_0`: the controller's robot base in world at skid 0.
+    pub base0: Pose,
+    /// `a`: unit track direction in world.
+    pub track_axis: Vector3<f64>,
+    /// External axis index of the skid (0 = `eax_a` / `E1`).
+    pub skid_axis: usize,
+    /// Work objects / bases overriding the program's (lower-case name → pose in world).
+    pub frames: BTreeMap<String, Pose>,
+    pub deviation: &'a dyn Deviation,
+    /// The work object for declared targets no motion uses (`--default-wobj`).
+    pub default_wobj: Option<String>,
+}
+
+impl<'a> TrackSetup<'a> {
+    pub fn new(robot: &Robot, deviation: &'a dyn Deviation) -> TrackSetup<'a> {
+        TrackSetup {
+            base0: robot.base0,
+            track_axis: robot.track_axis,
+            skid_axis: robot.skid_axis,
+            frames: robot.frames.clone(),
+            deviation,
+            default_wobj: None,
+        }
+    }
+
+    /// `B(s) = Trans(s·a)·B_0`.
+    pub fn base_at(&self, skid: f64) -> Pose {
+        Translation3::from(self.track_axis * skid) * self.base0
+    }
+
+    /// The work-object-frame change `W⁻¹·B·D^∓1·B⁻¹·W` at skid `s` (left factor of `T`).
+    pub fn correction(&self, w: &Pose, skid: f64, dir: Direction) -> Result<Pose, TrackError> {
+        let b = self.base_at(skid);
+        let d = self.deviation.deviation(skid)?;
+        let d = match dir {
+            Direction::Correct => d.inverse(),
+            Direction::Zero => d,
+        };
+        Ok(w.inverse() * b * d * b.inverse() * w)
+    }
+}
+
+/// Coordinates beyond this (mm) are not a target in a robot cell.
+const PLAUSIBLE_MM: f64 = 1e6;
+
+/// Names that mean "world" when a program does not declare them.
+fn is_world(name: &str) -> bool {
+    let n = name.to_ascii_lowercase();
+    matches!(
+        n.as_str(),
+        "wobj0" | "base_data[0]" | "$nullframe" | "$world"
+    )
+}
+
+/// A work object resolved to a pose in world, or why not (kind, message, hint).
+pub(crate) enum Resolved {
+    Frame(Pose),
+    Refused(RefusalKind, String, String),
+}
+
+/// The work object / base `name` in world: the cell's override, else the program's
+/// declaration, else world for `wobj0`.
+pub(crate) fn resolve_frame(
+    program: &Program,
+    overrides: &BTreeMap<String, Pose>,
+    name: &str,
+) -> Resolved {
+    let lower = name.to_ascii_lowercase();
+    if let Some(p) = overrides.get(&lower) {
+        return Resolved::Frame(*p);
+    }
+    let decl = program.files.iter().flat_map(|f| &f.frames).find(|d| {
+        matches!(d.kind, FrameKind::WorkObject | FrameKind::Base)
+            && d.name.eq_ignore_ascii_case(name)
+    });
+    match decl {
+        Some(d) if d.ufprog == Some(false) => Resolved::Refused(
+            RefusalKind::MovingWorkObject,
+            format!("work object `{name}` is moved by a mechanical unit (ufprog FALSE)"),
+            "its position depends on that unit, not on the track: correct such targets by hand"
+                .to_owned(),
+        ),
+        Some(d) if d.robhold == Some(true) => Resolved::Refused(
+            RefusalKind::StationaryTool,
+            format!("work object `{name}` is held by the robot (robhold TRUE: stationary tool)"),
+            "a stationary-tool target moves with the work piece, not the track: correct it by hand"
+                .to_owned(),
+        ),
+        Some(d) => match d.pose() {
+            Some(p) => Resolved::Frame(p),
+            None => Resolved::Refused(
+                RefusalKind::UnresolvedWorkObject,
+                format!("work object `{name}` has fields that are not numbers"),
+                format!(
+                    "give `{name}` as {{x,y,z,rx,ry,rz}} under [robot.NAME.wobj] in the cell file"
+                ),
+            ),
+        },
+        None if is_world(name) => Resolved::Frame(Pose::identity()),
+        None => Resolved::Refused(
+            RefusalKind::UnresolvedWorkObject,
+            format!("work object `{name}` is not declared in the program"),
+            format!("add `{name}` under [robot.NAME.wobj] in the cell file"),
+        ),
+    }
+}
+
+/// The work object (or KRL base) a target is used with: its first use, else `default` for a
+/// declared target no motion uses.
+pub(crate) fn wobj_of(
+    p: &Position,
+    default: Option<&str>,
+) -> Result<String, (RefusalKind, String, String)> {
+    let what = describe(p);
+    match (&p.usage.wobj, p.usage.lines.is_empty()) {
+        (Some(w), _) => Ok(w.clone()),
+        (None, true) => match default {
+            Some(d) => Ok(d.to_owned()),
+            None => Err((
+                RefusalKind::UnresolvedWorkObject,
+                format!("{what} is not used by any motion: its work object is unknown"),
+                "pass --default-wobj NAME to transform unused targets in NAME".to_owned(),
+            )),
+        },
+        (None, false) => Err((
+            RefusalKind::UnresolvedWorkObject,
+            format!("{what} is used with a work object that cannot be resolved"),
+            "name the work object explicitly in the motion instruction".to_owned(),
+        )),
+    }
+}
+
+/// `robtarget \`p10\`` for a declared target, `inline robtarget` for a literal in an instruction.
+pub(crate) fn describe(p: &Position) -> String {
+    match &p.name {
+        Some(n) => format!("{} `{n}`", p.kind.as_str()),
+        None => format!("inline {}", p.kind.as_str()),
+    }
+}
+
+/// Checks that every transform makes before touching a Cartesian target; `None` = go ahead.
+pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Refusal> {
+    let label = p.label();
+    let refuse = |kind, msg: String, hint: &str| {
+        Some(Refusal::new(
+            file,
+            p.span,
+            label.clone(),
+            kind,
+            msg,
+            format!("{hint}, {SKIP_HINT}"),
+        ))
+    };
+    let what = describe(p);
+    if !p.kind.is_cartesian() {
+        return refuse(
+            RefusalKind::JointTarget,
+            format!("{what} is a joint target: it is not changed"),
+            "re-teach it or convert it to a Cartesian target",
+        );
+    }
+    if p.cartesian.as_ref().and_then(|c| c.pose()).is_none() {
+        return refuse(
+            RefusalKind::Expression,
+            format!("{what} has a position or orientation field that is not a number"),
+            "write the fields as numeric literals",
+        );
+    }
+    let far = p
+        .cartesian
+        .as_ref()
+        .and_then(|c| c.translation())
+        .is_some_and(|t| t.iter().any(|v| v.abs() > PLAUSIBLE_MM));
+    if far {
+        return refuse(
+            RefusalKind::Implausible,
+            format!("{what} lies more than 1 km from its work object's origin"),
+            "check the coordinates (mm)",
+        );
+    }
+    if p.usage.stationary_tool {
+        let setting = match file.language {
+            Language::Rapid => "robhold TRUE",
+            Language::Krl => "IPO_FRAME #TCP",
+        };
+        return refuse(
+            RefusalKind::StationaryTool,
+            format!("{what} is a stationary-tool point ({setting})"),
+            "it moves with the work piece, not the track: correct it by hand",
+        );
+    }
+    if let Some(other) = p.usage.other_wobjs.first() {
+        let first = p.usage.wobj.as_deref().unwrap_or("?");
+        return refuse(
+            RefusalKind::TwoWorkObjects,
+            format!("{what} is used with two work objects (`{first}` and `{other}`)"),
+            "split it into one target per work object",
+        );
+    }
+    None
+}
+
+/// `correct` or `zero` every Cartesian target of `program` with `setup`'s track.
+pub fn track_correction(program: &Program, setup: &TrackSetup, dir: Direction) -> ProgramEdits {
+    let mut out = ProgramEdits::for_program(program);
+    for (file, fe) in program.files.iter().zip(out.files.iter_mut()) {
+        for p in &file.positions {
+            if let Some(r) = common_refusal(file, p) {
+                fe.refusals.push(r);
+                continue;
+            }
+            match correct_one(program, file, p, setup, dir) {
+                Ok((edits, change)) => {
+                    if !edits.is_empty() {
+                        fe.edits.extend(edits);
+                        fe.changes.push(change);
+                    }
+                }
+                Err(r) => fe.refusals.push(*r),
+            }
+        }
+    }
+    out
+}
+
+type Corrected = (Vec<crate::syntax::Edit>, TargetChange);
+
+fn correct_one(
+    program: &Program,
+    file: &ParsedFile,
+    p: &Position,
+    setup: &TrackSetup,
+    dir: Direction,
+) -> Result<Corrected, Box<Refusal>> {
+    let label = p.label();
+    let what = describe(p);
+    let refuse = |k, msg: String, hint: String| {
+        Box::new(Refusal::new(
+            file,
+            p.span,
+            label.clone(),
+            k,
+            msg,
+            format!("{hint}, {SKIP_HINT}"),
+        ))
+    };
+    let axis = axis_name(file.language, setup.skid_axis);
+    let skid = match p.skid(setup.skid_axis) {
+        Skid::At(s) => s,
+        Skid::NotConnected => {
+            return Err(refuse(
+                RefusalKind::SkidNotConnected,
+                format!("{what} has {axis} = 9E9 (not connected): no skid position"),
+                format!(
+                    "write the skid position into {axis}, or set `skid` for this robot in the cell file"
+                ),
+            ));
+        }
+        Skid::Missing => {
+            return Err(refuse(
+                RefusalKind::SkidMissing,
+                format!("{what} has no numeric {axis}: no skid position"),
+                format!("write the skid position into {axis}"),
+            ));
+        }
+    };
+    let wobj_name = match wobj_of(p, setup.default_wobj.as_deref()) {
+        Ok(name) => name,
+        Err((k, msg, hint)) => return Err(refuse(k, msg, hint)),
+    };
+    let w = match resolve_frame(program, &setup.frames, &wobj_name) {
+        Resolved::Frame(w) => w,
+        Resolved::Refused(k, msg, hint) => {
+            return Err(refuse(k, format!("{what}: {msg}"), hint));
+        }
+    };
+    let correction = setup
+        .correction(&w, skid, dir)
+        .map_err(|e| match e {
+            TrackError::OutOfRange { min, max, .. } => refuse(
+                RefusalKind::SkidOutOfRange,
+                format!(
+                    "{what} is at skid {skid} mm, outside the profile's range [{min}, {max}] mm"
+                ),
+                "measure the track over this range, or set extrapolate = \"clamp\" or \"linear\" in the profile"
+                    .to_owned(),
+            ),
+            other => refuse(
+                RefusalKind::SkidOutOfRange,
+                format!("{what} at skid {skid} mm: {other}"),
+                "check the profile".to_owned(),
+            ),
+        })?;
+    let Some(fields) = p.cartesian.as_ref() else {
+        return Ok((Vec::new(), no_change()));
+    };
+    let Some(t) = fields.pose() else {
+        return Ok((Vec::new(), no_change()));
+    };
+    let new = correction * t;
+    let edits = pose_edits(fields, &new, OrientationHint::NearOriginal);
+    let (mm, deg) = pose_change(&t, &new);
+    Ok((
+        edits,
+        TargetChange {
+            mm,
+            deg,
+            skid: Some(skid),
+        },
+    ))
+}
+
+fn no_change() -> TargetChange {
+    TargetChange {
+        mm: 0.0,
+        deg: 0.0,
+        skid: None,
+    }
+}
+
+/// `eax_a` / `E1` … for messages.
+pub(crate) fn axis_name(language: Language, index: usize) -> String {
+    match language {
+        Language::Rapid => format!("eax_{}", (b'a' + index.min(25) as u8) as char),
+        Language::Krl => format!("E{}", index + 1),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{abb_quat, pose_xyz_deg};
+    use crate::position::Orientation;
+    use crate::track::profile::{Extrapolate, Knot};
+    use crate::transform::edits::apply;
+    use crate::transform::test_support::{krl, rapid};
+    use proptest::prelude::*;
+
+    fn setup<'a>(dev: &'a dyn Deviation, base0: Pose, axis: Vector3<f64>) -> TrackSetup<'a> {
+        TrackSetup {
+            base0,
+            track_axis: axis.normalize(),
+            skid_axis: 0,
+            frames: BTreeMap::new(),
+            deviation: dev,
+            default_wobj: None,
+        }
+    }
+
+    fn text_after(p: &Program, s: &TrackSetup, dir: Direction) -> String {
+        let r = apply(p, track_correction(p, s, dir)).unwrap();
+        assert!(
+            r.refusals().next().is_none(),
+            "{:?}",
+            r.refusals().collect::<Vec<_>>()
+        );
+        String::from_utf8(r.files[0].output.clone()).unwrap()
+    }
+
+    #[test]
+    fn worked_example_sag_lifts_the_target() {
+        // The rails sag 1 mm at every skid: the real base is 1 mm lower than the controller
+        // thinks, so the corrected target must be 1 mm higher for the TCP to land on the CAD
+        // point. Base at skid 0 in world (0, -1800, 0) turned 90° about z, track along +x.
+        let sag = |_s: f64| -> Result<Pose, TrackError> {
+            Ok(pose_xyz_deg(0.0, 0.0, -1.0, 0.0, 0.0, 0.0))
+        };
+        let s = setup(
+            &sag,
+            pose_xyz_deg(0.0, -1800.0, 0.0, 0.0, 0.0, 90.0),
+            Vector3::x(),
+        );
+        let w = pose_xyz_deg(2000.0, 0.0, 600.0, 0.0, 0.0, 0.0);
+        let c = s.correction(&w, 3000.0, Direction::Correct).unwrap();
+        let t = pose_xyz_deg(100.0, 200.0, 300.0, 0.0, 0.0, 0.0);
+        let v = (c * t).translation.vector - t.translation.vector;
+        assert!((v - Vector3::new(0.0, 0.0, 1.0)).norm() < 1e-12, "{v}");
+        // And the physical check of DESIGN.md §4: B·D·B⁻¹·W·T' = W·T.
+        let b = s.base_at(3000.0);
+        let d = sag(3000.0).unwrap();
+        let reached = b * d * b.inverse() * w * (c * t);
+        assert!((reached.translation.vector - (w * t).translation.vector).norm() < 1e-9);
+    }
+
+    #[test]
+    fn twist_turns_about_the_base_not_the_work_object() {
+        // A twist of 0.01° about the base x axis at skid s, with the target 1 m above the base:
+        // the correction moves it sideways by 1000·sin(0.01°) ≈ 0.1745 mm.
+        let twist = |_s: f64| -> Result<Pose, TrackError> {
+            Ok(pose_xyz_deg(0.0, 0.0, 0.0, 0.01, 0.0, 0.0))
+        };
+        let s = setup(&twist, Pose::identity(), Vector3::x());
+        let c = s
+            .correction(&Pose::identity(), 500.0, Direction::Correct)
+            .unwrap();
+        let t = pose_xyz_deg(500.0, 0.0, 1000.0, 0.0, 0.0, 0.0);
+        let moved = (c * t).translation.vector - t.translation.vector;
+        assert!(
+            (moved.y - 1000.0 * 0.01f64.to_radians().sin()).abs() < 1e-9,
+            "{moved}"
+        );
+    }
+
+    #[test]
+    fn zero_deviation_profile_leaves_files_byte_identical() {
+        let knots = (0..5)
+            .map(|i| Knot {
+                skid: i as f64 * 2000.0,
+                dx: 0.0,
+                dy: 0.0,
+                dz: 0.0,
+                rx: 0.0,
+                ry: 0.0,
+                rz: 0.0,
+            })
+            .collect();
+        let profile = crate::track::Profile::from_knots("flat", knots, Extrapolate::Error).unwrap();
+        let src = "[[1200.5,-310.25,845],[0.0436194,0.0,0.9990482,0.0],[0,-1,0,1],[2500,9E9,9E9,9E9,9E9,9E9]]\n\
+                   [[0,0,0],[0.7071,0,0.7071,0],[0,0,0,0],[0,9E+09,9E9,9E9,9E9,9E9]]\n";
+        let s = setup(
+            &profile,
+            pose_xyz_deg(10.0, -1800.0, 5.0, 0.0, 0.0, 90.0),
+            Vector3::x(),
+        );
+        let mut s = s;
+        s.frames.insert(
+            "wobj_car".into(),
+            pose_xyz_deg(2000.0, 0.0, 600.0, 0.0, 0.0, 180.0),
+        );
+        for dir in [Direction::Correct, Direction::Zero] {
+            assert_eq!(text_after(&rapid(src, "wobj_car"), &s, dir), src);
+        }
+        let k = "{X 1200.5,Y 310.25,Z 845,A 30,B 89.99,C 170,S 6,T 27,E1 7999.5}\n";
+        assert_eq!(text_after(&krl(k, "wobj_car"), &s, Direction::Correct), k);
+    }
+
+    fn quat(p: &Position) -> [f64; 4] {
+        match &p.cartesian.as_ref().unwrap().orient {
+            Some(Orientation::Quaternion(q)) => q.clone().map(|f| f.unwrap().value()),
+            _ => panic!(),
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(128))]
+
+        /// DESIGN.md §4: zero(correct(P)) = P in memory, 1e-6 mm and 1e-9 quaternion.
+        #[test]
+        fn zero_undoes_correct_in_memory(
+            base in (-3000.0..3000.0f64, -3000.0..3000.0f64, -500.0..500.0f64, -180.0..180.0f64),
+            axis in (0.5..1.0f64, -0.2..0.2f64, -0.05..0.05f64),
+            w in (-3000.0..3000.0f64, -3000.0..3000.0f64, 0.0..1500.0f64, -180.0..180.0f64, -30.0..30.0f64),
+            t in (-1500.0..1500.0f64, -1500.0..1500.0f64, -500.0..1500.0f64, -180.0..180.0f64, -80.0..80.0f64, -180.0..180.0f64),
+            skid in 0.0..8000.0f64,
+            amp in (0.05..5.0f64, 0.001..0.1f64, 500.0..9000.0f64),
+        ) {
+            // A generated deformation: mm-size translations, hundredths of a degree.
+            let dev = move |s: f64| -> Result<Pose, TrackError> {
+                let u = s / amp.2;
+                Ok(pose_xyz_deg(amp.0 * u.cos(), amp.0 * u.sin(), -amp.0 * (2.0 * u).sin(),
+                                amp.1 * u.sin(), -amp.1 * u.cos(), amp.1 * (3.0 * u).sin()))
+            };
+            let s = setup(&dev, pose_xyz_deg(base.0, base.1, base.2, 0.0, 0.0, base.3), Vector3::new(axis.0, axis.1, axis.2));
+            let w = pose_xyz_deg(w.0, w.1, w.2, 0.0, w.4, w.3);
+            let t = pose_xyz_deg(t.0, t.1, t.2, t.3, t.4, t.5);
+            let corrected = s.correction(&w, skid, Direction::Correct).unwrap() * t;
+            let back = s.correction(&w, skid, Direction::Zero).unwrap() * corrected;
+            prop_assert!((back.translation.vector - t.translation.vector).norm() < 1e-6);
+            let (a, b) = (back.rotation.quaternion(), t.rotation.quaternion());
+            prop_assert!((a.coords - b.coords).amax() < 1e-9 || (a.coords + b.coords).amax() < 1e-9);
+            // The correction is a real one (tenths of mm), not a no-op.
+            prop_assert!((corrected.translation.vector - t.translation.vector).norm() > 1e-3);
+        }
+
+        /// Through text: zero(correct(file)) gives back the file's numbers to written precision.
+        #[test]
+        fn zero_undoes_correct_through_text(
+            q in (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64).prop_filter("norm", |q| q.0*q.0+q.1*q.1+q.2*q.2+q.3*q.3 > 0.05),
+            x in -1500.0..1500.0f64, y in -1500.0..1500.0f64, z in -500.0..1500.0f64,
+            skid in 0.0..8000.0f64,
+            abc in (-180.0..180.0f64, -85.0..85.0f64, -180.0..180.0f64),
+            knots in proptest::collection::vec((-3.0..3.0f64, -3.0..3.0f64, -3.0..3.0f64, -0.1..0.1f64, -0.1..0.1f64, -0.1..0.1f64), 2..10),
+        ) {
+            // A generated profile: 2 to 9 knots spread evenly over 0..8000 mm.
+            let step = 8000.0 / (knots.len() - 1) as f64;
+            let knots = knots.iter().enumerate().map(|(i, k)| Knot { skid: i as f64 * step, dx: k.0, dy: k.1, dz: k.2, rx: k.3, ry: k.4, rz: k.5 }).collect();
+            let profile = crate::track::Profile::from_knots("generated", knots, Extrapolate::Error).unwrap();
+            let n = (q.0*q.0+q.1*q.1+q.2*q.2+q.3*q.3).sqrt();
+            let q = [q.0/n, q.1/n, q.2/n, q.3/n];
+            let mut s = setup(&profile, pose_xyz_deg(0.0, -1800.0, 0.0, 0.0, 0.0, 90.0), Vector3::x());
+            s.frames.insert("wobj_car".into(), pose_xyz_deg(2000.0, 0.0, 600.0, 0.0, 0.0, 180.0));
+            let line = format!("[[{x:.3},{y:.3},{z:.3}],[{:.6},{:.6},{:.6},{:.6}],[0,0,0,0],[{skid:.2},9E9,9E9,9E9,9E9,9E9]]\n", q[0], q[1], q[2], q[3]);
+            let p0 = rapid(&line, "wobj_car");
+            let c = text_after(&p0, &s, Direction::Correct);
+            let back = text_after(&rapid(&c, "wobj_car"), &s, Direction::Zero);
+            let p1 = rapid(&back, "wobj_car");
+            let (a, b) = (&p0.files[0].positions[0], &p1.files[0].positions[0]);
+            let (ta, tb) = (a.cartesian.as_ref().unwrap().translation().unwrap(), b.cartesian.as_ref().unwrap().translation().unwrap());
+            for (u, v) in ta.iter().zip(tb) { prop_assert!((u - v).abs() <= 1.5e-3, "{line}{c}{back}"); }
+            let ra = abb_quat(quat(a)).unwrap();
+            let rb = abb_quat(quat(b)).unwrap();
+            prop_assert!(ra.angle_to(&rb) < 1e-5, "{line}{c}{back}");
+            // KUKA through text as well.
+            let kl = format!("{{X {x:.3},Y {y:.3},Z {z:.3},A {:.4},B {:.4},C {:.4},S 2,T 0,E1 {skid:.2}}}\n", abc.0, abc.1, abc.2);
+            let kc = text_after(&krl(&kl, "wobj_car"), &s, Direction::Correct);
+            let kb = text_after(&krl(&kc, "wobj_car"), &s, Direction::Zero);
+            let (ka, kz) = (krl(&kl, "w").files[0].positions[0].cartesian.clone().unwrap(), krl(&kb, "w").files[0].positions[0].cartesian.clone().unwrap());
+            let (pa, pz) = (ka.pose().unwrap(), kz.pose().unwrap());
+            prop_assert!((pa.translation.vector - pz.translation.vector).amax() <= 1.5e-3, "{kl}{kc}{kb}");
+            prop_assert!(pa.rotation.angle_to(&pz.rotation).to_degrees() < 3e-4, "{kl}{kc}{kb}");
+        }
+    }
+}

@@ -1,0 +1,198 @@
+//! `transfer` (DESIGN.md §4): zero with robot A, optionally mirror, correct with robot B.
+//!
+//! The three steps run through text exactly as three commands in a row would: each step's output
+//! is parsed again before the next, so the written precision rounds in the same places and
+//! `transfer` equals `zero; mirror; correct` byte for byte.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use crate::position::{Language, Program};
+use crate::program::{LoadError, LoadOptions};
+use crate::syntax::EditError;
+
+use super::edits::{FileResult, ProgramResult, TargetChange, apply};
+use super::mirror::{MirrorSettings, Reflection, mirror, reflection_for};
+use super::rewrite::pose_change;
+use super::track_correction::{Direction, TrackSetup, track_correction};
+
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum TransferError {
+    #[error(transparent)]
+    Edit(#[from] EditError),
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    #[error("temporary folder for re-reading a KRL pair: {0}")]
+    Io(#[from] std::io::Error),
+    #[error("{}: the transformed file no longer has the same targets ({before} before, {after} after)", path.display())]
+    Drift {
+        path: PathBuf,
+        before: usize,
+        after: usize,
+    },
+}
+
+/// The three steps of a transfer.
+pub struct TransferPlan<'a> {
+    pub from: TrackSetup<'a>,
+    pub mirror: Option<MirrorSettings>,
+    pub to: TrackSetup<'a>,
+}
+
+/// A private folder under the system temp dir, removed on drop.
+struct ScratchDir(PathBuf);
+
+impl ScratchDir {
+    fn new() -> std::io::Result<ScratchDir> {
+        static COUNTER: AtomicUsize = AtomicUsize::new(0);
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("trackfix-reparse-{}-{n}", std::process::id()));
+        std::fs::create_dir_all(&dir)?;
+        Ok(ScratchDir(dir))
+    }
+}
+
+impl Drop for ScratchDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn file_name(p: &Path) -> PathBuf {
+    p.file_name().map(PathBuf::from).unwrap_or_default()
+}
+
+/// Parses a transform's output again, as the next command of a chain would read it. File paths
+/// stay the original ones.
+pub fn reparse(
+    program: &Program,
+    result: &ProgramResult,
+    options: &LoadOptions,
+) -> Result<Program, TransferError> {
+    let language = program.files.first().map(|f| f.language);
+    if language == Some(Language::Rapid) {
+        let files = result
+            .files
+            .iter()
+            .map(|f| crate::rapid::parse_file(&f.path, f.output.clone()))
+            .collect();
+        return Ok(Program { files });
+    }
+    // A KRL pair is read through the loader so that the .src's motions resolve the .dat's
+    // targets exactly as on the command line.
+    let scratch = ScratchDir::new()?;
+    for f in &result.files {
+        std::fs::write(scratch.0.join(file_name(&f.path)), &f.output)?;
+    }
+    let Some(first) = result.files.first() else {
+        return Ok(Program { files: Vec::new() });
+    };
+    let mut reread = crate::program::load(&scratch.0.join(file_name(&first.path)), options)?;
+    for f in &mut reread.files {
+        if let Some(orig) = result.files.iter().find(|o| {
+            f.path.parent() == Some(scratch.0.as_path()) && file_name(&o.path) == file_name(&f.path)
+        }) {
+            f.path = orig.path.clone();
+        }
+    }
+    Ok(reread)
+}
+
+/// Runs `zero` with `plan.from`, `mirror` if asked, `correct` with `plan.to`.
+pub fn transfer(
+    program: &Program,
+    plan: &TransferPlan,
+    options: &LoadOptions,
+) -> Result<ProgramResult, TransferError> {
+    let zeroed = apply(
+        program,
+        track_correction(program, &plan.from, Direction::Zero),
+    )?;
+    let mut current = reparse(program, &zeroed, options)?;
+    let mut steps = vec![zeroed];
+    if let Some(m) = &plan.mirror {
+        let mirrored = apply(&current, mirror(&current, m))?;
+        current = reparse(&current, &mirrored, options)?;
+        steps.push(mirrored);
+    }
+    let corrected = apply(
+        &current,
+        track_correction(&current, &plan.to, Direction::Correct),
+    )?;
+    let last = reparse(&current, &corrected, options)?;
+    steps.push(corrected);
+    combine(
+        program,
+        &last,
+        &steps,
+        plan.from.skid_axis,
+        plan.mirror.as_ref(),
+    )
+}
+
+/// One result from a chain of steps: the first step's input, the last step's output, every
+/// distinct refusal, and each changed target's track correction: the change from start to end
+/// beyond the mirror itself (a mirror moves points by metres; the correction is what matters).
+fn combine(
+    start: &Program,
+    end: &Program,
+    steps: &[ProgramResult],
+    skid_axis: usize,
+    mirror: Option<&MirrorSettings>,
+) -> Result<ProgramResult, TransferError> {
+    let own = mirror.map(Reflection::new);
+    let mut files = Vec::new();
+    for (i, (a, b)) in start.files.iter().zip(&end.files).enumerate() {
+        if a.positions.len() != b.positions.len() {
+            return Err(TransferError::Drift {
+                path: a.path.clone(),
+                before: a.positions.len(),
+                after: b.positions.len(),
+            });
+        }
+        let mut seen = BTreeSet::new();
+        let refusals = steps
+            .iter()
+            .filter_map(|s| s.files.get(i))
+            .flat_map(|f| f.refusals.iter())
+            .filter(|r| seen.insert((r.line, r.target.clone(), r.kind)))
+            .cloned()
+            .collect();
+        let changes = a
+            .positions
+            .iter()
+            .zip(&b.positions)
+            .filter(|(p, q)| p.span.slice(&a.source) != q.span.slice(&b.source))
+            .map(|(p, q)| {
+                let poses = p
+                    .cartesian
+                    .as_ref()
+                    .and_then(|c| c.pose())
+                    .map(|x| match (mirror, &own) {
+                        (Some(m), Some(own)) => match reflection_for(start, p, m, own) {
+                            Ok(r) => r.target(&x).0,
+                            Err(_) => x,
+                        },
+                        _ => x,
+                    })
+                    .zip(q.cartesian.as_ref().and_then(|c| c.pose()));
+                let (mm, deg) = poses.map_or((0.0, 0.0), |(x, y)| pose_change(&x, &y));
+                let skid = match p.skid(skid_axis) {
+                    crate::position::Skid::At(s) => Some(s),
+                    _ => None,
+                };
+                TargetChange { mm, deg, skid }
+            })
+            .collect();
+        files.push(FileResult {
+            path: a.path.clone(),
+            original: a.source.clone(),
+            output: b.source.clone(),
+            refusals,
+            changes,
+        });
+    }
+    Ok(ProgramResult { files })
+}
