@@ -132,11 +132,18 @@ fn nums(fields: &[Option<NumField>]) -> Vec<Option<f64>> {
 fn orientation(c: &CartesianFields) -> (Option<[f64; 4]>, Option<[f64; 3]>) {
     match c.rotation() {
         Some(r) => (
-            Some(abb_quat_components(&r, c.written_quaternion())),
-            Some(xyz_deg_angles(&r)),
+            Some(abb_quat_components(&r, c.written_quaternion()).map(tidy)),
+            Some(xyz_deg_angles(&r).map(tidy)),
         ),
         None => (None, None),
     }
+}
+
+/// Computed values (a quaternion from A, B, C; angles from a quaternion) to 1e-9, so float
+/// noise like `6.1e-17` does not reach reports. Written values are reported as read.
+fn tidy(v: f64) -> f64 {
+    let r = (v * 1e9).round() / 1e9;
+    if r == 0.0 { 0.0 } else { r }
 }
 
 fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> PositionRow {
@@ -199,26 +206,28 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
     }
 }
 
-fn frame_kind(kind: FrameKind) -> &'static str {
-    match kind {
-        FrameKind::WorkObject => "wobjdata",
-        FrameKind::Tool => "tooldata",
-        FrameKind::Base => "base",
+/// The data type of a frame as its language names it.
+fn frame_kind(kind: FrameKind, language: Language) -> &'static str {
+    match (kind, language) {
+        (FrameKind::WorkObject, _) => "wobjdata",
+        (FrameKind::Tool, Language::Rapid) => "tooldata",
+        (FrameKind::Tool, Language::Krl) => "tool",
+        (FrameKind::Base, _) => "base",
     }
 }
 
-fn frame_row(f: &FrameDecl) -> FrameRow {
+fn frame_row(f: &FrameDecl, language: Language) -> FrameRow {
     let pose = f.pose();
     let t = pose.map(|p| p.translation.vector);
-    let q = pose.map(|p| abb_quat_components(&p.rotation, None));
-    let angles = pose.map(|p| xyz_deg_angles(&p.rotation));
+    let q = pose.map(|p| abb_quat_components(&p.rotation, None).map(tidy));
+    let angles = pose.map(|p| xyz_deg_angles(&p.rotation).map(tidy));
     FrameRow {
         name: f.name.clone(),
-        kind: frame_kind(f.kind),
+        kind: frame_kind(f.kind, language),
         line: f.line,
-        x: t.map(|v| v.x),
-        y: t.map(|v| v.y),
-        z: t.map(|v| v.z),
+        x: t.map(|v| tidy(v.x)),
+        y: t.map(|v| tidy(v.y)),
+        z: t.map(|v| tidy(v.z)),
         q,
         rx: angles.map(|a| a[0]),
         ry: angles.map(|a| a[1]),
@@ -254,7 +263,11 @@ pub fn inspect_file(file: &ParsedFile, options: InspectOptions) -> FileReport {
             .iter()
             .map(|p| position_row(file, p, options))
             .collect(),
-        frames: file.frames.iter().map(frame_row).collect(),
+        frames: file
+            .frames
+            .iter()
+            .map(|f| frame_row(f, file.language))
+            .collect(),
         opaque: file.opaque,
         counts,
         warnings: lints(file).iter().map(|d| message(file, d)).collect(),

@@ -84,3 +84,141 @@ fn man_page_and_completions_come_from_the_same_definitions() {
     assert!(bash.status.success());
     assert!(stdout(&bash).contains("trackfix__subcmd__transfer"));
 }
+
+/// Every program in `samples/`: RAPID modules, and KRL programs named once (the `.src` of a pair).
+fn sample_programs() -> Vec<String> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let files = trackfix::program::collect_inputs(&[root.join("samples")]).expect("samples listed");
+    let mut out: Vec<String> = files
+        .iter()
+        .filter(|p| !p.ends_with("$config.dat"))
+        .map(|p| {
+            p.strip_prefix(root)
+                .unwrap_or(p)
+                .to_string_lossy()
+                .replace('\\', "/")
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+#[test]
+fn inspect_json_snapshot_per_sample() {
+    let programs = sample_programs();
+    assert!(
+        programs.len() >= 20,
+        "expected the RAPID and KRL samples, found {programs:?}"
+    );
+    for program in &programs {
+        let o = trackfix(&["inspect", "--format", "json", program]);
+        assert_eq!(o.status.code(), Some(0), "{program}: {}", stderr(&o));
+        let json: serde_json::Value = serde_json::from_slice(&o.stdout).expect("valid JSON");
+        // The stable shape: every position has every documented key.
+        for file in json["files"].as_array().expect("files") {
+            for p in file["positions"].as_array().expect("positions") {
+                for key in [
+                    "name", "kind", "line", "x", "y", "z", "q", "rx", "ry", "rz", "config", "skid",
+                    "extax", "tool",
+                ] {
+                    assert!(p.get(key).is_some(), "{program}: position lacks {key}: {p}");
+                }
+                let frame_key = if file["language"] == "krl" {
+                    "base"
+                } else {
+                    "wobj"
+                };
+                assert!(p.get(frame_key).is_some(), "{program}: lacks {frame_key}");
+            }
+        }
+        let name = format!("inspect_{}", program.replace(['/', '.', '$'], "_"));
+        insta::assert_snapshot!(name, stdout(&o));
+    }
+}
+
+#[test]
+fn inspect_krl_with_config_dat_resolves_bases() {
+    let o = trackfix(&[
+        "inspect",
+        "--format",
+        "json",
+        "--config-dat",
+        "samples/krl/$config.dat",
+        "samples/krl/spot_line.dat",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).expect("valid JSON");
+    let files = json["files"].as_array().expect("files");
+    // Naming the .dat reads the pair (the .src first) and the $config.dat.
+    assert_eq!(files[0]["path"], "samples/krl/spot_line.src");
+    assert_eq!(files[1]["path"], "samples/krl/spot_line.dat");
+    let frames: Vec<&str> = files
+        .iter()
+        .flat_map(|f| f["frames"].as_array().into_iter().flatten())
+        .filter_map(|f| f["name"].as_str())
+        .collect();
+    assert!(frames.contains(&"BASE_DATA[1]"), "{frames:?}");
+    assert!(frames.contains(&"TOOL_DATA[1]"), "{frames:?}");
+    let points = files[1]["positions"].as_array().expect("positions");
+    assert!(points.len() >= 150, "{}", points.len());
+    // Every spot point is welded on the car (BASE_DATA[1]); only the home point is in $WORLD.
+    let on_car = points
+        .iter()
+        .filter(|p| p["base"] == "BASE_DATA[1]")
+        .count();
+    let in_world: Vec<&str> = points
+        .iter()
+        .filter(|p| p["base"] == "$WORLD")
+        .filter_map(|p| p["name"].as_str())
+        .collect();
+    assert_eq!(on_car + in_world.len(), points.len());
+    assert_eq!(in_world, ["XP0"]);
+    let skids: Vec<f64> = points.iter().filter_map(|p| p["skid"].as_f64()).collect();
+    assert!(skids.iter().all(|s| (0.0..=8000.0).contains(s)));
+}
+
+#[test]
+fn check_over_all_samples_round_trips_and_reports_the_deliberate_findings() {
+    let o = trackfix(&["check", "samples"]);
+    let out = stdout(&o);
+    // Findings are the samples that exercise warnings on purpose (two work objects, a
+    // reassigned RoboDK frame, a composed KRL frame, an unresolved base).
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    let summary = out.lines().last().unwrap_or_default();
+    let files: usize = summary
+        .strip_prefix("checked ")
+        .and_then(|s| s.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .expect("summary line");
+    assert!(
+        summary.contains(&format!("{files} round-trip byte for byte")),
+        "{summary}"
+    );
+    insta::assert_snapshot!(out);
+}
+
+#[test]
+fn table_and_csv_list_the_same_positions() {
+    let table = stdout(&trackfix(&["inspect", "samples/rapid/spot_line.mod"]));
+    let csv = stdout(&trackfix(&[
+        "inspect",
+        "--format",
+        "csv",
+        "samples/rapid/spot_line.mod",
+    ]));
+    let rows = csv.lines().count() - 1;
+    assert!(rows > 200, "{rows}");
+    assert!(
+        table.contains(&format!("1 files, {rows} positions")),
+        "{table}"
+    );
+    assert!(
+        csv.starts_with(
+            "file,language,name,kind,line,x,y,z,q1,q2,q3,q4,rx,ry,rz,skid,frame,tool\n"
+        )
+    );
+    assert!(
+        csv.contains("samples/rapid/spot_line.mod,rapid,Sp001,robtarget,"),
+        "{csv}"
+    );
+}
