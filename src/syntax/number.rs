@@ -2,15 +2,18 @@
 
 /// A numeric literal as written: `12`, `-0.5`, `.5`, `9E9`, `9E+09`, `9e+9`, `2.69E-07`.
 ///
-/// Like toml_edit's `Formatted<T>`, the value and its text travel together: an unchanged value
-/// prints its original bytes, a changed one is written with the original's decimals.
-#[derive(Clone, Debug, PartialEq)]
+/// Like toml_edit's `Formatted<T>`, the value and the style of its text travel together: an
+/// unchanged value keeps its original bytes (they stay in the source, found by the field's span),
+/// a changed one is written with the original's decimals. The text itself is not copied: a
+/// 50 MB module holds millions of literals, and an allocation each would dominate parsing.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NumLit {
-    text: String,
     value: f64,
     /// Decimal places the text resolves: mantissa decimals minus the exponent
     /// (`9E+09` → -9, `2.69E-07` → 9, `1.50` → 2).
     precision: i32,
+    /// The text starts with an explicit `+`.
+    plus: bool,
 }
 
 impl NumLit {
@@ -62,24 +65,21 @@ impl NumLit {
         if i != bytes.len() {
             return None;
         }
+        // Only ASCII digits, signs, '.', 'e' remain here, so the text is valid UTF-8.
         let text = std::str::from_utf8(bytes).ok()?;
         let value: f64 = text.parse().ok()?;
         if !value.is_finite() {
             return None;
         }
         Some(NumLit {
-            text: text.to_owned(),
             value,
             precision: decimals.saturating_sub(exponent),
+            plus: bytes.first() == Some(&b'+'),
         })
     }
 
     pub fn value(&self) -> f64 {
         self.value
-    }
-
-    pub fn text(&self) -> &str {
-        &self.text
     }
 
     /// Decimal places the original text resolves (negative for `9E9`).
@@ -98,7 +98,7 @@ impl NumLit {
         if written == fixed(self.value, places) {
             return None;
         }
-        if self.text.starts_with('+') && !written.starts_with('-') {
+        if self.plus && !written.starts_with('-') {
             return Some(format!("+{written}"));
         }
         Some(written)
@@ -144,7 +144,6 @@ mod tests {
             let lit = NumLit::parse(text.as_bytes()).unwrap();
             assert_eq!(lit.value(), value, "{text}");
             assert_eq!(lit.precision(), precision, "{text}");
-            assert_eq!(lit.text(), text);
         }
         for bad in ["", "-", ".", "1e", "1.2.3", "abc", "1x", "1e+"] {
             assert!(NumLit::parse(bad.as_bytes()).is_none(), "{bad}");
@@ -164,6 +163,9 @@ mod tests {
         assert_eq!(q.rewrite(-0.1234568, 6).as_deref(), Some("-0.123457"));
         let mm = NumLit::parse(b"1234.56789").unwrap();
         assert_eq!(mm.rewrite(1234.5, 3).as_deref(), Some("1234.50000"));
+        let plus = NumLit::parse(b"+1.5").unwrap();
+        assert_eq!(plus.rewrite(2.0, 3).as_deref(), Some("+2.000"));
+        assert_eq!(plus.rewrite(-2.0, 3).as_deref(), Some("-2.000"));
     }
 
     #[test]

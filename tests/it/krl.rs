@@ -8,7 +8,7 @@ use trackfix::position::{
     Config, FrameKind, NumField, Orientation, ParsedFile, Position, PositionKind, Program,
 };
 use trackfix::program::LoadOptions;
-use trackfix::syntax::Severity;
+use trackfix::syntax::{NumLit, Severity};
 
 fn sample(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -219,8 +219,8 @@ fn spot_line_has_160_points_on_the_track_resolved_through_fdat() {
     assert_eq!(p0.usage.wobj.as_deref(), Some("$WORLD"));
     // The spans point at the literal text.
     let e1 = p12.extax[0].as_ref().unwrap();
-    assert_eq!(e1.span.slice(&dat.source), e1.lit.text().as_bytes());
-    assert_eq!(e1.lit.text(), "690.750");
+    assert_eq!(e1.span.slice(&dat.source), b"690.750");
+    assert_eq!(NumLit::parse(b"690.750"), Some(e1.lit));
     let cfg = &program.files[2];
     assert!(cfg.positions.is_empty());
     let bases: Vec<_> = cfg.frames.iter().map(|f| f.name.as_str()).collect();
@@ -560,7 +560,7 @@ proptest! {
             prop_assert_eq!(status.as_ref().unwrap().value, *s);
             prop_assert_eq!(turn.as_ref().unwrap().value, *t);
             prop_assert_eq!(p.extax.len(), 2);
-            prop_assert_eq!(p.extax[0].as_ref().unwrap().lit.text(), e1.as_str());
+            prop_assert_eq!(p.extax[0].as_ref().unwrap().span.slice(&file.source), e1.as_bytes());
         }
     }
 

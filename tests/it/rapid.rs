@@ -16,7 +16,7 @@ use trackfix::position::{
     PositionKind, Skid,
 };
 use trackfix::rapid;
-use trackfix::syntax::{Severity, latin1};
+use trackfix::syntax::{NumLit, Severity, latin1};
 
 fn samples_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/rapid")
@@ -153,8 +153,8 @@ fn assert_spans_match(f: &ParsedFile) {
     let check = |field: &Option<NumField>| {
         if let Some(n) = field {
             assert_eq!(
-                n.span.slice(src),
-                n.lit.text().as_bytes(),
+                NumLit::parse(n.span.slice(src)),
+                Some(n.lit),
                 "{}",
                 f.path.display()
             );
@@ -257,7 +257,7 @@ fn spot_line_is_a_track_program() {
         last = s;
         for k in 1..6 {
             assert_eq!(p.skid(k), Skid::NotConnected);
-            assert_eq!(p.extax[k].as_ref().unwrap().lit.text(), "9E+09");
+            assert_eq!(p.extax[k].as_ref().unwrap().span.slice(src), b"9E+09");
         }
         assert_eq!(p.usage.wobj.as_deref(), Some("wobj_car"));
         assert_eq!(p.usage.tool.as_deref(), Some("tGun1"));
@@ -719,7 +719,11 @@ proptest! {
         for (p, lits) in f.positions.iter().zip(&expected) {
             let got: Vec<String> = all_fields(p)
                 .into_iter()
-                .map(|o| o.as_ref().map(|n| n.lit.text().to_owned()).unwrap_or_default())
+                .map(|o| {
+                    o.as_ref()
+                        .map(|n| String::from_utf8_lossy(n.span.slice(&f.source)).into_owned())
+                        .unwrap_or_default()
+                })
                 .collect();
             prop_assert_eq!(&got, lits);
             let wobj = if p.name.is_some() { "wobj1" } else { "wobj0" };
