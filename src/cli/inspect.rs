@@ -150,15 +150,18 @@ pub fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
         }
         Format::Csv => render_csv(&report),
     };
-    std::io::stdout().lock().write_all(text.as_bytes())?;
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())?;
     if matches!(args.format, Format::Table) {
         let positions: usize = report.files.iter().map(|f| f.positions.len()).sum();
-        println!(
+        // writeln!, not println!: a closed pipe must be an error we can map to success.
+        writeln!(
+            out,
             "{} files, {positions} positions{}{}",
             report.files.len(),
             plural(batch.skipped, "skipped"),
             plural(batch.errors, "unreadable")
-        );
+        )?;
     }
     Ok(if batch.errors > 0 {
         Exit::Usage
