@@ -18,7 +18,7 @@ use trackfix::track::simulate::{
     TrackTruth, measurements_csv, sample_tcp_points, scan_csv, simulate_measurements, simulate_scan,
 };
 use trackfix::track::spectrum::{TUKEY_ALPHA, scan_spectrum};
-use trackfix::track::{Extrapolate, Gear, Profile, Reference};
+use trackfix::track::{Extrapolate, Gear, Knot, Profile, Reference};
 
 use super::Exit;
 
@@ -355,6 +355,20 @@ fn round6(v: f64) -> f64 {
     clean(v, 6)
 }
 
+/// `dx, dy, dz` to 4 decimals and `rx, ry, rz` to 6, right-aligned in `mm_width` and
+/// `deg_width`, joined by `sep`.
+fn deviation_cells(c: &[f64; 6], mm_width: usize, deg_width: usize, sep: &str) -> String {
+    let mut cells = Vec::with_capacity(6);
+    for (i, v) in c.iter().enumerate() {
+        cells.push(if i < 3 {
+            format!("{:>mm_width$.4}", clean(*v, 4))
+        } else {
+            format!("{:>deg_width$.6}", round6(*v))
+        });
+    }
+    cells.join(sep)
+}
+
 fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
     let p = Profile::load(&a.profile)?;
     if let Some(path) = &a.plot {
@@ -399,28 +413,10 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
     let mut s = String::new();
     match a.format {
         ShowFormat::Json => {
-            // A struct keeps the documented key order (a json! map would sort it).
-            #[derive(serde::Serialize)]
-            struct Row {
-                skid: f64,
-                dx: f64,
-                dy: f64,
-                dz: f64,
-                rx: f64,
-                ry: f64,
-                rz: f64,
-            }
-            let arr: Vec<Row> = rows
+            // Knot keeps the documented key order (a json! map would sort it).
+            let arr: Vec<Knot> = rows
                 .iter()
-                .map(|(skid, c)| Row {
-                    skid: *skid,
-                    dx: round6(c[0]),
-                    dy: round6(c[1]),
-                    dz: round6(c[2]),
-                    rx: round6(c[3]),
-                    ry: round6(c[4]),
-                    rz: round6(c[5]),
-                })
+                .map(|(skid, c)| Knot::from_components(*skid, c.map(round6)))
                 .collect();
             s = serde_json::to_string_pretty(&arr)?;
             s.push('\n');
@@ -428,16 +424,7 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
         ShowFormat::Csv => {
             s.push_str("skid,dx,dy,dz,rx,ry,rz\n");
             for (skid, c) in &rows {
-                let _ = writeln!(
-                    s,
-                    "{skid},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6}",
-                    clean(c[0], 4),
-                    clean(c[1], 4),
-                    clean(c[2], 4),
-                    round6(c[3]),
-                    round6(c[4]),
-                    round6(c[5])
-                );
+                let _ = writeln!(s, "{skid},{}", deviation_cells(c, 0, 0, ","));
             }
         }
         ShowFormat::Table => {
@@ -452,17 +439,7 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
                 "      skid    dx [mm]    dy [mm]    dz [mm]     rx [deg]     ry [deg]     rz [deg]"
             );
             for (skid, c) in &rows {
-                let _ = writeln!(
-                    s,
-                    "{:>10} {:>10.4} {:>10.4} {:>10.4} {:>12.6} {:>12.6} {:>12.6}",
-                    skid,
-                    clean(c[0], 4),
-                    clean(c[1], 4),
-                    clean(c[2], 4),
-                    round6(c[3]),
-                    round6(c[4]),
-                    round6(c[5])
-                );
+                let _ = writeln!(s, "{skid:>10} {}", deviation_cells(c, 10, 12, " "));
             }
         }
     }
@@ -494,17 +471,7 @@ fn overview(p: &Profile) -> String {
         n.gear_factor
     );
     let header = "    dx [mm]    dy [mm]    dz [mm]     rx [deg]     ry [deg]     rz [deg]";
-    let row6 = |c: &[f64; 6]| {
-        format!(
-            "{:>11.4}{:>11.4}{:>11.4}{:>13.6}{:>13.6}{:>13.6}",
-            clean(c[0], 4),
-            clean(c[1], 4),
-            clean(c[2], 4),
-            round6(c[3]),
-            round6(c[4]),
-            round6(c[5])
-        )
-    };
+    let row6 = |c: &[f64; 6]| deviation_cells(c, 11, 13, "");
     let _ = writeln!(
         s,
         "\nmanual adjustment: deviation of each component from its own regression line (seed eq. 4.54)"
@@ -554,15 +521,11 @@ fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
         Some(v) => ("t", v),
         None => ("skid", 1.0),
     };
-    let idx = table.columns(&[pos_col, "x", "y", "z"])?;
     let mut positions = Vec::with_capacity(table.rows.len());
     let mut points = Vec::with_capacity(table.rows.len());
-    for row in &table.rows {
-        let v: Vec<f64> = idx.iter().map(|&i| NumericCsv::get(row, i)).collect();
-        if let [s, x, y, z] = v[..] {
-            positions.push(s * scale);
-            points.push([x, y, z]);
-        }
+    for (_, [s, x, y, z]) in table.select(&[pos_col, "x", "y", "z"])? {
+        positions.push(s * scale);
+        points.push([x, y, z]);
     }
     let spec = scan_spectrum(&positions, &points, a.threshold)
         .with_context(|| a.scan.display().to_string())?;

@@ -95,29 +95,56 @@ impl NumericCsv {
 
     /// Index of a required column.
     pub fn column(&self, name: &str) -> Result<usize, TrackError> {
-        self.headers
-            .iter()
-            .position(|h| h == name)
-            .ok_or_else(|| TrackError::Csv {
-                path: self.path.clone(),
-                line: 1,
-                column: name.to_string(),
-                message: format!("missing column; the header is `{}`", self.headers.join(",")),
-            })
+        self.headers.iter().position(|h| h == name).ok_or_else(|| {
+            self.error(
+                1,
+                name,
+                format!("missing column; the header is `{}`", self.headers.join(",")),
+            )
+        })
     }
 
     /// Indices of `names`, refusing columns that are not among them (a misspelt header
     /// should not be ignored silently).
     pub fn columns(&self, names: &[&str]) -> Result<Vec<usize>, TrackError> {
         if let Some(extra) = self.headers.iter().find(|h| !names.contains(&h.as_str())) {
-            return Err(TrackError::Csv {
-                path: self.path.clone(),
-                line: 1,
-                column: extra.clone(),
-                message: format!("unknown column; expected `{}`", names.join(",")),
-            });
+            return Err(self.error(
+                1,
+                extra,
+                format!("unknown column; expected `{}`", names.join(",")),
+            ));
         }
         names.iter().map(|n| self.column(n)).collect()
+    }
+
+    /// Each row's values in the order of `names` (all the file's columns, see
+    /// [`NumericCsv::columns`]) with the row's line.
+    pub fn select<const N: usize>(
+        &self,
+        names: &[&str; N],
+    ) -> Result<Vec<(u64, [f64; N])>, TrackError> {
+        let idx = self.columns(names)?;
+        Ok(self
+            .rows
+            .iter()
+            .map(|row| {
+                let mut v = [f64::NAN; N];
+                for (slot, &i) in v.iter_mut().zip(&idx) {
+                    *slot = NumericCsv::get(row, i);
+                }
+                (row.line, v)
+            })
+            .collect())
+    }
+
+    /// An error at `line` of this file, in `column`.
+    pub fn error(&self, line: u64, column: &str, message: String) -> TrackError {
+        TrackError::Csv {
+            path: self.path.clone(),
+            line,
+            column: column.to_string(),
+            message,
+        }
     }
 
     /// The value at `index` (validated by [`NumericCsv::columns`]).

@@ -22,42 +22,34 @@ pub const OUTLIER_FACTOR: f64 = 4.0;
 
 /// Reads `measurements.csv`. A point number repeated at one skid is an error at its line.
 pub fn read_measurements(path: &Path) -> Result<Vec<MeasurementRow>, TrackError> {
-    let bytes = std::fs::read(path).map_err(|error| TrackError::Io {
-        path: path.to_path_buf(),
-        error,
-    })?;
-    parse_measurements(path, &bytes)
+    measurements_of(&NumericCsv::read(path)?)
 }
 
 /// Parses `measurements.csv` bytes; `path` is for messages only.
 pub fn parse_measurements(path: &Path, bytes: &[u8]) -> Result<Vec<MeasurementRow>, TrackError> {
-    let table = NumericCsv::parse(path, bytes)?;
-    let idx = table.columns(&MEASUREMENTS_HEADER)?;
+    measurements_of(&NumericCsv::parse(path, bytes)?)
+}
+
+fn measurements_of(table: &NumericCsv) -> Result<Vec<MeasurementRow>, TrackError> {
     let mut seen: BTreeMap<(u64, u32), u64> = BTreeMap::new();
     let mut rows = Vec::with_capacity(table.rows.len());
-    for row in &table.rows {
-        let v: Vec<f64> = idx.iter().map(|&i| NumericCsv::get(row, i)).collect();
-        let [skid, point, rx, ry, rz, mx, my, mz] = v[..] else {
-            continue;
-        };
+    for (line, [skid, point, rx, ry, rz, mx, my, mz]) in table.select(&MEASUREMENTS_HEADER)? {
         if point < 0.0 || point.fract() != 0.0 || point > u32::MAX as f64 {
-            return Err(TrackError::Csv {
-                path: path.to_path_buf(),
-                line: row.line,
-                column: "point".to_string(),
-                message: format!("`{point}` is not a point number (0, 1, 2, ...)"),
-            });
+            return Err(table.error(
+                line,
+                "point",
+                format!("`{point}` is not a point number (0, 1, 2, ...)"),
+            ));
         }
         let point = point as u32;
-        if let Some(first) = seen.insert((skid.to_bits(), point), row.line) {
-            return Err(TrackError::Csv {
-                path: path.to_path_buf(),
-                line: row.line,
-                column: "point".to_string(),
-                message: format!(
+        if let Some(first) = seen.insert((skid.to_bits(), point), line) {
+            return Err(table.error(
+                line,
+                "point",
+                format!(
                     "point {point} at skid {skid} was already measured on line {first}; keep one row per point and skid"
                 ),
-            });
+            ));
         }
         rows.push(MeasurementRow {
             skid,

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Translation3, Vector3};
 use serde::{Deserialize, Serialize};
 
+use super::nominal::FitOptions;
 use super::spline::{CubicSpline, EndCondition, SplineError};
 use crate::geometry::{Pose, pose_xyz_deg, xyz_deg};
 
@@ -74,6 +75,24 @@ impl Knot {
     /// `[dx, dy, dz, rx, ry, rz]`.
     pub fn components(&self) -> [f64; 6] {
         [self.dx, self.dy, self.dz, self.rx, self.ry, self.rz]
+    }
+
+    /// A knot of `[dx, dy, dz, rx, ry, rz]` at `skid`.
+    pub fn from_components(skid: f64, [dx, dy, dz, rx, ry, rz]: [f64; 6]) -> Knot {
+        Knot {
+            skid,
+            dx,
+            dy,
+            dz,
+            rx,
+            ry,
+            rz,
+        }
+    }
+
+    /// A knot of no deviation at `skid`.
+    pub fn zero(skid: f64) -> Knot {
+        Knot::from_components(skid, [0.0; 6])
     }
 
     /// The knot's pose `D_i`.
@@ -202,40 +221,34 @@ impl Profile {
         knots: Vec<Knot>,
         extrapolate: Extrapolate,
     ) -> Result<Profile, TrackError> {
-        Profile::from_parts(
-            name.into(),
-            String::new(),
-            Reference::Regression,
-            Gear::AsIs,
+        let opts = FitOptions {
+            name: name.into(),
             extrapolate,
-            Nominal::identity(),
-            knots,
-        )
+            ..FitOptions::default()
+        };
+        Profile::from_parts(&opts, Nominal::identity(), knots)
     }
 
-    /// A profile with every field given; statistics are computed from the knots.
+    /// A profile with the name, reference, gear, extrapolation and source hash of `opts`;
+    /// statistics are computed from the knots.
     pub fn from_parts(
-        name: String,
-        source_sha256: String,
-        reference: Reference,
-        gear: Gear,
-        extrapolate: Extrapolate,
+        opts: &FitOptions,
         nominal: Nominal,
         knots: Vec<Knot>,
     ) -> Result<Profile, TrackError> {
         let splines = build_splines(&knots).map_err(|error| TrackError::Knots {
-            context: format!("profile `{name}`"),
+            context: format!("profile `{}`", opts.name),
             error,
         })?;
         let stats = Some(compute_stats(&knots, &nominal));
         Ok(Profile {
             file: ProfileFile {
                 format: PROFILE_FORMAT.to_string(),
-                name,
-                source_sha256,
-                reference,
-                gear,
-                extrapolate,
+                name: opts.name.clone(),
+                source_sha256: opts.source_sha256.clone(),
+                reference: opts.reference,
+                gear: opts.gear,
+                extrapolate: opts.extrapolate,
                 nominal,
                 stats,
                 knot: knots,

@@ -124,46 +124,51 @@ impl Reflection {
 
     /// The quaternion of `Sa·R·Sb` (see the module comment), not normalised away from `q`'s sign.
     fn rotation(&self, r: &UnitQuaternion<f64>, right: Vector3<f64>) -> Quaternion<f64> {
-        let pa = Quaternion::from_parts(0.0, self.normal);
-        let pb = Quaternion::from_parts(0.0, right);
-        -(pa * r.quaternion() * pb)
+        reflect_rotation(self.normal, r, right)
     }
 
     /// `T' = M·Sa·M⁻¹·T·Sb`, with the quaternion the analytic formula gives (sign included).
     pub fn target(&self, t: &Pose) -> (Pose, [f64; 4]) {
-        let q = self.rotation(&t.rotation, self.tool_axis);
-        let p = self.point(&t.translation.vector);
-        let r = UnitQuaternion::from_quaternion(q);
-        (
-            Pose::from_parts(Translation3::from(p), r),
-            [q.w, q.i, q.j, q.k],
+        pose_with_quat(
+            self.point(&t.translation.vector),
+            self.rotation(&t.rotation, self.tool_axis),
         )
     }
 
     /// A frame in the mirrored space: `A·F·A` (work objects, bases: both sides reflect the
     /// plane, so `uframe'·oframe'·T' = Sa·uframe·oframe·T·Sb`).
     pub fn frame(&self, f: &Pose) -> (Pose, [f64; 4]) {
-        let q = self.rotation(&f.rotation, self.normal);
-        let p = self.point(&f.translation.vector);
-        let r = UnitQuaternion::from_quaternion(q);
-        (
-            Pose::from_parts(Translation3::from(p), r),
-            [q.w, q.i, q.j, q.k],
+        pose_with_quat(
+            self.point(&f.translation.vector),
+            self.rotation(&f.rotation, self.normal),
         )
     }
 
     /// A tool in the flange of the mirror-image robot: `Sb·tframe·Sb` (the mirrored flange is
     /// the flange reflected in its own flip axis).
     pub fn tool(&self, f: &Pose) -> (Pose, [f64; 4]) {
-        let pa = Quaternion::from_parts(0.0, self.tool_axis);
-        let q = -(pa * f.rotation.quaternion() * pa);
-        let p = self.tool_vector(&f.translation.vector);
-        let r = UnitQuaternion::from_quaternion(q);
-        (
-            Pose::from_parts(Translation3::from(p), r),
-            [q.w, q.i, q.j, q.k],
+        pose_with_quat(
+            self.tool_vector(&f.translation.vector),
+            reflect_rotation(self.tool_axis, &f.rotation, self.tool_axis),
         )
     }
+}
+
+/// `Sl·R·Sr` for the reflections with unit normals `left` and `right` (module comment).
+fn reflect_rotation(
+    left: Vector3<f64>,
+    r: &UnitQuaternion<f64>,
+    right: Vector3<f64>,
+) -> Quaternion<f64> {
+    -(Quaternion::from_parts(0.0, left) * r.quaternion() * Quaternion::from_parts(0.0, right))
+}
+
+/// The pose and the exact quaternion it came from: the caller keeps the quaternion's sign.
+fn pose_with_quat(p: Vector3<f64>, q: Quaternion<f64>) -> (Pose, [f64; 4]) {
+    (
+        Pose::from_parts(Translation3::from(p), UnitQuaternion::from_quaternion(q)),
+        [q.w, q.i, q.j, q.k],
+    )
 }
 
 /// An edit for a value that may be an exact sign flip: a flip keeps the original decimals

@@ -386,15 +386,10 @@ fn knot_strategy() -> impl Strategy<Value = Vec<Knot>> {
                     .zip(vals)
                     .map(|(g, v)| {
                         s += g;
-                        Knot {
-                            skid: s,
-                            dx: v[0],
-                            dy: v[1],
-                            dz: v[2],
-                            rx: v[3] / 10.0,
-                            ry: v[4] / 10.0,
-                            rz: v[5] / 10.0,
-                        }
+                        Knot::from_components(
+                            s,
+                            [v[0], v[1], v[2], v[3] / 10.0, v[4] / 10.0, v[5] / 10.0],
+                        )
                     })
                     .collect()
             })

@@ -262,17 +262,7 @@ fn load_with_cell(path: &Path, cell: &Cell, robot: &str) -> Program {
 /// DESIGN.md §4: a profile of zero deviations leaves every sample byte-identical.
 #[test]
 fn zero_deviation_profile_leaves_every_sample_byte_identical() {
-    let knots = (0..=8)
-        .map(|i| Knot {
-            skid: i as f64 * 1000.0,
-            dx: 0.0,
-            dy: 0.0,
-            dz: 0.0,
-            rx: 0.0,
-            ry: 0.0,
-            rz: 0.0,
-        })
-        .collect();
+    let knots = (0..=8).map(|i| Knot::zero(i as f64 * 1000.0)).collect();
     let flat = Profile::from_knots("flat", knots, Extrapolate::Linear).unwrap();
     let cell = sample_cell();
     let mut checked = 0;
