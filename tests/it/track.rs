@@ -1,8 +1,7 @@
 //! Integration tests: track (issue 4). The simulation test, properties, and snapshots of the
 //! `trackfix track` commands on the samples.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
 use nalgebra::{Point3, Vector3};
 use proptest::prelude::*;
@@ -17,23 +16,7 @@ use trackfix::track::simulate::{
 use trackfix::track::spline::{CubicSpline, EndCondition};
 use trackfix::track::{Extrapolate, Knot, Profile, TrackError};
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// Runs the binary from the crate root; returns (exit code, stdout, stderr).
-fn trackfix(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_trackfix"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run trackfix");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use crate::support::{root, trackfix};
 
 fn skids() -> Vec<f64> {
     (0..=16).map(|i| i as f64 * 500.0).collect()

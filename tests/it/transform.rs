@@ -5,7 +5,6 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use nalgebra::{Point3, Translation3};
 use trackfix::geometry::{Pose, abb_quat_components, kuka_abc_angles, pose_to_xyz_deg, xyz_deg};
@@ -19,23 +18,7 @@ use trackfix::track::simulate::{
 use trackfix::track::{Extrapolate, Knot, Profile};
 use trackfix::transform::{Cell, Direction, TrackSetup, apply, track_correction};
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// Runs the binary from the crate root; returns (exit code, stdout, stderr).
-fn trackfix(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_trackfix"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run trackfix");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use crate::support::{root, trackfix};
 
 /// Every program among the samples (a KRL pair once, by its .src or lone file).
 fn sample_programs() -> Vec<String> {
@@ -606,34 +589,45 @@ fn end_to_end_rapid_correction_reaches_the_cad_points() {
     let dir = e.cell.parent().unwrap().to_owned();
     let cad = dir.join("e2e.mod");
     std::fs::write(&cad, &m).unwrap();
-    // The CAD poses are what the file says (rounded), so compare against those.
     let mut e = e;
-    e.targets = poses(&load(&cad, &LoadOptions::default()).unwrap())
-        .into_iter()
-        .zip(&e.targets)
-        .map(|((_, p), (s, _))| (*s, p))
-        .collect();
+    e.use_written_targets(&cad);
     let out = dir.join("corrected.mod");
-    run_ok(&[
+    let summary = correct_and_measure(&e, &cad, &["-o", out.to_str().unwrap()], &out);
+    insta::assert_snapshot!("e2e_rapid", summary);
+}
+
+impl E2e {
+    /// The CAD poses are what the file says (rounded), so compare against those.
+    fn use_written_targets(&mut self, cad: &Path) {
+        self.targets = poses(&load(cad, &LoadOptions::default()).unwrap())
+            .into_iter()
+            .zip(&self.targets)
+            .map(|((_, p), (s, _))| (*s, p))
+            .collect();
+    }
+}
+
+/// Runs `trackfix correct CAD --cell … --robot r1 OUTPUT`, then the physical TCP error of the
+/// program before and after (read back from `corrected`): the issue's levels are asserted, the
+/// figures returned for the snapshot.
+fn correct_and_measure(e: &E2e, cad: &Path, output: &[&str], corrected: &Path) -> String {
+    let mut args = vec![
         "correct",
         cad.to_str().unwrap(),
         "--cell",
         e.cell.to_str().unwrap(),
         "--robot",
         "r1",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    let before = physical_errors(&e, &load(&cad, &LoadOptions::default()).unwrap(), skid0);
-    let after = physical_errors(&e, &load(&out, &LoadOptions::default()).unwrap(), skid0);
+    ];
+    args.extend(output);
+    run_ok(&args);
+    let before = physical_errors(e, &load(cad, &LoadOptions::default()).unwrap(), skid0);
+    let after = physical_errors(e, &load(corrected, &LoadOptions::default()).unwrap(), skid0);
     let (rb, ra) = (rms(&before), rms(&after));
     let ma = after.iter().cloned().fold(0.0, f64::max);
     assert!(rb > 1.0, "uncorrected rms {rb:.3} mm");
     assert!(ra < 0.05, "corrected rms {ra:.4} mm (max {ma:.4})");
-    insta::assert_snapshot!(
-        "e2e_rapid",
-        format!("before rms {rb:.2} mm, after rms {ra:.3} mm")
-    );
+    format!("before rms {rb:.2} mm, after rms {ra:.3} mm")
 }
 
 /// Issue 5's end-to-end test, KRL (.src/.dat pair, BASE_DATA[1] from the cell), same track and
@@ -655,35 +649,14 @@ fn end_to_end_krl_correction_reaches_the_cad_points() {
     std::fs::write(dir.join("e2e.src"), &src).unwrap();
     std::fs::write(dir.join("e2e.dat"), &dat).unwrap();
     let cad = dir.join("e2e.src");
-    let original = load(&cad, &LoadOptions::default()).unwrap();
-    e.targets = poses(&original)
-        .into_iter()
-        .zip(&e.targets)
-        .map(|((_, p), (s, _))| (*s, p))
-        .collect();
+    e.use_written_targets(&cad);
     let out = dir.join("out");
-    run_ok(&[
-        "correct",
-        cad.to_str().unwrap(),
-        "--cell",
-        e.cell.to_str().unwrap(),
-        "--robot",
-        "r1",
-        "--out-dir",
-        out.to_str().unwrap(),
-    ]);
-    let before = physical_errors(&e, &original, skid0);
-    let after = physical_errors(
+    let summary = correct_and_measure(
         &e,
-        &load(&out.join("e2e.src"), &LoadOptions::default()).unwrap(),
-        skid0,
+        &cad,
+        &["--out-dir", out.to_str().unwrap()],
+        &out.join("e2e.src"),
     );
     assert_eq!(std::fs::read(out.join("e2e.src")).unwrap(), src.as_bytes());
-    let (rb, ra) = (rms(&before), rms(&after));
-    assert!(rb > 1.0, "uncorrected rms {rb:.3} mm");
-    assert!(ra < 0.05, "corrected rms {ra:.4} mm");
-    insta::assert_snapshot!(
-        "e2e_krl",
-        format!("before rms {rb:.2} mm, after rms {ra:.3} mm")
-    );
+    insta::assert_snapshot!("e2e_krl", summary);
 }
