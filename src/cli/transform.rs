@@ -139,7 +139,8 @@ pub struct MirrorArgs {
     /// A cell file whose [mirror] table gives the plane, frame, tool flip, config and skid map.
     #[arg(long, value_name = "CELL.toml")]
     pub cell: Option<PathBuf>,
-    /// The external axis holding the skid (eax_a … eax_f, E1 … E6) [default: eax_a / E1].
+    /// The external axis holding the skid (eax_a … eax_f, E1 … E6) [default: --robot's `skid`
+    /// in the cell, else eax_a / E1].
     #[arg(long, value_name = "AXIS")]
     pub skid: Option<String>,
     /// The robot whose work objects place a world mirror plane (`frame_in = "world"`).
@@ -384,6 +385,7 @@ fn mirror_settings(
         config: o.config.or(table.config).unwrap_or(d.config),
         skid_map: o.skid_map.or(table.skid_map).unwrap_or(d.skid_map),
         skid_axis,
+        skid_axis_to: None,
         mirror_frames: o.mirror_frames,
         mirror_joints: o.mirror_joints,
     }
@@ -391,15 +393,15 @@ fn mirror_settings(
 
 pub fn run_mirror(a: MirrorArgs) -> anyhow::Result<Exit> {
     let cell = a.cell.as_deref().map(load_cell).transpose()?;
-    let skid_axis = match &a.skid {
-        Some(s) => skid_axis_index(s)
-            .with_context(|| format!("--skid {s}: use eax_a … eax_f or E1 … E6"))?,
-        None => 0,
-    };
     let robot = match (&cell, &a.robot) {
         (Some(c), Some(name)) => Some(c.robot(name)?),
         (None, Some(_)) => bail!("--robot needs --cell"),
         _ => None,
+    };
+    let skid_axis = match &a.skid {
+        Some(s) => skid_axis_index(s)
+            .with_context(|| format!("--skid {s}: use eax_a … eax_f or E1 … E6"))?,
+        None => robot.map_or(0, |r| r.skid_axis),
     };
     let settings = mirror_settings(
         cell.as_ref(),
@@ -425,8 +427,9 @@ pub fn run_transfer(a: TransferArgs) -> anyhow::Result<Exit> {
     let to_profile = load_profile(to)?;
     let mut plan = TransferPlan {
         from: TrackSetup::new(from, &from_profile),
-        mirror: a.mirror.then(|| {
-            mirror_settings(
+        mirror: a.mirror.then(|| MirrorSettings {
+            skid_axis_to: Some(to.skid_axis),
+            ..mirror_settings(
                 Some(&cell),
                 &a.mirror_options,
                 from.skid_axis,

@@ -40,6 +40,10 @@ pub struct MirrorSettings {
     pub skid_map: (f64, f64),
     /// External axis index of the skid (0 = `eax_a` / `E1`).
     pub skid_axis: usize,
+    /// The mirror-image robot's skid axis when it is another one (`transfer` between robots
+    /// whose skids sit on different axes): the mapped skid moves there and that axis's old
+    /// value takes its place, so a second mirror the other way gives the program back.
+    pub skid_axis_to: Option<usize>,
     /// Also mirror the program's work objects, bases and tools.
     pub mirror_frames: bool,
     /// Mirror joint targets (axes 1, 4, 6 negated) instead of refusing them.
@@ -69,6 +73,7 @@ impl Default for MirrorSettings {
             config: ConfigRule::Mirror,
             skid_map: (1.0, 0.0),
             skid_axis: 0,
+            skid_axis_to: None,
             mirror_frames: false,
             mirror_joints: false,
             world: None,
@@ -179,16 +184,55 @@ fn flip_or_value_edit(field: &Option<NumField>, new: f64, min_decimals: usize) -
     number_edit(field, new, decimals)
 }
 
-fn skid_edit(p: &Position, settings: &MirrorSettings) -> Option<Edit> {
+fn skid_edits(file: &ParsedFile, p: &Position, settings: &MirrorSettings) -> Vec<Edit> {
     let (scale, offset) = settings.skid_map;
-    match p.skid(settings.skid_axis) {
-        Skid::At(s) => number_edit(
-            p.extax.get(settings.skid_axis)?,
-            scale * s + offset,
-            MM_DECIMALS,
-        ),
-        Skid::NotConnected | Skid::Missing => None,
+    let from = settings.skid_axis;
+    let Skid::At(s) = p.skid(from) else {
+        return Vec::new();
+    };
+    let Some(field) = p.extax.get(from) else {
+        return Vec::new();
+    };
+    let mapped = number_edit(field, scale * s + offset, MM_DECIMALS);
+    let to = match settings.skid_axis_to {
+        Some(to) if to != from => to,
+        _ => return mapped.into_iter().collect(),
+    };
+    // Both fields exist: `skid_refusal` refused the target otherwise.
+    let (Some(old), Some(Some(new))) = (field, p.extax.get(to)) else {
+        return Vec::new();
+    };
+    let mapped_text = match mapped {
+        Some(e) => e.text,
+        None => old.span.slice(&file.source).to_vec(),
+    };
+    vec![
+        Edit::new(new.span, mapped_text),
+        Edit::new(old.span, new.span.slice(&file.source).to_vec()),
+    ]
+}
+
+/// A skid that has to move to another axis the target does not write.
+fn skid_refusal(file: &ParsedFile, p: &Position, settings: &MirrorSettings) -> Option<Refusal> {
+    let to = settings.skid_axis_to?;
+    if to == settings.skid_axis || !matches!(p.skid(settings.skid_axis), Skid::At(_)) {
+        return None;
     }
+    if matches!(p.extax.get(to), Some(Some(_))) {
+        return None;
+    }
+    Some(Refusal::new(
+        file,
+        p.span,
+        p.label(),
+        RefusalKind::SkidMissing,
+        format!(
+            "{} has no numeric external axis {} to take the mirror-image robot's skid",
+            describe(p),
+            to + 1
+        ),
+        format!("write that axis in the target (9E9 will do), {SKIP_HINT}"),
+    ))
 }
 
 fn config_edits(config: &Config) -> Vec<Edit> {
@@ -225,7 +269,11 @@ pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
                             flip_or_value_edit(f, -f.as_ref()?.value(), 0)
                         })
                         .collect();
-                    edits.extend(skid_edit(p, settings));
+                    if let Some(r) = skid_refusal(file, p, settings) {
+                        fe.refusals.push(r);
+                        continue;
+                    }
+                    edits.extend(skid_edits(file, p, settings));
                     if !edits.is_empty() {
                         fe.edits.extend(edits);
                         fe.changes.push(TargetChange {
@@ -256,6 +304,10 @@ pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
                 }
                 _ => {}
             }
+            if let Some(r) = skid_refusal(file, p, settings) {
+                fe.refusals.push(r);
+                continue;
+            }
             let refl = match reflection_for(program, p, settings, &refl) {
                 Ok(r) => r,
                 Err((kind, msg, hint)) => {
@@ -279,7 +331,7 @@ pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
             if settings.config == ConfigRule::Mirror {
                 edits.extend(config_edits(&p.config));
             }
-            edits.extend(skid_edit(p, settings));
+            edits.extend(skid_edits(file, p, settings));
             if !edits.is_empty() {
                 let (mm, deg) = pose_change(&t, &new);
                 let skid = match p.skid(settings.skid_axis) {
@@ -544,6 +596,47 @@ mod tests {
         let plus = a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol);
         let minus = a.iter().zip(b).all(|(x, y)| (x + y).abs() <= tol);
         plus || minus
+    }
+
+    #[test]
+    fn skid_moves_to_the_mirror_image_robots_axis_and_back() {
+        let src = "[[100,0,300],[1,0,0,0],[0,0,0,0],[1500.5,9E9,9E9,9E9,9E9,9E9]]\n";
+        let there = MirrorSettings {
+            skid_axis_to: Some(1),
+            ..MirrorSettings::default()
+        };
+        let text = mirrored_text(&rapid(src, "wobj0"), &there);
+        assert!(text.ends_with("[9E9,1500.5,9E9,9E9,9E9,9E9]]\n"), "{text}");
+        let back = MirrorSettings {
+            skid_axis: 1,
+            skid_axis_to: Some(0),
+            ..MirrorSettings::default()
+        };
+        assert_eq!(mirrored_text(&rapid(&text, "wobj0"), &back), src);
+        let mapped = MirrorSettings {
+            skid_map: (1.0, 250.0),
+            ..there
+        };
+        let text = mirrored_text(&rapid(src, "wobj0"), &mapped);
+        assert!(
+            text.ends_with("[9E9,1750.500,9E9,9E9,9E9,9E9]]\n"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn a_target_without_the_other_skid_axis_is_refused() {
+        let p = krl("{X 1,Y 2,Z 3,A 0,B 0,C 0,S 6,T 27,E1 800}\n", "$WORLD");
+        let settings = MirrorSettings {
+            skid_axis_to: Some(1),
+            ..MirrorSettings::default()
+        };
+        let edits = mirror(&p, &settings);
+        let r = &edits.files[0].refusals;
+        assert_eq!(r.len(), 1);
+        assert_eq!(r[0].kind, RefusalKind::SkidMissing);
+        assert!(r[0].message.contains("external axis 2"), "{}", r[0].message);
+        assert!(edits.files[0].edits.is_empty());
     }
 
     /// `../shared/reference/README.md`: RobotStudio's mirror in the work object's xz plane.
