@@ -482,22 +482,48 @@ fn mirror_offsets(
             OffsetKind::Offs => refl.normal,
             OffsetKind::RelTool => refl.tool_axis,
         };
-        let blocked = call
+        // A RelTool rotation changes sign unless it turns about the flipped tool axis.
+        let rot_switch = ["\\Rx", "\\Ry", "\\Rz"]
+            .into_iter()
+            .zip(&call.rot)
+            .zip(&call.rot_given)
+            .zip(refl.tool_axis.iter())
+            .find(|(((_, f), given), n)| {
+                call.kind == OffsetKind::RelTool && **given && f.is_none() && **n == 0.0
+            })
+            .map(|(((switch, _), _), _)| switch);
+        let offset_blocked = call
             .delta
             .iter()
             .zip(axis.iter())
             .any(|(f, n)| f.is_none() && n.abs() > 1e-12);
-        if blocked {
-            refusals.push(Refusal::new(
-                file,
-                call.span,
-                call.target.clone(),
-                RefusalKind::Expression,
+        let why = match (rot_switch, offset_blocked) {
+            (Some(switch), _) => Some((
+                format!(
+                    "{name}({}, …): its rotation {switch} is not a number and the mirror changes its sign",
+                    call.target
+                ),
+                format!(
+                    "write {switch} as a number (or negate the expression by hand), {SKIP_HINT}"
+                ),
+            )),
+            (None, true) => Some((
                 format!(
                     "{name}({}, …) has an offset that is not a number where the mirror changes it",
                     call.target
                 ),
                 format!("write the {frame}-frame offsets as numbers, {SKIP_HINT}"),
+            )),
+            (None, false) => None,
+        };
+        if let Some((message, hint)) = why {
+            refusals.push(Refusal::new(
+                file,
+                call.span,
+                call.target.clone(),
+                RefusalKind::Expression,
+                message,
+                hint,
             ));
             continue;
         }
@@ -846,6 +872,30 @@ mod tests {
         let out = String::from_utf8(apply(&p0, edits).unwrap().files[0].output.clone()).unwrap();
         assert!(out.contains("Offs(p1,10,-20,zUp)"), "{out}");
         assert!(out.contains("Offs(p1,10,zUp,0)"), "{out}");
+    }
+
+    #[test]
+    fn reltool_rotation_expressions_are_refused_where_the_mirror_changes_them() {
+        let text = "MODULE m\n  VAR num a := 5;\n  CONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[100,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL RelTool(p1,0,0,10\\Rz:=a), v1000, fine, tool0;\n    MoveL RelTool(p1,0,0,10\\Ry:=a), v1000, fine, tool0;\n    MoveL RelTool(p1,0,0,10\\Rz:=30), v1000, fine, tool0;\n  ENDPROC\nENDMODULE\n";
+        let p0 = parse(text);
+        let edits = mirror(&p0, &MirrorSettings::default());
+        let refused: Vec<_> = edits
+            .refusals()
+            .map(|r| (r.line, r.kind, r.message.clone()))
+            .collect();
+        assert_eq!(
+            refused,
+            [(
+                5,
+                RefusalKind::Expression,
+                "RelTool(p1, …): its rotation \\Rz is not a number and the mirror changes its sign"
+                    .to_owned()
+            )]
+        );
+        let out = String::from_utf8(apply(&p0, edits).unwrap().files[0].output.clone()).unwrap();
+        // Tool flip y: a turn about y keeps its sign, one about z changes it.
+        assert!(out.contains("RelTool(p1,0,0,10\\Ry:=a)"), "{out}");
+        assert!(out.contains("RelTool(p1,0,0,10\\Rz:=-30)"), "{out}");
     }
 
     fn settings() -> impl Strategy<Value = MirrorSettings> {

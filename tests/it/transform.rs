@@ -203,6 +203,30 @@ fn refusal_messages() {
     insta::assert_snapshot!("refusals", all);
 }
 
+/// The refusals `mirror` adds: an offset or a `RelTool` rotation written as an expression where
+/// the reflection changes it, each by name; exit 3, nothing written.
+#[test]
+fn mirror_refusal_messages() {
+    let (dir, path) = scratch_with(
+        "offsets.mod",
+        "MODULE m\n  VAR num a := 5;\n  CONST robtarget p1:=[[1,0,3],[1,0,0,0],[0,0,0,0],[100,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL RelTool(p1,0,0,10\\Rx:=a), v100, fine, tool0;\n    MoveL Offs(p1,0,a,0), v100, fine, tool0;\n    MoveL RelTool(p1,0,0,10\\Ry:=a), v100, fine, tool0;\n  ENDPROC\nENDMODULE\n",
+    );
+    let out = dir.path().join("out.mod");
+    let err = refusal_output(&[
+        "mirror",
+        path.to_str().unwrap(),
+        "--plane",
+        "xz",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!out.exists());
+    insta::assert_snapshot!(
+        "mirror_refusals",
+        err.replace(dir.path().to_str().unwrap(), "<tmp>")
+    );
+}
+
 /// `--default-wobj` resolves declared targets that no motion uses.
 #[test]
 fn default_wobj_resolves_unused_targets() {
