@@ -227,6 +227,59 @@ fn mirror_refusal_messages() {
     );
 }
 
+/// Each robot's `skid` axis applies: r1 on eax_a, r2 (in a copy of the sample cell) on eax_b.
+/// `transfer --from r1 --to r2 --mirror` moves the skid to eax_b, and back again the other way.
+#[test]
+fn transfer_moves_the_skid_to_the_other_robots_axis() {
+    let dir = tempfile::tempdir().unwrap();
+    let cell_text = std::fs::read_to_string(root().join("samples/cell.toml"))
+        .unwrap()
+        .replace("track/", &format!("{}/samples/track/", root().display()))
+        .replace(
+            "krl/$config",
+            &format!("{}/samples/krl/$config", root().display()),
+        );
+    let r2_at = cell_text.find("[robot.r2]").unwrap();
+    let (head, tail) = cell_text.split_at(r2_at);
+    let cell_text = format!(
+        "{head}{}",
+        tail.replacen("skid = \"eax_a\"", "skid = \"eax_b\"", 1)
+    );
+    let cell = dir.path().join("cell.toml");
+    std::fs::write(&cell, cell_text).unwrap();
+    let module = dir.path().join("m.mod");
+    std::fs::write(
+        &module,
+        "MODULE m\n  CONST robtarget p1:=[[1200,-1500,900],[0,0,1,0],[0,0,0,0],[2500,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL p1, v100, fine, tool0;\n  ENDPROC\nENDMODULE\n",
+    )
+    .unwrap();
+    let there = dir.path().join("there.mod");
+    let back = dir.path().join("back.mod");
+    for (from, to, input, output) in [("r1", "r2", &module, &there), ("r2", "r1", &there, &back)] {
+        run_ok(&[
+            "transfer",
+            input.to_str().unwrap(),
+            "--cell",
+            cell.to_str().unwrap(),
+            "--from",
+            from,
+            "--to",
+            to,
+            "--mirror",
+            "-o",
+            output.to_str().unwrap(),
+        ]);
+    }
+    let there = std::fs::read_to_string(&there).unwrap();
+    assert!(there.contains("[9E9,2500,9E9,9E9,9E9,9E9]]"), "{there}");
+    let start = poses(&load(&module, &LoadOptions::default()).unwrap());
+    let end = poses(&load(&back, &LoadOptions::default()).unwrap());
+    let moved = (end[0].1.translation.vector - start[0].1.translation.vector).norm();
+    assert!(moved < 2e-3, "{moved} mm");
+    let back = std::fs::read_to_string(&back).unwrap();
+    assert!(back.contains("[2500,9E9,9E9,9E9,9E9,9E9]]"), "{back}");
+}
+
 /// `--default-wobj` resolves declared targets that no motion uses.
 #[test]
 fn default_wobj_resolves_unused_targets() {
