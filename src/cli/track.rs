@@ -18,7 +18,8 @@ use trackfix::track::simulate::{
     TrackTruth, measurements_csv, sample_tcp_points, scan_csv, simulate_measurements, simulate_scan,
 };
 use trackfix::track::spectrum::{TUKEY_ALPHA, scan_spectrum};
-use trackfix::track::{Extrapolate, Gear, Knot, Profile, Reference};
+use trackfix::track::{Extrapolate, Gear, Knot, Profile, Reference, TrackError};
+use trackfix::transform::CellError;
 
 use super::Exit;
 
@@ -37,7 +38,38 @@ pub enum TrackCommand {
     Simulate(SimulateArgs),
 }
 
+const IDENTIFY_EXAMPLES: &str = "\
+Examples:
+  trackfix track identify samples/track/measurements.csv -o frames.csv
+
+measurements.csv has one row per tracker point: skid,point,robot_x,robot_y,robot_z,meas_x,
+meas_y,meas_z (the TCP point in the robot base and the tracker's reading of it, mm). At least 3
+non-collinear points per skid position. Points above 4 x the median residual are flagged.";
+
+const FIT_EXAMPLES: &str = "\
+Examples:
+  trackfix track fit frames.csv -o profile.toml --name r1
+  trackfix track fit frames.csv -o profile.toml --gear recalibrated --extrapolate clamp
+
+Prints what to enter in the controller: the gear factor correction, the track direction and
+the base frame at skid 0.";
+
+const SHOW_EXAMPLES: &str = "\
+Examples:
+  trackfix track show samples/track/profile.toml
+  trackfix track show samples/track/profile.toml --at 0 --at 250 --at 4000
+  trackfix track show samples/track/profile.toml --step 500 --format csv
+  trackfix track show samples/track/profile.toml --plot profile.svg";
+
+const SPECTRUM_EXAMPLES: &str = "\
+Examples:
+  trackfix track spectrum samples/track/scan.csv --threshold 0.05 --plot spectrum.svg
+  trackfix track spectrum timed_scan.csv --speed 100 --threshold 0.05
+
+Recommends the sampling spacing 1/(2f) for the highest frequency above the threshold.";
+
 #[derive(clap::Args)]
+#[command(after_help = IDENTIFY_EXAMPLES)]
 pub struct IdentifyArgs {
     /// measurements.csv: skid,point,robot_x,robot_y,robot_z,meas_x,meas_y,meas_z
     pub measurements: PathBuf,
@@ -47,6 +79,7 @@ pub struct IdentifyArgs {
 }
 
 #[derive(clap::Args)]
+#[command(after_help = FIT_EXAMPLES)]
 pub struct FitArgs {
     /// frames.csv: skid,x,y,z,rx,ry,rz in increasing skid order.
     pub frames: PathBuf,
@@ -75,6 +108,7 @@ pub enum ShowFormat {
 }
 
 #[derive(clap::Args)]
+#[command(after_help = SHOW_EXAMPLES)]
 pub struct ShowArgs {
     /// profile.toml
     pub profile: PathBuf,
@@ -93,6 +127,7 @@ pub struct ShowArgs {
 }
 
 #[derive(clap::Args)]
+#[command(after_help = SPECTRUM_EXAMPLES)]
 pub struct SpectrumArgs {
     /// scan.csv: skid,x,y,z (or t,x,y,z with --speed).
     pub scan: PathBuf,
@@ -130,6 +165,38 @@ pub struct SimulateArgs {
 }
 
 pub fn run(cmd: TrackCommand) -> anyhow::Result<Exit> {
+    report_located(run_command(cmd))
+}
+
+/// The text of an error that already says `file:line:col: error: …` with the line and a hint.
+fn located_text<'e>(e: &'e (dyn std::error::Error + 'static)) -> Option<&'e str> {
+    if let Some(TrackError::Csv { rendered, .. } | TrackError::Toml { rendered, .. }) =
+        e.downcast_ref::<TrackError>()
+    {
+        return Some(rendered);
+    }
+    match e.downcast_ref::<CellError>() {
+        Some(CellError::Invalid { rendered }) => Some(rendered),
+        _ => None,
+    }
+}
+
+/// Prints an error that carries its own location as it is (not behind another `error:`),
+/// with what the command was doing as a note, and exits 2; other errors pass through.
+pub(crate) fn report_located(result: anyhow::Result<Exit>) -> anyhow::Result<Exit> {
+    let Err(err) = result else { return result };
+    let Some(text) = err.chain().find_map(located_text) else {
+        return Err(err);
+    };
+    let mut out = text.to_owned();
+    for context in err.chain().take_while(|c| located_text(*c).is_none()) {
+        out.push_str(&format!("\n  = note: {context}"));
+    }
+    eprintln!("{out}");
+    Ok(Exit::Usage)
+}
+
+fn run_command(cmd: TrackCommand) -> anyhow::Result<Exit> {
     let text = match cmd {
         TrackCommand::Identify(a) => run_identify(&a)?,
         TrackCommand::Fit(a) => run_fit(&a)?,

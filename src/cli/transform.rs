@@ -11,7 +11,7 @@ use anyhow::{Context as _, bail};
 
 use trackfix::position::Program;
 use trackfix::program::{LoadOptions, collect_inputs, load};
-use trackfix::track::Profile;
+use trackfix::track::{Profile, TrackError};
 use trackfix::transform::cell::skid_axis_index;
 use trackfix::transform::output::{Destination, output_path, plan_writes, unified_diff, write_all};
 use trackfix::transform::{
@@ -20,6 +20,7 @@ use trackfix::transform::{
 };
 
 use super::Exit;
+use super::track::report_located;
 
 /// Where results go and what to do with refusals (shared by all four commands).
 #[derive(clap::Args, Debug)]
@@ -74,8 +75,9 @@ bits of A1/A4/A6 toggled unless --config keep. Joint targets are refused unless 
 
 const TRANSFER_EXAMPLES: &str = "\
 Examples:
-  trackfix transfer samples/rapid/spot_line.mod --cell samples/cell.toml --from r1 --to r2 --mirror --out-dir out/
-  trackfix transfer tuned/ --cell samples/cell.toml --from r1 --to r3 --diff
+  trackfix transfer samples/krl/spot_line.src --cell samples/cell.toml \\
+      --from r1 --to r2 --mirror --out-dir out/
+  trackfix transfer tuned/ --cell samples/cell.toml --from r1 --to r2 --diff
 
 zero with --from's track, mirror (with --mirror, plane from the cell's [mirror] table), then
 correct with --to's track: the same bytes as running the three commands in a row.";
@@ -215,8 +217,11 @@ fn load_cell(path: &Path) -> anyhow::Result<Cell> {
     Ok(Cell::load(path)?)
 }
 
-fn load_profile(robot: &Robot) -> anyhow::Result<Profile> {
-    Profile::load(&robot.profile).with_context(|| format!("profile of robot `{}`", robot.name))
+fn load_profile(cell: &Cell, robot: &Robot) -> anyhow::Result<Profile> {
+    match Profile::load(&robot.profile) {
+        Err(TrackError::Io { error, .. }) => Err(cell.profile_error(robot, &error).into()),
+        r => r.with_context(|| format!("profile of robot `{}`", robot.name)),
+    }
 }
 
 fn load_options(robot: Option<&Robot>) -> LoadOptions {
@@ -337,7 +342,7 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
 fn run_track(a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
     let cell = load_cell(&a.cell)?;
     let robot = cell.robot(&a.robot)?;
-    let profile = load_profile(robot)?;
+    let profile = load_profile(&cell, robot)?;
     let mut setup = TrackSetup::new(robot, &profile);
     setup.default_wobj = a.default_wobj.clone();
     let programs = load_programs(&a.files, &load_options(Some(robot)))?;
@@ -350,10 +355,18 @@ fn run_track(a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
 }
 
 pub fn run_correct(a: CorrectArgs) -> anyhow::Result<Exit> {
+    report_located(run_correct_inner(a))
+}
+
+fn run_correct_inner(a: CorrectArgs) -> anyhow::Result<Exit> {
     run_track(a, Direction::Correct)
 }
 
 pub fn run_zero(a: ZeroArgs) -> anyhow::Result<Exit> {
+    report_located(run_zero_inner(a))
+}
+
+fn run_zero_inner(a: ZeroArgs) -> anyhow::Result<Exit> {
     run_track(a.inner, Direction::Zero)
 }
 
@@ -392,6 +405,10 @@ fn mirror_settings(
 }
 
 pub fn run_mirror(a: MirrorArgs) -> anyhow::Result<Exit> {
+    report_located(run_mirror_inner(a))
+}
+
+fn run_mirror_inner(a: MirrorArgs) -> anyhow::Result<Exit> {
     let cell = a.cell.as_deref().map(load_cell).transpose()?;
     let robot = match (&cell, &a.robot) {
         (Some(c), Some(name)) => Some(c.robot(name)?),
@@ -420,11 +437,15 @@ pub fn run_mirror(a: MirrorArgs) -> anyhow::Result<Exit> {
 }
 
 pub fn run_transfer(a: TransferArgs) -> anyhow::Result<Exit> {
+    report_located(run_transfer_inner(a))
+}
+
+fn run_transfer_inner(a: TransferArgs) -> anyhow::Result<Exit> {
     let cell = load_cell(&a.cell)?;
     let from = cell.robot(&a.from)?;
     let to = cell.robot(&a.to)?;
-    let from_profile = load_profile(from)?;
-    let to_profile = load_profile(to)?;
+    let from_profile = load_profile(&cell, from)?;
+    let to_profile = load_profile(&cell, to)?;
     let mut plan = TransferPlan {
         from: TrackSetup::new(from, &from_profile),
         mirror: a.mirror.then(|| MirrorSettings {

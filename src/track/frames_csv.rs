@@ -39,9 +39,10 @@ fn frames_of(table: &NumericCsv) -> Result<Vec<SamplingFrame>, TrackError> {
                 line,
                 "skid",
                 format!(
-                    "skid {skid} does not follow {} in increasing order; sort the rows and remove duplicates",
+                    "skid {skid} does not follow {} in increasing order",
                     prev.skid
                 ),
+                "sort the rows by skid and keep one row per skid position",
             ));
         }
         frames.push(SamplingFrame {

@@ -38,7 +38,8 @@ fn measurements_of(table: &NumericCsv) -> Result<Vec<MeasurementRow>, TrackError
             return Err(table.error(
                 line,
                 "point",
-                format!("`{point}` is not a point number (0, 1, 2, ...)"),
+                format!("`{point}` is not a point number"),
+                "number the points 0, 1, 2, ... (the same number for the same TCP point at every skid)",
             ));
         }
         let point = point as u32;
@@ -46,9 +47,8 @@ fn measurements_of(table: &NumericCsv) -> Result<Vec<MeasurementRow>, TrackError
             return Err(table.error(
                 line,
                 "point",
-                format!(
-                    "point {point} at skid {skid} was already measured on line {first}; keep one row per point and skid"
-                ),
+                format!("point {point} at skid {skid} was already measured on line {first}"),
+                "keep one row per point and skid",
             ));
         }
         rows.push(MeasurementRow {

@@ -342,7 +342,17 @@ fn error_messages() {
     );
     let e7 = error_of(&["track", "fit", frames.to_str().unwrap(), "-o", out]);
 
-    let all = [e1, e2, e3, e4, e5, e6, e7].map(clean).join("\n");
+    // A file given to the wrong command.
+    let e8 = error_of(&[
+        "track",
+        "spectrum",
+        "samples/track/measurements.csv",
+        "--threshold",
+        "0.05",
+    ]);
+    let e9 = error_of(&["track", "show", frames.to_str().unwrap()]);
+
+    let all = [e1, e2, e3, e4, e5, e6, e7, e8, e9].map(clean).join("\n");
     insta::assert_snapshot!("errors", all);
 }
 

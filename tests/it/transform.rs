@@ -280,6 +280,80 @@ fn transfer_moves_the_skid_to_the_other_robots_axis() {
     assert!(back.contains("[2500,9E9,9E9,9E9,9E9,9E9]]"), "{back}");
 }
 
+/// Errors in the cell file and its profiles name `file:line:col`, show the line and say what
+/// to do: a misspelt key, a profile that is not there, a profile with a bad value, an unknown
+/// robot, a missing cell file. Exit 2, nothing written.
+#[test]
+fn cell_error_messages() {
+    let dir = tempfile::tempdir().unwrap();
+    let sample = std::fs::read_to_string(root().join("samples/cell.toml")).unwrap();
+    let profile = std::fs::read_to_string(root().join("samples/track/profile.toml")).unwrap();
+    std::fs::create_dir(dir.path().join("track")).unwrap();
+    std::fs::write(
+        dir.path().join("track/bad_gear.toml"),
+        profile.replace("gear = \"as-is\"", "gear = \"asis\""),
+    )
+    .unwrap();
+    let cells = [
+        (
+            "typo.toml",
+            sample.replacen("track_axis = ", "track_axes = ", 1),
+        ),
+        (
+            "no_profile.toml",
+            sample.replacen("track/profile.toml", "track/nope.toml", 1),
+        ),
+        (
+            "bad_profile.toml",
+            sample.replacen("track/profile.toml", "track/bad_gear.toml", 1),
+        ),
+    ];
+    let mut all = String::new();
+    for (name, text) in &cells {
+        std::fs::write(dir.path().join(name), text).unwrap();
+    }
+    let out = dir.path().join("out.mod");
+    for (cell, robot) in [
+        ("typo.toml", "r1"),
+        ("no_profile.toml", "r1"),
+        ("bad_profile.toml", "r1"),
+        ("nope.toml", "r1"),
+    ] {
+        let cell_path = dir.path().join(cell);
+        let (code, _, err) = trackfix(&[
+            "correct",
+            "samples/rapid/spot_line.mod",
+            "--cell",
+            cell_path.to_str().unwrap(),
+            "--robot",
+            robot,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 2, "{err}");
+        assert!(!out.exists());
+        let err = err.replace(dir.path().to_str().unwrap(), "<tmp>");
+        writeln!(
+            all,
+            "$ trackfix correct … --cell {cell} --robot {robot}\n{err}"
+        )
+        .unwrap();
+    }
+    // The unknown-robot case needs a loadable cell.
+    let (code, _, err) = trackfix(&[
+        "correct",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r3",
+        "--diff",
+    ]);
+    assert_eq!(code, 2);
+    writeln!(all, "$ trackfix correct … --robot r3\n{err}").unwrap();
+    insta::assert_snapshot!("cell_errors", all);
+}
+
 /// `--default-wobj` resolves declared targets that no motion uses.
 #[test]
 fn default_wobj_resolves_unused_targets() {
