@@ -38,10 +38,10 @@ pub struct OutputArgs {
     #[arg(long, requires = "in_place")]
     pub no_backup: bool,
     /// Print a unified diff of what would change; write nothing.
-    #[arg(long, conflicts_with = "check")]
+    #[arg(long, conflicts_with_all = ["check", "output", "out_dir", "in_place"])]
     pub diff: bool,
     /// Exit 1 if anything would change; write nothing.
-    #[arg(long)]
+    #[arg(long, conflicts_with_all = ["output", "out_dir", "in_place"])]
     pub check: bool,
     /// Leave unsupported targets (joint targets, 9E9 skids, …) unchanged instead of failing.
     #[arg(long)]
@@ -326,9 +326,15 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
         if f.changes.is_empty() {
             writeln!(stderr, "{}: unchanged{refused}{target}", f.path.display())?;
         } else {
+            // A mirror moves points by metres: that is no correction.
+            let largest = if command == "mirror" {
+                "largest move"
+            } else {
+                "largest correction"
+            };
             writeln!(
                 stderr,
-                "{}: {} target(s) changed, largest correction {} mm / {:.4}°{skid}{refused}{target}",
+                "{}: {} target(s) changed, {largest} {} mm / {:.4}°{skid}{refused}{target}",
                 f.path.display(),
                 f.changes.len(),
                 fmt_mm(mm),
