@@ -762,22 +762,16 @@ mod tests {
         let text = String::from_utf8(out.files[0].output.clone()).unwrap();
         let p1 = parse(&text);
         let (f0, f1) = (&p0.files[0], &p1.files[0]);
-        let wobj = |f: &ParsedFile| {
+        let frame = |f: &ParsedFile, name: &str| {
             f.frames
                 .iter()
-                .find(|d| d.name == "wCar")
+                .find(|d| d.name == name)
                 .unwrap()
                 .pose()
                 .unwrap()
         };
-        let tool = |f: &ParsedFile| {
-            f.frames
-                .iter()
-                .find(|d| d.name == "tGun")
-                .unwrap()
-                .pose()
-                .unwrap()
-        };
+        let wobj = |f: &ParsedFile| frame(f, "wCar");
+        let tool = |f: &ParsedFile| frame(f, "tGun");
         let target = |f: &ParsedFile| {
             f.positions
                 .iter()
