@@ -116,7 +116,12 @@ pub struct ShowArgs {
     #[arg(long = "at", value_name = "S", allow_negative_numbers = true)]
     pub at: Vec<f64>,
     /// Evaluate every MM over the profile's range.
-    #[arg(long, value_name = "MM", conflicts_with = "at")]
+    #[arg(
+        long,
+        value_name = "MM",
+        conflicts_with = "at",
+        allow_negative_numbers = true
+    )]
     pub step: Option<f64>,
     /// Output format of the evaluated values.
     #[arg(long, value_enum, default_value = "table")]
@@ -132,10 +137,10 @@ pub struct SpectrumArgs {
     /// scan.csv: skid,x,y,z (or t,x,y,z with --speed).
     pub scan: PathBuf,
     /// Amplitude threshold in mm: frequencies above it must be sampled.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     pub threshold: f64,
     /// Skid speed in mm/s, for a scan timed in seconds (t,x,y,z).
-    #[arg(long, value_name = "MM_PER_S")]
+    #[arg(long, value_name = "MM_PER_S", allow_negative_numbers = true)]
     pub speed: Option<f64>,
     /// Also write the amplitude spectrum as SVG.
     #[arg(long, value_name = "FILE.svg")]

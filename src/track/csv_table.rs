@@ -119,7 +119,7 @@ impl NumericCsv {
                 (header_line, None),
                 "",
                 "the file has no header line".to_string(),
-                "start the file with the column names, e.g. `skid,x,y,z`",
+                "start the file with its column names (the command's --help lists them)",
             ));
         }
         let mut rows = Vec::new();

@@ -58,6 +58,25 @@ fn measurements_of(table: &NumericCsv) -> Result<Vec<MeasurementRow>, TrackError
             meas: [mx, my, mz],
         });
     }
+    // identify() says the same without a location; the file can point at the rows.
+    let mut per_skid: BTreeMap<u64, (f64, usize, u64)> = BTreeMap::new();
+    for ((skid_bits, _), &line) in &seen {
+        let e = per_skid
+            .entry(*skid_bits)
+            .or_insert((f64::from_bits(*skid_bits), 0, 0));
+        e.1 += 1;
+        e.2 = e.2.max(line);
+    }
+    if let Some((skid, count, line)) = per_skid.values().find(|(_, count, _)| *count < 3) {
+        return Err(table.error(
+            *line,
+            "skid",
+            format!(
+                "skid {skid} mm: {count} point(s) measured, a base frame needs at least 3 non-collinear points"
+            ),
+            "measure at least 3 well-spread TCP points at every skid position (10 is usual)",
+        ));
+    }
     Ok(rows)
 }
 
