@@ -145,6 +145,10 @@ pub struct MirrorArgs {
     /// in the cell, else eax_a / E1].
     #[arg(long, value_name = "AXIS")]
     pub skid: Option<String>,
+    /// The mirror-image robot's skid axis, if it is another one: the skid moves there (and that
+    /// axis's old value to --skid's place), as `transfer` does between robots.
+    #[arg(long, value_name = "AXIS")]
+    pub skid_to: Option<String>,
     /// The robot whose work objects place a world mirror plane (`frame_in = "world"`).
     #[arg(long, requires = "cell")]
     pub robot: Option<String>,
@@ -421,18 +425,27 @@ fn run_mirror_inner(a: MirrorArgs) -> anyhow::Result<Exit> {
         (None, Some(_)) => bail!("--robot needs --cell"),
         _ => None,
     };
+    let axis = |flag: &str, s: &str| {
+        skid_axis_index(s).with_context(|| format!("--{flag} {s}: use eax_a … eax_f or E1 … E6"))
+    };
     let skid_axis = match &a.skid {
-        Some(s) => skid_axis_index(s)
-            .with_context(|| format!("--skid {s}: use eax_a … eax_f or E1 … E6"))?,
+        Some(s) => axis("skid", s)?,
         None => robot.map_or(0, |r| r.skid_axis),
     };
-    let settings = mirror_settings(
-        cell.as_ref(),
-        &a.mirror,
-        skid_axis,
-        robot,
-        a.default_wobj.as_deref(),
-    );
+    let settings = MirrorSettings {
+        skid_axis_to: a
+            .skid_to
+            .as_deref()
+            .map(|s| axis("skid-to", s))
+            .transpose()?,
+        ..mirror_settings(
+            cell.as_ref(),
+            &a.mirror,
+            skid_axis,
+            robot,
+            a.default_wobj.as_deref(),
+        )
+    };
     let programs = load_programs(&a.files, &load_options(robot))?;
     let mut results = Vec::new();
     for p in &programs {

@@ -272,6 +272,18 @@ fn transfer_moves_the_skid_to_the_other_robots_axis() {
     }
     let there = std::fs::read_to_string(&there).unwrap();
     assert!(there.contains("[9E9,2500,9E9,9E9,9E9,9E9]]"), "{there}");
+    // `mirror --skid-to` is the middle step on its own.
+    let (code, diff, err) = trackfix(&[
+        "mirror",
+        module.to_str().unwrap(),
+        "--plane",
+        "xz",
+        "--skid-to",
+        "eax_b",
+        "--diff",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(diff.contains("[9E9,2500,9E9,9E9,9E9,9E9]]"), "{diff}");
     let start = poses(&load(&module, &LoadOptions::default()).unwrap());
     let end = poses(&load(&back, &LoadOptions::default()).unwrap());
     let moved = (end[0].1.translation.vector - start[0].1.translation.vector).norm();
