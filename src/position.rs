@@ -306,6 +306,9 @@ pub struct OffsetCall {
     pub delta: [Option<NumField>; 3],
     /// `\Rx, \Ry, \Rz` (degrees) of `RelTool`; `None` where absent or not a numeric literal.
     pub rot: [Option<NumField>; 3],
+    /// Whether `\Rx, \Ry, \Rz` are written at all: with `rot` it tells an expression
+    /// (`\Rz:=angle`) from an absent switch.
+    pub rot_given: [bool; 3],
 }
 
 /// One parsed source file and everything trackfix understands in it.

@@ -134,17 +134,21 @@ pub fn collect_inputs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, LoadError> {
             out.push(p.clone());
         }
     }
-    let srcs: BTreeSet<PathBuf> = out
+    // The `.dat` a `.src` loads with is found the way `krl::load_program` finds it (stem and
+    // extension in any case), and compared as a file, not as spelled (`./a.dat` is `a.dat`).
+    let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
+    let partners: BTreeSet<PathBuf> = out
         .iter()
         .filter(|p| extension(p).as_deref() == Some("src"))
-        .map(|p| p.with_extension(""))
+        .filter_map(|p| crate::krl::partner_of(p))
+        .map(|d| same_file(&d))
         .collect();
     let mut seen = BTreeSet::new();
     out.retain(|p| {
-        if extension(p).as_deref() == Some("dat") && srcs.contains(&p.with_extension("")) {
+        if extension(p).as_deref() == Some("dat") && partners.contains(&same_file(p)) {
             return false;
         }
-        seen.insert(p.clone())
+        seen.insert(same_file(p))
     });
     Ok(out)
 }

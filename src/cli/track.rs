@@ -18,7 +18,8 @@ use trackfix::track::simulate::{
     TrackTruth, measurements_csv, sample_tcp_points, scan_csv, simulate_measurements, simulate_scan,
 };
 use trackfix::track::spectrum::{TUKEY_ALPHA, scan_spectrum};
-use trackfix::track::{Extrapolate, Gear, Profile, Reference};
+use trackfix::track::{Extrapolate, Gear, Knot, Profile, Reference, TrackError};
+use trackfix::transform::CellError;
 
 use super::Exit;
 
@@ -37,7 +38,38 @@ pub enum TrackCommand {
     Simulate(SimulateArgs),
 }
 
+const IDENTIFY_EXAMPLES: &str = "\
+Examples:
+  trackfix track identify samples/track/measurements.csv -o frames.csv
+
+measurements.csv has one row per tracker point: skid,point,robot_x,robot_y,robot_z,meas_x,
+meas_y,meas_z (the TCP point in the robot base and the tracker's reading of it, mm). At least 3
+non-collinear points per skid position. Points above 4 x the median residual are flagged.";
+
+const FIT_EXAMPLES: &str = "\
+Examples:
+  trackfix track fit frames.csv -o profile.toml --name r1
+  trackfix track fit frames.csv -o profile.toml --gear recalibrated --extrapolate clamp
+
+Prints what to enter in the controller: the gear factor correction, the track direction and
+the base frame at skid 0.";
+
+const SHOW_EXAMPLES: &str = "\
+Examples:
+  trackfix track show samples/track/profile.toml
+  trackfix track show samples/track/profile.toml --at 0 --at 250 --at 4000
+  trackfix track show samples/track/profile.toml --step 500 --format csv
+  trackfix track show samples/track/profile.toml --plot profile.svg";
+
+const SPECTRUM_EXAMPLES: &str = "\
+Examples:
+  trackfix track spectrum samples/track/scan.csv --threshold 0.05 --plot spectrum.svg
+  trackfix track spectrum timed_scan.csv --speed 100 --threshold 0.05
+
+Recommends the sampling spacing 1/(2f) for the highest frequency above the threshold.";
+
 #[derive(clap::Args)]
+#[command(after_help = IDENTIFY_EXAMPLES)]
 pub struct IdentifyArgs {
     /// measurements.csv: skid,point,robot_x,robot_y,robot_z,meas_x,meas_y,meas_z
     pub measurements: PathBuf,
@@ -47,6 +79,7 @@ pub struct IdentifyArgs {
 }
 
 #[derive(clap::Args)]
+#[command(after_help = FIT_EXAMPLES)]
 pub struct FitArgs {
     /// frames.csv: skid,x,y,z,rx,ry,rz in increasing skid order.
     pub frames: PathBuf,
@@ -75,6 +108,7 @@ pub enum ShowFormat {
 }
 
 #[derive(clap::Args)]
+#[command(after_help = SHOW_EXAMPLES)]
 pub struct ShowArgs {
     /// profile.toml
     pub profile: PathBuf,
@@ -82,7 +116,12 @@ pub struct ShowArgs {
     #[arg(long = "at", value_name = "S", allow_negative_numbers = true)]
     pub at: Vec<f64>,
     /// Evaluate every MM over the profile's range.
-    #[arg(long, value_name = "MM", conflicts_with = "at")]
+    #[arg(
+        long,
+        value_name = "MM",
+        conflicts_with = "at",
+        allow_negative_numbers = true
+    )]
     pub step: Option<f64>,
     /// Output format of the evaluated values.
     #[arg(long, value_enum, default_value = "table")]
@@ -93,14 +132,15 @@ pub struct ShowArgs {
 }
 
 #[derive(clap::Args)]
+#[command(after_help = SPECTRUM_EXAMPLES)]
 pub struct SpectrumArgs {
     /// scan.csv: skid,x,y,z (or t,x,y,z with --speed).
     pub scan: PathBuf,
     /// Amplitude threshold in mm: frequencies above it must be sampled.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     pub threshold: f64,
     /// Skid speed in mm/s, for a scan timed in seconds (t,x,y,z).
-    #[arg(long, value_name = "MM_PER_S")]
+    #[arg(long, value_name = "MM_PER_S", allow_negative_numbers = true)]
     pub speed: Option<f64>,
     /// Also write the amplitude spectrum as SVG.
     #[arg(long, value_name = "FILE.svg")]
@@ -130,6 +170,38 @@ pub struct SimulateArgs {
 }
 
 pub fn run(cmd: TrackCommand) -> anyhow::Result<Exit> {
+    report_located(run_command(cmd))
+}
+
+/// The text of an error that already says `file:line:col: error: …` with the line and a hint.
+fn located_text<'e>(e: &'e (dyn std::error::Error + 'static)) -> Option<&'e str> {
+    if let Some(TrackError::Csv { rendered, .. } | TrackError::Toml { rendered, .. }) =
+        e.downcast_ref::<TrackError>()
+    {
+        return Some(rendered);
+    }
+    match e.downcast_ref::<CellError>() {
+        Some(CellError::Invalid { rendered }) => Some(rendered),
+        _ => None,
+    }
+}
+
+/// Prints an error that carries its own location as it is (not behind another `error:`),
+/// with what the command was doing as a note, and exits 2; other errors pass through.
+pub(crate) fn report_located(result: anyhow::Result<Exit>) -> anyhow::Result<Exit> {
+    let Err(err) = result else { return result };
+    let Some(text) = err.chain().find_map(located_text) else {
+        return Err(err);
+    };
+    let mut out = text.to_owned();
+    for context in err.chain().take_while(|c| located_text(*c).is_none()) {
+        out.push_str(&format!("\n  = note: {context}"));
+    }
+    eprintln!("{out}");
+    Ok(Exit::Usage)
+}
+
+fn run_command(cmd: TrackCommand) -> anyhow::Result<Exit> {
     let text = match cmd {
         TrackCommand::Identify(a) => run_identify(&a)?,
         TrackCommand::Fit(a) => run_fit(&a)?,
@@ -355,6 +427,20 @@ fn round6(v: f64) -> f64 {
     clean(v, 6)
 }
 
+/// `dx, dy, dz` to 4 decimals and `rx, ry, rz` to 6, right-aligned in `mm_width` and
+/// `deg_width`, joined by `sep`.
+fn deviation_cells(c: &[f64; 6], mm_width: usize, deg_width: usize, sep: &str) -> String {
+    let mut cells = Vec::with_capacity(6);
+    for (i, v) in c.iter().enumerate() {
+        cells.push(if i < 3 {
+            format!("{:>mm_width$.4}", clean(*v, 4))
+        } else {
+            format!("{:>deg_width$.6}", round6(*v))
+        });
+    }
+    cells.join(sep)
+}
+
 fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
     let p = Profile::load(&a.profile)?;
     if let Some(path) = &a.plot {
@@ -399,28 +485,10 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
     let mut s = String::new();
     match a.format {
         ShowFormat::Json => {
-            // A struct keeps the documented key order (a json! map would sort it).
-            #[derive(serde::Serialize)]
-            struct Row {
-                skid: f64,
-                dx: f64,
-                dy: f64,
-                dz: f64,
-                rx: f64,
-                ry: f64,
-                rz: f64,
-            }
-            let arr: Vec<Row> = rows
+            // Knot keeps the documented key order (a json! map would sort it).
+            let arr: Vec<Knot> = rows
                 .iter()
-                .map(|(skid, c)| Row {
-                    skid: *skid,
-                    dx: round6(c[0]),
-                    dy: round6(c[1]),
-                    dz: round6(c[2]),
-                    rx: round6(c[3]),
-                    ry: round6(c[4]),
-                    rz: round6(c[5]),
-                })
+                .map(|(skid, c)| Knot::from_components(*skid, c.map(round6)))
                 .collect();
             s = serde_json::to_string_pretty(&arr)?;
             s.push('\n');
@@ -428,16 +496,7 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
         ShowFormat::Csv => {
             s.push_str("skid,dx,dy,dz,rx,ry,rz\n");
             for (skid, c) in &rows {
-                let _ = writeln!(
-                    s,
-                    "{skid},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6}",
-                    clean(c[0], 4),
-                    clean(c[1], 4),
-                    clean(c[2], 4),
-                    round6(c[3]),
-                    round6(c[4]),
-                    round6(c[5])
-                );
+                let _ = writeln!(s, "{skid},{}", deviation_cells(c, 0, 0, ","));
             }
         }
         ShowFormat::Table => {
@@ -452,17 +511,7 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
                 "      skid    dx [mm]    dy [mm]    dz [mm]     rx [deg]     ry [deg]     rz [deg]"
             );
             for (skid, c) in &rows {
-                let _ = writeln!(
-                    s,
-                    "{:>10} {:>10.4} {:>10.4} {:>10.4} {:>12.6} {:>12.6} {:>12.6}",
-                    skid,
-                    clean(c[0], 4),
-                    clean(c[1], 4),
-                    clean(c[2], 4),
-                    round6(c[3]),
-                    round6(c[4]),
-                    round6(c[5])
-                );
+                let _ = writeln!(s, "{skid:>10} {}", deviation_cells(c, 10, 12, " "));
             }
         }
     }
@@ -494,17 +543,7 @@ fn overview(p: &Profile) -> String {
         n.gear_factor
     );
     let header = "    dx [mm]    dy [mm]    dz [mm]     rx [deg]     ry [deg]     rz [deg]";
-    let row6 = |c: &[f64; 6]| {
-        format!(
-            "{:>11.4}{:>11.4}{:>11.4}{:>13.6}{:>13.6}{:>13.6}",
-            clean(c[0], 4),
-            clean(c[1], 4),
-            clean(c[2], 4),
-            round6(c[3]),
-            round6(c[4]),
-            round6(c[5])
-        )
-    };
+    let row6 = |c: &[f64; 6]| deviation_cells(c, 11, 13, "");
     let _ = writeln!(
         s,
         "\nmanual adjustment: deviation of each component from its own regression line (seed eq. 4.54)"
@@ -554,15 +593,11 @@ fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
         Some(v) => ("t", v),
         None => ("skid", 1.0),
     };
-    let idx = table.columns(&[pos_col, "x", "y", "z"])?;
     let mut positions = Vec::with_capacity(table.rows.len());
     let mut points = Vec::with_capacity(table.rows.len());
-    for row in &table.rows {
-        let v: Vec<f64> = idx.iter().map(|&i| NumericCsv::get(row, i)).collect();
-        if let [s, x, y, z] = v[..] {
-            positions.push(s * scale);
-            points.push([x, y, z]);
-        }
+    for (_, [s, x, y, z]) in table.select(&[pos_col, "x", "y", "z"])? {
+        positions.push(s * scale);
+        points.push([x, y, z]);
     }
     let spec = scan_spectrum(&positions, &points, a.threshold)
         .with_context(|| a.scan.display().to_string())?;

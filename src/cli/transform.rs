@@ -11,7 +11,7 @@ use anyhow::{Context as _, bail};
 
 use trackfix::position::Program;
 use trackfix::program::{LoadOptions, collect_inputs, load};
-use trackfix::track::Profile;
+use trackfix::track::{Profile, TrackError};
 use trackfix::transform::cell::skid_axis_index;
 use trackfix::transform::output::{Destination, output_path, plan_writes, unified_diff, write_all};
 use trackfix::transform::{
@@ -20,6 +20,7 @@ use trackfix::transform::{
 };
 
 use super::Exit;
+use super::track::report_located;
 
 /// Where results go and what to do with refusals (shared by all four commands).
 #[derive(clap::Args, Debug)]
@@ -37,10 +38,10 @@ pub struct OutputArgs {
     #[arg(long, requires = "in_place")]
     pub no_backup: bool,
     /// Print a unified diff of what would change; write nothing.
-    #[arg(long, conflicts_with = "check")]
+    #[arg(long, conflicts_with_all = ["check", "output", "out_dir", "in_place"])]
     pub diff: bool,
     /// Exit 1 if anything would change; write nothing.
-    #[arg(long)]
+    #[arg(long, conflicts_with_all = ["output", "out_dir", "in_place"])]
     pub check: bool,
     /// Leave unsupported targets (joint targets, 9E9 skids, …) unchanged instead of failing.
     #[arg(long)]
@@ -74,8 +75,9 @@ bits of A1/A4/A6 toggled unless --config keep. Joint targets are refused unless 
 
 const TRANSFER_EXAMPLES: &str = "\
 Examples:
-  trackfix transfer samples/rapid/spot_line.mod --cell samples/cell.toml --from r1 --to r2 --mirror --out-dir out/
-  trackfix transfer tuned/ --cell samples/cell.toml --from r1 --to r3 --diff
+  trackfix transfer samples/krl/spot_line.src --cell samples/cell.toml \\
+      --from r1 --to r2 --mirror --out-dir out/
+  trackfix transfer tuned/ --cell samples/cell.toml --from r1 --to r2 --diff
 
 zero with --from's track, mirror (with --mirror, plane from the cell's [mirror] table), then
 correct with --to's track: the same bytes as running the three commands in a row.";
@@ -139,9 +141,14 @@ pub struct MirrorArgs {
     /// A cell file whose [mirror] table gives the plane, frame, tool flip, config and skid map.
     #[arg(long, value_name = "CELL.toml")]
     pub cell: Option<PathBuf>,
-    /// The external axis holding the skid (eax_a … eax_f, E1 … E6) [default: eax_a / E1].
+    /// The external axis holding the skid (eax_a … eax_f, E1 … E6) [default: --robot's `skid`
+    /// in the cell, else eax_a / E1].
     #[arg(long, value_name = "AXIS")]
     pub skid: Option<String>,
+    /// The mirror-image robot's skid axis, if it is another one: the skid moves there (and that
+    /// axis's old value to --skid's place), as `transfer` does between robots.
+    #[arg(long, value_name = "AXIS")]
+    pub skid_to: Option<String>,
     /// The robot whose work objects place a world mirror plane (`frame_in = "world"`).
     #[arg(long, requires = "cell")]
     pub robot: Option<String>,
@@ -214,8 +221,11 @@ fn load_cell(path: &Path) -> anyhow::Result<Cell> {
     Ok(Cell::load(path)?)
 }
 
-fn load_profile(robot: &Robot) -> anyhow::Result<Profile> {
-    Profile::load(&robot.profile).with_context(|| format!("profile of robot `{}`", robot.name))
+fn load_profile(cell: &Cell, robot: &Robot) -> anyhow::Result<Profile> {
+    match Profile::load(&robot.profile) {
+        Err(TrackError::Io { error, .. }) => Err(cell.profile_error(robot, &error).into()),
+        r => r.with_context(|| format!("profile of robot `{}`", robot.name)),
+    }
 }
 
 fn load_options(robot: Option<&Robot>) -> LoadOptions {
@@ -320,9 +330,15 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
         if f.changes.is_empty() {
             writeln!(stderr, "{}: unchanged{refused}{target}", f.path.display())?;
         } else {
+            // A mirror moves points by metres: that is no correction.
+            let largest = if command == "mirror" {
+                "largest move"
+            } else {
+                "largest correction"
+            };
             writeln!(
                 stderr,
-                "{}: {} target(s) changed, largest correction {} mm / {:.4}°{skid}{refused}{target}",
+                "{}: {} target(s) changed, {largest} {} mm / {:.4}°{skid}{refused}{target}",
                 f.path.display(),
                 f.changes.len(),
                 fmt_mm(mm),
@@ -336,7 +352,7 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
 fn run_track(a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
     let cell = load_cell(&a.cell)?;
     let robot = cell.robot(&a.robot)?;
-    let profile = load_profile(robot)?;
+    let profile = load_profile(&cell, robot)?;
     let mut setup = TrackSetup::new(robot, &profile);
     setup.default_wobj = a.default_wobj.clone();
     let programs = load_programs(&a.files, &load_options(Some(robot)))?;
@@ -349,10 +365,18 @@ fn run_track(a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
 }
 
 pub fn run_correct(a: CorrectArgs) -> anyhow::Result<Exit> {
+    report_located(run_correct_inner(a))
+}
+
+fn run_correct_inner(a: CorrectArgs) -> anyhow::Result<Exit> {
     run_track(a, Direction::Correct)
 }
 
 pub fn run_zero(a: ZeroArgs) -> anyhow::Result<Exit> {
+    report_located(run_zero_inner(a))
+}
+
+fn run_zero_inner(a: ZeroArgs) -> anyhow::Result<Exit> {
     run_track(a.inner, Direction::Zero)
 }
 
@@ -384,30 +408,44 @@ fn mirror_settings(
         config: o.config.or(table.config).unwrap_or(d.config),
         skid_map: o.skid_map.or(table.skid_map).unwrap_or(d.skid_map),
         skid_axis,
+        skid_axis_to: None,
         mirror_frames: o.mirror_frames,
         mirror_joints: o.mirror_joints,
     }
 }
 
 pub fn run_mirror(a: MirrorArgs) -> anyhow::Result<Exit> {
+    report_located(run_mirror_inner(a))
+}
+
+fn run_mirror_inner(a: MirrorArgs) -> anyhow::Result<Exit> {
     let cell = a.cell.as_deref().map(load_cell).transpose()?;
-    let skid_axis = match &a.skid {
-        Some(s) => skid_axis_index(s)
-            .with_context(|| format!("--skid {s}: use eax_a … eax_f or E1 … E6"))?,
-        None => 0,
-    };
     let robot = match (&cell, &a.robot) {
         (Some(c), Some(name)) => Some(c.robot(name)?),
         (None, Some(_)) => bail!("--robot needs --cell"),
         _ => None,
     };
-    let settings = mirror_settings(
-        cell.as_ref(),
-        &a.mirror,
-        skid_axis,
-        robot,
-        a.default_wobj.as_deref(),
-    );
+    let axis = |flag: &str, s: &str| {
+        skid_axis_index(s).with_context(|| format!("--{flag} {s}: use eax_a … eax_f or E1 … E6"))
+    };
+    let skid_axis = match &a.skid {
+        Some(s) => axis("skid", s)?,
+        None => robot.map_or(0, |r| r.skid_axis),
+    };
+    let settings = MirrorSettings {
+        skid_axis_to: a
+            .skid_to
+            .as_deref()
+            .map(|s| axis("skid-to", s))
+            .transpose()?,
+        ..mirror_settings(
+            cell.as_ref(),
+            &a.mirror,
+            skid_axis,
+            robot,
+            a.default_wobj.as_deref(),
+        )
+    };
     let programs = load_programs(&a.files, &load_options(robot))?;
     let mut results = Vec::new();
     for p in &programs {
@@ -418,15 +456,20 @@ pub fn run_mirror(a: MirrorArgs) -> anyhow::Result<Exit> {
 }
 
 pub fn run_transfer(a: TransferArgs) -> anyhow::Result<Exit> {
+    report_located(run_transfer_inner(a))
+}
+
+fn run_transfer_inner(a: TransferArgs) -> anyhow::Result<Exit> {
     let cell = load_cell(&a.cell)?;
     let from = cell.robot(&a.from)?;
     let to = cell.robot(&a.to)?;
-    let from_profile = load_profile(from)?;
-    let to_profile = load_profile(to)?;
+    let from_profile = load_profile(&cell, from)?;
+    let to_profile = load_profile(&cell, to)?;
     let mut plan = TransferPlan {
         from: TrackSetup::new(from, &from_profile),
-        mirror: a.mirror.then(|| {
-            mirror_settings(
+        mirror: a.mirror.then(|| MirrorSettings {
+            skid_axis_to: Some(to.skid_axis),
+            ..mirror_settings(
                 Some(&cell),
                 &a.mirror_options,
                 from.skid_axis,

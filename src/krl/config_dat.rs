@@ -6,7 +6,11 @@ use crate::position::{FrameDecl, FrameKind, ParsedFile};
 use crate::program::{LoadError, read_source};
 
 pub(crate) fn parse_config(path: &Path) -> Result<ParsedFile, LoadError> {
-    Ok(super::parse_file(path, read_source(path)?))
+    Ok(parse_config_source(path, read_source(path)?))
+}
+
+pub(crate) fn parse_config_source(path: &Path, source: Vec<u8>) -> ParsedFile {
+    super::parse_file(path, source)
 }
 
 /// The `BASE_DATA[n]` and `TOOL_DATA[n]` assignments of a parsed `$config.dat` (or any KRL file).

@@ -8,7 +8,8 @@
 //!   nodes with located diagnostics for the rest; `tree.print(src) == src`;
 //! - `positions`: targets, joint positions, `BASE_DATA`/`TOOL_DATA` into the shared model;
 //! - `resolve`: the base and tool of every motion over a `.src`/`.dat` pair;
-//! - [`load_program`] (the pair), [`load_config_dat`] (bases and tools of a `$config.dat`).
+//! - [`load_program`] (the pair; [`load_program_from_sources`] from bytes in memory),
+//!   [`load_config_dat`] (bases and tools of a `$config.dat`).
 //!
 //! ```
 //! let src = b"DEF a()\r\n  LIN {X 10, Y 20, Z 30, A 0, B 90, C 0} C_DIS ; go\r\nEND";
@@ -27,7 +28,7 @@ pub mod tree;
 use std::path::Path;
 
 pub use config_dat::{config_frames, load_config_dat};
-pub use pair::{load_program, partner_of};
+pub use pair::{load_program, load_program_from_sources, partner_of};
 pub use parser::{Parse, parse};
 
 use crate::position::{Language, ParsedFile};

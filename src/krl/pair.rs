@@ -67,18 +67,70 @@ pub fn load_program(path: &Path, options: &LoadOptions) -> Result<Program, LoadE
             paths.push(other);
         }
     }
-    let mut files = Vec::new();
+    let mut sources = Vec::with_capacity(paths.len());
+    for p in paths {
+        let bytes = read_source(&p)?;
+        sources.push((p, bytes));
+    }
+    load_program_from_sources(sources, options)
+}
+
+/// Builds a program from files already in memory (a `.src` and its `.dat`, or a lone file;
+/// a path whose name is `$config.dat`, in any case, is taken as the cell's configuration), with
+/// the same base/tool resolution as [`load_program`]: `transfer` re-parses a transformed pair
+/// this way without writing it out. Paths are names only: nothing is read from disk except
+/// [`LoadOptions::krl_config_dat`] when given (which then replaces an in-memory one), so the
+/// only error is failing to read that file. Bytes that are not KRL are kept verbatim and
+/// reported in each file's diagnostics.
+///
+/// Files keep their given order, except that a `.src` is placed before a `.dat` and a
+/// `$config.dat` last, as [`load_program`] orders them.
+pub fn load_program_from_sources(
+    files: Vec<(PathBuf, Vec<u8>)>,
+    options: &LoadOptions,
+) -> Result<Program, LoadError> {
+    let is_config = |p: &Path| {
+        p.file_name()
+            .and_then(|n| n.to_str())
+            .is_some_and(|n| n.eq_ignore_ascii_case("$config.dat"))
+    };
+    let rank = |p: &Path| {
+        if is_config(p) {
+            2
+        } else if lower_ext(p).as_deref() == Some("dat") {
+            1
+        } else {
+            0
+        }
+    };
+    let mut files = files;
+    files.sort_by_key(|(p, _)| rank(p));
+    let mut program_files = Vec::new();
     let mut facts = Vec::new();
-    for p in &paths {
-        let (file, fact) = analyse(p, read_source(p)?);
-        files.push(file);
-        facts.push(fact);
+    let mut configs = Vec::new();
+    for (path, bytes) in files {
+        if is_config(&path) {
+            configs.push(config_file(config_dat::parse_config_source(&path, bytes)));
+        } else {
+            let (file, fact) = analyse(&path, bytes);
+            program_files.push(file);
+            facts.push(fact);
+        }
     }
-    resolve::resolve(&mut files, &mut facts);
+    resolve::resolve(&mut program_files, &mut facts);
+    if options.krl_config_dat.is_none() {
+        program_files.extend(configs);
+    }
     if let Some(cfg) = &options.krl_config_dat {
-        let mut file = config_dat::parse_config(cfg)?;
-        file.positions.clear();
-        files.push(file);
+        program_files.push(config_file(config_dat::parse_config(cfg)?));
     }
-    Ok(Program { files })
+    Ok(Program {
+        files: program_files,
+    })
+}
+
+/// A `$config.dat` in a program carries its frames only.
+fn config_file(mut file: crate::position::ParsedFile) -> crate::position::ParsedFile {
+    file.positions.clear();
+    file
 }

@@ -366,6 +366,7 @@ impl<'l> Extractor<'l> {
                     };
                     let mut positional = Vec::new();
                     let mut rot: [Option<NumField>; 3] = [None, None, None];
+                    let mut rot_given = [false; 3];
                     for a in arena.children(i) {
                         let Some(arg) = arena.get(a) else { continue };
                         let value = arena
@@ -382,6 +383,9 @@ impl<'l> Extractor<'l> {
                             } else {
                                 continue;
                             };
+                            if let Some(g) = rot_given.get_mut(slot) {
+                                *g = value.is_some();
+                            }
                             if let (Some(v), Some(r)) = (value, rot.get_mut(slot)) {
                                 *r = self.num(src, arena, v);
                             }
@@ -409,6 +413,7 @@ impl<'l> Extractor<'l> {
                         target,
                         delta,
                         rot,
+                        rot_given,
                     });
                 }
                 _ => {}

@@ -20,35 +20,30 @@ pub struct SamplingFrame {
 
 /// Reads `frames.csv`; rows must be in strictly increasing skid order.
 pub fn read_frames(path: &Path) -> Result<Vec<SamplingFrame>, TrackError> {
-    let bytes = std::fs::read(path).map_err(|error| TrackError::Io {
-        path: path.to_path_buf(),
-        error,
-    })?;
-    parse_frames(path, &bytes)
+    frames_of(&NumericCsv::read(path)?)
 }
 
 /// Parses `frames.csv` bytes; `path` is for messages only.
 pub fn parse_frames(path: &Path, bytes: &[u8]) -> Result<Vec<SamplingFrame>, TrackError> {
-    let table = NumericCsv::parse(path, bytes)?;
-    let idx = table.columns(&FRAMES_HEADER)?;
+    frames_of(&NumericCsv::parse(path, bytes)?)
+}
+
+fn frames_of(table: &NumericCsv) -> Result<Vec<SamplingFrame>, TrackError> {
+    let path = &table.path;
     let mut frames: Vec<SamplingFrame> = Vec::with_capacity(table.rows.len());
-    for row in &table.rows {
-        let v: Vec<f64> = idx.iter().map(|&i| NumericCsv::get(row, i)).collect();
-        let [skid, x, y, z, rx, ry, rz] = v[..] else {
-            continue;
-        };
+    for (line, [skid, x, y, z, rx, ry, rz]) in table.select(&FRAMES_HEADER)? {
         if let Some(prev) = frames.last()
             && skid <= prev.skid
         {
-            return Err(TrackError::Csv {
-                path: path.to_path_buf(),
-                line: row.line,
-                column: "skid".to_string(),
-                message: format!(
-                    "skid {skid} does not follow {} in increasing order; sort the rows and remove duplicates",
+            return Err(table.error(
+                line,
+                "skid",
+                format!(
+                    "skid {skid} does not follow {} in increasing order",
                     prev.skid
                 ),
-            });
+                "sort the rows by skid and keep one row per skid position",
+            ));
         }
         frames.push(SamplingFrame {
             skid,

@@ -22,42 +22,34 @@ pub const OUTLIER_FACTOR: f64 = 4.0;
 
 /// Reads `measurements.csv`. A point number repeated at one skid is an error at its line.
 pub fn read_measurements(path: &Path) -> Result<Vec<MeasurementRow>, TrackError> {
-    let bytes = std::fs::read(path).map_err(|error| TrackError::Io {
-        path: path.to_path_buf(),
-        error,
-    })?;
-    parse_measurements(path, &bytes)
+    measurements_of(&NumericCsv::read(path)?)
 }
 
 /// Parses `measurements.csv` bytes; `path` is for messages only.
 pub fn parse_measurements(path: &Path, bytes: &[u8]) -> Result<Vec<MeasurementRow>, TrackError> {
-    let table = NumericCsv::parse(path, bytes)?;
-    let idx = table.columns(&MEASUREMENTS_HEADER)?;
+    measurements_of(&NumericCsv::parse(path, bytes)?)
+}
+
+fn measurements_of(table: &NumericCsv) -> Result<Vec<MeasurementRow>, TrackError> {
     let mut seen: BTreeMap<(u64, u32), u64> = BTreeMap::new();
     let mut rows = Vec::with_capacity(table.rows.len());
-    for row in &table.rows {
-        let v: Vec<f64> = idx.iter().map(|&i| NumericCsv::get(row, i)).collect();
-        let [skid, point, rx, ry, rz, mx, my, mz] = v[..] else {
-            continue;
-        };
+    for (line, [skid, point, rx, ry, rz, mx, my, mz]) in table.select(&MEASUREMENTS_HEADER)? {
         if point < 0.0 || point.fract() != 0.0 || point > u32::MAX as f64 {
-            return Err(TrackError::Csv {
-                path: path.to_path_buf(),
-                line: row.line,
-                column: "point".to_string(),
-                message: format!("`{point}` is not a point number (0, 1, 2, ...)"),
-            });
+            return Err(table.error(
+                line,
+                "point",
+                format!("`{point}` is not a point number"),
+                "number the points 0, 1, 2, ... (the same number for the same TCP point at every skid)",
+            ));
         }
         let point = point as u32;
-        if let Some(first) = seen.insert((skid.to_bits(), point), row.line) {
-            return Err(TrackError::Csv {
-                path: path.to_path_buf(),
-                line: row.line,
-                column: "point".to_string(),
-                message: format!(
-                    "point {point} at skid {skid} was already measured on line {first}; keep one row per point and skid"
-                ),
-            });
+        if let Some(first) = seen.insert((skid.to_bits(), point), line) {
+            return Err(table.error(
+                line,
+                "point",
+                format!("point {point} at skid {skid} was already measured on line {first}"),
+                "keep one row per point and skid",
+            ));
         }
         rows.push(MeasurementRow {
             skid,
@@ -65,6 +57,25 @@ pub fn parse_measurements(path: &Path, bytes: &[u8]) -> Result<Vec<MeasurementRo
             robot: [rx, ry, rz],
             meas: [mx, my, mz],
         });
+    }
+    // identify() says the same without a location; the file can point at the rows.
+    let mut per_skid: BTreeMap<u64, (f64, usize, u64)> = BTreeMap::new();
+    for ((skid_bits, _), &line) in &seen {
+        let e = per_skid
+            .entry(*skid_bits)
+            .or_insert((f64::from_bits(*skid_bits), 0, 0));
+        e.1 += 1;
+        e.2 = e.2.max(line);
+    }
+    if let Some((skid, count, line)) = per_skid.values().find(|(_, count, _)| *count < 3) {
+        return Err(table.error(
+            *line,
+            "skid",
+            format!(
+                "skid {skid} mm: {count} point(s) measured, a base frame needs at least 3 non-collinear points"
+            ),
+            "measure at least 3 well-spread TCP points at every skid position (10 is usual)",
+        ));
     }
     Ok(rows)
 }

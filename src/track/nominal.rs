@@ -132,16 +132,7 @@ pub fn fit_track(frames: &[SamplingFrame], opts: &FitOptions) -> Result<TrackFit
         .map(|f| {
             // DESIGN.md §3.2: D_i = N(s_i)⁻¹·F_i.
             let d = nominal_at(f.skid).inverse() * f.pose;
-            let [dx, dy, dz, rx, ry, rz] = pose_to_xyz_deg(&d).map(round);
-            Knot {
-                skid: f.skid,
-                dx,
-                dy,
-                dz,
-                rx,
-                ry,
-                rz,
-            }
+            Knot::from_components(f.skid, pose_to_xyz_deg(&d).map(round))
         })
         .collect();
     let nominal = Nominal {
@@ -150,15 +141,7 @@ pub fn fit_track(frames: &[SamplingFrame], opts: &FitOptions) -> Result<TrackFit
         rotation: xyz_deg_angles(&rotation).map(|v| (v * 1e9).round() / 1e9),
         gear_factor: (gear_factor * 1e12).round() / 1e12,
     };
-    let profile = Profile::from_parts(
-        opts.name.clone(),
-        opts.source_sha256.clone(),
-        opts.reference,
-        opts.gear,
-        opts.extrapolate,
-        nominal,
-        knots,
-    )?;
+    let profile = Profile::from_parts(opts, nominal, knots)?;
     Ok(TrackFit {
         base_at_zero: nominal_at(0.0),
         profile,

@@ -71,12 +71,14 @@ pub fn profile_svg(profile: &Profile) -> Result<String, TrackError> {
             let mut chart = ChartBuilder::on(area)
                 .caption(label, ("sans-serif", 18))
                 .margin(12)
+                .margin_right(28)
                 .x_label_area_size(32)
                 .y_label_area_size(64)
                 .build_cartesian_2d(s0..s1, yr)
                 .map_err(plot_error)?;
             chart
                 .configure_mesh()
+                .x_label_formatter(&|v| format!("{v:.0}"))
                 .x_desc("skid [mm]")
                 .y_desc(label)
                 .draw()
@@ -127,7 +129,12 @@ pub fn spectrum_svg(spectrum: &Spectrum) -> Result<String, TrackError> {
     {
         let root = SVGBackend::with_string(&mut svg, (1000, 600)).into_drawing_area();
         root.fill(&WHITE).map_err(plot_error)?;
-        let fmax = spectrum.nyquist().max(1e-9);
+        // Up to the Nyquist frequency the noise floor would squeeze the part that matters into
+        // the first few pixels: show ten times the reported frequency instead.
+        let nyquist = spectrum.nyquist().max(1e-9);
+        let fmax = spectrum
+            .highest
+            .map_or(nyquist, |(f, _)| (10.0 * f).min(nyquist));
         let amax = spectrum
             .amplitude
             .iter()
@@ -141,13 +148,19 @@ pub fn spectrum_svg(spectrum: &Spectrum) -> Result<String, TrackError> {
                 ("sans-serif", 20),
             )
             .margin(14)
+            .margin_right(30)
             .x_label_area_size(40)
             .y_label_area_size(70)
             .build_cartesian_2d(0.0..fmax, 0.0..amax.max(1e-6))
             .map_err(plot_error)?;
+        let x_desc = if fmax < nyquist {
+            format!("spatial frequency [1/mm] (shown to {fmax:.6}; Nyquist {nyquist:.6})")
+        } else {
+            "spatial frequency [1/mm]".to_owned()
+        };
         chart
             .configure_mesh()
-            .x_desc("spatial frequency [1/mm]")
+            .x_desc(x_desc)
             .y_desc("amplitude [mm]")
             .draw()
             .map_err(plot_error)?;
@@ -156,20 +169,39 @@ pub fn spectrum_svg(spectrum: &Spectrum) -> Result<String, TrackError> {
             .iter()
             .zip(&spectrum.amplitude)
             .skip(1)
+            .take_while(|(f, _)| **f <= fmax)
             .map(|(f, a)| (*f, *a))
             .collect();
         chart
             .draw_series(LineSeries::new(pts, BLUE.stroke_width(1)))
             .map_err(plot_error)?;
+        let threshold = spectrum.threshold_mm;
         chart
             .draw_series(LineSeries::new(
-                [(0.0, spectrum.threshold_mm), (fmax, spectrum.threshold_mm)],
+                [(0.0, threshold), (fmax, threshold)],
                 RED.stroke_width(1),
             ))
             .map_err(plot_error)?;
-        if let Some(p) = spectrum.highest {
+        chart
+            .draw_series(std::iter::once(Text::new(
+                format!("threshold {threshold} mm"),
+                (fmax * 0.75, threshold + amax * 0.02),
+                ("sans-serif", 14).into_font().color(&RED),
+            )))
+            .map_err(plot_error)?;
+        if let Some((f, a)) = spectrum.highest {
             chart
-                .draw_series(std::iter::once(Circle::new(p, 5, RED.filled())))
+                .draw_series(std::iter::once(Circle::new((f, a), 5, RED.filled())))
+                .map_err(plot_error)?;
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    format!(
+                        "highest above threshold: {f:.6} /mm -> sample every {:.0} mm",
+                        0.5 / f
+                    ),
+                    (f + fmax * 0.02, a + amax * 0.03),
+                    ("sans-serif", 14).into_font().color(&RED),
+                )))
                 .map_err(plot_error)?;
         }
         root.present().map_err(plot_error)?;

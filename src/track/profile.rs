@@ -5,8 +5,11 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Translation3, Vector3};
 use serde::{Deserialize, Serialize};
 
+use super::csv_table::render_located;
+use super::nominal::FitOptions;
 use super::spline::{CubicSpline, EndCondition, SplineError};
 use crate::geometry::{Pose, pose_xyz_deg, xyz_deg};
+use crate::syntax::Span;
 
 /// The format tag every profile file starts with.
 pub const PROFILE_FORMAT: &str = "trackfix-profile/1";
@@ -26,23 +29,25 @@ pub enum TrackError {
         path: PathBuf,
         error: std::io::Error,
     },
-    /// A `profile.toml` that TOML or the profile schema rejects; `message` carries toml's
-    /// line and column.
-    #[error("{}: {message}", path.display())]
-    Toml { path: PathBuf, message: String },
+    /// A `profile.toml` that TOML or the profile schema rejects, rendered as
+    /// `file:line:col: error: …` with the line, a caret and what to do.
+    #[error("{rendered}")]
+    Toml { path: PathBuf, rendered: String },
     /// A profile with a format tag this version does not read.
     #[error("{}: format = {found:?}, expected {PROFILE_FORMAT:?}", path.display())]
     Format { path: PathBuf, found: String },
     /// The knots cannot carry a spline (too few, not increasing, not finite).
     #[error("{context}: {error}")]
     Knots { context: String, error: SplineError },
-    /// A CSV input error at `file:line`, in a named column.
-    #[error("{}:{line}: column `{column}`: {message}", path.display())]
+    /// A CSV input error at `file:line`, in a named column; `rendered` is the whole message:
+    /// `file:line:col: error: …`, the line, a caret and what to do.
+    #[error("{rendered}")]
     Csv {
         path: PathBuf,
         line: u64,
         column: String,
         message: String,
+        rendered: String,
     },
     /// Fewer than 3 point pairs at one skid position.
     #[error(
@@ -74,6 +79,24 @@ impl Knot {
     /// `[dx, dy, dz, rx, ry, rz]`.
     pub fn components(&self) -> [f64; 6] {
         [self.dx, self.dy, self.dz, self.rx, self.ry, self.rz]
+    }
+
+    /// A knot of `[dx, dy, dz, rx, ry, rz]` at `skid`.
+    pub fn from_components(skid: f64, [dx, dy, dz, rx, ry, rz]: [f64; 6]) -> Knot {
+        Knot {
+            skid,
+            dx,
+            dy,
+            dz,
+            rx,
+            ry,
+            rz,
+        }
+    }
+
+    /// A knot of no deviation at `skid`.
+    pub fn zero(skid: f64) -> Knot {
+        Knot::from_components(skid, [0.0; 6])
     }
 
     /// The knot's pose `D_i`.
@@ -195,6 +218,24 @@ impl PartialEq for Profile {
     }
 }
 
+/// The `skid = …` line of the `index`-th (0-based) `[[knot]]` table of profile text.
+fn knot_skid_span(text: &str, index: usize) -> Option<Span> {
+    let mut offset = 0;
+    let mut tables = 0;
+    for line in text.split_inclusive('\n') {
+        let start = offset;
+        offset += line.len();
+        let trimmed = line.trim();
+        if trimmed == "[[knot]]" {
+            tables += 1;
+        } else if tables == index + 1 && trimmed.starts_with("skid") {
+            let lead = line.len() - line.trim_start().len();
+            return Some(Span::new(start + lead, start + lead + trimmed.len()));
+        }
+    }
+    None
+}
+
 impl Profile {
     /// A profile from knots alone: identity nominal, reference `regression`, gear `as-is`.
     pub fn from_knots(
@@ -202,40 +243,34 @@ impl Profile {
         knots: Vec<Knot>,
         extrapolate: Extrapolate,
     ) -> Result<Profile, TrackError> {
-        Profile::from_parts(
-            name.into(),
-            String::new(),
-            Reference::Regression,
-            Gear::AsIs,
+        let opts = FitOptions {
+            name: name.into(),
             extrapolate,
-            Nominal::identity(),
-            knots,
-        )
+            ..FitOptions::default()
+        };
+        Profile::from_parts(&opts, Nominal::identity(), knots)
     }
 
-    /// A profile with every field given; statistics are computed from the knots.
+    /// A profile with the name, reference, gear, extrapolation and source hash of `opts`;
+    /// statistics are computed from the knots.
     pub fn from_parts(
-        name: String,
-        source_sha256: String,
-        reference: Reference,
-        gear: Gear,
-        extrapolate: Extrapolate,
+        opts: &FitOptions,
         nominal: Nominal,
         knots: Vec<Knot>,
     ) -> Result<Profile, TrackError> {
         let splines = build_splines(&knots).map_err(|error| TrackError::Knots {
-            context: format!("profile `{name}`"),
+            context: format!("profile `{}`", opts.name),
             error,
         })?;
         let stats = Some(compute_stats(&knots, &nominal));
         Ok(Profile {
             file: ProfileFile {
                 format: PROFILE_FORMAT.to_string(),
-                name,
-                source_sha256,
-                reference,
-                gear,
-                extrapolate,
+                name: opts.name.clone(),
+                source_sha256: opts.source_sha256.clone(),
+                reference: opts.reference,
+                gear: opts.gear,
+                extrapolate: opts.extrapolate,
                 nominal,
                 stats,
                 knot: knots,
@@ -258,7 +293,14 @@ impl Profile {
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Profile, TrackError> {
         let file: ProfileFile = toml::from_str(text).map_err(|e| TrackError::Toml {
             path: path.to_path_buf(),
-            message: e.to_string().trim_end().to_string(),
+            rendered: render_located(
+                path,
+                text.as_bytes(),
+                e.span().map(Span::from).unwrap_or_default(),
+                e.message().trim(),
+                "a profile is what `trackfix track fit FRAMES.csv -o profile.toml` writes; \
+                 see samples/track/profile.toml for its keys",
+            ),
         })?;
         if file.format != PROFILE_FORMAT {
             return Err(TrackError::Format {
@@ -266,9 +308,29 @@ impl Profile {
                 found: file.format,
             });
         }
-        let splines = build_splines(&file.knot).map_err(|error| TrackError::Knots {
-            context: format!("{}: [[knot]]", path.display()),
-            error,
+        let splines = build_splines(&file.knot).map_err(|error| {
+            let index = match error {
+                SplineError::NotIncreasing { index, .. } | SplineError::NotFinite { index } => {
+                    Some(index)
+                }
+                _ => None,
+            };
+            match index.and_then(|i| knot_skid_span(text, i)) {
+                Some(span) => TrackError::Toml {
+                    path: path.to_path_buf(),
+                    rendered: render_located(
+                        path,
+                        text.as_bytes(),
+                        span,
+                        &format!("[[knot]]: {error}"),
+                        "keep one [[knot]] per skid position, in increasing skid order",
+                    ),
+                },
+                None => TrackError::Knots {
+                    context: format!("{}: [[knot]]", path.display()),
+                    error,
+                },
+            }
         })?;
         Ok(Profile { file, splines })
     }

@@ -27,13 +27,14 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use crate::geometry::{Pose, pose_xyz_deg};
-use crate::syntax::{Diagnostic, LineIndex, Span};
+use crate::syntax::Span;
+use crate::track::csv_table::render_located;
 
 /// Why a cell file could not be used.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum CellError {
-    #[error("{}: {source}", path.display())]
+    #[error("cannot read the cell file {}", path.display())]
     Io {
         path: PathBuf,
         source: std::io::Error,
@@ -138,7 +139,7 @@ struct CellToml {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RobotToml {
-    profile: String,
+    profile: Spanned<String>,
     base: FrameXyz,
     track_axis: Spanned<[f64; 3]>,
     skid: Option<Spanned<String>>,
@@ -164,6 +165,8 @@ pub struct Robot {
     pub name: String,
     /// The profile file, resolved against the cell file's folder.
     pub profile: PathBuf,
+    /// Where the cell file names it.
+    pub profile_span: Span,
     /// `B_0`: the controller's robot base in world at skid 0.
     pub base0: Pose,
     /// `a`: the unit track direction in world.
@@ -193,6 +196,8 @@ pub struct Cell {
     pub path: PathBuf,
     pub robots: BTreeMap<String, Robot>,
     pub mirror: MirrorTable,
+    /// The file's text, for messages located in it after loading.
+    text: String,
 }
 
 /// `"eax_a"`…`"eax_f"` or `"E1"`…`"E6"` (any case) → 0…5.
@@ -224,15 +229,8 @@ impl Cell {
 
     /// Validates cell text; relative paths resolve against `path`'s folder.
     pub fn parse(path: &Path, text: &str) -> Result<Cell, CellError> {
-        let located = |span: Span, message: String, hint: &str| {
-            let index = LineIndex::new(text.as_bytes());
-            let d = Diagnostic::error(span, message).with_hint(hint);
-            CellError::Invalid {
-                rendered: d
-                    .render(&path.display().to_string(), text.as_bytes(), &index)
-                    .trim_end()
-                    .to_owned(),
-            }
+        let located = |span: Span, message: String, hint: &str| CellError::Invalid {
+            rendered: render_located(path, text.as_bytes(), span, &message, hint),
         };
         let raw: CellToml = toml::from_str(text).map_err(|e| {
             let span = e.span().map(Span::from).unwrap_or_default();
@@ -283,7 +281,8 @@ impl Cell {
                 name.clone(),
                 Robot {
                     name,
-                    profile: dir.join(&r.profile),
+                    profile: dir.join(r.profile.get_ref()),
+                    profile_span: r.profile.span().into(),
                     base0: r.base.pose(),
                     track_axis: axis / norm,
                     skid_axis,
@@ -307,7 +306,27 @@ impl Cell {
             path: path.to_owned(),
             robots,
             mirror,
+            text: text.to_owned(),
         })
+    }
+
+    /// An error about `robot`'s profile, at the cell's `profile = …`: what went wrong reading
+    /// it, and how to make one.
+    pub fn profile_error(&self, robot: &Robot, error: &dyn std::fmt::Display) -> CellError {
+        CellError::Invalid {
+            rendered: render_located(
+                &self.path,
+                self.text.as_bytes(),
+                robot.profile_span,
+                &format!(
+                    "robot `{}`: cannot read its profile {}: {error}",
+                    robot.name,
+                    robot.profile.display()
+                ),
+                "the path is relative to the cell file; make a profile with \
+                 `trackfix track identify` and `trackfix track fit FRAMES.csv -o PROFILE.toml`",
+            ),
+        }
     }
 
     /// The robot called `name`, or an error listing the known ones.

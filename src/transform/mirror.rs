@@ -40,6 +40,10 @@ pub struct MirrorSettings {
     pub skid_map: (f64, f64),
     /// External axis index of the skid (0 = `eax_a` / `E1`).
     pub skid_axis: usize,
+    /// The mirror-image robot's skid axis when it is another one (`transfer` between robots
+    /// whose skids sit on different axes): the mapped skid moves there and that axis's old
+    /// value takes its place, so a second mirror the other way gives the program back.
+    pub skid_axis_to: Option<usize>,
     /// Also mirror the program's work objects, bases and tools.
     pub mirror_frames: bool,
     /// Mirror joint targets (axes 1, 4, 6 negated) instead of refusing them.
@@ -69,6 +73,7 @@ impl Default for MirrorSettings {
             config: ConfigRule::Mirror,
             skid_map: (1.0, 0.0),
             skid_axis: 0,
+            skid_axis_to: None,
             mirror_frames: false,
             mirror_joints: false,
             world: None,
@@ -124,46 +129,51 @@ impl Reflection {
 
     /// The quaternion of `Sa·R·Sb` (see the module comment), not normalised away from `q`'s sign.
     fn rotation(&self, r: &UnitQuaternion<f64>, right: Vector3<f64>) -> Quaternion<f64> {
-        let pa = Quaternion::from_parts(0.0, self.normal);
-        let pb = Quaternion::from_parts(0.0, right);
-        -(pa * r.quaternion() * pb)
+        reflect_rotation(self.normal, r, right)
     }
 
     /// `T' = M·Sa·M⁻¹·T·Sb`, with the quaternion the analytic formula gives (sign included).
     pub fn target(&self, t: &Pose) -> (Pose, [f64; 4]) {
-        let q = self.rotation(&t.rotation, self.tool_axis);
-        let p = self.point(&t.translation.vector);
-        let r = UnitQuaternion::from_quaternion(q);
-        (
-            Pose::from_parts(Translation3::from(p), r),
-            [q.w, q.i, q.j, q.k],
+        pose_with_quat(
+            self.point(&t.translation.vector),
+            self.rotation(&t.rotation, self.tool_axis),
         )
     }
 
     /// A frame in the mirrored space: `A·F·A` (work objects, bases: both sides reflect the
     /// plane, so `uframe'·oframe'·T' = Sa·uframe·oframe·T·Sb`).
     pub fn frame(&self, f: &Pose) -> (Pose, [f64; 4]) {
-        let q = self.rotation(&f.rotation, self.normal);
-        let p = self.point(&f.translation.vector);
-        let r = UnitQuaternion::from_quaternion(q);
-        (
-            Pose::from_parts(Translation3::from(p), r),
-            [q.w, q.i, q.j, q.k],
+        pose_with_quat(
+            self.point(&f.translation.vector),
+            self.rotation(&f.rotation, self.normal),
         )
     }
 
     /// A tool in the flange of the mirror-image robot: `Sb·tframe·Sb` (the mirrored flange is
     /// the flange reflected in its own flip axis).
     pub fn tool(&self, f: &Pose) -> (Pose, [f64; 4]) {
-        let pa = Quaternion::from_parts(0.0, self.tool_axis);
-        let q = -(pa * f.rotation.quaternion() * pa);
-        let p = self.tool_vector(&f.translation.vector);
-        let r = UnitQuaternion::from_quaternion(q);
-        (
-            Pose::from_parts(Translation3::from(p), r),
-            [q.w, q.i, q.j, q.k],
+        pose_with_quat(
+            self.tool_vector(&f.translation.vector),
+            reflect_rotation(self.tool_axis, &f.rotation, self.tool_axis),
         )
     }
+}
+
+/// `Sl·R·Sr` for the reflections with unit normals `left` and `right` (module comment).
+fn reflect_rotation(
+    left: Vector3<f64>,
+    r: &UnitQuaternion<f64>,
+    right: Vector3<f64>,
+) -> Quaternion<f64> {
+    -(Quaternion::from_parts(0.0, left) * r.quaternion() * Quaternion::from_parts(0.0, right))
+}
+
+/// The pose and the exact quaternion it came from: the caller keeps the quaternion's sign.
+fn pose_with_quat(p: Vector3<f64>, q: Quaternion<f64>) -> (Pose, [f64; 4]) {
+    (
+        Pose::from_parts(Translation3::from(p), UnitQuaternion::from_quaternion(q)),
+        [q.w, q.i, q.j, q.k],
+    )
 }
 
 /// An edit for a value that may be an exact sign flip: a flip keeps the original decimals
@@ -174,16 +184,55 @@ fn flip_or_value_edit(field: &Option<NumField>, new: f64, min_decimals: usize) -
     number_edit(field, new, decimals)
 }
 
-fn skid_edit(p: &Position, settings: &MirrorSettings) -> Option<Edit> {
+fn skid_edits(file: &ParsedFile, p: &Position, settings: &MirrorSettings) -> Vec<Edit> {
     let (scale, offset) = settings.skid_map;
-    match p.skid(settings.skid_axis) {
-        Skid::At(s) => number_edit(
-            p.extax.get(settings.skid_axis)?,
-            scale * s + offset,
-            MM_DECIMALS,
-        ),
-        Skid::NotConnected | Skid::Missing => None,
+    let from = settings.skid_axis;
+    let Skid::At(s) = p.skid(from) else {
+        return Vec::new();
+    };
+    let Some(field) = p.extax.get(from) else {
+        return Vec::new();
+    };
+    let mapped = number_edit(field, scale * s + offset, MM_DECIMALS);
+    let to = match settings.skid_axis_to {
+        Some(to) if to != from => to,
+        _ => return mapped.into_iter().collect(),
+    };
+    // Both fields exist: `skid_refusal` refused the target otherwise.
+    let (Some(old), Some(Some(new))) = (field, p.extax.get(to)) else {
+        return Vec::new();
+    };
+    let mapped_text = match mapped {
+        Some(e) => e.text,
+        None => old.span.slice(&file.source).to_vec(),
+    };
+    vec![
+        Edit::new(new.span, mapped_text),
+        Edit::new(old.span, new.span.slice(&file.source).to_vec()),
+    ]
+}
+
+/// A skid that has to move to another axis the target does not write.
+fn skid_refusal(file: &ParsedFile, p: &Position, settings: &MirrorSettings) -> Option<Refusal> {
+    let to = settings.skid_axis_to?;
+    if to == settings.skid_axis || !matches!(p.skid(settings.skid_axis), Skid::At(_)) {
+        return None;
     }
+    if matches!(p.extax.get(to), Some(Some(_))) {
+        return None;
+    }
+    Some(Refusal::new(
+        file,
+        p.span,
+        p.label(),
+        RefusalKind::SkidMissing,
+        format!(
+            "{} has no numeric external axis {} to take the mirror-image robot's skid",
+            describe(p),
+            to + 1
+        ),
+        format!("write that axis in the target (9E9 will do), {SKIP_HINT}"),
+    ))
 }
 
 fn config_edits(config: &Config) -> Vec<Edit> {
@@ -220,7 +269,11 @@ pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
                             flip_or_value_edit(f, -f.as_ref()?.value(), 0)
                         })
                         .collect();
-                    edits.extend(skid_edit(p, settings));
+                    if let Some(r) = skid_refusal(file, p, settings) {
+                        fe.refusals.push(r);
+                        continue;
+                    }
+                    edits.extend(skid_edits(file, p, settings));
                     if !edits.is_empty() {
                         fe.edits.extend(edits);
                         fe.changes.push(TargetChange {
@@ -251,6 +304,10 @@ pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
                 }
                 _ => {}
             }
+            if let Some(r) = skid_refusal(file, p, settings) {
+                fe.refusals.push(r);
+                continue;
+            }
             let refl = match reflection_for(program, p, settings, &refl) {
                 Ok(r) => r,
                 Err((kind, msg, hint)) => {
@@ -274,7 +331,7 @@ pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
             if settings.config == ConfigRule::Mirror {
                 edits.extend(config_edits(&p.config));
             }
-            edits.extend(skid_edit(p, settings));
+            edits.extend(skid_edits(file, p, settings));
             if !edits.is_empty() {
                 let (mm, deg) = pose_change(&t, &new);
                 let skid = match p.skid(settings.skid_axis) {
@@ -425,22 +482,48 @@ fn mirror_offsets(
             OffsetKind::Offs => refl.normal,
             OffsetKind::RelTool => refl.tool_axis,
         };
-        let blocked = call
+        // A RelTool rotation changes sign unless it turns about the flipped tool axis.
+        let rot_switch = ["\\Rx", "\\Ry", "\\Rz"]
+            .into_iter()
+            .zip(&call.rot)
+            .zip(&call.rot_given)
+            .zip(refl.tool_axis.iter())
+            .find(|(((_, f), given), n)| {
+                call.kind == OffsetKind::RelTool && **given && f.is_none() && **n == 0.0
+            })
+            .map(|(((switch, _), _), _)| switch);
+        let offset_blocked = call
             .delta
             .iter()
             .zip(axis.iter())
             .any(|(f, n)| f.is_none() && n.abs() > 1e-12);
-        if blocked {
-            refusals.push(Refusal::new(
-                file,
-                call.span,
-                call.target.clone(),
-                RefusalKind::Expression,
+        let why = match (rot_switch, offset_blocked) {
+            (Some(switch), _) => Some((
+                format!(
+                    "{name}({}, …): its rotation {switch} is not a number and the mirror changes its sign",
+                    call.target
+                ),
+                format!(
+                    "write {switch} as a number (or negate the expression by hand), {SKIP_HINT}"
+                ),
+            )),
+            (None, true) => Some((
                 format!(
                     "{name}({}, …) has an offset that is not a number where the mirror changes it",
                     call.target
                 ),
                 format!("write the {frame}-frame offsets as numbers, {SKIP_HINT}"),
+            )),
+            (None, false) => None,
+        };
+        if let Some((message, hint)) = why {
+            refusals.push(Refusal::new(
+                file,
+                call.span,
+                call.target.clone(),
+                RefusalKind::Expression,
+                message,
+                hint,
             ));
             continue;
         }
@@ -541,6 +624,47 @@ mod tests {
         plus || minus
     }
 
+    #[test]
+    fn skid_moves_to_the_mirror_image_robots_axis_and_back() {
+        let src = "[[100,0,300],[1,0,0,0],[0,0,0,0],[1500.5,9E9,9E9,9E9,9E9,9E9]]\n";
+        let there = MirrorSettings {
+            skid_axis_to: Some(1),
+            ..MirrorSettings::default()
+        };
+        let text = mirrored_text(&rapid(src, "wobj0"), &there);
+        assert!(text.ends_with("[9E9,1500.5,9E9,9E9,9E9,9E9]]\n"), "{text}");
+        let back = MirrorSettings {
+            skid_axis: 1,
+            skid_axis_to: Some(0),
+            ..MirrorSettings::default()
+        };
+        assert_eq!(mirrored_text(&rapid(&text, "wobj0"), &back), src);
+        let mapped = MirrorSettings {
+            skid_map: (1.0, 250.0),
+            ..there
+        };
+        let text = mirrored_text(&rapid(src, "wobj0"), &mapped);
+        assert!(
+            text.ends_with("[9E9,1750.500,9E9,9E9,9E9,9E9]]\n"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn a_target_without_the_other_skid_axis_is_refused() {
+        let p = krl("{X 1,Y 2,Z 3,A 0,B 0,C 0,S 6,T 27,E1 800}\n", "$WORLD");
+        let settings = MirrorSettings {
+            skid_axis_to: Some(1),
+            ..MirrorSettings::default()
+        };
+        let edits = mirror(&p, &settings);
+        let r = &edits.files[0].refusals;
+        assert_eq!(r.len(), 1);
+        assert_eq!(r[0].kind, RefusalKind::SkidMissing);
+        assert!(r[0].message.contains("external axis 2"), "{}", r[0].message);
+        assert!(edits.files[0].edits.is_empty());
+    }
+
     /// `../shared/reference/README.md`: RobotStudio's mirror in the work object's xz plane.
     // The literals are RobotStudio's printed numbers, not approximations of 1/√2 we chose.
     #[allow(clippy::approx_constant)]
@@ -638,22 +762,16 @@ mod tests {
         let text = String::from_utf8(out.files[0].output.clone()).unwrap();
         let p1 = parse(&text);
         let (f0, f1) = (&p0.files[0], &p1.files[0]);
-        let wobj = |f: &ParsedFile| {
+        let frame = |f: &ParsedFile, name: &str| {
             f.frames
                 .iter()
-                .find(|d| d.name == "wCar")
+                .find(|d| d.name == name)
                 .unwrap()
                 .pose()
                 .unwrap()
         };
-        let tool = |f: &ParsedFile| {
-            f.frames
-                .iter()
-                .find(|d| d.name == "tGun")
-                .unwrap()
-                .pose()
-                .unwrap()
-        };
+        let wobj = |f: &ParsedFile| frame(f, "wCar");
+        let tool = |f: &ParsedFile| frame(f, "tGun");
         let target = |f: &ParsedFile| {
             f.positions
                 .iter()
@@ -748,6 +866,30 @@ mod tests {
         let out = String::from_utf8(apply(&p0, edits).unwrap().files[0].output.clone()).unwrap();
         assert!(out.contains("Offs(p1,10,-20,zUp)"), "{out}");
         assert!(out.contains("Offs(p1,10,zUp,0)"), "{out}");
+    }
+
+    #[test]
+    fn reltool_rotation_expressions_are_refused_where_the_mirror_changes_them() {
+        let text = "MODULE m\n  VAR num a := 5;\n  CONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[100,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL RelTool(p1,0,0,10\\Rz:=a), v1000, fine, tool0;\n    MoveL RelTool(p1,0,0,10\\Ry:=a), v1000, fine, tool0;\n    MoveL RelTool(p1,0,0,10\\Rz:=30), v1000, fine, tool0;\n  ENDPROC\nENDMODULE\n";
+        let p0 = parse(text);
+        let edits = mirror(&p0, &MirrorSettings::default());
+        let refused: Vec<_> = edits
+            .refusals()
+            .map(|r| (r.line, r.kind, r.message.clone()))
+            .collect();
+        assert_eq!(
+            refused,
+            [(
+                5,
+                RefusalKind::Expression,
+                "RelTool(p1, …): its rotation \\Rz is not a number and the mirror changes its sign"
+                    .to_owned()
+            )]
+        );
+        let out = String::from_utf8(apply(&p0, edits).unwrap().files[0].output.clone()).unwrap();
+        // Tool flip y: a turn about y keeps its sign, one about z changes it.
+        assert!(out.contains("RelTool(p1,0,0,10\\Ry:=a)"), "{out}");
+        assert!(out.contains("RelTool(p1,0,0,10\\Rz:=-30)"), "{out}");
     }
 
     fn settings() -> impl Strategy<Value = MirrorSettings> {

@@ -461,17 +461,7 @@ mod tests {
 
     #[test]
     fn zero_deviation_profile_leaves_files_byte_identical() {
-        let knots = (0..5)
-            .map(|i| Knot {
-                skid: i as f64 * 2000.0,
-                dx: 0.0,
-                dy: 0.0,
-                dz: 0.0,
-                rx: 0.0,
-                ry: 0.0,
-                rz: 0.0,
-            })
-            .collect();
+        let knots = (0..5).map(|i| Knot::zero(i as f64 * 2000.0)).collect();
         let profile = crate::track::Profile::from_knots("flat", knots, Extrapolate::Error).unwrap();
         let src = "[[1200.5,-310.25,845],[0.0436194,0.0,0.9990482,0.0],[0,-1,0,1],[2500,9E9,9E9,9E9,9E9,9E9]]\n\
                    [[0,0,0],[0.7071,0,0.7071,0],[0,0,0,0],[0,9E+09,9E9,9E9,9E9,9E9]]\n";
@@ -541,7 +531,7 @@ mod tests {
         ) {
             // A generated profile: 2 to 9 knots spread evenly over 0..8000 mm.
             let step = 8000.0 / (knots.len() - 1) as f64;
-            let knots = knots.iter().enumerate().map(|(i, k)| Knot { skid: i as f64 * step, dx: k.0, dy: k.1, dz: k.2, rx: k.3, ry: k.4, rz: k.5 }).collect();
+            let knots = knots.iter().enumerate().map(|(i, k)| Knot::from_components(i as f64 * step, [k.0, k.1, k.2, k.3, k.4, k.5])).collect();
             let profile = crate::track::Profile::from_knots("generated", knots, Extrapolate::Error).unwrap();
             let n = (q.0*q.0+q.1*q.1+q.2*q.2+q.3*q.3).sqrt();
             let q = [q.0/n, q.1/n, q.2/n, q.3/n];

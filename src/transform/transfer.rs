@@ -2,11 +2,11 @@
 //!
 //! The three steps run through text exactly as three commands in a row would: each step's output
 //! is parsed again before the next, so the written precision rounds in the same places and
-//! `transfer` equals `zero; mirror; correct` byte for byte.
+//! `transfer` equals `zero; mirror; correct` byte for byte. Nothing is written between the steps:
+//! RAPID re-parses the bytes, a KRL pair goes through `krl::load_program_from_sources`.
 
 use std::collections::BTreeSet;
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::path::PathBuf;
 
 use crate::position::{Language, Program};
 use crate::program::{LoadError, LoadOptions};
@@ -24,8 +24,6 @@ pub enum TransferError {
     Edit(#[from] EditError),
     #[error(transparent)]
     Load(#[from] LoadError),
-    #[error("temporary folder for re-reading a KRL pair: {0}")]
-    Io(#[from] std::io::Error),
     #[error("{}: the transformed file no longer has the same targets ({before} before, {after} after)", path.display())]
     Drift {
         path: PathBuf,
@@ -39,29 +37,6 @@ pub struct TransferPlan<'a> {
     pub from: TrackSetup<'a>,
     pub mirror: Option<MirrorSettings>,
     pub to: TrackSetup<'a>,
-}
-
-/// A private folder under the system temp dir, removed on drop.
-struct ScratchDir(PathBuf);
-
-impl ScratchDir {
-    fn new() -> std::io::Result<ScratchDir> {
-        static COUNTER: AtomicUsize = AtomicUsize::new(0);
-        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let dir = std::env::temp_dir().join(format!("trackfix-reparse-{}-{n}", std::process::id()));
-        std::fs::create_dir_all(&dir)?;
-        Ok(ScratchDir(dir))
-    }
-}
-
-impl Drop for ScratchDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn file_name(p: &Path) -> PathBuf {
-    p.file_name().map(PathBuf::from).unwrap_or_default()
 }
 
 /// Parses a transform's output again, as the next command of a chain would read it. File paths
@@ -80,24 +55,14 @@ pub fn reparse(
             .collect();
         return Ok(Program { files });
     }
-    // A KRL pair is read through the loader so that the .src's motions resolve the .dat's
-    // targets exactly as on the command line.
-    let scratch = ScratchDir::new()?;
-    for f in &result.files {
-        std::fs::write(scratch.0.join(file_name(&f.path)), &f.output)?;
-    }
-    let Some(first) = result.files.first() else {
-        return Ok(Program { files: Vec::new() });
-    };
-    let mut reread = crate::program::load(&scratch.0.join(file_name(&first.path)), options)?;
-    for f in &mut reread.files {
-        if let Some(orig) = result.files.iter().find(|o| {
-            f.path.parent() == Some(scratch.0.as_path()) && file_name(&o.path) == file_name(&f.path)
-        }) {
-            f.path = orig.path.clone();
-        }
-    }
-    Ok(reread)
+    // A KRL pair goes through the loader (in memory) so that the .src's motions resolve the
+    // .dat's targets exactly as on the command line.
+    let sources = result
+        .files
+        .iter()
+        .map(|f| (f.path.clone(), f.output.clone()))
+        .collect();
+    Ok(crate::krl::load_program_from_sources(sources, options)?)
 }
 
 /// Runs `zero` with `plan.from`, `mirror` if asked, `correct` with `plan.to`.

@@ -782,3 +782,84 @@ fn pair_lookup_any_case_and_declared_types_across_the_pair() {
     assert_eq!(alone.files.len(), 1);
     assert_eq!(krl::partner_of(&dir.path().join("alone.sub")), None);
 }
+
+#[test]
+fn collect_inputs_lists_a_pair_once_in_any_case() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("Cell.SRC"), "DEF cell( )\r\nEND\r\n").unwrap();
+    std::fs::write(d.join("cell.dat"), "DEFDAT cell\r\nENDDAT\r\n").unwrap();
+    std::fs::write(d.join("lone.dat"), "DEFDAT lone\r\nENDDAT\r\n").unwrap();
+    std::fs::write(d.join("other.src"), "DEF other( )\r\nEND\r\n").unwrap();
+    let names = |paths: Vec<PathBuf>| -> Vec<String> {
+        paths
+            .iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+            .collect()
+    };
+    let listed = trackfix::program::collect_inputs(&[d.to_owned()]).unwrap();
+    assert_eq!(names(listed), ["Cell.SRC", "lone.dat", "other.src"]);
+    // Named explicitly, in either order and spelled differently, the pair is still one program.
+    let named = trackfix::program::collect_inputs(&[
+        d.join("cell.dat"),
+        d.join(".").join("Cell.SRC"),
+        d.join("Cell.SRC"),
+    ])
+    .unwrap();
+    assert_eq!(names(named), ["Cell.SRC"]);
+}
+
+#[test]
+fn program_from_sources_in_memory_matches_the_program_from_disk() {
+    let options = LoadOptions {
+        krl_config_dat: Some(sample("$config.dat")),
+    };
+    for name in [
+        "spot_line.src",
+        "glue_tcp.dat",
+        "two_bases.src",
+        "pallet.src",
+    ] {
+        let from_disk = krl::load_program(&sample(name), &options).unwrap();
+        // Given .dat first: the in-memory build still puts the .src first.
+        let mut sources: Vec<(PathBuf, Vec<u8>)> = from_disk
+            .files
+            .iter()
+            .filter(|f| !f.path.ends_with("$config.dat"))
+            .map(|f| (f.path.clone(), f.source.clone()))
+            .collect();
+        sources.reverse();
+        let in_memory = krl::load_program_from_sources(sources.clone(), &options).unwrap();
+        let summary = |p: &Program| -> Vec<String> {
+            p.files
+                .iter()
+                .flat_map(|f| {
+                    std::iter::once(f.path.display().to_string()).chain(f.positions.iter().map(
+                        |pos| {
+                            format!(
+                                "{} {:?} {:?} {:?} {:?}",
+                                pos.label(),
+                                pos.usage.wobj,
+                                pos.usage.tool,
+                                pos.usage.stationary_tool,
+                                pos.usage.lines
+                            )
+                        },
+                    ))
+                })
+                .collect()
+        };
+        assert_eq!(summary(&in_memory), summary(&from_disk), "{name}");
+        assert!(summary(&from_disk).iter().any(|s| s.contains("BASE_DATA[")));
+        // The $config.dat may come in memory too, named in any case.
+        sources.push((
+            PathBuf::from("$CONFIG.DAT"),
+            std::fs::read(sample("$config.dat")).unwrap(),
+        ));
+        let all_in_memory =
+            krl::load_program_from_sources(sources, &LoadOptions::default()).unwrap();
+        let frames = |p: &Program| p.files.last().map(|f| f.frames.len());
+        assert_eq!(frames(&all_in_memory), frames(&from_disk));
+        assert!(all_in_memory.files.last().unwrap().positions.is_empty());
+    }
+}

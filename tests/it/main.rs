@@ -3,5 +3,6 @@
 mod cli;
 mod krl;
 mod rapid;
+mod support;
 mod track;
 mod transform;

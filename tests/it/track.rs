@@ -1,8 +1,7 @@
 //! Integration tests: track (issue 4). The simulation test, properties, and snapshots of the
 //! `trackfix track` commands on the samples.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
 use nalgebra::{Point3, Vector3};
 use proptest::prelude::*;
@@ -17,23 +16,7 @@ use trackfix::track::simulate::{
 use trackfix::track::spline::{CubicSpline, EndCondition};
 use trackfix::track::{Extrapolate, Knot, Profile, TrackError};
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// Runs the binary from the crate root; returns (exit code, stdout, stderr).
-fn trackfix(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_trackfix"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run trackfix");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use crate::support::{root, trackfix};
 
 fn skids() -> Vec<f64> {
     (0..=16).map(|i| i as f64 * 500.0).collect()
@@ -359,7 +342,17 @@ fn error_messages() {
     );
     let e7 = error_of(&["track", "fit", frames.to_str().unwrap(), "-o", out]);
 
-    let all = [e1, e2, e3, e4, e5, e6, e7].map(clean).join("\n");
+    // A file given to the wrong command.
+    let e8 = error_of(&[
+        "track",
+        "spectrum",
+        "samples/track/measurements.csv",
+        "--threshold",
+        "0.05",
+    ]);
+    let e9 = error_of(&["track", "show", frames.to_str().unwrap()]);
+
+    let all = [e1, e2, e3, e4, e5, e6, e7, e8, e9].map(clean).join("\n");
     insta::assert_snapshot!("errors", all);
 }
 
@@ -386,15 +379,10 @@ fn knot_strategy() -> impl Strategy<Value = Vec<Knot>> {
                     .zip(vals)
                     .map(|(g, v)| {
                         s += g;
-                        Knot {
-                            skid: s,
-                            dx: v[0],
-                            dy: v[1],
-                            dz: v[2],
-                            rx: v[3] / 10.0,
-                            ry: v[4] / 10.0,
-                            rz: v[5] / 10.0,
-                        }
+                        Knot::from_components(
+                            s,
+                            [v[0], v[1], v[2], v[3] / 10.0, v[4] / 10.0, v[5] / 10.0],
+                        )
                     })
                     .collect()
             })

@@ -5,7 +5,6 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use nalgebra::{Point3, Translation3};
 use trackfix::geometry::{Pose, abb_quat_components, kuka_abc_angles, pose_to_xyz_deg, xyz_deg};
@@ -19,23 +18,7 @@ use trackfix::track::simulate::{
 use trackfix::track::{Extrapolate, Knot, Profile};
 use trackfix::transform::{Cell, Direction, TrackSetup, apply, track_correction};
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// Runs the binary from the crate root; returns (exit code, stdout, stderr).
-fn trackfix(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_trackfix"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run trackfix");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use crate::support::{root, trackfix};
 
 /// Every program among the samples (a KRL pair once, by its .src or lone file).
 fn sample_programs() -> Vec<String> {
@@ -220,6 +203,169 @@ fn refusal_messages() {
     insta::assert_snapshot!("refusals", all);
 }
 
+/// The refusals `mirror` adds: an offset or a `RelTool` rotation written as an expression where
+/// the reflection changes it, each by name; exit 3, nothing written.
+#[test]
+fn mirror_refusal_messages() {
+    let (dir, path) = scratch_with(
+        "offsets.mod",
+        "MODULE m\n  VAR num a := 5;\n  CONST robtarget p1:=[[1,0,3],[1,0,0,0],[0,0,0,0],[100,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL RelTool(p1,0,0,10\\Rx:=a), v100, fine, tool0;\n    MoveL Offs(p1,0,a,0), v100, fine, tool0;\n    MoveL RelTool(p1,0,0,10\\Ry:=a), v100, fine, tool0;\n  ENDPROC\nENDMODULE\n",
+    );
+    let out = dir.path().join("out.mod");
+    let err = refusal_output(&[
+        "mirror",
+        path.to_str().unwrap(),
+        "--plane",
+        "xz",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!out.exists());
+    insta::assert_snapshot!(
+        "mirror_refusals",
+        err.replace(dir.path().to_str().unwrap(), "<tmp>")
+    );
+}
+
+/// Each robot's `skid` axis applies: r1 on eax_a, r2 (in a copy of the sample cell) on eax_b.
+/// `transfer --from r1 --to r2 --mirror` moves the skid to eax_b, and back again the other way.
+#[test]
+fn transfer_moves_the_skid_to_the_other_robots_axis() {
+    let dir = tempfile::tempdir().unwrap();
+    let cell_text = std::fs::read_to_string(root().join("samples/cell.toml"))
+        .unwrap()
+        .replace("track/", &format!("{}/samples/track/", root().display()))
+        .replace(
+            "krl/$config",
+            &format!("{}/samples/krl/$config", root().display()),
+        );
+    let r2_at = cell_text.find("[robot.r2]").unwrap();
+    let (head, tail) = cell_text.split_at(r2_at);
+    let cell_text = format!(
+        "{head}{}",
+        tail.replacen("skid = \"eax_a\"", "skid = \"eax_b\"", 1)
+    );
+    let cell = dir.path().join("cell.toml");
+    std::fs::write(&cell, cell_text).unwrap();
+    let module = dir.path().join("m.mod");
+    std::fs::write(
+        &module,
+        "MODULE m\n  CONST robtarget p1:=[[1200,-1500,900],[0,0,1,0],[0,0,0,0],[2500,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL p1, v100, fine, tool0;\n  ENDPROC\nENDMODULE\n",
+    )
+    .unwrap();
+    let there = dir.path().join("there.mod");
+    let back = dir.path().join("back.mod");
+    for (from, to, input, output) in [("r1", "r2", &module, &there), ("r2", "r1", &there, &back)] {
+        run_ok(&[
+            "transfer",
+            input.to_str().unwrap(),
+            "--cell",
+            cell.to_str().unwrap(),
+            "--from",
+            from,
+            "--to",
+            to,
+            "--mirror",
+            "-o",
+            output.to_str().unwrap(),
+        ]);
+    }
+    let there = std::fs::read_to_string(&there).unwrap();
+    assert!(there.contains("[9E9,2500,9E9,9E9,9E9,9E9]]"), "{there}");
+    // `mirror --skid-to` is the middle step on its own.
+    let (code, diff, err) = trackfix(&[
+        "mirror",
+        module.to_str().unwrap(),
+        "--plane",
+        "xz",
+        "--skid-to",
+        "eax_b",
+        "--diff",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(diff.contains("[9E9,2500,9E9,9E9,9E9,9E9]]"), "{diff}");
+    let start = poses(&load(&module, &LoadOptions::default()).unwrap());
+    let end = poses(&load(&back, &LoadOptions::default()).unwrap());
+    let moved = (end[0].1.translation.vector - start[0].1.translation.vector).norm();
+    assert!(moved < 2e-3, "{moved} mm");
+    let back = std::fs::read_to_string(&back).unwrap();
+    assert!(back.contains("[2500,9E9,9E9,9E9,9E9,9E9]]"), "{back}");
+}
+
+/// Errors in the cell file and its profiles name `file:line:col`, show the line and say what
+/// to do: a misspelt key, a profile that is not there, a profile with a bad value, an unknown
+/// robot, a missing cell file. Exit 2, nothing written.
+#[test]
+fn cell_error_messages() {
+    let dir = tempfile::tempdir().unwrap();
+    let sample = std::fs::read_to_string(root().join("samples/cell.toml")).unwrap();
+    let profile = std::fs::read_to_string(root().join("samples/track/profile.toml")).unwrap();
+    std::fs::create_dir(dir.path().join("track")).unwrap();
+    std::fs::write(
+        dir.path().join("track/bad_gear.toml"),
+        profile.replace("gear = \"as-is\"", "gear = \"asis\""),
+    )
+    .unwrap();
+    let cells = [
+        (
+            "typo.toml",
+            sample.replacen("track_axis = ", "track_axes = ", 1),
+        ),
+        (
+            "no_profile.toml",
+            sample.replacen("track/profile.toml", "track/nope.toml", 1),
+        ),
+        (
+            "bad_profile.toml",
+            sample.replacen("track/profile.toml", "track/bad_gear.toml", 1),
+        ),
+    ];
+    let mut all = String::new();
+    for (name, text) in &cells {
+        std::fs::write(dir.path().join(name), text).unwrap();
+    }
+    let out = dir.path().join("out.mod");
+    for (cell, robot) in [
+        ("typo.toml", "r1"),
+        ("no_profile.toml", "r1"),
+        ("bad_profile.toml", "r1"),
+        ("nope.toml", "r1"),
+    ] {
+        let cell_path = dir.path().join(cell);
+        let (code, _, err) = trackfix(&[
+            "correct",
+            "samples/rapid/spot_line.mod",
+            "--cell",
+            cell_path.to_str().unwrap(),
+            "--robot",
+            robot,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 2, "{err}");
+        assert!(!out.exists());
+        let err = err.replace(dir.path().to_str().unwrap(), "<tmp>");
+        writeln!(
+            all,
+            "$ trackfix correct … --cell {cell} --robot {robot}\n{err}"
+        )
+        .unwrap();
+    }
+    // The unknown-robot case needs a loadable cell.
+    let (code, _, err) = trackfix(&[
+        "correct",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r3",
+        "--diff",
+    ]);
+    assert_eq!(code, 2);
+    writeln!(all, "$ trackfix correct … --robot r3\n{err}").unwrap();
+    insta::assert_snapshot!("cell_errors", all);
+}
+
 /// `--default-wobj` resolves declared targets that no motion uses.
 #[test]
 fn default_wobj_resolves_unused_targets() {
@@ -262,17 +408,7 @@ fn load_with_cell(path: &Path, cell: &Cell, robot: &str) -> Program {
 /// DESIGN.md §4: a profile of zero deviations leaves every sample byte-identical.
 #[test]
 fn zero_deviation_profile_leaves_every_sample_byte_identical() {
-    let knots = (0..=8)
-        .map(|i| Knot {
-            skid: i as f64 * 1000.0,
-            dx: 0.0,
-            dy: 0.0,
-            dz: 0.0,
-            rx: 0.0,
-            ry: 0.0,
-            rz: 0.0,
-        })
-        .collect();
+    let knots = (0..=8).map(|i| Knot::zero(i as f64 * 1000.0)).collect();
     let flat = Profile::from_knots("flat", knots, Extrapolate::Linear).unwrap();
     let cell = sample_cell();
     let mut checked = 0;
@@ -616,34 +752,45 @@ fn end_to_end_rapid_correction_reaches_the_cad_points() {
     let dir = e.cell.parent().unwrap().to_owned();
     let cad = dir.join("e2e.mod");
     std::fs::write(&cad, &m).unwrap();
-    // The CAD poses are what the file says (rounded), so compare against those.
     let mut e = e;
-    e.targets = poses(&load(&cad, &LoadOptions::default()).unwrap())
-        .into_iter()
-        .zip(&e.targets)
-        .map(|((_, p), (s, _))| (*s, p))
-        .collect();
+    e.use_written_targets(&cad);
     let out = dir.join("corrected.mod");
-    run_ok(&[
+    let summary = correct_and_measure(&e, &cad, &["-o", out.to_str().unwrap()], &out);
+    insta::assert_snapshot!("e2e_rapid", summary);
+}
+
+impl E2e {
+    /// The CAD poses are what the file says (rounded), so compare against those.
+    fn use_written_targets(&mut self, cad: &Path) {
+        self.targets = poses(&load(cad, &LoadOptions::default()).unwrap())
+            .into_iter()
+            .zip(&self.targets)
+            .map(|((_, p), (s, _))| (*s, p))
+            .collect();
+    }
+}
+
+/// Runs `trackfix correct CAD --cell … --robot r1 OUTPUT`, then the physical TCP error of the
+/// program before and after (read back from `corrected`): the issue's levels are asserted, the
+/// figures returned for the snapshot.
+fn correct_and_measure(e: &E2e, cad: &Path, output: &[&str], corrected: &Path) -> String {
+    let mut args = vec![
         "correct",
         cad.to_str().unwrap(),
         "--cell",
         e.cell.to_str().unwrap(),
         "--robot",
         "r1",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    let before = physical_errors(&e, &load(&cad, &LoadOptions::default()).unwrap(), skid0);
-    let after = physical_errors(&e, &load(&out, &LoadOptions::default()).unwrap(), skid0);
+    ];
+    args.extend(output);
+    run_ok(&args);
+    let before = physical_errors(e, &load(cad, &LoadOptions::default()).unwrap(), skid0);
+    let after = physical_errors(e, &load(corrected, &LoadOptions::default()).unwrap(), skid0);
     let (rb, ra) = (rms(&before), rms(&after));
     let ma = after.iter().cloned().fold(0.0, f64::max);
     assert!(rb > 1.0, "uncorrected rms {rb:.3} mm");
     assert!(ra < 0.05, "corrected rms {ra:.4} mm (max {ma:.4})");
-    insta::assert_snapshot!(
-        "e2e_rapid",
-        format!("before rms {rb:.2} mm, after rms {ra:.3} mm")
-    );
+    format!("before rms {rb:.2} mm, after rms {ra:.3} mm")
 }
 
 /// Issue 5's end-to-end test, KRL (.src/.dat pair, BASE_DATA[1] from the cell), same track and
@@ -665,35 +812,14 @@ fn end_to_end_krl_correction_reaches_the_cad_points() {
     std::fs::write(dir.join("e2e.src"), &src).unwrap();
     std::fs::write(dir.join("e2e.dat"), &dat).unwrap();
     let cad = dir.join("e2e.src");
-    let original = load(&cad, &LoadOptions::default()).unwrap();
-    e.targets = poses(&original)
-        .into_iter()
-        .zip(&e.targets)
-        .map(|((_, p), (s, _))| (*s, p))
-        .collect();
+    e.use_written_targets(&cad);
     let out = dir.join("out");
-    run_ok(&[
-        "correct",
-        cad.to_str().unwrap(),
-        "--cell",
-        e.cell.to_str().unwrap(),
-        "--robot",
-        "r1",
-        "--out-dir",
-        out.to_str().unwrap(),
-    ]);
-    let before = physical_errors(&e, &original, skid0);
-    let after = physical_errors(
+    let summary = correct_and_measure(
         &e,
-        &load(&out.join("e2e.src"), &LoadOptions::default()).unwrap(),
-        skid0,
+        &cad,
+        &["--out-dir", out.to_str().unwrap()],
+        &out.join("e2e.src"),
     );
     assert_eq!(std::fs::read(out.join("e2e.src")).unwrap(), src.as_bytes());
-    let (rb, ra) = (rms(&before), rms(&after));
-    assert!(rb > 1.0, "uncorrected rms {rb:.3} mm");
-    assert!(ra < 0.05, "corrected rms {ra:.4} mm");
-    insta::assert_snapshot!(
-        "e2e_krl",
-        format!("before rms {rb:.2} mm, after rms {ra:.3} mm")
-    );
+    insta::assert_snapshot!("e2e_krl", summary);
 }

@@ -1,0 +1,32 @@
+//! What the integration tests share: the crate root and one way to run the built binary.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+/// The package root, where the samples are.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Runs the built `trackfix` binary from the package root.
+pub fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_trackfix"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("the trackfix binary runs")
+}
+
+pub fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Runs the binary; returns (exit code, stdout, stderr), -1 for a signal.
+pub fn trackfix(args: &[&str]) -> (i32, String, String) {
+    let o = run(args);
+    (o.status.code().unwrap_or(-1), stdout(&o), stderr(&o))
+}
