@@ -1,24 +1,9 @@
 //! The command line as a user meets it: help, exit codes, input errors, `inspect`/`check` over
 //! the samples.
 
-use std::process::{Command, Output};
+use std::process::Command;
 
-/// Runs the built `trackfix` binary from the package root.
-pub fn trackfix(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_trackfix"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the trackfix binary runs")
-}
-
-pub fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-pub fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use crate::support::{run as trackfix, stderr, stdout};
 
 #[test]
 fn help_lists_every_command_with_examples() {
