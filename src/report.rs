@@ -8,7 +8,9 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use crate::geometry::{abb_quat_components, xyz_deg_angles};
+use nalgebra::UnitQuaternion;
+
+use crate::geometry::{Pose, abb_quat_components, xyz_deg_angles};
 use crate::position::{
     CartesianFields, Config, FrameDecl, FrameKind, Language, NumField, Orientation, ParsedFile,
     Position, Program, Skid,
@@ -46,6 +48,20 @@ pub struct FileReport {
     pub warnings: Vec<Message>,
 }
 
+/// A pose as reported: translation in mm, orientation as an ABB quaternion `[q1, q2, q3, q4]`
+/// (scalar first, for every language) and as fixed-axis angles in degrees (DESIGN.md §2).
+/// A value that is not a numeric literal is `null`.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct PoseColumns {
+    pub x: Option<f64>,
+    pub y: Option<f64>,
+    pub z: Option<f64>,
+    pub q: Option<[f64; 4]>,
+    pub rx: Option<f64>,
+    pub ry: Option<f64>,
+    pub rz: Option<f64>,
+}
+
 /// One position of the report. Coordinates that are not numeric literals are `null`.
 #[derive(Clone, Debug, Serialize)]
 pub struct PositionRow {
@@ -54,15 +70,8 @@ pub struct PositionRow {
     pub kind: &'static str,
     pub line: usize,
     pub column: usize,
-    pub x: Option<f64>,
-    pub y: Option<f64>,
-    pub z: Option<f64>,
-    /// Orientation as an ABB quaternion `[q1, q2, q3, q4]` (scalar first), for every language.
-    pub q: Option<[f64; 4]>,
-    /// Orientation as fixed-axis angles, degrees (DESIGN.md §2).
-    pub rx: Option<f64>,
-    pub ry: Option<f64>,
-    pub rz: Option<f64>,
+    #[serde(flatten)]
+    pub pose: PoseColumns,
     /// KRL only: `[A, B, C]` as written.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub abc: Option<[Option<f64>; 3]>,
@@ -93,13 +102,8 @@ pub struct FrameRow {
     pub name: String,
     pub kind: &'static str,
     pub line: usize,
-    pub x: Option<f64>,
-    pub y: Option<f64>,
-    pub z: Option<f64>,
-    pub q: Option<[f64; 4]>,
-    pub rx: Option<f64>,
-    pub ry: Option<f64>,
-    pub rz: Option<f64>,
+    #[serde(flatten)]
+    pub pose: PoseColumns,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub robhold: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -127,15 +131,43 @@ fn nums(fields: &[Option<NumField>]) -> Vec<Option<f64>> {
     fields.iter().map(num).collect()
 }
 
-/// Quaternion and rx/ry/rz of a Cartesian literal, when its orientation is all numeric (the
-/// translation may still be an expression).
-fn orientation(c: &CartesianFields) -> (Option<[f64; 4]>, Option<[f64; 3]>) {
-    match c.rotation() {
-        Some(r) => (
-            Some(abb_quat_components(&r, c.written_quaternion()).map(tidy)),
-            Some(xyz_deg_angles(&r).map(tidy)),
-        ),
-        None => (None, None),
+impl PoseColumns {
+    fn new(
+        trans: [Option<f64>; 3],
+        rotation: Option<&UnitQuaternion<f64>>,
+        like: Option<[f64; 4]>,
+    ) -> Self {
+        let q = rotation.map(|r| abb_quat_components(r, like).map(tidy));
+        let angles = rotation.map(|r| xyz_deg_angles(r).map(tidy));
+        PoseColumns {
+            x: trans[0],
+            y: trans[1],
+            z: trans[2],
+            q,
+            rx: angles.map(|a| a[0]),
+            ry: angles.map(|a| a[1]),
+            rz: angles.map(|a| a[2]),
+        }
+    }
+
+    /// A literal as written: the translation as read, the orientation when all its fields are
+    /// numeric (the translation may still be an expression).
+    fn of_literal(c: &CartesianFields) -> Self {
+        PoseColumns::new(
+            [num(&c.trans[0]), num(&c.trans[1]), num(&c.trans[2])],
+            c.rotation().as_ref(),
+            c.written_quaternion(),
+        )
+    }
+
+    /// A computed pose (a work object's `uframe·oframe`).
+    fn of_pose(p: &Pose) -> Self {
+        let t = p.translation.vector;
+        PoseColumns::new(
+            [Some(tidy(t.x)), Some(tidy(t.y)), Some(tidy(t.z))],
+            Some(&p.rotation),
+            None,
+        )
     }
 }
 
@@ -147,15 +179,6 @@ fn tidy(v: f64) -> f64 {
 }
 
 fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> PositionRow {
-    let (x, y, z) = match &p.cartesian {
-        Some(c) => (num(&c.trans[0]), num(&c.trans[1]), num(&c.trans[2])),
-        None => (None, None, None),
-    };
-    let (q, angles) = p
-        .cartesian
-        .as_ref()
-        .map(orientation)
-        .unwrap_or((None, None));
     let abc = match p.cartesian.as_ref().and_then(|c| c.orient.as_ref()) {
         Some(Orientation::Abc(abc)) => Some([num(&abc[0]), num(&abc[1]), num(&abc[2])]),
         _ => None,
@@ -186,13 +209,11 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
         kind: p.kind.as_str(),
         line: p.line,
         column: p.column,
-        x,
-        y,
-        z,
-        q,
-        rx: angles.map(|a| a[0]),
-        ry: angles.map(|a| a[1]),
-        rz: angles.map(|a| a[2]),
+        pose: p
+            .cartesian
+            .as_ref()
+            .map(PoseColumns::of_literal)
+            .unwrap_or_default(),
         abc,
         config,
         status,
@@ -217,21 +238,15 @@ fn frame_kind(kind: FrameKind, language: Language) -> &'static str {
 }
 
 fn frame_row(f: &FrameDecl, language: Language) -> FrameRow {
-    let pose = f.pose();
-    let t = pose.map(|p| p.translation.vector);
-    let q = pose.map(|p| abb_quat_components(&p.rotation, None).map(tidy));
-    let angles = pose.map(|p| xyz_deg_angles(&p.rotation).map(tidy));
     FrameRow {
         name: f.name.clone(),
         kind: frame_kind(f.kind, language),
         line: f.line,
-        x: t.map(|v| tidy(v.x)),
-        y: t.map(|v| tidy(v.y)),
-        z: t.map(|v| tidy(v.z)),
-        q,
-        rx: angles.map(|a| a[0]),
-        ry: angles.map(|a| a[1]),
-        rz: angles.map(|a| a[2]),
+        pose: f
+            .pose()
+            .as_ref()
+            .map(PoseColumns::of_pose)
+            .unwrap_or_default(),
         robhold: f.robhold,
         ufprog: f.ufprog,
         ufmec: f.ufmec.clone(),
@@ -369,12 +384,12 @@ pub fn render_table(report: &InspectReport) -> String {
                     p.name.as_deref().unwrap_or("*"),
                     p.kind,
                     p.line,
-                    cell(p.x, 3),
-                    cell(p.y, 3),
-                    cell(p.z, 3),
-                    cell(p.rx, 4),
-                    cell(p.ry, 4),
-                    cell(p.rz, 4),
+                    cell(p.pose.x, 3),
+                    cell(p.pose.y, 3),
+                    cell(p.pose.z, 3),
+                    cell(p.pose.rx, 4),
+                    cell(p.pose.ry, 4),
+                    cell(p.pose.rz, 4),
                     cell(p.skid, 1),
                     frame.as_deref().unwrap_or("-"),
                     p.tool.as_deref().unwrap_or("-"),
@@ -388,12 +403,12 @@ pub fn render_table(report: &InspectReport) -> String {
                 fr.kind,
                 fr.name,
                 fr.line,
-                cell(fr.x, 3),
-                cell(fr.y, 3),
-                cell(fr.z, 3),
-                cell(fr.rx, 4),
-                cell(fr.ry, 4),
-                cell(fr.rz, 4),
+                cell(fr.pose.x, 3),
+                cell(fr.pose.y, 3),
+                cell(fr.pose.z, 3),
+                cell(fr.pose.rx, 4),
+                cell(fr.pose.ry, 4),
+                cell(fr.pose.rz, 4),
             );
         }
         let counts: Vec<String> = f.counts.iter().map(|(k, n)| format!("{n} {k}")).collect();
@@ -430,7 +445,7 @@ pub fn render_csv(report: &InspectReport) -> String {
         String::from("file,language,name,kind,line,x,y,z,q1,q2,q3,q4,rx,ry,rz,skid,frame,tool\n");
     for f in &report.files {
         for p in &f.positions {
-            let q = |i: usize| p.q.map(|q| q[i]);
+            let q = |i: usize| p.pose.q.map(|q| q[i]);
             let frame = p.wobj.clone().or(p.base.clone()).flatten();
             let fields = [
                 csv_text(&f.path),
@@ -438,16 +453,16 @@ pub fn render_csv(report: &InspectReport) -> String {
                 csv_text(p.name.as_deref().unwrap_or("")),
                 p.kind.to_owned(),
                 p.line.to_string(),
-                opt(p.x),
-                opt(p.y),
-                opt(p.z),
+                opt(p.pose.x),
+                opt(p.pose.y),
+                opt(p.pose.z),
                 opt(q(0)),
                 opt(q(1)),
                 opt(q(2)),
                 opt(q(3)),
-                opt(p.rx),
-                opt(p.ry),
-                opt(p.rz),
+                opt(p.pose.rx),
+                opt(p.pose.ry),
+                opt(p.pose.rz),
                 opt(p.skid),
                 csv_text(frame.as_deref().unwrap_or("")),
                 csv_text(p.tool.as_deref().unwrap_or("")),
