@@ -160,6 +160,18 @@ impl PoseColumns {
         )
     }
 
+    /// `x, y, z` (3 decimals) and `rx, ry, rz` (4 decimals) for a table; `-` where unknown.
+    fn cells(&self) -> [String; 6] {
+        [
+            cell(self.x, 3),
+            cell(self.y, 3),
+            cell(self.z, 3),
+            cell(self.rx, 4),
+            cell(self.ry, 4),
+            cell(self.rz, 4),
+        ]
+    }
+
     /// A computed pose (a work object's `uframe·oframe`).
     fn of_pose(p: &Pose) -> Self {
         let t = p.translation.vector;
@@ -378,18 +390,19 @@ pub fn render_table(report: &InspectReport) -> String {
             );
             for p in &f.positions {
                 let frame = p.wobj.clone().or(p.base.clone()).flatten();
+                let [x, y, z, rx, ry, rz] = p.pose.cells();
                 let _ = writeln!(
                     out,
                     "  {:<20} {:<11} {:>6} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:<12} {:<12}",
                     p.name.as_deref().unwrap_or("*"),
                     p.kind,
                     p.line,
-                    cell(p.pose.x, 3),
-                    cell(p.pose.y, 3),
-                    cell(p.pose.z, 3),
-                    cell(p.pose.rx, 4),
-                    cell(p.pose.ry, 4),
-                    cell(p.pose.rz, 4),
+                    x,
+                    y,
+                    z,
+                    rx,
+                    ry,
+                    rz,
                     cell(p.skid, 1),
                     frame.as_deref().unwrap_or("-"),
                     p.tool.as_deref().unwrap_or("-"),
@@ -397,18 +410,11 @@ pub fn render_table(report: &InspectReport) -> String {
             }
         }
         for fr in &f.frames {
+            let [x, y, z, rx, ry, rz] = fr.pose.cells();
             let _ = writeln!(
                 out,
-                "  {} {} (line {}): x {} y {} z {} rx {} ry {} rz {}",
-                fr.kind,
-                fr.name,
-                fr.line,
-                cell(fr.pose.x, 3),
-                cell(fr.pose.y, 3),
-                cell(fr.pose.z, 3),
-                cell(fr.pose.rx, 4),
-                cell(fr.pose.ry, 4),
-                cell(fr.pose.rz, 4),
+                "  {} {} (line {}): x {x} y {y} z {z} rx {rx} ry {ry} rz {rz}",
+                fr.kind, fr.name, fr.line,
             );
         }
         let counts: Vec<String> = f.counts.iter().map(|(k, n)| format!("{n} {k}")).collect();
