@@ -613,11 +613,11 @@ proptest! {
                 krl::tree::NodeKind::RoutineEnd => {
                     if let Some(start) = open.take() {
                         let end = span.start
-                            + tree.tokens[node.first as usize..node.end as usize]
+                            + krl::lexer::lex(span.slice(&original.source))
                                 .iter()
                                 .rev()
                                 .find(|t| !t.kind.is_trivia())
-                                .map_or(0, |t| t.end as usize - span.start);
+                                .map_or(0, |t| t.end as usize);
                         routines.push((start, end));
                     }
                 }
