@@ -863,3 +863,40 @@ fn program_from_sources_in_memory_matches_the_program_from_disk() {
         assert!(all_in_memory.files.last().unwrap().positions.is_empty());
     }
 }
+
+#[test]
+fn frame_array_moved_to_with_a_computed_index_makes_every_element_a_target() {
+    // A stacking cell: three FRAMEs in an array, the routine picks one at run time.
+    let files = vec![
+        (
+            PathBuf::from("stack.src"),
+            b"DEF stack( )\n  BAS(#BASE,2)\n  FOR I = 1 TO 3\n    SPTP TOPS[I] C_DIS\n    SLIN LIFT(ONTOP[I], 2)\n  ENDFOR\nEND\n".to_vec(),
+        ),
+        (
+            PathBuf::from("stack.dat"),
+            b"DEFDAT stack\nDECL FRAME TOPS[3]\nTOPS[1]={X 600,Y -30,Z 330,A 90,B 0,C 180}\nTOPS[2]={X 600,Y 150,Z 330,A 90,B 0,C 180}\nDECL FRAME ONTOP[3]\nONTOP[1]={X 600,Y -30,Z 60,A 90,B 0,C 180}\nENDDAT\n".to_vec(),
+        ),
+    ];
+    let program = krl::load_program_from_sources(files, &LoadOptions::default()).unwrap();
+    let found: Vec<_> = program
+        .files
+        .iter()
+        .flat_map(|f| &f.positions)
+        .map(|p| (p.label(), p.usage.wobj.clone(), p.usage.lines.clone()))
+        .collect();
+    assert_eq!(
+        found,
+        [
+            (
+                "TOPS[1]".to_owned(),
+                Some("BASE_DATA[2]".to_owned()),
+                vec![4]
+            ),
+            (
+                "TOPS[2]".to_owned(),
+                Some("BASE_DATA[2]".to_owned()),
+                vec![4]
+            ),
+        ]
+    );
+}
