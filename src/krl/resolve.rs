@@ -297,6 +297,8 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                     }
                     let base = local.base.as_ref().and_then(base_label);
                     let tool = local.tool.as_ref().and_then(tool_label);
+                    // Only a Cartesian target needs a base: a joint target (`PTP {A1 0, …}`,
+                    // an E6AXIS) moves the same whatever the base.
                     let mut found = false;
                     for r in refs {
                         match r {
@@ -306,7 +308,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                     .and_then(|f| f.positions.iter_mut().find(|p| p.span == *s))
                                 {
                                     record_use(&mut p.usage, &base, &tool, local.tcp, *line);
-                                    found = true;
+                                    found |= p.cartesian.is_some();
                                 }
                             }
                             Ref::Named(n) => {
@@ -338,14 +340,14 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                     };
                                     if let Some(p) = p {
                                         record_use(&mut p.usage, &base, &tool, local.tcp, *line);
-                                        found = true;
+                                        found |= p.cartesian.is_some();
                                     }
                                 }
                             }
                         }
                     }
                     // A motion to a point outside the program (`XHOME` of $config.dat) is not
-                    // this program's business.
+                    // this program's business, nor is a joint target.
                     if base.is_none()
                         && found
                         && let Some(file) = files.get_mut(fi)

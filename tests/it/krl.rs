@@ -900,3 +900,16 @@ fn frame_array_moved_to_with_a_computed_index_makes_every_element_a_target() {
         ]
     );
 }
+
+#[test]
+fn a_joint_target_needs_no_base_a_cartesian_one_does() {
+    let src = b"DEF rsi( )\n  PTP {A1 0, A2 -90, A3 90, A4 0, A5 0, A6 0}\n  LIN {X 600, Y 0, Z 900, A 0, B 90, C 0}\nEND\n";
+    let file = krl::parse_file(Path::new("rsi.src"), src.to_vec());
+    let warned: Vec<usize> = file
+        .diagnostics
+        .iter()
+        .filter(|d| d.message.contains("base of this motion"))
+        .map(|d| file.lines.line(d.span.start))
+        .collect();
+    assert_eq!(warned, [3]);
+}
