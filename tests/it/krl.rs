@@ -913,3 +913,39 @@ fn a_joint_target_needs_no_base_a_cartesian_one_does() {
         .collect();
     assert_eq!(warned, [3]);
 }
+
+/// Inputs kept from `cargo fuzz run krl_round_trip` (`fuzz/fuzz_targets/krl_round_trip.rs`):
+/// each is cut at its first NUL into a `.src` and a `.dat`, as the fuzz target does, and must
+/// print back byte for byte with every reported span inside its file.
+#[test]
+fn fuzz_regressions_replay() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions/krl");
+    let mut replayed = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let data = std::fs::read(&path).unwrap();
+        let (src, dat) = match data.iter().position(|&b| b == 0) {
+            Some(i) => (&data[..i], &data[i + 1..]),
+            None => (&data[..], &data[..0]),
+        };
+        assert_eq!(krl::parse(src).tree.print(src), src, "{}", path.display());
+        let files = vec![
+            (PathBuf::from("fuzz.dat"), dat.to_vec()),
+            (PathBuf::from("fuzz.src"), src.to_vec()),
+        ];
+        let program = krl::load_program_from_sources(files, &LoadOptions::default()).unwrap();
+        for file in &program.files {
+            assert!(file.round_trip, "{}", path.display());
+            let len = file.source.len();
+            for d in &file.diagnostics {
+                assert!(d.span.start <= d.span.end && d.span.end <= len);
+                assert!(file.render(d).starts_with("fuzz."));
+            }
+            for p in &file.positions {
+                assert!(p.span.end <= len);
+            }
+        }
+        replayed += 1;
+    }
+    assert!(replayed >= 7, "only {replayed} regression inputs found");
+}
