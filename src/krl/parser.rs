@@ -435,7 +435,16 @@ impl<'a> Cursor<'a> {
             type_name = self.peek().map(|t| t.span());
             self.pos += 2;
         }
-        let mut fields = Vec::new();
+        // One allocation per aggregate: the commas left on the line bound its field count
+        // (a `.dat` line is one aggregate of up to 14 fields, nested ones are short).
+        let commas = self
+            .toks
+            .get(self.pos..)
+            .unwrap_or(&[])
+            .iter()
+            .filter(|t| t.kind == TokenKind::Punct && t.text(self.src) == b",")
+            .count();
+        let mut fields = Vec::with_capacity((commas + 1).min(16));
         if !self.is_punct(b"}") {
             loop {
                 let name = self.expect_ident(
