@@ -949,3 +949,62 @@ fn fuzz_regressions_replay() {
     }
     assert!(replayed >= 7, "only {replayed} regression inputs found");
 }
+
+/// Constructs met in real KSS backups in round two, written anew: each parses with no opaque
+/// line and no error, and only true targets become positions.
+#[test]
+fn kss_backup_oddities_parse_cleanly() {
+    let machine = "&ACCESS RV$\r\n&PARAM VERSION = 1.0.0\r\nDEFDAT  $MACHINE PUBLIC\r\n\
+        DECL FRA $COUPLING[6,6] ;N = numerator, D = denominator\r\n$COUPLING[4,5]={N -3,D 91}\r\n\
+        FRAME $ROBROOT={X 0.0,Y 0.0,Z 0.0,A 0.0,B 0.0,C 0.0} ;robot in world\r\n\
+        DECL CYLINDER $CYLSPACE[8]\r\n$CYLSPACE[1]={X 1.0,Y 2.0,Z 3.0,A 0.0,B 0.0,C 0.0,Z1 0.0,Z2 0.0,R 0.0,MODE #OFF,STATE FALSE}\r\n\
+        INT $CAL_ORDER[12]\r\n$CAL_ORDER[12]='B100000000000'\r\nENDDAT\r\n";
+    let program = "&ACCESS RVP\nDEF  grind (nStation :IN, nTool: IN)\n\
+        INT nStation, nTool\n\
+        IF ($T1 OR $T2)THEN\n   GLOBAL INTERRUPT DECL 3 WHEN $STOPMESS==TRUE DO IR_STOPM ( )\n   INTERRUPT ON 3\nENDIF\n\
+        ;;// a comment written with two semicolons\n\
+        SWITCH($ERR.NUMBER)\n  CASE 0\n    ;ok\n  CASE 1430\n    GLOBAL INTERRUPT DECL 3 WHEN $STOPMESS==TRUE DO IR_STOPM ()\n  DEFAULT\n    ERR_RAISE($ERR)\nENDSWITCH\n\
+        ;FOLD SPTP P1 CONT ;%{PE}\n\
+        SPTP XP1 WITH $VEL_AXIS[1] = SVEL_JOINT(100.0), $TOOL = STOOL2(FP1), $BASE = SBASE(FP1.BASE_NO), $IPO_MODE = SIPO_MODE(FP1.IPO_FRAME), $APO = SAPO_PTP(PPDAT1) C_Spl\n\
+        ;ENDFOLD\n\
+        BASE_DATA[12] = BASE_DATA[nStation]:SHIFT[nStation]\n\
+        IF (nTool > 0) Then\n  $BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,BASE_DATA[3])\nEndIf\nEND\n\
+        ;ENDFOLD GRIND ()\n;FOLD {H}\nDEF helper( )\n\tCONTINUE\nEND\n;ENDFOLD";
+    let data = "DEFDAT grind\nDECL E6POS XP1={X 10.0,Y 20.0,Z 30.0,A 0.0,B 90.0,C 0.0,S 2,T 35,E1 4100.0}\n\
+        DECL FDAT FP1={TOOL_NO 2,BASE_NO 4,IPO_FRAME #BASE,POINT2[] \" \"}\nENDDAT\n";
+    let loaded = krl::load_program_from_sources(
+        vec![
+            (PathBuf::from("$MACHINE.DAT"), machine.as_bytes().to_vec()),
+            (PathBuf::from("grind.src"), program.as_bytes().to_vec()),
+            (PathBuf::from("grind.dat"), data.as_bytes().to_vec()),
+        ],
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    for file in &loaded.files {
+        assert!(file.round_trip, "{}", file.path.display());
+        assert_eq!(file.opaque, 0, "{}", file.path.display());
+        let errors: Vec<_> = file
+            .diagnostics
+            .iter()
+            .filter(|d| d.severity == Severity::Error)
+            .map(|d| file.render(d))
+            .collect();
+        assert!(errors.is_empty(), "{errors:?}");
+    }
+    let found: Vec<_> = loaded
+        .files
+        .iter()
+        .flat_map(|f| &f.positions)
+        .map(|p| (p.label(), p.usage.wobj.clone(), p.usage.tool.clone()))
+        .collect();
+    // `$ROBROOT` and the `$` workspace literal are system data, not targets.
+    assert_eq!(
+        found,
+        [(
+            "XP1".to_owned(),
+            Some("BASE_DATA[4]".to_owned()),
+            Some("TOOL_DATA[2]".to_owned())
+        )]
+    );
+}
