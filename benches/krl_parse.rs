@@ -78,6 +78,21 @@ fn dat_parse_and_print(bencher: Bencher, mb: usize) {
         });
 }
 
+/// What `parse_file` runs: every statement parsed into its expression tree and handed on,
+/// the tree keeping only lines.
+#[divan::bench(args = SIZES, sample_count = 5, sample_size = 1)]
+fn dat_parse_streamed_and_print(bencher: Bencher, mb: usize) {
+    let input = dat(mb);
+    bencher
+        .counter(divan::counter::BytesCount::new(input.len()))
+        .bench(|| {
+            let parse = trackfix::krl::parser::parse_with(black_box(input), &mut |s| {
+                black_box(s);
+            });
+            assert_eq!(parse.tree.print(input).len(), input.len());
+        });
+}
+
 #[divan::bench(args = SIZES, sample_count = 5, sample_size = 1)]
 fn src_parse_and_print(bencher: Bencher, mb: usize) {
     let input = src(mb);

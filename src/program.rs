@@ -137,9 +137,21 @@ pub fn collect_inputs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, LoadError> {
     // The `.dat` a `.src` loads with is found the way `krl::load_program` finds it (stem and
     // extension in any case), and compared as a file, not as spelled (`./a.dat` is `a.dat`).
     let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
+    let stem_key = |p: &Path| {
+        let stem = p
+            .file_stem()
+            .map(|s| s.to_string_lossy().to_ascii_lowercase());
+        (same_file(p).parent().map(Path::to_owned), stem)
+    };
+    // Only a `.src` whose stem a listed `.dat` shares needs its directory read.
+    let dat_stems: BTreeSet<_> = out
+        .iter()
+        .filter(|p| extension(p).as_deref() == Some("dat"))
+        .map(|p| stem_key(p))
+        .collect();
     let partners: BTreeSet<PathBuf> = out
         .iter()
-        .filter(|p| extension(p).as_deref() == Some("src"))
+        .filter(|p| extension(p).as_deref() == Some("src") && dat_stems.contains(&stem_key(p)))
         .filter_map(|p| crate::krl::partner_of(p))
         .map(|d| same_file(&d))
         .collect();

@@ -68,15 +68,41 @@ fn is_ident_start(b: u8) -> bool {
     b.is_ascii_alphabetic() || b == b'_' || b == b'$'
 }
 
-fn is_ident_continue(b: u8) -> bool {
+fn line_end(src: &[u8], i: usize) -> usize {
+    run_end(src, i, |b| b != b'\n' && b != b'\r')
+}
+
+const fn byte_table(ident: bool) -> [bool; 256] {
+    let mut t = [false; 256];
+    let mut b = 0;
+    while b < 256 {
+        t[b] = if ident {
+            is_ident_byte(b as u8)
+        } else {
+            is_space(b as u8)
+        };
+        b += 1;
+    }
+    t
+}
+
+const fn is_space(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | 0x0B | 0x0C | 0x1A | 0x00..=0x08 | 0x0E..=0x19 | 0x1B..=0x1F | 0x7F)
+}
+
+const fn is_ident_byte(b: u8) -> bool {
     b.is_ascii_alphanumeric() || b == b'_' || b == b'$'
 }
 
-fn line_end(src: &[u8], mut i: usize) -> usize {
-    while i < src.len() && src[i] != b'\n' && src[i] != b'\r' {
-        i += 1;
-    }
-    i
+/// Byte classes by table: the lexer's inner loops are one load per byte.
+static SPACE: [bool; 256] = byte_table(false);
+static IDENT: [bool; 256] = byte_table(true);
+
+/// The end of the run of bytes from `i` on that satisfy `keep`.
+#[inline]
+fn run_end(src: &[u8], i: usize, keep: impl Fn(u8) -> bool) -> usize {
+    let rest = src.get(i..).unwrap_or(&[]);
+    i + rest.iter().position(|&b| !keep(b)).unwrap_or(rest.len())
 }
 
 /// Splits `src` into tokens covering every byte. Never fails: a byte the syntax does not know
@@ -86,17 +112,52 @@ fn line_end(src: &[u8], mut i: usize) -> usize {
 pub fn lex(src: &[u8]) -> Vec<Token> {
     // Roughly one token per 4 bytes in position-heavy `.dat` files.
     let mut out = Vec::with_capacity(src.len() / 4 + 8);
-    let mut i = 0;
-    let mut line_start = true;
-    if src.starts_with(crate::syntax::BOM) {
-        out.push(Token {
-            kind: TokenKind::Bom,
-            start: 0,
-            end: 3,
-        });
-        i = 3;
+    out.extend(Lexer::new(src));
+    out
+}
+
+/// The tokens of `src` one at a time, for the parser to consume a line at a time without
+/// holding the tokens of the whole file (five times the size of a position-heavy `.dat`).
+#[derive(Clone, Debug)]
+pub struct Lexer<'a> {
+    src: &'a [u8],
+    i: usize,
+    line_start: bool,
+}
+
+impl<'a> Lexer<'a> {
+    pub fn new(src: &'a [u8]) -> Lexer<'a> {
+        Lexer {
+            src,
+            i: 0,
+            line_start: true,
+        }
     }
-    while i < src.len() {
+
+    /// Byte offset of the next token.
+    pub fn offset(&self) -> usize {
+        self.i
+    }
+}
+
+impl Iterator for Lexer<'_> {
+    type Item = Token;
+
+    fn next(&mut self) -> Option<Token> {
+        let src = self.src;
+        let mut i = self.i;
+        if i >= src.len() {
+            return None;
+        }
+        if i == 0 && src.starts_with(crate::syntax::BOM) {
+            self.i = 3;
+            return Some(Token {
+                kind: TokenKind::Bom,
+                start: 0,
+                end: 3,
+            });
+        }
+        let line_start = self.line_start;
         let b = src[i];
         let start = i;
         let kind = match b {
@@ -108,13 +169,8 @@ pub fn lex(src: &[u8]) -> Vec<Token> {
                 i += if src.get(i + 1) == Some(&b'\n') { 2 } else { 1 };
                 TokenKind::Newline
             }
-            b' ' | b'\t' | 0x0B | 0x0C | 0x1A | 0x00..=0x08 | 0x0E..=0x19 | 0x1B..=0x1F | 0x7F => {
-                i += 1;
-                while i < src.len()
-                    && matches!(src[i], b' ' | b'\t' | 0x0B | 0x0C | 0x1A | 0x00..=0x08 | 0x0E..=0x19 | 0x1B..=0x1F | 0x7F)
-                {
-                    i += 1;
-                }
+            _ if SPACE[b as usize] => {
+                i = run_end(src, i + 1, |c| SPACE[c as usize]);
                 TokenKind::Whitespace
             }
             b';' => {
@@ -126,10 +182,7 @@ pub fn lex(src: &[u8]) -> Vec<Token> {
                 TokenKind::Header
             }
             b'"' | b'\'' => {
-                let mut j = i + 1;
-                while j < src.len() && src[j] != b && src[j] != b'\n' && src[j] != b'\r' {
-                    j += 1;
-                }
+                let j = run_end(src, i + 1, |c| c != b && c != b'\n' && c != b'\r');
                 if src.get(j) == Some(&b) {
                     i = j + 1;
                     if b == b'"' {
@@ -143,10 +196,7 @@ pub fn lex(src: &[u8]) -> Vec<Token> {
                 }
             }
             b'#' if src.get(i + 1).is_some_and(|&c| is_ident_start(c)) => {
-                i += 2;
-                while i < src.len() && is_ident_continue(src[i]) {
-                    i += 1;
-                }
+                i = run_end(src, i + 2, |c| IDENT[c as usize]);
                 TokenKind::Enum
             }
             b'0'..=b'9' => {
@@ -158,10 +208,7 @@ pub fn lex(src: &[u8]) -> Vec<Token> {
                 TokenKind::Number
             }
             _ if is_ident_start(b) => {
-                i += 1;
-                while i < src.len() && is_ident_continue(src[i]) {
-                    i += 1;
-                }
+                i = run_end(src, i + 1, |c| IDENT[c as usize]);
                 TokenKind::Ident
             }
             0x80..=0xFF => {
@@ -180,18 +227,18 @@ pub fn lex(src: &[u8]) -> Vec<Token> {
                 TokenKind::Punct
             }
         };
-        line_start = match kind {
+        self.line_start = match kind {
             TokenKind::Newline => true,
             TokenKind::Whitespace => line_start,
             _ => false,
         };
-        out.push(Token {
+        self.i = i;
+        Some(Token {
             kind,
             start: start as u32,
             end: i as u32,
-        });
+        })
     }
-    out
 }
 
 /// End of `digits [. digits] [E [+-] digits]` (or `. digits …`) starting at `i`.

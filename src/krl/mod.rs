@@ -61,10 +61,7 @@ fn analyse(path: &Path, source: Vec<u8>) -> (ParsedFile, positions::Facts) {
         .iter()
         .any(|n| n.kind == tree::NodeKind::RoutineStart)
     {
-        let at = parse
-            .tree
-            .tokens
-            .iter()
+        let at = lexer::Lexer::new(&source)
             .find(|t| !t.kind.is_trivia())
             .map_or(crate::syntax::Span::new(0, 0), |t| t.span());
         diagnostics.insert(

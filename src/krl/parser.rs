@@ -3,7 +3,7 @@
 //!
 //! Each function names the `grammars/krl.ebnf` rule it implements.
 
-use super::lexer::{Token, TokenKind, lex};
+use super::lexer::{Lexer, Token, TokenKind};
 use super::tree::{
     Aggregate, DeclVar, Expr, ExprKind, Field, Node, NodeKind, Stmt, StmtKind, Tree,
 };
@@ -211,7 +211,49 @@ impl<'a> Cursor<'a> {
 
     /// Rule `expr`: precedence climbing; `:` (geometric operator) binds tightest.
     fn expr(&mut self) -> PResult<Expr> {
+        if let Some(e) = self.simple_value() {
+            return Ok(e);
+        }
         self.binary(0)
+    }
+
+    /// The common case of a `.dat` field, a lone literal or name before `,` `}` `)` `]` or the
+    /// end of the line, read without descending the precedence levels. Gives exactly what
+    /// [`Self::binary`] gives for it (a sign written against a number is part of the number).
+    fn simple_value(&mut self) -> Option<Expr> {
+        let t = self.peek()?;
+        let (kind, span, used) = match t.kind {
+            TokenKind::Number => (ExprKind::Number, t.span(), 1),
+            TokenKind::Str => (ExprKind::Str, t.span(), 1),
+            TokenKind::Quoted => (ExprKind::Quoted, t.span(), 1),
+            TokenKind::Enum => (ExprKind::Enum, t.span(), 1),
+            TokenKind::Ident => {
+                let text = t.text(self.src);
+                if text.eq_ignore_ascii_case(b"NOT") || text.eq_ignore_ascii_case(b"B_NOT") {
+                    return None;
+                }
+                (ExprKind::Name, t.span(), 1)
+            }
+            TokenKind::Punct if matches!(t.text(self.src), b"-" | b"+") => {
+                let n = self.peek_at(1)?;
+                if n.kind != TokenKind::Number || n.start != t.end {
+                    return None;
+                }
+                (ExprKind::Number, t.span().cover(n.span()), 2)
+            }
+            _ => return None,
+        };
+        let ends = match self.peek_at(used) {
+            None => true,
+            Some(f) => {
+                f.kind == TokenKind::Punct && matches!(f.text(self.src), b"," | b"}" | b")" | b"]")
+            }
+        };
+        if !ends {
+            return None;
+        }
+        self.pos += used;
+        Some(Expr { span, kind })
     }
 
     fn binary_prec(&self) -> Option<u8> {
@@ -393,7 +435,16 @@ impl<'a> Cursor<'a> {
             type_name = self.peek().map(|t| t.span());
             self.pos += 2;
         }
-        let mut fields = Vec::new();
+        // One allocation per aggregate: the commas left on the line bound its field count
+        // (a `.dat` line is one aggregate of up to 14 fields, nested ones are short).
+        let commas = self
+            .toks
+            .get(self.pos..)
+            .unwrap_or(&[])
+            .iter()
+            .filter(|t| t.kind == TokenKind::Punct && t.text(self.src) == b",")
+            .count();
+        let mut fields = Vec::with_capacity((commas + 1).min(16));
         if !self.is_punct(b"}") {
             loop {
                 let name = self.expect_ident(
@@ -502,38 +553,56 @@ pub fn parse_with(src: &[u8], sink: &mut dyn FnMut(Stmt)) -> Parse {
             )
             .with_hint("split the program; robot controllers do not load files this large"),
         );
-        p.out.tree.tokens.push(Token {
-            kind: TokenKind::Unknown,
-            start: 0,
+        p.out.tree.nodes.push(Node {
+            kind: NodeKind::Opaque,
+            first: 0,
             end: 0,
+            depth: 0,
         });
         return p.out;
     }
-    let tokens = lex(src);
+    // One line at a time: the tokens of a line live only while it is parsed, and only the
+    // significant ones are kept (trivia matter only on lines without code).
+    let mut lexer = Lexer::new(src);
     let mut sig: Vec<Token> = Vec::with_capacity(64);
-    let mut i = 0;
-    while i < tokens.len() {
-        let mut j = i;
-        while j < tokens.len() && tokens[j].kind != TokenKind::Newline {
-            j += 1;
-        }
-        let end = if j < tokens.len() { j + 1 } else { j };
+    loop {
+        let start = lexer.offset();
         sig.clear();
-        sig.extend(tokens[i..j].iter().filter(|t| !t.kind.is_trivia()));
+        let mut comment = None;
+        let mut content_end = start;
+        let mut had_newline = false;
+        for t in lexer.by_ref() {
+            if t.kind == TokenKind::Newline {
+                had_newline = true;
+                break;
+            }
+            content_end = t.end as usize;
+            if !t.kind.is_trivia() {
+                sig.push(t);
+            } else if t.kind == TokenKind::Comment && comment.is_none() {
+                comment = Some(t);
+            }
+        }
+        let end = lexer.offset();
+        if end == start {
+            break;
+        }
         let node_index = p.out.tree.nodes.len() as u32;
         let depth_before = p.stack.len();
         let (kind, depth) = if sig.is_empty() {
-            (p.trivia_line(&tokens[i..j]), depth_before)
+            (p.trivia_line(comment), depth_before)
         } else {
-            p.statement(&sig, node_index, line_eol(&tokens, i, j))
+            p.statement(&sig, node_index, Span::new(content_end, content_end))
         };
         p.out.tree.nodes.push(Node {
             kind,
-            first: i as u32,
+            first: start as u32,
             end: end as u32,
             depth: depth.min(u16::MAX as usize) as u16,
         });
-        i = end;
+        if !had_newline {
+            break;
+        }
     }
     for open in std::mem::take(&mut p.stack) {
         p.out.diagnostics.push(
@@ -547,23 +616,13 @@ pub fn parse_with(src: &[u8], sink: &mut dyn FnMut(Stmt)) -> Parse {
                 .with_hint("add `;ENDFOLD` or the pendant will fold the rest of the file"),
         );
     }
-    p.out.tree.tokens = tokens;
     p.out
-}
-
-/// The empty span at the end of a line's content, for "end of line" messages.
-fn line_eol(tokens: &[Token], i: usize, j: usize) -> Span {
-    let at = tokens
-        .get(i..j)
-        .and_then(|l| l.last())
-        .map_or(0, |t| t.end as usize);
-    Span::new(at, at)
 }
 
 impl<'a> LineParser<'a, '_> {
     /// Rule `trivia_line`: blank, comment, fold lines.
-    fn trivia_line(&mut self, toks: &[Token]) -> NodeKind {
-        let Some(c) = toks.iter().find(|t| t.kind == TokenKind::Comment) else {
+    fn trivia_line(&mut self, comment: Option<Token>) -> NodeKind {
+        let Some(c) = comment else {
             return NodeKind::Blank;
         };
         let text = c.text(self.src);
@@ -1169,6 +1228,34 @@ DEF cell( )\r\n  SPLINE WITH $ACC = {CP 2.0}\r\n    SPL XP1\r\n    SLIN XP2\r\n 
         assert_eq!(depth_of("UNTIL"), Some((NodeKind::BlockClose, 1)));
         assert_eq!(depth_of("done:"), Some((NodeKind::Label, 1)));
         assert_eq!(depth_of("ENDFCT"), Some((NodeKind::RoutineEnd, 0)));
+    }
+
+    #[test]
+    fn simple_values_read_as_the_full_expression_parser_reads_them() {
+        let cases = [
+            "12.5,", "-12.5}", "- 12.5,", "+3)", "-X,", "#BASE]", "\"s\",", "'B01'}", "XP1,",
+            "XP1[2],", "XP1.X}", "NOT B,", "A:B,", "1+2,", "-5", "TRUE", "F(1),",
+        ];
+        for case in cases {
+            let src = case.as_bytes();
+            let toks: Vec<Token> = super::super::lexer::lex(src)
+                .into_iter()
+                .filter(|t| !t.kind.is_trivia())
+                .collect();
+            let cursor = |toks| Cursor {
+                src,
+                toks,
+                pos: 0,
+                eol: Span::new(src.len(), src.len()),
+                depth: 0,
+            };
+            let mut fast = cursor(&toks);
+            let mut full = cursor(&toks);
+            let a = fast.expr().ok();
+            let b = full.binary(0).ok();
+            assert_eq!(a, b, "{case}");
+            assert_eq!(fast.pos, full.pos, "{case}");
+        }
     }
 
     #[test]

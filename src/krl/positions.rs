@@ -115,11 +115,22 @@ pub(crate) fn name_key(name: &str) -> String {
 }
 
 fn upper(src: &[u8], span: Span) -> String {
-    span.slice(src)
+    let text = span.slice(src);
+    // Names are plain ASCII nearly always: one copy, no per-character UTF-8 encoding.
+    if text
         .iter()
+        .all(|b| b.is_ascii() && !b.is_ascii_whitespace())
+    {
+        return String::from_utf8(text.to_ascii_uppercase()).unwrap_or_default();
+    }
+    text.iter()
         .filter(|b| !b.is_ascii_whitespace())
         .map(|b| b.to_ascii_uppercase() as char)
         .collect()
+}
+
+fn is_word(src: &[u8], span: Span, word: &[u8]) -> bool {
+    span.slice(src).eq_ignore_ascii_case(word)
 }
 
 fn positional_type(name: &str) -> Option<PositionKind> {
@@ -421,8 +432,11 @@ impl<'a> Extractor<'a> {
                 }
             }
             StmtKind::Decl { type_name, vars } => {
-                let ty = upper(src, *type_name);
-                let positional = positional_type(&ty);
+                let positional = ["E6POS", "POS", "FRAME", "E6AXIS", "AXIS"]
+                    .into_iter()
+                    .find(|t| is_word(src, *type_name, t.as_bytes()))
+                    .and_then(positional_type);
+                let is_fdat = is_word(src, *type_name, b"FDAT");
                 for v in vars {
                     if let Some(kind) = positional {
                         self.declared.insert(upper(src, v.name), kind);
@@ -431,7 +445,7 @@ impl<'a> Extractor<'a> {
                     let ExprKind::Aggregate(agg) = &init.kind else {
                         continue;
                     };
-                    if ty == "FDAT" {
+                    if is_fdat {
                         out.facts.fdats.insert(upper(src, v.name), fdat(src, agg));
                     } else if let Some(kind) = positional {
                         let name = crate::syntax::latin1(v.name.slice(src));
@@ -514,13 +528,12 @@ impl<'a> Extractor<'a> {
 fn fdat(src: &[u8], agg: &Aggregate) -> Fdat {
     let mut f = Fdat::default();
     for field in &agg.fields {
-        match upper(src, field.name).as_str() {
-            "TOOL_NO" => f.tool = integer(src, &field.value),
-            "BASE_NO" => f.base = integer(src, &field.value),
-            "IPO_FRAME" if field.value.kind == ExprKind::Enum => {
-                f.tcp = Some(upper(src, field.value.span) == "#TCP");
-            }
-            _ => {}
+        if is_word(src, field.name, b"TOOL_NO") {
+            f.tool = integer(src, &field.value);
+        } else if is_word(src, field.name, b"BASE_NO") {
+            f.base = integer(src, &field.value);
+        } else if is_word(src, field.name, b"IPO_FRAME") && field.value.kind == ExprKind::Enum {
+            f.tcp = Some(is_word(src, field.value.span, b"#TCP"));
         }
     }
     f

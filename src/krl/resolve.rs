@@ -166,6 +166,15 @@ fn record_use(u: &mut Usage, base: &Option<String>, tool: &Option<String>, tcp: 
 /// Resolves base, tool and IPO mode of every motion of a program (files in the same order as
 /// `facts`), fills each used position's [`Usage`], promotes used `FRAME`s and candidate
 /// aggregates to positions, and reports motions whose base stays unknown.
+/// `BASEPOS` for `BASEPOS[I]`, `P[I+1,2]`: an element chosen at run time, which may be any
+/// element of the array. `None` for a name or a literal index (`P[3]`, looked up exactly).
+fn computed_index_array(name: &str) -> Option<&str> {
+    let (array, rest) = name.split_once('[')?;
+    let index = rest.strip_suffix(']')?;
+    let literal = index.bytes().all(|b| b.is_ascii_digit() || b == b',');
+    (!literal).then_some(array)
+}
+
 pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     let mut fdats: HashMap<String, Fdat> = HashMap::default();
     for f in facts.iter() {
@@ -185,6 +194,16 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             if let Some(n) = &p.name {
                 by_name.entry(name_key(n)).or_default().push((fi, true, i));
             }
+        }
+    }
+    // Array elements by array name: `SPTP BASEPOS[I]` may move to any of `BASEPOS[1..n]`.
+    let mut by_array: HashMap<String, Vec<(usize, bool, usize)>> = HashMap::default();
+    for (name, at) in &by_name {
+        if let Some((array, _)) = name.split_once('[') {
+            by_array
+                .entry(array.to_owned())
+                .or_default()
+                .extend(at.iter().copied());
         }
     }
     let mut used_candidates: Vec<Vec<bool>> = facts
@@ -278,6 +297,8 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                     }
                     let base = local.base.as_ref().and_then(base_label);
                     let tool = local.tool.as_ref().and_then(tool_label);
+                    // Only a Cartesian target needs a base: a joint target (`PTP {A1 0, …}`,
+                    // an E6AXIS) moves the same whatever the base.
                     let mut found = false;
                     for r in refs {
                         match r {
@@ -287,7 +308,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                     .and_then(|f| f.positions.iter_mut().find(|p| p.span == *s))
                                 {
                                     record_use(&mut p.usage, &base, &tool, local.tcp, *line);
-                                    found = true;
+                                    found |= p.cartesian.is_some();
                                 }
                             }
                             Ref::Named(n) => {
@@ -300,7 +321,11 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                     }
                                 }
                                 let hits = chain.iter().flat_map(|c| {
-                                    by_name.get(*c).map_or(&[][..], Vec::as_slice).iter()
+                                    by_name.get(*c).map_or(&[][..], Vec::as_slice).iter().chain(
+                                        computed_index_array(c)
+                                            .and_then(|a| by_array.get(a))
+                                            .map_or(&[][..], Vec::as_slice),
+                                    )
                                 });
                                 for &(f2, cand, i) in hits {
                                     let p = if cand {
@@ -315,14 +340,14 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                     };
                                     if let Some(p) = p {
                                         record_use(&mut p.usage, &base, &tool, local.tcp, *line);
-                                        found = true;
+                                        found |= p.cartesian.is_some();
                                     }
                                 }
                             }
                         }
                     }
                     // A motion to a point outside the program (`XHOME` of $config.dat) is not
-                    // this program's business.
+                    // this program's business, nor is a joint target.
                     if base.is_none()
                         && found
                         && let Some(file) = files.get_mut(fi)

@@ -6,7 +6,6 @@
 //! `DEF … END` / `IF … ENDIF` nesting), so printing is the concatenation of every node's tokens
 //! and the round trip holds by construction.
 
-use super::lexer::{Token, TokenKind};
 use crate::syntax::{Span, latin1};
 
 /// What a line holds (`grammars/krl.ebnf`, rule `line`).
@@ -72,7 +71,7 @@ impl NodeKind {
     }
 }
 
-/// One line: tokens `first..end` (indices into [`Tree::tokens`]) and its block depth.
+/// One line: bytes `first..end` of the source (its newline included) and its block depth.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Node {
     pub kind: NodeKind,
@@ -178,63 +177,45 @@ pub struct Stmt {
     pub kind: StmtKind,
 }
 
-/// A parsed file: tokens, lines and the statements read from them.
+/// A parsed file: its lines and the statements read from them. Tokens are not kept: a line is
+/// re-lexed on demand ([`super::lexer::lex`] over [`Tree::node_span`]), which keeps a parsed
+/// 50 MB `.dat` at a fraction of its size.
 #[derive(Clone, Debug, Default)]
 pub struct Tree {
-    pub tokens: Vec<Token>,
     pub nodes: Vec<Node>,
     pub stmts: Vec<Stmt>,
 }
 
 impl Tree {
-    /// The bytes of node `i`, trivia and newline included.
+    /// The bytes of a node, trivia and newline included.
     pub fn node_span(&self, node: &Node) -> Span {
-        let first = self.tokens.get(node.first as usize);
-        let last = node
-            .end
-            .checked_sub(1)
-            .and_then(|i| self.tokens.get(i as usize));
-        match (first, last) {
-            (Some(f), Some(l)) if node.end > node.first => {
-                Span::new(f.start as usize, l.end as usize)
-            }
-            _ => Span::default(),
-        }
+        Span::new(node.first as usize, node.end.max(node.first) as usize)
     }
 
-    /// The source again, from the nodes' tokens.
+    /// The source again, from the nodes' spans.
     pub fn print(&self, src: &[u8]) -> Vec<u8> {
         let mut out = Vec::with_capacity(src.len());
         for node in &self.nodes {
-            for t in self
-                .tokens
-                .get(node.first as usize..node.end as usize)
-                .unwrap_or(&[])
-            {
-                out.extend_from_slice(t.text(src));
-            }
+            out.extend_from_slice(self.node_span(node).slice(src));
         }
         out
     }
 
-    /// One line per node: depth, kind and the statement text (newline excluded), for tests.
+    /// One line per node: depth, kind and the line's text (newline excluded), for tests.
     pub fn dump(&self, src: &[u8]) -> String {
         let mut out = String::new();
         for node in &self.nodes {
-            let toks = self
-                .tokens
-                .get(node.first as usize..node.end as usize)
-                .unwrap_or(&[]);
-            let text: Vec<u8> = toks
-                .iter()
-                .filter(|t| t.kind != TokenKind::Newline)
-                .flat_map(|t| t.text(src).iter().copied())
-                .collect();
+            let text = self.node_span(node).slice(src);
+            let text = text
+                .strip_suffix(b"\r\n")
+                .or_else(|| text.strip_suffix(b"\n"))
+                .or_else(|| text.strip_suffix(b"\r"))
+                .unwrap_or(text);
             out.push_str(&format!(
                 "{}{} {:?}\n",
                 "  ".repeat(node.depth as usize),
                 node.kind.as_str(),
-                latin1(&text)
+                latin1(text)
             ));
         }
         out
