@@ -487,14 +487,36 @@ impl<'a, 's> Parser<'a, 's> {
             TokenKind::Eof => "the file looks truncated: complete the construct",
             _ => "fix the syntax; trackfix keeps this text verbatim and does not transform it",
         };
-        self.diagnostics.push(
+        // A statement missing its `;` (a generator's `WaitTime 1.000` line) ends at the line
+        // break when the next line starts with a name: the following statement is read as
+        // usual instead of disappearing into this opaque node with its targets.
+        let next_line_starts_statement = err.at.kind == TokenKind::Ident
+            && err.at.start == self.tok.start
+            && err.at.start > start
+            && self.newline_before_tok();
+        let diagnostic = if next_line_starts_statement {
+            let end = self.prev_end as usize;
+            Diagnostic::error(
+                Span::new(end, end),
+                format!(
+                    "expected {} before the line break, found {found} on the next line",
+                    err.expected
+                ),
+            )
+            .with_hint("add the missing `;`; trackfix keeps this line verbatim")
+        } else {
             Diagnostic::error(
                 err.at.span(),
                 format!("expected {}, found {found}", err.expected),
             )
-            .with_hint(hint),
-        );
-        self.skip_to_statement_end(start);
+            .with_hint(hint)
+        };
+        self.diagnostics.push(diagnostic);
+        if next_line_starts_statement {
+            self.prev_end = self.prev_end.max(start);
+        } else {
+            self.skip_to_statement_end(start);
+        }
         self.opaque += 1;
         self.leaf(NodeKind::Opaque, start);
     }
@@ -1027,6 +1049,19 @@ impl<'a, 's> Parser<'a, 's> {
             self.bump();
             self.bump();
             return Ok((NodeKind::Label, Stmt::Other));
+        }
+        // `Hand_MoveTo(10);`, `TPWrite("a"+b);`: a routine call whose first argument is a
+        // parenthesised expression (seen in real programs); a call result is never assigned to.
+        if self.peek2().punct(self.src) == b'(' {
+            self.bump();
+            let args = self.call_args(t.end)?;
+            return Ok((
+                NodeKind::Call,
+                Stmt::Call {
+                    name: t.span(),
+                    args,
+                },
+            ));
         }
         let target = self.postfix()?;
         if self.tok.kind == TokenKind::Assign {
