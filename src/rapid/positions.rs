@@ -712,6 +712,12 @@ impl StatementSink for Extractor<'_> {
                             u.tool = v;
                         }
                     } else {
+                        // A required argument may be given by name: `..., fine, tool:=tGun;`.
+                        if arg.name_end > arg.name_start
+                            && arg.name_span().slice(src).eq_ignore_ascii_case(b"Tool")
+                        {
+                            u.tool = value.map(|v| v.span());
+                        }
                         u.positional.push(
                             value
                                 .filter(|v| matches!(v.kind, ExprKind::Ident | ExprKind::Access))

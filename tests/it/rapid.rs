@@ -879,3 +879,77 @@ fn inline_targets_with_external_axes_in_a_variable() {
         Some([1.0, 2.0, 3.0])
     );
 }
+
+#[test]
+fn calls_with_a_parenthesised_first_argument_are_calls() {
+    let src = b"MODULE m\nPROC p()\n  Hand_MoveTo(10);\n  TPWrite(\"Err \"+ValToStr(ERRNO)+\" | x\");\n  SocketClose(sd);\n  Hand_MoveTo (5)+1,\\NoWait;\n  x := Fn(1);\n  MoveL Offs(p1,0,0,5),v100,z1,tool0;\nENDPROC\nENDMODULE\n";
+    let tree = rapid::parse_tree(src);
+    assert!(tree.diagnostics.is_empty(), "{:?}", tree.diagnostics);
+    assert_eq!(tree.opaque, 0);
+    let dump = tree.tree.dump(src);
+    assert_eq!(dump.matches("Call@").count(), 5, "{dump}");
+    assert_eq!(dump.matches("Assign@").count(), 1, "{dump}");
+}
+
+#[test]
+fn a_missing_semicolon_ends_at_the_line_break_and_the_next_target_is_found() {
+    // A generator wrote `WaitTime 1.000` without its `;`.
+    let src = b"MODULE m\nPROC p()\n  WaitTime 1.000\n  MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100,z1,tGun\\WObj:=wCar;\nENDPROC\nENDMODULE\n".to_vec();
+    let f = rapid::parse_file(Path::new("gen.mod"), src.clone());
+    assert!(f.round_trip);
+    assert_eq!(f.opaque, 1);
+    let errors: Vec<String> = f
+        .diagnostics
+        .iter()
+        .filter(|d| d.severity == Severity::Error)
+        .map(|d| f.render(d))
+        .collect();
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    // Reported at the end of the broken line, not on the good line after it.
+    assert!(
+        errors[0].starts_with("gen.mod:3:17: error: expected"),
+        "{}",
+        errors[0]
+    );
+    assert_eq!(f.positions.len(), 1);
+    let p = &f.positions[0];
+    assert_eq!(p.line, 4);
+    assert_eq!(p.usage.wobj.as_deref(), Some("wCar"));
+    assert_eq!(p.usage.tool.as_deref(), Some("tGun"));
+    // A broken continuation line is still one opaque statement up to its `;`.
+    let src = b"MODULE m\nPROC p()\n  x := [1,2\n    3];\n  MoveL p1,v100,z1,tool0;\nENDPROC\nENDMODULE\n";
+    let t = rapid::parse_tree(src);
+    assert_eq!(t.diagnostics.len(), 1, "{:?}", t.diagnostics);
+    assert_eq!(t.opaque, 1);
+}
+
+#[test]
+fn a_tool_given_by_name_is_the_tool() {
+    let src = b"MODULE m\nCONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\nPROC p()\n  MoveL ToPoint:=p1, Speed:=v100, Tool:=tCam, Zone:=fine;\nENDPROC\nENDMODULE\n".to_vec();
+    let f = rapid::parse_file(Path::new("n.mod"), src);
+    assert!(f.diagnostics.is_empty(), "{:?}", f.diagnostics);
+    let p = pos(&f, "p1");
+    assert_eq!(p.usage.tool.as_deref(), Some("tCam"));
+    assert_eq!(p.usage.wobj.as_deref(), Some("wobj0"));
+}
+
+#[test]
+fn second_round_idioms_sample() {
+    let f = load("cell_idioms.mod");
+    // Robtargets inside a record aggregate are found; names come from declarations of type
+    // robtarget only.
+    let named: Vec<&str> = f
+        .positions
+        .iter()
+        .filter_map(|p| p.name.as_deref())
+        .collect();
+    assert_eq!(named, vec!["jPark", "pPick", "pDrop"]);
+    assert_eq!(f.positions.len(), 7);
+    let pick = pos(&f, "pPick");
+    assert_eq!(pick.usage.wobj.as_deref(), Some("wConveyor"));
+    assert_eq!(pick.usage.tool.as_deref(), Some("tGripper"));
+    // `9E+009` is "not connected", the track value is kept.
+    let park = pos(&f, "jPark");
+    assert_eq!(park.skid(0), Skid::At(0.0));
+    assert_eq!(park.skid(1), Skid::NotConnected);
+}
