@@ -77,6 +77,78 @@ pub struct Extracted {
     pub diagnostics: Vec<Diagnostic>,
 }
 
+/// A multiply-rotate hasher for the name maps (names are short, attacker-free keys; SipHash
+/// showed up first in the profile of a 250,000-target module).
+#[derive(Default, Clone, Copy)]
+struct NameHasher(u64);
+
+impl std::hash::Hasher for NameHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u8(b);
+        }
+    }
+    fn write_u8(&mut self, b: u8) {
+        self.0 = (self.0.rotate_left(5) ^ u64::from(b)).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_usize(&mut self, n: usize) {
+        self.0 = (self.0.rotate_left(5) ^ n as u64).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+type NameMap<K, V> = HashMap<K, V, std::hash::BuildHasherDefault<NameHasher>>;
+
+/// A name in the source compared as RAPID compares names: ASCII case-insensitive, whitespace
+/// ignored (`pArr{ 2 }` = `parr{2}`). Borrows the source: no copy per declaration or use.
+#[derive(Clone, Copy)]
+struct NameKey<'s>(&'s [u8]);
+
+impl NameKey<'_> {
+    fn bytes(&self) -> impl Iterator<Item = u8> + '_ {
+        self.0
+            .iter()
+            .filter(|b| !b.is_ascii_whitespace())
+            .map(u8::to_ascii_lowercase)
+    }
+    fn is(&self, lower: &[u8]) -> bool {
+        self.bytes().eq(lower.iter().copied())
+    }
+    fn starts_with(&self, lower: &[u8]) -> bool {
+        let mut b = self.bytes();
+        lower.iter().all(|&l| b.next() == Some(l))
+    }
+    /// `z10`, `v1000`: the prefix letter then digits only.
+    fn numbered(&self, prefix: u8) -> bool {
+        let mut b = self.bytes();
+        b.next() == Some(prefix) && {
+            let mut digits = 0;
+            b.all(|c| {
+                digits += 1;
+                c.is_ascii_digit()
+            }) && digits > 0
+        }
+    }
+}
+
+impl std::hash::Hash for NameKey<'_> {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        for b in self.bytes() {
+            state.write_u8(b);
+        }
+    }
+}
+
+impl PartialEq for NameKey<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        self.bytes().eq(other.bytes())
+    }
+}
+
+impl Eq for NameKey<'_> {}
+
 fn text_of(src: &[u8], span: Span) -> String {
     latin1(span.slice(src))
 }
@@ -422,17 +494,17 @@ impl<'l> Extractor<'l> {
         let mut diagnostics = Vec::new();
         let mut buf = String::new();
         // Names declared twice in the module scope; the types of all names.
-        let mut seen: HashMap<String, Span> = HashMap::new();
-        let mut type_of: HashMap<String, SymType> = HashMap::new();
+        let mut seen: NameMap<NameKey, Span> = NameMap::default();
+        let mut type_of: NameMap<NameKey, SymType> = NameMap::default();
         for s in &self.symbols {
-            let k = key_into(&mut buf, src, s.name);
+            let k = NameKey(s.name.slice(src));
             if s.ty != SymType::Other {
-                type_of.insert(k.to_owned(), s.ty);
+                type_of.insert(k, s.ty);
             }
             if !s.module_scope {
                 continue;
             }
-            if let Some(first) = seen.get(k) {
+            if let Some(first) = seen.get(&k) {
                 let line = self.lines.line(first.start);
                 diagnostics.push(
                     Diagnostic::warning(
@@ -447,29 +519,34 @@ impl<'l> Extractor<'l> {
                     ),
                 );
             } else {
-                seen.insert(k.to_owned(), s.name);
+                seen.insert(k, s.name);
             }
         }
-        let numbered = |n: &str, prefix: char| {
-            n.len() > 1 && n.starts_with(prefix) && n.bytes().skip(1).all(|b| b.is_ascii_digit())
+        let is_tool = |n: &NameKey| n.is(b"tool0") || type_of.get(n) == Some(&SymType::Tool);
+        let is_zone = |n: &NameKey| {
+            n.is(b"fine") || n.numbered(b'z') || type_of.get(n) == Some(&SymType::Zone)
         };
-        let is_tool = |n: &str| n == "tool0" || type_of.get(n) == Some(&SymType::Tool);
-        let is_zone =
-            |n: &str| n == "fine" || numbered(n, 'z') || type_of.get(n) == Some(&SymType::Zone);
-        let is_speed =
-            |n: &str| n == "vmax" || numbered(n, 'v') || type_of.get(n) == Some(&SymType::Speed);
-        let robhold: HashMap<String, bool> = self
+        let is_speed = |n: &NameKey| {
+            n.is(b"vmax") || n.numbered(b'v') || type_of.get(n) == Some(&SymType::Speed)
+        };
+        let robhold: NameMap<String, bool> = self
             .frames
             .iter()
             .filter(|f| f.kind == FrameKind::WorkObject)
             .filter_map(|f| Some((f.name.to_ascii_lowercase(), f.robhold?)))
             .collect();
-        let mut by_name: HashMap<String, Vec<usize>> = HashMap::new();
+        let mut by_name: NameMap<String, Vec<usize>> =
+            NameMap::with_capacity_and_hasher(self.positions.len(), Default::default());
         for (i, p) in self.positions.iter().enumerate() {
             if let Some(n) = &p.name {
                 let lower = n.to_ascii_lowercase();
                 if let Some(base) = lower.split('{').next().filter(|b| b.len() < lower.len()) {
-                    by_name.entry(base.to_owned()).or_default().push(i);
+                    match by_name.get_mut(base) {
+                        Some(v) => v.push(i),
+                        None => {
+                            by_name.insert(base.to_owned(), vec![i]);
+                        }
+                    }
                 }
                 by_name.entry(lower).or_default().push(i);
             }
@@ -485,12 +562,14 @@ impl<'l> Extractor<'l> {
             }
         };
         let mut targets: Vec<usize> = Vec::new();
-        let mut names: Vec<String> = Vec::new();
+        let mut names: Vec<Option<NameKey>> = Vec::new();
         for u in &self.uses {
             names.clear();
-            for p in &u.positional {
-                names.push(p.map_or_else(String::new, |sp| key_into(&mut buf, src, sp).to_owned()));
-            }
+            names.extend(
+                u.positional
+                    .iter()
+                    .map(|p| p.map(|sp| NameKey(sp.slice(src)))),
+            );
             let written = |i: usize| -> Option<String> {
                 u.positional
                     .get(i)
@@ -498,31 +577,38 @@ impl<'l> Extractor<'l> {
                     .flatten()
                     .map(|sp| text_of(src, sp))
             };
-            let name_lower = key_into(&mut buf, src, u.name).to_owned();
+            let call = NameKey(u.name.slice(src));
             let tool = u
                 .tool
                 .map(|sp| text_of(src, sp).trim().to_owned())
                 .or_else(|| {
-                    if let Some(i) = names.iter().position(|n| is_tool(n)) {
+                    if let Some(i) = names.iter().position(|n| n.as_ref().is_some_and(is_tool)) {
                         return written(i);
                     }
-                    let after = names.iter().position(|n| is_zone(n)).or_else(|| {
-                        name_lower
-                            .starts_with("search")
-                            .then(|| names.iter().position(|n| is_speed(n)))
-                            .flatten()
-                    })?;
+                    let after = names
+                        .iter()
+                        .position(|n| n.as_ref().is_some_and(is_zone))
+                        .or_else(|| {
+                            call.starts_with(b"search")
+                                .then(|| {
+                                    names.iter().position(|n| n.as_ref().is_some_and(is_speed))
+                                })
+                                .flatten()
+                        })?;
                     written(after + 1)
                 });
-            let motion = MOTION_PREFIXES.iter().any(|p| name_lower.starts_with(p));
+            let motion = MOTION_PREFIXES
+                .iter()
+                .any(|p| call.starts_with(p.as_bytes()));
             let wobj = match u.wobj {
                 Some(sp) => Some(text_of(src, sp).trim().to_owned()),
                 None => (motion || tool.is_some()).then(|| "wobj0".to_owned()),
             };
             targets.clear();
             targets.extend_from_slice(&u.inline);
-            for n in names.iter().filter(|n| !n.is_empty()) {
-                targets.extend_from_slice(lookup(n));
+            for sp in u.positional.iter().flatten() {
+                let k = key_into(&mut buf, src, *sp);
+                targets.extend_from_slice(lookup(k));
             }
             for &sp in &u.via_offset {
                 let k = key_into(&mut buf, src, sp);
@@ -624,27 +710,35 @@ impl StatementSink for Extractor<'_> {
                 module_scope,
                 ..
             } => {
-                let ty = type_name.slice(src).to_ascii_lowercase();
+                let ty = type_name.slice(src);
+                let is = |t: &[u8]| ty.eq_ignore_ascii_case(t);
                 let name_text = text_of(src, name);
                 self.symbols.push(Symbol {
                     name,
-                    ty: match ty.as_slice() {
-                        b"tooldata" => SymType::Tool,
-                        b"zonedata" => SymType::Zone,
-                        b"speeddata" => SymType::Speed,
-                        _ => SymType::Other,
+                    ty: if is(b"tooldata") {
+                        SymType::Tool
+                    } else if is(b"zonedata") {
+                        SymType::Zone
+                    } else if is(b"speeddata") {
+                        SymType::Speed
+                    } else {
+                        SymType::Other
                     },
                     module_scope,
                 });
-                let target_kind = match ty.as_slice() {
-                    b"robtarget" => Some(PositionKind::Robtarget),
-                    b"jointtarget" => Some(PositionKind::Jointtarget),
-                    _ => None,
+                let target_kind = if is(b"robtarget") {
+                    Some(PositionKind::Robtarget)
+                } else if is(b"jointtarget") {
+                    Some(PositionKind::Jointtarget)
+                } else {
+                    None
                 };
-                let frame_kind = match ty.as_slice() {
-                    b"wobjdata" => Some(FrameKind::WorkObject),
-                    b"tooldata" => Some(FrameKind::Tool),
-                    _ => None,
+                let frame_kind = if is(b"wobjdata") {
+                    Some(FrameKind::WorkObject)
+                } else if is(b"tooldata") {
+                    Some(FrameKind::Tool)
+                } else {
+                    None
                 };
                 let mut elements = Vec::new();
                 if let Some(init) = init {
@@ -652,7 +746,11 @@ impl StatementSink for Extractor<'_> {
                 }
                 if let Some(kind) = target_kind {
                     for (suffix, id) in &elements {
-                        let full = format!("{name_text}{suffix}");
+                        let full = if suffix.is_empty() {
+                            name_text.clone()
+                        } else {
+                            format!("{name_text}{suffix}")
+                        };
                         if let Some(p) = self.position(src, arena, *id, kind, Some(full)) {
                             self.positions.push(p);
                         }
