@@ -143,7 +143,8 @@ impl std::hash::Hash for NameKey<'_> {
 
 impl PartialEq for NameKey<'_> {
     fn eq(&self, other: &Self) -> bool {
-        self.bytes().eq(other.bytes())
+        // Names are almost always written the same way twice: compare bytes first.
+        self.0 == other.0 || self.bytes().eq(other.bytes())
     }
 }
 
@@ -494,7 +495,9 @@ impl<'l> Extractor<'l> {
         let mut diagnostics = Vec::new();
         let mut buf = String::new();
         // Names declared twice in the module scope; the types of all names.
-        let mut seen: NameMap<NameKey, Span> = NameMap::default();
+        let n = self.symbols.len();
+        let mut seen: NameMap<NameKey, Span> =
+            NameMap::with_capacity_and_hasher(n, Default::default());
         let mut type_of: NameMap<NameKey, SymType> = NameMap::default();
         for s in &self.symbols {
             let k = NameKey(s.name.slice(src));
