@@ -953,3 +953,73 @@ fn second_round_idioms_sample() {
     assert_eq!(park.skid(0), Skid::At(0.0));
     assert_eq!(park.skid(1), Skid::NotConnected);
 }
+
+/// Inputs that once broke the parser or are kept as edge cases found while fuzzing
+/// (`fuzz/`, see docs/notes-rapid.md): each must print back byte for byte, never panic, and
+/// report every diagnostic inside the file.
+#[test]
+fn fuzz_regressions_replay() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("tests/fuzz_regressions exists")
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    assert!(files.len() >= 3, "{files:?}");
+    for path in files {
+        let src = std::fs::read(&path).unwrap();
+        assert_eq!(rapid::print(&src), src, "{}", path.display());
+        let f = rapid::parse_file(&path, src.clone());
+        assert!(f.round_trip, "{}", path.display());
+        assert!(
+            f.diagnostics.iter().all(|d| d.span.end <= src.len()),
+            "{}",
+            path.display()
+        );
+        // Every one of them is broken somewhere: the break is reported, not swallowed.
+        assert!(
+            f.diagnostics.iter().any(|d| d.severity == Severity::Error),
+            "{}",
+            path.display()
+        );
+        let krl = trackfix::krl::parse_file(&path, src);
+        assert!(krl.round_trip, "{}", path.display());
+    }
+}
+
+/// Real programs, not committed (their text is not ours): point `TRACKFIX_RAPID_CORPUS` at a
+/// directory of modules and run
+/// `TRACKFIX_RAPID_CORPUS=dir cargo test --test it rapid::real_corpus -- --ignored --nocapture`.
+/// Every file must round-trip; the report lists targets found, opaque nodes and diagnostics.
+#[test]
+#[ignore = "needs TRACKFIX_RAPID_CORPUS"]
+#[allow(clippy::print_stdout)] // the report is the point of this manual check
+fn real_corpus() {
+    let Ok(dir) = std::env::var("TRACKFIX_RAPID_CORPUS") else {
+        return;
+    };
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .collect();
+    files.sort();
+    for path in files {
+        let src = std::fs::read(&path).unwrap();
+        let f = rapid::parse_file(&path, src);
+        let count = |k: PositionKind| f.positions.iter().filter(|p| p.kind == k).count();
+        println!(
+            "{}: round_trip={} robtargets={} jointtargets={} frames={} opaque={}",
+            path.display(),
+            f.round_trip,
+            count(PositionKind::Robtarget),
+            count(PositionKind::Jointtarget),
+            f.frames.len(),
+            f.opaque
+        );
+        for d in &f.diagnostics {
+            println!("{}", f.render(d));
+        }
+        assert!(f.round_trip, "{}", path.display());
+    }
+}
