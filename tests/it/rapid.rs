@@ -763,7 +763,9 @@ proptest! {
         let cut_src = &src[..k];
         let f = assert_sound(cut_src);
         // Cutting anything before the final ENDMODULE leaves a construct open.
-        if k < end && k > 0 && !cut_src.iter().all(|b| b.is_ascii_whitespace()) {
+        // A cut that leaves only a BOM and blanks leaves nothing open.
+        let text = cut_src.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(cut_src);
+        if k < end && k > 0 && !text.iter().all(|b| b.is_ascii_whitespace()) {
             let e = f.diagnostics.iter().find(|d| d.severity == Severity::Error);
             prop_assert!(e.is_some() || f.opaque > 0, "cut at {k}: {:?}", f.diagnostics);
         }
