@@ -39,6 +39,10 @@ pub enum Stmt {
     },
     /// `PROC`/`FUNC`/`TRAP` head (its name is a module-scope symbol).
     Routine { name: Span },
+    /// `RECORD name` (the components follow as [`Stmt::RecordField`]).
+    Record { name: Span },
+    /// `type name;` inside a `RECORD`.
+    RecordField { type_name: Span, name: Span },
     /// A procedure call; `args` is an [`ExprKind::Args`] node, `name` the routine name (for a
     /// late-binding call, the `%expr%` text).
     Call { name: Span, args: u32 },
@@ -802,8 +806,12 @@ impl<'a, 's> Parser<'a, 's> {
     fn record(&mut self, start: u32) {
         let branch = self.open(NodeKind::Record, start);
         self.bump();
+        self.arena.clear();
         match self.expect_ident("a record name after RECORD") {
-            Ok(_) => self.leaf(NodeKind::RecordHead, start),
+            Ok(name) => {
+                self.leaf(NodeKind::RecordHead, start);
+                self.emit(Stmt::Record { name: name.span() }, start);
+            }
             Err(e) => self.recover(start, e),
         }
         loop {
@@ -824,14 +832,23 @@ impl<'a, 's> Parser<'a, 's> {
                 break;
             }
             let s = self.tok.start;
-            let field: PResult<()> = (|| {
-                self.expect_ident("a component type")?;
-                self.expect_ident("a component name")?;
+            let field: PResult<(Token, Token)> = (|| {
+                let type_name = self.expect_ident("a component type")?;
+                let name = self.expect_ident("a component name")?;
                 self.expect_punct(b';', "`;` after the record component")?;
-                Ok(())
+                Ok((type_name, name))
             })();
             match field {
-                Ok(()) => self.leaf(NodeKind::RecordField, s),
+                Ok((type_name, name)) => {
+                    self.leaf(NodeKind::RecordField, s);
+                    self.emit(
+                        Stmt::RecordField {
+                            type_name: type_name.span(),
+                            name: name.span(),
+                        },
+                        s,
+                    );
+                }
                 Err(e) => self.recover(s, e),
             }
         }

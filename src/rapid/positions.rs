@@ -57,8 +57,16 @@ struct CallUse {
     inline: Vec<usize>,
 }
 
+/// A `RECORD` declared in the module: its name and components (type, name).
+#[derive(Clone, Debug)]
+struct RecordDecl {
+    name: Span,
+    fields: Vec<(Span, Span)>,
+}
+
 /// Collects positions, frames, offsets and usage from the parsed statements.
 pub struct Extractor<'l> {
+    records: Vec<RecordDecl>,
     lines: &'l LineIndex,
     positions: Vec<Position>,
     frames: Vec<FrameDecl>,
@@ -173,6 +181,7 @@ impl<'l> Extractor<'l> {
     pub fn new(lines: &'l LineIndex, src: &[u8]) -> Extractor<'l> {
         let literals = src.windows(2).filter(|w| w == b"[[").count();
         Extractor {
+            records: Vec::new(),
             lines,
             positions: Vec::with_capacity(literals),
             frames: Vec::new(),
@@ -783,8 +792,73 @@ impl StatementSink for Extractor<'_> {
                     }
                     self.scan(src, arena, false);
                 } else {
-                    // Records holding targets: their robtarget-shaped parts are still found.
+                    // A record declared in the module with target components: each element's
+                    // component is a named target (`seam{1}.where`), so a move through the
+                    // component finds it; any other target-shaped part is still found inline.
+                    let before = self.positions.len();
+                    let components: Vec<(usize, PositionKind, Span)> = self
+                        .records
+                        .iter()
+                        .find(|r| NameKey(r.name.slice(src)) == NameKey(ty))
+                        .map(|r| {
+                            r.fields
+                                .iter()
+                                .enumerate()
+                                .filter_map(|(k, &(field_ty, field))| {
+                                    let t = field_ty.slice(src);
+                                    let kind = if t.eq_ignore_ascii_case(b"robtarget") {
+                                        PositionKind::Robtarget
+                                    } else if t.eq_ignore_ascii_case(b"jointtarget") {
+                                        PositionKind::Jointtarget
+                                    } else {
+                                        return None;
+                                    };
+                                    Some((k, kind, field))
+                                })
+                                .collect()
+                        })
+                        .unwrap_or_default();
+                    for (suffix, id) in &elements {
+                        for &(k, kind, field) in &components {
+                            let Some(part) = arena.children(*id).nth(k) else {
+                                continue;
+                            };
+                            let full = format!("{name_text}{suffix}.{}", text_of(src, field));
+                            if let Some(p) = self.position(src, arena, part, kind, Some(full)) {
+                                self.positions.push(p);
+                            }
+                        }
+                    }
+                    let named = self.positions.len();
                     self.scan(src, arena, true);
+                    if named > before {
+                        let spans: Vec<Span> = self
+                            .positions
+                            .get(before..named)
+                            .map(|ps| ps.iter().map(|p| p.span).collect())
+                            .unwrap_or_default();
+                        let mut i = named;
+                        while i < self.positions.len() {
+                            if self
+                                .positions
+                                .get(i)
+                                .is_some_and(|p| spans.contains(&p.span))
+                            {
+                                self.positions.remove(i);
+                            } else {
+                                i += 1;
+                            }
+                        }
+                    }
+                }
+            }
+            Stmt::Record { name } => self.records.push(RecordDecl {
+                name,
+                fields: Vec::new(),
+            }),
+            Stmt::RecordField { type_name, name } => {
+                if let Some(r) = self.records.last_mut() {
+                    r.fields.push((type_name, name));
                 }
             }
             Stmt::Routine { name } => self.symbols.push(Symbol {

@@ -938,15 +938,32 @@ fn a_tool_given_by_name_is_the_tool() {
 #[test]
 fn second_round_idioms_sample() {
     let f = load("cell_idioms.mod");
-    // Robtargets inside a record aggregate are found; names come from declarations of type
-    // robtarget only.
+    // Robtargets inside the value of a record declared in the module are named by component,
+    // once each, and a move through the component gives their usage.
     let named: Vec<&str> = f
         .positions
         .iter()
         .filter_map(|p| p.name.as_deref())
         .collect();
-    assert_eq!(named, vec!["jPark", "pPick", "pDrop"]);
+    assert_eq!(
+        named,
+        vec![
+            "seamA{1}.where",
+            "seamA{2}.where",
+            "jPark",
+            "pPick",
+            "pDrop"
+        ]
+    );
     assert_eq!(f.positions.len(), 7);
+    let seam = pos(&f, "seamA{1}.where");
+    assert_eq!(seam.usage.wobj.as_deref(), Some("wConveyor"));
+    assert_eq!(seam.usage.lines, vec![57]);
+    assert_eq!(
+        seam.cartesian.as_ref().unwrap().translation(),
+        Some([10.0, 0.0, 5.0])
+    );
+    assert!(pos(&f, "seamA{2}.where").usage.wobj.is_none());
     let pick = pos(&f, "pPick");
     assert_eq!(pick.usage.wobj.as_deref(), Some("wConveyor"));
     assert_eq!(pick.usage.tool.as_deref(), Some("tGripper"));
