@@ -39,6 +39,10 @@ pub enum Stmt {
     },
     /// `PROC`/`FUNC`/`TRAP` head (its name is a module-scope symbol).
     Routine { name: Span },
+    /// `RECORD name` (the components follow as [`Stmt::RecordField`]).
+    Record { name: Span },
+    /// `type name;` inside a `RECORD`.
+    RecordField { type_name: Span, name: Span },
     /// A procedure call; `args` is an [`ExprKind::Args`] node, `name` the routine name (for a
     /// late-binding call, the `%expr%` text).
     Call { name: Span, args: u32 },
@@ -487,14 +491,36 @@ impl<'a, 's> Parser<'a, 's> {
             TokenKind::Eof => "the file looks truncated: complete the construct",
             _ => "fix the syntax; trackfix keeps this text verbatim and does not transform it",
         };
-        self.diagnostics.push(
+        // A statement missing its `;` (a generator's `WaitTime 1.000` line) ends at the line
+        // break when the next line starts with a name: the following statement is read as
+        // usual instead of disappearing into this opaque node with its targets.
+        let next_line_starts_statement = err.at.kind == TokenKind::Ident
+            && err.at.start == self.tok.start
+            && err.at.start > start
+            && self.newline_before_tok();
+        let diagnostic = if next_line_starts_statement {
+            let end = self.prev_end as usize;
+            Diagnostic::error(
+                Span::new(end, end),
+                format!(
+                    "expected {} before the line break, found {found} on the next line",
+                    err.expected
+                ),
+            )
+            .with_hint("add the missing `;`; trackfix keeps this line verbatim")
+        } else {
             Diagnostic::error(
                 err.at.span(),
                 format!("expected {}, found {found}", err.expected),
             )
-            .with_hint(hint),
-        );
-        self.skip_to_statement_end(start);
+            .with_hint(hint)
+        };
+        self.diagnostics.push(diagnostic);
+        if next_line_starts_statement {
+            self.prev_end = self.prev_end.max(start);
+        } else {
+            self.skip_to_statement_end(start);
+        }
         self.opaque += 1;
         self.leaf(NodeKind::Opaque, start);
     }
@@ -780,8 +806,12 @@ impl<'a, 's> Parser<'a, 's> {
     fn record(&mut self, start: u32) {
         let branch = self.open(NodeKind::Record, start);
         self.bump();
+        self.arena.clear();
         match self.expect_ident("a record name after RECORD") {
-            Ok(_) => self.leaf(NodeKind::RecordHead, start),
+            Ok(name) => {
+                self.leaf(NodeKind::RecordHead, start);
+                self.emit(Stmt::Record { name: name.span() }, start);
+            }
             Err(e) => self.recover(start, e),
         }
         loop {
@@ -802,14 +832,23 @@ impl<'a, 's> Parser<'a, 's> {
                 break;
             }
             let s = self.tok.start;
-            let field: PResult<()> = (|| {
-                self.expect_ident("a component type")?;
-                self.expect_ident("a component name")?;
+            let field: PResult<(Token, Token)> = (|| {
+                let type_name = self.expect_ident("a component type")?;
+                let name = self.expect_ident("a component name")?;
                 self.expect_punct(b';', "`;` after the record component")?;
-                Ok(())
+                Ok((type_name, name))
             })();
             match field {
-                Ok(()) => self.leaf(NodeKind::RecordField, s),
+                Ok((type_name, name)) => {
+                    self.leaf(NodeKind::RecordField, s);
+                    self.emit(
+                        Stmt::RecordField {
+                            type_name: type_name.span(),
+                            name: name.span(),
+                        },
+                        s,
+                    );
+                }
                 Err(e) => self.recover(s, e),
             }
         }
@@ -1027,6 +1066,19 @@ impl<'a, 's> Parser<'a, 's> {
             self.bump();
             self.bump();
             return Ok((NodeKind::Label, Stmt::Other));
+        }
+        // `Hand_MoveTo(10);`, `TPWrite("a"+b);`: a routine call whose first argument is a
+        // parenthesised expression (seen in real programs); a call result is never assigned to.
+        if self.peek2().punct(self.src) == b'(' {
+            self.bump();
+            let args = self.call_args(t.end)?;
+            return Ok((
+                NodeKind::Call,
+                Stmt::Call {
+                    name: t.span(),
+                    args,
+                },
+            ));
         }
         let target = self.postfix()?;
         if self.tok.kind == TokenKind::Assign {

@@ -57,8 +57,16 @@ struct CallUse {
     inline: Vec<usize>,
 }
 
+/// A `RECORD` declared in the module: its name and components (type, name).
+#[derive(Clone, Debug)]
+struct RecordDecl {
+    name: Span,
+    fields: Vec<(Span, Span)>,
+}
+
 /// Collects positions, frames, offsets and usage from the parsed statements.
 pub struct Extractor<'l> {
+    records: Vec<RecordDecl>,
     lines: &'l LineIndex,
     positions: Vec<Position>,
     frames: Vec<FrameDecl>,
@@ -76,6 +84,79 @@ pub struct Extracted {
     pub offsets: Vec<OffsetCall>,
     pub diagnostics: Vec<Diagnostic>,
 }
+
+/// A multiply-rotate hasher for the name maps (names are short, attacker-free keys; SipHash
+/// showed up first in the profile of a 250,000-target module).
+#[derive(Default, Clone, Copy)]
+struct NameHasher(u64);
+
+impl std::hash::Hasher for NameHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u8(b);
+        }
+    }
+    fn write_u8(&mut self, b: u8) {
+        self.0 = (self.0.rotate_left(5) ^ u64::from(b)).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_usize(&mut self, n: usize) {
+        self.0 = (self.0.rotate_left(5) ^ n as u64).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+type NameMap<K, V> = HashMap<K, V, std::hash::BuildHasherDefault<NameHasher>>;
+
+/// A name in the source compared as RAPID compares names: ASCII case-insensitive, whitespace
+/// ignored (`pArr{ 2 }` = `parr{2}`). Borrows the source: no copy per declaration or use.
+#[derive(Clone, Copy)]
+struct NameKey<'s>(&'s [u8]);
+
+impl NameKey<'_> {
+    fn bytes(&self) -> impl Iterator<Item = u8> + '_ {
+        self.0
+            .iter()
+            .filter(|b| !b.is_ascii_whitespace())
+            .map(u8::to_ascii_lowercase)
+    }
+    fn is(&self, lower: &[u8]) -> bool {
+        self.bytes().eq(lower.iter().copied())
+    }
+    fn starts_with(&self, lower: &[u8]) -> bool {
+        let mut b = self.bytes();
+        lower.iter().all(|&l| b.next() == Some(l))
+    }
+    /// `z10`, `v1000`: the prefix letter then digits only.
+    fn numbered(&self, prefix: u8) -> bool {
+        let mut b = self.bytes();
+        b.next() == Some(prefix) && {
+            let mut digits = 0;
+            b.all(|c| {
+                digits += 1;
+                c.is_ascii_digit()
+            }) && digits > 0
+        }
+    }
+}
+
+impl std::hash::Hash for NameKey<'_> {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        for b in self.bytes() {
+            state.write_u8(b);
+        }
+    }
+}
+
+impl PartialEq for NameKey<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        // Names are almost always written the same way twice: compare bytes first.
+        self.0 == other.0 || self.bytes().eq(other.bytes())
+    }
+}
+
+impl Eq for NameKey<'_> {}
 
 fn text_of(src: &[u8], span: Span) -> String {
     latin1(span.slice(src))
@@ -100,6 +181,7 @@ impl<'l> Extractor<'l> {
     pub fn new(lines: &'l LineIndex, src: &[u8]) -> Extractor<'l> {
         let literals = src.windows(2).filter(|w| w == b"[[").count();
         Extractor {
+            records: Vec::new(),
             lines,
             positions: Vec::with_capacity(literals),
             frames: Vec::new(),
@@ -142,10 +224,13 @@ impl<'l> Extractor<'l> {
 
     fn nums_vec(&self, src: &[u8], arena: &Arena, id: Option<u32>) -> Vec<Option<NumField>> {
         match id.filter(|&id| arena.get(id).is_some_and(|n| n.kind == ExprKind::Aggregate)) {
-            Some(id) => arena
-                .children(id)
-                .map(|c| self.num(src, arena, c))
-                .collect(),
+            Some(id) => {
+                // Sized exactly: collecting from the linked children grew the vector twice per
+                // target (a quarter of the allocated bytes on a 250,000-target module).
+                let mut out = Vec::with_capacity(arena.children(id).count());
+                out.extend(arena.children(id).map(|c| self.num(src, arena, c)));
+                out
+            }
             None => Vec::new(),
         }
     }
@@ -427,17 +512,19 @@ impl<'l> Extractor<'l> {
         let mut diagnostics = Vec::new();
         let mut buf = String::new();
         // Names declared twice in the module scope; the types of all names.
-        let mut seen: HashMap<String, Span> = HashMap::new();
-        let mut type_of: HashMap<String, SymType> = HashMap::new();
+        let n = self.symbols.len();
+        let mut seen: NameMap<NameKey, Span> =
+            NameMap::with_capacity_and_hasher(n, Default::default());
+        let mut type_of: NameMap<NameKey, SymType> = NameMap::default();
         for s in &self.symbols {
-            let k = key_into(&mut buf, src, s.name);
+            let k = NameKey(s.name.slice(src));
             if s.ty != SymType::Other {
-                type_of.insert(k.to_owned(), s.ty);
+                type_of.insert(k, s.ty);
             }
             if !s.module_scope {
                 continue;
             }
-            if let Some(first) = seen.get(k) {
+            if let Some(first) = seen.get(&k) {
                 let line = self.lines.line(first.start);
                 diagnostics.push(
                     Diagnostic::warning(
@@ -452,29 +539,34 @@ impl<'l> Extractor<'l> {
                     ),
                 );
             } else {
-                seen.insert(k.to_owned(), s.name);
+                seen.insert(k, s.name);
             }
         }
-        let numbered = |n: &str, prefix: char| {
-            n.len() > 1 && n.starts_with(prefix) && n.bytes().skip(1).all(|b| b.is_ascii_digit())
+        let is_tool = |n: &NameKey| n.is(b"tool0") || type_of.get(n) == Some(&SymType::Tool);
+        let is_zone = |n: &NameKey| {
+            n.is(b"fine") || n.numbered(b'z') || type_of.get(n) == Some(&SymType::Zone)
         };
-        let is_tool = |n: &str| n == "tool0" || type_of.get(n) == Some(&SymType::Tool);
-        let is_zone =
-            |n: &str| n == "fine" || numbered(n, 'z') || type_of.get(n) == Some(&SymType::Zone);
-        let is_speed =
-            |n: &str| n == "vmax" || numbered(n, 'v') || type_of.get(n) == Some(&SymType::Speed);
-        let robhold: HashMap<String, bool> = self
+        let is_speed = |n: &NameKey| {
+            n.is(b"vmax") || n.numbered(b'v') || type_of.get(n) == Some(&SymType::Speed)
+        };
+        let robhold: NameMap<NameKey, bool> = self
             .frames
             .iter()
             .filter(|f| f.kind == FrameKind::WorkObject)
-            .filter_map(|f| Some((f.name.to_ascii_lowercase(), f.robhold?)))
+            .filter_map(|f| Some((NameKey(f.name.as_bytes()), f.robhold?)))
             .collect();
-        let mut by_name: HashMap<String, Vec<usize>> = HashMap::new();
+        let mut by_name: NameMap<String, Vec<usize>> =
+            NameMap::with_capacity_and_hasher(self.positions.len(), Default::default());
         for (i, p) in self.positions.iter().enumerate() {
             if let Some(n) = &p.name {
                 let lower = n.to_ascii_lowercase();
                 if let Some(base) = lower.split('{').next().filter(|b| b.len() < lower.len()) {
-                    by_name.entry(base.to_owned()).or_default().push(i);
+                    match by_name.get_mut(base) {
+                        Some(v) => v.push(i),
+                        None => {
+                            by_name.insert(base.to_owned(), vec![i]);
+                        }
+                    }
                 }
                 by_name.entry(lower).or_default().push(i);
             }
@@ -490,12 +582,29 @@ impl<'l> Extractor<'l> {
             }
         };
         let mut targets: Vec<usize> = Vec::new();
-        let mut names: Vec<String> = Vec::new();
+        let mut names: Vec<Option<NameKey>> = Vec::new();
         for u in &self.uses {
-            names.clear();
-            for p in &u.positional {
-                names.push(p.map_or_else(String::new, |sp| key_into(&mut buf, src, sp).to_owned()));
+            targets.clear();
+            targets.extend_from_slice(&u.inline);
+            for sp in u.positional.iter().flatten() {
+                let k = key_into(&mut buf, src, *sp);
+                targets.extend_from_slice(lookup(k));
             }
+            for &sp in &u.via_offset {
+                let k = key_into(&mut buf, src, sp);
+                targets.extend_from_slice(lookup(k));
+            }
+            if targets.is_empty() {
+                continue;
+            }
+            targets.sort_unstable();
+            targets.dedup();
+            names.clear();
+            names.extend(
+                u.positional
+                    .iter()
+                    .map(|p| p.map(|sp| NameKey(sp.slice(src)))),
+            );
             let written = |i: usize| -> Option<String> {
                 u.positional
                     .get(i)
@@ -503,41 +612,36 @@ impl<'l> Extractor<'l> {
                     .flatten()
                     .map(|sp| text_of(src, sp))
             };
-            let name_lower = key_into(&mut buf, src, u.name).to_owned();
+            let call = NameKey(u.name.slice(src));
             let tool = u
                 .tool
                 .map(|sp| text_of(src, sp).trim().to_owned())
                 .or_else(|| {
-                    if let Some(i) = names.iter().position(|n| is_tool(n)) {
+                    if let Some(i) = names.iter().position(|n| n.as_ref().is_some_and(is_tool)) {
                         return written(i);
                     }
-                    let after = names.iter().position(|n| is_zone(n)).or_else(|| {
-                        name_lower
-                            .starts_with("search")
-                            .then(|| names.iter().position(|n| is_speed(n)))
-                            .flatten()
-                    })?;
+                    let after = names
+                        .iter()
+                        .position(|n| n.as_ref().is_some_and(is_zone))
+                        .or_else(|| {
+                            call.starts_with(b"search")
+                                .then(|| {
+                                    names.iter().position(|n| n.as_ref().is_some_and(is_speed))
+                                })
+                                .flatten()
+                        })?;
                     written(after + 1)
                 });
-            let motion = MOTION_PREFIXES.iter().any(|p| name_lower.starts_with(p));
+            let motion = MOTION_PREFIXES
+                .iter()
+                .any(|p| call.starts_with(p.as_bytes()));
             let wobj = match u.wobj {
                 Some(sp) => Some(text_of(src, sp).trim().to_owned()),
                 None => (motion || tool.is_some()).then(|| "wobj0".to_owned()),
             };
-            targets.clear();
-            targets.extend_from_slice(&u.inline);
-            for n in names.iter().filter(|n| !n.is_empty()) {
-                targets.extend_from_slice(lookup(n));
-            }
-            for &sp in &u.via_offset {
-                let k = key_into(&mut buf, src, sp);
-                targets.extend_from_slice(lookup(k));
-            }
-            targets.sort_unstable();
-            targets.dedup();
             let stationary = wobj
                 .as_ref()
-                .is_some_and(|w| robhold.get(&w.to_ascii_lowercase()) == Some(&true));
+                .is_some_and(|w| robhold.get(&NameKey(w.as_bytes())) == Some(&true));
             for &t in &targets {
                 let Some(p) = self.positions.get_mut(t) else {
                     continue;
@@ -629,35 +733,47 @@ impl StatementSink for Extractor<'_> {
                 module_scope,
                 ..
             } => {
-                let ty = type_name.slice(src).to_ascii_lowercase();
+                let ty = type_name.slice(src);
+                let is = |t: &[u8]| ty.eq_ignore_ascii_case(t);
                 let name_text = text_of(src, name);
                 self.symbols.push(Symbol {
                     name,
-                    ty: match ty.as_slice() {
-                        b"tooldata" => SymType::Tool,
-                        b"zonedata" => SymType::Zone,
-                        b"speeddata" => SymType::Speed,
-                        _ => SymType::Other,
+                    ty: if is(b"tooldata") {
+                        SymType::Tool
+                    } else if is(b"zonedata") {
+                        SymType::Zone
+                    } else if is(b"speeddata") {
+                        SymType::Speed
+                    } else {
+                        SymType::Other
                     },
                     module_scope,
                 });
-                let target_kind = match ty.as_slice() {
-                    b"robtarget" => Some(PositionKind::Robtarget),
-                    b"jointtarget" => Some(PositionKind::Jointtarget),
-                    _ => None,
+                let target_kind = if is(b"robtarget") {
+                    Some(PositionKind::Robtarget)
+                } else if is(b"jointtarget") {
+                    Some(PositionKind::Jointtarget)
+                } else {
+                    None
                 };
-                let frame_kind = match ty.as_slice() {
-                    b"wobjdata" => Some(FrameKind::WorkObject),
-                    b"tooldata" => Some(FrameKind::Tool),
-                    _ => None,
+                let frame_kind = if is(b"wobjdata") {
+                    Some(FrameKind::WorkObject)
+                } else if is(b"tooldata") {
+                    Some(FrameKind::Tool)
+                } else {
+                    None
                 };
                 let mut elements = Vec::new();
                 if let Some(init) = init {
                     Self::elements(arena, init, dims, &mut Vec::new(), &mut elements);
                 }
                 if let Some(kind) = target_kind {
+                    let mut scalar_name = Some(name_text);
                     for (suffix, id) in &elements {
-                        let full = format!("{name_text}{suffix}");
+                        let full = match (suffix.is_empty(), scalar_name.take()) {
+                            (true, Some(n)) => n,
+                            _ => format!("{}{suffix}", text_of(src, name)),
+                        };
                         if let Some(p) = self.position(src, arena, *id, kind, Some(full)) {
                             self.positions.push(p);
                         }
@@ -681,8 +797,73 @@ impl StatementSink for Extractor<'_> {
                     }
                     self.scan(src, arena, false);
                 } else {
-                    // Records holding targets: their robtarget-shaped parts are still found.
+                    // A record declared in the module with target components: each element's
+                    // component is a named target (`seam{1}.where`), so a move through the
+                    // component finds it; any other target-shaped part is still found inline.
+                    let before = self.positions.len();
+                    let components: Vec<(usize, PositionKind, Span)> = self
+                        .records
+                        .iter()
+                        .find(|r| NameKey(r.name.slice(src)) == NameKey(ty))
+                        .map(|r| {
+                            r.fields
+                                .iter()
+                                .enumerate()
+                                .filter_map(|(k, &(field_ty, field))| {
+                                    let t = field_ty.slice(src);
+                                    let kind = if t.eq_ignore_ascii_case(b"robtarget") {
+                                        PositionKind::Robtarget
+                                    } else if t.eq_ignore_ascii_case(b"jointtarget") {
+                                        PositionKind::Jointtarget
+                                    } else {
+                                        return None;
+                                    };
+                                    Some((k, kind, field))
+                                })
+                                .collect()
+                        })
+                        .unwrap_or_default();
+                    for (suffix, id) in &elements {
+                        for &(k, kind, field) in &components {
+                            let Some(part) = arena.children(*id).nth(k) else {
+                                continue;
+                            };
+                            let full = format!("{name_text}{suffix}.{}", text_of(src, field));
+                            if let Some(p) = self.position(src, arena, part, kind, Some(full)) {
+                                self.positions.push(p);
+                            }
+                        }
+                    }
+                    let named = self.positions.len();
                     self.scan(src, arena, true);
+                    if named > before {
+                        let spans: Vec<Span> = self
+                            .positions
+                            .get(before..named)
+                            .map(|ps| ps.iter().map(|p| p.span).collect())
+                            .unwrap_or_default();
+                        let mut i = named;
+                        while i < self.positions.len() {
+                            if self
+                                .positions
+                                .get(i)
+                                .is_some_and(|p| spans.contains(&p.span))
+                            {
+                                self.positions.remove(i);
+                            } else {
+                                i += 1;
+                            }
+                        }
+                    }
+                }
+            }
+            Stmt::Record { name } => self.records.push(RecordDecl {
+                name,
+                fields: Vec::new(),
+            }),
+            Stmt::RecordField { type_name, name } => {
+                if let Some(r) = self.records.last_mut() {
+                    r.fields.push((type_name, name));
                 }
             }
             Stmt::Routine { name } => self.symbols.push(Symbol {
@@ -717,6 +898,12 @@ impl StatementSink for Extractor<'_> {
                             u.tool = v;
                         }
                     } else {
+                        // A required argument may be given by name: `..., fine, tool:=tGun;`.
+                        if arg.name_end > arg.name_start
+                            && arg.name_span().slice(src).eq_ignore_ascii_case(b"Tool")
+                        {
+                            u.tool = value.map(|v| v.span());
+                        }
                         u.positional.push(
                             value
                                 .filter(|v| matches!(v.kind, ExprKind::Ident | ExprKind::Access))

@@ -1,0 +1,9 @@
+MODULE m
+PROC p()
+  IF (a)
+  B
+  C;
+  TEST a<=b CASE a<=
+  ENDTEST
+ENDPROC
+ENDMODULE
