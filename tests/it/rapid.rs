@@ -978,9 +978,9 @@ fn second_round_idioms_sample() {
 /// report every diagnostic inside the file.
 #[test]
 fn fuzz_regressions_replay() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions/rapid");
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .expect("tests/fuzz_regressions exists")
+        .expect("tests/fuzz_regressions/rapid exists")
         .map(|e| e.unwrap().path())
         .collect();
     files.sort();
