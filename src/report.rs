@@ -331,7 +331,20 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
             .and_then(CartesianFields::written_quaternion)
         {
             let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
+            if norm == 0.0 {
+                // Unused slots of PERS robtarget arrays are written this way by controllers:
+                // worth knowing, not a defect of the program.
+                out.push(
+                    Diagnostic::note(
+                        p.span,
+                        format!(
+                            "`{}` has the quaternion [0,0,0,0]: an unset slot",
+                            p.label()
+                        ),
+                    )
+                    .with_hint("transforms leave it as written and report it"),
+                );
+            } else if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
                 out.push(
                     Diagnostic::warning(
                         p.span,

@@ -29,6 +29,8 @@ pub enum RefusalKind {
     UnresolvedWorkObject,
     /// Coordinates beyond any robot cell (over 1 km): a typo or a placeholder, not a target.
     Implausible,
+    /// An all-zero quaternion: an unset slot (e.g. of a `PERS` array), not an orientation.
+    ZeroQuaternion,
 }
 
 /// One refused target.

@@ -217,6 +217,14 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Refusal>
             "re-teach it or convert it to a Cartesian target",
         );
     }
+    let written_q = p.cartesian.as_ref().and_then(|c| c.written_quaternion());
+    if written_q.is_some_and(|q| q.iter().all(|v| *v == 0.0)) {
+        return refuse(
+            RefusalKind::ZeroQuaternion,
+            format!("{what} has the quaternion [0,0,0,0]: an unset slot, not an orientation"),
+            "teach the target (or leave the slot unused)",
+        );
+    }
     if p.cartesian.as_ref().and_then(|c| c.pose()).is_none() {
         return refuse(
             RefusalKind::Expression,

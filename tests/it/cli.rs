@@ -231,3 +231,40 @@ fn a_closed_pipe_is_not_an_error() {
     assert!(!err.contains("panicked"), "{err}");
     assert_eq!(out.status.code(), Some(0), "{err}");
 }
+
+/// Controllers write unused slots of `PERS robtarget` arrays as all zeros: `check` does not call
+/// that a defect, and the transforms refuse the slot by name instead of calling it an expression.
+#[test]
+fn an_all_zero_quaternion_is_an_unset_slot() {
+    let dir = tempfile::tempdir().unwrap();
+    let module = dir.path().join("slots.mod");
+    std::fs::write(
+        &module,
+        "MODULE slots\n  PERS robtarget s{2}:=[[[0,0,0],[0,0,0,0],[0,0,0,0],[0,9E9,9E9,9E9,9E9,9E9]],\
+         [[10,0,0],[1,0,0,0],[0,0,0,0],[100,9E9,9E9,9E9,9E9,9E9]]];\n  PROC main()\n    \
+         MoveL s{1}, v100, fine, tool0;\n    MoveL s{2}, v100, fine, tool0;\n  ENDPROC\nENDMODULE\n",
+    )
+    .unwrap();
+    let path = module.to_str().unwrap();
+    let check = trackfix(&["check", path]);
+    assert_eq!(check.status.code(), Some(0), "{}", stdout(&check));
+    let correct = trackfix(&[
+        "correct",
+        path,
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--diff",
+    ]);
+    assert_eq!(correct.status.code(), Some(3));
+    let err = stderr(&correct);
+    assert!(
+        err.contains("robtarget `s{1}` has the quaternion [0,0,0,0]: an unset slot"),
+        "{err}"
+    );
+    assert!(
+        !err.contains("s{2}`"),
+        "only the unset slot is refused: {err}"
+    );
+}
