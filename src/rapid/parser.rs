@@ -458,6 +458,18 @@ impl<'a, 's> Parser<'a, 's> {
         self.sink.statement(self.src, &self.arena, &stmt, span);
     }
 
+    /// Ends the head of a compound statement's part (`ELSEIF … THEN`, `CASE …:`) that started
+    /// at `start`: a leaf and a statement when it parsed, an error and an opaque leaf when not.
+    fn close_part(&mut self, head: PResult<()>, kind: NodeKind, start: u32) {
+        match head {
+            Ok(()) => {
+                self.leaf(kind, start);
+                self.emit(Stmt::Other, start);
+            }
+            Err(e) => self.recover(start, e),
+        }
+    }
+
     fn describe(&self, t: Token) -> String {
         match t.kind {
             TokenKind::Eof => "the end of the file".to_owned(),
@@ -1202,13 +1214,7 @@ impl<'a, 's> Parser<'a, 's> {
                             self.expect_kw(b"THEN", "THEN after the ELSEIF condition")?;
                             Ok(())
                         })();
-                        match cond {
-                            Ok(()) => {
-                                self.leaf(NodeKind::IfPart, s);
-                                self.emit(Stmt::Other, s);
-                            }
-                            Err(e) => self.recover(s, e),
-                        }
+                        self.close_part(cond, NodeKind::IfPart, s);
                         self.block_body(&[b"ELSEIF", b"ELSE", b"ENDIF"]);
                     } else if self.at_kw(b"ELSE") {
                         self.bump();
@@ -1375,13 +1381,7 @@ impl<'a, 's> Parser<'a, 's> {
                     self.expect_punct(b':', "`:` after the CASE values")?;
                     Ok(())
                 })();
-                match head {
-                    Ok(()) => {
-                        self.leaf(NodeKind::TestPart, s);
-                        self.emit(Stmt::Other, s);
-                    }
-                    Err(e) => self.recover(s, e),
-                }
+                self.close_part(head, NodeKind::TestPart, s);
                 self.block_body(&[b"CASE", b"DEFAULT", b"ENDTEST"]);
             } else if self.at_kw(b"DEFAULT") {
                 self.bump();
