@@ -20,7 +20,7 @@ pub(super) struct DeclLine {
 }
 
 /// Only plain blanks: other bytes the lexer counts as whitespace are left to the general path.
-#[inline]
+#[inline(always)]
 fn blanks(src: &[u8], mut i: usize) -> usize {
     while matches!(src.get(i), Some(b' ' | b'\t')) {
         i += 1;
@@ -28,7 +28,7 @@ fn blanks(src: &[u8], mut i: usize) -> usize {
     i
 }
 
-#[inline]
+#[inline(always)]
 fn ident(src: &[u8], i: usize) -> Option<usize> {
     if !is_ident_start(*src.get(i)?) {
         return None;
@@ -48,7 +48,7 @@ fn reserved_after_decl(word: &[u8]) -> bool {
 }
 
 /// A lone literal or name (what `Cursor::simple_value` accepts) starting at `i`.
-#[inline]
+#[inline(always)]
 fn value(src: &[u8], i: usize) -> Option<(ExprKind, usize)> {
     let b = *src.get(i)?;
     let starts_number = |j: usize| match src.get(j) {
