@@ -276,6 +276,16 @@ mod tests {
             }
         }
         assert!(seen >= 12, "only {seen} files found");
+        // Real programs, when given (not committed): see `krl::real_corpus`.
+        if let Some(dir) = std::env::var_os("TRACKFIX_KRL_CORPUS") {
+            for entry in walkdir::WalkDir::new(dir).into_iter().flatten() {
+                if entry.file_type().is_file()
+                    && let Ok(bytes) = std::fs::read(entry.path())
+                {
+                    same_as_general(&bytes);
+                }
+            }
+        }
     }
 
     fn line() -> impl Strategy<Value = Vec<u8>> {
