@@ -64,7 +64,7 @@ impl Token {
     }
 }
 
-fn is_ident_start(b: u8) -> bool {
+pub(super) fn is_ident_start(b: u8) -> bool {
     b.is_ascii_alphabetic() || b == b'_' || b == b'$'
 }
 
@@ -96,7 +96,7 @@ const fn is_ident_byte(b: u8) -> bool {
 
 /// Byte classes by table: the lexer's inner loops are one load per byte.
 static SPACE: [bool; 256] = byte_table(false);
-static IDENT: [bool; 256] = byte_table(true);
+pub(super) static IDENT: [bool; 256] = byte_table(true);
 
 /// The end of the run of bytes from `i` on that satisfy `keep`.
 #[inline]
@@ -137,6 +137,12 @@ impl<'a> Lexer<'a> {
     /// Byte offset of the next token.
     pub fn offset(&self) -> usize {
         self.i
+    }
+
+    /// Continues lexing at `i`, the start of a line (after a line the parser read itself).
+    pub(super) fn resume_at_line(&mut self, i: usize) {
+        self.i = i;
+        self.line_start = true;
     }
 }
 
@@ -242,7 +248,7 @@ impl Iterator for Lexer<'_> {
 }
 
 /// End of `digits [. digits] [E [+-] digits]` (or `. digits …`) starting at `i`.
-fn number_end(src: &[u8], mut i: usize) -> usize {
+pub(super) fn number_end(src: &[u8], mut i: usize) -> usize {
     while i < src.len() && src[i].is_ascii_digit() {
         i += 1;
     }

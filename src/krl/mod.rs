@@ -18,6 +18,7 @@
 //! ```
 
 mod config_dat;
+mod dat_line;
 pub mod lexer;
 mod pair;
 pub mod parser;

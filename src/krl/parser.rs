@@ -538,6 +538,12 @@ pub fn parse(src: &[u8]) -> Parse {
 /// it in the tree (`tree.stmts` stays empty). Reading positions this way keeps memory at the
 /// size of the tokens: a 50 MB `.dat` holds millions of aggregate fields.
 pub fn parse_with(src: &[u8], sink: &mut dyn FnMut(Stmt)) -> Parse {
+    parse_lines(src, sink, true)
+}
+
+/// The parser, with or without the `.dat` declaration fast path ([`super::dat_line`]); both
+/// give the same result, which the fast path's tests check.
+pub(super) fn parse_lines(src: &[u8], sink: &mut dyn FnMut(Stmt), fast: bool) -> Parse {
     let mut p = LineParser {
         src,
         out: Parse::default(),
@@ -565,8 +571,28 @@ pub fn parse_with(src: &[u8], sink: &mut dyn FnMut(Stmt)) -> Parse {
     // significant ones are kept (trivia matter only on lines without code).
     let mut lexer = Lexer::new(src);
     let mut sig: Vec<Token> = Vec::with_capacity(64);
+    let mut fields = Vec::with_capacity(16);
     loop {
         let start = lexer.offset();
+        if fast && let Some(line) = super::dat_line::decl_line(src, start, &mut fields) {
+            let node = p.out.tree.nodes.len() as u32;
+            (p.sink)(Stmt {
+                node,
+                span: line.span,
+                kind: line.kind,
+            });
+            p.out.tree.nodes.push(Node {
+                kind: NodeKind::Declaration,
+                first: start as u32,
+                end: line.end as u32,
+                depth: p.stack.len().min(u16::MAX as usize) as u16,
+            });
+            if !line.had_newline {
+                break;
+            }
+            lexer.resume_at_line(line.end);
+            continue;
+        }
         sig.clear();
         let mut comment = None;
         let mut content_end = start;
