@@ -2,10 +2,11 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::support::texts;
 use proptest::prelude::*;
 use trackfix::krl;
 use trackfix::position::{
-    Config, FrameKind, NumField, Orientation, ParsedFile, Position, PositionKind, Program,
+    Config, FrameKind, Orientation, ParsedFile, Position, PositionKind, Program,
 };
 use trackfix::program::LoadOptions;
 use trackfix::syntax::{NumLit, Severity};
@@ -45,20 +46,6 @@ fn load(name: &str, config: bool) -> Program {
         krl_config_dat: config.then(|| sample("$config.dat")),
     };
     krl::load_program(&sample(name), &options).unwrap()
-}
-
-fn text(src: &[u8], f: &Option<NumField>) -> String {
-    match f {
-        Some(f) => String::from_utf8_lossy(f.span.slice(src)).into_owned(),
-        None => "-".to_owned(),
-    }
-}
-
-fn texts(src: &[u8], fs: &[Option<NumField>]) -> String {
-    fs.iter()
-        .map(|f| text(src, f))
-        .collect::<Vec<_>>()
-        .join(",")
 }
 
 /// One line per position: where, what, every field as written (read back through its span), and

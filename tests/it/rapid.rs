@@ -10,13 +10,14 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::support::{text, texts};
 use proptest::prelude::*;
 use trackfix::position::{
     CartesianFields, Config, FrameDecl, FrameKind, NumField, Orientation, ParsedFile, Position,
     PositionKind, Skid,
 };
 use trackfix::rapid;
-use trackfix::syntax::{NumLit, Severity, latin1};
+use trackfix::syntax::{NumLit, Severity};
 
 fn samples_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/rapid")
@@ -50,20 +51,6 @@ fn frame<'a>(f: &'a ParsedFile, name: &str) -> &'a FrameDecl {
         .iter()
         .find(|p| p.name == name)
         .unwrap_or_else(|| panic!("no frame {name}"))
-}
-
-fn text(src: &[u8], f: &Option<NumField>) -> String {
-    match f {
-        Some(f) => latin1(f.span.slice(src)),
-        None => "-".to_owned(),
-    }
-}
-
-fn texts(src: &[u8], fs: &[Option<NumField>]) -> String {
-    fs.iter()
-        .map(|f| text(src, f))
-        .collect::<Vec<_>>()
-        .join(",")
 }
 
 fn cartesian(src: &[u8], c: &Option<CartesianFields>) -> String {

@@ -3,6 +3,9 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+use trackfix::position::NumField;
+use trackfix::syntax::latin1;
+
 /// The package root, where the samples are.
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -29,4 +32,21 @@ pub fn stderr(o: &Output) -> String {
 pub fn trackfix(args: &[&str]) -> (i32, String, String) {
     let o = run(args);
     (o.status.code().unwrap_or(-1), stdout(&o), stderr(&o))
+}
+
+/// A numeric field as written in `src` (read back through its span), `-` where the field is not
+/// a numeric literal.
+pub fn text(src: &[u8], f: &Option<NumField>) -> String {
+    match f {
+        Some(f) => latin1(f.span.slice(src)),
+        None => "-".to_owned(),
+    }
+}
+
+/// Several fields as written, comma-separated.
+pub fn texts(src: &[u8], fs: &[Option<NumField>]) -> String {
+    fs.iter()
+        .map(|f| text(src, f))
+        .collect::<Vec<_>>()
+        .join(",")
 }
