@@ -1500,11 +1500,21 @@ impl<'a, 's> Parser<'a, 's> {
     /// `binop = "+" | "-" | "*" | "/" | "=" | "<" | ">" | "<=" | ">=" | "<>" | "DIV" | "MOD"
     ///        | "AND" | "OR" | "XOR"`. Precedence does not matter to trackfix and is not kept.
     fn expr(&mut self) -> PResult<u32> {
+        self.nested("a less deeply nested expression", Self::expr_inner)
+    }
+
+    /// Runs `parse` one level deeper, refusing (with `expected`) past `MAX_DEPTH` so that
+    /// hostile nesting is an error, not a stack overflow.
+    fn nested(
+        &mut self,
+        expected: &'static str,
+        parse: fn(&mut Self) -> PResult<u32>,
+    ) -> PResult<u32> {
         if self.depth > MAX_DEPTH {
-            return Err(self.error("a less deeply nested expression"));
+            return Err(self.error(expected));
         }
         self.depth += 1;
-        let r = self.expr_inner();
+        let r = parse(self);
         self.depth -= 1;
         r
     }
@@ -1554,32 +1564,23 @@ impl<'a, 's> Parser<'a, 's> {
                 self.arena.close(id, n.end);
                 return Ok(id);
             }
-            let id = self.arena.open(ExprKind::Compound, t.start);
-            let inner = self.nested_unary()?;
-            self.arena.link(id, NONE, inner);
-            self.arena.close(id, self.prev_end);
-            return Ok(id);
+            return self.operator_applied(t.start);
         }
         if self.at_kw(b"NOT") {
             self.bump();
-            let id = self.arena.open(ExprKind::Compound, t.start);
-            let inner = self.nested_unary()?;
-            self.arena.link(id, NONE, inner);
-            self.arena.close(id, self.prev_end);
-            return Ok(id);
+            return self.operator_applied(t.start);
         }
         self.postfix()
     }
 
-    /// A unary operand under another unary operator, counted against the nesting limit.
-    fn nested_unary(&mut self) -> PResult<u32> {
-        if self.depth > MAX_DEPTH {
-            return Err(self.error("fewer stacked unary operators"));
-        }
-        self.depth += 1;
-        let r = self.unary();
-        self.depth -= 1;
-        r
+    /// The compound of a unary operator that started at `start` and the operand after it,
+    /// counted against the nesting limit.
+    fn operator_applied(&mut self, start: u32) -> PResult<u32> {
+        let id = self.arena.open(ExprKind::Compound, start);
+        let inner = self.nested("fewer stacked unary operators", Self::unary)?;
+        self.arena.link(id, NONE, inner);
+        self.arena.close(id, self.prev_end);
+        Ok(id)
     }
 
     /// `postfix = primary { "{" expr { "," expr } "}" | "." ident }`
