@@ -13,6 +13,7 @@
 //! The library never prints and never panics on input.
 
 pub mod geometry;
+pub mod html_report;
 pub mod krl;
 pub mod position;
 pub mod program;
