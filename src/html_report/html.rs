@@ -169,8 +169,8 @@ h2 { font-size: 1.3rem; border-bottom: 2px solid #245; padding-bottom: .2rem; ma
 h3 { font-size: 1.05rem; margin: 1.2rem 0 .4rem; }
 .meta { color: #444; margin: 0 0 1rem; }
 nav ol { columns: 2; margin: .4rem 0 1rem; }
-table { border-collapse: collapse; margin: .5rem 0 1rem; font-size: .85rem; }
-th, td { border: 1px solid #bbb; padding: .15rem .45rem; vertical-align: top; }
+table { border-collapse: collapse; margin: .5rem 0 1rem; font-size: .85rem; max-width: 100%; }
+th, td { border: 1px solid #bbb; padding: .15rem .45rem; vertical-align: top; overflow-wrap: anywhere; }
 th { background: #e8edf3; text-align: left; }
 td.n { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 tr.outlier td { background: #fde2e2; }

@@ -388,32 +388,38 @@ fn file_section(i: usize, f: &RunFile) -> Section {
     }
     if !f.targets.is_empty() {
         sec.sub("Changed targets");
+        // Name and line columns only when the transform reports them.
+        let names = f.targets.iter().any(|t| t.name.is_some());
+        let lines = f.targets.iter().any(|t| t.line.is_some());
         let rows: Vec<Row> = f
             .targets
             .iter()
             .enumerate()
             .map(|(k, t)| {
-                Row::new(vec![
-                    Cell::num((k + 1).to_string()),
-                    Cell::text(t.name.clone().unwrap_or_default()),
-                    Cell::num(t.line.map(|l| l.to_string()).unwrap_or_default()),
+                let mut cells = vec![Cell::num((k + 1).to_string())];
+                if names {
+                    cells.push(Cell::text(t.name.clone().unwrap_or_default()));
+                }
+                if lines {
+                    cells.push(Cell::num(t.line.map(|l| l.to_string()).unwrap_or_default()));
+                }
+                cells.extend([
                     Cell::num(t.skid.map(|s| format!("{s}")).unwrap_or_default()),
                     Cell::num(format!("{:.3}", t.mm)),
                     Cell::num(format!("{:.4}", t.deg)),
-                ])
+                ]);
+                Row::new(cells)
             })
             .collect();
-        sec.raw(&table(
-            &[
-                "#",
-                "target",
-                "line",
-                "skid [mm]",
-                "moved [mm]",
-                "turned [deg]",
-            ],
-            &rows,
-        ));
+        let mut headers = vec!["#"];
+        if names {
+            headers.push("target");
+        }
+        if lines {
+            headers.push("line");
+        }
+        headers.extend(["skid [mm]", "moved [mm]", "turned [deg]"]);
+        sec.raw(&table(&headers, &rows));
     }
     if !f.lines.is_empty() {
         sec.sub("Old and new text");

@@ -337,11 +337,18 @@ fn sample_reports(dir: &Path) -> Vec<(String, String, Vec<String>)> {
             .map(|f| format!("{}{}", run_headings::FILE_PREFIX, f.path)),
     );
     run_all.push(run_headings::REFUSALS.into());
-    vec![
+    let reports: Vec<(String, String, Vec<String>)> = vec![
         ("r1.html".into(), r1_report(dir), track_all.clone()),
         ("r2.html".into(), r2, track_all),
         ("run.html".into(), run_report(&run), run_all),
-    ]
+    ];
+    // TRACKFIX_REPORT_DIR=DIR keeps a copy to look at.
+    if let Some(keep) = std::env::var_os("TRACKFIX_REPORT_DIR") {
+        for (name, html, _) in &reports {
+            std::fs::write(Path::new(&keep).join(name), html).unwrap();
+        }
+    }
+    reports
 }
 
 /// Nothing in a report points outside the file: no URL, no `src`, no link but `#anchors`, no
@@ -640,6 +647,49 @@ fn reports_render_in_a_real_browser() {
         let colours = png_colours(&std::fs::read(&shot).unwrap());
         assert!(colours > 16, "{name}: the screenshot has {colours} colours");
     }
+}
+
+/// Printed, each section starts on a new page: the scan-only report (a short inputs table
+/// and one chart, together less than a page) prints on exactly two pages.
+#[test]
+fn printed_sections_start_on_new_pages() {
+    let Some(browser) = browser() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set but no browser was found"
+        );
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    cli_report(
+        tmp.path(),
+        "scan.html",
+        &["--scan", "samples/track/scan.csv"],
+    );
+    let pdf = tmp.path().join("scan.pdf");
+    let pdf_arg = format!("--print-to-pdf={}", pdf.display());
+    let url = format!("file://{}", tmp.path().join("scan.html").display());
+    let profile = tempfile::tempdir().unwrap();
+    let out = chromium(
+        &browser,
+        profile.path(),
+        &["--no-pdf-header-footer", &pdf_arg, &url],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(pdf_pages(&std::fs::read(&pdf).unwrap()), 2);
+}
+
+/// Page objects of a PDF: `/Type /Page` not followed by `s` (that is the page tree).
+fn pdf_pages(bytes: &[u8]) -> usize {
+    let key = b"/Type /Page";
+    bytes
+        .windows(key.len() + 1)
+        .filter(|w| w.starts_with(key) && w[key.len()] != b's')
+        .count()
 }
 
 /// The number of distinct pixel values of a PNG (up to 4096).
