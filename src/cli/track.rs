@@ -197,7 +197,7 @@ pub(crate) fn report_located(result: anyhow::Result<Exit>) -> anyhow::Result<Exi
     for context in err.chain().take_while(|c| located_text(*c).is_none()) {
         out.push_str(&format!("\n  = note: {context}"));
     }
-    eprintln!("{out}");
+    let _ = writeln!(std::io::stderr(), "{out}");
     Ok(Exit::Usage)
 }
 
