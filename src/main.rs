@@ -61,6 +61,23 @@ enum Command {
     Man,
 }
 
+/// The error and its causes, `: `-separated, each cause only once: library errors show their
+/// OS error in their own message and also keep it as their source.
+fn chain_text(err: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in err.chain() {
+        let part = cause.to_string();
+        if text.contains(&part) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&part);
+    }
+    text
+}
+
 /// Writes a rendered text to standard output; a failure (a full disk) is an error, not a panic.
 fn to_stdout(bytes: &[u8]) -> anyhow::Result<cli::Exit> {
     let mut out = std::io::stdout().lock();
@@ -101,7 +118,7 @@ fn main() -> ExitCode {
                 return ExitCode::SUCCESS;
             }
             // A full or closed stderr leaves only the exit code to tell; never a panic.
-            let _ = writeln!(std::io::stderr(), "error: {err:#}");
+            let _ = writeln!(std::io::stderr(), "error: {}", chain_text(&err));
             cli::Exit::Usage.into()
         }
     }

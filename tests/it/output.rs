@@ -393,3 +393,10 @@ fn a_kill_during_a_long_write_leaves_no_partial_output_and_the_next_run_cleans_u
     );
     assert_eq!(listing(&out_dir), ["small.mod"]);
 }
+
+#[test]
+fn an_os_error_is_named_once() {
+    let (code, _, err) = correct(&["no_such_file.mod", "-o", "never.mod"]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(err.matches("os error 2").count(), 1, "{err}");
+}
