@@ -400,3 +400,87 @@ fn an_os_error_is_named_once() {
     assert_eq!(code, 2, "{err}");
     assert_eq!(err.matches("os error 2").count(), 1, "{err}");
 }
+
+#[test]
+fn a_multi_file_in_place_run_that_fails_on_its_second_file_changes_neither() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.mod");
+    let b = dir.path().join("b.mod");
+    for f in [&a, &b] {
+        std::fs::copy(root().join("samples/rapid/spot_line.mod"), f).unwrap();
+    }
+    // A directory where b's first backup would go is skipped, never written into.
+    std::fs::create_dir(dir.path().join("b.mod.orig")).unwrap();
+    // A live run holds b (process 1 always runs): the whole run must fail, a untouched.
+    std::fs::write(dir.path().join(".b.mod.trackfix-lock"), "1").unwrap();
+    let before = listing(dir.path());
+    let original = std::fs::read(&a).unwrap();
+    let (code, _, err) = correct(&[a.to_str().unwrap(), b.to_str().unwrap(), "--in-place"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("another trackfix run (process 1) is writing it"),
+        "{err}"
+    );
+    assert_eq!(listing(dir.path()), before);
+    assert_eq!(std::fs::read(&a).unwrap(), original);
+    // Once the lock is gone, both are written and b's backup takes the next free name.
+    std::fs::remove_file(dir.path().join(".b.mod.trackfix-lock")).unwrap();
+    let (code, _, err) = correct(&[a.to_str().unwrap(), b.to_str().unwrap(), "--in-place"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        std::fs::read(dir.path().join("a.mod.orig")).unwrap(),
+        original
+    );
+    assert_eq!(
+        std::fs::read(dir.path().join("b.mod.orig.1")).unwrap(),
+        original
+    );
+    assert!(dir.path().join("b.mod.orig").is_dir());
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn two_concurrent_in_place_runs_on_one_file_do_not_both_apply() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = large_module(dir.path());
+    let original = std::fs::read(&input).unwrap();
+    let run = || {
+        spawn(&[
+            "correct",
+            input.to_str().unwrap(),
+            "--cell",
+            CELL,
+            "--robot",
+            "r1",
+        ])
+        .args(["--skip-unsupported", "--in-place"])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+    };
+    // Both read the file before either writes (reading and correcting 20 MB takes a while).
+    let (first, second) = (run(), run());
+    let outcomes: Vec<(i32, String)> = [first, second]
+        .into_iter()
+        .map(|c| {
+            let o = c.wait_with_output().unwrap();
+            (
+                o.status.code().unwrap_or(-1),
+                String::from_utf8_lossy(&o.stderr).into_owned(),
+            )
+        })
+        .collect();
+    let ok = outcomes.iter().filter(|(c, _)| *c == 0).count();
+    assert_eq!(ok, 1, "{outcomes:?}");
+    let (_, refused) = outcomes.iter().find(|(c, _)| *c != 0).unwrap();
+    assert!(
+        refused.contains("changed since it was read") || refused.contains("another trackfix run"),
+        "{refused}"
+    );
+    // One correction: one backup holding the original, nothing else left.
+    assert_eq!(
+        std::fs::read(dir.path().join("big.mod.orig")).unwrap(),
+        original
+    );
+    assert_eq!(listing(dir.path()), ["big.mod", "big.mod.orig"]);
+}
