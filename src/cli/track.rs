@@ -13,7 +13,6 @@ use trackfix::track::frames_csv::{clean, frames_csv, read_frames};
 use trackfix::track::identify::{OUTLIER_FACTOR, identify, read_measurements};
 use trackfix::track::nominal::{FitOptions, fit_track};
 use trackfix::track::plot::{profile_svg, spectrum_svg};
-use trackfix::track::profile::write_atomic;
 use trackfix::track::simulate::{
     TrackTruth, measurements_csv, sample_tcp_points, scan_csv, simulate_measurements, simulate_scan,
 };
@@ -216,7 +215,8 @@ fn run_command(cmd: TrackCommand) -> anyhow::Result<Exit> {
 }
 
 fn write_file(path: &Path, text: &str) -> anyhow::Result<()> {
-    write_atomic(path, text.as_bytes())?;
+    // One write helper for every file trackfix writes: temporary + rename, mode kept.
+    trackfix::output::write_file(path, text.as_bytes())?;
     Ok(())
 }
 
