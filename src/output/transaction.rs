@@ -110,6 +110,8 @@ impl Filesystem for RealFs {
 
 const TEMP_MARK: &str = ".trackfix-tmp-";
 const LOCK_MARK: &str = ".trackfix-lock";
+/// A lock without a process id this old is left by a killed run.
+const EMPTY_LOCK_STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(10);
 
 /// `dir/.NAME.trackfix-tmp-PID`: the temporary file beside `target`.
 pub fn temp_path(target: &Path) -> PathBuf {
@@ -157,7 +159,17 @@ pub fn clean_stale(dir: &Path) -> Vec<PathBuf> {
                 .parse::<u32>()
                 .is_ok_and(|pid| pid != std::process::id() && !process_alive(pid))
         } else if name.ends_with(LOCK_MARK) {
-            lock_holder(&entry.path()).is_some_and(|pid| !process_alive(pid))
+            match lock_holder(&entry.path()) {
+                Some(pid) => !process_alive(pid),
+                // Killed between creating the lock and writing its process id (a window of
+                // microseconds): stale once it is older than any run takes to fill it.
+                None => entry
+                    .metadata()
+                    .and_then(|m| m.modified())
+                    .ok()
+                    .and_then(|t| t.elapsed().ok())
+                    .is_some_and(|age| age > EMPTY_LOCK_STALE_AFTER),
+            }
         } else {
             false
         };
@@ -764,6 +776,19 @@ mod tests {
         std::fs::write(&stale_temp, "half").unwrap();
         commit(&writes).unwrap();
         assert!(!lock.exists() && !stale_temp.exists());
+        // A run killed between creating its lock and writing its id leaves an empty lock: held
+        // while fresh, stale once old.
+        std::fs::write(&lock, "").unwrap();
+        let e = commit(&writes).unwrap_err();
+        assert!(matches!(e, OutputError::Locked { pid: None, .. }), "{e}");
+        let old = std::time::SystemTime::now() - std::time::Duration::from_secs(60);
+        std::fs::File::options()
+            .write(true)
+            .open(&lock)
+            .unwrap()
+            .set_modified(old)
+            .unwrap();
+        assert_eq!(clean_stale(dir.path()), vec![lock]);
     }
 
     #[cfg(unix)]
