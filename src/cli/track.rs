@@ -314,7 +314,8 @@ fn default_name(output: &Path) -> String {
 }
 
 fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
-    let bytes = std::fs::read(&a.frames).with_context(|| a.frames.display().to_string())?;
+    let bytes = trackfix::output::read_regular_file(&a.frames, trackfix::output::MAX_INPUT_BYTES)
+        .with_context(|| a.frames.display().to_string())?;
     let frames = read_frames(&a.frames)?;
     let opts = FitOptions {
         name: a.name.clone().unwrap_or_else(|| default_name(&a.output)),

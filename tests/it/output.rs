@@ -503,3 +503,20 @@ fn two_concurrent_in_place_runs_on_one_file_do_not_both_apply() {
     );
     assert_eq!(listing(dir.path()), ["big.mod", "big.mod.orig"]);
 }
+
+#[test]
+fn a_failed_out_dir_run_leaves_no_folder_it_created() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in");
+    std::fs::create_dir_all(input.join("sub")).unwrap();
+    for f in ["sub/a.mod", "b.mod"] {
+        std::fs::copy(root().join("samples/rapid/spot_line.mod"), input.join(f)).unwrap();
+    }
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    // `out/sub/` is created for a.mod before the lock on `out/b.mod` (held by a live run) fails.
+    std::fs::write(out.join(".b.mod.trackfix-lock"), "1").unwrap();
+    let (code, _, err) = correct(&[input.to_str().unwrap(), "--out-dir", out.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(listing(&out), [".b.mod.trackfix-lock"]);
+}
