@@ -8,13 +8,15 @@
 //! - [`geometry`]: poses, one constructor per rotation convention, rigid fits;
 //! - [`track`]: the track model from laser-tracker measurements to a profile;
 //! - [`report`]: what `inspect` and `check` say about programs;
-//! - [`transform`]: `correct`, `zero`, `mirror`, `transfer` as edits to programs.
+//! - [`transform`]: `correct`, `zero`, `mirror`, `transfer` as edits to programs;
+//! - [`output`]: where results go, written as one transaction; the diff; safe input reads.
 //!
 //! The library never prints and never panics on input.
 
 pub mod geometry;
 pub mod html_report;
 pub mod krl;
+pub mod output;
 pub mod position;
 pub mod program;
 pub mod rapid;

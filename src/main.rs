@@ -3,12 +3,12 @@
 //! Exit codes (DESIGN.md §5): 0 ok, 1 findings (`check`, `--check` differences), 2 usage or
 //! input error, 3 a transform refused.
 
-// The binary may write to stderr; stdout goes through `writeln!` so that a closed pipe is an
-// error we map to success rather than a panic in `println!` (Cargo.toml [lints]).
-#![allow(clippy::print_stderr)]
+// stdout and stderr go through `writeln!`, never `println!`/`eprintln!`: a closed pipe or a
+// full disk is an error we handle (a closed pipe is success), not a panic (Cargo.toml [lints]).
 
 mod cli;
 
+use std::io::Write as _;
 use std::process::ExitCode;
 
 use clap::{CommandFactory, Parser, Subcommand};
@@ -63,6 +63,32 @@ enum Command {
     Man,
 }
 
+/// The error and its causes, `: `-separated, each cause only once: library errors show their
+/// OS error in their own message and also keep it as their source.
+fn chain_text(err: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in err.chain() {
+        let part = cause.to_string();
+        if text.contains(&part) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&part);
+    }
+    text
+}
+
+/// Writes a rendered text to standard output; a failure (a full disk) is an error, not a panic.
+fn to_stdout(bytes: &[u8]) -> anyhow::Result<cli::Exit> {
+    let mut out = std::io::stdout().lock();
+    out.write_all(bytes)
+        .and_then(|()| out.flush())
+        .map_err(|e| anyhow::Error::from(e).context("writing to standard output"))?;
+    Ok(cli::Exit::Ok)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -75,14 +101,18 @@ fn main() -> ExitCode {
         Command::Transfer(a) => cli::transform::run_transfer(a),
         Command::Report(a) => cli::report::run(a),
         Command::Completions { shell } => {
-            let mut cmd = Cli::command();
-            clap_complete::generate(shell, &mut cmd, "trackfix", &mut std::io::stdout());
-            Ok(cli::Exit::Ok)
+            // Rendered first: clap_complete panics on a failed write.
+            let mut script = Vec::new();
+            clap_complete::generate(shell, &mut Cli::command(), "trackfix", &mut script);
+            to_stdout(&script)
         }
-        Command::Man => clap_mangen::Man::new(Cli::command())
-            .render(&mut std::io::stdout())
-            .map(|()| cli::Exit::Ok)
-            .map_err(Into::into),
+        Command::Man => {
+            let mut page = Vec::new();
+            clap_mangen::Man::new(Cli::command())
+                .render(&mut page)
+                .map_err(anyhow::Error::from)
+                .and_then(|()| to_stdout(&page))
+        }
     };
     match result {
         Ok(exit) => exit.into(),
@@ -90,7 +120,8 @@ fn main() -> ExitCode {
             if cli::is_broken_pipe(&err) {
                 return ExitCode::SUCCESS;
             }
-            eprintln!("error: {err:#}");
+            // A full or closed stderr leaves only the exit code to tell; never a panic.
+            let _ = writeln!(std::io::stderr(), "error: {}", chain_text(&err));
             cli::Exit::Usage.into()
         }
     }

@@ -9,7 +9,6 @@ use trackfix::html_report::{SourceFile, TrackInputs};
 use trackfix::track::frames_csv::parse_frames;
 use trackfix::track::identify::parse_measurements;
 use trackfix::track::nominal::FitOptions;
-use trackfix::track::profile::write_atomic;
 use trackfix::track::spectrum::scan_spectrum;
 use trackfix::track::{Gear, NumericCsv, Profile, Reference};
 
@@ -68,7 +67,8 @@ pub struct ReportArgs {
 }
 
 fn read(path: &Path) -> anyhow::Result<(SourceFile, Vec<u8>)> {
-    let bytes = std::fs::read(path).with_context(|| path.display().to_string())?;
+    let bytes = trackfix::output::read_regular_file(path, trackfix::output::MAX_INPUT_BYTES)
+        .with_context(|| path.display().to_string())?;
     Ok((SourceFile::new(path.display().to_string(), &bytes), bytes))
 }
 
@@ -138,7 +138,8 @@ fn run_inner(a: &ReportArgs) -> anyhow::Result<Exit> {
     let report = TrackReport::compute(inputs)?;
     let sections = report.sections();
     let html = report.render();
-    write_atomic(&a.output, html.as_bytes())?;
+    // One write helper for every file trackfix writes: temporary + rename, mode kept.
+    trackfix::output::write_file(&a.output, html.as_bytes())?;
     let mut out = std::io::stdout().lock();
     writeln!(
         out,

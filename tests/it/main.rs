@@ -2,6 +2,7 @@
 
 mod cli;
 mod krl;
+mod output;
 mod rapid;
 mod report;
 mod support;
