@@ -63,11 +63,17 @@ pub fn ticks(span: Span, target: usize) -> (Vec<f64>, usize) {
         .map(|m| m * mag)
         .find(|s| *s >= raw)
         .unwrap_or(10.0 * mag);
-    let decimals = (-step.log10().floor()).max(0.0) as usize;
-    let first = (span.lo / step).ceil() as i64;
-    let last = (span.hi / step).floor() as i64;
-    let ticks = (first..=last.min(first + 100))
-        .map(|i| i as f64 * step)
+    if !(step > 0.0 && step.is_finite()) {
+        return (Vec::new(), 0);
+    }
+    let decimals = (-step.log10().floor()).clamp(0.0, 12.0) as usize;
+    let (first, last) = ((span.lo / step).ceil(), (span.hi / step).floor());
+    // A range far from zero at a tiny width would ask for more ticks than a chart has pixels.
+    if !(first.is_finite() && last.is_finite()) || last - first > 100.0 {
+        return (Vec::new(), decimals);
+    }
+    let ticks = (0..=(last - first).max(-1.0) as i64)
+        .map(|i| (first + i as f64) * step)
         .collect();
     (ticks, decimals)
 }
@@ -420,6 +426,17 @@ mod tests {
         let (t, d) = ticks(Span::new(0.0, 8000.0), 8);
         assert_eq!(d, 0);
         assert_eq!(t.len(), 9);
+    }
+
+    #[test]
+    fn degenerate_ranges_give_no_ticks_rather_than_panic() {
+        // Infinite width falls back to a unit one, far from zero: no tick fits.
+        assert_eq!(ticks(Span::new(1e308, f64::INFINITY), 6).0.len(), 0);
+        assert_eq!(ticks(Span::new(8000.0, 8000.0), 6).0, vec![8000.0]);
+        assert!(ticks(Span::new(f64::NAN, 1.0), 6).0.len() <= 101);
+        assert!(ticks(Span::new(-1e308, 1e308), 6).0.len() <= 101);
+        let svg = Chart::new(100.0, 100.0, Span::new(5.0, 5.0), Span::new(0.0, 0.0)).render();
+        assert!(svg.starts_with("<svg"));
     }
 
     #[test]

@@ -592,8 +592,14 @@ fn interpolate(knots: &[f64], values: &[f64], s: f64) -> f64 {
         return values.last().copied().unwrap_or(0.0);
     }
     let i = knots.partition_point(|k| *k <= s).saturating_sub(1);
-    let (x0, x1) = (knots[i], knots[(i + 1).min(knots.len() - 1)]);
-    let (y0, y1) = (values[i], values[(i + 1).min(values.len() - 1)]);
+    let (Some(&x0), Some(&x1), Some(&y0), Some(&y1)) = (
+        knots.get(i),
+        knots.get(i + 1),
+        values.get(i),
+        values.get(i + 1),
+    ) else {
+        return values.last().copied().unwrap_or(0.0);
+    };
     if x1 > x0 {
         y0 + (y1 - y0) * (s - x0) / (x1 - x0)
     } else {
@@ -607,6 +613,8 @@ const CURVE_SAMPLES: usize = 240;
 /// ± one standard uncertainty (linear between the knots).
 pub fn deviation_section(p: &Profile, uncertainty: Option<&[[f64; 6]]>) -> Section {
     let mut sec = Section::new("deviation", headings::DEVIATION);
+    // One uncertainty per knot, or none at all.
+    let uncertainty = uncertainty.filter(|u| u.len() == p.knots().len());
     let (s0, s1) = p.skid_range();
     sec.para(&format!(
         "D(s): deviation of the real base from the nominal straight track, in the nominal base frame (R = Rz*Ry*Rx). Line: natural cubic spline; dots: the {} knots.",
@@ -874,13 +882,13 @@ fn spectrum_section(spec: &Spectrum) -> Section {
     let rows: Vec<Row> = peaks(&spec.amplitude)
         .iter()
         .take(6)
-        .map(|&k| {
-            let f = spec.frequency[k];
-            Row::new(vec![
+        .filter_map(|&k| {
+            let (f, a) = (spec.frequency.get(k)?, spec.amplitude.get(k)?);
+            Some(Row::new(vec![
                 Cell::num(format!("{f:.6}")),
                 Cell::num(format!("{:.1}", 1.0 / f)),
-                Cell::num(format!("{:.4}", spec.amplitude[k])),
-            ])
+                Cell::num(format!("{a:.4}")),
+            ]))
         })
         .collect();
     sec.raw(&table(

@@ -708,3 +708,48 @@ fn png_colours(bytes: &[u8]) -> usize {
     }
     seen.len()
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+
+    /// Any profile (any name, any finite knots) gives a whole page: the four profile sections
+    /// after the inputs, balanced sections and charts, the name only escaped.
+    #[test]
+    fn any_profile_renders_a_whole_escaped_page(
+        name in "\\PC{0,24}",
+        steps in proptest::collection::vec(1.0f64..5000.0, 1..12),
+        values in proptest::collection::vec(-1e3f64..1e3, 6 * 12),
+    ) {
+        let mut skid = -1000.0;
+        let knots: Vec<Knot> = steps
+            .iter()
+            .enumerate()
+            .map(|(i, step)| {
+                skid += step;
+                let mut c = [0.0; 6];
+                c.copy_from_slice(&values[6 * i..6 * i + 6]);
+                Knot::from_components(skid, c)
+            })
+            .collect();
+        let first = Knot::zero(-1000.0);
+        let knots = std::iter::once(first).chain(knots).collect();
+        let p = Profile::from_knots(name.clone(), knots, Extrapolate::Error).unwrap();
+        let html = TrackReport::compute(TrackInputs {
+            profile: Some((trackfix::html_report::SourceFile::new("p.toml", b""), p)),
+            ..TrackInputs::default()
+        })
+        .unwrap()
+        .render();
+        proptest::prop_assert_eq!(html.matches("<section").count(), 5);
+        proptest::prop_assert_eq!(html.matches("</section>").count(), 5);
+        proptest::prop_assert_eq!(html.matches("<svg").count(), html.matches("</svg>").count());
+        let escaped = trackfix::html_report::html::escape(&name);
+        let numbers = html.replace(&escaped, "");
+        proptest::prop_assert!(!numbers.contains("NaN") && !numbers.contains("inf"));
+        let title = format!("<title>trackfix track report: {escaped}</title>");
+        proptest::prop_assert!(html.contains(&title));
+        if name.contains('<') {
+            proptest::prop_assert!(!html.contains(&name));
+        }
+    }
+}
