@@ -507,6 +507,42 @@ mod tests {
     }
 
     #[test]
+    fn checks_section_only_with_checks_and_refusals_always() {
+        let mut r = RunReport {
+            command: "mirror".into(),
+            files: vec![RunFile::from_parts("a.mod", b"x\n", b"x\n", vec![], vec![])],
+            ..RunReport::default()
+        };
+        let headings = |r: &RunReport| -> Vec<String> {
+            run_sections(r).into_iter().map(|s| s.heading).collect()
+        };
+        assert_eq!(
+            headings(&r),
+            [
+                headings::SUMMARY,
+                headings::INPUTS,
+                headings::ALONG_SKID,
+                "Changes in a.mod",
+                headings::REFUSALS
+            ]
+        );
+        let html = run_report(&r);
+        assert!(html.contains("Unchanged: no byte of this file differs."));
+        assert!(html.contains("None: every target the command applies to was changed."));
+        assert!(html.contains("No changed target has a skid value"));
+        r.checks.push(DataTable {
+            title: "Reach".into(),
+            columns: vec!["target".into(), "reach [mm]".into()],
+            rows: vec![vec!["p10".into(), "1820.5".into()]],
+            note: None,
+        });
+        assert_eq!(
+            headings(&r).last().map(String::as_str),
+            Some(headings::CHECKS)
+        );
+    }
+
+    #[test]
     fn report_escapes_names_and_lists_refusals_with_locations() {
         let r = RunReport {
             command: "correct".into(),
