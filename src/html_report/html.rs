@@ -80,25 +80,33 @@ impl Section {
     }
 }
 
-/// A table cell: text, and whether it is a number (right-aligned, tabular digits).
+/// A table cell: text and how it is set (`n`: a number, right-aligned with tabular digits;
+/// `code`: a hash or path, monospace, broken anywhere so a narrow page keeps the table).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Cell {
     pub text: String,
-    pub numeric: bool,
+    pub class: Option<&'static str>,
 }
 
 impl Cell {
     pub fn text(s: impl Into<String>) -> Cell {
         Cell {
             text: s.into(),
-            numeric: false,
+            class: None,
         }
     }
 
     pub fn num(s: impl Into<String>) -> Cell {
         Cell {
             text: s.into(),
-            numeric: true,
+            class: Some("n"),
+        }
+    }
+
+    pub fn code(s: impl Into<String>) -> Cell {
+        Cell {
+            text: s.into(),
+            class: Some("code"),
         }
     }
 }
@@ -136,10 +144,13 @@ pub fn table(headers: &[&str], rows: &[Row]) -> String {
             None => s.push_str("<tr>"),
         }
         for c in &r.cells {
-            if c.numeric {
-                let _ = write!(s, "<td class=\"n\">{}</td>", escape(&c.text));
-            } else {
-                let _ = write!(s, "<td>{}</td>", escape(&c.text));
+            match c.class {
+                Some(class) => {
+                    let _ = write!(s, "<td class=\"{class}\">{}</td>", escape(&c.text));
+                }
+                None => {
+                    let _ = write!(s, "<td>{}</td>", escape(&c.text));
+                }
             }
         }
         s.push_str("</tr>\n");
@@ -170,7 +181,9 @@ h3 { font-size: 1.05rem; margin: 1.2rem 0 .4rem; }
 .meta { color: #444; margin: 0 0 1rem; }
 nav ol { columns: 2; margin: .4rem 0 1rem; }
 table { border-collapse: collapse; margin: .5rem 0 1rem; font-size: .85rem; max-width: 100%; }
-th, td { border: 1px solid #bbb; padding: .15rem .45rem; vertical-align: top; overflow-wrap: anywhere; }
+th, td { border: 1px solid #bbb; padding: .15rem .45rem; vertical-align: top; }
+td.code { font-family: ui-monospace, 'DejaVu Sans Mono', Consolas, monospace; font-size: .78rem; overflow-wrap: anywhere; }
+table.lines code { white-space: pre-wrap; overflow-wrap: anywhere; }
 th { background: #e8edf3; text-align: left; }
 td.n { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 tr.outlier td { background: #fde2e2; }

@@ -287,8 +287,8 @@ fn inputs_section(r: &RunReport) -> Section {
         .map(|i| {
             Row::new(vec![
                 Cell::text(i.role.clone()),
-                Cell::text(i.path.clone()),
-                Cell::text(i.sha256.clone()),
+                Cell::code(i.path.clone()),
+                Cell::code(i.sha256.clone()),
                 Cell::text(i.detail.clone()),
             ])
         })
@@ -304,9 +304,9 @@ fn inputs_section(r: &RunReport) -> Section {
         .iter()
         .map(|f| {
             Row::new(vec![
-                Cell::text(f.path.clone()),
-                Cell::text(f.input_sha256.clone()),
-                Cell::text(if f.changed() {
+                Cell::code(f.path.clone()),
+                Cell::code(f.input_sha256.clone()),
+                Cell::code(if f.changed() {
                     f.output_sha256.clone()
                 } else {
                     "unchanged".to_owned()
@@ -458,7 +458,7 @@ fn refusals_section(r: &RunReport) -> Section {
         .flat_map(|f| {
             f.refusals.iter().map(move |x| {
                 Row::new(vec![
-                    Cell::text(format!("{}:{}:{}", f.path, x.line, x.column)),
+                    Cell::code(format!("{}:{}:{}", f.path, x.line, x.column)),
                     Cell::text(x.target.clone()),
                     Cell::text(x.kind.clone()),
                     Cell::text(x.message.clone()),

@@ -283,8 +283,8 @@ impl TrackReport {
             .map(|(what, src)| {
                 Row::new(vec![
                     Cell::text(what.clone()),
-                    Cell::text(src.path.clone()),
-                    Cell::text(src.sha256.clone()),
+                    Cell::code(src.path.clone()),
+                    Cell::code(src.sha256.clone()),
                 ])
             })
             .collect();
