@@ -104,7 +104,7 @@ fn write_table(out: &mut impl std::io::Write, files: &[FileReach]) -> anyhow::Re
         writeln!(out, "{}", f.path.display())?;
         writeln!(
             out,
-            "  {:<12} {:>5} {:<15} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:<14} {:<14} {:>7}",
+            "  {:<18} {:>5} {:<15} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:<14} {:<14} {:>7}",
             "name",
             "line",
             "status",
@@ -131,7 +131,7 @@ fn write_table(out: &mut impl std::io::Write, files: &[FileReach]) -> anyhow::Re
                 .unwrap_or_else(|| "-".to_owned());
             writeln!(
                 out,
-                "  {:<12} {:>5} {:<15} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:<14} {:<14} {:>7}",
+                "  {:<18} {:>5} {:<15} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:<14} {:<14} {:>7}",
                 t.name,
                 t.line,
                 t.status.as_str(),

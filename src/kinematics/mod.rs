@@ -150,19 +150,22 @@ pub fn select(kin: &Kinematics, flange: &Pose, written: Option<&ConfigValue>) ->
     if let Some(j) = within.iter().find(|j| w.matches(kin, j)) {
         return Some(pick(*j, true));
     }
-    // Outside the limits but in the written configuration: report that solution, so the
-    // message is "outside a limit", not "another configuration".
+    // Outside the limits but in the written configuration: report that solution (the turn
+    // variant least outside), so the message is "outside a limit", not "another
+    // configuration".
     let wide = Kinematics {
         limits: [[-720.0, 720.0]; 6],
         ..kin.clone()
     };
-    let outside: Vec<Joints> = base
+    let violation =
+        |j: &Joints| -> f64 { kin.limit_margins(j).iter().map(|m| (-m).max(0.0)).sum() };
+    let outside = base
         .iter()
         .flat_map(|j| wide.turns(j))
         .filter(|j| w.matches(kin, j))
-        .collect();
-    if let Some(j) = outside.first() {
-        return Some(pick(*j, true));
+        .min_by(|a, b| violation(a).total_cmp(&violation(b)));
+    if let Some(j) = outside {
+        return Some(pick(j, true));
     }
     Some(match nearest_zero(&within) {
         Some(j) => pick(j, false),

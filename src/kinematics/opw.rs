@@ -273,8 +273,7 @@ fn ry(a: f64) -> Matrix3<f64> {
 
 /// The two `(q4, q5, q6)` with `Rz(q4)·Ry(q5)·Rz(q6) = m` (one at a singular wrist).
 fn wrist(m: &Matrix3<f64>, hint_q4: Option<f64>) -> Vec<[f64; 3]> {
-    // Third column (cos q4·sin q5, sin q4·sin q5, cos q5); third row (−sin q5·cos q6,
-    // sin q5·sin q6, cos q5).
+    // Third column of Rz(q4)·Ry(q5)·Rz(q6): (cos q4·sin q5, sin q4·sin q5, cos q5).
     let s5 = m[(0, 2)].hypot(m[(1, 2)]);
     let q5 = s5.atan2(m[(2, 2)]);
     if s5 < SINGULAR {
@@ -289,6 +288,12 @@ fn wrist(m: &Matrix3<f64>, hint_q4: Option<f64>) -> Vec<[f64; 3]> {
         return vec![[q4, q5, wrap_pi(q6)]];
     }
     let q4 = m[(1, 2)].atan2(m[(0, 2)]);
-    let q6 = m[(2, 1)].atan2(-m[(2, 0)]);
-    vec![[q4, q5, q6], [wrap_pi(q4 + PI), -q5, wrap_pi(q6 + PI)]]
+    // q6 from what is left, Rz(q6) = (Rz(q4)·Ry(q5))ᵀ·m, rather than from m's third row: near
+    // the singularity q4 is ill-conditioned, and this way q6 absorbs its error exactly.
+    let q6_of = |q4: f64, q5: f64| {
+        let n = (rz(q4) * ry(q5)).transpose() * m;
+        n[(1, 0)].atan2(n[(0, 0)])
+    };
+    let q4b = wrap_pi(q4 + PI);
+    vec![[q4, q5, q6_of(q4, q5)], [q4b, -q5, q6_of(q4b, -q5)]]
 }
