@@ -696,3 +696,51 @@ fn reach_cli_on_the_spot_line_sample() {
     assert_eq!(code, 2);
     assert!(err.contains("no [robot.r1.kinematics]"), "{err}");
 }
+
+#[test]
+fn kuka_joint_directions_follow_the_controller() {
+    let k = model("kuka_kr210_r3100_2").unwrap().kinematics();
+    // The mastering/home pose: upper arm upright, forearm level, flange facing forward with its
+    // z axis along base +x (KUKA shows B = 90°), at x = a1 + c3 + c4, z = c1 + c2 − a2.
+    let home = k.forward(&[0.0, -90.0, 90.0, 0.0, 0.0, 0.0]);
+    let p = home.translation.vector;
+    assert!((p - Vector3::new(1990.0, 0.0, 2110.0)).norm() < 1e-9, "{p}");
+    let b90 = trackfix::geometry::kuka_abc(0.0, 90.0, 0.0);
+    assert!(home.rotation.angle_to(&b90) < 1e-12);
+    // A1's axis points down: A1 = +90° turns the arm to base −y.
+    let p = k
+        .forward(&[90.0, -90.0, 90.0, 0.0, 0.0, 0.0])
+        .translation
+        .vector;
+    assert!(
+        (p - Vector3::new(0.0, -1990.0, 2110.0)).norm() < 1e-9,
+        "{p}"
+    );
+}
+
+#[test]
+fn reach_on_the_krl_sample_reads_status_and_turn() {
+    let (code, json, err) = trackfix(&[
+        "reach",
+        "samples/krl/spot_line.src",
+        "--cell",
+        "samples/cell_kinematics.toml",
+        "--robot",
+        "k1",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(code, 1, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let targets = v["files"][0]["targets"].as_array().unwrap();
+    assert_eq!(targets.len(), 161);
+    let xp1 = &targets[1];
+    assert_eq!(xp1["name"], "XP1");
+    assert_eq!(xp1["status"], "ok");
+    assert_eq!(xp1["config_written"], "S 6 T 50");
+    assert_eq!(xp1["config_solved"], "S 6 T 50");
+    assert_eq!(xp1["config_matches"], true);
+    // XP0 is in $WORLD at the far end of the line from the skid it names.
+    assert_eq!(targets[0]["status"], "unreachable");
+    assert_eq!(targets[0]["joints"], serde_json::Value::Null);
+}
