@@ -58,6 +58,24 @@ pub struct KinematicCheck {
     pub refusal: Option<KinematicRefusal>,
 }
 
+fn fmt_joints(j: &Joints) -> String {
+    let v: Vec<String> = j.iter().map(|a| format!("{a:.3}")).collect();
+    format!("[{}]", v.join(", "))
+}
+
+impl KinematicCheck {
+    /// The refusal as a message with the joints before and after (degrees), for a transform to
+    /// report by the target's name; `None` when the transform may go ahead.
+    pub fn message(&self) -> Option<String> {
+        let r = self.refusal.as_ref()?;
+        let before = self
+            .before
+            .map_or("none (not reachable)".to_owned(), |j| fmt_joints(&j));
+        let after = self.after.map_or("none".to_owned(), |j| fmt_joints(&j));
+        Some(format!("{r}: joints before {before}, after {after}"))
+    }
+}
+
 fn first_outside(kin: &Kinematics, j: &Joints) -> Option<KinematicRefusal> {
     let m = kin.limit_margins(j);
     let axis = (0..6).find(|&i| m[i] < -1e-9)?;

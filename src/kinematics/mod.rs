@@ -121,7 +121,8 @@ pub struct Selection {
     pub within_limits: bool,
 }
 
-/// Picks the solution of a flange pose: the one within the limits that `written` selects; else
+/// Picks the solution of a flange pose: the one within the limits that `written` selects (the
+/// one nearest to zero joints if several turns share the configuration); else
 /// (the configuration does not reach the pose) a solution within the limits in the same arm
 /// choice, else any within the limits, else the first one outside them. Without a written
 /// configuration, the solution within the limits nearest to all-zero joints. `None` when the
@@ -147,8 +148,15 @@ pub fn select(kin: &Kinematics, flange: &Pose, written: Option<&ConfigValue>) ->
             None => pick(first, true),
         });
     };
-    if let Some(j) = within.iter().find(|j| w.matches(kin, j)) {
-        return Some(pick(*j, true));
+    // Several turns can share one configuration (KUKA Turn gives only signs: axis 6 of
+    // ±400° has two negative variants); the one nearest to zero joints is taken.
+    let matching: Vec<Joints> = within
+        .iter()
+        .filter(|j| w.matches(kin, j))
+        .copied()
+        .collect();
+    if let Some(j) = nearest_zero(&matching) {
+        return Some(pick(j, true));
     }
     // Outside the limits but in the written configuration: report that solution (the turn
     // variant least outside), so the message is "outside a limit", not "another

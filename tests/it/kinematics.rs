@@ -475,9 +475,11 @@ fn check_target_refuses_unreachable_limit_and_configuration_changes() {
     );
     // 3 m away: out of reach.
     let far = pose_xyz_deg(3000.0, 0.0, 0.0, 0.0, 0.0, 0.0) * f;
+    let c = check_target(&k, &f, &far, Some(&written));
+    assert_eq!(c.refusal, Some(KinematicRefusal::Unreachable));
     assert_eq!(
-        check_target(&k, &f, &far, Some(&written)).refusal,
-        Some(KinematicRefusal::Unreachable)
+        c.message().unwrap(),
+        "the transformed target is out of reach: joints before [10.000, 20.000, -10.000, 30.000, 40.000, -50.000], after none"
     );
     // Mirrored through the base's xz plane with the configuration unchanged: cf1 = 0 cannot
     // reach an axis 1 of -10°.
@@ -743,4 +745,60 @@ fn reach_on_the_krl_sample_reads_status_and_turn() {
     // XP0 is in $WORLD at the far end of the line from the skid it names.
     assert_eq!(targets[0]["status"], "unreachable");
     assert_eq!(targets[0]["joints"], serde_json::Value::Null);
+}
+
+#[test]
+fn a_pose_inside_the_arm_has_all_eight_solutions() {
+    let k = irb2400();
+    let j = [0.0, 0.0, 60.0, 0.0, 30.0, 0.0];
+    let sols = k.inverse(&k.forward(&j), None);
+    let branches: std::collections::BTreeSet<(bool, bool, bool)> = sols
+        .iter()
+        .map(|s| {
+            let a = k.arm(s);
+            (a.front_of_axis1, a.front_of_lower_arm, s[4] >= 0.0)
+        })
+        .collect();
+    assert_eq!((sols.len(), branches.len()), (8, 8), "{sols:?}");
+    let cfx: std::collections::BTreeSet<i32> =
+        sols.iter().map(|s| abb::config_of(&k, s)[3]).collect();
+    assert_eq!(cfx, (0..8).collect());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// The configuration of J, written back, selects J: ABB confdata and KUKA Status/Turn each
+    /// pick exactly one solution within the limits.
+    #[test]
+    fn the_configuration_of_joints_selects_them(u in prop::array::uniform6(0.02f64..0.98)) {
+        for m in MODELS {
+            let k = m.kinematics();
+            let j: Joints = std::array::from_fn(|i| {
+                let [lo, hi] = k.limits[i];
+                lo + u[i] * (hi - lo)
+            });
+            let q = k.model_joints(&j);
+            let psi = k.geometry.a2.atan2(k.geometry.c3);
+            let off_boundary = [0, 3, 5].iter().all(|&i| (j[i] / 90.0 - (j[i] / 90.0).round()).abs() > 1e-6)
+                && q[4].sin().abs() > 1e-3
+                && (q[2] + psi).sin().abs() > 1e-3
+                && k.wrist_centre(&j).xy().norm() > 1.0;
+            prop_assume!(off_boundary);
+            let f = k.forward(&j);
+            for lang in [Language::Rapid, Language::Krl] {
+                let written = ConfigValue::of_joints(lang, &k, &j);
+                let s = trackfix::kinematics::select(&k, &f, Some(&written)).unwrap();
+                prop_assert!(s.config_matches && s.within_limits);
+                let exact = s.joints.iter().zip(&j).all(|(a, b)| (a - b).abs() < 1e-6);
+                if lang == Language::Rapid || m.name.starts_with("kuka") {
+                    // confdata quadrants, or Turn signs within ±350°, leave one choice.
+                    prop_assert!(exact, "{}: {:?} vs {:?}", m.name, s.joints, j);
+                } else {
+                    // Turn on an ABB arm (axis 6 ±400°): two negative turns may share it.
+                    prop_assert!(joints_close(&s.joints, &j, 1e-6), "{}: {:?} vs {:?}", m.name, s.joints, j);
+                }
+            }
+        }
+    }
 }
