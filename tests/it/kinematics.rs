@@ -802,3 +802,24 @@ proptest! {
         }
     }
 }
+
+/// The README's figure: the sample's home joint target on r1's measured track.
+#[test]
+fn sample_home_joint_target_on_the_measured_track() {
+    let profile =
+        trackfix::track::Profile::load(&crate::support::root().join("samples/track/profile.toml"))
+            .unwrap();
+    let d = profile.deviation(150.0).unwrap();
+    let k = model("abb_irb4600_40_255").unwrap().kinematics();
+    let j = [0.0, -20.0, 30.0, 0.0, 80.0, 0.0];
+    let jc = joint_target_correction(&k, &j, &d.inverse()).unwrap();
+    let want = [0.0514, -19.9494, 30.0292, -0.0669, 79.9236, 0.0997];
+    assert!(
+        jc.iter().zip(&want).all(|(a, b)| (a - b).abs() < 1e-4),
+        "{jc:?}"
+    );
+    let (dp, dr) = pose_error(&k.forward(&jc), &(d.inverse() * k.forward(&j)));
+    assert!(dp < 1e-3 && dr < 1e-9);
+    let moved = (k.forward(&jc).translation.vector - k.forward(&j).translation.vector).norm();
+    assert!((moved - 1.87).abs() < 0.01, "{moved}");
+}
