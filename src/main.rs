@@ -51,6 +51,8 @@ enum Command {
     Mirror(cli::transform::MirrorArgs),
     /// Zero with one robot's track, optionally mirror, correct with another's.
     Transfer(cli::transform::TransferArgs),
+    /// Check every target's reach, joint limits and configuration with the robot's kinematics.
+    Reach(cli::reach::ReachArgs),
     /// Print a shell completion script (bash, zsh, fish, powershell, elvish).
     #[command(
         after_help = "Example:\n  trackfix completions bash > /etc/bash_completion.d/trackfix"
@@ -97,6 +99,7 @@ fn main() -> ExitCode {
         Command::Zero(a) => cli::transform::run_zero(a),
         Command::Mirror(a) => cli::transform::run_mirror(a),
         Command::Transfer(a) => cli::transform::run_transfer(a),
+        Command::Reach(a) => cli::reach::run(a),
         Command::Completions { shell } => {
             // Rendered first: clap_complete panics on a failed write.
             let mut script = Vec::new();
