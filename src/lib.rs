@@ -7,6 +7,7 @@
 //!   targets, frames and offsets found in a program ([`position`]);
 //! - [`geometry`]: poses, one constructor per rotation convention, rigid fits;
 //! - [`track`]: the track model from laser-tracker measurements to a profile;
+//! - [`kinematics`]: the OPW arm model, ABB/KUKA configurations, reach and joint checks;
 //! - [`report`]: what `inspect` and `check` say about programs;
 //! - [`transform`]: `correct`, `zero`, `mirror`, `transfer` as edits to programs;
 //! - [`output`]: where results go, written as one transaction; the diff; safe input reads.
@@ -15,6 +16,7 @@
 
 pub mod geometry;
 pub mod html_report;
+pub mod kinematics;
 pub mod krl;
 pub mod output;
 pub mod position;

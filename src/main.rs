@@ -51,6 +51,8 @@ enum Command {
     Mirror(cli::transform::MirrorArgs),
     /// Zero with one robot's track, optionally mirror, correct with another's.
     Transfer(cli::transform::TransferArgs),
+    /// Check every target's reach, joint limits and configuration with the robot's kinematics.
+    Reach(cli::reach::ReachArgs),
     /// Write the track report: one self-contained HTML file (measurements, model, controller figures).
     Report(cli::report::ReportArgs),
     /// Print a shell completion script (bash, zsh, fish, powershell, elvish).
@@ -99,6 +101,7 @@ fn main() -> ExitCode {
         Command::Zero(a) => cli::transform::run_zero(a),
         Command::Mirror(a) => cli::transform::run_mirror(a),
         Command::Transfer(a) => cli::transform::run_transfer(a),
+        Command::Reach(a) => cli::reach::run(a),
         Command::Report(a) => cli::report::run(a),
         Command::Completions { shell } => {
             // Rendered first: clap_complete panics on a failed write.

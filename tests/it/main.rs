@@ -1,6 +1,7 @@
 //! trackfix's integration tests: one binary, one module per area.
 
 mod cli;
+mod kinematics;
 mod krl;
 mod output;
 mod rapid;
