@@ -51,6 +51,9 @@ enum Command {
     Mirror(cli::transform::MirrorArgs),
     /// Zero with one robot's track, optionally mirror, correct with another's.
     Transfer(cli::transform::TransferArgs),
+    /// ISO 9283 pose and path accuracy from laser-tracker measurements.
+    #[command(subcommand)]
+    Accuracy(cli::accuracy::AccuracyCommand),
     /// Print a shell completion script (bash, zsh, fish, powershell, elvish).
     #[command(
         after_help = "Example:\n  trackfix completions bash > /etc/bash_completion.d/trackfix"
@@ -71,6 +74,7 @@ fn main() -> ExitCode {
         Command::Zero(a) => cli::transform::run_zero(a),
         Command::Mirror(a) => cli::transform::run_mirror(a),
         Command::Transfer(a) => cli::transform::run_transfer(a),
+        Command::Accuracy(c) => cli::accuracy::run(c),
         Command::Completions { shell } => {
             let mut cmd = Cli::command();
             clap_complete::generate(shell, &mut cmd, "trackfix", &mut std::io::stdout());
