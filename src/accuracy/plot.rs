@@ -100,7 +100,7 @@ pub fn pose_svg(report: &PoseReport) -> Result<String, AccuracyError> {
             .flat_map(|p| [p.ap, p.max, p.rp])
             .fold(0.0, f64::max)
             .max(1e-3)
-            * 1.15;
+            * 1.35;
         let mut chart = ChartBuilder::on(&left)
             .caption("per point [mm]", ("sans-serif", 18))
             .margin(14)
@@ -143,6 +143,7 @@ pub fn pose_svg(report: &PoseReport) -> Result<String, AccuracyError> {
         }
         chart
             .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
             .border_style(BLACK)
             .background_style(WHITE)
             .draw()
@@ -186,7 +187,8 @@ pub fn pose_svg(report: &PoseReport) -> Result<String, AccuracyError> {
             chart
                 .draw_series(std::iter::once(Text::new(
                     p.point.clone(),
-                    (p.ap_x, p.ap_y),
+                    // Beside the circle, not over the visits.
+                    (p.ap_x + p.rp, p.ap_y + p.rp),
                     ("sans-serif", 13).into_font().color(&BLACK),
                 )))
                 .map_err(AccuracyError::plot)?;
@@ -238,15 +240,25 @@ fn plane_views(area: &Area<'_>, commanded: &Polyline, report: &PathReport) -> Dr
             .draw()
             .map_err(AccuracyError::plot)?;
         chart
-            .draw_series(LineSeries::new(ideal, IDEAL.stroke_width(2)))
+            .draw_series(LineSeries::new(ideal.clone(), IDEAL.stroke_width(2)))
             .map_err(AccuracyError::plot)?;
+        // Looking along the path (its projection shorter than a millimetre), a line through
+        // the samples would only zigzag: show them as dots.
+        let projected: f64 = ideal
+            .windows(2)
+            .map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1))
+            .sum();
         for run in &report.used {
-            chart
-                .draw_series(LineSeries::new(
-                    run.samples.iter().map(|s| (s.position[a], s.position[b])),
-                    MEASURED,
-                ))
-                .map_err(AccuracyError::plot)?;
+            let pts = run.samples.iter().map(|s| (s.position[a], s.position[b]));
+            if projected < 1.0 {
+                chart
+                    .draw_series(pts.map(|p| Circle::new(p, 1, MEASURED.mix(0.5).filled())))
+                    .map_err(AccuracyError::plot)?;
+            } else {
+                chart
+                    .draw_series(LineSeries::new(pts, MEASURED))
+                    .map_err(AccuracyError::plot)?;
+            }
         }
     }
     Ok(())
@@ -397,6 +409,47 @@ fn velocity(area: &Area<'_>, report: &PathReport) -> Drawn {
     Ok(())
 }
 
+/// Table 5.1 as text, beside the look-through view of the combined figure.
+fn line_facts(area: &Area<'_>, report: &PathReport) -> Drawn {
+    let l = &report.line;
+    let opt = |v: Option<f64>, unit: &str, decimals: usize| {
+        v.map_or_else(|| "-".to_owned(), |v| format!("{v:.decimals$} {unit}"))
+    };
+    let rows = [
+        ("path length", format!("{:.3} m", l.length / 1000.0)),
+        ("commanded velocity", opt(l.commanded_velocity, "mm/s", 1)),
+        ("measured velocity", opt(l.measured_velocity, "mm/s", 1)),
+        (
+            "velocity deviation (max)",
+            opt(l.velocity_deviation_max_percent, "%", 1),
+        ),
+        ("acceleration", opt(l.acceleration, "mm/s²", 0)),
+        ("max. path deviation", format!("{:.3} mm", l.max_deviation)),
+        (
+            "repeating uncertainty",
+            format!("{:.3} mm", l.repeat_uncertainty),
+        ),
+        ("deviation at start", format!("{:.3} mm", l.start_deviation)),
+        ("deviation at end", format!("{:.3} mm", l.end_deviation)),
+        ("AT / RT", format!("{:.3} / {:.3} mm", report.at, report.rt)),
+    ];
+    let font = ("sans-serif", 18).into_font().color(&BLACK);
+    area.draw(&Text::new(
+        "straight line (Table 5.1)",
+        (30, 40),
+        font.clone(),
+    ))
+    .map_err(AccuracyError::plot)?;
+    for (k, (name, value)) in rows.iter().enumerate() {
+        let y = 80 + 30 * k as i32;
+        area.draw(&Text::new(name.to_string(), (30, y), font.clone()))
+            .map_err(AccuracyError::plot)?;
+        area.draw(&Text::new(value.clone(), (330, y), font.clone()))
+            .map_err(AccuracyError::plot)?;
+    }
+    Ok(())
+}
+
 /// The path figures, each on its own: `(file stem, SVG)` for Figs 5.2-5.5.
 pub fn path_svgs(
     commanded: &Polyline,
@@ -436,8 +489,9 @@ pub fn path_svg(commanded: &Polyline, report: &PathReport) -> Result<String, Acc
         let (look, speed) = rest.split_vertically(760);
         plane_views(&planes, commanded, report)?;
         deviation_along(&deviation, commanded, report)?;
-        let (look, _) = look.split_horizontally(760);
+        let (look, facts) = look.split_horizontally(760);
         look_through(&look, commanded, report)?;
+        line_facts(&facts, report)?;
         velocity(&speed, report)
     })
 }
