@@ -40,6 +40,39 @@ pub struct LineReport {
     /// commanded start and end.
     pub start_deviation: f64,
     pub end_deviation: f64,
+    /// The same figures per straight leg of the commanded path (one for a line): where a path
+    /// changes direction the deviations of one leg do not hide those of the next.
+    pub legs: Vec<LegReport>,
+}
+
+/// The straight-line figures of one leg of the commanded path.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LegReport {
+    /// 1-based.
+    pub leg: usize,
+    pub from_s: f64,
+    pub to_s: f64,
+    pub samples: usize,
+    /// Largest and mean perpendicular distance of the samples whose nearest path point is on
+    /// this leg (eq. 3.38).
+    pub max_deviation: f64,
+    pub mean_deviation: f64,
+    /// Median windowed speed of those samples; `None` without times.
+    pub measured_velocity: Option<f64>,
+}
+
+fn median(values: &[f64]) -> Option<f64> {
+    if values.is_empty() {
+        return None;
+    }
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let n = sorted.len();
+    Some(if n % 2 == 1 {
+        sorted[n / 2]
+    } else {
+        0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
+    })
 }
 
 /// `(t − t_first, speed)` of each sample over the window; empty without times.
@@ -109,6 +142,8 @@ pub fn line_report(
         planes.first().map_or(0.0, |p| p.s),
         planes.last().map_or(length, |p| p.s),
     );
+    let legs_count = commanded.vertices().len() - 1;
+    let mut per_leg: Vec<(Vec<f64>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); legs_count];
     let mut travel = Vec::new();
     let mut max_deviation = (0.0, 0.0, String::new());
     let mut deviations = Vec::new();
@@ -121,6 +156,12 @@ pub fn line_report(
                 if p.distance > max_deviation.0 || max_deviation.2.is_empty() {
                     max_deviation = (p.distance, p.s, run.label.clone());
                 }
+                if let Some(leg) = per_leg.get_mut(p.segment) {
+                    leg.0.push(p.distance);
+                    if let Some(v) = series.get(k) {
+                        leg.1.push(v.1);
+                    }
+                }
             }
             if (s_first..=s_last).contains(&p.s)
                 && let Some(v) = series.get(k)
@@ -129,16 +170,7 @@ pub fn line_report(
             }
         }
     }
-    let measured_velocity = (!travel.is_empty()).then(|| {
-        let mut sorted = travel.clone();
-        sorted.sort_by(f64::total_cmp);
-        let n = sorted.len();
-        if n % 2 == 1 {
-            sorted[n / 2]
-        } else {
-            0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
-        }
-    });
+    let measured_velocity = median(&travel);
     let reference = commanded_speed.or(measured_velocity).filter(|v| *v > 0.0);
     let velocity_deviation_max_percent = reference.and_then(|r| {
         travel
@@ -174,7 +206,21 @@ pub fn line_report(
         };
         (sum / runs.len().max(1) as f64 - target).norm()
     };
+    let legs = per_leg
+        .iter()
+        .enumerate()
+        .map(|(k, (d, v))| LegReport {
+            leg: k + 1,
+            from_s: commanded.arc_at_vertex(k),
+            to_s: commanded.arc_at_vertex(k + 1),
+            samples: d.len(),
+            max_deviation: d.iter().copied().fold(0.0, f64::max),
+            mean_deviation: mean(d).unwrap_or(0.0),
+            measured_velocity: median(v),
+        })
+        .collect();
     LineReport {
+        legs,
         length,
         commanded_velocity: commanded_speed,
         measured_velocity,

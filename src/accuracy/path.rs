@@ -72,6 +72,14 @@ impl Polyline {
         self.angles.is_some()
     }
 
+    /// Arc length at vertex `k`.
+    pub fn arc_at_vertex(&self, k: usize) -> f64 {
+        self.cumulative
+            .get(k)
+            .copied()
+            .unwrap_or_else(|| self.length())
+    }
+
     /// Arc length `L`.
     pub fn length(&self) -> f64 {
         self.cumulative.last().copied().unwrap_or(0.0)

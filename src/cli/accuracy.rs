@@ -538,6 +538,20 @@ fn path_table(a: &PathArgs, r: &PathReport) -> String {
     for (k, v) in rows {
         let _ = writeln!(s, "  {k:<34} {v}");
     }
+    if l.legs.len() > 1 {
+        for leg in &l.legs {
+            let _ = writeln!(
+                s,
+                "  leg {:<3} s {:>8.1} .. {:>8.1} mm  max. deviation {:.3} mm, mean {:.3} mm, velocity {}",
+                leg.leg,
+                leg.from_s,
+                leg.to_s,
+                leg.max_deviation,
+                leg.mean_deviation,
+                opt(leg.measured_velocity, "mm/s", 1)
+            );
+        }
+    }
     for run in &r.runs {
         let _ = writeln!(
             s,

@@ -549,6 +549,16 @@ fn a_polyline_path_is_cut_on_each_leg() {
         assert!(p.at_a.is_none() && p.rt_a.is_none());
     }
     assert!(r.planes.iter().any(|p| p.s > 400.0) && r.planes.iter().any(|p| p.s < 400.0));
+    // Per leg: the largest distance is the run at z = 0.2 beside the offset of 0.2.
+    let legs: Vec<(f64, f64)> = r.line.legs.iter().map(|l| (l.from_s, l.to_s)).collect();
+    assert_eq!(legs, [(0.0, 400.0), (400.0, 700.0)]);
+    for leg in &r.line.legs {
+        assert!((leg.max_deviation - 0.08f64.sqrt()).abs() < 1e-9, "{leg:?}");
+        assert!(
+            (leg.measured_velocity.unwrap() - 100.0).abs() < 1e-6,
+            "{leg:?}"
+        );
+    }
 }
 
 #[test]
@@ -1022,4 +1032,32 @@ fn figures_are_deterministic_and_snapshotted() {
         summary.push(format!("{name}.svg: {}", svg_summary(&a)));
     }
     insta::assert_snapshot!("path_svg_summary", summary.join("\n"));
+}
+
+#[test]
+fn measured_angles_without_commanded_ones_give_repeatability_only() {
+    let cmd = [CommandedPose {
+        name: "P1".into(),
+        line: 0,
+        position: Vector3::zeros(),
+        angles: None,
+    }];
+    // rx visits at 179.99, -179.99, 180.0: a spread of hundredths, not of 360°.
+    let visits: Vec<Visit> = [179.99, -179.99, 180.0]
+        .iter()
+        .enumerate()
+        .map(|(j, rx)| Visit {
+            point: "P1".into(),
+            cycle: Some(j.to_string()),
+            line: 0,
+            position: Vector3::new(0.01 * j as f64, 0.0, 0.0),
+            angles: Some([*rx, 0.0, 0.0]),
+        })
+        .collect();
+    let r = pose_accuracy(&cmd, &visits).unwrap();
+    let p = &r.points[0];
+    assert!(p.ap_a.is_none() && p.ap_b.is_none() && p.ap_c.is_none());
+    let d = [0.0, 0.02, 0.01];
+    assert!((p.rp_a.unwrap() - 3.0 * naive_std(&d)).abs() < 1e-9, "{:?}", p.rp_a);
+    assert_eq!(p.rp_b, Some(0.0));
 }
