@@ -1058,6 +1058,10 @@ fn measured_angles_without_commanded_ones_give_repeatability_only() {
     let p = &r.points[0];
     assert!(p.ap_a.is_none() && p.ap_b.is_none() && p.ap_c.is_none());
     let d = [0.0, 0.02, 0.01];
-    assert!((p.rp_a.unwrap() - 3.0 * naive_std(&d)).abs() < 1e-9, "{:?}", p.rp_a);
+    assert!(
+        (p.rp_a.unwrap() - 3.0 * naive_std(&d)).abs() < 1e-9,
+        "{:?}",
+        p.rp_a
+    );
     assert_eq!(p.rp_b, Some(0.0));
 }
