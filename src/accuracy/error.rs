@@ -63,10 +63,54 @@ pub enum AccuracyError {
     /// Bad input at a place in a file.
     #[error("{0}")]
     Input(Box<Located>),
-    /// The measurements, taken together, cannot give the figures (the message says why and
-    /// what to measure).
-    #[error("{0}")]
-    Invalid(String),
+    /// A file with neither a header nor data.
+    #[error("{}: the file is empty (start it with its column names)", path.display())]
+    Empty { path: PathBuf },
+    /// No commanded pose.
+    #[error("no commanded poses: the commanded file needs one row per pose")]
+    NoCommandedPoses,
+    /// A commanded pose visited fewer than twice.
+    #[error(
+        "point `{point}` has {visits} visit(s); repeatability needs at least 2 (ISO 9283 asks for 30 cycles)"
+    )]
+    TooFewVisits { point: String, visits: usize },
+    /// A point of the later measurement that the earlier one lacks.
+    #[error(
+        "point `{point}` is not in the earlier measurement; compare measurements of the same poses"
+    )]
+    NotInEarlier { point: String },
+    /// A commanded path of fewer than two points.
+    #[error(
+        "the commanded path has {points} point(s); it needs at least 2 (start and end of a line)"
+    )]
+    PathTooShort { points: usize },
+    /// Two consecutive commanded path points at the same place (1-based).
+    #[error("commanded path points {first} and {} coincide; remove the repeated point", first + 1)]
+    CoincidentPoints { first: usize },
+    /// Zero planes asked for.
+    #[error("the number of planes must be at least 1")]
+    NoPlanes,
+    /// Fewer than two usable runs.
+    #[error(
+        "{used} run(s) along the path in the commanded direction; path repeatability needs at least 2 (found {found} run(s) in all)"
+    )]
+    TooFewRuns { used: usize, found: usize },
+    /// A run that does not reach a plane.
+    #[error(
+        "run `{run}` does not cross the plane at s = {s:.3} mm; record each run over the whole path"
+    )]
+    NoCrossing { run: String, s: f64 },
+    /// Runs to be found from the motion, but the recording has no times.
+    #[error(
+        "without a cycle column the runs are found from the motion, which needs a time column `t`"
+    )]
+    NoTimes,
+    /// Too few samples to find runs in.
+    #[error("{samples} samples are too few to find runs in (at least {needed})")]
+    TooFewSamples { samples: usize, needed: usize },
+    /// A recording that does not move.
+    #[error("the recording does not move; nothing to cut into runs")]
+    Standing,
     /// plotters refused to draw.
     #[error("cannot draw the plot: {0}")]
     Plot(String),

@@ -40,20 +40,15 @@ impl Polyline {
         angles: Option<Vec<[f64; 3]>>,
     ) -> Result<Polyline, AccuracyError> {
         if vertices.len() < 2 {
-            return Err(AccuracyError::Invalid(format!(
-                "the commanded path has {} point(s); it needs at least 2 (start and end of a line)",
-                vertices.len()
-            )));
+            return Err(AccuracyError::PathTooShort {
+                points: vertices.len(),
+            });
         }
         let mut cumulative = vec![0.0];
         for (k, w) in vertices.windows(2).enumerate() {
             let len = (w[1] - w[0]).norm();
             if len < 1e-9 {
-                return Err(AccuracyError::Invalid(format!(
-                    "commanded path points {} and {} coincide; remove the repeated point",
-                    k + 1,
-                    k + 2
-                )));
+                return Err(AccuracyError::CoincidentPoints { first: k + 1 });
             }
             cumulative.push(cumulative[k] + len);
         }
@@ -423,9 +418,7 @@ pub fn path_accuracy(
     options: PathOptions,
 ) -> Result<PathReport, AccuracyError> {
     if options.planes == 0 {
-        return Err(AccuracyError::Invalid(
-            "the number of planes must be at least 1".into(),
-        ));
+        return Err(AccuracyError::NoPlanes);
     }
     let (runs, infos) = match &recording.cycles {
         Some(cycles) => runs_by_cycle(commanded, &recording.samples, cycles)?,
@@ -438,11 +431,10 @@ pub fn path_accuracy(
         .map(|(r, _)| r)
         .collect();
     if used.len() < 2 {
-        return Err(AccuracyError::Invalid(format!(
-            "{} run(s) along the path in the commanded direction; path repeatability needs at least 2 (found {} run(s) in all)",
-            used.len(),
-            infos.len()
-        )));
+        return Err(AccuracyError::TooFewRuns {
+            used: used.len(),
+            found: infos.len(),
+        });
     }
     let m = options.planes;
     let length = commanded.length();
@@ -453,10 +445,10 @@ pub fn path_accuracy(
         let mut crossings = Vec::with_capacity(used.len());
         for run in &used {
             let Some(x) = plane_crossing(&run.samples, &c, &u) else {
-                return Err(AccuracyError::Invalid(format!(
-                    "run `{}` does not cross the plane at s = {s:.3} mm; record each run over the whole path",
-                    run.label
-                )));
+                return Err(AccuracyError::NoCrossing {
+                    run: run.label.clone(),
+                    s,
+                });
             };
             crossings.push(x);
         }

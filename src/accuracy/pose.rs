@@ -273,19 +273,16 @@ pub fn pose_accuracy(
     visits: &[Visit],
 ) -> Result<PoseReport, AccuracyError> {
     if commanded.is_empty() {
-        return Err(AccuracyError::Invalid(
-            "no commanded poses: the commanded file needs one row per pose".into(),
-        ));
+        return Err(AccuracyError::NoCommandedPoses);
     }
     let mut points = Vec::with_capacity(commanded.len());
     for c in commanded {
         let mine: Vec<&Visit> = visits.iter().filter(|v| v.point == c.name).collect();
         if mine.len() < 2 {
-            return Err(AccuracyError::Invalid(format!(
-                "point `{}` has {} visit(s); repeatability needs at least 2 (ISO 9283 asks for 30 cycles)",
-                c.name,
-                mine.len()
-            )));
+            return Err(AccuracyError::TooFewVisits {
+                point: c.name.clone(),
+                visits: mine.len(),
+            });
         }
         let mut centre = RunningPoint::default();
         for v in &mine {
@@ -419,10 +416,9 @@ pub fn compare(before: &PoseReport, after: &PoseReport) -> Result<PoseComparison
     let mut points = Vec::with_capacity(after.points.len());
     for a in &after.points {
         let Some(b) = before.points.iter().find(|b| b.point == a.point) else {
-            return Err(AccuracyError::Invalid(format!(
-                "point `{}` is not in the earlier measurement",
-                a.point
-            )));
+            return Err(AccuracyError::NotInEarlier {
+                point: a.point.clone(),
+            });
         };
         points.push(PointChange {
             point: a.point.clone(),

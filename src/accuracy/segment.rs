@@ -137,25 +137,20 @@ pub fn runs_by_motion(
 ) -> Result<(Vec<Run>, Vec<RunInfo>), AccuracyError> {
     let times: Option<Vec<f64>> = samples.iter().map(|s| s.t).collect();
     let Some(times) = times else {
-        return Err(AccuracyError::Invalid(
-            "without a cycle column the runs are found from the motion, which needs a time column `t`".into(),
-        ));
+        return Err(AccuracyError::NoTimes);
     };
     if samples.len() < 2 * WINDOW + 2 {
-        return Err(AccuracyError::Invalid(format!(
-            "{} samples are too few to find runs in (at least {})",
-            samples.len(),
-            2 * WINDOW + 2
-        )));
+        return Err(AccuracyError::TooFewSamples {
+            samples: samples.len(),
+            needed: 2 * WINDOW + 2,
+        });
     }
     let m = motion(commanded, samples, &times);
     let mut speeds: Vec<f64> = m.iter().map(|x| x.1).collect();
     speeds.sort_by(f64::total_cmp);
     let travel = speeds[(speeds.len() - 1) * 95 / 100];
     if travel <= 0.0 {
-        return Err(AccuracyError::Invalid(
-            "the recording does not move; nothing to cut into runs".into(),
-        ));
+        return Err(AccuracyError::Standing);
     }
     let threshold = STOP_FRACTION * travel;
     let mut state: Vec<i8> = m

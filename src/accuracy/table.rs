@@ -147,10 +147,9 @@ impl Table {
             start = stop + 1;
         }
         let Some(&(header_line, hs, he)) = lines.first() else {
-            return Err(AccuracyError::Invalid(format!(
-                "{}: the file has no header line and no data (start it with its column names)",
-                path.display()
-            )));
+            return Err(AccuracyError::Empty {
+                path: path.to_path_buf(),
+            });
         };
         let head = &bytes[hs..he];
         let delimiter = if head.contains(&b';') {

@@ -61,6 +61,7 @@ pub struct PoseArgs {
     /// An earlier measurement of the same poses (e.g. before `correct`): report the improvement.
     #[arg(long, value_name = "MEASURED0.csv")]
     pub before: Option<PathBuf>,
+    /// Output format (JSON and CSV round to 6 decimals).
     #[arg(long, value_enum, default_value = "table")]
     pub format: Format,
     /// Write the figure: FILE.svg, or a folder (pose.svg in it).
@@ -85,6 +86,7 @@ pub struct PathArgs {
     /// The programmed speed in mm/s (for the velocity deviation).
     #[arg(long, value_name = "MM_PER_S")]
     pub speed: Option<f64>,
+    /// Output format (JSON and CSV round to 6 decimals).
     #[arg(long, value_enum, default_value = "table")]
     pub format: Format,
     /// Write the figures: FILE.svg (all in one), or a folder (path_planes.svg,
@@ -454,6 +456,11 @@ fn path_csv(r: &PathReport) -> String {
     s
 }
 
+/// Rounded to 0.1 without a "-0.0" for a sample a hair before the start.
+fn tenths(v: f64) -> f64 {
+    (v * 10.0).round() / 10.0 + 0.0
+}
+
 fn opt(v: Option<f64>, unit: &str, decimals: usize) -> String {
     v.map_or_else(|| "-".to_owned(), |v| format!("{v:.decimals$} {unit}"))
 }
@@ -564,8 +571,8 @@ fn path_table(a: &PathArgs, r: &PathReport) -> String {
                 trackfix::accuracy::segment::Direction::Forward => "forward",
                 trackfix::accuracy::segment::Direction::Backward => "backward",
             },
-            run.from_s,
-            run.to_s,
+            tenths(run.from_s),
+            tenths(run.to_s),
             if run.used {
                 "used".to_owned()
             } else {
