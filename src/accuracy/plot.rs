@@ -20,14 +20,19 @@ type Figure = fn(&super::pose::PointAccuracy) -> f64;
 const IDEAL: RGBColor = RGBColor(0, 150, 0);
 const MEASURED: RGBColor = RGBColor(200, 0, 0);
 
+/// Ten distinguishable colours (matplotlib's "tab10"), one per run or point.
 fn run_color(k: usize) -> RGBColor {
-    const COLORS: [RGBColor; 6] = [
-        RGBColor(200, 0, 0),
-        RGBColor(0, 90, 200),
-        RGBColor(230, 140, 0),
-        RGBColor(130, 0, 170),
-        RGBColor(0, 150, 150),
-        RGBColor(90, 90, 90),
+    const COLORS: [RGBColor; 10] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+        RGBColor(188, 189, 34),
+        RGBColor(23, 190, 207),
     ];
     COLORS[k % COLORS.len()]
 }

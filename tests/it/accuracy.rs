@@ -42,7 +42,30 @@ fn samples_are_reproducible() {
             std::fs::write(&path, &text).unwrap();
         }
         let on_disk = std::fs::read_to_string(&path).unwrap();
-        assert!(on_disk == text, "{name} differs from its generator");
+        assert_same_table(name, &on_disk, &text);
+    }
+}
+
+/// Equal text, except that a number may differ by one unit of its last written digit: the
+/// generator's noise goes through `ln` and `cos`, whose last bit may differ between platforms.
+fn assert_same_table(name: &str, on_disk: &str, generated: &str) {
+    let (a, b): (Vec<&str>, Vec<&str>) = (on_disk.lines().collect(), generated.lines().collect());
+    assert_eq!(a.len(), b.len(), "{name}: line count");
+    for (k, (x, y)) in a.iter().zip(&b).enumerate() {
+        let split = |l: &str| l.split([',', ';']).map(str::to_owned).collect::<Vec<_>>();
+        let (fx, fy) = (split(x), split(y));
+        assert_eq!(fx.len(), fy.len(), "{name}:{}", k + 1);
+        for (u, v) in fx.iter().zip(&fy) {
+            if u == v {
+                continue;
+            }
+            let num = |t: &str| t.replace(',', ".").parse::<f64>().ok();
+            let (Some(p), Some(q)) = (num(u), num(v)) else {
+                panic!("{name}:{}: `{u}` vs `{v}`", k + 1);
+            };
+            let unit = 10f64.powi(-(u.rsplit(['.', ',']).next().map_or(0, str::len) as i32));
+            assert!((p - q).abs() <= 1.5 * unit, "{name}:{}: {u} vs {v}", k + 1);
+        }
     }
 }
 
@@ -72,7 +95,11 @@ fn tracker_export_sample_is_reproducible() {
     if std::env::var_os("TRACKFIX_WRITE_SAMPLES").is_some() {
         std::fs::write(&path, &text).unwrap();
     }
-    assert!(std::fs::read_to_string(&path).unwrap() == text);
+    assert_same_table(
+        "pose_export.csv",
+        &std::fs::read_to_string(&path).unwrap(),
+        &text,
+    );
 }
 
 // ---- independent implementations -------------------------------------------------------
