@@ -8,7 +8,8 @@
 //! velocity exceeds [`STOP_FRACTION`] of the recording's typical travel speed (its 95th
 //! percentile), and stands otherwise. A run is a span of one direction with the standing
 //! samples around it; a stop between two runs is split in the middle. Spans shorter than the
-//! window are noise and stand.
+//! window are noise and stand. A stop inside the path (a corner, a fine point) does not end a
+//! run: two spans of one direction around it are one run.
 
 use nalgebra::Vector3;
 use serde::Serialize;
@@ -185,7 +186,27 @@ pub fn runs_by_motion(
             state[a..=b].fill(0);
         }
     }
-    let moving = spans(&state);
+    // A stop inside the path (at a corner, a fine point, a pause) does not end the run: two
+    // spans of one direction with a stop between them merge unless the stop is at an end.
+    let length = commanded.length();
+    let mut moving: Vec<(usize, usize, i8)> = Vec::new();
+    for span in spans(&state) {
+        if let Some(last) = moving.last_mut()
+            && last.2 == span.2
+        {
+            let gap = &samples[last.1 + 1..span.0];
+            let inside = gap.is_empty() || {
+                let mean = gap.iter().map(|x| x.position).sum::<Vector3<f64>>() / gap.len() as f64;
+                let s = commanded.project(&mean).s;
+                s > COVER_FRACTION * length && s < (1.0 - COVER_FRACTION) * length
+            };
+            if inside {
+                last.1 = span.1;
+                continue;
+            }
+        }
+        moving.push(span);
+    }
     let mut runs = Vec::with_capacity(moving.len());
     let mut infos = Vec::with_capacity(moving.len());
     for (j, &(a, b, _)) in moving.iter().enumerate() {

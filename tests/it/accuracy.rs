@@ -1092,3 +1092,68 @@ fn measured_angles_without_commanded_ones_give_repeatability_only() {
     );
     assert_eq!(p.rp_b, Some(0.0));
 }
+
+#[test]
+fn a_stop_at_a_corner_does_not_end_the_run() {
+    // Three runs along an L, each standing 0.2 s at the start, at the corner and at the end, with
+    // a trapezoidal speed on each leg; one continuous recording without cycles.
+    let v = [
+        Vector3::new(0.0, 0.0, 0.0),
+        Vector3::new(400.0, 0.0, 0.0),
+        Vector3::new(400.0, 300.0, 0.0),
+    ];
+    let poly = Polyline::new(v.to_vec(), None).unwrap();
+    let mut samples = Vec::new();
+    let mut t = 0.0;
+    let dt = 0.01;
+    let mut push = |p: Vector3<f64>, t: &mut f64| {
+        samples.push(Sample {
+            line: 0,
+            t: Some(*t),
+            position: p,
+            angles: None,
+        });
+        *t += dt;
+    };
+    for run in 0..3 {
+        let offset = Vector3::new(0.0, 0.0, 0.05 * run as f64);
+        for (from, to) in [(v[0], v[1]), (v[1], v[2])] {
+            for _ in 0..20 {
+                push(from + offset, &mut t);
+            }
+            let len = (to - from).norm();
+            let steps = (len / 4.0) as usize; // 400 mm/s
+            for k in 1..=steps {
+                let f = k as f64 / steps as f64;
+                let eased = 0.5 - 0.5 * (std::f64::consts::PI * f).cos();
+                push(from + (to - from) * eased + offset, &mut t);
+            }
+        }
+        for _ in 0..20 {
+            push(v[2] + offset, &mut t);
+        }
+        // Back to the start, quickly and off the path (not a run along it).
+        for k in 1..=30 {
+            let f = k as f64 / 30.0;
+            push(
+                v[2] + (v[0] - v[2]) * f
+                    + Vector3::new(0.0, 0.0, 50.0) * (1.0 - (2.0 * f - 1.0).powi(2)),
+                &mut t,
+            );
+        }
+    }
+    let r = path_accuracy(
+        &poly,
+        &Recording {
+            samples,
+            cycles: None,
+        },
+        PathOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(r.runs_used, 3, "{:#?}", r.runs);
+    // Offsets 0, 0.05, 0.1 in z: barycentre 0.05 off, l = 0.05, 0, 0.05.
+    assert!((r.at - 0.05).abs() < 1e-9, "{}", r.at);
+    let l = [0.05, 0.0, 0.05];
+    assert!((r.rt - (naive_mean(&l) + 3.0 * naive_std(&l))).abs() < 1e-9);
+}
