@@ -377,6 +377,38 @@ mod tests {
         );
     }
 
+    proptest::proptest! {
+        #[test]
+        fn any_bytes_give_a_table_or_a_located_error(bytes in proptest::collection::vec(
+            proptest::prop_oneof![
+                proptest::strategy::Just(b','), proptest::strategy::Just(b';'),
+                proptest::strategy::Just(b'\n'), proptest::strategy::Just(b'"'),
+                proptest::strategy::Just(b'1'), proptest::strategy::Just(b'x'),
+                proptest::num::u8::ANY,
+            ],
+            0..200,
+        )) {
+            let map = ColumnMap::parse("point=x").unwrap();
+            match Table::parse(Path::new("f.csv"), &bytes, &map) {
+                Ok(t) => {
+                    for row in &t.rows {
+                        for i in 0..row.fields.len() + 1 {
+                            let _ = t.text(row, i);
+                            if let Err(e) = t.number(row, i) {
+                                proptest::prop_assert!(e.location().is_some());
+                            }
+                        }
+                    }
+                    let _ = t.column("point");
+                    let _ = t.angle_columns();
+                }
+                Err(e) => {
+                    let _ = e.to_string();
+                }
+            }
+        }
+    }
+
     #[test]
     fn column_map_syntax() {
         assert!(ColumnMap::parse("point").is_err());

@@ -1157,3 +1157,31 @@ fn a_stop_at_a_corner_does_not_end_the_run() {
     let l = [0.05, 0.0, 0.05];
     assert!((r.rt - (naive_mean(&l) + 3.0 * naive_std(&l))).abs() < 1e-9);
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Any recording along any polyline gives figures or an error, never a panic.
+    #[test]
+    fn path_analysis_never_panics(
+        vertices in prop::collection::vec(prop::array::uniform3(-100.0f64..100.0), 2..5),
+        points in prop::collection::vec(prop::array::uniform3(-120.0f64..120.0), 0..80),
+        with_cycles in any::<bool>(),
+        planes in 0usize..6,
+    ) {
+        let Ok(poly) = Polyline::new(vertices.iter().map(|v| Vector3::from(*v)).collect(), None) else {
+            return Ok(());
+        };
+        let samples: Vec<Sample> = points
+            .iter()
+            .enumerate()
+            .map(|(k, p)| Sample { line: k as u64 + 2, t: Some(k as f64 * 0.01), position: Vector3::from(*p), angles: Some([p[0], p[1], p[2]]) })
+            .collect();
+        let cycles = with_cycles.then(|| (0..samples.len()).map(|k| (k % 3).to_string()).collect());
+        let rec = Recording { samples, cycles };
+        if let Ok(r) = path_accuracy(&poly, &rec, PathOptions { planes, commanded_speed: Some(100.0) }) {
+            prop_assert!(r.at.is_finite() && r.rt.is_finite() && r.runs_used >= 2);
+            let _ = trackfix::accuracy::plot::path_svg(&poly, &r).unwrap();
+        }
+    }
+}
