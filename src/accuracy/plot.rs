@@ -88,8 +88,10 @@ fn svg(size: (u32, u32), draw: impl FnOnce(&Area<'_>) -> Drawn) -> Result<String
 }
 
 /// Figs 3.11-3.12: AP, MAX and RP per point, and each point's visits in the x/y plane around
-/// its mean deviation with the RP circle.
-pub fn pose_svg(report: &PoseReport) -> Result<String, AccuracyError> {
+/// its mean deviation with the RP circle. With an earlier measurement, its AP as a bar beside
+/// and a line from its mean deviation to the new one: how far a correction moved each point.
+pub fn pose_svg(report: &PoseReport, before: Option<&PoseReport>) -> Result<String, AccuracyError> {
+    let earlier = |name: &str| before.and_then(|b| b.points.iter().find(|p| p.point == name));
     svg((1400, 650), |root| {
         let root = root
             .titled(
@@ -102,7 +104,7 @@ pub fn pose_svg(report: &PoseReport) -> Result<String, AccuracyError> {
         let top = report
             .points
             .iter()
-            .flat_map(|p| [p.ap, p.max, p.rp])
+            .flat_map(|p| [p.ap, p.max, p.rp, earlier(&p.point).map_or(0.0, |b| b.ap)])
             .fold(0.0, f64::max)
             .max(1e-3)
             * 1.35;
@@ -133,12 +135,39 @@ pub fn pose_svg(report: &PoseReport) -> Result<String, AccuracyError> {
             ("MAX", MEASURED, |p| p.max),
             ("RP", IDEAL, |p| p.rp),
         ];
+        let (bars, width) = if before.is_some() {
+            (4.0, 0.18)
+        } else {
+            (3.0, 0.22)
+        };
+        let offset = |k: usize| (k as f64 - (bars - 1.0) / 2.0) * width;
+        if before.is_some() {
+            let light = RGBColor(150, 170, 230);
+            chart
+                .draw_series(report.points.iter().enumerate().map(|(i, p)| {
+                    let x = i as f64 + offset(0);
+                    let h = earlier(&p.point).map_or(0.0, |b| b.ap);
+                    Rectangle::new(
+                        [(x - width / 2.2, 0.0), (x + width / 2.2, h)],
+                        light.filled(),
+                    )
+                }))
+                .map_err(AccuracyError::plot)?
+                .label("AP before")
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 5), (x + 12, y + 5)], light.filled())
+                });
+        }
+        let first = usize::from(before.is_some());
         for (k, (label, color, value)) in series.into_iter().enumerate() {
-            let dx = (k as f64 - 1.0) * 0.22;
+            let dx = offset(k + first);
             chart
                 .draw_series(report.points.iter().enumerate().map(|(i, p)| {
                     let x = i as f64 + dx;
-                    Rectangle::new([(x - 0.1, 0.0), (x + 0.1, value(p))], color.filled())
+                    Rectangle::new(
+                        [(x - width / 2.2, 0.0), (x + width / 2.2, value(p))],
+                        color.filled(),
+                    )
                 }))
                 .map_err(AccuracyError::plot)?
                 .label(label)
@@ -159,11 +188,16 @@ pub fn pose_svg(report: &PoseReport) -> Result<String, AccuracyError> {
                 .iter()
                 .flat_map(|d| [d.x, d.y])
                 .chain([p.ap_x.abs() + p.rp, p.ap_y.abs() + p.rp])
+                .chain(earlier(&p.point).map_or([0.0; 2], |b| [b.ap_x, b.ap_y]))
                 .collect::<Vec<_>>()
         }));
         let mut chart = ChartBuilder::on(&right)
             .caption(
-                "x/y deviation of each visit; circle: RP around the mean",
+                if before.is_some() {
+                    "x/y deviation of each visit; circle: RP around the mean; x: mean before"
+                } else {
+                    "x/y deviation of each visit; circle: RP around the mean"
+                },
                 ("sans-serif", 16),
             )
             .margin(14)
@@ -179,6 +213,17 @@ pub fn pose_svg(report: &PoseReport) -> Result<String, AccuracyError> {
             .map_err(AccuracyError::plot)?;
         for (i, p) in report.points.iter().enumerate() {
             let color = run_color(i);
+            if let Some(b) = earlier(&p.point) {
+                chart
+                    .draw_series(LineSeries::new(
+                        [(b.ap_x, b.ap_y), (p.ap_x, p.ap_y)],
+                        color.mix(0.6),
+                    ))
+                    .map_err(AccuracyError::plot)?;
+                chart
+                    .draw_series(std::iter::once(Cross::new((b.ap_x, b.ap_y), 4, color)))
+                    .map_err(AccuracyError::plot)?;
+            }
             chart
                 .draw_series(
                     p.deviations

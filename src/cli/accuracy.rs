@@ -64,7 +64,8 @@ pub struct PoseArgs {
     /// Output format (JSON and CSV round to 6 decimals).
     #[arg(long, value_enum, default_value = "table")]
     pub format: Format,
-    /// Write the figure: FILE.svg, or a folder (pose.svg in it).
+    /// Write the figure: FILE.svg, or a folder (pose.svg in it). With --before it shows the
+    /// earlier AP and how far each point's mean moved.
     #[arg(long, value_name = "DIR_or_FILE.svg")]
     pub plot: Option<PathBuf>,
     /// Which columns of a measurement export hold the roles: point=COL,cycle=COL,x=COL,…
@@ -217,10 +218,8 @@ fn run_pose(a: &PoseArgs) -> anyhow::Result<String> {
         None => None,
     };
     if let Some(plot) = &a.plot {
-        write_atomic(
-            &plot_target(plot, "pose.svg")?,
-            pose_svg(&report)?.as_bytes(),
-        )?;
+        let svg = pose_svg(&report, before.as_ref().map(|b| &b.0))?;
+        write_atomic(&plot_target(plot, "pose.svg")?, svg.as_bytes())?;
     }
     Ok(match a.format {
         Format::Json => match &before {

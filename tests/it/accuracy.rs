@@ -1011,6 +1011,25 @@ fn figures_are_deterministic_and_snapshotted() {
     // 10 points: 100 visit dots, 10 RP circles (polylines) and their labels.
     assert_eq!(pose.matches("<circle").count(), 100);
     insta::assert_snapshot!("pose_svg", pose);
+    // With the earlier measurement: its AP bars (one more per point, 10 more rects), a cross at
+    // each earlier mean and a line from it to the new one.
+    ok(&[
+        "accuracy",
+        "pose",
+        POSE[0],
+        POSE[1],
+        "--before",
+        "samples/accuracy/pose_before.csv",
+        "--plot",
+        &d("before.svg"),
+    ]);
+    let compared = std::fs::read_to_string(d("before.svg")).unwrap();
+    assert_eq!(
+        compared.matches("<rect").count(),
+        pose.matches("<rect").count() + 11
+    );
+    assert!(compared.contains("AP before") && compared.contains("x: mean before"));
+    insta::assert_snapshot!("pose_before_svg_summary", svg_summary(&compared));
 
     let cycles = "samples/accuracy/line_cycles.csv";
     ok(&[
