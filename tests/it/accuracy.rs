@@ -5,7 +5,9 @@ use nalgebra::Vector3;
 use proptest::prelude::*;
 use trackfix::accuracy::path::{Recording, Sample, path_accuracy, plane_crossing};
 use trackfix::accuracy::pose::{CommandedPose, Visit, compare, pose_accuracy};
-use trackfix::accuracy::simulate::{LineSimulation, THESIS_POINTS, line_csvs, pose_csvs};
+use trackfix::accuracy::simulate::{
+    LineSimulation, THESIS_POINTS, edge_csvs, line_csvs, pose_csvs,
+};
 use trackfix::accuracy::{PathOptions, Polyline};
 
 use crate::support::{root, trackfix};
@@ -18,11 +20,13 @@ const LINE: &str = "samples/accuracy/line_commanded.csv";
 
 const POSE_SEED: u64 = 9283;
 const LINE_SEED: u64 = 5101;
+const EDGE_SEED: u64 = 3406;
 
 /// The sample files and how they are made: `TRACKFIX_WRITE_SAMPLES=1` rewrites them.
 fn sample_files() -> Vec<(&'static str, String)> {
     let (commanded, measured, before) = pose_csvs(POSE_SEED, 10, 0.3, 0.006);
     let (line, cycles, continuous) = line_csvs(LINE_SEED, &LineSimulation::default(), 3);
+    let edge = edge_csvs(EDGE_SEED, 3);
     vec![
         ("pose_commanded.csv", commanded),
         ("pose_measured.csv", measured),
@@ -30,6 +34,8 @@ fn sample_files() -> Vec<(&'static str, String)> {
         ("line_commanded.csv", line),
         ("line_cycles.csv", cycles),
         ("line_continuous.csv", continuous),
+        ("edge_commanded.csv", edge.0),
+        ("edge_cycles.csv", edge.1),
     ]
 }
 
@@ -855,6 +861,19 @@ fn path_cli_outputs() {
             "5",
             "--format",
             "json"
+        ])
+    );
+    // A 90° edge without a stop: the straight-line figures per leg, the swing-over behind the
+    // corner in ATp of the planes after it.
+    insta::assert_snapshot!(
+        "path_table_edge",
+        ok(&[
+            "accuracy",
+            "path",
+            "samples/accuracy/edge_commanded.csv",
+            "samples/accuracy/edge_cycles.csv",
+            "--speed",
+            "400"
         ])
     );
     insta::assert_snapshot!(
