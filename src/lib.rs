@@ -14,6 +14,7 @@
 //!
 //! The library never prints and never panics on input.
 
+pub mod accuracy;
 pub mod geometry;
 pub mod html_report;
 pub mod kinematics;

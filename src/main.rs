@@ -53,6 +53,9 @@ enum Command {
     Transfer(cli::transform::TransferArgs),
     /// Check every target's reach, joint limits and configuration with the robot's kinematics.
     Reach(cli::reach::ReachArgs),
+    /// ISO 9283 pose and path accuracy from laser-tracker measurements.
+    #[command(subcommand)]
+    Accuracy(cli::accuracy::AccuracyCommand),
     /// Write the track report: one self-contained HTML file (measurements, model, controller figures).
     Report(cli::report::ReportArgs),
     /// Print a shell completion script (bash, zsh, fish, powershell, elvish).
@@ -102,6 +105,7 @@ fn main() -> ExitCode {
         Command::Mirror(a) => cli::transform::run_mirror(a),
         Command::Transfer(a) => cli::transform::run_transfer(a),
         Command::Reach(a) => cli::reach::run(a),
+        Command::Accuracy(c) => cli::accuracy::run(c),
         Command::Report(a) => cli::report::run(a),
         Command::Completions { shell } => {
             // Rendered first: clap_complete panics on a failed write.
