@@ -4,6 +4,9 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
+use trackfix::accuracy::pose::{pose_accuracy, read_commanded_poses, read_visits};
+use trackfix::accuracy::{AccuracyError, ColumnMap};
+use trackfix::html_report::accuracy::pose_result;
 use trackfix::html_report::track::{TrackReport, scan_columns};
 use trackfix::html_report::{SourceFile, TrackInputs};
 use trackfix::track::frames_csv::parse_frames;
@@ -19,6 +22,7 @@ const REPORT_EXAMPLES: &str = "\
 Examples:
   trackfix report --measurements samples/track/measurements.csv --scan samples/track/scan.csv -o r1.html
   trackfix report --profile samples/track/profile.toml -o profile.html
+  trackfix report --profile samples/track/profile.toml --accuracy-pose samples/accuracy/pose_commanded.csv samples/accuracy/pose_measured.csv -o cell.html
 
 One HTML file with its stylesheet and charts inline: no script, no font or file fetched; it opens
 from a USB stick and prints to PDF (one section per page). What is not given is computed:
@@ -27,7 +31,7 @@ measurements -> frames (as track identify) -> profile (as track fit).";
 #[derive(clap::Args)]
 #[command(after_help = REPORT_EXAMPLES)]
 #[command(group = clap::ArgGroup::new("input").required(true).multiple(true)
-    .args(["measurements", "frames", "profile", "scan"]))]
+    .args(["measurements", "frames", "profile", "scan", "accuracy_pose"]))]
 pub struct ReportArgs {
     /// measurements.csv: skid,point,robot_x,robot_y,robot_z,meas_x,meas_y,meas_z
     #[arg(long, value_name = "M.csv")]
@@ -41,6 +45,10 @@ pub struct ReportArgs {
     /// scan.csv: skid,x,y,z (or t,x,y,z with --speed), for the spectrum.
     #[arg(long, value_name = "S.csv")]
     pub scan: Option<PathBuf>,
+    /// ISO 9283 pose accuracy: commanded poses (point,x,y,z[,rx,ry,rz]) and their measured
+    /// visits (point,cycle,x,y,z[,rx,ry,rz]), as `accuracy pose` reads them (repeatable).
+    #[arg(long, num_args = 2, value_names = ["C.csv", "M.csv"], action = clap::ArgAction::Append)]
+    pub accuracy_pose: Vec<PathBuf>,
     /// Spectrum amplitude threshold in mm: frequencies above it must be sampled.
     #[arg(
         long,
@@ -80,7 +88,16 @@ fn folder_name(path: &Path) -> Option<String> {
 }
 
 pub fn run(a: ReportArgs) -> anyhow::Result<Exit> {
-    report_located(run_inner(&a))
+    let result = report_located(run_inner(&a));
+    // An accuracy input error already says `file:line:col: error: …` with the line and a hint.
+    if let Err(err) = &result
+        && let Some(AccuracyError::Input(located)) =
+            err.chain().find_map(|c| c.downcast_ref::<AccuracyError>())
+    {
+        writeln!(std::io::stderr(), "{located}")?;
+        return Ok(Exit::Usage);
+    }
+    result
 }
 
 fn run_inner(a: &ReportArgs) -> anyhow::Result<Exit> {
@@ -134,6 +151,19 @@ fn run_inner(a: &ReportArgs) -> anyhow::Result<Exit> {
         let spec = scan_spectrum(&positions, &points, a.threshold)
             .with_context(|| path.display().to_string())?;
         inputs.scan = Some((src, spec));
+    }
+    for pair in a.accuracy_pose.chunks(2) {
+        let [commanded, measured] = pair else {
+            anyhow::bail!("--accuracy-pose takes two files: C.csv M.csv");
+        };
+        let map = ColumnMap::default();
+        let poses = read_commanded_poses(commanded, &map)?;
+        let visits = read_visits(measured, &map, &poses)?;
+        let report = pose_accuracy(&poses, &visits)
+            .with_context(|| format!("ISO 9283 pose accuracy of {}", measured.display()))?;
+        inputs
+            .accuracy
+            .push(pose_result(&report, read(commanded)?.0, read(measured)?.0));
     }
     let report = TrackReport::compute(inputs)?;
     let sections = report.sections();

@@ -206,6 +206,7 @@ svg .band { fill: #1f4fa0; fill-opacity: .18; stroke: none; }
 svg .knot { fill: #c62828; }
 svg .bar { fill: #4a78c2; }
 svg .bar.outlier { fill: #c62828; }
+svg .bar.rp { fill: #8a8f98; }
 svg .limit { stroke: #c62828; stroke-width: 1.2; stroke-dasharray: 6 3; }
 svg .median { stroke: #555; stroke-width: 1; stroke-dasharray: 2 3; }
 svg .marker { stroke: #c62828; stroke-width: 1.2; }

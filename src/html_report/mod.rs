@@ -5,6 +5,7 @@
 //! Every text taken from a file goes through [`html::escape`]; charts are small hand-written
 //! SVG ([`svg`]) printed with fixed decimals, so the same inputs give the same bytes.
 
+pub mod accuracy;
 pub mod figures;
 pub mod html;
 pub mod run;
@@ -14,5 +15,6 @@ pub mod track;
 pub use figures::{ControllerFigures, abb_pose_literal, kuka_frame_literal};
 pub use run::{RunFile, RunInput, RunReport, run_report};
 pub use track::{
-    DataTable, ReportError, SourceFile, TrackInputs, TrackReport, accuracy_section, track_report,
+    AccuracyResult, DataTable, ReportError, SourceFile, TrackInputs, TrackReport, accuracy_section,
+    track_report,
 };

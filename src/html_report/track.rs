@@ -104,6 +104,16 @@ impl DataTable {
     }
 }
 
+/// One ISO 9283 result for the accuracy section: the files it comes from, its tables and
+/// optionally a chart (an inline SVG from [`super::svg`]) with its caption.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AccuracyResult {
+    /// (role, file), listed under the report's inputs.
+    pub sources: Vec<(String, SourceFile)>,
+    pub tables: Vec<DataTable>,
+    pub figure: Option<(String, String)>,
+}
+
 /// What the report is made from; each given input adds its sections.
 #[derive(Clone, Debug, Default)]
 pub struct TrackInputs {
@@ -118,8 +128,8 @@ pub struct TrackInputs {
     /// How a profile is fitted when it is computed (`source_sha256` is filled in: the frames
     /// file's hash, or the hash of the frames text `track identify` would write).
     pub fit: FitOptions,
-    /// ISO 9283 results, one table each; the section appears when there is at least one.
-    pub accuracy: Vec<DataTable>,
+    /// ISO 9283 results; the section appears when there is at least one.
+    pub accuracy: Vec<AccuracyResult>,
 }
 
 /// A step of the report that failed, and why.
@@ -144,7 +154,7 @@ pub struct TrackReport {
     pub fit: Option<TrackFit>,
     pub profile: Option<Profile>,
     pub spectrum: Option<Spectrum>,
-    pub accuracy: Vec<DataTable>,
+    pub accuracy: Vec<AccuracyResult>,
 }
 
 impl TrackReport {
@@ -217,6 +227,9 @@ impl TrackReport {
             sources.push(("scan".to_owned(), src));
             spec
         });
+        for a in &inputs.accuracy {
+            sources.extend(a.sources.iter().cloned());
+        }
         Ok(TrackReport {
             sources,
             derived,
@@ -898,12 +911,17 @@ fn spectrum_section(spec: &Spectrum) -> Section {
     sec
 }
 
-/// ISO 9283 results (pose accuracy, repeatability, …) as given: one table each.
-pub fn accuracy_section(tables: &[DataTable]) -> Section {
+/// ISO 9283 results (pose accuracy, repeatability, …) as given: tables and charts.
+pub fn accuracy_section(results: &[AccuracyResult]) -> Section {
     let mut sec = Section::new("accuracy", headings::ACCURACY);
-    sec.para("Pose accuracy and repeatability per ISO 9283, from tracker measurements of commanded poses.");
-    for t in tables {
-        sec.raw(&t.to_html());
+    sec.para("Accuracy and repeatability per ISO 9283, from laser-tracker measurements of commanded poses.");
+    for r in results {
+        for t in &r.tables {
+            sec.raw(&t.to_html());
+        }
+        if let Some((svg, caption)) = &r.figure {
+            sec.figure(svg, caption);
+        }
     }
     sec
 }

@@ -7,7 +7,7 @@ use std::process::Command;
 
 use trackfix::html_report::run::{RunFile, RunInput, RunReport, headings as run_headings};
 use trackfix::html_report::track::{deviation_section, headings as track_headings};
-use trackfix::html_report::{DataTable, TrackInputs, TrackReport, run_report};
+use trackfix::html_report::{AccuracyResult, DataTable, TrackInputs, TrackReport, run_report};
 use trackfix::program::{LoadOptions, load};
 use trackfix::track::{Extrapolate, Knot, Profile};
 use trackfix::transform::{Cell, Direction, TrackSetup, apply, track_correction};
@@ -187,6 +187,8 @@ fn track_report_of_the_samples_outline() {
         &["--profile", "samples/track/r2/profile.toml"],
     );
     insta::assert_snapshot!("track_r2_profile_only", outline(&r2));
+    let acc = cli_report(tmp.path(), "acc.html", &["--accuracy-pose", POSE_C, POSE_M]);
+    insta::assert_snapshot!("track_accuracy_pose_only", outline(&acc));
 }
 
 #[test]
@@ -231,19 +233,54 @@ fn sections_follow_the_inputs() {
     );
     let scan = cli_report(tmp.path(), "s.html", &["--scan", "samples/track/scan.csv"]);
     assert_eq!(h2s(&scan), [INPUTS, SPECTRUM]);
-    let mut acc = TrackReport::compute(TrackInputs {
-        accuracy: vec![DataTable {
-            title: "Pose accuracy per point".into(),
-            columns: vec!["point".into(), "AP [mm]".into()],
-            rows: vec![vec!["P1".into(), "0.08".into()]],
-            note: None,
+    let acc = cli_report(tmp.path(), "a.html", &["--accuracy-pose", POSE_C, POSE_M]);
+    assert_eq!(h2s(&acc), [INPUTS, ACCURACY]);
+    // A library caller's own table model shows the same way.
+    let own = TrackReport::compute(TrackInputs {
+        accuracy: vec![AccuracyResult {
+            tables: vec![DataTable {
+                title: "Pose accuracy per point".into(),
+                columns: vec!["point".into(), "AP [mm]".into()],
+                rows: vec![vec!["P1".into(), "0.08".into()]],
+                note: None,
+            }],
+            ..AccuracyResult::default()
         }],
         ..TrackInputs::default()
     })
     .unwrap()
     .render();
-    assert_eq!(h2s(&acc), [INPUTS, ACCURACY]);
-    acc.clear();
+    assert_eq!(h2s(&own), [INPUTS, ACCURACY]);
+    assert!(own.contains("<td>P1</td><td class=\"n\">0.08</td>"));
+}
+
+const POSE_C: &str = "samples/accuracy/pose_commanded.csv";
+const POSE_M: &str = "samples/accuracy/pose_measured.csv";
+
+/// The ISO 9283 table holds what `accuracy pose` prints, row for row.
+#[test]
+fn accuracy_table_equals_accuracy_pose() {
+    let (code, text, err) = trackfix(&["accuracy", "pose", POSE_C, POSE_M]);
+    assert_eq!(code, 0, "{err}");
+    let tmp = tempfile::tempdir().unwrap();
+    let html = cli_report(tmp.path(), "a.html", &["--accuracy-pose", POSE_C, POSE_M]);
+    let mut rows = 0;
+    for line in text.lines() {
+        let cells: Vec<&str> = line.split_whitespace().collect();
+        let is_point = cells
+            .first()
+            .is_some_and(|c| c.starts_with('P') && c[1..].parse::<u32>().is_ok());
+        if !(is_point && cells.len() == 14) {
+            continue;
+        }
+        let mut want = format!("<tr><td>{}</td><td class=\"n\">{}</td>", cells[0], cells[1]);
+        for c in &cells[2..] {
+            want.push_str(&format!("<td class=\"n\">{c}</td>"));
+        }
+        assert!(html.contains(&want), "missing {want}");
+        rows += 1;
+    }
+    assert_eq!(rows, 10, "{text}");
 }
 
 /// The controller figures are the ones `track fit` prints, character for character, whether
@@ -337,8 +374,26 @@ fn sample_reports(dir: &Path) -> Vec<(String, String, Vec<String>)> {
             .map(|f| format!("{}{}", run_headings::FILE_PREFIX, f.path)),
     );
     run_all.push(run_headings::REFUSALS.into());
+    let cell = cli_report(
+        dir,
+        "cell.html",
+        &[
+            "--profile",
+            "samples/track/profile.toml",
+            "--accuracy-pose",
+            POSE_C,
+            POSE_M,
+            "--accuracy-pose",
+            POSE_C,
+            "samples/accuracy/pose_before.csv",
+        ],
+    );
+    let cell_all: Vec<String> = [INPUTS, CONTROLLER, DEVIATION, ADJUSTMENT, BOUNDS, ACCURACY]
+        .map(str::to_owned)
+        .to_vec();
     let reports: Vec<(String, String, Vec<String>)> = vec![
         ("r1.html".into(), r1_report(dir), track_all.clone()),
+        ("cell.html".into(), cell, cell_all),
         ("r2.html".into(), r2, track_all),
         ("run.html".into(), run_report(&run), run_all),
     ];
