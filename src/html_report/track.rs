@@ -735,7 +735,7 @@ fn adjustment_section(p: &Profile) -> Section {
     .equal_scale();
     let pts: Vec<(f64, f64)> = twist.iter().map(|t| (t.x, t.y)).collect();
     ch.polyline(&pts, "curve");
-    for t in &twist {
+    for (i, t) in twist.iter().enumerate() {
         ch.dot(
             t.x,
             t.y,
@@ -748,7 +748,9 @@ fn adjustment_section(p: &Profile) -> Section {
                 t.y
             )),
         );
-        ch.label(t.x, t.y, 5.0, -5.0, &skid_text(t.skid));
+        // Neighbouring knots lie close: labels alternate above and below their dot.
+        let dy = if i % 2 == 0 { -5.0 } else { 13.0 };
+        ch.label(t.x, t.y, 5.0, dy, &skid_text(t.skid));
     }
     sec.figure(
         &ch.render(),
