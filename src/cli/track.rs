@@ -1,5 +1,5 @@
 //! `trackfix track identify | fit | show | spectrum` (and the hidden `simulate` that made the
-//! samples). Owned by issue 4.
+//! samples).
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -9,16 +9,19 @@ use anyhow::Context as _;
 use trackfix::geometry::{abb_quat_components, kuka_abc_angles, pose_to_xyz_deg};
 use trackfix::track::adjustment::{chord_bounds, manual_adjustment, twist_diagram};
 use trackfix::track::csv_table::NumericCsv;
-use trackfix::track::frames_csv::{clean, frames_csv, read_frames};
-use trackfix::track::identify::{OUTLIER_FACTOR, identify, read_measurements};
+use trackfix::track::frames_csv::{FRAMES_HEADER, clean, frames_csv, frames_from};
+use trackfix::track::identify::{
+    CONDITION_LIMIT, Exclusion, FrameShift, MEASUREMENTS_HEADER, OUTLIER_FACTOR,
+    identify_excluding, measurements_from,
+};
 use trackfix::track::nominal::{FitOptions, fit_track};
 use trackfix::track::plot::{profile_svg, spectrum_svg};
 use trackfix::track::profile::write_atomic;
 use trackfix::track::simulate::{
     TrackTruth, measurements_csv, sample_tcp_points, scan_csv, simulate_measurements, simulate_scan,
 };
-use trackfix::track::spectrum::{TUKEY_ALPHA, scan_spectrum};
-use trackfix::track::{Extrapolate, Gear, Knot, Profile, Reference, TrackError};
+use trackfix::track::spectrum::{TUKEY_ALPHA, scan_from_table, scan_spectrum};
+use trackfix::track::{Extrapolate, Gear, Knot, LocatedError, Profile, Reference, TrackError};
 use trackfix::transform::CellError;
 
 use super::Exit;
@@ -44,7 +47,10 @@ Examples:
 
 measurements.csv has one row per tracker point: skid,point,robot_x,robot_y,robot_z,meas_x,
 meas_y,meas_z (the TCP point in the robot base and the tracker's reading of it, mm). At least 3
-non-collinear points per skid position. Points above 4 x the median residual are flagged.";
+non-collinear points per skid position (rotation condition number at most 20), tracker and
+robot points in the same units. Outliers are judged against a robust fit, so one bad reading
+is the one point flagged; leave it out with --exclude SKID:POINT. A `;`-separated file with
+decimal commas (a spreadsheet export) is read too.";
 
 const FIT_EXAMPLES: &str = "\
 Examples:
@@ -76,6 +82,10 @@ pub struct IdentifyArgs {
     /// Where to write frames.csv (skid,x,y,z,rx,ry,rz).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Leave out a bad reading: SKID:POINT as in the file, e.g. 1500:3 (repeatable). Prints how
+    /// far the frame moved.
+    #[arg(long, value_name = "SKID:POINT")]
+    pub exclude: Vec<Exclusion>,
 }
 
 #[derive(clap::Args)]
@@ -174,15 +184,23 @@ pub fn run(cmd: TrackCommand) -> anyhow::Result<Exit> {
 }
 
 /// The text of an error that already says `file:line:col: error: …` with the line and a hint.
-fn located_text<'e>(e: &'e (dyn std::error::Error + 'static)) -> Option<&'e str> {
-    if let Some(TrackError::Csv { rendered, .. } | TrackError::Toml { rendered, .. }) =
-        e.downcast_ref::<TrackError>()
-    {
-        return Some(rendered);
+fn located_text(e: &(dyn std::error::Error + 'static)) -> Option<String> {
+    if let Some(located) = e.downcast_ref::<TrackError>().and_then(TrackError::located) {
+        return Some(located.to_string());
+    }
+    if let Some(located) = e.downcast_ref::<LocatedError>() {
+        return Some(located.to_string());
     }
     match e.downcast_ref::<CellError>() {
-        Some(CellError::Invalid { rendered }) => Some(rendered),
+        Some(CellError::Invalid { rendered }) => Some(rendered.clone()),
         _ => None,
+    }
+}
+
+/// How a table was read when it was not plain CSV, on standard error.
+fn print_notes(table: &NumericCsv) {
+    for note in &table.notes {
+        eprintln!("note: {note}");
     }
 }
 
@@ -193,7 +211,7 @@ pub(crate) fn report_located(result: anyhow::Result<Exit>) -> anyhow::Result<Exi
     let Some(text) = err.chain().find_map(located_text) else {
         return Err(err);
     };
-    let mut out = text.to_owned();
+    let mut out = text;
     for context in err.chain().take_while(|c| located_text(*c).is_none()) {
         out.push_str(&format!("\n  = note: {context}"));
     }
@@ -221,8 +239,11 @@ fn write_file(path: &Path, text: &str) -> anyhow::Result<()> {
 }
 
 fn run_identify(a: &IdentifyArgs) -> anyhow::Result<String> {
-    let rows = read_measurements(&a.measurements)?;
-    let id = identify(&rows).with_context(|| a.measurements.display().to_string())?;
+    let table = NumericCsv::read(&a.measurements, &MEASUREMENTS_HEADER)?;
+    print_notes(&table);
+    let rows = measurements_from(&table)?;
+    let id = identify_excluding(&rows, &a.exclude)
+        .with_context(|| a.measurements.display().to_string())?;
     write_file(&a.output, &frames_csv(&id.frames()))?;
     let mut s = String::new();
     let _ = writeln!(
@@ -240,10 +261,11 @@ fn run_identify(a: &IdentifyArgs) -> anyhow::Result<String> {
     for f in &id.fits {
         let _ = writeln!(
             s,
-            "\nskid {} mm: {} points, rms {:.4} mm",
+            "\nskid {} mm: {} points, rms {:.4} mm, condition {:.1}",
             f.skid,
             f.points.len(),
-            f.fit.rms
+            f.fit.rms,
+            f.fit.condition
         );
         let _ = writeln!(s, "  point    dx [mm]    dy [mm]    dz [mm]   rms [mm]");
         for (p, r) in f.points.iter().zip(&f.fit.residuals) {
@@ -264,10 +286,27 @@ fn run_identify(a: &IdentifyArgs) -> anyhow::Result<String> {
         let max = f.fit.residual_norms().into_iter().fold(0.0, f64::max);
         let _ = writeln!(s, "  {:>8} {:>10.4} {:>10.4}", f.skid, f.fit.rms, max);
     }
+    let worst = id.fits.iter().map(|f| f.fit.condition).fold(0.0, f64::max);
+    let _ = writeln!(
+        s,
+        "\nlargest condition number {worst:.1} (limit {CONDITION_LIMIT}: points near a line leave the rotation about it free)"
+    );
+    for f in id.fits.iter().filter(|f| !f.excluded.is_empty()) {
+        let pts: Vec<String> = f.excluded.iter().map(|p| p.to_string()).collect();
+        let _ = writeln!(
+            s,
+            "\nexcluded at skid {} mm: point(s) {}",
+            f.skid,
+            pts.join(", ")
+        );
+        if let Some(shift) = &f.exclusion_shift {
+            let _ = writeln!(s, "  effect on the frame: {}", shift_text(shift));
+        }
+    }
     let limit = OUTLIER_FACTOR * id.median_residual;
     let _ = write!(
         s,
-        "\nmedian point residual {:.4} mm; outliers (> {OUTLIER_FACTOR} x median = {limit:.4} mm): ",
+        "\nmedian point residual {:.4} mm (robust fit); outliers (> {OUTLIER_FACTOR} x median = {limit:.4} mm): ",
         id.median_residual
     );
     if id.outliers.is_empty() {
@@ -277,12 +316,26 @@ fn run_identify(a: &IdentifyArgs) -> anyhow::Result<String> {
         for o in &id.outliers {
             let _ = writeln!(
                 s,
-                "  skid {} mm, point {}: {:.4} mm ({:.1} x median) - remeasure or remove the row",
-                o.skid, o.point, o.residual, o.ratio
+                "  skid {} mm, point {}: {:.4} mm ({:.1} x median) - remeasure it, or leave it out with --exclude {}:{}",
+                o.skid, o.point, o.residual, o.ratio, o.skid, o.point
             );
+            if let Some(shift) = &o.shift_if_excluded {
+                let _ = writeln!(
+                    s,
+                    "    leaving it out would move the frame: {}",
+                    shift_text(shift)
+                );
+            }
         }
     }
     Ok(s)
+}
+
+fn shift_text(shift: &FrameShift) -> String {
+    format!(
+        "{:.4} mm at the measured points (origin {:.4} mm, rotation {:.5} deg)",
+        shift.at_points_mm, shift.origin_mm, shift.rotation_deg
+    )
 }
 
 fn sha256_hex(bytes: &[u8]) -> String {
@@ -315,7 +368,9 @@ fn default_name(output: &Path) -> String {
 
 fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
     let bytes = std::fs::read(&a.frames).with_context(|| a.frames.display().to_string())?;
-    let frames = read_frames(&a.frames)?;
+    let table = NumericCsv::read(&a.frames, &FRAMES_HEADER)?;
+    print_notes(&table);
+    let frames = frames_from(&table)?;
     let opts = FitOptions {
         name: a.name.clone().unwrap_or_else(|| default_name(&a.output)),
         reference: a.reference,
@@ -585,7 +640,6 @@ fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
             a.threshold
         );
     }
-    let table = NumericCsv::read(&a.scan)?;
     let (pos_col, scale) = match a.speed {
         Some(v) if v.is_nan() || v <= 0.0 => {
             anyhow::bail!("--speed {v}: give a positive speed in mm/s")
@@ -593,12 +647,9 @@ fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
         Some(v) => ("t", v),
         None => ("skid", 1.0),
     };
-    let mut positions = Vec::with_capacity(table.rows.len());
-    let mut points = Vec::with_capacity(table.rows.len());
-    for (_, [s, x, y, z]) in table.select(&[pos_col, "x", "y", "z"])? {
-        positions.push(s * scale);
-        points.push([x, y, z]);
-    }
+    let table = NumericCsv::read(&a.scan, &[pos_col, "x", "y", "z"])?;
+    print_notes(&table);
+    let (positions, points) = scan_from_table(&table, pos_col, scale)?;
     let spec = scan_spectrum(&positions, &points, a.threshold)
         .with_context(|| a.scan.display().to_string())?;
     if let Some(path) = &a.plot {

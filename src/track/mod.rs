@@ -1,10 +1,9 @@
 //! The track model (DESIGN.md §3): sampling frames, the straight nominal with its gear factor,
 //! deviations, natural cubic splines, error bounds and the frequency scan.
-//!
-//! Owned by issue 4.
 
 pub mod adjustment;
 pub mod csv_table;
+pub mod error;
 pub mod frames_csv;
 pub mod identify;
 pub mod nominal;
@@ -15,4 +14,5 @@ pub mod spectrum;
 pub mod spline;
 
 pub use csv_table::NumericCsv;
-pub use profile::{Extrapolate, Gear, Knot, Nominal, Profile, Reference, TrackError};
+pub use error::{LocatedError, NominalProblem, SkidProblem, TrackError};
+pub use profile::{Extrapolate, Gear, Knot, Nominal, Profile, Reference};

@@ -14,7 +14,7 @@ const LABELS: [&str; 6] = [
 ];
 
 fn plot_error(e: impl std::fmt::Display) -> TrackError {
-    TrackError::Invalid(format!("cannot draw the plot: {e}"))
+    TrackError::Output(format!("cannot draw the plot: {e}"))
 }
 
 /// A value range with some margin; a flat series gets a small symmetric one.

@@ -1,11 +1,12 @@
 //! `profile.toml`: a fitted track profile and its evaluation `D(s)` (DESIGN.md §3, §6).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use std::sync::Arc;
 
 use nalgebra::{Translation3, Vector3};
 use serde::{Deserialize, Serialize};
 
-use super::csv_table::render_located;
+use super::error::LocatedError;
 use super::nominal::FitOptions;
 use super::spline::{CubicSpline, EndCondition, SplineError};
 use crate::geometry::{Pose, pose_xyz_deg, xyz_deg};
@@ -14,53 +15,7 @@ use crate::syntax::Span;
 /// The format tag every profile file starts with.
 pub const PROFILE_FORMAT: &str = "trackfix-profile/1";
 
-/// Everything that can go wrong in the track model, with the file, line or skid it concerns.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum TrackError {
-    /// `D(s)` asked outside `[s_0, s_N]` with `extrapolate = "error"`.
-    #[error(
-        "skid {skid} mm is outside the profile's range [{min}, {max}] mm (measure further, or set extrapolate = \"clamp\" or \"linear\" in the profile)"
-    )]
-    OutOfRange { skid: f64, min: f64, max: f64 },
-    /// A file could not be read or written.
-    #[error("{}: {error}", path.display())]
-    Io {
-        path: PathBuf,
-        error: std::io::Error,
-    },
-    /// A `profile.toml` that TOML or the profile schema rejects, rendered as
-    /// `file:line:col: error: …` with the line, a caret and what to do.
-    #[error("{rendered}")]
-    Toml { path: PathBuf, rendered: String },
-    /// A profile with a format tag this version does not read.
-    #[error("{}: format = {found:?}, expected {PROFILE_FORMAT:?}", path.display())]
-    Format { path: PathBuf, found: String },
-    /// The knots cannot carry a spline (too few, not increasing, not finite).
-    #[error("{context}: {error}")]
-    Knots { context: String, error: SplineError },
-    /// A CSV input error at `file:line`, in a named column; `rendered` is the whole message:
-    /// `file:line:col: error: …`, the line, a caret and what to do.
-    #[error("{rendered}")]
-    Csv {
-        path: PathBuf,
-        line: u64,
-        column: String,
-        message: String,
-        rendered: String,
-    },
-    /// Fewer than 3 point pairs at one skid position.
-    #[error(
-        "skid {skid} mm: {count} point(s) measured, a base frame needs at least 3 non-collinear points"
-    )]
-    TooFewPoints { skid: f64, count: usize },
-    /// Point pairs that do not fix a rigid transform (collinear or coincident).
-    #[error("skid {skid} mm: {reason}")]
-    Degenerate { skid: f64, reason: String },
-    /// Anything else that makes the input unusable.
-    #[error("{0}")]
-    Invalid(String),
-}
+pub use super::error::TrackError;
 
 /// One sampling position's deviation `D_i` (mm, degrees; DESIGN.md §2 `rx, ry, rz`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -218,23 +173,62 @@ impl PartialEq for Profile {
     }
 }
 
-/// The `skid = …` line of the `index`-th (0-based) `[[knot]]` table of profile text.
-fn knot_skid_span(text: &str, index: usize) -> Option<Span> {
+/// The span of the line `key = …` in the table `table` (`None`: the top level; `Some((header,
+/// n))`: the `n`-th (0-based) table whose header line is `header`) of profile text.
+fn key_span(text: &str, table: Option<(&str, usize)>, key: &str) -> Option<Span> {
     let mut offset = 0;
-    let mut tables = 0;
+    let mut current: Option<(&str, usize)> = None;
+    let mut seen: Vec<(&str, usize)> = Vec::new();
     for line in text.split_inclusive('\n') {
         let start = offset;
         offset += line.len();
         let trimmed = line.trim();
-        if trimmed == "[[knot]]" {
-            tables += 1;
-        } else if tables == index + 1 && trimmed.starts_with("skid") {
+        if trimmed.starts_with('[') {
+            let n = seen.iter().filter(|(h, _)| *h == trimmed).count();
+            seen.push((trimmed, n));
+            current = Some((trimmed, n));
+        } else if current == table
+            && trimmed
+                .strip_prefix(key)
+                .is_some_and(|rest| rest.trim_start().starts_with('='))
+        {
             let lead = line.len() - line.trim_start().len();
             return Some(Span::new(start + lead, start + lead + trimmed.len()));
         }
     }
     None
 }
+
+/// The span of the `n`-th (0-based) `[[knot]]` header line.
+fn knot_header_span(text: &str, n: usize) -> Option<Span> {
+    let mut offset = 0;
+    let mut count = 0;
+    for line in text.split_inclusive('\n') {
+        let start = offset;
+        offset += line.len();
+        if line.trim() == "[[knot]]" {
+            if count == n {
+                let lead = line.len() - line.trim_start().len();
+                return Some(Span::new(start + lead, start + lead + 8));
+            }
+            count += 1;
+        }
+    }
+    None
+}
+
+/// Whether text claims to be a profile: a `format = "trackfix-profile…"` line. Errors in a file
+/// that does not are reported without quoting it (it may be anything, `/etc/passwd` included).
+fn claims_to_be_a_profile(text: &str) -> bool {
+    text.lines().any(|l| {
+        l.trim_start().strip_prefix("format").is_some_and(|rest| {
+            rest.trim_start().starts_with('=') && rest.contains("trackfix-profile")
+        })
+    })
+}
+
+const PROFILE_HINT: &str =
+    "a profile is what `trackfix track fit` writes; see samples/track/profile.toml for its keys";
 
 impl Profile {
     /// A profile from knots alone: identity nominal, reference `regression`, gear `as-is`.
@@ -280,57 +274,70 @@ impl Profile {
     }
 
     /// Reads and validates a `profile.toml`: unknown keys are an error, a missing key names
-    /// itself, errors carry the file and toml's line/column.
+    /// itself, errors carry the file, line and column.
     pub fn load(path: &Path) -> Result<Profile, TrackError> {
-        let text = std::fs::read_to_string(path).map_err(|error| TrackError::Io {
+        let bytes = std::fs::read(path).map_err(|error| TrackError::Io {
             path: path.to_path_buf(),
             error,
         })?;
-        Profile::from_toml_str(&text, path)
+        Profile::from_toml_bytes(&bytes, path)
     }
 
     /// Parses profile text; `path` is only used in messages.
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Profile, TrackError> {
-        let file: ProfileFile = toml::from_str(text).map_err(|e| TrackError::Toml {
-            path: path.to_path_buf(),
-            rendered: render_located(
-                path,
-                text.as_bytes(),
+        Profile::from_toml_bytes(text.as_bytes(), path)
+    }
+
+    fn from_toml_bytes(bytes: &[u8], path: &Path) -> Result<Profile, TrackError> {
+        let source: Arc<[u8]> = Arc::from(bytes);
+        let located = |span: Span, message: String, hint: &str| {
+            LocatedError::new(path, source.clone(), span, message, hint)
+        };
+        let not_a_profile = |at: usize| -> TrackError {
+            located(
+                Span::new(at, at),
+                format!("not a trackfix profile: it has no `format = \"{PROFILE_FORMAT}\"` line"),
+                PROFILE_HINT,
+            )
+            .without_quote()
+            .into()
+        };
+        let text = std::str::from_utf8(bytes).map_err(|e| not_a_profile(e.valid_up_to()))?;
+        if !claims_to_be_a_profile(text) {
+            return Err(not_a_profile(0));
+        }
+        let file: ProfileFile = toml::from_str(text).map_err(|e| {
+            located(
                 e.span().map(Span::from).unwrap_or_default(),
-                e.message().trim(),
-                "a profile is what `trackfix track fit FRAMES.csv -o profile.toml` writes; \
-                 see samples/track/profile.toml for its keys",
-            ),
+                e.message().trim().to_owned(),
+                PROFILE_HINT,
+            )
         })?;
         if file.format != PROFILE_FORMAT {
-            return Err(TrackError::Format {
-                path: path.to_path_buf(),
-                found: file.format,
-            });
+            let span = key_span(text, None, "format").unwrap_or_default();
+            return Err(located(
+                span,
+                format!(
+                    "format = {:?}: this version of trackfix reads {PROFILE_FORMAT:?}",
+                    file.format
+                ),
+                "fit the profile again with this version of trackfix, or use the version that wrote it",
+            )
+            .into());
         }
         let splines = build_splines(&file.knot).map_err(|error| {
-            let index = match error {
+            let span = match error {
                 SplineError::NotIncreasing { index, .. } | SplineError::NotFinite { index } => {
-                    Some(index)
+                    key_span(text, Some(("[[knot]]", index)), "skid")
+                        .or_else(|| knot_header_span(text, index))
                 }
-                _ => None,
+                _ => knot_header_span(text, 0).or_else(|| key_span(text, None, "format")),
             };
-            match index.and_then(|i| knot_skid_span(text, i)) {
-                Some(span) => TrackError::Toml {
-                    path: path.to_path_buf(),
-                    rendered: render_located(
-                        path,
-                        text.as_bytes(),
-                        span,
-                        &format!("[[knot]]: {error}"),
-                        "keep one [[knot]] per skid position, in increasing skid order",
-                    ),
-                },
-                None => TrackError::Knots {
-                    context: format!("{}: [[knot]]", path.display()),
-                    error,
-                },
-            }
+            TrackError::from(located(
+                span.unwrap_or_default(),
+                format!("[[knot]]: {error}"),
+                "keep one [[knot]] per skid position, at least 2, in increasing skid order",
+            ))
         })?;
         Ok(Profile { file, splines })
     }
@@ -338,7 +345,7 @@ impl Profile {
     /// The profile as TOML text (what [`Profile::save`] writes).
     pub fn to_toml_string(&self) -> Result<String, TrackError> {
         let body = toml::to_string(&self.file)
-            .map_err(|e| TrackError::Invalid(format!("cannot write the profile: {e}")))?;
+            .map_err(|e| TrackError::Output(format!("cannot write the profile: {e}")))?;
         Ok(format!(
             "# trackfix track profile: deviation D(s) of the real robot base from the nominal \
              straight track,\n# mm and degrees (R = Rz*Ry*Rx), natural cubic splines through the \

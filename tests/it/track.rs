@@ -1,4 +1,4 @@
-//! Integration tests: track (issue 4). The simulation test, properties, and snapshots of the
+//! Integration tests: track. The simulation test, properties, and snapshots of the
 //! `trackfix track` commands on the samples.
 
 use std::path::Path;
@@ -7,14 +7,18 @@ use nalgebra::{Point3, Vector3};
 use proptest::prelude::*;
 use trackfix::geometry::rigid_fit::fit_rigid;
 use trackfix::geometry::{Pose, pose_xyz_deg};
-use trackfix::track::frames_csv::frames_csv;
-use trackfix::track::identify::{identify, parse_measurements};
+use trackfix::track::frames_csv::{SamplingFrame, frames_csv};
+use trackfix::track::identify::{
+    Exclusion, MEASUREMENTS_HEADER, identify, identify_excluding, parse_measurements,
+};
 use trackfix::track::nominal::{FitOptions, fit_track};
 use trackfix::track::simulate::{
     TrackTruth, measurements_csv, sample_tcp_points, scan_csv, simulate_measurements, simulate_scan,
 };
 use trackfix::track::spline::{CubicSpline, EndCondition};
-use trackfix::track::{Extrapolate, Knot, Profile, TrackError};
+use trackfix::track::{
+    Extrapolate, Knot, NominalProblem, NumericCsv, Profile, SkidProblem, TrackError,
+};
 
 use crate::support::{root, trackfix};
 
@@ -176,8 +180,7 @@ fn identify_flags_an_outlier() {
         r.meas[2] += 0.5;
     }
     let id = identify(&rows).unwrap();
-    // A least-squares fit spreads a bad point over its neighbours, so a second point of the
-    // same skid may be flagged too; the bad one stands out most.
+    assert_eq!(id.outliers.len(), 1, "{:?}", id.outliers);
     let worst = id
         .outliers
         .iter()
@@ -524,4 +527,279 @@ fn spectrum_of_a_timed_scan() {
     ]);
     assert_eq!(a, b);
     assert!(a.contains("1001.2 mm"), "{a}");
+}
+
+/// One reading 2 mm off: a least-squares fit spreads it over the other points of its skid (the
+/// old check flagged most of them); the robust fit flags exactly that one point, and says how
+/// far leaving it out would move the frame.
+#[test]
+fn one_bad_reading_flags_that_point_only() {
+    let truth = TrackTruth::sample_r1();
+    let mut rows = simulate_measurements(&truth, &skids(), &sample_tcp_points(), 0.02, 3);
+    let bad = rows
+        .iter_mut()
+        .find(|r| r.skid == 3000.0 && r.point == 4)
+        .unwrap();
+    bad.meas[0] += 1.2;
+    bad.meas[1] -= 1.6; // |(1.2, -1.6, 0)| = 2 mm
+    let id = identify(&rows).unwrap();
+    let flagged: Vec<(f64, u32)> = id.outliers.iter().map(|o| (o.skid, o.point)).collect();
+    assert_eq!(flagged, [(3000.0, 4)], "{:?}", id.outliers);
+    let o = id.outliers[0];
+    // Against the robust fit the residual is the whole 2 mm (noise 0.02 mm per axis).
+    assert!((o.residual - 2.0).abs() < 0.1, "{o:?}");
+    // A plain least-squares fit leaves a tenth of the error in each of the other 9 points.
+    let plain = &id.fits.iter().find(|f| f.skid == 3000.0).unwrap().fit;
+    let others = plain
+        .residual_norms()
+        .iter()
+        .zip(&id.fits[6].points)
+        .filter(|(_, p)| **p != 4)
+        .map(|(r, _)| *r)
+        .fold(0.0, f64::max);
+    assert!(others > 4.0 * id.median_residual, "{others}");
+    let shift = o.shift_if_excluded.unwrap();
+    assert!(shift.at_points_mm > 0.1, "{shift:?}");
+    // Leaving it out gives the frame of the clean data back (within the noise).
+    let clean = identify(&simulate_measurements(
+        &truth,
+        &skids(),
+        &sample_tcp_points(),
+        0.02,
+        3,
+    ))
+    .unwrap();
+    let excl = identify_excluding(
+        &rows,
+        &[Exclusion {
+            skid: 3000.0,
+            point: 4,
+        }],
+    )
+    .unwrap();
+    let f = &excl.fits[6];
+    assert_eq!((f.skid, f.excluded.clone()), (3000.0, vec![4]));
+    let moved = f.exclusion_shift.unwrap();
+    assert!((moved.at_points_mm - shift.at_points_mm).abs() < 1e-9);
+    let pts = sample_tcp_points();
+    let err = pts
+        .iter()
+        .map(|p| (f.fit.pose * p - clean.fits[6].fit.pose * p).norm())
+        .fold(0.0, f64::max);
+    assert!(err < 0.03, "{err}");
+    assert!(excl.outliers.is_empty(), "{:?}", excl.outliers);
+}
+
+#[test]
+fn exclude_through_the_binary() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("frames.csv");
+    let out = out.to_str().unwrap();
+    let (code, text, err) = trackfix(&[
+        "track",
+        "identify",
+        "samples/track/measurements.csv",
+        "-o",
+        out,
+        "--exclude",
+        "1500:3",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(text.contains("skid 1500 mm: 9 points"), "{text}");
+    assert!(
+        text.contains("excluded at skid 1500 mm: point(s) 3\n  effect on the frame: "),
+        "{text}"
+    );
+    let e = error_of(&[
+        "track",
+        "identify",
+        "samples/track/measurements.csv",
+        "-o",
+        out,
+        "--exclude",
+        "1501:3",
+    ]);
+    assert!(e.contains("no point 3 at skid 1501 mm to exclude"), "{e}");
+    let e = error_of(&[
+        "track",
+        "identify",
+        "samples/track/measurements.csv",
+        "-o",
+        out,
+        "--exclude",
+        "1500",
+    ]);
+    assert!(e.contains("write SKID:POINT"), "{e}");
+}
+
+/// Nearly collinear points: noise turns into a rotation about their line, so the fit is refused
+/// with its condition number; tracker points in other units (scaled) are refused too.
+#[test]
+fn ill_conditioned_and_scaled_fits_are_refused() {
+    let truth = pose_xyz_deg(100.0, -2300.0, 0.0, 0.0, 0.0, 90.0);
+    let line: Vec<[f64; 3]> = (0..10)
+        .map(|i| {
+            let s = if i % 2 == 0 { 1.0 } else { -1.0 };
+            [900.0 + 100.0 * i as f64, 3.0 * s, 800.0 + 2.0 * s]
+        })
+        .collect();
+    let rows = |scale: f64, pts: &[[f64; 3]]| -> Vec<trackfix::track::simulate::MeasurementRow> {
+        [0.0, 1000.0]
+            .iter()
+            .flat_map(|&skid| {
+                pts.iter().enumerate().map(move |(i, p)| {
+                    let q = truth * Point3::from(*p);
+                    trackfix::track::simulate::MeasurementRow {
+                        skid,
+                        point: i as u32 + 1,
+                        robot: *p,
+                        meas: [q.x * scale + skid, q.y * scale, q.z * scale],
+                    }
+                })
+            })
+            .collect()
+    };
+    // Independent figure: the spread of the points, sqrt((λ1 + λ2) / (λ2 + λ3)).
+    let c = {
+        let n = line.len() as f64;
+        let mean: Vector3<f64> = line.iter().map(|p| Vector3::from(*p)).sum::<Vector3<f64>>() / n;
+        let s: nalgebra::Matrix3<f64> = line
+            .iter()
+            .map(|p| (Vector3::from(*p) - mean) * (Vector3::from(*p) - mean).transpose())
+            .sum();
+        let mut l: Vec<f64> = s.symmetric_eigenvalues().iter().copied().collect();
+        l.sort_by(|a, b| b.total_cmp(a));
+        ((l[0] + l[1]) / (l[1] + l[2])).sqrt()
+    };
+    assert!(c > 20.0, "{c}");
+    match identify(&rows(1.0, &line)) {
+        Err(TrackError::Skid {
+            skid,
+            problem: SkidProblem::IllConditioned { condition, limit },
+        }) => {
+            assert_eq!(skid, 0.0);
+            assert!((condition - c).abs() < 1e-6 * c, "{condition} vs {c}");
+            assert_eq!(limit, 20.0);
+        }
+        other => panic!("{other:?}"),
+    }
+    let good: Vec<[f64; 3]> = sample_tcp_points()
+        .iter()
+        .map(|p| [p.x, p.y, p.z])
+        .collect();
+    assert!(identify(&rows(1.0, &good)).is_ok());
+    for scale in [1e9, 1e-3, 1.02] {
+        match identify(&rows(scale, &good)) {
+            Err(TrackError::Skid {
+                problem: SkidProblem::Scale { ratio, .. },
+                ..
+            }) => assert!((ratio / scale - 1.0).abs() < 1e-9, "{ratio}"),
+            other => panic!("{scale}: {other:?}"),
+        }
+    }
+    // Frames in metres against a skid in mm: a gear factor of 0.001 is not a track.
+    let frames: Vec<SamplingFrame> = (0..5)
+        .map(|i| SamplingFrame {
+            skid: 1000.0 * i as f64,
+            pose: pose_xyz_deg(1.0 * i as f64, 0.0, 0.0, 0.0, 0.0, 0.0),
+        })
+        .collect();
+    match fit_track(&frames, &FitOptions::default()) {
+        Err(TrackError::Nominal(NominalProblem::ImplausibleGear { gear_factor, .. })) => {
+            assert!((gear_factor - 1e-3).abs() < 1e-12)
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// A German spreadsheet's export: `;` between the fields and decimal commas. Read with a note,
+/// to the same frames as the CSV.
+#[test]
+fn semicolon_and_decimal_comma_tables_are_read() {
+    let text = std::fs::read_to_string(root().join("samples/track/measurements.csv")).unwrap();
+    let german = text.replace(',', ";").replace('.', ",");
+    let tmp = tempfile::tempdir().unwrap();
+    let m = tmp.path().join("messungen.csv");
+    std::fs::write(&m, &german).unwrap();
+    let out = tmp.path().join("frames.csv");
+    let (code, _, err) = trackfix(&[
+        "track",
+        "identify",
+        m.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("note: ")
+            && err.contains("read with `;` between the fields and `,` as the decimal point"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        std::fs::read(root().join("samples/track/frames.csv")).unwrap()
+    );
+    // A bad number in such a file is located in its own column.
+    let broken = german.replacen("1200,000", "1200,0x0", 1);
+    let e =
+        NumericCsv::parse(Path::new("m.csv"), broken.as_bytes(), &MEASUREMENTS_HEADER).unwrap_err();
+    let l = e.located().unwrap();
+    assert_eq!(l.line_col(), (2, 5));
+    assert_eq!(l.column_name(), Some("robot_x"));
+}
+
+/// Files that are not what they were given as are not quoted; the errors of a wrong `format`,
+/// a one-knot profile and a scan out of order carry `file:line:column`.
+#[test]
+fn located_errors_and_foreign_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = |name: &str, text: &str| {
+        let p = tmp.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let clean = |s: String| s.replace(tmp.path().to_str().unwrap(), "<tmp>");
+    let passwd = t(
+        "passwd",
+        "root:x:0:0:root:/root:/bin/bash\ndaemon:x:1:1:daemon:/usr/sbin:/usr/sbin/nologin\n",
+    );
+    let p = passwd.to_str().unwrap();
+    let out = tmp.path().join("o");
+    let out = out.to_str().unwrap();
+    let e1 = error_of(&["track", "show", p]);
+    let e2 = error_of(&["track", "identify", p, "-o", out]);
+    let e3 = error_of(&["track", "fit", p, "-o", out]);
+    let e4 = error_of(&["track", "spectrum", p, "--threshold", "0.05"]);
+    for e in [&e1, &e2, &e3, &e4] {
+        assert!(!e.contains("root:x") && !e.contains("daemon"), "{e}");
+    }
+    let profile = std::fs::read_to_string(root().join("samples/track/profile.toml")).unwrap();
+    let wrong = t(
+        "wrong.toml",
+        &profile.replace("trackfix-profile/1", "trackfix-profile/2"),
+    );
+    let e5 = error_of(&["track", "show", wrong.to_str().unwrap()]);
+    let first_knot_end = profile.match_indices("[[knot]]").nth(1).unwrap().0;
+    let one = t("one.toml", &profile[..first_knot_end]);
+    let e6 = error_of(&["track", "show", one.to_str().unwrap()]);
+    let scan = std::fs::read_to_string(root().join("samples/track/scan.csv")).unwrap();
+    let swapped = scan.replacen("\n20,", "\n5,", 1);
+    let s = t("scan.csv", &swapped);
+    let e7 = error_of(&[
+        "track",
+        "spectrum",
+        s.to_str().unwrap(),
+        "--threshold",
+        "0.05",
+    ]);
+    let short = t("short.csv", "skid,x,y,z\n0,0,0,0\n10,10,0,0\n");
+    let e8 = error_of(&[
+        "track",
+        "spectrum",
+        short.to_str().unwrap(),
+        "--threshold",
+        "0.05",
+    ]);
+    let all = [e1, e2, e3, e4, e5, e6, e7, e8].map(clean).join("\n");
+    insta::assert_snapshot!("errors_located", all);
 }
