@@ -1,5 +1,5 @@
-//! `trackfix track identify | fit | show | spectrum` (and the hidden `simulate` that made the
-//! samples).
+//! `trackfix track identify | fit | show | spectrum` (the samples' simulator is
+//! `examples/simulate_track.rs`).
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -10,6 +10,7 @@ use trackfix::geometry::{abb_quat_components, kuka_abc_angles, pose_to_xyz_deg};
 use trackfix::track::adjustment::{chord_bounds, manual_adjustment, twist_diagram};
 use trackfix::track::csv_table::NumericCsv;
 use trackfix::track::frames_csv::{FRAMES_HEADER, clean, frames_csv, frames_from};
+use trackfix::track::gear;
 use trackfix::track::identify::{
     CONDITION_LIMIT, Exclusion, FrameShift, MEASUREMENTS_HEADER, OUTLIER_FACTOR,
     identify_excluding, measurements_from,
@@ -17,9 +18,6 @@ use trackfix::track::identify::{
 use trackfix::track::nominal::{FitOptions, fit_track};
 use trackfix::track::plot::{profile_svg, spectrum_svg};
 use trackfix::track::profile::write_atomic;
-use trackfix::track::simulate::{
-    TrackTruth, measurements_csv, sample_tcp_points, scan_csv, simulate_measurements, simulate_scan,
-};
 use trackfix::track::spectrum::{TUKEY_ALPHA, scan_from_table, scan_spectrum};
 use trackfix::track::{Extrapolate, Gear, Knot, LocatedError, Profile, Reference, TrackError};
 use trackfix::transform::CellError;
@@ -36,9 +34,6 @@ pub enum TrackCommand {
     Show(ShowArgs),
     /// Recommend a sampling spacing from a continuous scan along the track.
     Spectrum(SpectrumArgs),
-    /// Simulate a deformed track and its tracker measurements (how the samples were made).
-    #[command(hide = true)]
-    Simulate(SimulateArgs),
 }
 
 const IDENTIFY_EXAMPLES: &str = "\
@@ -108,6 +103,10 @@ pub struct FitArgs {
     /// Profile name (default: the output file's stem, or its folder's name for profile.toml).
     #[arg(long)]
     pub name: Option<String>,
+    /// The controller's current gear ratio, to print the new one: ABB's Transmission Gear
+    /// Ratio as a number, or KUKA's $RAT_MOT_AX as N/D (e.g. 47746/1000).
+    #[arg(long, value_name = "X")]
+    pub current_gear: Option<String>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -157,28 +156,6 @@ pub struct SpectrumArgs {
     pub plot: Option<PathBuf>,
 }
 
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum SampleRobot {
-    R1,
-    R2,
-}
-
-#[derive(clap::Args)]
-pub struct SimulateArgs {
-    /// Which sample track (see samples/track/README.md).
-    #[arg(long, value_enum)]
-    pub robot: SampleRobot,
-    /// Folder for measurements.csv and scan.csv.
-    #[arg(long)]
-    pub out_dir: PathBuf,
-    /// Tracker noise, mm (standard deviation per axis).
-    #[arg(long, default_value_t = 0.02)]
-    pub noise: f64,
-    /// PRNG seed.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-}
-
 pub fn run(cmd: TrackCommand) -> anyhow::Result<Exit> {
     report_located(run_command(cmd))
 }
@@ -225,7 +202,6 @@ fn run_command(cmd: TrackCommand) -> anyhow::Result<Exit> {
         TrackCommand::Fit(a) => run_fit(&a)?,
         TrackCommand::Show(a) => run_show(&a)?,
         TrackCommand::Spectrum(a) => run_spectrum(&a)?,
-        TrackCommand::Simulate(a) => run_simulate(&a)?,
     };
     let mut out = std::io::stdout().lock();
     out.write_all(text.as_bytes())?;
@@ -405,13 +381,13 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         (fit.gear_factor - 1.0) * (s1 - s0),
         s1 - s0
     );
+    gear_advice(&mut s, fit.gear_factor, a.current_gear.as_deref())?;
     let _ = writeln!(
         s,
-        "    new gear factor = {:.6} x current gear factor (seed eq. 4.4){}",
-        fit.gear_factor,
+        "    {}",
         match a.gear {
-            Gear::AsIs => "; with --gear as-is the profile keeps the drift instead",
-            Gear::Recalibrated => "; the profile assumes you enter it",
+            Gear::AsIs => "with --gear as-is the profile keeps the drift instead",
+            Gear::Recalibrated => "the profile assumes you enter the new ratio",
         }
     );
     let u = fit.direction;
@@ -472,6 +448,60 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
     Ok(s)
 }
 
+/// The controller parameter that holds the gear ratio, which way it changes, and its new value
+/// for `--current-gear` (trackfix::track::gear).
+fn gear_advice(s: &mut String, g: f64, current: Option<&str>) -> anyhow::Result<()> {
+    let _ = writeln!(
+        s,
+        "    the controllers store motor turns per travel, which must be divided by {g:.6} (it grows when the skid travels short):"
+    );
+    let _ = writeln!(
+        s,
+        "      ABB: the track's Transmission Gear Ratio (topic Motion, type Transmission; transm_joint in MOC.cfg): new = current / {g:.6}"
+    );
+    let _ = writeln!(
+        s,
+        "      KUKA: $RAT_MOT_AX[7] = {{N n,D d}} in $machine.dat ([7] = E1, [6+k] = Ek): new N/D = current N/D / {g:.6}"
+    );
+    let _ = writeln!(
+        s,
+        "      (a travel per motor turn, the gear factor of seed eq. 4.4, grows the other way: new = {g:.6} x current)"
+    );
+    let Some(text) = current else {
+        return Ok(());
+    };
+    if text.contains('/') {
+        let ratio = gear::parse_kuka_ratio(text).with_context(|| {
+            format!("--current-gear {text}: write the KUKA ratio as N/D with integers, D not 0")
+        })?;
+        let new = gear::new_kuka_ratio(ratio, g).with_context(|| {
+            format!("--current-gear {text}: the new ratio does not fit KUKA's INT range")
+        })?;
+        let _ = writeln!(
+            s,
+            "    for --current-gear {text} (KUKA {ratio}): $RAT_MOT_AX = {new} (= {:.9})",
+            new.value()
+        );
+    } else {
+        let current: f64 = text
+            .trim()
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite() && *v != 0.0)
+            .with_context(|| {
+                format!(
+                    "--current-gear {text}: give the current ratio as a number (ABB) or N/D (KUKA)"
+                )
+            })?;
+        let _ = writeln!(
+            s,
+            "    for --current-gear {text}: new Transmission Gear Ratio {:.9}",
+            gear::new_motor_ratio(current, g)
+        );
+    }
+    Ok(())
+}
+
 fn enum_name(v: impl clap::ValueEnum) -> String {
     v.to_possible_value()
         .map(|p| p.get_name().to_string())
@@ -500,6 +530,13 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
     let p = Profile::load(&a.profile)?;
     if let Some(path) = &a.plot {
         write_file(path, &profile_svg(&p)?)?;
+        // On standard error: standard output may be the JSON or CSV asked for.
+        eprintln!(
+            "wrote {}: the six deviation curves of profile `{}` with their {} knots, and the twist diagram",
+            path.display(),
+            p.name(),
+            p.knots().len()
+        );
     }
     let (s0, s1) = p.skid_range();
     let skids: Vec<f64> = if let Some(step) = a.step {
@@ -654,6 +691,12 @@ fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
         .with_context(|| a.scan.display().to_string())?;
     if let Some(path) = &a.plot {
         write_file(path, &spectrum_svg(&spec)?)?;
+        eprintln!(
+            "wrote {}: the amplitude spectrum of {} ({} frequencies, wavelengths in brackets)",
+            path.display(),
+            a.scan.display(),
+            spec.frequency.len()
+        );
     }
     let mut s = String::new();
     let _ = writeln!(
@@ -711,37 +754,4 @@ fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
         }
     }
     Ok(s)
-}
-
-fn run_simulate(a: &SimulateArgs) -> anyhow::Result<String> {
-    let truth = match a.robot {
-        SampleRobot::R1 => TrackTruth::sample_r1(),
-        SampleRobot::R2 => TrackTruth::sample_r2(),
-    };
-    std::fs::create_dir_all(&a.out_dir).with_context(|| a.out_dir.display().to_string())?;
-    let skids: Vec<f64> = (0..=16).map(|i| i as f64 * 500.0).collect();
-    let rows = simulate_measurements(&truth, &skids, &sample_tcp_points(), a.noise, a.seed);
-    let m = a.out_dir.join("measurements.csv");
-    write_file(&m, &measurements_csv(&rows))?;
-    let reflector = nalgebra::Point3::new(0.0, 0.0, 250.0);
-    let scan = simulate_scan(
-        &truth,
-        reflector,
-        0.0,
-        8000.0,
-        10.0,
-        a.noise,
-        a.seed.wrapping_add(1000),
-    );
-    let sc = a.out_dir.join("scan.csv");
-    write_file(&sc, &scan_csv(&scan))?;
-    Ok(format!(
-        "wrote {} ({} rows) and {} ({} rows), noise {} mm, seed {}\n",
-        m.display(),
-        rows.len(),
-        sc.display(),
-        scan.len(),
-        a.noise,
-        a.seed
-    ))
 }

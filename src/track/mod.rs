@@ -5,6 +5,7 @@ pub mod adjustment;
 pub mod csv_table;
 pub mod error;
 pub mod frames_csv;
+pub mod gear;
 pub mod identify;
 pub mod nominal;
 pub mod plot;

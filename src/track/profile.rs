@@ -64,11 +64,11 @@ impl Knot {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Extrapolate {
-    /// Refuse: [`TrackError::OutOfRange`].
+    /// Refuse a skid outside the measured range.
     Error,
-    /// Hold the end value.
+    /// Hold the deviation of the nearest end.
     Clamp,
-    /// Continue the end tangent.
+    /// Continue the deviation along its slope at the nearest end.
     Linear,
 }
 
@@ -85,11 +85,11 @@ pub enum Reference {
 /// Whether the gear factor's drift stays in the profile (DESIGN.md §3.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 pub enum Gear {
-    /// Keep the controller's gear factor; its drift is part of `D(s)`.
+    /// Keep the controller's gear ratio; its drift stays in the profile.
     #[serde(rename = "as-is")]
     #[value(name = "as-is")]
     AsIs,
-    /// The user enters the new gear factor; the drift is removed from `D(s)`.
+    /// You enter the new gear ratio in the controller; the drift is taken out of the profile.
     #[serde(rename = "recalibrated")]
     Recalibrated,
 }

@@ -240,19 +240,39 @@ fn svg_is_deterministic() {
             p.to_str().unwrap(),
         ]);
         assert_eq!(code, 0, "{err}");
+        assert_eq!(
+            err,
+            format!(
+                "wrote {}: the six deviation curves of profile `r1` with their 17 knots, and the twist diagram\n",
+                p.display()
+            )
+        );
     }
     let (sa, sb) = (std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
     assert_eq!(sa, sb);
     let text = String::from_utf8(sa).unwrap();
     // Six curves + the twist diagram; 17 knots in each of the 7 panels.
+    // The twist diagram labels each of its 17 dots with the knot's skid.
+    // (plotters anchors axis ticks in the middle or at the end, the diagram's labels at the start).
+    let started: Vec<&str> = text
+        .split("<text ")
+        .filter(|t| t.contains("text-anchor=\"start\""))
+        .filter_map(|t| t.split_once('>').and_then(|(_, r)| r.split_once("</text>")))
+        .map(|(content, _)| content.trim())
+        .collect();
+    let labels: Vec<String> = (0..=16).map(|i| (500 * i).to_string()).collect();
     let summary = format!(
-        "polylines: {}\ncircles: {}\ntitles: {:?}",
+        "polylines: {}\ncircles: {}\ntitles: {:?}\nskid labels: {}",
         text.matches("<polyline").count(),
         text.matches("<circle").count(),
         ["dx [mm]", "rz [deg]", "twist diagram", "track profile `r1`"]
             .iter()
             .map(|t| text.contains(t))
-            .collect::<Vec<_>>()
+            .collect::<Vec<_>>(),
+        labels
+            .iter()
+            .filter(|l| started.contains(&l.as_str()))
+            .count()
     );
     insta::assert_snapshot!("svg_summary", summary);
     let c = tmp.path().join("c.svg");
@@ -266,7 +286,11 @@ fn svg_is_deterministic() {
         c.to_str().unwrap(),
     ]);
     assert_eq!(code, 0);
-    assert!(std::fs::read_to_string(&c).unwrap().starts_with("<svg"));
+    let spectrum = std::fs::read_to_string(&c).unwrap();
+    assert!(spectrum.starts_with("<svg"));
+    // Frequency ticks carry their wavelength: 0.0005 /mm is 2000 mm.
+    assert!(spectrum.contains("\n0.0005 (2000)\n</text>"), "{spectrum}");
+    assert!(spectrum.contains("(wavelength 2002 mm)"));
 }
 
 #[test]
@@ -802,4 +826,55 @@ fn located_errors_and_foreign_files() {
     ]);
     let all = [e1, e2, e3, e4, e5, e6, e7, e8].map(clean).join("\n");
     insta::assert_snapshot!("errors_located", all);
+}
+
+/// `--current-gear` prints the new controller value: motor turns per travel divided by the
+/// measured gear factor (the sample's skid travels short, so the ratio grows).
+#[test]
+fn current_gear_gives_the_new_controller_value() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("profile.toml");
+    let run = |current: &str| {
+        let (code, text, err) = trackfix(&[
+            "track",
+            "fit",
+            "samples/track/frames.csv",
+            "-o",
+            out.to_str().unwrap(),
+            "--current-gear",
+            current,
+        ]);
+        assert_eq!(code, 0, "{err}");
+        text.lines()
+            .find(|l| l.contains("for --current-gear"))
+            .unwrap()
+            .to_string()
+    };
+    let g = Profile::load(&root().join("samples/track/profile.toml"))
+        .unwrap()
+        .nominal()
+        .gear_factor;
+    let abb = run("1500");
+    let value: f64 = abb.rsplit(' ').next().unwrap().parse().unwrap();
+    assert!((value - 1500.0 / g).abs() < 1e-8, "{abb}");
+    assert!(value > 1500.0);
+    let kuka = run("47746/1000");
+    let (n, d) = kuka
+        .split_once("$RAT_MOT_AX = {N ")
+        .and_then(|(_, r)| r.split_once('}'))
+        .and_then(|(f, _)| f.split_once(",D "))
+        .unwrap();
+    let (n, d): (f64, f64) = (n.parse().unwrap(), d.parse().unwrap());
+    assert!(n < 2_147_483_647.0 && d < 2_147_483_647.0);
+    assert!((n / d - 47.746 / g).abs() < 1e-7, "{kuka}");
+    let e = error_of(&[
+        "track",
+        "fit",
+        "samples/track/frames.csv",
+        "-o",
+        out.to_str().unwrap(),
+        "--current-gear",
+        "1/0",
+    ]);
+    assert!(e.contains("write the KUKA ratio as N/D"), "{e}");
 }
