@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 use trackfix::geometry::{abb_quat_components, kuka_abc_angles, pose_to_xyz_deg};
 use trackfix::track::adjustment::{chord_bounds, manual_adjustment, twist_diagram};
+use trackfix::track::cell_nominal::{check_cell_nominal, write_nominal_into_cell};
 use trackfix::track::csv_table::NumericCsv;
 use trackfix::track::frames_csv::{FRAMES_HEADER, clean, frames_csv, frames_from};
 use trackfix::track::gear;
@@ -15,12 +16,14 @@ use trackfix::track::identify::{
     CONDITION_LIMIT, Exclusion, FrameShift, MEASUREMENTS_HEADER, OUTLIER_FACTOR,
     identify_excluding, measurements_from,
 };
-use trackfix::track::nominal::{FitOptions, fit_track};
+use trackfix::track::nominal::{FitOptions, TrackFit, fit_track};
 use trackfix::track::plot::{profile_svg, spectrum_svg};
 use trackfix::track::profile::write_atomic;
 use trackfix::track::spectrum::{TUKEY_ALPHA, scan_from_table, scan_spectrum};
-use trackfix::track::{Extrapolate, Gear, Knot, LocatedError, Profile, Reference, TrackError};
-use trackfix::transform::CellError;
+use trackfix::track::{
+    Extrapolate, Gear, Knot, LocatedError, MeasuredIn, Profile, Reference, TrackError,
+};
+use trackfix::transform::{Cell, CellError};
 
 use super::Exit;
 
@@ -107,6 +110,17 @@ pub struct FitArgs {
     /// Ratio as a number, or KUKA's $RAT_MOT_AX as N/D (e.g. 47746/1000).
     #[arg(long, value_name = "X")]
     pub current_gear: Option<String>,
+    /// The frame the tracker measured in: `world` when it was aligned to the cell, so the
+    /// profile's nominal can be checked against (and written into) the cell file.
+    #[arg(long, value_enum)]
+    pub measured_in: Option<MeasuredIn>,
+    /// Write the fitted nominal (base at skid 0 and track axis) into this cell file's
+    /// [robot.NAME] (needs --robot; implies --measured-in world). Only those two values change.
+    #[arg(long, value_name = "CELL.toml", requires = "robot")]
+    pub cell: Option<PathBuf>,
+    /// The robot of --cell.
+    #[arg(long, value_name = "NAME", requires = "cell")]
+    pub robot: Option<String>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -354,9 +368,23 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         extrapolate: a.extrapolate,
         source_sha256: sha256_hex(&bytes),
     };
-    let fit = fit_track(&frames, &opts).with_context(|| a.frames.display().to_string())?;
+    let mut fit = fit_track(&frames, &opts).with_context(|| a.frames.display().to_string())?;
+    let measured_in = match (a.measured_in, &a.cell) {
+        (Some(MeasuredIn::Tracker), Some(_)) => anyhow::bail!(
+            "--cell writes the nominal as the cell's world frame: the frames must be measured in it (--measured-in world)"
+        ),
+        (None, Some(_)) => Some(MeasuredIn::World),
+        (m, _) => m,
+    };
+    if let Some(m) = measured_in {
+        fit.profile = fit.profile.with_measured_in(m);
+    }
     let p = &fit.profile;
     p.save(&a.output)?;
+    let cell_note = match (&a.cell, &a.robot) {
+        (Some(cell), Some(robot)) => Some(write_cell_nominal(cell, robot, &fit)?),
+        _ => None,
+    };
     let (s0, s1) = p.skid_range();
     let mut s = String::new();
     let _ = writeln!(
@@ -432,6 +460,9 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
             l.slope, l.intercept, rms, max
         );
     }
+    if let Some(note) = cell_note {
+        let _ = writeln!(s, "\n{note}");
+    }
     if let Some(st) = p.stats() {
         let _ = writeln!(s, "\ndeviation from the nominal:");
         let _ = writeln!(
@@ -446,6 +477,29 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         );
     }
     Ok(s)
+}
+
+/// Writes the fitted nominal into `[robot.<robot>]` of the cell file (a lossless edit of the two
+/// values), checks it back through the cell loader, and says what changed.
+fn write_cell_nominal(cell: &Path, robot: &str, fit: &TrackFit) -> anyhow::Result<String> {
+    let text = std::fs::read_to_string(cell).with_context(|| cell.display().to_string())?;
+    let new = write_nominal_into_cell(&text, robot, &fit.base_at_zero, &fit.direction)
+        .with_context(|| cell.display().to_string())?;
+    // Checked before it replaces the file: the loader must accept it and agree with the profile.
+    let loaded = Cell::parse(cell, &new)?;
+    let r = loaded.robot(robot)?;
+    check_cell_nominal(&r.base0, &r.track_axis, &fit.profile)
+        .with_context(|| format!("{}: the written nominal", cell.display()))?;
+    write_file(cell, &new)?;
+    let [x, y, z, rx, ry, rz] = pose_to_xyz_deg(&fit.base_at_zero);
+    let u = fit.direction;
+    Ok(format!(
+        "wrote the nominal into {} [robot.{robot}] (the rest of the file unchanged):\n  base = {{ x = {x:.4}, y = {y:.4}, z = {z:.4}, rx = {rx:.6}, ry = {ry:.6}, rz = {rz:.6} }}\n  track_axis = [{:.9}, {:.9}, {:.9}]",
+        cell.display(),
+        clean(u.x, 9),
+        clean(u.y, 9),
+        clean(u.z, 9)
+    ))
 }
 
 /// The controller parameter that holds the gear ratio, which way it changes, and its new value
@@ -528,6 +582,9 @@ fn deviation_cells(c: &[f64; 6], mm_width: usize, deg_width: usize, sep: &str) -
 
 fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
     let p = Profile::load(&a.profile)?;
+    for w in p.consistency_warnings() {
+        eprintln!("warning: {}: {w}", a.profile.display());
+    }
     if let Some(path) = &a.plot {
         write_file(path, &profile_svg(&p)?)?;
         // On standard error: standard output may be the JSON or CSV asked for.

@@ -2,6 +2,7 @@
 //! deviations, natural cubic splines, error bounds and the frequency scan.
 
 pub mod adjustment;
+pub mod cell_nominal;
 pub mod csv_table;
 pub mod error;
 pub mod frames_csv;
@@ -16,4 +17,4 @@ pub mod spline;
 
 pub use csv_table::NumericCsv;
 pub use error::{LocatedError, NominalProblem, SkidProblem, TrackError};
-pub use profile::{Extrapolate, Gear, Knot, Nominal, Profile, Reference};
+pub use profile::{Extrapolate, Gear, Knot, MeasuredIn, Nominal, Profile, Reference};

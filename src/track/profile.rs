@@ -94,6 +94,18 @@ pub enum Gear {
     Recalibrated,
 }
 
+/// The frame the tracker measured in, as far as the profile knows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum MeasuredIn {
+    /// The cell's world frame (the tracker was aligned to the cell): the nominal can be
+    /// compared with the cell's base and track axis.
+    World,
+    /// The tracker's own frame: only the frame-independent track direction in the robot base
+    /// can be compared with a cell.
+    Tracker,
+}
+
 /// The controller's straight track `N(s) = (R_N, origin + s·step)` in the measurement frame.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -121,7 +133,7 @@ impl Nominal {
 }
 
 /// Figures of the fitted deviations, for reports (not used by `D(s)`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ProfileStats {
     /// Number of knots.
@@ -139,6 +151,10 @@ pub struct ProfileStats {
     pub straightness_vertical_mm: f64,
     /// Peak-to-peak of the rotation about the track axis (twist), degrees.
     pub twist_deg: f64,
+    /// sha256 of what `D(s)` is made of (reference, gear, nominal, knots; see
+    /// [`Profile::data_sha256`]): a hand edit that changes them shows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub data_sha256: Option<String>,
 }
 
 /// The on-disk layout, field order = file order.
@@ -152,6 +168,8 @@ struct ProfileFile {
     reference: Reference,
     gear: Gear,
     extrapolate: Extrapolate,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    measured_in: Option<MeasuredIn>,
     nominal: Nominal,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     stats: Option<ProfileStats>,
@@ -256,21 +274,22 @@ impl Profile {
             context: format!("profile `{}`", opts.name),
             error,
         })?;
-        let stats = Some(compute_stats(&knots, &nominal));
-        Ok(Profile {
-            file: ProfileFile {
-                format: PROFILE_FORMAT.to_string(),
-                name: opts.name.clone(),
-                source_sha256: opts.source_sha256.clone(),
-                reference: opts.reference,
-                gear: opts.gear,
-                extrapolate: opts.extrapolate,
-                nominal,
-                stats,
-                knot: knots,
-            },
-            splines,
-        })
+        let mut file = ProfileFile {
+            format: PROFILE_FORMAT.to_string(),
+            name: opts.name.clone(),
+            source_sha256: opts.source_sha256.clone(),
+            reference: opts.reference,
+            gear: opts.gear,
+            extrapolate: opts.extrapolate,
+            measured_in: None,
+            nominal,
+            stats: None,
+            knot: knots,
+        };
+        let mut stats = compute_stats(&file.knot, &file.nominal);
+        stats.data_sha256 = Some(data_sha256(&file));
+        file.stats = Some(stats);
+        Ok(Profile { file, splines })
     }
 
     /// Reads and validates a `profile.toml`: unknown keys are an error, a missing key names
@@ -406,6 +425,73 @@ impl Profile {
         &self.splines
     }
 
+    /// The frame the profile was measured in, if it says.
+    pub fn measured_in(&self) -> Option<MeasuredIn> {
+        self.file.measured_in
+    }
+
+    /// Same profile, recording the frame it was measured in.
+    pub fn with_measured_in(mut self, frame: MeasuredIn) -> Profile {
+        self.file.measured_in = Some(frame);
+        self
+    }
+
+    /// sha256 (hex) of what `D(s)` and `N(s)` are made of: reference, gear, the nominal and the
+    /// knots' skid and six components (not the name, the extrapolation rule or other keys, which
+    /// may be edited by hand).
+    pub fn data_sha256(&self) -> String {
+        data_sha256(&self.file)
+    }
+
+    /// Where the file disagrees with itself: its `[stats]` are not those of its knots, or the
+    /// knots or nominal changed since it was written (a hand edit). Empty for a consistent
+    /// profile and for one without `[stats]`.
+    pub fn consistency_warnings(&self) -> Vec<String> {
+        let Some(written) = &self.file.stats else {
+            return Vec::new();
+        };
+        let mut warnings = Vec::new();
+        if let Some(hash) = &written.data_sha256
+            && *hash != self.data_sha256()
+        {
+            warnings.push(format!(
+                "profile `{}`: its knots or nominal changed after it was written ([stats] data_sha256 does not match); fit it again from its frames",
+                self.file.name
+            ));
+        }
+        let mut actual = compute_stats(&self.file.knot, &self.file.nominal);
+        actual.data_sha256 = written.data_sha256.clone();
+        let close = |a: f64, b: f64| (a - b).abs() <= 2e-6 * (1.0 + a.abs().max(b.abs()));
+        let same = actual.knots == written.knots
+            && [
+                (actual.position_rms_mm, written.position_rms_mm),
+                (actual.position_max_mm, written.position_max_mm),
+                (actual.rotation_max_deg, written.rotation_max_deg),
+                (
+                    actual.straightness_sideways_mm,
+                    written.straightness_sideways_mm,
+                ),
+                (
+                    actual.straightness_vertical_mm,
+                    written.straightness_vertical_mm,
+                ),
+                (actual.twist_deg, written.twist_deg),
+            ]
+            .iter()
+            .all(|(a, b)| close(*a, *b));
+        if !same {
+            warnings.push(format!(
+                "profile `{}`: its [stats] are not those of its knots (e.g. {} knots, position max {:.4} mm; the file says {} and {:.4} mm): it was edited by hand",
+                self.file.name,
+                actual.knots,
+                actual.position_max_mm,
+                written.knots,
+                written.position_max_mm
+            ));
+        }
+        warnings
+    }
+
     /// Same profile, another extrapolation rule.
     pub fn with_extrapolate(mut self, extrapolate: Extrapolate) -> Profile {
         self.file.extrapolate = extrapolate;
@@ -464,6 +550,22 @@ impl Profile {
     pub fn base_frame(&self, skid: f64) -> Result<Pose, TrackError> {
         Ok(self.nominal_frame(skid) * self.deviation(skid)?)
     }
+}
+
+fn data_sha256(file: &ProfileFile) -> String {
+    use sha2::Digest as _;
+    use std::fmt::Write as _;
+    // `{:?}` of f64 is the shortest text that reads back to the same number, as TOML writes it.
+    let mut text = format!("{:?} {:?} {:?}\n", file.reference, file.gear, file.nominal);
+    for k in &file.knot {
+        let _ = writeln!(text, "{:?} {:?}", k.skid, k.components());
+    }
+    sha2::Sha256::digest(text.as_bytes())
+        .iter()
+        .fold(String::new(), |mut s, b| {
+            let _ = write!(s, "{b:02x}");
+            s
+        })
 }
 
 fn build_splines(knots: &[Knot]) -> Result<[CubicSpline; 6], SplineError> {
@@ -547,6 +649,7 @@ fn compute_stats(knots: &[Knot], nominal: &Nominal) -> ProfileStats {
         straightness_sideways_mm: round(peak_to_peak(&line_residuals(&skids, &side))),
         straightness_vertical_mm: round(peak_to_peak(&line_residuals(&skids, &vert))),
         twist_deg: round(peak_to_peak(&twist)),
+        data_sha256: None,
     }
 }
 

@@ -20,6 +20,10 @@ use trackfix::track::{
     Extrapolate, Knot, NominalProblem, NumericCsv, Profile, SkidProblem, TrackError,
 };
 
+use trackfix::track::MeasuredIn;
+use trackfix::track::cell_nominal::{Disagreement, check_cell_nominal};
+use trackfix::transform::Cell;
+
 use crate::support::{root, trackfix};
 
 fn skids() -> Vec<f64> {
@@ -144,6 +148,8 @@ fn identify_then_fit_through_the_binary_matches_the_samples() {
         profile.to_str().unwrap(),
         "--name",
         "r1",
+        "--measured-in",
+        "world",
     ]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(
@@ -877,4 +883,145 @@ fn current_gear_gives_the_new_controller_value() {
         "1/0",
     ]);
     assert!(e.contains("write the KUKA ratio as N/D"), "{e}");
+}
+
+/// The cell against the profile's nominal: the samples agree; a track_axis along y for a track
+/// along x fails the frame-independent check (direction seen from the base); a design-value base
+/// fails the world check of a profile measured in the world frame.
+#[test]
+fn cell_is_checked_against_the_nominal() {
+    let cell = Cell::load(&root().join("samples/cell.toml")).unwrap();
+    for name in ["r1", "r2"] {
+        let r = cell.robot(name).unwrap();
+        let p = Profile::load(&r.profile).unwrap();
+        let c = check_cell_nominal(&r.base0, &r.track_axis, &p).unwrap();
+        let w = c.world.unwrap();
+        // The sample cell holds the fitted nominal to 3 decimals (mm) and 6 (deg).
+        assert!(w.base_position_mm < 0.002, "{name}: {c:?}");
+        assert!(
+            c.axis_in_base_deg < 1e-3 && w.axis_deg < 1e-3,
+            "{name}: {c:?}"
+        );
+    }
+    let r1 = cell.robot("r1").unwrap();
+    let p = Profile::load(&r1.profile).unwrap();
+    let e = check_cell_nominal(&r1.base0, &Vector3::y(), &p).unwrap_err();
+    assert!(matches!(
+        e.disagreements[0],
+        Disagreement::AxisInBase { angle_deg } if (angle_deg - 90.0).abs() < 0.01
+    ));
+    // Without knowing the measurement frame only the direction in the base is compared: a
+    // base moved by 1.7 mm passes, a wrong axis does not.
+    let tracker = p.clone().with_measured_in(MeasuredIn::Tracker);
+    let design = pose_xyz_deg(0.0, -3500.0, 0.0, 0.0, 0.0, 90.0);
+    let c = check_cell_nominal(&design, &Vector3::x(), &tracker).unwrap();
+    assert!(c.world.is_none());
+    assert!(check_cell_nominal(&design, &Vector3::y(), &tracker).is_err());
+    let e = check_cell_nominal(&design, &Vector3::x(), &p).unwrap_err();
+    let found: Vec<String> = e.disagreements.iter().map(|d| d.to_string()).collect();
+    // |(0.016, -3499.087, -1.496) - (0, -3500, 0)| = 1.753 mm.
+    assert!(
+        matches!(e.disagreements[0], Disagreement::BasePosition { distance_mm } if (distance_mm - 1.7532).abs() < 1e-3),
+        "{found:?}"
+    );
+    assert!(e.to_string().contains("tolerance 0.1 mm"), "{e}");
+}
+
+/// `track fit --cell C --robot R` writes the fitted nominal into the cell: only `base` and
+/// `track_axis` of that robot change, comments and layout stay, and the result passes the check.
+#[test]
+fn fit_writes_the_nominal_into_the_cell() {
+    let tmp = tempfile::tempdir().unwrap();
+    let original = std::fs::read_to_string(root().join("samples/cell.toml")).unwrap();
+    let design = original
+        .replace(
+            "base = { x = 0.016, y = -3499.087, z = -1.496, rx = 0.000412, ry = -0.000064, rz = 90.000710 }",
+            "base = { x = 0, y = -3500, z = 0, rx = 0, ry = 0, rz = 90 }",
+        )
+        .replace(
+            "track_axis = [1.0, -0.0000032, 0.0000014]",
+            "track_axis = [0, 1, 0]",
+        );
+    assert_ne!(design, original);
+    let cell = tmp.path().join("cell.toml");
+    std::fs::write(&cell, &design).unwrap();
+    let profile = tmp.path().join("profile.toml");
+    let (code, out, err) = trackfix(&[
+        "track",
+        "fit",
+        "samples/track/frames.csv",
+        "-o",
+        profile.to_str().unwrap(),
+        "--cell",
+        cell.to_str().unwrap(),
+        "--robot",
+        "r1",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("[robot.r1] (the rest of the file unchanged)"),
+        "{out}"
+    );
+    let written = std::fs::read_to_string(&cell).unwrap();
+    let changed: Vec<(&str, &str)> = design
+        .lines()
+        .zip(written.lines())
+        .filter(|(a, b)| a != b)
+        .collect();
+    assert_eq!(design.lines().count(), written.lines().count());
+    assert_eq!(changed.len(), 2, "{changed:?}");
+    assert!(
+        changed[0]
+            .1
+            .starts_with("base = { x = 0.0157, y = -3499.0871, z = -1.4958, rx = 0.000412"),
+        "{changed:?}"
+    );
+    assert!(
+        changed[1]
+            .1
+            .starts_with("track_axis = [1.0, -0.000003206, 0.000001369]  # unit direction"),
+        "{changed:?}"
+    );
+    let p = Profile::load(&profile).unwrap();
+    assert_eq!(p.measured_in(), Some(MeasuredIn::World));
+    let c = Cell::load(&cell).unwrap();
+    let r = c.robot("r1").unwrap();
+    check_cell_nominal(&r.base0, &r.track_axis, &p).unwrap();
+    let e = error_of(&[
+        "track",
+        "fit",
+        "samples/track/frames.csv",
+        "-o",
+        profile.to_str().unwrap(),
+        "--cell",
+        cell.to_str().unwrap(),
+        "--robot",
+        "r9",
+    ]);
+    assert!(e.contains("no [robot.r9] table"), "{e}");
+}
+
+/// A profile edited by hand (a knot's value) disagrees with its own [stats] and hash: a
+/// warning; editing the extrapolation rule, as the out-of-range message suggests, is not.
+#[test]
+fn hand_edited_profile_is_a_warning() {
+    let text = std::fs::read_to_string(root().join("samples/track/profile.toml")).unwrap();
+    let p = Profile::from_toml_str(&text, Path::new("p.toml")).unwrap();
+    assert!(p.consistency_warnings().is_empty());
+    let clamp = text.replace("extrapolate = \"error\"", "extrapolate = \"clamp\"");
+    let p = Profile::from_toml_str(&clamp, Path::new("p.toml")).unwrap();
+    assert!(p.consistency_warnings().is_empty());
+    let edited = text.replacen("dz = 1.589099", "dz = 2.589099", 1);
+    assert_ne!(edited, text);
+    let p = Profile::from_toml_str(&edited, Path::new("p.toml")).unwrap();
+    let w = p.consistency_warnings();
+    assert_eq!(w.len(), 2, "{w:?}");
+    assert!(w[0].contains("data_sha256 does not match"), "{w:?}");
+    assert!(w[1].contains("[stats] are not those of its knots"), "{w:?}");
+    let tmp = tempfile::tempdir().unwrap();
+    let f = tmp.path().join("edited.toml");
+    std::fs::write(&f, &edited).unwrap();
+    let (code, _, err) = trackfix(&["track", "show", f.to_str().unwrap(), "--at", "0"]);
+    assert_eq!(code, 0);
+    assert_eq!(err.matches("warning: ").count(), 2, "{err}");
 }
