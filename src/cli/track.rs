@@ -18,6 +18,7 @@ use trackfix::track::identify::{
 };
 use trackfix::track::nominal::{FitOptions, TrackFit, fit_track};
 use trackfix::track::plot::{profile_svg, spectrum_svg};
+use trackfix::track::point_export::{ColumnMap, points_csv, read_point_export};
 use trackfix::track::profile::write_atomic;
 use trackfix::track::spectrum::{TUKEY_ALPHA, scan_from_table, scan_spectrum};
 use trackfix::track::{
@@ -37,6 +38,8 @@ pub enum TrackCommand {
     Show(ShowArgs),
     /// Recommend a sampling spacing from a continuous scan along the track.
     Spectrum(SpectrumArgs),
+    /// Read a laser tracker's point export (name x y z; `;`, tab, space or `,`) into point,x,y,z CSV.
+    Import(ImportArgs),
 }
 
 const IDENTIFY_EXAMPLES: &str = "\
@@ -154,6 +157,29 @@ pub struct ShowArgs {
     pub plot: Option<PathBuf>,
 }
 
+const IMPORT_EXAMPLES: &str = "\
+Examples:
+  trackfix track import marks.txt -o marks.csv
+  trackfix track import export.csv --map name=Punkt,x=Ost,y=Nord,z=Hoehe -o marks.csv
+  trackfix track import export.txt --map name=2,x=4,y=5,z=6 -o marks.csv
+
+Reads one named point per line, with or without a header line, fields separated by `;`, tabs,
+spaces or `,` (decimal commas where `,` is not the separator). Without --map the columns are
+found from the header (name/point/id, x, y, z) or are the first four. Says how it read the file.";
+
+#[derive(clap::Args)]
+#[command(after_help = IMPORT_EXAMPLES)]
+pub struct ImportArgs {
+    /// The tracker software's CSV/TXT point export.
+    pub export: PathBuf,
+    /// Which columns hold name, x, y, z: by position (name=1,x=2,y=3,z=4) or header name.
+    #[arg(long, value_name = "name=C,x=C,y=C,z=C")]
+    pub map: Option<ColumnMap>,
+    /// Where to write point,x,y,z CSV (mm).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
 #[derive(clap::Args)]
 #[command(after_help = SPECTRUM_EXAMPLES)]
 pub struct SpectrumArgs {
@@ -216,6 +242,7 @@ fn run_command(cmd: TrackCommand) -> anyhow::Result<Exit> {
         TrackCommand::Fit(a) => run_fit(&a)?,
         TrackCommand::Show(a) => run_show(&a)?,
         TrackCommand::Spectrum(a) => run_spectrum(&a)?,
+        TrackCommand::Import(a) => run_import(&a)?,
     };
     let mut out = std::io::stdout().lock();
     out.write_all(text.as_bytes())?;
@@ -725,6 +752,22 @@ fn overview(p: &Profile) -> String {
         let _ = writeln!(s, "{:>10}{:>10}{}", b.from, b.to, row6(&d));
     }
     s
+}
+
+fn run_import(a: &ImportArgs) -> anyhow::Result<String> {
+    let export = read_point_export(&a.export, a.map.as_ref())?;
+    write_file(&a.output, &points_csv(&export.points))?;
+    let mut s = String::new();
+    for note in &export.notes {
+        let _ = writeln!(s, "{note}");
+    }
+    let _ = writeln!(
+        s,
+        "wrote {} point(s) to {}",
+        export.points.len(),
+        a.output.display()
+    );
+    Ok(s)
 }
 
 fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {

@@ -10,6 +10,7 @@ pub mod gear;
 pub mod identify;
 pub mod nominal;
 pub mod plot;
+pub mod point_export;
 pub mod profile;
 pub mod simulate;
 pub mod spectrum;

@@ -1025,3 +1025,43 @@ fn hand_edited_profile_is_a_warning() {
     assert_eq!(code, 0);
     assert_eq!(err.matches("warning: ").count(), 2, "{err}");
 }
+
+/// A tracker's point export (German spreadsheet style, extra columns) through `track import`
+/// with `--map`: the points come out as point,x,y,z, and the command says how it read the file.
+#[test]
+fn tracker_export_is_imported_with_a_map() {
+    let tmp = tempfile::tempdir().unwrap();
+    let export = tmp.path().join("export.csv");
+    std::fs::write(
+        &export,
+        "Nr;Punkt;Zeit;Ost;Nord;Hoehe\n1;M1;12:00;1670,3;-1850,75;612,4\n2;M2;12:01;2670,25;-1850,5;612\n",
+    )
+    .unwrap();
+    let out = tmp.path().join("marks.csv");
+    let (code, text, err) = trackfix(&[
+        "track",
+        "import",
+        export.to_str().unwrap(),
+        "--map",
+        "name=Punkt,x=Ost,y=Nord,z=Hoehe",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        text.contains("2 point(s), fields separated by `;` with `,` as the decimal point, a header line; name, x, y, z in columns 2, 4, 5, 6"),
+        "{text}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(&out).unwrap(),
+        "point,x,y,z\nM1,1670.3000,-1850.7500,612.4000\nM2,2670.2500,-1850.5000,612.0000\n"
+    );
+    let e = error_of(&[
+        "track",
+        "import",
+        "/etc/passwd",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!e.contains("daemon") && !e.contains("root:"), "{e}");
+}
