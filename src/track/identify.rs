@@ -250,6 +250,27 @@ impl Group {
         Ok(fit)
     }
 
+    /// The residuals of the fit, among the full one (`full`) and those leaving out one point,
+    /// with the smallest median residual: with one bad reading, the fit without it.
+    fn robust_start(&self, full: Vec<f64>) -> Vec<f64> {
+        let median_of = |r: &[f64]| {
+            let mut v = r.to_vec();
+            v.sort_by(f64::total_cmp);
+            median(&v)
+        };
+        let mut best = (median_of(&full), full);
+        for i in 0..self.points.len() {
+            if let Some(fit) = self.fit_without(i) {
+                let r = fit.residual_norms();
+                let m = median_of(&r);
+                if m < best.0 {
+                    best = (m, r);
+                }
+            }
+        }
+        best.1
+    }
+
     /// The least-squares fit without point `index`, if the rest still fixes a frame.
     fn fit_without(&self, index: usize) -> Option<RigidFit> {
         let mut w = vec![1.0; self.points.len()];
@@ -349,8 +370,16 @@ pub fn identify_excluding(
             exclusion_shift,
         });
     }
-    // Iteratively reweighted least squares, all skids sharing one residual scale.
+    // Iteratively reweighted least squares, all skids sharing one residual scale. A plain
+    // least-squares start lets a bad point push its neighbours' residuals above the cut-off
+    // (masking), so each skid starts from the best of the full fit and its leave-one-out fits.
     let mut scale = median_residual_of(&fits);
+    if scale > 1e-9 {
+        for (f, (kept, _)) in fits.iter_mut().zip(&groups) {
+            f.robust_residuals = kept.robust_start(f.fit.residual_norms());
+        }
+        scale = median_residual_of(&fits);
+    }
     // Residuals at the level of rounding are exact data: nothing to reweight.
     for _ in 0..10 {
         if scale <= 1e-9 {

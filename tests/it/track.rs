@@ -618,6 +618,29 @@ fn one_bad_reading_flags_that_point_only() {
         .fold(0.0, f64::max);
     assert!(err < 0.03, "{err}");
     assert!(excl.outliers.is_empty(), "{:?}", excl.outliers);
+    // Other tracks' noise, other skids and points, other directions of the 2 mm error.
+    for (seed, skid, point, dir) in [
+        (1, 3000.0, 4, [0.6, -0.8, 0.0]),
+        (2, 0.0, 1, [0.0, 0.0, 1.0]),
+        (4, 8000.0, 10, [1.0, 0.0, 0.0]),
+        (5, 4500.0, 7, [0.0, 0.6, 0.8]),
+    ] {
+        let mut rows = simulate_measurements(&truth, &skids(), &sample_tcp_points(), 0.02, seed);
+        let bad = rows
+            .iter_mut()
+            .find(|r| r.skid == skid && r.point == point)
+            .unwrap();
+        for (m, d) in bad.meas.iter_mut().zip(dir) {
+            *m += 2.0 * d;
+        }
+        let flagged: Vec<(f64, u32)> = identify(&rows)
+            .unwrap()
+            .outliers
+            .iter()
+            .map(|o| (o.skid, o.point))
+            .collect();
+        assert_eq!(flagged, [(skid, point)], "seed {seed}");
+    }
 }
 
 #[test]
