@@ -367,14 +367,13 @@ fn sha256_hex(bytes: &[u8]) -> String {
 
 fn default_name(output: &Path) -> String {
     let stem = output.file_stem().and_then(|s| s.to_str()).unwrap_or("");
-    if stem == "profile" {
-        if let Some(dir) = output
+    if stem == "profile"
+        && let Some(dir) = output
             .parent()
             .and_then(|p| p.file_name())
             .and_then(|s| s.to_str())
-        {
-            return dir.to_string();
-        }
+    {
+        return dir.to_string();
     }
     if stem.is_empty() {
         "track".to_string()

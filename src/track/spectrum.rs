@@ -163,7 +163,7 @@ pub fn scan_spectrum(
             .map_err(|e| TrackError::Output(format!("DFT failed: {e}")))?;
         for (k, (p, x)) in power.iter_mut().zip(&output).enumerate() {
             // One-sided amplitude: DC and Nyquist are not doubled.
-            let scale = if k == 0 || (n % 2 == 0 && k == n / 2) {
+            let scale = if k == 0 || (n.is_multiple_of(2) && k == n / 2) {
                 1.0
             } else {
                 2.0

@@ -161,10 +161,10 @@ fn check_duplicates(writes: Vec<PlannedWrite>) -> Result<Vec<PlannedWrite>, Outp
 }
 
 fn write_one(w: &PlannedWrite) -> std::io::Result<()> {
-    if let Some(dir) = w.path.parent() {
-        if !dir.as_os_str().is_empty() {
-            std::fs::create_dir_all(dir)?;
-        }
+    if let Some(dir) = w.path.parent()
+        && !dir.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(dir)?;
     }
     let mut file = atomic_write_file::AtomicWriteFile::open(&w.path)?;
     file.write_all(&w.bytes)?;

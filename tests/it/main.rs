@@ -3,6 +3,7 @@
 mod cli;
 mod krl;
 mod rapid;
+mod rust_version;
 mod support;
 mod track;
 mod transform;
