@@ -30,7 +30,7 @@ fn skids() -> Vec<f64> {
     (0..=16).map(|i| i as f64 * 500.0).collect()
 }
 
-/// The simulation test of issue 4. Truth: `TrackTruth::sample_r1()` without its waviness, i.e. a
+/// The simulation test. Truth: `TrackTruth::sample_r1()` without its waviness, i.e. a
 /// smooth deformation: 2.5 mm sag, 1.5 mm sideways bow, 0.03° twist, pitch/yaw following the
 /// rails (up to 0.06°), gear error -1.5e-4 (1.2 mm over 8 m). 10 TCP points at each of 17 skid
 /// positions (0..8000 every 500 mm), tracker noise 0.02 mm per axis (seed 7). identify + fit,
