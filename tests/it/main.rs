@@ -6,6 +6,7 @@ mod kinematics;
 mod krl;
 mod output;
 mod rapid;
+mod rust_version;
 mod support;
 mod track;
 mod transform;
