@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use anyhow::Context as _;
 use clap::Parser as _;
-use trackfix::track::profile::write_atomic;
+use trackfix::output::write_file;
 use trackfix::track::simulate::{
     TrackTruth, measurements_csv, sample_tcp_points, scan_csv, simulate_measurements, simulate_scan,
 };
@@ -47,7 +47,7 @@ fn main() -> anyhow::Result<()> {
     let skids: Vec<f64> = (0..=16).map(|i| i as f64 * 500.0).collect();
     let rows = simulate_measurements(&truth, &skids, &sample_tcp_points(), a.noise, a.seed);
     let m = a.out_dir.join("measurements.csv");
-    write_atomic(&m, measurements_csv(&rows).as_bytes())?;
+    write_file(&m, measurements_csv(&rows).as_bytes())?;
     let reflector = nalgebra::Point3::new(0.0, 0.0, 250.0);
     let scan = simulate_scan(
         &truth,
@@ -59,7 +59,7 @@ fn main() -> anyhow::Result<()> {
         a.seed.wrapping_add(1000),
     );
     let sc = a.out_dir.join("scan.csv");
-    write_atomic(&sc, scan_csv(&scan).as_bytes())?;
+    write_file(&sc, scan_csv(&scan).as_bytes())?;
     #[allow(clippy::print_stdout)]
     {
         println!(
