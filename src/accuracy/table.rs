@@ -106,7 +106,7 @@ fn clean(bytes: &[u8]) -> String {
 impl Table {
     /// Reads a file; lines starting with `#` and blank lines are skipped.
     pub fn read(path: &Path, map: &ColumnMap) -> Result<Table, AccuracyError> {
-        let bytes = std::fs::read(path).map_err(|error| AccuracyError::Io {
+        let bytes = crate::output::read_input(path).map_err(|error| AccuracyError::Io {
             path: path.to_path_buf(),
             error,
         })?;

@@ -12,7 +12,7 @@ use trackfix::accuracy::pose::{compare, pose_accuracy, read_commanded_poses, rea
 use trackfix::accuracy::{
     ColumnMap, PathOptions, PathReport, PointAccuracy, PoseComparison, PoseReport, PoseSummary,
 };
-use trackfix::track::profile::write_atomic;
+use trackfix::output::write_file;
 
 use super::Exit;
 
@@ -219,7 +219,7 @@ fn run_pose(a: &PoseArgs) -> anyhow::Result<String> {
     };
     if let Some(plot) = &a.plot {
         let svg = pose_svg(&report, before.as_ref().map(|b| &b.0))?;
-        write_atomic(&plot_target(plot, "pose.svg")?, svg.as_bytes())?;
+        write_file(&plot_target(plot, "pose.svg")?, svg.as_bytes())?;
     }
     Ok(match a.format {
         Format::Json => match &before {
@@ -419,11 +419,11 @@ fn run_path(a: &PathArgs) -> anyhow::Result<String> {
     }
     if let Some(plot) = &a.plot {
         if is_file_target(plot) {
-            write_atomic(plot, path_svg(&commanded, &report)?.as_bytes())?;
+            write_file(plot, path_svg(&commanded, &report)?.as_bytes())?;
         } else {
             for (name, svg) in path_svgs(&commanded, &report)? {
                 let target = plot_target(plot, &format!("path_{name}.svg"))?;
-                write_atomic(&target, svg.as_bytes())?;
+                write_file(&target, svg.as_bytes())?;
             }
         }
     }

@@ -7,12 +7,12 @@ use anyhow::Context as _;
 use trackfix::accuracy::pose::{pose_accuracy, read_commanded_poses, read_visits};
 use trackfix::accuracy::{AccuracyError, ColumnMap};
 use trackfix::html_report::accuracy::pose_result;
-use trackfix::html_report::track::{TrackReport, scan_columns};
+use trackfix::html_report::track::TrackReport;
 use trackfix::html_report::{SourceFile, TrackInputs};
 use trackfix::track::frames_csv::parse_frames;
 use trackfix::track::identify::parse_measurements;
 use trackfix::track::nominal::FitOptions;
-use trackfix::track::spectrum::scan_spectrum;
+use trackfix::track::spectrum::{scan_from_table, scan_spectrum};
 use trackfix::track::{Gear, NumericCsv, Profile, Reference};
 
 use super::Exit;
@@ -75,9 +75,16 @@ pub struct ReportArgs {
 }
 
 fn read(path: &Path) -> anyhow::Result<(SourceFile, Vec<u8>)> {
-    let bytes = trackfix::output::read_regular_file(path, trackfix::output::MAX_INPUT_BYTES)
-        .with_context(|| path.display().to_string())?;
+    let bytes = trackfix::output::read_input(path).with_context(|| path.display().to_string())?;
     Ok((SourceFile::new(path.display().to_string(), &bytes), bytes))
+}
+
+/// How a table was read when that is not plain CSV (`;`-separated, …), for the user to check.
+fn print_notes(table: &NumericCsv) -> anyhow::Result<()> {
+    for note in &table.notes {
+        writeln!(std::io::stderr(), "note: {note}")?;
+    }
+    Ok(())
 }
 
 fn folder_name(path: &Path) -> Option<String> {
@@ -146,8 +153,13 @@ fn run_inner(a: &ReportArgs) -> anyhow::Result<Exit> {
     }
     if let Some(path) = &a.scan {
         let (src, bytes) = read(path)?;
-        let table = NumericCsv::parse(path, &bytes)?;
-        let (positions, points) = scan_columns(&table, a.speed)?;
+        let (pos_col, scale) = match a.speed {
+            Some(v) => ("t", v),
+            None => ("skid", 1.0),
+        };
+        let table = NumericCsv::parse(path, &bytes, &[pos_col, "x", "y", "z"])?;
+        print_notes(&table)?;
+        let (positions, points) = scan_from_table(&table, pos_col, scale)?;
         let spec = scan_spectrum(&positions, &points, a.threshold)
             .with_context(|| path.display().to_string())?;
         inputs.scan = Some((src, spec));

@@ -11,7 +11,6 @@ use super::figures::ControllerFigures;
 use super::html::{Cell, Page, Row, Section, definitions, escape, table};
 use super::svg::{Chart, Span, fmt_fixed};
 use crate::track::adjustment::{TWIST_LEVER_MM, chord_bounds, manual_adjustment, twist_diagram};
-use crate::track::csv_table::NumericCsv;
 use crate::track::frames_csv::{SamplingFrame, frames_csv};
 use crate::track::identify::{Identification, OUTLIER_FACTOR, identify};
 use crate::track::nominal::{FitOptions, TrackFit, fit_track};
@@ -123,7 +122,7 @@ pub struct TrackInputs {
     pub frames: Option<(SourceFile, Vec<SamplingFrame>)>,
     /// `profile.toml`; fitted from the frames when absent.
     pub profile: Option<(SourceFile, Profile)>,
-    /// The spectrum of a continuous scan (see [`scan_columns`]).
+    /// The spectrum of a continuous scan.
     pub scan: Option<(SourceFile, Spectrum)>,
     /// How a profile is fitted when it is computed (`source_sha256` is filled in: the frames
     /// file's hash, or the hash of the frames text `track identify` would write).
@@ -328,25 +327,6 @@ fn enum_text<T: serde::Serialize>(v: &T) -> String {
 /// Builds the track report page from its inputs.
 pub fn track_report(inputs: TrackInputs) -> Result<String, ReportError> {
     Ok(TrackReport::compute(inputs)?.render())
-}
-
-/// Positions and points of a scan table: `skid,x,y,z`, or `t,x,y,z` with a skid speed in
-/// mm/s (as `track spectrum` reads them).
-pub fn scan_columns(
-    table: &NumericCsv,
-    speed: Option<f64>,
-) -> Result<(Vec<f64>, Vec<[f64; 3]>), TrackError> {
-    let (pos_col, scale) = match speed {
-        Some(v) => ("t", v),
-        None => ("skid", 1.0),
-    };
-    let mut positions = Vec::with_capacity(table.rows.len());
-    let mut points = Vec::with_capacity(table.rows.len());
-    for (_, [s, x, y, z]) in table.select(&[pos_col, "x", "y", "z"])? {
-        positions.push(s * scale);
-        points.push([x, y, z]);
-    }
-    Ok((positions, points))
 }
 
 /// Standard uncertainties `u_dx … u_rz` per knot, when every knot of the profile carries all

@@ -20,7 +20,7 @@ use crate::transform::ProgramResult;
 pub use backup::{backup_path, next_free_backup};
 pub use diff::unified_diff;
 pub use paths::{Destination, Roots, output_path, output_path_under};
-pub use read::{MAX_INPUT_BYTES, read_regular_file};
+pub use read::{MAX_INPUT_BYTES, read_input, read_regular_file};
 pub use transaction::{FileWrite, Written, clean_stale, commit};
 
 /// Why the outputs of a run were not written. Nothing was changed on disk when one of these

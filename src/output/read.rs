@@ -25,6 +25,11 @@ pub fn read_regular_file(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// [`read_regular_file`] with the one limit every input of trackfix shares.
+pub fn read_input(path: &Path) -> std::io::Result<Vec<u8>> {
+    read_regular_file(path, MAX_INPUT_BYTES)
+}
+
 fn check_kind(meta: &std::fs::Metadata) -> std::io::Result<()> {
     if meta.is_file() {
         return Ok(());

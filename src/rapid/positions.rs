@@ -432,12 +432,12 @@ impl<'l> Extractor<'l> {
             let i = i as u32;
             match n.kind {
                 ExprKind::Aggregate if literals && i >= skip_until => {
-                    if let Some(kind) = Self::literal_kind(arena, i) {
-                        if let Some(p) = self.position(src, arena, i, kind, None) {
-                            added.push(self.positions.len());
-                            self.positions.push(p);
-                            skip_until = n.subtree_end;
-                        }
+                    if let Some(kind) = Self::literal_kind(arena, i)
+                        && let Some(p) = self.position(src, arena, i, kind, None)
+                    {
+                        added.push(self.positions.len());
+                        self.positions.push(p);
+                        skip_until = n.subtree_end;
                     }
                 }
                 ExprKind::Call => {
@@ -483,10 +483,10 @@ impl<'l> Extractor<'l> {
                         .and_then(|&v| arena.get(v))
                         .map(|v| text_of(src, v.span()))
                         .unwrap_or_default();
-                    if let Some(v) = positional.first().and_then(|&v| arena.get(v)) {
-                        if matches!(v.kind, ExprKind::Ident | ExprKind::Access) {
-                            refs.push(v.span());
-                        }
+                    if let Some(v) = positional.first().and_then(|&v| arena.get(v))
+                        && matches!(v.kind, ExprKind::Ident | ExprKind::Access)
+                    {
+                        refs.push(v.span());
                     }
                     let delta =
                         [1, 2, 3].map(|k| positional.get(k).and_then(|&v| self.num(src, arena, v)));

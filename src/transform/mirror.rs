@@ -541,10 +541,10 @@ fn mirror_offsets(
             // flipped axis keep their sign, the other two change it.
             for (i, f) in call.rot.iter().enumerate() {
                 let flip = refl.tool_axis[i] == 0.0;
-                if let Some(v) = f.as_ref().map(NumField::value) {
-                    if flip {
-                        edits.extend(flip_or_value_edit(f, -v, 0));
-                    }
+                if let Some(v) = f.as_ref().map(NumField::value)
+                    && flip
+                {
+                    edits.extend(flip_or_value_edit(f, -v, 0));
                 }
             }
         }
@@ -583,11 +583,11 @@ fn mirror_frames(
                 }
             }
             FrameKind::Tool => {
-                if let Some(fields) = &d.frame {
-                    if let Some(f) = fields.pose() {
-                        let (new, q) = own.tool(&f);
-                        edits.extend(frame_field_edits(fields, &new, q));
-                    }
+                if let Some(fields) = &d.frame
+                    && let Some(f) = fields.pose()
+                {
+                    let (new, q) = own.tool(&f);
+                    edits.extend(frame_field_edits(fields, &new, q));
                 }
             }
         }

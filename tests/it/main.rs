@@ -7,6 +7,7 @@ mod krl;
 mod output;
 mod rapid;
 mod report;
+mod rust_version;
 mod support;
 mod track;
 mod transform;
