@@ -1,4 +1,4 @@
-//! `trackfix correct | zero | mirror | transfer`. Owned by issue 5.
+//! `trackfix correct | zero | mirror | transfer`.
 //!
 //! Every command: load the programs, compute every result in memory, report refusals (exit 3,
 //! nothing written, unless `--skip-unsupported`), then either print a diff, check, or plan and

@@ -5,8 +5,6 @@
 //! [`ProgramEdits`]: per file, the [`Edit`](crate::syntax::Edit)s of the numeric literals that
 //! change, the targets it refused, and how much each changed target moved. Nothing is written
 //! here; [`output`] turns applied edits into files, diffs and checks.
-//!
-//! Owned by issue 5.
 
 pub mod cell;
 pub mod edits;
