@@ -16,7 +16,7 @@ use trackfix::transform::cell::skid_axis_index;
 use trackfix::transform::output::{Destination, output_path, plan_writes, unified_diff, write_all};
 use trackfix::transform::{
     Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, Robot,
-    TrackSetup, TransferPlan, WorldPlane, apply, mirror, track_correction, transfer,
+    TrackSetup, TransferPlan, TransformStep, WorldPlane, apply, transfer,
 };
 
 use super::Exit;
@@ -349,19 +349,54 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
     Ok(Exit::Ok)
 }
 
+/// The one runner of every transform: load each program (with `robot`'s `$config.dat`), run
+/// `transform` on it in memory, then report, diff, check or write everything at once.
+fn run_each(
+    command: &str,
+    files: &[PathBuf],
+    robot: Option<&Robot>,
+    other_configs: &[Option<&Path>],
+    out: &OutputArgs,
+    transform: impl Fn(&Program) -> anyhow::Result<ProgramResult>,
+) -> anyhow::Result<Exit> {
+    let programs = load_programs(files, &load_options(robot))?;
+    let mut results = Vec::new();
+    for p in &programs {
+        results.push(transform(p)?);
+    }
+    drop_untouched_config(&mut results, robot.and_then(|r| r.config_dat.as_deref()));
+    for cfg in other_configs {
+        drop_untouched_config(&mut results, *cfg);
+    }
+    finish(command, &results, out)
+}
+
+/// [`run_each`] for one transform step.
+fn run_step(
+    command: &str,
+    files: &[PathBuf],
+    robot: Option<&Robot>,
+    step: TransformStep,
+    out: &OutputArgs,
+) -> anyhow::Result<Exit> {
+    run_each(command, files, robot, &[], out, |p| {
+        Ok(apply(p, step.edits(p))?)
+    })
+}
+
 fn run_track(a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
     let cell = load_cell(&a.cell)?;
     let robot = cell.robot(&a.robot)?;
     let profile = load_profile(&cell, robot)?;
     let mut setup = TrackSetup::new(robot, &profile);
     setup.default_wobj = a.default_wobj.clone();
-    let programs = load_programs(&a.files, &load_options(Some(robot)))?;
-    let mut results = Vec::new();
-    for p in &programs {
-        results.push(apply(p, track_correction(p, &setup, dir))?);
-    }
-    drop_untouched_config(&mut results, robot.config_dat.as_deref());
-    finish(dir.as_str(), &results, &a.out)
+    run_step(
+        dir.as_str(),
+        &a.files,
+        Some(robot),
+        TransformStep::Track(&setup, dir),
+        &a.out,
+    )
 }
 
 pub fn run_correct(a: CorrectArgs) -> anyhow::Result<Exit> {
@@ -446,13 +481,13 @@ fn run_mirror_inner(a: MirrorArgs) -> anyhow::Result<Exit> {
             a.default_wobj.as_deref(),
         )
     };
-    let programs = load_programs(&a.files, &load_options(robot))?;
-    let mut results = Vec::new();
-    for p in &programs {
-        results.push(apply(p, mirror(p, &settings))?);
-    }
-    drop_untouched_config(&mut results, robot.and_then(|r| r.config_dat.as_deref()));
-    finish("mirror", &results, &a.out)
+    run_step(
+        "mirror",
+        &a.files,
+        robot,
+        TransformStep::Mirror(&settings),
+        &a.out,
+    )
 }
 
 pub fn run_transfer(a: TransferArgs) -> anyhow::Result<Exit> {
@@ -481,12 +516,13 @@ fn run_transfer_inner(a: TransferArgs) -> anyhow::Result<Exit> {
     };
     plan.from.default_wobj = a.default_wobj.clone();
     plan.to.default_wobj = a.default_wobj.clone();
-    let programs = load_programs(&a.files, &load_options(Some(from)))?;
-    let mut results = Vec::new();
-    for p in &programs {
-        results.push(transfer(p, &plan, &load_options(Some(to)))?);
-    }
-    drop_untouched_config(&mut results, from.config_dat.as_deref());
-    drop_untouched_config(&mut results, to.config_dat.as_deref());
-    finish("transfer", &results, &a.out)
+    let written = load_options(Some(to));
+    run_each(
+        "transfer",
+        &a.files,
+        Some(from),
+        &[to.config_dat.as_deref()],
+        &a.out,
+        |p| Ok(transfer(p, &plan, &written)?),
+    )
 }

@@ -7,9 +7,11 @@
 //! here; [`output`] turns applied edits into files, diffs and checks.
 
 pub mod cell;
+mod driver;
 pub mod edits;
 pub mod mirror;
 pub mod output;
+mod policy;
 pub mod refusal;
 pub mod rewrite;
 pub mod track_correction;
@@ -20,7 +22,7 @@ pub use edits::{FileEdits, FileResult, ProgramEdits, ProgramResult, TargetChange
 pub use mirror::{MirrorSettings, WorldPlane, mirror};
 pub use refusal::{Refusal, RefusalKind};
 pub use track_correction::{Deviation, Direction, TrackSetup, track_correction};
-pub use transfer::{TransferError, TransferPlan, reparse, transfer};
+pub use transfer::{TransferError, TransferPlan, TransformStep, reparse, transfer};
 
 #[cfg(test)]
 pub(crate) mod test_support;

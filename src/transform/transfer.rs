@@ -12,7 +12,7 @@ use crate::position::{Language, Program};
 use crate::program::{LoadError, LoadOptions};
 use crate::syntax::EditError;
 
-use super::edits::{FileResult, ProgramResult, TargetChange, apply};
+use super::edits::{FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
 use super::mirror::{MirrorSettings, Reflection, mirror, reflection_for};
 use super::rewrite::pose_change;
 use super::track_correction::{Direction, TrackSetup, track_correction};
@@ -65,32 +65,53 @@ pub fn reparse(
     Ok(crate::krl::load_program_from_sources(sources, options)?)
 }
 
+/// One transform of a chain.
+#[derive(Clone, Copy)]
+pub enum TransformStep<'a> {
+    /// `correct` or `zero` with a robot's track.
+    Track(&'a TrackSetup<'a>, Direction),
+    Mirror(&'a MirrorSettings),
+}
+
+impl TransformStep<'_> {
+    /// The step's edits of `program`.
+    pub fn edits(&self, program: &Program) -> ProgramEdits {
+        match *self {
+            TransformStep::Track(setup, dir) => track_correction(program, setup, dir),
+            TransformStep::Mirror(settings) => mirror(program, settings),
+        }
+    }
+}
+
+impl TransferPlan<'_> {
+    /// `zero` with `from`, `mirror` if asked, `correct` with `to`.
+    pub fn steps(&self) -> Vec<TransformStep<'_>> {
+        let mut steps = vec![TransformStep::Track(&self.from, Direction::Zero)];
+        steps.extend(self.mirror.as_ref().map(TransformStep::Mirror));
+        steps.push(TransformStep::Track(&self.to, Direction::Correct));
+        steps
+    }
+}
+
 /// Runs `zero` with `plan.from`, `mirror` if asked, `correct` with `plan.to`.
 pub fn transfer(
     program: &Program,
     plan: &TransferPlan,
     options: &LoadOptions,
 ) -> Result<ProgramResult, TransferError> {
-    let zeroed = apply(
-        program,
-        track_correction(program, &plan.from, Direction::Zero),
-    )?;
-    let mut current = reparse(program, &zeroed, options)?;
-    let mut steps = vec![zeroed];
-    if let Some(m) = &plan.mirror {
-        let mirrored = apply(&current, mirror(&current, m))?;
-        current = reparse(&current, &mirrored, options)?;
-        steps.push(mirrored);
+    let mut current: Option<Program> = None;
+    let mut steps = Vec::new();
+    for step in plan.steps() {
+        let input = current.as_ref().unwrap_or(program);
+        let result = apply(input, step.edits(input))?;
+        let next = reparse(input, &result, options)?;
+        steps.push(result);
+        current = Some(next);
     }
-    let corrected = apply(
-        &current,
-        track_correction(&current, &plan.to, Direction::Correct),
-    )?;
-    let last = reparse(&current, &corrected, options)?;
-    steps.push(corrected);
+    let last = current.as_ref().unwrap_or(program);
     combine(
         program,
-        &last,
+        last,
         &steps,
         plan.from.skid_axis,
         plan.mirror.as_ref(),
