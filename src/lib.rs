@@ -12,6 +12,7 @@
 //!
 //! The library never prints and never panics on input.
 
+pub mod dialect;
 pub mod geometry;
 pub mod krl;
 pub mod position;

@@ -16,52 +16,30 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 /// Values at or above this are RAPID/KRL "not connected" external axes (`9E9`, `9E+09`).
 pub const NOT_CONNECTED: f64 = 8.9e9;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Language {
-    Rapid,
-    Krl,
-}
+pub use crate::dialect::Language;
 
-/// What a position literal is, by its declared or inferred data type.
+/// What a position literal is, by its declared or inferred data type: the type's name as its
+/// language writes it, and whether it is Cartesian. Each dialect defines its kinds
+/// (`PositionKind::Robtarget`, `PositionKind::E6Pos`, …).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum PositionKind {
-    /// RAPID `robtarget`.
-    Robtarget,
-    /// RAPID `jointtarget`.
-    Jointtarget,
-    /// KRL `E6POS`.
-    E6Pos,
-    /// KRL `POS`.
-    Pos,
-    /// KRL `FRAME` used as a motion target.
-    Frame,
-    /// KRL `E6AXIS`.
-    E6Axis,
-    /// KRL `AXIS`.
-    Axis,
+pub struct PositionKind {
+    name: &'static str,
+    cartesian: bool,
 }
 
 impl PositionKind {
-    /// The name `inspect` prints (RAPID lower case, KRL upper case, as each language writes it).
+    pub const fn new(name: &'static str, cartesian: bool) -> PositionKind {
+        PositionKind { name, cartesian }
+    }
+
+    /// The name `inspect` prints (as the language writes it: `robtarget`, `E6POS`).
     pub fn as_str(self) -> &'static str {
-        match self {
-            PositionKind::Robtarget => "robtarget",
-            PositionKind::Jointtarget => "jointtarget",
-            PositionKind::E6Pos => "E6POS",
-            PositionKind::Pos => "POS",
-            PositionKind::Frame => "FRAME",
-            PositionKind::E6Axis => "E6AXIS",
-            PositionKind::Axis => "AXIS",
-        }
+        self.name
     }
 
     /// Cartesian targets are transformed; joint targets never are (DESIGN.md §4).
     pub fn is_cartesian(self) -> bool {
-        matches!(
-            self,
-            PositionKind::Robtarget | PositionKind::E6Pos | PositionKind::Pos | PositionKind::Frame
-        )
+        self.cartesian
     }
 }
 
@@ -346,6 +324,13 @@ impl ParsedFile {
 #[derive(Clone, Debug)]
 pub struct Program {
     pub files: Vec<ParsedFile>,
+}
+
+impl Program {
+    /// The dialect of the program's first file (every file of a program shares one).
+    pub fn language(&self) -> Option<Language> {
+        self.files.first().map(|f| f.language)
+    }
 }
 
 /// Index of an external axis by name: RAPID `eax_a`..`eax_f` or KRL `E1`..`E6` (any case) →

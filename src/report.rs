@@ -88,12 +88,28 @@ pub struct PositionRow {
     /// The skid: the configured external axis; `null` when missing or not connected (9E9).
     pub skid: Option<f64>,
     pub extax: Vec<Option<f64>>,
-    /// RAPID work object (`wobj`) or KRL base (`base`) of the instructions using it.
-    #[serde(rename = "wobj", skip_serializing_if = "Option::is_none")]
-    pub wobj: Option<Option<String>>,
-    #[serde(rename = "base", skip_serializing_if = "Option::is_none")]
-    pub base: Option<Option<String>>,
+    /// The work object (RAPID `wobj`) or base (KRL `base`) of the instructions using it.
+    #[serde(flatten)]
+    pub frame: FrameColumn,
     pub tool: Option<String>,
+}
+
+/// The frame a position is used in, under the name its language gives that column (the
+/// dialect's [`Vocabulary::frame_column`](crate::dialect::Vocabulary)): `"wobj": "wobj_car"`,
+/// `"base": "BASE_DATA[3]"`; `null` when unused or unresolved.
+#[derive(Clone, Debug)]
+pub struct FrameColumn {
+    pub column: &'static str,
+    pub name: Option<String>,
+}
+
+impl Serialize for FrameColumn {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap as _;
+        let mut map = s.serialize_map(Some(1))?;
+        map.serialize_entry(self.column, &self.name)?;
+        map.end()
+    }
 }
 
 /// A declared work object, tool or base, with its pose in world.
@@ -212,9 +228,9 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
         Skid::At(s) => Some(s),
         Skid::NotConnected | Skid::Missing => None,
     };
-    let (wobj, base) = match file.language {
-        Language::Rapid => (Some(p.usage.wobj.clone()), None),
-        Language::Krl => (None, Some(p.usage.wobj.clone())),
+    let frame = FrameColumn {
+        column: file.language.dialect().vocabulary().frame_column,
+        name: p.usage.wobj.clone(),
     };
     PositionRow {
         name: p.name.clone(),
@@ -233,19 +249,17 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
         joints: nums(&p.joints),
         skid,
         extax: nums(&p.extax),
-        wobj,
-        base,
+        frame,
         tool: p.usage.tool.clone(),
     }
 }
 
 /// The data type of a frame as its language names it.
 fn frame_kind(kind: FrameKind, language: Language) -> &'static str {
-    match (kind, language) {
-        (FrameKind::WorkObject, _) => "wobjdata",
-        (FrameKind::Tool, Language::Rapid) => "tooldata",
-        (FrameKind::Tool, Language::Krl) => "tool",
-        (FrameKind::Base, _) => "base",
+    match kind {
+        FrameKind::WorkObject => "wobjdata",
+        FrameKind::Tool => language.dialect().vocabulary().tool_kind,
+        FrameKind::Base => "base",
     }
 }
 
@@ -366,10 +380,7 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
                     && d.message.contains("work object")
             });
             if !already {
-                let what = match file.language {
-                    Language::Rapid => "work objects",
-                    Language::Krl => "bases",
-                };
+                let what = file.language.dialect().vocabulary().frames;
                 let mut all = vec![p.usage.wobj.clone().unwrap_or_default()];
                 all.extend(p.usage.other_wobjs.iter().cloned());
                 out.push(
@@ -392,17 +403,14 @@ pub fn render_table(report: &InspectReport) -> String {
     for f in &report.files {
         let _ = writeln!(out, "{} ({})", f.path, language_name(f.language));
         if !f.positions.is_empty() {
-            let frame_col = match f.language {
-                Language::Rapid => "wobj",
-                Language::Krl => "base",
-            };
+            let frame_col = f.language.dialect().vocabulary().frame_column;
             let _ = writeln!(
                 out,
                 "  {:<20} {:<11} {:>6} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:<12} {:<12}",
                 "name", "kind", "line", "x", "y", "z", "rx", "ry", "rz", "skid", frame_col, "tool"
             );
             for p in &f.positions {
-                let frame = p.wobj.clone().or(p.base.clone()).flatten();
+                let frame = &p.frame.name;
                 let [x, y, z, rx, ry, rz] = p.pose.cells();
                 let _ = writeln!(
                     out,
@@ -465,7 +473,7 @@ pub fn render_csv(report: &InspectReport) -> String {
     for f in &report.files {
         for p in &f.positions {
             let q = |i: usize| p.pose.q.map(|q| q[i]);
-            let frame = p.wobj.clone().or(p.base.clone()).flatten();
+            let frame = &p.frame.name;
             let fields = [
                 csv_text(&f.path),
                 language_name(f.language).to_owned(),
@@ -493,10 +501,7 @@ pub fn render_csv(report: &InspectReport) -> String {
 }
 
 fn language_name(l: Language) -> &'static str {
-    match l {
-        Language::Rapid => "rapid",
-        Language::Krl => "krl",
-    }
+    l.name()
 }
 
 fn cell(v: Option<f64>, places: usize) -> String {

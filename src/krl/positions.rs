@@ -668,7 +668,7 @@ fn assignment(
     }
     let f = read_fields(src, agg);
     let name = Some(name_text(target.span.slice(src)));
-    match declared.get(&base) {
+    match declared.get(&base).copied() {
         Some(PositionKind::Frame) => {
             out.facts.candidates.push(build_position(
                 lines,
@@ -679,7 +679,7 @@ fn assignment(
             ));
             out.facts.inferred.push(false);
         }
-        Some(&kind) => out
+        Some(kind) => out
             .positions
             .push(build_position(lines, value.span, kind, name, f)),
         None => {

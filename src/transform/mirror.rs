@@ -13,8 +13,8 @@ use nalgebra::{Quaternion, Translation3, UnitQuaternion, Vector3};
 
 use crate::geometry::Pose;
 use crate::position::{
-    CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, ParsedFile,
-    Position, Program, Skid,
+    CartesianFields, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, ParsedFile, Position,
+    Program, Skid,
 };
 use crate::syntax::Edit;
 
@@ -23,12 +23,7 @@ use super::driver::{Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
 use super::policy::{Why, common_refusal, describe, work_object_of};
 use super::refusal::{Refusal, RefusalKind, SKIP_HINT};
-use super::rewrite::{
-    MM_DECIMALS, OrientationHint, bits_edit, integer_edit, number_edit, pose_edits,
-};
-
-/// KUKA Turn bits of A1, A4 and A6: a mirror-image robot runs those axes with the opposite sign.
-const TURN_A1_A4_A6: u32 = 0b10_1001;
+use super::rewrite::{MM_DECIMALS, OrientationHint, number_edit, pose_edits};
 
 /// Everything `mirror` needs.
 #[derive(Clone, Debug, PartialEq)]
@@ -234,25 +229,6 @@ fn skid_refusal(p: &Position, settings: &MirrorSettings) -> Option<Why> {
     ))
 }
 
-fn config_edits(config: &Config) -> Vec<Edit> {
-    match config {
-        Config::Abb(cf) => cf
-            .iter()
-            .take(3)
-            .filter_map(|f| {
-                let v = f.as_ref()?.value();
-                integer_edit(f, -(v.round() as i64) - 1)
-            })
-            .collect(),
-        Config::Kuka { turn, .. } => turn
-            .as_ref()
-            .and_then(|t| bits_edit(turn, t.value ^ TURN_A1_A4_A6))
-            .into_iter()
-            .collect(),
-        Config::None => Vec::new(),
-    }
-}
-
 /// `mirror` as a rule of the transform driver.
 struct MirrorRule<'s> {
     settings: &'s MirrorSettings,
@@ -326,7 +302,7 @@ impl TargetRule for MirrorRule<'_> {
     fn more_edits(&self, scope: Scope, p: &Position) -> Vec<Edit> {
         let mut edits = Vec::new();
         if self.settings.config == ConfigRule::Mirror {
-            edits.extend(config_edits(&p.config));
+            edits.extend(scope.file.language.dialect().mirror_config(&p.config));
         }
         edits.extend(skid_edits(scope.file, p, self.settings));
         edits
@@ -587,7 +563,7 @@ fn mirror_frame(d: &FrameDecl, settings: &MirrorSettings, own: &Reflection) -> V
 mod tests {
     use super::*;
     use crate::geometry::{abb_quat, kuka_abc, pose_xyz_deg};
-    use crate::position::Orientation;
+    use crate::position::{Config, Orientation};
     use crate::transform::edits::apply;
     use crate::transform::rewrite::wijk;
     use crate::transform::test_support::{krl, rapid};

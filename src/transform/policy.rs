@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 use crate::geometry::Pose;
-use crate::position::{FrameKind, Language, ParsedFile, Position, Program};
+use crate::position::{FrameKind, ParsedFile, Position, Program};
 
 use super::refusal::{Refusal, RefusalKind, SKIP_HINT};
 
@@ -42,13 +42,12 @@ impl Why {
     }
 }
 
-/// Names that mean "world" when a program does not declare them.
+/// Names that mean "world" when a program does not declare them, in any dialect.
 fn is_world(name: &str) -> bool {
     let n = name.to_ascii_lowercase();
-    matches!(
-        n.as_str(),
-        "wobj0" | "base_data[0]" | "$nullframe" | "$world"
-    )
+    crate::dialect::registry()
+        .iter()
+        .any(|d| d.vocabulary().world_frames.contains(&n.as_str()))
 }
 
 /// The work object / base `name` in world: the cell's override, else the program's
@@ -183,10 +182,7 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
         );
     }
     if p.usage.stationary_tool {
-        let setting = match file.language {
-            Language::Rapid => "robhold TRUE",
-            Language::Krl => "IPO_FRAME #TCP",
-        };
+        let setting = file.language.dialect().vocabulary().stationary_tool;
         return refuse(
             RefusalKind::StationaryTool,
             format!("{what} is a stationary-tool point ({setting})"),

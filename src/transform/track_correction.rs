@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use nalgebra::{Translation3, Vector3};
 
 use crate::geometry::Pose;
-use crate::position::{Language, Position, Program, Skid};
+use crate::position::{Position, Program, Skid};
 use crate::track::{Profile, TrackError};
 
 use super::cell::Robot;
@@ -111,7 +111,11 @@ impl TargetRule for TrackRule<'_, '_> {
 
     fn skid(&self, scope: Scope, p: &Position) -> Result<Option<f64>, Why> {
         let what = describe(p);
-        let axis = axis_name(scope.file.language, self.setup.skid_axis);
+        let axis = scope
+            .file
+            .language
+            .dialect()
+            .axis_name(self.setup.skid_axis);
         match p.skid(self.setup.skid_axis) {
             Skid::At(s) => Ok(Some(s)),
             Skid::NotConnected => Err(Why::new(
@@ -172,14 +176,6 @@ impl TargetRule for TrackRule<'_, '_> {
 /// `correct` or `zero` every Cartesian target of `program` with `setup`'s track.
 pub fn track_correction(program: &Program, setup: &TrackSetup, dir: Direction) -> ProgramEdits {
     apply_rule(program, &TrackRule { setup, dir })
-}
-
-/// `eax_a` / `E1` … for messages.
-pub(crate) fn axis_name(language: Language, index: usize) -> String {
-    match language {
-        Language::Rapid => format!("eax_{}", (b'a' + index.min(25) as u8) as char),
-        Language::Krl => format!("E{}", index + 1),
-    }
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 
-use crate::position::{Language, Program};
+use crate::position::Program;
 use crate::program::{LoadError, LoadOptions};
 use crate::syntax::EditError;
 
@@ -46,23 +46,17 @@ pub fn reparse(
     result: &ProgramResult,
     options: &LoadOptions,
 ) -> Result<Program, TransferError> {
-    let language = program.files.first().map(|f| f.language);
-    if language == Some(Language::Rapid) {
-        let files = result
-            .files
-            .iter()
-            .map(|f| crate::rapid::parse_file(&f.path, f.output.clone()))
-            .collect();
-        return Ok(Program { files });
-    }
-    // A KRL pair goes through the loader (in memory) so that the .src's motions resolve the
-    // .dat's targets exactly as on the command line.
-    let sources = result
+    let files = result
         .files
         .iter()
         .map(|f| (f.path.clone(), f.output.clone()))
         .collect();
-    Ok(crate::krl::load_program_from_sources(sources, options)?)
+    // The program's own dialect reads it again (a KRL pair through its loader, in memory, so
+    // that the .src's motions resolve the .dat's targets exactly as on the command line).
+    match program.language() {
+        Some(language) => Ok(language.dialect().reparse(files, options)?),
+        None => Ok(Program { files: Vec::new() }),
+    }
 }
 
 /// One transform of a chain.
