@@ -15,6 +15,7 @@
 pub mod dialect;
 pub mod geometry;
 pub mod krl;
+pub mod located;
 pub mod position;
 pub mod program;
 pub mod rapid;

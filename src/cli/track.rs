@@ -174,14 +174,14 @@ pub fn run(cmd: TrackCommand) -> anyhow::Result<Exit> {
 }
 
 /// The text of an error that already says `file:line:col: error: …` with the line and a hint.
-fn located_text<'e>(e: &'e (dyn std::error::Error + 'static)) -> Option<&'e str> {
+fn located_text(e: &(dyn std::error::Error + 'static)) -> Option<String> {
     if let Some(TrackError::Csv { rendered, .. } | TrackError::Toml { rendered, .. }) =
         e.downcast_ref::<TrackError>()
     {
-        return Some(rendered);
+        return Some(rendered.clone());
     }
     match e.downcast_ref::<CellError>() {
-        Some(CellError::Invalid { rendered }) => Some(rendered),
+        Some(CellError::Invalid(located)) => Some(located.to_string()),
         _ => None,
     }
 }
@@ -193,7 +193,7 @@ pub(crate) fn report_located(result: anyhow::Result<Exit>) -> anyhow::Result<Exi
     let Some(text) = err.chain().find_map(located_text) else {
         return Err(err);
     };
-    let mut out = text.to_owned();
+    let mut out = text;
     for context in err.chain().take_while(|c| located_text(*c).is_none()) {
         out.push_str(&format!("\n  = note: {context}"));
     }

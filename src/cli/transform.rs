@@ -11,12 +11,13 @@ use anyhow::{Context as _, bail};
 
 use trackfix::position::Program;
 use trackfix::program::{LoadOptions, collect_inputs, load};
+use trackfix::syntax::Severity;
 use trackfix::track::{Profile, TrackError};
 use trackfix::transform::cell::skid_axis_index;
 use trackfix::transform::output::{Destination, output_path, plan_writes, unified_diff, write_all};
 use trackfix::transform::{
-    Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, Robot,
-    TrackSetup, TransferPlan, TransformStep, WorldPlane, apply, transfer,
+    Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, Remedy,
+    Robot, TrackSetup, TransferPlan, TransformStep, WorldPlane, apply, transfer,
 };
 
 use super::Exit;
@@ -247,21 +248,37 @@ fn fmt_mm(v: f64) -> String {
     format!("{v:.3}")
 }
 
+/// The command-line flag that gives a refusal's remedy.
+fn remedy_flag(remedy: Remedy) -> &'static str {
+    match remedy {
+        Remedy::DefaultWorkObject => "pass --default-wobj NAME to transform unused targets in NAME",
+        Remedy::MirrorJoints => "pass --mirror-joints to negate axes 1, 4 and 6",
+    }
+}
+
 /// Reports refusals, then diffs, checks or writes. The one place outcomes become an exit code.
 fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow::Result<Exit> {
     let mut stderr = std::io::stderr().lock();
     let refused: Vec<_> = results.iter().flat_map(|r| r.refusals()).collect();
     for r in &refused {
         // Skipped targets are reported as warnings: the run goes on without them.
-        let text = if out.skip_unsupported {
-            r.rendered.replacen(": error: ", ": warning: ", 1).replace(
-                ", or pass --skip-unsupported to leave it unchanged",
-                " (left unchanged)",
-            )
+        let (severity, outcome) = if out.skip_unsupported {
+            (Severity::Warning, " (left unchanged)")
         } else {
-            r.rendered.clone()
+            (
+                Severity::Error,
+                ", or pass --skip-unsupported to leave it unchanged",
+            )
         };
-        write!(stderr, "{text}")?;
+        let advice = match r.remedy {
+            Some(remedy) => remedy_flag(remedy),
+            None => &r.hint,
+        };
+        writeln!(
+            stderr,
+            "{}",
+            r.located(severity, format!("{advice}{outcome}"))
+        )?;
     }
     if !refused.is_empty() && !out.skip_unsupported {
         writeln!(

@@ -22,7 +22,7 @@ use super::cell::{Axis, ConfigRule, Plane};
 use super::driver::{Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
 use super::policy::{Why, common_refusal, describe, work_object_of};
-use super::refusal::{Refusal, RefusalKind, SKIP_HINT};
+use super::refusal::{Refusal, RefusalKind, Remedy};
 use super::rewrite::{MM_DECIMALS, OrientationHint, number_edit, pose_edits};
 
 /// Everything `mirror` needs.
@@ -244,8 +244,9 @@ impl TargetRule for MirrorRule<'_> {
             return Err(Why::new(
                 RefusalKind::JointTarget,
                 format!("{} is a joint target: it is not mirrored", describe(p)),
-                "pass --mirror-joints to negate axes 1, 4 and 6",
+                "mirror joint targets too (axes 1, 4 and 6 negated)",
             )
+            .with_remedy(Remedy::MirrorJoints)
             .at(scope.file, p));
         }
         let mut edits: Vec<Edit> = [0, 3, 5]
@@ -434,7 +435,8 @@ fn mirror_offset(
                             call.target.clone(),
                             why.kind,
                             format!("Offs({}, …): {}", call.target, why.message),
-                            format!("{}, {SKIP_HINT}", why.hint),
+                            why.hint,
+                            why.remedy,
                         )));
                     }
                 }
@@ -472,16 +474,14 @@ fn mirror_offset(
                     "{name}({}, …): its rotation {switch} is not a number and the mirror changes its sign",
                     call.target
                 ),
-                format!(
-                    "write {switch} as a number (or negate the expression by hand), {SKIP_HINT}"
-                ),
+                format!("write {switch} as a number (or negate the expression by hand)"),
             )),
             (None, true) => Some((
                 format!(
                     "{name}({}, …) has an offset that is not a number where the mirror changes it",
                     call.target
                 ),
-                format!("write the {frame}-frame offsets as numbers, {SKIP_HINT}"),
+                format!("write the {frame}-frame offsets as numbers"),
             )),
             (None, false) => None,
         };
@@ -493,6 +493,7 @@ fn mirror_offset(
                 RefusalKind::Expression,
                 message,
                 hint,
+                None,
             )));
         }
         let d = call.delta.clone().map(|f| f.map_or(0.0, |f| f.value()));

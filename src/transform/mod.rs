@@ -20,7 +20,7 @@ pub mod transfer;
 pub use cell::{Axis, Cell, CellError, ConfigRule, FrameIn, MirrorTable, Plane, Robot};
 pub use edits::{FileEdits, FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
 pub use mirror::{MirrorSettings, WorldPlane, mirror};
-pub use refusal::{Refusal, RefusalKind};
+pub use refusal::{Refusal, RefusalKind, Remedy};
 pub use track_correction::{Deviation, Direction, TrackSetup, track_correction};
 pub use transfer::{TransferError, TransferPlan, TransformStep, reparse, transfer};
 

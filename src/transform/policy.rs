@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use crate::geometry::Pose;
 use crate::position::{FrameKind, ParsedFile, Position, Program};
 
-use super::refusal::{Refusal, RefusalKind, SKIP_HINT};
+use super::refusal::{Refusal, RefusalKind, Remedy};
 
 /// Coordinates beyond this (mm) are not a target in a robot cell.
 const PLAUSIBLE_MM: f64 = 1e6;
@@ -16,8 +16,10 @@ const PLAUSIBLE_MM: f64 = 1e6;
 pub(crate) struct Why {
     pub kind: RefusalKind,
     pub message: String,
-    /// What to do; the skip hint is added when the refusal is located.
+    /// What to do, in words.
     pub hint: String,
+    /// The transform setting that gets past it, if any.
+    pub remedy: Option<Remedy>,
 }
 
 impl Why {
@@ -26,7 +28,13 @@ impl Why {
             kind,
             message,
             hint: hint.into(),
+            remedy: None,
         }
+    }
+
+    pub(crate) fn with_remedy(mut self, remedy: Remedy) -> Why {
+        self.remedy = Some(remedy);
+        self
     }
 
     /// The refusal of `p` in `file` for this reason.
@@ -37,7 +45,8 @@ impl Why {
             p.label(),
             self.kind,
             self.message,
-            format!("{}, {SKIP_HINT}", self.hint),
+            self.hint,
+            self.remedy,
         ))
     }
 }
@@ -105,8 +114,9 @@ pub(crate) fn wobj_of(p: &Position, default: Option<&str>) -> Result<String, Why
             None => Err(Why::new(
                 RefusalKind::UnresolvedWorkObject,
                 format!("{what} is not used by any motion: its work object is unknown"),
-                "pass --default-wobj NAME to transform unused targets in NAME",
-            )),
+                "name the work object of targets no motion uses",
+            )
+            .with_remedy(Remedy::DefaultWorkObject)),
         },
         (None, false) => Err(Why::new(
             RefusalKind::UnresolvedWorkObject,
