@@ -11,6 +11,7 @@ use anyhow::{Context as _, bail};
 
 use trackfix::position::Program;
 use trackfix::program::{LoadOptions, collect_inputs, load};
+use trackfix::report::{FileSummary, would_change};
 use trackfix::syntax::Severity;
 use trackfix::track::{Profile, TrackError};
 use trackfix::transform::cell::skid_axis_index;
@@ -244,10 +245,6 @@ fn drop_untouched_config(results: &mut [ProgramResult], config_dat: Option<&Path
     }
 }
 
-fn fmt_mm(v: f64) -> String {
-    format!("{v:.3}")
-}
-
 /// The command-line flag that gives a refusal's remedy.
 fn remedy_flag(remedy: Remedy) -> &'static str {
     match remedy {
@@ -298,14 +295,9 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
     if out.check {
         let mut any = false;
         for f in results.iter().flat_map(|r| &r.files) {
-            if f.changed() {
+            if let Some(line) = would_change(f) {
                 any = true;
-                writeln!(
-                    stderr,
-                    "{}: {} target(s) would change",
-                    f.path.display(),
-                    f.changes.len()
-                )?;
+                writeln!(stderr, "{line}")?;
             }
         }
         return Ok(if any { Exit::Findings } else { Exit::Ok });
@@ -326,42 +318,16 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
     let writes = plan_writes(results, &dest)?;
     write_all(&writes)?;
     for f in results.iter().flat_map(|r| &r.files) {
-        let (mm, deg) = f.largest_change();
-        let skid = match f.skid_range() {
-            Some((lo, hi)) => format!(", skid {}…{} mm", fmt_mm(lo), fmt_mm(hi)),
-            None => String::new(),
-        };
         let first = results
             .iter()
             .find(|r| r.files.iter().any(|g| g.path == f.path))
             .filter(|r| r.files.len() > 1)
             .and_then(|r| r.files.first())
             .map(|g| g.path.as_path());
-        let target = output_path(&dest, &f.path, first, f.changed())
-            .map(|p| format!(" → {}", p.display()))
-            .unwrap_or_default();
-        let refused = match f.refusals.len() {
-            0 => String::new(),
-            n => format!(", {n} refused (left unchanged)"),
-        };
-        if f.changes.is_empty() {
-            writeln!(stderr, "{}: unchanged{refused}{target}", f.path.display())?;
-        } else {
-            // A mirror moves points by metres: that is no correction.
-            let largest = if command == "mirror" {
-                "largest move"
-            } else {
-                "largest correction"
-            };
-            writeln!(
-                stderr,
-                "{}: {} target(s) changed, {largest} {} mm / {:.4}°{skid}{refused}{target}",
-                f.path.display(),
-                f.changes.len(),
-                fmt_mm(mm),
-                deg,
-            )?;
-        }
+        let written_to = output_path(&dest, &f.path, first, f.changed());
+        // A mirror moves points by metres: that is no correction.
+        let summary = FileSummary::new(f, written_to, command == "mirror");
+        writeln!(stderr, "{summary}")?;
     }
     Ok(Exit::Ok)
 }

@@ -1,7 +1,9 @@
-//! What `inspect` and `check` report about programs: positions, frames, summaries, lints.
+//! What `inspect` reports about programs: positions, frames, counts and lints per file, as a
+//! table, JSON or CSV.
 //!
-//! The report is built from the shared position model only, so RAPID and KRL get the same shape
-//! (DESIGN.md §5, issue 2 point 6). Rendering returns strings; the binary prints them.
+//! The report is built from the shared position model and the dialect's vocabulary only, so
+//! every language gets the same shape (DESIGN.md §5). Rendering returns strings; the binary
+//! prints them.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -17,9 +19,7 @@ use crate::position::{
 };
 use crate::syntax::{Diagnostic, Severity, Span};
 
-/// How far `|q|` may stray from 1 before `check` calls a quaternion non-normalised. Six written
-/// decimals give about 1e-6; RobotStudio's own output stays well inside 1e-4.
-pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-4;
+use super::check::{count_suffix, lints};
 
 /// Options of `inspect`.
 #[derive(Clone, Copy, Debug, Default)]
@@ -32,6 +32,19 @@ pub struct InspectOptions {
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct InspectReport {
     pub files: Vec<FileReport>,
+}
+
+impl InspectReport {
+    /// The table's last line: `3 files, 41 positions, 1 skipped`.
+    pub fn summary_line(&self, skipped: usize, unreadable: usize) -> String {
+        let positions: usize = self.files.iter().map(|f| f.positions.len()).sum();
+        format!(
+            "{} files, {positions} positions{}{}",
+            self.files.len(),
+            count_suffix(skipped, "skipped"),
+            count_suffix(unreadable, "unreadable")
+        )
+    }
 }
 
 /// One file of the report.
@@ -322,79 +335,6 @@ pub fn inspect_program(program: &Program, options: InspectOptions) -> Vec<FileRe
         .iter()
         .map(|f| inspect_file(f, options))
         .collect()
-}
-
-/// Everything `check` says about a file: the parser's diagnostics, a failed round trip, and the
-/// lints of the model (non-normalised quaternions, a target used with two work objects).
-/// Sorted by position.
-pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
-    let mut out = file.diagnostics.clone();
-    if !file.round_trip {
-        out.push(
-            Diagnostic::error(
-                Span::new(0, 0),
-                "printing the parsed file does not give back its bytes",
-            )
-            .with_hint("this is a trackfix bug: please report it with the file attached"),
-        );
-    }
-    for p in &file.positions {
-        if let Some(q) = p
-            .cartesian
-            .as_ref()
-            .and_then(CartesianFields::written_quaternion)
-        {
-            let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if norm == 0.0 {
-                // Unused slots of PERS robtarget arrays are written this way by controllers:
-                // worth knowing, not a defect of the program.
-                out.push(
-                    Diagnostic::note(
-                        p.span,
-                        format!(
-                            "`{}` has the quaternion [0,0,0,0]: an unset slot",
-                            p.label()
-                        ),
-                    )
-                    .with_hint("transforms leave it as written and report it"),
-                );
-            } else if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
-                out.push(
-                    Diagnostic::warning(
-                        p.span,
-                        format!(
-                            "quaternion of `{}` is not normalised (|q| = {norm:.6})",
-                            p.label()
-                        ),
-                    )
-                    .with_hint(
-                        "the controller rejects it; `trackfix correct` writes normalised quaternions",
-                    ),
-                );
-            }
-        }
-        if !p.usage.other_wobjs.is_empty() {
-            let already = file.diagnostics.iter().any(|d| {
-                d.span.start <= p.span.start
-                    && p.span.start < d.span.end.max(d.span.start + 1)
-                    && d.message.contains("work object")
-            });
-            if !already {
-                let what = file.language.dialect().vocabulary().frames;
-                let mut all = vec![p.usage.wobj.clone().unwrap_or_default()];
-                all.extend(p.usage.other_wobjs.iter().cloned());
-                out.push(
-                    Diagnostic::warning(
-                        p.span,
-                        format!("`{}` is used with two {what}: {}", p.label(), all.join(", ")),
-                    )
-                    .with_hint("a transform cannot move one target for two frames; declare one target per frame"),
-                );
-            }
-        }
-    }
-    out.sort_by_key(|d| (d.span.start, d.span.end));
-    out
 }
 
 /// `inspect --format table`: one block per file.
