@@ -16,6 +16,7 @@ pub mod dialect;
 pub mod geometry;
 pub mod krl;
 pub mod located;
+mod names;
 pub mod position;
 pub mod program;
 pub mod rapid;

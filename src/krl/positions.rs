@@ -107,12 +107,7 @@ pub(crate) struct Facts {
 }
 
 /// A declared name as motions reference it: upper case, without blanks (`p[ 3 ]` → `P[3]`).
-pub(crate) fn name_key(name: &str) -> String {
-    name.chars()
-        .filter(|c| !c.is_ascii_whitespace())
-        .map(|c| c.to_ascii_uppercase())
-        .collect()
-}
+pub(crate) use crate::names::fold as name_key;
 
 /// A name as text (Latin-1, as the controller writes it): one copy for the usual ASCII name
 /// instead of a character at a time (a 50 MB `.dat` names 131 000 positions).

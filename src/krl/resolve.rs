@@ -2,43 +2,11 @@
 //! and joined at `IF`/`SWITCH`, over every file of a `.src`/`.dat` pair; the result goes to each
 //! position's [`Usage`].
 
-use std::collections::HashMap as StdHashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
 use super::positions::{BranchEvent, Event, Facts, Fdat, FrameRef, Ref, Setting, name_key};
 use crate::position::{Config, ParsedFile, PositionKind, Usage};
 use crate::syntax::Diagnostic;
 
-/// Names are short, trusted-enough keys (the file is the user's own program) and a `.dat` holds
-/// hundreds of thousands of them: SipHash showed up as a tenth of the run time. This is the
-/// multiply-rotate hash of rustc's `FxHasher` with a finaliser, written out to avoid a
-/// dependency.
-#[derive(Default, Clone, Copy)]
-pub(crate) struct NameHasher(u64);
-
-impl Hasher for NameHasher {
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut word = [0u8; 8];
-            word[..chunk.len()].copy_from_slice(chunk);
-            self.0 = (self.0.rotate_left(5) ^ u64::from_le_bytes(word))
-                .wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-        }
-    }
-
-    /// MurmurHash3's finaliser: hashbrown picks buckets from the low bits, which the
-    /// multiply alone leaves equal for names differing only in their last bytes (`XP100001`).
-    fn finish(&self) -> u64 {
-        let mut h = self.0;
-        h ^= h >> 33;
-        h = h.wrapping_mul(0xff51_afd7_ed55_8ccd);
-        h ^= h >> 33;
-        h = h.wrapping_mul(0xc4ce_b9fe_1a85_ec53);
-        h ^ (h >> 33)
-    }
-}
-
-pub(crate) type HashMap<K, V> = StdHashMap<K, V, BuildHasherDefault<NameHasher>>;
+pub(crate) use crate::names::NameMap as HashMap;
 
 /// The name trackfix gives a base: `BASE_DATA[n]`, `$WORLD` for base 0.
 pub(crate) fn base_label(r: &FrameRef) -> Option<String> {

@@ -6,14 +6,13 @@
 //! object and tool). Usage is resolved at the end, because RAPID lets a routine use data declared
 //! further down the module.
 
-use std::collections::HashMap;
-
 use super::expr::{Arena, ExprKind};
 use super::parser::{StatementSink, Stmt};
 use crate::position::{
     CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, Orientation,
     Position, PositionKind, Usage,
 };
+use crate::names::{NameKey, NameMap, fold};
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, latin1};
 
 /// Instruction name prefixes that move the robot (or set up a move): their targets get the
@@ -85,94 +84,14 @@ pub struct Extracted {
     pub diagnostics: Vec<Diagnostic>,
 }
 
-/// A multiply-rotate hasher for the name maps (names are short, attacker-free keys; SipHash
-/// showed up first in the profile of a 250,000-target module).
-#[derive(Default, Clone, Copy)]
-struct NameHasher(u64);
-
-impl std::hash::Hasher for NameHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u8(b);
-        }
-    }
-    fn write_u8(&mut self, b: u8) {
-        self.0 = (self.0.rotate_left(5) ^ u64::from(b)).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-    fn write_usize(&mut self, n: usize) {
-        self.0 = (self.0.rotate_left(5) ^ n as u64).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-}
-
-type NameMap<K, V> = HashMap<K, V, std::hash::BuildHasherDefault<NameHasher>>;
-
-/// A name in the source compared as RAPID compares names: ASCII case-insensitive, whitespace
-/// ignored (`pArr{ 2 }` = `parr{2}`). Borrows the source: no copy per declaration or use.
-#[derive(Clone, Copy)]
-struct NameKey<'s>(&'s [u8]);
-
-impl NameKey<'_> {
-    fn bytes(&self) -> impl Iterator<Item = u8> + '_ {
-        self.0
-            .iter()
-            .filter(|b| !b.is_ascii_whitespace())
-            .map(u8::to_ascii_lowercase)
-    }
-    fn is(&self, lower: &[u8]) -> bool {
-        self.bytes().eq(lower.iter().copied())
-    }
-    fn starts_with(&self, lower: &[u8]) -> bool {
-        let mut b = self.bytes();
-        lower.iter().all(|&l| b.next() == Some(l))
-    }
-    /// `z10`, `v1000`: the prefix letter then digits only.
-    fn numbered(&self, prefix: u8) -> bool {
-        let mut b = self.bytes();
-        b.next() == Some(prefix) && {
-            let mut digits = 0;
-            b.all(|c| {
-                digits += 1;
-                c.is_ascii_digit()
-            }) && digits > 0
-        }
-    }
-}
-
-impl std::hash::Hash for NameKey<'_> {
-    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
-        for b in self.bytes() {
-            state.write_u8(b);
-        }
-    }
-}
-
-impl PartialEq for NameKey<'_> {
-    fn eq(&self, other: &Self) -> bool {
-        // Names are almost always written the same way twice: compare bytes first.
-        self.0 == other.0 || self.bytes().eq(other.bytes())
-    }
-}
-
-impl Eq for NameKey<'_> {}
-
 fn text_of(src: &[u8], span: Span) -> String {
     latin1(span.slice(src))
 }
 
-/// A reference as a lookup key: lower case, no whitespace (`pArr{ 2 }` → `parr{2}`), written
-/// into a reused buffer.
+/// A reference as a lookup key ([`fold`](crate::names::fold) of its text), written into a
+/// reused buffer.
 fn key_into<'b>(buf: &'b mut String, src: &[u8], span: Span) -> &'b str {
-    buf.clear();
-    buf.extend(
-        span.slice(src)
-            .iter()
-            .filter(|b| !b.is_ascii_whitespace())
-            .map(|&b| (b as char).to_ascii_lowercase()),
-    );
-    buf
+    crate::names::fold_into(buf, span.slice(src))
 }
 
 impl<'l> Extractor<'l> {
@@ -559,7 +478,7 @@ impl<'l> Extractor<'l> {
             NameMap::with_capacity_and_hasher(self.positions.len(), Default::default());
         for (i, p) in self.positions.iter().enumerate() {
             if let Some(n) = &p.name {
-                let lower = n.to_ascii_lowercase();
+                let lower = fold(n);
                 if let Some(base) = lower.split('{').next().filter(|b| b.len() < lower.len()) {
                     match by_name.get_mut(base) {
                         Some(v) => v.push(i),
