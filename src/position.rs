@@ -172,6 +172,38 @@ pub struct Usage {
     pub lines: Vec<usize>,
 }
 
+impl Usage {
+    /// Records one use by a motion at `line` with work object (or base) `wobj` and `tool`.
+    /// The first work object stays the target's; another (names compared as the languages
+    /// compare them, case-insensitively) is added to `other_wobjs`. The first tool stays.
+    pub fn record(
+        &mut self,
+        wobj: Option<&str>,
+        tool: Option<&str>,
+        stationary: bool,
+        line: usize,
+    ) {
+        if let Some(w) = wobj {
+            match &self.wobj {
+                None => self.wobj = Some(w.to_owned()),
+                Some(first) if first.eq_ignore_ascii_case(w) => {}
+                Some(_) => {
+                    if !self.other_wobjs.iter().any(|o| o.eq_ignore_ascii_case(w)) {
+                        self.other_wobjs.push(w.to_owned());
+                    }
+                }
+            }
+        }
+        if self.tool.is_none() {
+            self.tool = tool.map(str::to_owned);
+        }
+        self.stationary_tool |= stationary;
+        if !self.lines.contains(&line) {
+            self.lines.push(line);
+        }
+    }
+}
+
 /// One target: a declaration (`name = Some`) or an inline literal in an instruction.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Position {
@@ -352,6 +384,20 @@ pub fn external_axis_index(name: &str) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_use_records_the_first_frame_and_tool_and_every_other_frame_once() {
+        let mut u = Usage::default();
+        u.record(Some("wCar"), Some("tGun"), false, 10);
+        u.record(Some("WCAR"), Some("tOther"), false, 12);
+        u.record(Some("wTable"), None, true, 12);
+        u.record(Some("wtable"), None, false, 20);
+        assert_eq!(u.wobj.as_deref(), Some("wCar"));
+        assert_eq!(u.tool.as_deref(), Some("tGun"));
+        assert_eq!(u.other_wobjs, ["wTable"]);
+        assert!(u.stationary_tool);
+        assert_eq!(u.lines, [10, 12, 20]);
+    }
 
     #[test]
     fn axis_names() {

@@ -115,20 +115,7 @@ impl State {
 }
 
 fn record_use(u: &mut Usage, base: &Option<String>, tool: &Option<String>, tcp: bool, line: usize) {
-    if let Some(b) = base {
-        match &u.wobj {
-            None => u.wobj = Some(b.clone()),
-            Some(w) if w != b && !u.other_wobjs.contains(b) => u.other_wobjs.push(b.clone()),
-            Some(_) => {}
-        }
-    }
-    if u.tool.is_none() {
-        u.tool.clone_from(tool);
-    }
-    u.stationary_tool |= tcp;
-    if !u.lines.contains(&line) {
-        u.lines.push(line);
-    }
+    u.record(base.as_deref(), tool.as_deref(), tcp, line);
 }
 
 /// Resolves base, tool and IPO mode of every motion of a program (files in the same order as

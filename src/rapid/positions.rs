@@ -8,11 +8,11 @@
 
 use super::expr::{Arena, ExprKind};
 use super::parser::{StatementSink, Stmt};
+use crate::names::{NameKey, NameMap, fold};
 use crate::position::{
     CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, Orientation,
     Position, PositionKind, Usage,
 };
-use crate::names::{NameKey, NameMap, fold};
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, latin1};
 
 /// Instruction name prefixes that move the robot (or set up a move): their targets get the
@@ -565,25 +565,12 @@ impl<'l> Extractor<'l> {
                 let Some(p) = self.positions.get_mut(t) else {
                     continue;
                 };
-                let usage = &mut p.usage;
-                if usage.lines.last() != Some(&u.line) {
-                    usage.lines.push(u.line);
-                }
-                if let Some(w) = &wobj {
-                    match &usage.wobj {
-                        None => usage.wobj = Some(w.clone()),
-                        Some(first) if first.eq_ignore_ascii_case(w) => {}
-                        Some(_) => {
-                            if !usage.other_wobjs.iter().any(|o| o.eq_ignore_ascii_case(w)) {
-                                usage.other_wobjs.push(w.clone());
-                            }
-                        }
-                    }
-                    usage.stationary_tool |= stationary;
-                }
-                if usage.tool.is_none() {
-                    usage.tool = tool.clone();
-                }
+                p.usage.record(
+                    wobj.as_deref(),
+                    tool.as_deref(),
+                    wobj.is_some() && stationary,
+                    u.line,
+                );
             }
         }
         // A frame given a whole new value in a routine: the declaration may not be what runs.
