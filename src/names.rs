@@ -123,6 +123,55 @@ pub(crate) fn fold_into<'b>(buf: &'b mut String, bytes: &[u8]) -> &'b str {
     buf
 }
 
+/// Declared names of a program, folded, with the elements of each array under the array's name:
+/// what both languages' usage resolvers look a motion's references up in. `T` says where the
+/// declaration is (an index into a file's positions, …).
+pub(crate) struct NameIndex<T> {
+    /// The bracket that opens an array index (`{` in RAPID, `[` in KRL).
+    open: char,
+    exact: NameMap<String, Vec<T>>,
+    elements: NameMap<String, Vec<T>>,
+}
+
+impl<T: Copy> NameIndex<T> {
+    pub(crate) fn new(open: char, capacity: usize) -> NameIndex<T> {
+        NameIndex {
+            open,
+            exact: NameMap::with_capacity_and_hasher(capacity, Default::default()),
+            elements: NameMap::default(),
+        }
+    }
+
+    /// Adds the declaration of `name` (as written) at `at`.
+    pub(crate) fn insert(&mut self, name: &str, at: T) {
+        let key = fold(name);
+        if let Some((array, _)) = key.split_once(self.open) {
+            match self.elements.get_mut(array) {
+                Some(v) => v.push(at),
+                None => {
+                    self.elements.insert(array.to_owned(), vec![at]);
+                }
+            }
+        }
+        self.exact.entry(key).or_default().push(at);
+    }
+
+    /// The declarations named exactly `key` (a [`fold`]ed name).
+    pub(crate) fn exact(&self, key: &str) -> &[T] {
+        self.exact.get(key).map_or(&[], Vec::as_slice)
+    }
+
+    /// Every element of the array `key` (a [`fold`]ed name without index).
+    pub(crate) fn elements(&self, key: &str) -> &[T] {
+        self.elements.get(key).map_or(&[], Vec::as_slice)
+    }
+
+    /// The array `key` indexes (`PARR` for `PARR{I}`), if it has an index.
+    pub(crate) fn array_of<'k>(&self, key: &'k str) -> Option<&'k str> {
+        key.split_once(self.open).map(|(array, _)| array)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -151,5 +200,19 @@ mod tests {
             .map(|i| h.hash_one(NameKey(format!("XP1000{i:02}").as_bytes())) & 63)
             .collect();
         assert!(low.len() > 32, "{}", low.len());
+    }
+
+    #[test]
+    fn the_index_finds_names_elements_and_whole_arrays() {
+        let mut ix = NameIndex::new('{', 4);
+        ix.insert("p10", 0);
+        ix.insert("pArr{1}", 1);
+        ix.insert("pArr{ 2 }", 2);
+        assert_eq!(ix.exact("P10"), [0]);
+        assert_eq!(ix.exact("PARR{2}"), [2]);
+        assert_eq!(ix.elements("PARR"), [1, 2]);
+        assert_eq!(ix.array_of("PARR{I}"), Some("PARR"));
+        assert_eq!(ix.array_of("P10"), None);
+        assert!(ix.exact("PARR").is_empty());
     }
 }

@@ -6,6 +6,7 @@ use super::positions::{BranchEvent, Event, Facts, Fdat, FrameRef, Ref, Setting, 
 use crate::position::{Config, ParsedFile, PositionKind, Usage};
 use crate::syntax::Diagnostic;
 
+use crate::names::NameIndex;
 pub(crate) use crate::names::NameMap as HashMap;
 
 /// The name trackfix gives a base: `BASE_DATA[n]`, `$WORLD` for base 0.
@@ -137,28 +138,19 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             fdats.entry(k.clone()).or_insert_with(|| v.clone());
         }
     }
-    // Where each declared name lives: (file, in candidates?, index).
-    let mut by_name: HashMap<String, Vec<(usize, bool, usize)>> = HashMap::default();
+    // Where each declared name lives: (file, in candidates?, index); array elements also
+    // under the array's name (`SPTP BASEPOS[I]` may move to any of `BASEPOS[1..n]`).
+    let mut declared_at: NameIndex<(usize, bool, usize)> = NameIndex::new('[', 0);
     for (fi, (file, fact)) in files.iter().zip(facts.iter()).enumerate() {
         for (i, p) in file.positions.iter().enumerate() {
             if let Some(n) = &p.name {
-                by_name.entry(name_key(n)).or_default().push((fi, false, i));
+                declared_at.insert(n, (fi, false, i));
             }
         }
         for (i, p) in fact.candidates.iter().enumerate() {
             if let Some(n) = &p.name {
-                by_name.entry(name_key(n)).or_default().push((fi, true, i));
+                declared_at.insert(n, (fi, true, i));
             }
-        }
-    }
-    // Array elements by array name: `SPTP BASEPOS[I]` may move to any of `BASEPOS[1..n]`.
-    let mut by_array: HashMap<String, Vec<(usize, bool, usize)>> = HashMap::default();
-    for (name, at) in &by_name {
-        if let Some((array, _)) = name.split_once('[') {
-            by_array
-                .entry(array.to_owned())
-                .or_default()
-                .extend(at.iter().copied());
         }
     }
     let mut used_candidates: Vec<Vec<bool>> = facts
@@ -276,10 +268,9 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                     }
                                 }
                                 let hits = chain.iter().flat_map(|c| {
-                                    by_name.get(*c).map_or(&[][..], Vec::as_slice).iter().chain(
+                                    declared_at.exact(c).iter().chain(
                                         computed_index_array(c)
-                                            .and_then(|a| by_array.get(a))
-                                            .map_or(&[][..], Vec::as_slice),
+                                            .map_or(&[][..], |a| declared_at.elements(a)),
                                     )
                                 });
                                 for &(f2, cand, i) in hits {

@@ -8,7 +8,7 @@
 
 use super::expr::{Arena, ExprKind};
 use super::parser::{StatementSink, Stmt};
-use crate::names::{NameKey, NameMap, fold};
+use crate::names::{NameIndex, NameKey, NameMap};
 use crate::position::{
     CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, Orientation,
     Position, PositionKind, Usage,
@@ -474,30 +474,18 @@ impl<'l> Extractor<'l> {
             .filter(|f| f.kind == FrameKind::WorkObject)
             .filter_map(|f| Some((NameKey(f.name.as_bytes()), f.robhold?)))
             .collect();
-        let mut by_name: NameMap<String, Vec<usize>> =
-            NameMap::with_capacity_and_hasher(self.positions.len(), Default::default());
+        let mut declared = NameIndex::new('{', self.positions.len());
         for (i, p) in self.positions.iter().enumerate() {
             if let Some(n) = &p.name {
-                let lower = fold(n);
-                if let Some(base) = lower.split('{').next().filter(|b| b.len() < lower.len()) {
-                    match by_name.get_mut(base) {
-                        Some(v) => v.push(i),
-                        None => {
-                            by_name.insert(base.to_owned(), vec![i]);
-                        }
-                    }
-                }
-                by_name.entry(lower).or_default().push(i);
+                declared.insert(n, i);
             }
         }
+        // A name, an element (`pArr{2}`), or a whole array or an element chosen at run time
+        // (`pArr`, `pArr{i}`): then every element of the array may be used.
         let lookup = |r: &str| -> &[usize] {
-            if let Some(v) = by_name.get(r) {
-                return v;
-            }
-            // `pArr{i}` with a variable index: every element of the array may be used.
-            match r.split('{').next() {
-                Some(base) if base.len() < r.len() => by_name.get(base).map_or(&[], Vec::as_slice),
-                _ => &[],
+            match declared.exact(r) {
+                [] => declared.elements(declared.array_of(r).unwrap_or(r)),
+                hits => hits,
             }
         };
         let mut targets: Vec<usize> = Vec::new();
