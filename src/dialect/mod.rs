@@ -142,6 +142,16 @@ pub fn registry() -> Vec<&'static dyn Dialect> {
         .collect()
 }
 
+/// Whether any dialect satisfies `test`, without collecting the registry (for per-target
+/// questions such as "does this name mean world?").
+pub fn any(mut test: impl FnMut(&dyn Dialect) -> bool) -> bool {
+    if BUILT_IN.iter().any(|d| test(*d)) {
+        return true;
+    }
+    let extra = REGISTERED.read().unwrap_or_else(|e| e.into_inner());
+    extra.iter().any(|d| test(*d))
+}
+
 /// The dialect of a file, by its extension (any case).
 pub fn dialect_of(path: &Path) -> Option<&'static dyn Dialect> {
     let ext = path.extension()?.to_str()?.to_ascii_lowercase();

@@ -54,9 +54,7 @@ impl Why {
 /// Names that mean "world" when a program does not declare them, in any dialect.
 fn is_world(name: &str) -> bool {
     let n = name.to_ascii_lowercase();
-    crate::dialect::registry()
-        .iter()
-        .any(|d| d.vocabulary().world_frames.contains(&n.as_str()))
+    crate::dialect::any(|d| d.vocabulary().world_frames.contains(&n.as_str()))
 }
 
 /// The work object / base `name` in world: the cell's override, else the program's

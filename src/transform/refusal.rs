@@ -118,3 +118,37 @@ impl Refusal {
         Located::new(self.path.clone(), source, d)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transform::test_support::rapid;
+
+    #[test]
+    fn a_refusal_renders_its_own_line_at_its_line_number_and_chosen_severity() {
+        let p = rapid(
+            "x\n\ty\n\t[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]\n",
+            "w",
+        );
+        let f = &p.files[0];
+        let target = &f.positions[0];
+        let span = Span::new(target.span.start + 1, target.span.start + 8);
+        let r = Refusal::new(
+            f,
+            span,
+            "p3".into(),
+            RefusalKind::SkidNotConnected,
+            "no skid".into(),
+            "write one",
+            None,
+        );
+        assert_eq!((r.line, r.column), (3, 2));
+        let text = r
+            .located(Severity::Warning, "write one (left unchanged)")
+            .to_string();
+        assert_eq!(
+            text,
+            "t.mod:3:2: warning: no skid\n  |\n3 | \t[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]\n  | \t^^^^^^^\n  = help: write one (left unchanged)"
+        );
+    }
+}
