@@ -73,10 +73,12 @@ fn known_extensions() -> String {
 
 /// Reads a file as bytes, refusing binary content.
 pub fn read_source(path: &Path) -> Result<Vec<u8>, LoadError> {
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+    let bytes = crate::output::read_regular_file(path, crate::output::MAX_INPUT_BYTES).map_err(
+        |source| LoadError::Io {
+            path: path.to_owned(),
+            source,
+        },
+    )?;
     if looks_binary(&bytes) {
         return Err(LoadError::NotText {
             path: path.to_owned(),

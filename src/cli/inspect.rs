@@ -109,13 +109,22 @@ fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
         match load(path, options) {
             Ok(p) => batch.programs.push(p),
             Err(e) if e.is_skip() => {
-                bar.suspend(|| eprintln!("note: {e}"));
+                bar.suspend(|| {
+                    let _ = writeln!(std::io::stderr(), "note: {e}");
+                });
                 batch.skipped += 1;
             }
             Err(e) => {
-                bar.suspend(|| eprintln!("error: {e}"));
+                bar.suspend(|| {
+                    let _ = writeln!(std::io::stderr(), "error: {e}");
+                });
                 if matches!(e, LoadError::UnknownType { .. }) {
-                    bar.suspend(|| eprintln!("  = help: name RAPID or KRL files, or a directory"));
+                    bar.suspend(|| {
+                        let _ = writeln!(
+                            std::io::stderr(),
+                            "  = help: name RAPID or KRL files, or a directory"
+                        );
+                    });
                 }
                 batch.errors += 1;
             }

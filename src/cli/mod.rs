@@ -1,6 +1,7 @@
 //! Subcommand implementations. Library calls only; printing and `anyhow` live here.
 
 pub mod inspect;
+pub mod reach;
 pub mod track;
 pub mod transform;
 

@@ -13,7 +13,6 @@ use trackfix::track::frames_csv::{clean, frames_csv, read_frames};
 use trackfix::track::identify::{OUTLIER_FACTOR, identify, read_measurements};
 use trackfix::track::nominal::{FitOptions, fit_track};
 use trackfix::track::plot::{profile_svg, spectrum_svg};
-use trackfix::track::profile::write_atomic;
 use trackfix::track::simulate::{
     TrackTruth, measurements_csv, sample_tcp_points, scan_csv, simulate_measurements, simulate_scan,
 };
@@ -197,7 +196,7 @@ pub(crate) fn report_located(result: anyhow::Result<Exit>) -> anyhow::Result<Exi
     for context in err.chain().take_while(|c| located_text(*c).is_none()) {
         out.push_str(&format!("\n  = note: {context}"));
     }
-    eprintln!("{out}");
+    let _ = writeln!(std::io::stderr(), "{out}");
     Ok(Exit::Usage)
 }
 
@@ -216,7 +215,8 @@ fn run_command(cmd: TrackCommand) -> anyhow::Result<Exit> {
 }
 
 fn write_file(path: &Path, text: &str) -> anyhow::Result<()> {
-    write_atomic(path, text.as_bytes())?;
+    // One write helper for every file trackfix writes: temporary + rename, mode kept.
+    trackfix::output::write_file(path, text.as_bytes())?;
     Ok(())
 }
 
@@ -314,7 +314,8 @@ fn default_name(output: &Path) -> String {
 }
 
 fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
-    let bytes = std::fs::read(&a.frames).with_context(|| a.frames.display().to_string())?;
+    let bytes = trackfix::output::read_regular_file(&a.frames, trackfix::output::MAX_INPUT_BYTES)
+        .with_context(|| a.frames.display().to_string())?;
     let frames = read_frames(&a.frames)?;
     let opts = FitOptions {
         name: a.name.clone().unwrap_or_else(|| default_name(&a.output)),

@@ -9,13 +9,13 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, bail};
 
+use trackfix::output::{self, Destination, Roots, unified_diff};
 use trackfix::position::Program;
 use trackfix::program::{LoadOptions, collect_inputs, load};
 use trackfix::report::{FileSummary, would_change};
 use trackfix::syntax::Severity;
 use trackfix::track::{Profile, TrackError};
 use trackfix::transform::cell::skid_axis_index;
-use trackfix::transform::output::{Destination, output_path, plan_writes, unified_diff, write_all};
 use trackfix::transform::{
     Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, Remedy,
     Robot, TrackSetup, TransferPlan, TransformStep, WorldPlane, apply, transfer,
@@ -209,7 +209,9 @@ fn load_programs(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Vec
     for path in collect_inputs(files)? {
         match load(&path, options) {
             Ok(p) => programs.push(p),
-            Err(e) if e.is_skip() => eprintln!("note: {e}"),
+            Err(e) if e.is_skip() => {
+                let _ = writeln!(std::io::stderr(), "note: {e}");
+            }
             Err(e) => return Err(e.into()),
         }
     }
@@ -254,7 +256,12 @@ fn remedy_flag(remedy: Remedy) -> &'static str {
 }
 
 /// Reports refusals, then diffs, checks or writes. The one place outcomes become an exit code.
-fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow::Result<Exit> {
+fn finish(
+    command: &str,
+    results: &[ProgramResult],
+    out: &OutputArgs,
+    inputs: &[PathBuf],
+) -> anyhow::Result<Exit> {
     let mut stderr = std::io::stderr().lock();
     let refused: Vec<_> = results.iter().flat_map(|r| r.refusals()).collect();
     for r in &refused {
@@ -302,7 +309,39 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
         }
         return Ok(if any { Exit::Findings } else { Exit::Ok });
     }
+    write_outputs(command, results, out, inputs)
+}
+
+/// Writes the results (one transaction, `trackfix::output`) and lists every file written.
+fn write_outputs(
+    command: &str,
+    results: &[ProgramResult],
+    out: &OutputArgs,
+    inputs: &[PathBuf],
+) -> anyhow::Result<Exit> {
+    let mut stderr = std::io::stderr().lock();
+    if results.iter().all(|r| r.files.is_empty()) {
+        // Only a `$config.dat` was given: it is read for its bases and written only when a
+        // transform changes it.
+        bail!(
+            "nothing written: {} holds no program to {command} (a $config.dat is read for its bases and written only when a transform changes it; name the programs that use it)",
+            inputs
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     let dest = if let Some(o) = &out.output {
+        if o.as_os_str() == "-" {
+            let bytes = output::stream_output(results)?;
+            let mut stdout = std::io::stdout().lock();
+            stdout.write_all(bytes)?;
+            stdout.flush()?;
+            // The output is complete: a summary that cannot be shown changes nothing.
+            let _ = summarize(command, results, &[], &mut stderr);
+            return Ok(Exit::Ok);
+        }
         Destination::File(o.clone())
     } else if let Some(d) = &out.out_dir {
         Destination::Dir(d.clone())
@@ -312,21 +351,34 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
         }
     } else {
         bail!(
-            "say where to write: -o FILE, --out-dir DIR or --in-place (or preview with --diff, --check)"
+            "say where to write: -o FILE (- for standard output), --out-dir DIR or --in-place (or preview with --diff, --check)"
         );
     };
-    let writes = plan_writes(results, &dest)?;
-    write_all(&writes)?;
+    let writes = output::plan(results, &dest, &Roots::from_inputs(inputs))?;
+    let written = output::commit(&writes)?;
+    // The files are written: a summary that cannot be shown (stderr full or closed) changes
+    // nothing about the outcome.
+    if written.is_empty() {
+        let _ = writeln!(stderr, "note: nothing written: no file changed");
+    }
+    let _ = summarize(command, results, &written, &mut stderr);
+    Ok(Exit::Ok)
+}
+
+/// One line per input file: what changed, and every file written for it.
+fn summarize(
+    command: &str,
+    results: &[ProgramResult],
+    written: &[output::Written],
+    stderr: &mut impl std::io::Write,
+) -> anyhow::Result<Exit> {
     for f in results.iter().flat_map(|r| &r.files) {
-        let first = results
-            .iter()
-            .find(|r| r.files.iter().any(|g| g.path == f.path))
-            .filter(|r| r.files.len() > 1)
-            .and_then(|r| r.files.first())
-            .map(|g| g.path.as_path());
-        let written_to = output_path(&dest, &f.path, first, f.changed());
-        // A mirror moves points by metres: that is no correction.
-        let summary = FileSummary::new(f, written_to, command == "mirror");
+        let mut summary = FileSummary::new(f, command == "mirror");
+        if let Some(w) = written.iter().find(|w| w.input == f.path) {
+            summary.written_to = Some(w.path.clone());
+            summary.link_target.clone_from(&w.resolved);
+            summary.backup.clone_from(&w.backup);
+        }
         writeln!(stderr, "{summary}")?;
     }
     Ok(Exit::Ok)
@@ -351,7 +403,7 @@ fn run_each(
     for cfg in other_configs {
         drop_untouched_config(&mut results, *cfg);
     }
-    finish(command, &results, out)
+    finish(command, &results, out, files)
 }
 
 /// [`run_each`] for one transform step.

@@ -20,12 +20,17 @@ pub struct FileSummary {
     pub refused: usize,
     /// Where the file was written; `None` if it was not.
     pub written_to: Option<PathBuf>,
+    /// The file actually replaced when the destination is a symbolic link.
+    pub link_target: Option<PathBuf>,
+    /// The backup of the file it replaced.
+    pub backup: Option<PathBuf>,
     /// The change is a move (a mirror moves points by metres), not a correction.
     pub is_move: bool,
 }
 
 impl FileSummary {
-    pub fn new(file: &FileResult, written_to: Option<PathBuf>, is_move: bool) -> FileSummary {
+    /// The summary of `file`, not yet written anywhere.
+    pub fn new(file: &FileResult, is_move: bool) -> FileSummary {
         let (largest_mm, largest_deg) = file.largest_change();
         FileSummary {
             path: file.path.clone(),
@@ -34,7 +39,9 @@ impl FileSummary {
             largest_deg,
             skid_range: file.skid_range(),
             refused: file.refusals.len(),
-            written_to,
+            written_to: None,
+            link_target: None,
+            backup: None,
             is_move,
         }
     }
@@ -46,11 +53,16 @@ fn mm(v: f64) -> String {
 
 impl fmt::Display for FileSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let target = self
-            .written_to
-            .as_ref()
-            .map(|p| format!(" → {}", p.display()))
-            .unwrap_or_default();
+        let mut target = String::new();
+        if let Some(p) = &self.written_to {
+            target = format!(" → {}", p.display());
+            if let Some(r) = &self.link_target {
+                target.push_str(&format!(" (the link's target {})", r.display()));
+            }
+            if let Some(b) = &self.backup {
+                target.push_str(&format!(", backup {}", b.display()));
+            }
+        }
         let refused = match self.refused {
             0 => String::new(),
             n => format!(", {n} refused (left unchanged)"),
@@ -111,15 +123,17 @@ mod tests {
             c(0.25, 0.001, Some(3000.0)),
             c(1.5, 0.02, Some(500.0)),
         ]);
-        let s = FileSummary::new(&f, Some(PathBuf::from("out/a.mod")), false);
+        let mut s = FileSummary::new(&f, false);
+        s.written_to = Some(PathBuf::from("a.mod"));
+        s.backup = Some(PathBuf::from("a.mod.orig"));
         assert_eq!(
             s.to_string(),
-            "a.mod: 2 target(s) changed, largest correction 1.500 mm / 0.0200°, skid 500.000…3000.000 mm → out/a.mod"
+            "a.mod: 2 target(s) changed, largest correction 1.500 mm / 0.0200°, skid 500.000…3000.000 mm → a.mod, backup a.mod.orig"
         );
-        let moved = FileSummary::new(&f, None, true).to_string();
+        let moved = FileSummary::new(&f, true).to_string();
         assert!(moved.contains("largest move 1.500 mm"), "{moved}");
         assert_eq!(
-            FileSummary::new(&result(Vec::new()), None, false).to_string(),
+            FileSummary::new(&result(Vec::new()), false).to_string(),
             "a.mod: unchanged"
         );
         assert_eq!(

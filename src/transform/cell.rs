@@ -157,6 +157,9 @@ struct RobotToml {
     #[serde(default)]
     wobj: BTreeMap<String, FrameXyz>,
     config_dat: Option<String>,
+    kinematics: Option<Spanned<crate::kinematics::cell_table::KinematicsToml>>,
+    #[serde(default)]
+    tool: BTreeMap<String, FrameXyz>,
 }
 
 #[derive(Deserialize)]
@@ -188,6 +191,11 @@ pub struct Robot {
     pub frames: BTreeMap<String, Pose>,
     /// KUKA `$config.dat`, resolved against the cell file's folder.
     pub config_dat: Option<PathBuf>,
+    /// `[robot.NAME.kinematics]`: the arm, for reach and configuration checks.
+    pub kinematics: Option<crate::kinematics::Kinematics>,
+    /// `[robot.NAME.tool]`: tool frames on the flange that override the program's (lower-case
+    /// name → pose), so each robot uses its own measured TCP.
+    pub tools: BTreeMap<String, Pose>,
 }
 
 /// The `[mirror]` table.
@@ -288,6 +296,19 @@ impl Cell {
                 .iter()
                 .map(|(k, f)| (k.to_ascii_lowercase(), f.pose()))
                 .collect();
+            let kinematics = match &r.kinematics {
+                Some(k) => Some(
+                    k.get_ref()
+                        .resolve(&name, k.span().into())
+                        .map_err(|e| located(e.span, e.message, &e.hint))?,
+                ),
+                None => None,
+            };
+            let tools = r
+                .tool
+                .iter()
+                .map(|(k, f)| (k.to_ascii_lowercase(), f.pose()))
+                .collect();
             robots.insert(
                 name.clone(),
                 Robot {
@@ -299,6 +320,8 @@ impl Cell {
                     skid_axis,
                     frames,
                     config_dat: r.config_dat.map(|c| dir.join(c)),
+                    kinematics,
+                    tools,
                 },
             );
         }

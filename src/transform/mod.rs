@@ -11,7 +11,7 @@ mod driver;
 pub mod edits;
 pub mod mirror;
 pub mod output;
-mod policy;
+pub(crate) mod policy;
 pub mod refusal;
 pub mod rewrite;
 pub mod track_correction;

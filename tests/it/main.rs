@@ -2,7 +2,9 @@
 
 mod cli;
 mod dialect;
+mod kinematics;
 mod krl;
+mod output;
 mod rapid;
 mod support;
 mod track;
