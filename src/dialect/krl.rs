@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::kinematics::{ConfigValue, Joints, Kinematics};
 use crate::position::{Config, PositionKind, Program};
 use crate::program::{LoadError, LoadOptions};
 use crate::syntax::Edit;
@@ -105,6 +106,14 @@ impl Dialect for Krl {
 
     fn axis_name(&self, index: usize) -> String {
         format!("E{}", index + 1)
+    }
+
+    fn configuration_of(&self, kin: &Kinematics, j: &Joints) -> ConfigValue {
+        let (status, turn) = crate::kinematics::kuka::status_turn_of(kin, j);
+        ConfigValue::Kuka {
+            status: Some(status),
+            turn: Some(turn),
+        }
     }
 
     /// A mirror-image arm: the Turn bits of A1, A4 and A6 toggled; Status unchanged.

@@ -13,6 +13,7 @@ pub mod rapid;
 use std::path::{Path, PathBuf};
 use std::sync::RwLock;
 
+use crate::kinematics::{ConfigValue, Joints, Kinematics};
 use crate::position::{Config, Program};
 use crate::program::{LoadError, LoadOptions};
 use crate::syntax::Edit;
@@ -70,6 +71,12 @@ pub trait Dialect: Sync + 'static {
     /// The edits that give a mirror-image robot's configuration for `config` (the arm runs
     /// the axes that change sign under a mirror, 1, 4 and 6, the other way).
     fn mirror_config(&self, config: &Config) -> Vec<Edit>;
+
+    /// The configuration the language writes for an arm at joints `j` (ABB `confdata`, KUKA
+    /// Status and Turn). A dialect without one of its own writes ABB's quadrant convention.
+    fn configuration_of(&self, kin: &Kinematics, j: &Joints) -> ConfigValue {
+        ConfigValue::Abb(crate::kinematics::abb::config_of(kin, j))
+    }
 }
 
 /// A language, as a handle to its dialect: what every parsed file carries.

@@ -63,17 +63,7 @@ impl ConfigValue {
 
     /// The configuration of joints `j` in `language`'s terms.
     pub fn of_joints(language: Language, kin: &Kinematics, j: &Joints) -> ConfigValue {
-        // The configuration a language writes follows its `Config` convention; a dialect hook
-        // for it would remove this last comparison with a language.
-        if language == Language::Krl {
-            let (s, t) = kuka::status_turn_of(kin, j);
-            ConfigValue::Kuka {
-                status: Some(s),
-                turn: Some(t),
-            }
-        } else {
-            ConfigValue::Abb(abb::config_of(kin, j))
-        }
+        language.dialect().configuration_of(kin, j)
     }
 
     /// Whether joints `j` are in this configuration.
