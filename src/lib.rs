@@ -18,6 +18,7 @@
 //!
 //! The library never prints and never panics on input.
 
+pub mod accuracy;
 pub mod dialect;
 pub mod geometry;
 pub mod kinematics;

@@ -53,6 +53,9 @@ enum Command {
     Transfer(cli::transform::TransferArgs),
     /// Check every target's reach, joint limits and configuration with the robot's kinematics.
     Reach(cli::reach::ReachArgs),
+    /// ISO 9283 pose and path accuracy from laser-tracker measurements.
+    #[command(subcommand)]
+    Accuracy(cli::accuracy::AccuracyCommand),
     /// Print a shell completion script (bash, zsh, fish, powershell, elvish).
     #[command(
         after_help = "Example:\n  trackfix completions bash > /etc/bash_completion.d/trackfix"
@@ -100,6 +103,7 @@ fn main() -> ExitCode {
         Command::Mirror(a) => cli::transform::run_mirror(a),
         Command::Transfer(a) => cli::transform::run_transfer(a),
         Command::Reach(a) => cli::reach::run(a),
+        Command::Accuracy(c) => cli::accuracy::run(c),
         Command::Completions { shell } => {
             // Rendered first: clap_complete panics on a failed write.
             let mut script = Vec::new();

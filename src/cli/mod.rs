@@ -1,5 +1,6 @@
 //! Subcommand implementations. Library calls only; printing and `anyhow` live here.
 
+pub mod accuracy;
 pub mod inspect;
 pub mod reach;
 pub mod track;

@@ -1,5 +1,6 @@
 //! trackfix's integration tests: one binary, one module per area.
 
+mod accuracy;
 mod cli;
 mod dialect;
 mod kinematics;
