@@ -408,7 +408,8 @@ fn run_path(a: &PathArgs) -> anyhow::Result<String> {
     .with_context(|| a.measured.display().to_string())?;
     if a.format != Format::Table {
         for r in report.runs.iter().filter(|r| !r.used) {
-            eprintln!(
+            let _ = writeln!(
+                std::io::stderr(),
                 "note: {} (lines {}-{}) not used: {}",
                 r.label,
                 r.first_line,

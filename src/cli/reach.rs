@@ -77,7 +77,9 @@ pub fn run(a: ReachArgs) -> anyhow::Result<Exit> {
     for path in collect_inputs(&a.files)? {
         match load(&path, &options) {
             Ok(p) => files.extend(reach_program(&p, robot, kin, &reach_options)),
-            Err(e) if e.is_skip() => eprintln!("note: {e}"),
+            Err(e) if e.is_skip() => {
+                let _ = writeln!(std::io::stderr(), "note: {e}");
+            }
             Err(e) => return Err(e.into()),
         }
     }

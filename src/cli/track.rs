@@ -208,7 +208,7 @@ fn located_text(e: &(dyn std::error::Error + 'static)) -> Option<String> {
         return Some(located.to_string());
     }
     match e.downcast_ref::<CellError>() {
-        Some(CellError::Invalid { rendered }) => Some(rendered.clone()),
+        Some(CellError::Invalid(located)) => Some(located.to_string()),
         _ => None,
     }
 }
@@ -216,7 +216,7 @@ fn located_text(e: &(dyn std::error::Error + 'static)) -> Option<String> {
 /// How a table was read when it was not plain CSV, on standard error.
 fn print_notes(table: &NumericCsv) {
     for note in &table.notes {
-        eprintln!("note: {note}");
+        let _ = writeln!(std::io::stderr(), "note: {note}");
     }
 }
 
@@ -231,7 +231,7 @@ pub(crate) fn report_located(result: anyhow::Result<Exit>) -> anyhow::Result<Exi
     for context in err.chain().take_while(|c| located_text(*c).is_none()) {
         out.push_str(&format!("\n  = note: {context}"));
     }
-    eprintln!("{out}");
+    let _ = writeln!(std::io::stderr(), "{out}");
     Ok(Exit::Usage)
 }
 
@@ -609,12 +609,13 @@ fn deviation_cells(c: &[f64; 6], mm_width: usize, deg_width: usize, sep: &str) -
 fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
     let p = Profile::load(&a.profile)?;
     for w in p.consistency_warnings() {
-        eprintln!("warning: {}: {w}", a.profile.display());
+        let _ = writeln!(std::io::stderr(), "warning: {}: {w}", a.profile.display());
     }
     if let Some(path) = &a.plot {
         write_file(path, &profile_svg(&p)?)?;
         // On standard error: standard output may be the JSON or CSV asked for.
-        eprintln!(
+        let _ = writeln!(
+            std::io::stderr(),
             "wrote {}: the six deviation curves of profile `{}` with their {} knots, and the twist diagram",
             path.display(),
             p.name(),
@@ -790,7 +791,8 @@ fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
         .with_context(|| a.scan.display().to_string())?;
     if let Some(path) = &a.plot {
         write_file(path, &spectrum_svg(&spec)?)?;
-        eprintln!(
+        let _ = writeln!(
+            std::io::stderr(),
             "wrote {}: the amplitude spectrum of {} ({} frequencies, wavelengths in brackets)",
             path.display(),
             a.scan.display(),

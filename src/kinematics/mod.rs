@@ -63,16 +63,7 @@ impl ConfigValue {
 
     /// The configuration of joints `j` in `language`'s terms.
     pub fn of_joints(language: Language, kin: &Kinematics, j: &Joints) -> ConfigValue {
-        match language {
-            Language::Rapid => ConfigValue::Abb(abb::config_of(kin, j)),
-            Language::Krl => {
-                let (s, t) = kuka::status_turn_of(kin, j);
-                ConfigValue::Kuka {
-                    status: Some(s),
-                    turn: Some(t),
-                }
-            }
-        }
+        language.dialect().configuration_of(kin, j)
     }
 
     /// Whether joints `j` are in this configuration.

@@ -13,7 +13,8 @@ use crate::geometry::Pose;
 use crate::position::{FrameKind, Position, Program, Skid};
 use crate::track::TrackError;
 use crate::transform::Robot;
-use crate::transform::track_correction::{Resolved, TrackSetup, describe, resolve_frame, wobj_of};
+use crate::transform::policy::{describe, resolve_frame, wobj_of};
+use crate::transform::track_correction::TrackSetup;
 
 use super::{ConfigValue, Joints, Kinematics, select};
 
@@ -251,11 +252,11 @@ fn cartesian(
     r.config_written = written.map(|c| c.to_string());
     let wobj = match wobj_of(p, options.default_wobj.as_deref()) {
         Ok(w) => w,
-        Err((_, msg, _)) => return r.not_checked(msg),
+        Err(why) => return r.not_checked(why.message),
     };
     let w = match resolve_frame(program, &robot.frames, &wobj) {
-        Resolved::Frame(w) => w,
-        Resolved::Refused(_, msg, _) => return r.not_checked(msg),
+        Ok(w) => w,
+        Err(why) => return r.not_checked(why.message),
     };
     let Some(tool_name) = p.usage.tool.as_deref() else {
         return r.not_checked(format!("tool not resolved: {what} is not used with a tool"));

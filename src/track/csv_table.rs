@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::error::{LocatedError, TrackError};
-use crate::syntax::{Diagnostic, LineIndex, Span};
+use crate::syntax::{LineIndex, Span};
 
 /// One data row and the 1-based line it came from.
 #[derive(Clone, Debug, PartialEq)]
@@ -33,24 +33,6 @@ pub struct NumericCsv {
     delimiter: u8,
     /// The file's bytes, for messages that show the line.
     source: Arc<[u8]>,
-}
-
-/// `file:line:col: error: message`, the line, a caret under `span` and `hint`.
-pub(crate) fn render_located(
-    path: &Path,
-    src: &[u8],
-    span: Span,
-    message: &str,
-    hint: &str,
-) -> String {
-    let index = LineIndex::new(src);
-    let mut d = Diagnostic::error(span, message);
-    if !hint.is_empty() {
-        d = d.with_hint(hint);
-    }
-    d.render(&path.display().to_string(), src, &index)
-        .trim_end()
-        .to_owned()
 }
 
 /// The span of field `field` (0-based) of `line`, or of the whole line when there is no such

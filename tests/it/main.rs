@@ -2,6 +2,7 @@
 
 mod accuracy;
 mod cli;
+mod dialect;
 mod kinematics;
 mod krl;
 mod output;
