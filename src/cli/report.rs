@@ -178,8 +178,9 @@ fn run_inner(a: &ReportArgs) -> anyhow::Result<Exit> {
             .push(pose_result(&report, read(commanded)?.0, read(measured)?.0));
     }
     let report = TrackReport::compute(inputs)?;
-    let sections = report.sections();
-    let html = report.render();
+    let page = report.page();
+    let html = page.render();
+    let sections = &page.sections;
     // One write helper for every file trackfix writes: temporary + rename, mode kept.
     trackfix::output::write_file(&a.output, html.as_bytes())?;
     let mut out = std::io::stdout().lock();
@@ -190,7 +191,7 @@ fn run_inner(a: &ReportArgs) -> anyhow::Result<Exit> {
         html.len(),
         sections.len()
     )?;
-    for s in &sections {
+    for s in sections {
         writeln!(out, "  {}", s.heading)?;
     }
     out.flush()?;

@@ -265,6 +265,11 @@ impl TrackReport {
 
     /// The whole HTML page.
     pub fn render(&self) -> String {
+        self.page().render()
+    }
+
+    /// The page before rendering: title, subtitle and sections.
+    pub fn page(&self) -> Page {
         let subtitle = match &self.profile {
             Some(p) => {
                 let (s0, s1) = p.skid_range();
@@ -284,7 +289,6 @@ impl TrackReport {
             subtitle,
             sections: self.sections(),
         }
-        .render()
     }
 
     fn inputs_section(&self) -> Section {
