@@ -803,8 +803,14 @@ proptest::proptest! {
         proptest::prop_assert!(!numbers.contains("NaN") && !numbers.contains("inf"));
         let title = format!("<title>trackfix track report: {escaped}</title>");
         proptest::prop_assert!(html.contains(&title));
-        if name.contains('<') {
-            proptest::prop_assert!(!html.contains(&name));
+        // Whatever the name holds, it adds no element: one page title, one h1, no script.
+        proptest::prop_assert_eq!(html.matches("<title>trackfix").count(), 1);
+        proptest::prop_assert_eq!(html.matches("</title>\n").count(), 1);
+        proptest::prop_assert_eq!(html.matches("<h1>").count(), 1);
+        proptest::prop_assert!(!html.contains("<script"));
+        if escaped != name {
+            let raw = format!("report: {name}</title>");
+            proptest::prop_assert!(!html.contains(&raw));
         }
     }
 }
