@@ -51,9 +51,9 @@ pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
 fn analyse(path: &Path, source: Vec<u8>) -> (ParsedFile, positions::Facts) {
     let lines = LineIndex::new(&source);
     let mut extractor = positions::Extractor::new(&source, &lines);
-    let parse = parser::parse_with(&source, &mut |stmt| extractor.statement(&stmt));
+    let parse = parser::parse_with(&source, &mut |stmt: tree::Stmt| extractor.statement(&stmt));
     let (extracted, notes) = extractor.finish();
-    let round_trip = parse.tree.print(&source) == source;
+    let round_trip = parse.tree.prints_back(&source);
     let mut diagnostics = parse.diagnostics;
     diagnostics.extend(notes);
     if !parse

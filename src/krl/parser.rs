@@ -4,15 +4,16 @@
 //! Each function names the `grammars/krl.ebnf` rule it implements.
 
 use super::lexer::{Lexer, Token, TokenKind};
-use super::tree::{
-    Aggregate, DeclVar, Expr, ExprKind, Field, Node, NodeKind, Stmt, StmtKind, Tree,
-};
-use crate::syntax::{Diagnostic, Span};
+use super::tree::{Aggregate, DeclVar, Expr, ExprKind, Field, Krl, NodeKind, Stmt, StmtKind, Tree};
+use crate::syntax::{Diagnostic, Sink, Span, TreeBuilder};
 
 /// The result of parsing one file.
 #[derive(Clone, Debug, Default)]
 pub struct Parse {
     pub tree: Tree,
+    /// The statements read, in order (kept by [`parse`]; empty after [`parse_with`], which
+    /// streams them to its sink instead).
+    pub stmts: Vec<Stmt>,
     pub diagnostics: Vec<Diagnostic>,
     /// Lines kept verbatim because the grammar does not know them or could not parse them.
     pub opaque: usize,
@@ -480,6 +481,8 @@ impl<'a> Cursor<'a> {
 struct Open {
     keyword: &'static str,
     span: Span,
+    /// The branch ([`NodeKind::Routine`] or [`NodeKind::Block`]) this opener started.
+    node: usize,
 }
 
 fn closer_of(open: &str) -> &'static str {
@@ -520,51 +523,50 @@ struct LineParser<'a, 'k> {
     src: &'a [u8],
     out: Parse,
     /// Where parsed statements go: kept in the tree by [`parse`], streamed by [`parse_with`].
-    sink: &'k mut dyn FnMut(Stmt),
+    sink: &'k mut dyn Sink<Stmt>,
     stack: Vec<Open>,
     folds: Vec<Span>,
+    tree: TreeBuilder<Krl>,
+    /// Where the line being parsed starts (a block it opens starts there).
+    line_start: u32,
+    /// The branch the line being parsed closes, closed once the line is in the tree.
+    close_after_line: Option<usize>,
 }
 
 /// Parses a KRL source (rule `file`) into a tree that keeps its statements. Never fails and
 /// never panics.
 pub fn parse(src: &[u8]) -> Parse {
     let mut stmts = Vec::new();
-    let mut out = parse_with(src, &mut |s| stmts.push(s));
-    out.tree.stmts = stmts;
+    let mut out = parse_with(src, &mut |s: Stmt| stmts.push(s));
+    out.stmts = stmts;
     out
 }
 
 /// Like [`parse`], but hands each statement to `sink` as soon as it is parsed instead of keeping
-/// it in the tree (`tree.stmts` stays empty). Reading positions this way keeps memory at the
+/// it (`stmts` stays empty). Reading positions this way keeps memory at the
 /// size of the tokens: a 50 MB `.dat` holds millions of aggregate fields.
-pub fn parse_with(src: &[u8], sink: &mut dyn FnMut(Stmt)) -> Parse {
+pub fn parse_with(src: &[u8], sink: &mut dyn Sink<Stmt>) -> Parse {
     parse_lines(src, sink, true)
 }
 
 /// The parser, with or without the `.dat` declaration fast path ([`super::dat_line`]); both
 /// give the same result, which the fast path's tests check.
-pub(super) fn parse_lines(src: &[u8], sink: &mut dyn FnMut(Stmt), fast: bool) -> Parse {
+pub(super) fn parse_lines(src: &[u8], sink: &mut dyn Sink<Stmt>, fast: bool) -> Parse {
     let mut p = LineParser {
         src,
         out: Parse::default(),
         sink,
         stack: Vec::new(),
         folds: Vec::new(),
+        // About one node per 60 bytes of a typical `.src`/`.dat` line.
+        tree: TreeBuilder::with_capacity(src.len() / 60 + 4),
+        line_start: 0,
+        close_after_line: None,
     };
-    if src.len() >= u32::MAX as usize {
-        p.out.diagnostics.push(
-            Diagnostic::error(
-                Span::new(0, 0),
-                "file too large for the KRL parser (4 GiB or more)",
-            )
-            .with_hint("split the program; robot controllers do not load files this large"),
-        );
-        p.out.tree.nodes.push(Node {
-            kind: NodeKind::Opaque,
-            first: 0,
-            end: 0,
-            depth: 0,
-        });
+    if let Some(refused) = crate::syntax::too_large(src) {
+        p.out.diagnostics.push(refused);
+        p.out.tree = crate::syntax::refused_tree(NodeKind::Opaque);
+        p.out.opaque = 1;
         return p.out;
     }
     // One line at a time: the tokens of a line live only while it is parsed, and only the
@@ -575,18 +577,14 @@ pub(super) fn parse_lines(src: &[u8], sink: &mut dyn FnMut(Stmt), fast: bool) ->
     loop {
         let start = lexer.offset();
         if fast && let Some(line) = super::dat_line::decl_line(src, start, &mut fields) {
-            let node = p.out.tree.nodes.len() as u32;
-            (p.sink)(Stmt {
+            let node = p.tree.len() as u32;
+            p.sink.accept(Stmt {
                 node,
                 span: line.span,
                 kind: line.kind,
             });
-            p.out.tree.nodes.push(Node {
-                kind: NodeKind::Declaration,
-                first: start as u32,
-                end: line.end as u32,
-                depth: p.stack.len().min(u16::MAX as usize) as u16,
-            });
+            p.tree
+                .leaf(NodeKind::Declaration, start as u32, line.end as u32);
             if !line.had_newline {
                 break;
             }
@@ -613,24 +611,22 @@ pub(super) fn parse_lines(src: &[u8], sink: &mut dyn FnMut(Stmt), fast: bool) ->
         if end == start {
             break;
         }
-        let node_index = p.out.tree.nodes.len() as u32;
-        let depth_before = p.stack.len();
-        let (kind, depth) = if sig.is_empty() {
-            (p.trivia_line(comment), depth_before)
+        p.line_start = start as u32;
+        let kind = if sig.is_empty() {
+            p.trivia_line(comment)
         } else {
-            p.statement(&sig, node_index, Span::new(content_end, content_end))
+            p.statement(&sig, Span::new(content_end, content_end))
         };
-        p.out.tree.nodes.push(Node {
-            kind,
-            first: start as u32,
-            end: end as u32,
-            depth: depth.min(u16::MAX as usize) as u16,
-        });
+        p.tree.leaf(kind, start as u32, end as u32);
+        if let Some(branch) = p.close_after_line.take() {
+            p.tree.close(branch);
+        }
         if !had_newline {
             break;
         }
     }
     for open in std::mem::take(&mut p.stack) {
+        p.tree.close(open.node);
         p.out.diagnostics.push(
             Diagnostic::error(open.span, format!("`{}` is never closed", open.keyword))
                 .with_hint(format!("add `{}` to close it", closer_of(open.keyword))),
@@ -642,6 +638,7 @@ pub(super) fn parse_lines(src: &[u8], sink: &mut dyn FnMut(Stmt), fast: bool) ->
                 .with_hint("add `;ENDFOLD` or the pendant will fold the rest of the file"),
         );
     }
+    p.out.tree = p.tree.finish(src.len() as u32);
     p.out
 }
 
@@ -701,9 +698,8 @@ impl<'a> LineParser<'a, '_> {
         NodeKind::Opaque
     }
 
-    /// Rule `statement`. Returns the node kind and its depth.
-    fn statement(&mut self, sig: &[Token], node: u32, eol: Span) -> (NodeKind, usize) {
-        let depth = self.stack.len();
+    /// Rule `statement`. Returns the line's node kind.
+    fn statement(&mut self, sig: &[Token], eol: Span) -> NodeKind {
         let stmt_span = match (sig.first(), sig.last()) {
             (Some(f), Some(l)) => f.span().cover(l.span()),
             _ => eol,
@@ -728,20 +724,20 @@ impl<'a> LineParser<'a, '_> {
                 message: message.to_owned(),
                 hint,
             };
-            return (self.error(e), depth);
+            return self.error(e);
         }
         let Some(first) = sig.first() else {
-            return (NodeKind::Blank, depth);
+            return NodeKind::Blank;
         };
         if first.kind == TokenKind::Header {
-            return (NodeKind::Header, depth);
+            return NodeKind::Header;
         }
         if first.kind != TokenKind::Ident {
             let what = format!(
                 "starting with `{}`",
                 crate::syntax::latin1(first.text(self.src))
             );
-            return (self.unknown(stmt_span, what), depth);
+            return self.unknown(stmt_span, what);
         }
         let mut c = self.cursor(sig, eol);
         let global = c.is_kw("GLOBAL");
@@ -754,17 +750,17 @@ impl<'a> LineParser<'a, '_> {
                 message: "`GLOBAL` without a declaration".to_owned(),
                 hint: "write `GLOBAL DEF`, `GLOBAL DEFFCT` or `GLOBAL DECL`",
             };
-            return (self.error(e), depth);
+            return self.error(e);
         };
         let word = Word::of(head.text(self.src));
         let w = word.as_str();
-        let result: Result<(NodeKind, usize, Option<StmtKind>), PErr> = match w {
+        let result: Result<(NodeKind, Option<StmtKind>), PErr> = match w {
             "DEF" | "DEFFCT" | "DEFDAT" => self.routine(&mut c, w, head.span()),
             "END" | "ENDFCT" | "ENDDAT" if !global => {
                 c.pos += 1;
                 c.expect_end(w).map(|()| {
-                    let d = self.close(w, head.span());
-                    (NodeKind::RoutineEnd, d, None)
+                    self.close(w, head.span());
+                    (NodeKind::RoutineEnd, None)
                 })
             }
             "DECL" => {
@@ -773,36 +769,29 @@ impl<'a> LineParser<'a, '_> {
                     c.pos += 1;
                 }
                 if c.is_kw("INTERRUPT") {
-                    Ok((NodeKind::Simple, depth, None))
+                    Ok((NodeKind::Simple, None))
                 } else if c.is_kw("STRUC") || c.is_kw("ENUM") || c.is_kw("SIGNAL") {
-                    Ok((NodeKind::Declaration, depth, None))
+                    Ok((NodeKind::Declaration, None))
                 } else {
-                    decl(&mut c).map(|k| (NodeKind::Declaration, depth, Some(k)))
+                    decl(&mut c).map(|k| (NodeKind::Declaration, Some(k)))
                 }
             }
-            "INTERRUPT" | "TRIGGER" => Ok((NodeKind::Simple, depth, None)),
-            _ if DECL_KEYWORDS.contains(&w) => Ok((NodeKind::Declaration, depth, None)),
+            "INTERRUPT" | "TRIGGER" => Ok((NodeKind::Simple, None)),
+            _ if DECL_KEYWORDS.contains(&w) => Ok((NodeKind::Declaration, None)),
             _ if global => Err(PErr {
                 span: head.span(),
                 message: format!("`GLOBAL` before `{}`", c.text(head)),
                 hint: "`GLOBAL` only qualifies DEF, DEFFCT, DECL, STRUC, ENUM, SIGNAL and INTERRUPT",
             }),
             _ if MOTION_KEYWORDS.contains(&w) => {
-                motion(&mut c).map(|k| (NodeKind::Motion, depth, Some(k)))
+                motion(&mut c).map(|k| (NodeKind::Motion, Some(k)))
             }
-            _ if SIMPLE_KEYWORDS.contains(&w) => Ok((NodeKind::Simple, depth, None)),
+            _ if SIMPLE_KEYWORDS.contains(&w) => Ok((NodeKind::Simple, None)),
             "IF" => {
                 let has_then = sig.last().is_some_and(|t| is_kw(self.src, Some(t), "THEN"));
                 if has_then {
-                    self.stack.push(Open {
-                        keyword: "IF",
-                        span: head.span(),
-                    });
-                    Ok((
-                        NodeKind::BlockOpen,
-                        depth,
-                        Some(StmtKind::Branch(head.span())),
-                    ))
+                    self.push_open("IF", head.span(), NodeKind::Block);
+                    Ok((NodeKind::BlockOpen, Some(StmtKind::Branch(head.span()))))
                 } else {
                     Err(PErr {
                         span: eol,
@@ -813,22 +802,15 @@ impl<'a> LineParser<'a, '_> {
             }
             "FOR" | "WHILE" | "LOOP" | "REPEAT" | "SWITCH" | "SPLINE" | "PTP_SPLINE" => {
                 if let Some(k) = static_kw(w) {
-                    self.stack.push(Open {
-                        keyword: k,
-                        span: head.span(),
-                    });
+                    self.push_open(k, head.span(), NodeKind::Block);
                 }
                 let branch = (w == "SWITCH").then(|| StmtKind::Branch(head.span()));
-                Ok((NodeKind::BlockOpen, depth, branch))
+                Ok((NodeKind::BlockOpen, branch))
             }
             "ELSE" | "CASE" | "DEFAULT" => {
                 let parent = if w == "ELSE" { "IF" } else { "SWITCH" };
                 if self.stack.last().is_some_and(|o| o.keyword == parent) {
-                    Ok((
-                        NodeKind::BlockMiddle,
-                        depth.saturating_sub(1),
-                        Some(StmtKind::Branch(head.span())),
-                    ))
+                    Ok((NodeKind::BlockMiddle, Some(StmtKind::Branch(head.span()))))
                 } else {
                     Err(PErr {
                         span: head.span(),
@@ -839,25 +821,27 @@ impl<'a> LineParser<'a, '_> {
             }
             "ENDIF" | "ENDFOR" | "ENDWHILE" | "ENDLOOP" | "UNTIL" | "ENDSWITCH" | "ENDSPLINE" => {
                 let matched = self.stack.iter().any(|o| closer_of(o.keyword) == w);
-                let d = self.close(w, head.span());
+                self.close(w, head.span());
                 let branch = (matched && (w == "ENDIF" || w == "ENDSWITCH"))
                     .then(|| StmtKind::Branch(head.span()));
-                Ok((NodeKind::BlockClose, d, branch))
+                Ok((NodeKind::BlockClose, branch))
             }
-            _ => self.other(&mut c, head, stmt_span, depth),
+            _ => self.other(&mut c, head, stmt_span),
         };
         match result {
-            Ok((kind, d, stmt)) => {
+            Ok((kind, stmt)) => {
                 if let Some(kind) = stmt {
-                    (self.sink)(Stmt {
+                    // The line's leaf comes next, after any branch this line opened.
+                    let node = self.tree.len() as u32;
+                    self.sink.accept(Stmt {
                         node,
                         span: stmt_span,
                         kind,
                     });
                 }
-                (kind, d)
+                kind
             }
-            Err(e) => (self.error(e), depth),
+            Err(e) => self.error(e),
         }
     }
 
@@ -867,7 +851,7 @@ impl<'a> LineParser<'a, '_> {
         c: &mut Cursor<'_>,
         w: &str,
         keyword: Span,
-    ) -> PResult<(NodeKind, usize, Option<StmtKind>)> {
+    ) -> PResult<(NodeKind, Option<StmtKind>)> {
         c.pos += 1;
         if w == "DEFFCT" {
             c.expect_ident(
@@ -880,6 +864,7 @@ impl<'a> LineParser<'a, '_> {
         if !self.stack.is_empty() {
             let open: Vec<Open> = std::mem::take(&mut self.stack);
             for o in open {
+                self.tree.close(o.node);
                 self.out.diagnostics.push(
                     Diagnostic::error(o.span, format!("`{}` is never closed", o.keyword))
                         .with_hint(format!(
@@ -890,14 +875,10 @@ impl<'a> LineParser<'a, '_> {
             }
         }
         if let Some(k) = static_kw(w) {
-            self.stack.push(Open {
-                keyword: k,
-                span: keyword,
-            });
+            self.push_open(k, keyword, NodeKind::Routine);
         }
         Ok((
             NodeKind::RoutineStart,
-            0,
             Some(StmtKind::Routine {
                 keyword,
                 name: Some(name),
@@ -905,27 +886,38 @@ impl<'a> LineParser<'a, '_> {
         ))
     }
 
-    /// Pops the block `closer` closes; reports a closer without its opener. Returns the depth.
-    fn close(&mut self, closer: &str, span: Span) -> usize {
+    /// Opens a block or routine branch at the current line.
+    fn push_open(&mut self, keyword: &'static str, span: Span, kind: NodeKind) {
+        let node = self.tree.open(kind, self.line_start);
+        self.stack.push(Open {
+            keyword,
+            span,
+            node,
+        });
+    }
+
+    /// Pops the block `closer` closes (its branch ends after this line); reports a closer
+    /// without its opener.
+    fn close(&mut self, closer: &str, span: Span) {
         if let Some(at) = self
             .stack
             .iter()
             .rposition(|o| closer_of(o.keyword) == closer)
         {
             for o in self.stack.drain(at + 1..).collect::<Vec<_>>() {
+                self.tree.close(o.node);
                 self.out.diagnostics.push(
                     Diagnostic::error(o.span, format!("`{}` is never closed", o.keyword))
                         .with_hint(format!("add `{}` before `{closer}`", closer_of(o.keyword))),
                 );
             }
+            self.close_after_line = self.stack.get(at).map(|o| o.node);
             self.stack.truncate(at);
-            at
         } else {
             self.out.diagnostics.push(
                 Diagnostic::error(span, format!("`{closer}` without an open block"))
                     .with_hint("remove it or add the statement that opens the block"),
             );
-            self.stack.len()
         }
     }
 
@@ -935,16 +927,15 @@ impl<'a> LineParser<'a, '_> {
         c: &mut Cursor<'_>,
         head: &Token,
         stmt_span: Span,
-        depth: usize,
-    ) -> PResult<(NodeKind, usize, Option<StmtKind>)> {
+    ) -> PResult<(NodeKind, Option<StmtKind>)> {
         let next = c.peek_at(1);
         let src = self.src;
         if next.is_none() {
             let what = format!("`{}`", c.text(head));
-            return Ok((self.unknown(stmt_span, what), depth, None));
+            return Ok((self.unknown(stmt_span, what), None));
         }
         if is_punct(src, next, b":") && c.peek_at(2).is_none() {
-            return Ok((NodeKind::Label, depth, None));
+            return Ok((NodeKind::Label, None));
         }
         if next.is_some_and(|t| t.kind == TokenKind::Ident) {
             let ty = Word::of(head.text(src));
@@ -960,7 +951,7 @@ impl<'a> LineParser<'a, '_> {
                     .with_hint("write `DECL TYPE name` for a user-defined type, or check the keyword's spelling"),
                 );
             }
-            return Ok((NodeKind::Declaration, depth, Some(k)));
+            return Ok((NodeKind::Declaration, Some(k)));
         }
         if is_punct(src, next, b"=") || is_punct(src, next, b"[") || is_punct(src, next, b".") {
             let target = c.postfix()?;
@@ -970,13 +961,12 @@ impl<'a> LineParser<'a, '_> {
                 c.expect_end("the assigned value")?;
                 return Ok((
                     NodeKind::Assignment,
-                    depth,
                     Some(StmtKind::Assign { target, value }),
                 ));
             }
             if matches!(target.kind, ExprKind::Call(..)) {
                 c.expect_end("the call")?;
-                return Ok((NodeKind::Call, depth, Some(StmtKind::Call(target))));
+                return Ok((NodeKind::Call, Some(StmtKind::Call(target))));
             }
             return c.err(
                 format!("expected `=`, found {}", c.found()),
@@ -991,7 +981,6 @@ impl<'a> LineParser<'a, '_> {
                 c.expect_end("the assigned value")?;
                 return Ok((
                     NodeKind::Assignment,
-                    depth,
                     Some(StmtKind::Assign {
                         target: call,
                         value,
@@ -999,10 +988,10 @@ impl<'a> LineParser<'a, '_> {
                 ));
             }
             c.expect_end("the call")?;
-            return Ok((NodeKind::Call, depth, Some(StmtKind::Call(call))));
+            return Ok((NodeKind::Call, Some(StmtKind::Call(call))));
         }
         let what = format!("`{}`", c.text(head));
-        Ok((self.unknown(stmt_span, what), depth, None))
+        Ok((self.unknown(stmt_span, what), None))
     }
 }
 
@@ -1110,6 +1099,10 @@ mod tests {
     use super::*;
     use crate::syntax::Severity;
 
+    fn first_line(p: &Parse) -> NodeKind {
+        p.tree.leaves().next().map_or(NodeKind::Root, |n| n.kind)
+    }
+
     fn dump(src: &str) -> String {
         let p = parse(src.as_bytes());
         assert_eq!(p.tree.print(src.as_bytes()), src.as_bytes());
@@ -1121,7 +1114,7 @@ mod tests {
         let src = "&ACCESS RVP\nDEF a()\n  IF X THEN\n    LIN XP1 C_DIS\n  ELSE\n  ENDIF\nEND";
         assert_eq!(
             dump(src),
-            "header \"&ACCESS RVP\"\nroutine \"DEF a()\"\n  block \"  IF X THEN\"\n    motion \"    LIN XP1 C_DIS\"\n  middle \"  ELSE\"\n  endblock \"  ENDIF\"\nend \"END\"\n"
+            "Root@0..68\n  Header@0..12 \"&ACCESS RVP\\n\"\n  Routine@12..68\n    RoutineStart@12..20 \"DEF a()\\n\"\n    Block@20..65\n      BlockOpen@20..32 \"  IF X THEN\\n\"\n      Motion@32..50 \"    LIN XP1 C_DIS\\n\"\n      BlockMiddle@50..57 \"  ELSE\\n\"\n      BlockClose@57..65 \"  ENDIF\\n\"\n    RoutineEnd@65..68 \"END\"\n"
         );
     }
 
@@ -1130,7 +1123,7 @@ mod tests {
         let src = ";FOLD LIN P1;%{PE}%R 8.3.31,%MKUKATPBASIS\nLIN XP1\n;ENDFOLD (x)\n";
         assert_eq!(
             dump(src),
-            "fold \";FOLD LIN P1;%{PE}%R 8.3.31,%MKUKATPBASIS\"\nmotion \"LIN XP1\"\nendfold \";ENDFOLD (x)\"\n"
+            "Root@0..63\n  FoldStart@0..42 \";FOLD LIN P1;%{PE}%R 8.3.31,%MKUKATPBASIS\\n\"\n  Motion@42..50 \"LIN XP1\\n\"\n  FoldEnd@50..63 \";ENDFOLD (x)\\n\"\n"
         );
         let p = parse(b";ENDFOLD\n;FOLD a\n");
         assert_eq!(p.diagnostics.len(), 2);
@@ -1141,7 +1134,7 @@ mod tests {
         let src = "def a()\n  decl e6pos p={x 1}\n  lin p c_dis\nend";
         let p = parse(src.as_bytes());
         assert!(p.diagnostics.is_empty(), "{:?}", p.diagnostics);
-        assert_eq!(p.tree.stmts.len(), 3);
+        assert_eq!(p.stmts.len(), 3);
     }
 
     #[test]
@@ -1166,7 +1159,7 @@ mod tests {
         ] {
             let p = parse(src.as_bytes());
             assert!(p.diagnostics.is_empty(), "{src}: {:?}", p.diagnostics);
-            assert_eq!(p.tree.nodes[0].kind, NodeKind::Declaration, "{src}");
+            assert_eq!(first_line(&p), NodeKind::Declaration, "{src}");
         }
     }
 
@@ -1209,7 +1202,7 @@ mod tests {
         ] {
             let p = parse(src.as_bytes());
             assert!(p.diagnostics.is_empty(), "{src}: {:?}", p.diagnostics);
-            assert_eq!(p.tree.nodes[0].kind, kind, "{src}");
+            assert_eq!(first_line(&p), kind, "{src}");
         }
     }
 
@@ -1238,22 +1231,46 @@ DEF cell( )\r\n  SPLINE WITH $ACC = {CP 2.0}\r\n    SPL XP1\r\n    SLIN XP2\r\n 
         assert!(p.diagnostics.is_empty(), "{:?}", p.diagnostics);
         assert_eq!(p.opaque, 0);
         assert_eq!(p.tree.print(src.as_bytes()), src.as_bytes());
-        let depth_of = |text: &str| {
-            p.tree
-                .nodes
-                .iter()
-                .find(|n| {
-                    let span = p.tree.node_span(n);
-                    String::from_utf8_lossy(span.slice(src.as_bytes())).contains(text)
-                })
-                .map(|n| (n.kind, n.depth))
+        // The line holding `text` and the branches around it, innermost first.
+        let enclosing = |text: &str| {
+            let nodes = &p.tree.nodes;
+            let i = nodes.iter().position(|n| {
+                !n.kind.is_branch()
+                    && String::from_utf8_lossy(n.span().slice(src.as_bytes())).contains(text)
+            })?;
+            let mut around: Vec<NodeKind> = (1..i)
+                .filter(|&b| nodes[b].kind.is_branch() && nodes[b].subtree_end as usize > i)
+                .map(|b| nodes[b].kind)
+                .collect();
+            around.reverse();
+            Some((nodes[i].kind, around))
         };
-        assert_eq!(depth_of("SPL XP1"), Some((NodeKind::Motion, 2)));
-        assert_eq!(depth_of("CASE 1"), Some((NodeKind::BlockMiddle, 1)));
-        assert_eq!(depth_of("PTP_REL"), Some((NodeKind::Motion, 2)));
-        assert_eq!(depth_of("UNTIL"), Some((NodeKind::BlockClose, 1)));
-        assert_eq!(depth_of("done:"), Some((NodeKind::Label, 1)));
-        assert_eq!(depth_of("ENDFCT"), Some((NodeKind::RoutineEnd, 0)));
+        use NodeKind::{Block, Routine};
+        assert_eq!(
+            enclosing("SPL XP1"),
+            Some((NodeKind::Motion, vec![Block, Routine]))
+        );
+        assert_eq!(
+            enclosing("CASE 1"),
+            Some((NodeKind::BlockMiddle, vec![Block, Routine]))
+        );
+        assert_eq!(
+            enclosing("PTP_REL"),
+            Some((NodeKind::Motion, vec![Block, Routine]))
+        );
+        assert_eq!(
+            enclosing("UNTIL"),
+            Some((NodeKind::BlockClose, vec![Block, Routine]))
+        );
+        assert_eq!(enclosing("done:"), Some((NodeKind::Label, vec![Routine])));
+        assert_eq!(
+            enclosing("ENDFCT"),
+            Some((NodeKind::RoutineEnd, vec![Routine]))
+        );
+        assert_eq!(
+            enclosing("DEF cell"),
+            Some((NodeKind::RoutineStart, vec![Routine]))
+        );
     }
 
     #[test]

@@ -27,7 +27,7 @@ use crate::syntax::{Diagnostic, LineIndex};
 
 /// Parses `src` into its lossless tree only (no positions): the fast path.
 pub fn parse_tree(src: &[u8]) -> Parse {
-    parse(src, &mut parser::NoSink)
+    parse(src, &mut crate::syntax::NoSink)
 }
 
 /// `print(parse(src))`: the bytes the tree prints. Equal to `src` for every input.
@@ -40,7 +40,9 @@ pub fn print(src: &[u8]) -> Vec<u8> {
 pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
     let lines = LineIndex::new(&source);
     let mut extractor = positions::Extractor::new(&lines, &source);
-    let parsed = parse(&source, &mut extractor);
+    let parsed = parse(&source, &mut |s: parser::Statement<'_>| {
+        extractor.statement(s.src, s.arena, s.stmt, s.span)
+    });
     let extracted = extractor.finish(&source);
     let round_trip = parsed.tree.prints_back(&source);
     let mut diagnostics = parsed.diagnostics;

@@ -8,8 +8,8 @@
 
 use super::expr::{Arena, ExprKind, NONE};
 use super::lexer::{Lexer, Token, TokenKind};
-use super::tree::{Node, NodeKind, Tree};
-use crate::syntax::{Diagnostic, Span};
+use super::tree::{NodeKind, Rapid, Tree};
+use crate::syntax::{Diagnostic, Sink, Span, TreeBuilder};
 
 /// Nesting deeper than this (brackets, blocks) is reported instead of recursed into, so a
 /// hostile input cannot overflow the stack.
@@ -52,17 +52,19 @@ pub enum Stmt {
     Other,
 }
 
-/// Receives every statement as it is read (the positions layer implements it).
-pub trait StatementSink {
-    fn statement(&mut self, src: &[u8], arena: &Arena, stmt: &Stmt, span: Span);
+/// One statement as it is read, handed to the parser's [`Sink`] (the positions layer is one):
+/// the source, the scratch arena its expression ids point into (valid only during the call),
+/// the statement and its span.
+#[derive(Clone, Copy, Debug)]
+pub struct Statement<'e> {
+    pub src: &'e [u8],
+    pub arena: &'e Arena,
+    pub stmt: &'e Stmt,
+    pub span: Span,
 }
 
-/// A sink that keeps nothing: parsing for the tree alone.
-pub struct NoSink;
-
-impl StatementSink for NoSink {
-    fn statement(&mut self, _: &[u8], _: &Arena, _: &Stmt, _: Span) {}
-}
+/// What [`parse`] hands statements to: any `FnMut(Statement)` or [`crate::syntax::NoSink`].
+pub type StatementSink<'s> = dyn for<'e> Sink<Statement<'e>> + 's;
 
 /// The result of parsing: the tree, what went wrong, and how many opaque nodes it holds.
 #[derive(Clone, Debug, Default)]
@@ -82,27 +84,11 @@ struct SyntaxError {
 type PResult<T> = Result<T, SyntaxError>;
 
 /// Parses a whole source. Never fails, never panics; see [`Parse`].
-pub fn parse(src: &[u8], sink: &mut dyn StatementSink) -> Parse {
-    if src.len() > u32::MAX as usize {
-        let mut tree = Tree::default();
-        tree.nodes.push(Node {
-            kind: NodeKind::Root,
-            start: 0,
-            end: 0,
-            subtree_end: 2,
-        });
-        tree.nodes.push(Node {
-            kind: NodeKind::Opaque,
-            start: 0,
-            end: 0,
-            subtree_end: 2,
-        });
+pub fn parse(src: &[u8], sink: &mut StatementSink<'_>) -> Parse {
+    if let Some(refused) = crate::syntax::too_large(src) {
         return Parse {
-            tree,
-            diagnostics: vec![
-                Diagnostic::error(Span::new(0, 0), "file larger than 4 GiB; not parsed")
-                    .with_hint("split the module"),
-            ],
+            tree: crate::syntax::refused_tree(NodeKind::Opaque),
+            diagnostics: vec![refused],
             opaque: 1,
         };
     }
@@ -120,9 +106,8 @@ struct Parser<'a, 's> {
     peeked: Option<(Token, Lexer<'a>)>,
     /// End of the last significant token consumed.
     prev_end: u32,
-    nodes: Vec<Node>,
-    /// End of the last leaf pushed: bytes between it and the next leaf are trivia.
-    leaf_end: u32,
+    /// Bytes between two leaves become trivia leaves.
+    tree: TreeBuilder<Rapid>,
     diagnostics: Vec<Diagnostic>,
     opaque: usize,
     arena: Arena,
@@ -132,7 +117,7 @@ struct Parser<'a, 's> {
     /// Use [`Parser::numeric_aggregate`] (off only in tests that compare it with the general
     /// path).
     fast_aggregates: bool,
-    sink: &'s mut dyn StatementSink,
+    sink: &'s mut StatementSink<'s>,
 }
 
 /// Keywords that end a statement list (and so also end error recovery).
@@ -241,7 +226,7 @@ fn is_word_in(text: &[u8], words: &[&[u8]]) -> bool {
 }
 
 impl<'a, 's> Parser<'a, 's> {
-    fn new(src: &'a [u8], sink: &'s mut dyn StatementSink) -> Parser<'a, 's> {
+    fn new(src: &'a [u8], sink: &'s mut StatementSink<'s>) -> Parser<'a, 's> {
         let mut p = Parser {
             src,
             lex: Lexer::new(src),
@@ -255,8 +240,7 @@ impl<'a, 's> Parser<'a, 's> {
             prev_end: 0,
             // About two leaves per statement; robtarget files average ~45 bytes per leaf, so
             // this avoids doubling (and a second copy) for typical modules.
-            nodes: Vec::with_capacity(src.len() / 40 + 4),
-            leaf_end: 0,
+            tree: TreeBuilder::with_capacity(src.len() / 40 + 4),
             diagnostics: Vec::new(),
             opaque: 0,
             arena: Arena::default(),
@@ -265,22 +249,15 @@ impl<'a, 's> Parser<'a, 's> {
             fast_aggregates: true,
             sink,
         };
-        p.nodes.push(Node {
-            kind: NodeKind::Root,
-            start: 0,
-            end: 0,
-            subtree_end: 1,
-        });
         p.tok = p.next_significant();
         p
     }
 
-    fn finish(mut self) -> Parse {
+    fn finish(self) -> Parse {
         let end = self.src.len() as u32;
-        self.flush_trivia(end);
-        self.close(0);
+        let tree: Tree = self.tree.finish(end);
         Parse {
-            tree: Tree { nodes: self.nodes },
+            tree,
             diagnostics: self.diagnostics,
             opaque: self.opaque,
         }
@@ -407,55 +384,27 @@ impl<'a, 's> Parser<'a, 's> {
 
     // ---- tree building ------------------------------------------------------------------
 
-    fn flush_trivia(&mut self, upto: u32) {
-        if upto > self.leaf_end {
-            self.nodes.push(Node {
-                kind: NodeKind::Trivia,
-                start: self.leaf_end,
-                end: upto,
-                subtree_end: self.nodes.len() as u32 + 1,
-            });
-            self.leaf_end = upto;
-        }
-    }
-
     /// Pushes a leaf from `start` to the end of the last consumed token.
     fn leaf(&mut self, kind: NodeKind, start: u32) {
-        let end = self.prev_end.max(start);
-        self.flush_trivia(start);
-        self.nodes.push(Node {
-            kind,
-            start,
-            end,
-            subtree_end: self.nodes.len() as u32 + 1,
-        });
-        self.leaf_end = end;
+        self.tree.leaf(kind, start, self.prev_end);
     }
 
     fn open(&mut self, kind: NodeKind, start: u32) -> usize {
-        self.flush_trivia(start);
-        let idx = self.nodes.len();
-        self.nodes.push(Node {
-            kind,
-            start,
-            end: start,
-            subtree_end: idx as u32 + 1,
-        });
-        idx
+        self.tree.open(kind, start)
     }
 
     fn close(&mut self, idx: usize) {
-        let len = self.nodes.len() as u32;
-        let end = self.leaf_end;
-        if let Some(n) = self.nodes.get_mut(idx) {
-            n.subtree_end = len;
-            n.end = end.max(n.start);
-        }
+        self.tree.close(idx);
     }
 
     fn emit(&mut self, stmt: Stmt, start: u32) {
         let span = Span::new(start as usize, self.prev_end as usize);
-        self.sink.statement(self.src, &self.arena, &stmt, span);
+        self.sink.accept(Statement {
+            src: self.src,
+            arena: &self.arena,
+            stmt: &stmt,
+            span,
+        });
     }
 
     /// Ends the head of a compound statement's part (`ELSEIF … THEN`, `CASE …:`) that started
@@ -1718,7 +1667,7 @@ mod tests {
 
     /// The expression nodes and the following token, read with or without the fast path.
     fn read(src: &[u8], fast: bool) -> (Vec<super::super::expr::ExprNode>, Option<Token>) {
-        let mut sink = NoSink;
+        let mut sink = crate::syntax::NoSink;
         let mut p = Parser::new(src, &mut sink);
         p.fast_aggregates = fast;
         match p.expr() {

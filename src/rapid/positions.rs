@@ -9,7 +9,7 @@
 use std::collections::HashMap;
 
 use super::expr::{Arena, ExprKind};
-use super::parser::{StatementSink, Stmt};
+use super::parser::Stmt;
 use crate::position::{
     CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, Orientation,
     Position, PositionKind, Usage,
@@ -722,8 +722,8 @@ impl<'l> Extractor<'l> {
     }
 }
 
-impl StatementSink for Extractor<'_> {
-    fn statement(&mut self, src: &[u8], arena: &Arena, stmt: &Stmt, span: Span) {
+impl Extractor<'_> {
+    pub(super) fn statement(&mut self, src: &[u8], arena: &Arena, stmt: &Stmt, span: Span) {
         match *stmt {
             Stmt::Decl {
                 type_name,

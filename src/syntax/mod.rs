@@ -10,12 +10,14 @@ mod edit;
 mod line_index;
 mod number;
 mod span;
+mod tree;
 
 pub use diagnostic::{Diagnostic, Severity, latin1};
 pub use edit::{Edit, EditError, apply_edits};
 pub use line_index::LineIndex;
 pub use number::{NumLit, fixed};
 pub use span::Span;
+pub use tree::{Language, NoSink, Node, Sink, Tree, TreeBuilder, escape, refused_tree, too_large};
 
 /// The UTF-8 byte order mark some editors put in front of a module.
 pub const BOM: &[u8] = b"\xEF\xBB\xBF";
