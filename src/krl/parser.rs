@@ -55,10 +55,11 @@ const SIMPLE_KEYWORDS: &[&str] = &[
     "CONST_VEL",
     "TIME_BLOCK",
     "STOP",
+    "CONFIRM",
 ];
 
 const DECL_KEYWORDS: &[&str] = &[
-    "STRUC", "ENUM", "SIGNAL", "EXT", "EXTFCT", "EXTP", "EXTFCTP", "IMPORT", "CONST",
+    "STRUC", "ENUM", "SIGNAL", "EXT", "EXTFCT", "EXTP", "EXTFCTP", "IMPORT", "CONST", "CHANNEL",
 ];
 
 /// Types whose declarations may omit `DECL` (a `.dat` writes `E6POS XP1={…}`, `INT I`).
@@ -395,6 +396,18 @@ impl<'a> Cursor<'a> {
             TokenKind::Str => ExprKind::Str,
             TokenKind::Quoted => ExprKind::Quoted,
             TokenKind::Enum => ExprKind::Enum,
+            // `# State`: KSS accepts blanks between `#` and the enum value's name.
+            TokenKind::Punct
+                if t.text(self.src) == b"#"
+                    && self.peek_at(1).is_some_and(|n| n.kind == TokenKind::Ident) =>
+            {
+                let name = self.peek_at(1).map_or(t.span(), |n| n.span());
+                self.pos += 2;
+                return Ok(Expr {
+                    span: t.span().cover(name),
+                    kind: ExprKind::Enum,
+                });
+            }
             TokenKind::Ident => ExprKind::Name,
             TokenKind::Punct if t.text(self.src) == b"{" => return self.aggregate(),
             TokenKind::Punct if t.text(self.src) == b"(" => {
@@ -778,6 +791,10 @@ impl<'a> LineParser<'a, '_> {
             }
             "INTERRUPT" | "TRIGGER" => Ok((NodeKind::Simple, None)),
             _ if DECL_KEYWORDS.contains(&w) => Ok((NodeKind::Declaration, None)),
+            // `GLOBAL INT x = 10`: a predefined type may omit `DECL` after `GLOBAL` too.
+            _ if global && PREDEFINED_TYPES.contains(&w) => {
+                decl(&mut c).map(|k| (NodeKind::Declaration, Some(k)))
+            }
             _ if global => Err(PErr {
                 span: head.span(),
                 message: format!("`GLOBAL` before `{}`", c.text(head)),
@@ -858,6 +875,12 @@ impl<'a> LineParser<'a, '_> {
                 "the function's return type",
                 "write `DEFFCT TYPE name(params)`",
             )?;
+            // An array return type: `DEFFCT CHAR[128] NAME( )`.
+            if c.is_punct(b"[") {
+                c.pos += 1;
+                c.list(b"]")?;
+                c.expect_punct(b"]", "close the return type's array size with `]`")?;
+            }
         }
         let name = c.expect_ident("a name", "write `DEF name()`")?;
         // Parameters and `PUBLIC` are kept as written.

@@ -143,6 +143,13 @@ impl<'a> Lexer<'a> {
         }
     }
 
+    fn ident_token(&mut self, rest: &[u8]) -> Token {
+        let len = ident(rest).map_or(1, |(_, m)| m.len());
+        let mut t = self.token(TokenKind::Ident, len);
+        t.keyword = rest.get(..len).is_some_and(is_keyword);
+        t
+    }
+
     /// The next token; [`TokenKind::Eof`] (empty) at the end, forever.
     pub fn next_token(&mut self) -> Token {
         let rest = self.src.get(self.pos..).unwrap_or(&[]);
@@ -184,12 +191,7 @@ impl<'a> Lexer<'a> {
                 let (kind, len) = string_len(rest);
                 self.token(kind, len)
             }
-            b'a'..=b'z' | b'A'..=b'Z' | b'_' => {
-                let len = ident(rest).map_or(1, |(_, m)| m.len());
-                let mut t = self.token(TokenKind::Ident, len);
-                t.keyword = rest.get(..len).is_some_and(is_keyword);
-                t
-            }
+            b'a'..=b'z' | b'A'..=b'Z' | b'_' => self.ident_token(rest),
             b'0'..=b'9' => self.token(TokenKind::Number, number_len(rest).max(1)),
             b'.' if rest.get(1).is_some_and(u8::is_ascii_digit) => {
                 self.token(TokenKind::Number, number_len(rest).max(1))
@@ -205,6 +207,7 @@ impl<'a> Lexer<'a> {
                 self.line_start = true;
                 self.token(TokenKind::Bom, BOM.len())
             }
+            0xC0..=0xFF if is_letter(b) => self.ident_token(rest),
             b'(' | b')' | b'[' | b']' | b'{' | b'}' | b',' | b';' | b':' | b'=' | b'+' | b'-'
             | b'*' | b'/' | b'>' | b'\\' | b'.' | b'%' | b'?' | b'^' | b'&' | b'#' | b'@'
             | b'$' | b'|' | b'\'' | b'~' | b'`' => self.token(TokenKind::Punct, 1),
@@ -262,11 +265,17 @@ fn placeholder_len(rest: &[u8]) -> Option<usize> {
     PLACEHOLDERS.contains(&name).then_some(close + 1)
 }
 
+/// `letter` (grammars/rapid.ebnf): RAPID's character set is ISO 8859-1, whose letters are the
+/// ASCII ones and 0xC0-0xFF except × (0xD7) and ÷ (0xF7): `PROC Ñ()` is a routine name.
+fn is_letter(c: u8) -> bool {
+    c.is_ascii_alphabetic() || (c >= 0xC0 && c != 0xD7 && c != 0xF7)
+}
+
 /// `ident = letter { letter | digit | "_" }` (grammars/rapid.ebnf).
 fn ident(i: &[u8]) -> IResult<&[u8], &[u8]> {
     recognize((
-        take_while1(|c: u8| c.is_ascii_alphabetic() || c == b'_'),
-        take_while(|c: u8| c.is_ascii_alphanumeric() || c == b'_'),
+        take_while1(|c: u8| is_letter(c) || c == b'_'),
+        take_while(|c: u8| is_letter(c) || c.is_ascii_digit() || c == b'_'),
     ))
     .parse(i)
 }

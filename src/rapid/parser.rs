@@ -700,7 +700,7 @@ impl<'a, 's> Parser<'a, 's> {
             self.data_decl(start, module_scope);
         } else if self.at_any(&[b"PROC", b"FUNC", b"TRAP"]) || kw_is(&[b"PROC", b"FUNC", b"TRAP"]) {
             self.routine(start);
-        } else if self.at_kw(b"RECORD") {
+        } else if self.at_kw(b"RECORD") || kw_is(&[b"RECORD"]) {
             self.record(start);
         } else {
             self.unknown_item(start);
@@ -763,9 +763,12 @@ impl<'a, 's> Parser<'a, 's> {
         })
     }
 
-    /// `record = "RECORD" ident { type ident ";" } "ENDRECORD"`
+    /// `record = [ "LOCAL" | "TASK" ] "RECORD" ident { type ident ";" } "ENDRECORD"`
     fn record(&mut self, start: u32) {
         let branch = self.open(NodeKind::Record, start);
+        if self.at_any(&[b"LOCAL", b"TASK"]) {
+            self.bump();
+        }
         self.bump();
         self.arena.clear();
         match self.expect_ident("a record name after RECORD") {

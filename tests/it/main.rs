@@ -2,6 +2,7 @@
 
 mod cli;
 mod krl;
+mod parser_data;
 mod rapid;
 mod support;
 mod track;
