@@ -150,7 +150,9 @@ impl<'a> Lexer<'a> {
         t
     }
 
-    /// The next token; [`TokenKind::Eof`] (empty) at the end, forever.
+    /// The next token; [`TokenKind::Eof`] (empty) at the end, forever. Rules `newline`,
+    /// `whitespace`, `comment`, `bom`, `header_line`, `string`, `placeholder`, `assign`,
+    /// `compare2` and `punct`.
     pub fn next_token(&mut self) -> Token {
         let rest = self.src.get(self.pos..).unwrap_or(&[]);
         let Some(&b) = rest.first() else {
@@ -265,7 +267,7 @@ fn placeholder_len(rest: &[u8]) -> Option<usize> {
     PLACEHOLDERS.contains(&name).then_some(close + 1)
 }
 
-/// `letter` (grammars/rapid.ebnf): RAPID's character set is ISO 8859-1, whose letters are the
+/// Rule `letter` (grammars/rapid.ebnf): RAPID's character set is ISO 8859-1, whose letters are the
 /// ASCII ones and 0xC0-0xFF except × (0xD7) and ÷ (0xF7): `PROC Ñ()` is a routine name.
 fn is_letter(c: u8) -> bool {
     c.is_ascii_alphabetic() || (c >= 0xC0 && c != 0xD7 && c != 0xF7)
@@ -280,7 +282,8 @@ fn ident(i: &[u8]) -> IResult<&[u8], &[u8]> {
     .parse(i)
 }
 
-/// `number = based | decimal [ exponent ]` (grammars/rapid.ebnf). A trailing `E` without
+/// `number = based | decimal [ exponent ]` (grammars/rapid.ebnf), with rules `decimal` and
+/// `exponent`. A trailing `E` without
 /// digits is not part of the number (`1E` lexes as `1` then `E`). Decimal numbers are the
 /// hottest path of a robtarget file, so they are scanned by hand.
 pub fn number_len(rest: &[u8]) -> usize {
@@ -559,5 +562,18 @@ mod tests {
         let src = b"a \xC3\xA9 \x01b";
         assert_eq!(concat(src), src);
         assert!(tokenize(src).iter().any(|t| t.kind == TokenKind::Unknown));
+    }
+
+    /// The editor placeholders the lexer knows are the grammar's.
+    #[test]
+    fn placeholders_are_the_grammar_terminals() {
+        use crate::syntax::grammar_check::{read, terminals};
+        let mut grammar = terminals(&read("grammars/rapid.ebnf"), "placeholder");
+        assert!(grammar.remove("<") && grammar.remove(">"));
+        let known = PLACEHOLDERS
+            .iter()
+            .map(|p| String::from_utf8_lossy(p).into_owned())
+            .collect();
+        assert_eq!(grammar, known);
     }
 }

@@ -9,6 +9,8 @@
 
 mod diagnostic;
 mod edit;
+#[cfg(test)]
+pub(crate) mod grammar_check;
 mod line_index;
 mod number;
 mod span;

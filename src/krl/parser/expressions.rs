@@ -175,7 +175,7 @@ impl<'a> Cursor<'a> {
         }
     }
 
-    /// Rule `expr`, from operators of precedence `min` up (`binop`).
+    /// Rules `expr` and `binop`, from operators of precedence `min` up.
     pub(super) fn binary(&mut self, min: u8) -> PResult<Expr> {
         let mut lhs = self.unary()?;
         while let Some(prec) = self.binary_prec() {
@@ -334,7 +334,7 @@ impl<'a> Cursor<'a> {
         })
     }
 
-    /// Rule `aggregate`: `{ [TYPE :] field {, field} }`.
+    /// Rules `aggregate` and `field`: `{ [TYPE :] field {, field} }`.
     pub(super) fn aggregate(&mut self) -> PResult<Expr> {
         let open = self.bump().map(|t| t.span()).unwrap_or(self.eol);
         let mut type_name = None;

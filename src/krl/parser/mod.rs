@@ -187,7 +187,8 @@ pub fn parse_with(src: &[u8], sink: &mut dyn Sink<Stmt>) -> Parse {
 }
 
 /// The parser, with or without the `.dat` declaration fast path ([`super::dat_line`]); both
-/// give the same result, which the fast path's tests check.
+/// give the same result, which the fast path's tests check. Rules `line` and `trivia`: one
+/// line at a time, trivia kept in the line's node.
 pub(super) fn parse_lines(src: &[u8], sink: &mut dyn Sink<Stmt>, fast: bool) -> Parse {
     let mut p = LineParser {
         src,
@@ -280,7 +281,7 @@ pub(super) fn parse_lines(src: &[u8], sink: &mut dyn Sink<Stmt>, fast: bool) -> 
 }
 
 impl<'a> LineParser<'a, '_> {
-    /// Rule `trivia_line`: blank, comment, fold lines.
+    /// Rules `trivia_line`, `fold_start` and `fold_end`: blank, comment, fold lines.
     fn trivia_line(&mut self, comment: Option<Token>) -> NodeKind {
         let Some(c) = comment else {
             return NodeKind::Blank;
@@ -576,5 +577,37 @@ DEF cell( )\r\n  SPLINE WITH $ACC = {CP 2.0}\r\n    SPL XP1\r\n    SLIN XP2\r\n 
                 "`ENDIF` without an open block"
             ]
         );
+    }
+
+    /// Every rule of `grammars/krl.ebnf` is cited by the function that implements it, and
+    /// every cited rule is in the grammar.
+    #[test]
+    fn grammar_rules_and_parser_functions_agree() {
+        crate::syntax::grammar_check::assert_rules_cited(
+            "grammars/krl.ebnf",
+            &[
+                "src/krl/lexer.rs",
+                "src/krl/dat_line.rs",
+                "src/krl/parser/mod.rs",
+                "src/krl/parser/statements.rs",
+                "src/krl/parser/expressions.rs",
+            ],
+        );
+    }
+
+    /// The keyword tables are the grammar's terminals, so a keyword added to one and not the
+    /// other fails here.
+    #[test]
+    fn keyword_tables_are_the_grammar_terminals() {
+        use crate::syntax::grammar_check::{read, terminals};
+        use std::collections::BTreeSet;
+        let ebnf = read("grammars/krl.ebnf");
+        let set = |words: &[&str]| words.iter().map(|w| w.to_string()).collect::<BTreeSet<_>>();
+        assert_eq!(terminals(&ebnf, "motion_kw"), set(MOTION_KEYWORDS));
+        assert_eq!(terminals(&ebnf, "approximation"), set(APPROXIMATION));
+        let mut simple = set(SIMPLE_KEYWORDS);
+        simple.extend(set(&["GLOBAL", "INTERRUPT", "TRIGGER"]));
+        assert_eq!(terminals(&ebnf, "simple"), simple);
+        assert_eq!(terminals(&ebnf, "other_decl"), set(DECL_KEYWORDS));
     }
 }

@@ -4,7 +4,8 @@
 use super::*;
 
 impl LineParser<'_, '_> {
-    /// Rule `statement`. Returns the line's node kind.
+    /// Rule `statement`, with rules `routine_end`, `other_decl`, `simple`, `block_open`,
+    /// `block_middle` and `block_close`. Returns the line's node kind.
     pub(super) fn statement(&mut self, sig: &[Token], eol: Span) -> NodeKind {
         let stmt_span = match (sig.first(), sig.last()) {
             (Some(f), Some(l)) => f.span().cover(l.span()),
@@ -311,7 +312,8 @@ impl LineParser<'_, '_> {
     }
 }
 
-/// Rule `decl`: `type name [dims] [= value] {, name [dims] [= value]}` (after `DECL`).
+/// Rules `decl_statement`, `decl` and `var`: `type name [dims] [= value] {, name [dims]
+/// [= value]}` (after `DECL`).
 fn decl(c: &mut Cursor<'_>) -> PResult<StmtKind> {
     let type_name = c.expect_ident("a data type", "write `DECL TYPE name`")?;
     let mut vars = Vec::new();
@@ -341,7 +343,8 @@ fn decl(c: &mut Cursor<'_>) -> PResult<StmtKind> {
 }
 
 /// Rule `motion`: `KEYWORD target`, `CIRC aux, target [, CA angle]`, then approximation
-/// (`C_DIS` …), enums (`#TOOL`) and `WITH` assignments.
+/// (`C_DIS` …), enums (`#TOOL`) and `WITH` assignments; rules `motion_kw`, `circ_rest`,
+/// `approximation` and `with`.
 fn motion(c: &mut Cursor<'_>) -> PResult<StmtKind> {
     let keyword = c.bump().map(|t| t.span()).unwrap_or(c.eol);
     let kw = Word::of(keyword.slice(c.src));

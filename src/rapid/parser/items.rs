@@ -62,6 +62,7 @@ impl Parser<'_, '_> {
     }
 
     /// `module = "MODULE" ident [ "(" attribute { "," attribute } ")" ] { item } "ENDMODULE"`
+    /// (rule `attribute`: any identifier).
     pub(super) fn module(&mut self) {
         let start = self.tok.start;
         let branch = self.open(NodeKind::Module, start);
@@ -173,7 +174,7 @@ impl Parser<'_, '_> {
     }
 
     /// `data_decl = [ "LOCAL" | "TASK" ] ( "CONST" | "PERS" | "VAR" ) type ident [ dims ]
-    ///              [ ":=" expr ] ";" | "ALIAS" type ident ";"`
+    ///              [ ":=" expr ] ";" | "ALIAS" type ident ";"`, with rule `dims`.
     pub(super) fn data_decl(&mut self, start: u32, module_scope: bool) {
         match self.data_decl_inner(module_scope) {
             Ok(stmt) => {
@@ -287,7 +288,8 @@ impl Parser<'_, '_> {
     // ---- routines -----------------------------------------------------------------------
 
     /// `routine = [ "LOCAL" ] ( "PROC" ident "(" params ")" | "FUNC" type ident "(" params ")"
-    ///            | "TRAP" ident ) body { handler } end_routine`
+    ///            | "TRAP" ident ) body { handler } end_routine`: rules `handler` and
+    /// `end_routine` too.
     pub(super) fn routine(&mut self, start: u32) {
         let branch = self.open(NodeKind::Routine, start);
         if self.at_kw(b"LOCAL") || self.at_kw(b"TASK") {

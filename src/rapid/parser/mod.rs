@@ -541,3 +541,22 @@ impl<'a, 's> Parser<'a, 's> {
         self.leaf(NodeKind::Opaque, start);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    /// Every rule of `grammars/rapid.ebnf` is cited by the function that implements it, and
+    /// every cited rule is in the grammar.
+    #[test]
+    fn grammar_rules_and_parser_functions_agree() {
+        crate::syntax::grammar_check::assert_rules_cited(
+            "grammars/rapid.ebnf",
+            &[
+                "src/rapid/lexer.rs",
+                "src/rapid/parser/mod.rs",
+                "src/rapid/parser/items.rs",
+                "src/rapid/parser/statements.rs",
+                "src/rapid/parser/expressions.rs",
+            ],
+        );
+    }
+}

@@ -52,7 +52,8 @@ impl Parser<'_, '_> {
         self.depth -= 1;
     }
 
-    /// `simple = jump | label | placeholder | late_call | assignment | call` (one leaf).
+    /// `simple = jump | label | placeholder | late_call | assignment | call` (one leaf), with
+    /// rules `jump`, `label`, `assignment` and `call`.
     pub(super) fn simple_statement(&mut self) -> PResult<(NodeKind, Stmt)> {
         let t = self.tok;
         if t.kind == TokenKind::Placeholder {
