@@ -3,7 +3,14 @@
 //! trivia and newline, and whose branches are the `DEF … END` routines and `IF … ENDIF` blocks;
 //! plus the parsed statements that trackfix reads (declarations, assignments, calls, motions).
 
-use crate::syntax::{Language, Span};
+use crate::syntax::Span;
+
+crate::syntax::language! {
+    /// KRL in the shared tree ([`crate::syntax::Tree`]): lines are leaves, routines and blocks
+    /// branches. Leaves are whole lines, so the builder never sees a gap between two of them.
+    Krl: NodeKind, root Root, gap Blank,
+    branches [Root, Routine, Block]
+}
 
 /// What a line holds (`grammars/krl.ebnf`, rule `line`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -49,34 +56,6 @@ pub enum NodeKind {
     /// Branch: a block-opening line, the lines inside and its closing line.
     Block,
 }
-
-impl NodeKind {
-    pub fn is_branch(self) -> bool {
-        matches!(self, NodeKind::Root | NodeKind::Routine | NodeKind::Block)
-    }
-}
-
-/// KRL in the shared tree.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Krl {}
-
-impl Language for Krl {
-    type Kind = NodeKind;
-    const ROOT: NodeKind = NodeKind::Root;
-    // Leaves are whole lines, so the builder never sees a gap between two of them.
-    const GAP: NodeKind = NodeKind::Blank;
-    fn is_branch(kind: NodeKind) -> bool {
-        kind.is_branch()
-    }
-}
-
-/// One node of a KRL tree: a line (leaf) or a routine or block (branch).
-pub type Node = crate::syntax::Node<NodeKind>;
-
-/// A parsed KRL file: lines in pre-order under their routines and blocks. Tokens are not kept:
-/// a line is re-lexed on demand ([`super::lexer::lex`] over [`Node::span`]), which keeps a
-/// parsed 50 MB `.dat` at a fraction of its size.
-pub type Tree = crate::syntax::Tree<Krl>;
 
 /// An expression as far as trackfix needs it: literals and aggregates in detail, the rest as
 /// spans.

@@ -10,8 +10,6 @@
 //! targets, frames and offsets extracted) while the statement is read, in a scratch arena that
 //! is reused for the next statement.
 
-use crate::syntax::Language;
-
 /// What a node is. Branches: [`NodeKind::Root`], [`NodeKind::Module`], [`NodeKind::Routine`],
 /// [`NodeKind::Record`], [`NodeKind::If`], [`NodeKind::For`], [`NodeKind::While`],
 /// [`NodeKind::Test`], [`NodeKind::CompactIf`], [`NodeKind::Handler`]. Everything else is a leaf.
@@ -69,39 +67,8 @@ pub enum NodeKind {
     Opaque,
 }
 
-impl NodeKind {
-    pub fn is_branch(self) -> bool {
-        matches!(
-            self,
-            NodeKind::Root
-                | NodeKind::Module
-                | NodeKind::Routine
-                | NodeKind::Record
-                | NodeKind::Handler
-                | NodeKind::If
-                | NodeKind::CompactIf
-                | NodeKind::For
-                | NodeKind::While
-                | NodeKind::Test
-        )
-    }
+crate::syntax::language! {
+    /// RAPID in the shared tree ([`crate::syntax::Tree`]).
+    Rapid: NodeKind, root Root, gap Trivia,
+    branches [Root, Module, Routine, Record, Handler, If, CompactIf, For, While, Test]
 }
-
-/// RAPID in the shared tree ([`crate::syntax::Tree`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Rapid {}
-
-impl Language for Rapid {
-    type Kind = NodeKind;
-    const ROOT: NodeKind = NodeKind::Root;
-    const GAP: NodeKind = NodeKind::Trivia;
-    fn is_branch(kind: NodeKind) -> bool {
-        kind.is_branch()
-    }
-}
-
-/// One node of a RAPID tree.
-pub type Node = crate::syntax::Node<NodeKind>;
-
-/// A parsed RAPID source: nodes in pre-order, the root first.
-pub type Tree = crate::syntax::Tree<Rapid>;

@@ -25,6 +25,41 @@ pub trait Language: 'static {
     fn is_branch(kind: Self::Kind) -> bool;
 }
 
+/// Declares a language of the shared tree: the marker type, its [`Language`] impl (root, gap and
+/// branch kinds), `NodeKind::is_branch`, and the `Node`/`Tree` aliases of the language's module.
+/// A language's `tree.rs` is then its node kinds and this one line.
+macro_rules! language {
+    ($(#[$meta:meta])* $lang:ident: $kind:ident, root $root:ident, gap $gap:ident,
+     branches [$($branch:ident),+ $(,)?]) => {
+        $(#[$meta])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum $lang {}
+
+        impl $crate::syntax::Language for $lang {
+            type Kind = $kind;
+            const ROOT: $kind = $kind::$root;
+            const GAP: $kind = $kind::$gap;
+            fn is_branch(kind: $kind) -> bool {
+                kind.is_branch()
+            }
+        }
+
+        impl $kind {
+            /// True for kinds that group children instead of owning bytes.
+            pub fn is_branch(self) -> bool {
+                matches!(self, $($kind::$branch)|+)
+            }
+        }
+
+        /// One node of this language's tree.
+        pub type Node = $crate::syntax::Node<$kind>;
+
+        /// A parsed source of this language: nodes in pre-order, the root first.
+        pub type Tree = $crate::syntax::Tree<$lang>;
+    };
+}
+pub(crate) use language;
+
 /// One node: its kind, its bytes, and (for branches) where its subtree ends in [`Tree::nodes`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Node<K> {
