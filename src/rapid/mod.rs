@@ -1,6 +1,7 @@
 //! ABB RAPID: lossless lexer, parser and printer, and the positions found in a module.
 //!
-//! Owned by issue 2. Grammar: `grammars/rapid.ebnf`.
+//! Grammar: `grammars/rapid.ebnf`. The tree is the shared [`crate::syntax::Tree`]; this folder
+//! holds RAPID's lexer rules, grammar ([`parser`]), node kinds ([`tree`]) and extraction.
 //!
 //! ```
 //! use std::path::Path;
