@@ -86,9 +86,12 @@ fn dat_parse_streamed_and_print(bencher: Bencher, mb: usize) {
     bencher
         .counter(divan::counter::BytesCount::new(input.len()))
         .bench(|| {
-            let parse = trackfix::krl::parser::parse_with(black_box(input), &mut |s| {
-                black_box(s);
-            });
+            let parse = trackfix::krl::parser::parse_with(
+                black_box(input),
+                &mut |s: trackfix::krl::tree::Stmt| {
+                    black_box(s);
+                },
+            );
             assert_eq!(parse.tree.print(input).len(), input.len());
         });
 }

@@ -5,7 +5,7 @@
 //!
 //! Conventions: mm, degrees, seconds; angles `rx, ry, rz` are compared component by component
 //! as ISO 9283 does, each deviation wrapped to (-180, 180]. Standard deviations are over
-//! `n − 1`. The contract is `docs/design-accuracy.md`.
+//! `n − 1`. The contract is `docs/design.md §11`.
 
 pub mod error;
 pub mod line;

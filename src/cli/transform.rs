@@ -14,6 +14,7 @@ use trackfix::position::Program;
 use trackfix::program::{LoadOptions, collect_inputs, load};
 use trackfix::report::{FileSummary, would_change};
 use trackfix::syntax::Severity;
+use trackfix::track::cell_nominal::check_cell_nominal;
 use trackfix::track::{Profile, TrackError};
 use trackfix::transform::cell::skid_axis_index;
 use trackfix::transform::{
@@ -225,11 +226,31 @@ fn load_cell(path: &Path) -> anyhow::Result<Cell> {
     Ok(Cell::load(path)?)
 }
 
+/// The robot's profile, checked against the cell: a cell whose track axis (or, for a profile
+/// measured in the cell's frame, whose base) disagrees with the profile's nominal would apply the
+/// profile in the wrong place, so it is an error; a profile that disagrees with its own
+/// statistics (a hand edit) is a warning.
 fn load_profile(cell: &Cell, robot: &Robot) -> anyhow::Result<Profile> {
-    match Profile::load(&robot.profile) {
-        Err(TrackError::Io { error, .. }) => Err(cell.profile_error(robot, &error).into()),
-        r => r.with_context(|| format!("profile of robot `{}`", robot.name)),
+    let profile = match Profile::load(&robot.profile) {
+        Err(TrackError::Io { error, .. }) => return Err(cell.profile_error(robot, &error).into()),
+        r => r.with_context(|| format!("profile of robot `{}`", robot.name))?,
+    };
+    check_cell_nominal(&robot.base0, &robot.track_axis, &profile).with_context(|| {
+        format!(
+            "{}: robot `{}` does not match its profile {}",
+            cell.path.display(),
+            robot.name,
+            robot.profile.display()
+        )
+    })?;
+    for w in profile.consistency_warnings() {
+        let _ = writeln!(
+            std::io::stderr(),
+            "warning: {}: {w}",
+            robot.profile.display()
+        );
     }
+    Ok(profile)
 }
 
 fn load_options(robot: Option<&Robot>) -> LoadOptions {

@@ -4,7 +4,7 @@
 //!
 //! Conventions: joints are the controller's, in degrees ([`Joints`]); poses are in mm with
 //! `nalgebra` rotations; the flange pose is `tool0` in the robot base frame. See
-//! `docs/design-kinematics.md`.
+//! `docs/design.md §10`.
 
 pub mod abb;
 pub mod cell_table;

@@ -106,7 +106,9 @@ fn run_end(src: &[u8], i: usize, keep: impl Fn(u8) -> bool) -> usize {
 }
 
 /// Splits `src` into tokens covering every byte. Never fails: a byte the syntax does not know
-/// becomes an [`TokenKind::Unknown`] token for the parser to report.
+/// becomes an [`TokenKind::Unknown`] token for the parser to report. Rules `token`, `bom`,
+/// `whitespace`, `newline`, `comment`, `header`, `ident`, `number`, `exponent`, `string`,
+/// `quoted`, `unterminated`, `enum`, `punct` and `unknown`.
 ///
 /// Sources of 4 GiB or more do not fit `u32` spans; the caller refuses them before lexing.
 pub fn lex(src: &[u8]) -> Vec<Token> {

@@ -1,10 +1,11 @@
 //! KUKA KRL: lossless lexer, parser and printer for `.src`/`.dat`/`.sub` files and
 //! `$config.dat`, and the positions found in a program.
 //!
-//! Owned by issue 3. Grammar: `grammars/krl.ebnf`.
+//! Grammar: `grammars/krl.ebnf`.
 //!
 //! - [`lexer`]: bytes → `(kind, u32 span)` tokens covering every byte;
-//! - [`parser`] and [`tree`]: one node per line, statements for what trackfix reads, opaque
+//! - [`parser`] and [`tree`]: the shared [`crate::syntax::Tree`] with one leaf per line under
+//!   routine and block branches, statements for what trackfix reads, opaque
 //!   nodes with located diagnostics for the rest; `tree.print(src) == src`;
 //! - `positions`: targets, joint positions, `BASE_DATA`/`TOOL_DATA` into the shared model;
 //! - `resolve`: the base and tool of every motion over a `.src`/`.dat` pair;
@@ -51,9 +52,9 @@ pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
 fn analyse(path: &Path, source: Vec<u8>) -> (ParsedFile, positions::Facts) {
     let lines = LineIndex::new(&source);
     let mut extractor = positions::Extractor::new(&source, &lines);
-    let parse = parser::parse_with(&source, &mut |stmt| extractor.statement(&stmt));
+    let parse = parser::parse_with(&source, &mut |stmt: tree::Stmt| extractor.statement(&stmt));
     let (extracted, notes) = extractor.finish();
-    let round_trip = parse.tree.print(&source) == source;
+    let round_trip = parse.tree.prints_back(&source);
     let mut diagnostics = parse.diagnostics;
     diagnostics.extend(notes);
     if !parse

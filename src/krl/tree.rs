@@ -1,12 +1,16 @@
-//! The KRL syntax tree: one node per source line (KRL is line oriented), each owning a contiguous
-//! run of tokens including its trivia and newline, plus the parsed statements that trackfix
-//! reads (declarations, assignments, calls, motions).
-//!
-//! Nodes are stored flat in source order with their block depth (a pre-order listing of the
-//! `DEF … END` / `IF … ENDIF` nesting), so printing is the concatenation of every node's tokens
-//! and the round trip holds by construction.
+//! The KRL syntax tree: the shared pre-order tree ([`crate::syntax::Tree`]) whose leaves are
+//! source lines (KRL is line oriented), each owning a contiguous run of tokens including its
+//! trivia and newline, and whose branches are the `DEF … END` routines and `IF … ENDIF` blocks;
+//! plus the parsed statements that trackfix reads (declarations, assignments, calls, motions).
 
-use crate::syntax::{Span, latin1};
+use crate::syntax::Span;
+
+crate::syntax::language! {
+    /// KRL in the shared tree ([`crate::syntax::Tree`]): lines are leaves, routines and blocks
+    /// branches. Leaves are whole lines, so the builder never sees a gap between two of them.
+    Krl: NodeKind, root Root, gap Blank,
+    branches [Root, Routine, Block]
+}
 
 /// What a line holds (`grammars/krl.ebnf`, rule `line`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -45,39 +49,12 @@ pub enum NodeKind {
     Label,
     /// A line the grammar does not know or could not parse: kept verbatim and reported.
     Opaque,
-}
-
-impl NodeKind {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            NodeKind::Blank => "blank",
-            NodeKind::Comment => "comment",
-            NodeKind::FoldStart => "fold",
-            NodeKind::FoldEnd => "endfold",
-            NodeKind::Header => "header",
-            NodeKind::RoutineStart => "routine",
-            NodeKind::RoutineEnd => "end",
-            NodeKind::Declaration => "decl",
-            NodeKind::Assignment => "assign",
-            NodeKind::Call => "call",
-            NodeKind::Motion => "motion",
-            NodeKind::BlockOpen => "block",
-            NodeKind::BlockMiddle => "middle",
-            NodeKind::BlockClose => "endblock",
-            NodeKind::Simple => "simple",
-            NodeKind::Label => "label",
-            NodeKind::Opaque => "opaque",
-        }
-    }
-}
-
-/// One line: bytes `first..end` of the source (its newline included) and its block depth.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Node {
-    pub kind: NodeKind,
-    pub first: u32,
-    pub end: u32,
-    pub depth: u16,
+    /// Branch: the whole file.
+    Root,
+    /// Branch: a `DEF`/`DEFFCT`/`DEFDAT` line, the lines inside and its `END` line.
+    Routine,
+    /// Branch: a block-opening line, the lines inside and its closing line.
+    Block,
 }
 
 /// An expression as far as trackfix needs it: literals and aggregates in detail, the rest as
@@ -170,54 +147,9 @@ pub enum StmtKind {
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stmt {
-    /// Index of the node (line) in [`Tree::nodes`].
+    /// Index of the line's node in [`Tree::nodes`].
     pub node: u32,
     /// The statement's own text, trivia excluded.
     pub span: Span,
     pub kind: StmtKind,
-}
-
-/// A parsed file: its lines and the statements read from them. Tokens are not kept: a line is
-/// re-lexed on demand ([`super::lexer::lex`] over [`Tree::node_span`]), which keeps a parsed
-/// 50 MB `.dat` at a fraction of its size.
-#[derive(Clone, Debug, Default)]
-pub struct Tree {
-    pub nodes: Vec<Node>,
-    pub stmts: Vec<Stmt>,
-}
-
-impl Tree {
-    /// The bytes of a node, trivia and newline included.
-    pub fn node_span(&self, node: &Node) -> Span {
-        Span::new(node.first as usize, node.end.max(node.first) as usize)
-    }
-
-    /// The source again, from the nodes' spans.
-    pub fn print(&self, src: &[u8]) -> Vec<u8> {
-        let mut out = Vec::with_capacity(src.len());
-        for node in &self.nodes {
-            out.extend_from_slice(self.node_span(node).slice(src));
-        }
-        out
-    }
-
-    /// One line per node: depth, kind and the line's text (newline excluded), for tests.
-    pub fn dump(&self, src: &[u8]) -> String {
-        let mut out = String::new();
-        for node in &self.nodes {
-            let text = self.node_span(node).slice(src);
-            let text = text
-                .strip_suffix(b"\r\n")
-                .or_else(|| text.strip_suffix(b"\n"))
-                .or_else(|| text.strip_suffix(b"\r"))
-                .unwrap_or(text);
-            out.push_str(&format!(
-                "{}{} {:?}\n",
-                "  ".repeat(node.depth as usize),
-                node.kind.as_str(),
-                latin1(text)
-            ));
-        }
-        out
-    }
 }

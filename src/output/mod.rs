@@ -5,7 +5,7 @@
 //! Every destination is decided and checked before the first byte is written, and a run's
 //! writes are one transaction ([`transaction`]): all files are written or none, originals are
 //! never lost, and no temporary file outlives the run that made it. The contract is written
-//! down in `docs/design-output.md`.
+//! down in `docs/design.md §9`.
 
 pub mod backup;
 pub mod diff;

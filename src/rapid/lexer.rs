@@ -10,8 +10,7 @@
 
 use nom::IResult;
 use nom::Parser as _;
-use nom::bytes::complete::{tag_no_case, take_while, take_while1};
-use nom::combinator::recognize;
+use nom::bytes::complete::{tag_no_case, take_while1};
 
 use crate::syntax::BOM;
 
@@ -143,7 +142,16 @@ impl<'a> Lexer<'a> {
         }
     }
 
-    /// The next token; [`TokenKind::Eof`] (empty) at the end, forever.
+    fn ident_token(&mut self, rest: &[u8]) -> Token {
+        let len = ident_len(rest);
+        let mut t = self.token(TokenKind::Ident, len);
+        t.keyword = rest.get(..len).is_some_and(is_keyword);
+        t
+    }
+
+    /// The next token; [`TokenKind::Eof`] (empty) at the end, forever. Rules `newline`,
+    /// `whitespace`, `comment`, `bom`, `header_line`, `string`, `placeholder`, `assign`,
+    /// `compare2` and `punct`.
     pub fn next_token(&mut self) -> Token {
         let rest = self.src.get(self.pos..).unwrap_or(&[]);
         let Some(&b) = rest.first() else {
@@ -184,12 +192,7 @@ impl<'a> Lexer<'a> {
                 let (kind, len) = string_len(rest);
                 self.token(kind, len)
             }
-            b'a'..=b'z' | b'A'..=b'Z' | b'_' => {
-                let len = ident(rest).map_or(1, |(_, m)| m.len());
-                let mut t = self.token(TokenKind::Ident, len);
-                t.keyword = rest.get(..len).is_some_and(is_keyword);
-                t
-            }
+            b'a'..=b'z' | b'A'..=b'Z' | b'_' => self.ident_token(rest),
             b'0'..=b'9' => self.token(TokenKind::Number, number_len(rest).max(1)),
             b'.' if rest.get(1).is_some_and(u8::is_ascii_digit) => {
                 self.token(TokenKind::Number, number_len(rest).max(1))
@@ -205,6 +208,7 @@ impl<'a> Lexer<'a> {
                 self.line_start = true;
                 self.token(TokenKind::Bom, BOM.len())
             }
+            0xC0..=0xFF if is_letter(b) => self.ident_token(rest),
             b'(' | b')' | b'[' | b']' | b'{' | b'}' | b',' | b';' | b':' | b'=' | b'+' | b'-'
             | b'*' | b'/' | b'>' | b'\\' | b'.' | b'%' | b'?' | b'^' | b'&' | b'#' | b'@'
             | b'$' | b'|' | b'\'' | b'~' | b'`' => self.token(TokenKind::Punct, 1),
@@ -262,16 +266,37 @@ fn placeholder_len(rest: &[u8]) -> Option<usize> {
     PLACEHOLDERS.contains(&name).then_some(close + 1)
 }
 
-/// `ident = letter { letter | digit | "_" }` (grammars/rapid.ebnf).
-fn ident(i: &[u8]) -> IResult<&[u8], &[u8]> {
-    recognize((
-        take_while1(|c: u8| c.is_ascii_alphabetic() || c == b'_'),
-        take_while(|c: u8| c.is_ascii_alphanumeric() || c == b'_'),
-    ))
-    .parse(i)
+/// Rule `letter` (grammars/rapid.ebnf): RAPID's character set is ISO 8859-1, whose letters are the
+/// ASCII ones and 0xC0-0xFF except × (0xD7) and ÷ (0xF7): `PROC Ñ()` is a routine name.
+const fn is_letter(c: u8) -> bool {
+    c.is_ascii_alphabetic() || (c >= 0xC0 && c != 0xD7 && c != 0xF7)
 }
 
-/// `number = based | decimal [ exponent ]` (grammars/rapid.ebnf). A trailing `E` without
+/// The bytes that continue an identifier, by table: identifiers are the lexer's most frequent
+/// token, and the table keeps its loop at one load per byte with Latin-1 letters included.
+static IDENT_CONTINUE: [bool; 256] = {
+    let mut table = [false; 256];
+    let mut b = 0;
+    while b < 256 {
+        let c = b as u8;
+        table[b] = is_letter(c) || c.is_ascii_digit() || c == b'_';
+        b += 1;
+    }
+    table
+};
+
+/// `ident = letter { letter | digit | "_" }` (grammars/rapid.ebnf): the length of the
+/// identifier `rest` starts with (its first byte is a letter or `_`).
+fn ident_len(rest: &[u8]) -> usize {
+    1 + rest
+        .iter()
+        .skip(1)
+        .take_while(|&&c| IDENT_CONTINUE[c as usize])
+        .count()
+}
+
+/// `number = based | decimal [ exponent ]` (grammars/rapid.ebnf), with rules `decimal` and
+/// `exponent`. A trailing `E` without
 /// digits is not part of the number (`1E` lexes as `1` then `E`). Decimal numbers are the
 /// hottest path of a robtarget file, so they are scanned by hand.
 pub fn number_len(rest: &[u8]) -> usize {
@@ -549,5 +574,18 @@ mod tests {
         let src = b"a \xC3\xA9 \x01b";
         assert_eq!(concat(src), src);
         assert!(tokenize(src).iter().any(|t| t.kind == TokenKind::Unknown));
+    }
+
+    /// The editor placeholders the lexer knows are the grammar's.
+    #[test]
+    fn placeholders_are_the_grammar_terminals() {
+        use crate::syntax::grammar_check::{read, terminals};
+        let mut grammar = terminals(&read("grammars/rapid.ebnf"), "placeholder");
+        assert!(grammar.remove("<") && grammar.remove(">"));
+        let known = PLACEHOLDERS
+            .iter()
+            .map(|p| String::from_utf8_lossy(p).into_owned())
+            .collect();
+        assert_eq!(grammar, known);
     }
 }

@@ -1,6 +1,7 @@
 //! ABB RAPID: lossless lexer, parser and printer, and the positions found in a module.
 //!
-//! Owned by issue 2. Grammar: `grammars/rapid.ebnf`.
+//! Grammar: `grammars/rapid.ebnf`. The tree is the shared [`crate::syntax::Tree`]; this folder
+//! holds RAPID's lexer rules, grammar ([`parser`]), node kinds ([`tree`]) and extraction.
 //!
 //! ```
 //! use std::path::Path;
@@ -27,7 +28,7 @@ use crate::syntax::{Diagnostic, LineIndex};
 
 /// Parses `src` into its lossless tree only (no positions): the fast path.
 pub fn parse_tree(src: &[u8]) -> Parse {
-    parse(src, &mut parser::NoSink)
+    parse(src, &mut crate::syntax::NoSink)
 }
 
 /// `print(parse(src))`: the bytes the tree prints. Equal to `src` for every input.
@@ -40,7 +41,9 @@ pub fn print(src: &[u8]) -> Vec<u8> {
 pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
     let lines = LineIndex::new(&source);
     let mut extractor = positions::Extractor::new(&lines, &source);
-    let parsed = parse(&source, &mut extractor);
+    let parsed = parse(&source, &mut |s: parser::Statement<'_>| {
+        extractor.statement(s.src, s.arena, s.stmt, s.span)
+    });
     let extracted = extractor.finish(&source);
     let round_trip = parsed.tree.prints_back(&source);
     let mut diagnostics = parsed.diagnostics;

@@ -7,7 +7,7 @@
 //! further down the module.
 
 use super::expr::{Arena, ExprKind};
-use super::parser::{StatementSink, Stmt};
+use super::parser::Stmt;
 use crate::names::{NameIndex, NameKey, NameMap};
 use crate::position::{
     CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, Orientation,
@@ -616,8 +616,8 @@ impl<'l> Extractor<'l> {
     }
 }
 
-impl StatementSink for Extractor<'_> {
-    fn statement(&mut self, src: &[u8], arena: &Arena, stmt: &Stmt, span: Span) {
+impl Extractor<'_> {
+    pub(super) fn statement(&mut self, src: &[u8], arena: &Arena, stmt: &Stmt, span: Span) {
         match *stmt {
             Stmt::Decl {
                 type_name,

@@ -4,26 +4,63 @@
 //! Latin-1 or Windows-125x bytes, which are kept, never decoded). Parsers keep byte spans into
 //! the source; printing is concatenation of those spans, and a transform is a list of [`Edit`]s
 //! that replace only the numeric literals it changes.
+//!
+#![doc = include_str!("lossless_example.md")]
 
 mod diagnostic;
 mod edit;
+#[cfg(test)]
+pub(crate) mod grammar_check;
 mod line_index;
 mod number;
 mod span;
+mod tree;
 
 pub use diagnostic::{Diagnostic, Severity, latin1};
 pub use edit::{Edit, EditError, apply_edits};
 pub use line_index::LineIndex;
 pub use number::{NumLit, fixed};
 pub use span::Span;
+pub(crate) use tree::language;
+pub use tree::{Language, NoSink, Node, Sink, Tree, TreeBuilder, escape, refused_tree, too_large};
 
 /// The UTF-8 byte order mark some editors put in front of a module.
 pub const BOM: &[u8] = b"\xEF\xBB\xBF";
 
-/// True for bytes that are neither text nor the usual control characters: a NUL or most C0
-/// codes mean an encrypted or binary file, which is reported and skipped, not parsed.
+/// True for a file that is not text: a NUL byte, or C0 control codes (other than tab, line
+/// ends, form feed and DOS end-of-file) in more than 1 of 32 bytes of its first 8 KiB (and more
+/// than 8 of them), mean
+/// an encrypted or binary file, which is reported and skipped, not parsed. A stray control
+/// byte in a comment (0x05, 0x1C: editors and pendants leave them) does not.
 pub fn looks_binary(src: &[u8]) -> bool {
     let head = &src[..src.len().min(8192)];
-    head.iter()
-        .any(|&b| b == 0 || (b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0C | 0x1A)))
+    if head.contains(&0) {
+        return true;
+    }
+    let controls = head
+        .iter()
+        .filter(|&&b| b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0C | 0x1A))
+        .count();
+    controls * 32 > head.len().max(256)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::looks_binary;
+
+    #[test]
+    fn a_control_byte_in_a_comment_is_still_text() {
+        assert!(!looks_binary(
+            b"MODULE m\r\n  ! moved \x05 here \x1C\r\nENDMODULE\r\n"
+        ));
+        assert!(!looks_binary(b";\x05\r\nDEF a()\r\nEND\r\n"));
+        assert!(looks_binary(b"MODULE m\x00"));
+        assert!(looks_binary(
+            &[0x17, 0x9a, 0x01, 0x02, 0x03, 0x04].repeat(20)
+        ));
+        // One control byte on every line of a long file is still text.
+        let every_line = b"  ! moved \x05 here, see the cell drawing\r\n".repeat(200);
+        assert!(!looks_binary(&every_line));
+        assert!(!looks_binary(b""));
+    }
 }

@@ -239,10 +239,13 @@ pub fn skid_axis_index(name: &str) -> Option<usize> {
 impl Cell {
     /// Reads and validates a cell file. Every schema error names `file:line:col`.
     pub fn load(path: &Path) -> Result<Cell, CellError> {
-        let text = std::fs::read_to_string(path).map_err(|source| CellError::Io {
+        let io = |source| CellError::Io {
             path: path.to_owned(),
             source,
-        })?;
+        };
+        let bytes = crate::output::read_input(path).map_err(io)?;
+        let text = String::from_utf8(bytes)
+            .map_err(|e| io(std::io::Error::new(std::io::ErrorKind::InvalidData, e)))?;
         Cell::parse(path, &text)
     }
 

@@ -709,7 +709,7 @@ fn walk(dir: &Path) -> Vec<PathBuf> {
     out
 }
 
-/// The tree, one line per node with its block depth, and the diagnostics: a valid file and a
+/// The tree, one line per node (routines and blocks as branches), and the diagnostics: a valid file and a
 /// damaged one (rust-analyzer's `test_data/{ok,err}` in small).
 #[test]
 fn tree_dumps() {

@@ -6,6 +6,7 @@ mod dialect;
 mod kinematics;
 mod krl;
 mod output;
+mod parser_data;
 mod rapid;
 mod report;
 mod rust_version;

@@ -823,3 +823,47 @@ fn end_to_end_krl_correction_reaches_the_cad_points() {
     assert_eq!(std::fs::read(out.join("e2e.src")).unwrap(), src.as_bytes());
     insta::assert_snapshot!("e2e_krl", summary);
 }
+
+/// A cell whose track axis is not the profile's direction (here: y for a track along x) would
+/// apply the profile in the wrong place: the run stops with exit 2, names both files and writes
+/// nothing.
+#[test]
+fn a_cell_that_disagrees_with_its_profile_is_refused() {
+    let cell = std::fs::read_to_string(root().join("samples/cell.toml")).unwrap();
+    let samples = root().join("samples");
+    let bad = cell
+        .lines()
+        .map(|l| match l {
+            l if l.starts_with("track_axis") => "track_axis = [0, 1, 0]".to_owned(),
+            l if l.starts_with("profile = \"") => l.replacen(
+                "profile = \"",
+                &format!("profile = \"{}/", samples.display()),
+                1,
+            ),
+            l => l.to_owned(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let (dir, cell_path) = scratch_with("cell.toml", &bad);
+    let out = dir.path().join("out");
+    let module = root().join("samples/rapid/spot_line.mod");
+    let (code, stdout, err) = trackfix(&[
+        "correct",
+        module.to_str().unwrap(),
+        "--cell",
+        cell_path.to_str().unwrap(),
+        "--robot",
+        "r1",
+        "--skip-unsupported",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(stdout.is_empty());
+    assert!(
+        err.contains("robot `r1` does not match its profile"),
+        "{err}"
+    );
+    assert!(err.contains("track_axis is 90.0"), "{err}");
+    assert!(!out.exists(), "nothing may be written");
+}

@@ -1,0 +1,400 @@
+//! Items: the file, modules, data declarations, records, routines and their parameters
+//! (`grammars/rapid.ebnf`, sections "file" and "routines").
+
+use super::*;
+
+impl Parser<'_, '_> {
+    /// `file = [ BOM ] { header_line } { module | item } EOF`
+    pub(super) fn file(&mut self) {
+        let mut outside_warned = false;
+        // The `%%%` line that opened a header block not yet closed.
+        let mut open_header: Option<Token> = None;
+        loop {
+            match self.tok.kind {
+                TokenKind::Eof => break,
+                TokenKind::HeaderLine => {
+                    let t = self.tok;
+                    if self.text(t).starts_with(b"%%%") {
+                        open_header = match open_header {
+                            Some(_) => None,
+                            None => Some(t),
+                        };
+                    }
+                    self.bump();
+                    self.leaf(NodeKind::Header, t.start);
+                }
+                _ if self.at_kw(b"MODULE") => self.module(),
+                _ => {
+                    if !outside_warned && self.is_item_start() {
+                        outside_warned = true;
+                        self.diagnostics.push(
+                            Diagnostic::warning(
+                                self.tok.span(),
+                                "declaration outside a MODULE ... ENDMODULE block",
+                            )
+                            .with_hint(
+                                "a controller loads only modules; wrap the text in MODULE name ... ENDMODULE",
+                            ),
+                        );
+                    }
+                    self.item(true);
+                }
+            }
+        }
+        if let Some(t) = open_header {
+            self.diagnostics.push(
+                Diagnostic::error(
+                    t.span(),
+                    "`%%%` header block without its closing `%%%` line",
+                )
+                .with_hint(
+                    "close the header with a line `%%%`; everything after it was read as header",
+                ),
+            );
+        }
+    }
+
+    pub(super) fn is_item_start(&self) -> bool {
+        self.at_any(&[
+            b"CONST", b"PERS", b"VAR", b"LOCAL", b"TASK", b"PROC", b"FUNC", b"TRAP", b"RECORD",
+            b"ALIAS",
+        ])
+    }
+
+    /// `module = "MODULE" ident [ "(" attribute { "," attribute } ")" ] { item } "ENDMODULE"`
+    /// (rule `attribute`: any identifier).
+    pub(super) fn module(&mut self) {
+        let start = self.tok.start;
+        let branch = self.open(NodeKind::Module, start);
+        let head = self.tok;
+        self.bump();
+        let head_ok: PResult<()> = (|| {
+            if self.tok.kind != TokenKind::Ident {
+                return Err(self.error("a module name after MODULE"));
+            }
+            self.bump();
+            if self.eat_punct(b'(') {
+                loop {
+                    self.expect_ident(
+                        "a module attribute (SYSMODULE, NOSTEPIN, VIEWONLY, READONLY, NOVIEW)",
+                    )?;
+                    if self.eat_punct(b')') {
+                        break;
+                    }
+                    self.expect_punct(b',', "`,` or `)` in the module attributes")?;
+                }
+            }
+            Ok(())
+        })();
+        match head_ok {
+            Ok(()) => self.leaf(NodeKind::ModuleHead, start),
+            Err(e) => {
+                // Keep the rest of the head line opaque but go on reading the module body.
+                if e.at.kind == TokenKind::Unknown {
+                    self.reported_unknown = Some(e.at.start);
+                }
+                while self.tok.kind != TokenKind::Eof && !self.newline_before_tok() {
+                    self.bump();
+                }
+                let found = self.describe(e.at);
+                self.diagnostics.push(
+                    Diagnostic::error(
+                        e.at.span(),
+                        format!("expected {}, found {found}", e.expected),
+                    )
+                    .with_hint(
+                        "write the module head as MODULE name or MODULE name(SYSMODULE, NOSTEPIN)",
+                    ),
+                );
+                self.opaque += 1;
+                self.leaf(NodeKind::Opaque, start);
+            }
+        }
+        loop {
+            if self.tok.kind == TokenKind::Eof {
+                self.diagnostics.push(
+                    Diagnostic::error(head.span(), "MODULE without ENDMODULE").with_hint(
+                        "add ENDMODULE at the end of the module (is the file truncated?)",
+                    ),
+                );
+                break;
+            }
+            if self.at_kw(b"ENDMODULE") {
+                let s = self.tok.start;
+                self.bump();
+                self.leaf(NodeKind::ModuleEnd, s);
+                break;
+            }
+            if self.at_kw(b"MODULE") {
+                self.diagnostics.push(
+                    Diagnostic::error(
+                        head.span(),
+                        "MODULE without ENDMODULE before the next MODULE",
+                    )
+                    .with_hint("add ENDMODULE before the next MODULE"),
+                );
+                break;
+            }
+            self.item(true);
+        }
+        self.close(branch);
+    }
+
+    /// `item = data_decl | routine | record | placeholder | opaque`
+    pub(super) fn item(&mut self, module_scope: bool) {
+        let start = self.tok.start;
+        self.arena.clear();
+        if self.tok.kind == TokenKind::Placeholder {
+            self.bump();
+            self.eat_punct(b';');
+            self.leaf(NodeKind::Placeholder, start);
+            return;
+        }
+        let second = self.peek2();
+        let second_text = second.text(self.src);
+        let prefixed = self.at_any(&[b"LOCAL", b"TASK"]);
+        let kw_is = |words: &[&[u8]]| {
+            if prefixed {
+                second.keyword && is_word_in(second_text, words)
+            } else {
+                false
+            }
+        };
+        if self.at_any(&[b"CONST", b"PERS", b"VAR", b"ALIAS"])
+            || kw_is(&[b"CONST", b"PERS", b"VAR"])
+        {
+            self.data_decl(start, module_scope);
+        } else if self.at_any(&[b"PROC", b"FUNC", b"TRAP"]) || kw_is(&[b"PROC", b"FUNC", b"TRAP"]) {
+            self.routine(start);
+        } else if self.at_kw(b"RECORD") || kw_is(&[b"RECORD"]) {
+            self.record(start);
+        } else {
+            self.unknown_item(start);
+        }
+    }
+
+    /// `data_decl = [ "LOCAL" | "TASK" ] ( "CONST" | "PERS" | "VAR" ) type ident [ dims ]
+    ///              [ ":=" expr ] ";" | "ALIAS" type ident ";"`, with rule `dims`.
+    pub(super) fn data_decl(&mut self, start: u32, module_scope: bool) {
+        match self.data_decl_inner(module_scope) {
+            Ok(stmt) => {
+                self.leaf(NodeKind::DataDecl, start);
+                self.emit(stmt, start);
+            }
+            Err(e) => self.recover(start, e),
+        }
+    }
+
+    pub(super) fn data_decl_inner(&mut self, module_scope: bool) -> PResult<Stmt> {
+        if self.at_any(&[b"LOCAL", b"TASK"]) {
+            self.bump();
+        }
+        let storage_tok = self.bump();
+        let st = self.text(storage_tok);
+        let storage = if st.eq_ignore_ascii_case(b"CONST") {
+            Storage::Const
+        } else if st.eq_ignore_ascii_case(b"PERS") {
+            Storage::Pers
+        } else if st.eq_ignore_ascii_case(b"VAR") {
+            Storage::Var
+        } else {
+            Storage::Alias
+        };
+        let ty = self.expect_ident("a data type after the storage class")?;
+        let name = self.expect_ident("a data name after the type")?;
+        let mut dims = 0u8;
+        if self.eat_punct(b'{') {
+            loop {
+                self.expr()?;
+                dims = dims.saturating_add(1);
+                if self.eat_punct(b'}') {
+                    break;
+                }
+                self.expect_punct(b',', "`,` or `}` in the array dimensions")?;
+            }
+        }
+        let mut init = None;
+        if self.tok.kind == TokenKind::Assign {
+            self.bump();
+            init = Some(self.expr()?);
+        }
+        self.expect_punct(b';', "`;` at the end of the declaration")?;
+        Ok(Stmt::Decl {
+            storage,
+            type_name: ty.span(),
+            name: name.span(),
+            dims,
+            init,
+            module_scope,
+        })
+    }
+
+    /// `record = [ "LOCAL" | "TASK" ] "RECORD" ident { type ident ";" } "ENDRECORD"`
+    pub(super) fn record(&mut self, start: u32) {
+        let branch = self.open(NodeKind::Record, start);
+        if self.at_any(&[b"LOCAL", b"TASK"]) {
+            self.bump();
+        }
+        self.bump();
+        self.arena.clear();
+        match self.expect_ident("a record name after RECORD") {
+            Ok(name) => {
+                self.leaf(NodeKind::RecordHead, start);
+                self.emit(Stmt::Record { name: name.span() }, start);
+            }
+            Err(e) => self.recover(start, e),
+        }
+        loop {
+            if self.at_kw(b"ENDRECORD") {
+                let s = self.tok.start;
+                self.bump();
+                self.leaf(NodeKind::RecordEnd, s);
+                break;
+            }
+            if self.tok.kind == TokenKind::Eof || (self.at_any(HARD_ENDS)) {
+                self.diagnostics.push(
+                    Diagnostic::error(
+                        Span::new(start as usize, start as usize + 6),
+                        "RECORD without ENDRECORD",
+                    )
+                    .with_hint("add ENDRECORD after the record's components"),
+                );
+                break;
+            }
+            let s = self.tok.start;
+            let field: PResult<(Token, Token)> = (|| {
+                let type_name = self.expect_ident("a component type")?;
+                let name = self.expect_ident("a component name")?;
+                self.expect_punct(b';', "`;` after the record component")?;
+                Ok((type_name, name))
+            })();
+            match field {
+                Ok((type_name, name)) => {
+                    self.leaf(NodeKind::RecordField, s);
+                    self.emit(
+                        Stmt::RecordField {
+                            type_name: type_name.span(),
+                            name: name.span(),
+                        },
+                        s,
+                    );
+                }
+                Err(e) => self.recover(s, e),
+            }
+        }
+        self.close(branch);
+    }
+
+    // ---- routines -----------------------------------------------------------------------
+
+    /// `routine = [ "LOCAL" ] ( "PROC" ident "(" params ")" | "FUNC" type ident "(" params ")"
+    ///            | "TRAP" ident ) body { handler } end_routine`: rules `handler` and
+    /// `end_routine` too.
+    pub(super) fn routine(&mut self, start: u32) {
+        let branch = self.open(NodeKind::Routine, start);
+        if self.at_kw(b"LOCAL") || self.at_kw(b"TASK") {
+            self.bump();
+        }
+        let kw = self.bump();
+        let kind = self.text(kw).to_ascii_uppercase();
+        let end_kw: &'static [u8] = match kind.as_slice() {
+            b"FUNC" => b"ENDFUNC",
+            b"TRAP" => b"ENDTRAP",
+            _ => b"ENDPROC",
+        };
+        let head: PResult<Span> = (|| {
+            if kind == b"FUNC" {
+                self.expect_ident("the return type after FUNC")?;
+            }
+            let name = self.expect_ident("a routine name")?;
+            if kind != b"TRAP" {
+                self.params()?;
+            }
+            Ok(name.span())
+        })();
+        match head {
+            Ok(name) => {
+                self.leaf(NodeKind::RoutineHead, start);
+                self.arena.clear();
+                self.emit(Stmt::Routine { name }, start);
+            }
+            Err(e) => self.recover(start, e),
+        }
+        self.statements(&[end_kw, b"ERROR", b"UNDO", b"BACKWARD"]);
+        while self.at_any(&[b"ERROR", b"UNDO", b"BACKWARD"]) {
+            let hs = self.tok.start;
+            let handler = self.open(NodeKind::Handler, hs);
+            self.bump();
+            let head: PResult<()> = (|| {
+                if self.eat_punct(b'(') {
+                    loop {
+                        self.expr()?;
+                        if self.eat_punct(b')') {
+                            break;
+                        }
+                        self.expect_punct(b',', "`,` or `)` in the ERROR handler's error numbers")?;
+                    }
+                }
+                Ok(())
+            })();
+            match head {
+                Ok(()) => self.leaf(NodeKind::HandlerHead, hs),
+                Err(e) => self.recover(hs, e),
+            }
+            self.statements(&[end_kw, b"ERROR", b"UNDO", b"BACKWARD"]);
+            self.close(handler);
+        }
+        if self.at_kw(end_kw) {
+            let s = self.tok.start;
+            self.bump();
+            self.leaf(NodeKind::RoutineEnd, s);
+        } else {
+            let found = self.describe(self.tok);
+            self.diagnostics.push(
+                Diagnostic::error(
+                    kw.span(),
+                    format!(
+                        "{} without {} (found {found})",
+                        crate::syntax::latin1(self.text(kw)),
+                        String::from_utf8_lossy(end_kw)
+                    ),
+                )
+                .with_hint(format!(
+                    "add {} at the end of the routine",
+                    String::from_utf8_lossy(end_kw)
+                )),
+            );
+        }
+        self.close(branch);
+    }
+
+    /// `params = "(" [ param { ( "," | "|" ) param } ] ")"` with
+    /// `param = [ "\" ] [ "INOUT" | "VAR" | "PERS" ] type ident [ "{" "*" { "," "*" } "}" ]`;
+    /// read as a balanced parenthesis group (the positions never depend on parameters).
+    pub(super) fn params(&mut self) -> PResult<()> {
+        self.expect_punct(b'(', "`(` before the parameter list")?;
+        let mut depth = 1u32;
+        loop {
+            match self.tok.kind {
+                TokenKind::Eof => return Err(self.error("`)` closing the parameter list")),
+                TokenKind::Unknown | TokenKind::UnterminatedStr => {
+                    return Err(self.error("a parameter"));
+                }
+                _ => {}
+            }
+            if self.at_punct(b';') || self.at_any(HARD_ENDS) {
+                return Err(self.error("`)` closing the parameter list"));
+            }
+            let c = self.tok.punct(self.src);
+            self.bump();
+            if c == b'(' {
+                depth += 1;
+            } else if c == b')' {
+                depth -= 1;
+                if depth == 0 {
+                    return Ok(());
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,562 @@
+//! The RAPID parser: a recursive-descent reader over the streaming lexer's tokens that builds
+//! the lossless [`Tree`] and never fails.
+//!
+//! Each function's doc comment names the rule of `grammars/rapid.ebnf` it implements. A
+//! statement or item that does not fit its rule becomes an [`NodeKind::Opaque`] leaf running to
+//! the next `;` (or to the next block keyword), with a located diagnostic: the round trip holds
+//! for every input because leaves are byte ranges and every byte lands in exactly one leaf.
+
+mod expressions;
+mod items;
+mod statements;
+
+use super::expr::{Arena, ExprKind, NONE};
+use super::lexer::{Lexer, Token, TokenKind};
+use super::tree::{NodeKind, Rapid, Tree};
+use crate::syntax::{Diagnostic, Sink, Span, TreeBuilder};
+
+/// Nesting deeper than this (brackets, blocks) is reported instead of recursed into, so a
+/// hostile input cannot overflow the stack.
+const MAX_DEPTH: u32 = 96;
+
+/// Storage class of a data declaration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Storage {
+    Const,
+    Pers,
+    Var,
+    Alias,
+}
+
+/// What the position extractor needs to know about a statement just read; expression ids
+/// point into the parser's [`Arena`].
+#[derive(Clone, Copy, Debug)]
+pub enum Stmt {
+    /// A data declaration. `module_scope` is false inside routines.
+    Decl {
+        storage: Storage,
+        type_name: Span,
+        name: Span,
+        dims: u8,
+        init: Option<u32>,
+        module_scope: bool,
+    },
+    /// `PROC`/`FUNC`/`TRAP` head (its name is a module-scope symbol).
+    Routine { name: Span },
+    /// `RECORD name` (the components follow as [`Stmt::RecordField`]).
+    Record { name: Span },
+    /// `type name;` inside a `RECORD`.
+    RecordField { type_name: Span, name: Span },
+    /// A procedure call; `args` is an [`ExprKind::Args`] node, `name` the routine name (for a
+    /// late-binding call, the `%expr%` text).
+    Call { name: Span, args: u32 },
+    /// `target := value;` (`target` is the whole left side, e.g. `p.trans.x`).
+    Assign { target: Span, value: u32 },
+    /// Any other statement: its expressions are still scanned for inline targets and offsets.
+    Other,
+}
+
+/// One statement as it is read, handed to the parser's [`Sink`] (the positions layer is one):
+/// the source, the scratch arena its expression ids point into (valid only during the call),
+/// the statement and its span.
+#[derive(Clone, Copy, Debug)]
+pub struct Statement<'e> {
+    pub src: &'e [u8],
+    pub arena: &'e Arena,
+    pub stmt: &'e Stmt,
+    pub span: Span,
+}
+
+/// What [`parse`] hands statements to: any `FnMut(Statement)` or [`crate::syntax::NoSink`].
+pub type StatementSink<'s> = dyn for<'e> Sink<Statement<'e>> + 's;
+
+/// The result of parsing: the tree, what went wrong, and how many opaque nodes it holds.
+#[derive(Clone, Debug, Default)]
+pub struct Parse {
+    pub tree: Tree,
+    pub diagnostics: Vec<Diagnostic>,
+    pub opaque: usize,
+}
+
+/// A syntax error inside a construct: where, and what was expected there.
+#[derive(Clone, Debug)]
+struct SyntaxError {
+    at: Token,
+    expected: &'static str,
+}
+
+type PResult<T> = Result<T, SyntaxError>;
+
+/// Parses a whole source. Never fails, never panics; see [`Parse`].
+pub fn parse(src: &[u8], sink: &mut StatementSink<'_>) -> Parse {
+    if let Some(refused) = crate::syntax::too_large(src) {
+        return Parse {
+            tree: crate::syntax::refused_tree(NodeKind::Opaque),
+            diagnostics: vec![refused],
+            opaque: 1,
+        };
+    }
+    let mut p = Parser::new(src, sink);
+    p.file();
+    p.finish()
+}
+
+struct Parser<'a, 's> {
+    src: &'a [u8],
+    lex: Lexer<'a>,
+    /// The current significant (non-trivia) token.
+    tok: Token,
+    /// The token after `tok` and the lexer positioned after it, once looked at.
+    peeked: Option<(Token, Lexer<'a>)>,
+    /// End of the last significant token consumed.
+    prev_end: u32,
+    /// Bytes between two leaves become trivia leaves.
+    tree: TreeBuilder<Rapid>,
+    diagnostics: Vec<Diagnostic>,
+    opaque: usize,
+    arena: Arena,
+    depth: u32,
+    /// The unknown token already reported as the cause of an error (not reported twice).
+    reported_unknown: Option<u32>,
+    /// Use [`Parser::numeric_aggregate`] (off only in tests that compare it with the general
+    /// path).
+    fast_aggregates: bool,
+    sink: &'s mut StatementSink<'s>,
+}
+
+/// Keywords that end a statement list (and so also end error recovery).
+const BLOCK_ENDS: &[&[u8]] = &[
+    b"ENDPROC",
+    b"ENDFUNC",
+    b"ENDTRAP",
+    b"ENDMODULE",
+    b"ENDRECORD",
+    b"MODULE",
+    b"PROC",
+    b"FUNC",
+    b"TRAP",
+    b"LOCAL",
+    b"TASK",
+    b"RECORD",
+    b"ERROR",
+    b"UNDO",
+    b"BACKWARD",
+    b"ELSEIF",
+    b"ELSE",
+    b"ENDIF",
+    b"ENDFOR",
+    b"ENDWHILE",
+    b"CASE",
+    b"DEFAULT",
+    b"ENDTEST",
+];
+
+/// Ends that close a routine or module whatever is open inside them.
+const HARD_ENDS: &[&[u8]] = &[
+    b"ENDPROC",
+    b"ENDFUNC",
+    b"ENDTRAP",
+    b"ENDMODULE",
+    b"MODULE",
+    b"PROC",
+    b"FUNC",
+    b"TRAP",
+    b"LOCAL",
+    b"TASK",
+    b"RECORD",
+    b"ERROR",
+    b"UNDO",
+    b"BACKWARD",
+];
+
+/// Reserved words that can never start an operand.
+const RESERVED: &[&[u8]] = &[
+    b"THEN",
+    b"DO",
+    b"TO",
+    b"FROM",
+    b"STEP",
+    b"WITH",
+    b"ELSE",
+    b"ELSEIF",
+    b"ENDIF",
+    b"ENDFOR",
+    b"ENDWHILE",
+    b"ENDTEST",
+    b"CASE",
+    b"DEFAULT",
+    b"ENDPROC",
+    b"ENDFUNC",
+    b"ENDTRAP",
+    b"ENDMODULE",
+    b"PROC",
+    b"FUNC",
+    b"TRAP",
+    b"MODULE",
+    b"CONST",
+    b"PERS",
+    b"VAR",
+    b"IF",
+    b"FOR",
+    b"WHILE",
+    b"TEST",
+    b"GOTO",
+    b"RETURN",
+    b"RAISE",
+    b"EXIT",
+    b"RETRY",
+    b"TRYNEXT",
+    b"DIV",
+    b"MOD",
+    b"AND",
+    b"OR",
+    b"XOR",
+    b"ERROR",
+    b"UNDO",
+    b"BACKWARD",
+    b"LOCAL",
+    b"TASK",
+    b"INOUT",
+    b"RECORD",
+    b"ENDRECORD",
+    b"ALIAS",
+    b"CONNECT",
+];
+
+const BINARY_WORDS: &[&[u8]] = &[b"DIV", b"MOD", b"AND", b"OR", b"XOR"];
+
+fn is_word_in(text: &[u8], words: &[&[u8]]) -> bool {
+    words.iter().any(|w| w.eq_ignore_ascii_case(text))
+}
+
+impl<'a, 's> Parser<'a, 's> {
+    fn new(src: &'a [u8], sink: &'s mut StatementSink<'s>) -> Parser<'a, 's> {
+        let mut p = Parser {
+            src,
+            lex: Lexer::new(src),
+            tok: Token {
+                kind: TokenKind::Eof,
+                keyword: false,
+                start: 0,
+                end: 0,
+            },
+            peeked: None,
+            prev_end: 0,
+            // About two leaves per statement; robtarget files average ~45 bytes per leaf, so
+            // this avoids doubling (and a second copy) for typical modules.
+            tree: TreeBuilder::with_capacity(src.len() / 40 + 4),
+            diagnostics: Vec::new(),
+            opaque: 0,
+            arena: Arena::default(),
+            depth: 0,
+            reported_unknown: None,
+            fast_aggregates: true,
+            sink,
+        };
+        p.tok = p.next_significant();
+        p
+    }
+
+    fn finish(self) -> Parse {
+        let end = self.src.len() as u32;
+        let tree: Tree = self.tree.finish(end);
+        Parse {
+            tree,
+            diagnostics: self.diagnostics,
+            opaque: self.opaque,
+        }
+    }
+
+    // ---- tokens -------------------------------------------------------------------------
+
+    fn next_significant(&mut self) -> Token {
+        loop {
+            let t = self.lex.next_token();
+            if !t.kind.is_trivia() {
+                return t;
+            }
+        }
+    }
+
+    fn bump(&mut self) -> Token {
+        let t = self.tok;
+        if t.kind == TokenKind::Unknown && self.reported_unknown != Some(t.start) {
+            // Stepped over while recovering from another error: still say where it is.
+            self.diagnostics.push(
+                Diagnostic::error(
+                    t.span(),
+                    format!("{} in the program text", self.describe(t)),
+                )
+                .with_hint("remove the byte or move it into a comment or string"),
+            );
+        }
+        if t.kind != TokenKind::Eof {
+            self.prev_end = t.end;
+            self.tok = match self.peeked.take() {
+                Some((next, lex)) => {
+                    self.lex = lex;
+                    next
+                }
+                None => self.next_significant(),
+            };
+        }
+        t
+    }
+
+    /// The token after the current one (lexed once on a copy of the lexer, then kept).
+    fn peek2(&mut self) -> Token {
+        if let Some((t, _)) = self.peeked {
+            return t;
+        }
+        let mut lex = self.lex;
+        let t = loop {
+            let t = lex.next_token();
+            if !t.kind.is_trivia() {
+                break t;
+            }
+        };
+        self.peeked = Some((t, lex));
+        t
+    }
+
+    /// A line break lies between the last consumed token and the current one.
+    fn newline_before_tok(&self) -> bool {
+        self.src
+            .get(self.prev_end as usize..self.tok.start as usize)
+            .is_some_and(|gap| gap.iter().any(|&b| b == b'\n' || b == b'\r'))
+    }
+
+    fn text(&self, t: Token) -> &'a [u8] {
+        t.text(self.src)
+    }
+
+    fn at_kw(&self, kw: &[u8]) -> bool {
+        self.tok.keyword && self.text(self.tok).eq_ignore_ascii_case(kw)
+    }
+
+    fn at_any(&self, words: &[&[u8]]) -> bool {
+        self.tok.keyword && is_word_in(self.text(self.tok), words)
+    }
+
+    fn is_reserved(&self, t: Token) -> bool {
+        t.keyword && is_word_in(self.text(t), RESERVED)
+    }
+
+    fn at_punct(&self, c: u8) -> bool {
+        self.tok.punct(self.src) == c
+    }
+
+    fn eat_punct(&mut self, c: u8) -> bool {
+        if self.at_punct(c) {
+            self.bump();
+            true
+        } else {
+            false
+        }
+    }
+
+    fn expect_punct(&mut self, c: u8, expected: &'static str) -> PResult<Token> {
+        if self.at_punct(c) {
+            Ok(self.bump())
+        } else {
+            Err(self.error(expected))
+        }
+    }
+
+    fn expect_kw(&mut self, kw: &[u8], expected: &'static str) -> PResult<Token> {
+        if self.at_kw(kw) {
+            Ok(self.bump())
+        } else {
+            Err(self.error(expected))
+        }
+    }
+
+    fn expect_ident(&mut self, expected: &'static str) -> PResult<Token> {
+        if self.tok.kind == TokenKind::Ident && !self.is_reserved(self.tok) {
+            Ok(self.bump())
+        } else {
+            Err(self.error(expected))
+        }
+    }
+
+    fn error(&self, expected: &'static str) -> SyntaxError {
+        SyntaxError {
+            at: self.tok,
+            expected,
+        }
+    }
+
+    // ---- tree building ------------------------------------------------------------------
+
+    /// Pushes a leaf from `start` to the end of the last consumed token.
+    fn leaf(&mut self, kind: NodeKind, start: u32) {
+        self.tree.leaf(kind, start, self.prev_end);
+    }
+
+    fn open(&mut self, kind: NodeKind, start: u32) -> usize {
+        self.tree.open(kind, start)
+    }
+
+    fn close(&mut self, idx: usize) {
+        self.tree.close(idx);
+    }
+
+    fn emit(&mut self, stmt: Stmt, start: u32) {
+        let span = Span::new(start as usize, self.prev_end as usize);
+        self.sink.accept(Statement {
+            src: self.src,
+            arena: &self.arena,
+            stmt: &stmt,
+            span,
+        });
+    }
+
+    /// Ends the head of a compound statement's part (`ELSEIF … THEN`, `CASE …:`) that started
+    /// at `start`: a leaf and a statement when it parsed, an error and an opaque leaf when not.
+    fn close_part(&mut self, head: PResult<()>, kind: NodeKind, start: u32) {
+        match head {
+            Ok(()) => {
+                self.leaf(kind, start);
+                self.emit(Stmt::Other, start);
+            }
+            Err(e) => self.recover(start, e),
+        }
+    }
+
+    fn describe(&self, t: Token) -> String {
+        match t.kind {
+            TokenKind::Eof => "the end of the file".to_owned(),
+            TokenKind::Unknown => format!(
+                "the byte(s) `{}` that RAPID does not allow here",
+                crate::syntax::latin1(self.text(t)).escape_default()
+            ),
+            TokenKind::UnterminatedStr => "a string without its closing quote".to_owned(),
+            _ => {
+                let text = crate::syntax::latin1(self.text(t));
+                let short: String = text.chars().take(40).collect();
+                format!("`{short}`")
+            }
+        }
+    }
+
+    /// Records a syntax error and turns what was read of the construct, up to the next `;` or
+    /// block keyword, into an opaque leaf.
+    fn recover(&mut self, start: u32, err: SyntaxError) {
+        let found = self.describe(err.at);
+        if err.at.kind == TokenKind::Unknown {
+            self.reported_unknown = Some(err.at.start);
+        }
+        let hint = match err.at.kind {
+            TokenKind::UnterminatedStr => {
+                "close the string with `\"` on the same line (write `\"\"` for a quote inside it)"
+            }
+            TokenKind::Unknown => {
+                "remove the byte or move it into a comment or string; the line is kept as it is"
+            }
+            TokenKind::Eof => "the file looks truncated: complete the construct",
+            _ => "fix the syntax; trackfix keeps this text verbatim and does not transform it",
+        };
+        // A statement missing its `;` (a generator's `WaitTime 1.000` line) ends at the line
+        // break when the next line starts with a name: the following statement is read as
+        // usual instead of disappearing into this opaque node with its targets.
+        let next_line_starts_statement = err.at.kind == TokenKind::Ident
+            && err.at.start == self.tok.start
+            && err.at.start > start
+            && self.newline_before_tok();
+        let diagnostic = if next_line_starts_statement {
+            let end = self.prev_end as usize;
+            Diagnostic::error(
+                Span::new(end, end),
+                format!(
+                    "expected {} before the line break, found {found} on the next line",
+                    err.expected
+                ),
+            )
+            .with_hint("add the missing `;`; trackfix keeps this line verbatim")
+        } else {
+            Diagnostic::error(
+                err.at.span(),
+                format!("expected {}, found {found}", err.expected),
+            )
+            .with_hint(hint)
+        };
+        self.diagnostics.push(diagnostic);
+        if next_line_starts_statement {
+            self.prev_end = self.prev_end.max(start);
+        } else {
+            self.skip_to_statement_end(start);
+        }
+        self.opaque += 1;
+        self.leaf(NodeKind::Opaque, start);
+    }
+
+    fn skip_to_statement_end(&mut self, start: u32) {
+        loop {
+            if self.tok.kind == TokenKind::Eof {
+                break;
+            }
+            if self.at_punct(b';') {
+                self.bump();
+                break;
+            }
+            // Stop before a block keyword so the enclosing construct can resume, but always
+            // consume something: a stray keyword where a statement was expected is the error.
+            if self.at_any(BLOCK_ENDS) && self.prev_end > start {
+                break;
+            }
+            self.bump();
+        }
+        if self.prev_end < start {
+            self.prev_end = start;
+        }
+    }
+
+    /// A construct understood only as far as its extent (module-level text that is not an
+    /// item): an opaque leaf with a warning.
+    fn unknown_item(&mut self, start: u32) {
+        let first = self.tok;
+        if first.kind == TokenKind::Unknown {
+            self.reported_unknown = Some(first.start);
+        }
+        self.skip_to_statement_end(start);
+        if self.prev_end <= start {
+            self.bump();
+        }
+        self.opaque += 1;
+        let message = format!(
+            "unknown construct at module level starting with {}; kept verbatim",
+            self.describe(first)
+        );
+        // Bytes no RAPID text may hold are an error; an unknown but well-formed construct is
+        // only a warning (trackfix keeps it and does not look inside).
+        let diagnostic = match first.kind {
+            TokenKind::Unknown | TokenKind::UnterminatedStr => {
+                Diagnostic::error(first.span(), message)
+                    .with_hint("remove the bytes or close the string; the text is kept as it is")
+            }
+            _ => Diagnostic::warning(first.span(), message)
+                .with_hint("trackfix does not read or transform anything in it"),
+        };
+        self.diagnostics.push(diagnostic);
+        self.leaf(NodeKind::Opaque, start);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// Every rule of `grammars/rapid.ebnf` is cited by the function that implements it, and
+    /// every cited rule is in the grammar.
+    #[test]
+    fn grammar_rules_and_parser_functions_agree() {
+        crate::syntax::grammar_check::assert_rules_cited(
+            "grammars/rapid.ebnf",
+            &[
+                "src/rapid/lexer.rs",
+                "src/rapid/parser/mod.rs",
+                "src/rapid/parser/items.rs",
+                "src/rapid/parser/statements.rs",
+                "src/rapid/parser/expressions.rs",
+            ],
+        );
+    }
+}

@@ -1,0 +1,393 @@
+//! The lossless syntax tree shared by every robot language.
+//!
+//! A language plugs in through [`Language`] (its node kinds and which of them are branches), in
+//! the spirit of rowan's `Language` trait. The layout is one vector of [`Node`]s in pre-order,
+//! the root first. Leaves own bytes of the source (a statement, a line, a run of trivia);
+//! branches (a module, a routine, a block) only group the nodes up to their `subtree_end`.
+//! Printing concatenates the leaves in order, so the round trip is checked, not assumed: a leaf
+//! that is lost, duplicated or out of place shows as a difference in [`Tree::prints_back`].
+//!
+//! Parsers build trees with a [`TreeBuilder`] and hand what they read to a [`Sink`].
+
+use std::fmt;
+
+use super::{Diagnostic, Span};
+
+/// A language's node kinds, as the shared tree needs them.
+pub trait Language: 'static {
+    /// The language's node kind enum.
+    type Kind: Copy + fmt::Debug + Eq;
+    /// The kind of the root branch.
+    const ROOT: Self::Kind;
+    /// The kind the builder gives to bytes between two leaves (whitespace and comments).
+    const GAP: Self::Kind;
+    /// True for kinds that group children instead of owning bytes.
+    fn is_branch(kind: Self::Kind) -> bool;
+}
+
+/// Declares a language of the shared tree: the marker type, its [`Language`] impl (root, gap and
+/// branch kinds), `NodeKind::is_branch`, and the `Node`/`Tree` aliases of the language's module.
+/// A language's `tree.rs` is then its node kinds and this one line.
+macro_rules! language {
+    ($(#[$meta:meta])* $lang:ident: $kind:ident, root $root:ident, gap $gap:ident,
+     branches [$($branch:ident),+ $(,)?]) => {
+        $(#[$meta])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum $lang {}
+
+        impl $crate::syntax::Language for $lang {
+            type Kind = $kind;
+            const ROOT: $kind = $kind::$root;
+            const GAP: $kind = $kind::$gap;
+            fn is_branch(kind: $kind) -> bool {
+                kind.is_branch()
+            }
+        }
+
+        impl $kind {
+            /// True for kinds that group children instead of owning bytes.
+            pub fn is_branch(self) -> bool {
+                matches!(self, $($kind::$branch)|+)
+            }
+        }
+
+        /// One node of this language's tree.
+        pub type Node = $crate::syntax::Node<$kind>;
+
+        /// A parsed source of this language: nodes in pre-order, the root first.
+        pub type Tree = $crate::syntax::Tree<$lang>;
+    };
+}
+pub(crate) use language;
+
+/// One node: its kind, its bytes, and (for branches) where its subtree ends in [`Tree::nodes`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Node<K> {
+    pub kind: K,
+    pub start: u32,
+    pub end: u32,
+    /// Index one past this node's last descendant (`self + 1` for a leaf).
+    pub subtree_end: u32,
+}
+
+impl<K> Node<K> {
+    pub fn span(&self) -> Span {
+        Span::new(self.start as usize, self.end.max(self.start) as usize)
+    }
+}
+
+/// A parsed source: nodes in pre-order, the root first.
+pub struct Tree<L: Language> {
+    pub nodes: Vec<Node<L::Kind>>,
+}
+
+impl<L: Language> Clone for Tree<L> {
+    fn clone(&self) -> Self {
+        Tree {
+            nodes: self.nodes.clone(),
+        }
+    }
+}
+
+impl<L: Language> fmt::Debug for Tree<L> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Tree").field("nodes", &self.nodes).finish()
+    }
+}
+
+impl<L: Language> Default for Tree<L> {
+    fn default() -> Self {
+        Tree { nodes: Vec::new() }
+    }
+}
+
+impl<L: Language> PartialEq for Tree<L> {
+    fn eq(&self, other: &Self) -> bool {
+        self.nodes == other.nodes
+    }
+}
+
+impl<L: Language> Eq for Tree<L> {}
+
+impl<L: Language> Tree<L> {
+    /// The bytes of a node (for a branch, everything its subtree covers).
+    pub fn node_span(&self, node: &Node<L::Kind>) -> Span {
+        node.span()
+    }
+
+    /// The leaves in order: together they are the source.
+    pub fn leaves(&self) -> impl Iterator<Item = &Node<L::Kind>> {
+        self.nodes.iter().filter(|n| !L::is_branch(n.kind))
+    }
+
+    /// The source again, from the leaves. Equal to the input for every input.
+    pub fn print(&self, src: &[u8]) -> Vec<u8> {
+        let mut out = Vec::with_capacity(src.len());
+        for n in self.leaves() {
+            out.extend_from_slice(n.span().slice(src));
+        }
+        out
+    }
+
+    /// Writes the leaves in order to `out` (printing a large file without a second copy).
+    pub fn write_to(&self, src: &[u8], out: &mut impl std::io::Write) -> std::io::Result<()> {
+        for n in self.leaves() {
+            out.write_all(n.span().slice(src))?;
+        }
+        Ok(())
+    }
+
+    /// True if printing gives `src` back, compared leaf by leaf without building the copy.
+    pub fn prints_back(&self, src: &[u8]) -> bool {
+        let mut pos = 0usize;
+        for n in self.leaves() {
+            let text = n.span().slice(src);
+            if n.start as usize != pos && src.get(pos..pos + text.len()) != Some(text) {
+                return false;
+            }
+            pos += text.len();
+        }
+        pos == src.len()
+    }
+
+    /// One line per node, indented by depth: kind, byte range and (for leaves) the text with
+    /// control bytes escaped, whitespace included. The one dump format of every language, for
+    /// snapshot tests and `tests/data`, in the spirit of rust-analyzer's test data.
+    pub fn dump(&self, src: &[u8]) -> String {
+        let mut out = String::new();
+        let mut stack: Vec<u32> = Vec::new();
+        for (i, n) in self.nodes.iter().enumerate() {
+            while stack.last().is_some_and(|&end| end as usize <= i) {
+                stack.pop();
+            }
+            out.push_str(&"  ".repeat(stack.len()));
+            out.push_str(&format!("{:?}@{}..{}", n.kind, n.start, n.end));
+            if L::is_branch(n.kind) {
+                stack.push(n.subtree_end);
+            } else {
+                out.push(' ');
+                out.push_str(&escape(n.span().slice(src)));
+            }
+            out.push('\n');
+        }
+        out
+    }
+}
+
+/// Builds a [`Tree`] in pre-order: branches are opened and closed around their children, and
+/// bytes between two leaves become a [`Language::GAP`] leaf, so every byte lands in exactly one
+/// leaf.
+pub struct TreeBuilder<L: Language> {
+    nodes: Vec<Node<L::Kind>>,
+    /// End of the last leaf pushed.
+    leaf_end: u32,
+}
+
+impl<L: Language> TreeBuilder<L> {
+    /// A builder with room for `capacity` nodes, the root opened.
+    pub fn with_capacity(capacity: usize) -> TreeBuilder<L> {
+        let mut nodes = Vec::with_capacity(capacity.max(1));
+        nodes.push(Node {
+            kind: L::ROOT,
+            start: 0,
+            end: 0,
+            subtree_end: 1,
+        });
+        TreeBuilder { nodes, leaf_end: 0 }
+    }
+
+    /// Number of nodes so far: the index the next node gets.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// True before anything but the root was pushed.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.len() <= 1
+    }
+
+    /// End of the last leaf pushed.
+    pub fn leaf_end(&self) -> u32 {
+        self.leaf_end
+    }
+
+    /// Pushes the bytes from the last leaf up to `upto` as a gap leaf, if there are any.
+    #[inline]
+    pub fn gap(&mut self, upto: u32) {
+        if upto > self.leaf_end {
+            let idx = self.nodes.len() as u32;
+            self.nodes.push(Node {
+                kind: L::GAP,
+                start: self.leaf_end,
+                end: upto,
+                subtree_end: idx + 1,
+            });
+            self.leaf_end = upto;
+        }
+    }
+
+    /// Pushes a leaf of bytes `start..end` (after the gap before it).
+    #[inline]
+    pub fn leaf(&mut self, kind: L::Kind, start: u32, end: u32) {
+        let end = end.max(start);
+        self.gap(start);
+        let idx = self.nodes.len() as u32;
+        self.nodes.push(Node {
+            kind,
+            start,
+            end,
+            subtree_end: idx + 1,
+        });
+        self.leaf_end = end;
+    }
+
+    /// Opens a branch at `start`; returns its index for [`TreeBuilder::close`].
+    #[inline]
+    pub fn open(&mut self, kind: L::Kind, start: u32) -> usize {
+        self.gap(start);
+        let idx = self.nodes.len();
+        self.nodes.push(Node {
+            kind,
+            start,
+            end: start,
+            subtree_end: idx as u32 + 1,
+        });
+        idx
+    }
+
+    /// Closes the branch opened at `idx`: it covers every node pushed since.
+    #[inline]
+    pub fn close(&mut self, idx: usize) {
+        let len = self.nodes.len() as u32;
+        let end = self.leaf_end;
+        if let Some(n) = self.nodes.get_mut(idx) {
+            n.subtree_end = len;
+            n.end = end.max(n.start);
+        }
+    }
+
+    /// The tree: the bytes up to `src_len` after the last leaf become a gap, the root closed.
+    pub fn finish(mut self, src_len: u32) -> Tree<L> {
+        self.gap(src_len);
+        self.close(0);
+        Tree { nodes: self.nodes }
+    }
+}
+
+/// Receives what a parser reads (statements, events), as toml_parser's receivers do: one parser
+/// feeds several consumers. Any `FnMut(E)` closure is a sink.
+pub trait Sink<E> {
+    fn accept(&mut self, event: E);
+}
+
+impl<E, F: FnMut(E)> Sink<E> for F {
+    #[inline]
+    fn accept(&mut self, event: E) {
+        self(event)
+    }
+}
+
+/// A sink that keeps nothing: parsing for the tree alone.
+pub struct NoSink;
+
+impl<E> Sink<E> for NoSink {
+    #[inline]
+    fn accept(&mut self, _: E) {}
+}
+
+/// The one size guard of every parser: spans are `u32`, so a source longer than `u32::MAX`
+/// bytes is reported, not parsed. `None` when `src` fits.
+pub fn too_large(src: &[u8]) -> Option<Diagnostic> {
+    (src.len() > u32::MAX as usize).then(|| {
+        Diagnostic::error(Span::new(0, 0), "file larger than 4 GiB; not parsed")
+            .with_hint("split the program; robot controllers do not load files this large")
+    })
+}
+
+/// The tree of a source [`too_large`] refused: the root and one empty opaque leaf.
+pub fn refused_tree<L: Language>(opaque: L::Kind) -> Tree<L> {
+    let mut b = TreeBuilder::<L>::with_capacity(2);
+    b.leaf(opaque, 0, 0);
+    b.finish(0)
+}
+
+/// Bytes as a quoted, escaped string: ASCII graphic as is, everything else `\xNN`/`\r`/`\n`.
+pub fn escape(bytes: &[u8]) -> String {
+    let mut s = String::with_capacity(bytes.len() + 2);
+    s.push('"');
+    for &b in bytes {
+        match b {
+            b'\n' => s.push_str("\\n"),
+            b'\r' => s.push_str("\\r"),
+            b'\t' => s.push_str("\\t"),
+            b'"' => s.push_str("\\\""),
+            b'\\' => s.push_str("\\\\"),
+            0x20..=0x7E => s.push(b as char),
+            _ => s.push_str(&format!("\\x{b:02X}")),
+        }
+    }
+    s.push('"');
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    enum K {
+        Root,
+        Gap,
+        Block,
+        Word,
+    }
+
+    struct Toy;
+
+    impl Language for Toy {
+        type Kind = K;
+        const ROOT: K = K::Root;
+        const GAP: K = K::Gap;
+        fn is_branch(kind: K) -> bool {
+            matches!(kind, K::Root | K::Block)
+        }
+    }
+
+    #[test]
+    fn builder_fills_gaps_and_nests_in_pre_order() {
+        let src = b"a {b} c";
+        let mut b = TreeBuilder::<Toy>::with_capacity(8);
+        b.leaf(K::Word, 0, 1);
+        let block = b.open(K::Block, 2);
+        b.leaf(K::Word, 2, 5);
+        b.close(block);
+        b.leaf(K::Word, 6, 7);
+        let tree = b.finish(src.len() as u32);
+        assert_eq!(
+            tree.dump(src),
+            "Root@0..7\n  Word@0..1 \"a\"\n  Gap@1..2 \" \"\n  Block@2..5\n    Word@2..5 \"{b}\"\n  Gap@5..6 \" \"\n  Word@6..7 \"c\"\n"
+        );
+        assert!(tree.prints_back(src));
+        assert_eq!(tree.print(src), src);
+        assert!(!tree.prints_back(b"a {b} cd"));
+        let mut lost = tree.clone();
+        lost.nodes.remove(2);
+        assert!(!lost.prints_back(src));
+        let mut doubled = tree.clone();
+        doubled.nodes.insert(2, tree.nodes[1]);
+        assert!(!doubled.prints_back(src));
+    }
+
+    #[test]
+    fn closures_are_sinks() {
+        let mut seen = Vec::new();
+        {
+            let mut sink = |e: u32| seen.push(e);
+            let dyn_sink: &mut dyn Sink<u32> = &mut sink;
+            dyn_sink.accept(3);
+            dyn_sink.accept(4);
+        }
+        NoSink.accept(5u32);
+        assert_eq!(seen, [3, 4]);
+    }
+}

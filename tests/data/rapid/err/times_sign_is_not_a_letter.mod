@@ -1,0 +1,3 @@
+MODULE Signs
+  VAR num a×b := 1;
+ENDMODULE

@@ -1,0 +1,5 @@
+MODULE Open
+  PROC main()
+    IF TRUE THEN
+      Stop;
+ENDMODULE
