@@ -20,6 +20,7 @@
 
 pub mod accuracy;
 pub mod dialect;
+pub mod digest;
 pub mod geometry;
 pub mod html_report;
 pub mod kinematics;

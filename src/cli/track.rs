@@ -6,7 +6,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use trackfix::geometry::{abb_quat_components, kuka_abc_angles, pose_to_xyz_deg};
+use trackfix::geometry::{abb_pose_literal, kuka_frame_literal, pose_to_xyz_deg};
 use trackfix::track::adjustment::{chord_bounds, manual_adjustment, twist_diagram};
 use trackfix::track::cell_nominal::{check_cell_nominal, write_nominal_into_cell};
 use trackfix::track::csv_table::NumericCsv;
@@ -354,16 +354,6 @@ fn shift_text(shift: &FrameShift) -> String {
     )
 }
 
-fn sha256_hex(bytes: &[u8]) -> String {
-    use sha2::Digest as _;
-    sha2::Sha256::digest(bytes)
-        .iter()
-        .fold(String::new(), |mut s, b| {
-            let _ = write!(s, "{b:02x}");
-            s
-        })
-}
-
 fn default_name(output: &Path) -> String {
     let stem = output.file_stem().and_then(|s| s.to_str()).unwrap_or("");
     if stem == "profile"
@@ -392,7 +382,7 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         reference: a.reference,
         gear: a.gear,
         extrapolate: a.extrapolate,
-        source_sha256: sha256_hex(&bytes),
+        source_sha256: trackfix::digest::sha256_hex(&bytes),
     };
     let mut fit = fit_track(&frames, &opts).with_context(|| a.frames.display().to_string())?;
     let measured_in = match (a.measured_in, &a.cell) {
@@ -461,12 +451,11 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         s,
         "  base frame at skid 0: x {x:.3} y {y:.3} z {z:.3} mm, rx {rx:.4} ry {ry:.4} rz {rz:.4} deg"
     );
-    let q = abb_quat_components(&fit.base_at_zero.rotation, None);
-    let abc = kuka_abc_angles(&fit.base_at_zero.rotation, None);
     let _ = writeln!(
         s,
-        "    ABB [[{x:.3},{y:.3},{z:.3}],[{:.6},{:.6},{:.6},{:.6}]]   KUKA {{X {x:.3},Y {y:.3},Z {z:.3},A {:.4},B {:.4},C {:.4}}}",
-        q[0], q[1], q[2], q[3], abc[0], abc[1], abc[2]
+        "    ABB {}   KUKA {}",
+        abb_pose_literal(&fit.base_at_zero),
+        kuka_frame_literal(&fit.base_at_zero)
     );
     let _ = writeln!(
         s,

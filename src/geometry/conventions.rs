@@ -127,6 +127,26 @@ pub fn origin(p: &Pose) -> Vector3<f64> {
     p.translation.vector
 }
 
+/// A RAPID `pose` literal: position to 3 decimals (mm), quaternion scalar first to 6.
+pub fn abb_pose_literal(p: &Pose) -> String {
+    let t = p.translation.vector;
+    let q = abb_quat_components(&p.rotation, None);
+    format!(
+        "[[{:.3},{:.3},{:.3}],[{:.6},{:.6},{:.6},{:.6}]]",
+        t.x, t.y, t.z, q[0], q[1], q[2], q[3]
+    )
+}
+
+/// A KRL `FRAME` literal: position to 3 decimals (mm), A, B, C (Rz·Ry·Rx) to 4 (degrees).
+pub fn kuka_frame_literal(p: &Pose) -> String {
+    let t = p.translation.vector;
+    let abc = kuka_abc_angles(&p.rotation, None);
+    format!(
+        "{{X {:.3},Y {:.3},Z {:.3},A {:.4},B {:.4},C {:.4}}}",
+        t.x, t.y, t.z, abc[0], abc[1], abc[2]
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

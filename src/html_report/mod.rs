@@ -12,7 +12,8 @@ pub mod run;
 pub mod svg;
 pub mod track;
 
-pub use figures::{ControllerFigures, abb_pose_literal, kuka_frame_literal};
+pub use crate::geometry::{abb_pose_literal, kuka_frame_literal};
+pub use figures::ControllerFigures;
 pub use run::{RunFile, RunInput, RunReport, run_report};
 pub use track::{
     AccuracyResult, DataTable, ReportError, SourceFile, TrackInputs, TrackReport, accuracy_section,

@@ -9,7 +9,8 @@ use std::fmt::Write as _;
 
 use super::html::{Cell, Page, Row, Section, definitions, escape, table};
 use super::svg::{Chart, Span, fmt_fixed};
-use super::track::{DataTable, sha256_hex};
+use super::track::DataTable;
+use crate::digest::sha256_hex;
 use crate::syntax::latin1;
 use crate::transform::{FileResult, Refusal, TargetChange};
 

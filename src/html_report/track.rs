@@ -5,7 +5,7 @@
 
 use std::fmt::Write as _;
 
-use sha2::Digest as _;
+use crate::digest::sha256_hex;
 
 use super::figures::ControllerFigures;
 use super::html::{Cell, Page, Row, Section, definitions, escape, table};
@@ -50,16 +50,6 @@ impl SourceFile {
             sha256: sha256_hex(bytes),
         }
     }
-}
-
-/// sha256 of `bytes`, lower-case hex.
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    sha2::Sha256::digest(bytes)
-        .iter()
-        .fold(String::new(), |mut s, b| {
-            let _ = write!(s, "{b:02x}");
-            s
-        })
 }
 
 /// A plain table for sections whose numbers come from elsewhere (ISO 9283 results, kinematics

@@ -553,19 +553,13 @@ impl Profile {
 }
 
 fn data_sha256(file: &ProfileFile) -> String {
-    use sha2::Digest as _;
     use std::fmt::Write as _;
     // `{:?}` of f64 is the shortest text that reads back to the same number, as TOML writes it.
     let mut text = format!("{:?} {:?} {:?}\n", file.reference, file.gear, file.nominal);
     for k in &file.knot {
         let _ = writeln!(text, "{:?} {:?}", k.skid, k.components());
     }
-    sha2::Sha256::digest(text.as_bytes())
-        .iter()
-        .fold(String::new(), |mut s, b| {
-            let _ = write!(s, "{b:02x}");
-            s
-        })
+    crate::digest::sha256_hex(text.as_bytes())
 }
 
 fn build_splines(knots: &[Knot]) -> Result<[CubicSpline; 6], SplineError> {
