@@ -13,6 +13,7 @@ pub mod profile;
 pub mod simulate;
 pub mod spectrum;
 pub mod spline;
+pub mod uncertainty;
 
 pub use csv_table::NumericCsv;
 pub use profile::{Extrapolate, Gear, Knot, Nominal, Profile, Reference, TrackError};

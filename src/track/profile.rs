@@ -73,6 +73,20 @@ pub struct Knot {
     pub rx: f64,
     pub ry: f64,
     pub rz: f64,
+    /// Standard uncertainties (k = 1) of the six components from the identification noise
+    /// (mm, degrees); absent in profiles fitted without measurements, and in old profiles.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_dx: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_dy: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_dz: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_rx: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_ry: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_rz: Option<f64>,
 }
 
 impl Knot {
@@ -91,7 +105,31 @@ impl Knot {
             rx,
             ry,
             rz,
+            u_dx: None,
+            u_dy: None,
+            u_dz: None,
+            u_rx: None,
+            u_ry: None,
+            u_rz: None,
         }
+    }
+
+    /// `[u_dx, u_dy, u_dz, u_rx, u_ry, u_rz]` if the knot carries all six.
+    pub fn uncertainty(&self) -> Option<[f64; 6]> {
+        Some([
+            self.u_dx?, self.u_dy?, self.u_dz?, self.u_rx?, self.u_ry?, self.u_rz?,
+        ])
+    }
+
+    /// The same knot with standard uncertainties `[u_dx, …, u_rz]` (`None` removes them).
+    pub fn with_uncertainty(mut self, u: Option<[f64; 6]>) -> Knot {
+        let [a, b, c, d, e, f] = match u {
+            Some(u) => u.map(Some),
+            None => [None; 6],
+        };
+        (self.u_dx, self.u_dy, self.u_dz) = (a, b, c);
+        (self.u_rx, self.u_ry, self.u_rz) = (d, e, f);
+        self
     }
 
     /// A knot of no deviation at `skid`.
@@ -399,6 +437,22 @@ impl Profile {
         &self.splines
     }
 
+    /// Same profile with standard uncertainties on its knots, one `[u_dx, …, u_rz]` per knot
+    /// in knot order (rounded to 1e-6 like the knots).
+    pub fn with_knot_uncertainties(mut self, u: &[[f64; 6]]) -> Result<Profile, TrackError> {
+        if u.len() != self.file.knot.len() {
+            return Err(TrackError::Invalid(format!(
+                "{} knot uncertainties for {} knots",
+                u.len(),
+                self.file.knot.len()
+            )));
+        }
+        for (k, u) in self.file.knot.iter_mut().zip(u) {
+            *k = k.with_uncertainty(Some(u.map(|v| (v * 1e6).round() / 1e6)));
+        }
+        Ok(self)
+    }
+
     /// Same profile, another extrapolation rule.
     pub fn with_extrapolate(mut self, extrapolate: Extrapolate) -> Profile {
         self.file.extrapolate = extrapolate;
@@ -560,15 +614,7 @@ mod tests {
     use super::*;
 
     fn knot(skid: f64, dz: f64, rx: f64) -> Knot {
-        Knot {
-            skid,
-            dx: 0.0,
-            dy: 0.0,
-            dz,
-            rx,
-            ry: 0.0,
-            rz: 0.0,
-        }
+        Knot::from_components(skid, [0.0, 0.0, dz, rx, 0.0, 0.0])
     }
 
     fn sample() -> Profile {
@@ -612,6 +658,20 @@ mod tests {
         let text = p.to_toml_string().unwrap();
         let back = Profile::from_toml_str(&text, Path::new("p.toml")).unwrap();
         assert_eq!(back, p);
+    }
+
+    #[test]
+    fn knot_uncertainties_round_trip_and_stay_optional() {
+        let p = sample();
+        let text = p.to_toml_string().unwrap();
+        assert!(!text.contains("u_dx"), "{text}");
+        let u = [[0.01, 0.02, 0.03, 0.0004, 0.0005, 0.0006]; 3];
+        let with = p.with_knot_uncertainties(&u).unwrap();
+        let text = with.to_toml_string().unwrap();
+        assert!(text.contains("u_dz = 0.03"), "{text}");
+        let back = Profile::from_toml_str(&text, Path::new("p.toml")).unwrap();
+        assert_eq!(back.knots()[1].uncertainty(), Some(u[1]));
+        assert!(sample().with_knot_uncertainties(&u[..2]).is_err());
     }
 
     #[test]
