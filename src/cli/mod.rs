@@ -1,5 +1,6 @@
 //! Subcommand implementations. Library calls only; printing and `anyhow` live here.
 
+pub mod frame;
 pub mod inspect;
 pub mod track;
 pub mod transform;

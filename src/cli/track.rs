@@ -18,6 +18,7 @@ use trackfix::track::simulate::{
     TrackTruth, measurements_csv, sample_tcp_points, scan_csv, simulate_measurements, simulate_scan,
 };
 use trackfix::track::spectrum::{TUKEY_ALPHA, scan_spectrum};
+use trackfix::track::uncertainty::{ProfileUncertainty, Sigma, knot_uncertainties};
 use trackfix::track::{Extrapolate, Gear, Knot, Profile, Reference, TrackError};
 use trackfix::transform::CellError;
 
@@ -98,6 +99,14 @@ pub struct FitArgs {
     /// Profile name (default: the output file's stem, or its folder's name for profile.toml).
     #[arg(long)]
     pub name: Option<String>,
+    /// The measurements.csv the frames were identified from: gives each knot its standard
+    /// uncertainties (u_dx ... u_rz), which `track show` carries to every skid.
+    #[arg(long, value_name = "measurements.csv")]
+    pub measurements: Option<PathBuf>,
+    /// Noise per axis of a measured point, mm (tracker and robot); default: from the
+    /// identification residuals. Needs --measurements.
+    #[arg(long, value_name = "MM", requires = "measurements")]
+    pub sigma: Option<f64>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -324,7 +333,38 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         source_sha256: sha256_hex(&bytes),
     };
     let fit = fit_track(&frames, &opts).with_context(|| a.frames.display().to_string())?;
-    let p = &fit.profile;
+    let mut noise_note = None;
+    let profile = match &a.measurements {
+        Some(path) => {
+            let rows = read_measurements(path)?;
+            let id = identify(&rows).with_context(|| path.display().to_string())?;
+            let same = id.fits.len() == frames.len()
+                && id.fits.iter().zip(&frames).all(|(f, g)| {
+                    // frames.csv keeps 4 decimals of mm and 6 of degrees.
+                    (f.skid - g.skid).abs() <= 1e-6 * (1.0 + g.skid.abs())
+                        && (f.fit.pose.translation.vector - g.pose.translation.vector).norm() < 1e-3
+                        && f.fit.pose.rotation.angle_to(&g.pose.rotation) < 1e-6
+                });
+            if !same {
+                anyhow::bail!(
+                    "{}: its base frames are not those of {}: pass the measurements the frames were identified from (`trackfix track identify` of them gives the frames)",
+                    path.display(),
+                    a.frames.display()
+                );
+            }
+            let (u, sigma) = knot_uncertainties(&rows, &id, a.sigma)
+                .with_context(|| path.display().to_string())?;
+            noise_note = Some(match sigma {
+                Sigma::Given(v) => format!("{v:.4} mm per axis (given)"),
+                Sigma::Estimated { sigma, dof } => {
+                    format!("{sigma:.4} mm per axis (from the residuals, {dof} degrees of freedom)")
+                }
+            });
+            fit.profile.clone().with_knot_uncertainties(&u)?
+        }
+        None => fit.profile.clone(),
+    };
+    let p = &profile;
     p.save(&a.output)?;
     let (s0, s1) = p.skid_range();
     let mut s = String::new();
@@ -342,6 +382,12 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         enum_name(a.gear),
         enum_name(a.extrapolate)
     );
+    if let Some(note) = &noise_note {
+        let _ = writeln!(
+            s,
+            "knot uncertainties from the identification noise: {note}"
+        );
+    }
     let _ = writeln!(s, "\nenter in the controller (measurement frame = world):");
     let _ = writeln!(
         s,
@@ -475,12 +521,21 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
         }
         return Ok(overview(&p));
     }
+    let pu = ProfileUncertainty::new(&p)?;
     let mut rows = Vec::with_capacity(skids.len());
     for &skid in &skids {
         let c = p
             .deviation_components(skid)
             .with_context(|| format!("{}: --at {skid}", a.profile.display()))?;
-        rows.push((skid, c));
+        let u = match &pu {
+            Some(pu) => Some(
+                pu.at(skid)
+                    .with_context(|| format!("{}: --at {skid}", a.profile.display()))?
+                    .u,
+            ),
+            None => None,
+        };
+        rows.push((skid, c, u));
     }
     let mut s = String::new();
     match a.format {
@@ -488,15 +543,31 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
             // Knot keeps the documented key order (a json! map would sort it).
             let arr: Vec<Knot> = rows
                 .iter()
-                .map(|(skid, c)| Knot::from_components(*skid, c.map(round6)))
+                .map(|(skid, c, u)| {
+                    Knot::from_components(*skid, c.map(round6)).with_uncertainty(u.map(|u| {
+                        let mut r = [0.0; 6];
+                        for (i, (slot, v)) in r.iter_mut().zip(u).enumerate() {
+                            *slot = if i < 3 { clean(v, 4) } else { round6(v) };
+                        }
+                        r
+                    }))
+                })
                 .collect();
             s = serde_json::to_string_pretty(&arr)?;
             s.push('\n');
         }
         ShowFormat::Csv => {
-            s.push_str("skid,dx,dy,dz,rx,ry,rz\n");
-            for (skid, c) in &rows {
-                let _ = writeln!(s, "{skid},{}", deviation_cells(c, 0, 0, ","));
+            s.push_str("skid,dx,dy,dz,rx,ry,rz");
+            if pu.is_some() {
+                s.push_str(",u_dx,u_dy,u_dz,u_rx,u_ry,u_rz");
+            }
+            s.push('\n');
+            for (skid, c, u) in &rows {
+                let _ = write!(s, "{skid},{}", deviation_cells(c, 0, 0, ","));
+                if let Some(u) = u {
+                    let _ = write!(s, ",{}", deviation_cells(u, 0, 0, ","));
+                }
+                s.push('\n');
             }
         }
         ShowFormat::Table => {
@@ -510,8 +581,17 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
                 s,
                 "      skid    dx [mm]    dy [mm]    dz [mm]     rx [deg]     ry [deg]     rz [deg]"
             );
-            for (skid, c) in &rows {
+            for (skid, c, u) in &rows {
                 let _ = writeln!(s, "{skid:>10} {}", deviation_cells(c, 10, 12, " "));
+                if let Some(u) = u {
+                    let _ = writeln!(s, "{:>10} {}", "u (k=1)", deviation_cells(u, 10, 12, " "));
+                }
+            }
+            if pu.is_some() {
+                let _ = writeln!(
+                    s,
+                    "u: standard uncertainty of D(s) from the knots' identification noise and the interpolation between knots"
+                );
             }
         }
     }

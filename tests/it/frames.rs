@@ -392,3 +392,186 @@ fn point_pairs_reject_a_bad_mark() {
     let kept = fit_pairs(&nominal, &measured, None, None).unwrap();
     assert!(kept.rejected.is_empty() && kept.rms > 0.5);
 }
+
+mod cli {
+    use crate::support::{root, trackfix};
+
+    fn ok(args: &[&str]) -> String {
+        let (code, out, err) = trackfix(args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        out
+    }
+
+    #[test]
+    fn samples_are_reproducible() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path().to_str().unwrap();
+        ok(&["frame", "simulate", "--out-dir", d]);
+        for f in [
+            "base_points.csv",
+            "marks.csv",
+            "flange.csv",
+            "flange_abc.csv",
+            "marks_nominal.csv",
+            "marks_tracker.csv",
+        ] {
+            let made = std::fs::read_to_string(dir.path().join(f)).unwrap();
+            let committed = std::fs::read_to_string(root().join("samples/frames").join(f)).unwrap();
+            assert_eq!(made, committed, "{f}");
+        }
+        let profile = dir.path().join("profile.toml");
+        ok(&[
+            "track",
+            "fit",
+            "samples/track/frames.csv",
+            "-o",
+            profile.to_str().unwrap(),
+            "--name",
+            "r1",
+            "--measurements",
+            "samples/track/measurements.csv",
+        ]);
+        assert_eq!(
+            std::fs::read_to_string(&profile).unwrap(),
+            std::fs::read_to_string(root().join("samples/frames/profile.toml")).unwrap()
+        );
+    }
+
+    #[test]
+    fn base_outputs() {
+        let args = [
+            "frame",
+            "base",
+            "samples/frames/base_points.csv",
+            "--profile",
+            "samples/frames/profile.toml",
+        ];
+        insta::assert_snapshot!("frame_base", ok(&args));
+        let mut json = args.to_vec();
+        json.extend(["--format", "json"]);
+        let text = ok(&json);
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(v["residuals"].as_array().unwrap().len(), 35);
+        insta::assert_snapshot!("frame_base_json", text);
+        insta::assert_snapshot!(
+            "frame_base_uncompensated",
+            ok(&["frame", "base", "samples/frames/base_points.csv"])
+        );
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("base.toml");
+        let mut with_o = args.to_vec();
+        with_o.extend(["-o", out.to_str().unwrap()]);
+        ok(&with_o);
+        let toml_text = std::fs::read_to_string(&out).unwrap();
+        insta::assert_snapshot!("frame_base_toml", toml_text);
+        // What -o writes is what samples/frames/cell.toml carries.
+        let cell = std::fs::read_to_string(root().join("samples/frames/cell.toml")).unwrap();
+        for line in toml_text.lines().filter(|l| !l.starts_with('#')) {
+            assert!(cell.contains(line), "{line}");
+        }
+    }
+
+    #[test]
+    fn wobj_tool_and_pair_outputs() {
+        let wobj = [
+            "frame",
+            "wobj",
+            "samples/frames/marks.csv",
+            "--cell",
+            "samples/frames/cell.toml",
+            "--robot",
+            "r1",
+        ];
+        insta::assert_snapshot!("frame_wobj", ok(&wobj));
+        let mut json = wobj.to_vec();
+        json.extend(["--format", "json"]);
+        insta::assert_snapshot!("frame_wobj_json", ok(&json));
+        let mut plain = wobj.to_vec();
+        plain.push("--no-compensation");
+        insta::assert_snapshot!("frame_wobj_uncompensated", ok(&plain));
+        let tool = ok(&["frame", "tool", "samples/frames/flange.csv"]);
+        insta::assert_snapshot!("frame_tool", tool);
+        // KUKA A, B, C give the same TCP (to the written 4 decimals of the angles).
+        let abc = ok(&[
+            "frame",
+            "tool",
+            "samples/frames/flange_abc.csv",
+            "--format",
+            "json",
+        ]);
+        insta::assert_snapshot!("frame_tool_abc_json", abc);
+        insta::assert_snapshot!(
+            "frame_fit",
+            ok(&[
+                "frame",
+                "fit",
+                "samples/frames/marks_nominal.csv",
+                "samples/frames/marks_tracker.csv",
+            ])
+        );
+    }
+
+    #[test]
+    fn show_carries_the_uncertainty() {
+        let p = "samples/frames/profile.toml";
+        let table = ok(&[
+            "track", "show", p, "--at", "0", "--at", "250", "--at", "4250",
+        ]);
+        insta::assert_snapshot!("show_u_table", table);
+        let json = ok(&["track", "show", p, "--step", "2000", "--format", "json"]);
+        let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+        for row in v.as_array().unwrap() {
+            for k in ["u_dx", "u_dy", "u_dz", "u_rx", "u_ry", "u_rz"] {
+                assert!(row[k].as_f64().unwrap() > 0.0, "{row}");
+            }
+        }
+        insta::assert_snapshot!("show_u_json", json);
+        let csv = ok(&["track", "show", p, "--at", "250", "--format", "csv"]);
+        insta::assert_snapshot!("show_u_csv", csv);
+        // An old profile without knot uncertainties reads as before.
+        let old = ok(&[
+            "track",
+            "show",
+            "samples/track/profile.toml",
+            "--at",
+            "250",
+            "--format",
+            "json",
+        ]);
+        assert!(!old.contains("u_dx"), "{old}");
+    }
+
+    #[test]
+    fn frame_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let one_skid = dir.path().join("one_skid.csv");
+        std::fs::write(
+            &one_skid,
+            "skid,point,robot_x,robot_y,robot_z,meas_x,meas_y,meas_z\n\
+             0,1,1000,0,0,1000,0,0\n0,2,0,1000,0,0,1000,0\n0,3,0,0,1000,0,0,1000\n0,4,500,500,0,500,500,0\n",
+        )
+        .unwrap();
+        let no_rot = dir.path().join("flange.csv");
+        std::fs::write(&no_rot, "x,y,z,w\n1,2,3,4\n").unwrap();
+        let mut all = String::new();
+        for args in [
+            vec!["frame", "base", one_skid.to_str().unwrap()],
+            vec!["frame", "tool", no_rot.to_str().unwrap()],
+            vec![
+                "track",
+                "fit",
+                "samples/track/frames.csv",
+                "-o",
+                dir.path().join("p.toml").to_str().unwrap(),
+                "--measurements",
+                "samples/track/r2/measurements.csv",
+            ],
+        ] {
+            let (code, _, err) = trackfix(&args);
+            assert_eq!(code, 2, "{args:?}");
+            all.push_str(&err.replace(dir.path().to_str().unwrap(), "TMP"));
+            all.push('\n');
+        }
+        insta::assert_snapshot!("frame_errors", all);
+    }
+}
