@@ -16,4 +16,6 @@ pub mod spline;
 pub mod uncertainty;
 
 pub use csv_table::NumericCsv;
-pub use profile::{Extrapolate, Gear, Knot, Nominal, Profile, Reference, TrackError};
+pub use profile::{
+    Extrapolate, Gear, Knot, KnotUncertainty, Nominal, Profile, Reference, TrackError,
+};

@@ -87,6 +87,24 @@ pub struct Knot {
     pub u_ry: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub u_rz: Option<f64>,
+    /// The centroid of the points the knot's frame was identified from (base frame, mm):
+    /// there a position error does not correlate with the rotation error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_centre: Option<[f64; 3]>,
+    /// Standard uncertainties (k = 1) of a point at `u_centre` along the base axes, mm.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_centre_xyz: Option<[f64; 3]>,
+}
+
+/// A knot's standard uncertainties (k = 1) from the identification of its frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KnotUncertainty {
+    /// `[u_dx, u_dy, u_dz, u_rx, u_ry, u_rz]`, mm and degrees.
+    pub u: [f64; 6],
+    /// Centroid of the identification points, base frame, mm.
+    pub centre: [f64; 3],
+    /// Standard uncertainties of a point at `centre`, mm.
+    pub centre_xyz: [f64; 3],
 }
 
 impl Knot {
@@ -111,7 +129,14 @@ impl Knot {
             u_rx: None,
             u_ry: None,
             u_rz: None,
+            u_centre: None,
+            u_centre_xyz: None,
         }
+    }
+
+    /// `(u_centre, u_centre_xyz)` if the knot carries both.
+    pub fn centre_uncertainty(&self) -> Option<([f64; 3], [f64; 3])> {
+        Some((self.u_centre?, self.u_centre_xyz?))
     }
 
     /// `[u_dx, u_dy, u_dz, u_rx, u_ry, u_rz]` if the knot carries all six.
@@ -437,9 +462,9 @@ impl Profile {
         &self.splines
     }
 
-    /// Same profile with standard uncertainties on its knots, one `[u_dx, …, u_rz]` per knot
-    /// in knot order (rounded to 1e-6 like the knots).
-    pub fn with_knot_uncertainties(mut self, u: &[[f64; 6]]) -> Result<Profile, TrackError> {
+    /// Same profile with standard uncertainties on its knots, one per knot in knot order
+    /// (rounded to 1e-6 like the knots, the centre to 0.1 mm).
+    pub fn with_knot_uncertainties(mut self, u: &[KnotUncertainty]) -> Result<Profile, TrackError> {
         if u.len() != self.file.knot.len() {
             return Err(TrackError::Invalid(format!(
                 "{} knot uncertainties for {} knots",
@@ -447,8 +472,11 @@ impl Profile {
                 self.file.knot.len()
             )));
         }
+        let r6 = |v: f64| (v * 1e6).round() / 1e6;
         for (k, u) in self.file.knot.iter_mut().zip(u) {
-            *k = k.with_uncertainty(Some(u.map(|v| (v * 1e6).round() / 1e6)));
+            *k = k.with_uncertainty(Some(u.u.map(r6)));
+            k.u_centre = Some(u.centre.map(|v| (v * 10.0).round() / 10.0));
+            k.u_centre_xyz = Some(u.centre_xyz.map(r6));
         }
         Ok(self)
     }
@@ -665,12 +693,21 @@ mod tests {
         let p = sample();
         let text = p.to_toml_string().unwrap();
         assert!(!text.contains("u_dx"), "{text}");
-        let u = [[0.01, 0.02, 0.03, 0.0004, 0.0005, 0.0006]; 3];
+        let u = [KnotUncertainty {
+            u: [0.01, 0.02, 0.03, 0.0004, 0.0005, 0.0006],
+            centre: [1200.04, 0.0, 850.0],
+            centre_xyz: [0.006; 3],
+        }; 3];
         let with = p.with_knot_uncertainties(&u).unwrap();
         let text = with.to_toml_string().unwrap();
         assert!(text.contains("u_dz = 0.03"), "{text}");
+        assert!(text.contains("u_centre = [1200.0, 0.0, 850.0]"), "{text}");
         let back = Profile::from_toml_str(&text, Path::new("p.toml")).unwrap();
-        assert_eq!(back.knots()[1].uncertainty(), Some(u[1]));
+        assert_eq!(back.knots()[1].uncertainty(), Some(u[1].u));
+        assert_eq!(
+            back.knots()[1].centre_uncertainty(),
+            Some(([1200.0, 0.0, 850.0], [0.006; 3]))
+        );
         assert!(sample().with_knot_uncertainties(&u[..2]).is_err());
     }
 

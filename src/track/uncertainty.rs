@@ -21,7 +21,7 @@ use std::collections::BTreeMap;
 use nalgebra::{DMatrix, Matrix3, Matrix6, Point3, Vector3};
 
 use super::identify::Identification;
-use super::profile::{Extrapolate, Profile, TrackError};
+use super::profile::{Extrapolate, KnotUncertainty, Profile, TrackError};
 use super::simulate::MeasurementRow;
 use super::spline::{CubicSpline, EndCondition};
 use crate::geometry::Pose;
@@ -92,13 +92,14 @@ pub fn invert_spd(m: &DMatrix<f64>) -> Option<DMatrix<f64>> {
     Some(&eig.eigenvectors * inv * eig.eigenvectors.transpose())
 }
 
-/// `[u_dx, u_dy, u_dz, u_rx, u_ry, u_rz]` (mm, degrees) of each identified frame, in the order
-/// of `ident.fits`, and the noise level used.
+/// The standard uncertainties of each identified frame (`[u_dx, …, u_rz]` in mm and degrees,
+/// and those of a point at the centroid of its points), in the order of `ident.fits`, and the
+/// noise level used.
 pub fn knot_uncertainties(
     rows: &[MeasurementRow],
     ident: &Identification,
     sigma: Option<f64>,
-) -> Result<(Vec<[f64; 6]>, Sigma), TrackError> {
+) -> Result<(Vec<KnotUncertainty>, Sigma), TrackError> {
     let mut by_skid: BTreeMap<u64, Vec<Point3<f64>>> = BTreeMap::new();
     for r in rows {
         by_skid
@@ -151,7 +152,15 @@ pub fn knot_uncertainties(
             let v = s * cof[(i, i)].max(0.0).sqrt();
             *slot = if i < 3 { v } else { v.to_degrees() };
         }
-        out.push(u);
+        // At the centroid, position and rotation decouple: `JᵀJ` there has no cross block,
+        // so a point's covariance is σ²/n per axis.
+        let n = points.len().max(1) as f64;
+        let c = points.iter().map(|p| p.coords).sum::<Vector3<f64>>() / n;
+        out.push(KnotUncertainty {
+            u,
+            centre: [c.x, c.y, c.z],
+            centre_xyz: [s / n.sqrt(); 3],
+        });
     }
     Ok((out, sigma))
 }
@@ -178,6 +187,9 @@ pub struct ProfileUncertainty {
     cardinal: Vec<CubicSpline>,
     /// Noise-free leave-one-out miss per knot (0 at the ends), mm and degrees.
     loo: Vec<[f64; 6]>,
+    /// Per knot, the identification points' centroid and a point's uncertainty there, if the
+    /// profile has them.
+    centres: Option<Vec<([f64; 3], [f64; 3])>>,
     extrapolate: Extrapolate,
 }
 
@@ -240,18 +252,22 @@ impl ProfileUncertainty {
                 }
             }
         }
+        let centres = knots
+            .iter()
+            .map(|k| k.centre_uncertainty())
+            .collect::<Option<Vec<_>>>();
         Ok(Some(ProfileUncertainty {
             skids,
             knot_u,
             cardinal,
             loo,
+            centres,
             extrapolate: profile.extrapolate(),
         }))
     }
 
-    /// The standard uncertainties of `D(s)`; outside the knots as the profile's extrapolation
-    /// rule says (an error for `extrapolate = "error"`).
-    pub fn at(&self, skid: f64) -> Result<DeviationUncertainty, TrackError> {
+    /// `w_i(s)`, or why `s` is refused.
+    fn weights(&self, skid: f64) -> Result<(Vec<f64>, bool), TrackError> {
         let (min, max) = (
             self.skids.first().copied().unwrap_or(0.0),
             self.skids.last().copied().unwrap_or(0.0),
@@ -266,7 +282,17 @@ impl ProfileUncertainty {
             Extrapolate::Linear if !inside => c.value(end) + c.derivative(end) * (skid - end),
             _ => c.value(end),
         };
-        let w: Vec<f64> = self.cardinal.iter().map(weight).collect();
+        Ok((self.cardinal.iter().map(weight).collect(), inside))
+    }
+
+    /// The standard uncertainties of `D(s)`; outside the knots as the profile's extrapolation
+    /// rule says (an error for `extrapolate = "error"`).
+    pub fn at(&self, skid: f64) -> Result<DeviationUncertainty, TrackError> {
+        let (w, inside) = self.weights(skid)?;
+        let end = skid.clamp(
+            self.skids.first().copied().unwrap_or(0.0),
+            self.skids.last().copied().unwrap_or(0.0),
+        );
         let mut noise = [0.0; 6];
         for (c, slot) in noise.iter_mut().enumerate() {
             *slot = w
@@ -310,6 +336,47 @@ impl ProfileUncertainty {
     }
 }
 
+impl ProfileUncertainty {
+    /// The uncertainty of the corrected TCP for a target at skid `s` whose TCP is at
+    /// `tcp_in_base` (offset from the robot base, base frame, mm). With the knots' centroids
+    /// (profiles fitted by this version) each knot's error is a position error at its centroid
+    /// plus a rotation about it, independent of each other: exact for the rigid fit, so the
+    /// TCP's uncertainty is as small as the identification makes it near the measured points.
+    /// Older profiles fall back to [`tcp_uncertainty`]. The interpolation part is added as
+    /// independent translation and rotation errors.
+    pub fn tcp_at(
+        &self,
+        skid: f64,
+        tcp_in_base: &Vector3<f64>,
+    ) -> Result<TcpUncertainty, TrackError> {
+        let dev = self.at(skid)?;
+        let Some(centres) = &self.centres else {
+            return Ok(tcp_uncertainty(&dev, tcp_in_base));
+        };
+        let (w, _) = self.weights(skid)?;
+        let mut cov = Matrix3::<f64>::zeros();
+        for ((wi, u), (c, uc)) in w.iter().zip(&self.knot_u).zip(centres) {
+            let arm = (tcp_in_base - Vector3::from(*c)).cross_matrix();
+            let cov_c = Matrix3::from_diagonal(&Vector3::from(*uc).map(|v| v * v));
+            let cov_r = Matrix3::from_diagonal(
+                &Vector3::new(u[3], u[4], u[5]).map(|v| v.to_radians().powi(2)),
+            );
+            cov += (cov_c + arm * cov_r * arm.transpose()) * (wi * wi);
+        }
+        let ip = dev.interpolation;
+        let arm = tcp_in_base.cross_matrix();
+        let cov_t = Matrix3::from_diagonal(&Vector3::new(ip[0], ip[1], ip[2]).map(|v| v * v));
+        let cov_r = Matrix3::from_diagonal(
+            &Vector3::new(ip[3], ip[4], ip[5]).map(|v| v.to_radians().powi(2)),
+        );
+        cov += cov_t + arm * cov_r * arm.transpose();
+        Ok(TcpUncertainty {
+            u: [0, 1, 2].map(|i| cov[(i, i)].max(0.0).sqrt()),
+            expanded: 2.0 * cov.trace().max(0.0).sqrt(),
+        })
+    }
+}
+
 /// Uncertainty of a corrected TCP at one skid (the track's part).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TcpUncertainty {
@@ -321,11 +388,12 @@ pub struct TcpUncertainty {
     pub expanded: f64,
 }
 
-/// The uncertainty of the corrected TCP for a target at `tcp_in_base` (the TCP's offset from
-/// the robot base, in the base frame, mm) from the profile's `D(s)` uncertainty: a base error
-/// `(δt, δθ)` moves the TCP by `δt + δθ × r`. The six components are taken as independent (the
-/// profile stores standard uncertainties, not their correlations), which overstates the
-/// uncertainty of TCPs near the points the knots were identified from.
+/// The uncertainty of a TCP at `tcp_in_base` (offset from the robot base, base frame, mm) from
+/// the standard uncertainties of `D(s)` alone: a base error `(δt, δθ)` moves the TCP by
+/// `δt + δθ × r`. The six components are taken as independent, which overstates the
+/// uncertainty of TCPs near the points the knots were identified from (the origin's position
+/// error and the rotation error are correlated); [`ProfileUncertainty::tcp_at`] does better
+/// where the profile has the knots' centroids.
 pub fn tcp_uncertainty(dev: &DeviationUncertainty, tcp_in_base: &Vector3<f64>) -> TcpUncertainty {
     let du = dev.u;
     let rad = |d: f64| d.to_radians();
@@ -348,7 +416,7 @@ pub fn tcp_uncertainty(dev: &DeviationUncertainty, tcp_in_base: &Vector3<f64>) -
     }
 }
 
-/// [`tcp_uncertainty`] for a target given in world: `base` is the robot base `B(s)` in world at
+/// [`ProfileUncertainty::tcp_at`] for a target given in world: `base` is the robot base `B(s)` in world at
 /// that skid, `tcp_in_world` the corrected TCP position.
 pub fn tcp_uncertainty_world(
     profile_u: &ProfileUncertainty,
@@ -356,9 +424,8 @@ pub fn tcp_uncertainty_world(
     skid: f64,
     tcp_in_world: &Point3<f64>,
 ) -> Result<TcpUncertainty, TrackError> {
-    let dev = profile_u.at(skid)?;
     let r = base.inverse() * tcp_in_world;
-    Ok(tcp_uncertainty(&dev, &r.coords))
+    profile_u.tcp_at(skid, &r.coords)
 }
 
 #[cfg(test)]
