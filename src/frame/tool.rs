@@ -153,3 +153,19 @@ pub fn fit_tool(poses: &[Pose], sigma: Option<f64>) -> Result<ToolFit, FrameErro
         u_point: [u(3), u(4), u(5)],
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::pose_xyz_deg;
+
+    #[test]
+    fn orientations_about_one_axis_do_not_fix_the_tcp() {
+        // Turning only about base z leaves the TCP's z and the point's z trading off.
+        let poses: Vec<Pose> = (0..6)
+            .map(|k| pose_xyz_deg(100.0 * k as f64, 0.0, 500.0, 0.0, 0.0, 60.0 * k as f64))
+            .collect();
+        let e = fit_tool(&poses, None).unwrap_err();
+        assert!(e.to_string().contains("two different axes"), "{e}");
+    }
+}
