@@ -60,7 +60,8 @@ Examples:
   trackfix track show samples/track/profile.toml
   trackfix track show samples/track/profile.toml --at 0 --at 250 --at 4000
   trackfix track show samples/track/profile.toml --step 500 --format csv
-  trackfix track show samples/track/profile.toml --plot profile.svg";
+  trackfix track show samples/track/profile.toml --plot profile.svg
+  trackfix track show samples/frames/profile.toml --step 1000 --tcp 1500,300,900";
 
 const SPECTRUM_EXAMPLES: &str = "\
 Examples:
@@ -138,6 +139,37 @@ pub struct ShowArgs {
     /// Also write an SVG: the six deviation curves with their knots, and the twist diagram.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
+    /// Also give, at each skid, the expanded uncertainty (k = 2) of a corrected TCP at X,Y,Z
+    /// (robot base frame, mm). Needs a profile fitted with --measurements.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_xyz, allow_hyphen_values = true)]
+    pub tcp: Option<[f64; 3]>,
+}
+
+/// `X,Y,Z` in mm.
+fn parse_xyz(text: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let values: Vec<f64> = parts
+        .iter()
+        .map(|p| p.parse::<f64>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or_else(|| format!("`{text}`: write three numbers in mm, e.g. 1500,300,900"))?;
+    match values[..] {
+        [x, y, z] => Ok([x, y, z]),
+        _ => Err(format!(
+            "`{text}`: write three numbers in mm, e.g. 1500,300,900"
+        )),
+    }
+}
+
+/// A `show --format json` row: the knot's keys, then the TCP's uncertainty if asked.
+#[derive(serde::Serialize)]
+struct ShowRow {
+    #[serde(flatten)]
+    knot: Knot,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tcp_u: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tcp_expanded: Option<f64>,
 }
 
 #[derive(clap::Args)]
@@ -522,35 +554,49 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
         return Ok(overview(&p));
     }
     let pu = ProfileUncertainty::new(&p)?;
+    let tcp = match (&a.tcp, &pu) {
+        (Some(v), Some(_)) => Some(nalgebra::Vector3::new(v[0], v[1], v[2])),
+        (Some(_), None) => anyhow::bail!(
+            "{}: --tcp needs knot uncertainties, and this profile has none: fit it with `trackfix track fit FRAMES.csv --measurements MEASUREMENTS.csv`",
+            a.profile.display()
+        ),
+        (None, _) => None,
+    };
     let mut rows = Vec::with_capacity(skids.len());
     for &skid in &skids {
-        let c = p
-            .deviation_components(skid)
-            .with_context(|| format!("{}: --at {skid}", a.profile.display()))?;
-        let u = match &pu {
-            Some(pu) => Some(
-                pu.at(skid)
-                    .with_context(|| format!("{}: --at {skid}", a.profile.display()))?
-                    .u,
-            ),
-            None => None,
+        let at = || format!("{}: --at {skid}", a.profile.display());
+        let c = p.deviation_components(skid).with_context(at)?;
+        let (u, t) = match &pu {
+            Some(pu) => {
+                let u = pu.at(skid).with_context(at)?.u;
+                let t = match &tcp {
+                    Some(r) => Some(pu.tcp_at(skid, r).with_context(at)?),
+                    None => None,
+                };
+                (Some(u), t)
+            }
+            None => (None, None),
         };
-        rows.push((skid, c, u));
+        rows.push((skid, c, u, t));
     }
     let mut s = String::new();
     match a.format {
         ShowFormat::Json => {
             // Knot keeps the documented key order (a json! map would sort it).
-            let arr: Vec<Knot> = rows
+            let arr: Vec<ShowRow> = rows
                 .iter()
-                .map(|(skid, c, u)| {
-                    Knot::from_components(*skid, c.map(round6)).with_uncertainty(u.map(|u| {
-                        let mut r = [0.0; 6];
-                        for (i, (slot, v)) in r.iter_mut().zip(u).enumerate() {
-                            *slot = if i < 3 { clean(v, 4) } else { round6(v) };
-                        }
-                        r
-                    }))
+                .map(|(skid, c, u, t)| ShowRow {
+                    knot: Knot::from_components(*skid, c.map(round6)).with_uncertainty(u.map(
+                        |u| {
+                            let mut r = [0.0; 6];
+                            for (i, (slot, v)) in r.iter_mut().zip(u).enumerate() {
+                                *slot = if i < 3 { clean(v, 4) } else { round6(v) };
+                            }
+                            r
+                        },
+                    )),
+                    tcp_u: t.map(|t| t.u.map(|v| clean(v, 4))),
+                    tcp_expanded: t.map(|t| clean(t.expanded, 4)),
                 })
                 .collect();
             s = serde_json::to_string_pretty(&arr)?;
@@ -561,11 +607,21 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
             if pu.is_some() {
                 s.push_str(",u_dx,u_dy,u_dz,u_rx,u_ry,u_rz");
             }
+            if tcp.is_some() {
+                s.push_str(",tcp_u_x,tcp_u_y,tcp_u_z,tcp_expanded");
+            }
             s.push('\n');
-            for (skid, c, u) in &rows {
+            for (skid, c, u, t) in &rows {
                 let _ = write!(s, "{skid},{}", deviation_cells(c, 0, 0, ","));
                 if let Some(u) = u {
                     let _ = write!(s, ",{}", deviation_cells(u, 0, 0, ","));
+                }
+                if let Some(t) = t {
+                    let _ = write!(
+                        s,
+                        ",{:.4},{:.4},{:.4},{:.4}",
+                        t.u[0], t.u[1], t.u[2], t.expanded
+                    );
                 }
                 s.push('\n');
             }
@@ -581,16 +637,30 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
                 s,
                 "      skid    dx [mm]    dy [mm]    dz [mm]     rx [deg]     ry [deg]     rz [deg]"
             );
-            for (skid, c, u) in &rows {
+            for (skid, c, u, t) in &rows {
                 let _ = writeln!(s, "{skid:>10} {}", deviation_cells(c, 10, 12, " "));
                 if let Some(u) = u {
                     let _ = writeln!(s, "{:>10} {}", "u (k=1)", deviation_cells(u, 10, 12, " "));
+                }
+                if let Some(t) = t {
+                    let _ = writeln!(
+                        s,
+                        "{:>10} U (k=2) {:.4} mm (u x {:.4} y {:.4} z {:.4} mm)",
+                        "TCP", t.expanded, t.u[0], t.u[1], t.u[2]
+                    );
                 }
             }
             if pu.is_some() {
                 let _ = writeln!(
                     s,
                     "u: standard uncertainty of D(s) from the knots' identification noise and the interpolation between knots"
+                );
+            }
+            if let Some(r) = &tcp {
+                let _ = writeln!(
+                    s,
+                    "TCP: a corrected TCP at ({}, {}, {}) mm in the robot base; U = 2*sqrt(u_x^2 + u_y^2 + u_z^2)",
+                    r.x, r.y, r.z
                 );
             }
         }

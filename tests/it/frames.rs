@@ -560,6 +560,45 @@ mod cli {
         insta::assert_snapshot!("show_u_json", json);
         let csv = ok(&["track", "show", p, "--at", "250", "--format", "csv"]);
         insta::assert_snapshot!("show_u_csv", csv);
+        let tcp = ok(&[
+            "track",
+            "show",
+            p,
+            "--at",
+            "250",
+            "--at",
+            "4250",
+            "--tcp",
+            "1500,300,900",
+        ]);
+        insta::assert_snapshot!("show_u_tcp", tcp);
+        let json = ok(&[
+            "track",
+            "show",
+            p,
+            "--at",
+            "4250",
+            "--tcp",
+            "1500,300,900",
+            "--format",
+            "json",
+        ]);
+        let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+        let expanded = v[0]["tcp_expanded"].as_f64().unwrap();
+        let u: Vec<f64> = (0..3).map(|i| v[0]["tcp_u"][i].as_f64().unwrap()).collect();
+        let want = 2.0 * (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
+        assert!((expanded - want).abs() < 2e-4, "{expanded} vs {want}");
+        let (code, _, err) = trackfix(&[
+            "track",
+            "show",
+            "samples/track/profile.toml",
+            "--at",
+            "250",
+            "--tcp",
+            "1500,300,900",
+        ]);
+        assert_eq!(code, 2);
+        assert!(err.contains("--measurements"), "{err}");
         // An old profile without knot uncertainties reads as before.
         let old = ok(&[
             "track",
