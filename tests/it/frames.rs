@@ -654,3 +654,56 @@ mod cli {
         insta::assert_snapshot!("frame_errors", all);
     }
 }
+
+mod invariants {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        /// Exact points at several skids give back the base and the axis they came from.
+        #[test]
+        fn base_of_exact_points_is_recovered(
+            x in -5000.0f64..5000.0, y in -5000.0f64..5000.0, z in -500.0f64..500.0,
+            rx in -3.0f64..3.0, ry in -3.0f64..3.0, rz in -180.0f64..180.0,
+            tilt in -0.01f64..0.01, turn in -180.0f64..180.0,
+        ) {
+            let b0 = pose_xyz_deg(x, y, z, rx, ry, rz);
+            let axis = trackfix::geometry::xyz_deg(0.0, tilt, turn) * Vector3::x();
+            let rows: Vec<_> = [0.0, 1700.0, 4100.0]
+                .iter()
+                .flat_map(|&s| {
+                    sample_tcp_points().into_iter().take(5).map(move |p| {
+                        let m = b0 * p + axis * s;
+                        trackfix::track::simulate::MeasurementRow {
+                            skid: s,
+                            point: 1,
+                            robot: [p.x, p.y, p.z],
+                            meas: [m.x, m.y, m.z],
+                        }
+                    })
+                })
+                .collect();
+            let fit = fit_base(&rows, None, Some(0.01)).unwrap();
+            prop_assert!((fit.base0.translation.vector - b0.translation.vector).norm() < 1e-6);
+            prop_assert!(fit.base0.rotation.angle_to(&b0.rotation) < 1e-9);
+            prop_assert!((fit.track_axis - axis).norm() < 1e-9);
+            prop_assert!(fit.rms < 1e-6);
+        }
+
+        /// Exact pivot poses give back the TCP; the residuals vanish.
+        #[test]
+        fn tcp_of_exact_poses_is_recovered(
+            tx in -50.0f64..50.0, ty in -50.0f64..50.0, tz in 50.0f64..400.0,
+            px in 500.0f64..2000.0, py in -800.0f64..800.0, pz in 0.0f64..1500.0,
+            seed in 0u64..1000,
+        ) {
+            let tcp = Vector3::new(tx, ty, tz);
+            let poses = simulate_pivot(&tcp, &Point3::new(px, py, pz), 6, 0.0, seed);
+            let fit = fit_tool(&poses, Some(0.0)).unwrap();
+            prop_assert!((fit.tcp - tcp).norm() < 1e-8);
+            prop_assert!(fit.max < 1e-8);
+        }
+    }
+}
