@@ -725,6 +725,26 @@ fn overview(p: &Profile) -> String {
         let d = b.distance.map(|c| c.distance.abs());
         let _ = writeln!(s, "{:>10}{:>10}{}", b.from, b.to, row6(&d));
     }
+    if let Ok(Some(pu)) = ProfileUncertainty::new(p) {
+        let _ = writeln!(
+            s,
+            "\nlargest standard uncertainty (k=1) of D(s) per interval: knots' noise and interpolation"
+        );
+        let _ = writeln!(s, "      from        to{header}");
+        for w in p.knots().windows(2) {
+            let (a, b) = (w[0].skid, w[1].skid);
+            let mut worst = [0.0f64; 6];
+            // The interpolation part peaks mid-interval, the noise part at the knots.
+            for i in 0..=16 {
+                if let Ok(u) = pu.at(a + (b - a) * i as f64 / 16.0) {
+                    for (m, v) in worst.iter_mut().zip(u.u) {
+                        *m = m.max(v);
+                    }
+                }
+            }
+            let _ = writeln!(s, "{a:>10}{b:>10}{}", row6(&worst));
+        }
+    }
     s
 }
 

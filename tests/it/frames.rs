@@ -607,6 +607,12 @@ mod cli {
         ]);
         assert_eq!(code, 2);
         assert!(err.contains("--measurements"), "{err}");
+        let overview = ok(&["track", "show", p]);
+        assert!(
+            overview.contains("largest standard uncertainty"),
+            "{overview}"
+        );
+        insta::assert_snapshot!("show_u_overview", overview);
         // An old profile without knot uncertainties reads as before.
         let old = ok(&[
             "track",
