@@ -1,5 +1,5 @@
 //! Uncertainty of a track profile, from the tracker and robot noise to `D(s)` and to a corrected
-//! TCP (docs/design-frames.md §4).
+//! TCP (docs/design-frames.md §6).
 //!
 //! 1. **Frame**: the base frame at one skid is a rigid fit of `n` point pairs. With independent
 //!    noise `σ` per axis, its covariance in the perturbation `F = F̂·(δt, δθ)` is
@@ -28,10 +28,13 @@ use crate::geometry::Pose;
 
 /// The interpolation uncertainty in the middle of an interval, as a share of the noise-free
 /// leave-one-out miss `ê` (which is taken at twice the spacing). A smooth track's `h⁴` law
-/// would give 1/16; rails with a waviness near the spacing scale slower, and 1/2 is what keeps
-/// the coverage of 2u at 94-96 % on simulated tracks sampled every 500-1000 mm
-/// (tests/it/frames.rs). Sampled coarser than the spectrum recommends (`track spectrum`), the
-/// leave-one-out cannot see the waviness and the uncertainty is too small.
+/// would give 1/16 (and `h²` near the natural ends 1/4): calibrated at 3-4 knots per wavelength
+/// of the rail's waviness, but 76 % coverage at the 2 knots per wavelength `track spectrum`
+/// recommends, where leave-one-out cannot tell a resolved waviness from an aliased one. 1/2
+/// keeps the coverage of 2u at 91-98 % from 2 to 4 knots per wavelength and 500-1000 mm spacing
+/// (tests/it/frames.rs), on the safe side where the sampling is fine. Sampled coarser than the
+/// spectrum recommends, the leave-one-out cannot see the waviness and the uncertainty is too
+/// small.
 pub const INTERPOLATION_SHARE: f64 = 0.5;
 
 /// Where the noise level used for an uncertainty came from.
@@ -185,7 +188,7 @@ pub struct ProfileUncertainty {
     knot_u: Vec<[f64; 6]>,
     /// `w_i(s)`: the spline through the `i`-th unit vector.
     cardinal: Vec<CubicSpline>,
-    /// Noise-free leave-one-out miss per knot (0 at the ends), mm and degrees.
+    /// Noise-free leave-one-out miss `ê` per knot (0 at the ends), mm and degrees.
     loo: Vec<[f64; 6]>,
     /// Per knot, the identification points' centroid and a point's uncertainty there, if the
     /// profile has them.
