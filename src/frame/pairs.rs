@@ -9,7 +9,7 @@ use nalgebra::{Matrix6, Point3};
 
 use super::{FrameError, PointResidual, PoseUncertainty, rms, sigma_of, xyz_deg_uncertainty};
 use crate::geometry::Pose;
-use crate::geometry::rigid_fit::fit_rigid;
+use crate::geometry::rigid_fit::{RigidFitError, fit_rigid};
 use crate::track::TrackError;
 use crate::track::csv_table::NumericCsv;
 use crate::track::uncertainty::{Sigma, rigid_fit_cofactor};
@@ -114,7 +114,12 @@ pub fn fit_pairs(
         let src: Vec<Point3<f64>> = ids.iter().map(|k| measured[k]).collect();
         let dst: Vec<Point3<f64>> = ids.iter().map(|k| nominal[k]).collect();
         let fit = fit_rigid(&src, &dst).map_err(|e| {
-            FrameError::Underdetermined(format!("{} paired point(s): {e}", ids.len()))
+            FrameError::Underdetermined(match e {
+                RigidFitError::TooFewPoints { got } => format!(
+                    "{got} point(s) in both files: a best fit needs at least 3 non-collinear points, paired by point number"
+                ),
+                other => format!("{} paired points: {other}", ids.len()),
+            })
         })?;
         // A least-squares fit spreads one bad point over the others; its residual against
         // the fit of the rest shows it plainly.

@@ -551,6 +551,75 @@ mod cli {
         );
     }
 
+    /// Hamilton product of scalar-first quaternions, written out here.
+    fn qmul(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+        [
+            a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+            a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+            a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+            a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+        ]
+    }
+
+    #[test]
+    fn wobj_literals_follow_the_controllers_conventions() {
+        let json = ok(&[
+            "frame",
+            "wobj",
+            "samples/frames/marks.csv",
+            "--cell",
+            "samples/frames/cell.toml",
+            "--robot",
+            "r1",
+            "--name",
+            "wobj_car",
+            "--base-index",
+            "3",
+            "--format",
+            "json",
+        ]);
+        let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+        let w = |k: &str| v["wobj"][k].as_f64().unwrap();
+        let numbers = |text: &str| -> Vec<f64> {
+            text.split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
+                .filter_map(|t| t.parse().ok())
+                .collect()
+        };
+        // KUKA: A, B, C = Rz·Ry·Rx, the same order as rx, ry, rz: A = rz, B = ry, C = rx.
+        let kuka = v["kuka"].as_str().unwrap();
+        assert!(kuka.starts_with("BASE_DATA[3]={X "), "{kuka}");
+        let k = numbers(kuka.trim_start_matches("BASE_DATA[3]"));
+        for (got, want) in k
+            .iter()
+            .zip([w("x"), w("y"), w("z"), w("rz"), w("ry"), w("rx")])
+        {
+            assert!((got - want).abs() < 6e-4, "{kuka} vs {v}");
+        }
+        // RAPID: q = qz·qy·qx from half angles, scalar first.
+        let half = |deg: f64| (deg.to_radians() / 2.0).sin_cos();
+        let (sx, cx) = half(w("rx"));
+        let (sy, cy) = half(w("ry"));
+        let (sz, cz) = half(w("rz"));
+        let q = qmul(
+            qmul([cz, 0.0, 0.0, sz], [cy, 0.0, sy, 0.0]),
+            [cx, sx, 0.0, 0.0],
+        );
+        let rapid = v["rapid"].as_str().unwrap();
+        assert!(
+            rapid.starts_with("PERS wobjdata wobj_car:=[FALSE,TRUE,\"\",[["),
+            "{rapid}"
+        );
+        let r = numbers(rapid);
+        assert_eq!(r.len(), 3 + 4 + 3 + 4, "{rapid}");
+        for (got, want) in r[..3].iter().zip([w("x"), w("y"), w("z")]) {
+            assert!((got - want).abs() < 6e-4);
+        }
+        for (got, want) in r[3..7].iter().zip(q) {
+            assert!((got - want).abs() < 2e-6, "{rapid} vs {q:?}");
+        }
+        assert_eq!(r[7..], [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]);
+    }
+
     #[test]
     fn show_carries_the_uncertainty() {
         let p = "samples/frames/profile.toml";
@@ -636,12 +705,24 @@ mod cli {
              0,1,1000,0,0,1000,0,0\n0,2,0,1000,0,0,1000,0\n0,3,0,0,1000,0,0,1000\n0,4,500,500,0,500,500,0\n",
         )
         .unwrap();
+        let two = dir.path().join("two.csv");
+        std::fs::write(&two, "point,x,y,z\n1,0,0,0\n2,1000,0,0\n").unwrap();
         let no_rot = dir.path().join("flange.csv");
         std::fs::write(&no_rot, "x,y,z,w\n1,2,3,4\n").unwrap();
         let mut all = String::new();
         for args in [
             vec!["frame", "base", one_skid.to_str().unwrap()],
             vec!["frame", "tool", no_rot.to_str().unwrap()],
+            vec![
+                "frame",
+                "wobj",
+                "samples/frames/marks.csv",
+                "--cell",
+                "samples/frames/cell.toml",
+                "--robot",
+                "r9",
+            ],
+            vec!["frame", "fit", two.to_str().unwrap(), two.to_str().unwrap()],
             vec![
                 "track",
                 "fit",
