@@ -16,7 +16,7 @@ use trackfix::geometry::{Pose, abb_quat_components, kuka_abc_angles, pose_to_xyz
 use trackfix::track::Profile;
 use trackfix::track::frames_csv::clean;
 use trackfix::track::profile::write_atomic;
-use trackfix::track::uncertainty::Sigma;
+use trackfix::track::uncertainty::{ProfileUncertainty, Sigma};
 use trackfix::transform::{Cell, TrackSetup};
 
 use super::Exit;
@@ -505,7 +505,11 @@ fn run_wobj(a: &WobjArgs) -> anyhow::Result<String> {
         Some(p) => TrackSetup::new(robot, p),
         None => TrackSetup::new(robot, &identity),
     };
-    let fit = fit_wobj(&rows, &setup, a.sigma)
+    let profile_u = match &profile {
+        Some(p) => ProfileUncertainty::new(p)?,
+        None => None,
+    };
+    let fit = fit_wobj(&rows, &setup, profile_u.as_ref(), a.sigma)
         .map_err(frame_error)
         .with_context(|| a.marks.display().to_string())?;
     let rapid = rapid_wobj(&a.name, &fit.wobj);
@@ -549,7 +553,12 @@ fn run_wobj(a: &WobjArgs) -> anyhow::Result<String> {
     let _ = writeln!(s, "  wobj: {}", pose_line(&fit.wobj, &fit.u_wobj));
     let _ = writeln!(
         s,
-        "    (u from the marks' scatter; an error of the robot's base in the cell moves the work object with it)"
+        "    (u from the marks' scatter{}; an error of the robot's base in the cell moves the work object with it)",
+        if profile_u.is_some() {
+            " and the profile's uncertainty"
+        } else {
+            ""
+        }
     );
     let _ = writeln!(s, "  rms {:.4} mm; {}", fit.rms, sigma_text(&fit.sigma));
     let _ = writeln!(s, "\n  RAPID: {rapid}");

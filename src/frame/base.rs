@@ -21,7 +21,7 @@ use crate::track::csv_table::NumericCsv;
 use crate::track::identify::MEASUREMENTS_HEADER;
 use crate::track::profile::line_fit;
 use crate::track::simulate::MeasurementRow;
-use crate::track::uncertainty::Sigma;
+use crate::track::uncertainty::{ProfileUncertainty, Sigma};
 use crate::track::{Profile, TrackError};
 
 /// The fitted base and track axis.
@@ -96,7 +96,7 @@ fn normal_basis(a: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
 
 /// Fits `B0` and `a` to `rows`; with `profile`, the robot points are first moved by `D(s)`.
 /// `sigma` is the noise per axis (tracker and robot together), else estimated from the
-/// residuals with `3n - 8` degrees of freedom.
+/// residuals with `3n - 8` degrees of freedom; a profile with knot uncertainties adds its own.
 pub fn fit_base(
     rows: &[MeasurementRow],
     profile: Option<&Profile>,
@@ -150,9 +150,20 @@ pub fn fit_base(
             residual: meas[j] - model(&base0, &axis, &q[j], skids[j]),
         })
         .collect();
+    // The profile's own uncertainty moves all points at a skid together (and points at
+    // neighbouring skids through shared knots): not independent noise, so it enters as
+    // `(JᵀJ)⁻¹·Jᵀ·Σ_D·J·(JᵀJ)⁻¹`. The residual-based σ̂ already holds part of it, so this errs
+    // on the safe side (taking that part out, `tr((I − H)·Σ_D)`, undercovers: Σ_D's
+    // interpolation part is itself conservative).
+    let (jac, _) = linearise(&base0, &axis, &q, &meas, &skids);
     let sigma = sigma_of(sigma, &residuals, 8)?;
-    let s2 = sigma.value().powi(2);
-    let cov = &cof * s2;
+    let mut cov = &cof * sigma.value().powi(2);
+    if let Some(pr) = profile
+        && let Some(pu) = ProfileUncertainty::new(pr)?
+    {
+        let sd = profile_covariance(&pu, &base0, &q, &skids)?;
+        cov += &cof * (jac.transpose() * sd * &jac) * &cof;
+    }
     let cov6 = Matrix6::from_fn(|i, k| cov[(i, k)]);
     let u_base = xyz_deg_uncertainty(&base0, &cov6);
     let (e1, e2) = normal_basis(&axis);
@@ -160,7 +171,6 @@ pub fn fit_base(
     let cab = nalgebra::Matrix2::new(cov[(6, 6)], cov[(6, 7)], cov[(7, 6)], cov[(7, 7)]);
     let ca: Matrix3<f64> = e * cab * e.transpose();
     let u_axis = [0, 1, 2].map(|i| ca[(i, i)].max(0.0).sqrt());
-    let (jac, _) = linearise(&base0, &axis, &q, &meas, &skids);
     let mut sum = 0.0;
     for j in 0..n {
         let jj = jac.rows(3 * j, 3);
@@ -180,6 +190,31 @@ pub fn fit_base(
         u_point,
         iterations,
     })
+}
+
+/// `Σ_D` (3n × 3n, world axes): the covariance the profile's uncertainty puts on the points.
+fn profile_covariance(
+    pu: &ProfileUncertainty,
+    base0: &Pose,
+    q: &[Point3<f64>],
+    skids: &[f64],
+) -> Result<DMatrix<f64>, TrackError> {
+    let n = q.len();
+    let r = base0.rotation.to_rotation_matrix().into_inner();
+    let mut out = DMatrix::<f64>::zeros(3 * n, 3 * n);
+    for j in 0..n {
+        for k in j..n {
+            let c = pu.point_covariance((skids[j], &q[j].coords), (skids[k], &q[k].coords))?;
+            let world = r * c * r.transpose();
+            for a in 0..3 {
+                for b in 0..3 {
+                    out[(3 * j + a, 3 * k + b)] = world[(a, b)];
+                    out[(3 * k + b, 3 * j + a)] = world[(a, b)];
+                }
+            }
+        }
+    }
+    Ok(out)
 }
 
 fn model(base0: &Pose, axis: &Vector3<f64>, q: &Point3<f64>, skid: f64) -> Point3<f64> {

@@ -4,7 +4,7 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 
-use nalgebra::{Matrix6, Point3};
+use nalgebra::{Matrix3x6, Matrix6, Point3};
 
 use super::{FrameError, PointResidual, PoseUncertainty, rms, sigma_of, xyz_deg_uncertainty};
 use crate::geometry::Pose;
@@ -12,7 +12,7 @@ use crate::geometry::rigid_fit::{RigidFitError, fit_rigid};
 use crate::track::TrackError;
 use crate::track::csv_table::NumericCsv;
 use crate::track::simulate::MarkRow;
-use crate::track::uncertainty::{Sigma, rigid_fit_cofactor};
+use crate::track::uncertainty::{ProfileUncertainty, Sigma, rigid_fit_cofactor};
 use crate::transform::track_correction::TrackSetup;
 
 /// The header of `marks.csv`.
@@ -68,16 +68,22 @@ pub fn read_marks(path: &Path) -> Result<Vec<MarkRow>, TrackError> {
 
 /// Fits `W` to the marks: each touched point is taken into world through the robot's base at
 /// its skid, `B(s)·D(s)` (`setup.deviation` is `D`; an identity there is the uncompensated
-/// fit), then `W` is the rigid fit of the CAD points onto them.
+/// fit), then `W` is the rigid fit of the CAD points onto them. `profile_u`, the uncertainty of
+/// that `D`, adds the profile's correlated errors to `W`'s covariance (on the safe side: the
+/// residual-based σ̂ holds part of them already).
 pub fn fit_wobj(
     rows: &[MarkRow],
     setup: &TrackSetup,
+    profile_u: Option<&ProfileUncertainty>,
     sigma: Option<f64>,
 ) -> Result<WobjFit, FrameError> {
     let mut world = Vec::with_capacity(rows.len());
+    let mut in_base = Vec::with_capacity(rows.len());
     for r in rows {
-        let b = setup.base_at(r.skid) * setup.deviation.deviation(r.skid)?;
-        world.push(b * Point3::from(r.robot));
+        let d = setup.deviation.deviation(r.skid)?;
+        let q = d * Point3::from(r.robot);
+        world.push(setup.base_at(r.skid) * q);
+        in_base.push(q.coords);
     }
     let cad: Vec<Point3<f64>> = rows.iter().map(|r| Point3::from(r.cad)).collect();
     let fit = fit_rigid(&cad, &world).map_err(|e| {
@@ -104,7 +110,28 @@ pub fn fit_wobj(
     let cof = rigid_fit_cofactor(&cad).ok_or_else(|| {
         FrameError::Underdetermined("the marks do not fix all six degrees of freedom".to_string())
     })?;
-    let cov: Matrix6<f64> = cof * sigma.value().powi(2);
+    let mut cov: Matrix6<f64> = cof * sigma.value().powi(2);
+    if let Some(pu) = profile_u {
+        // J_j = R_W·[I, −[c_j]×]; the profile's errors are in the base axes, B0's rotation.
+        let rw = fit.pose.rotation.to_rotation_matrix().into_inner();
+        let rb = setup.base0.rotation.to_rotation_matrix().into_inner();
+        let jac = |j: usize| -> Matrix3x6<f64> {
+            let mut a = Matrix3x6::<f64>::zeros();
+            a.fixed_view_mut::<3, 3>(0, 0).copy_from(&rw);
+            a.fixed_view_mut::<3, 3>(0, 3)
+                .copy_from(&(-rw * cad[j].coords.cross_matrix()));
+            a
+        };
+        let mut middle = Matrix6::<f64>::zeros();
+        for j in 0..rows.len() {
+            for k in 0..rows.len() {
+                let c =
+                    pu.point_covariance((rows[j].skid, &in_base[j]), (rows[k].skid, &in_base[k]))?;
+                middle += jac(j).transpose() * (rb * c * rb.transpose()) * jac(k);
+            }
+        }
+        cov += cof * middle * cof;
+    }
     Ok(WobjFit {
         u_wobj: xyz_deg_uncertainty(&fit.pose, &cov),
         wobj: fit.pose,

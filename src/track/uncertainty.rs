@@ -340,39 +340,51 @@ impl ProfileUncertainty {
 }
 
 impl ProfileUncertainty {
+    /// The covariance (mm², base axes) between the errors that `D(s)` puts on a point `qa` at
+    /// skid `sa` and on a point `qb` at skid `sb` (points in the robot base at their skid).
+    /// A knot's error is a position error at its centroid `c_i` plus a rotation `δθ_i` about
+    /// it, independent of each other (exact for the rigid fit), so the knots contribute
+    /// `Σ w_i(sa)·w_i(sb)·(C_c,i + [qa−c_i]×·C_θ,i·[qb−c_i]×ᵀ)`. Without centroids (older
+    /// profiles) the knots' six components are taken as independent about the base origin,
+    /// which overstates the uncertainty near the identification points. The interpolation
+    /// error is independent between skids and, at one skid, independent translation and
+    /// rotation errors.
+    pub fn point_covariance(
+        &self,
+        (sa, qa): (f64, &Vector3<f64>),
+        (sb, qb): (f64, &Vector3<f64>),
+    ) -> Result<Matrix3<f64>, TrackError> {
+        let (wa, _) = self.weights(sa)?;
+        let (wb, _) = self.weights(sb)?;
+        let diag = |v: [f64; 3]| Matrix3::from_diagonal(&Vector3::from(v).map(|x| x * x));
+        let rad = |u: &[f64; 6]| [u[3], u[4], u[5]].map(f64::to_radians);
+        let mut cov = Matrix3::<f64>::zeros();
+        for (i, u) in self.knot_u.iter().enumerate() {
+            let (c, cov_c) = match &self.centres {
+                Some(cs) => (Vector3::from(cs[i].0), diag(cs[i].1)),
+                None => (Vector3::zeros(), diag([u[0], u[1], u[2]])),
+            };
+            let arm_a = (qa - c).cross_matrix();
+            let arm_b = (qb - c).cross_matrix();
+            cov += (cov_c + arm_a * diag(rad(u)) * arm_b.transpose()) * (wa[i] * wb[i]);
+        }
+        if sa == sb {
+            let ip = self.at(sa)?.interpolation;
+            cov += diag([ip[0], ip[1], ip[2]])
+                + qa.cross_matrix() * diag(rad(&ip)) * qb.cross_matrix().transpose();
+        }
+        Ok(cov)
+    }
+
     /// The uncertainty of the corrected TCP for a target at skid `s` whose TCP is at
-    /// `tcp_in_base` (offset from the robot base, base frame, mm). With the knots' centroids
-    /// (profiles fitted by this version) each knot's error is a position error at its centroid
-    /// plus a rotation about it, independent of each other: exact for the rigid fit, so the
-    /// TCP's uncertainty is as small as the identification makes it near the measured points.
-    /// Older profiles fall back to [`tcp_uncertainty`]. The interpolation part is added as
-    /// independent translation and rotation errors.
+    /// `tcp_in_base` (offset from the robot base, base frame, mm): the track's part, from
+    /// [`ProfileUncertainty::point_covariance`].
     pub fn tcp_at(
         &self,
         skid: f64,
         tcp_in_base: &Vector3<f64>,
     ) -> Result<TcpUncertainty, TrackError> {
-        let dev = self.at(skid)?;
-        let Some(centres) = &self.centres else {
-            return Ok(tcp_uncertainty(&dev, tcp_in_base));
-        };
-        let (w, _) = self.weights(skid)?;
-        let mut cov = Matrix3::<f64>::zeros();
-        for ((wi, u), (c, uc)) in w.iter().zip(&self.knot_u).zip(centres) {
-            let arm = (tcp_in_base - Vector3::from(*c)).cross_matrix();
-            let cov_c = Matrix3::from_diagonal(&Vector3::from(*uc).map(|v| v * v));
-            let cov_r = Matrix3::from_diagonal(
-                &Vector3::new(u[3], u[4], u[5]).map(|v| v.to_radians().powi(2)),
-            );
-            cov += (cov_c + arm * cov_r * arm.transpose()) * (wi * wi);
-        }
-        let ip = dev.interpolation;
-        let arm = tcp_in_base.cross_matrix();
-        let cov_t = Matrix3::from_diagonal(&Vector3::new(ip[0], ip[1], ip[2]).map(|v| v * v));
-        let cov_r = Matrix3::from_diagonal(
-            &Vector3::new(ip[3], ip[4], ip[5]).map(|v| v.to_radians().powi(2)),
-        );
-        cov += cov_t + arm * cov_r * arm.transpose();
+        let cov = self.point_covariance((skid, tcp_in_base), (skid, tcp_in_base))?;
         Ok(TcpUncertainty {
             u: [0, 1, 2].map(|i| cov[(i, i)].max(0.0).sqrt()),
             expanded: 2.0 * cov.trace().max(0.0).sqrt(),
