@@ -99,6 +99,7 @@ pub struct BaseArgs {
     /// Noise per axis, mm (tracker and robot together); default: from the residuals.
     #[arg(long, value_name = "MM")]
     pub sigma: Option<f64>,
+    /// Output format.
     #[arg(long, value_enum, default_value = "table")]
     pub format: Format,
     /// Write `base` and `track_axis` for cell.toml to this file.
@@ -129,6 +130,7 @@ pub struct WobjArgs {
     /// Index of the KUKA BASE_DATA in the printed literal.
     #[arg(long, default_value_t = 1)]
     pub base_index: u32,
+    /// Output format.
     #[arg(long, value_enum, default_value = "table")]
     pub format: Format,
 }
@@ -141,6 +143,7 @@ pub struct ToolArgs {
     /// Noise per axis of a flange position, mm; default: from the residuals.
     #[arg(long, value_name = "MM")]
     pub sigma: Option<f64>,
+    /// Output format.
     #[arg(long, value_enum, default_value = "table")]
     pub format: Format,
 }
@@ -161,6 +164,7 @@ pub struct PairArgs {
     /// Noise per axis, mm; default: from the residuals.
     #[arg(long, value_name = "MM")]
     pub sigma: Option<f64>,
+    /// Output format.
     #[arg(long, value_enum, default_value = "table")]
     pub format: Format,
 }
