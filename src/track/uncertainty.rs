@@ -495,6 +495,26 @@ mod tests {
     }
 
     #[test]
+    fn world_and_base_tcp_agree() {
+        let knots: Vec<Knot> = (0..4)
+            .map(|i| {
+                Knot::from_components(i as f64 * 1000.0, [0.0; 6])
+                    .with_uncertainty(Some([0.01, 0.02, 0.03, 0.001, 0.002, 0.003]))
+            })
+            .collect();
+        let p = Profile::from_knots("t", knots, Extrapolate::Error).unwrap();
+        let pu = ProfileUncertainty::new(&p).unwrap().unwrap();
+        let base = crate::geometry::pose_xyz_deg(100.0, -3500.0, 20.0, 0.0, 0.0, 90.0);
+        let r = Vector3::new(1500.0, 300.0, 900.0);
+        let a = pu.tcp_at(1500.0, &r).unwrap();
+        let b = tcp_uncertainty_world(&pu, &base, 1500.0, &(base * Point3::from(r))).unwrap();
+        assert!((a.expanded - b.expanded).abs() < 1e-12);
+        // No centroids: the same as the independent-components figure.
+        let c = tcp_uncertainty(&pu.at(1500.0).unwrap(), &r);
+        assert!((a.expanded - c.expanded).abs() < 1e-9, "{a:?} {c:?}");
+    }
+
+    #[test]
     fn tcp_uncertainty_adds_the_lever_arm() {
         let dev = DeviationUncertainty {
             skid: 0.0,

@@ -507,6 +507,38 @@ mod cli {
     }
 
     #[test]
+    fn a_given_noise_level_scales_the_knot_uncertainties() {
+        let dir = tempfile::tempdir().unwrap();
+        let given = dir.path().join("given.toml");
+        let out = ok(&[
+            "track",
+            "fit",
+            "samples/track/frames.csv",
+            "-o",
+            given.to_str().unwrap(),
+            "--measurements",
+            "samples/track/measurements.csv",
+            "--sigma",
+            "0.04",
+        ]);
+        assert!(out.contains("0.0400 mm per axis (given)"), "{out}");
+        let est =
+            trackfix::track::Profile::load(&root().join("samples/frames/profile.toml")).unwrap();
+        let giv = trackfix::track::Profile::load(&given).unwrap();
+        // The sample's pooled estimate is 0.0203 mm: a given 0.04 mm scales every u by 0.04/0.0203.
+        let sigma_est = 0.0203;
+        for (a, b) in est.knots().iter().zip(giv.knots()) {
+            let (ua, ub) = (a.uncertainty().unwrap(), b.uncertainty().unwrap());
+            for (x, y) in ua.iter().zip(ub) {
+                assert!(
+                    (y / x - 0.04 / sigma_est).abs() < 0.01 * 0.04 / sigma_est + 2e-6 / x,
+                    "{x} {y}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn base_outputs() {
         let args = [
             "frame",
