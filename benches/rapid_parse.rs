@@ -35,7 +35,7 @@ fn module(mb: usize) -> Vec<u8> {
             700.0 + (i % 13) as f64,
             250.0 + (i % 29) as f64 * 12.5
         );
-        if i % 10 == 0 {
+        if i.is_multiple_of(10) {
             let _ = write!(moves, "    ! group {}\r\n", i / 10);
             let _ = write!(
                 moves,

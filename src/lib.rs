@@ -5,18 +5,30 @@
 //! - [`syntax`]: bytes, spans, line index, numeric literals, diagnostics, span-splice edits;
 //! - [`rapid`] and [`krl`]: lossless parsers whose trees print back byte for byte, and the
 //!   targets, frames and offsets found in a program ([`position`]);
+//! - [`dialect`]: the one registry through which loading, reports and transforms reach a
+//!   language (extensions, load/reparse, vocabulary, configuration mirror rule);
 //! - [`geometry`]: poses, one constructor per rotation convention, rigid fits;
 //! - [`track`]: the track model from laser-tracker measurements to a profile, and its
 //!   uncertainty;
 //! - [`frame`]: robot base, work objects, TCP and point-pair fits, track-compensated;
-//! - [`report`]: what `inspect` and `check` say about programs;
-//! - [`transform`]: `correct`, `zero`, `mirror`, `transfer` as edits to programs.
+//! - [`kinematics`]: the OPW arm model, ABB/KUKA configurations, reach and joint checks;
+//! - [`report`]: the output models of `inspect`, `check` and the transforms;
+//! - [`transform`]: `correct`, `zero`, `mirror`, `transfer` as rules of one driver, giving
+//!   edits to programs;
+//! - [`output`]: where results go, written as one transaction; the diff; safe input reads;
+//! - [`located`]: errors that render themselves (path, source, diagnostic).
 //!
 //! The library never prints and never panics on input.
 
+pub mod accuracy;
+pub mod dialect;
 pub mod frame;
 pub mod geometry;
+pub mod kinematics;
 pub mod krl;
+pub mod located;
+mod names;
+pub mod output;
 pub mod position;
 pub mod program;
 pub mod rapid;

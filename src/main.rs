@@ -3,12 +3,12 @@
 //! Exit codes (DESIGN.md §5): 0 ok, 1 findings (`check`, `--check` differences), 2 usage or
 //! input error, 3 a transform refused.
 
-// The binary may write to stderr; stdout goes through `writeln!` so that a closed pipe is an
-// error we map to success rather than a panic in `println!` (Cargo.toml [lints]).
-#![allow(clippy::print_stderr)]
+// stdout and stderr go through `writeln!`, never `println!`/`eprintln!`: a closed pipe or a
+// full disk is an error we handle (a closed pipe is success), not a panic (Cargo.toml [lints]).
 
 mod cli;
 
+use std::io::Write as _;
 use std::process::ExitCode;
 
 use clap::{CommandFactory, Parser, Subcommand};
@@ -55,6 +55,11 @@ enum Command {
     Mirror(cli::transform::MirrorArgs),
     /// Zero with one robot's track, optionally mirror, correct with another's.
     Transfer(cli::transform::TransferArgs),
+    /// Check every target's reach, joint limits and configuration with the robot's kinematics.
+    Reach(cli::reach::ReachArgs),
+    /// ISO 9283 pose and path accuracy from laser-tracker measurements.
+    #[command(subcommand)]
+    Accuracy(cli::accuracy::AccuracyCommand),
     /// Print a shell completion script (bash, zsh, fish, powershell, elvish).
     #[command(
         after_help = "Example:\n  trackfix completions bash > /etc/bash_completion.d/trackfix"
@@ -63,6 +68,32 @@ enum Command {
     /// Print the man page (roff) to standard output.
     #[command(after_help = "Example:\n  trackfix man > trackfix.1 && man ./trackfix.1")]
     Man,
+}
+
+/// The error and its causes, `: `-separated, each cause only once: library errors show their
+/// OS error in their own message and also keep it as their source.
+fn chain_text(err: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in err.chain() {
+        let part = cause.to_string();
+        if text.contains(&part) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&part);
+    }
+    text
+}
+
+/// Writes a rendered text to standard output; a failure (a full disk) is an error, not a panic.
+fn to_stdout(bytes: &[u8]) -> anyhow::Result<cli::Exit> {
+    let mut out = std::io::stdout().lock();
+    out.write_all(bytes)
+        .and_then(|()| out.flush())
+        .map_err(|e| anyhow::Error::from(e).context("writing to standard output"))?;
+    Ok(cli::Exit::Ok)
 }
 
 fn main() -> ExitCode {
@@ -76,15 +107,21 @@ fn main() -> ExitCode {
         Command::Zero(a) => cli::transform::run_zero(a),
         Command::Mirror(a) => cli::transform::run_mirror(a),
         Command::Transfer(a) => cli::transform::run_transfer(a),
+        Command::Reach(a) => cli::reach::run(a),
+        Command::Accuracy(c) => cli::accuracy::run(c),
         Command::Completions { shell } => {
-            let mut cmd = Cli::command();
-            clap_complete::generate(shell, &mut cmd, "trackfix", &mut std::io::stdout());
-            Ok(cli::Exit::Ok)
+            // Rendered first: clap_complete panics on a failed write.
+            let mut script = Vec::new();
+            clap_complete::generate(shell, &mut Cli::command(), "trackfix", &mut script);
+            to_stdout(&script)
         }
-        Command::Man => clap_mangen::Man::new(Cli::command())
-            .render(&mut std::io::stdout())
-            .map(|()| cli::Exit::Ok)
-            .map_err(Into::into),
+        Command::Man => {
+            let mut page = Vec::new();
+            clap_mangen::Man::new(Cli::command())
+                .render(&mut page)
+                .map_err(anyhow::Error::from)
+                .and_then(|()| to_stdout(&page))
+        }
     };
     match result {
         Ok(exit) => exit.into(),
@@ -92,7 +129,8 @@ fn main() -> ExitCode {
             if cli::is_broken_pipe(&err) {
                 return ExitCode::SUCCESS;
             }
-            eprintln!("error: {err:#}");
+            // A full or closed stderr leaves only the exit code to tell; never a panic.
+            let _ = writeln!(std::io::stderr(), "error: {}", chain_text(&err));
             cli::Exit::Usage.into()
         }
     }

@@ -16,52 +16,30 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 /// Values at or above this are RAPID/KRL "not connected" external axes (`9E9`, `9E+09`).
 pub const NOT_CONNECTED: f64 = 8.9e9;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Language {
-    Rapid,
-    Krl,
-}
+pub use crate::dialect::Language;
 
-/// What a position literal is, by its declared or inferred data type.
+/// What a position literal is, by its declared or inferred data type: the type's name as its
+/// language writes it, and whether it is Cartesian. Each dialect defines its kinds
+/// (`PositionKind::Robtarget`, `PositionKind::E6Pos`, …).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum PositionKind {
-    /// RAPID `robtarget`.
-    Robtarget,
-    /// RAPID `jointtarget`.
-    Jointtarget,
-    /// KRL `E6POS`.
-    E6Pos,
-    /// KRL `POS`.
-    Pos,
-    /// KRL `FRAME` used as a motion target.
-    Frame,
-    /// KRL `E6AXIS`.
-    E6Axis,
-    /// KRL `AXIS`.
-    Axis,
+pub struct PositionKind {
+    name: &'static str,
+    cartesian: bool,
 }
 
 impl PositionKind {
-    /// The name `inspect` prints (RAPID lower case, KRL upper case, as each language writes it).
+    pub const fn new(name: &'static str, cartesian: bool) -> PositionKind {
+        PositionKind { name, cartesian }
+    }
+
+    /// The name `inspect` prints (as the language writes it: `robtarget`, `E6POS`).
     pub fn as_str(self) -> &'static str {
-        match self {
-            PositionKind::Robtarget => "robtarget",
-            PositionKind::Jointtarget => "jointtarget",
-            PositionKind::E6Pos => "E6POS",
-            PositionKind::Pos => "POS",
-            PositionKind::Frame => "FRAME",
-            PositionKind::E6Axis => "E6AXIS",
-            PositionKind::Axis => "AXIS",
-        }
+        self.name
     }
 
     /// Cartesian targets are transformed; joint targets never are (DESIGN.md §4).
     pub fn is_cartesian(self) -> bool {
-        matches!(
-            self,
-            PositionKind::Robtarget | PositionKind::E6Pos | PositionKind::Pos | PositionKind::Frame
-        )
+        self.cartesian
     }
 }
 
@@ -192,6 +170,38 @@ pub struct Usage {
     pub stationary_tool: bool,
     /// 1-based lines of the instructions that use it.
     pub lines: Vec<usize>,
+}
+
+impl Usage {
+    /// Records one use by a motion at `line` with work object (or base) `wobj` and `tool`.
+    /// The first work object stays the target's; another (names compared as the languages
+    /// compare them, case-insensitively) is added to `other_wobjs`. The first tool stays.
+    pub fn record(
+        &mut self,
+        wobj: Option<&str>,
+        tool: Option<&str>,
+        stationary: bool,
+        line: usize,
+    ) {
+        if let Some(w) = wobj {
+            match &self.wobj {
+                None => self.wobj = Some(w.to_owned()),
+                Some(first) if first.eq_ignore_ascii_case(w) => {}
+                Some(_) => {
+                    if !self.other_wobjs.iter().any(|o| o.eq_ignore_ascii_case(w)) {
+                        self.other_wobjs.push(w.to_owned());
+                    }
+                }
+            }
+        }
+        if self.tool.is_none() {
+            self.tool = tool.map(str::to_owned);
+        }
+        self.stationary_tool |= stationary;
+        if !self.lines.contains(&line) {
+            self.lines.push(line);
+        }
+    }
 }
 
 /// One target: a declaration (`name = Some`) or an inline literal in an instruction.
@@ -348,6 +358,13 @@ pub struct Program {
     pub files: Vec<ParsedFile>,
 }
 
+impl Program {
+    /// The dialect of the program's first file (every file of a program shares one).
+    pub fn language(&self) -> Option<Language> {
+        self.files.first().map(|f| f.language)
+    }
+}
+
 /// Index of an external axis by name: RAPID `eax_a`..`eax_f` or KRL `E1`..`E6` (any case) →
 /// 0..5.
 pub fn external_axis_index(name: &str) -> Option<usize> {
@@ -367,6 +384,20 @@ pub fn external_axis_index(name: &str) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_use_records_the_first_frame_and_tool_and_every_other_frame_once() {
+        let mut u = Usage::default();
+        u.record(Some("wCar"), Some("tGun"), false, 10);
+        u.record(Some("WCAR"), Some("tOther"), false, 12);
+        u.record(Some("wTable"), None, true, 12);
+        u.record(Some("wtable"), None, false, 20);
+        assert_eq!(u.wobj.as_deref(), Some("wCar"));
+        assert_eq!(u.tool.as_deref(), Some("tGun"));
+        assert_eq!(u.other_wobjs, ["wTable"]);
+        assert!(u.stationary_tool);
+        assert_eq!(u.lines, [10, 12, 20]);
+    }
 
     #[test]
     fn axis_names() {

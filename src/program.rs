@@ -6,12 +6,6 @@ use std::path::{Path, PathBuf};
 use crate::position::{Language, Program};
 use crate::syntax::looks_binary;
 
-/// RAPID file extensions (lower case). `.pgf` is RobotStudio's XML program file, which holds
-/// no RAPID text and is skipped with a note.
-pub const RAPID_EXTENSIONS: &[&str] = &["mod", "modx", "sys", "sysx", "prg", "pgf"];
-/// KRL file extensions (lower case).
-pub const KRL_EXTENSIONS: &[&str] = &["src", "dat", "sub"];
-
 /// Options that change how a program is read.
 #[derive(Clone, Debug, Default)]
 pub struct LoadOptions {
@@ -33,7 +27,7 @@ pub enum LoadError {
     NotText { path: PathBuf },
     #[error("{}: RobotStudio program file (.pgf, XML): it lists modules but holds no RAPID; skipped", path.display())]
     ProgramXml { path: PathBuf },
-    #[error("{}: unknown file type; expected .mod/.modx/.sys/.sysx/.prg or .src/.dat/.sub", path.display())]
+    #[error("{}: unknown file type; expected {}", path.display(), known_extensions())]
     UnknownType { path: PathBuf },
 }
 
@@ -57,30 +51,34 @@ impl LoadError {
     }
 }
 
-fn extension(path: &Path) -> Option<String> {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
+/// The language of a file, by its extension: the dialect registry's answer.
+pub fn language_of(path: &Path) -> Option<Language> {
+    crate::dialect::dialect_of(path).map(Language::of)
 }
 
-/// The language of a file, by its extension.
-pub fn language_of(path: &Path) -> Option<Language> {
-    let ext = extension(path)?;
-    if RAPID_EXTENSIONS.contains(&ext.as_str()) {
-        Some(Language::Rapid)
-    } else if KRL_EXTENSIONS.contains(&ext.as_str()) {
-        Some(Language::Krl)
-    } else {
-        None
-    }
+/// `.mod/.modx/.sys/.sysx/.prg or .src/.dat/.sub`: the program extensions of every dialect.
+fn known_extensions() -> String {
+    crate::dialect::registry()
+        .iter()
+        .map(|d| {
+            d.extensions()
+                .iter()
+                .map(|e| format!(".{e}"))
+                .collect::<Vec<_>>()
+                .join("/")
+        })
+        .collect::<Vec<_>>()
+        .join(" or ")
 }
 
 /// Reads a file as bytes, refusing binary content.
 pub fn read_source(path: &Path) -> Result<Vec<u8>, LoadError> {
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+    let bytes = crate::output::read_regular_file(path, crate::output::MAX_INPUT_BYTES).map_err(
+        |source| LoadError::Io {
+            path: path.to_owned(),
+            source,
+        },
+    )?;
     if looks_binary(&bytes) {
         return Err(LoadError::NotText {
             path: path.to_owned(),
@@ -89,22 +87,11 @@ pub fn read_source(path: &Path) -> Result<Vec<u8>, LoadError> {
     Ok(bytes)
 }
 
-/// Loads the program `path` belongs to: a RAPID module, or a KRL `.src`/`.dat` pair (naming
-/// either file loads both).
+/// Loads the program `path` belongs to, with its dialect: a RAPID module, a KRL
+/// `.src`/`.dat` pair (naming either file loads both), …
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Program, LoadError> {
-    match language_of(path) {
-        Some(Language::Rapid) => {
-            if extension(path).as_deref() == Some("pgf") {
-                return Err(LoadError::ProgramXml {
-                    path: path.to_owned(),
-                });
-            }
-            let source = read_source(path)?;
-            Ok(Program {
-                files: vec![crate::rapid::parse_file(path, source)],
-            })
-        }
-        Some(Language::Krl) => crate::krl::load_program(path, options),
+    match crate::dialect::dialect_of(path) {
+        Some(dialect) => dialect.load(path, options),
         None => Err(LoadError::UnknownType {
             path: path.to_owned(),
         }),
@@ -134,33 +121,11 @@ pub fn collect_inputs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, LoadError> {
             out.push(p.clone());
         }
     }
-    // The `.dat` a `.src` loads with is found the way `krl::load_program` finds it (stem and
-    // extension in any case), and compared as a file, not as spelled (`./a.dat` is `a.dat`).
+    for dialect in crate::dialect::registry() {
+        dialect.dedupe_inputs(&mut out);
+    }
     let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
-    let stem_key = |p: &Path| {
-        let stem = p
-            .file_stem()
-            .map(|s| s.to_string_lossy().to_ascii_lowercase());
-        (same_file(p).parent().map(Path::to_owned), stem)
-    };
-    // Only a `.src` whose stem a listed `.dat` shares needs its directory read.
-    let dat_stems: BTreeSet<_> = out
-        .iter()
-        .filter(|p| extension(p).as_deref() == Some("dat"))
-        .map(|p| stem_key(p))
-        .collect();
-    let partners: BTreeSet<PathBuf> = out
-        .iter()
-        .filter(|p| extension(p).as_deref() == Some("src") && dat_stems.contains(&stem_key(p)))
-        .filter_map(|p| crate::krl::partner_of(p))
-        .map(|d| same_file(&d))
-        .collect();
     let mut seen = BTreeSet::new();
-    out.retain(|p| {
-        if extension(p).as_deref() == Some("dat") && partners.contains(&same_file(p)) {
-            return false;
-        }
-        seen.insert(same_file(p))
-    });
+    out.retain(|p| seen.insert(same_file(p)));
     Ok(out)
 }

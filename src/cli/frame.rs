@@ -7,20 +7,22 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use serde::Serialize;
-use trackfix::frame::base::{BaseFit, fit_base, read_points};
-use trackfix::frame::pairs::{REJECT_FACTOR, fit_pairs, read_point_file};
-use trackfix::frame::tool::{fit_tool, read_flange};
-use trackfix::frame::wobj::{fit_wobj, read_marks};
+use trackfix::frame::base::{BaseFit, fit_base, points_from};
+use trackfix::frame::pairs::{POINTS_HEADER, REJECT_FACTOR, fit_pairs, point_file_from};
+use trackfix::frame::tool::{FLANGE_COLUMNS, fit_tool, flange_from};
+use trackfix::frame::wobj::{MARKS_HEADER, fit_wobj, marks_from};
 use trackfix::frame::{FrameError, PointResidual, PoseUncertainty};
 use trackfix::geometry::{Pose, abb_quat_components, kuka_abc_angles, pose_to_xyz_deg};
+use trackfix::output::write_file;
+use trackfix::track::NumericCsv;
 use trackfix::track::Profile;
 use trackfix::track::frames_csv::clean;
-use trackfix::track::profile::write_atomic;
+use trackfix::track::identify::MEASUREMENTS_HEADER;
 use trackfix::track::uncertainty::{ProfileUncertainty, Sigma};
 use trackfix::transform::{Cell, TrackSetup};
 
 use super::Exit;
-use super::track::report_located;
+use super::track::{print_notes, report_located};
 
 #[derive(clap::Subcommand)]
 pub enum FrameCommand {
@@ -185,6 +187,13 @@ fn run_command(cmd: FrameCommand) -> anyhow::Result<Exit> {
     out.write_all(text.as_bytes())?;
     out.flush()?;
     Ok(Exit::Ok)
+}
+
+/// Reads a numeric table, telling how when it is not plain CSV.
+fn read_table(path: &Path, accepted: &[&str]) -> anyhow::Result<NumericCsv> {
+    let table = NumericCsv::read(path, accepted)?;
+    print_notes(&table);
+    Ok(table)
 }
 
 /// A located input error stays findable by `report_located`.
@@ -359,7 +368,7 @@ fn base_toml(fit: &BaseFit, source: &str) -> String {
 }
 
 fn run_base(a: &BaseArgs) -> anyhow::Result<String> {
-    let rows = read_points(&a.points)?;
+    let rows = points_from(&read_table(&a.points, &MEASUREMENTS_HEADER)?)?;
     let profile = match &a.profile {
         Some(p) => Some(Profile::load(p)?),
         None => None,
@@ -372,7 +381,7 @@ fn run_base(a: &BaseArgs) -> anyhow::Result<String> {
             Some(p) => format!("{} --profile {}", a.points.display(), p.display()),
             None => a.points.display().to_string(),
         };
-        write_atomic(out, base_toml(&fit, &source).as_bytes())?;
+        write_file(out, base_toml(&fit, &source).as_bytes())?;
     }
     let axis = fit.track_axis;
     let round_axis = [axis.x, axis.y, axis.z].map(|v| clean(v, 9));
@@ -498,7 +507,7 @@ fn kuka_base(index: u32, p: &Pose) -> String {
 fn run_wobj(a: &WobjArgs) -> anyhow::Result<String> {
     let cell = Cell::load(&a.cell)?;
     let robot = cell.robot(&a.robot)?;
-    let rows = read_marks(&a.marks)?;
+    let rows = marks_from(&read_table(&a.marks, &MARKS_HEADER)?)?;
     let identity = |_s: f64| Ok(Pose::identity());
     let profile = if a.no_compensation {
         None
@@ -608,7 +617,7 @@ struct PoseResidualRow {
 }
 
 fn run_tool(a: &ToolArgs) -> anyhow::Result<String> {
-    let (poses, kind) = read_flange(&a.flange)?;
+    let (poses, kind) = flange_from(&read_table(&a.flange, &FLANGE_COLUMNS)?)?;
     let fit = fit_tool(&poses, a.sigma)
         .map_err(frame_error)
         .with_context(|| a.flange.display().to_string())?;
@@ -721,8 +730,8 @@ fn numbers(v: &[u32]) -> String {
 }
 
 fn run_pairs(a: &PairArgs) -> anyhow::Result<String> {
-    let nominal = read_point_file(&a.nominal)?;
-    let measured = read_point_file(&a.measured)?;
+    let nominal = point_file_from(&read_table(&a.nominal, &POINTS_HEADER)?)?;
+    let measured = point_file_from(&read_table(&a.measured, &POINTS_HEADER)?)?;
     if a.reject_factor.is_nan() || a.reject_factor <= 1.0 {
         anyhow::bail!(
             "--reject-factor {}: give a factor above 1 (or --no-reject)",
@@ -802,7 +811,7 @@ fn run_simulate(a: &SimulateArgs) -> anyhow::Result<String> {
     };
     std::fs::create_dir_all(&a.out_dir).with_context(|| a.out_dir.display().to_string())?;
     let write = |name: &str, text: &str| -> anyhow::Result<()> {
-        write_atomic(&a.out_dir.join(name), text.as_bytes())?;
+        write_file(&a.out_dir.join(name), text.as_bytes())?;
         Ok(())
     };
     let truth = TrackTruth::sample_r1();

@@ -8,9 +8,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use trackfix::position::{Program, external_axis_index};
 use trackfix::program::{LoadError, LoadOptions, collect_inputs, load};
 use trackfix::report::{
-    InspectOptions, InspectReport, inspect_program, lints, render_csv, render_table,
+    CheckSummary, InspectOptions, InspectReport, findings, inspect_program, render_csv,
+    render_table,
 };
-use trackfix::syntax::Severity;
 
 use super::Exit;
 
@@ -109,13 +109,22 @@ fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
         match load(path, options) {
             Ok(p) => batch.programs.push(p),
             Err(e) if e.is_skip() => {
-                bar.suspend(|| eprintln!("note: {e}"));
+                bar.suspend(|| {
+                    let _ = writeln!(std::io::stderr(), "note: {e}");
+                });
                 batch.skipped += 1;
             }
             Err(e) => {
-                bar.suspend(|| eprintln!("error: {e}"));
+                bar.suspend(|| {
+                    let _ = writeln!(std::io::stderr(), "error: {e}");
+                });
                 if matches!(e, LoadError::UnknownType { .. }) {
-                    bar.suspend(|| eprintln!("  = help: name RAPID or KRL files, or a directory"));
+                    bar.suspend(|| {
+                        let _ = writeln!(
+                            std::io::stderr(),
+                            "  = help: name RAPID or KRL files, or a directory"
+                        );
+                    });
                 }
                 batch.errors += 1;
             }
@@ -153,15 +162,8 @@ pub fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
     let mut out = std::io::stdout().lock();
     out.write_all(text.as_bytes())?;
     if matches!(args.format, Format::Table) {
-        let positions: usize = report.files.iter().map(|f| f.positions.len()).sum();
         // writeln!, not println!: a closed pipe must be an error we can map to success.
-        writeln!(
-            out,
-            "{} files, {positions} positions{}{}",
-            report.files.len(),
-            plural(batch.skipped, "skipped"),
-            plural(batch.errors, "unreadable")
-        )?;
+        writeln!(out, "{}", report.summary_line(batch.skipped, batch.errors))?;
     }
     Ok(if batch.errors > 0 {
         Exit::Usage
@@ -170,46 +172,28 @@ pub fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
     })
 }
 
-fn plural(n: usize, what: &str) -> String {
-    if n == 0 {
-        String::new()
-    } else {
-        format!(", {n} {what}")
-    }
-}
-
 pub fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
     let options = LoadOptions {
         krl_config_dat: args.config_dat.clone(),
     };
     let batch = load_all(&args.files, &options)?;
     let mut out = std::io::stdout().lock();
-    let (mut files, mut round_trips, mut findings, mut files_with_findings) = (0, 0, 0, 0);
+    let mut summary = CheckSummary {
+        skipped: batch.skipped,
+        unreadable: batch.errors,
+        ..CheckSummary::default()
+    };
     for program in &batch.programs {
         for file in &program.files {
-            files += 1;
-            if file.round_trip {
-                round_trips += 1;
-            }
-            let found: Vec<_> = lints(file)
-                .into_iter()
-                .filter(|d| d.severity >= Severity::Warning)
-                .collect();
-            if !found.is_empty() {
-                files_with_findings += 1;
-            }
+            let found = findings(file);
+            summary.add_file(file, found.len());
             for d in &found {
-                findings += 1;
                 write!(out, "{}", file.render(d))?;
             }
         }
     }
-    writeln!(
-        out,
-        "checked {files} files: {round_trips} round-trip byte for byte, {findings} findings in {files_with_findings} files{}{}",
-        plural(batch.skipped, "skipped"),
-        plural(batch.errors, "unreadable")
-    )?;
+    writeln!(out, "{summary}")?;
+    let findings = summary.findings;
     Ok(if batch.errors > 0 {
         Exit::Usage
     } else if findings > 0 {

@@ -1,5 +1,5 @@
-//! `trackfix track identify | fit | show | spectrum` (and the hidden `simulate` that made the
-//! samples). Owned by issue 4.
+//! `trackfix track identify | fit | show | spectrum` (the samples' simulator is
+//! `examples/simulate_track.rs`).
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -8,19 +8,23 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 use trackfix::geometry::{abb_quat_components, kuka_abc_angles, pose_to_xyz_deg};
 use trackfix::track::adjustment::{chord_bounds, manual_adjustment, twist_diagram};
+use trackfix::track::cell_nominal::{check_cell_nominal, write_nominal_into_cell};
 use trackfix::track::csv_table::NumericCsv;
-use trackfix::track::frames_csv::{clean, frames_csv, read_frames};
-use trackfix::track::identify::{OUTLIER_FACTOR, identify, read_measurements};
-use trackfix::track::nominal::{FitOptions, fit_track};
-use trackfix::track::plot::{profile_svg, spectrum_svg};
-use trackfix::track::profile::write_atomic;
-use trackfix::track::simulate::{
-    TrackTruth, measurements_csv, sample_tcp_points, scan_csv, simulate_measurements, simulate_scan,
+use trackfix::track::frames_csv::{FRAMES_HEADER, clean, frames_csv, frames_from};
+use trackfix::track::gear;
+use trackfix::track::identify::{
+    CONDITION_LIMIT, Exclusion, FrameShift, MEASUREMENTS_HEADER, OUTLIER_FACTOR,
+    identify_excluding, measurements_from,
 };
-use trackfix::track::spectrum::{TUKEY_ALPHA, scan_spectrum};
+use trackfix::track::nominal::{FitOptions, TrackFit, fit_track};
+use trackfix::track::plot::{profile_svg, spectrum_svg};
+use trackfix::track::point_export::{ColumnMap, points_csv, read_point_export};
+use trackfix::track::spectrum::{TUKEY_ALPHA, scan_from_table, scan_spectrum};
 use trackfix::track::uncertainty::{ProfileUncertainty, Sigma, knot_uncertainties};
-use trackfix::track::{Extrapolate, Gear, Knot, Profile, Reference, TrackError};
-use trackfix::transform::CellError;
+use trackfix::track::{
+    Extrapolate, Gear, Knot, LocatedError, MeasuredIn, Profile, Reference, TrackError,
+};
+use trackfix::transform::{Cell, CellError};
 
 use super::Exit;
 
@@ -34,9 +38,8 @@ pub enum TrackCommand {
     Show(ShowArgs),
     /// Recommend a sampling spacing from a continuous scan along the track.
     Spectrum(SpectrumArgs),
-    /// Simulate a deformed track and its tracker measurements (how the samples were made).
-    #[command(hide = true)]
-    Simulate(SimulateArgs),
+    /// Read a laser tracker's point export (name x y z; `;`, tab, space or `,`) into point,x,y,z CSV.
+    Import(ImportArgs),
 }
 
 const IDENTIFY_EXAMPLES: &str = "\
@@ -45,7 +48,10 @@ Examples:
 
 measurements.csv has one row per tracker point: skid,point,robot_x,robot_y,robot_z,meas_x,
 meas_y,meas_z (the TCP point in the robot base and the tracker's reading of it, mm). At least 3
-non-collinear points per skid position. Points above 4 x the median residual are flagged.";
+non-collinear points per skid position (rotation condition number at most 20), tracker and
+robot points in the same units. Outliers are judged against a robust fit, so one bad reading
+is the one point flagged; leave it out with --exclude SKID:POINT. A `;`-separated file with
+decimal commas (a spreadsheet export) is read too.";
 
 const FIT_EXAMPLES: &str = "\
 Examples:
@@ -78,6 +84,10 @@ pub struct IdentifyArgs {
     /// Where to write frames.csv (skid,x,y,z,rx,ry,rz).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Leave out a bad reading: SKID:POINT as in the file, e.g. 1500:3 (repeatable). Prints how
+    /// far the frame moved.
+    #[arg(long, value_name = "SKID:POINT")]
+    pub exclude: Vec<Exclusion>,
 }
 
 #[derive(clap::Args)]
@@ -100,6 +110,21 @@ pub struct FitArgs {
     /// Profile name (default: the output file's stem, or its folder's name for profile.toml).
     #[arg(long)]
     pub name: Option<String>,
+    /// The controller's current gear ratio, to print the new one: ABB's Transmission Gear
+    /// Ratio as a number, or KUKA's $RAT_MOT_AX as N/D (e.g. 47746/1000).
+    #[arg(long, value_name = "X")]
+    pub current_gear: Option<String>,
+    /// The frame the tracker measured in: `world` when it was aligned to the cell, so the
+    /// profile's nominal can be checked against (and written into) the cell file.
+    #[arg(long, value_enum)]
+    pub measured_in: Option<MeasuredIn>,
+    /// Write the fitted nominal (base at skid 0 and track axis) into this cell file's
+    /// [robot.NAME] (needs --robot; implies --measured-in world). Only those two values change.
+    #[arg(long, value_name = "CELL.toml", requires = "robot")]
+    pub cell: Option<PathBuf>,
+    /// The robot of --cell.
+    #[arg(long, value_name = "NAME", requires = "cell")]
+    pub robot: Option<String>,
     /// The measurements.csv the frames were identified from: gives each knot its standard
     /// uncertainties (u_dx ... u_rz), which `track show` carries to every skid.
     #[arg(long, value_name = "measurements.csv")]
@@ -172,6 +197,29 @@ struct ShowRow {
     tcp_expanded: Option<f64>,
 }
 
+const IMPORT_EXAMPLES: &str = "\
+Examples:
+  trackfix track import marks.txt -o marks.csv
+  trackfix track import export.csv --map name=Punkt,x=Ost,y=Nord,z=Hoehe -o marks.csv
+  trackfix track import export.txt --map name=2,x=4,y=5,z=6 -o marks.csv
+
+Reads one named point per line, with or without a header line, fields separated by `;`, tabs,
+spaces or `,` (decimal commas where `,` is not the separator). Without --map the columns are
+found from the header (name/point/id, x, y, z) or are the first four. Says how it read the file.";
+
+#[derive(clap::Args)]
+#[command(after_help = IMPORT_EXAMPLES)]
+pub struct ImportArgs {
+    /// The tracker software's CSV/TXT point export.
+    pub export: PathBuf,
+    /// Which columns hold name, x, y, z: by position (name=1,x=2,y=3,z=4) or header name.
+    #[arg(long, value_name = "name=C,x=C,y=C,z=C")]
+    pub map: Option<ColumnMap>,
+    /// Where to write point,x,y,z CSV (mm).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
 #[derive(clap::Args)]
 #[command(after_help = SPECTRUM_EXAMPLES)]
 pub struct SpectrumArgs {
@@ -188,42 +236,28 @@ pub struct SpectrumArgs {
     pub plot: Option<PathBuf>,
 }
 
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum SampleRobot {
-    R1,
-    R2,
-}
-
-#[derive(clap::Args)]
-pub struct SimulateArgs {
-    /// Which sample track (see samples/track/README.md).
-    #[arg(long, value_enum)]
-    pub robot: SampleRobot,
-    /// Folder for measurements.csv and scan.csv.
-    #[arg(long)]
-    pub out_dir: PathBuf,
-    /// Tracker noise, mm (standard deviation per axis).
-    #[arg(long, default_value_t = 0.02)]
-    pub noise: f64,
-    /// PRNG seed.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-}
-
 pub fn run(cmd: TrackCommand) -> anyhow::Result<Exit> {
     report_located(run_command(cmd))
 }
 
 /// The text of an error that already says `file:line:col: error: …` with the line and a hint.
-fn located_text<'e>(e: &'e (dyn std::error::Error + 'static)) -> Option<&'e str> {
-    if let Some(TrackError::Csv { rendered, .. } | TrackError::Toml { rendered, .. }) =
-        e.downcast_ref::<TrackError>()
-    {
-        return Some(rendered);
+fn located_text(e: &(dyn std::error::Error + 'static)) -> Option<String> {
+    if let Some(located) = e.downcast_ref::<TrackError>().and_then(TrackError::located) {
+        return Some(located.to_string());
+    }
+    if let Some(located) = e.downcast_ref::<LocatedError>() {
+        return Some(located.to_string());
     }
     match e.downcast_ref::<CellError>() {
-        Some(CellError::Invalid { rendered }) => Some(rendered),
+        Some(CellError::Invalid(located)) => Some(located.to_string()),
         _ => None,
+    }
+}
+
+/// How a table was read when it was not plain CSV, on standard error.
+pub(crate) fn print_notes(table: &NumericCsv) {
+    for note in &table.notes {
+        let _ = writeln!(std::io::stderr(), "note: {note}");
     }
 }
 
@@ -234,11 +268,11 @@ pub(crate) fn report_located(result: anyhow::Result<Exit>) -> anyhow::Result<Exi
     let Some(text) = err.chain().find_map(located_text) else {
         return Err(err);
     };
-    let mut out = text.to_owned();
+    let mut out = text;
     for context in err.chain().take_while(|c| located_text(*c).is_none()) {
         out.push_str(&format!("\n  = note: {context}"));
     }
-    eprintln!("{out}");
+    let _ = writeln!(std::io::stderr(), "{out}");
     Ok(Exit::Usage)
 }
 
@@ -248,7 +282,7 @@ fn run_command(cmd: TrackCommand) -> anyhow::Result<Exit> {
         TrackCommand::Fit(a) => run_fit(&a)?,
         TrackCommand::Show(a) => run_show(&a)?,
         TrackCommand::Spectrum(a) => run_spectrum(&a)?,
-        TrackCommand::Simulate(a) => run_simulate(&a)?,
+        TrackCommand::Import(a) => run_import(&a)?,
     };
     let mut out = std::io::stdout().lock();
     out.write_all(text.as_bytes())?;
@@ -257,13 +291,16 @@ fn run_command(cmd: TrackCommand) -> anyhow::Result<Exit> {
 }
 
 fn write_file(path: &Path, text: &str) -> anyhow::Result<()> {
-    write_atomic(path, text.as_bytes())?;
+    trackfix::output::write_file(path, text.as_bytes())?;
     Ok(())
 }
 
 fn run_identify(a: &IdentifyArgs) -> anyhow::Result<String> {
-    let rows = read_measurements(&a.measurements)?;
-    let id = identify(&rows).with_context(|| a.measurements.display().to_string())?;
+    let table = NumericCsv::read(&a.measurements, &MEASUREMENTS_HEADER)?;
+    print_notes(&table);
+    let rows = measurements_from(&table)?;
+    let id = identify_excluding(&rows, &a.exclude)
+        .with_context(|| a.measurements.display().to_string())?;
     write_file(&a.output, &frames_csv(&id.frames()))?;
     let mut s = String::new();
     let _ = writeln!(
@@ -281,10 +318,11 @@ fn run_identify(a: &IdentifyArgs) -> anyhow::Result<String> {
     for f in &id.fits {
         let _ = writeln!(
             s,
-            "\nskid {} mm: {} points, rms {:.4} mm",
+            "\nskid {} mm: {} points, rms {:.4} mm, condition {:.1}",
             f.skid,
             f.points.len(),
-            f.fit.rms
+            f.fit.rms,
+            f.fit.condition
         );
         let _ = writeln!(s, "  point    dx [mm]    dy [mm]    dz [mm]   rms [mm]");
         for (p, r) in f.points.iter().zip(&f.fit.residuals) {
@@ -305,10 +343,27 @@ fn run_identify(a: &IdentifyArgs) -> anyhow::Result<String> {
         let max = f.fit.residual_norms().into_iter().fold(0.0, f64::max);
         let _ = writeln!(s, "  {:>8} {:>10.4} {:>10.4}", f.skid, f.fit.rms, max);
     }
+    let worst = id.fits.iter().map(|f| f.fit.condition).fold(0.0, f64::max);
+    let _ = writeln!(
+        s,
+        "\nlargest condition number {worst:.1} (limit {CONDITION_LIMIT}: points near a line leave the rotation about it free)"
+    );
+    for f in id.fits.iter().filter(|f| !f.excluded.is_empty()) {
+        let pts: Vec<String> = f.excluded.iter().map(|p| p.to_string()).collect();
+        let _ = writeln!(
+            s,
+            "\nexcluded at skid {} mm: point(s) {}",
+            f.skid,
+            pts.join(", ")
+        );
+        if let Some(shift) = &f.exclusion_shift {
+            let _ = writeln!(s, "  effect on the frame: {}", shift_text(shift));
+        }
+    }
     let limit = OUTLIER_FACTOR * id.median_residual;
     let _ = write!(
         s,
-        "\nmedian point residual {:.4} mm; outliers (> {OUTLIER_FACTOR} x median = {limit:.4} mm): ",
+        "\nmedian point residual {:.4} mm (robust fit); outliers (> {OUTLIER_FACTOR} x median = {limit:.4} mm): ",
         id.median_residual
     );
     if id.outliers.is_empty() {
@@ -318,12 +373,26 @@ fn run_identify(a: &IdentifyArgs) -> anyhow::Result<String> {
         for o in &id.outliers {
             let _ = writeln!(
                 s,
-                "  skid {} mm, point {}: {:.4} mm ({:.1} x median) - remeasure or remove the row",
-                o.skid, o.point, o.residual, o.ratio
+                "  skid {} mm, point {}: {:.4} mm ({:.1} x median) - remeasure it, or leave it out with --exclude {}:{}",
+                o.skid, o.point, o.residual, o.ratio, o.skid, o.point
             );
+            if let Some(shift) = &o.shift_if_excluded {
+                let _ = writeln!(
+                    s,
+                    "    leaving it out would move the frame: {}",
+                    shift_text(shift)
+                );
+            }
         }
     }
     Ok(s)
+}
+
+fn shift_text(shift: &FrameShift) -> String {
+    format!(
+        "{:.4} mm at the measured points (origin {:.4} mm, rotation {:.5} deg)",
+        shift.at_points_mm, shift.origin_mm, shift.rotation_deg
+    )
 }
 
 fn sha256_hex(bytes: &[u8]) -> String {
@@ -338,14 +407,13 @@ fn sha256_hex(bytes: &[u8]) -> String {
 
 fn default_name(output: &Path) -> String {
     let stem = output.file_stem().and_then(|s| s.to_str()).unwrap_or("");
-    if stem == "profile" {
-        if let Some(dir) = output
+    if stem == "profile"
+        && let Some(dir) = output
             .parent()
             .and_then(|p| p.file_name())
             .and_then(|s| s.to_str())
-        {
-            return dir.to_string();
-        }
+    {
+        return dir.to_string();
     }
     if stem.is_empty() {
         "track".to_string()
@@ -355,8 +423,11 @@ fn default_name(output: &Path) -> String {
 }
 
 fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
-    let bytes = std::fs::read(&a.frames).with_context(|| a.frames.display().to_string())?;
-    let frames = read_frames(&a.frames)?;
+    let bytes =
+        trackfix::output::read_input(&a.frames).with_context(|| a.frames.display().to_string())?;
+    let table = NumericCsv::read(&a.frames, &FRAMES_HEADER)?;
+    print_notes(&table);
+    let frames = frames_from(&table)?;
     let opts = FitOptions {
         name: a.name.clone().unwrap_or_else(|| default_name(&a.output)),
         reference: a.reference,
@@ -364,40 +435,53 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         extrapolate: a.extrapolate,
         source_sha256: sha256_hex(&bytes),
     };
-    let fit = fit_track(&frames, &opts).with_context(|| a.frames.display().to_string())?;
-    let mut noise_note = None;
-    let profile = match &a.measurements {
-        Some(path) => {
-            let rows = read_measurements(path)?;
-            let id = identify(&rows).with_context(|| path.display().to_string())?;
-            let same = id.fits.len() == frames.len()
-                && id.fits.iter().zip(&frames).all(|(f, g)| {
-                    // frames.csv keeps 4 decimals of mm and 6 of degrees.
-                    (f.skid - g.skid).abs() <= 1e-6 * (1.0 + g.skid.abs())
-                        && (f.fit.pose.translation.vector - g.pose.translation.vector).norm() < 1e-3
-                        && f.fit.pose.rotation.angle_to(&g.pose.rotation) < 1e-6
-                });
-            if !same {
-                anyhow::bail!(
-                    "{}: its base frames are not those of {}: pass the measurements the frames were identified from (`trackfix track identify` of them gives the frames)",
-                    path.display(),
-                    a.frames.display()
-                );
-            }
-            let (u, sigma) = knot_uncertainties(&rows, &id, a.sigma)
-                .with_context(|| path.display().to_string())?;
-            noise_note = Some(match sigma {
-                Sigma::Given(v) => format!("{v:.4} mm per axis (given)"),
-                Sigma::Estimated { sigma, dof } => {
-                    format!("{sigma:.4} mm per axis (from the residuals, {dof} degrees of freedom)")
-                }
-            });
-            fit.profile.clone().with_knot_uncertainties(&u)?
-        }
-        None => fit.profile.clone(),
+    let mut fit = fit_track(&frames, &opts).with_context(|| a.frames.display().to_string())?;
+    let measured_in = match (a.measured_in, &a.cell) {
+        (Some(MeasuredIn::Tracker), Some(_)) => anyhow::bail!(
+            "--cell writes the nominal as the cell's world frame: the frames must be measured in it (--measured-in world)"
+        ),
+        (None, Some(_)) => Some(MeasuredIn::World),
+        (m, _) => m,
     };
-    let p = &profile;
+    if let Some(m) = measured_in {
+        fit.profile = fit.profile.with_measured_in(m);
+    }
+    let mut noise_note = None;
+    if let Some(path) = &a.measurements {
+        let table = NumericCsv::read(path, &MEASUREMENTS_HEADER)?;
+        print_notes(&table);
+        let rows = measurements_from(&table)?;
+        let id = identify_excluding(&rows, &[]).with_context(|| path.display().to_string())?;
+        let same = id.fits.len() == frames.len()
+            && id.fits.iter().zip(&frames).all(|(f, g)| {
+                // frames.csv keeps 4 decimals of mm and 6 of degrees.
+                (f.skid - g.skid).abs() <= 1e-6 * (1.0 + g.skid.abs())
+                    && (f.fit.pose.translation.vector - g.pose.translation.vector).norm() < 1e-3
+                    && f.fit.pose.rotation.angle_to(&g.pose.rotation) < 1e-6
+            });
+        if !same {
+            anyhow::bail!(
+                "{}: its base frames are not those of {}: pass the measurements the frames were identified from (`trackfix track identify` of them gives the frames)",
+                path.display(),
+                a.frames.display()
+            );
+        }
+        let (u, sigma) =
+            knot_uncertainties(&rows, &id, a.sigma).with_context(|| path.display().to_string())?;
+        noise_note = Some(match sigma {
+            Sigma::Given(v) => format!("{v:.4} mm per axis (given)"),
+            Sigma::Estimated { sigma, dof } => {
+                format!("{sigma:.4} mm per axis (from the residuals, {dof} degrees of freedom)")
+            }
+        });
+        fit.profile = fit.profile.with_knot_uncertainties(&u)?;
+    }
+    let p = &fit.profile;
     p.save(&a.output)?;
+    let cell_note = match (&a.cell, &a.robot) {
+        (Some(cell), Some(robot)) => Some(write_cell_nominal(cell, robot, &fit)?),
+        _ => None,
+    };
     let (s0, s1) = p.skid_range();
     let mut s = String::new();
     let _ = writeln!(
@@ -428,13 +512,13 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         (fit.gear_factor - 1.0) * (s1 - s0),
         s1 - s0
     );
+    gear_advice(&mut s, fit.gear_factor, a.current_gear.as_deref())?;
     let _ = writeln!(
         s,
-        "    new gear factor = {:.6} x current gear factor (seed eq. 4.4){}",
-        fit.gear_factor,
+        "    {}",
         match a.gear {
-            Gear::AsIs => "; with --gear as-is the profile keeps the drift instead",
-            Gear::Recalibrated => "; the profile assumes you enter it",
+            Gear::AsIs => "with --gear as-is the profile keeps the drift instead",
+            Gear::Recalibrated => "the profile assumes you enter the new ratio",
         }
     );
     let u = fit.direction;
@@ -479,6 +563,9 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
             l.slope, l.intercept, rms, max
         );
     }
+    if let Some(note) = cell_note {
+        let _ = writeln!(s, "\n{note}");
+    }
     if let Some(st) = p.stats() {
         let _ = writeln!(s, "\ndeviation from the nominal:");
         let _ = writeln!(
@@ -493,6 +580,83 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         );
     }
     Ok(s)
+}
+
+/// Writes the fitted nominal into `[robot.<robot>]` of the cell file (a lossless edit of the two
+/// values), checks it back through the cell loader, and says what changed.
+fn write_cell_nominal(cell: &Path, robot: &str, fit: &TrackFit) -> anyhow::Result<String> {
+    let text = std::fs::read_to_string(cell).with_context(|| cell.display().to_string())?;
+    let new = write_nominal_into_cell(&text, robot, &fit.base_at_zero, &fit.direction)
+        .with_context(|| cell.display().to_string())?;
+    // Checked before it replaces the file: the loader must accept it and agree with the profile.
+    let loaded = Cell::parse(cell, &new)?;
+    let r = loaded.robot(robot)?;
+    check_cell_nominal(&r.base0, &r.track_axis, &fit.profile)
+        .with_context(|| format!("{}: the written nominal", cell.display()))?;
+    write_file(cell, &new)?;
+    let [x, y, z, rx, ry, rz] = pose_to_xyz_deg(&fit.base_at_zero);
+    let u = fit.direction;
+    Ok(format!(
+        "wrote the nominal into {} [robot.{robot}] (the rest of the file unchanged):\n  base = {{ x = {x:.4}, y = {y:.4}, z = {z:.4}, rx = {rx:.6}, ry = {ry:.6}, rz = {rz:.6} }}\n  track_axis = [{:.9}, {:.9}, {:.9}]",
+        cell.display(),
+        clean(u.x, 9),
+        clean(u.y, 9),
+        clean(u.z, 9)
+    ))
+}
+
+/// The controller parameter that holds the gear ratio, which way it changes, and its new value
+/// for `--current-gear` (trackfix::track::gear).
+fn gear_advice(s: &mut String, g: f64, current: Option<&str>) -> anyhow::Result<()> {
+    let _ = writeln!(
+        s,
+        "    the controllers store motor turns per travel, which must be divided by {g:.6} (it grows when the skid travels short):"
+    );
+    let _ = writeln!(
+        s,
+        "      ABB: the track's Transmission Gear Ratio (topic Motion, type Transmission; transm_joint in MOC.cfg): new = current / {g:.6}"
+    );
+    let _ = writeln!(
+        s,
+        "      KUKA: $RAT_MOT_AX[7] = {{N n,D d}} in $machine.dat ([7] = E1, [6+k] = Ek): new N/D = current N/D / {g:.6}"
+    );
+    let _ = writeln!(
+        s,
+        "      (a travel per motor turn, the gear factor of seed eq. 4.4, grows the other way: new = {g:.6} x current)"
+    );
+    let Some(text) = current else {
+        return Ok(());
+    };
+    if text.contains('/') {
+        let ratio = gear::parse_kuka_ratio(text).with_context(|| {
+            format!("--current-gear {text}: write the KUKA ratio as N/D with integers, D not 0")
+        })?;
+        let new = gear::new_kuka_ratio(ratio, g).with_context(|| {
+            format!("--current-gear {text}: the new ratio does not fit KUKA's INT range")
+        })?;
+        let _ = writeln!(
+            s,
+            "    for --current-gear {text} (KUKA {ratio}): $RAT_MOT_AX = {new} (= {:.9})",
+            new.value()
+        );
+    } else {
+        let current: f64 = text
+            .trim()
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite() && *v != 0.0)
+            .with_context(|| {
+                format!(
+                    "--current-gear {text}: give the current ratio as a number (ABB) or N/D (KUKA)"
+                )
+            })?;
+        let _ = writeln!(
+            s,
+            "    for --current-gear {text}: new Transmission Gear Ratio {:.9}",
+            gear::new_motor_ratio(current, g)
+        );
+    }
+    Ok(())
 }
 
 fn enum_name(v: impl clap::ValueEnum) -> String {
@@ -521,8 +685,19 @@ fn deviation_cells(c: &[f64; 6], mm_width: usize, deg_width: usize, sep: &str) -
 
 fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
     let p = Profile::load(&a.profile)?;
+    for w in p.consistency_warnings() {
+        let _ = writeln!(std::io::stderr(), "warning: {}: {w}", a.profile.display());
+    }
     if let Some(path) = &a.plot {
         write_file(path, &profile_svg(&p)?)?;
+        // On standard error: standard output may be the JSON or CSV asked for.
+        let _ = writeln!(
+            std::io::stderr(),
+            "wrote {}: the six deviation curves of profile `{}` with their {} knots, and the twist diagram",
+            path.display(),
+            p.name(),
+            p.knots().len()
+        );
     }
     let (s0, s1) = p.skid_range();
     let skids: Vec<f64> = if let Some(step) = a.step {
@@ -748,6 +923,22 @@ fn overview(p: &Profile) -> String {
     s
 }
 
+fn run_import(a: &ImportArgs) -> anyhow::Result<String> {
+    let export = read_point_export(&a.export, a.map.as_ref())?;
+    write_file(&a.output, &points_csv(&export.points))?;
+    let mut s = String::new();
+    for note in &export.notes {
+        let _ = writeln!(s, "{note}");
+    }
+    let _ = writeln!(
+        s,
+        "wrote {} point(s) to {}",
+        export.points.len(),
+        a.output.display()
+    );
+    Ok(s)
+}
+
 fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
     if a.threshold.is_nan() || a.threshold <= 0.0 {
         anyhow::bail!(
@@ -755,7 +946,6 @@ fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
             a.threshold
         );
     }
-    let table = NumericCsv::read(&a.scan)?;
     let (pos_col, scale) = match a.speed {
         Some(v) if v.is_nan() || v <= 0.0 => {
             anyhow::bail!("--speed {v}: give a positive speed in mm/s")
@@ -763,16 +953,20 @@ fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
         Some(v) => ("t", v),
         None => ("skid", 1.0),
     };
-    let mut positions = Vec::with_capacity(table.rows.len());
-    let mut points = Vec::with_capacity(table.rows.len());
-    for (_, [s, x, y, z]) in table.select(&[pos_col, "x", "y", "z"])? {
-        positions.push(s * scale);
-        points.push([x, y, z]);
-    }
+    let table = NumericCsv::read(&a.scan, &[pos_col, "x", "y", "z"])?;
+    print_notes(&table);
+    let (positions, points) = scan_from_table(&table, pos_col, scale)?;
     let spec = scan_spectrum(&positions, &points, a.threshold)
         .with_context(|| a.scan.display().to_string())?;
     if let Some(path) = &a.plot {
         write_file(path, &spectrum_svg(&spec)?)?;
+        let _ = writeln!(
+            std::io::stderr(),
+            "wrote {}: the amplitude spectrum of {} ({} frequencies, wavelengths in brackets)",
+            path.display(),
+            a.scan.display(),
+            spec.frequency.len()
+        );
     }
     let mut s = String::new();
     let _ = writeln!(
@@ -830,37 +1024,4 @@ fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
         }
     }
     Ok(s)
-}
-
-fn run_simulate(a: &SimulateArgs) -> anyhow::Result<String> {
-    let truth = match a.robot {
-        SampleRobot::R1 => TrackTruth::sample_r1(),
-        SampleRobot::R2 => TrackTruth::sample_r2(),
-    };
-    std::fs::create_dir_all(&a.out_dir).with_context(|| a.out_dir.display().to_string())?;
-    let skids: Vec<f64> = (0..=16).map(|i| i as f64 * 500.0).collect();
-    let rows = simulate_measurements(&truth, &skids, &sample_tcp_points(), a.noise, a.seed);
-    let m = a.out_dir.join("measurements.csv");
-    write_file(&m, &measurements_csv(&rows))?;
-    let reflector = nalgebra::Point3::new(0.0, 0.0, 250.0);
-    let scan = simulate_scan(
-        &truth,
-        reflector,
-        0.0,
-        8000.0,
-        10.0,
-        a.noise,
-        a.seed.wrapping_add(1000),
-    );
-    let sc = a.out_dir.join("scan.csv");
-    write_file(&sc, &scan_csv(&scan))?;
-    Ok(format!(
-        "wrote {} ({} rows) and {} ({} rows), noise {} mm, seed {}\n",
-        m.display(),
-        rows.len(),
-        sc.display(),
-        scan.len(),
-        a.noise,
-        a.seed
-    ))
 }

@@ -1,4 +1,4 @@
-//! `trackfix correct | zero | mirror | transfer`. Owned by issue 5.
+//! `trackfix correct | zero | mirror | transfer`.
 //!
 //! Every command: load the programs, compute every result in memory, report refusals (exit 3,
 //! nothing written, unless `--skip-unsupported`), then either print a diff, check, or plan and
@@ -9,14 +9,16 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, bail};
 
+use trackfix::output::{self, Destination, Roots, unified_diff};
 use trackfix::position::Program;
 use trackfix::program::{LoadOptions, collect_inputs, load};
+use trackfix::report::{FileSummary, would_change};
+use trackfix::syntax::Severity;
 use trackfix::track::{Profile, TrackError};
 use trackfix::transform::cell::skid_axis_index;
-use trackfix::transform::output::{Destination, output_path, plan_writes, unified_diff, write_all};
 use trackfix::transform::{
-    Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, Robot,
-    TrackSetup, TransferPlan, WorldPlane, apply, mirror, track_correction, transfer,
+    Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, Remedy,
+    Robot, TrackSetup, TransferPlan, TransformStep, WorldPlane, apply, transfer,
 };
 
 use super::Exit;
@@ -207,7 +209,9 @@ fn load_programs(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Vec
     for path in collect_inputs(files)? {
         match load(&path, options) {
             Ok(p) => programs.push(p),
-            Err(e) if e.is_skip() => eprintln!("note: {e}"),
+            Err(e) if e.is_skip() => {
+                let _ = writeln!(std::io::stderr(), "note: {e}");
+            }
             Err(e) => return Err(e.into()),
         }
     }
@@ -243,25 +247,42 @@ fn drop_untouched_config(results: &mut [ProgramResult], config_dat: Option<&Path
     }
 }
 
-fn fmt_mm(v: f64) -> String {
-    format!("{v:.3}")
+/// The command-line flag that gives a refusal's remedy.
+fn remedy_flag(remedy: Remedy) -> &'static str {
+    match remedy {
+        Remedy::DefaultWorkObject => "pass --default-wobj NAME to transform unused targets in NAME",
+        Remedy::MirrorJoints => "pass --mirror-joints to negate axes 1, 4 and 6",
+    }
 }
 
 /// Reports refusals, then diffs, checks or writes. The one place outcomes become an exit code.
-fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow::Result<Exit> {
+fn finish(
+    command: &str,
+    results: &[ProgramResult],
+    out: &OutputArgs,
+    inputs: &[PathBuf],
+) -> anyhow::Result<Exit> {
     let mut stderr = std::io::stderr().lock();
     let refused: Vec<_> = results.iter().flat_map(|r| r.refusals()).collect();
     for r in &refused {
         // Skipped targets are reported as warnings: the run goes on without them.
-        let text = if out.skip_unsupported {
-            r.rendered.replacen(": error: ", ": warning: ", 1).replace(
-                ", or pass --skip-unsupported to leave it unchanged",
-                " (left unchanged)",
-            )
+        let (severity, outcome) = if out.skip_unsupported {
+            (Severity::Warning, " (left unchanged)")
         } else {
-            r.rendered.clone()
+            (
+                Severity::Error,
+                ", or pass --skip-unsupported to leave it unchanged",
+            )
         };
-        write!(stderr, "{text}")?;
+        let advice = match r.remedy {
+            Some(remedy) => remedy_flag(remedy),
+            None => &r.hint,
+        };
+        writeln!(
+            stderr,
+            "{}",
+            r.located(severity, format!("{advice}{outcome}"))
+        )?;
     }
     if !refused.is_empty() && !out.skip_unsupported {
         writeln!(
@@ -281,19 +302,46 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
     if out.check {
         let mut any = false;
         for f in results.iter().flat_map(|r| &r.files) {
-            if f.changed() {
+            if let Some(line) = would_change(f) {
                 any = true;
-                writeln!(
-                    stderr,
-                    "{}: {} target(s) would change",
-                    f.path.display(),
-                    f.changes.len()
-                )?;
+                writeln!(stderr, "{line}")?;
             }
         }
         return Ok(if any { Exit::Findings } else { Exit::Ok });
     }
+    write_outputs(command, results, out, inputs)
+}
+
+/// Writes the results (one transaction, `trackfix::output`) and lists every file written.
+fn write_outputs(
+    command: &str,
+    results: &[ProgramResult],
+    out: &OutputArgs,
+    inputs: &[PathBuf],
+) -> anyhow::Result<Exit> {
+    let mut stderr = std::io::stderr().lock();
+    if results.iter().all(|r| r.files.is_empty()) {
+        // Only a `$config.dat` was given: it is read for its bases and written only when a
+        // transform changes it.
+        bail!(
+            "nothing written: {} holds no program to {command} (a $config.dat is read for its bases and written only when a transform changes it; name the programs that use it)",
+            inputs
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     let dest = if let Some(o) = &out.output {
+        if o.as_os_str() == "-" {
+            let bytes = output::stream_output(results)?;
+            let mut stdout = std::io::stdout().lock();
+            stdout.write_all(bytes)?;
+            stdout.flush()?;
+            // The output is complete: a summary that cannot be shown changes nothing.
+            let _ = summarize(command, results, &[], &mut stderr);
+            return Ok(Exit::Ok);
+        }
         Destination::File(o.clone())
     } else if let Some(d) = &out.out_dir {
         Destination::Dir(d.clone())
@@ -303,50 +351,72 @@ fn finish(command: &str, results: &[ProgramResult], out: &OutputArgs) -> anyhow:
         }
     } else {
         bail!(
-            "say where to write: -o FILE, --out-dir DIR or --in-place (or preview with --diff, --check)"
+            "say where to write: -o FILE (- for standard output), --out-dir DIR or --in-place (or preview with --diff, --check)"
         );
     };
-    let writes = plan_writes(results, &dest)?;
-    write_all(&writes)?;
+    let writes = output::plan(results, &dest, &Roots::from_inputs(inputs))?;
+    let written = output::commit(&writes)?;
+    // The files are written: a summary that cannot be shown (stderr full or closed) changes
+    // nothing about the outcome.
+    if written.is_empty() {
+        let _ = writeln!(stderr, "note: nothing written: no file changed");
+    }
+    let _ = summarize(command, results, &written, &mut stderr);
+    Ok(Exit::Ok)
+}
+
+/// One line per input file: what changed, and every file written for it.
+fn summarize(
+    command: &str,
+    results: &[ProgramResult],
+    written: &[output::Written],
+    stderr: &mut impl std::io::Write,
+) -> anyhow::Result<Exit> {
     for f in results.iter().flat_map(|r| &r.files) {
-        let (mm, deg) = f.largest_change();
-        let skid = match f.skid_range() {
-            Some((lo, hi)) => format!(", skid {}…{} mm", fmt_mm(lo), fmt_mm(hi)),
-            None => String::new(),
-        };
-        let first = results
-            .iter()
-            .find(|r| r.files.iter().any(|g| g.path == f.path))
-            .filter(|r| r.files.len() > 1)
-            .and_then(|r| r.files.first())
-            .map(|g| g.path.as_path());
-        let target = output_path(&dest, &f.path, first, f.changed())
-            .map(|p| format!(" → {}", p.display()))
-            .unwrap_or_default();
-        let refused = match f.refusals.len() {
-            0 => String::new(),
-            n => format!(", {n} refused (left unchanged)"),
-        };
-        if f.changes.is_empty() {
-            writeln!(stderr, "{}: unchanged{refused}{target}", f.path.display())?;
-        } else {
-            // A mirror moves points by metres: that is no correction.
-            let largest = if command == "mirror" {
-                "largest move"
-            } else {
-                "largest correction"
-            };
-            writeln!(
-                stderr,
-                "{}: {} target(s) changed, {largest} {} mm / {:.4}°{skid}{refused}{target}",
-                f.path.display(),
-                f.changes.len(),
-                fmt_mm(mm),
-                deg,
-            )?;
+        let mut summary = FileSummary::new(f, command == "mirror");
+        if let Some(w) = written.iter().find(|w| w.input == f.path) {
+            summary.written_to = Some(w.path.clone());
+            summary.link_target.clone_from(&w.resolved);
+            summary.backup.clone_from(&w.backup);
         }
+        writeln!(stderr, "{summary}")?;
     }
     Ok(Exit::Ok)
+}
+
+/// The one runner of every transform: load each program (with `robot`'s `$config.dat`), run
+/// `transform` on it in memory, then report, diff, check or write everything at once.
+fn run_each(
+    command: &str,
+    files: &[PathBuf],
+    robot: Option<&Robot>,
+    other_configs: &[Option<&Path>],
+    out: &OutputArgs,
+    transform: impl Fn(&Program) -> anyhow::Result<ProgramResult>,
+) -> anyhow::Result<Exit> {
+    let programs = load_programs(files, &load_options(robot))?;
+    let mut results = Vec::new();
+    for p in &programs {
+        results.push(transform(p)?);
+    }
+    drop_untouched_config(&mut results, robot.and_then(|r| r.config_dat.as_deref()));
+    for cfg in other_configs {
+        drop_untouched_config(&mut results, *cfg);
+    }
+    finish(command, &results, out, files)
+}
+
+/// [`run_each`] for one transform step.
+fn run_step(
+    command: &str,
+    files: &[PathBuf],
+    robot: Option<&Robot>,
+    step: TransformStep,
+    out: &OutputArgs,
+) -> anyhow::Result<Exit> {
+    run_each(command, files, robot, &[], out, |p| {
+        Ok(apply(p, step.edits(p))?)
+    })
 }
 
 fn run_track(a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
@@ -355,13 +425,13 @@ fn run_track(a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
     let profile = load_profile(&cell, robot)?;
     let mut setup = TrackSetup::new(robot, &profile);
     setup.default_wobj = a.default_wobj.clone();
-    let programs = load_programs(&a.files, &load_options(Some(robot)))?;
-    let mut results = Vec::new();
-    for p in &programs {
-        results.push(apply(p, track_correction(p, &setup, dir))?);
-    }
-    drop_untouched_config(&mut results, robot.config_dat.as_deref());
-    finish(dir.as_str(), &results, &a.out)
+    run_step(
+        dir.as_str(),
+        &a.files,
+        Some(robot),
+        TransformStep::Track(&setup, dir),
+        &a.out,
+    )
 }
 
 pub fn run_correct(a: CorrectArgs) -> anyhow::Result<Exit> {
@@ -446,13 +516,13 @@ fn run_mirror_inner(a: MirrorArgs) -> anyhow::Result<Exit> {
             a.default_wobj.as_deref(),
         )
     };
-    let programs = load_programs(&a.files, &load_options(robot))?;
-    let mut results = Vec::new();
-    for p in &programs {
-        results.push(apply(p, mirror(p, &settings))?);
-    }
-    drop_untouched_config(&mut results, robot.and_then(|r| r.config_dat.as_deref()));
-    finish("mirror", &results, &a.out)
+    run_step(
+        "mirror",
+        &a.files,
+        robot,
+        TransformStep::Mirror(&settings),
+        &a.out,
+    )
 }
 
 pub fn run_transfer(a: TransferArgs) -> anyhow::Result<Exit> {
@@ -481,12 +551,13 @@ fn run_transfer_inner(a: TransferArgs) -> anyhow::Result<Exit> {
     };
     plan.from.default_wobj = a.default_wobj.clone();
     plan.to.default_wobj = a.default_wobj.clone();
-    let programs = load_programs(&a.files, &load_options(Some(from)))?;
-    let mut results = Vec::new();
-    for p in &programs {
-        results.push(transfer(p, &plan, &load_options(Some(to)))?);
-    }
-    drop_untouched_config(&mut results, from.config_dat.as_deref());
-    drop_untouched_config(&mut results, to.config_dat.as_deref());
-    finish("transfer", &results, &a.out)
+    let written = load_options(Some(to));
+    run_each(
+        "transfer",
+        &a.files,
+        Some(from),
+        &[to.config_dat.as_deref()],
+        &a.out,
+        |p| Ok(transfer(p, &plan, &written)?),
+    )
 }

@@ -52,7 +52,11 @@ pub struct BaseFit {
 /// Reads `POINTS.csv` (the columns of `measurements.csv`); unlike `track identify`, any number
 /// of points per skid is fine. A point measured twice at one skid is an error at its line.
 pub fn read_points(path: &Path) -> Result<Vec<MeasurementRow>, TrackError> {
-    let table = NumericCsv::read(path)?;
+    points_from(&NumericCsv::read(path, &MEASUREMENTS_HEADER)?)
+}
+
+/// The points of a table read with [`MEASUREMENTS_HEADER`] (whose notes the caller shows).
+pub fn points_from(table: &NumericCsv) -> Result<Vec<MeasurementRow>, TrackError> {
     let mut seen: BTreeMap<(u64, u64), u64> = BTreeMap::new();
     let mut rows = Vec::new();
     for (line, [skid, point, rx, ry, rz, mx, my, mz]) in table.select(&MEASUREMENTS_HEADER)? {

@@ -23,7 +23,11 @@ pub const REJECT_FACTOR: f64 = crate::track::identify::OUTLIER_FACTOR;
 
 /// Reads `point,x,y,z`; a point number twice is an error at its line.
 pub fn read_point_file(path: &Path) -> Result<BTreeMap<u32, Point3<f64>>, TrackError> {
-    let table = NumericCsv::read(path)?;
+    point_file_from(&NumericCsv::read(path, &POINTS_HEADER)?)
+}
+
+/// The points of a table read with [`POINTS_HEADER`] (whose notes the caller shows).
+pub fn point_file_from(table: &NumericCsv) -> Result<BTreeMap<u32, Point3<f64>>, TrackError> {
     let mut out = BTreeMap::new();
     for (line, [point, x, y, z]) in table.select(&POINTS_HEADER)? {
         if point < 0.0 || point.fract() != 0.0 || point > u32::MAX as f64 {

@@ -35,9 +35,18 @@ impl FlangeOrientation {
     }
 }
 
+/// Every column a flange file may have: `x,y,z` and one orientation's.
+pub const FLANGE_COLUMNS: [&str; 13] = [
+    "x", "y", "z", "q1", "q2", "q3", "q4", "rx", "ry", "rz", "a", "b", "c",
+];
+
 /// Reads `FLANGE.csv`: `x,y,z` and one of `q1,q2,q3,q4` / `rx,ry,rz` / `a,b,c`.
 pub fn read_flange(path: &Path) -> Result<(Vec<Pose>, FlangeOrientation), TrackError> {
-    let table = NumericCsv::read(path)?;
+    flange_from(&NumericCsv::read(path, &FLANGE_COLUMNS)?)
+}
+
+/// The flange poses of a table read with [`FLANGE_COLUMNS`] (whose notes the caller shows).
+pub fn flange_from(table: &NumericCsv) -> Result<(Vec<Pose>, FlangeOrientation), TrackError> {
     let has = |c: &str| table.headers.iter().any(|h| h == c);
     let kind = if has("q1") {
         FlangeOrientation::Quaternion

@@ -36,7 +36,11 @@ pub struct WobjFit {
 
 /// Reads `marks.csv`; a mark number twice is an error at its line.
 pub fn read_marks(path: &Path) -> Result<Vec<MarkRow>, TrackError> {
-    let table = NumericCsv::read(path)?;
+    marks_from(&NumericCsv::read(path, &MARKS_HEADER)?)
+}
+
+/// The marks of a table read with [`MARKS_HEADER`] (whose notes the caller shows).
+pub fn marks_from(table: &NumericCsv) -> Result<Vec<MarkRow>, TrackError> {
     let mut seen = BTreeSet::new();
     let mut rows = Vec::new();
     for (line, [mark, skid, rx, ry, rz, cx, cy, cz]) in table.select(&MARKS_HEADER)? {

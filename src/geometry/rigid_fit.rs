@@ -3,7 +3,10 @@
 //! Closed form first (Kabsch/Horn: SVD of the cross-covariance, written out here), then
 //! Gauss-Newton steps with the pseudo-inverse of the Jacobian (seed eq. 4.28). For equal weights
 //! the closed form is already the least-squares optimum; the refinement guards its numerics and
-//! reports how far it moved.
+//! reports how far it moved. A weighted variant serves robust (iteratively reweighted) fits.
+//!
+//! Two figures say whether the fit can be trusted, whatever the residuals: the condition number
+//! of the rotation and the scale ratio of the two point sets (see [`RigidFit`]).
 
 use nalgebra::{
     DMatrix, DVector, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3,
@@ -38,6 +41,14 @@ pub struct RigidFit {
     pub rms: f64,
     /// Gauss-Newton iterations taken after the closed form.
     pub iterations: usize,
+    /// Condition number of the rotation: with `λ1 ≥ λ2 ≥ λ3` the eigenvalues of the (weighted)
+    /// spread `Σ (p - p̄)(p - p̄)ᵀ` of the source points, `sqrt((λ1 + λ2) / (λ2 + λ3))`, the
+    /// ratio of the best to the worst determined rotation (1 for a spread like a sphere's, √2
+    /// for a square, growing without bound as the points approach a line).
+    pub condition: f64,
+    /// `sqrt(Σ |q - q̄|² / Σ |p - p̄|²)`: how much wider the target points are spread than the
+    /// source points; 1 for a rigid motion.
+    pub scale_ratio: f64,
 }
 
 impl RigidFit {
@@ -52,11 +63,29 @@ pub fn fit_rigid(
     source: &[Point3<f64>],
     target: &[Point3<f64>],
 ) -> Result<RigidFit, RigidFitError> {
+    fit_rigid_weighted(source, target, &vec![1.0; source.len()])
+}
+
+/// Fits `pose` minimising `Σ w_j |q_j - pose·p_j|²`; residuals are given for every point,
+/// `rms` is over the points of positive weight. Weights must be finite and non-negative; at
+/// least 3 must be positive.
+pub fn fit_rigid_weighted(
+    source: &[Point3<f64>],
+    target: &[Point3<f64>],
+    weights: &[f64],
+) -> Result<RigidFit, RigidFitError> {
     if source.len() != target.len() {
         return Err(RigidFitError::LengthMismatch(source.len(), target.len()));
     }
-    if source.len() < 3 {
-        return Err(RigidFitError::TooFewPoints { got: source.len() });
+    if weights.len() != source.len() {
+        return Err(RigidFitError::LengthMismatch(source.len(), weights.len()));
+    }
+    let used = weights.iter().filter(|w| **w > 0.0).count();
+    if used < 3 {
+        return Err(RigidFitError::TooFewPoints { got: used });
+    }
+    if !weights.iter().all(|w| w.is_finite() && *w >= 0.0) {
+        return Err(RigidFitError::NotFinite);
     }
     if source
         .iter()
@@ -65,37 +94,65 @@ pub fn fit_rigid(
     {
         return Err(RigidFitError::NotFinite);
     }
-    let closed = kabsch(source, target)?;
-    let (pose, iterations) = gauss_newton(source, target, closed);
+    let closed = kabsch(source, target, weights)?;
+    let (pose, iterations) = gauss_newton(source, target, weights, closed.pose);
     let residuals: Vec<Vector3<f64>> = source
         .iter()
         .zip(target)
         .map(|(p, q)| q - pose * p)
         .collect();
-    let rms =
-        (residuals.iter().map(|r| r.norm_squared()).sum::<f64>() / residuals.len() as f64).sqrt();
+    let rms = (residuals
+        .iter()
+        .zip(weights)
+        .filter(|(_, w)| **w > 0.0)
+        .map(|(r, _)| r.norm_squared())
+        .sum::<f64>()
+        / used as f64)
+        .sqrt();
     Ok(RigidFit {
         pose,
         residuals,
         rms,
         iterations,
+        condition: closed.condition,
+        scale_ratio: closed.scale_ratio,
     })
 }
 
-fn centroid(points: &[Point3<f64>]) -> Vector3<f64> {
-    points.iter().map(|p| p.coords).sum::<Vector3<f64>>() / points.len().max(1) as f64
+fn centroid(points: &[Point3<f64>], weights: &[f64]) -> Vector3<f64> {
+    let total: f64 = weights.iter().sum();
+    points
+        .iter()
+        .zip(weights)
+        .map(|(p, w)| p.coords * *w)
+        .sum::<Vector3<f64>>()
+        / total.max(f64::MIN_POSITIVE)
 }
 
-/// Kabsch/Horn: `H = Σ (p - p̄)(q - q̄)ᵀ = U Σ Vᵀ`, `R = V·diag(1, 1, det(V Uᵀ))·Uᵀ`.
-fn kabsch(source: &[Point3<f64>], target: &[Point3<f64>]) -> Result<Pose, RigidFitError> {
-    let pc = centroid(source);
-    let qc = centroid(target);
+struct ClosedForm {
+    pose: Pose,
+    condition: f64,
+    scale_ratio: f64,
+}
+
+/// Kabsch/Horn: `H = Σ w (p - p̄)(q - q̄)ᵀ = U Σ Vᵀ`, `R = V·diag(1, 1, det(V Uᵀ))·Uᵀ`.
+fn kabsch(
+    source: &[Point3<f64>],
+    target: &[Point3<f64>],
+    weights: &[f64],
+) -> Result<ClosedForm, RigidFitError> {
+    let pc = centroid(source, weights);
+    let qc = centroid(target, weights);
     let mut h = Matrix3::zeros();
     let mut spread = Matrix3::zeros();
-    for (p, q) in source.iter().zip(target) {
+    let (mut source_sq, mut target_sq) = (0.0, 0.0);
+    for ((p, q), w) in source.iter().zip(target).zip(weights) {
         let a = p.coords - pc;
-        h += a * (q.coords - qc).transpose();
-        spread += a * a.transpose();
+        let b = q.coords - qc;
+        h += a * b.transpose() * *w;
+        spread += a * a.transpose() * *w;
+        source_sq += w * a.norm_squared();
+        target_sq += w * b.norm_squared();
     }
     // Coordinates near f64::MAX overflow when squared; an SVD of non-finite numbers never
     // converges.
@@ -111,6 +168,8 @@ fn kabsch(source: &[Point3<f64>], target: &[Point3<f64>]) -> Result<Pose, RigidF
     if sorted[0] <= 1e-18 || sorted[1] <= 1e-12 * scale {
         return Err(RigidFitError::Collinear);
     }
+    let condition = ((sorted[0] + sorted[1]) / (sorted[1] + sorted[2].max(0.0))).sqrt();
+    let scale_ratio = (target_sq / source_sq).sqrt();
     let svd = h
         .try_svd(true, true, f64::EPSILON, 10_000)
         .ok_or(RigidFitError::Svd)?;
@@ -126,30 +185,41 @@ fn kabsch(source: &[Point3<f64>], target: &[Point3<f64>]) -> Result<Pose, RigidF
     let r = Rotation3::from_matrix_unchecked(v * d * u.transpose());
     let rot = UnitQuaternion::from_rotation_matrix(&r);
     let t = qc - rot * pc;
-    Ok(Pose::from_parts(Translation3::from(t), rot))
+    Ok(ClosedForm {
+        pose: Pose::from_parts(Translation3::from(t), rot),
+        condition,
+        scale_ratio,
+    })
 }
 
 /// Gauss-Newton on a small-rotation update `T ← (δR, δt)·T` with the pseudo-inverse (seed eq.
 /// 4.28): residual `r_j = q_j - T p_j`, `∂r_j/∂(δθ, δt) = [ [T p_j]×, -I ]`.
-fn gauss_newton(source: &[Point3<f64>], target: &[Point3<f64>], start: Pose) -> (Pose, usize) {
+/// With weights, each point's rows are scaled by `sqrt(w)`.
+fn gauss_newton(
+    source: &[Point3<f64>],
+    target: &[Point3<f64>],
+    weights: &[f64],
+    start: Pose,
+) -> (Pose, usize) {
     let n = source.len();
     let mut pose = start;
     let mut iterations = 0;
     for _ in 0..5 {
         let mut jac = DMatrix::<f64>::zeros(3 * n, 6);
         let mut res = DVector::<f64>::zeros(3 * n);
-        for (j, (p, q)) in source.iter().zip(target).enumerate() {
+        for (j, ((p, q), w)) in source.iter().zip(target).zip(weights).enumerate() {
+            let sw = w.sqrt();
             let tp = pose * p;
-            let r = q - tp;
+            let r = (q - tp) * sw;
             let x = tp.coords;
             // r(δ) = q - (tp + δθ × tp + δt) = r - (-[tp]× δθ + δt); J = ∂r/∂δ = [ [tp]×, -I ].
-            let skew = x.cross_matrix();
+            let skew = x.cross_matrix() * sw;
             for a in 0..3 {
                 res[3 * j + a] = r[a];
                 for b in 0..3 {
                     jac[(3 * j + a, b)] = skew[(a, b)];
                 }
-                jac[(3 * j + a, 3 + a)] = -1.0;
+                jac[(3 * j + a, 3 + a)] = -sw;
             }
         }
         if !jac.iter().chain(res.iter()).all(|v| v.is_finite()) {
@@ -197,6 +267,50 @@ mod tests {
         assert!((fit.pose.translation.vector - t.translation.vector).norm() < 1e-9);
         assert!(fit.pose.rotation.angle_to(&t.rotation) < 1e-12);
         assert!(fit.rms < 1e-9);
+    }
+
+    #[test]
+    fn condition_and_scale_of_known_spreads() {
+        let t = pose_xyz_deg(10.0, 20.0, 30.0, 5.0, -3.0, 40.0);
+        // Cube corners: the spread is isotropic, every rotation equally determined.
+        let cube: Vec<_> = (0..8)
+            .map(|i| Point3::new((i & 1) as f64, ((i >> 1) & 1) as f64, (i >> 2) as f64) * 100.0)
+            .collect();
+        let on = |src: &[Point3<f64>], k: f64| -> Vec<Point3<f64>> {
+            src.iter().map(|p| t * Point3::from(p.coords * k)).collect()
+        };
+        let fit = fit_rigid(&cube, &on(&cube, 1.0)).unwrap();
+        assert!((fit.condition - 1.0).abs() < 1e-12, "{}", fit.condition);
+        assert!((fit.scale_ratio - 1.0).abs() < 1e-12);
+        // A square: λ = (a, a, 0), sqrt(2a / a).
+        let square: Vec<_> = (0..4)
+            .map(|i| Point3::new((i & 1) as f64 * 500.0, (i >> 1) as f64 * 500.0, 0.0))
+            .collect();
+        let fit = fit_rigid(&square, &on(&square, 1.0)).unwrap();
+        assert!(
+            (fit.condition - 2f64.sqrt()).abs() < 1e-12,
+            "{}",
+            fit.condition
+        );
+        let fit = fit_rigid(&square, &on(&square, 1000.0)).unwrap();
+        assert!((fit.scale_ratio - 1000.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_zero_weight_removes_the_point() {
+        let t = pose_xyz_deg(2500.0, -1800.0, -650.0, 0.3, -1.2, 30.0);
+        let mut src = cloud();
+        src.push(Point3::new(1300.0, -100.0, 1000.0));
+        let mut dst: Vec<_> = src.iter().map(|p| t * p).collect();
+        dst[4].x += 5.0;
+        let fit = fit_rigid_weighted(&src, &dst, &[1.0, 1.0, 1.0, 1.0, 0.0]).unwrap();
+        assert!((fit.pose.translation.vector - t.translation.vector).norm() < 1e-9);
+        assert!(fit.rms < 1e-9);
+        assert!((fit.residuals[4].x - 5.0).abs() < 1e-9);
+        assert_eq!(
+            fit_rigid_weighted(&src, &dst, &[1.0, 1.0, 0.0, 0.0, 0.0]),
+            Err(RigidFitError::TooFewPoints { got: 2 })
+        );
     }
 
     #[test]

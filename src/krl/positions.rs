@@ -107,12 +107,7 @@ pub(crate) struct Facts {
 }
 
 /// A declared name as motions reference it: upper case, without blanks (`p[ 3 ]` → `P[3]`).
-pub(crate) fn name_key(name: &str) -> String {
-    name.chars()
-        .filter(|c| !c.is_ascii_whitespace())
-        .map(|c| c.to_ascii_uppercase())
-        .collect()
-}
+pub(crate) use crate::names::fold as name_key;
 
 /// A name as text (Latin-1, as the controller writes it): one copy for the usual ASCII name
 /// instead of a character at a time (a 50 MB `.dat` names 131 000 positions).
@@ -668,7 +663,7 @@ fn assignment(
     }
     let f = read_fields(src, agg);
     let name = Some(name_text(target.span.slice(src)));
-    match declared.get(&base) {
+    match declared.get(&base).copied() {
         Some(PositionKind::Frame) => {
             out.facts.candidates.push(build_position(
                 lines,
@@ -679,7 +674,7 @@ fn assignment(
             ));
             out.facts.inferred.push(false);
         }
-        Some(&kind) => out
+        Some(kind) => out
             .positions
             .push(build_position(lines, value.span, kind, name, f)),
         None => {

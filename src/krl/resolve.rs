@@ -2,43 +2,12 @@
 //! and joined at `IF`/`SWITCH`, over every file of a `.src`/`.dat` pair; the result goes to each
 //! position's [`Usage`].
 
-use std::collections::HashMap as StdHashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
 use super::positions::{BranchEvent, Event, Facts, Fdat, FrameRef, Ref, Setting, name_key};
 use crate::position::{Config, ParsedFile, PositionKind, Usage};
 use crate::syntax::Diagnostic;
 
-/// Names are short, trusted-enough keys (the file is the user's own program) and a `.dat` holds
-/// hundreds of thousands of them: SipHash showed up as a tenth of the run time. This is the
-/// multiply-rotate hash of rustc's `FxHasher` with a finaliser, written out to avoid a
-/// dependency.
-#[derive(Default, Clone, Copy)]
-pub(crate) struct NameHasher(u64);
-
-impl Hasher for NameHasher {
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut word = [0u8; 8];
-            word[..chunk.len()].copy_from_slice(chunk);
-            self.0 = (self.0.rotate_left(5) ^ u64::from_le_bytes(word))
-                .wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-        }
-    }
-
-    /// MurmurHash3's finaliser: hashbrown picks buckets from the low bits, which the
-    /// multiply alone leaves equal for names differing only in their last bytes (`XP100001`).
-    fn finish(&self) -> u64 {
-        let mut h = self.0;
-        h ^= h >> 33;
-        h = h.wrapping_mul(0xff51_afd7_ed55_8ccd);
-        h ^= h >> 33;
-        h = h.wrapping_mul(0xc4ce_b9fe_1a85_ec53);
-        h ^ (h >> 33)
-    }
-}
-
-pub(crate) type HashMap<K, V> = StdHashMap<K, V, BuildHasherDefault<NameHasher>>;
+use crate::names::NameIndex;
+pub(crate) use crate::names::NameMap as HashMap;
 
 /// The name trackfix gives a base: `BASE_DATA[n]`, `$WORLD` for base 0.
 pub(crate) fn base_label(r: &FrameRef) -> Option<String> {
@@ -147,20 +116,7 @@ impl State {
 }
 
 fn record_use(u: &mut Usage, base: &Option<String>, tool: &Option<String>, tcp: bool, line: usize) {
-    if let Some(b) = base {
-        match &u.wobj {
-            None => u.wobj = Some(b.clone()),
-            Some(w) if w != b && !u.other_wobjs.contains(b) => u.other_wobjs.push(b.clone()),
-            Some(_) => {}
-        }
-    }
-    if u.tool.is_none() {
-        u.tool.clone_from(tool);
-    }
-    u.stationary_tool |= tcp;
-    if !u.lines.contains(&line) {
-        u.lines.push(line);
-    }
+    u.record(base.as_deref(), tool.as_deref(), tcp, line);
 }
 
 /// Resolves base, tool and IPO mode of every motion of a program (files in the same order as
@@ -182,28 +138,19 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             fdats.entry(k.clone()).or_insert_with(|| v.clone());
         }
     }
-    // Where each declared name lives: (file, in candidates?, index).
-    let mut by_name: HashMap<String, Vec<(usize, bool, usize)>> = HashMap::default();
+    // Where each declared name lives: (file, in candidates?, index); array elements also
+    // under the array's name (`SPTP BASEPOS[I]` may move to any of `BASEPOS[1..n]`).
+    let mut declared_at: NameIndex<(usize, bool, usize)> = NameIndex::new('[', 0);
     for (fi, (file, fact)) in files.iter().zip(facts.iter()).enumerate() {
         for (i, p) in file.positions.iter().enumerate() {
             if let Some(n) = &p.name {
-                by_name.entry(name_key(n)).or_default().push((fi, false, i));
+                declared_at.insert(n, (fi, false, i));
             }
         }
         for (i, p) in fact.candidates.iter().enumerate() {
             if let Some(n) = &p.name {
-                by_name.entry(name_key(n)).or_default().push((fi, true, i));
+                declared_at.insert(n, (fi, true, i));
             }
-        }
-    }
-    // Array elements by array name: `SPTP BASEPOS[I]` may move to any of `BASEPOS[1..n]`.
-    let mut by_array: HashMap<String, Vec<(usize, bool, usize)>> = HashMap::default();
-    for (name, at) in &by_name {
-        if let Some((array, _)) = name.split_once('[') {
-            by_array
-                .entry(array.to_owned())
-                .or_default()
-                .extend(at.iter().copied());
         }
     }
     let mut used_candidates: Vec<Vec<bool>> = facts
@@ -321,10 +268,9 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                     }
                                 }
                                 let hits = chain.iter().flat_map(|c| {
-                                    by_name.get(*c).map_or(&[][..], Vec::as_slice).iter().chain(
+                                    declared_at.exact(c).iter().chain(
                                         computed_index_array(c)
-                                            .and_then(|a| by_array.get(a))
-                                            .map_or(&[][..], Vec::as_slice),
+                                            .map_or(&[][..], |a| declared_at.elements(a)),
                                     )
                                 });
                                 for &(f2, cand, i) in hits {

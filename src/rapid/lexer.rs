@@ -279,10 +279,9 @@ pub fn number_len(rest: &[u8]) -> usize {
         && rest
             .get(1)
             .is_some_and(|c| matches!(c | 0x20, b'x' | b'b' | b'o'))
+        && let Ok((_, m)) = based(rest)
     {
-        if let Ok((_, m)) = based(rest) {
-            return m.len();
-        }
+        return m.len();
     }
     let digits = |mut i: usize| {
         while rest.get(i).is_some_and(u8::is_ascii_digit) {

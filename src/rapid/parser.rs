@@ -1667,10 +1667,10 @@ impl<'a, 's> Parser<'a, 's> {
                 }
             }
             TokenKind::Punct if t.punct(self.src) == b'[' => {
-                if self.fast_aggregates {
-                    if let Some(id) = self.numeric_aggregate() {
-                        return Ok(id);
-                    }
+                if self.fast_aggregates
+                    && let Some(id) = self.numeric_aggregate()
+                {
+                    return Ok(id);
                 }
                 self.bump();
                 let id = self.arena.open(ExprKind::Aggregate, t.start);

@@ -6,10 +6,9 @@
 //! object and tool). Usage is resolved at the end, because RAPID lets a routine use data declared
 //! further down the module.
 
-use std::collections::HashMap;
-
 use super::expr::{Arena, ExprKind};
 use super::parser::{StatementSink, Stmt};
+use crate::names::{NameIndex, NameKey, NameMap};
 use crate::position::{
     CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, Orientation,
     Position, PositionKind, Usage,
@@ -85,94 +84,14 @@ pub struct Extracted {
     pub diagnostics: Vec<Diagnostic>,
 }
 
-/// A multiply-rotate hasher for the name maps (names are short, attacker-free keys; SipHash
-/// showed up first in the profile of a 250,000-target module).
-#[derive(Default, Clone, Copy)]
-struct NameHasher(u64);
-
-impl std::hash::Hasher for NameHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u8(b);
-        }
-    }
-    fn write_u8(&mut self, b: u8) {
-        self.0 = (self.0.rotate_left(5) ^ u64::from(b)).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-    fn write_usize(&mut self, n: usize) {
-        self.0 = (self.0.rotate_left(5) ^ n as u64).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-}
-
-type NameMap<K, V> = HashMap<K, V, std::hash::BuildHasherDefault<NameHasher>>;
-
-/// A name in the source compared as RAPID compares names: ASCII case-insensitive, whitespace
-/// ignored (`pArr{ 2 }` = `parr{2}`). Borrows the source: no copy per declaration or use.
-#[derive(Clone, Copy)]
-struct NameKey<'s>(&'s [u8]);
-
-impl NameKey<'_> {
-    fn bytes(&self) -> impl Iterator<Item = u8> + '_ {
-        self.0
-            .iter()
-            .filter(|b| !b.is_ascii_whitespace())
-            .map(u8::to_ascii_lowercase)
-    }
-    fn is(&self, lower: &[u8]) -> bool {
-        self.bytes().eq(lower.iter().copied())
-    }
-    fn starts_with(&self, lower: &[u8]) -> bool {
-        let mut b = self.bytes();
-        lower.iter().all(|&l| b.next() == Some(l))
-    }
-    /// `z10`, `v1000`: the prefix letter then digits only.
-    fn numbered(&self, prefix: u8) -> bool {
-        let mut b = self.bytes();
-        b.next() == Some(prefix) && {
-            let mut digits = 0;
-            b.all(|c| {
-                digits += 1;
-                c.is_ascii_digit()
-            }) && digits > 0
-        }
-    }
-}
-
-impl std::hash::Hash for NameKey<'_> {
-    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
-        for b in self.bytes() {
-            state.write_u8(b);
-        }
-    }
-}
-
-impl PartialEq for NameKey<'_> {
-    fn eq(&self, other: &Self) -> bool {
-        // Names are almost always written the same way twice: compare bytes first.
-        self.0 == other.0 || self.bytes().eq(other.bytes())
-    }
-}
-
-impl Eq for NameKey<'_> {}
-
 fn text_of(src: &[u8], span: Span) -> String {
     latin1(span.slice(src))
 }
 
-/// A reference as a lookup key: lower case, no whitespace (`pArr{ 2 }` → `parr{2}`), written
-/// into a reused buffer.
+/// A reference as a lookup key ([`fold`](crate::names::fold) of its text), written into a
+/// reused buffer.
 fn key_into<'b>(buf: &'b mut String, src: &[u8], span: Span) -> &'b str {
-    buf.clear();
-    buf.extend(
-        span.slice(src)
-            .iter()
-            .filter(|b| !b.is_ascii_whitespace())
-            .map(|&b| (b as char).to_ascii_lowercase()),
-    );
-    buf
+    crate::names::fold_into(buf, span.slice(src))
 }
 
 impl<'l> Extractor<'l> {
@@ -432,12 +351,12 @@ impl<'l> Extractor<'l> {
             let i = i as u32;
             match n.kind {
                 ExprKind::Aggregate if literals && i >= skip_until => {
-                    if let Some(kind) = Self::literal_kind(arena, i) {
-                        if let Some(p) = self.position(src, arena, i, kind, None) {
-                            added.push(self.positions.len());
-                            self.positions.push(p);
-                            skip_until = n.subtree_end;
-                        }
+                    if let Some(kind) = Self::literal_kind(arena, i)
+                        && let Some(p) = self.position(src, arena, i, kind, None)
+                    {
+                        added.push(self.positions.len());
+                        self.positions.push(p);
+                        skip_until = n.subtree_end;
                     }
                 }
                 ExprKind::Call => {
@@ -483,10 +402,10 @@ impl<'l> Extractor<'l> {
                         .and_then(|&v| arena.get(v))
                         .map(|v| text_of(src, v.span()))
                         .unwrap_or_default();
-                    if let Some(v) = positional.first().and_then(|&v| arena.get(v)) {
-                        if matches!(v.kind, ExprKind::Ident | ExprKind::Access) {
-                            refs.push(v.span());
-                        }
+                    if let Some(v) = positional.first().and_then(|&v| arena.get(v))
+                        && matches!(v.kind, ExprKind::Ident | ExprKind::Access)
+                    {
+                        refs.push(v.span());
                     }
                     let delta =
                         [1, 2, 3].map(|k| positional.get(k).and_then(|&v| self.num(src, arena, v)));
@@ -555,30 +474,18 @@ impl<'l> Extractor<'l> {
             .filter(|f| f.kind == FrameKind::WorkObject)
             .filter_map(|f| Some((NameKey(f.name.as_bytes()), f.robhold?)))
             .collect();
-        let mut by_name: NameMap<String, Vec<usize>> =
-            NameMap::with_capacity_and_hasher(self.positions.len(), Default::default());
+        let mut declared = NameIndex::new('{', self.positions.len());
         for (i, p) in self.positions.iter().enumerate() {
             if let Some(n) = &p.name {
-                let lower = n.to_ascii_lowercase();
-                if let Some(base) = lower.split('{').next().filter(|b| b.len() < lower.len()) {
-                    match by_name.get_mut(base) {
-                        Some(v) => v.push(i),
-                        None => {
-                            by_name.insert(base.to_owned(), vec![i]);
-                        }
-                    }
-                }
-                by_name.entry(lower).or_default().push(i);
+                declared.insert(n, i);
             }
         }
+        // A name, an element (`pArr{2}`), or a whole array or an element chosen at run time
+        // (`pArr`, `pArr{i}`): then every element of the array may be used.
         let lookup = |r: &str| -> &[usize] {
-            if let Some(v) = by_name.get(r) {
-                return v;
-            }
-            // `pArr{i}` with a variable index: every element of the array may be used.
-            match r.split('{').next() {
-                Some(base) if base.len() < r.len() => by_name.get(base).map_or(&[], Vec::as_slice),
-                _ => &[],
+            match declared.exact(r) {
+                [] => declared.elements(declared.array_of(r).unwrap_or(r)),
+                hits => hits,
             }
         };
         let mut targets: Vec<usize> = Vec::new();
@@ -646,25 +553,12 @@ impl<'l> Extractor<'l> {
                 let Some(p) = self.positions.get_mut(t) else {
                     continue;
                 };
-                let usage = &mut p.usage;
-                if usage.lines.last() != Some(&u.line) {
-                    usage.lines.push(u.line);
-                }
-                if let Some(w) = &wobj {
-                    match &usage.wobj {
-                        None => usage.wobj = Some(w.clone()),
-                        Some(first) if first.eq_ignore_ascii_case(w) => {}
-                        Some(_) => {
-                            if !usage.other_wobjs.iter().any(|o| o.eq_ignore_ascii_case(w)) {
-                                usage.other_wobjs.push(w.clone());
-                            }
-                        }
-                    }
-                    usage.stationary_tool |= stationary;
-                }
-                if usage.tool.is_none() {
-                    usage.tool = tool.clone();
-                }
+                p.usage.record(
+                    wobj.as_deref(),
+                    tool.as_deref(),
+                    wobj.is_some() && stationary,
+                    u.line,
+                );
             }
         }
         // A frame given a whole new value in a routine: the declaration may not be what runs.

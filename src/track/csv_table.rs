@@ -1,10 +1,16 @@
 //! Numeric CSV tables (`measurements.csv`, `frames.csv`, `scan.csv`) with errors that name
 //! `file:line:col`, show the line with a caret under the field, and say what to do.
+//!
+//! Besides `,`-separated files, a spreadsheet's export in a German (or other continental)
+//! locale is read: `;` between the fields and `,` as the decimal point, told as a note. Tab
+//! separated tables are read too. A file whose header names none of the expected columns is
+//! something else (`/etc/passwd` given as a table): the error does not quote it.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
-use super::profile::TrackError;
-use crate::syntax::{Diagnostic, LineIndex, Span};
+use super::error::{LocatedError, TrackError};
+use crate::syntax::{LineIndex, Span};
 
 /// One data row and the 1-based line it came from.
 #[derive(Clone, Debug, PartialEq)]
@@ -21,37 +27,23 @@ pub struct NumericCsv {
     pub rows: Vec<NumericRow>,
     /// The 1-based line of the header (comment lines may come first).
     pub header_line: u64,
+    /// How the file was read when that is not plain `,`-separated CSV (for the user to check).
+    pub notes: Vec<String>,
+    /// The field separator found in the header.
+    delimiter: u8,
     /// The file's bytes, for messages that show the line.
-    source: Vec<u8>,
-}
-
-/// `file:line:col: error: message`, the line, a caret under `span` and `hint`.
-pub(crate) fn render_located(
-    path: &Path,
-    src: &[u8],
-    span: Span,
-    message: &str,
-    hint: &str,
-) -> String {
-    let index = LineIndex::new(src);
-    let mut d = Diagnostic::error(span, message);
-    if !hint.is_empty() {
-        d = d.with_hint(hint);
-    }
-    d.render(&path.display().to_string(), src, &index)
-        .trim_end()
-        .to_owned()
+    source: Arc<[u8]>,
 }
 
 /// The span of field `field` (0-based) of `line`, or of the whole line when there is no such
-/// field. Numeric CSV has no quoted commas, so splitting the line is enough.
-fn field_span(src: &[u8], line: u64, field: Option<usize>) -> Span {
+/// field. Numeric CSV has no quoted separators, so splitting the line is enough.
+fn field_span(src: &[u8], delimiter: u8, line: u64, field: Option<usize>) -> Span {
     let index = LineIndex::new(src);
     let whole = index.line_span(src, usize::try_from(line).unwrap_or(usize::MAX));
     let Some(field) = field else { return whole };
     let text = whole.slice(src);
     let mut start = 0;
-    for (i, part) in text.split(|&b| b == b',').enumerate() {
+    for (i, part) in text.split(|&b| b == delimiter).enumerate() {
         if i == field {
             let lead = part.iter().take_while(|b| b.is_ascii_whitespace()).count();
             let trail = part
@@ -67,42 +59,81 @@ fn field_span(src: &[u8], line: u64, field: Option<usize>) -> Span {
     whole
 }
 
-/// The error of a CSV file: where, in which column, what, and what to do.
-fn csv_error(
-    path: &Path,
-    src: &[u8],
-    (line, field): (u64, Option<usize>),
-    column: &str,
-    message: String,
-    hint: &str,
-) -> TrackError {
-    let rendered = render_located(path, src, field_span(src, line, field), &message, hint);
-    TrackError::Csv {
-        path: path.to_path_buf(),
-        line,
-        column: column.to_string(),
-        message,
-        rendered,
+/// The first line that is neither blank nor a `#` comment: the header.
+fn header_text(bytes: &[u8]) -> &[u8] {
+    bytes
+        .split(|&b| b == b'\n')
+        .find(|l| {
+            let t = l.trim_ascii();
+            !t.is_empty() && !t.starts_with(b"#")
+        })
+        .unwrap_or_default()
+}
+
+/// `,` unless the header has none and has `;` (a continental spreadsheet) or tabs.
+fn detect_delimiter(header: &[u8]) -> u8 {
+    let count = |d: u8| header.iter().filter(|&&b| b == d).count();
+    if count(b',') > 0 {
+        b','
+    } else if count(b';') > 0 {
+        b';'
+    } else if count(b'\t') > 0 {
+        b'\t'
+    } else {
+        b','
+    }
+}
+
+struct Source<'a> {
+    path: &'a Path,
+    bytes: &'a Arc<[u8]>,
+    delimiter: u8,
+}
+
+impl Source<'_> {
+    /// The error of a CSV file: where, in which column, what, and what to do.
+    fn error(
+        &self,
+        (line, field): (u64, Option<usize>),
+        column: &str,
+        message: String,
+        hint: &str,
+    ) -> TrackError {
+        let span = field_span(self.bytes, self.delimiter, line, field);
+        let mut e = LocatedError::new(self.path, self.bytes.clone(), span, message, hint);
+        if !column.is_empty() {
+            e = e.in_column(column);
+        }
+        e.into()
     }
 }
 
 impl NumericCsv {
-    /// Reads a file; `#` starts a comment line.
-    pub fn read(path: &Path) -> Result<NumericCsv, TrackError> {
-        let bytes = std::fs::read(path).map_err(|error| TrackError::Io {
+    /// Reads a file; `#` starts a comment line. `accepted` are the columns the caller can use:
+    /// a header naming none of them means the file is not such a table.
+    pub fn read(path: &Path, accepted: &[&str]) -> Result<NumericCsv, TrackError> {
+        let bytes = crate::output::read_input(path).map_err(|error| TrackError::Io {
             path: path.to_path_buf(),
             error,
         })?;
-        NumericCsv::parse(path, &bytes)
+        NumericCsv::parse(path, &bytes, accepted)
     }
 
-    /// Parses bytes; `path` is for messages only.
-    pub fn parse(path: &Path, bytes: &[u8]) -> Result<NumericCsv, TrackError> {
+    /// Parses bytes; `path` is for messages only. See [`NumericCsv::read`].
+    pub fn parse(path: &Path, bytes: &[u8], accepted: &[&str]) -> Result<NumericCsv, TrackError> {
+        let shared: Arc<[u8]> = Arc::from(bytes);
+        let delimiter = detect_delimiter(header_text(bytes));
+        let src = Source {
+            path,
+            bytes: &shared,
+            delimiter,
+        };
         let err = |at: (u64, Option<usize>), column: &str, message: String, hint: &str| {
-            csv_error(path, bytes, at, column, message, hint)
+            src.error(at, column, message, hint)
         };
         let mut reader = csv::ReaderBuilder::new()
             .has_headers(true)
+            .delimiter(delimiter)
             .trim(csv::Trim::All)
             .comment(Some(b'#'))
             .from_reader(bytes);
@@ -122,6 +153,22 @@ impl NumericCsv {
                 "start the file with its column names (the command's --help lists them)",
             ));
         }
+        if !accepted.is_empty() && !headers.iter().any(|h| accepted.contains(&h.as_str())) {
+            let e = LocatedError::new(
+                path,
+                shared.clone(),
+                field_span(&shared, delimiter, header_line, None),
+                format!(
+                    "not a table of this kind: its first line names none of the columns `{}`",
+                    accepted.join(",")
+                ),
+                "give a table whose header line names these columns",
+            );
+            return Err(e.without_quote().into());
+        }
+        // Decimal commas only where `,` cannot be the separator.
+        let decimal_comma = delimiter != b',';
+        let mut saw_decimal_comma = false;
         let mut rows = Vec::new();
         for record in reader.records() {
             let record = match record {
@@ -135,7 +182,10 @@ impl NumericCsv {
                             (line, None),
                             "",
                             format!("{len} field(s), the header has {expected_len}"),
-                            "write one value per column on every row",
+                            &format!(
+                                "write one value per column on every row, separated by `{}` as in the header",
+                                char::from(delimiter).escape_default()
+                            ),
                         ),
                         _ => err((line, None), "", e.to_string(), ""),
                     });
@@ -144,12 +194,22 @@ impl NumericCsv {
             let line = record.position().map(|p| p.line()).unwrap_or(0);
             let mut values = Vec::with_capacity(record.len());
             for (i, (field, name)) in record.iter().zip(&headers).enumerate() {
-                let v: f64 = field.parse().map_err(|_| {
+                let parsed = if decimal_comma && field.contains(',') {
+                    saw_decimal_comma = true;
+                    field.replacen(',', ".", 1).parse::<f64>()
+                } else {
+                    field.parse::<f64>()
+                };
+                let v: f64 = parsed.map_err(|_| {
                     err(
                         (line, Some(i)),
                         name,
                         format!("`{field}` in column `{name}` is not a number"),
-                        "write a plain number (mm or degrees, `.` as the decimal point)",
+                        if decimal_comma {
+                            "write a plain number (mm or degrees, `,` or `.` as the decimal point)"
+                        } else {
+                            "write a plain number (mm or degrees, `.` as the decimal point)"
+                        },
                     )
                 })?;
                 if !v.is_finite() {
@@ -164,21 +224,34 @@ impl NumericCsv {
             }
             rows.push(NumericRow { line, values });
         }
+        let mut notes = Vec::new();
+        match (delimiter, saw_decimal_comma) {
+            (b',', _) => {}
+            (b';', true) => notes.push(format!(
+                "{}: read with `;` between the fields and `,` as the decimal point (a spreadsheet export in a continental locale)",
+                path.display()
+            )),
+            (d, _) => notes.push(format!(
+                "{}: read with `{}` between the fields",
+                path.display(),
+                char::from(d).escape_default()
+            )),
+        }
         Ok(NumericCsv {
             path: path.to_path_buf(),
             headers,
             rows,
             header_line,
-            source: bytes.to_vec(),
+            notes,
+            delimiter,
+            source: shared,
         })
     }
 
     /// Index of a required column.
     pub fn column(&self, name: &str) -> Result<usize, TrackError> {
         self.headers.iter().position(|h| h == name).ok_or_else(|| {
-            csv_error(
-                &self.path,
-                &self.source,
+            self.src().error(
                 (self.header_line, None),
                 name,
                 format!("column `{name}` is missing"),
@@ -230,14 +303,15 @@ impl NumericCsv {
     /// An error at `line` of this file, under the field of `column`, with what to do.
     pub fn error(&self, line: u64, column: &str, message: String, hint: &str) -> TrackError {
         let field = self.headers.iter().position(|h| h == column);
-        csv_error(
-            &self.path,
-            &self.source,
-            (line, field),
-            column,
-            message,
-            hint,
-        )
+        self.src().error((line, field), column, message, hint)
+    }
+
+    fn src(&self) -> Source<'_> {
+        Source {
+            path: &self.path,
+            bytes: &self.source,
+            delimiter: self.delimiter,
+        }
     }
 
     /// The value at `index` (validated by [`NumericCsv::columns`]).

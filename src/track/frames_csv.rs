@@ -20,16 +20,20 @@ pub struct SamplingFrame {
 
 /// Reads `frames.csv`; rows must be in strictly increasing skid order.
 pub fn read_frames(path: &Path) -> Result<Vec<SamplingFrame>, TrackError> {
-    frames_of(&NumericCsv::read(path)?)
+    frames_of(&NumericCsv::read(path, &FRAMES_HEADER)?)
+}
+
+/// The frames of a table read with [`FRAMES_HEADER`] (whose notes the caller shows).
+pub fn frames_from(table: &NumericCsv) -> Result<Vec<SamplingFrame>, TrackError> {
+    frames_of(table)
 }
 
 /// Parses `frames.csv` bytes; `path` is for messages only.
 pub fn parse_frames(path: &Path, bytes: &[u8]) -> Result<Vec<SamplingFrame>, TrackError> {
-    frames_of(&NumericCsv::parse(path, bytes)?)
+    frames_of(&NumericCsv::parse(path, bytes, &FRAMES_HEADER)?)
 }
 
 fn frames_of(table: &NumericCsv) -> Result<Vec<SamplingFrame>, TrackError> {
-    let path = &table.path;
     let mut frames: Vec<SamplingFrame> = Vec::with_capacity(table.rows.len());
     for (line, [skid, x, y, z, rx, ry, rz]) in table.select(&FRAMES_HEADER)? {
         if let Some(prev) = frames.last()
@@ -51,11 +55,16 @@ fn frames_of(table: &NumericCsv) -> Result<Vec<SamplingFrame>, TrackError> {
         });
     }
     if frames.len() < 2 {
-        return Err(TrackError::Invalid(format!(
-            "{}: {} sampling frame(s), a track model needs at least 2",
-            path.display(),
-            frames.len()
-        )));
+        let line = table.rows.last().map_or(table.header_line, |r| r.line);
+        return Err(table.error(
+            line,
+            "",
+            format!(
+                "{} sampling frame(s), a track model needs at least 2",
+                frames.len()
+            ),
+            "identify the base frame at two or more skid positions (every 500 mm is usual)",
+        ));
     }
     Ok(frames)
 }

@@ -3,11 +3,17 @@
 
 use nalgebra::{Matrix3, Translation3, UnitQuaternion, Vector3};
 
+use super::error::NominalProblem;
 use super::frames_csv::SamplingFrame;
 use super::profile::{
     Extrapolate, Gear, Knot, Nominal, Profile, Reference, TrackError, line_fit, line_residuals,
 };
 use crate::geometry::{Pose, nearest_rotation, pose_to_xyz_deg, xyz_deg_angles};
+
+/// How far the gear factor may be from 1: a real track's gear error is parts per ten thousand;
+/// beyond this the frames are in other units than the skid (metres, inches, a scale of 1e9) or
+/// the skid column is wrong.
+pub const GEAR_TOLERANCE: f64 = 0.05;
 
 /// How to fit a profile.
 #[derive(Clone, Debug, PartialEq)]
@@ -67,14 +73,14 @@ impl TrackFit {
 /// Fits the nominal and the deviations of sampling frames in increasing skid order.
 pub fn fit_track(frames: &[SamplingFrame], opts: &FitOptions) -> Result<TrackFit, TrackError> {
     let Some(first) = frames.first() else {
-        return Err(TrackError::Invalid(
-            "no sampling frames: a track model needs at least 2".to_string(),
-        ));
+        return Err(TrackError::Nominal(NominalProblem::TooFewFrames {
+            count: 0,
+        }));
     };
     if frames.len() < 2 {
-        return Err(TrackError::Invalid(
-            "1 sampling frame: a track model needs at least 2".to_string(),
-        ));
+        return Err(TrackError::Nominal(NominalProblem::TooFewFrames {
+            count: frames.len(),
+        }));
     }
     let skids: Vec<f64> = frames.iter().map(|f| f.skid).collect();
     let coord = |a: usize| -> Vec<f64> {
@@ -96,9 +102,13 @@ pub fn fit_track(frames: &[SamplingFrame], opts: &FitOptions) -> Result<TrackFit
     let slope = Vector3::new(lines[0].slope, lines[1].slope, lines[2].slope);
     let gear_factor = slope.norm();
     if gear_factor.is_nan() || gear_factor <= 0.0 || !gear_factor.is_finite() {
-        return Err(TrackError::Invalid(
-            "the sampling frames do not move with the skid: no track direction".to_string(),
-        ));
+        return Err(TrackError::Nominal(NominalProblem::NoDirection));
+    }
+    if (gear_factor - 1.0).abs() > GEAR_TOLERANCE {
+        return Err(TrackError::Nominal(NominalProblem::ImplausibleGear {
+            gear_factor,
+            tolerance: GEAR_TOLERANCE,
+        }));
     }
     let direction = slope / gear_factor;
     let step = match opts.gear {
@@ -111,9 +121,8 @@ pub fn fit_track(frames: &[SamplingFrame], opts: &FitOptions) -> Result<TrackFit
                 .iter()
                 .map(|f| f.pose.rotation.to_rotation_matrix().into_inner())
                 .sum();
-            let r = nearest_rotation(&sum).ok_or_else(|| {
-                TrackError::Invalid("the mean of the frame rotations is degenerate".to_string())
-            })?;
+            let r = nearest_rotation(&sum)
+                .ok_or(TrackError::Nominal(NominalProblem::DegenerateRotation))?;
             let origin = Vector3::new(lines[0].intercept, lines[1].intercept, lines[2].intercept);
             (UnitQuaternion::from_rotation_matrix(&r), origin)
         }

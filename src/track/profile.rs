@@ -1,11 +1,12 @@
 //! `profile.toml`: a fitted track profile and its evaluation `D(s)` (DESIGN.md §3, §6).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use std::sync::Arc;
 
 use nalgebra::{Translation3, Vector3};
 use serde::{Deserialize, Serialize};
 
-use super::csv_table::render_located;
+use super::error::LocatedError;
 use super::nominal::FitOptions;
 use super::spline::{CubicSpline, EndCondition, SplineError};
 use crate::geometry::{Pose, pose_xyz_deg, xyz_deg};
@@ -14,53 +15,7 @@ use crate::syntax::Span;
 /// The format tag every profile file starts with.
 pub const PROFILE_FORMAT: &str = "trackfix-profile/1";
 
-/// Everything that can go wrong in the track model, with the file, line or skid it concerns.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum TrackError {
-    /// `D(s)` asked outside `[s_0, s_N]` with `extrapolate = "error"`.
-    #[error(
-        "skid {skid} mm is outside the profile's range [{min}, {max}] mm (measure further, or set extrapolate = \"clamp\" or \"linear\" in the profile)"
-    )]
-    OutOfRange { skid: f64, min: f64, max: f64 },
-    /// A file could not be read or written.
-    #[error("{}: {error}", path.display())]
-    Io {
-        path: PathBuf,
-        error: std::io::Error,
-    },
-    /// A `profile.toml` that TOML or the profile schema rejects, rendered as
-    /// `file:line:col: error: …` with the line, a caret and what to do.
-    #[error("{rendered}")]
-    Toml { path: PathBuf, rendered: String },
-    /// A profile with a format tag this version does not read.
-    #[error("{}: format = {found:?}, expected {PROFILE_FORMAT:?}", path.display())]
-    Format { path: PathBuf, found: String },
-    /// The knots cannot carry a spline (too few, not increasing, not finite).
-    #[error("{context}: {error}")]
-    Knots { context: String, error: SplineError },
-    /// A CSV input error at `file:line`, in a named column; `rendered` is the whole message:
-    /// `file:line:col: error: …`, the line, a caret and what to do.
-    #[error("{rendered}")]
-    Csv {
-        path: PathBuf,
-        line: u64,
-        column: String,
-        message: String,
-        rendered: String,
-    },
-    /// Fewer than 3 point pairs at one skid position.
-    #[error(
-        "skid {skid} mm: {count} point(s) measured, a base frame needs at least 3 non-collinear points"
-    )]
-    TooFewPoints { skid: f64, count: usize },
-    /// Point pairs that do not fix a rigid transform (collinear or coincident).
-    #[error("skid {skid} mm: {reason}")]
-    Degenerate { skid: f64, reason: String },
-    /// Anything else that makes the input unusable.
-    #[error("{0}")]
-    Invalid(String),
-}
+pub use super::error::TrackError;
 
 /// One sampling position's deviation `D_i` (mm, degrees; DESIGN.md §2 `rx, ry, rz`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -172,11 +127,11 @@ impl Knot {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Extrapolate {
-    /// Refuse: [`TrackError::OutOfRange`].
+    /// Refuse a skid outside the measured range.
     Error,
-    /// Hold the end value.
+    /// Hold the deviation of the nearest end.
     Clamp,
-    /// Continue the end tangent.
+    /// Continue the deviation along its slope at the nearest end.
     Linear,
 }
 
@@ -193,13 +148,25 @@ pub enum Reference {
 /// Whether the gear factor's drift stays in the profile (DESIGN.md §3.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 pub enum Gear {
-    /// Keep the controller's gear factor; its drift is part of `D(s)`.
+    /// Keep the controller's gear ratio; its drift stays in the profile.
     #[serde(rename = "as-is")]
     #[value(name = "as-is")]
     AsIs,
-    /// The user enters the new gear factor; the drift is removed from `D(s)`.
+    /// You enter the new gear ratio in the controller; the drift is taken out of the profile.
     #[serde(rename = "recalibrated")]
     Recalibrated,
+}
+
+/// The frame the tracker measured in, as far as the profile knows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum MeasuredIn {
+    /// The cell's world frame (the tracker was aligned to the cell): the nominal can be
+    /// compared with the cell's base and track axis.
+    World,
+    /// The tracker's own frame: only the frame-independent track direction in the robot base
+    /// can be compared with a cell.
+    Tracker,
 }
 
 /// The controller's straight track `N(s) = (R_N, origin + s·step)` in the measurement frame.
@@ -229,7 +196,7 @@ impl Nominal {
 }
 
 /// Figures of the fitted deviations, for reports (not used by `D(s)`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ProfileStats {
     /// Number of knots.
@@ -247,6 +214,10 @@ pub struct ProfileStats {
     pub straightness_vertical_mm: f64,
     /// Peak-to-peak of the rotation about the track axis (twist), degrees.
     pub twist_deg: f64,
+    /// sha256 of what `D(s)` is made of (reference, gear, nominal, knots; see
+    /// [`Profile::data_sha256`]): a hand edit that changes them shows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub data_sha256: Option<String>,
 }
 
 /// The on-disk layout, field order = file order.
@@ -260,6 +231,8 @@ struct ProfileFile {
     reference: Reference,
     gear: Gear,
     extrapolate: Extrapolate,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    measured_in: Option<MeasuredIn>,
     nominal: Nominal,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     stats: Option<ProfileStats>,
@@ -281,23 +254,62 @@ impl PartialEq for Profile {
     }
 }
 
-/// The `skid = …` line of the `index`-th (0-based) `[[knot]]` table of profile text.
-fn knot_skid_span(text: &str, index: usize) -> Option<Span> {
+/// The span of the line `key = …` in the table `table` (`None`: the top level; `Some((header,
+/// n))`: the `n`-th (0-based) table whose header line is `header`) of profile text.
+fn key_span(text: &str, table: Option<(&str, usize)>, key: &str) -> Option<Span> {
     let mut offset = 0;
-    let mut tables = 0;
+    let mut current: Option<(&str, usize)> = None;
+    let mut seen: Vec<(&str, usize)> = Vec::new();
     for line in text.split_inclusive('\n') {
         let start = offset;
         offset += line.len();
         let trimmed = line.trim();
-        if trimmed == "[[knot]]" {
-            tables += 1;
-        } else if tables == index + 1 && trimmed.starts_with("skid") {
+        if trimmed.starts_with('[') {
+            let n = seen.iter().filter(|(h, _)| *h == trimmed).count();
+            seen.push((trimmed, n));
+            current = Some((trimmed, n));
+        } else if current == table
+            && trimmed
+                .strip_prefix(key)
+                .is_some_and(|rest| rest.trim_start().starts_with('='))
+        {
             let lead = line.len() - line.trim_start().len();
             return Some(Span::new(start + lead, start + lead + trimmed.len()));
         }
     }
     None
 }
+
+/// The span of the `n`-th (0-based) `[[knot]]` header line.
+fn knot_header_span(text: &str, n: usize) -> Option<Span> {
+    let mut offset = 0;
+    let mut count = 0;
+    for line in text.split_inclusive('\n') {
+        let start = offset;
+        offset += line.len();
+        if line.trim() == "[[knot]]" {
+            if count == n {
+                let lead = line.len() - line.trim_start().len();
+                return Some(Span::new(start + lead, start + lead + 8));
+            }
+            count += 1;
+        }
+    }
+    None
+}
+
+/// Whether text claims to be a profile: a `format = "trackfix-profile…"` line. Errors in a file
+/// that does not are reported without quoting it (it may be anything, `/etc/passwd` included).
+fn claims_to_be_a_profile(text: &str) -> bool {
+    text.lines().any(|l| {
+        l.trim_start().strip_prefix("format").is_some_and(|rest| {
+            rest.trim_start().starts_with('=') && rest.contains("trackfix-profile")
+        })
+    })
+}
+
+const PROFILE_HINT: &str =
+    "a profile is what `trackfix track fit` writes; see samples/track/profile.toml for its keys";
 
 impl Profile {
     /// A profile from knots alone: identity nominal, reference `regression`, gear `as-is`.
@@ -325,75 +337,89 @@ impl Profile {
             context: format!("profile `{}`", opts.name),
             error,
         })?;
-        let stats = Some(compute_stats(&knots, &nominal));
-        Ok(Profile {
-            file: ProfileFile {
-                format: PROFILE_FORMAT.to_string(),
-                name: opts.name.clone(),
-                source_sha256: opts.source_sha256.clone(),
-                reference: opts.reference,
-                gear: opts.gear,
-                extrapolate: opts.extrapolate,
-                nominal,
-                stats,
-                knot: knots,
-            },
-            splines,
-        })
+        let mut file = ProfileFile {
+            format: PROFILE_FORMAT.to_string(),
+            name: opts.name.clone(),
+            source_sha256: opts.source_sha256.clone(),
+            reference: opts.reference,
+            gear: opts.gear,
+            extrapolate: opts.extrapolate,
+            measured_in: None,
+            nominal,
+            stats: None,
+            knot: knots,
+        };
+        let mut stats = compute_stats(&file.knot, &file.nominal);
+        stats.data_sha256 = Some(data_sha256(&file));
+        file.stats = Some(stats);
+        Ok(Profile { file, splines })
     }
 
     /// Reads and validates a `profile.toml`: unknown keys are an error, a missing key names
-    /// itself, errors carry the file and toml's line/column.
+    /// itself, errors carry the file, line and column.
     pub fn load(path: &Path) -> Result<Profile, TrackError> {
-        let text = std::fs::read_to_string(path).map_err(|error| TrackError::Io {
+        let bytes = crate::output::read_input(path).map_err(|error| TrackError::Io {
             path: path.to_path_buf(),
             error,
         })?;
-        Profile::from_toml_str(&text, path)
+        Profile::from_toml_bytes(&bytes, path)
     }
 
     /// Parses profile text; `path` is only used in messages.
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Profile, TrackError> {
-        let file: ProfileFile = toml::from_str(text).map_err(|e| TrackError::Toml {
-            path: path.to_path_buf(),
-            rendered: render_located(
-                path,
-                text.as_bytes(),
+        Profile::from_toml_bytes(text.as_bytes(), path)
+    }
+
+    fn from_toml_bytes(bytes: &[u8], path: &Path) -> Result<Profile, TrackError> {
+        let source: Arc<[u8]> = Arc::from(bytes);
+        let located = |span: Span, message: String, hint: &str| {
+            LocatedError::new(path, source.clone(), span, message, hint)
+        };
+        let not_a_profile = |at: usize| -> TrackError {
+            located(
+                Span::new(at, at),
+                format!("not a trackfix profile: it has no `format = \"{PROFILE_FORMAT}\"` line"),
+                PROFILE_HINT,
+            )
+            .without_quote()
+            .into()
+        };
+        let text = std::str::from_utf8(bytes).map_err(|e| not_a_profile(e.valid_up_to()))?;
+        if !claims_to_be_a_profile(text) {
+            return Err(not_a_profile(0));
+        }
+        let file: ProfileFile = toml::from_str(text).map_err(|e| {
+            located(
                 e.span().map(Span::from).unwrap_or_default(),
-                e.message().trim(),
-                "a profile is what `trackfix track fit FRAMES.csv -o profile.toml` writes; \
-                 see samples/track/profile.toml for its keys",
-            ),
+                e.message().trim().to_owned(),
+                PROFILE_HINT,
+            )
         })?;
         if file.format != PROFILE_FORMAT {
-            return Err(TrackError::Format {
-                path: path.to_path_buf(),
-                found: file.format,
-            });
+            let span = key_span(text, None, "format").unwrap_or_default();
+            return Err(located(
+                span,
+                format!(
+                    "format = {:?}: this version of trackfix reads {PROFILE_FORMAT:?}",
+                    file.format
+                ),
+                "fit the profile again with this version of trackfix, or use the version that wrote it",
+            )
+            .into());
         }
         let splines = build_splines(&file.knot).map_err(|error| {
-            let index = match error {
+            let span = match error {
                 SplineError::NotIncreasing { index, .. } | SplineError::NotFinite { index } => {
-                    Some(index)
+                    key_span(text, Some(("[[knot]]", index)), "skid")
+                        .or_else(|| knot_header_span(text, index))
                 }
-                _ => None,
+                _ => knot_header_span(text, 0).or_else(|| key_span(text, None, "format")),
             };
-            match index.and_then(|i| knot_skid_span(text, i)) {
-                Some(span) => TrackError::Toml {
-                    path: path.to_path_buf(),
-                    rendered: render_located(
-                        path,
-                        text.as_bytes(),
-                        span,
-                        &format!("[[knot]]: {error}"),
-                        "keep one [[knot]] per skid position, in increasing skid order",
-                    ),
-                },
-                None => TrackError::Knots {
-                    context: format!("{}: [[knot]]", path.display()),
-                    error,
-                },
-            }
+            TrackError::from(located(
+                span.unwrap_or_default(),
+                format!("[[knot]]: {error}"),
+                "keep one [[knot]] per skid position, at least 2, in increasing skid order",
+            ))
         })?;
         Ok(Profile { file, splines })
     }
@@ -401,7 +427,7 @@ impl Profile {
     /// The profile as TOML text (what [`Profile::save`] writes).
     pub fn to_toml_string(&self) -> Result<String, TrackError> {
         let body = toml::to_string(&self.file)
-            .map_err(|e| TrackError::Invalid(format!("cannot write the profile: {e}")))?;
+            .map_err(|e| TrackError::Output(format!("cannot write the profile: {e}")))?;
         Ok(format!(
             "# trackfix track profile: deviation D(s) of the real robot base from the nominal \
              straight track,\n# mm and degrees (R = Rz*Ry*Rx), natural cubic splines through the \
@@ -412,7 +438,7 @@ impl Profile {
     /// Writes the profile atomically.
     pub fn save(&self, path: &Path) -> Result<(), TrackError> {
         let text = self.to_toml_string()?;
-        write_atomic(path, text.as_bytes())
+        Ok(crate::output::write_file(path, text.as_bytes())?)
     }
 
     /// `[s_0, s_N]`.
@@ -466,11 +492,10 @@ impl Profile {
     /// (rounded to 1e-6 like the knots, the centre to 0.1 mm).
     pub fn with_knot_uncertainties(mut self, u: &[KnotUncertainty]) -> Result<Profile, TrackError> {
         if u.len() != self.file.knot.len() {
-            return Err(TrackError::Invalid(format!(
-                "{} knot uncertainties for {} knots",
-                u.len(),
-                self.file.knot.len()
-            )));
+            return Err(TrackError::KnotUncertaintyCount {
+                given: u.len(),
+                knots: self.file.knot.len(),
+            });
         }
         let r6 = |v: f64| (v * 1e6).round() / 1e6;
         for (k, u) in self.file.knot.iter_mut().zip(u) {
@@ -479,6 +504,73 @@ impl Profile {
             k.u_centre_xyz = Some(u.centre_xyz.map(r6));
         }
         Ok(self)
+    }
+
+    /// The frame the profile was measured in, if it says.
+    pub fn measured_in(&self) -> Option<MeasuredIn> {
+        self.file.measured_in
+    }
+
+    /// Same profile, recording the frame it was measured in.
+    pub fn with_measured_in(mut self, frame: MeasuredIn) -> Profile {
+        self.file.measured_in = Some(frame);
+        self
+    }
+
+    /// sha256 (hex) of what `D(s)` and `N(s)` are made of: reference, gear, the nominal and the
+    /// knots' skid and six components (not the name, the extrapolation rule or other keys, which
+    /// may be edited by hand).
+    pub fn data_sha256(&self) -> String {
+        data_sha256(&self.file)
+    }
+
+    /// Where the file disagrees with itself: its `[stats]` are not those of its knots, or the
+    /// knots or nominal changed since it was written (a hand edit). Empty for a consistent
+    /// profile and for one without `[stats]`.
+    pub fn consistency_warnings(&self) -> Vec<String> {
+        let Some(written) = &self.file.stats else {
+            return Vec::new();
+        };
+        let mut warnings = Vec::new();
+        if let Some(hash) = &written.data_sha256
+            && *hash != self.data_sha256()
+        {
+            warnings.push(format!(
+                "profile `{}`: its knots or nominal changed after it was written ([stats] data_sha256 does not match); fit it again from its frames",
+                self.file.name
+            ));
+        }
+        let mut actual = compute_stats(&self.file.knot, &self.file.nominal);
+        actual.data_sha256 = written.data_sha256.clone();
+        let close = |a: f64, b: f64| (a - b).abs() <= 2e-6 * (1.0 + a.abs().max(b.abs()));
+        let same = actual.knots == written.knots
+            && [
+                (actual.position_rms_mm, written.position_rms_mm),
+                (actual.position_max_mm, written.position_max_mm),
+                (actual.rotation_max_deg, written.rotation_max_deg),
+                (
+                    actual.straightness_sideways_mm,
+                    written.straightness_sideways_mm,
+                ),
+                (
+                    actual.straightness_vertical_mm,
+                    written.straightness_vertical_mm,
+                ),
+                (actual.twist_deg, written.twist_deg),
+            ]
+            .iter()
+            .all(|(a, b)| close(*a, *b));
+        if !same {
+            warnings.push(format!(
+                "profile `{}`: its [stats] are not those of its knots (e.g. {} knots, position max {:.4} mm; the file says {} and {:.4} mm): it was edited by hand",
+                self.file.name,
+                actual.knots,
+                actual.position_max_mm,
+                written.knots,
+                written.position_max_mm
+            ));
+        }
+        warnings
     }
 
     /// Same profile, another extrapolation rule.
@@ -539,6 +631,22 @@ impl Profile {
     pub fn base_frame(&self, skid: f64) -> Result<Pose, TrackError> {
         Ok(self.nominal_frame(skid) * self.deviation(skid)?)
     }
+}
+
+fn data_sha256(file: &ProfileFile) -> String {
+    use sha2::Digest as _;
+    use std::fmt::Write as _;
+    // `{:?}` of f64 is the shortest text that reads back to the same number, as TOML writes it.
+    let mut text = format!("{:?} {:?} {:?}\n", file.reference, file.gear, file.nominal);
+    for k in &file.knot {
+        let _ = writeln!(text, "{:?} {:?}", k.skid, k.components());
+    }
+    sha2::Sha256::digest(text.as_bytes())
+        .iter()
+        .fold(String::new(), |mut s, b| {
+            let _ = write!(s, "{b:02x}");
+            s
+        })
 }
 
 fn build_splines(knots: &[Knot]) -> Result<[CubicSpline; 6], SplineError> {
@@ -622,19 +730,8 @@ fn compute_stats(knots: &[Knot], nominal: &Nominal) -> ProfileStats {
         straightness_sideways_mm: round(peak_to_peak(&line_residuals(&skids, &side))),
         straightness_vertical_mm: round(peak_to_peak(&line_residuals(&skids, &vert))),
         twist_deg: round(peak_to_peak(&twist)),
+        data_sha256: None,
     }
-}
-
-/// Writes `bytes` to `path` through a temporary file and a rename (DESIGN.md §5).
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrackError> {
-    use std::io::Write;
-    let io = |error| TrackError::Io {
-        path: path.to_path_buf(),
-        error,
-    };
-    let mut f = atomic_write_file::AtomicWriteFile::open(path).map_err(io)?;
-    f.write_all(bytes).map_err(io)?;
-    f.commit().map_err(io)
 }
 
 #[cfg(test)]

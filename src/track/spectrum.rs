@@ -8,7 +8,50 @@
 
 use realfft::RealFftPlanner;
 
+use super::csv_table::NumericCsv;
 use super::profile::{TrackError, line_residuals};
+
+/// Fewest samples a spectrum is computed from.
+pub const MIN_SAMPLES: usize = 8;
+
+/// The positions (column `position`, times `scale`: 1 for a skid in mm, the speed for a time in
+/// s) and points of a scan table; a position that does not increase is an error at its line.
+pub fn scan_from_table(
+    table: &NumericCsv,
+    position: &str,
+    scale: f64,
+) -> Result<(Vec<f64>, Vec<[f64; 3]>), TrackError> {
+    let mut positions: Vec<f64> = Vec::with_capacity(table.rows.len());
+    let mut points = Vec::with_capacity(table.rows.len());
+    for (line, [s, x, y, z]) in table.select(&[position, "x", "y", "z"])? {
+        let s = s * scale;
+        if let Some(prev) = positions.last()
+            && s <= *prev
+        {
+            return Err(table.error(
+                line,
+                position,
+                format!("position {s} mm does not follow {prev} mm in increasing order"),
+                "sort the scan by position and keep one row per position",
+            ));
+        }
+        positions.push(s);
+        points.push([x, y, z]);
+    }
+    if positions.len() < MIN_SAMPLES {
+        let line = table.rows.last().map_or(table.header_line, |r| r.line);
+        return Err(table.error(
+            line,
+            "",
+            format!(
+                "{} scan sample(s); a spectrum needs at least {MIN_SAMPLES}",
+                positions.len()
+            ),
+            "scan the track continuously (a point every 10 mm is usual)",
+        ));
+    }
+    Ok((positions, points))
+}
 
 /// Fraction of the window that is tapered (0 = rectangular, 1 = Hann).
 pub const TUKEY_ALPHA: f64 = 0.5;
@@ -76,21 +119,21 @@ pub fn scan_spectrum(
 ) -> Result<Spectrum, TrackError> {
     let n = positions.len();
     if n != points.len() {
-        return Err(TrackError::Invalid(format!(
+        return Err(TrackError::Scan(format!(
             "{n} positions but {} points",
             points.len()
         )));
     }
-    if n < 8 {
-        return Err(TrackError::Invalid(format!(
-            "{n} scan samples; a spectrum needs at least 8"
+    if n < MIN_SAMPLES {
+        return Err(TrackError::Scan(format!(
+            "{n} scan samples; a spectrum needs at least {MIN_SAMPLES}"
         )));
     }
     for (i, w) in positions.windows(2).enumerate() {
         if let [a, b] = w
             && b <= a
         {
-            return Err(TrackError::Invalid(format!(
+            return Err(TrackError::Scan(format!(
                 "scan row {}: position {b} does not follow {a} in increasing order",
                 i + 2
             )));
@@ -117,10 +160,10 @@ pub fn scan_spectrum(
         let mut input: Vec<f64> = residual.iter().zip(&window).map(|(r, w)| r * w).collect();
         let mut output = fft.make_output_vec();
         fft.process(&mut input, &mut output)
-            .map_err(|e| TrackError::Invalid(format!("DFT failed: {e}")))?;
+            .map_err(|e| TrackError::Output(format!("DFT failed: {e}")))?;
         for (k, (p, x)) in power.iter_mut().zip(&output).enumerate() {
             // One-sided amplitude: DC and Nyquist are not doubled.
-            let scale = if k == 0 || (n % 2 == 0 && k == n / 2) {
+            let scale = if k == 0 || (n.is_multiple_of(2) && k == n / 2) {
                 1.0
             } else {
                 2.0

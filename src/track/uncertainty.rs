@@ -20,8 +20,9 @@ use std::collections::BTreeMap;
 
 use nalgebra::{DMatrix, Matrix3, Matrix6, Point3, Vector3};
 
+use super::error::{SkidProblem, TrackError};
 use super::identify::Identification;
-use super::profile::{Extrapolate, KnotUncertainty, Profile, TrackError};
+use super::profile::{Extrapolate, KnotUncertainty, Profile};
 use super::simulate::MeasurementRow;
 use super::spline::{CubicSpline, EndCondition};
 use crate::geometry::Pose;
@@ -113,9 +114,7 @@ pub fn knot_uncertainties(
     let sigma = match sigma {
         Some(s) if s.is_finite() && s >= 0.0 => Sigma::Given(s),
         Some(s) => {
-            return Err(TrackError::Invalid(format!(
-                "noise level {s} mm: give a non-negative number"
-            )));
+            return Err(TrackError::NoiseLevel { sigma: s });
         }
         None => {
             let ssr: f64 = ident
@@ -129,9 +128,7 @@ pub fn knot_uncertainties(
                 .map(|f| (3 * f.fit.residuals.len()).saturating_sub(6))
                 .sum();
             if dof == 0 {
-                return Err(TrackError::Invalid(
-                    "3 points per skid leave no residual to estimate the noise from: give the noise level, or measure more points".to_string(),
-                ));
+                return Err(TrackError::NoNoiseEstimate { points: rows.len() });
             }
             Sigma::Estimated {
                 sigma: (ssr / dof as f64).sqrt(),
@@ -146,9 +143,9 @@ pub fn knot_uncertainties(
             .get(&f.skid.to_bits())
             .map(Vec::as_slice)
             .unwrap_or(&[]);
-        let cof = rigid_fit_cofactor(points).ok_or_else(|| TrackError::Degenerate {
+        let cof = rigid_fit_cofactor(points).ok_or(TrackError::Skid {
             skid: f.skid,
-            reason: "the points do not fix all six degrees of freedom of the frame".to_string(),
+            problem: SkidProblem::Unconstrained,
         })?;
         let mut u = [0.0; 6];
         for (i, slot) in u.iter_mut().enumerate() {

@@ -27,8 +27,9 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use crate::geometry::{Pose, pose_xyz_deg};
+use crate::located::Located;
+use crate::syntax::Diagnostic;
 use crate::syntax::Span;
-use crate::track::csv_table::render_located;
 
 /// Why a cell file could not be used.
 #[derive(Debug, thiserror::Error)]
@@ -39,15 +40,25 @@ pub enum CellError {
         path: PathBuf,
         source: std::io::Error,
     },
-    /// A located syntax or schema error, already rendered as `file:line:col: error: …`.
-    #[error("{rendered}")]
-    Invalid { rendered: String },
+    /// A syntax or schema error at its place in the cell file (or at a robot's `profile`).
+    #[error(transparent)]
+    Invalid(Box<Located>),
     #[error("{}: no robot `{name}` in the cell file (robots: {})", path.display(), known.join(", "))]
     UnknownRobot {
         path: PathBuf,
         name: String,
         known: Vec<String>,
     },
+}
+
+impl CellError {
+    fn invalid(path: &Path, text: &str, span: Span, message: String, hint: &str) -> CellError {
+        let mut d = Diagnostic::error(span, message);
+        if !hint.is_empty() {
+            d = d.with_hint(hint);
+        }
+        CellError::Invalid(Box::new(Located::new(path, text.as_bytes().to_vec(), d)))
+    }
 }
 
 /// A pose written as `{ x, y, z, rx, ry, rz }` (mm, degrees, `R = Rz·Ry·Rx`).
@@ -146,6 +157,9 @@ struct RobotToml {
     #[serde(default)]
     wobj: BTreeMap<String, FrameXyz>,
     config_dat: Option<String>,
+    kinematics: Option<Spanned<crate::kinematics::cell_table::KinematicsToml>>,
+    #[serde(default)]
+    tool: BTreeMap<String, FrameXyz>,
 }
 
 #[derive(Deserialize)]
@@ -177,6 +191,11 @@ pub struct Robot {
     pub frames: BTreeMap<String, Pose>,
     /// KUKA `$config.dat`, resolved against the cell file's folder.
     pub config_dat: Option<PathBuf>,
+    /// `[robot.NAME.kinematics]`: the arm, for reach and configuration checks.
+    pub kinematics: Option<crate::kinematics::Kinematics>,
+    /// `[robot.NAME.tool]`: tool frames on the flange that override the program's (lower-case
+    /// name → pose), so each robot uses its own measured TCP.
+    pub tools: BTreeMap<String, Pose>,
 }
 
 /// The `[mirror]` table.
@@ -229,8 +248,8 @@ impl Cell {
 
     /// Validates cell text; relative paths resolve against `path`'s folder.
     pub fn parse(path: &Path, text: &str) -> Result<Cell, CellError> {
-        let located = |span: Span, message: String, hint: &str| CellError::Invalid {
-            rendered: render_located(path, text.as_bytes(), span, &message, hint),
+        let located = |span: Span, message: String, hint: &str| {
+            CellError::invalid(path, text, span, message, hint)
         };
         let raw: CellToml = toml::from_str(text).map_err(|e| {
             let span = e.span().map(Span::from).unwrap_or_default();
@@ -259,7 +278,7 @@ impl Cell {
                 return Err(located(
                     r.track_axis.span().into(),
                     format!("robot `{name}`: track_axis has length {norm:.6}, expected 1"),
-                    "write a unit vector; a gear factor belongs in the profile (track fit --gear)",
+                    "write a unit vector; a gear factor belongs in the track profile's fit, not in the cell",
                 ));
             }
             let skid_axis = match &r.skid {
@@ -277,6 +296,19 @@ impl Cell {
                 .iter()
                 .map(|(k, f)| (k.to_ascii_lowercase(), f.pose()))
                 .collect();
+            let kinematics = match &r.kinematics {
+                Some(k) => Some(
+                    k.get_ref()
+                        .resolve(&name, k.span().into())
+                        .map_err(|e| located(e.span, e.message, &e.hint))?,
+                ),
+                None => None,
+            };
+            let tools = r
+                .tool
+                .iter()
+                .map(|(k, f)| (k.to_ascii_lowercase(), f.pose()))
+                .collect();
             robots.insert(
                 name.clone(),
                 Robot {
@@ -288,6 +320,8 @@ impl Cell {
                     skid_axis,
                     frames,
                     config_dat: r.config_dat.map(|c| dir.join(c)),
+                    kinematics,
+                    tools,
                 },
             );
         }
@@ -313,20 +347,18 @@ impl Cell {
     /// An error about `robot`'s profile, at the cell's `profile = …`: what went wrong reading
     /// it, and how to make one.
     pub fn profile_error(&self, robot: &Robot, error: &dyn std::fmt::Display) -> CellError {
-        CellError::Invalid {
-            rendered: render_located(
-                &self.path,
-                self.text.as_bytes(),
-                robot.profile_span,
-                &format!(
-                    "robot `{}`: cannot read its profile {}: {error}",
-                    robot.name,
-                    robot.profile.display()
-                ),
-                "the path is relative to the cell file; make a profile with \
-                 `trackfix track identify` and `trackfix track fit FRAMES.csv -o PROFILE.toml`",
+        CellError::invalid(
+            &self.path,
+            &self.text,
+            robot.profile_span,
+            format!(
+                "robot `{}`: cannot read its profile {}: {error}",
+                robot.name,
+                robot.profile.display()
             ),
-        }
+            "the path is relative to the cell file; make a profile with \
+             `trackfix track identify` and `trackfix track fit FRAMES.csv -o PROFILE.toml`",
+        )
     }
 
     /// The robot called `name`, or an error listing the known ones.

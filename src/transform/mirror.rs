@@ -13,20 +13,17 @@ use nalgebra::{Quaternion, Translation3, UnitQuaternion, Vector3};
 
 use crate::geometry::Pose;
 use crate::position::{
-    CartesianFields, Config, FrameKind, NumField, OffsetKind, ParsedFile, Position, Program, Skid,
+    CartesianFields, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, ParsedFile, Position,
+    Program, Skid,
 };
 use crate::syntax::Edit;
 
 use super::cell::{Axis, ConfigRule, Plane};
+use super::driver::{Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
-use super::refusal::{Refusal, RefusalKind, SKIP_HINT};
-use super::rewrite::{
-    MM_DECIMALS, OrientationHint, bits_edit, integer_edit, number_edit, pose_change, pose_edits,
-};
-use super::track_correction::{Resolved, common_refusal, describe, resolve_frame, wobj_of};
-
-/// KUKA Turn bits of A1, A4 and A6: a mirror-image robot runs those axes with the opposite sign.
-const TURN_A1_A4_A6: u32 = 0b10_1001;
+use super::policy::{Why, common_refusal, describe, work_object_of};
+use super::refusal::{Refusal, RefusalKind, Remedy};
+use super::rewrite::{MM_DECIMALS, OrientationHint, number_edit, pose_edits};
 
 /// Everything `mirror` needs.
 #[derive(Clone, Debug, PartialEq)]
@@ -213,7 +210,7 @@ fn skid_edits(file: &ParsedFile, p: &Position, settings: &MirrorSettings) -> Vec
 }
 
 /// A skid that has to move to another axis the target does not write.
-fn skid_refusal(file: &ParsedFile, p: &Position, settings: &MirrorSettings) -> Option<Refusal> {
+fn skid_refusal(p: &Position, settings: &MirrorSettings) -> Option<Why> {
     let to = settings.skid_axis_to?;
     if to == settings.skid_axis || !matches!(p.skid(settings.skid_axis), Skid::At(_)) {
         return None;
@@ -221,143 +218,120 @@ fn skid_refusal(file: &ParsedFile, p: &Position, settings: &MirrorSettings) -> O
     if matches!(p.extax.get(to), Some(Some(_))) {
         return None;
     }
-    Some(Refusal::new(
-        file,
-        p.span,
-        p.label(),
+    Some(Why::new(
         RefusalKind::SkidMissing,
         format!(
             "{} has no numeric external axis {} to take the mirror-image robot's skid",
             describe(p),
             to + 1
         ),
-        format!("write that axis in the target (9E9 will do), {SKIP_HINT}"),
+        "write that axis in the target (9E9 will do)",
     ))
 }
 
-fn config_edits(config: &Config) -> Vec<Edit> {
-    match config {
-        Config::Abb(cf) => cf
+/// `mirror` as a rule of the transform driver.
+struct MirrorRule<'s> {
+    settings: &'s MirrorSettings,
+    /// The reflection in the work object (`settings.frame` as `M`).
+    own: Reflection,
+}
+
+impl TargetRule for MirrorRule<'_> {
+    type Frame = Reflection;
+
+    fn joint(&self, scope: Scope, p: &Position) -> Step {
+        if !self.settings.mirror_joints {
+            return Err(Why::new(
+                RefusalKind::JointTarget,
+                format!("{} is a joint target: it is not mirrored", describe(p)),
+                "mirror joint targets too (axes 1, 4 and 6 negated)",
+            )
+            .with_remedy(Remedy::MirrorJoints)
+            .at(scope.file, p));
+        }
+        let mut edits: Vec<Edit> = [0, 3, 5]
             .iter()
-            .take(3)
-            .filter_map(|f| {
-                let v = f.as_ref()?.value();
-                integer_edit(f, -(v.round() as i64) - 1)
+            .filter_map(|&i| {
+                let f = p.joints.get(i)?;
+                flip_or_value_edit(f, -f.as_ref()?.value(), 0)
             })
-            .collect(),
-        Config::Kuka { turn, .. } => turn
-            .as_ref()
-            .and_then(|t| bits_edit(turn, t.value ^ TURN_A1_A4_A6))
-            .into_iter()
-            .collect(),
-        Config::None => Vec::new(),
+            .collect();
+        if let Some(why) = skid_refusal(p, self.settings) {
+            return Err(why.at(scope.file, p));
+        }
+        edits.extend(skid_edits(scope.file, p, self.settings));
+        let change = TargetChange {
+            mm: 0.0,
+            deg: 0.0,
+            skid: None,
+        };
+        Ok(Some((edits, change)))
+    }
+
+    fn refusal(&self, scope: Scope, p: &Position) -> Option<Why> {
+        // A plane given in the work object mirrors a target used with two work objects the
+        // same way in both; a plane in world does not.
+        common_refusal(scope.file, p)
+            .filter(|w| w.kind != RefusalKind::TwoWorkObjects || self.settings.world.is_some())
+    }
+
+    fn skid(&self, _scope: Scope, p: &Position) -> Result<Option<f64>, Why> {
+        if let Some(why) = skid_refusal(p, self.settings) {
+            return Err(why);
+        }
+        Ok(match p.skid(self.settings.skid_axis) {
+            Skid::At(s) => Some(s),
+            _ => None,
+        })
+    }
+
+    fn frame(&self, scope: Scope, p: &Position) -> Result<Reflection, Why> {
+        reflection_for(scope.program, p, self.settings, &self.own)
+    }
+
+    fn new_pose(
+        &self,
+        _p: &Position,
+        refl: &Reflection,
+        _skid: Option<f64>,
+        t: &Pose,
+    ) -> Result<(Pose, OrientationHint), Why> {
+        let (new, expected) = refl.target(t);
+        Ok((new, OrientationHint::Expected(expected)))
+    }
+
+    fn more_edits(&self, scope: Scope, p: &Position) -> Vec<Edit> {
+        let mut edits = Vec::new();
+        if self.settings.config == ConfigRule::Mirror {
+            edits.extend(scope.file.language.dialect().mirror_config(&p.config));
+        }
+        edits.extend(skid_edits(scope.file, p, self.settings));
+        edits
+    }
+
+    fn offset(&self, scope: Scope, call: &OffsetCall) -> Result<Vec<Edit>, Box<Refusal>> {
+        mirror_offset(scope, self.settings, &self.own, call)
+    }
+
+    fn declaration(&self, _scope: Scope, decl: &FrameDecl) -> Vec<Edit> {
+        if self.settings.mirror_frames {
+            mirror_frame(decl, self.settings, &self.own)
+        } else {
+            Vec::new()
+        }
     }
 }
 
 /// `mirror` every target (and, if asked, frame) of `program`.
 pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
-    let refl = Reflection::new(settings);
-    let mut out = ProgramEdits::for_program(program);
-    for (file, fe) in program.files.iter().zip(out.files.iter_mut()) {
-        for p in &file.positions {
-            if !p.kind.is_cartesian() {
-                if settings.mirror_joints {
-                    let mut edits: Vec<Edit> = [0, 3, 5]
-                        .iter()
-                        .filter_map(|&i| {
-                            let f = p.joints.get(i)?;
-                            flip_or_value_edit(f, -f.as_ref()?.value(), 0)
-                        })
-                        .collect();
-                    if let Some(r) = skid_refusal(file, p, settings) {
-                        fe.refusals.push(r);
-                        continue;
-                    }
-                    edits.extend(skid_edits(file, p, settings));
-                    if !edits.is_empty() {
-                        fe.edits.extend(edits);
-                        fe.changes.push(TargetChange {
-                            mm: 0.0,
-                            deg: 0.0,
-                            skid: None,
-                        });
-                    }
-                } else {
-                    let label = p.label();
-                    fe.refusals.push(Refusal::new(
-                        file,
-                        p.span,
-                        label.clone(),
-                        RefusalKind::JointTarget,
-                        format!("{} is a joint target: it is not mirrored", describe(p)),
-                        format!("pass --mirror-joints to negate axes 1, 4 and 6, {SKIP_HINT}"),
-                    ));
-                }
-                continue;
-            }
-            match common_refusal(file, p) {
-                // A plane given in the work object mirrors a target used with two work objects
-                // the same way in both; a plane in world does not.
-                Some(r) if r.kind != RefusalKind::TwoWorkObjects || settings.world.is_some() => {
-                    fe.refusals.push(r);
-                    continue;
-                }
-                _ => {}
-            }
-            if let Some(r) = skid_refusal(file, p, settings) {
-                fe.refusals.push(r);
-                continue;
-            }
-            let refl = match reflection_for(program, p, settings, &refl) {
-                Ok(r) => r,
-                Err((kind, msg, hint)) => {
-                    fe.refusals.push(Refusal::new(
-                        file,
-                        p.span,
-                        p.label(),
-                        kind,
-                        msg,
-                        format!("{hint}, {SKIP_HINT}"),
-                    ));
-                    continue;
-                }
-            };
-            let Some(fields) = p.cartesian.as_ref() else {
-                continue;
-            };
-            let Some(t) = fields.pose() else { continue };
-            let (new, expected) = refl.target(&t);
-            let mut edits = pose_edits(fields, &new, OrientationHint::Expected(expected));
-            if settings.config == ConfigRule::Mirror {
-                edits.extend(config_edits(&p.config));
-            }
-            edits.extend(skid_edits(file, p, settings));
-            if !edits.is_empty() {
-                let (mm, deg) = pose_change(&t, &new);
-                let skid = match p.skid(settings.skid_axis) {
-                    Skid::At(s) => Some(s),
-                    _ => None,
-                };
-                fe.edits.extend(edits);
-                fe.changes.push(TargetChange { mm, deg, skid });
-            }
-        }
-        mirror_offsets(
-            program,
-            file,
+    apply_rule(
+        program,
+        &MirrorRule {
             settings,
-            &refl,
-            &mut fe.edits,
-            &mut fe.refusals,
-        );
-        if settings.mirror_frames {
-            mirror_frames(file, settings, &refl, &mut fe.edits);
-        }
-    }
-    out
+            own: Reflection::new(settings),
+        },
+    )
 }
-
-type Why = (RefusalKind, String, String);
 
 /// The reflection for one target: the settings' own, or the world plane taken into the
 /// target's work object.
@@ -370,11 +344,8 @@ pub(crate) fn reflection_for(
     let Some(world) = &settings.world else {
         return Ok(*own);
     };
-    let name = wobj_of(p, world.default_wobj.as_deref())?;
-    match resolve_frame(program, &world.frames, &name) {
-        Resolved::Frame(w) => Ok(Reflection::about(&(w.inverse() * world.frame), settings)),
-        Resolved::Refused(kind, msg, hint) => Err((kind, format!("{}: {msg}", describe(p)), hint)),
-    }
+    let w = work_object_of(program, p, &world.frames, world.default_wobj.as_deref())?;
+    Ok(Reflection::about(&(w.inverse() * world.frame), settings))
 }
 
 /// The declared target an `Offs` offsets: `p10` in `Offs(p10, …)`, `pBed` in
@@ -403,15 +374,16 @@ fn offset_targets<'p>(program: &'p Program, text: &str) -> Vec<&'p Position> {
         .collect()
 }
 
-fn mirror_offsets(
-    program: &Program,
-    file: &ParsedFile,
+/// The edits of one `Offs`/`RelTool` call: its offsets reflected, or why not.
+fn mirror_offset(
+    scope: Scope,
     settings: &MirrorSettings,
     own: &Reflection,
-    edits: &mut Vec<Edit>,
-    refusals: &mut Vec<Refusal>,
-) {
-    for call in &file.offsets {
+    call: &OffsetCall,
+) -> Result<Vec<Edit>, Box<Refusal>> {
+    let (program, file) = (scope.program, scope.file);
+    let mut edits = Vec::new();
+    {
         // Offs offsets are in the work object of the target they offset: with a plane in world
         // that target's work object decides the plane.
         let refl = match (&settings.world, call.kind) {
@@ -422,14 +394,13 @@ fn mirror_offsets(
                     .map(|p| reflection_for(program, p, settings, own))
                     .collect();
                 let resolved = match reflections.first() {
-                    None => Err((
+                    None => Err(Why::new(
                         RefusalKind::UnresolvedWorkObject,
                         format!(
                             "`{}` is not a declared target: its work object is unknown",
                             call.target
                         ),
-                        "offset a declared target, or mirror with the plane in the work object"
-                            .to_owned(),
+                        "offset a declared target, or mirror with the plane in the work object",
                     )),
                     Some(Err(e)) => Err(e.clone()),
                     Some(Ok(first)) => {
@@ -444,29 +415,29 @@ fn mirror_offsets(
                         if same {
                             Ok(*first)
                         } else {
-                            Err((
+                            Err(Why::new(
                                 RefusalKind::TwoWorkObjects,
                                 format!(
                                     "the elements of `{}` lie in different work objects",
                                     call.target
                                 ),
-                                "offset one target per work object".to_owned(),
+                                "offset one target per work object",
                             ))
                         }
                     }
                 };
                 match resolved {
                     Ok(r) => r,
-                    Err((kind, msg, hint)) => {
-                        refusals.push(Refusal::new(
+                    Err(why) => {
+                        return Err(Box::new(Refusal::new(
                             file,
                             call.span,
                             call.target.clone(),
-                            kind,
-                            format!("Offs({}, …): {msg}", call.target),
-                            format!("{hint}, {SKIP_HINT}"),
-                        ));
-                        continue;
+                            why.kind,
+                            format!("Offs({}, …): {}", call.target, why.message),
+                            why.hint,
+                            why.remedy,
+                        )));
                     }
                 }
             }
@@ -503,29 +474,27 @@ fn mirror_offsets(
                     "{name}({}, …): its rotation {switch} is not a number and the mirror changes its sign",
                     call.target
                 ),
-                format!(
-                    "write {switch} as a number (or negate the expression by hand), {SKIP_HINT}"
-                ),
+                format!("write {switch} as a number (or negate the expression by hand)"),
             )),
             (None, true) => Some((
                 format!(
                     "{name}({}, …) has an offset that is not a number where the mirror changes it",
                     call.target
                 ),
-                format!("write the {frame}-frame offsets as numbers, {SKIP_HINT}"),
+                format!("write the {frame}-frame offsets as numbers"),
             )),
             (None, false) => None,
         };
         if let Some((message, hint)) = why {
-            refusals.push(Refusal::new(
+            return Err(Box::new(Refusal::new(
                 file,
                 call.span,
                 call.target.clone(),
                 RefusalKind::Expression,
                 message,
                 hint,
-            ));
-            continue;
+                None,
+            )));
         }
         let d = call.delta.clone().map(|f| f.map_or(0.0, |f| f.value()));
         let v = Vector3::new(d[0], d[1], d[2]);
@@ -541,64 +510,61 @@ fn mirror_offsets(
             // flipped axis keep their sign, the other two change it.
             for (i, f) in call.rot.iter().enumerate() {
                 let flip = refl.tool_axis[i] == 0.0;
-                if let Some(v) = f.as_ref().map(NumField::value) {
-                    if flip {
-                        edits.extend(flip_or_value_edit(f, -v, 0));
-                    }
+                if let Some(v) = f.as_ref().map(NumField::value)
+                    && flip
+                {
+                    edits.extend(flip_or_value_edit(f, -v, 0));
                 }
             }
         }
     }
+    Ok(edits)
 }
 
 fn frame_field_edits(fields: &CartesianFields, new: &Pose, expected: [f64; 4]) -> Vec<Edit> {
     pose_edits(fields, new, OrientationHint::Expected(expected))
 }
 
-fn mirror_frames(
-    file: &ParsedFile,
-    settings: &MirrorSettings,
-    own: &Reflection,
-    edits: &mut Vec<Edit>,
-) {
-    for d in &file.frames {
-        match d.kind {
-            FrameKind::WorkObject | FrameKind::Base => {
-                // A plane in world reflects the user frame (in world) about itself and the
-                // object frame (in the user frame) about the plane seen from the user frame.
-                let uframe = d.frame.as_ref().and_then(|f| f.pose());
-                let (for_uframe, for_oframe) = match (&settings.world, uframe) {
-                    (Some(w), Some(u)) => (
-                        Reflection::about(&w.frame, settings),
-                        Reflection::about(&(u.inverse() * w.frame), settings),
-                    ),
-                    _ => (*own, *own),
-                };
-                for (fields, refl) in [(&d.frame, for_uframe), (&d.oframe, for_oframe)] {
-                    let Some(fields) = fields else { continue };
-                    if let Some(f) = fields.pose() {
-                        let (new, q) = refl.frame(&f);
-                        edits.extend(frame_field_edits(fields, &new, q));
-                    }
-                }
-            }
-            FrameKind::Tool => {
-                if let Some(fields) = &d.frame {
-                    if let Some(f) = fields.pose() {
-                        let (new, q) = own.tool(&f);
-                        edits.extend(frame_field_edits(fields, &new, q));
-                    }
+/// The edits of one work object, base or tool declaration.
+fn mirror_frame(d: &FrameDecl, settings: &MirrorSettings, own: &Reflection) -> Vec<Edit> {
+    let mut edits = Vec::new();
+    match d.kind {
+        FrameKind::WorkObject | FrameKind::Base => {
+            // A plane in world reflects the user frame (in world) about itself and the
+            // object frame (in the user frame) about the plane seen from the user frame.
+            let uframe = d.frame.as_ref().and_then(|f| f.pose());
+            let (for_uframe, for_oframe) = match (&settings.world, uframe) {
+                (Some(w), Some(u)) => (
+                    Reflection::about(&w.frame, settings),
+                    Reflection::about(&(u.inverse() * w.frame), settings),
+                ),
+                _ => (*own, *own),
+            };
+            for (fields, refl) in [(&d.frame, for_uframe), (&d.oframe, for_oframe)] {
+                let Some(fields) = fields else { continue };
+                if let Some(f) = fields.pose() {
+                    let (new, q) = refl.frame(&f);
+                    edits.extend(frame_field_edits(fields, &new, q));
                 }
             }
         }
+        FrameKind::Tool => {
+            if let Some(fields) = &d.frame
+                && let Some(f) = fields.pose()
+            {
+                let (new, q) = own.tool(&f);
+                edits.extend(frame_field_edits(fields, &new, q));
+            }
+        }
     }
+    edits
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::geometry::{abb_quat, kuka_abc, pose_xyz_deg};
-    use crate::position::Orientation;
+    use crate::position::{Config, Orientation};
     use crate::transform::edits::apply;
     use crate::transform::rewrite::wijk;
     use crate::transform::test_support::{krl, rapid};

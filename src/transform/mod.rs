@@ -5,13 +5,13 @@
 //! [`ProgramEdits`]: per file, the [`Edit`](crate::syntax::Edit)s of the numeric literals that
 //! change, the targets it refused, and how much each changed target moved. Nothing is written
 //! here; [`output`] turns applied edits into files, diffs and checks.
-//!
-//! Owned by issue 5.
 
 pub mod cell;
+mod driver;
 pub mod edits;
 pub mod mirror;
 pub mod output;
+pub(crate) mod policy;
 pub mod refusal;
 pub mod rewrite;
 pub mod track_correction;
@@ -20,9 +20,9 @@ pub mod transfer;
 pub use cell::{Axis, Cell, CellError, ConfigRule, FrameIn, MirrorTable, Plane, Robot};
 pub use edits::{FileEdits, FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
 pub use mirror::{MirrorSettings, WorldPlane, mirror};
-pub use refusal::{Refusal, RefusalKind};
+pub use refusal::{Refusal, RefusalKind, Remedy};
 pub use track_correction::{Deviation, Direction, TrackSetup, track_correction};
-pub use transfer::{TransferError, TransferPlan, reparse, transfer};
+pub use transfer::{TransferError, TransferPlan, TransformStep, reparse, transfer};
 
 #[cfg(test)]
 pub(crate) mod test_support;

@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use crate::located::Located;
 use crate::position::ParsedFile;
 use crate::syntax::{Diagnostic, Severity, Span};
 
@@ -33,19 +34,46 @@ pub enum RefusalKind {
     ZeroQuaternion,
 }
 
+/// A setting of the transform that gets past a refusal; whoever shows the refusal says how to
+/// give it (the CLI names its flag). Every refusal can also be skipped, leaving the target as
+/// written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Remedy {
+    /// Name the work object of declared targets no motion uses.
+    DefaultWorkObject,
+    /// Mirror joint targets too (axes 1, 4 and 6 negated).
+    MirrorJoints,
+}
+
+/// The refused target's line, so that a refusal renders without its whole file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+struct Excerpt {
+    /// The line's bytes, without its terminator.
+    text: Vec<u8>,
+    /// Byte offset of the line's start in the file.
+    start: usize,
+}
+
 /// One refused target.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Refusal {
     pub path: PathBuf,
     pub line: usize,
     pub column: usize,
+    /// The refused literal or call in the file.
+    #[serde(skip)]
+    pub span: Span,
     /// The target's name or `inline robtarget`.
     pub target: String,
     pub kind: RefusalKind,
     pub message: String,
+    /// What to do, in words (no command-line flags).
     pub hint: String,
-    /// `file:line:col: error: …`, the line, a caret and the hint.
-    pub rendered: String,
+    /// A transform setting that gets past it, when there is one.
+    pub remedy: Option<Remedy>,
+    #[serde(skip)]
+    excerpt: Excerpt,
 }
 
 impl Refusal {
@@ -56,22 +84,71 @@ impl Refusal {
         kind: RefusalKind,
         message: String,
         hint: impl Into<String>,
+        remedy: Option<Remedy>,
     ) -> Refusal {
-        let hint = hint.into();
         let (line, column) = file.lines.line_col(span.start);
-        let d = Diagnostic::new(Severity::Error, span, message.clone()).with_hint(hint.clone());
+        let line_span = file.lines.line_span(&file.source, line);
         Refusal {
             path: file.path.clone(),
             line,
             column,
+            span,
             target,
             kind,
             message,
-            hint,
-            rendered: file.render(&d),
+            hint: hint.into(),
+            remedy,
+            excerpt: Excerpt {
+                text: line_span.slice(&file.source).to_vec(),
+                start: line_span.start,
+            },
         }
+    }
+
+    /// The refusal as a located diagnostic at `severity` with `hint` (the renderer's words for
+    /// what to do), rendered on `Display` with the refused line and a caret.
+    pub fn located(&self, severity: Severity, hint: impl Into<String>) -> Located {
+        // Only the refused line is kept: empty lines before it put it at its own line number.
+        let pad = self.line.saturating_sub(1);
+        let mut source = vec![b'\n'; pad];
+        source.extend_from_slice(&self.excerpt.text);
+        let at = |offset: usize| pad + offset.saturating_sub(self.excerpt.start);
+        let span = Span::new(at(self.span.start), at(self.span.end));
+        let d = Diagnostic::new(severity, span, self.message.clone()).with_hint(hint);
+        Located::new(self.path.clone(), source, d)
     }
 }
 
-/// The hint printed under every refusal: how to get past it.
-pub(crate) const SKIP_HINT: &str = "or pass --skip-unsupported to leave it unchanged";
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transform::test_support::rapid;
+
+    #[test]
+    fn a_refusal_renders_its_own_line_at_its_line_number_and_chosen_severity() {
+        let p = rapid(
+            "x\n\ty\n\t[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]\n",
+            "w",
+        );
+        let f = &p.files[0];
+        let target = &f.positions[0];
+        let span = Span::new(target.span.start + 1, target.span.start + 8);
+        let r = Refusal::new(
+            f,
+            span,
+            "p3".into(),
+            RefusalKind::SkidNotConnected,
+            "no skid".into(),
+            "write one",
+            None,
+        );
+        assert_eq!((r.line, r.column), (3, 2));
+        let text = r
+            .located(Severity::Warning, "write one (left unchanged)")
+            .to_string();
+        assert_eq!(
+            text,
+            "t.mod:3:2: warning: no skid\n  |\n3 | \t[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]\n  | \t^^^^^^^\n  = help: write one (left unchanged)"
+        );
+    }
+}

@@ -10,13 +10,15 @@ use std::collections::BTreeMap;
 use nalgebra::{Translation3, Vector3};
 
 use crate::geometry::Pose;
-use crate::position::{FrameKind, Language, ParsedFile, Position, Program, Skid};
+use crate::position::{Position, Program, Skid};
 use crate::track::{Profile, TrackError};
 
 use super::cell::Robot;
-use super::edits::{ProgramEdits, TargetChange};
-use super::refusal::{Refusal, RefusalKind, SKIP_HINT};
-use super::rewrite::{OrientationHint, pose_change, pose_edits};
+use super::driver::{Scope, TargetRule, apply_rule};
+use super::edits::ProgramEdits;
+use super::policy::{Why, describe, work_object_of};
+use super::refusal::RefusalKind;
+use super::rewrite::OrientationHint;
 
 /// `D(s)`: anything that gives the track's deviation at a skid (a [`Profile`], or a test's
 /// closed form).
@@ -98,298 +100,82 @@ impl<'a> TrackSetup<'a> {
     }
 }
 
-/// Coordinates beyond this (mm) are not a target in a robot cell.
-const PLAUSIBLE_MM: f64 = 1e6;
-
-/// Names that mean "world" when a program does not declare them.
-fn is_world(name: &str) -> bool {
-    let n = name.to_ascii_lowercase();
-    matches!(
-        n.as_str(),
-        "wobj0" | "base_data[0]" | "$nullframe" | "$world"
-    )
-}
-
-/// A work object resolved to a pose in world, or why not (kind, message, hint).
-pub(crate) enum Resolved {
-    Frame(Pose),
-    Refused(RefusalKind, String, String),
-}
-
-/// The work object / base `name` in world: the cell's override, else the program's
-/// declaration, else world for `wobj0`.
-pub(crate) fn resolve_frame(
-    program: &Program,
-    overrides: &BTreeMap<String, Pose>,
-    name: &str,
-) -> Resolved {
-    let lower = name.to_ascii_lowercase();
-    if let Some(p) = overrides.get(&lower) {
-        return Resolved::Frame(*p);
-    }
-    let decl = program.files.iter().flat_map(|f| &f.frames).find(|d| {
-        matches!(d.kind, FrameKind::WorkObject | FrameKind::Base)
-            && d.name.eq_ignore_ascii_case(name)
-    });
-    match decl {
-        Some(d) if d.ufprog == Some(false) => Resolved::Refused(
-            RefusalKind::MovingWorkObject,
-            format!("work object `{name}` is moved by a mechanical unit (ufprog FALSE)"),
-            "its position depends on that unit, not on the track: correct such targets by hand"
-                .to_owned(),
-        ),
-        Some(d) if d.robhold == Some(true) => Resolved::Refused(
-            RefusalKind::StationaryTool,
-            format!("work object `{name}` is held by the robot (robhold TRUE: stationary tool)"),
-            "a stationary-tool target moves with the work piece, not the track: correct it by hand"
-                .to_owned(),
-        ),
-        Some(d) => match d.pose() {
-            Some(p) => Resolved::Frame(p),
-            None => Resolved::Refused(
-                RefusalKind::UnresolvedWorkObject,
-                format!("work object `{name}` has fields that are not numbers"),
-                format!(
-                    "give `{name}` as {{x,y,z,rx,ry,rz}} under [robot.NAME.wobj] in the cell file"
-                ),
-            ),
-        },
-        None if is_world(name) => Resolved::Frame(Pose::identity()),
-        None => Resolved::Refused(
-            RefusalKind::UnresolvedWorkObject,
-            format!("work object `{name}` is not declared in the program"),
-            format!("add `{name}` under [robot.NAME.wobj] in the cell file"),
-        ),
-    }
-}
-
-/// The work object (or KRL base) a target is used with: its first use, else `default` for a
-/// declared target no motion uses.
-pub(crate) fn wobj_of(
-    p: &Position,
-    default: Option<&str>,
-) -> Result<String, (RefusalKind, String, String)> {
-    let what = describe(p);
-    match (&p.usage.wobj, p.usage.lines.is_empty()) {
-        (Some(w), _) => Ok(w.clone()),
-        (None, true) => match default {
-            Some(d) => Ok(d.to_owned()),
-            None => Err((
-                RefusalKind::UnresolvedWorkObject,
-                format!("{what} is not used by any motion: its work object is unknown"),
-                "pass --default-wobj NAME to transform unused targets in NAME".to_owned(),
-            )),
-        },
-        (None, false) => Err((
-            RefusalKind::UnresolvedWorkObject,
-            format!("{what} is used with a work object that cannot be resolved"),
-            "name the work object explicitly in the motion instruction".to_owned(),
-        )),
-    }
-}
-
-/// `robtarget \`p10\`` for a declared target, `inline robtarget` for a literal in an instruction.
-pub(crate) fn describe(p: &Position) -> String {
-    match &p.name {
-        Some(n) => format!("{} `{n}`", p.kind.as_str()),
-        None => format!("inline {}", p.kind.as_str()),
-    }
-}
-
-/// Checks that every transform makes before touching a Cartesian target; `None` = go ahead.
-pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Refusal> {
-    let label = p.label();
-    let refuse = |kind, msg: String, hint: &str| {
-        Some(Refusal::new(
-            file,
-            p.span,
-            label.clone(),
-            kind,
-            msg,
-            format!("{hint}, {SKIP_HINT}"),
-        ))
-    };
-    let what = describe(p);
-    if !p.kind.is_cartesian() {
-        return refuse(
-            RefusalKind::JointTarget,
-            format!("{what} is a joint target: it is not changed"),
-            "re-teach it or convert it to a Cartesian target",
-        );
-    }
-    let written_q = p.cartesian.as_ref().and_then(|c| c.written_quaternion());
-    if written_q.is_some_and(|q| q.iter().all(|v| *v == 0.0)) {
-        return refuse(
-            RefusalKind::ZeroQuaternion,
-            format!("{what} has the quaternion [0,0,0,0]: an unset slot, not an orientation"),
-            "teach the target (or leave the slot unused)",
-        );
-    }
-    if p.cartesian.as_ref().and_then(|c| c.pose()).is_none() {
-        return refuse(
-            RefusalKind::Expression,
-            format!("{what} has a position or orientation field that is not a number"),
-            "write the fields as numeric literals",
-        );
-    }
-    let far = p
-        .cartesian
-        .as_ref()
-        .and_then(|c| c.translation())
-        .is_some_and(|t| t.iter().any(|v| v.abs() > PLAUSIBLE_MM));
-    if far {
-        return refuse(
-            RefusalKind::Implausible,
-            format!("{what} lies more than 1 km from its work object's origin"),
-            "check the coordinates (mm)",
-        );
-    }
-    if p.usage.stationary_tool {
-        let setting = match file.language {
-            Language::Rapid => "robhold TRUE",
-            Language::Krl => "IPO_FRAME #TCP",
-        };
-        return refuse(
-            RefusalKind::StationaryTool,
-            format!("{what} is a stationary-tool point ({setting})"),
-            "it moves with the work piece, not the track: correct it by hand",
-        );
-    }
-    if let Some(other) = p.usage.other_wobjs.first() {
-        let first = p.usage.wobj.as_deref().unwrap_or("?");
-        return refuse(
-            RefusalKind::TwoWorkObjects,
-            format!("{what} is used with two work objects (`{first}` and `{other}`)"),
-            "split it into one target per work object",
-        );
-    }
-    None
-}
-
-/// `correct` or `zero` every Cartesian target of `program` with `setup`'s track.
-pub fn track_correction(program: &Program, setup: &TrackSetup, dir: Direction) -> ProgramEdits {
-    let mut out = ProgramEdits::for_program(program);
-    for (file, fe) in program.files.iter().zip(out.files.iter_mut()) {
-        for p in &file.positions {
-            if let Some(r) = common_refusal(file, p) {
-                fe.refusals.push(r);
-                continue;
-            }
-            match correct_one(program, file, p, setup, dir) {
-                Ok((edits, change)) => {
-                    if !edits.is_empty() {
-                        fe.edits.extend(edits);
-                        fe.changes.push(change);
-                    }
-                }
-                Err(r) => fe.refusals.push(*r),
-            }
-        }
-    }
-    out
-}
-
-type Corrected = (Vec<crate::syntax::Edit>, TargetChange);
-
-fn correct_one(
-    program: &Program,
-    file: &ParsedFile,
-    p: &Position,
-    setup: &TrackSetup,
+/// `correct` or `zero` as a rule of the transform driver.
+struct TrackRule<'s, 'a> {
+    setup: &'s TrackSetup<'a>,
     dir: Direction,
-) -> Result<Corrected, Box<Refusal>> {
-    let label = p.label();
-    let what = describe(p);
-    let refuse = |k, msg: String, hint: String| {
-        Box::new(Refusal::new(
-            file,
-            p.span,
-            label.clone(),
-            k,
-            msg,
-            format!("{hint}, {SKIP_HINT}"),
-        ))
-    };
-    let axis = axis_name(file.language, setup.skid_axis);
-    let skid = match p.skid(setup.skid_axis) {
-        Skid::At(s) => s,
-        Skid::NotConnected => {
-            return Err(refuse(
+}
+
+impl TargetRule for TrackRule<'_, '_> {
+    type Frame = Pose;
+
+    fn skid(&self, scope: Scope, p: &Position) -> Result<Option<f64>, Why> {
+        let what = describe(p);
+        let axis = scope
+            .file
+            .language
+            .dialect()
+            .axis_name(self.setup.skid_axis);
+        match p.skid(self.setup.skid_axis) {
+            Skid::At(s) => Ok(Some(s)),
+            Skid::NotConnected => Err(Why::new(
                 RefusalKind::SkidNotConnected,
                 format!("{what} has {axis} = 9E9 (not connected): no skid position"),
                 format!(
                     "write the skid position into {axis}, or set `skid` for this robot in the cell file"
                 ),
-            ));
-        }
-        Skid::Missing => {
-            return Err(refuse(
+            )),
+            Skid::Missing => Err(Why::new(
                 RefusalKind::SkidMissing,
                 format!("{what} has no numeric {axis}: no skid position"),
                 format!("write the skid position into {axis}"),
-            ));
+            )),
         }
-    };
-    let wobj_name = match wobj_of(p, setup.default_wobj.as_deref()) {
-        Ok(name) => name,
-        Err((k, msg, hint)) => return Err(refuse(k, msg, hint)),
-    };
-    let w = match resolve_frame(program, &setup.frames, &wobj_name) {
-        Resolved::Frame(w) => w,
-        Resolved::Refused(k, msg, hint) => {
-            return Err(refuse(k, format!("{what}: {msg}"), hint));
-        }
-    };
-    let correction = setup
-        .correction(&w, skid, dir)
-        .map_err(|e| match e {
-            TrackError::OutOfRange { min, max, .. } => refuse(
-                RefusalKind::SkidOutOfRange,
-                format!(
-                    "{what} is at skid {skid} mm, outside the profile's range [{min}, {max}] mm"
+    }
+
+    fn frame(&self, scope: Scope, p: &Position) -> Result<Pose, Why> {
+        work_object_of(
+            scope.program,
+            p,
+            &self.setup.frames,
+            self.setup.default_wobj.as_deref(),
+        )
+    }
+
+    fn new_pose(
+        &self,
+        p: &Position,
+        w: &Pose,
+        skid: Option<f64>,
+        t: &Pose,
+    ) -> Result<(Pose, OrientationHint), Why> {
+        let what = describe(p);
+        // `skid` refused targets without one.
+        let skid = skid.unwrap_or_default();
+        let correction = self
+            .setup
+            .correction(w, skid, self.dir)
+            .map_err(|e| match e {
+                TrackError::OutOfRange { min, max, .. } => Why::new(
+                    RefusalKind::SkidOutOfRange,
+                    format!(
+                        "{what} is at skid {skid} mm, outside the profile's range [{min}, {max}] mm"
+                    ),
+                    "measure the track over this range, or set extrapolate = \"clamp\" or \"linear\" in the profile",
                 ),
-                "measure the track over this range, or set extrapolate = \"clamp\" or \"linear\" in the profile"
-                    .to_owned(),
-            ),
-            other => refuse(
-                RefusalKind::SkidOutOfRange,
-                format!("{what} at skid {skid} mm: {other}"),
-                "check the profile".to_owned(),
-            ),
-        })?;
-    let Some(fields) = p.cartesian.as_ref() else {
-        return Ok((Vec::new(), no_change()));
-    };
-    let Some(t) = fields.pose() else {
-        return Ok((Vec::new(), no_change()));
-    };
-    let new = correction * t;
-    let edits = pose_edits(fields, &new, OrientationHint::NearOriginal);
-    let (mm, deg) = pose_change(&t, &new);
-    Ok((
-        edits,
-        TargetChange {
-            mm,
-            deg,
-            skid: Some(skid),
-        },
-    ))
-}
-
-fn no_change() -> TargetChange {
-    TargetChange {
-        mm: 0.0,
-        deg: 0.0,
-        skid: None,
+                other => Why::new(
+                    RefusalKind::SkidOutOfRange,
+                    format!("{what} at skid {skid} mm: {other}"),
+                    "check the profile",
+                ),
+            })?;
+        Ok((correction * t, OrientationHint::NearOriginal))
     }
 }
 
-/// `eax_a` / `E1` … for messages.
-pub(crate) fn axis_name(language: Language, index: usize) -> String {
-    match language {
-        Language::Rapid => format!("eax_{}", (b'a' + index.min(25) as u8) as char),
-        Language::Krl => format!("E{}", index + 1),
-    }
+/// `correct` or `zero` every Cartesian target of `program` with `setup`'s track.
+pub fn track_correction(program: &Program, setup: &TrackSetup, dir: Direction) -> ProgramEdits {
+    apply_rule(program, &TrackRule { setup, dir })
 }
 
 #[cfg(test)]

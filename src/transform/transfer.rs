@@ -8,11 +8,11 @@
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 
-use crate::position::{Language, Program};
+use crate::position::Program;
 use crate::program::{LoadError, LoadOptions};
 use crate::syntax::EditError;
 
-use super::edits::{FileResult, ProgramResult, TargetChange, apply};
+use super::edits::{FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
 use super::mirror::{MirrorSettings, Reflection, mirror, reflection_for};
 use super::rewrite::pose_change;
 use super::track_correction::{Direction, TrackSetup, track_correction};
@@ -46,23 +46,45 @@ pub fn reparse(
     result: &ProgramResult,
     options: &LoadOptions,
 ) -> Result<Program, TransferError> {
-    let language = program.files.first().map(|f| f.language);
-    if language == Some(Language::Rapid) {
-        let files = result
-            .files
-            .iter()
-            .map(|f| crate::rapid::parse_file(&f.path, f.output.clone()))
-            .collect();
-        return Ok(Program { files });
-    }
-    // A KRL pair goes through the loader (in memory) so that the .src's motions resolve the
-    // .dat's targets exactly as on the command line.
-    let sources = result
+    let files = result
         .files
         .iter()
         .map(|f| (f.path.clone(), f.output.clone()))
         .collect();
-    Ok(crate::krl::load_program_from_sources(sources, options)?)
+    // The program's own dialect reads it again (a KRL pair through its loader, in memory, so
+    // that the .src's motions resolve the .dat's targets exactly as on the command line).
+    match program.language() {
+        Some(language) => Ok(language.dialect().reparse(files, options)?),
+        None => Ok(Program { files: Vec::new() }),
+    }
+}
+
+/// One transform of a chain.
+#[derive(Clone, Copy)]
+pub enum TransformStep<'a> {
+    /// `correct` or `zero` with a robot's track.
+    Track(&'a TrackSetup<'a>, Direction),
+    Mirror(&'a MirrorSettings),
+}
+
+impl TransformStep<'_> {
+    /// The step's edits of `program`.
+    pub fn edits(&self, program: &Program) -> ProgramEdits {
+        match *self {
+            TransformStep::Track(setup, dir) => track_correction(program, setup, dir),
+            TransformStep::Mirror(settings) => mirror(program, settings),
+        }
+    }
+}
+
+impl TransferPlan<'_> {
+    /// `zero` with `from`, `mirror` if asked, `correct` with `to`.
+    pub fn steps(&self) -> Vec<TransformStep<'_>> {
+        let mut steps = vec![TransformStep::Track(&self.from, Direction::Zero)];
+        steps.extend(self.mirror.as_ref().map(TransformStep::Mirror));
+        steps.push(TransformStep::Track(&self.to, Direction::Correct));
+        steps
+    }
 }
 
 /// Runs `zero` with `plan.from`, `mirror` if asked, `correct` with `plan.to`.
@@ -71,26 +93,19 @@ pub fn transfer(
     plan: &TransferPlan,
     options: &LoadOptions,
 ) -> Result<ProgramResult, TransferError> {
-    let zeroed = apply(
-        program,
-        track_correction(program, &plan.from, Direction::Zero),
-    )?;
-    let mut current = reparse(program, &zeroed, options)?;
-    let mut steps = vec![zeroed];
-    if let Some(m) = &plan.mirror {
-        let mirrored = apply(&current, mirror(&current, m))?;
-        current = reparse(&current, &mirrored, options)?;
-        steps.push(mirrored);
+    let mut current: Option<Program> = None;
+    let mut steps = Vec::new();
+    for step in plan.steps() {
+        let input = current.as_ref().unwrap_or(program);
+        let result = apply(input, step.edits(input))?;
+        let next = reparse(input, &result, options)?;
+        steps.push(result);
+        current = Some(next);
     }
-    let corrected = apply(
-        &current,
-        track_correction(&current, &plan.to, Direction::Correct),
-    )?;
-    let last = reparse(&current, &corrected, options)?;
-    steps.push(corrected);
+    let last = current.as_ref().unwrap_or(program);
     combine(
         program,
-        &last,
+        last,
         &steps,
         plan.from.skid_axis,
         plan.mirror.as_ref(),

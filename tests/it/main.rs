@@ -1,9 +1,14 @@
 //! trackfix's integration tests: one binary, one module per area.
 
+mod accuracy;
 mod cli;
+mod dialect;
 mod frames;
+mod kinematics;
 mod krl;
+mod output;
 mod rapid;
+mod rust_version;
 mod support;
 mod track;
 mod transform;

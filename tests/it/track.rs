@@ -1,4 +1,4 @@
-//! Integration tests: track (issue 4). The simulation test, properties, and snapshots of the
+//! Integration tests: track. The simulation test, properties, and snapshots of the
 //! `trackfix track` commands on the samples.
 
 use std::path::Path;
@@ -7,14 +7,22 @@ use nalgebra::{Point3, Vector3};
 use proptest::prelude::*;
 use trackfix::geometry::rigid_fit::fit_rigid;
 use trackfix::geometry::{Pose, pose_xyz_deg};
-use trackfix::track::frames_csv::frames_csv;
-use trackfix::track::identify::{identify, parse_measurements};
+use trackfix::track::frames_csv::{SamplingFrame, frames_csv};
+use trackfix::track::identify::{
+    Exclusion, MEASUREMENTS_HEADER, identify, identify_excluding, parse_measurements,
+};
 use trackfix::track::nominal::{FitOptions, fit_track};
 use trackfix::track::simulate::{
     TrackTruth, measurements_csv, sample_tcp_points, scan_csv, simulate_measurements, simulate_scan,
 };
 use trackfix::track::spline::{CubicSpline, EndCondition};
-use trackfix::track::{Extrapolate, Knot, Profile, TrackError};
+use trackfix::track::{
+    Extrapolate, Knot, NominalProblem, NumericCsv, Profile, SkidProblem, TrackError,
+};
+
+use trackfix::track::MeasuredIn;
+use trackfix::track::cell_nominal::{Disagreement, check_cell_nominal};
+use trackfix::transform::Cell;
 
 use crate::support::{root, trackfix};
 
@@ -22,7 +30,7 @@ fn skids() -> Vec<f64> {
     (0..=16).map(|i| i as f64 * 500.0).collect()
 }
 
-/// The simulation test of issue 4. Truth: `TrackTruth::sample_r1()` without its waviness, i.e. a
+/// The simulation test. Truth: `TrackTruth::sample_r1()` without its waviness, i.e. a
 /// smooth deformation: 2.5 mm sag, 1.5 mm sideways bow, 0.03° twist, pitch/yaw following the
 /// rails (up to 0.06°), gear error -1.5e-4 (1.2 mm over 8 m). 10 TCP points at each of 17 skid
 /// positions (0..8000 every 500 mm), tracker noise 0.02 mm per axis (seed 7). identify + fit,
@@ -140,6 +148,8 @@ fn identify_then_fit_through_the_binary_matches_the_samples() {
         profile.to_str().unwrap(),
         "--name",
         "r1",
+        "--measured-in",
+        "world",
     ]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(
@@ -176,8 +186,7 @@ fn identify_flags_an_outlier() {
         r.meas[2] += 0.5;
     }
     let id = identify(&rows).unwrap();
-    // A least-squares fit spreads a bad point over its neighbours, so a second point of the
-    // same skid may be flagged too; the bad one stands out most.
+    assert_eq!(id.outliers.len(), 1, "{:?}", id.outliers);
     let worst = id
         .outliers
         .iter()
@@ -237,19 +246,39 @@ fn svg_is_deterministic() {
             p.to_str().unwrap(),
         ]);
         assert_eq!(code, 0, "{err}");
+        assert_eq!(
+            err,
+            format!(
+                "wrote {}: the six deviation curves of profile `r1` with their 17 knots, and the twist diagram\n",
+                p.display()
+            )
+        );
     }
     let (sa, sb) = (std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
     assert_eq!(sa, sb);
     let text = String::from_utf8(sa).unwrap();
     // Six curves + the twist diagram; 17 knots in each of the 7 panels.
+    // The twist diagram labels each of its 17 dots with the knot's skid.
+    // (plotters anchors axis ticks in the middle or at the end, the diagram's labels at the start).
+    let started: Vec<&str> = text
+        .split("<text ")
+        .filter(|t| t.contains("text-anchor=\"start\""))
+        .filter_map(|t| t.split_once('>').and_then(|(_, r)| r.split_once("</text>")))
+        .map(|(content, _)| content.trim())
+        .collect();
+    let labels: Vec<String> = (0..=16).map(|i| (500 * i).to_string()).collect();
     let summary = format!(
-        "polylines: {}\ncircles: {}\ntitles: {:?}",
+        "polylines: {}\ncircles: {}\ntitles: {:?}\nskid labels: {}",
         text.matches("<polyline").count(),
         text.matches("<circle").count(),
         ["dx [mm]", "rz [deg]", "twist diagram", "track profile `r1`"]
             .iter()
             .map(|t| text.contains(t))
-            .collect::<Vec<_>>()
+            .collect::<Vec<_>>(),
+        labels
+            .iter()
+            .filter(|l| started.contains(&l.as_str()))
+            .count()
     );
     insta::assert_snapshot!("svg_summary", summary);
     let c = tmp.path().join("c.svg");
@@ -263,7 +292,11 @@ fn svg_is_deterministic() {
         c.to_str().unwrap(),
     ]);
     assert_eq!(code, 0);
-    assert!(std::fs::read_to_string(&c).unwrap().starts_with("<svg"));
+    let spectrum = std::fs::read_to_string(&c).unwrap();
+    assert!(spectrum.starts_with("<svg"));
+    // Frequency ticks carry their wavelength: 0.0005 /mm is 2000 mm.
+    assert!(spectrum.contains("\n0.0005 (2000)\n</text>"), "{spectrum}");
+    assert!(spectrum.contains("(wavelength 2002 mm)"));
 }
 
 #[test]
@@ -524,4 +557,534 @@ fn spectrum_of_a_timed_scan() {
     ]);
     assert_eq!(a, b);
     assert!(a.contains("1001.2 mm"), "{a}");
+}
+
+/// One reading 2 mm off: a least-squares fit spreads it over the other points of its skid (the
+/// old check flagged most of them); the robust fit flags exactly that one point, and says how
+/// far leaving it out would move the frame.
+#[test]
+fn one_bad_reading_flags_that_point_only() {
+    let truth = TrackTruth::sample_r1();
+    let mut rows = simulate_measurements(&truth, &skids(), &sample_tcp_points(), 0.02, 3);
+    let bad = rows
+        .iter_mut()
+        .find(|r| r.skid == 3000.0 && r.point == 4)
+        .unwrap();
+    bad.meas[0] += 1.2;
+    bad.meas[1] -= 1.6; // |(1.2, -1.6, 0)| = 2 mm
+    let id = identify(&rows).unwrap();
+    let flagged: Vec<(f64, u32)> = id.outliers.iter().map(|o| (o.skid, o.point)).collect();
+    assert_eq!(flagged, [(3000.0, 4)], "{:?}", id.outliers);
+    let o = id.outliers[0];
+    // Against the robust fit the residual is the whole 2 mm (noise 0.02 mm per axis).
+    assert!((o.residual - 2.0).abs() < 0.1, "{o:?}");
+    // A plain least-squares fit leaves a tenth of the error in each of the other 9 points.
+    let plain = &id.fits.iter().find(|f| f.skid == 3000.0).unwrap().fit;
+    let others = plain
+        .residual_norms()
+        .iter()
+        .zip(&id.fits[6].points)
+        .filter(|(_, p)| **p != 4)
+        .map(|(r, _)| *r)
+        .fold(0.0, f64::max);
+    assert!(others > 4.0 * id.median_residual, "{others}");
+    let shift = o.shift_if_excluded.unwrap();
+    assert!(shift.at_points_mm > 0.1, "{shift:?}");
+    // Leaving it out gives the frame of the clean data back (within the noise).
+    let clean = identify(&simulate_measurements(
+        &truth,
+        &skids(),
+        &sample_tcp_points(),
+        0.02,
+        3,
+    ))
+    .unwrap();
+    let excl = identify_excluding(
+        &rows,
+        &[Exclusion {
+            skid: 3000.0,
+            point: 4,
+        }],
+    )
+    .unwrap();
+    let f = &excl.fits[6];
+    assert_eq!((f.skid, f.excluded.clone()), (3000.0, vec![4]));
+    let moved = f.exclusion_shift.unwrap();
+    assert!((moved.at_points_mm - shift.at_points_mm).abs() < 1e-9);
+    let pts = sample_tcp_points();
+    let err = pts
+        .iter()
+        .map(|p| (f.fit.pose * p - clean.fits[6].fit.pose * p).norm())
+        .fold(0.0, f64::max);
+    assert!(err < 0.03, "{err}");
+    assert!(excl.outliers.is_empty(), "{:?}", excl.outliers);
+    // Other tracks' noise, other skids and points, other directions of the 2 mm error.
+    for (seed, skid, point, dir) in [
+        (1, 3000.0, 4, [0.6, -0.8, 0.0]),
+        (2, 0.0, 1, [0.0, 0.0, 1.0]),
+        (4, 8000.0, 10, [1.0, 0.0, 0.0]),
+        (5, 4500.0, 7, [0.0, 0.6, 0.8]),
+    ] {
+        let mut rows = simulate_measurements(&truth, &skids(), &sample_tcp_points(), 0.02, seed);
+        let bad = rows
+            .iter_mut()
+            .find(|r| r.skid == skid && r.point == point)
+            .unwrap();
+        for (m, d) in bad.meas.iter_mut().zip(dir) {
+            *m += 2.0 * d;
+        }
+        let flagged: Vec<(f64, u32)> = identify(&rows)
+            .unwrap()
+            .outliers
+            .iter()
+            .map(|o| (o.skid, o.point))
+            .collect();
+        assert_eq!(flagged, [(skid, point)], "seed {seed}");
+    }
+}
+
+#[test]
+fn exclude_through_the_binary() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("frames.csv");
+    let out = out.to_str().unwrap();
+    let (code, text, err) = trackfix(&[
+        "track",
+        "identify",
+        "samples/track/measurements.csv",
+        "-o",
+        out,
+        "--exclude",
+        "1500:3",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(text.contains("skid 1500 mm: 9 points"), "{text}");
+    assert!(
+        text.contains("excluded at skid 1500 mm: point(s) 3\n  effect on the frame: "),
+        "{text}"
+    );
+    let e = error_of(&[
+        "track",
+        "identify",
+        "samples/track/measurements.csv",
+        "-o",
+        out,
+        "--exclude",
+        "1501:3",
+    ]);
+    assert!(e.contains("no point 3 at skid 1501 mm to exclude"), "{e}");
+    let e = error_of(&[
+        "track",
+        "identify",
+        "samples/track/measurements.csv",
+        "-o",
+        out,
+        "--exclude",
+        "1500",
+    ]);
+    assert!(e.contains("write SKID:POINT"), "{e}");
+}
+
+/// Nearly collinear points: noise turns into a rotation about their line, so the fit is refused
+/// with its condition number; tracker points in other units (scaled) are refused too.
+#[test]
+fn ill_conditioned_and_scaled_fits_are_refused() {
+    let truth = pose_xyz_deg(100.0, -2300.0, 0.0, 0.0, 0.0, 90.0);
+    let line: Vec<[f64; 3]> = (0..10)
+        .map(|i| {
+            let s = if i % 2 == 0 { 1.0 } else { -1.0 };
+            [900.0 + 100.0 * i as f64, 3.0 * s, 800.0 + 2.0 * s]
+        })
+        .collect();
+    let rows = |scale: f64, pts: &[[f64; 3]]| -> Vec<trackfix::track::simulate::MeasurementRow> {
+        [0.0, 1000.0]
+            .iter()
+            .flat_map(|&skid| {
+                pts.iter().enumerate().map(move |(i, p)| {
+                    let q = truth * Point3::from(*p);
+                    trackfix::track::simulate::MeasurementRow {
+                        skid,
+                        point: i as u32 + 1,
+                        robot: *p,
+                        meas: [q.x * scale + skid, q.y * scale, q.z * scale],
+                    }
+                })
+            })
+            .collect()
+    };
+    // Independent figure: the spread of the points, sqrt((λ1 + λ2) / (λ2 + λ3)).
+    let c = {
+        let n = line.len() as f64;
+        let mean: Vector3<f64> = line.iter().map(|p| Vector3::from(*p)).sum::<Vector3<f64>>() / n;
+        let s: nalgebra::Matrix3<f64> = line
+            .iter()
+            .map(|p| (Vector3::from(*p) - mean) * (Vector3::from(*p) - mean).transpose())
+            .sum();
+        let mut l: Vec<f64> = s.symmetric_eigenvalues().iter().copied().collect();
+        l.sort_by(|a, b| b.total_cmp(a));
+        ((l[0] + l[1]) / (l[1] + l[2])).sqrt()
+    };
+    assert!(c > 20.0, "{c}");
+    match identify(&rows(1.0, &line)) {
+        Err(TrackError::Skid {
+            skid,
+            problem: SkidProblem::IllConditioned { condition, limit },
+        }) => {
+            assert_eq!(skid, 0.0);
+            assert!((condition - c).abs() < 1e-6 * c, "{condition} vs {c}");
+            assert_eq!(limit, 20.0);
+        }
+        other => panic!("{other:?}"),
+    }
+    let good: Vec<[f64; 3]> = sample_tcp_points()
+        .iter()
+        .map(|p| [p.x, p.y, p.z])
+        .collect();
+    assert!(identify(&rows(1.0, &good)).is_ok());
+    for scale in [1e9, 1e-3, 1.02] {
+        match identify(&rows(scale, &good)) {
+            Err(TrackError::Skid {
+                problem: SkidProblem::Scale { ratio, .. },
+                ..
+            }) => assert!((ratio / scale - 1.0).abs() < 1e-9, "{ratio}"),
+            other => panic!("{scale}: {other:?}"),
+        }
+    }
+    // Frames in metres against a skid in mm: a gear factor of 0.001 is not a track.
+    let frames: Vec<SamplingFrame> = (0..5)
+        .map(|i| SamplingFrame {
+            skid: 1000.0 * i as f64,
+            pose: pose_xyz_deg(1.0 * i as f64, 0.0, 0.0, 0.0, 0.0, 0.0),
+        })
+        .collect();
+    match fit_track(&frames, &FitOptions::default()) {
+        Err(TrackError::Nominal(NominalProblem::ImplausibleGear { gear_factor, .. })) => {
+            assert!((gear_factor - 1e-3).abs() < 1e-12)
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// A German spreadsheet's export: `;` between the fields and decimal commas. Read with a note,
+/// to the same frames as the CSV.
+#[test]
+fn semicolon_and_decimal_comma_tables_are_read() {
+    let text = std::fs::read_to_string(root().join("samples/track/measurements.csv")).unwrap();
+    let german = text.replace(',', ";").replace('.', ",");
+    let tmp = tempfile::tempdir().unwrap();
+    let m = tmp.path().join("messungen.csv");
+    std::fs::write(&m, &german).unwrap();
+    let out = tmp.path().join("frames.csv");
+    let (code, _, err) = trackfix(&[
+        "track",
+        "identify",
+        m.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("note: ")
+            && err.contains("read with `;` between the fields and `,` as the decimal point"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        std::fs::read(root().join("samples/track/frames.csv")).unwrap()
+    );
+    // A bad number in such a file is located in its own column.
+    let broken = german.replacen("1200,000", "1200,0x0", 1);
+    let e =
+        NumericCsv::parse(Path::new("m.csv"), broken.as_bytes(), &MEASUREMENTS_HEADER).unwrap_err();
+    let l = e.located().unwrap();
+    assert_eq!(l.line_col(), (2, 5));
+    assert_eq!(l.column_name(), Some("robot_x"));
+}
+
+/// Files that are not what they were given as are not quoted; the errors of a wrong `format`,
+/// a one-knot profile and a scan out of order carry `file:line:column`.
+#[test]
+fn located_errors_and_foreign_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = |name: &str, text: &str| {
+        let p = tmp.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let clean = |s: String| s.replace(tmp.path().to_str().unwrap(), "<tmp>");
+    let passwd = t(
+        "passwd",
+        "root:x:0:0:root:/root:/bin/bash\ndaemon:x:1:1:daemon:/usr/sbin:/usr/sbin/nologin\n",
+    );
+    let p = passwd.to_str().unwrap();
+    let out = tmp.path().join("o");
+    let out = out.to_str().unwrap();
+    let e1 = error_of(&["track", "show", p]);
+    let e2 = error_of(&["track", "identify", p, "-o", out]);
+    let e3 = error_of(&["track", "fit", p, "-o", out]);
+    let e4 = error_of(&["track", "spectrum", p, "--threshold", "0.05"]);
+    for e in [&e1, &e2, &e3, &e4] {
+        assert!(!e.contains("root:x") && !e.contains("daemon"), "{e}");
+    }
+    let profile = std::fs::read_to_string(root().join("samples/track/profile.toml")).unwrap();
+    let wrong = t(
+        "wrong.toml",
+        &profile.replace("trackfix-profile/1", "trackfix-profile/2"),
+    );
+    let e5 = error_of(&["track", "show", wrong.to_str().unwrap()]);
+    let first_knot_end = profile.match_indices("[[knot]]").nth(1).unwrap().0;
+    let one = t("one.toml", &profile[..first_knot_end]);
+    let e6 = error_of(&["track", "show", one.to_str().unwrap()]);
+    let scan = std::fs::read_to_string(root().join("samples/track/scan.csv")).unwrap();
+    let swapped = scan.replacen("\n20,", "\n5,", 1);
+    let s = t("scan.csv", &swapped);
+    let e7 = error_of(&[
+        "track",
+        "spectrum",
+        s.to_str().unwrap(),
+        "--threshold",
+        "0.05",
+    ]);
+    let short = t("short.csv", "skid,x,y,z\n0,0,0,0\n10,10,0,0\n");
+    let e8 = error_of(&[
+        "track",
+        "spectrum",
+        short.to_str().unwrap(),
+        "--threshold",
+        "0.05",
+    ]);
+    let all = [e1, e2, e3, e4, e5, e6, e7, e8].map(clean).join("\n");
+    insta::assert_snapshot!("errors_located", all);
+}
+
+/// `--current-gear` prints the new controller value: motor turns per travel divided by the
+/// measured gear factor (the sample's skid travels short, so the ratio grows).
+#[test]
+fn current_gear_gives_the_new_controller_value() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("profile.toml");
+    let run = |current: &str| {
+        let (code, text, err) = trackfix(&[
+            "track",
+            "fit",
+            "samples/track/frames.csv",
+            "-o",
+            out.to_str().unwrap(),
+            "--current-gear",
+            current,
+        ]);
+        assert_eq!(code, 0, "{err}");
+        text.lines()
+            .find(|l| l.contains("for --current-gear"))
+            .unwrap()
+            .to_string()
+    };
+    let g = Profile::load(&root().join("samples/track/profile.toml"))
+        .unwrap()
+        .nominal()
+        .gear_factor;
+    let abb = run("1500");
+    let value: f64 = abb.rsplit(' ').next().unwrap().parse().unwrap();
+    assert!((value - 1500.0 / g).abs() < 1e-8, "{abb}");
+    assert!(value > 1500.0);
+    let kuka = run("47746/1000");
+    let (n, d) = kuka
+        .split_once("$RAT_MOT_AX = {N ")
+        .and_then(|(_, r)| r.split_once('}'))
+        .and_then(|(f, _)| f.split_once(",D "))
+        .unwrap();
+    let (n, d): (f64, f64) = (n.parse().unwrap(), d.parse().unwrap());
+    assert!(n < 2_147_483_647.0 && d < 2_147_483_647.0);
+    assert!((n / d - 47.746 / g).abs() < 1e-7, "{kuka}");
+    let e = error_of(&[
+        "track",
+        "fit",
+        "samples/track/frames.csv",
+        "-o",
+        out.to_str().unwrap(),
+        "--current-gear",
+        "1/0",
+    ]);
+    assert!(e.contains("write the KUKA ratio as N/D"), "{e}");
+}
+
+/// The cell against the profile's nominal: the samples agree; a track_axis along y for a track
+/// along x fails the frame-independent check (direction seen from the base); a design-value base
+/// fails the world check of a profile measured in the world frame.
+#[test]
+fn cell_is_checked_against_the_nominal() {
+    let cell = Cell::load(&root().join("samples/cell.toml")).unwrap();
+    for name in ["r1", "r2"] {
+        let r = cell.robot(name).unwrap();
+        let p = Profile::load(&r.profile).unwrap();
+        let c = check_cell_nominal(&r.base0, &r.track_axis, &p).unwrap();
+        let w = c.world.unwrap();
+        // The sample cell holds the fitted nominal to 3 decimals (mm) and 6 (deg).
+        assert!(w.base_position_mm < 0.002, "{name}: {c:?}");
+        assert!(
+            c.axis_in_base_deg < 1e-3 && w.axis_deg < 1e-3,
+            "{name}: {c:?}"
+        );
+    }
+    let r1 = cell.robot("r1").unwrap();
+    let p = Profile::load(&r1.profile).unwrap();
+    let e = check_cell_nominal(&r1.base0, &Vector3::y(), &p).unwrap_err();
+    assert!(matches!(
+        e.disagreements[0],
+        Disagreement::AxisInBase { angle_deg } if (angle_deg - 90.0).abs() < 0.01
+    ));
+    // Without knowing the measurement frame only the direction in the base is compared: a
+    // base moved by 1.7 mm passes, a wrong axis does not.
+    let tracker = p.clone().with_measured_in(MeasuredIn::Tracker);
+    let design = pose_xyz_deg(0.0, -3500.0, 0.0, 0.0, 0.0, 90.0);
+    let c = check_cell_nominal(&design, &Vector3::x(), &tracker).unwrap();
+    assert!(c.world.is_none());
+    assert!(check_cell_nominal(&design, &Vector3::y(), &tracker).is_err());
+    let e = check_cell_nominal(&design, &Vector3::x(), &p).unwrap_err();
+    let found: Vec<String> = e.disagreements.iter().map(|d| d.to_string()).collect();
+    // |(0.016, -3499.087, -1.496) - (0, -3500, 0)| = 1.753 mm.
+    assert!(
+        matches!(e.disagreements[0], Disagreement::BasePosition { distance_mm } if (distance_mm - 1.7532).abs() < 1e-3),
+        "{found:?}"
+    );
+    assert!(e.to_string().contains("tolerance 0.1 mm"), "{e}");
+}
+
+/// `track fit --cell C --robot R` writes the fitted nominal into the cell: only `base` and
+/// `track_axis` of that robot change, comments and layout stay, and the result passes the check.
+#[test]
+fn fit_writes_the_nominal_into_the_cell() {
+    let tmp = tempfile::tempdir().unwrap();
+    let original = std::fs::read_to_string(root().join("samples/cell.toml")).unwrap();
+    let design = original
+        .replace(
+            "base = { x = 0.016, y = -3499.087, z = -1.496, rx = 0.000412, ry = -0.000064, rz = 90.000710 }",
+            "base = { x = 0, y = -3500, z = 0, rx = 0, ry = 0, rz = 90 }",
+        )
+        .replace(
+            "track_axis = [1.0, -0.0000032, 0.0000014]",
+            "track_axis = [0, 1, 0]",
+        );
+    assert_ne!(design, original);
+    let cell = tmp.path().join("cell.toml");
+    std::fs::write(&cell, &design).unwrap();
+    let profile = tmp.path().join("profile.toml");
+    let (code, out, err) = trackfix(&[
+        "track",
+        "fit",
+        "samples/track/frames.csv",
+        "-o",
+        profile.to_str().unwrap(),
+        "--cell",
+        cell.to_str().unwrap(),
+        "--robot",
+        "r1",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("[robot.r1] (the rest of the file unchanged)"),
+        "{out}"
+    );
+    let written = std::fs::read_to_string(&cell).unwrap();
+    let changed: Vec<(&str, &str)> = design
+        .lines()
+        .zip(written.lines())
+        .filter(|(a, b)| a != b)
+        .collect();
+    assert_eq!(design.lines().count(), written.lines().count());
+    assert_eq!(changed.len(), 2, "{changed:?}");
+    assert!(
+        changed[0]
+            .1
+            .starts_with("base = { x = 0.0157, y = -3499.0871, z = -1.4958, rx = 0.000412"),
+        "{changed:?}"
+    );
+    assert!(
+        changed[1]
+            .1
+            .starts_with("track_axis = [1.0, -0.000003206, 0.000001369]  # unit direction"),
+        "{changed:?}"
+    );
+    let p = Profile::load(&profile).unwrap();
+    assert_eq!(p.measured_in(), Some(MeasuredIn::World));
+    let c = Cell::load(&cell).unwrap();
+    let r = c.robot("r1").unwrap();
+    check_cell_nominal(&r.base0, &r.track_axis, &p).unwrap();
+    let e = error_of(&[
+        "track",
+        "fit",
+        "samples/track/frames.csv",
+        "-o",
+        profile.to_str().unwrap(),
+        "--cell",
+        cell.to_str().unwrap(),
+        "--robot",
+        "r9",
+    ]);
+    assert!(e.contains("no [robot.r9] table"), "{e}");
+}
+
+/// A profile edited by hand (a knot's value) disagrees with its own [stats] and hash: a
+/// warning; editing the extrapolation rule, as the out-of-range message suggests, is not.
+#[test]
+fn hand_edited_profile_is_a_warning() {
+    let text = std::fs::read_to_string(root().join("samples/track/profile.toml")).unwrap();
+    let p = Profile::from_toml_str(&text, Path::new("p.toml")).unwrap();
+    assert!(p.consistency_warnings().is_empty());
+    let clamp = text.replace("extrapolate = \"error\"", "extrapolate = \"clamp\"");
+    let p = Profile::from_toml_str(&clamp, Path::new("p.toml")).unwrap();
+    assert!(p.consistency_warnings().is_empty());
+    let edited = text.replacen("dz = 1.589099", "dz = 2.589099", 1);
+    assert_ne!(edited, text);
+    let p = Profile::from_toml_str(&edited, Path::new("p.toml")).unwrap();
+    let w = p.consistency_warnings();
+    assert_eq!(w.len(), 2, "{w:?}");
+    assert!(w[0].contains("data_sha256 does not match"), "{w:?}");
+    assert!(w[1].contains("[stats] are not those of its knots"), "{w:?}");
+    let tmp = tempfile::tempdir().unwrap();
+    let f = tmp.path().join("edited.toml");
+    std::fs::write(&f, &edited).unwrap();
+    let (code, _, err) = trackfix(&["track", "show", f.to_str().unwrap(), "--at", "0"]);
+    assert_eq!(code, 0);
+    assert_eq!(err.matches("warning: ").count(), 2, "{err}");
+}
+
+/// A tracker's point export (German spreadsheet style, extra columns) through `track import`
+/// with `--map`: the points come out as point,x,y,z, and the command says how it read the file.
+#[test]
+fn tracker_export_is_imported_with_a_map() {
+    let tmp = tempfile::tempdir().unwrap();
+    let export = tmp.path().join("export.csv");
+    std::fs::write(
+        &export,
+        "Nr;Punkt;Zeit;Ost;Nord;Hoehe\n1;M1;12:00;1670,3;-1850,75;612,4\n2;M2;12:01;2670,25;-1850,5;612\n",
+    )
+    .unwrap();
+    let out = tmp.path().join("marks.csv");
+    let (code, text, err) = trackfix(&[
+        "track",
+        "import",
+        export.to_str().unwrap(),
+        "--map",
+        "name=Punkt,x=Ost,y=Nord,z=Hoehe",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        text.contains("2 point(s), fields separated by `;` with `,` as the decimal point, a header line; name, x, y, z in columns 2, 4, 5, 6"),
+        "{text}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(&out).unwrap(),
+        "point,x,y,z\nM1,1670.3000,-1850.7500,612.4000\nM2,2670.2500,-1850.5000,612.0000\n"
+    );
+    let e = error_of(&[
+        "track",
+        "import",
+        "/etc/passwd",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!e.contains("daemon") && !e.contains("root:"), "{e}");
 }

@@ -1,7 +1,9 @@
-//! What `inspect` and `check` report about programs: positions, frames, summaries, lints.
+//! What `inspect` reports about programs: positions, frames, counts and lints per file, as a
+//! table, JSON or CSV.
 //!
-//! The report is built from the shared position model only, so RAPID and KRL get the same shape
-//! (DESIGN.md §5, issue 2 point 6). Rendering returns strings; the binary prints them.
+//! The report is built from the shared position model and the dialect's vocabulary only, so
+//! every language gets the same shape (DESIGN.md §5). Rendering returns strings; the binary
+//! prints them.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -17,9 +19,7 @@ use crate::position::{
 };
 use crate::syntax::{Diagnostic, Severity, Span};
 
-/// How far `|q|` may stray from 1 before `check` calls a quaternion non-normalised. Six written
-/// decimals give about 1e-6; RobotStudio's own output stays well inside 1e-4.
-pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-4;
+use super::check::{count_suffix, lints};
 
 /// Options of `inspect`.
 #[derive(Clone, Copy, Debug, Default)]
@@ -32,6 +32,19 @@ pub struct InspectOptions {
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct InspectReport {
     pub files: Vec<FileReport>,
+}
+
+impl InspectReport {
+    /// The table's last line: `3 files, 41 positions, 1 skipped`.
+    pub fn summary_line(&self, skipped: usize, unreadable: usize) -> String {
+        let positions: usize = self.files.iter().map(|f| f.positions.len()).sum();
+        format!(
+            "{} files, {positions} positions{}{}",
+            self.files.len(),
+            count_suffix(skipped, "skipped"),
+            count_suffix(unreadable, "unreadable")
+        )
+    }
 }
 
 /// One file of the report.
@@ -88,12 +101,28 @@ pub struct PositionRow {
     /// The skid: the configured external axis; `null` when missing or not connected (9E9).
     pub skid: Option<f64>,
     pub extax: Vec<Option<f64>>,
-    /// RAPID work object (`wobj`) or KRL base (`base`) of the instructions using it.
-    #[serde(rename = "wobj", skip_serializing_if = "Option::is_none")]
-    pub wobj: Option<Option<String>>,
-    #[serde(rename = "base", skip_serializing_if = "Option::is_none")]
-    pub base: Option<Option<String>>,
+    /// The work object (RAPID `wobj`) or base (KRL `base`) of the instructions using it.
+    #[serde(flatten)]
+    pub frame: FrameColumn,
     pub tool: Option<String>,
+}
+
+/// The frame a position is used in, under the name its language gives that column (the
+/// dialect's [`Vocabulary::frame_column`](crate::dialect::Vocabulary)): `"wobj": "wobj_car"`,
+/// `"base": "BASE_DATA[3]"`; `null` when unused or unresolved.
+#[derive(Clone, Debug)]
+pub struct FrameColumn {
+    pub column: &'static str,
+    pub name: Option<String>,
+}
+
+impl Serialize for FrameColumn {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap as _;
+        let mut map = s.serialize_map(Some(1))?;
+        map.serialize_entry(self.column, &self.name)?;
+        map.end()
+    }
 }
 
 /// A declared work object, tool or base, with its pose in world.
@@ -212,9 +241,9 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
         Skid::At(s) => Some(s),
         Skid::NotConnected | Skid::Missing => None,
     };
-    let (wobj, base) = match file.language {
-        Language::Rapid => (Some(p.usage.wobj.clone()), None),
-        Language::Krl => (None, Some(p.usage.wobj.clone())),
+    let frame = FrameColumn {
+        column: file.language.dialect().vocabulary().frame_column,
+        name: p.usage.wobj.clone(),
     };
     PositionRow {
         name: p.name.clone(),
@@ -233,19 +262,17 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
         joints: nums(&p.joints),
         skid,
         extax: nums(&p.extax),
-        wobj,
-        base,
+        frame,
         tool: p.usage.tool.clone(),
     }
 }
 
 /// The data type of a frame as its language names it.
 fn frame_kind(kind: FrameKind, language: Language) -> &'static str {
-    match (kind, language) {
-        (FrameKind::WorkObject, _) => "wobjdata",
-        (FrameKind::Tool, Language::Rapid) => "tooldata",
-        (FrameKind::Tool, Language::Krl) => "tool",
-        (FrameKind::Base, _) => "base",
+    match kind {
+        FrameKind::WorkObject => "wobjdata",
+        FrameKind::Tool => language.dialect().vocabulary().tool_kind,
+        FrameKind::Base => "base",
     }
 }
 
@@ -310,99 +337,20 @@ pub fn inspect_program(program: &Program, options: InspectOptions) -> Vec<FileRe
         .collect()
 }
 
-/// Everything `check` says about a file: the parser's diagnostics, a failed round trip, and the
-/// lints of the model (non-normalised quaternions, a target used with two work objects).
-/// Sorted by position.
-pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
-    let mut out = file.diagnostics.clone();
-    if !file.round_trip {
-        out.push(
-            Diagnostic::error(
-                Span::new(0, 0),
-                "printing the parsed file does not give back its bytes",
-            )
-            .with_hint("this is a trackfix bug: please report it with the file attached"),
-        );
-    }
-    for p in &file.positions {
-        if let Some(q) = p
-            .cartesian
-            .as_ref()
-            .and_then(CartesianFields::written_quaternion)
-        {
-            let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if norm == 0.0 {
-                // Unused slots of PERS robtarget arrays are written this way by controllers:
-                // worth knowing, not a defect of the program.
-                out.push(
-                    Diagnostic::note(
-                        p.span,
-                        format!(
-                            "`{}` has the quaternion [0,0,0,0]: an unset slot",
-                            p.label()
-                        ),
-                    )
-                    .with_hint("transforms leave it as written and report it"),
-                );
-            } else if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
-                out.push(
-                    Diagnostic::warning(
-                        p.span,
-                        format!(
-                            "quaternion of `{}` is not normalised (|q| = {norm:.6})",
-                            p.label()
-                        ),
-                    )
-                    .with_hint(
-                        "the controller rejects it; `trackfix correct` writes normalised quaternions",
-                    ),
-                );
-            }
-        }
-        if !p.usage.other_wobjs.is_empty() {
-            let already = file.diagnostics.iter().any(|d| {
-                d.span.start <= p.span.start
-                    && p.span.start < d.span.end.max(d.span.start + 1)
-                    && d.message.contains("work object")
-            });
-            if !already {
-                let what = match file.language {
-                    Language::Rapid => "work objects",
-                    Language::Krl => "bases",
-                };
-                let mut all = vec![p.usage.wobj.clone().unwrap_or_default()];
-                all.extend(p.usage.other_wobjs.iter().cloned());
-                out.push(
-                    Diagnostic::warning(
-                        p.span,
-                        format!("`{}` is used with two {what}: {}", p.label(), all.join(", ")),
-                    )
-                    .with_hint("a transform cannot move one target for two frames; declare one target per frame"),
-                );
-            }
-        }
-    }
-    out.sort_by_key(|d| (d.span.start, d.span.end));
-    out
-}
-
 /// `inspect --format table`: one block per file.
 pub fn render_table(report: &InspectReport) -> String {
     let mut out = String::new();
     for f in &report.files {
         let _ = writeln!(out, "{} ({})", f.path, language_name(f.language));
         if !f.positions.is_empty() {
-            let frame_col = match f.language {
-                Language::Rapid => "wobj",
-                Language::Krl => "base",
-            };
+            let frame_col = f.language.dialect().vocabulary().frame_column;
             let _ = writeln!(
                 out,
                 "  {:<20} {:<11} {:>6} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:<12} {:<12}",
                 "name", "kind", "line", "x", "y", "z", "rx", "ry", "rz", "skid", frame_col, "tool"
             );
             for p in &f.positions {
-                let frame = p.wobj.clone().or(p.base.clone()).flatten();
+                let frame = &p.frame.name;
                 let [x, y, z, rx, ry, rz] = p.pose.cells();
                 let _ = writeln!(
                     out,
@@ -465,7 +413,7 @@ pub fn render_csv(report: &InspectReport) -> String {
     for f in &report.files {
         for p in &f.positions {
             let q = |i: usize| p.pose.q.map(|q| q[i]);
-            let frame = p.wobj.clone().or(p.base.clone()).flatten();
+            let frame = &p.frame.name;
             let fields = [
                 csv_text(&f.path),
                 language_name(f.language).to_owned(),
@@ -493,10 +441,7 @@ pub fn render_csv(report: &InspectReport) -> String {
 }
 
 fn language_name(l: Language) -> &'static str {
-    match l {
-        Language::Rapid => "rapid",
-        Language::Krl => "krl",
-    }
+    l.name()
 }
 
 fn cell(v: Option<f64>, places: usize) -> String {

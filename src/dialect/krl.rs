@@ -1,0 +1,129 @@
+//! KUKA KRL: a `.src`/`.dat` pair per program (either loads both), bases, A/B/C angles,
+//! Status and Turn.
+
+use std::path::{Path, PathBuf};
+
+use crate::kinematics::{ConfigValue, Joints, Kinematics};
+use crate::position::{Config, PositionKind, Program};
+use crate::program::{LoadError, LoadOptions};
+use crate::syntax::Edit;
+use crate::transform::rewrite::bits_edit;
+
+use super::{Dialect, Language, Vocabulary};
+
+/// The KRL dialect.
+#[derive(Clone, Copy, Debug)]
+pub struct Krl;
+
+#[allow(non_upper_case_globals)]
+impl Language {
+    pub const Krl: Language = Language::of(&Krl);
+}
+
+#[allow(non_upper_case_globals)]
+impl PositionKind {
+    /// KRL `E6POS`.
+    pub const E6Pos: PositionKind = PositionKind::new("E6POS", true);
+    /// KRL `POS`.
+    pub const Pos: PositionKind = PositionKind::new("POS", true);
+    /// KRL `FRAME` used as a motion target.
+    pub const Frame: PositionKind = PositionKind::new("FRAME", true);
+    /// KRL `E6AXIS`.
+    pub const E6Axis: PositionKind = PositionKind::new("E6AXIS", false);
+    /// KRL `AXIS`.
+    pub const Axis: PositionKind = PositionKind::new("AXIS", false);
+}
+
+/// Turn bits of A1, A4 and A6: a mirror-image robot runs those axes with the opposite sign.
+const TURN_A1_A4_A6: u32 = 0b10_1001;
+
+const VOCABULARY: Vocabulary = Vocabulary {
+    frame_column: "base",
+    frames: "bases",
+    tool_kind: "tool",
+    stationary_tool: "IPO_FRAME #TCP",
+    world_frames: &["base_data[0]", "$nullframe", "$world"],
+};
+
+fn extension(p: &Path) -> Option<String> {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+}
+
+impl Dialect for Krl {
+    fn name(&self) -> &'static str {
+        "krl"
+    }
+
+    fn extensions(&self) -> &'static [&'static str] {
+        &["src", "dat", "sub"]
+    }
+
+    fn load(&self, path: &Path, options: &LoadOptions) -> Result<Program, LoadError> {
+        crate::krl::load_program(path, options)
+    }
+
+    fn reparse(
+        &self,
+        files: Vec<(PathBuf, Vec<u8>)>,
+        options: &LoadOptions,
+    ) -> Result<Program, LoadError> {
+        crate::krl::load_program_from_sources(files, options)
+    }
+
+    /// A `.dat` whose `.src` is listed is dropped: loading the `.src` loads both. The `.dat` is
+    /// found the way `krl::load_program` finds it (stem and extension in any case) and compared
+    /// as a file, not as spelled (`./a.dat` is `a.dat`).
+    fn dedupe_inputs(&self, inputs: &mut Vec<PathBuf>) {
+        let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
+        let stem_key = |p: &Path| {
+            let stem = p
+                .file_stem()
+                .map(|s| s.to_string_lossy().to_ascii_lowercase());
+            (same_file(p).parent().map(Path::to_owned), stem)
+        };
+        // Only a `.src` whose stem a listed `.dat` shares needs its directory read.
+        let dat_stems: std::collections::BTreeSet<_> = inputs
+            .iter()
+            .filter(|p| extension(p).as_deref() == Some("dat"))
+            .map(|p| stem_key(p))
+            .collect();
+        let partners: std::collections::BTreeSet<PathBuf> = inputs
+            .iter()
+            .filter(|p| extension(p).as_deref() == Some("src") && dat_stems.contains(&stem_key(p)))
+            .filter_map(|p| crate::krl::partner_of(p))
+            .map(|d| same_file(&d))
+            .collect();
+        inputs.retain(|p| {
+            !(extension(p).as_deref() == Some("dat") && partners.contains(&same_file(p)))
+        });
+    }
+
+    fn vocabulary(&self) -> &'static Vocabulary {
+        &VOCABULARY
+    }
+
+    fn axis_name(&self, index: usize) -> String {
+        format!("E{}", index + 1)
+    }
+
+    fn configuration_of(&self, kin: &Kinematics, j: &Joints) -> ConfigValue {
+        let (status, turn) = crate::kinematics::kuka::status_turn_of(kin, j);
+        ConfigValue::Kuka {
+            status: Some(status),
+            turn: Some(turn),
+        }
+    }
+
+    /// A mirror-image arm: the Turn bits of A1, A4 and A6 toggled; Status unchanged.
+    fn mirror_config(&self, config: &Config) -> Vec<Edit> {
+        let Config::Kuka { turn, .. } = config else {
+            return Vec::new();
+        };
+        turn.as_ref()
+            .and_then(|t| bits_edit(turn, t.value ^ TURN_A1_A4_A6))
+            .into_iter()
+            .collect()
+    }
+}

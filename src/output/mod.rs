@@ -1,0 +1,251 @@
+//! Where transformed files go and how they get there: `-o FILE`, `-o -`, `--out-dir DIR`
+//! (mirroring the input tree), `--in-place` (numbered backups); the unified diff of `--diff`;
+//! and safe reading of inputs.
+//!
+//! Every destination is decided and checked before the first byte is written, and a run's
+//! writes are one transaction ([`transaction`]): all files are written or none, originals are
+//! never lost, and no temporary file outlives the run that made it. The contract is written
+//! down in `docs/design-output.md`.
+
+pub mod backup;
+pub mod diff;
+pub mod paths;
+pub mod read;
+pub mod transaction;
+
+use std::path::{Path, PathBuf};
+
+use crate::transform::ProgramResult;
+
+pub use backup::{backup_path, next_free_backup};
+pub use diff::unified_diff;
+pub use paths::{Destination, Roots, output_path, output_path_under};
+pub use read::{MAX_INPUT_BYTES, read_input, read_regular_file};
+pub use transaction::{FileWrite, Written, clean_stale, commit};
+
+/// Why the outputs of a run were not written. Nothing was changed on disk when one of these
+/// is returned, except as [`OutputError::RollbackFailed`] says.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OutputError {
+    #[error("{}: refusing to overwrite an input file; write it in place instead", path.display())]
+    WouldOverwriteInput { path: PathBuf },
+    #[error("one output file was named, but {count} programs were given; name an output folder")]
+    OneOutputManyPrograms { count: usize },
+    #[error(
+        "standard output takes one file, but the program has {count} files to write (a KRL pair?); name an output file or folder"
+    )]
+    OneStreamManyFiles { count: usize },
+    #[error("{} would be written twice (two inputs with the same name and no input folder to tell them apart?)", path.display())]
+    Duplicate { path: PathBuf },
+    #[error("{}: cannot write there: it is {what}", path.display())]
+    NotAFile { path: PathBuf, what: &'static str },
+    #[error("{}: another trackfix run{} is writing it; try again when it has finished (a lock left by a killed run is removed automatically)", path.display(), pid.map(|p| format!(" (process {p})")).unwrap_or_default())]
+    Locked { path: PathBuf, pid: Option<u32> },
+    #[error("{}: changed since it was read (by another run?); nothing written, run again", path.display())]
+    ChangedSinceRead { path: PathBuf },
+    // The OS error is part of the message and deliberately not a `source`: printed with its
+    // chain, it would otherwise appear twice.
+    #[error("{}: {error}; nothing written", path.display())]
+    Io {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    #[error("{error}, and undoing the run failed for: {}; the backups are kept", failures.join("; "))]
+    RollbackFailed {
+        error: Box<OutputError>,
+        failures: Vec<String>,
+    },
+}
+
+/// Every write of a run, checked: no input is overwritten (except in place), no file is
+/// written twice. In place, only files that change are written.
+pub fn plan_writes(
+    programs: &[ProgramResult],
+    dest: &Destination,
+) -> Result<Vec<FileWrite>, OutputError> {
+    plan(programs, dest, &Roots::default())
+}
+
+/// [`plan_writes`] with the input folders of the run (for `--out-dir`'s mirrored tree).
+pub fn plan(
+    programs: &[ProgramResult],
+    dest: &Destination,
+    roots: &Roots,
+) -> Result<Vec<FileWrite>, OutputError> {
+    let inputs: Vec<PathBuf> = programs
+        .iter()
+        .flat_map(|p| &p.files)
+        .map(|f| paths::identity(&f.path))
+        .collect();
+    if let (Destination::File(_), n @ 2..) = (dest, programs.len()) {
+        return Err(OutputError::OneOutputManyPrograms { count: n });
+    }
+    let in_place = matches!(dest, Destination::InPlace { .. });
+    let mut writes = Vec::new();
+    for p in programs {
+        let first = (p.files.len() > 1)
+            .then(|| p.files.first().map(|f| f.path.as_path()))
+            .flatten();
+        for f in &p.files {
+            let Some(path) = output_path_under(dest, roots, &f.path, first, f.changed()) else {
+                continue;
+            };
+            writes.push(FileWrite {
+                input: f.path.clone(),
+                path,
+                bytes: f.output.clone(),
+                expected: in_place.then(|| f.original.clone()),
+                backup: matches!(dest, Destination::InPlace { backup: true }),
+            });
+        }
+    }
+    let mut seen = std::collections::BTreeSet::new();
+    for w in &writes {
+        let id = paths::identity(&w.path);
+        if !in_place && inputs.contains(&id) {
+            return Err(OutputError::WouldOverwriteInput {
+                path: w.path.clone(),
+            });
+        }
+        if !seen.insert(id) {
+            return Err(OutputError::Duplicate {
+                path: w.path.clone(),
+            });
+        }
+    }
+    Ok(writes)
+}
+
+/// Writes every planned file as one transaction ([`transaction::commit`]).
+pub fn write_all(writes: &[FileWrite]) -> Result<Vec<Written>, OutputError> {
+    commit(writes)
+}
+
+/// The one file `-o -` sends to standard output: the program's only file, or its only changed
+/// file (a KRL pair whose `.src` is unchanged).
+pub fn stream_output(programs: &[ProgramResult]) -> Result<&[u8], OutputError> {
+    if programs.len() > 1 {
+        return Err(OutputError::OneOutputManyPrograms {
+            count: programs.len(),
+        });
+    }
+    let files: Vec<_> = programs.iter().flat_map(|p| &p.files).collect();
+    let changed: Vec<_> = files.iter().copied().filter(|f| f.changed()).collect();
+    match (files.as_slice(), changed.as_slice()) {
+        ([only], _) | (_, [only]) => Ok(&only.output),
+        _ => Err(OutputError::OneStreamManyFiles {
+            count: changed.len(),
+        }),
+    }
+}
+
+/// Writes `bytes` to `path` alone, as a transaction of one file (profiles, frame tables,
+/// plots): a temporary beside it and a rename, the old file's mode kept, a symlink followed.
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    commit(&[FileWrite {
+        input: path.to_owned(),
+        path: path.to_owned(),
+        bytes: bytes.to_vec(),
+        expected: None,
+        backup: false,
+    }])
+    .map(drop)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transform::FileResult;
+
+    fn result(path: &str, old: &str, new: &str) -> ProgramResult {
+        ProgramResult {
+            files: vec![FileResult {
+                path: PathBuf::from(path),
+                original: old.as_bytes().to_vec(),
+                output: new.as_bytes().to_vec(),
+                refusals: Vec::new(),
+                changes: Vec::new(),
+            }],
+        }
+    }
+
+    #[test]
+    fn krl_pair_with_o_keeps_each_extension() {
+        let mut r = result("in/a.src", "x", "y");
+        r.files.push(result("in/a.dat", "x", "y").files.remove(0));
+        let w = plan_writes(&[r], &Destination::File(PathBuf::from("out/b.src"))).unwrap();
+        assert_eq!(w[0].path, Path::new("out/b.src"));
+        assert_eq!(w[1].path, Path::new("out/b.dat"));
+    }
+
+    #[test]
+    fn a_mirrored_config_dat_keeps_its_name_beside_the_output() {
+        let mut r = result("in/a.src", "x", "y");
+        r.files.push(result("in/a.dat", "x", "y").files.remove(0));
+        r.files
+            .push(result("cfg/$config.dat", "x", "y").files.remove(0));
+        let w = plan_writes(&[r], &Destination::File(PathBuf::from("out/b.src"))).unwrap();
+        assert_eq!(w[2].path, Path::new("out/$config.dat"));
+    }
+
+    #[test]
+    fn in_place_writes_changed_files_with_their_original_for_the_backup() {
+        let plan = plan_writes(
+            &[result("a.mod", "x", "y"), result("b.mod", "z", "z")],
+            &Destination::InPlace { backup: true },
+        )
+        .unwrap();
+        assert_eq!(plan.len(), 1);
+        assert_eq!(plan[0].path, Path::new("a.mod"));
+        assert_eq!(plan[0].expected.as_deref(), Some(&b"x"[..]));
+        assert!(plan[0].backup);
+    }
+
+    #[test]
+    fn refuses_to_overwrite_an_input() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("a.mod");
+        std::fs::write(&input, "x").unwrap();
+        let r = result(input.to_str().unwrap(), "x", "y");
+        let e = plan_writes(std::slice::from_ref(&r), &Destination::File(input.clone()));
+        assert!(matches!(e, Err(OutputError::WouldOverwriteInput { .. })));
+        let e = plan_writes(&[r], &Destination::Dir(dir.path().to_owned()));
+        assert!(matches!(e, Err(OutputError::WouldOverwriteInput { .. })));
+    }
+
+    #[test]
+    fn same_names_in_different_task_folders_do_not_collide_under_out_dir() {
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path().join("backup");
+        for task in ["T_ROB1", "T_ROB2"] {
+            std::fs::create_dir_all(root.join(task)).unwrap();
+        }
+        let a = root.join("T_ROB1/MainModule.mod");
+        let b = root.join("T_ROB2/MainModule.mod");
+        let programs = [
+            result(a.to_str().unwrap(), "x", "y"),
+            result(b.to_str().unwrap(), "x", "z"),
+        ];
+        let out = Destination::Dir(dir.path().join("out"));
+        // Without the input folder, the two collide (what happened before).
+        assert!(matches!(
+            plan_writes(&programs, &out),
+            Err(OutputError::Duplicate { .. })
+        ));
+        let w = plan(&programs, &out, &Roots::from_inputs(&[root])).unwrap();
+        assert_eq!(w[0].path, dir.path().join("out/T_ROB1/MainModule.mod"));
+        assert_eq!(w[1].path, dir.path().join("out/T_ROB2/MainModule.mod"));
+    }
+
+    #[test]
+    fn io_errors_name_the_os_error_once() {
+        let e = OutputError::Io {
+            path: PathBuf::from("a"),
+            error: std::io::Error::from_raw_os_error(28),
+        };
+        // Printed with its chain (as the command line does), the OS error must not repeat.
+        assert!(std::error::Error::source(&e).is_none());
+        assert_eq!(e.to_string().matches("os error 28").count(), 1, "{e}");
+    }
+}

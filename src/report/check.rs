@@ -1,0 +1,146 @@
+//! What `check` reports: per file the parser's diagnostics, a failed round trip and the lints
+//! of the position model, and the batch's one-line summary.
+
+use std::fmt;
+
+use crate::position::{CartesianFields, ParsedFile, Program};
+use crate::syntax::{Diagnostic, Severity, Span};
+
+/// How far `|q|` may stray from 1 before `check` calls a quaternion non-normalised. Six written
+/// decimals give about 1e-6; RobotStudio's own output stays well inside 1e-4.
+pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-4;
+
+/// Everything `check` says about a file: the parser's diagnostics, a failed round trip, and the
+/// lints of the model (non-normalised quaternions, a target used with two work objects).
+/// Sorted by position.
+pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
+    let mut out = file.diagnostics.clone();
+    if !file.round_trip {
+        out.push(
+            Diagnostic::error(
+                Span::new(0, 0),
+                "printing the parsed file does not give back its bytes",
+            )
+            .with_hint("this is a trackfix bug: please report it with the file attached"),
+        );
+    }
+    for p in &file.positions {
+        if let Some(q) = p
+            .cartesian
+            .as_ref()
+            .and_then(CartesianFields::written_quaternion)
+        {
+            let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if norm == 0.0 {
+                // Unused slots of PERS robtarget arrays are written this way by controllers:
+                // worth knowing, not a defect of the program.
+                out.push(
+                    Diagnostic::note(
+                        p.span,
+                        format!(
+                            "`{}` has the quaternion [0,0,0,0]: an unset slot",
+                            p.label()
+                        ),
+                    )
+                    .with_hint("transforms leave it as written and report it"),
+                );
+            } else if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
+                out.push(
+                    Diagnostic::warning(
+                        p.span,
+                        format!(
+                            "quaternion of `{}` is not normalised (|q| = {norm:.6})",
+                            p.label()
+                        ),
+                    )
+                    .with_hint(
+                        "the controller rejects it; `trackfix correct` writes normalised quaternions",
+                    ),
+                );
+            }
+        }
+        if !p.usage.other_wobjs.is_empty() {
+            let already = file.diagnostics.iter().any(|d| {
+                d.span.start <= p.span.start
+                    && p.span.start < d.span.end.max(d.span.start + 1)
+                    && d.message.contains("work object")
+            });
+            if !already {
+                let what = file.language.dialect().vocabulary().frames;
+                let mut all = vec![p.usage.wobj.clone().unwrap_or_default()];
+                all.extend(p.usage.other_wobjs.iter().cloned());
+                out.push(
+                    Diagnostic::warning(
+                        p.span,
+                        format!("`{}` is used with two {what}: {}", p.label(), all.join(", ")),
+                    )
+                    .with_hint("a transform cannot move one target for two frames; declare one target per frame"),
+                );
+            }
+        }
+    }
+    out.sort_by_key(|d| (d.span.start, d.span.end));
+    out
+}
+
+/// The findings of one file: its diagnostics of at least warning severity.
+pub fn findings(file: &ParsedFile) -> Vec<Diagnostic> {
+    lints(file)
+        .into_iter()
+        .filter(|d| d.severity >= Severity::Warning)
+        .collect()
+}
+
+/// The counts `check` ends with.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct CheckSummary {
+    pub files: usize,
+    pub round_trips: usize,
+    pub findings: usize,
+    pub files_with_findings: usize,
+    /// Files skipped with a note (binary, RobotStudio XML).
+    pub skipped: usize,
+    /// Files that could not be read.
+    pub unreadable: usize,
+}
+
+impl CheckSummary {
+    /// Counts one program's files with their findings.
+    pub fn add(&mut self, program: &Program) {
+        for file in &program.files {
+            self.add_file(file, findings(file).len());
+        }
+    }
+
+    /// Counts one file with `findings` findings.
+    pub fn add_file(&mut self, file: &ParsedFile, findings: usize) {
+        self.files += 1;
+        self.round_trips += usize::from(file.round_trip);
+        self.findings += findings;
+        self.files_with_findings += usize::from(findings > 0);
+    }
+}
+
+/// `, 2 skipped`, or nothing for zero.
+pub(crate) fn count_suffix(n: usize, what: &str) -> String {
+    if n == 0 {
+        String::new()
+    } else {
+        format!(", {n} {what}")
+    }
+}
+
+impl fmt::Display for CheckSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "checked {} files: {} round-trip byte for byte, {} findings in {} files{}{}",
+            self.files,
+            self.round_trips,
+            self.findings,
+            self.files_with_findings,
+            count_suffix(self.skipped, "skipped"),
+            count_suffix(self.unreadable, "unreadable")
+        )
+    }
+}

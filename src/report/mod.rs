@@ -1,0 +1,14 @@
+//! Every human and machine output model: what `inspect`, `check` and the transforms report.
+//! Each model is data (serde for JSON) with the text renderings beside it; the CLI only
+//! chooses the format and where it goes.
+
+pub mod check;
+pub mod inspect;
+pub mod transform;
+
+pub use check::{CheckSummary, QUATERNION_NORM_TOLERANCE, findings, lints};
+pub use inspect::{
+    FileReport, FrameColumn, FrameRow, InspectOptions, InspectReport, Message, PoseColumns,
+    PositionRow, inspect_file, inspect_program, render_csv, render_table,
+};
+pub use transform::{FileSummary, would_change};

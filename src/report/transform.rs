@@ -1,0 +1,144 @@
+//! What a transform reports per file after writing: how many targets changed, the largest
+//! change, the skid range they were at, what was refused, and where the result went.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use crate::transform::FileResult;
+
+/// The summary line of one transformed file.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct FileSummary {
+    pub path: PathBuf,
+    /// Targets whose text changed.
+    pub changed: usize,
+    /// Largest translation (mm) and rotation (degrees) change of any target.
+    pub largest_mm: f64,
+    pub largest_deg: f64,
+    /// Smallest and largest skid of the changed targets.
+    pub skid_range: Option<(f64, f64)>,
+    pub refused: usize,
+    /// Where the file was written; `None` if it was not.
+    pub written_to: Option<PathBuf>,
+    /// The file actually replaced when the destination is a symbolic link.
+    pub link_target: Option<PathBuf>,
+    /// The backup of the file it replaced.
+    pub backup: Option<PathBuf>,
+    /// The change is a move (a mirror moves points by metres), not a correction.
+    pub is_move: bool,
+}
+
+impl FileSummary {
+    /// The summary of `file`, not yet written anywhere.
+    pub fn new(file: &FileResult, is_move: bool) -> FileSummary {
+        let (largest_mm, largest_deg) = file.largest_change();
+        FileSummary {
+            path: file.path.clone(),
+            changed: file.changes.len(),
+            largest_mm,
+            largest_deg,
+            skid_range: file.skid_range(),
+            refused: file.refusals.len(),
+            written_to: None,
+            link_target: None,
+            backup: None,
+            is_move,
+        }
+    }
+}
+
+fn mm(v: f64) -> String {
+    format!("{v:.3}")
+}
+
+impl fmt::Display for FileSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mut target = String::new();
+        if let Some(p) = &self.written_to {
+            target = format!(" → {}", p.display());
+            if let Some(r) = &self.link_target {
+                target.push_str(&format!(" (the link's target {})", r.display()));
+            }
+            if let Some(b) = &self.backup {
+                target.push_str(&format!(", backup {}", b.display()));
+            }
+        }
+        let refused = match self.refused {
+            0 => String::new(),
+            n => format!(", {n} refused (left unchanged)"),
+        };
+        if self.changed == 0 {
+            return write!(f, "{}: unchanged{refused}{target}", self.path.display());
+        }
+        let skid = match self.skid_range {
+            Some((lo, hi)) => format!(", skid {}…{} mm", mm(lo), mm(hi)),
+            None => String::new(),
+        };
+        let largest = if self.is_move {
+            "largest move"
+        } else {
+            "largest correction"
+        };
+        write!(
+            f,
+            "{}: {} target(s) changed, {largest} {} mm / {:.4}°{skid}{refused}{target}",
+            self.path.display(),
+            self.changed,
+            mm(self.largest_mm),
+            self.largest_deg,
+        )
+    }
+}
+
+/// The line `--check` prints for a file that would change.
+pub fn would_change(file: &FileResult) -> Option<String> {
+    file.changed().then(|| {
+        format!(
+            "{}: {} target(s) would change",
+            file.path.display(),
+            file.changes.len()
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transform::TargetChange;
+
+    fn result(changes: Vec<TargetChange>) -> FileResult {
+        FileResult {
+            path: PathBuf::from("a.mod"),
+            original: b"x".to_vec(),
+            output: b"y".to_vec(),
+            refusals: Vec::new(),
+            changes,
+        }
+    }
+
+    #[test]
+    fn summary_lines_say_count_largest_change_and_skid_range() {
+        let c = |mm, deg, skid| TargetChange { mm, deg, skid };
+        let f = result(vec![
+            c(0.25, 0.001, Some(3000.0)),
+            c(1.5, 0.02, Some(500.0)),
+        ]);
+        let mut s = FileSummary::new(&f, false);
+        s.written_to = Some(PathBuf::from("a.mod"));
+        s.backup = Some(PathBuf::from("a.mod.orig"));
+        assert_eq!(
+            s.to_string(),
+            "a.mod: 2 target(s) changed, largest correction 1.500 mm / 0.0200°, skid 500.000…3000.000 mm → a.mod, backup a.mod.orig"
+        );
+        let moved = FileSummary::new(&f, true).to_string();
+        assert!(moved.contains("largest move 1.500 mm"), "{moved}");
+        assert_eq!(
+            FileSummary::new(&result(Vec::new()), false).to_string(),
+            "a.mod: unchanged"
+        );
+        assert_eq!(
+            would_change(&f).as_deref(),
+            Some("a.mod: 2 target(s) would change")
+        );
+    }
+}

@@ -1,0 +1,213 @@
+//! Errors of the track model, by cause. Each carries its data; `Display` renders it (a located
+//! input error as `file:line:col: error: …` with the line, a caret and what to do, through
+//! [`Diagnostic::render`]).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use super::spline::SplineError;
+use crate::geometry::rigid_fit::RigidFitError;
+use crate::syntax::{Diagnostic, LineIndex, Span};
+
+/// An error at a place in an input file (a CSV table, a profile).
+#[derive(Clone, Debug)]
+pub struct LocatedError {
+    path: PathBuf,
+    source: Arc<[u8]>,
+    diagnostic: Diagnostic,
+    /// The CSV column the error is in, if any.
+    column_name: Option<String>,
+    /// False for a file that is not what it was given as (`/etc/passwd` as a profile): its
+    /// text is not echoed.
+    quote: bool,
+}
+
+impl LocatedError {
+    /// An error at `span` of `source` with what to do (`hint`, may be empty).
+    pub fn new(
+        path: &Path,
+        source: Arc<[u8]>,
+        span: Span,
+        message: impl Into<String>,
+        hint: &str,
+    ) -> LocatedError {
+        let mut diagnostic = Diagnostic::error(span, message);
+        if !hint.is_empty() {
+            diagnostic = diagnostic.with_hint(hint);
+        }
+        LocatedError {
+            path: path.to_path_buf(),
+            source,
+            diagnostic,
+            column_name: None,
+            quote: true,
+        }
+    }
+
+    /// The same error without the file's text: for a file that is not what it claims to be.
+    pub fn without_quote(mut self) -> LocatedError {
+        self.quote = false;
+        self
+    }
+
+    /// The same error, in the CSV column `name`.
+    pub fn in_column(mut self, name: &str) -> LocatedError {
+        self.column_name = Some(name.to_owned());
+        self
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// 1-based line and column (in bytes) of the error.
+    pub fn line_col(&self) -> (usize, usize) {
+        LineIndex::new(&self.source).line_col(self.diagnostic.span.start)
+    }
+
+    pub fn message(&self) -> &str {
+        &self.diagnostic.message
+    }
+
+    pub fn hint(&self) -> Option<&str> {
+        self.diagnostic.hint.as_deref()
+    }
+
+    /// The CSV column the error is in.
+    pub fn column_name(&self) -> Option<&str> {
+        self.column_name.as_deref()
+    }
+
+    pub fn diagnostic(&self) -> &Diagnostic {
+        &self.diagnostic
+    }
+}
+
+impl fmt::Display for LocatedError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let path = self.path.display().to_string();
+        if self.quote {
+            let index = LineIndex::new(&self.source);
+            let text = self.diagnostic.render(&path, &self.source, &index);
+            return f.write_str(text.trim_end());
+        }
+        let (line, col) = self.line_col();
+        write!(f, "{path}:{line}:{col}: error: {}", self.diagnostic.message)?;
+        if let Some(hint) = &self.diagnostic.hint {
+            write!(f, "\n  = help: {hint}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for LocatedError {}
+
+/// Why the points measured at one skid position give no trustworthy base frame.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SkidProblem {
+    #[error("{count} point(s) measured, a base frame needs at least 3 non-collinear points")]
+    TooFewPoints { count: usize },
+    #[error("{0}")]
+    Degenerate(RigidFitError),
+    /// The points lie too close to a line: the rotation about it is barely determined.
+    #[error(
+        "the points are nearly collinear: the fit's condition number is {condition:.0} (limit {limit:.0}), so noise turns into a large rotation about their line"
+    )]
+    IllConditioned { condition: f64, limit: f64 },
+    /// The tracker points are spread `ratio` times as wide as the robot points.
+    #[error(
+        "the tracker points are spread {ratio:.6e} times as wide as the robot points (a rigid fit needs 1 within {tolerance}): the two point sets are in different units or do not belong together"
+    )]
+    Scale { ratio: f64, tolerance: f64 },
+    /// The fit's normal matrix is singular: some motion of the frame moves no point.
+    #[error("the points do not fix all six degrees of freedom of the frame")]
+    Unconstrained,
+}
+
+/// Why sampling frames give no straight nominal track.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum NominalProblem {
+    #[error("{count} sampling frame(s), a track model needs at least 2")]
+    TooFewFrames { count: usize },
+    #[error("the sampling frames do not move with the skid: no track direction")]
+    NoDirection,
+    #[error("the mean of the frame rotations is degenerate")]
+    DegenerateRotation,
+    /// The base moves `gear_factor` mm per commanded mm: not a track with a wrong gear ratio
+    /// but frames in other units or of other skid positions.
+    #[error(
+        "the base moves {gear_factor:.6e} mm per commanded mm of skid (a track is within {tolerance} of 1): the frames are in other units than the skid, or the skid column is wrong"
+    )]
+    ImplausibleGear { gear_factor: f64, tolerance: f64 },
+}
+
+/// Everything that can go wrong in the track model, by cause.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum TrackError {
+    /// Writing an output file failed (nothing was left half-written).
+    #[error(transparent)]
+    Write(#[from] crate::output::OutputError),
+    /// `D(s)` asked outside `[s_0, s_N]` with `extrapolate = "error"`.
+    #[error(
+        "skid {skid} mm is outside the profile's range [{min}, {max}] mm (measure further, or set extrapolate = \"clamp\" or \"linear\" in the profile)"
+    )]
+    OutOfRange { skid: f64, min: f64, max: f64 },
+    /// A file could not be read or written.
+    #[error("{}: {error}", path.display())]
+    Io {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    /// An input file (CSV table, profile) that is malformed at a known place.
+    #[error("{0}")]
+    Input(Box<LocatedError>),
+    /// Knots given in code that cannot carry a spline (too few, not increasing, not finite).
+    #[error("{context}: {error}")]
+    Knots { context: String, error: SplineError },
+    /// The measurements of one skid position give no trustworthy base frame.
+    #[error("skid {skid} mm: {problem}")]
+    Skid { skid: f64, problem: SkidProblem },
+    /// A point to leave out that no measurement row has.
+    #[error("no point {point} at skid {skid} mm to exclude")]
+    UnknownExclusion { skid: f64, point: u32 },
+    /// The sampling frames give no straight nominal.
+    #[error("{0}")]
+    Nominal(NominalProblem),
+    /// A noise level that is not a non-negative number.
+    #[error("noise level {sigma} mm: give a non-negative number")]
+    NoiseLevel { sigma: f64 },
+    /// The fits leave no degree of freedom to estimate the noise from.
+    #[error(
+        "{points} point(s) leave no residual to estimate the noise from: give the noise level, or measure more points"
+    )]
+    NoNoiseEstimate { points: usize },
+    /// Knot uncertainties given in code that do not match the profile's knots one to one.
+    #[error("{given} knot uncertainties for {knots} knots")]
+    KnotUncertaintyCount { given: usize, knots: usize },
+    /// A scan the spectrum cannot use (too short, positions not increasing).
+    #[error("{0}")]
+    Scan(String),
+    /// A figure or file could not be produced.
+    #[error("{0}")]
+    Output(String),
+}
+
+impl From<LocatedError> for TrackError {
+    fn from(e: LocatedError) -> TrackError {
+        TrackError::Input(Box::new(e))
+    }
+}
+
+impl TrackError {
+    /// The located input error, if this is one.
+    pub fn located(&self) -> Option<&LocatedError> {
+        match self {
+            TrackError::Input(e) => Some(e),
+            _ => None,
+        }
+    }
+}

@@ -1,0 +1,122 @@
+//! The one loop every transform runs: per target refuse → skid → frame → new pose → edits →
+//! change record, then the program's offset calls and frame declarations. A transform is a
+//! [`TargetRule`]: it says what it does at each step and nothing else.
+
+use crate::geometry::Pose;
+use crate::position::{FrameDecl, OffsetCall, ParsedFile, Position, Program};
+use crate::syntax::Edit;
+
+use super::edits::{ProgramEdits, TargetChange};
+use super::policy::{Why, common_refusal, joint_target};
+use super::refusal::Refusal;
+use super::rewrite::{OrientationHint, pose_change, pose_edits};
+
+/// Where a rule is looking: the program (for frames declared in other files) and the file.
+#[derive(Clone, Copy)]
+pub(crate) struct Scope<'a> {
+    pub program: &'a Program,
+    pub file: &'a ParsedFile,
+}
+
+/// The outcome for one target: its edits and change record, nothing to do, or a refusal.
+pub(crate) type Step = Result<Option<(Vec<Edit>, TargetChange)>, Box<Refusal>>;
+
+/// What one transform does to each target, offset call and frame declaration.
+pub(crate) trait TargetRule {
+    /// What the rule needs from a target's work object (its pose, a mirror plane in it, …).
+    type Frame;
+
+    /// A joint target: refused unless the rule changes joints.
+    fn joint(&self, scope: Scope, p: &Position) -> Step {
+        Err(joint_target(p).at(scope.file, p))
+    }
+
+    /// The checks before a Cartesian target is touched (DESIGN.md §4).
+    fn refusal(&self, scope: Scope, p: &Position) -> Option<Why> {
+        common_refusal(scope.file, p)
+    }
+
+    /// The target's skid, for the change record; a refusal if the rule needs one it lacks.
+    fn skid(&self, scope: Scope, p: &Position) -> Result<Option<f64>, Why>;
+
+    /// The target's work object as the rule needs it.
+    fn frame(&self, scope: Scope, p: &Position) -> Result<Self::Frame, Why>;
+
+    /// The new pose of a target at `t`, and how to write its orientation.
+    fn new_pose(
+        &self,
+        p: &Position,
+        frame: &Self::Frame,
+        skid: Option<f64>,
+        t: &Pose,
+    ) -> Result<(Pose, OrientationHint), Why>;
+
+    /// Edits beyond the pose (configuration, skid axes).
+    fn more_edits(&self, _scope: Scope, _p: &Position) -> Vec<Edit> {
+        Vec::new()
+    }
+
+    /// The edits of an `Offs`/`RelTool` call.
+    fn offset(&self, _scope: Scope, _call: &OffsetCall) -> Result<Vec<Edit>, Box<Refusal>> {
+        Ok(Vec::new())
+    }
+
+    /// The edits of a work object, base or tool declaration.
+    fn declaration(&self, _scope: Scope, _decl: &FrameDecl) -> Vec<Edit> {
+        Vec::new()
+    }
+}
+
+/// Runs `rule` over every target, offset call and frame declaration of `program`.
+pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramEdits {
+    let mut out = ProgramEdits::for_program(program);
+    for (file, fe) in program.files.iter().zip(out.files.iter_mut()) {
+        let scope = Scope { program, file };
+        for p in &file.positions {
+            let step = if p.kind.is_cartesian() {
+                cartesian(rule, scope, p)
+            } else {
+                rule.joint(scope, p)
+            };
+            match step {
+                Ok(Some((edits, change))) if !edits.is_empty() => {
+                    fe.edits.extend(edits);
+                    fe.changes.push(change);
+                }
+                Ok(_) => {}
+                Err(r) => fe.refusals.push(*r),
+            }
+        }
+        for call in &file.offsets {
+            match rule.offset(scope, call) {
+                Ok(edits) => fe.edits.extend(edits),
+                Err(r) => fe.refusals.push(*r),
+            }
+        }
+        for decl in &file.frames {
+            fe.edits.extend(rule.declaration(scope, decl));
+        }
+    }
+    out
+}
+
+fn cartesian<R: TargetRule>(rule: &R, scope: Scope, p: &Position) -> Step {
+    let refuse = |why: Why| why.at(scope.file, p);
+    if let Some(why) = rule.refusal(scope, p) {
+        return Err(refuse(why));
+    }
+    let skid = rule.skid(scope, p).map_err(refuse)?;
+    let frame = rule.frame(scope, p).map_err(refuse)?;
+    // `refusal` has refused targets whose fields are not all numbers.
+    let Some(fields) = p.cartesian.as_ref() else {
+        return Ok(None);
+    };
+    let Some(t) = fields.pose() else {
+        return Ok(None);
+    };
+    let (new, hint) = rule.new_pose(p, &frame, skid, &t).map_err(refuse)?;
+    let mut edits = pose_edits(fields, &new, hint);
+    edits.extend(rule.more_edits(scope, p));
+    let (mm, deg) = pose_change(&t, &new);
+    Ok(Some((edits, TargetChange { mm, deg, skid })))
+}

@@ -1,0 +1,209 @@
+//! The refusal and frame-resolution rules every transform shares (DESIGN.md §4): which targets
+//! no transform touches, and how a target's work object (or KRL base) becomes a pose in world.
+
+use std::collections::BTreeMap;
+
+use crate::geometry::Pose;
+use crate::position::{FrameKind, ParsedFile, Position, Program};
+
+use super::refusal::{Refusal, RefusalKind, Remedy};
+
+/// Coordinates beyond this (mm) are not a target in a robot cell.
+const PLAUSIBLE_MM: f64 = 1e6;
+
+/// Why a target is refused, before it is located in a file.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Why {
+    pub kind: RefusalKind,
+    pub message: String,
+    /// What to do, in words.
+    pub hint: String,
+    /// The transform setting that gets past it, if any.
+    pub remedy: Option<Remedy>,
+}
+
+impl Why {
+    pub(crate) fn new(kind: RefusalKind, message: String, hint: impl Into<String>) -> Why {
+        Why {
+            kind,
+            message,
+            hint: hint.into(),
+            remedy: None,
+        }
+    }
+
+    pub(crate) fn with_remedy(mut self, remedy: Remedy) -> Why {
+        self.remedy = Some(remedy);
+        self
+    }
+
+    /// The refusal of `p` in `file` for this reason.
+    pub(crate) fn at(self, file: &ParsedFile, p: &Position) -> Box<Refusal> {
+        Box::new(Refusal::new(
+            file,
+            p.span,
+            p.label(),
+            self.kind,
+            self.message,
+            self.hint,
+            self.remedy,
+        ))
+    }
+}
+
+/// Names that mean "world" when a program does not declare them, in any dialect.
+fn is_world(name: &str) -> bool {
+    let n = name.to_ascii_lowercase();
+    crate::dialect::any(|d| d.vocabulary().world_frames.contains(&n.as_str()))
+}
+
+/// The work object / base `name` in world: the cell's override, else the program's
+/// declaration, else world for `wobj0`.
+pub(crate) fn resolve_frame(
+    program: &Program,
+    overrides: &BTreeMap<String, Pose>,
+    name: &str,
+) -> Result<Pose, Why> {
+    let lower = name.to_ascii_lowercase();
+    if let Some(p) = overrides.get(&lower) {
+        return Ok(*p);
+    }
+    let decl = program.files.iter().flat_map(|f| &f.frames).find(|d| {
+        matches!(d.kind, FrameKind::WorkObject | FrameKind::Base)
+            && d.name.eq_ignore_ascii_case(name)
+    });
+    match decl {
+        Some(d) if d.ufprog == Some(false) => Err(Why::new(
+            RefusalKind::MovingWorkObject,
+            format!("work object `{name}` is moved by a mechanical unit (ufprog FALSE)"),
+            "its position depends on that unit, not on the track: correct such targets by hand",
+        )),
+        Some(d) if d.robhold == Some(true) => Err(Why::new(
+            RefusalKind::StationaryTool,
+            format!("work object `{name}` is held by the robot (robhold TRUE: stationary tool)"),
+            "a stationary-tool target moves with the work piece, not the track: correct it by hand",
+        )),
+        Some(d) => d.pose().ok_or_else(|| {
+            Why::new(
+                RefusalKind::UnresolvedWorkObject,
+                format!("work object `{name}` has fields that are not numbers"),
+                format!(
+                    "give `{name}` as {{x,y,z,rx,ry,rz}} under [robot.NAME.wobj] in the cell file"
+                ),
+            )
+        }),
+        None if is_world(name) => Ok(Pose::identity()),
+        None => Err(Why::new(
+            RefusalKind::UnresolvedWorkObject,
+            format!("work object `{name}` is not declared in the program"),
+            format!("add `{name}` under [robot.NAME.wobj] in the cell file"),
+        )),
+    }
+}
+
+/// The work object (or KRL base) a target is used with: its first use, else `default` for a
+/// declared target no motion uses.
+pub(crate) fn wobj_of(p: &Position, default: Option<&str>) -> Result<String, Why> {
+    let what = describe(p);
+    match (&p.usage.wobj, p.usage.lines.is_empty()) {
+        (Some(w), _) => Ok(w.clone()),
+        (None, true) => match default {
+            Some(d) => Ok(d.to_owned()),
+            None => Err(Why::new(
+                RefusalKind::UnresolvedWorkObject,
+                format!("{what} is not used by any motion: its work object is unknown"),
+                "name the work object of targets no motion uses",
+            )
+            .with_remedy(Remedy::DefaultWorkObject)),
+        },
+        (None, false) => Err(Why::new(
+            RefusalKind::UnresolvedWorkObject,
+            format!("{what} is used with a work object that cannot be resolved"),
+            "name the work object explicitly in the motion instruction",
+        )),
+    }
+}
+
+/// The pose in world of the work object `p` is used with (`frames` override the program's).
+pub(crate) fn work_object_of(
+    program: &Program,
+    p: &Position,
+    frames: &BTreeMap<String, Pose>,
+    default: Option<&str>,
+) -> Result<Pose, Why> {
+    let name = wobj_of(p, default)?;
+    resolve_frame(program, frames, &name).map_err(|why| Why {
+        message: format!("{}: {}", describe(p), why.message),
+        ..why
+    })
+}
+
+/// `robtarget \`p10\`` for a declared target, `inline robtarget` for a literal in an instruction.
+pub(crate) fn describe(p: &Position) -> String {
+    match &p.name {
+        Some(n) => format!("{} `{n}`", p.kind.as_str()),
+        None => format!("inline {}", p.kind.as_str()),
+    }
+}
+
+/// The refusal of every transform for a joint target it does not change.
+pub(crate) fn joint_target(p: &Position) -> Why {
+    Why::new(
+        RefusalKind::JointTarget,
+        format!("{} is a joint target: it is not changed", describe(p)),
+        "re-teach it or convert it to a Cartesian target",
+    )
+}
+
+/// Checks that every transform makes before touching a Cartesian target; `None` = go ahead.
+pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
+    let what = describe(p);
+    let refuse = |kind, msg: String, hint: &str| Some(Why::new(kind, msg, hint));
+    if !p.kind.is_cartesian() {
+        return Some(joint_target(p));
+    }
+    let written_q = p.cartesian.as_ref().and_then(|c| c.written_quaternion());
+    if written_q.is_some_and(|q| q.iter().all(|v| *v == 0.0)) {
+        return refuse(
+            RefusalKind::ZeroQuaternion,
+            format!("{what} has the quaternion [0,0,0,0]: an unset slot, not an orientation"),
+            "teach the target (or leave the slot unused)",
+        );
+    }
+    if p.cartesian.as_ref().and_then(|c| c.pose()).is_none() {
+        return refuse(
+            RefusalKind::Expression,
+            format!("{what} has a position or orientation field that is not a number"),
+            "write the fields as numeric literals",
+        );
+    }
+    let far = p
+        .cartesian
+        .as_ref()
+        .and_then(|c| c.translation())
+        .is_some_and(|t| t.iter().any(|v| v.abs() > PLAUSIBLE_MM));
+    if far {
+        return refuse(
+            RefusalKind::Implausible,
+            format!("{what} lies more than 1 km from its work object's origin"),
+            "check the coordinates (mm)",
+        );
+    }
+    if p.usage.stationary_tool {
+        let setting = file.language.dialect().vocabulary().stationary_tool;
+        return refuse(
+            RefusalKind::StationaryTool,
+            format!("{what} is a stationary-tool point ({setting})"),
+            "it moves with the work piece, not the track: correct it by hand",
+        );
+    }
+    if let Some(other) = p.usage.other_wobjs.first() {
+        let first = p.usage.wobj.as_deref().unwrap_or("?");
+        return refuse(
+            RefusalKind::TwoWorkObjects,
+            format!("{what} is used with two work objects (`{first}` and `{other}`)"),
+            "split it into one target per work object",
+        );
+    }
+    None
+}

@@ -1,0 +1,825 @@
+//! Integration tests: the OPW kinematics, ABB/KUKA configurations, `reach`, joint-target
+//! correction and mirroring at the kinematics level.
+
+use std::path::Path;
+
+use nalgebra::{Matrix3, Matrix4, Rotation3, Vector3};
+use proptest::prelude::*;
+
+use trackfix::geometry::{Pose, abb_quat, pose_xyz_deg, wrap_deg};
+use trackfix::kinematics::reach::{ReachOptions, ReachStatus, reach_program};
+use trackfix::kinematics::{
+    ConfigValue, Joints, KinematicRefusal, Kinematics, MODELS, OpwGeometry, abb, check_target,
+    joint_target_correction, kuka, mirror_config_by_ik, mirrored_joints, model,
+};
+use trackfix::position::{Language, Program};
+use trackfix::transform::Cell;
+
+use crate::support::trackfix;
+
+fn irb2400() -> Kinematics {
+    model("abb_irb2400_10").expect("bundled").kinematics()
+}
+
+/// An arm with a sideways offset `b`, which no bundled model has, so the IK's `b` terms are
+/// exercised too.
+fn offset_arm() -> Kinematics {
+    Kinematics {
+        geometry: OpwGeometry {
+            a1: 150.0,
+            a2: -110.0,
+            b: 35.0,
+            c1: 500.0,
+            c2: 800.0,
+            c3: 900.0,
+            c4: 120.0,
+        },
+        offsets: [10.0, -90.0, 5.0, 0.0, 0.0, 20.0],
+        signs: [-1.0, 1.0, 1.0, -1.0, 1.0, -1.0],
+        limits: [[-185.0, 185.0]; 6],
+    }
+}
+
+fn all_arms() -> Vec<(String, Kinematics)> {
+    let mut v: Vec<(String, Kinematics)> = MODELS
+        .iter()
+        .map(|m| (m.name.to_owned(), m.kinematics()))
+        .collect();
+    v.push(("offset_arm".to_owned(), offset_arm()));
+    v
+}
+
+// ---- an independent forward kinematics: a product of elementary homogeneous transforms ----
+
+fn trans(x: f64, y: f64, z: f64) -> Matrix4<f64> {
+    let mut m = Matrix4::identity();
+    m[(0, 3)] = x;
+    m[(1, 3)] = y;
+    m[(2, 3)] = z;
+    m
+}
+
+fn rot(axis: usize, a: f64) -> Matrix4<f64> {
+    let (s, c) = a.sin_cos();
+    let mut m = Matrix4::identity();
+    let (i, j) = match axis {
+        0 => (1, 2),
+        1 => (2, 0),
+        _ => (0, 1),
+    };
+    m[(i, i)] = c;
+    m[(j, j)] = c;
+    m[(i, j)] = -s;
+    m[(j, i)] = s;
+    m
+}
+
+/// The OPW chain joint by joint: axis 1 at the base origin, axis 2 at (a1, b, c1) in the
+/// axis-1 frame, axis 3 c2 above it, the wrist centre at (a2, 0, c3) from axis 3, the flange c4
+/// further along the wrist's z.
+fn chain_fk(k: &Kinematics, j: &Joints) -> Matrix4<f64> {
+    let g = k.geometry;
+    let q: Vec<f64> = (0..6)
+        .map(|i| (k.signs[i] * j[i] - k.offsets[i]).to_radians())
+        .collect();
+    rot(2, q[0])
+        * trans(g.a1, g.b, g.c1)
+        * rot(1, q[1])
+        * trans(0.0, 0.0, g.c2)
+        * rot(1, q[2])
+        * trans(g.a2, 0.0, g.c3)
+        * rot(2, q[3])
+        * rot(1, q[4])
+        * rot(2, q[5])
+        * trans(0.0, 0.0, g.c4)
+}
+
+fn matrix(p: &Pose) -> Matrix4<f64> {
+    p.to_homogeneous()
+}
+
+fn max_abs(m: &Matrix4<f64>) -> f64 {
+    m.iter().fold(0.0, |a, v| a.max(v.abs()))
+}
+
+fn pose_error(a: &Pose, b: &Pose) -> (f64, f64) {
+    (
+        (a.translation.vector - b.translation.vector).norm(),
+        a.rotation.angle_to(&b.rotation),
+    )
+}
+
+fn joints_close(a: &Joints, b: &Joints, tol: f64) -> bool {
+    a.iter().zip(b).all(|(x, y)| wrap_deg(x - y).abs() < tol)
+}
+
+#[test]
+#[allow(clippy::approx_constant)] // the published quaternion as printed, six decimals
+fn irb2400_home_pose_is_the_published_one() {
+    let k = irb2400();
+    let f = k.forward(&[0.0; 6]);
+    let p = f.translation.vector;
+    assert!((p - Vector3::new(940.0, 0.0, 1455.0)).norm() < 1e-6, "{p}");
+    let q = abb_quat([0.707107, 0.0, 0.707107, 0.0]).unwrap();
+    assert!(f.rotation.angle_to(&q) < 1e-6);
+    // tool z along base +x (reference/README.md).
+    assert!((f.rotation * Vector3::z() - Vector3::x()).norm() < 1e-12);
+}
+
+#[test]
+fn wrist_centre_and_arm_of_hand_worked_poses() {
+    let k = irb2400();
+    // Home: the wrist centre 85 mm behind the flange.
+    let c = k.wrist_centre(&[0.0; 6]);
+    assert!((c - Vector3::new(855.0, 0.0, 1455.0)).norm() < 1e-9);
+    // Upper arm tilted back to horizontal (θ2 = -90°), forearm level with it (θ3 = 0):
+    // x in the axis-1 frame = 100 − 705 − 135 = −740 mm: behind axis 1.
+    let back = [0.0, -90.0, 0.0, 0.0, 30.0, 0.0];
+    let c = k.wrist_centre(&back);
+    assert!((c.x + 740.0).abs() < 1e-9, "{c}");
+    assert_eq!(abb::config_of(&k, &back), [0, 0, 0, 4]);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// FK equals the joint-by-joint product of elementary transforms, for every model.
+    #[test]
+    fn forward_kinematics_matches_the_elementary_chain(raw in prop::array::uniform6(-180.0f64..180.0)) {
+        for (name, k) in all_arms() {
+            let diff = matrix(&k.forward(&raw)) - chain_fk(&k, &raw);
+            prop_assert!(max_abs(&diff) < 1e-9 * 3000.0, "{name}: {diff}");
+        }
+    }
+
+    /// IK(FK(J)) contains J for joints anywhere on the circle (all 8 branches), and every
+    /// solution reproduces the pose.
+    #[test]
+    fn inverse_finds_every_branch(raw in prop::array::uniform6(-179.0f64..179.0)) {
+        for (name, k) in all_arms() {
+            let f = k.forward(&raw);
+            let sols = k.inverse(&f, Some(raw[3]));
+            for s in &sols {
+                let (dp, dr) = pose_error(&k.forward(s), &f);
+                prop_assert!(dp < 1e-6 && dr < 1e-9, "{name}: {s:?} misses by {dp} mm {dr} rad");
+            }
+            let q = k.model_joints(&raw);
+            let psi = k.geometry.a2.atan2(k.geometry.c3);
+            let regular = q[4].sin().abs() > 1e-3
+                && (q[2] + psi).sin().abs() > 1e-3
+                && k.wrist_centre(&raw).xy().norm() > 1.0 + k.geometry.b.abs();
+            if regular {
+                prop_assert!(
+                    sols.iter().any(|s| joints_close(s, &raw, 1e-6)),
+                    "{name}: {raw:?} not among {sols:?}"
+                );
+                // Eight distinct (arm, wrist) branches when all are in reach; at least the original's.
+                let branches: std::collections::BTreeSet<(bool, bool, bool)> = sols
+                    .iter()
+                    .map(|s| { let a = k.arm(s); (a.front_of_axis1, a.front_of_lower_arm, s[4] >= 0.0) })
+                    .collect();
+                prop_assert_eq!(branches.len(), sols.len(), "{}: one solution per branch", name);
+            }
+        }
+    }
+
+    /// Near-singular wrists (|axis 5| down to 1e-7°) still give exact poses, and the solution
+    /// nearest to J is J.
+    #[test]
+    fn near_singular_wrists_round_trip(raw in prop::array::uniform6(-150.0f64..150.0), exp in 1.0f64..7.0, neg in any::<bool>()) {
+        for (name, k) in all_arms() {
+            let mut j = raw;
+            j[1] = j[1].clamp(k.limits[1][0] + 1.0, k.limits[1][1] - 1.0);
+            j[2] = j[2].clamp(k.limits[2][0] + 1.0, k.limits[2][1] - 1.0);
+            // Controller axis 5 such that the model's q5 = ±10^-exp degrees.
+            let q5 = if neg { -1.0 } else { 1.0 } * 10f64.powf(-exp);
+            j[4] = k.signs[4] * (q5 + k.offsets[4]);
+            let f = k.forward(&j);
+            let sols = k.inverse(&f, Some(j[3]));
+            prop_assert!(!sols.is_empty(), "{name}: no solution near the singularity");
+            for s in &sols {
+                let (dp, dr) = pose_error(&k.forward(s), &f);
+                prop_assert!(dp < 1e-6 && dr < 1e-9, "{name}: {dp} mm {dr} rad");
+            }
+            if k.within_limits(&j) {
+                let n = k.nearest(&f, &j, true).expect("a solution within the limits");
+                let (dp, _) = pose_error(&k.forward(&n), &f);
+                prop_assert!(dp < 1e-6);
+                prop_assert!(k.wrist_singularity_deg(&n) < 10f64.powf(-exp) * 1.001 + 1e-9);
+            }
+        }
+    }
+}
+
+#[test]
+fn exactly_singular_wrist_keeps_the_hinted_axis_4() {
+    let k = irb2400();
+    let j = [10.0, 20.0, -10.0, 33.0, 0.0, -50.0];
+    let f = k.forward(&j);
+    let sols = k.inverse(&f, Some(33.0));
+    // The singular branch has one wrist solution (axis 4 = the hint), the others two each.
+    assert_eq!(sols.len(), 7, "{sols:?}");
+    let singular: Vec<&Joints> = sols.iter().filter(|s| s[4].abs() < 1e-9).collect();
+    assert_eq!(singular.len(), 1, "{sols:?}");
+    assert!(joints_close(singular[0], &j, 1e-6), "{sols:?}");
+    assert!(k.wrist_singularity_deg(&j) < 1e-12);
+}
+
+#[test]
+fn turns_of_axes_4_and_6_are_kept() {
+    let k = irb2400(); // axis 4 ±200°, axis 6 ±400°
+    let j = [5.0, 10.0, 20.0, 190.0, 40.0, 350.0];
+    let f = k.forward(&j);
+    let n = k.nearest(&f, &j, true).expect("reachable");
+    assert!(n.iter().zip(&j).all(|(a, b)| (a - b).abs() < 1e-6), "{n:?}");
+    // Variants: axis 4 190 and -170, axis 6 350, -10 (and -370): 2 × 3.
+    let variants = k.turns(&[5.0, 10.0, 20.0, -170.0, 40.0, -10.0]);
+    assert_eq!(variants.len(), 6, "{variants:?}");
+    // Same pose and reference one turn away: the nearest follows the reference.
+    let r = [5.0, 10.0, 20.0, -170.0, 40.0, -370.0];
+    let n = k.nearest(&f, &r, true).expect("reachable");
+    assert!(
+        (n[3] + 170.0).abs() < 1e-6 && (n[5] + 370.0).abs() < 1e-6,
+        "{n:?}"
+    );
+}
+
+#[test]
+fn abb_quadrants_and_cfx_by_hand() {
+    for (deg, q) in [
+        (0.0, 0),
+        (45.0, 0),
+        (95.0, 1),
+        (-45.0, -1),
+        (-95.0, -2),
+        (185.0, 2),
+        (-185.0, -3),
+        (350.0, 3),
+    ] {
+        assert_eq!(abb::quadrant(deg), q, "{deg}");
+    }
+    let k = irb2400();
+    assert_eq!(
+        abb::config_of(&k, &[0.0, 0.0, 0.0, 0.0, 30.0, 0.0]),
+        [0, 0, 0, 0]
+    );
+    assert_eq!(
+        abb::config_of(&k, &[-10.0, 0.0, 0.0, 100.0, -30.0, -200.0]),
+        [-1, 1, -3, 1]
+    );
+    // Elbow behind the lower arm: q3 + ψ < 0 with ψ = atan2(-135, 755) = -10.14°, i.e.
+    // θ3 < -79.86° (beyond the limits, but the configuration is geometry).
+    assert_eq!(
+        abb::config_of(&k, &[0.0, 0.0, -85.0, 0.0, 30.0, 0.0]),
+        [0, 0, 0, 2]
+    );
+    assert_eq!(
+        abb::config_of(&k, &[0.0, -90.0, -85.0, 0.0, -30.0, 0.0]),
+        [0, 0, 0, 7]
+    );
+    // A joint on a quadrant boundary matches both sides.
+    assert!(abb::matches(
+        &k,
+        &[0.0, 0.0, 0.0, 0.0, 30.0, 0.0],
+        [-1, 0, 0, 0]
+    ));
+    assert!(!abb::matches(
+        &k,
+        &[0.0, 0.0, 0.0, 0.0, 30.0, 0.0],
+        [0, 0, 0, 1]
+    ));
+}
+
+#[test]
+fn kuka_status_and_turn_by_hand() {
+    let k = model("kuka_kr210_r3100_2").unwrap().kinematics();
+    // The KUKA home {A1 0, A2 -90, A3 90, A4 0, A5 0, A6 0}: S 'B010', T 'B000010'.
+    assert_eq!(
+        kuka::status_turn_of(&k, &[0.0, -90.0, 90.0, 0.0, 0.0, 0.0]),
+        (0b010, 0b000010)
+    );
+    // A5 negative sets bit 2; Turn: A1, A2, A5, A6 negative.
+    assert_eq!(
+        kuka::status_turn_of(&k, &[-10.0, -90.0, 90.0, 20.0, -30.0, -100.0]),
+        (0b110, 0b110011)
+    );
+    // Overhead: the upper arm tilted 80° back (A2 = -170°, beyond its -140° limit: geometry
+    // only) and the forearm in line puts the wrist behind A1: bit 0.
+    let (s, _) = kuka::status_turn_of(&k, &[0.0, -170.0, 0.0, 0.0, 30.0, 0.0]);
+    assert_eq!(s & 1, 1, "{s:b}");
+    // The arm bit flips at φ = -ψ = atan2(115, 1420) = 4.63°.
+    let phi = 115f64.atan2(1420.0).to_degrees();
+    let s_above = kuka::status_turn_of(&k, &[0.0, -90.0, phi + 0.01, 0.0, 30.0, 0.0]).0;
+    let s_below = kuka::status_turn_of(&k, &[0.0, -90.0, phi - 0.01, 0.0, 30.0, 0.0]).0;
+    assert_eq!((s_above & 2, s_below & 2), (2, 0));
+    assert!(kuka::matches(
+        &k,
+        &[0.0, -90.0, 90.0, 0.0, 30.0, 0.0],
+        Some(0b010),
+        Some(0b000010)
+    ));
+    assert!(!kuka::matches(
+        &k,
+        &[0.0, -90.0, 90.0, 0.0, 30.0, 0.0],
+        Some(0b110),
+        None
+    ));
+}
+
+#[test]
+fn the_written_configuration_selects_the_solution() {
+    let k = irb2400();
+    for j in [
+        [10.0, 20.0, -10.0, 30.0, 40.0, -50.0],
+        [10.0, 20.0, -10.0, -150.0, -40.0, 130.0],
+        [-100.0, 5.0, 15.0, 60.0, 80.0, 200.0],
+    ] {
+        let f = k.forward(&j);
+        let written = ConfigValue::Abb(abb::config_of(&k, &j));
+        let s = trackfix::kinematics::select(&k, &f, Some(&written)).unwrap();
+        assert!(s.config_matches && s.within_limits);
+        assert!(joints_close(&s.joints, &j, 1e-6), "{:?} vs {j:?}", s.joints);
+        assert!((s.joints[5] - j[5]).abs() < 1e-6, "turn of axis 6 from cf6");
+    }
+}
+
+#[test]
+fn mirrored_joints_give_the_mirrored_pose_and_ik_agrees_with_the_rule() {
+    // Sa = Sb = diag(1, -1, 1) for the xz plane through the base.
+    let s = Matrix4::from_diagonal(&nalgebra::Vector4::new(1.0, -1.0, 1.0, 1.0));
+    for m in MODELS {
+        let k = m.kinematics();
+        for j in [
+            [
+                20.0,
+                -30.0
+                    + if m.name.starts_with("kuka") {
+                        -60.0
+                    } else {
+                        0.0
+                    },
+                40.0,
+                35.0,
+                50.0,
+                -70.0,
+            ],
+            [
+                -60.0,
+                10.0 + if m.name.starts_with("kuka") {
+                    -90.0
+                } else {
+                    0.0
+                },
+                30.0,
+                -100.0,
+                70.0,
+                160.0,
+            ],
+        ] {
+            let lhs = matrix(&k.forward(&mirrored_joints(&j)));
+            let rhs = s * matrix(&k.forward(&j)) * s;
+            assert!(max_abs(&(lhs - rhs)) < 1e-9, "{}: {}", m.name, lhs - rhs);
+            // IK of the mirrored pose picks the rule's joints, and its configuration is the
+            // rule's (cf1, cf4, cf6 → -cf-1, cfx kept; Turn bits of A1, A4, A6 toggled).
+            let mirrored = Pose::from_parts(
+                nalgebra::Translation3::from(Vector3::new(rhs[(0, 3)], rhs[(1, 3)], rhs[(2, 3)])),
+                nalgebra::UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(
+                    Matrix3::from_fn(|r, c| rhs[(r, c)]),
+                )),
+            );
+            if !k.within_limits(&j) {
+                continue;
+            }
+            let (jm, abb_c) = mirror_config_by_ik(&k, &mirrored, &j, Language::Rapid).unwrap();
+            assert!(
+                joints_close(&jm, &mirrored_joints(&j), 1e-6),
+                "{}: {jm:?}",
+                m.name
+            );
+            let [c1, c4, c6, cx] = abb::config_of(&k, &j);
+            assert_eq!(
+                abb_c,
+                ConfigValue::Abb([-c1 - 1, -c4 - 1, -c6 - 1, cx]),
+                "{}",
+                m.name
+            );
+            let (_, kuka_c) = mirror_config_by_ik(&k, &mirrored, &j, Language::Krl).unwrap();
+            let (st, t) = kuka::status_turn_of(&k, &j);
+            assert_eq!(
+                kuka_c,
+                ConfigValue::Kuka {
+                    status: Some(st),
+                    turn: Some(t ^ 0b101001)
+                },
+                "{}",
+                m.name
+            );
+        }
+    }
+}
+
+/// A deformation of the track at one skid, like a profile's D(s): mm and hundredths of a degree.
+fn deviation() -> Pose {
+    pose_xyz_deg(1.2, -0.8, 2.1, 0.03, -0.02, 0.05)
+}
+
+#[test]
+fn joint_targets_follow_the_deformed_track() {
+    let d = deviation();
+    for m in MODELS {
+        let k = m.kinematics();
+        let j = if m.name.starts_with("kuka") {
+            [15.0, -80.0, 100.0, 30.0, 45.0, -200.0]
+        } else {
+            [15.0, 10.0, 20.0, 30.0, 45.0, -200.0]
+        };
+        assert!(k.within_limits(&j), "{}", m.name);
+        // correct: FK(J') = D⁻¹·FK(J); zero: FK(J') = D·FK(J) and back.
+        let jc = joint_target_correction(&k, &j, &d.inverse()).expect("reachable");
+        let want = d.inverse() * k.forward(&j);
+        let (dp, dr) = pose_error(&k.forward(&jc), &want);
+        assert!(dp < 1e-3 && dr < 1e-8, "{}: {dp} mm", m.name);
+        assert!(
+            jc.iter().zip(&j).all(|(a, b)| (a - b).abs() < 1.0),
+            "{}: {jc:?}",
+            m.name
+        );
+        assert!(
+            (jc[5] + 200.0).abs() < 1.0,
+            "the turn of axis 6 is kept: {jc:?}"
+        );
+        let back = joint_target_correction(&k, &jc, &d).expect("reachable");
+        assert!(
+            back.iter().zip(&j).all(|(a, b)| (a - b).abs() < 1e-6),
+            "{back:?}"
+        );
+    }
+}
+
+#[test]
+fn check_target_refuses_unreachable_limit_and_configuration_changes() {
+    let k = irb2400();
+    let j = [10.0, 20.0, -10.0, 30.0, 40.0, -50.0];
+    let f = k.forward(&j);
+    let written = ConfigValue::Abb(abb::config_of(&k, &j));
+    // A small move: same configuration, joints close by.
+    let moved = pose_xyz_deg(0.5, -0.3, 0.2, 0.0, 0.0, 0.01) * f;
+    let c = check_target(&k, &f, &moved, Some(&written));
+    assert_eq!(c.refusal, None);
+    assert!(
+        c.after
+            .unwrap()
+            .iter()
+            .zip(&j)
+            .all(|(a, b)| (a - b).abs() < 0.5)
+    );
+    // 3 m away: out of reach.
+    let far = pose_xyz_deg(3000.0, 0.0, 0.0, 0.0, 0.0, 0.0) * f;
+    let c = check_target(&k, &f, &far, Some(&written));
+    assert_eq!(c.refusal, Some(KinematicRefusal::Unreachable));
+    assert_eq!(
+        c.message().unwrap(),
+        "the transformed target is out of reach: joints before [10.000, 20.000, -10.000, 30.000, 40.000, -50.000], after none"
+    );
+    // Mirrored through the base's xz plane with the configuration unchanged: cf1 = 0 cannot
+    // reach an axis 1 of -10°.
+    let mj = mirrored_joints(&j);
+    let c = check_target(&k, &f, &k.forward(&mj), Some(&written));
+    assert!(
+        matches!(c.refusal, Some(KinematicRefusal::ConfigChange { .. })),
+        "{c:?}"
+    );
+    // Axis 5 bent past its 120° limit: in the written configuration only 123° reaches it.
+    let edge = [0.0, 10.0, 20.0, 0.0, 118.0, 0.0];
+    let fe = k.forward(&edge);
+    let w = ConfigValue::Abb(abb::config_of(&k, &edge));
+    let bent = k.forward(&[0.0, 10.0, 20.0, 0.0, 123.0, 0.0]);
+    let c = check_target(&k, &fe, &bent, Some(&w));
+    assert_eq!(
+        c.refusal,
+        Some(KinematicRefusal::OutsideLimit {
+            axis: 5,
+            value: c.after.unwrap()[4],
+            limits: [-120.0, 120.0]
+        }),
+        "{c:?}"
+    );
+    assert!((c.after.unwrap()[4] - 123.0).abs() < 1e-6);
+}
+
+// ---- reach on a program ----
+
+const CELL: &str = r#"
+[robot.r1]
+profile = "track/profile.toml"
+base = { x = 0, y = -1000, z = 0, rx = 0, ry = 0, rz = 90 }
+track_axis = [1, 0, 0]
+skid = "eax_a"
+[robot.r1.kinematics]
+model = "abb_irb2400_10"
+[robot.r1.tool]
+tgun = { x = 0, y = 0, z = 200, rx = 0, ry = 0, rz = 0 }
+"#;
+
+fn robtarget(name: &str, t: &Pose, cf: [i32; 4], skid: f64) -> String {
+    let p = t.translation.vector;
+    let q = t.rotation.quaternion();
+    format!(
+        "  CONST robtarget {name}:=[[{:.4},{:.4},{:.4}],[{:.8},{:.8},{:.8},{:.8}],[{},{},{},{}],[{skid},9E9,9E9,9E9,9E9,9E9]];\n",
+        p.x, p.y, p.z, q.w, q.i, q.j, q.k, cf[0], cf[1], cf[2], cf[3]
+    )
+}
+
+#[test]
+fn reach_flags_far_targets_wrong_configurations_and_singular_wrists() {
+    let cell = Cell::parse(Path::new("cell.toml"), CELL).unwrap();
+    let robot = cell.robot("r1").unwrap();
+    let k = robot.kinematics.clone().unwrap();
+    let tool = robot.tools["tgun"];
+    let skid = 500.0;
+    let b = pose_xyz_deg(skid, -1000.0, 0.0, 0.0, 0.0, 90.0);
+    // wobj0 = world: T = B(s)·FK(J)·TOOL.
+    let target = |j: &Joints| b * k.forward(j) * tool;
+    let good = [10.0, 20.0, -10.0, 30.0, 40.0, -50.0];
+    let singular = [10.0, 20.0, -10.0, 30.0, 2.0, -50.0];
+    let far = pose_xyz_deg(0.0, 2500.0, 0.0, 0.0, 0.0, 0.0) * target(&good);
+    let cf = abb::config_of(&k, &good);
+    let mut src = String::from(
+        "MODULE M\n  PERS tooldata tGun:=[TRUE,[[0,0,0],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\n",
+    );
+    src += &robtarget("pGood", &target(&good), cf, skid);
+    src += &robtarget(
+        "pWrongCf",
+        &target(&good),
+        [cf[0], cf[1], cf[2], cf[3] ^ 4],
+        skid,
+    );
+    src += &robtarget("pFar", &far, cf, skid);
+    src += &robtarget(
+        "pWrist",
+        &target(&singular),
+        abb::config_of(&k, &singular),
+        skid,
+    );
+    src += "  CONST jointtarget jOut:=[[0,0,0,0,130,0],[500,9E9,9E9,9E9,9E9,9E9]];\n";
+    src += "  PROC main()\n    MoveL pGood,v100,fine,tGun\\WObj:=wobj0;\n    MoveL pWrongCf,v100,fine,tGun;\n    MoveL pFar,v100,fine,tGun;\n    MoveL pWrist,v100,fine,tGun;\n    MoveAbsJ jOut,v100,fine,tGun;\n  ENDPROC\nENDMODULE\n";
+    let program = Program {
+        files: vec![trackfix::rapid::parse_file(
+            Path::new("m.mod"),
+            src.into_bytes(),
+        )],
+    };
+    let files = reach_program(&program, robot, &k, &ReachOptions::default());
+    let t = &files[0].targets;
+    let by = |n: &str| t.iter().find(|x| x.name == n).unwrap();
+    let g = by("pGood");
+    assert_eq!(g.status, ReachStatus::Ok, "{g:?}");
+    assert!(
+        joints_close(&g.joints.unwrap(), &good, 1e-4),
+        "{:?}",
+        g.joints
+    );
+    assert_eq!(g.config_matches, Some(true));
+    let m = g.limit_margin_deg.unwrap();
+    assert!(
+        (m[1] - 90.0).abs() < 1e-3 && (m[4] - 80.0).abs() < 1e-3,
+        "{m:?}"
+    );
+    let w = by("pWrongCf");
+    assert_eq!(w.status, ReachStatus::ConfigMismatch);
+    assert_eq!(w.config_matches, Some(false));
+    assert_eq!(by("pFar").status, ReachStatus::Unreachable);
+    assert_eq!(by("pFar").reachable, Some(false));
+    let s = by("pWrist");
+    assert_eq!(s.status, ReachStatus::Ok);
+    assert!(
+        s.warnings.iter().any(|w| w.contains("wrist singularity")),
+        "{s:?}"
+    );
+    let j = by("jOut");
+    assert_eq!(j.status, ReachStatus::OutsideLimit);
+    assert!((j.limit_margin_deg.unwrap()[4] + 10.0).abs() < 1e-9);
+    // The tool override in the cell is used: the program's tGun has no offset.
+    assert!((tool.translation.vector.z - 200.0).abs() < 1e-12);
+}
+
+#[test]
+fn kinematics_table_errors_are_located() {
+    let parse = |t: &str| match Cell::parse(Path::new("cell.toml"), t) {
+        Err(e) => e.to_string(),
+        Ok(_) => "parsed".to_owned(),
+    };
+    let e = parse(&CELL.replace("abb_irb2400_10", "irb9999"));
+    assert!(
+        e.starts_with("cell.toml:8:9: error: robot `r1`: unknown robot model `irb9999`"),
+        "{e}"
+    );
+    assert!(e.contains("abb_irb2400_10"), "{e}");
+    let e = parse(&CELL.replace("model = \"abb_irb2400_10\"", "a1 = 100.0"));
+    assert!(e.contains("kinematics has no `a2`"), "{e}");
+    let e = parse(&CELL.replace(
+        "model = \"abb_irb2400_10\"",
+        "model = \"abb_irb2400_10\"\nsigns = [1, 1, 2, 1, 1, 1]",
+    ));
+    assert!(
+        e.starts_with("cell.toml:9:9: error:") && e.contains("signs must be 1 or -1"),
+        "{e}"
+    );
+    let e = parse(&CELL.replace(
+        "model = \"abb_irb2400_10\"",
+        "model = \"abb_irb2400_10\"\nc5 = 1",
+    ));
+    assert!(e.contains("unknown field `c5`"), "{e}");
+    // Overrides on a model.
+    let cell = Cell::parse(
+        Path::new("cell.toml"),
+        &CELL.replace(
+            "model = \"abb_irb2400_10\"",
+            "model = \"ABB-IRB2400/10\"\nc4 = 100",
+        ),
+    )
+    .unwrap();
+    let k = cell.robot("r1").unwrap().kinematics.clone().unwrap();
+    assert_eq!(k.geometry.c4, 100.0);
+    assert_eq!(k.geometry.c3, 755.0);
+}
+
+#[test]
+fn reach_cli_on_the_spot_line_sample() {
+    let (code, out, err) = trackfix(&[
+        "reach",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        "samples/cell_kinematics.toml",
+        "--robot",
+        "r1",
+    ]);
+    // The sample's confdata was written by hand, not by IK: most targets are in another
+    // configuration than the one written, which is exactly what reach is for.
+    assert_eq!(code, 1, "{err}");
+    insta::assert_snapshot!(out);
+    let (code, json, _) = trackfix(&[
+        "reach",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        "samples/cell_kinematics.toml",
+        "--robot",
+        "r1",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(code, 1);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let targets = v["files"][0]["targets"].as_array().unwrap();
+    assert_eq!(targets.len(), 227);
+    for key in [
+        "name",
+        "line",
+        "reachable",
+        "joints",
+        "config_matches",
+        "config_written",
+        "config_solved",
+        "limit_margin_deg",
+        "warnings",
+    ] {
+        assert!(targets[1].get(key).is_some(), "{key}");
+    }
+    assert_eq!(targets[0]["name"], "jHome");
+    assert_eq!(targets[0]["joints"][4], 80.0);
+    let (code, _, err) = trackfix(&[
+        "reach",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+    ]);
+    assert_eq!(code, 2);
+    assert!(err.contains("no [robot.r1.kinematics]"), "{err}");
+}
+
+#[test]
+fn kuka_joint_directions_follow_the_controller() {
+    let k = model("kuka_kr210_r3100_2").unwrap().kinematics();
+    // The mastering/home pose: upper arm upright, forearm level, flange facing forward with its
+    // z axis along base +x (KUKA shows B = 90°), at x = a1 + c3 + c4, z = c1 + c2 − a2.
+    let home = k.forward(&[0.0, -90.0, 90.0, 0.0, 0.0, 0.0]);
+    let p = home.translation.vector;
+    assert!((p - Vector3::new(1990.0, 0.0, 2110.0)).norm() < 1e-9, "{p}");
+    let b90 = trackfix::geometry::kuka_abc(0.0, 90.0, 0.0);
+    assert!(home.rotation.angle_to(&b90) < 1e-12);
+    // A1's axis points down: A1 = +90° turns the arm to base −y.
+    let p = k
+        .forward(&[90.0, -90.0, 90.0, 0.0, 0.0, 0.0])
+        .translation
+        .vector;
+    assert!(
+        (p - Vector3::new(0.0, -1990.0, 2110.0)).norm() < 1e-9,
+        "{p}"
+    );
+}
+
+#[test]
+fn reach_on_the_krl_sample_reads_status_and_turn() {
+    let (code, json, err) = trackfix(&[
+        "reach",
+        "samples/krl/spot_line.src",
+        "--cell",
+        "samples/cell_kinematics.toml",
+        "--robot",
+        "k1",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(code, 1, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let targets = v["files"][0]["targets"].as_array().unwrap();
+    assert_eq!(targets.len(), 161);
+    let xp1 = &targets[1];
+    assert_eq!(xp1["name"], "XP1");
+    assert_eq!(xp1["status"], "ok");
+    assert_eq!(xp1["config_written"], "S 6 T 50");
+    assert_eq!(xp1["config_solved"], "S 6 T 50");
+    assert_eq!(xp1["config_matches"], true);
+    // XP0 is in $WORLD at the far end of the line from the skid it names.
+    assert_eq!(targets[0]["status"], "unreachable");
+    assert_eq!(targets[0]["joints"], serde_json::Value::Null);
+}
+
+#[test]
+fn a_pose_inside_the_arm_has_all_eight_solutions() {
+    let k = irb2400();
+    let j = [0.0, 0.0, 60.0, 0.0, 30.0, 0.0];
+    let sols = k.inverse(&k.forward(&j), None);
+    let branches: std::collections::BTreeSet<(bool, bool, bool)> = sols
+        .iter()
+        .map(|s| {
+            let a = k.arm(s);
+            (a.front_of_axis1, a.front_of_lower_arm, s[4] >= 0.0)
+        })
+        .collect();
+    assert_eq!((sols.len(), branches.len()), (8, 8), "{sols:?}");
+    let cfx: std::collections::BTreeSet<i32> =
+        sols.iter().map(|s| abb::config_of(&k, s)[3]).collect();
+    assert_eq!(cfx, (0..8).collect());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// The configuration of J, written back, selects J: ABB confdata and KUKA Status/Turn each
+    /// pick exactly one solution within the limits.
+    #[test]
+    fn the_configuration_of_joints_selects_them(u in prop::array::uniform6(0.02f64..0.98)) {
+        for m in MODELS {
+            let k = m.kinematics();
+            let j: Joints = std::array::from_fn(|i| {
+                let [lo, hi] = k.limits[i];
+                lo + u[i] * (hi - lo)
+            });
+            let q = k.model_joints(&j);
+            let psi = k.geometry.a2.atan2(k.geometry.c3);
+            let off_boundary = [0, 3, 5].iter().all(|&i| (j[i] / 90.0 - (j[i] / 90.0).round()).abs() > 1e-6)
+                && q[4].sin().abs() > 1e-3
+                && (q[2] + psi).sin().abs() > 1e-3
+                && k.wrist_centre(&j).xy().norm() > 1.0;
+            prop_assume!(off_boundary);
+            let f = k.forward(&j);
+            for lang in [Language::Rapid, Language::Krl] {
+                let written = ConfigValue::of_joints(lang, &k, &j);
+                let s = trackfix::kinematics::select(&k, &f, Some(&written)).unwrap();
+                prop_assert!(s.config_matches && s.within_limits);
+                let exact = s.joints.iter().zip(&j).all(|(a, b)| (a - b).abs() < 1e-6);
+                if lang == Language::Rapid || m.name.starts_with("kuka") {
+                    // confdata quadrants, or Turn signs within ±350°, leave one choice.
+                    prop_assert!(exact, "{}: {:?} vs {:?}", m.name, s.joints, j);
+                } else {
+                    // Turn on an ABB arm (axis 6 ±400°): two negative turns may share it.
+                    prop_assert!(joints_close(&s.joints, &j, 1e-6), "{}: {:?} vs {:?}", m.name, s.joints, j);
+                }
+            }
+        }
+    }
+}
+
+/// The README's figure: the sample's home joint target on r1's measured track.
+#[test]
+fn sample_home_joint_target_on_the_measured_track() {
+    let profile =
+        trackfix::track::Profile::load(&crate::support::root().join("samples/track/profile.toml"))
+            .unwrap();
+    let d = profile.deviation(150.0).unwrap();
+    let k = model("abb_irb4600_40_255").unwrap().kinematics();
+    let j = [0.0, -20.0, 30.0, 0.0, 80.0, 0.0];
+    let jc = joint_target_correction(&k, &j, &d.inverse()).unwrap();
+    let want = [0.0514, -19.9494, 30.0292, -0.0669, 79.9236, 0.0997];
+    assert!(
+        jc.iter().zip(&want).all(|(a, b)| (a - b).abs() < 1e-4),
+        "{jc:?}"
+    );
+    let (dp, dr) = pose_error(&k.forward(&jc), &(d.inverse() * k.forward(&j)));
+    assert!(dp < 1e-3 && dr < 1e-9);
+    let moved = (k.forward(&jc).translation.vector - k.forward(&j).translation.vector).norm();
+    assert!((moved - 1.87).abs() < 0.01, "{moved}");
+}
