@@ -20,6 +20,7 @@ Examples:
   trackfix track identify samples/track/measurements.csv -o frames.csv
   trackfix track fit frames.csv -o profile.toml
   trackfix track show profile.toml --step 500
+  trackfix frame base points.csv --profile profile.toml -o base.toml
   trackfix correct program.mod --cell samples/cell.toml --robot r1 -o corrected.mod
   trackfix transfer samples/rapid/spot_line.mod --cell samples/cell.toml --from r1 --to r2 --mirror --out-dir out/
 
@@ -43,6 +44,9 @@ enum Command {
     /// Measure and model a linear track: identify, fit, show, spectrum.
     #[command(subcommand)]
     Track(cli::track::TrackCommand),
+    /// Frames from tracker and robot: base and track axis, work objects, TCP, point pairs.
+    #[command(subcommand)]
+    Frame(cli::frame::FrameCommand),
     /// Apply a track profile to every target (offline program → real track).
     Correct(cli::transform::CorrectArgs),
     /// Remove a track profile from an online-tuned program (→ straight track).
@@ -100,6 +104,7 @@ fn main() -> ExitCode {
         Command::Inspect(a) => cli::inspect::run_inspect(a),
         Command::Check(a) => cli::inspect::run_check(a),
         Command::Track(c) => cli::track::run(c),
+        Command::Frame(c) => cli::frame::run(c),
         Command::Correct(a) => cli::transform::run_correct(a),
         Command::Zero(a) => cli::transform::run_zero(a),
         Command::Mirror(a) => cli::transform::run_mirror(a),

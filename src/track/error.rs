@@ -121,6 +121,9 @@ pub enum SkidProblem {
         "the tracker points are spread {ratio:.6e} times as wide as the robot points (a rigid fit needs 1 within {tolerance}): the two point sets are in different units or do not belong together"
     )]
     Scale { ratio: f64, tolerance: f64 },
+    /// The fit's normal matrix is singular: some motion of the frame moves no point.
+    #[error("the points do not fix all six degrees of freedom of the frame")]
+    Unconstrained,
 }
 
 /// Why sampling frames give no straight nominal track.
@@ -174,6 +177,17 @@ pub enum TrackError {
     /// The sampling frames give no straight nominal.
     #[error("{0}")]
     Nominal(NominalProblem),
+    /// A noise level that is not a non-negative number.
+    #[error("noise level {sigma} mm: give a non-negative number")]
+    NoiseLevel { sigma: f64 },
+    /// The fits leave no degree of freedom to estimate the noise from.
+    #[error(
+        "{points} point(s) leave no residual to estimate the noise from: give the noise level, or measure more points"
+    )]
+    NoNoiseEstimate { points: usize },
+    /// Knot uncertainties given in code that do not match the profile's knots one to one.
+    #[error("{given} knot uncertainties for {knots} knots")]
+    KnotUncertaintyCount { given: usize, knots: usize },
     /// A scan the spectrum cannot use (too short, positions not increasing).
     #[error("{0}")]
     Scan(String),

@@ -3,6 +3,7 @@
 mod accuracy;
 mod cli;
 mod dialect;
+mod frames;
 mod kinematics;
 mod krl;
 mod output;
