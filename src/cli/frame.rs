@@ -1,5 +1,5 @@
 //! `trackfix frame base | wobj | tool | fit`: frames from tracker and robot measurements, with
-//! their uncertainties (docs/design-frames.md).
+//! their uncertainties (docs/design.md).
 
 use std::fmt::Write as _;
 use std::io::Write as _;

@@ -1,4 +1,4 @@
-//! Frames measured with a laser tracker and the robot (docs/design-frames.md): the robot base and
+//! Frames measured with a laser tracker and the robot (docs/design.md): the robot base and
 //! track axis in the cell, compensated by the track profile ([`base`]); work objects touched at
 //! several skid positions ([`wobj`]); the TCP from pivot poses ([`tool`]); and the plain
 //! point-pair fit that ties a tracker to the cell's reference marks ([`pairs`]). Every result

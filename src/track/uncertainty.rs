@@ -1,5 +1,5 @@
 //! Uncertainty of a track profile, from the tracker and robot noise to `D(s)` and to a corrected
-//! TCP (docs/design-frames.md §6).
+//! TCP (docs/design.md §14 §6).
 //!
 //! 1. **Frame**: the base frame at one skid is a rigid fit of `n` point pairs. With independent
 //!    noise `σ` per axis, its covariance in the perturbation `F = F̂·(δt, δθ)` is
