@@ -814,3 +814,60 @@ proptest::proptest! {
         }
     }
 }
+
+/// `correct … --report run.html` through the binary: the report is written beside the output,
+/// names the cell and profile it read with their sha256, lists the refused joint target at its
+/// location, carries no external reference, and its sections are those of the library's run
+/// report.
+#[test]
+fn correct_with_report_writes_the_run_report() {
+    let tmp = tempfile::tempdir().unwrap();
+    let report = tmp.path().join("run.html");
+    let out = tmp.path().join("out");
+    let (code, _, stderr) = trackfix(&[
+        "correct",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--skip-unsupported",
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stderr.contains("the run report"), "{stderr}");
+    let html = std::fs::read_to_string(&report).unwrap();
+    let cell = std::fs::read(root().join("samples/cell.toml")).unwrap();
+    let profile = std::fs::read(root().join("samples/track/profile.toml")).unwrap();
+    for hash in [&cell, &profile].map(|b| trackfix::digest::sha256_hex(b)) {
+        assert!(
+            html.contains(&hash),
+            "the report names the input with hash {hash}"
+        );
+    }
+    assert!(html.contains("jHome"), "the refused joint target is listed");
+    assert!(html.contains("spot_line.mod:14:28") || html.contains("14:28"));
+    for external in ["http:", "https:", "src=\"//", "@import"] {
+        assert!(
+            !html.contains(external),
+            "no external reference: {external}"
+        );
+    }
+    let headings: Vec<String> = html
+        .lines()
+        .filter(|l| l.starts_with("<h2>"))
+        .map(strip_tags)
+        .collect();
+    assert!(
+        headings.iter().any(|h| h == "Refused targets"),
+        "{headings:?}"
+    );
+    assert!(
+        headings.iter().any(|h| h == "Cell, profiles and programs"),
+        "{headings:?}"
+    );
+    assert!(out.join("spot_line.mod").is_file());
+}
