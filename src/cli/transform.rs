@@ -16,6 +16,7 @@ use trackfix::program::{LoadOptions, collect_inputs, load};
 use trackfix::report::{FileSummary, would_change};
 use trackfix::syntax::Severity;
 use trackfix::track::cell_nominal::check_cell_nominal;
+use trackfix::track::uncertainty::ProfileUncertainty;
 use trackfix::track::{Profile, TrackError};
 use trackfix::transform::cell::skid_axis_index;
 use trackfix::transform::{
@@ -516,7 +517,10 @@ fn run_track(mut a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
         ("cell".to_owned(), a.cell.clone()),
         (format!("profile of {}", robot.name), robot.profile.clone()),
     ];
+    let uncertainty = ProfileUncertainty::new(&profile)
+        .with_context(|| format!("uncertainties of {}", robot.profile.display()))?;
     let mut setup = TrackSetup::new(robot, &profile);
+    setup.uncertainty = uncertainty.as_ref();
     setup.default_wobj = a.default_wobj.clone();
     run_step(
         dir.as_str(),

@@ -68,8 +68,8 @@ pub struct RunTarget {
 impl From<&TargetChange> for RunTarget {
     fn from(c: &TargetChange) -> RunTarget {
         RunTarget {
-            name: None,
-            line: None,
+            name: c.name.clone(),
+            line: Some(c.line),
             skid: c.skid,
             mm: c.mm,
             deg: c.deg,

@@ -26,6 +26,12 @@ pub struct FileSummary {
     pub backup: Option<PathBuf>,
     /// The change is a move (a mirror moves points by metres), not a correction.
     pub is_move: bool,
+    /// The largest expanded uncertainty (k = 2, mm) of a corrected TCP, when the profile
+    /// carries uncertainties.
+    pub largest_uncertainty_mm: Option<f64>,
+    /// Targets whose correction is smaller than its own expanded uncertainty, by name (or
+    /// `line N`): the correction is within the doubt of the measurement.
+    pub below_uncertainty: Vec<String>,
 }
 
 impl FileSummary {
@@ -43,6 +49,17 @@ impl FileSummary {
             link_target: None,
             backup: None,
             is_move,
+            largest_uncertainty_mm: file
+                .changes
+                .iter()
+                .filter_map(|c| c.uncertainty_mm)
+                .reduce(f64::max),
+            below_uncertainty: file
+                .changes
+                .iter()
+                .filter(|c| c.uncertainty_mm.is_some_and(|u| c.mm < u))
+                .map(|c| c.name.clone().unwrap_or_else(|| format!("line {}", c.line)))
+                .collect(),
         }
     }
 }
@@ -79,14 +96,27 @@ impl fmt::Display for FileSummary {
         } else {
             "largest correction"
         };
+        let uncertainty = match self.largest_uncertainty_mm {
+            Some(u) => format!(", U (k=2) up to {} mm", mm(u)),
+            None => String::new(),
+        };
         write!(
             f,
-            "{}: {} target(s) changed, {largest} {} mm / {:.4}°{skid}{refused}{target}",
+            "{}: {} target(s) changed, {largest} {} mm / {:.4}°{uncertainty}{skid}{refused}{target}",
             self.path.display(),
             self.changed,
             mm(self.largest_mm),
             self.largest_deg,
-        )
+        )?;
+        if let Some(first) = self.below_uncertainty.first() {
+            write!(
+                f,
+                "\n{}: warning: {} target(s) are corrected by less than their own uncertainty (e.g. `{first}`): the correction is within the measurement's doubt; measure the track more densely or with less noise there",
+                self.path.display(),
+                self.below_uncertainty.len()
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -118,7 +148,14 @@ mod tests {
 
     #[test]
     fn summary_lines_say_count_largest_change_and_skid_range() {
-        let c = |mm, deg, skid| TargetChange { mm, deg, skid };
+        let c = |mm, deg, skid| TargetChange {
+            mm,
+            deg,
+            skid,
+            name: None,
+            line: 1,
+            uncertainty_mm: None,
+        };
         let f = result(vec![
             c(0.25, 0.001, Some(3000.0)),
             c(1.5, 0.02, Some(500.0)),
@@ -139,6 +176,30 @@ mod tests {
         assert_eq!(
             would_change(&f).as_deref(),
             Some("a.mod: 2 target(s) would change")
+        );
+    }
+
+    #[test]
+    fn a_correction_below_its_uncertainty_is_a_warning_naming_the_target() {
+        let c = |mm, name: &str, u| TargetChange {
+            mm,
+            deg: 0.0,
+            skid: Some(100.0),
+            name: Some(name.to_owned()),
+            line: 3,
+            uncertainty_mm: Some(u),
+        };
+        let f = result(vec![c(0.5, "p1", 0.2), c(0.1, "p2", 0.25)]);
+        let s = FileSummary::new(&f, false);
+        assert_eq!(s.largest_uncertainty_mm, Some(0.25));
+        assert_eq!(s.below_uncertainty, ["p2"]);
+        let text = s.to_string();
+        assert!(text.contains("U (k=2) up to 0.250 mm"), "{text}");
+        assert!(
+            text.contains(
+                "1 target(s) are corrected by less than their own uncertainty (e.g. `p2`)"
+            ),
+            "{text}"
         );
     }
 }

@@ -51,6 +51,11 @@ pub(crate) trait TargetRule {
         t: &Pose,
     ) -> Result<(Pose, OrientationHint), Why>;
 
+    /// The expanded uncertainty (k = 2, mm) of the new target's TCP, when the rule knows one.
+    fn uncertainty(&self, _frame: &Self::Frame, _skid: Option<f64>, _new: &Pose) -> Option<f64> {
+        None
+    }
+
     /// Edits beyond the pose (configuration, skid axes).
     fn more_edits(&self, _scope: Scope, _p: &Position) -> Vec<Edit> {
         Vec::new()
@@ -118,5 +123,16 @@ fn cartesian<R: TargetRule>(rule: &R, scope: Scope, p: &Position) -> Step {
     let mut edits = pose_edits(fields, &new, hint);
     edits.extend(rule.more_edits(scope, p));
     let (mm, deg) = pose_change(&t, &new);
-    Ok(Some((edits, TargetChange { mm, deg, skid })))
+    let uncertainty_mm = rule.uncertainty(&frame, skid, &new);
+    Ok(Some((
+        edits,
+        TargetChange {
+            mm,
+            deg,
+            skid,
+            name: p.name.clone(),
+            line: p.line,
+            uncertainty_mm,
+        },
+    )))
 }

@@ -8,7 +8,7 @@ use crate::syntax::{Edit, EditError, apply_edits};
 use super::refusal::Refusal;
 
 /// How much one changed target moved.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct TargetChange {
     /// Translation change in mm.
     pub mm: f64,
@@ -16,6 +16,14 @@ pub struct TargetChange {
     pub deg: f64,
     /// The skid value the target was transformed at (`None` for transforms that use none).
     pub skid: Option<f64>,
+    /// The target's name, when it has one (inline targets have none).
+    pub name: Option<String>,
+    /// 1-based line of the target.
+    pub line: usize,
+    /// Expanded uncertainty (k = 2, mm) of the corrected TCP, when the profile carries
+    /// uncertainties (docs/design.md §14): a correction smaller than this is within the
+    /// measurement's own doubt.
+    pub uncertainty_mm: Option<f64>,
 }
 
 /// The edits and refusals of one file.

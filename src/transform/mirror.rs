@@ -264,6 +264,9 @@ impl TargetRule for MirrorRule<'_> {
             mm: 0.0,
             deg: 0.0,
             skid: None,
+            name: p.name.clone(),
+            line: p.line,
+            uncertainty_mm: None,
         };
         Ok(Some((edits, change)))
     }

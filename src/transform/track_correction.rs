@@ -5,6 +5,7 @@
 //! - correct: `T' = W⁻¹ · B(s) · D(s)⁻¹ · B(s)⁻¹ · W · T`
 //! - zero:    `T' = W⁻¹ · B(s) · D(s)   · B(s)⁻¹ · W · T`
 
+use crate::track::uncertainty::{ProfileUncertainty, tcp_uncertainty_world};
 use std::collections::BTreeMap;
 
 use nalgebra::{Translation3, Vector3};
@@ -69,6 +70,9 @@ pub struct TrackSetup<'a> {
     pub deviation: &'a dyn Deviation,
     /// The work object for declared targets no motion uses (`--default-wobj`).
     pub default_wobj: Option<String>,
+    /// The profile's uncertainty, when it carries one: each corrected target then records the
+    /// expanded uncertainty of its TCP.
+    pub uncertainty: Option<&'a ProfileUncertainty>,
 }
 
 impl<'a> TrackSetup<'a> {
@@ -80,6 +84,7 @@ impl<'a> TrackSetup<'a> {
             frames: robot.frames.clone(),
             deviation,
             default_wobj: None,
+            uncertainty: None,
         }
     }
 
@@ -171,6 +176,14 @@ impl TargetRule for TrackRule<'_, '_> {
             })?;
         Ok((correction * t, OrientationHint::NearOriginal))
     }
+
+    fn uncertainty(&self, w: &Pose, skid: Option<f64>, new: &Pose) -> Option<f64> {
+        let (pu, skid) = (self.setup.uncertainty?, skid?);
+        let tcp = w * nalgebra::Point3::from(new.translation.vector);
+        tcp_uncertainty_world(pu, &self.setup.base_at(skid), skid, &tcp)
+            .ok()
+            .map(|u| u.expanded)
+    }
 }
 
 /// `correct` or `zero` every Cartesian target of `program` with `setup`'s track.
@@ -196,6 +209,7 @@ mod tests {
             frames: BTreeMap::new(),
             deviation: dev,
             default_wobj: None,
+            uncertainty: None,
         }
     }
 

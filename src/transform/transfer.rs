@@ -163,7 +163,14 @@ fn combine(
                     crate::position::Skid::At(s) => Some(s),
                     _ => None,
                 };
-                TargetChange { mm, deg, skid }
+                TargetChange {
+                    mm,
+                    deg,
+                    skid,
+                    name: p.name.clone(),
+                    line: p.line,
+                    uncertainty_mm: None,
+                }
             })
             .collect();
         files.push(FileResult {

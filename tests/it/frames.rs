@@ -303,6 +303,7 @@ fn work_object_with_track_compensation() {
         frames: BTreeMap::new(),
         deviation: &profile,
         default_wobj: None,
+        uncertainty: None,
     };
     let pu = ProfileUncertainty::new(&profile).unwrap();
     let fit = fit_wobj(&rows, &setup, pu.as_ref(), None).unwrap();
@@ -343,6 +344,7 @@ fn work_object_uncertainty_is_calibrated() {
         frames: BTreeMap::new(),
         deviation: &identity,
         default_wobj: None,
+        uncertainty: None,
     };
     let want = pose_to_xyz_deg(&wobj);
     let (mut inside, mut total) = (0, 0);

@@ -867,3 +867,89 @@ fn a_cell_that_disagrees_with_its_profile_is_refused() {
     assert!(err.contains("track_axis is 90.0"), "{err}");
     assert!(!out.exists(), "nothing may be written");
 }
+
+/// A profile fitted with `--measurements` carries knot uncertainties: `correct` then states
+/// the largest expanded uncertainty (k = 2) of a corrected TCP. For the sample (0.02 mm
+/// tracker noise, TCPs 2-2.5 m from the base) it lies between the noise itself and the largest
+/// correction; a profile without uncertainties states none.
+#[test]
+fn correct_states_the_expanded_uncertainty_when_the_profile_has_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let run = |args: &[&str]| {
+        let (code, out, err) = trackfix(args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        format!("{out}{err}")
+    };
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let meas = s(&root().join("samples/track/measurements.csv"));
+    let frames = d.join("frames.csv");
+    let profile = d.join("profile.toml");
+    run(&["track", "identify", &meas, "-o", &s(&frames)]);
+    run(&[
+        "track",
+        "fit",
+        &s(&frames),
+        "--measurements",
+        &meas,
+        "--name",
+        "r1",
+        "-o",
+        &s(&profile),
+    ]);
+    let cell = std::fs::read_to_string(root().join("samples/cell.toml"))
+        .unwrap()
+        .replace(
+            "profile = \"track/profile.toml\"",
+            &format!("profile = {:?}", s(&profile)),
+        )
+        .replace(
+            "profile = \"track/r2/profile.toml\"",
+            &format!(
+                "profile = {:?}",
+                s(&root().join("samples/track/r2/profile.toml"))
+            ),
+        );
+    let cell_path = d.join("cell.toml");
+    std::fs::write(&cell_path, cell).unwrap();
+    let module = s(&root().join("samples/rapid/spot_line.mod"));
+    let out = run(&[
+        "correct",
+        &module,
+        "--cell",
+        &s(&cell_path),
+        "--robot",
+        "r1",
+        "--skip-unsupported",
+        "--out-dir",
+        &s(&d.join("out")),
+    ]);
+    let u: f64 = out
+        .split("U (k=2) up to ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no uncertainty stated: {out}"));
+    let largest: f64 = out
+        .split("largest correction ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap();
+    assert!(
+        u > 2.0 * 0.02 && u < largest,
+        "U {u} mm, largest correction {largest} mm"
+    );
+    let plain = run(&[
+        "correct",
+        &module,
+        "--cell",
+        &s(&root().join("samples/cell.toml")),
+        "--robot",
+        "r1",
+        "--skip-unsupported",
+        "--out-dir",
+        &s(&d.join("out2")),
+    ]);
+    assert!(!plain.contains("U (k=2)"), "{plain}");
+}
