@@ -11,6 +11,7 @@ use trackfix::report::{
     CheckSummary, InspectOptions, InspectReport, findings, inspect_program, render_csv,
     render_table,
 };
+use trackfix::syntax::printable;
 
 use super::Exit;
 
@@ -89,6 +90,13 @@ struct Batch {
 
 fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
     let inputs = collect_inputs(files).context("listing the input files")?;
+    if inputs.is_empty() {
+        let names: Vec<_> = files.iter().map(|p| p.display().to_string()).collect();
+        anyhow::bail!(
+            "no RAPID or KRL program in {} (looked for .mod .modx .sys .sysx .prg .src .dat .sub)",
+            names.join(", ")
+        );
+    }
     let bar = if std::io::stderr().is_terminal() && inputs.len() > 20 {
         let bar = ProgressBar::new(inputs.len() as u64);
         bar.set_style(
@@ -108,7 +116,9 @@ fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
         bar.set_message(path.display().to_string());
         match load(path, options) {
             Ok(p) => batch.programs.push(p),
-            Err(e) if e.is_skip() => {
+            // A file named on the command line is meant to be a program: one that is not is
+            // an error, not a silent skip (a control byte must not bypass `check`).
+            Err(e) if e.is_skip() && !files.contains(path) => {
                 bar.suspend(|| {
                     let _ = writeln!(std::io::stderr(), "note: {e}");
                 });
@@ -185,6 +195,14 @@ pub fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
     };
     for program in &batch.programs {
         for file in &program.files {
+            if let Some((stamp, _)) = trackfix::transform::stamp::find(file) {
+                writeln!(
+                    out,
+                    "{}: stamped: {}",
+                    printable(&file.path.display().to_string()),
+                    printable(&stamp.text())
+                )?;
+            }
             let found = findings(file);
             summary.add_file(file, found.len());
             for d in &found {

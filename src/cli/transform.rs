@@ -13,12 +13,13 @@ use trackfix::output::{self, Destination, Roots, unified_diff};
 use trackfix::position::Program;
 use trackfix::program::{LoadOptions, collect_inputs, load};
 use trackfix::report::{FileSummary, would_change};
-use trackfix::syntax::Severity;
+use trackfix::syntax::{Severity, printable};
 use trackfix::track::{Profile, TrackError};
 use trackfix::transform::cell::skid_axis_index;
+use trackfix::transform::stamp;
 use trackfix::transform::{
-    Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, Remedy,
-    Robot, TrackSetup, TransferPlan, TransformStep, WorldPlane, apply, transfer,
+    Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, RefusalKind,
+    Remedy, Robot, Stamp, TrackSetup, TransferPlan, TransformStep, WorldPlane, apply, transfer,
 };
 
 use super::Exit;
@@ -45,9 +46,141 @@ pub struct OutputArgs {
     /// Exit 1 if anything would change; write nothing.
     #[arg(long, conflicts_with_all = ["output", "out_dir", "in_place"])]
     pub check: bool,
-    /// Leave unsupported targets (joint targets, 9E9 skids, …) unchanged instead of failing.
+    /// Leave targets refused for this reason unchanged instead of failing (repeatable, or
+    /// comma-separated); the run then exits 4 and lists them.
+    #[arg(long, value_name = "KIND", value_enum, value_delimiter = ',')]
+    pub keep: Vec<RefusalKind>,
+    /// Leave every refused target unchanged instead of failing: --keep for all kinds (exit 4
+    /// when any was left).
     #[arg(long)]
     pub skip_unsupported: bool,
+    /// Add no provenance stamp (the comment line after the header naming command, robot,
+    /// profile and version); the output then differs from the input only in changed numbers.
+    #[arg(long)]
+    pub no_stamp: bool,
+    /// Transform even a file whose stamp says it must not be: `correct` of a file already
+    /// corrected for the robot, `zero` of a file not stamped as corrected for it.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// The stamp a run writes and what the stamps already in the files must say.
+struct Provenance {
+    stamp: Stamp,
+    rule: StampRule,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum StampRule {
+    /// Nothing required.
+    Any,
+    /// `correct`: no file may already be corrected for the robot.
+    NotCorrected,
+    /// `zero`: some file must be stamped as corrected for the robot.
+    Corrected,
+}
+
+impl Provenance {
+    fn new(
+        command: &str,
+        robot: Option<&Robot>,
+        profile: Option<&Profile>,
+        rule: StampRule,
+    ) -> Self {
+        let hash = profile.map(Profile::data_sha256);
+        Provenance {
+            stamp: Stamp::new(
+                command,
+                robot.map(|r| r.name.as_str()),
+                profile.zip(hash.as_deref()).map(|(p, h)| (p.name(), h)),
+            ),
+            rule,
+        }
+    }
+}
+
+/// Refuses (exit 3) a `correct` of a program already corrected for the robot and a `zero` of one
+/// never corrected for it, unless `--force`.
+fn check_stamps(
+    command: &str,
+    programs: &[Program],
+    prov: &Provenance,
+    out: &OutputArgs,
+) -> anyhow::Result<Option<Exit>> {
+    let Some(robot) = prov.stamp.robot.as_deref() else {
+        return Ok(None);
+    };
+    if out.force || prov.rule == StampRule::Any {
+        return Ok(None);
+    }
+    let mut stderr = std::io::stderr().lock();
+    let mut refused = 0;
+    for p in programs {
+        let stamps: Vec<_> = p
+            .files
+            .iter()
+            .filter_map(|f| Some((f, stamp::find(f)?)))
+            .collect();
+        let corrected = stamps.iter().find(|(_, (s, _))| s.corrected_for(robot));
+        let name = p
+            .files
+            .first()
+            .map(|f| f.path.display().to_string())
+            .unwrap_or_default();
+        match (prov.rule, corrected) {
+            (StampRule::NotCorrected, Some((f, (s, span)))) => {
+                refused += 1;
+                let (line, _) = f.lines.line_col(span.start);
+                writeln!(
+                    stderr,
+                    "error: {}:{line}: already corrected for robot `{robot}` ({}): correcting again would apply the track's deviation twice\n  = help: correct the original, `zero` this one first, or pass --force if the stamp is wrong",
+                    printable(&f.path.display().to_string()),
+                    printable(&s.text())
+                )?;
+            }
+            (StampRule::Corrected, None) => {
+                refused += 1;
+                writeln!(
+                    stderr,
+                    "error: {}: no stamp says it is corrected for robot `{robot}`: zero removes a correction, and this file shows none\n  = help: pass --force to zero it anyway (an online-tuned program taught on the real track, or one corrected with --no-stamp)",
+                    printable(&name)
+                )?;
+            }
+            _ => {}
+        }
+    }
+    if refused == 0 {
+        return Ok(None);
+    }
+    writeln!(
+        stderr,
+        "error: {command} refused {refused} program(s) by their provenance stamp; nothing written"
+    )?;
+    Ok(Some(Exit::Refused))
+}
+
+/// Writes the stamp into every file the run changed (unless `--no-stamp`).
+fn stamp_results(results: &mut [ProgramResult], prov: &Provenance, out: &OutputArgs) {
+    if out.no_stamp {
+        return;
+    }
+    for f in results.iter_mut().flat_map(|r| r.files.iter_mut()) {
+        if !f.changed() {
+            continue;
+        }
+        if let Some(d) = trackfix::dialect::dialect_of(&f.path)
+            && let Some(stamped) = stamp::write(&f.output, d, &prov.stamp)
+        {
+            f.output = stamped;
+        }
+    }
+}
+
+impl OutputArgs {
+    /// Whether refusals of `kind` are left unchanged rather than stopping the run.
+    fn keeps(&self, kind: RefusalKind) -> bool {
+        self.skip_unsupported || self.keep.contains(&kind)
+    }
 }
 
 const CORRECT_EXAMPLES: &str = "\
@@ -247,6 +380,22 @@ fn drop_untouched_config(results: &mut [ProgramResult], config_dat: Option<&Path
     }
 }
 
+/// The name `--keep` takes for a refusal kind (clap's, from the library's enum).
+fn kind_name(kind: RefusalKind) -> String {
+    use clap::ValueEnum as _;
+    kind.to_possible_value()
+        .map_or_else(|| format!("{kind:?}"), |v| v.get_name().to_owned())
+}
+
+/// Exit 4 when the output was written with refused targets kept as written.
+fn written_exit(results: &[ProgramResult]) -> Exit {
+    if results.iter().any(|r| r.refusals().next().is_some()) {
+        Exit::Kept
+    } else {
+        Exit::Ok
+    }
+}
+
 /// The command-line flag that gives a refusal's remedy.
 fn remedy_flag(remedy: Remedy) -> &'static str {
     match remedy {
@@ -263,15 +412,27 @@ fn finish(
     inputs: &[PathBuf],
 ) -> anyhow::Result<Exit> {
     let mut stderr = std::io::stderr().lock();
+    for n in results
+        .iter()
+        .flat_map(|r| r.files.iter().flat_map(|f| &f.notes))
+    {
+        writeln!(
+            stderr,
+            "{}",
+            n.located(Severity::Note, "left as written; not a target")
+        )?;
+    }
     let refused: Vec<_> = results.iter().flat_map(|r| r.refusals()).collect();
+    let blocking = refused.iter().filter(|r| !out.keeps(r.kind)).count();
     for r in &refused {
-        // Skipped targets are reported as warnings: the run goes on without them.
-        let (severity, outcome) = if out.skip_unsupported {
-            (Severity::Warning, " (left unchanged)")
+        // Kept targets are reported as warnings: the run goes on without them.
+        let kind = kind_name(r.kind);
+        let (severity, outcome) = if out.keeps(r.kind) {
+            (Severity::Warning, " (kept as written)".to_owned())
         } else {
             (
                 Severity::Error,
-                ", or pass --skip-unsupported to leave it unchanged",
+                format!(", or pass --keep {kind} to leave it as written"),
             )
         };
         let advice = match r.remedy {
@@ -281,14 +442,22 @@ fn finish(
         writeln!(
             stderr,
             "{}",
-            r.located(severity, format!("{advice}{outcome}"))
+            r.located(severity, format!("{advice}{outcome} [{kind}]"))
         )?;
     }
-    if !refused.is_empty() && !out.skip_unsupported {
+    if blocking > 0 {
+        let mut kinds: Vec<_> = refused
+            .iter()
+            .filter(|r| !out.keeps(r.kind))
+            .map(|r| r.kind)
+            .collect();
+        kinds.sort();
+        kinds.dedup();
+        let kinds: Vec<_> = kinds.into_iter().map(kind_name).collect();
         writeln!(
             stderr,
-            "error: {command} refused {} target(s); nothing written (fix them, or pass --skip-unsupported to leave them unchanged)",
-            refused.len()
+            "error: {command} refused {blocking} target(s); nothing written (fix them, or leave them as written with --keep {}, or --skip-unsupported for every kind)",
+            kinds.join(",")
         )?;
         return Ok(Exit::Refused);
     }
@@ -340,7 +509,7 @@ fn write_outputs(
             stdout.flush()?;
             // The output is complete: a summary that cannot be shown changes nothing.
             let _ = summarize(command, results, &[], &mut stderr);
-            return Ok(Exit::Ok);
+            return Ok(written_exit(results));
         }
         Destination::File(o.clone())
     } else if let Some(d) = &out.out_dir {
@@ -362,7 +531,7 @@ fn write_outputs(
         let _ = writeln!(stderr, "note: nothing written: no file changed");
     }
     let _ = summarize(command, results, &written, &mut stderr);
-    Ok(Exit::Ok)
+    Ok(written_exit(results))
 }
 
 /// One line per input file: what changed, and every file written for it.
@@ -386,24 +555,62 @@ fn summarize(
 
 /// The one runner of every transform: load each program (with `robot`'s `$config.dat`), run
 /// `transform` on it in memory, then report, diff, check or write everything at once.
+#[allow(clippy::too_many_arguments)]
 fn run_each(
     command: &str,
     files: &[PathBuf],
     robot: Option<&Robot>,
     other_configs: &[Option<&Path>],
     out: &OutputArgs,
+    prov: &Provenance,
     transform: impl Fn(&Program) -> anyhow::Result<ProgramResult>,
 ) -> anyhow::Result<Exit> {
     let programs = load_programs(files, &load_options(robot))?;
+    if let Some(exit) = refuse_syntax_errors(command, &programs)? {
+        return Ok(exit);
+    }
+    if let Some(exit) = check_stamps(command, &programs, prov, out)? {
+        return Ok(exit);
+    }
     let mut results = Vec::new();
     for p in &programs {
         results.push(transform(p)?);
     }
+    stamp_results(&mut results, prov, out);
     drop_untouched_config(&mut results, robot.and_then(|r| r.config_dat.as_deref()));
     for cfg in other_configs {
         drop_untouched_config(&mut results, *cfg);
     }
     finish(command, &results, out, files)
+}
+
+/// A file with a syntax error (or one that does not print back byte for byte) is never
+/// transformed: what the parser could not read may hold targets that would stay uncorrected.
+/// Every error is shown, located; the run writes nothing and exits 2.
+fn refuse_syntax_errors(command: &str, programs: &[Program]) -> anyhow::Result<Option<Exit>> {
+    let mut stderr = std::io::stderr().lock();
+    let mut bad = Vec::new();
+    for file in programs.iter().flat_map(|p| &p.files) {
+        let errors: Vec<_> = trackfix::report::lints(file)
+            .into_iter()
+            .filter(|d| d.severity == Severity::Error)
+            .collect();
+        for d in &errors {
+            writeln!(stderr, "{}", file.render(d).trim_end())?;
+        }
+        if !errors.is_empty() {
+            bad.push(format!("{} ({})", file.path.display(), errors.len()));
+        }
+    }
+    if bad.is_empty() {
+        return Ok(None);
+    }
+    writeln!(
+        stderr,
+        "error: {command}: syntax errors in {}; a file that does not parse is never transformed: nothing written (fix them; `trackfix check` lists them)",
+        bad.join(", ")
+    )?;
+    Ok(Some(Exit::Usage))
 }
 
 /// [`run_each`] for one transform step.
@@ -413,8 +620,9 @@ fn run_step(
     robot: Option<&Robot>,
     step: TransformStep,
     out: &OutputArgs,
+    prov: &Provenance,
 ) -> anyhow::Result<Exit> {
-    run_each(command, files, robot, &[], out, |p| {
+    run_each(command, files, robot, &[], out, prov, |p| {
         Ok(apply(p, step.edits(p))?)
     })
 }
@@ -425,12 +633,17 @@ fn run_track(a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
     let profile = load_profile(&cell, robot)?;
     let mut setup = TrackSetup::new(robot, &profile);
     setup.default_wobj = a.default_wobj.clone();
+    let rule = match dir {
+        Direction::Correct => StampRule::NotCorrected,
+        Direction::Zero => StampRule::Corrected,
+    };
     run_step(
         dir.as_str(),
         &a.files,
         Some(robot),
         TransformStep::Track(&setup, dir),
         &a.out,
+        &Provenance::new(dir.as_str(), Some(robot), Some(&profile), rule),
     )
 }
 
@@ -502,6 +715,18 @@ fn run_mirror_inner(a: MirrorArgs) -> anyhow::Result<Exit> {
         Some(s) => axis("skid", s)?,
         None => robot.map_or(0, |r| r.skid_axis),
     };
+    require_plane(cell.as_ref(), &a.mirror)?;
+    if let (Some(c), None) = (&cell, robot) {
+        let plane = a.mirror.plane.or(c.mirror.plane).map_or("?", plane_name);
+        let frames = if c.mirror.frame_in == FrameIn::World {
+            "the cell's mirror frame in world, taken into each target's work object as the program declares it (the cell's [robot.NAME.wobj] entries are used only with --robot NAME)"
+        } else if c.mirror.frame.is_some() {
+            "the cell's mirror frame, in each target's own work object"
+        } else {
+            "each target's own work object"
+        };
+        let _ = writeln!(std::io::stderr(), "note: mirror: plane {plane} of {frames}");
+    }
     let settings = MirrorSettings {
         skid_axis_to: a
             .skid_to
@@ -522,7 +747,31 @@ fn run_mirror_inner(a: MirrorArgs) -> anyhow::Result<Exit> {
         robot,
         TransformStep::Mirror(&settings),
         &a.out,
+        &Provenance::new("mirror", robot, None, StampRule::Any),
     )
+}
+
+/// A mirror needs a plane: from `--plane` or the cell's `[mirror]` table, never a silent
+/// default.
+fn require_plane(cell: Option<&Cell>, o: &MirrorOptions) -> anyhow::Result<()> {
+    if o.plane.is_some() || cell.is_some_and(|c| c.mirror.plane.is_some()) {
+        return Ok(());
+    }
+    bail!(match cell {
+        Some(c) => format!(
+            "say which plane to mirror in: --plane xz|yz|xy, or `plane = \"xz\"` in the [mirror] table of {}",
+            c.path.display()
+        ),
+        None => "say which plane to mirror in: --plane xz|yz|xy, or --cell CELL.toml with a [mirror] table".to_owned(),
+    })
+}
+
+fn plane_name(p: Plane) -> &'static str {
+    match p {
+        Plane::Xy => "xy",
+        Plane::Xz => "xz",
+        Plane::Yz => "yz",
+    }
 }
 
 pub fn run_transfer(a: TransferArgs) -> anyhow::Result<Exit> {
@@ -535,6 +784,9 @@ fn run_transfer_inner(a: TransferArgs) -> anyhow::Result<Exit> {
     let to = cell.robot(&a.to)?;
     let from_profile = load_profile(&cell, from)?;
     let to_profile = load_profile(&cell, to)?;
+    if a.mirror {
+        require_plane(Some(&cell), &a.mirror_options)?;
+    }
     let mut plan = TransferPlan {
         from: TrackSetup::new(from, &from_profile),
         mirror: a.mirror.then(|| MirrorSettings {
@@ -558,6 +810,7 @@ fn run_transfer_inner(a: TransferArgs) -> anyhow::Result<Exit> {
         Some(from),
         &[to.config_dat.as_deref()],
         &a.out,
+        &Provenance::new("transfer", Some(to), Some(&to_profile), StampRule::Any),
         |p| Ok(transfer(p, &plan, &written)?),
     )
 }

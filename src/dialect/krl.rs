@@ -104,6 +104,14 @@ impl Dialect for Krl {
         &VOCABULARY
     }
 
+    fn line_comment(&self) -> Option<&'static str> {
+        Some(";")
+    }
+
+    fn header_keywords(&self) -> &'static [&'static str] {
+        &["DEF", "DEFDAT", "DEFFCT", "GLOBAL DEF", "GLOBAL DEFFCT"]
+    }
+
     fn axis_name(&self, index: usize) -> String {
         format!("E{}", index + 1)
     }

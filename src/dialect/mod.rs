@@ -65,6 +65,18 @@ pub trait Dialect: Sync + 'static {
 
     fn vocabulary(&self) -> &'static Vocabulary;
 
+    /// The mark that starts a comment running to the end of the line (`!`, `;`): trackfix's
+    /// provenance stamp is written as such a comment. `None`: files are not stamped.
+    fn line_comment(&self) -> Option<&'static str> {
+        None
+    }
+
+    /// Keywords opening a file's header (`MODULE`; `DEF`, `DEFDAT`): the provenance stamp is
+    /// the line after the first line that starts with one.
+    fn header_keywords(&self) -> &'static [&'static str] {
+        &[]
+    }
+
     /// The name of external axis `index` (0-based) as the language writes it.
     fn axis_name(&self, index: usize) -> String;
 
