@@ -16,6 +16,7 @@ use trackfix::report::{FileSummary, would_change};
 use trackfix::syntax::{Severity, printable};
 use trackfix::track::{Profile, TrackError};
 use trackfix::transform::cell::skid_axis_index;
+use trackfix::transform::rename::rename_program;
 use trackfix::transform::stamp;
 use trackfix::transform::{
     Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, RefusalKind,
@@ -501,6 +502,23 @@ fn write_outputs(
                 .join(", ")
         );
     }
+    // A KRL program written under a new name gets its DEF/DEFDAT renamed to match (KSS loads a
+    // module only when they agree).
+    let renamed_results: Vec<ProgramResult>;
+    let mut renames = Vec::new();
+    let results = match &out.output {
+        Some(o) if o.as_os_str() != "-" => {
+            let mut all = results.to_vec();
+            if let Some(stem) = o.file_stem().map(|s| s.to_string_lossy().into_owned()) {
+                for r in &mut all {
+                    renames.extend(rename_program(r, &stem)?);
+                }
+            }
+            renamed_results = all;
+            &renamed_results[..]
+        }
+        _ => results,
+    };
     let dest = if let Some(o) = &out.output {
         if o.as_os_str() == "-" {
             let bytes = output::stream_output(results)?;
@@ -531,6 +549,15 @@ fn write_outputs(
         let _ = writeln!(stderr, "note: nothing written: no file changed");
     }
     let _ = summarize(command, results, &written, &mut stderr);
+    for r in &renames {
+        let _ = writeln!(
+            stderr,
+            "note: {}: renamed `{}` to `{}` in the written file, to match its new file name (the controller needs them equal)",
+            printable(&r.path.display().to_string()),
+            printable(&r.from),
+            printable(&r.to)
+        );
+    }
     Ok(written_exit(results))
 }
 

@@ -104,6 +104,10 @@ impl Dialect for Krl {
         &VOCABULARY
     }
 
+    fn names_follow_file(&self) -> bool {
+        true
+    }
+
     fn line_comment(&self) -> Option<&'static str> {
         Some(";")
     }

@@ -71,6 +71,12 @@ pub trait Dialect: Sync + 'static {
         None
     }
 
+    /// Whether a program's main routine must carry its file's name (KRL `DEF spot_line(` in
+    /// `spot_line.src`): a program written under a new name then gets its header renamed.
+    fn names_follow_file(&self) -> bool {
+        false
+    }
+
     /// Keywords opening a file's header (`MODULE`; `DEF`, `DEFDAT`): the provenance stamp is
     /// the line after the first line that starts with one.
     fn header_keywords(&self) -> &'static [&'static str] {

@@ -13,6 +13,7 @@ pub mod mirror;
 pub mod output;
 pub(crate) mod policy;
 pub mod refusal;
+pub mod rename;
 pub mod rewrite;
 pub mod stamp;
 pub mod track_correction;

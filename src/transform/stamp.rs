@@ -147,25 +147,58 @@ fn lines(src: &[u8]) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
 
 /// Where the header line is: its content end and the end of its terminator.
 fn header(src: &[u8], keywords: &[&str]) -> Option<(usize, usize)> {
+    header_name(src, keywords).map(|h| (h.end, h.next))
+}
+
+/// The header line of a file and the name it declares.
+pub(crate) struct Header {
+    /// The span of the declared name (`spot_line` in `DEF spot_line( )`).
+    pub name: Span,
+    /// Content end and terminator end of the header line.
+    pub end: usize,
+    pub next: usize,
+}
+
+/// The first line that opens with one of `keywords` (ASCII case ignored, after blanks and a
+/// BOM), and the name after the keyword.
+pub(crate) fn header_name(src: &[u8], keywords: &[&str]) -> Option<Header> {
     for (start, end, next) in lines(src) {
         let text = &src[start..end];
-        let lead = text
+        let mut at = text
             .iter()
             .take_while(|b| matches!(b, b' ' | b'\t'))
             .count();
-        // A BOM before the first keyword.
-        let body = text[lead..]
-            .strip_prefix(b"\xEF\xBB\xBF")
-            .unwrap_or(&text[lead..]);
-        let opens = keywords.iter().any(|k| {
-            body.len() >= k.len()
-                && body[..k.len()].eq_ignore_ascii_case(k.as_bytes())
-                && body
-                    .get(k.len())
-                    .is_none_or(|b| matches!(b, b' ' | b'\t' | b'('))
-        });
-        if opens {
-            return Some((end, next));
+        if text[at..].starts_with(b"\xEF\xBB\xBF") {
+            at += 3;
+        }
+        let body = &text[at..];
+        // The longest keyword that matches (`DEFDAT` before `DEF`).
+        let keyword = keywords
+            .iter()
+            .filter(|k| {
+                body.len() >= k.len()
+                    && body[..k.len()].eq_ignore_ascii_case(k.as_bytes())
+                    && body
+                        .get(k.len())
+                        .is_none_or(|b| matches!(b, b' ' | b'\t' | b'('))
+            })
+            .max_by_key(|k| k.len());
+        if let Some(k) = keyword {
+            let rest = &body[k.len()..];
+            let blanks = rest
+                .iter()
+                .take_while(|b| matches!(b, b' ' | b'\t'))
+                .count();
+            let len = rest[blanks..]
+                .iter()
+                .take_while(|b| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'$'))
+                .count();
+            let name_start = start + at + k.len() + blanks;
+            return Some(Header {
+                name: Span::new(name_start, name_start + len),
+                end,
+                next,
+            });
         }
     }
     None

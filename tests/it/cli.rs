@@ -360,3 +360,46 @@ fn check_of_nothing_or_of_a_named_binary_file_is_an_error() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stdout(&o).contains("the file is empty"), "{}", stdout(&o));
 }
+
+/// A man page for every subcommand: `trackfix man correct` prints one, `--out-dir` writes all.
+#[test]
+fn man_pages_for_every_subcommand() {
+    let o = trackfix(&["man", "correct"]);
+    assert_eq!(o.status.code(), Some(0));
+    let page = stdout(&o);
+    assert!(page.contains(".TH trackfix-correct 1"), "{}", &page[..200]);
+    assert!(page.contains("keep"), "the page lists the options");
+    let o = trackfix(&["man", "track", "fit"]);
+    assert!(stdout(&o).contains("trackfix\\-track\\-fit"));
+    let o = trackfix(&["man", "nope"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("pages: inspect, check"),
+        "{}",
+        stderr(&o)
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("man");
+    let o = trackfix(&["man", "--out-dir", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    for name in [
+        "trackfix",
+        "trackfix-inspect",
+        "trackfix-check",
+        "trackfix-correct",
+        "trackfix-zero",
+        "trackfix-mirror",
+        "trackfix-transfer",
+        "trackfix-reach",
+        "trackfix-track",
+        "trackfix-track-identify",
+        "trackfix-track-fit",
+        "trackfix-track-show",
+        "trackfix-track-spectrum",
+        "trackfix-accuracy-pose",
+        "trackfix-accuracy-path",
+    ] {
+        let page = std::fs::read_to_string(out.join(format!("{name}.1"))).unwrap();
+        assert!(page.contains(&format!(".TH {name} 1")), "{name}");
+    }
+}

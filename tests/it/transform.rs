@@ -524,8 +524,33 @@ fn round_trips_through_files() {
             &m3,
             "--skip-unsupported",
         ]);
-        assert_eq!(std::fs::read(&m1).unwrap(), std::fs::read(&m3).unwrap());
+        // The same bytes but the KRL header names, which follow the file names (m1, m3).
+        assert_eq!(
+            unnamed(&std::fs::read(&m1).unwrap()),
+            unnamed(&std::fs::read(&m3).unwrap())
+        );
     }
+}
+
+/// A file's text with the name of its KRL `DEF`/`DEFDAT` header blanked: a program written
+/// under another file name carries that name there.
+fn unnamed(bytes: &[u8]) -> String {
+    trackfix::syntax::latin1(bytes)
+        .split_inclusive('\n')
+        .map(|l| {
+            let t = l.trim_start();
+            for k in ["DEFDAT", "DEF"] {
+                if let Some(rest) = t.strip_prefix(k) {
+                    let name_end = rest
+                        .trim_start()
+                        .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+                        .unwrap_or(rest.trim_start().len());
+                    return format!("{k} _{}", &rest.trim_start()[name_end..]);
+                }
+            }
+            l.to_owned()
+        })
+        .collect()
 }
 
 /// DESIGN.md §4: transfer equals zero; mirror; correct, byte for byte, through files.
@@ -580,12 +605,20 @@ fn transfer_equals_zero_mirror_correct() {
         let chained = std::fs::read(&c).unwrap();
         let transferred = std::fs::read(Path::new(&out).join(format!("{stem}.{ext}"))).unwrap();
         let original = std::fs::read(root().join(sample)).unwrap();
-        same_but_unmoved(&original, &chained, &transferred, sample);
+        let chained = unnamed(&chained).into_bytes();
+        let transferred = unnamed(&transferred).into_bytes();
+        same_but_unmoved(
+            &unnamed(&original).into_bytes(),
+            &chained,
+            &transferred,
+            sample,
+        );
         if ext == "src" {
             let a = std::fs::read(Path::new(&c).with_extension("dat")).unwrap();
             let b = std::fs::read(Path::new(&out).join(format!("{stem}.dat"))).unwrap();
             let o = std::fs::read(root().join("samples/krl/spot_line.dat")).unwrap();
-            same_but_unmoved(&o, &a, &b, "spot_line.dat");
+            let (a, b, o) = (unnamed(&a), unnamed(&b), unnamed(&o));
+            same_but_unmoved(o.as_bytes(), a.as_bytes(), b.as_bytes(), "spot_line.dat");
             assert!(a != o);
         }
     }
@@ -1370,4 +1403,44 @@ fn control_characters_are_escaped_in_diagnostics() {
     assert_eq!(code, 2);
     assert!(!err.contains('\u{1b}'), "{err:?}");
     drop(dir);
+}
+
+/// A KRL pair written under a new name gets `DEF`/`DEFDAT` renamed to it, and says so; a name
+/// KRL cannot take is refused with nothing written.
+#[test]
+fn krl_pair_under_a_new_name_renames_def_and_defdat() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("side_b.src");
+    let args = |o: &str| {
+        vec![
+            "correct".to_owned(),
+            "samples/krl/spot_line.src".to_owned(),
+            "--cell".to_owned(),
+            "samples/cell.toml".to_owned(),
+            "--robot".to_owned(),
+            "r1".to_owned(),
+            "--skip-unsupported".to_owned(),
+            "-o".to_owned(),
+            o.to_owned(),
+        ]
+    };
+    let a = args(out.to_str().unwrap());
+    let (code, _, err) = trackfix(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(code == 0 || code == 4, "{err}");
+    assert!(err.contains("renamed `spot_line` to `side_b`"), "{err}");
+    let src = trackfix::syntax::latin1(&std::fs::read(&out).unwrap());
+    let dat = trackfix::syntax::latin1(&std::fs::read(out.with_extension("dat")).unwrap());
+    assert!(src.contains("\nDEF side_b( )"), "{}", &src[..300]);
+    assert!(!src.contains("DEF spot_line("));
+    assert!(dat.contains("\nDEFDAT  side_b PUBLIC"), "{}", &dat[..300]);
+    // Everything else of the .src is the input's.
+    let original =
+        trackfix::syntax::latin1(&std::fs::read(root().join("samples/krl/spot_line.src")).unwrap());
+    assert_eq!(src, original.replacen("DEF spot_line(", "DEF side_b(", 1));
+    let bad = dir.path().join("2-side.src");
+    let a = args(bad.to_str().unwrap());
+    let (code, _, err) = trackfix(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("cannot be the name of a krl program"), "{err}");
+    assert_eq!(listing(dir.path()), ["side_b.dat", "side_b.src"]);
 }
