@@ -73,6 +73,19 @@ pub struct CheckArgs {
     /// KUKA $config.dat whose BASE_DATA/TOOL_DATA resolve KRL bases and tools.
     #[arg(long, value_name = "FILE")]
     pub config_dat: Option<PathBuf>,
+    /// `json`: `{"files": [{"path", "stamp", "findings": [...]}], "summary": {...}}` on
+    /// standard output.
+    #[arg(long, value_enum, default_value_t = super::transform::ReportFormat::Text)]
+    pub format: super::transform::ReportFormat,
+}
+
+/// One file of `check --format json`.
+#[derive(serde::Serialize)]
+struct CheckedFile {
+    path: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    stamp: Option<trackfix::transform::Stamp>,
+    findings: Vec<trackfix::report::Message>,
 }
 
 fn parse_axis(name: &str) -> Result<usize, String> {
@@ -193,8 +206,23 @@ pub fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
         unreadable: batch.errors,
         ..CheckSummary::default()
     };
+    let json = args.format == super::transform::ReportFormat::Json;
+    let mut checked = Vec::new();
     for program in &batch.programs {
         for file in &program.files {
+            if json {
+                let found = findings(file);
+                summary.add_file(file, found.len());
+                checked.push(CheckedFile {
+                    path: file.path.display().to_string(),
+                    stamp: trackfix::transform::stamp::find(file).map(|(s, _)| s),
+                    findings: found
+                        .iter()
+                        .map(|d| trackfix::report::message(file, d))
+                        .collect(),
+                });
+                continue;
+            }
             if let Some((stamp, _)) = trackfix::transform::stamp::find(file) {
                 writeln!(
                     out,
@@ -210,7 +238,12 @@ pub fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
             }
         }
     }
-    writeln!(out, "{summary}")?;
+    if json {
+        let doc = serde_json::json!({ "files": checked, "summary": summary });
+        writeln!(out, "{}", serde_json::to_string_pretty(&doc)?)?;
+    } else {
+        writeln!(out, "{summary}")?;
+    }
     let findings = summary.findings;
     Ok(if batch.errors > 0 {
         Exit::Usage

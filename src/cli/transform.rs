@@ -4,7 +4,7 @@
 //! nothing written, unless `--skip-unsupported`), then either print a diff, check, or plan and
 //! write all outputs atomically.
 
-use std::io::Write as _;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, bail};
@@ -63,6 +63,180 @@ pub struct OutputArgs {
     /// corrected for the robot, `zero` of a file not stamped as corrected for it.
     #[arg(long)]
     pub force: bool,
+    /// Print errors only: no per-file lines, warnings or notes.
+    #[arg(short, long, conflicts_with = "verbose")]
+    pub quiet: bool,
+    /// Print every warning and note (repeated ones are otherwise shown 3 times, then counted).
+    #[arg(short, long)]
+    pub verbose: bool,
+    /// `json`: the summary, refusals and notes as one JSON document on standard output
+    /// (nothing on standard error but a failure).
+    #[arg(long, value_enum, default_value_t = ReportFormat::Text, conflicts_with = "diff")]
+    pub format: ReportFormat,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum ReportFormat {
+    #[default]
+    Text,
+    Json,
+}
+
+/// How many messages of one kind are shown before the rest are counted (unless `-v`).
+const SHOWN_PER_KIND: usize = 3;
+
+/// Prints diagnostics with repeats grouped: the first few of each kind, then a count.
+struct Messages<'a> {
+    out: &'a OutputArgs,
+    seen: std::collections::BTreeMap<(Severity, String), usize>,
+}
+
+impl<'a> Messages<'a> {
+    fn new(out: &'a OutputArgs) -> Self {
+        Messages {
+            out,
+            seen: Default::default(),
+        }
+    }
+
+    /// Shows `text` unless quiet (errors always), JSON, or the kind was shown often enough.
+    fn show(
+        &mut self,
+        w: &mut impl Write,
+        severity: Severity,
+        kind: &str,
+        text: &dyn std::fmt::Display,
+    ) -> std::io::Result<()> {
+        if self.out.format == ReportFormat::Json || (self.out.quiet && severity < Severity::Error) {
+            return Ok(());
+        }
+        let n = self.seen.entry((severity, kind.to_owned())).or_default();
+        *n += 1;
+        if *n <= SHOWN_PER_KIND || self.out.verbose {
+            writeln!(w, "{text}")?;
+        }
+        Ok(())
+    }
+
+    /// The counts of what was not shown.
+    fn finish(&self, w: &mut impl Write) -> std::io::Result<()> {
+        for ((severity, kind), n) in &self.seen {
+            if *n > SHOWN_PER_KIND && !self.out.verbose {
+                writeln!(
+                    w,
+                    "{}: … and {} more like this [{kind}] (-v shows all)",
+                    severity.as_str(),
+                    n - SHOWN_PER_KIND
+                )?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One refusal or note in `--format json`.
+#[derive(serde::Serialize)]
+struct JsonRefusal<'a> {
+    #[serde(flatten)]
+    refusal: &'a trackfix::transform::Refusal,
+    /// `true`: left as written (`--keep`), `false`: it stopped the run.
+    kept: bool,
+}
+
+/// `--format json` of a transform run.
+#[derive(serde::Serialize)]
+struct JsonReport<'a> {
+    command: &'a str,
+    exit: u8,
+    files: Vec<FileSummary>,
+    refusals: Vec<JsonRefusal<'a>>,
+    notes: Vec<&'a trackfix::transform::Refusal>,
+    renamed: &'a [trackfix::transform::rename::Renamed],
+    totals: Totals,
+}
+
+/// The one line a run ends with (a batch of several programs), and its JSON.
+#[derive(Debug, Default, serde::Serialize)]
+struct Totals {
+    programs: usize,
+    files: usize,
+    changed_files: usize,
+    written: usize,
+    targets_changed: usize,
+    refused: usize,
+    kept: usize,
+    notes: usize,
+}
+
+impl Totals {
+    fn of(results: &[ProgramResult], written: usize, out: &OutputArgs) -> Totals {
+        let files = results.iter().flat_map(|r| &r.files);
+        let refusals: Vec<_> = results.iter().flat_map(|r| r.refusals()).collect();
+        Totals {
+            programs: results.len(),
+            files: files.clone().count(),
+            changed_files: files.clone().filter(|f| f.changed()).count(),
+            written,
+            targets_changed: files.clone().map(|f| f.changes.len()).sum(),
+            refused: refusals.iter().filter(|r| !out.keeps(r.kind)).count(),
+            kept: refusals.iter().filter(|r| out.keeps(r.kind)).count(),
+            notes: files.map(|f| f.notes.len()).sum(),
+        }
+    }
+}
+
+impl std::fmt::Display for Totals {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "total: {} programs ({} files): {} target(s) changed in {} files, {} written, {} refused, {} kept as written, {} notes",
+            self.programs,
+            self.files,
+            self.targets_changed,
+            self.changed_files,
+            self.written,
+            self.refused,
+            self.kept,
+            self.notes
+        )
+    }
+}
+
+/// Prints the JSON report of a run (`--format json`) and passes its exit code on.
+fn json_report(
+    command: &str,
+    results: &[ProgramResult],
+    summaries: Vec<FileSummary>,
+    renamed: &[trackfix::transform::rename::Renamed],
+    written: usize,
+    out: &OutputArgs,
+    exit: Exit,
+) -> anyhow::Result<Exit> {
+    let report = JsonReport {
+        command,
+        exit: exit as u8,
+        files: summaries,
+        refusals: results
+            .iter()
+            .flat_map(|r| r.refusals())
+            .map(|r| JsonRefusal {
+                refusal: r,
+                kept: out.keeps(r.kind),
+            })
+            .collect(),
+        notes: results
+            .iter()
+            .flat_map(|r| r.files.iter().flat_map(|f| &f.notes))
+            .collect(),
+        renamed,
+        totals: Totals::of(results, written, out),
+    };
+    let mut text = serde_json::to_string_pretty(&report)?;
+    text.push('\n');
+    let mut stdout = std::io::stdout().lock();
+    stdout.write_all(text.as_bytes())?;
+    stdout.flush()?;
+    Ok(exit)
 }
 
 /// The stamp a run writes and what the stamps already in the files must say.
@@ -413,15 +587,13 @@ fn finish(
     inputs: &[PathBuf],
 ) -> anyhow::Result<Exit> {
     let mut stderr = std::io::stderr().lock();
+    let mut messages = Messages::new(out);
     for n in results
         .iter()
         .flat_map(|r| r.files.iter().flat_map(|f| &f.notes))
     {
-        writeln!(
-            stderr,
-            "{}",
-            n.located(Severity::Note, "left as written; not a target")
-        )?;
+        let text = n.located(Severity::Note, "left as written; not a target");
+        messages.show(&mut stderr, Severity::Note, &kind_name(n.kind), &text)?;
     }
     let refused: Vec<_> = results.iter().flat_map(|r| r.refusals()).collect();
     let blocking = refused.iter().filter(|r| !out.keeps(r.kind)).count();
@@ -440,12 +612,10 @@ fn finish(
             Some(remedy) => remedy_flag(remedy),
             None => &r.hint,
         };
-        writeln!(
-            stderr,
-            "{}",
-            r.located(severity, format!("{advice}{outcome} [{kind}]"))
-        )?;
+        let text = r.located(severity, format!("{advice}{outcome} [{kind}]"));
+        messages.show(&mut stderr, severity, &kind, &text)?;
     }
+    messages.finish(&mut stderr)?;
     if blocking > 0 {
         let mut kinds: Vec<_> = refused
             .iter()
@@ -455,6 +625,14 @@ fn finish(
         kinds.sort();
         kinds.dedup();
         let kinds: Vec<_> = kinds.into_iter().map(kind_name).collect();
+        if out.format == ReportFormat::Json {
+            let summaries = results
+                .iter()
+                .flat_map(|r| &r.files)
+                .map(|f| FileSummary::new(f, command == "mirror"))
+                .collect();
+            return json_report(command, results, summaries, &[], 0, out, Exit::Refused);
+        }
         writeln!(
             stderr,
             "error: {command} refused {blocking} target(s); nothing written (fix them, or leave them as written with --keep {}, or --skip-unsupported for every kind)",
@@ -474,10 +652,21 @@ fn finish(
         for f in results.iter().flat_map(|r| &r.files) {
             if let Some(line) = would_change(f) {
                 any = true;
-                writeln!(stderr, "{line}")?;
+                if out.format == ReportFormat::Text {
+                    writeln!(stderr, "{line}")?;
+                }
             }
         }
-        return Ok(if any { Exit::Findings } else { Exit::Ok });
+        let exit = if any { Exit::Findings } else { Exit::Ok };
+        if out.format == ReportFormat::Json {
+            let summaries = results
+                .iter()
+                .flat_map(|r| &r.files)
+                .map(|f| FileSummary::new(f, command == "mirror"))
+                .collect();
+            return json_report(command, results, summaries, &[], 0, out, exit);
+        }
+        return Ok(exit);
     }
     write_outputs(command, results, out, inputs)
 }
@@ -526,7 +715,7 @@ fn write_outputs(
             stdout.write_all(bytes)?;
             stdout.flush()?;
             // The output is complete: a summary that cannot be shown changes nothing.
-            let _ = summarize(command, results, &[], &mut stderr);
+            let _ = summarize(command, results, &[], out, &mut stderr);
             return Ok(written_exit(results));
         }
         Destination::File(o.clone())
@@ -545,11 +734,24 @@ fn write_outputs(
     let written = output::commit(&writes)?;
     // The files are written: a summary that cannot be shown (stderr full or closed) changes
     // nothing about the outcome.
-    if written.is_empty() {
+    let exit = written_exit(results);
+    if out.format == ReportFormat::Json {
+        let summaries = summaries(command, results, &written);
+        return json_report(
+            command,
+            results,
+            summaries,
+            &renames,
+            written.len(),
+            out,
+            exit,
+        );
+    }
+    if written.is_empty() && !out.quiet {
         let _ = writeln!(stderr, "note: nothing written: no file changed");
     }
-    let _ = summarize(command, results, &written, &mut stderr);
-    for r in &renames {
+    let _ = summarize(command, results, &written, out, &mut stderr);
+    for r in renames.iter().filter(|_| !out.quiet) {
         let _ = writeln!(
             stderr,
             "note: {}: renamed `{}` to `{}` in the written file, to match its new file name (the controller needs them equal)",
@@ -561,13 +763,13 @@ fn write_outputs(
     Ok(written_exit(results))
 }
 
-/// One line per input file: what changed, and every file written for it.
-fn summarize(
+/// The summary of every input file: what changed, and every file written for it.
+fn summaries(
     command: &str,
     results: &[ProgramResult],
     written: &[output::Written],
-    stderr: &mut impl std::io::Write,
-) -> anyhow::Result<Exit> {
+) -> Vec<FileSummary> {
+    let mut out = Vec::new();
     for f in results.iter().flat_map(|r| &r.files) {
         let mut summary = FileSummary::new(f, command == "mirror");
         if let Some(w) = written.iter().find(|w| w.input == f.path) {
@@ -575,7 +777,27 @@ fn summarize(
             summary.link_target.clone_from(&w.resolved);
             summary.backup.clone_from(&w.backup);
         }
+        out.push(summary);
+    }
+    out
+}
+
+/// One line per input file (unless `-q`), and a totals line for a batch of several programs.
+fn summarize(
+    command: &str,
+    results: &[ProgramResult],
+    written: &[output::Written],
+    out: &OutputArgs,
+    stderr: &mut impl std::io::Write,
+) -> anyhow::Result<Exit> {
+    if out.quiet {
+        return Ok(Exit::Ok);
+    }
+    for summary in summaries(command, results, written) {
         writeln!(stderr, "{summary}")?;
+    }
+    if results.len() > 1 {
+        writeln!(stderr, "{}", Totals::of(results, written.len(), out))?;
     }
     Ok(Exit::Ok)
 }
@@ -599,10 +821,22 @@ fn run_each(
     if let Some(exit) = check_stamps(command, &programs, prov, out)? {
         return Ok(exit);
     }
+    // A progress bar on a terminal only, for a batch long enough to wait for.
+    let bar = if std::io::IsTerminal::is_terminal(&std::io::stderr())
+        && programs.len() > 20
+        && !out.quiet
+        && out.format == ReportFormat::Text
+    {
+        indicatif::ProgressBar::new(programs.len() as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
     let mut results = Vec::new();
     for p in &programs {
         results.push(transform(p)?);
+        bar.inc(1);
     }
+    bar.finish_and_clear();
     stamp_results(&mut results, prov, out);
     drop_untouched_config(&mut results, robot.and_then(|r| r.config_dat.as_deref()));
     for cfg in other_configs {

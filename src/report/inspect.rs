@@ -295,7 +295,8 @@ fn frame_row(f: &FrameDecl, language: Language) -> FrameRow {
     }
 }
 
-fn message(file: &ParsedFile, d: &Diagnostic) -> Message {
+/// A diagnostic of `file` as a located message (line and column, no source text).
+pub fn message(file: &ParsedFile, d: &Diagnostic) -> Message {
     let (line, column) = file.lines.line_col(d.span.start);
     Message {
         line,

@@ -1364,6 +1364,7 @@ fn refusals_on_one_long_line_render_a_window() {
         "--robot",
         "r1",
         "--diff",
+        "-v",
     ]);
     assert_eq!(code, 3);
     assert_eq!(
@@ -1443,4 +1444,87 @@ fn krl_pair_under_a_new_name_renames_def_and_defdat() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("cannot be the name of a krl program"), "{err}");
     assert_eq!(listing(dir.path()), ["side_b.dat", "side_b.src"]);
+}
+
+/// A batch: repeated warnings grouped (3 shown, then counted; `-v` shows all), one totals line,
+/// `-q` prints nothing but errors, `--format json` is one document on standard output.
+#[test]
+fn batch_reports_group_repeats_end_with_totals_and_speak_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in");
+    std::fs::create_dir(&input).unwrap();
+    for i in 0..5 {
+        std::fs::copy(
+            root().join("samples/rapid/spot_line.mod"),
+            input.join(format!("m{i}.mod")),
+        )
+        .unwrap();
+    }
+    let run = |extra: &[&str], out: &str| {
+        let o = dir.path().join(out);
+        trackfix(
+            &[
+                &[
+                    "correct",
+                    input.to_str().unwrap(),
+                    "--cell",
+                    "samples/cell.toml",
+                    "--robot",
+                    "r1",
+                    "--keep",
+                    "joint-target",
+                    "--out-dir",
+                    o.to_str().unwrap(),
+                ],
+                extra,
+            ]
+            .concat(),
+        )
+    };
+    let (code, _, err) = run(&[], "a");
+    assert_eq!(code, 4, "{err}");
+    assert_eq!(
+        err.matches("warning: jointtarget `jHome`").count(),
+        3,
+        "{err}"
+    );
+    assert!(
+        err.contains("warning: … and 2 more like this [joint-target] (-v shows all)"),
+        "{err}"
+    );
+    let last = err.lines().last().unwrap();
+    assert_eq!(
+        last,
+        "total: 5 programs (5 files): 1130 target(s) changed in 5 files, 5 written, 0 refused, 5 kept as written, 0 notes"
+    );
+    let (_, _, err) = run(&["-v"], "b");
+    assert_eq!(
+        err.matches("warning: jointtarget `jHome`").count(),
+        5,
+        "{err}"
+    );
+    assert!(!err.contains("more like this"));
+    let (code, out, err) = run(&["-q"], "c");
+    assert_eq!((code, out.as_str(), err.as_str()), (4, "", ""));
+    let (code, out, err) = run(&["--format", "json"], "d");
+    assert_eq!(code, 4);
+    assert_eq!(err, "");
+    let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(doc["exit"], 4);
+    assert_eq!(doc["files"].as_array().unwrap().len(), 5);
+    assert_eq!(doc["refusals"][0]["kind"], "joint-target");
+    assert_eq!(doc["refusals"][0]["kept"], true);
+    assert_eq!(doc["totals"]["targets_changed"], 1130);
+    assert!(
+        doc["files"][0]["written_to"]
+            .as_str()
+            .unwrap()
+            .ends_with(".mod")
+    );
+    // check --format json.
+    let (code, out, _) = trackfix(&["check", "samples/rapid/two_wobjs.mod", "--format", "json"]);
+    assert_eq!(code, 1);
+    let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(doc["summary"]["findings"].as_u64().unwrap() >= 1);
+    assert!(doc["files"][0]["findings"][0]["line"].as_u64().unwrap() > 0);
 }
