@@ -1528,3 +1528,29 @@ fn batch_reports_group_repeats_end_with_totals_and_speak_json() {
     assert!(doc["summary"]["findings"].as_u64().unwrap() >= 1);
     assert!(doc["files"][0]["findings"][0]["line"].as_u64().unwrap() > 0);
 }
+
+/// `--mirror-frames` mirrors a tool's load like its frame, with `Sb` (tool flip y): the centre of
+/// gravity's y changes sign, the axes of moment `Rx(90°)` become `Rx(-90°)`; mass and moments
+/// stay.
+#[test]
+fn mirror_frames_mirrors_the_tool_load_centre_of_gravity() {
+    let (dir, input) = scratch_with(
+        "t.mod",
+        "MODULE t\n  PERS tooldata tGun:=[TRUE,[[12.5,-3.2,412.8],[0.965926,0,0.258819,0]],[48.5,[10,20,180],[0.707107,0.707107,0,0],0.9,1.1,0.6]];\nENDMODULE\n",
+    );
+    let (code, out, err) = trackfix(&[
+        "mirror",
+        input.to_str().unwrap(),
+        "--plane",
+        "xz",
+        "--mirror-frames",
+        "--no-stamp",
+        "--diff",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("+  PERS tooldata tGun:=[TRUE,[[12.5,3.200,412.8],[0.965926,0,0.258819,0]],[48.5,[10,-20.000,180],[0.707107,-0.707107,0,0],0.9,1.1,0.6]];"),
+        "{out}"
+    );
+    drop(dir);
+}
