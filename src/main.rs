@@ -1,7 +1,8 @@
 //! The `trackfix` command line: parse flags, run, map outcomes to documented exit codes.
 //!
-//! Exit codes (DESIGN.md §5): 0 ok, 1 findings (`check`, `--check` differences), 2 usage or
-//! input error, 3 a transform refused.
+//! Exit codes (docs/design.md §7): 0 ok, 1 findings (`check`, `--check` differences), 2 usage
+//! or input error, 3 a transform refused, 4 a transform wrote its output with refused targets
+//! kept as written.
 
 // stdout and stderr go through `writeln!`, never `println!`/`eprintln!`: a closed pipe or a
 // full disk is an error we handle (a closed pipe is success), not a panic (Cargo.toml [lints]).
@@ -23,7 +24,8 @@ Examples:
   trackfix correct program.mod --cell samples/cell.toml --robot r1 -o corrected.mod
   trackfix transfer samples/rapid/spot_line.mod --cell samples/cell.toml --from r1 --to r2 --mirror --out-dir out/
 
-Exit codes: 0 ok, 1 findings (check, --check), 2 usage or input error, 3 transform refused.";
+Exit codes: 0 ok, 1 findings (check, --check), 2 usage or input error, 3 transform refused,
+4 written with refused targets kept as written (--keep, --skip-unsupported).";
 
 /// Model a robot's deformed linear track and rewrite ABB RAPID and KUKA KRL programs for it,
 /// losslessly: everything not changed stays byte for byte.

@@ -1,8 +1,9 @@
 //! `trackfix correct | zero | mirror | transfer`.
 //!
-//! Every command: load the programs, compute every result in memory, report refusals (exit 3,
-//! nothing written, unless `--skip-unsupported`), then either print a diff, check, or plan and
-//! write all outputs atomically.
+//! Every command: load the programs (a syntax error stops the run, exit 2), check their
+//! provenance stamps, compute every result in memory, report refusals (exit 3, nothing written,
+//! unless their kinds are kept with `--keep`/`--skip-unsupported`: exit 4 once written), then
+//! either print a diff, check, or plan and write all outputs atomically, stamped.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -71,6 +71,12 @@ pub trait Dialect: Sync + 'static {
         None
     }
 
+    /// What makes the configuration written in a target's literal text absurd, when the model
+    /// could not read it (KRL `T 1e30`, `S 1.5`), in words; `None` if nothing.
+    fn implausible_configuration(&self, _literal: &[u8]) -> Option<String> {
+        None
+    }
+
     /// Whether a program's main routine must carry its file's name (KRL `DEF spot_line(` in
     /// `spot_line.src`): a program written under a new name then gets its header renamed.
     fn names_follow_file(&self) -> bool {

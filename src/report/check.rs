@@ -86,7 +86,7 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
                 );
             }
         }
-        if let Some(problem) = crate::transform::policy::implausible_literal(p) {
+        if let Some(problem) = crate::transform::policy::implausible_literal(file, p) {
             out.push(
                 Diagnostic::warning(p.span, format!("`{}` {problem}", p.label())).with_hint(
                     "a typo or a placeholder: transforms refuse the target until it is fixed",

@@ -189,7 +189,7 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
             "check the coordinates (mm)",
         );
     }
-    if let Some(problem) = implausible_literal(p) {
+    if let Some(problem) = implausible_literal(file, p) {
         return refuse(
             RefusalKind::Implausible,
             format!("{what} {problem}"),
@@ -228,8 +228,15 @@ pub const PLAUSIBLE_QUATERNION_NORM_ERROR: f64 = 0.01;
 
 /// What makes the literals of a Cartesian target absurd, in words ("has cf4 = 1.5, …"), or
 /// `None`. Shared by `check` (a finding) and every transform (a refusal).
-pub fn implausible_literal(p: &Position) -> Option<String> {
+pub fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<String> {
     use crate::position::{Config, Orientation};
+    if let Some(problem) = file
+        .language
+        .dialect()
+        .implausible_configuration(p.span.slice(&file.source))
+    {
+        return Some(problem);
+    }
     if let Some(c) = &p.cartesian {
         match &c.orient {
             Some(Orientation::Abc(abc)) => {

@@ -1272,7 +1272,7 @@ fn absurd_values_are_named_refusals_and_check_findings() {
     );
     assert!(err.contains("[implausible]"), "{err}");
     drop(dir);
-    let krl = "DEFDAT a\nDECL E6POS XP1={X 100.0,Y 0.0,Z 0.0,A 0.0,B 9E9,C 0.0,S 2,T 35,E1 500.0}\nDECL E6POS XP2={X 100.0,Y 0.0,Z 0.0,A 0.0,B 0.0,C 0.0,S 2,T 99999,E1 500.0}\nENDDAT\n";
+    let krl = "DEFDAT a\nDECL E6POS XP1={X 100.0,Y 0.0,Z 0.0,A 0.0,B 9E9,C 0.0,S 2,T 35,E1 500.0}\nDECL E6POS XP2={X 100.0,Y 0.0,Z 0.0,A 0.0,B 0.0,C 0.0,S 2,T 99999,E1 500.0}\nDECL E6POS XP3={X 100.0,Y 0.0,Z 0.0,A 0.0,B 0.0,C 0.0,S 2,T 1e30,E1 500.0}\nENDDAT\n";
     let (dir, input) = scratch_with("a.dat", krl);
     let (code, out, _) = trackfix(&["check", input.to_str().unwrap()]);
     assert_eq!(code, 1, "{out}");
@@ -1281,6 +1281,10 @@ fn absurd_values_are_named_refusals_and_check_findings() {
         "{out}"
     );
     assert!(out.contains("`XP2` has Turn 99999"), "{out}");
+    assert!(
+        out.contains("`XP3` has Turn 1e30: Status and Turn are small whole numbers"),
+        "{out}"
+    );
     let (code, _, err) = trackfix(&[
         "correct",
         input.to_str().unwrap(),
