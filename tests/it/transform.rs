@@ -1322,11 +1322,12 @@ fn absurd_values_are_named_refusals_and_check_findings() {
         "joint-target",
         "--diff",
     ]);
-    if code != 2 {
-        // The profile loader may refuse it outright (exit 2); if it loads, the result is refused.
-        assert_eq!(code, 3, "{err}");
-        assert!(err.contains("[implausible-result]"), "{err}");
-    }
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("error: robtarget `Sp001`: the computed position lies more than 1 km from its work object's origin"),
+        "{err}"
+    );
+    assert!(err.contains("[implausible-result]"), "{err}");
     // The cell: base x = nan is located.
     let nan = cell_text.replacen("base = { x = 0.016,", "base = { x = nan,", 1);
     assert_ne!(nan, cell_text);
