@@ -4,15 +4,29 @@
 
 use std::path::PathBuf;
 
-use crate::syntax::{Diagnostic, LineIndex, Severity};
+use crate::syntax::{Diagnostic, Excerpt, LineIndex, Severity};
 
 /// A diagnostic located in one source.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Located {
     pub path: PathBuf,
-    /// The source the diagnostic's span points into.
+    /// The source the diagnostic's span points into: the whole file, or (see [`LineAt`]) only
+    /// the piece of the line it shows.
     pub source: Vec<u8>,
     pub diagnostic: Diagnostic,
+    /// Set when `source` is a piece of one line rather than the file.
+    pub at: Option<LineAt>,
+}
+
+/// Where a one-line excerpt sits in its file (see [`Excerpt`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LineAt {
+    pub line: usize,
+    pub column: usize,
+    /// Byte offset of the excerpt in the file.
+    pub start: usize,
+    pub cut_before: bool,
+    pub cut_after: bool,
 }
 
 impl Located {
@@ -21,6 +35,23 @@ impl Located {
             path: path.into(),
             source,
             diagnostic,
+            at: None,
+        }
+    }
+
+    /// A diagnostic that keeps only the piece of its line it shows (memory stays small however
+    /// long the line): `text` starts at `at.start` of the file; the span is in file offsets.
+    pub fn excerpt(
+        path: impl Into<PathBuf>,
+        text: Vec<u8>,
+        at: LineAt,
+        diagnostic: Diagnostic,
+    ) -> Located {
+        Located {
+            path: path.into(),
+            source: text,
+            diagnostic,
+            at: Some(at),
         }
     }
 
@@ -32,16 +63,33 @@ impl Located {
 
     /// 1-based line and column of the diagnostic.
     pub fn line_col(&self) -> (usize, usize) {
-        LineIndex::new(&self.source).line_col(self.diagnostic.span.start)
+        match self.at {
+            Some(at) => (at.line, at.column),
+            None => LineIndex::new(&self.source).line_col(self.diagnostic.span.start),
+        }
     }
 }
 
 impl std::fmt::Display for Located {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let index = LineIndex::new(&self.source);
-        let text = self
-            .diagnostic
-            .render(&self.path.display().to_string(), &self.source, &index);
+        let path = self.path.display().to_string();
+        let text = match self.at {
+            Some(at) => self.diagnostic.render_excerpt(
+                &path,
+                &Excerpt {
+                    line: at.line,
+                    column: at.column,
+                    text: &self.source,
+                    start: at.start,
+                    cut_before: at.cut_before,
+                    cut_after: at.cut_after,
+                },
+            ),
+            None => {
+                let index = LineIndex::new(&self.source);
+                self.diagnostic.render(&path, &self.source, &index)
+            }
+        };
         f.write_str(text.trim_end())
     }
 }

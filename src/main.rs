@@ -1,7 +1,8 @@
 //! The `trackfix` command line: parse flags, run, map outcomes to documented exit codes.
 //!
-//! Exit codes (DESIGN.md §5): 0 ok, 1 findings (`check`, `--check` differences), 2 usage or
-//! input error, 3 a transform refused.
+//! Exit codes (docs/design.md §7): 0 ok, 1 findings (`check`, `--check` differences), 2 usage
+//! or input error, 3 a transform refused, 4 a transform wrote its output with refused targets
+//! kept as written.
 
 // stdout and stderr go through `writeln!`, never `println!`/`eprintln!`: a closed pipe or a
 // full disk is an error we handle (a closed pipe is success), not a panic (Cargo.toml [lints]).
@@ -24,7 +25,8 @@ Examples:
   trackfix correct program.mod --cell samples/cell.toml --robot r1 -o corrected.mod
   trackfix transfer samples/rapid/spot_line.mod --cell samples/cell.toml --from r1 --to r2 --mirror --out-dir out/
 
-Exit codes: 0 ok, 1 findings (check, --check), 2 usage or input error, 3 transform refused.";
+Exit codes: 0 ok, 1 findings (check, --check), 2 usage or input error, 3 transform refused,
+4 written with refused targets kept as written (--keep, --skip-unsupported).";
 
 /// Model a robot's deformed linear track and rewrite ABB RAPID and KUKA KRL programs for it,
 /// losslessly: everything not changed stays byte for byte.
@@ -67,9 +69,18 @@ enum Command {
         after_help = "Example:\n  trackfix completions bash > /etc/bash_completion.d/trackfix"
     )]
     Completions { shell: clap_complete::Shell },
-    /// Print the man page (roff) to standard output.
-    #[command(after_help = "Example:\n  trackfix man > trackfix.1 && man ./trackfix.1")]
-    Man,
+    /// Print the man page (roff) of trackfix or of one subcommand, or write every page.
+    #[command(
+        after_help = "Examples:\n  trackfix man > trackfix.1 && man ./trackfix.1\n  trackfix man correct | man -l -\n  trackfix man --out-dir man/    # trackfix.1, trackfix-correct.1, trackfix-track-fit.1, …"
+    )]
+    Man {
+        /// The subcommand (`correct`, `track fit`, …); none: the top-level page.
+        #[arg(conflicts_with = "out_dir")]
+        subcommand: Vec<String>,
+        /// Write the page of trackfix and of every subcommand into DIR (created if missing).
+        #[arg(long, value_name = "DIR")]
+        out_dir: Option<std::path::PathBuf>,
+    },
 }
 
 /// The error and its causes, `: `-separated, each cause only once: library errors show their
@@ -98,6 +109,62 @@ fn to_stdout(bytes: &[u8]) -> anyhow::Result<cli::Exit> {
     Ok(cli::Exit::Ok)
 }
 
+/// The man page of a (sub)command, rendered in memory.
+fn man_page(cmd: clap::Command) -> anyhow::Result<Vec<u8>> {
+    let mut page = Vec::new();
+    clap_mangen::Man::new(cmd).render(&mut page)?;
+    Ok(page)
+}
+
+/// `trackfix man [SUBCOMMAND…] | --out-dir DIR`.
+fn man(subcommand: &[String], out_dir: Option<&std::path::Path>) -> anyhow::Result<cli::Exit> {
+    let mut root = Cli::command().disable_help_subcommand(true);
+    root.build();
+    if let Some(dir) = out_dir {
+        // Every visible command, named as `man` finds them: trackfix-track-fit.1.
+        let mut pages = Vec::new();
+        let mut stack = vec![(root, "trackfix".to_owned())];
+        while let Some((cmd, name)) = stack.pop() {
+            for sub in cmd.get_subcommands().filter(|s| !s.is_hide_set()) {
+                stack.push((sub.clone(), format!("{name}-{}", sub.get_name())));
+            }
+            let page = man_page(cmd.display_name(name.clone()))?;
+            pages.push((dir.join(format!("{name}.1")), page));
+        }
+        std::fs::create_dir_all(dir)
+            .map_err(|e| anyhow::anyhow!("creating {}: {e}", dir.display()))?;
+        let mut out = std::io::stderr().lock();
+        for (path, page) in &pages {
+            trackfix::output::write_file(path, page)?;
+        }
+        let _ = writeln!(
+            out,
+            "wrote {} man pages into {}",
+            pages.len(),
+            dir.display()
+        );
+        return Ok(cli::Exit::Ok);
+    }
+    let mut cmd = root;
+    let mut name = "trackfix".to_owned();
+    for word in subcommand {
+        let Some(sub) = cmd.find_subcommand(word).cloned() else {
+            let known: Vec<_> = cmd
+                .get_subcommands()
+                .filter(|s| !s.is_hide_set())
+                .map(|s| s.get_name().to_owned())
+                .collect();
+            anyhow::bail!(
+                "`{name}` has no subcommand `{word}`; pages: {}",
+                known.join(", ")
+            );
+        };
+        name = format!("{name}-{word}");
+        cmd = sub;
+    }
+    to_stdout(&man_page(cmd.display_name(name))?)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -118,13 +185,10 @@ fn main() -> ExitCode {
             clap_complete::generate(shell, &mut Cli::command(), "trackfix", &mut script);
             to_stdout(&script)
         }
-        Command::Man => {
-            let mut page = Vec::new();
-            clap_mangen::Man::new(Cli::command())
-                .render(&mut page)
-                .map_err(anyhow::Error::from)
-                .and_then(|()| to_stdout(&page))
-        }
+        Command::Man {
+            subcommand,
+            out_dir,
+        } => man(&subcommand, out_dir.as_deref()),
     };
     match result {
         Ok(exit) => exit.into(),

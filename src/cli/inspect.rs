@@ -11,6 +11,7 @@ use trackfix::report::{
     CheckSummary, InspectOptions, InspectReport, findings, inspect_program, render_csv,
     render_table,
 };
+use trackfix::syntax::printable;
 
 use super::Exit;
 
@@ -72,6 +73,19 @@ pub struct CheckArgs {
     /// KUKA $config.dat whose BASE_DATA/TOOL_DATA resolve KRL bases and tools.
     #[arg(long, value_name = "FILE")]
     pub config_dat: Option<PathBuf>,
+    /// `json`: `{"files": [{"path", "stamp", "findings": [...]}], "summary": {...}}` on
+    /// standard output.
+    #[arg(long, value_enum, default_value_t = super::transform::ReportFormat::Text)]
+    pub format: super::transform::ReportFormat,
+}
+
+/// One file of `check --format json`.
+#[derive(serde::Serialize)]
+struct CheckedFile {
+    path: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    stamp: Option<trackfix::transform::Stamp>,
+    findings: Vec<trackfix::report::Message>,
 }
 
 fn parse_axis(name: &str) -> Result<usize, String> {
@@ -89,6 +103,13 @@ struct Batch {
 
 fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
     let inputs = collect_inputs(files).context("listing the input files")?;
+    if inputs.is_empty() {
+        let names: Vec<_> = files.iter().map(|p| p.display().to_string()).collect();
+        anyhow::bail!(
+            "no RAPID or KRL program in {} (looked for .mod .modx .sys .sysx .prg .src .dat .sub)",
+            names.join(", ")
+        );
+    }
     let bar = if std::io::stderr().is_terminal() && inputs.len() > 20 {
         let bar = ProgressBar::new(inputs.len() as u64);
         bar.set_style(
@@ -108,7 +129,9 @@ fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
         bar.set_message(path.display().to_string());
         match load(path, options) {
             Ok(p) => batch.programs.push(p),
-            Err(e) if e.is_skip() => {
+            // A file named on the command line is meant to be a program: one that is not is
+            // an error, not a silent skip (a control byte must not bypass `check`).
+            Err(e) if e.is_skip() && !files.contains(path) => {
                 bar.suspend(|| {
                     let _ = writeln!(std::io::stderr(), "note: {e}");
                 });
@@ -183,8 +206,31 @@ pub fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
         unreadable: batch.errors,
         ..CheckSummary::default()
     };
+    let json = args.format == super::transform::ReportFormat::Json;
+    let mut checked = Vec::new();
     for program in &batch.programs {
         for file in &program.files {
+            if json {
+                let found = findings(file);
+                summary.add_file(file, found.len());
+                checked.push(CheckedFile {
+                    path: file.path.display().to_string(),
+                    stamp: trackfix::transform::stamp::find(file).map(|(s, _)| s),
+                    findings: found
+                        .iter()
+                        .map(|d| trackfix::report::message(file, d))
+                        .collect(),
+                });
+                continue;
+            }
+            if let Some((stamp, _)) = trackfix::transform::stamp::find(file) {
+                writeln!(
+                    out,
+                    "{}: stamped: {}",
+                    printable(&file.path.display().to_string()),
+                    printable(&stamp.text())
+                )?;
+            }
             let found = findings(file);
             summary.add_file(file, found.len());
             for d in &found {
@@ -192,7 +238,12 @@ pub fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
             }
         }
     }
-    writeln!(out, "{summary}")?;
+    if json {
+        let doc = serde_json::json!({ "files": checked, "summary": summary });
+        writeln!(out, "{}", serde_json::to_string_pretty(&doc)?)?;
+    } else {
+        writeln!(out, "{summary}")?;
+    }
     let findings = summary.findings;
     Ok(if batch.errors > 0 {
         Exit::Usage

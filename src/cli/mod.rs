@@ -21,6 +21,8 @@ pub enum Exit {
     Usage = 2,
     /// 3: a transform was refused.
     Refused = 3,
+    /// 4: a transform wrote its output but kept refused targets as written (`--keep`).
+    Kept = 4,
 }
 
 impl From<Exit> for ExitCode {

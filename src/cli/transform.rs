@@ -1,10 +1,11 @@
 //! `trackfix correct | zero | mirror | transfer`.
 //!
-//! Every command: load the programs, compute every result in memory, report refusals (exit 3,
-//! nothing written, unless `--skip-unsupported`), then either print a diff, check, or plan and
-//! write all outputs atomically.
+//! Every command: load the programs (a syntax error stops the run, exit 2), check their
+//! provenance stamps, compute every result in memory, report refusals (exit 3, nothing written,
+//! unless their kinds are kept with `--keep`/`--skip-unsupported`: exit 4 once written), then
+//! either print a diff, check, or plan and write all outputs atomically, stamped.
 
-use std::io::Write as _;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, bail};
@@ -14,14 +15,16 @@ use trackfix::output::{self, Destination, Roots, unified_diff};
 use trackfix::position::Program;
 use trackfix::program::{LoadOptions, collect_inputs, load};
 use trackfix::report::{FileSummary, would_change};
-use trackfix::syntax::Severity;
+use trackfix::syntax::{Severity, printable};
 use trackfix::track::cell_nominal::check_cell_nominal;
 use trackfix::track::uncertainty::ProfileUncertainty;
 use trackfix::track::{Profile, TrackError};
 use trackfix::transform::cell::skid_axis_index;
+use trackfix::transform::rename::rename_program;
+use trackfix::transform::stamp;
 use trackfix::transform::{
-    Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, Remedy,
-    Robot, TrackSetup, TransferPlan, TransformStep, WorldPlane, apply, transfer,
+    Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, RefusalKind,
+    Remedy, Robot, Stamp, TrackSetup, TransferPlan, TransformStep, WorldPlane, apply, transfer,
 };
 
 use super::Exit;
@@ -48,9 +51,32 @@ pub struct OutputArgs {
     /// Exit 1 if anything would change; write nothing.
     #[arg(long, conflicts_with_all = ["output", "out_dir", "in_place"])]
     pub check: bool,
-    /// Leave unsupported targets (joint targets, 9E9 skids, …) unchanged instead of failing.
+    /// Leave targets refused for this reason unchanged instead of failing (repeatable, or
+    /// comma-separated); the run then exits 4 and lists them.
+    #[arg(long, value_name = "KIND", value_enum, value_delimiter = ',')]
+    pub keep: Vec<RefusalKind>,
+    /// Leave every refused target unchanged instead of failing: --keep for all kinds (exit 4
+    /// when any was left).
     #[arg(long)]
     pub skip_unsupported: bool,
+    /// Add no provenance stamp (the comment line after the header naming command, robot,
+    /// profile and version); the output then differs from the input only in changed numbers.
+    #[arg(long)]
+    pub no_stamp: bool,
+    /// Transform even a file whose stamp says it must not be: `correct` of a file already
+    /// corrected for the robot, `zero` of a file not stamped as corrected for it.
+    #[arg(long)]
+    pub force: bool,
+    /// Print errors only: no per-file lines, warnings or notes.
+    #[arg(short, long, conflicts_with = "verbose")]
+    pub quiet: bool,
+    /// Print every warning and note (repeated ones are otherwise shown 3 times, then counted).
+    #[arg(short, long)]
+    pub verbose: bool,
+    /// `json`: the summary, refusals and notes as one JSON document on standard output
+    /// (nothing on standard error but a failure).
+    #[arg(long, value_enum, default_value_t = ReportFormat::Text, conflicts_with = "diff")]
+    pub format: ReportFormat,
     /// Also write a self-contained HTML record of the run (inputs with their hashes, every
     /// changed target old and new, refusals): what is handed over at buy-off.
     #[arg(long, value_name = "FILE.html")]
@@ -58,6 +84,289 @@ pub struct OutputArgs {
     /// The files the run read besides its programs (cell, profiles), for the report.
     #[arg(skip)]
     pub also_read: Vec<(String, PathBuf)>,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum ReportFormat {
+    #[default]
+    Text,
+    Json,
+}
+
+/// How many messages of one kind are shown before the rest are counted (unless `-v`).
+const SHOWN_PER_KIND: usize = 3;
+
+/// Prints diagnostics with repeats grouped: the first few of each kind, then a count.
+struct Messages<'a> {
+    out: &'a OutputArgs,
+    seen: std::collections::BTreeMap<(Severity, String), usize>,
+}
+
+impl<'a> Messages<'a> {
+    fn new(out: &'a OutputArgs) -> Self {
+        Messages {
+            out,
+            seen: Default::default(),
+        }
+    }
+
+    /// Shows `text` unless quiet (errors always), JSON, or the kind was shown often enough.
+    fn show(
+        &mut self,
+        w: &mut impl Write,
+        severity: Severity,
+        kind: &str,
+        text: &dyn std::fmt::Display,
+    ) -> std::io::Result<()> {
+        if self.out.format == ReportFormat::Json || (self.out.quiet && severity < Severity::Error) {
+            return Ok(());
+        }
+        let n = self.seen.entry((severity, kind.to_owned())).or_default();
+        *n += 1;
+        if *n <= SHOWN_PER_KIND || self.out.verbose {
+            writeln!(w, "{text}")?;
+        }
+        Ok(())
+    }
+
+    /// The counts of what was not shown.
+    fn finish(&self, w: &mut impl Write) -> std::io::Result<()> {
+        for ((severity, kind), n) in &self.seen {
+            if *n > SHOWN_PER_KIND && !self.out.verbose {
+                writeln!(
+                    w,
+                    "{}: … and {} more like this [{kind}] (-v shows all)",
+                    severity.as_str(),
+                    n - SHOWN_PER_KIND
+                )?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One refusal or note in `--format json`.
+#[derive(serde::Serialize)]
+struct JsonRefusal<'a> {
+    #[serde(flatten)]
+    refusal: &'a trackfix::transform::Refusal,
+    /// `true`: left as written (`--keep`), `false`: it stopped the run.
+    kept: bool,
+}
+
+/// `--format json` of a transform run.
+#[derive(serde::Serialize)]
+struct JsonReport<'a> {
+    command: &'a str,
+    exit: u8,
+    files: Vec<FileSummary>,
+    refusals: Vec<JsonRefusal<'a>>,
+    notes: Vec<&'a trackfix::transform::Refusal>,
+    renamed: &'a [trackfix::transform::rename::Renamed],
+    totals: Totals,
+}
+
+/// The one line a run ends with (a batch of several programs), and its JSON.
+#[derive(Debug, Default, serde::Serialize)]
+struct Totals {
+    programs: usize,
+    files: usize,
+    changed_files: usize,
+    written: usize,
+    targets_changed: usize,
+    refused: usize,
+    kept: usize,
+    notes: usize,
+}
+
+impl Totals {
+    fn of(results: &[ProgramResult], written: usize, out: &OutputArgs) -> Totals {
+        let files = results.iter().flat_map(|r| &r.files);
+        let refusals: Vec<_> = results.iter().flat_map(|r| r.refusals()).collect();
+        Totals {
+            programs: results.len(),
+            files: files.clone().count(),
+            changed_files: files.clone().filter(|f| f.changed()).count(),
+            written,
+            targets_changed: files.clone().map(|f| f.changes.len()).sum(),
+            refused: refusals.iter().filter(|r| !out.keeps(r.kind)).count(),
+            kept: refusals.iter().filter(|r| out.keeps(r.kind)).count(),
+            notes: files.map(|f| f.notes.len()).sum(),
+        }
+    }
+}
+
+impl std::fmt::Display for Totals {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "total: {} programs ({} files): {} target(s) changed in {} files, {} written, {} refused, {} kept as written, {} notes",
+            self.programs,
+            self.files,
+            self.targets_changed,
+            self.changed_files,
+            self.written,
+            self.refused,
+            self.kept,
+            self.notes
+        )
+    }
+}
+
+/// Prints the JSON report of a run (`--format json`) and passes its exit code on.
+fn json_report(
+    command: &str,
+    results: &[ProgramResult],
+    summaries: Vec<FileSummary>,
+    renamed: &[trackfix::transform::rename::Renamed],
+    written: usize,
+    out: &OutputArgs,
+    exit: Exit,
+) -> anyhow::Result<Exit> {
+    let report = JsonReport {
+        command,
+        exit: exit as u8,
+        files: summaries,
+        refusals: results
+            .iter()
+            .flat_map(|r| r.refusals())
+            .map(|r| JsonRefusal {
+                refusal: r,
+                kept: out.keeps(r.kind),
+            })
+            .collect(),
+        notes: results
+            .iter()
+            .flat_map(|r| r.files.iter().flat_map(|f| &f.notes))
+            .collect(),
+        renamed,
+        totals: Totals::of(results, written, out),
+    };
+    let mut text = serde_json::to_string_pretty(&report)?;
+    text.push('\n');
+    let mut stdout = std::io::stdout().lock();
+    stdout.write_all(text.as_bytes())?;
+    stdout.flush()?;
+    Ok(exit)
+}
+
+/// The stamp a run writes and what the stamps already in the files must say.
+struct Provenance {
+    stamp: Stamp,
+    rule: StampRule,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum StampRule {
+    /// Nothing required.
+    Any,
+    /// `correct`: no file may already be corrected for the robot.
+    NotCorrected,
+    /// `zero`: some file must be stamped as corrected for the robot.
+    Corrected,
+}
+
+impl Provenance {
+    fn new(
+        command: &str,
+        robot: Option<&Robot>,
+        profile: Option<&Profile>,
+        rule: StampRule,
+    ) -> Self {
+        let hash = profile.map(Profile::data_sha256);
+        Provenance {
+            stamp: Stamp::new(
+                command,
+                robot.map(|r| r.name.as_str()),
+                profile.zip(hash.as_deref()).map(|(p, h)| (p.name(), h)),
+            ),
+            rule,
+        }
+    }
+}
+
+/// Refuses (exit 3) a `correct` of a program already corrected for the robot and a `zero` of one
+/// never corrected for it, unless `--force`.
+fn check_stamps(
+    command: &str,
+    programs: &[Program],
+    prov: &Provenance,
+    out: &OutputArgs,
+) -> anyhow::Result<Option<Exit>> {
+    let Some(robot) = prov.stamp.robot.as_deref() else {
+        return Ok(None);
+    };
+    if out.force || prov.rule == StampRule::Any {
+        return Ok(None);
+    }
+    let mut stderr = std::io::stderr().lock();
+    let mut refused = 0;
+    for p in programs {
+        let stamps: Vec<_> = p
+            .files
+            .iter()
+            .filter_map(|f| Some((f, stamp::find(f)?)))
+            .collect();
+        let corrected = stamps.iter().find(|(_, (s, _))| s.corrected_for(robot));
+        let name = p
+            .files
+            .first()
+            .map(|f| f.path.display().to_string())
+            .unwrap_or_default();
+        match (prov.rule, corrected) {
+            (StampRule::NotCorrected, Some((f, (s, span)))) => {
+                refused += 1;
+                let (line, _) = f.lines.line_col(span.start);
+                writeln!(
+                    stderr,
+                    "error: {}:{line}: already corrected for robot `{robot}` ({}): correcting again would apply the track's deviation twice\n  = help: correct the original, `zero` this one first, or pass --force if the stamp is wrong",
+                    printable(&f.path.display().to_string()),
+                    printable(&s.text())
+                )?;
+            }
+            (StampRule::Corrected, None) => {
+                refused += 1;
+                writeln!(
+                    stderr,
+                    "error: {}: no stamp says it is corrected for robot `{robot}`: zero removes a correction, and this file shows none\n  = help: pass --force to zero it anyway (an online-tuned program taught on the real track, or one corrected with --no-stamp)",
+                    printable(&name)
+                )?;
+            }
+            _ => {}
+        }
+    }
+    if refused == 0 {
+        return Ok(None);
+    }
+    writeln!(
+        stderr,
+        "error: {command} refused {refused} program(s) by their provenance stamp; nothing written"
+    )?;
+    Ok(Some(Exit::Refused))
+}
+
+/// Writes the stamp into every file the run changed (unless `--no-stamp`).
+fn stamp_results(results: &mut [ProgramResult], prov: &Provenance, out: &OutputArgs) {
+    if out.no_stamp {
+        return;
+    }
+    for f in results.iter_mut().flat_map(|r| r.files.iter_mut()) {
+        if !f.changed() {
+            continue;
+        }
+        if let Some(d) = trackfix::dialect::dialect_of(&f.path)
+            && let Some(stamped) = stamp::write(&f.output, d, &prov.stamp)
+        {
+            f.output = stamped;
+        }
+    }
+}
+
+impl OutputArgs {
+    /// Whether refusals of `kind` are left unchanged rather than stopping the run.
+    fn keeps(&self, kind: RefusalKind) -> bool {
+        self.skip_unsupported || self.keep.contains(&kind)
+    }
 }
 
 const CORRECT_EXAMPLES: &str = "\
@@ -277,6 +586,22 @@ fn drop_untouched_config(results: &mut [ProgramResult], config_dat: Option<&Path
     }
 }
 
+/// The name `--keep` takes for a refusal kind (clap's, from the library's enum).
+fn kind_name(kind: RefusalKind) -> String {
+    use clap::ValueEnum as _;
+    kind.to_possible_value()
+        .map_or_else(|| format!("{kind:?}"), |v| v.get_name().to_owned())
+}
+
+/// Exit 4 when the output was written with refused targets kept as written.
+fn written_exit(results: &[ProgramResult]) -> Exit {
+    if results.iter().any(|r| r.refusals().next().is_some()) {
+        Exit::Kept
+    } else {
+        Exit::Ok
+    }
+}
+
 /// The command-line flag that gives a refusal's remedy.
 fn remedy_flag(remedy: Remedy) -> &'static str {
     match remedy {
@@ -308,15 +633,17 @@ fn write_run_report(
     out: &OutputArgs,
     exit: Exit,
 ) -> anyhow::Result<()> {
+    let written = match (&out.output, &out.out_dir) {
+        (Some(o), _) => format!("written to {}", o.display()),
+        (_, Some(d)) => format!("written under {}", d.display()),
+        _ => "written in place".to_owned(),
+    };
     let outcome = match exit {
         Exit::Refused => "refused: nothing written".to_owned(),
         _ if out.diff => "preview (diff): nothing written".to_owned(),
         _ if out.check => "check: nothing written".to_owned(),
-        Exit::Ok => match (&out.output, &out.out_dir) {
-            (Some(o), _) => format!("written to {}", o.display()),
-            (_, Some(d)) => format!("written under {}", d.display()),
-            _ => "written in place".to_owned(),
-        },
+        Exit::Ok => written,
+        Exit::Kept => format!("{written}; targets named below kept as written"),
         e => format!("exit {}", e as u8),
     };
     let mut inputs = Vec::new();
@@ -337,11 +664,13 @@ fn write_run_report(
         checks: Vec::new(),
     };
     output::write_file(path, run_report(&report).as_bytes())?;
-    let _ = writeln!(
-        std::io::stderr(),
-        "wrote {}: the run report",
-        path.display()
-    );
+    if out.format != ReportFormat::Json && !out.quiet {
+        let _ = writeln!(
+            std::io::stderr(),
+            "wrote {}: the run report",
+            path.display()
+        );
+    }
     Ok(())
 }
 
@@ -353,32 +682,56 @@ fn finish_outputs(
     inputs: &[PathBuf],
 ) -> anyhow::Result<Exit> {
     let mut stderr = std::io::stderr().lock();
+    let mut messages = Messages::new(out);
+    for n in results
+        .iter()
+        .flat_map(|r| r.files.iter().flat_map(|f| &f.notes))
+    {
+        let text = n.located(Severity::Note, "left as written; not a target");
+        messages.show(&mut stderr, Severity::Note, &kind_name(n.kind), &text)?;
+    }
     let refused: Vec<_> = results.iter().flat_map(|r| r.refusals()).collect();
+    let blocking = refused.iter().filter(|r| !out.keeps(r.kind)).count();
     for r in &refused {
-        // Skipped targets are reported as warnings: the run goes on without them.
-        let (severity, outcome) = if out.skip_unsupported {
-            (Severity::Warning, " (left unchanged)")
+        // Kept targets are reported as warnings: the run goes on without them.
+        let kind = kind_name(r.kind);
+        let (severity, outcome) = if out.keeps(r.kind) {
+            (Severity::Warning, " (kept as written)".to_owned())
         } else {
             (
                 Severity::Error,
-                ", or pass --skip-unsupported to leave it unchanged",
+                format!(", or pass --keep {kind} to leave it as written"),
             )
         };
         let advice = match r.remedy {
             Some(remedy) => remedy_flag(remedy),
             None => &r.hint,
         };
-        writeln!(
-            stderr,
-            "{}",
-            r.located(severity, format!("{advice}{outcome}"))
-        )?;
+        let text = r.located(severity, format!("{advice}{outcome} [{kind}]"));
+        messages.show(&mut stderr, severity, &kind, &text)?;
     }
-    if !refused.is_empty() && !out.skip_unsupported {
+    messages.finish(&mut stderr)?;
+    if blocking > 0 {
+        let mut kinds: Vec<_> = refused
+            .iter()
+            .filter(|r| !out.keeps(r.kind))
+            .map(|r| r.kind)
+            .collect();
+        kinds.sort();
+        kinds.dedup();
+        let kinds: Vec<_> = kinds.into_iter().map(kind_name).collect();
+        if out.format == ReportFormat::Json {
+            let summaries = results
+                .iter()
+                .flat_map(|r| &r.files)
+                .map(|f| FileSummary::new(f, command == "mirror"))
+                .collect();
+            return json_report(command, results, summaries, &[], 0, out, Exit::Refused);
+        }
         writeln!(
             stderr,
-            "error: {command} refused {} target(s); nothing written (fix them, or pass --skip-unsupported to leave them unchanged)",
-            refused.len()
+            "error: {command} refused {blocking} target(s); nothing written (fix them, or leave them as written with --keep {}, or --skip-unsupported for every kind)",
+            kinds.join(",")
         )?;
         return Ok(Exit::Refused);
     }
@@ -394,10 +747,21 @@ fn finish_outputs(
         for f in results.iter().flat_map(|r| &r.files) {
             if let Some(line) = would_change(f) {
                 any = true;
-                writeln!(stderr, "{line}")?;
+                if out.format == ReportFormat::Text {
+                    writeln!(stderr, "{line}")?;
+                }
             }
         }
-        return Ok(if any { Exit::Findings } else { Exit::Ok });
+        let exit = if any { Exit::Findings } else { Exit::Ok };
+        if out.format == ReportFormat::Json {
+            let summaries = results
+                .iter()
+                .flat_map(|r| &r.files)
+                .map(|f| FileSummary::new(f, command == "mirror"))
+                .collect();
+            return json_report(command, results, summaries, &[], 0, out, exit);
+        }
+        return Ok(exit);
     }
     write_outputs(command, results, out, inputs)
 }
@@ -422,6 +786,23 @@ fn write_outputs(
                 .join(", ")
         );
     }
+    // A KRL program written under a new name gets its DEF/DEFDAT renamed to match (KSS loads a
+    // module only when they agree).
+    let renamed_results: Vec<ProgramResult>;
+    let mut renames = Vec::new();
+    let results = match &out.output {
+        Some(o) if o.as_os_str() != "-" => {
+            let mut all = results.to_vec();
+            if let Some(stem) = o.file_stem().map(|s| s.to_string_lossy().into_owned()) {
+                for r in &mut all {
+                    renames.extend(rename_program(r, &stem)?);
+                }
+            }
+            renamed_results = all;
+            &renamed_results[..]
+        }
+        _ => results,
+    };
     let dest = if let Some(o) = &out.output {
         if o.as_os_str() == "-" {
             let bytes = output::stream_output(results)?;
@@ -429,8 +810,8 @@ fn write_outputs(
             stdout.write_all(bytes)?;
             stdout.flush()?;
             // The output is complete: a summary that cannot be shown changes nothing.
-            let _ = summarize(command, results, &[], &mut stderr);
-            return Ok(Exit::Ok);
+            let _ = summarize(command, results, &[], out, &mut stderr);
+            return Ok(written_exit(results));
         }
         Destination::File(o.clone())
     } else if let Some(d) = &out.out_dir {
@@ -448,20 +829,42 @@ fn write_outputs(
     let written = output::commit(&writes)?;
     // The files are written: a summary that cannot be shown (stderr full or closed) changes
     // nothing about the outcome.
-    if written.is_empty() {
+    let exit = written_exit(results);
+    if out.format == ReportFormat::Json {
+        let summaries = summaries(command, results, &written);
+        return json_report(
+            command,
+            results,
+            summaries,
+            &renames,
+            written.len(),
+            out,
+            exit,
+        );
+    }
+    if written.is_empty() && !out.quiet {
         let _ = writeln!(stderr, "note: nothing written: no file changed");
     }
-    let _ = summarize(command, results, &written, &mut stderr);
-    Ok(Exit::Ok)
+    let _ = summarize(command, results, &written, out, &mut stderr);
+    for r in renames.iter().filter(|_| !out.quiet) {
+        let _ = writeln!(
+            stderr,
+            "note: {}: renamed `{}` to `{}` in the written file, to match its new file name (the controller needs them equal)",
+            printable(&r.path.display().to_string()),
+            printable(&r.from),
+            printable(&r.to)
+        );
+    }
+    Ok(written_exit(results))
 }
 
-/// One line per input file: what changed, and every file written for it.
-fn summarize(
+/// The summary of every input file: what changed, and every file written for it.
+fn summaries(
     command: &str,
     results: &[ProgramResult],
     written: &[output::Written],
-    stderr: &mut impl std::io::Write,
-) -> anyhow::Result<Exit> {
+) -> Vec<FileSummary> {
+    let mut out = Vec::new();
     for f in results.iter().flat_map(|r| &r.files) {
         let mut summary = FileSummary::new(f, command == "mirror");
         if let Some(w) = written.iter().find(|w| w.input == f.path) {
@@ -469,31 +872,101 @@ fn summarize(
             summary.link_target.clone_from(&w.resolved);
             summary.backup.clone_from(&w.backup);
         }
+        out.push(summary);
+    }
+    out
+}
+
+/// One line per input file (unless `-q`), and a totals line for a batch of several programs.
+fn summarize(
+    command: &str,
+    results: &[ProgramResult],
+    written: &[output::Written],
+    out: &OutputArgs,
+    stderr: &mut impl std::io::Write,
+) -> anyhow::Result<Exit> {
+    if out.quiet {
+        return Ok(Exit::Ok);
+    }
+    for summary in summaries(command, results, written) {
         writeln!(stderr, "{summary}")?;
+    }
+    if results.len() > 1 {
+        writeln!(stderr, "{}", Totals::of(results, written.len(), out))?;
     }
     Ok(Exit::Ok)
 }
 
 /// The one runner of every transform: load each program (with `robot`'s `$config.dat`), run
 /// `transform` on it in memory, then report, diff, check or write everything at once.
+#[allow(clippy::too_many_arguments)]
 fn run_each(
     command: &str,
     files: &[PathBuf],
     robot: Option<&Robot>,
     other_configs: &[Option<&Path>],
     out: &OutputArgs,
+    prov: &Provenance,
     transform: impl Fn(&Program) -> anyhow::Result<ProgramResult>,
 ) -> anyhow::Result<Exit> {
     let programs = load_programs(files, &load_options(robot))?;
+    if let Some(exit) = refuse_syntax_errors(command, &programs)? {
+        return Ok(exit);
+    }
+    if let Some(exit) = check_stamps(command, &programs, prov, out)? {
+        return Ok(exit);
+    }
+    // A progress bar on a terminal only, for a batch long enough to wait for.
+    let bar = if std::io::IsTerminal::is_terminal(&std::io::stderr())
+        && programs.len() > 20
+        && !out.quiet
+        && out.format == ReportFormat::Text
+    {
+        indicatif::ProgressBar::new(programs.len() as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
     let mut results = Vec::new();
     for p in &programs {
         results.push(transform(p)?);
+        bar.inc(1);
     }
+    bar.finish_and_clear();
+    stamp_results(&mut results, prov, out);
     drop_untouched_config(&mut results, robot.and_then(|r| r.config_dat.as_deref()));
     for cfg in other_configs {
         drop_untouched_config(&mut results, *cfg);
     }
     finish(command, &results, out, files)
+}
+
+/// A file with a syntax error (or one that does not print back byte for byte) is never
+/// transformed: what the parser could not read may hold targets that would stay uncorrected.
+/// Every error is shown, located; the run writes nothing and exits 2.
+fn refuse_syntax_errors(command: &str, programs: &[Program]) -> anyhow::Result<Option<Exit>> {
+    let mut stderr = std::io::stderr().lock();
+    let mut bad = Vec::new();
+    for file in programs.iter().flat_map(|p| &p.files) {
+        let errors: Vec<_> = trackfix::report::lints(file)
+            .into_iter()
+            .filter(|d| d.severity == Severity::Error)
+            .collect();
+        for d in &errors {
+            writeln!(stderr, "{}", file.render(d).trim_end())?;
+        }
+        if !errors.is_empty() {
+            bad.push(format!("{} ({})", file.path.display(), errors.len()));
+        }
+    }
+    if bad.is_empty() {
+        return Ok(None);
+    }
+    writeln!(
+        stderr,
+        "error: {command}: syntax errors in {}; a file that does not parse is never transformed: nothing written (fix them; `trackfix check` lists them)",
+        bad.join(", ")
+    )?;
+    Ok(Some(Exit::Usage))
 }
 
 /// [`run_each`] for one transform step.
@@ -503,8 +976,9 @@ fn run_step(
     robot: Option<&Robot>,
     step: TransformStep,
     out: &OutputArgs,
+    prov: &Provenance,
 ) -> anyhow::Result<Exit> {
-    run_each(command, files, robot, &[], out, |p| {
+    run_each(command, files, robot, &[], out, prov, |p| {
         Ok(apply(p, step.edits(p))?)
     })
 }
@@ -522,12 +996,17 @@ fn run_track(mut a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
     let mut setup = TrackSetup::new(robot, &profile);
     setup.uncertainty = uncertainty.as_ref();
     setup.default_wobj = a.default_wobj.clone();
+    let rule = match dir {
+        Direction::Correct => StampRule::NotCorrected,
+        Direction::Zero => StampRule::Corrected,
+    };
     run_step(
         dir.as_str(),
         &a.files,
         Some(robot),
         TransformStep::Track(&setup, dir),
         &a.out,
+        &Provenance::new(dir.as_str(), Some(robot), Some(&profile), rule),
     )
 }
 
@@ -604,6 +1083,18 @@ fn run_mirror_inner(mut a: MirrorArgs) -> anyhow::Result<Exit> {
         Some(s) => axis("skid", s)?,
         None => robot.map_or(0, |r| r.skid_axis),
     };
+    require_plane(cell.as_ref(), &a.mirror)?;
+    if let (Some(c), None) = (&cell, robot) {
+        let plane = a.mirror.plane.or(c.mirror.plane).map_or("?", plane_name);
+        let frames = if c.mirror.frame_in == FrameIn::World {
+            "the cell's mirror frame in world, taken into each target's work object as the program declares it (the cell's [robot.NAME.wobj] entries are used only with --robot NAME)"
+        } else if c.mirror.frame.is_some() {
+            "the cell's mirror frame, in each target's own work object"
+        } else {
+            "each target's own work object"
+        };
+        let _ = writeln!(std::io::stderr(), "note: mirror: plane {plane} of {frames}");
+    }
     let settings = MirrorSettings {
         skid_axis_to: a
             .skid_to
@@ -624,7 +1115,31 @@ fn run_mirror_inner(mut a: MirrorArgs) -> anyhow::Result<Exit> {
         robot,
         TransformStep::Mirror(&settings),
         &a.out,
+        &Provenance::new("mirror", robot, None, StampRule::Any),
     )
+}
+
+/// A mirror needs a plane: from `--plane` or the cell's `[mirror]` table, never a silent
+/// default.
+fn require_plane(cell: Option<&Cell>, o: &MirrorOptions) -> anyhow::Result<()> {
+    if o.plane.is_some() || cell.is_some_and(|c| c.mirror.plane.is_some()) {
+        return Ok(());
+    }
+    bail!(match cell {
+        Some(c) => format!(
+            "say which plane to mirror in: --plane xz|yz|xy, or `plane = \"xz\"` in the [mirror] table of {}",
+            c.path.display()
+        ),
+        None => "say which plane to mirror in: --plane xz|yz|xy, or --cell CELL.toml with a [mirror] table".to_owned(),
+    })
+}
+
+fn plane_name(p: Plane) -> &'static str {
+    match p {
+        Plane::Xy => "xy",
+        Plane::Xz => "xz",
+        Plane::Yz => "yz",
+    }
 }
 
 pub fn run_transfer(a: TransferArgs) -> anyhow::Result<Exit> {
@@ -642,6 +1157,9 @@ fn run_transfer_inner(mut a: TransferArgs) -> anyhow::Result<Exit> {
         (format!("profile of {}", from.name), from.profile.clone()),
         (format!("profile of {}", to.name), to.profile.clone()),
     ];
+    if a.mirror {
+        require_plane(Some(&cell), &a.mirror_options)?;
+    }
     let mut plan = TransferPlan {
         from: TrackSetup::new(from, &from_profile),
         mirror: a.mirror.then(|| MirrorSettings {
@@ -665,6 +1183,7 @@ fn run_transfer_inner(mut a: TransferArgs) -> anyhow::Result<Exit> {
         Some(from),
         &[to.config_dat.as_deref()],
         &a.out,
+        &Provenance::new("transfer", Some(to), Some(&to_profile), StampRule::Any),
         |p| Ok(transfer(p, &plan, &written)?),
     )
 }

@@ -104,6 +104,45 @@ impl Dialect for Krl {
         &VOCABULARY
     }
 
+    fn implausible_configuration(&self, literal: &[u8]) -> Option<String> {
+        // `{X …, S 6, T 'B010101', …}`: Status and Turn are small integers or binary strings.
+        let text = crate::syntax::latin1(literal);
+        for field in text.split([',', '{', '}']) {
+            let field = field.trim();
+            let Some((name, value)) = field.split_once([' ', '\t']) else {
+                continue;
+            };
+            let which = match name.to_ascii_uppercase().as_str() {
+                "S" => "Status",
+                "T" => "Turn",
+                _ => continue,
+            };
+            let value = value.trim();
+            let binary = value.len() > 3
+                && value.starts_with('\'')
+                && value.ends_with('\'')
+                && value[1..2].eq_ignore_ascii_case("b");
+            if !binary && value.parse::<u32>().is_err() {
+                return Some(format!(
+                    "has {which} {value}: Status and Turn are small whole numbers"
+                ));
+            }
+        }
+        None
+    }
+
+    fn names_follow_file(&self) -> bool {
+        true
+    }
+
+    fn line_comment(&self) -> Option<&'static str> {
+        Some(";")
+    }
+
+    fn header_keywords(&self) -> &'static [&'static str] {
+        &["DEF", "DEFDAT", "DEFFCT", "GLOBAL DEF", "GLOBAL DEFFCT"]
+    }
+
     fn axis_name(&self, index: usize) -> String {
         format!("E{}", index + 1)
     }

@@ -65,6 +65,30 @@ pub trait Dialect: Sync + 'static {
 
     fn vocabulary(&self) -> &'static Vocabulary;
 
+    /// The mark that starts a comment running to the end of the line (`!`, `;`): trackfix's
+    /// provenance stamp is written as such a comment. `None`: files are not stamped.
+    fn line_comment(&self) -> Option<&'static str> {
+        None
+    }
+
+    /// What makes the configuration written in a target's literal text absurd, when the model
+    /// could not read it (KRL `T 1e30`, `S 1.5`), in words; `None` if nothing.
+    fn implausible_configuration(&self, _literal: &[u8]) -> Option<String> {
+        None
+    }
+
+    /// Whether a program's main routine must carry its file's name (KRL `DEF spot_line(` in
+    /// `spot_line.src`): a program written under a new name then gets its header renamed.
+    fn names_follow_file(&self) -> bool {
+        false
+    }
+
+    /// Keywords opening a file's header (`MODULE`; `DEF`, `DEFDAT`): the provenance stamp is
+    /// the line after the first line that starts with one.
+    fn header_keywords(&self) -> &'static [&'static str] {
+        &[]
+    }
+
     /// The name of external axis `index` (0-based) as the language writes it.
     fn axis_name(&self, index: usize) -> String;
 

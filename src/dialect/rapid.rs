@@ -81,6 +81,14 @@ impl Dialect for Rapid {
         &VOCABULARY
     }
 
+    fn line_comment(&self) -> Option<&'static str> {
+        Some("!")
+    }
+
+    fn header_keywords(&self) -> &'static [&'static str] {
+        &["MODULE"]
+    }
+
     fn axis_name(&self, index: usize) -> String {
         format!("eax_{}", (b'a' + index.min(25) as u8) as char)
     }

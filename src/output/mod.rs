@@ -165,6 +165,7 @@ mod tests {
                 original: old.as_bytes().to_vec(),
                 output: new.as_bytes().to_vec(),
                 refusals: Vec::new(),
+                notes: Vec::new(),
                 changes: Vec::new(),
             }],
         }

@@ -15,6 +15,12 @@ pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-4;
 /// Sorted by position.
 pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
     let mut out = file.diagnostics.clone();
+    if file.source.iter().all(u8::is_ascii_whitespace) {
+        out.push(
+            Diagnostic::warning(Span::new(0, 0), "the file is empty: it holds no program")
+                .with_hint("a truncated copy? restore it from the controller's backup"),
+        );
+    }
     if !file.round_trip {
         out.push(
             Diagnostic::error(
@@ -22,6 +28,27 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
                 "printing the parsed file does not give back its bytes",
             )
             .with_hint("this is a trackfix bug: please report it with the file attached"),
+        );
+    }
+    if let Some(at) = file
+        .source
+        .iter()
+        .position(|&b| crate::syntax::is_control_byte(b))
+    {
+        let n = file
+            .source
+            .iter()
+            .filter(|&&b| crate::syntax::is_control_byte(b))
+            .count();
+        out.push(
+            Diagnostic::warning(
+                Span::new(at, at + 1),
+                format!(
+                    "control character {:#04x} in the text ({n} in the file): the controller may reject it, a terminal may run it",
+                    file.source[at]
+                ),
+            )
+            .with_hint("delete it; trackfix shows such bytes escaped, as \\x1b"),
         );
     }
     for p in &file.positions {
@@ -58,6 +85,13 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
                     ),
                 );
             }
+        }
+        if let Some(problem) = crate::transform::policy::implausible_literal(file, p) {
+            out.push(
+                Diagnostic::warning(p.span, format!("`{}` {problem}", p.label())).with_hint(
+                    "a typo or a placeholder: transforms refuse the target until it is fixed",
+                ),
+            );
         }
         if !p.usage.other_wobjs.is_empty() {
             let already = file.diagnostics.iter().any(|d| {

@@ -17,7 +17,7 @@ use crate::position::{
     CartesianFields, Config, FrameDecl, FrameKind, Language, NumField, Orientation, ParsedFile,
     Position, Program, Skid,
 };
-use crate::syntax::{Diagnostic, Severity, Span};
+use crate::syntax::{Diagnostic, Severity, Span, printable};
 
 use super::check::{count_suffix, lints};
 
@@ -59,6 +59,9 @@ pub struct FileReport {
     /// Positions by kind (`"robtarget": 212`).
     pub counts: BTreeMap<String, usize>,
     pub warnings: Vec<Message>,
+    /// trackfix's provenance stamp: the last transform that wrote the file.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stamp: Option<crate::transform::Stamp>,
 }
 
 /// A pose as reported: translation in mm, orientation as an ABB quaternion `[q1, q2, q3, q4]`
@@ -292,7 +295,8 @@ fn frame_row(f: &FrameDecl, language: Language) -> FrameRow {
     }
 }
 
-fn message(file: &ParsedFile, d: &Diagnostic) -> Message {
+/// A diagnostic of `file` as a located message (line and column, no source text).
+pub fn message(file: &ParsedFile, d: &Diagnostic) -> Message {
     let (line, column) = file.lines.line_col(d.span.start);
     Message {
         line,
@@ -325,6 +329,7 @@ pub fn inspect_file(file: &ParsedFile, options: InspectOptions) -> FileReport {
         opaque: file.opaque,
         counts,
         warnings: lints(file).iter().map(|d| message(file, d)).collect(),
+        stamp: crate::transform::stamp::find(file).map(|(s, _)| s),
     }
 }
 
@@ -341,21 +346,50 @@ pub fn inspect_program(program: &Program, options: InspectOptions) -> Vec<FileRe
 pub fn render_table(report: &InspectReport) -> String {
     let mut out = String::new();
     for f in &report.files {
-        let _ = writeln!(out, "{} ({})", f.path, language_name(f.language));
+        let _ = writeln!(
+            out,
+            "{} ({})",
+            printable(&f.path),
+            language_name(f.language)
+        );
+        if let Some(s) = &f.stamp {
+            let _ = writeln!(out, "  stamp: {}", printable(&s.text()));
+        }
         if !f.positions.is_empty() {
             let frame_col = f.language.dialect().vocabulary().frame_column;
+            // A file whose targets are written as A, B, C (KRL) shows those, as written, and
+            // its Status/Turn; others show the fixed-axis angles rx, ry, rz.
+            let abc = f.positions.iter().any(|p| p.abc.is_some());
+            let (r1, r2, r3) = if abc {
+                ("A", "B", "C")
+            } else {
+                ("rx", "ry", "rz")
+            };
+            let st = if abc { " S/T" } else { "" };
             let _ = writeln!(
                 out,
-                "  {:<20} {:<11} {:>6} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:<12} {:<12}",
-                "name", "kind", "line", "x", "y", "z", "rx", "ry", "rz", "skid", frame_col, "tool"
+                "  {:<20} {:<11} {:>6} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:<12} {:<12}{st}",
+                "name", "kind", "line", "x", "y", "z", r1, r2, r3, "skid", frame_col, "tool"
             );
             for p in &f.positions {
                 let frame = &p.frame.name;
-                let [x, y, z, rx, ry, rz] = p.pose.cells();
+                let [x, y, z, mut rx, mut ry, mut rz] = p.pose.cells();
+                if let Some([a, b, c]) = p.abc {
+                    [rx, ry, rz] = [cell(a, 4), cell(b, 4), cell(c, 4)];
+                }
+                let st = match (abc, &p.status, &p.turn) {
+                    (false, ..) => String::new(),
+                    (true, None, None) => " -".to_owned(),
+                    (true, s, t) => format!(
+                        " {}/{}",
+                        s.as_deref().unwrap_or("-"),
+                        t.as_deref().unwrap_or("-")
+                    ),
+                };
                 let _ = writeln!(
                     out,
-                    "  {:<20} {:<11} {:>6} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:<12} {:<12}",
-                    p.name.as_deref().unwrap_or("*"),
+                    "  {:<20} {:<11} {:>6} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:<12} {:<12}{st}",
+                    printable(p.name.as_deref().unwrap_or("*")),
                     p.kind,
                     p.line,
                     x,
@@ -365,8 +399,8 @@ pub fn render_table(report: &InspectReport) -> String {
                     ry,
                     rz,
                     cell(p.skid, 1),
-                    frame.as_deref().unwrap_or("-"),
-                    p.tool.as_deref().unwrap_or("-"),
+                    printable(frame.as_deref().unwrap_or("-")),
+                    printable(p.tool.as_deref().unwrap_or("-")),
                 );
             }
         }
@@ -375,7 +409,9 @@ pub fn render_table(report: &InspectReport) -> String {
             let _ = writeln!(
                 out,
                 "  {} {} (line {}): x {x} y {y} z {z} rx {rx} ry {ry} rz {rz}",
-                fr.kind, fr.name, fr.line,
+                fr.kind,
+                printable(&fr.name),
+                fr.line,
             );
         }
         let counts: Vec<String> = f.counts.iter().map(|(k, n)| format!("{n} {k}")).collect();
@@ -395,11 +431,11 @@ pub fn render_table(report: &InspectReport) -> String {
             let _ = writeln!(
                 out,
                 "  {}:{}:{}: {}: {}",
-                f.path,
+                printable(&f.path),
                 w.line,
                 w.column,
                 w.severity.as_str(),
-                w.message
+                printable(&w.message)
             );
         }
     }
@@ -452,10 +488,19 @@ fn opt(v: Option<f64>) -> String {
     v.map_or_else(String::new, |v| v.to_string())
 }
 
+/// A text cell of `inspect --format csv`. A spreadsheet runs a cell that starts with `=`, `+`,
+/// `-` or `@` (or a tab / CR) as a formula: such a cell gets a leading `'` unless it is a number.
 fn csv_text(s: &str) -> String {
+    let formula = s.starts_with(['=', '+', '@', '\t', '\r'])
+        || (s.starts_with('-') && s.parse::<f64>().is_err());
+    let s = if formula {
+        format!("'{s}")
+    } else {
+        s.to_owned()
+    };
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
-        s.to_owned()
+        s
     }
 }

@@ -142,6 +142,7 @@ mod tests {
             original: b"x".to_vec(),
             output: b"y".to_vec(),
             refusals: Vec::new(),
+            notes: Vec::new(),
             changes,
         }
     }

@@ -59,44 +59,139 @@ impl Diagnostic {
 
     /// `path:line:column: severity: message`, the source line, a caret line and the hint.
     ///
-    /// Bytes are shown as Latin-1 so that a Windows-125x comment never breaks the caret's column.
+    /// Bytes are shown as Latin-1 so that a Windows-125x comment never breaks the caret's column;
+    /// control characters (ESC, OSC, C0 and C1) are shown escaped (`\x1b`), never sent to the
+    /// terminal; a long line is cut to a window of [`WINDOW`] characters around the span.
     pub fn render(&self, path: &str, src: &[u8], index: &LineIndex) -> String {
         let (line, col) = index.line_col(self.span.start);
+        let text_span = index.line_span(src, line);
+        let excerpt = Excerpt {
+            line,
+            column: col,
+            text: text_span.slice(src),
+            start: text_span.start,
+            cut_before: false,
+            cut_after: false,
+        };
+        self.render_excerpt(path, &excerpt)
+    }
+
+    /// [`render`](Self::render) from one line (or a piece of it) alone.
+    pub fn render_excerpt(&self, path: &str, x: &Excerpt) -> String {
+        let Excerpt {
+            line,
+            column: col,
+            text,
+            start: text_start,
+            ..
+        } = *x;
         let mut out = String::new();
         let _ = writeln!(
             out,
-            "{path}:{line}:{col}: {}: {}",
+            "{}:{line}:{col}: {}: {}",
+            printable(path),
             self.severity.as_str(),
-            self.message
+            printable(&self.message)
         );
-        let text_span = index.line_span(src, line);
-        let text = text_span.slice(src);
-        let gutter = line.to_string().len();
-        let _ = writeln!(out, "{:gutter$} |", "");
-        let _ = writeln!(out, "{line} | {}", latin1(text));
-        let caret_start = col - 1;
-        let caret_len = self
+        let at = self.span.start.saturating_sub(text_start).min(text.len());
+        let end = self
             .span
             .end
-            .min(text_span.end)
-            .saturating_sub(self.span.start)
-            .max(1);
-        let pad: String = text
-            .iter()
-            .take(caret_start)
-            .map(|&b| if b == b'\t' { '\t' } else { ' ' })
-            .collect();
+            .saturating_sub(text_start)
+            .clamp(at, text.len());
+        let (from, to) = window(text.len(), at, end);
+        let gutter = line.to_string().len();
+        let _ = writeln!(out, "{:gutter$} |", "");
+        let mut shown = String::new();
+        let mut pad = String::new();
+        if from > 0 || x.cut_before {
+            shown.push('…');
+            pad.push(' ');
+        }
+        for (i, &b) in text[from..to].iter().enumerate() {
+            let width = push_byte(&mut shown, b);
+            if from + i < at {
+                let fill = if b == b'\t' { '\t' } else { ' ' };
+                pad.extend(std::iter::repeat_n(fill, width));
+            }
+        }
+        if to < text.len() || x.cut_after {
+            shown.push('…');
+        }
+        let _ = writeln!(out, "{line} | {shown}");
+        let caret_len = end.min(to).saturating_sub(at).max(1);
         let _ = writeln!(out, "{:gutter$} | {pad}{}", "", "^".repeat(caret_len));
         if let Some(hint) = &self.hint {
-            let _ = writeln!(out, "{:gutter$} = help: {hint}", "");
+            let _ = writeln!(out, "{:gutter$} = help: {}", "", printable(hint));
         }
         out
     }
 }
 
+/// How many characters of a source line a diagnostic shows: a line of 2,000 targets renders
+/// as a window around the span, so every rendered diagnostic stays small.
+pub const WINDOW: usize = 200;
+
+/// The byte range `[from, to)` of a line of `len` bytes shown for a span `[at, end)`: the whole
+/// line when short, else [`WINDOW`] bytes starting a little before the span.
+pub fn window(len: usize, at: usize, end: usize) -> (usize, usize) {
+    if len <= WINDOW {
+        return (0, len);
+    }
+    let lead = WINDOW / 4;
+    let from = at.saturating_sub(lead).min(len.saturating_sub(WINDOW));
+    let to = (from + WINDOW).max(end.min(from + 2 * WINDOW)).min(len);
+    (from, to)
+}
+
+/// One source byte for the terminal: Latin-1, a control character escaped; its width.
+fn push_byte(out: &mut String, b: u8) -> usize {
+    let c = b as char;
+    if b == b'\t' || !c.is_control() {
+        out.push(c);
+        1
+    } else {
+        let _ = write!(out, "\\x{b:02x}");
+        4
+    }
+}
+
+/// One source line, or the window of it a diagnostic shows, with where it sits in its file.
+#[derive(Clone, Copy, Debug)]
+pub struct Excerpt<'a> {
+    /// 1-based line and column of the diagnostic's span start.
+    pub line: usize,
+    pub column: usize,
+    /// The bytes shown (no line terminator).
+    pub text: &'a [u8],
+    /// Byte offset of `text` in the file (the span's offsets are file offsets).
+    pub start: usize,
+    /// Whether the line goes on before / after `text`.
+    pub cut_before: bool,
+    pub cut_after: bool,
+}
+
 /// Bytes as Latin-1 text: every byte is one char, so columns stay columns.
 pub fn latin1(bytes: &[u8]) -> String {
     bytes.iter().map(|&b| b as char).collect()
+}
+
+/// `s` with control characters (ESC, OSC, BEL, C1, …; not tab or newline) escaped as `\x1b`,
+/// safe to print to a terminal: file names, messages and source text can hold anything.
+pub fn printable(s: &str) -> std::borrow::Cow<'_, str> {
+    let unsafe_char = |c: char| c.is_control() && c != '\t' && c != '\n';
+    if !s.chars().any(unsafe_char) {
+        return std::borrow::Cow::Borrowed(s);
+    }
+    let mut out = String::with_capacity(s.len() + 8);
+    for c in s.chars() {
+        if unsafe_char(c) {
+            let _ = write!(out, "\\x{:02x}", c as u32);
+        } else {
+            out.push(c);
+        }
+    }
+    std::borrow::Cow::Owned(out)
 }
 
 #[cfg(test)]
@@ -114,5 +209,33 @@ mod tests {
             text,
             "m.mod:2:9: error: unknown target `p1`\n  |\n2 |   MoveL p1 v100;\n  |         ^^\n  = help: declare it or check the spelling\n"
         );
+    }
+
+    #[test]
+    fn a_long_line_renders_a_window_around_the_span() {
+        let mut src = vec![b'x'; 10_000];
+        src[6000..6003].copy_from_slice(b"p42");
+        let idx = LineIndex::new(&src);
+        let d = Diagnostic::error(Span::new(6000, 6003), "here");
+        let text = d.render("m.mod", &src, &idx);
+        assert!(text.starts_with("m.mod:1:6001: error: here\n"), "{text}");
+        let lines: Vec<&str> = text.lines().collect();
+        // `…` + WINDOW bytes + `…`; the caret under `p42`.
+        assert_eq!(lines[2].chars().count(), "1 | ".len() + WINDOW + 2);
+        let shown = lines[2].find("p42").unwrap();
+        assert_eq!(lines[3].find("^^^").unwrap(), shown - ("…".len() - 1));
+    }
+
+    #[test]
+    fn control_characters_are_escaped_and_the_caret_follows() {
+        let src = b"a \x1b]0;x\x07 p1";
+        let idx = LineIndex::new(src);
+        let d = Diagnostic::warning(Span::new(9, 11), "bad\x1b[2J");
+        let text = d.render("m\x07.mod", src, &idx);
+        assert_eq!(
+            text,
+            "m\\x07.mod:1:10: warning: bad\\x1b[2J\n  |\n1 | a \\x1b]0;x\\x07 p1\n  |                ^^\n"
+        );
+        assert_eq!(printable("tab\tok"), "tab\tok");
     }
 }

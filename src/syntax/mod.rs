@@ -16,7 +16,7 @@ mod number;
 mod span;
 mod tree;
 
-pub use diagnostic::{Diagnostic, Severity, latin1};
+pub use diagnostic::{Diagnostic, Excerpt, Severity, WINDOW, latin1, printable, window};
 pub use edit::{Edit, EditError, apply_edits};
 pub use line_index::LineIndex;
 pub use number::{NumLit, fixed};
@@ -34,14 +34,15 @@ pub const BOM: &[u8] = b"\xEF\xBB\xBF";
 /// byte in a comment (0x05, 0x1C: editors and pendants leave them) does not.
 pub fn looks_binary(src: &[u8]) -> bool {
     let head = &src[..src.len().min(8192)];
-    if head.contains(&0) {
-        return true;
-    }
-    let controls = head
-        .iter()
-        .filter(|&&b| b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0C | 0x1A))
-        .count();
-    controls * 32 > head.len().max(256)
+    // A NUL never occurs in a program; a stray control byte in a comment does (and `check`
+    // reports it): only a text made largely of control bytes is binary.
+    let controls = head.iter().filter(|&&b| is_control_byte(b)).count();
+    head.contains(&0) || controls * 10 > head.len()
+}
+
+/// A C0 control byte other than tab, line ends, form feed and the DOS end-of-file mark.
+pub fn is_control_byte(b: u8) -> bool {
+    b == 0x7f || (b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0C | 0x1A))
 }
 
 #[cfg(test)]

@@ -65,12 +65,46 @@ impl CellError {
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct FrameXyz {
+    #[serde(deserialize_with = "plausible_mm")]
     pub x: f64,
+    #[serde(deserialize_with = "plausible_mm")]
     pub y: f64,
+    #[serde(deserialize_with = "plausible_mm")]
     pub z: f64,
+    #[serde(deserialize_with = "plausible_deg")]
     pub rx: f64,
+    #[serde(deserialize_with = "plausible_deg")]
     pub ry: f64,
+    #[serde(deserialize_with = "plausible_deg")]
     pub rz: f64,
+}
+
+/// A frame coordinate beyond this (mm) is no position in a robot cell: a typo or a placeholder.
+const PLAUSIBLE_FRAME_MM: f64 = 1e6;
+/// A frame angle beyond this (degrees) is a typo.
+const PLAUSIBLE_FRAME_DEG: f64 = 360.0;
+
+fn plausible<'de, D: serde::Deserializer<'de>>(
+    d: D,
+    limit: f64,
+    unit: &str,
+) -> Result<f64, D::Error> {
+    let v = f64::deserialize(d)?;
+    if v.is_finite() && v.abs() <= limit {
+        Ok(v)
+    } else {
+        Err(serde::de::Error::custom(format!(
+            "{v} is not a plausible value: write a finite number of {unit} (at most {limit:e} in size)"
+        )))
+    }
+}
+
+fn plausible_mm<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    plausible(d, PLAUSIBLE_FRAME_MM, "mm")
+}
+
+fn plausible_deg<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    plausible(d, PLAUSIBLE_FRAME_DEG, "degrees")
 }
 
 impl FrameXyz {
@@ -439,6 +473,24 @@ skid_map = [1.0, 5.0]
         )
         .unwrap();
         assert!((ok.robots["r1"].track_axis.norm() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_non_finite_or_absurd_frame_value_is_a_located_error() {
+        let good = "[robot.r1]\nprofile = \"p.toml\"\nbase = { x = 0, y = 0, z = 0, rx = 0, ry = 0, rz = 0 }\ntrack_axis = [1, 0, 0]\n";
+        assert!(Cell::parse(Path::new("cell.toml"), good).is_ok());
+        for bad in ["x = nan", "y = inf", "z = 1e22", "rz = 1e9"] {
+            let key = bad.split(' ').next().unwrap();
+            let text = good.replacen(&format!(" {key} = 0"), &format!(" {bad}"), 1);
+            let e = err(&text);
+            let value = bad.split(' ').next_back().unwrap();
+            let col = text.lines().nth(2).unwrap().find(value).unwrap() + 1;
+            assert!(
+                e.starts_with(&format!("cell.toml:3:{col}: error:")),
+                "{bad}: {e}"
+            );
+            assert!(e.contains("not a plausible value"), "{bad}: {e}");
+        }
     }
 
     #[test]

@@ -7,8 +7,8 @@ use crate::position::{FrameDecl, OffsetCall, ParsedFile, Position, Program};
 use crate::syntax::Edit;
 
 use super::edits::{ProgramEdits, TargetChange};
-use super::policy::{Why, common_refusal, joint_target};
-use super::refusal::Refusal;
+use super::policy::{Why, common_refusal, implausible_result, joint_target};
+use super::refusal::{Refusal, RefusalKind};
 use super::rewrite::{OrientationHint, pose_change, pose_edits};
 
 /// Where a rule is looking: the program (for frames declared in other files) and the file.
@@ -89,6 +89,8 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
                     fe.changes.push(change);
                 }
                 Ok(_) => {}
+                // An unset array slot is not a target: worth a note, never a refusal.
+                Err(r) if r.kind == RefusalKind::ZeroQuaternion => fe.notes.push(*r),
                 Err(r) => fe.refusals.push(*r),
             }
         }
@@ -120,6 +122,9 @@ fn cartesian<R: TargetRule>(rule: &R, scope: Scope, p: &Position) -> Step {
         return Ok(None);
     };
     let (new, hint) = rule.new_pose(p, &frame, skid, &t).map_err(refuse)?;
+    if let Some(why) = implausible_result(p, &new) {
+        return Err(refuse(why));
+    }
     let mut edits = pose_edits(fields, &new, hint);
     edits.extend(rule.more_edits(scope, p));
     let (mm, deg) = pose_change(&t, &new);

@@ -31,6 +31,9 @@ pub struct TargetChange {
 pub struct FileEdits {
     pub edits: Vec<Edit>,
     pub refusals: Vec<Refusal>,
+    /// Things that look like targets but are none (unset `[0,0,0,0]` array slots): left as
+    /// written and reported as notes, never refusals.
+    pub notes: Vec<Refusal>,
     /// One entry per target whose text changes.
     pub changes: Vec<TargetChange>,
 }
@@ -60,6 +63,8 @@ pub struct FileResult {
     pub original: Vec<u8>,
     pub output: Vec<u8>,
     pub refusals: Vec<Refusal>,
+    /// Unset slots and the like, left as written (see [`FileEdits::notes`]).
+    pub notes: Vec<Refusal>,
     pub changes: Vec<TargetChange>,
 }
 
@@ -113,6 +118,7 @@ pub fn apply(program: &Program, edits: ProgramEdits) -> Result<ProgramResult, Ed
             original: file.source.clone(),
             output,
             refusals: fe.refusals,
+            notes: fe.notes,
             changes: fe.changes,
         });
     }

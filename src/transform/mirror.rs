@@ -23,7 +23,7 @@ use super::driver::{Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
 use super::policy::{Why, common_refusal, describe, work_object_of};
 use super::refusal::{Refusal, RefusalKind, Remedy};
-use super::rewrite::{MM_DECIMALS, OrientationHint, number_edit, pose_edits};
+use super::rewrite::{MM_DECIMALS, OrientationHint, QUAT_DECIMALS, number_edit, pose_edits};
 
 /// Everything `mirror` needs.
 #[derive(Clone, Debug, PartialEq)]
@@ -317,8 +317,13 @@ impl TargetRule for MirrorRule<'_> {
     }
 
     fn declaration(&self, _scope: Scope, decl: &FrameDecl) -> Vec<Edit> {
+        // (`_scope` gives the source the tool's load is read from.)
         if self.settings.mirror_frames {
-            mirror_frame(decl, self.settings, &self.own)
+            let mut edits = mirror_frame(decl, self.settings, &self.own);
+            if decl.kind == FrameKind::Tool {
+                edits.extend(mirror_tool_load(&_scope.file.source, decl, &self.own));
+            }
+            edits
         } else {
             Vec::new()
         }
@@ -526,6 +531,85 @@ fn mirror_offset(
 
 fn frame_field_edits(fields: &CartesianFields, new: &Pose, expected: [f64; 4]) -> Vec<Edit> {
     pose_edits(fields, new, OrientationHint::Expected(expected))
+}
+
+/// A numeric literal inside a declaration, as found by [`numbers_after`].
+struct Lit {
+    span: crate::syntax::Span,
+    lit: crate::syntax::NumLit,
+}
+
+/// The numeric literals of `src[from..to]`, in order (separators `[ ] , ` and blanks only: any
+/// other text ends the scan, so only a plain literal is read).
+fn numbers_after(src: &[u8], from: usize, to: usize) -> Vec<Lit> {
+    let mut out = Vec::new();
+    let mut i = from;
+    while i < to {
+        match src[i] {
+            b'[' | b']' | b',' | b' ' | b'\t' | b'\r' | b'\n' => i += 1,
+            _ => {
+                let start = i;
+                while i < to && !matches!(src[i], b'[' | b']' | b',' | b' ' | b'\t' | b'\r' | b'\n')
+                {
+                    i += 1;
+                }
+                match crate::syntax::NumLit::parse(&src[start..i]) {
+                    Some(lit) => out.push(Lit {
+                        span: crate::syntax::Span::new(start, i),
+                        lit,
+                    }),
+                    None => break,
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The tool's load (RAPID `tooldata` `tload = [mass, [cog x, y, z], [aom q1..q4], ix, iy, iz]`,
+/// after the tool frame): its centre of gravity and axes of moment are in the flange frame and
+/// mirror with `Sb`, like the tool frame.
+fn mirror_tool_load(src: &[u8], d: &FrameDecl, own: &Reflection) -> Vec<Edit> {
+    let Some(frame) = &d.frame else {
+        return Vec::new();
+    };
+    let Some(crate::position::Orientation::Quaternion(q)) = &frame.orient else {
+        return Vec::new();
+    };
+    let Some(Some(last)) = q.last() else {
+        return Vec::new();
+    };
+    let nums = numbers_after(src, last.span.end, d.span.end.min(src.len()));
+    // mass, cog x y z, aom q1..q4 (ix, iy, iz are moments about the aom axes: kept).
+    if nums.len() < 8 {
+        return Vec::new();
+    }
+    let mut edits = Vec::new();
+    let cog = Vector3::new(
+        nums[1].lit.value(),
+        nums[2].lit.value(),
+        nums[3].lit.value(),
+    );
+    let new = own.tool_vector(&cog);
+    for (n, v) in nums[1..4].iter().zip([new.x, new.y, new.z]) {
+        if let Some(text) = n.lit.rewrite(v, MM_DECIMALS) {
+            edits.push(Edit::new(n.span, text));
+        }
+    }
+    let aom = [4, 5, 6, 7].map(|i| nums[i].lit.value());
+    if let Some(r) = crate::geometry::abb_quat(aom) {
+        let m = reflect_rotation(own.tool_axis, &r, own.tool_axis);
+        let m = [m.w, m.i, m.j, m.k];
+        // The sign nearest the written one.
+        let dot: f64 = m.iter().zip(aom).map(|(a, b)| a * b).sum();
+        let m = if dot < 0.0 { m.map(|v| -v) } else { m };
+        for (n, v) in nums[4..8].iter().zip(m) {
+            if let Some(text) = n.lit.rewrite(v, QUAT_DECIMALS) {
+                edits.push(Edit::new(n.span, text));
+            }
+        }
+    }
+    edits
 }
 
 /// The edits of one work object, base or tool declaration.

@@ -13,7 +13,9 @@ pub mod mirror;
 pub mod output;
 pub(crate) mod policy;
 pub mod refusal;
+pub mod rename;
 pub mod rewrite;
+pub mod stamp;
 pub mod track_correction;
 pub mod transfer;
 
@@ -21,6 +23,7 @@ pub use cell::{Axis, Cell, CellError, ConfigRule, FrameIn, MirrorTable, Plane, R
 pub use edits::{FileEdits, FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
 pub use mirror::{MirrorSettings, WorldPlane, mirror};
 pub use refusal::{Refusal, RefusalKind, Remedy};
+pub use stamp::Stamp;
 pub use track_correction::{Deviation, Direction, TrackSetup, track_correction};
 pub use transfer::{TransferError, TransferPlan, TransformStep, reparse, transfer};
 

@@ -189,6 +189,13 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
             "check the coordinates (mm)",
         );
     }
+    if let Some(problem) = implausible_literal(file, p) {
+        return refuse(
+            RefusalKind::Implausible,
+            format!("{what} {problem}"),
+            "check the value: it is no configuration or orientation a controller accepts",
+        );
+    }
     if p.usage.stationary_tool {
         let setting = file.language.dialect().vocabulary().stationary_tool;
         return refuse(
@@ -206,4 +213,127 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
         );
     }
     None
+}
+
+/// Written angles (degrees) beyond this are no orientation: a typo or `9E9` in the wrong field.
+pub const PLAUSIBLE_DEG: f64 = 360.0;
+/// ABB `cf1, cf4, cf6, cfx` are quadrant and configuration numbers: small integers.
+pub const PLAUSIBLE_CF: f64 = 1000.0;
+/// KUKA Status has 3 bits in use, Turn 6.
+const KUKA_STATUS_MAX: u32 = 0b111;
+const KUKA_TURN_MAX: u32 = 0b11_1111;
+/// A written quaternion farther than this from unit length is no rotation (controllers reject
+/// anything beyond a few 1e-5; the check lint warns at 1e-4).
+pub const PLAUSIBLE_QUATERNION_NORM_ERROR: f64 = 0.01;
+
+/// What makes the literals of a Cartesian target absurd, in words ("has cf4 = 1.5, …"), or
+/// `None`. Shared by `check` (a finding) and every transform (a refusal).
+pub fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<String> {
+    use crate::position::{Config, Orientation};
+    if let Some(problem) = file
+        .language
+        .dialect()
+        .implausible_configuration(p.span.slice(&file.source))
+    {
+        return Some(problem);
+    }
+    if let Some(c) = &p.cartesian {
+        match &c.orient {
+            Some(Orientation::Abc(abc)) => {
+                for (name, f) in ["A", "B", "C"].iter().zip(abc) {
+                    if let Some(f) = f
+                        && !(f.value().is_finite() && f.value().abs() <= PLAUSIBLE_DEG)
+                    {
+                        return Some(format!(
+                            "has {name} = {}: not an angle in degrees",
+                            shown(f.value())
+                        ));
+                    }
+                }
+            }
+            Some(Orientation::Quaternion(_)) => {
+                if let Some(q) = c.written_quaternion() {
+                    let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+                    if norm != 0.0
+                        && !(norm.is_finite()
+                            && (norm - 1.0).abs() <= PLAUSIBLE_QUATERNION_NORM_ERROR)
+                    {
+                        return Some(format!(
+                            "has a quaternion of length {norm:.4}: not a rotation"
+                        ));
+                    }
+                }
+            }
+            None => {}
+        }
+    }
+    match &p.config {
+        Config::Abb(cf) => {
+            for (name, f) in ["cf1", "cf4", "cf6", "cfx"].iter().zip(cf) {
+                if let Some(f) = f {
+                    let v = f.value();
+                    if !(v.is_finite() && v.fract() == 0.0 && v.abs() <= PLAUSIBLE_CF) {
+                        return Some(format!(
+                            "has {name} = {}: a configuration is a small integer",
+                            shown(f.value())
+                        ));
+                    }
+                }
+            }
+        }
+        Config::Kuka { status, turn } => {
+            if let Some(s) = status
+                && s.value > KUKA_STATUS_MAX
+            {
+                return Some(format!("has Status {}: only bits 0 to 2 exist", s.value));
+            }
+            if let Some(t) = turn
+                && t.value > KUKA_TURN_MAX
+            {
+                return Some(format!("has Turn {}: only bits 0 to 5 exist", t.value));
+            }
+        }
+        Config::None => {}
+    }
+    None
+}
+
+/// Why a computed pose cannot be written (not finite, or beyond any robot cell), or `None`.
+pub(crate) fn implausible_result(p: &Position, new: &Pose) -> Option<Why> {
+    let t = new.translation.vector;
+    let q = new.rotation.coords;
+    let what = describe(p);
+    if !(t.iter().all(|v| v.is_finite()) && q.iter().all(|v| v.is_finite())) {
+        return Some(Why::new(
+            RefusalKind::ImplausibleResult,
+            format!("{what}: the computed pose is not a finite number"),
+            "check the profile and the cell file's base, track axis and frames for absurd values",
+        ));
+    }
+    if (q.norm() - 1.0).abs() > 1e-6 {
+        return Some(Why::new(
+            RefusalKind::ImplausibleResult,
+            format!("{what}: the computed orientation is not a rotation"),
+            "check the profile and the cell file for absurd values",
+        ));
+    }
+    if t.iter().any(|v| v.abs() > PLAUSIBLE_MM) {
+        return Some(Why::new(
+            RefusalKind::ImplausibleResult,
+            format!(
+                "{what}: the computed position lies more than 1 km from its work object's origin"
+            ),
+            "check the profile and the cell file's base, track axis and frames for absurd values",
+        ));
+    }
+    None
+}
+
+/// A written value in a message: plain, or with an exponent when huge (`1e22`, not 23 digits).
+fn shown(v: f64) -> String {
+    if v.is_finite() && v.abs() < 1e6 {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
 }

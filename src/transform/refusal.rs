@@ -2,35 +2,50 @@
 
 use std::path::PathBuf;
 
-use crate::located::Located;
+use crate::located::{LineAt, Located};
 use crate::position::ParsedFile;
 use crate::syntax::{Diagnostic, Severity, Span};
 
-/// Why a target is left untouched.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
+/// Why a target is left untouched. Each kind can be kept as written on its own (the command
+/// line's `--keep KIND` lists exactly these, by their kebab-case names and the aliases below).
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, clap::ValueEnum,
+)]
 #[serde(rename_all = "kebab-case")]
+#[value(rename_all = "kebab-case")]
 pub enum RefusalKind {
     /// A joint target (`jointtarget`, `E6AXIS`, `AXIS`).
+    #[value(alias = "joint-targets")]
     JointTarget,
     /// A field of the target is an expression, not a numeric literal.
     Expression,
     /// The target is used with two different work objects / bases.
+    #[value(alias = "two-wobjs")]
     TwoWorkObjects,
     /// The work object is moved by a mechanical unit (`ufprog FALSE`).
     MovingWorkObject,
     /// Stationary tool (`robhold TRUE`, KRL `IPO_FRAME #TCP`).
     StationaryTool,
     /// The skid axis is `9E9` (not connected).
+    #[value(alias = "not-connected-skid")]
     SkidNotConnected,
     /// The skid axis is not written.
     SkidMissing,
     /// The skid lies outside the profile (under `extrapolate = "error"`).
     SkidOutOfRange,
     /// The work object / base could not be found or has non-numeric fields.
+    #[value(alias = "unresolved-wobj", alias = "unresolved-base")]
     UnresolvedWorkObject,
-    /// Coordinates beyond any robot cell (over 1 km): a typo or a placeholder, not a target.
+    /// Coordinates beyond any robot cell (over 1 km), an angle beyond a turn, a configuration
+    /// that is not a small integer: a typo or a placeholder, not a target.
     Implausible,
-    /// An all-zero quaternion: an unset slot (e.g. of a `PERS` array), not an orientation.
+    /// The computed pose is not finite or lies beyond any robot cell (an absurd profile or
+    /// cell value): nothing is written for it.
+    #[value(alias = "non-finite")]
+    ImplausibleResult,
+    /// An all-zero quaternion: an unset slot (e.g. of a `PERS` array), not an orientation and
+    /// not a target: reported as a note, never a refusal (so nothing to keep).
+    #[value(skip)]
     ZeroQuaternion,
 }
 
@@ -46,13 +61,17 @@ pub enum Remedy {
     MirrorJoints,
 }
 
-/// The refused target's line, so that a refusal renders without its whole file.
+/// The piece of the refused target's line a diagnostic shows (at most a window of
+/// [`WINDOW`](crate::syntax::WINDOW) bytes around the span), so that a refusal renders without
+/// its file and a line of 2,000 targets costs 2,000 small excerpts, not 2,000 copies of the line.
 #[derive(Clone, Debug, PartialEq, Eq)]
 struct Excerpt {
-    /// The line's bytes, without its terminator.
+    /// The bytes shown, without a line terminator.
     text: Vec<u8>,
-    /// Byte offset of the line's start in the file.
+    /// Byte offset of `text` in the file.
     start: usize,
+    cut_before: bool,
+    cut_after: bool,
 }
 
 /// One refused target.
@@ -88,6 +107,13 @@ impl Refusal {
     ) -> Refusal {
         let (line, column) = file.lines.line_col(span.start);
         let line_span = file.lines.line_span(&file.source, line);
+        let text = line_span.slice(&file.source);
+        let at = span.start.saturating_sub(line_span.start).min(text.len());
+        let end = span
+            .end
+            .saturating_sub(line_span.start)
+            .clamp(at, text.len());
+        let (from, to) = crate::syntax::window(text.len(), at, end);
         Refusal {
             path: file.path.clone(),
             line,
@@ -99,8 +125,10 @@ impl Refusal {
             hint: hint.into(),
             remedy,
             excerpt: Excerpt {
-                text: line_span.slice(&file.source).to_vec(),
-                start: line_span.start,
+                text: text[from..to].to_vec(),
+                start: line_span.start + from,
+                cut_before: from > 0,
+                cut_after: to < text.len(),
             },
         }
     }
@@ -108,14 +136,15 @@ impl Refusal {
     /// The refusal as a located diagnostic at `severity` with `hint` (the renderer's words for
     /// what to do), rendered on `Display` with the refused line and a caret.
     pub fn located(&self, severity: Severity, hint: impl Into<String>) -> Located {
-        // Only the refused line is kept: empty lines before it put it at its own line number.
-        let pad = self.line.saturating_sub(1);
-        let mut source = vec![b'\n'; pad];
-        source.extend_from_slice(&self.excerpt.text);
-        let at = |offset: usize| pad + offset.saturating_sub(self.excerpt.start);
-        let span = Span::new(at(self.span.start), at(self.span.end));
-        let d = Diagnostic::new(severity, span, self.message.clone()).with_hint(hint);
-        Located::new(self.path.clone(), source, d)
+        let d = Diagnostic::new(severity, self.span, self.message.clone()).with_hint(hint);
+        let at = LineAt {
+            line: self.line,
+            column: self.column,
+            start: self.excerpt.start,
+            cut_before: self.excerpt.cut_before,
+            cut_after: self.excerpt.cut_after,
+        };
+        Located::excerpt(self.path.clone(), self.excerpt.text.clone(), at, d)
     }
 }
 

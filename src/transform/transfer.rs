@@ -8,13 +8,13 @@
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 
-use crate::position::Program;
+use crate::position::{NumField, Orientation, ParsedFile, Position, Program};
 use crate::program::{LoadError, LoadOptions};
-use crate::syntax::EditError;
+use crate::syntax::{Edit, EditError, apply_edits};
 
 use super::edits::{FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
 use super::mirror::{MirrorSettings, Reflection, mirror, reflection_for};
-use super::rewrite::pose_change;
+use super::rewrite::{DEG_DECIMALS, MM_DECIMALS, QUAT_DECIMALS, pose_change};
 use super::track_correction::{Direction, TrackSetup, track_correction};
 
 #[derive(Debug, thiserror::Error)]
@@ -140,6 +140,14 @@ fn combine(
             .filter(|r| seen.insert((r.line, r.target.clone(), r.kind)))
             .cloned()
             .collect();
+        let mut seen = BTreeSet::new();
+        let notes = steps
+            .iter()
+            .filter_map(|s| s.files.get(i))
+            .flat_map(|f| f.notes.iter())
+            .filter(|r| seen.insert((r.line, r.target.clone(), r.kind)))
+            .cloned()
+            .collect();
         let changes = a
             .positions
             .iter()
@@ -173,13 +181,116 @@ fn combine(
                 }
             })
             .collect();
+        let output = restore_unmoved(a, b)?;
         files.push(FileResult {
             path: a.path.clone(),
             original: a.source.clone(),
-            output: b.source.clone(),
+            output,
             refusals,
+            notes,
             changes,
         });
     }
     Ok(ProgramResult { files })
+}
+
+/// The translation, orientation and other literals of a target (the last: joints and external
+/// axes), and the unit of the last place the transforms write for each group (DESIGN.md §5:
+/// at least 3 decimals for mm, 6 for quaternion components, 4 for degrees).
+struct TargetLiterals<'a> {
+    trans: Vec<&'a NumField>,
+    orient: Vec<&'a NumField>,
+    /// The rotation (radians) one unit of the orientation's last place amounts to.
+    orient_unit_rad: f64,
+    others: Vec<&'a NumField>,
+}
+
+fn unit(fields: &[&NumField], house: i32) -> f64 {
+    let places = fields
+        .iter()
+        .map(|f| f.lit.precision().clamp(0, 12))
+        .max()
+        .unwrap_or(0)
+        .max(house);
+    10f64.powi(-places)
+}
+
+fn target_literals(p: &Position) -> TargetLiterals<'_> {
+    let mut t = TargetLiterals {
+        trans: Vec::new(),
+        orient: Vec::new(),
+        orient_unit_rad: 0.0,
+        others: Vec::new(),
+    };
+    if let Some(c) = &p.cartesian {
+        t.trans = c.trans.iter().flatten().collect();
+        match &c.orient {
+            Some(Orientation::Quaternion(q)) => {
+                t.orient = q.iter().flatten().collect();
+                t.orient_unit_rad = 2.0 * unit(&t.orient, QUAT_DECIMALS as i32);
+            }
+            Some(Orientation::Abc(abc)) => {
+                t.orient = abc.iter().flatten().collect();
+                t.orient_unit_rad = unit(&t.orient, DEG_DECIMALS as i32).to_radians();
+            }
+            None => {}
+        }
+    }
+    t.others = p.joints.iter().chain(&p.extax).flatten().collect();
+    t
+}
+
+/// Each of a chain's intermediate files rounds every value it writes by up to half a unit of
+/// its last place: three steps can leave an unmoved value this many units off.
+const CHAIN_ROUNDING_UNITS: f64 = 1.5;
+
+/// `b.source`, except that a target the chain brings back to where it was written at the start
+/// (every coordinate, and the orientation as a rotation, within the rounding of the intermediate
+/// files) keeps its original text, and so do joint and external-axis values that came back: an
+/// identity transfer would otherwise rewrite `-1200` as `-1200.000`.
+fn restore_unmoved(a: &ParsedFile, b: &ParsedFile) -> Result<Vec<u8>, EditError> {
+    let mut edits = Vec::new();
+    let mut keep = |f: &NumField, g: &NumField| {
+        let old = f.span.slice(&a.source);
+        if old != g.span.slice(&b.source) {
+            edits.push(Edit::new(g.span, old.to_vec()));
+        }
+    };
+    let close = |f: &NumField, g: &NumField, house: i32| {
+        (f.value() - g.value()).abs() <= CHAIN_ROUNDING_UNITS * unit(&[f, g], house) * (1.0 + 1e-9)
+    };
+    for (p, q) in a.positions.iter().zip(&b.positions) {
+        let (x, y) = (target_literals(p), target_literals(q));
+        if x.others.len() == y.others.len() {
+            for (f, g) in x.others.iter().zip(&y.others) {
+                if close(f, g, MM_DECIMALS as i32) {
+                    keep(f, g);
+                }
+            }
+        }
+        if x.trans.len() != y.trans.len() || x.orient.len() != y.orient.len() {
+            continue;
+        }
+        let trans_back = x
+            .trans
+            .iter()
+            .zip(&y.trans)
+            .all(|(f, g)| close(f, g, MM_DECIMALS as i32));
+        let rot = |t: &Position| t.cartesian.as_ref().and_then(|c| c.rotation());
+        let orient_back = match (rot(p), rot(q)) {
+            (Some(r), Some(s)) => r.angle_to(&s) <= CHAIN_ROUNDING_UNITS * x.orient_unit_rad,
+            _ => x.orient.is_empty(),
+        };
+        if trans_back && orient_back {
+            for (f, g) in x
+                .trans
+                .iter()
+                .zip(&y.trans)
+                .chain(x.orient.iter().zip(&y.orient))
+            {
+                keep(f, g);
+            }
+        }
+    }
+    apply_edits(&b.source, &edits)
 }

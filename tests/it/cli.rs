@@ -233,7 +233,8 @@ fn a_closed_pipe_is_not_an_error() {
 }
 
 /// Controllers write unused slots of `PERS robtarget` arrays as all zeros: `check` does not call
-/// that a defect, and the transforms refuse the slot by name instead of calling it an expression.
+/// that a defect, and the transforms leave the slot as written with a note naming it: it is not
+/// a target, so never a refusal (nothing to keep).
 #[test]
 fn an_all_zero_quaternion_is_an_unset_slot() {
     let dir = tempfile::tempdir().unwrap();
@@ -257,14 +258,148 @@ fn an_all_zero_quaternion_is_an_unset_slot() {
         "r1",
         "--diff",
     ]);
-    assert_eq!(correct.status.code(), Some(3));
     let err = stderr(&correct);
+    assert_eq!(correct.status.code(), Some(0), "{err}");
     assert!(
-        err.contains("robtarget `s{1}` has the quaternion [0,0,0,0]: an unset slot"),
+        err.contains(": note: robtarget `s{1}` has the quaternion [0,0,0,0]: an unset slot"),
         "{err}"
     );
+    assert!(!err.contains("refused"), "{err}");
     assert!(
         !err.contains("s{2}`"),
-        "only the unset slot is refused: {err}"
+        "only the unset slot is noted: {err}"
     );
+    // The slot stays as written, the set one is corrected.
+    let out = stdout(&correct);
+    assert!(
+        out.contains("-    PERS") || out.contains("-  PERS"),
+        "{out}"
+    );
+    assert!(out.contains("[[[0,0,0],[0,0,0,0]"), "{out}");
+}
+
+/// `inspect --format csv` guards cells a spreadsheet would run as formulas; a negative number
+/// stays a number.
+#[test]
+fn csv_cells_that_start_like_formulas_are_guarded() {
+    let dir = tempfile::tempdir().unwrap();
+    let module = dir.path().join("=HYPERLINK(1).mod");
+    std::fs::write(
+        &module,
+        "MODULE m\n  CONST robtarget p1:=[[-100,0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\nENDMODULE\n",
+    )
+    .unwrap();
+    // Named relative to its folder, so the file cell starts with `=`.
+    let o = Command::new(env!("CARGO_BIN_EXE_trackfix"))
+        .args(["inspect", "--format", "csv", "=HYPERLINK(1).mod"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let csv = stdout(&o);
+    let row = csv.lines().nth(1).unwrap();
+    assert!(row.starts_with("'=HYPERLINK(1).mod,"), "{row}");
+    assert!(row.contains(",-100,"), "{row}");
+}
+
+/// KRL tables show A, B, C as written and Status/Turn.
+#[test]
+fn krl_inspect_table_labels_a_b_c_and_shows_status_turn() {
+    let o = trackfix(&["inspect", "samples/krl/spot_line.src"]);
+    let text = stdout(&o);
+    let header = text.lines().find(|l| l.contains("name ")).unwrap();
+    assert!(
+        header.contains(" A ") && header.contains(" B ") && header.contains(" C "),
+        "{header}"
+    );
+    assert!(header.ends_with("S/T"), "{header}");
+    let xp0 = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("XP0 "))
+        .unwrap();
+    // DECL E6POS XP0={X 1480.0,Y -1310.0,Z 1650.0,A -179.0,B 25.0,C 180.0,S 2,T 10,…}
+    assert!(
+        xp0.contains("-179.0000") && xp0.contains("25.0000") && xp0.contains("180.0000"),
+        "{xp0}"
+    );
+    assert!(xp0.ends_with(" 2/10"), "{xp0}");
+    let o = trackfix(&["inspect", "samples/rapid/spot_line.mod"]);
+    let header = stdout(&o)
+        .lines()
+        .find(|l| l.contains("name "))
+        .unwrap()
+        .to_owned();
+    assert!(
+        header.contains(" rx ") && !header.contains("S/T"),
+        "{header}"
+    );
+}
+
+/// `check` of an empty directory or of a binary file named on the command line is an input
+/// error (exit 2), not "0 findings"; an empty module is reported.
+#[test]
+fn check_of_nothing_or_of_a_named_binary_file_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let empty_dir = dir.path().join("empty");
+    std::fs::create_dir(&empty_dir).unwrap();
+    let o = trackfix(&["check", empty_dir.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("no RAPID or KRL program in"),
+        "{}",
+        stderr(&o)
+    );
+    let bin = dir.path().join("Encrypted.mod");
+    std::fs::write(&bin, b"\x00\x17\x9a\x01binary").unwrap();
+    let o = trackfix(&["check", bin.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("not a text module"), "{}", stderr(&o));
+    let empty = dir.path().join("Empty.mod");
+    std::fs::write(&empty, b"").unwrap();
+    let o = trackfix(&["check", empty.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stdout(&o).contains("the file is empty"), "{}", stdout(&o));
+}
+
+/// A man page for every subcommand: `trackfix man correct` prints one, `--out-dir` writes all.
+#[test]
+fn man_pages_for_every_subcommand() {
+    let o = trackfix(&["man", "correct"]);
+    assert_eq!(o.status.code(), Some(0));
+    let page = stdout(&o);
+    assert!(page.contains(".TH trackfix-correct 1"), "{}", &page[..200]);
+    assert!(page.contains("keep"), "the page lists the options");
+    let o = trackfix(&["man", "track", "fit"]);
+    assert!(stdout(&o).contains("trackfix\\-track\\-fit"));
+    let o = trackfix(&["man", "nope"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("pages: inspect, check"),
+        "{}",
+        stderr(&o)
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("man");
+    let o = trackfix(&["man", "--out-dir", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    for name in [
+        "trackfix",
+        "trackfix-inspect",
+        "trackfix-check",
+        "trackfix-correct",
+        "trackfix-zero",
+        "trackfix-mirror",
+        "trackfix-transfer",
+        "trackfix-reach",
+        "trackfix-track",
+        "trackfix-track-identify",
+        "trackfix-track-fit",
+        "trackfix-track-show",
+        "trackfix-track-spectrum",
+        "trackfix-accuracy-pose",
+        "trackfix-accuracy-path",
+    ] {
+        let page = std::fs::read_to_string(out.join(format!("{name}.1"))).unwrap();
+        assert!(page.contains(&format!(".TH {name} 1")), "{name}");
+    }
 }

@@ -58,11 +58,12 @@ fn in_place_twice_keeps_the_first_backup_and_numbers_the_next() {
     let original = std::fs::read(&input).unwrap();
     let inp = input.to_str().unwrap();
     let (code, _, err) = correct(&[inp, "--in-place"]);
-    assert_eq!(code, 0, "{err}");
+    assert_eq!(code, 4, "{err}"); // 4: written, jHome kept as written
     assert!(err.contains(", backup "), "{err}");
     let once = std::fs::read(&input).unwrap();
-    let (code, _, err) = correct(&[inp, "--in-place"]);
-    assert_eq!(code, 0, "{err}");
+    // The file now carries correct's stamp: correcting it again needs --force.
+    let (code, _, err) = correct(&[inp, "--in-place", "--force"]);
+    assert_eq!(code, 4, "{err}");
     // The summary names the new backup; the first one still holds the untouched original.
     assert!(err.contains("spot_line.mod.orig.1"), "{err}");
     assert_eq!(
@@ -98,7 +99,7 @@ fn out_dir_mirrors_the_input_tree_and_lists_every_file_written() {
     }
     let out = dir.path().join("out");
     let (code, _, err) = correct(&[backup.to_str().unwrap(), "--out-dir", out.to_str().unwrap()]);
-    assert_eq!(code, 0, "{err}");
+    assert_eq!(code, 4, "{err}"); // 4: written, jHome kept as written
     assert_eq!(
         listing(&out),
         [
@@ -139,7 +140,7 @@ fn dash_o_dash_writes_the_program_to_standard_output() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("c.mod");
     let (code, _, err) = correct(&["samples/rapid/spot_line.mod", "-o", file.to_str().unwrap()]);
-    assert_eq!(code, 0, "{err}");
+    assert_eq!(code, 4, "{err}"); // 4: written, jHome kept as written
     let o = Command::new(env!("CARGO_BIN_EXE_trackfix"))
         .args([
             "correct",
@@ -153,7 +154,7 @@ fn dash_o_dash_writes_the_program_to_standard_output() {
         .current_dir(root())
         .output()
         .unwrap();
-    assert_eq!(o.status.code(), Some(0));
+    assert_eq!(o.status.code(), Some(4)); // written, jHome kept as written
     assert_eq!(o.stdout, std::fs::read(&file).unwrap());
     assert!(!root().join("-").exists());
 }
@@ -187,7 +188,7 @@ fn in_place_on_a_symlink_replaces_its_target_and_keeps_the_mode() {
     std::os::unix::fs::symlink(&real, &link).unwrap();
     let original = std::fs::read(&real).unwrap();
     let (code, _, err) = correct(&[link.to_str().unwrap(), "--in-place"]);
-    assert_eq!(code, 0, "{err}");
+    assert_eq!(code, 4, "{err}"); // 4: written, jHome kept as written
     assert!(
         std::fs::symlink_metadata(&link)
             .unwrap()
@@ -211,7 +212,7 @@ fn in_place_on_a_symlink_replaces_its_target_and_keeps_the_mode() {
         "-o",
         out_link.to_str().unwrap(),
     ]);
-    assert_eq!(code, 0, "{err}");
+    assert_eq!(code, 4, "{err}"); // written, jHome kept as written
     assert!(
         std::fs::symlink_metadata(&out_link)
             .unwrap()
@@ -404,7 +405,7 @@ fn a_kill_during_a_long_write_leaves_no_partial_output_and_the_next_run_cleans_u
     // The next run writing into that folder removes the dead run's temporary.
     let other = out_dir.join("small.mod");
     let (code, _, err) = correct(&["samples/rapid/spot_line.mod", "-o", other.to_str().unwrap()]);
-    assert_eq!(code, 0, "{err}");
+    assert_eq!(code, 4, "{err}"); // 4: written, jHome kept as written
     assert_eq!(
         temps(&out_dir),
         Vec::<String>::new(),
@@ -445,7 +446,7 @@ fn a_multi_file_in_place_run_that_fails_on_its_second_file_changes_neither() {
     // Once the lock is gone, both are written and b's backup takes the next free name.
     std::fs::remove_file(dir.path().join(".b.mod.trackfix-lock")).unwrap();
     let (code, _, err) = correct(&[a.to_str().unwrap(), b.to_str().unwrap(), "--in-place"]);
-    assert_eq!(code, 0, "{err}");
+    assert_eq!(code, 4, "{err}"); // 4: written, jHome kept as written
     assert_eq!(
         std::fs::read(dir.path().join("a.mod.orig")).unwrap(),
         original
@@ -489,9 +490,10 @@ fn two_concurrent_in_place_runs_on_one_file_do_not_both_apply() {
             )
         })
         .collect();
-    let ok = outcomes.iter().filter(|(c, _)| *c == 0).count();
+    // 4: written, jHome kept as written.
+    let ok = outcomes.iter().filter(|(c, _)| *c == 4).count();
     assert_eq!(ok, 1, "{outcomes:?}");
-    let (_, refused) = outcomes.iter().find(|(c, _)| *c != 0).unwrap();
+    let (_, refused) = outcomes.iter().find(|(c, _)| *c != 4).unwrap();
     assert!(
         refused.contains("changed since it was read") || refused.contains("another trackfix run"),
         "{refused}"

@@ -837,7 +837,7 @@ fn correct_with_report_writes_the_run_report() {
         "--report",
         report.to_str().unwrap(),
     ]);
-    assert_eq!(code, 0, "{stderr}");
+    assert_eq!(code, 4, "written, the joint target kept: {stderr}");
     assert!(stderr.contains("the run report"), "{stderr}");
     let html = std::fs::read_to_string(&report).unwrap();
     let cell = std::fs::read(root().join("samples/cell.toml")).unwrap();

@@ -71,7 +71,15 @@ fn diff_snapshots_of_every_sample_and_command() {
         ),
         (
             "zero",
-            &["zero", "--cell", "samples/cell.toml", "--robot", "r1"],
+            // The samples carry no stamp: zero them all the same.
+            &[
+                "zero",
+                "--cell",
+                "samples/cell.toml",
+                "--robot",
+                "r1",
+                "--force",
+            ],
         ),
         (
             "mirror",
@@ -94,7 +102,13 @@ fn diff_snapshots_of_every_sample_and_command() {
     for sample in sample_programs() {
         for (name, args) in commands {
             let mut a: Vec<&str> = args.to_vec();
-            a.extend([sample.as_str(), "--diff", "--skip-unsupported"]);
+            // The numbers only: the stamp line has its own test.
+            a.extend([
+                sample.as_str(),
+                "--diff",
+                "--skip-unsupported",
+                "--no-stamp",
+            ]);
             let (code, out, err) = trackfix(&a);
             assert_eq!(code, 0, "{name} {sample}: {err}");
             insta::assert_snapshot!(
@@ -441,9 +455,16 @@ fn poses(program: &Program) -> Vec<(String, Pose)> {
         .collect()
 }
 
+/// Runs a transform that must succeed: exit 0, or 4 when it was told to keep refused targets.
 fn run_ok(args: &[&str]) {
     let (code, _, err) = trackfix(args);
-    assert_eq!(code, 0, "{args:?}: {err}");
+    let keeps = args
+        .iter()
+        .any(|a| *a == "--skip-unsupported" || *a == "--keep");
+    assert!(
+        code == 0 || (keeps && code == 4),
+        "{args:?}: exit {code}: {err}"
+    );
 }
 
 /// Through files: zero(correct(P)) and mirror(mirror(P)) give back P's numbers within the
@@ -503,8 +524,33 @@ fn round_trips_through_files() {
             &m3,
             "--skip-unsupported",
         ]);
-        assert_eq!(std::fs::read(&m1).unwrap(), std::fs::read(&m3).unwrap());
+        // The same bytes but the KRL header names, which follow the file names (m1, m3).
+        assert_eq!(
+            unnamed(&std::fs::read(&m1).unwrap()),
+            unnamed(&std::fs::read(&m3).unwrap())
+        );
     }
+}
+
+/// A file's text with the name of its KRL `DEF`/`DEFDAT` header blanked: a program written
+/// under another file name carries that name there.
+fn unnamed(bytes: &[u8]) -> String {
+    trackfix::syntax::latin1(bytes)
+        .split_inclusive('\n')
+        .map(|l| {
+            let t = l.trim_start();
+            for k in ["DEFDAT", "DEF"] {
+                if let Some(rest) = t.strip_prefix(k) {
+                    let name_end = rest
+                        .trim_start()
+                        .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+                        .unwrap_or(rest.trim_start().len());
+                    return format!("{k} _{}", &rest.trim_start()[name_end..]);
+                }
+            }
+            l.to_owned()
+        })
+        .collect()
 }
 
 /// DESIGN.md §4: transfer equals zero; mirror; correct, byte for byte, through files.
@@ -516,7 +562,12 @@ fn transfer_equals_zero_mirror_correct() {
         ("samples/rapid/spot_line.mod", "spot_line", "mod"),
         ("samples/krl/spot_line.src", "spot_line", "src"),
     ] {
-        let common = ["--cell", "samples/cell.toml", "--skip-unsupported"];
+        let common = [
+            "--cell",
+            "samples/cell.toml",
+            "--skip-unsupported",
+            "--no-stamp",
+        ];
         let out = d(&format!("transfer_{ext}"));
         run_ok(
             &[
@@ -540,24 +591,71 @@ fn transfer_equals_zero_mirror_correct() {
             d(&format!("m.{ext}")),
             d(&format!("c.{ext}")),
         );
-        run_ok(&[&["zero", sample, "--robot", "r1", "-o", &z], &common[..]].concat());
+        run_ok(
+            &[
+                &["zero", sample, "--robot", "r1", "-o", &z, "--force"],
+                &common[..],
+            ]
+            .concat(),
+        );
         // The cell's mirror plane is in world: the mirror resolves work objects like transfer
         // does, with --from's cell entries.
         run_ok(&[&["mirror", &z, "--robot", "r1", "-o", &m], &common[..]].concat());
         run_ok(&[&["correct", &m, "--robot", "r2", "-o", &c], &common[..]].concat());
         let chained = std::fs::read(&c).unwrap();
         let transferred = std::fs::read(Path::new(&out).join(format!("{stem}.{ext}"))).unwrap();
-        assert!(
-            chained == transferred,
-            "{sample}: transfer differs from the chain"
+        let original = std::fs::read(root().join(sample)).unwrap();
+        let chained = unnamed(&chained).into_bytes();
+        let transferred = unnamed(&transferred).into_bytes();
+        same_but_unmoved(
+            &unnamed(&original).into_bytes(),
+            &chained,
+            &transferred,
+            sample,
         );
         if ext == "src" {
             let a = std::fs::read(Path::new(&c).with_extension("dat")).unwrap();
             let b = std::fs::read(Path::new(&out).join(format!("{stem}.dat"))).unwrap();
-            assert!(a == b, "{sample}: .dat differs");
-            assert!(a != std::fs::read(root().join("samples/krl/spot_line.dat")).unwrap());
+            let o = std::fs::read(root().join("samples/krl/spot_line.dat")).unwrap();
+            let (a, b, o) = (unnamed(&a), unnamed(&b), unnamed(&o));
+            same_but_unmoved(o.as_bytes(), a.as_bytes(), b.as_bytes(), "spot_line.dat");
+            assert!(a != o);
         }
     }
+}
+
+/// `transferred` is `chained` byte for byte, except literals that the chain brought back to
+/// their original value (to one unit of the last written place) and transfer wrote as the
+/// original text.
+fn same_but_unmoved(original: &[u8], chained: &[u8], transferred: &[u8], what: &str) {
+    let words = |b: &[u8]| -> Vec<String> {
+        trackfix::syntax::latin1(b)
+            .split_inclusive([',', '[', ']', '{', '}', ' ', '\n'])
+            .map(str::to_owned)
+            .collect()
+    };
+    let (o, c, t) = (words(original), words(chained), words(transferred));
+    assert_eq!(c.len(), t.len(), "{what}");
+    assert_eq!(o.len(), t.len(), "{what}");
+    let mut restored = 0;
+    for ((o, c), t) in o.iter().zip(&c).zip(&t) {
+        if c == t {
+            continue;
+        }
+        assert_eq!(t, o, "{what}: transfer wrote {t:?}, the chain {c:?}");
+        let num = |s: &str| {
+            s.trim_end_matches([',', ']', '}', ' ', '\n'])
+                .trim_start_matches(|ch: char| ch.is_ascii_alphabetic() || ch == ' ')
+                .to_owned()
+        };
+        let (ov, cv) = (num(o), num(c));
+        let decimals = |s: &str| s.split_once('.').map_or(0, |(_, d)| d.len()) as i32;
+        let unit = 10f64.powi(-decimals(&ov).max(decimals(&cv)));
+        let (a, b): (f64, f64) = (ov.parse().unwrap(), cv.parse().unwrap());
+        assert!((a - b).abs() <= 2.0 * unit, "{what}: {o:?} vs {c:?}");
+        restored += 1;
+    }
+    assert!(restored < 20, "{what}: {restored} literals restored");
 }
 
 /// Writes, refuses to overwrite inputs, `--in-place` keeps a backup, `--check` exits 1.
@@ -584,7 +682,7 @@ fn output_modes() {
     assert_eq!(code, 1, "{err}");
     let before = std::fs::read(&input).unwrap();
     let (code, _, err) = trackfix(&[&["correct", inp, "--in-place"], &common[..]].concat());
-    assert_eq!(code, 0, "{err}");
+    assert_eq!(code, 4, "{err}"); // written, jHome kept as written
     assert!(
         err.contains("target(s) changed, largest correction"),
         "{err}"
@@ -876,9 +974,10 @@ fn a_cell_that_disagrees_with_its_profile_is_refused() {
 fn correct_states_the_expanded_uncertainty_when_the_profile_has_one() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
+    // Exit 4: written, with the sample's joint target kept as written.
     let run = |args: &[&str]| {
         let (code, out, err) = trackfix(args);
-        assert_eq!(code, 0, "{args:?}: {err}");
+        assert!(code == 0 || code == 4, "{args:?}: exit {code}: {err}");
         format!("{out}{err}")
     };
     let s = |p: &Path| p.to_str().unwrap().to_owned();
@@ -952,4 +1051,642 @@ fn correct_states_the_expanded_uncertainty_when_the_profile_has_one() {
         &s(&d.join("out2")),
     ]);
     assert!(!plain.contains("U (k=2)"), "{plain}");
+}
+
+/// The files a run in `dir` left there, sorted.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// A file with a syntax error is never transformed: every error located, exit 2, nothing written
+/// (before, `correct` changed the 225 readable targets and exited 0).
+#[test]
+fn a_file_with_syntax_errors_is_not_transformed() {
+    let good = trackfix::syntax::latin1(
+        &std::fs::read(root().join("samples/rapid/spot_line.mod")).unwrap(),
+    );
+    let broken = good.replacen("[[-1499.39,-722.85,251.51]", "[[-1499.39,,251.51]", 1);
+    assert_ne!(broken, good);
+    // And one cut off inside a PROC.
+    let cut = &good[..good.find("ENDPROC").unwrap()];
+    for (text, line) in [(broken.as_str(), 16), (cut, 0)] {
+        let (dir, input) = scratch_with("a.mod", text);
+        let out = dir.path().join("out.mod");
+        let (code, _, err) = trackfix(&[
+            "correct",
+            input.to_str().unwrap(),
+            "--cell",
+            "samples/cell.toml",
+            "--robot",
+            "r1",
+            "--skip-unsupported",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains(": error: "), "{err}");
+        if line > 0 {
+            assert!(err.contains(&format!("a.mod:{line}:37: error: ")), "{err}");
+        }
+        assert!(
+            err.contains("is never transformed: nothing written"),
+            "{err}"
+        );
+        assert!(!err.contains("target(s) changed"), "{err}");
+        assert_eq!(listing(dir.path()), ["a.mod"]);
+    }
+}
+
+/// `--keep KIND` keeps only that kind; other refusals still stop the run; a run that wrote
+/// output with targets kept exits 4 (`--skip-unsupported` is every kind).
+#[test]
+fn keep_one_refusal_kind_at_a_time_and_exit_4_when_any_was_kept() {
+    let text = "MODULE k\n  CONST jointtarget jHome:=[[0,0,0,0,30,0],[0,9E9,9E9,9E9,9E9,9E9]];\n  CONST robtarget p1:=[[100,0,0],[1,0,0,0],[0,0,0,0],[500,9E9,9E9,9E9,9E9,9E9]];\n  CONST robtarget p2:=[[100,0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveJ jHome, v100, fine, tool0;\n    MoveL p1, v100, fine, tool0;\n    MoveL p2, v100, fine, tool0;\n  ENDPROC\nENDMODULE\n";
+    let (dir, input) = scratch_with("k.mod", text);
+    let out = dir.path().join("o.mod");
+    let run = |extra: &[&str]| {
+        let args = [
+            &[
+                "correct",
+                input.to_str().unwrap(),
+                "--cell",
+                "samples/cell.toml",
+                "--robot",
+                "r1",
+                "-o",
+                out.to_str().unwrap(),
+            ],
+            extra,
+        ]
+        .concat();
+        trackfix(&args)
+    };
+    let (code, _, err) = run(&["--keep", "joint-targets"]);
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("warning: jointtarget `jHome`"), "{err}");
+    assert!(err.contains("error: robtarget `p2`"), "{err}");
+    assert!(err.contains("--keep skid-not-connected"), "{err}");
+    assert!(!out.exists());
+    for keep in [
+        &["--keep", "joint-target", "--keep", "not-connected-skid"][..],
+        &["--keep", "joint-target,skid-not-connected"],
+        &["--skip-unsupported"],
+    ] {
+        let _ = std::fs::remove_file(&out);
+        let (code, _, err) = run(keep);
+        assert_eq!(code, 4, "{keep:?}: {err}");
+        assert!(err.contains("k.mod: 1 target(s) changed"), "{err}");
+        assert!(out.exists());
+    }
+    // The kinds --keep takes are the library's refusal kinds, every one of them.
+    let (code, _, err) = run(&["--keep", "no-such-kind"]);
+    assert_eq!(code, 2);
+    use clap::ValueEnum as _;
+    for kind in trackfix::transform::RefusalKind::value_variants() {
+        let name = kind.to_possible_value().unwrap();
+        assert!(err.contains(name.get_name()), "{name:?} missing: {err}");
+    }
+}
+
+/// The provenance stamp: one comment line after the header; `correct` twice for one robot and
+/// `zero` of an unstamped file are refused unless `--force`; `--no-stamp` adds nothing.
+#[test]
+fn provenance_stamp_blocks_double_correction() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |s: &str| dir.path().join(s).to_str().unwrap().to_owned();
+    let common = [
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--keep",
+        "joint-target",
+    ];
+    let sample = "samples/rapid/spot_line.mod";
+    let original = trackfix::syntax::latin1(&std::fs::read(root().join(sample)).unwrap());
+    let (c, cc, z) = (d("c.mod"), d("cc.mod"), d("z.mod"));
+    run_ok(&[&["correct", sample, "-o", &c], &common[..]].concat());
+    let corrected = std::fs::read(&c).unwrap();
+    let text = trackfix::syntax::latin1(&corrected);
+    let lines: Vec<&str> = text.lines().collect();
+    let header = lines.iter().position(|l| l.starts_with("MODULE ")).unwrap();
+    let stamp = lines[header + 1];
+    assert!(
+        stamp.starts_with("! trackfix: correct robot=r1 profile=")
+            && stamp.contains(" sha256=")
+            && stamp.ends_with(&format!(" version={}", env!("CARGO_PKG_VERSION"))),
+        "{stamp}"
+    );
+    // The one line added: everything else has the input's line count.
+    assert_eq!(lines.len(), original.lines().count() + 1);
+    // inspect and check show it.
+    let (_, inspect, _) = trackfix(&["inspect", &c]);
+    assert!(
+        inspect.contains("stamp: trackfix: correct robot=r1"),
+        "{inspect}"
+    );
+    let (_, check, _) = trackfix(&["check", &c]);
+    assert!(check.contains("trackfix: correct robot=r1"), "{check}");
+    // Correcting again for r1 is refused, nothing written; with --force it goes.
+    let (code, _, err) = trackfix(&[&["correct", &c, "-o", &cc], &common[..]].concat());
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("already corrected for robot `r1`"), "{err}");
+    assert!(!Path::new(&cc).exists());
+    run_ok(&[&["correct", &c, "-o", &cc, "--force"], &common[..]].concat());
+    // zero of the unstamped sample is refused; of the corrected file it goes.
+    let (code, _, err) = trackfix(&[&["zero", sample, "-o", &z], &common[..]].concat());
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("no stamp says it is corrected for robot `r1`"),
+        "{err}"
+    );
+    run_ok(&[&["zero", &c, "-o", &z], &common[..]].concat());
+    let zeroed = trackfix::syntax::latin1(&std::fs::read(&z).unwrap());
+    assert!(
+        zeroed
+            .lines()
+            .nth(header + 1)
+            .unwrap()
+            .starts_with("! trackfix: zero robot=r1")
+    );
+    // KRL: a `;` comment after DEFDAT in the .dat (the .src is unchanged: not stamped).
+    let k = d("k.src");
+    run_ok(
+        &[
+            &["correct", "samples/krl/spot_line.src", "-o", &k],
+            &common[..],
+        ]
+        .concat(),
+    );
+    let dat = trackfix::syntax::latin1(&std::fs::read(d("k.dat")).unwrap());
+    let at = dat.lines().position(|l| l.starts_with("DEFDAT")).unwrap();
+    assert!(
+        dat.lines()
+            .nth(at + 1)
+            .unwrap()
+            .starts_with("; trackfix: correct robot=r1")
+    );
+    // --no-stamp: the lines are the input's.
+    let n = d("n.mod");
+    run_ok(&[&["correct", sample, "-o", &n, "--no-stamp"], &common[..]].concat());
+    let plain = trackfix::syntax::latin1(&std::fs::read(&n).unwrap());
+    assert!(!plain.contains("trackfix:"));
+    assert_eq!(plain.lines().count(), original.lines().count());
+}
+
+/// Identity is byte-identical: `transfer --from r1 --to r1` gives every sample back byte for byte
+/// (before: 226 lines of spot_line.mod rewritten, `-1200` → `-1200.000`); `correct` then `zero`
+/// through files gives back every number within its written precision and every byte outside
+/// the numbers the correction changed.
+#[test]
+fn identity_is_byte_identical_for_every_sample() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut checked = 0;
+    for sample in sample_programs() {
+        let (code, out, err) = trackfix(&[
+            "transfer",
+            &sample,
+            "--cell",
+            "samples/cell.toml",
+            "--from",
+            "r1",
+            "--to",
+            "r1",
+            "--skip-unsupported",
+            "--default-wobj",
+            "wobj0",
+            "--no-stamp",
+            "--diff",
+        ]);
+        assert!(code == 0, "{sample}: {err}");
+        assert_eq!(out, "", "{sample}: identity transfer changed bytes");
+        checked += 1;
+    }
+    assert!(checked >= 20, "{checked}");
+    // correct → zero through files, every sample: the lines the correction did not touch are the
+    // input's bytes, and every target's numbers come back within the written precision.
+    let cell = sample_cell();
+    for (i, sample) in sample_programs().into_iter().enumerate() {
+        let ext = sample.rsplit('.').next().unwrap();
+        let own = dir.path().join(i.to_string());
+        std::fs::create_dir(&own).unwrap();
+        let c = own.join(format!("c.{ext}"));
+        let z = own.join(format!("z.{ext}"));
+        let common = [
+            "--cell",
+            "samples/cell.toml",
+            "--robot",
+            "r1",
+            "--skip-unsupported",
+            "--default-wobj",
+            "wobj0",
+            "--no-stamp",
+        ];
+        let (cs, zs) = (c.to_str().unwrap(), z.to_str().unwrap());
+        let (code, _, err) = trackfix(&[&["correct", &sample, "-o", cs], &common[..]].concat());
+        if code == 2 && err.contains("nothing written") {
+            continue; // a sample with nothing to correct
+        }
+        assert!(code == 0 || code == 4, "{sample}: {err}");
+        if !c.exists() {
+            continue;
+        }
+        run_ok(&[&["zero", cs, "-o", zs, "--force"], &common[..]].concat());
+        let before = load_with_cell(&root().join(&sample), &cell, "r1");
+        let after = load_with_cell(&z, &cell, "r1");
+        let (a, b) = (poses(&before), poses(&after));
+        assert_eq!(a.len(), b.len(), "{sample}");
+        for ((name, p), (_, q)) in a.iter().zip(&b) {
+            let mm = (p.translation.vector - q.translation.vector).amax();
+            let deg = p.rotation.angle_to(&q.rotation).to_degrees();
+            assert!(
+                mm <= 1.5e-3 && deg <= 2e-4,
+                "{sample} {name}: {mm} mm {deg}°"
+            );
+        }
+        let own = |f: &&trackfix::position::ParsedFile| !f.path.to_string_lossy().contains('$');
+        for x in before.files.iter().filter(own) {
+            let ext = x.path.extension();
+            let Some(y) = after
+                .files
+                .iter()
+                .filter(own)
+                .find(|f| f.path.extension() == ext)
+            else {
+                continue;
+            };
+            let lines = |s: &[u8]| s.iter().filter(|&&b| b == b'\n').count();
+            assert_eq!(lines(&x.source), lines(&y.source), "{}", x.path.display());
+        }
+    }
+}
+
+/// `mirror` needs a plane: no --plane and no cell [mirror] is a usage error (it used to mirror
+/// in xz silently); `--cell` without `--robot` says which frames it used.
+#[test]
+fn mirror_without_a_plane_is_a_usage_error() {
+    let (code, _, err) = trackfix(&[
+        "mirror",
+        "samples/rapid/spot_line.mod",
+        "--diff",
+        "--skip-unsupported",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("say which plane to mirror in: --plane"),
+        "{err}"
+    );
+    let (dir, cell) = scratch_with(
+        "cell.toml",
+        &std::fs::read_to_string(root().join("samples/cell.toml"))
+            .unwrap()
+            .replace("plane = \"xz\"\n", "")
+            .replace("profile = \"track/", "profile = \"../samples/track/"),
+    );
+    let (code, _, err) = trackfix(&[
+        "mirror",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        cell.to_str().unwrap(),
+        "--diff",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("in the [mirror] table of"), "{err}");
+    drop(dir);
+    let (code, _, err) = trackfix(&[
+        "mirror",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        "samples/cell.toml",
+        "--diff",
+        "--skip-unsupported",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("note: mirror: plane xz of the cell's mirror frame in world, taken into each target's work object as the program declares it"),
+        "{err}"
+    );
+}
+
+/// Absurd values are refusals by name, never silently dropped or written: a config of 1.5 or
+/// 1e22, KRL `B 9E9` and `T 1e30`-like Turn values; a profile `dx = 1e300` (the result is not
+/// finite); `base x = nan` in the cell is a located cell error.
+#[test]
+fn absurd_values_are_named_refusals_and_check_findings() {
+    let rapid = "MODULE a\n  CONST robtarget p1:=[[100,0,0],[1,0,0,0],[0,1.5,0,0],[500,9E9,9E9,9E9,9E9,9E9]];\n  CONST robtarget p2:=[[100,0,0],[1,0,0,0],[0,0,1E22,0],[500,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL p1, v100, fine, tool0;\n    MoveL p2, v100, fine, tool0;\n  ENDPROC\nENDMODULE\n";
+    let (dir, input) = scratch_with("a.mod", rapid);
+    let (code, out, _) = trackfix(&["check", input.to_str().unwrap()]);
+    assert_eq!(code, 1, "{out}");
+    assert!(
+        out.contains("`p1` has cf4 = 1.5: a configuration is a small integer"),
+        "{out}"
+    );
+    assert!(out.contains("`p2` has cf6 = 1e22"), "{out}");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        input.to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--diff",
+    ]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("a.mod:2:23: error: robtarget `p1` has cf4 = 1.5"),
+        "{err}"
+    );
+    assert!(err.contains("[implausible]"), "{err}");
+    drop(dir);
+    let krl = "DEFDAT a\nDECL E6POS XP1={X 100.0,Y 0.0,Z 0.0,A 0.0,B 9E9,C 0.0,S 2,T 35,E1 500.0}\nDECL E6POS XP2={X 100.0,Y 0.0,Z 0.0,A 0.0,B 0.0,C 0.0,S 2,T 99999,E1 500.0}\nDECL E6POS XP3={X 100.0,Y 0.0,Z 0.0,A 0.0,B 0.0,C 0.0,S 2,T 1e30,E1 500.0}\nENDDAT\n";
+    let (dir, input) = scratch_with("a.dat", krl);
+    let (code, out, _) = trackfix(&["check", input.to_str().unwrap()]);
+    assert_eq!(code, 1, "{out}");
+    assert!(
+        out.contains("`XP1` has B = 9e9: not an angle in degrees"),
+        "{out}"
+    );
+    assert!(out.contains("`XP2` has Turn 99999"), "{out}");
+    assert!(
+        out.contains("`XP3` has Turn 1e30: Status and Turn are small whole numbers"),
+        "{out}"
+    );
+    let (code, _, err) = trackfix(&[
+        "correct",
+        input.to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--default-wobj",
+        "$WORLD",
+        "--diff",
+    ]);
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("E6POS `XP1` has B = 9e9"), "{err}");
+    drop(dir);
+    // A profile that makes the result absurd: a named refusal, not a silently unchanged file.
+    let profile = std::fs::read_to_string(root().join("samples/track/profile.toml")).unwrap();
+    let dx = profile.find("dx = ").unwrap();
+    let end = dx + profile[dx..].find('\n').unwrap();
+    let line = &profile[dx..end];
+    let comma = line.find(',').map_or(end, |c| dx + c);
+    let absurd = format!("{}dx = 1e300{}", &profile[..dx], &profile[comma..]);
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("track")).unwrap();
+    std::fs::write(dir.path().join("track/profile.toml"), absurd).unwrap();
+    let cell_text = std::fs::read_to_string(root().join("samples/cell.toml")).unwrap();
+    std::fs::write(dir.path().join("cell.toml"), &cell_text).unwrap();
+    let (code, _, err) = trackfix(&[
+        "correct",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        dir.path().join("cell.toml").to_str().unwrap(),
+        "--robot",
+        "r1",
+        "--keep",
+        "joint-target",
+        "--diff",
+    ]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("error: robtarget `Sp001`: the computed position lies more than 1 km from its work object's origin"),
+        "{err}"
+    );
+    assert!(err.contains("[implausible-result]"), "{err}");
+    // The cell: base x = nan is located.
+    let nan = cell_text.replacen("base = { x = 0.016,", "base = { x = nan,", 1);
+    assert_ne!(nan, cell_text);
+    std::fs::write(dir.path().join("cell.toml"), nan).unwrap();
+    let (code, _, err) = trackfix(&[
+        "correct",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        dir.path().join("cell.toml").to_str().unwrap(),
+        "--robot",
+        "r1",
+        "--diff",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("cell.toml:15:") && err.contains("not a plausible value"),
+        "{err}"
+    );
+}
+
+/// 2,000 refused targets on one line: each diagnostic shows a window of the line, so the
+/// output grows linearly (before: every refusal kept and printed the whole 300 kB line).
+#[test]
+fn refusals_on_one_long_line_render_a_window() {
+    let n = 2000;
+    let mut line = String::from("  ");
+    for i in 0..n {
+        line.push_str(&format!(
+            "CONST jointtarget j{i}:=[[0,0,0,0,30,0],[0,9E9,9E9,9E9,9E9,9E9]];"
+        ));
+    }
+    let text = format!("MODULE big\n{line}\nENDMODULE\n");
+    let (dir, input) = scratch_with("big.mod", &text);
+    let (code, _, err) = trackfix(&[
+        "correct",
+        input.to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--diff",
+        "-v",
+    ]);
+    assert_eq!(code, 3);
+    assert_eq!(
+        err.matches("is a joint target").count(),
+        n,
+        "{}",
+        &err[..2000]
+    );
+    // Each diagnostic is a few short lines: about 700 bytes, not the 130 kB line.
+    assert!(err.len() < n * 1000, "{} bytes", err.len());
+    assert!(err.lines().all(|l| l.len() < 1000));
+    assert!(err.contains("2:"), "{}", &err[..500]);
+    let last = format!("j{}", n - 1);
+    assert!(err.contains(&format!("`{last}`")));
+    drop(dir);
+}
+
+/// Control characters in source lines are shown escaped, never sent to the terminal.
+#[test]
+fn control_characters_are_escaped_in_diagnostics() {
+    let text = "MODULE m\n  CONST robtarget p1:=[[1,,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]; ! \u{1b}]0;owned\u{7}\nENDMODULE\n";
+    let (dir, input) = scratch_with("m.mod", text);
+    let (code, out, _) = trackfix(&["check", input.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(!out.contains('\u{1b}') && !out.contains('\u{7}'), "{out:?}");
+    assert!(out.contains("\\x1b]0;owned\\x07"), "{out}");
+    assert!(out.contains("control character 0x1b"), "{out}");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        input.to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--diff",
+    ]);
+    assert_eq!(code, 2);
+    assert!(!err.contains('\u{1b}'), "{err:?}");
+    drop(dir);
+}
+
+/// A KRL pair written under a new name gets `DEF`/`DEFDAT` renamed to it, and says so; a name
+/// KRL cannot take is refused with nothing written.
+#[test]
+fn krl_pair_under_a_new_name_renames_def_and_defdat() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("side_b.src");
+    let args = |o: &str| {
+        vec![
+            "correct".to_owned(),
+            "samples/krl/spot_line.src".to_owned(),
+            "--cell".to_owned(),
+            "samples/cell.toml".to_owned(),
+            "--robot".to_owned(),
+            "r1".to_owned(),
+            "--skip-unsupported".to_owned(),
+            "-o".to_owned(),
+            o.to_owned(),
+        ]
+    };
+    let a = args(out.to_str().unwrap());
+    let (code, _, err) = trackfix(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(code == 0 || code == 4, "{err}");
+    assert!(err.contains("renamed `spot_line` to `side_b`"), "{err}");
+    let src = trackfix::syntax::latin1(&std::fs::read(&out).unwrap());
+    let dat = trackfix::syntax::latin1(&std::fs::read(out.with_extension("dat")).unwrap());
+    assert!(src.contains("\nDEF side_b( )"), "{}", &src[..300]);
+    assert!(!src.contains("DEF spot_line("));
+    assert!(dat.contains("\nDEFDAT  side_b PUBLIC"), "{}", &dat[..300]);
+    // Everything else of the .src is the input's.
+    let original =
+        trackfix::syntax::latin1(&std::fs::read(root().join("samples/krl/spot_line.src")).unwrap());
+    assert_eq!(src, original.replacen("DEF spot_line(", "DEF side_b(", 1));
+    let bad = dir.path().join("2-side.src");
+    let a = args(bad.to_str().unwrap());
+    let (code, _, err) = trackfix(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("cannot be the name of a krl program"), "{err}");
+    assert_eq!(listing(dir.path()), ["side_b.dat", "side_b.src"]);
+}
+
+/// A batch: repeated warnings grouped (3 shown, then counted; `-v` shows all), one totals line,
+/// `-q` prints nothing but errors, `--format json` is one document on standard output.
+#[test]
+fn batch_reports_group_repeats_end_with_totals_and_speak_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in");
+    std::fs::create_dir(&input).unwrap();
+    for i in 0..5 {
+        std::fs::copy(
+            root().join("samples/rapid/spot_line.mod"),
+            input.join(format!("m{i}.mod")),
+        )
+        .unwrap();
+    }
+    let run = |extra: &[&str], out: &str| {
+        let o = dir.path().join(out);
+        trackfix(
+            &[
+                &[
+                    "correct",
+                    input.to_str().unwrap(),
+                    "--cell",
+                    "samples/cell.toml",
+                    "--robot",
+                    "r1",
+                    "--keep",
+                    "joint-target",
+                    "--out-dir",
+                    o.to_str().unwrap(),
+                ],
+                extra,
+            ]
+            .concat(),
+        )
+    };
+    let (code, _, err) = run(&[], "a");
+    assert_eq!(code, 4, "{err}");
+    assert_eq!(
+        err.matches("warning: jointtarget `jHome`").count(),
+        3,
+        "{err}"
+    );
+    assert!(
+        err.contains("warning: … and 2 more like this [joint-target] (-v shows all)"),
+        "{err}"
+    );
+    let last = err.lines().last().unwrap();
+    assert_eq!(
+        last,
+        "total: 5 programs (5 files): 1130 target(s) changed in 5 files, 5 written, 0 refused, 5 kept as written, 0 notes"
+    );
+    let (_, _, err) = run(&["-v"], "b");
+    assert_eq!(
+        err.matches("warning: jointtarget `jHome`").count(),
+        5,
+        "{err}"
+    );
+    assert!(!err.contains("more like this"));
+    let (code, out, err) = run(&["-q"], "c");
+    assert_eq!((code, out.as_str(), err.as_str()), (4, "", ""));
+    let (code, out, err) = run(&["--format", "json"], "d");
+    assert_eq!(code, 4);
+    assert_eq!(err, "");
+    let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(doc["exit"], 4);
+    assert_eq!(doc["files"].as_array().unwrap().len(), 5);
+    assert_eq!(doc["refusals"][0]["kind"], "joint-target");
+    assert_eq!(doc["refusals"][0]["kept"], true);
+    assert_eq!(doc["totals"]["targets_changed"], 1130);
+    assert!(
+        doc["files"][0]["written_to"]
+            .as_str()
+            .unwrap()
+            .ends_with(".mod")
+    );
+    // check --format json.
+    let (code, out, _) = trackfix(&["check", "samples/rapid/two_wobjs.mod", "--format", "json"]);
+    assert_eq!(code, 1);
+    let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(doc["summary"]["findings"].as_u64().unwrap() >= 1);
+    assert!(doc["files"][0]["findings"][0]["line"].as_u64().unwrap() > 0);
+}
+
+/// `--mirror-frames` mirrors a tool's load like its frame, with `Sb` (tool flip y): the centre of
+/// gravity's y changes sign, the axes of moment `Rx(90°)` become `Rx(-90°)`; mass and moments
+/// stay.
+#[test]
+fn mirror_frames_mirrors_the_tool_load_centre_of_gravity() {
+    let (dir, input) = scratch_with(
+        "t.mod",
+        "MODULE t\n  PERS tooldata tGun:=[TRUE,[[12.5,-3.2,412.8],[0.965926,0,0.258819,0]],[48.5,[10,20,180],[0.707107,0.707107,0,0],0.9,1.1,0.6]];\nENDMODULE\n",
+    );
+    let (code, out, err) = trackfix(&[
+        "mirror",
+        input.to_str().unwrap(),
+        "--plane",
+        "xz",
+        "--mirror-frames",
+        "--no-stamp",
+        "--diff",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("+  PERS tooldata tGun:=[TRUE,[[12.5,3.200,412.8],[0.965926,0,0.258819,0]],[48.5,[10,-20.000,180],[0.707107,-0.707107,0,0],0.9,1.1,0.6]];"),
+        "{out}"
+    );
+    drop(dir);
 }
