@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use trackfix::position::{Program, external_axis_index};
-use trackfix::program::{LoadError, LoadOptions, collect_inputs, load};
+use trackfix::program::{LoadError, LoadOptions, collect_inputs, group_inputs, load_group};
 use trackfix::report::{
     CheckSummary, InspectOptions, InspectReport, findings, inspect_program, render_csv,
     render_table,
@@ -104,32 +104,39 @@ fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
         errors: 0,
         skipped: 0,
     };
-    for path in &inputs {
-        bar.set_message(path.display().to_string());
-        match load(path, options) {
-            Ok(p) => batch.programs.push(p),
-            Err(e) if e.is_skip() => {
-                bar.suspend(|| {
-                    let _ = writeln!(std::io::stderr(), "note: {e}");
-                });
-                batch.skipped += 1;
-            }
-            Err(e) => {
-                bar.suspend(|| {
-                    let _ = writeln!(std::io::stderr(), "error: {e}");
-                });
-                if matches!(e, LoadError::UnknownType { .. }) {
+    for group in group_inputs(inputs) {
+        let label = group
+            .first()
+            .map(|p| p.display().to_string())
+            .unwrap_or_default();
+        bar.set_message(label);
+        let n = group.len() as u64;
+        for loaded in load_group(&group, options) {
+            match loaded {
+                Ok(p) => batch.programs.push(p),
+                Err(e) if e.is_skip() => {
                     bar.suspend(|| {
-                        let _ = writeln!(
-                            std::io::stderr(),
-                            "  = help: name RAPID or KRL files, or a directory"
-                        );
+                        let _ = writeln!(std::io::stderr(), "note: {e}");
                     });
+                    batch.skipped += 1;
                 }
-                batch.errors += 1;
+                Err(e) => {
+                    bar.suspend(|| {
+                        let _ = writeln!(std::io::stderr(), "error: {e}");
+                    });
+                    if matches!(e, LoadError::UnknownType { .. }) {
+                        bar.suspend(|| {
+                            let _ = writeln!(
+                                std::io::stderr(),
+                                "  = help: name RAPID or KRL files, or a directory"
+                            );
+                        });
+                    }
+                    batch.errors += 1;
+                }
             }
         }
-        bar.inc(1);
+        bar.inc(n);
     }
     bar.finish_and_clear();
     Ok(batch)

@@ -11,7 +11,7 @@ use anyhow::{Context as _, bail};
 
 use trackfix::output::{self, Destination, Roots, unified_diff};
 use trackfix::position::Program;
-use trackfix::program::{LoadOptions, collect_inputs, load};
+use trackfix::program::{LoadOptions, collect_inputs, group_inputs, load_group};
 use trackfix::report::{FileSummary, would_change};
 use trackfix::syntax::Severity;
 use trackfix::track::cell_nominal::check_cell_nominal;
@@ -207,13 +207,15 @@ fn parse_skid_map(s: &str) -> Result<(f64, f64), String> {
 
 fn load_programs(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Vec<Program>> {
     let mut programs = Vec::new();
-    for path in collect_inputs(files)? {
-        match load(&path, options) {
-            Ok(p) => programs.push(p),
-            Err(e) if e.is_skip() => {
-                let _ = writeln!(std::io::stderr(), "note: {e}");
+    for group in group_inputs(collect_inputs(files)?) {
+        for loaded in load_group(&group, options) {
+            match loaded {
+                Ok(p) => programs.push(p),
+                Err(e) if e.is_skip() => {
+                    let _ = writeln!(std::io::stderr(), "note: {e}");
+                }
+                Err(e) => return Err(e.into()),
             }
-            Err(e) => return Err(e.into()),
         }
     }
     if programs.is_empty() {

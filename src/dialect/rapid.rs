@@ -70,11 +70,41 @@ impl Dialect for Rapid {
         files: Vec<(PathBuf, Vec<u8>)>,
         _options: &LoadOptions,
     ) -> Result<Program, LoadError> {
-        let files = files
-            .into_iter()
-            .map(|(path, source)| crate::rapid::parse_file(&path, source))
-            .collect();
-        Ok(Program { files })
+        Ok(Program {
+            files: crate::rapid::parse_task(files),
+        })
+    }
+
+    /// A RobotStudio task folder: the nearest of the three folders above the module that holds
+    /// a `PROGMOD` or `SYSMOD` folder (`RAPID/TASK1/PROGMOD/Main.mod` → `RAPID/TASK1`).
+    fn program_root(&self, path: &Path) -> Option<PathBuf> {
+        path.ancestors().skip(1).take(3).find_map(|dir| {
+            let entries = std::fs::read_dir(dir).ok()?;
+            entries
+                .filter_map(Result::ok)
+                .any(|e| {
+                    e.file_type().is_ok_and(|t| t.is_dir())
+                        && e.file_name().to_str().is_some_and(|n| {
+                            n.eq_ignore_ascii_case("PROGMOD") || n.eq_ignore_ascii_case("SYSMOD")
+                        })
+                })
+                .then(|| dir.to_owned())
+        })
+    }
+
+    /// The modules of one task, resolved together (task and global data seen across modules).
+    fn load_together(
+        &self,
+        paths: &[PathBuf],
+        _options: &LoadOptions,
+    ) -> Result<Program, LoadError> {
+        let mut files = Vec::with_capacity(paths.len());
+        for p in paths {
+            files.push((p.clone(), read_source(p)?));
+        }
+        Ok(Program {
+            files: crate::rapid::parse_task(files),
+        })
     }
 
     fn vocabulary(&self) -> &'static Vocabulary {

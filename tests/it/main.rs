@@ -7,6 +7,7 @@ mod kinematics;
 mod krl;
 mod output;
 mod parser_data;
+mod programs;
 mod rapid;
 mod rust_version;
 mod support;

@@ -1,0 +1,204 @@
+//! Whole programs: the modules of a RAPID task resolved together (task and global data across
+//! modules, `LOCAL` data private, targets used through routine parameters).
+
+use std::path::{Path, PathBuf};
+
+use trackfix::position::{Position, Program};
+use trackfix::program::{LoadOptions, collect_inputs, group_inputs, load_group};
+
+use crate::support::{root, trackfix};
+
+const TARGET: &str =
+    "[[812.5,-120,455],[0,0.7071068,0.7071068,0],[0,0,0,0],[1500,9E9,9E9,9E9,9E9,9E9]]";
+
+/// Writes `files` (path under the task folder, text) into a fresh `TASK1` folder.
+fn task(files: &[(&str, String)]) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let task = dir.path().join("TASK1");
+    for (path, text) in files {
+        let p = task.join(path);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, text).unwrap();
+    }
+    (dir, task)
+}
+
+fn programs(dir: &Path) -> Vec<Program> {
+    let groups = group_inputs(collect_inputs(&[dir.to_owned()]).unwrap());
+    groups
+        .iter()
+        .flat_map(|g| load_group(g, &LoadOptions::default()))
+        .map(Result::unwrap)
+        .collect()
+}
+
+fn target<'p>(program: &'p Program, name: &str) -> &'p Position {
+    program
+        .files
+        .iter()
+        .flat_map(|f| &f.positions)
+        .find(|p| p.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no target {name}"))
+}
+
+/// The new user's case: data in one module, the motion in another, the work object declared in
+/// the data module: one program, the target used with `wCar`, and `correct` moves it.
+#[test]
+fn data_and_motion_modules_of_one_task_resolve_together() {
+    let data = format!(
+        "MODULE Data\n  PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[2000,-600,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n  CONST robtarget p10:={TARGET};\nENDMODULE\n"
+    );
+    let main = "MODULE Main\n  PROC main()\n    MoveL p10,v200,fine,tool0\\WObj:=wCar;\n  ENDPROC\nENDMODULE\n";
+    let (_dir, task) = task(&[
+        ("PROGMOD/Data.mod", data.clone()),
+        ("PROGMOD/Main.mod", main.to_owned()),
+    ]);
+    let ps = programs(&task);
+    assert_eq!(ps.len(), 1, "one task, one program");
+    assert_eq!(ps[0].files.len(), 2);
+    let p10 = target(&ps[0], "p10");
+    assert_eq!(p10.usage.wobj.as_deref(), Some("wCar"));
+    assert_eq!(p10.usage.tool.as_deref(), Some("tool0"));
+
+    let out = task.parent().unwrap().join("out");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        task.to_str().unwrap(),
+        "--cell",
+        root().join("samples/cell.toml").to_str().unwrap(),
+        "--robot",
+        "r1",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let written = std::fs::read_to_string(out.join("PROGMOD/Data.mod")).unwrap();
+    assert_ne!(written, data, "p10 is corrected");
+    assert!(
+        written.contains("wCar:=[FALSE,TRUE,\"\",[[2000,-600,300]"),
+        "{written}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("PROGMOD/Main.mod")).unwrap(),
+        main
+    );
+}
+
+/// `LOCAL` data is its module's: another module's motion does not reach it (and a module's own
+/// declaration hides the task's of the same name).
+#[test]
+fn local_data_stays_in_its_module() {
+    let a = format!(
+        "MODULE A\n  LOCAL CONST robtarget pL:={TARGET};\n  CONST robtarget pG:={TARGET};\nENDMODULE\n"
+    );
+    let b = format!(
+        "MODULE B\n  CONST robtarget pOwn:={TARGET};\n  PROC r()\n    MoveL pL,v1,fine,tool0\\WObj:=wB;\n    MoveL pG,v1,fine,tool0\\WObj:=wB;\n  ENDPROC\nENDMODULE\n"
+    );
+    let (_dir, task) = task(&[("PROGMOD/A.mod", a), ("SYSMOD/B.sys", b)]);
+    let ps = programs(&task);
+    assert_eq!(ps.len(), 1);
+    assert_eq!(
+        target(&ps[0], "pL").usage.wobj,
+        None,
+        "LOCAL: not seen from B"
+    );
+    assert_eq!(target(&ps[0], "pG").usage.wobj.as_deref(), Some("wB"));
+}
+
+/// A target passed to a routine's parameter is used as the routine's motions use it: directly,
+/// through `Offs`/`RelTool`, and passed on to a further routine; recursion ends; two paths with
+/// different work objects leave both on the target (refused by name as before).
+#[test]
+fn targets_through_routine_parameters() {
+    let data = format!(
+        "MODULE Data\n  CONST robtarget p1:={TARGET};\n  CONST robtarget p2:={TARGET};\n  CONST robtarget p3:={TARGET};\n  CONST robtarget p4:={TARGET};\nENDMODULE\n"
+    );
+    let main = "MODULE Main\n\
+        PROC main()\n  Weld p1;\n  Outer 5, p2;\n  Spin p3;\n  Weld p4;\n  Other p4;\nENDPROC\n\
+        PROC Weld(robtarget p)\n  MoveL Offs(p,0,0,50),v200,z10,tGun\\WObj:=wCar;\nENDPROC\n\
+        PROC Outer(num n, INOUT robtarget q)\n  Weld q;\nENDPROC\n\
+        PROC Spin(robtarget s)\n  Spin s;\n  MoveJ RelTool(s,0,0,-10),v200,z10,tGun\\WObj:=wSpin;\nENDPROC\n\
+        PROC Other(robtarget o)\n  MoveL o,v200,z10,tGun\\WObj:=wOther;\nENDPROC\n\
+        ENDMODULE\n";
+    let (_dir, task) = task(&[
+        ("PROGMOD/Data.mod", data),
+        ("PROGMOD/Main.mod", main.to_owned()),
+    ]);
+    let ps = programs(&task);
+    let u = |n: &str| target(&ps[0], n).usage.clone();
+    assert_eq!(u("p1").wobj.as_deref(), Some("wCar"));
+    assert_eq!(u("p1").tool.as_deref(), Some("tGun"));
+    assert_eq!(
+        u("p1").lines,
+        vec![3],
+        "the line of the call that passes it"
+    );
+    assert_eq!(u("p2").wobj.as_deref(), Some("wCar"), "passed on by Outer");
+    assert_eq!(u("p3").wobj.as_deref(), Some("wSpin"), "recursive routine");
+    assert_eq!(u("p4").wobj.as_deref(), Some("wCar"));
+    assert_eq!(u("p4").other_wobjs, vec!["wOther".to_owned()]);
+}
+
+fn cartesian(program: &Program) -> Vec<(String, [f64; 3])> {
+    program
+        .files
+        .iter()
+        .flat_map(|f| &f.positions)
+        .filter_map(|p| Some((p.label(), p.cartesian.as_ref()?.translation()?)))
+        .collect()
+}
+
+/// Per program: every target of the RobotStudio-style sample backup is transformed, and
+/// zero(correct(P)) gives back P's numbers within the written precision (3 decimals, two
+/// roundings: 1.5e-3 mm).
+#[test]
+fn correct_then_zero_gives_back_the_sample_backup() {
+    let dir = tempfile::tempdir().unwrap();
+    let (c, z) = (dir.path().join("c"), dir.path().join("z"));
+    let sample = root().join("samples/robotstudio_backup");
+    let cell = root().join("samples/cell.toml");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        sample.to_str().unwrap(),
+        "--cell",
+        cell.to_str().unwrap(),
+        "--robot",
+        "r1",
+        "--out-dir",
+        c.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "every target transformed: {err}");
+    let (code, _, err) = trackfix(&[
+        "zero",
+        c.to_str().unwrap(),
+        "--cell",
+        cell.to_str().unwrap(),
+        "--robot",
+        "r1",
+        "--out-dir",
+        z.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let before = cartesian(&programs(&sample)[0]);
+    let corrected = cartesian(&programs(&c)[0]);
+    let after = cartesian(&programs(&z)[0]);
+    assert_eq!(before.len(), 4);
+    assert_eq!(before.len(), after.len());
+    let moved = before
+        .iter()
+        .zip(&corrected)
+        .any(|(a, b)| (0..3).any(|k| (a.1[k] - b.1[k]).abs() > 0.1));
+    assert!(moved, "correct moves the targets");
+    for (a, b) in before.iter().zip(&after) {
+        assert_eq!(a.0, b.0);
+        for k in 0..3 {
+            assert!(
+                (a.1[k] - b.1[k]).abs() <= 1.5e-3,
+                "{}: {:?} vs {:?}",
+                a.0,
+                a.1,
+                b.1
+            );
+        }
+    }
+}
