@@ -264,9 +264,15 @@ fn load_options(robot: Option<&Robot>) -> LoadOptions {
 /// A `$config.dat` is loaded for its bases; it is written only if a transform changed it
 /// (`--mirror-frames`), never copied along.
 fn drop_untouched_config(results: &mut [ProgramResult], config_dat: Option<&Path>) {
-    let Some(cfg) = config_dat else { return };
+    // A robot tree's own `$config.dat` is part of its program on the same terms.
+    let is_config = |p: &Path| {
+        config_dat == Some(p)
+            || p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.eq_ignore_ascii_case("$config.dat"))
+    };
     for r in results {
-        r.files.retain(|f| f.changed() || f.path != cfg);
+        r.files.retain(|f| f.changed() || !is_config(&f.path));
     }
 }
 

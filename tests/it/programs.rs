@@ -202,3 +202,164 @@ fn correct_then_zero_gives_back_the_sample_backup() {
         }
     }
 }
+
+/// Writes `files` (path under `KRC/R1`, text) into a fresh KSS-style tree; returns the `R1` path.
+fn kss(files: &[(&str, &str)]) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let r1 = dir.path().join("KRC/R1");
+    for (path, text) in files {
+        let p = r1.join(path);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, text).unwrap();
+    }
+    (dir, r1)
+}
+
+const CONFIG: &str = "DEFDAT $CONFIG\n\
+    DECL E6POS XGLOBAL={X 150.0,Y 40.0,Z 380.0,A 180.0,B 0.0,C 180.0,S 6,T 27,E1 2500.0}\n\
+    DECL E6POS XUNUSED={X 1.0,Y 2.0,Z 3.0,A 0.0,B 0.0,C 0.0,S 6,T 27,E1 100.0}\n\
+    DECL E6AXIS XHOME={A1 0.0,A2 -90.0,A3 90.0,A4 0.0,A5 0.0,A6 0.0,E1 4000.0}\n\
+    BASE_DATA[1]={X 2150.0,Y -1480.0,Z 720.0,A 0.0,B 0.0,C 0.0}\n\
+    BASE_DATA[2]={X 3650.0,Y -1480.0,Z 720.0,A 90.0,B 0.0,C 0.0}\n\
+    TOOL_DATA[1]={X 0.0,Y 0.0,Z 245.0,A 0.0,B 0.0,C 0.0}\n\
+    ENDDAT\n";
+
+const P1: &str = "{X 410.0,Y -95.0,Z 230.0,A 180.0,B 0.0,C 180.0,S 6,T 27,E1 1500.0}";
+
+/// A KSS tree is one program: the `.src`/`.dat` pairs, lone `.src` files and the tree's own
+/// `$config.dat`. A base and tool set in a subroutine (of another file, called through a further
+/// subroutine) hold for the motions after the call; a subroutine that sets the base on one path
+/// only leaves it unknown; recursion ends; `$config.dat` points the program moves to are its
+/// targets, the others (and joint points like `XHOME`) are not.
+#[test]
+fn kss_tree_resolves_across_files_and_subroutines() {
+    let main_src = "DEF main( )\n  PTP XHOME\n  car( )\n  LIN XP1\n  LIN XGLOBAL\n  maybe( )\n  LIN XP2\n  other( )\n  LIN XP3\nEND\n";
+    let main_dat = format!(
+        "DEFDAT main PUBLIC\nDECL E6POS XP1={P1}\nDECL E6POS XP2={P1}\nDECL E6POS XP3={P1}\nENDDAT\n"
+    );
+    let subs = "GLOBAL DEF car( )\n  tools( )\n  BAS (#BASE,1 )\nEND\n\
+        DEF tools( )\n  $TOOL=TOOL_DATA[1]\nEND\n\
+        GLOBAL DEF maybe( )\n  IF $IN[1] THEN\n    BAS (#BASE,2 )\n  ENDIF\nEND\n\
+        GLOBAL DEF other( )\n  BAS (#BASE,2 )\n  other( )\nEND\n";
+    let (_dir, r1) = kss(&[
+        ("Program/main.src", main_src),
+        ("Program/main.dat", &main_dat),
+        ("Program/lib/subs.src", subs),
+        ("System/$config.dat", CONFIG),
+    ]);
+    let ps = programs(&r1);
+    assert_eq!(ps.len(), 1, "one tree, one program");
+    assert_eq!(ps[0].files.len(), 4);
+    let u = |n: &str| target(&ps[0], n).usage.clone();
+    assert_eq!(u("XP1").wobj.as_deref(), Some("BASE_DATA[1]"));
+    assert_eq!(
+        u("XP1").tool.as_deref(),
+        Some("TOOL_DATA[1]"),
+        "set two calls deep"
+    );
+    assert_eq!(u("XGLOBAL").wobj.as_deref(), Some("BASE_DATA[1]"));
+    assert_eq!(u("XP2").wobj, None, "base set on one path only: unknown");
+    assert_eq!(
+        u("XP3").wobj.as_deref(),
+        Some("BASE_DATA[2]"),
+        "recursive routine"
+    );
+    let config = ps[0]
+        .files
+        .iter()
+        .find(|f| f.path.ends_with("System/$config.dat"))
+        .unwrap();
+    let names: Vec<_> = config.positions.iter().map(|p| p.label()).collect();
+    assert_eq!(names, ["XGLOBAL"], "only the used Cartesian global point");
+}
+
+/// `$config.dat` is written only when something in it changed: a tree whose program moves to
+/// none of its points gets no `$config.dat` in the output; one that does gets it corrected.
+#[test]
+fn config_dat_is_written_only_when_changed() {
+    let cell = root().join("samples/cell.toml");
+    for (uses_global, expect_config) in [(false, false), (true, true)] {
+        let src = if uses_global {
+            "DEF m( )\n  BAS (#BASE,1 )\n  LIN XP1\n  LIN XGLOBAL\nEND\n"
+        } else {
+            "DEF m( )\n  BAS (#BASE,1 )\n  LIN XP1\nEND\n"
+        };
+        let dat = format!("DEFDAT m PUBLIC\nDECL E6POS XP1={P1}\nENDDAT\n");
+        let (dir, r1) = kss(&[
+            ("Program/m.src", src),
+            ("Program/m.dat", &dat),
+            ("System/$config.dat", CONFIG),
+        ]);
+        let out = dir.path().join("out");
+        let (code, _, err) = trackfix(&[
+            "correct",
+            r1.to_str().unwrap(),
+            "--cell",
+            cell.to_str().unwrap(),
+            "--robot",
+            "r1",
+            "--out-dir",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        let written = out.join("System/$config.dat");
+        assert_eq!(written.exists(), expect_config, "uses_global={uses_global}");
+        assert_ne!(
+            std::fs::read_to_string(out.join("Program/m.dat")).unwrap(),
+            dat
+        );
+        if expect_config {
+            let text = std::fs::read_to_string(written).unwrap();
+            assert!(!text.contains("XGLOBAL={X 150.0,"), "{text}");
+            assert!(
+                text.contains("XUNUSED={X 1.0,Y 2.0,Z 3.0,"),
+                "untouched: {text}"
+            );
+        }
+    }
+}
+
+/// zero(correct(P)) = P per program over the KSS-style sample tree (all three targets, the
+/// global one in `$config.dat` included).
+#[test]
+fn correct_then_zero_gives_back_the_kss_sample() {
+    let dir = tempfile::tempdir().unwrap();
+    let (c, z) = (dir.path().join("c"), dir.path().join("z"));
+    let sample = root().join("samples/kss_backup");
+    let cell = root().join("samples/cell.toml");
+    for (cmd, from, to) in [("correct", &sample, &c), ("zero", &c, &z)] {
+        let (code, _, err) = trackfix(&[
+            cmd,
+            from.to_str().unwrap(),
+            "--cell",
+            cell.to_str().unwrap(),
+            "--robot",
+            "r1",
+            "--out-dir",
+            to.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{cmd}: {err}");
+    }
+    let before = cartesian(&programs(&sample)[0]);
+    let corrected = cartesian(&programs(&c)[0]);
+    let after = cartesian(&programs(&z)[0]);
+    let names: Vec<_> = before.iter().map(|p| p.0.as_str()).collect();
+    assert_eq!(names, ["XP1", "XP2", "XPick_Point"]);
+    assert_eq!(after.len(), before.len());
+    for ((a, m), b) in before.iter().zip(&corrected).zip(&after) {
+        assert!(
+            (0..3).any(|k| (a.1[k] - m.1[k]).abs() > 0.1),
+            "{} moved",
+            a.0
+        );
+        for k in 0..3 {
+            assert!(
+                (a.1[k] - b.1[k]).abs() <= 1.5e-3,
+                "{}: {:?} vs {:?}",
+                a.0,
+                a.1,
+                b.1
+            );
+        }
+    }
+}
