@@ -8,8 +8,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use trackfix::position::{Program, external_axis_index};
 use trackfix::program::{LoadError, LoadOptions, collect_inputs, group_inputs, load_group};
 use trackfix::report::{
-    CheckSummary, InspectOptions, InspectReport, findings, inspect_program, render_csv,
-    render_table,
+    CheckSummary, InspectOptions, InspectReport, ProgramReport, findings, inspect_program,
+    render_csv, render_table,
 };
 
 use super::Exit;
@@ -83,6 +83,8 @@ fn parse_axis(name: &str) -> Result<usize, String> {
 /// RobotStudio XML) get a note; unreadable files are errors, and the batch goes on.
 struct Batch {
     programs: Vec<Program>,
+    /// Programs loaded from several inputs together (a RAPID task, a KSS tree): reported as such.
+    grouped: Vec<bool>,
     errors: usize,
     skipped: usize,
 }
@@ -101,6 +103,7 @@ fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
     };
     let mut batch = Batch {
         programs: Vec::new(),
+        grouped: Vec::new(),
         errors: 0,
         skipped: 0,
     };
@@ -113,7 +116,10 @@ fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
         let n = group.len() as u64;
         for loaded in load_group(&group, options) {
             match loaded {
-                Ok(p) => batch.programs.push(p),
+                Ok(p) => {
+                    batch.programs.push(p);
+                    batch.grouped.push(n > 1);
+                }
                 Err(e) if e.is_skip() => {
                     bar.suspend(|| {
                         let _ = writeln!(std::io::stderr(), "note: {e}");
@@ -155,6 +161,13 @@ pub fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
             .programs
             .iter()
             .flat_map(|p| inspect_program(p, inspect))
+            .collect(),
+        programs: batch
+            .programs
+            .iter()
+            .zip(&batch.grouped)
+            .filter(|(_, g)| **g)
+            .filter_map(|(p, _)| ProgramReport::of(p))
             .collect(),
     };
     let text = match args.format {

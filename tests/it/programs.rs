@@ -363,3 +363,31 @@ fn correct_then_zero_gives_back_the_kss_sample() {
         }
     }
 }
+
+/// `inspect --format json` of a task folder: each target names the file and line of the work
+/// object and tool it resolved to, and the program lists its files and how many targets resolved.
+#[test]
+fn inspect_json_places_frames_and_lists_the_program() {
+    let (code, out, err) = trackfix(&["inspect", "samples/robotstudio_backup", "--format", "json"]);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let p10 = &json["files"][0]["positions"][0];
+    assert_eq!(p10["name"], "p10");
+    assert_eq!(p10["wobj"], "wCar");
+    assert_eq!(
+        p10["wobj_at"]["file"],
+        "samples/robotstudio_backup/RAPID/TASK1/SYSMOD/user.sys"
+    );
+    assert_eq!(p10["wobj_at"]["line"], 3);
+    assert_eq!(
+        p10["tool_at"]["file"],
+        "samples/robotstudio_backup/RAPID/TASK1/PROGMOD/Data.mod"
+    );
+    assert_eq!(p10["tool_at"]["line"], 3);
+    let program = &json["programs"][0];
+    assert_eq!(program["files"].as_array().unwrap().len(), 3);
+    assert_eq!(
+        (program["targets"].as_u64(), program["resolved"].as_u64()),
+        (Some(4), Some(4))
+    );
+}
