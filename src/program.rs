@@ -134,11 +134,34 @@ pub fn collect_inputs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, LoadError> {
 /// program root of their dialect (a RAPID task folder) form one program, every other file is
 /// its own. Groups keep the order of their first file.
 pub fn group_inputs(inputs: Vec<PathBuf>) -> Vec<Vec<PathBuf>> {
+    group(inputs, &BTreeSet::new())
+}
+
+/// [`collect_inputs`] then [`group_inputs`], except that files named explicitly together, outside
+/// any program root, form one program where their dialect joins files given together
+/// ([`Dialect::joins_files_given_together`](crate::dialect::Dialect): RAPID modules named
+/// together are one task).
+pub fn collect_programs(paths: &[PathBuf]) -> Result<Vec<Vec<PathBuf>>, LoadError> {
+    let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
+    let given: BTreeSet<PathBuf> = paths
+        .iter()
+        .filter(|p| !p.is_dir())
+        .map(|p| same_file(p))
+        .collect();
+    Ok(group(collect_inputs(paths)?, &given))
+}
+
+fn group(inputs: Vec<PathBuf>, given: &BTreeSet<PathBuf>) -> Vec<Vec<PathBuf>> {
+    let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
     let mut groups: Vec<Vec<PathBuf>> = Vec::new();
-    let mut root_of_group: Vec<Option<(&'static str, PathBuf)>> = Vec::new();
+    let mut root_of_group: Vec<Option<(&'static str, Option<PathBuf>)>> = Vec::new();
     for path in inputs {
-        let root = crate::dialect::dialect_of(&path)
-            .and_then(|d| Some((d.name(), d.program_root(&path)?)));
+        let root = crate::dialect::dialect_of(&path).and_then(|d| match d.program_root(&path) {
+            Some(r) => Some((d.name(), Some(r))),
+            // `None` as the root: the files given together.
+            None => (d.joins_files_given_together() && given.contains(&same_file(&path)))
+                .then_some((d.name(), None)),
+        });
         match root
             .as_ref()
             .and_then(|r| root_of_group.iter().position(|g| g.as_ref() == Some(r)))

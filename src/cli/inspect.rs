@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use trackfix::position::{Program, external_axis_index};
-use trackfix::program::{LoadError, LoadOptions, collect_inputs, group_inputs, load_group};
+use trackfix::program::{LoadError, LoadOptions, collect_programs, load_group};
 use trackfix::report::{
     CheckSummary, InspectOptions, InspectReport, ProgramReport, findings, inspect_program,
     render_csv, render_table,
@@ -90,9 +90,10 @@ struct Batch {
 }
 
 fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
-    let inputs = collect_inputs(files).context("listing the input files")?;
-    let bar = if std::io::stderr().is_terminal() && inputs.len() > 20 {
-        let bar = ProgressBar::new(inputs.len() as u64);
+    let groups = collect_programs(files).context("listing the input files")?;
+    let count: usize = groups.iter().map(Vec::len).sum();
+    let bar = if std::io::stderr().is_terminal() && count > 20 {
+        let bar = ProgressBar::new(count as u64);
         bar.set_style(
             ProgressStyle::with_template("{bar:40} {pos}/{len} {wide_msg}")
                 .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -107,7 +108,7 @@ fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
         errors: 0,
         skipped: 0,
     };
-    for group in group_inputs(inputs) {
+    for group in groups {
         let label = group
             .first()
             .map(|p| p.display().to_string())

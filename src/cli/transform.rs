@@ -11,7 +11,7 @@ use anyhow::{Context as _, bail};
 
 use trackfix::output::{self, Destination, Roots, unified_diff};
 use trackfix::position::Program;
-use trackfix::program::{LoadOptions, collect_inputs, group_inputs, load_group};
+use trackfix::program::{LoadOptions, collect_programs, load_group};
 use trackfix::report::{FileSummary, would_change};
 use trackfix::syntax::Severity;
 use trackfix::track::cell_nominal::check_cell_nominal;
@@ -207,7 +207,7 @@ fn parse_skid_map(s: &str) -> Result<(f64, f64), String> {
 
 fn load_programs(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Vec<Program>> {
     let mut programs = Vec::new();
-    for group in group_inputs(collect_inputs(files)?) {
+    for group in collect_programs(files)? {
         for loaded in load_group(&group, options) {
             match loaded {
                 Ok(p) => programs.push(p),

@@ -69,6 +69,11 @@ pub trait Dialect: Sync + 'static {
         None
     }
 
+    /// Files of this language named together (outside any program root) are one program.
+    fn joins_files_given_together(&self) -> bool {
+        false
+    }
+
     /// One program of several files of this language, resolved together. The default loads the
     /// first (languages that group by [`Dialect::program_root`] override it).
     fn load_together(

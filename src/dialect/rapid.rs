@@ -92,6 +92,12 @@ impl Dialect for Rapid {
         })
     }
 
+    /// Modules named together are the modules of one task (RAPID scoping keeps each module's
+    /// own and `LOCAL` data first, so unrelated modules do not take each other's targets).
+    fn joins_files_given_together(&self) -> bool {
+        true
+    }
+
     /// The modules of one task, resolved together (task and global data seen across modules).
     fn load_together(
         &self,

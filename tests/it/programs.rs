@@ -391,3 +391,51 @@ fn inspect_json_places_frames_and_lists_the_program() {
         (Some(4), Some(4))
     );
 }
+
+/// Loose modules named together on the command line are one task: the new user's two files,
+/// outside any task folder, are transformed; named one at a time (or found by walking a plain
+/// folder) they stay separate programs and `p10` is refused.
+#[test]
+fn modules_named_together_are_one_task() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = format!(
+        "MODULE Data\n  PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[2000,-600,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n  CONST robtarget p10:={TARGET};\nENDMODULE\n"
+    );
+    let main = "MODULE Main\n  PROC main()\n    MoveL p10,v200,fine,tool0\\WObj:=wCar;\n  ENDPROC\nENDMODULE\n";
+    let (d, m) = (dir.path().join("Data.mod"), dir.path().join("Main.mod"));
+    std::fs::write(&d, &data).unwrap();
+    std::fs::write(&m, main).unwrap();
+    let groups = trackfix::program::collect_programs(&[d.clone(), m.clone()]).unwrap();
+    assert_eq!(groups, vec![vec![d.clone(), m.clone()]]);
+    let walked = trackfix::program::collect_programs(&[dir.path().to_owned()]).unwrap();
+    assert_eq!(walked.len(), 2, "a plain folder's modules stay separate");
+    let cell = root().join("samples/cell.toml");
+    let out = dir.path().join("out");
+    let args = |files: &[&Path]| {
+        let mut a: Vec<String> = vec!["correct".into()];
+        a.extend(files.iter().map(|f| f.to_str().unwrap().to_owned()));
+        a.extend(
+            [
+                "--cell",
+                cell.to_str().unwrap(),
+                "--robot",
+                "r1",
+                "--out-dir",
+            ]
+            .map(str::to_owned),
+        );
+        a.push(out.to_str().unwrap().to_owned());
+        a
+    };
+    let run = |files: &[&Path]| {
+        let a = args(files);
+        let a: Vec<&str> = a.iter().map(String::as_str).collect();
+        trackfix(&a)
+    };
+    let (code, _, err) = run(&[&d, &m]);
+    assert_eq!(code, 0, "{err}");
+    assert_ne!(std::fs::read_to_string(out.join("Data.mod")).unwrap(), data);
+    let (code, _, err) = run(&[&d]);
+    assert_ne!(code, 0, "alone, p10 is used by no motion");
+    assert!(err.contains("p10"), "{err}");
+}
