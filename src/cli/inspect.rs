@@ -204,13 +204,17 @@ pub fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
         unreadable: batch.errors,
         ..CheckSummary::default()
     };
-    for program in &batch.programs {
+    for (program, grouped) in batch.programs.iter().zip(&batch.grouped) {
         for file in &program.files {
             let found = findings(file);
             summary.add_file(file, found.len());
             for d in &found {
                 write!(out, "{}", file.render(d))?;
             }
+        }
+        // A program of several inputs: which files form it and how much of it resolved.
+        if let Some(report) = grouped.then(|| ProgramReport::of(program)).flatten() {
+            writeln!(out, "{report}: {}", report.files.join(", "))?;
         }
     }
     writeln!(out, "{summary}")?;

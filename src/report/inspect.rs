@@ -65,6 +65,21 @@ impl ProgramReport {
     }
 }
 
+/// `program (rapid, 3 files): 4 of 4 targets resolved to a wobj`.
+impl std::fmt::Display for ProgramReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "program ({}, {} files): {} of {} targets resolved to a {}",
+            language_name(self.language),
+            self.files.len(),
+            self.resolved,
+            self.targets,
+            self.language.dialect().vocabulary().frame_column,
+        )
+    }
+}
+
 /// Where a frame is declared: file and 1-based line.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct Place {
@@ -470,15 +485,7 @@ pub fn render_table(report: &InspectReport) -> String {
         }
     }
     for p in &report.programs {
-        let _ = writeln!(
-            out,
-            "program ({}, {} files): {} of {} targets resolved to a {}",
-            language_name(p.language),
-            p.files.len(),
-            p.resolved,
-            p.targets,
-            p.language.dialect().vocabulary().frame_column,
-        );
+        let _ = writeln!(out, "{p}");
         for f in &p.files {
             let _ = writeln!(out, "  {f}");
         }
