@@ -313,6 +313,14 @@ fn finish(
             r.located(severity, format!("{advice}{outcome}"))
         )?;
     }
+    let runtime = refused.iter().filter(|r| r.kind.is_runtime_data()).count();
+    if runtime > 0 {
+        writeln!(
+            stderr,
+            "note: {runtime} of the {} refused target(s) computed at run time: not correctable offline",
+            refused.len()
+        )?;
+    }
     if !refused.is_empty() && !out.skip_unsupported {
         writeln!(
             stderr,

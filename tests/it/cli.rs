@@ -267,4 +267,10 @@ fn an_all_zero_quaternion_is_an_unset_slot() {
         !err.contains("s{2}`"),
         "only the unset slot is refused: {err}"
     );
+    assert!(
+        err.contains(
+            "note: 1 of the 1 refused target(s) computed at run time: not correctable offline"
+        ),
+        "counted apart: {err}"
+    );
 }
