@@ -54,12 +54,20 @@ impl Dialect for Rapid {
             .extension()
             .and_then(|e| e.to_str())
             .is_some_and(|e| e.eq_ignore_ascii_case("pgf"));
-        if is_pgf {
+        let source = read_source(path)?;
+        // A `.pgf` is RobotStudio's XML list of modules; some tools write RAPID text under that
+        // name instead, and that is read as a module.
+        let xml = || {
+            let text = source.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&source);
+            text.iter()
+                .find(|b| !b.is_ascii_whitespace())
+                .is_none_or(|&b| b == b'<')
+        };
+        if is_pgf && xml() {
             return Err(LoadError::ProgramXml {
                 path: path.to_owned(),
             });
         }
-        let source = read_source(path)?;
         Ok(Program {
             files: vec![crate::rapid::parse_file(path, source)],
         })
