@@ -129,3 +129,91 @@ pub fn collect_inputs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, LoadError> {
     out.retain(|p| seen.insert(same_file(p)));
     Ok(out)
 }
+
+/// The inputs (as [`collect_inputs`] lists them) grouped into programs: the files under one
+/// program root of their dialect (a RAPID task folder) form one program, every other file is
+/// its own. Groups keep the order of their first file.
+pub fn group_inputs(inputs: Vec<PathBuf>) -> Vec<Vec<PathBuf>> {
+    group(inputs, &BTreeSet::new())
+}
+
+/// [`collect_inputs`] then [`group_inputs`], except that files named explicitly together, outside
+/// any program root, form one program where their dialect joins files given together
+/// ([`Dialect::joins_files_given_together`](crate::dialect::Dialect): RAPID modules named
+/// together are one task).
+pub fn collect_programs(paths: &[PathBuf]) -> Result<Vec<Vec<PathBuf>>, LoadError> {
+    let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
+    let given: BTreeSet<PathBuf> = paths
+        .iter()
+        .filter(|p| !p.is_dir())
+        .map(|p| same_file(p))
+        .collect();
+    Ok(group(collect_inputs(paths)?, &given))
+}
+
+fn group(inputs: Vec<PathBuf>, given: &BTreeSet<PathBuf>) -> Vec<Vec<PathBuf>> {
+    let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
+    let mut groups: Vec<Vec<PathBuf>> = Vec::new();
+    let mut root_of_group: Vec<Option<(&'static str, Option<PathBuf>)>> = Vec::new();
+    for path in inputs {
+        let root = crate::dialect::dialect_of(&path).and_then(|d| match d.program_root(&path) {
+            Some(r) => Some((d.name(), Some(r))),
+            // `None` as the root: the files given together.
+            None => (d.joins_files_given_together() && given.contains(&same_file(&path)))
+                .then_some((d.name(), None)),
+        });
+        match root
+            .as_ref()
+            .and_then(|r| root_of_group.iter().position(|g| g.as_ref() == Some(r)))
+        {
+            Some(g) => {
+                if let Some(group) = groups.get_mut(g) {
+                    group.push(path);
+                }
+            }
+            None => {
+                groups.push(vec![path]);
+                root_of_group.push(root);
+            }
+        }
+    }
+    groups
+}
+
+/// Loads one group of [`group_inputs`]: a single file as [`load`] does, several files as one
+/// program of their dialect. A file of the group that cannot be read is its own error (a
+/// binary module in a task is skipped, the others still form the program).
+pub fn load_group(paths: &[PathBuf], options: &LoadOptions) -> Vec<Result<Program, LoadError>> {
+    let [first, ..] = paths else {
+        return Vec::new();
+    };
+    if paths.len() == 1 {
+        return vec![load(first, options)];
+    }
+    let Some(dialect) = crate::dialect::dialect_of(first) else {
+        return vec![Err(LoadError::UnknownType {
+            path: first.clone(),
+        })];
+    };
+    let mut out = Vec::new();
+    let mut readable = Vec::with_capacity(paths.len());
+    for p in paths {
+        let skipped = dialect.skipped_extensions().iter().any(|e| {
+            p.extension()
+                .and_then(|x| x.to_str())
+                .is_some_and(|x| x.eq_ignore_ascii_case(e))
+        });
+        if skipped {
+            out.push(dialect.load(p, options));
+            continue;
+        }
+        match read_source(p) {
+            Ok(_) => readable.push(p.clone()),
+            Err(e) => out.push(Err(e)),
+        }
+    }
+    if !readable.is_empty() {
+        out.push(dialect.load_together(&readable, options));
+    }
+    out
+}

@@ -6,10 +6,10 @@ use std::path::PathBuf;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use trackfix::position::{Program, external_axis_index};
-use trackfix::program::{LoadError, LoadOptions, collect_inputs, load};
+use trackfix::program::{LoadError, LoadOptions, collect_programs, load_group};
 use trackfix::report::{
-    CheckSummary, InspectOptions, InspectReport, findings, inspect_program, render_csv,
-    render_table,
+    CheckSummary, InspectOptions, InspectReport, ProgramReport, findings, inspect_program,
+    render_csv, render_table,
 };
 use trackfix::syntax::printable;
 
@@ -97,21 +97,24 @@ fn parse_axis(name: &str) -> Result<usize, String> {
 /// RobotStudio XML) get a note; unreadable files are errors, and the batch goes on.
 struct Batch {
     programs: Vec<Program>,
+    /// Programs loaded from several inputs together (a RAPID task, a KSS tree): reported as such.
+    grouped: Vec<bool>,
     errors: usize,
     skipped: usize,
 }
 
 fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
-    let inputs = collect_inputs(files).context("listing the input files")?;
-    if inputs.is_empty() {
+    let groups = collect_programs(files).context("listing the input files")?;
+    let count: usize = groups.iter().map(Vec::len).sum();
+    if count == 0 {
         let names: Vec<_> = files.iter().map(|p| p.display().to_string()).collect();
         anyhow::bail!(
             "no RAPID or KRL program in {} (looked for .mod .modx .sys .sysx .prg .src .dat .sub)",
             names.join(", ")
         );
     }
-    let bar = if std::io::stderr().is_terminal() && inputs.len() > 20 {
-        let bar = ProgressBar::new(inputs.len() as u64);
+    let bar = if std::io::stderr().is_terminal() && count > 20 {
+        let bar = ProgressBar::new(count as u64);
         bar.set_style(
             ProgressStyle::with_template("{bar:40} {pos}/{len} {wide_msg}")
                 .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -122,37 +125,48 @@ fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
     };
     let mut batch = Batch {
         programs: Vec::new(),
+        grouped: Vec::new(),
         errors: 0,
         skipped: 0,
     };
-    for path in &inputs {
-        bar.set_message(path.display().to_string());
-        match load(path, options) {
-            Ok(p) => batch.programs.push(p),
-            // A file named on the command line is meant to be a program: one that is not is
-            // an error, not a silent skip (a control byte must not bypass `check`).
-            Err(e) if e.is_skip() && !files.contains(path) => {
-                bar.suspend(|| {
-                    let _ = writeln!(std::io::stderr(), "note: {e}");
-                });
-                batch.skipped += 1;
-            }
-            Err(e) => {
-                bar.suspend(|| {
-                    let _ = writeln!(std::io::stderr(), "error: {e}");
-                });
-                if matches!(e, LoadError::UnknownType { .. }) {
-                    bar.suspend(|| {
-                        let _ = writeln!(
-                            std::io::stderr(),
-                            "  = help: name RAPID or KRL files, or a directory"
-                        );
-                    });
+    for group in groups {
+        let label = group
+            .first()
+            .map(|p| p.display().to_string())
+            .unwrap_or_default();
+        bar.set_message(label);
+        let n = group.len() as u64;
+        for loaded in load_group(&group, options) {
+            match loaded {
+                Ok(p) => {
+                    batch.programs.push(p);
+                    batch.grouped.push(n > 1);
                 }
-                batch.errors += 1;
+                // A file named on the command line is meant to be a program: one that is not
+                // is an error, not a silent skip (a control byte must not bypass `check`).
+                Err(e) if e.is_skip() && !files.iter().any(|f| f == e.path()) => {
+                    bar.suspend(|| {
+                        let _ = writeln!(std::io::stderr(), "note: {e}");
+                    });
+                    batch.skipped += 1;
+                }
+                Err(e) => {
+                    bar.suspend(|| {
+                        let _ = writeln!(std::io::stderr(), "error: {e}");
+                    });
+                    if matches!(e, LoadError::UnknownType { .. }) {
+                        bar.suspend(|| {
+                            let _ = writeln!(
+                                std::io::stderr(),
+                                "  = help: name RAPID or KRL files, or a directory"
+                            );
+                        });
+                    }
+                    batch.errors += 1;
+                }
             }
         }
-        bar.inc(1);
+        bar.inc(n);
     }
     bar.finish_and_clear();
     Ok(batch)
@@ -171,6 +185,13 @@ pub fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
             .programs
             .iter()
             .flat_map(|p| inspect_program(p, inspect))
+            .collect(),
+        programs: batch
+            .programs
+            .iter()
+            .zip(&batch.grouped)
+            .filter(|(_, g)| **g)
+            .filter_map(|(p, _)| ProgramReport::of(p))
             .collect(),
     };
     let text = match args.format {
@@ -208,7 +229,7 @@ pub fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
     };
     let json = args.format == super::transform::ReportFormat::Json;
     let mut checked = Vec::new();
-    for program in &batch.programs {
+    for (program, grouped) in batch.programs.iter().zip(&batch.grouped) {
         for file in &program.files {
             if json {
                 let found = findings(file);
@@ -236,6 +257,10 @@ pub fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
             for d in &found {
                 write!(out, "{}", file.render(d))?;
             }
+        }
+        // A program of several inputs: which files form it and how much of it resolved.
+        if let Some(report) = grouped.then(|| ProgramReport::of(program)).flatten() {
+            writeln!(out, "{report}: {}", report.files.join(", "))?;
         }
     }
     if json {

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::bail;
 use trackfix::kinematics::reach::{FileReach, ReachOptions, ReachStatus, reach_program};
-use trackfix::program::{LoadOptions, collect_inputs, load};
+use trackfix::program::{LoadOptions, collect_programs, load_group};
 use trackfix::transform::Cell;
 
 use super::Exit;
@@ -74,13 +74,15 @@ pub fn run(a: ReachArgs) -> anyhow::Result<Exit> {
         default_wobj: a.default_wobj.clone(),
     };
     let mut files: Vec<FileReach> = Vec::new();
-    for path in collect_inputs(&a.files)? {
-        match load(&path, &options) {
-            Ok(p) => files.extend(reach_program(&p, robot, kin, &reach_options)),
-            Err(e) if e.is_skip() => {
-                let _ = writeln!(std::io::stderr(), "note: {e}");
+    for group in collect_programs(&a.files)? {
+        for loaded in load_group(&group, &options) {
+            match loaded {
+                Ok(p) => files.extend(reach_program(&p, robot, kin, &reach_options)),
+                Err(e) if e.is_skip() => {
+                    let _ = writeln!(std::io::stderr(), "note: {e}");
+                }
+                Err(e) => return Err(e.into()),
             }
-            Err(e) => return Err(e.into()),
         }
     }
     let bad = files

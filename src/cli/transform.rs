@@ -13,7 +13,7 @@ use anyhow::{Context as _, bail};
 use trackfix::html_report::{RunFile, RunInput, RunReport, run_report};
 use trackfix::output::{self, Destination, Roots, unified_diff};
 use trackfix::position::Program;
-use trackfix::program::{LoadOptions, collect_inputs, load};
+use trackfix::program::{LoadOptions, collect_programs, load_group};
 use trackfix::report::{FileSummary, would_change};
 use trackfix::syntax::{Severity, printable};
 use trackfix::track::cell_nominal::check_cell_nominal;
@@ -525,13 +525,15 @@ fn parse_skid_map(s: &str) -> Result<(f64, f64), String> {
 
 fn load_programs(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Vec<Program>> {
     let mut programs = Vec::new();
-    for path in collect_inputs(files)? {
-        match load(&path, options) {
-            Ok(p) => programs.push(p),
-            Err(e) if e.is_skip() => {
-                let _ = writeln!(std::io::stderr(), "note: {e}");
+    for group in collect_programs(files)? {
+        for loaded in load_group(&group, options) {
+            match loaded {
+                Ok(p) => programs.push(p),
+                Err(e) if e.is_skip() => {
+                    let _ = writeln!(std::io::stderr(), "note: {e}");
+                }
+                Err(e) => return Err(e.into()),
             }
-            Err(e) => return Err(e.into()),
         }
     }
     if programs.is_empty() {
@@ -580,9 +582,15 @@ fn load_options(robot: Option<&Robot>) -> LoadOptions {
 /// A `$config.dat` is loaded for its bases; it is written only if a transform changed it
 /// (`--mirror-frames`), never copied along.
 fn drop_untouched_config(results: &mut [ProgramResult], config_dat: Option<&Path>) {
-    let Some(cfg) = config_dat else { return };
+    // A robot tree's own `$config.dat` is part of its program on the same terms.
+    let is_config = |p: &Path| {
+        config_dat == Some(p)
+            || p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.eq_ignore_ascii_case("$config.dat"))
+    };
     for r in results {
-        r.files.retain(|f| f.changed() || f.path != cfg);
+        r.files.retain(|f| f.changed() || !is_config(&f.path));
     }
 }
 
@@ -711,6 +719,14 @@ fn finish_outputs(
         messages.show(&mut stderr, severity, &kind, &text)?;
     }
     messages.finish(&mut stderr)?;
+    let runtime = refused.iter().filter(|r| r.kind.is_runtime_data()).count();
+    if runtime > 0 && out.format != ReportFormat::Json && !out.quiet {
+        writeln!(
+            stderr,
+            "note: {runtime} of the {} refused target(s) computed at run time: not correctable offline",
+            refused.len()
+        )?;
+    }
     if blocking > 0 {
         let mut kinds: Vec<_> = refused
             .iter()

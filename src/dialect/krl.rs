@@ -100,6 +100,75 @@ impl Dialect for Krl {
         });
     }
 
+    /// A KSS robot tree (`KRC/R1`): the nearest of the four folders above the file that holds a
+    /// `Program` folder or `System/$config.dat`. Of `System/`, only `$config.dat` joins the
+    /// program; the other system files (`$machine.dat`, …) stay files of their own.
+    fn program_root(&self, path: &Path) -> Option<PathBuf> {
+        let named = |p: &Path, n: &str| {
+            p.file_name()
+                .and_then(|x| x.to_str())
+                .is_some_and(|x| x.eq_ignore_ascii_case(n))
+        };
+        let in_system = path.parent().is_some_and(|d| named(d, "System"));
+        if in_system && !named(path, "$config.dat") {
+            return None;
+        }
+        path.ancestors().skip(1).take(4).find_map(|dir| {
+            let entries = std::fs::read_dir(dir).ok()?;
+            let mut found = false;
+            for e in entries.filter_map(Result::ok) {
+                let p = e.path();
+                if !e.file_type().is_ok_and(|t| t.is_dir()) {
+                    continue;
+                }
+                if named(&p, "Program") {
+                    found = true;
+                } else if named(&p, "System") {
+                    found |= std::fs::read_dir(&p).is_ok_and(|mut sys| {
+                        sys.any(|f| f.is_ok_and(|f| named(&f.path(), "$config.dat")))
+                    });
+                }
+            }
+            found.then(|| dir.to_owned())
+        })
+    }
+
+    /// Every `.src`/`.dat` pair of a robot tree with its own `$config.dat` (which then stands for
+    /// the cell's), resolved together: a point or base declared in one file is seen from the
+    /// others.
+    fn load_together(
+        &self,
+        paths: &[PathBuf],
+        options: &LoadOptions,
+    ) -> Result<Program, LoadError> {
+        let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
+        let mut all: Vec<PathBuf> = Vec::new();
+        for p in paths {
+            all.push(p.clone());
+            all.extend(crate::krl::partner_of(p));
+        }
+        let mut seen = std::collections::BTreeSet::new();
+        all.retain(|p| seen.insert(same_file(p)));
+        let own_config = all.iter().any(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.eq_ignore_ascii_case("$config.dat"))
+        });
+        let mut sources = Vec::with_capacity(all.len());
+        for p in all {
+            let bytes = crate::program::read_source(&p)?;
+            sources.push((p, bytes));
+        }
+        let options = if own_config {
+            LoadOptions {
+                krl_config_dat: None,
+            }
+        } else {
+            options.clone()
+        };
+        crate::krl::load_program_from_sources(sources, &options)
+    }
+
     fn vocabulary(&self) -> &'static Vocabulary {
         &VOCABULARY
     }

@@ -63,6 +63,31 @@ pub trait Dialect: Sync + 'static {
     /// `.dat` whose `.src` is listed), so each program is loaded once.
     fn dedupe_inputs(&self, _inputs: &mut Vec<PathBuf>) {}
 
+    /// The folder whose files of this language form one program with `path` (a RAPID task
+    /// folder), if the language groups files that way; `None` loads `path` on its own.
+    fn program_root(&self, _path: &Path) -> Option<PathBuf> {
+        None
+    }
+
+    /// Files of this language named together (outside any program root) are one program.
+    fn joins_files_given_together(&self) -> bool {
+        false
+    }
+
+    /// One program of several files of this language, resolved together. The default loads the
+    /// first (languages that group by [`Dialect::program_root`] override it).
+    fn load_together(
+        &self,
+        paths: &[PathBuf],
+        options: &LoadOptions,
+    ) -> Result<Program, LoadError> {
+        let mut files = Vec::new();
+        for p in paths {
+            files.extend(self.load(p, options)?.files);
+        }
+        Ok(Program { files })
+    }
+
     fn vocabulary(&self) -> &'static Vocabulary;
 
     /// The mark that starts a comment running to the end of the line (`!`, `;`): trackfix's

@@ -54,12 +54,20 @@ impl Dialect for Rapid {
             .extension()
             .and_then(|e| e.to_str())
             .is_some_and(|e| e.eq_ignore_ascii_case("pgf"));
-        if is_pgf {
+        let source = read_source(path)?;
+        // A `.pgf` is RobotStudio's XML list of modules; some tools write RAPID text under that
+        // name instead, and that is read as a module.
+        let xml = || {
+            let text = source.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&source);
+            text.iter()
+                .find(|b| !b.is_ascii_whitespace())
+                .is_none_or(|&b| b == b'<')
+        };
+        if is_pgf && xml() {
             return Err(LoadError::ProgramXml {
                 path: path.to_owned(),
             });
         }
-        let source = read_source(path)?;
         Ok(Program {
             files: vec![crate::rapid::parse_file(path, source)],
         })
@@ -70,11 +78,47 @@ impl Dialect for Rapid {
         files: Vec<(PathBuf, Vec<u8>)>,
         _options: &LoadOptions,
     ) -> Result<Program, LoadError> {
-        let files = files
-            .into_iter()
-            .map(|(path, source)| crate::rapid::parse_file(&path, source))
-            .collect();
-        Ok(Program { files })
+        Ok(Program {
+            files: crate::rapid::parse_task(files),
+        })
+    }
+
+    /// A RobotStudio task folder: the nearest of the three folders above the module that holds
+    /// a `PROGMOD` or `SYSMOD` folder (`RAPID/TASK1/PROGMOD/Main.mod` → `RAPID/TASK1`).
+    fn program_root(&self, path: &Path) -> Option<PathBuf> {
+        path.ancestors().skip(1).take(3).find_map(|dir| {
+            let entries = std::fs::read_dir(dir).ok()?;
+            entries
+                .filter_map(Result::ok)
+                .any(|e| {
+                    e.file_type().is_ok_and(|t| t.is_dir())
+                        && e.file_name().to_str().is_some_and(|n| {
+                            n.eq_ignore_ascii_case("PROGMOD") || n.eq_ignore_ascii_case("SYSMOD")
+                        })
+                })
+                .then(|| dir.to_owned())
+        })
+    }
+
+    /// Modules named together are the modules of one task (RAPID scoping keeps each module's
+    /// own and `LOCAL` data first, so unrelated modules do not take each other's targets).
+    fn joins_files_given_together(&self) -> bool {
+        true
+    }
+
+    /// The modules of one task, resolved together (task and global data seen across modules).
+    fn load_together(
+        &self,
+        paths: &[PathBuf],
+        _options: &LoadOptions,
+    ) -> Result<Program, LoadError> {
+        let mut files = Vec::with_capacity(paths.len());
+        for p in paths {
+            files.push((p.clone(), read_source(p)?));
+        }
+        Ok(Program {
+            files: crate::rapid::parse_task(files),
+        })
     }
 
     fn vocabulary(&self) -> &'static Vocabulary {

@@ -107,19 +107,23 @@ pub fn load_program_from_sources(
     files.sort_by_key(|(p, _)| rank(p));
     let mut program_files = Vec::new();
     let mut facts = Vec::new();
-    let mut configs = Vec::new();
+    let mut configs = 0;
+    let own_config = options.krl_config_dat.is_none();
     for (path, bytes) in files {
-        if is_config(&path) {
-            configs.push(config_file(config_dat::parse_config_source(&path, bytes)));
-        } else {
-            let (file, fact) = analyse(&path, bytes);
-            program_files.push(file);
-            facts.push(fact);
+        let config = is_config(&path);
+        if config && !own_config {
+            continue;
         }
+        configs += usize::from(config);
+        let (file, fact) = analyse(&path, bytes);
+        program_files.push(file);
+        facts.push(fact);
     }
+    // A `$config.dat` among the files is resolved with them: its global points (`DECL E6POS
+    // XPICK={…}`) carry the usage of the motions that move to them.
     resolve::resolve(&mut program_files, &mut facts);
-    if options.krl_config_dat.is_none() {
-        program_files.extend(configs);
+    for file in program_files.iter_mut().rev().take(configs) {
+        keep_used_points(file);
     }
     if let Some(cfg) = &options.krl_config_dat {
         program_files.push(config_file(config_dat::parse_config(cfg)?));
@@ -133,4 +137,11 @@ pub fn load_program_from_sources(
 fn config_file(mut file: crate::position::ParsedFile) -> crate::position::ParsedFile {
     file.positions.clear();
     file
+}
+
+/// Of a `$config.dat` resolved with a program, only the Cartesian points a motion of the program
+/// uses are the program's (`XHOME` and the points other programs move to are not).
+fn keep_used_points(file: &mut crate::position::ParsedFile) {
+    file.positions
+        .retain(|p| p.cartesian.is_some() && !p.usage.lines.is_empty());
 }

@@ -52,8 +52,10 @@ pub(crate) enum Ref {
 
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub(crate) enum Event {
-    /// A `DEF`/`DEFFCT`: program order starts again.
-    Reset,
+    /// A `DEF`/`DEFFCT` (its name, upper case): program order starts again.
+    Reset(Option<String>),
+    /// A call of a routine by name (upper case): the base and tool it leaves set apply after it.
+    Call(String),
     Set(Setting),
     /// Program order forks (`IF`, `SWITCH`), switches branch (`ELSE`, `CASE`, `DEFAULT`) or
     /// joins (`ENDIF`, `ENDSWITCH`).
@@ -431,9 +433,11 @@ impl<'a> Extractor<'a> {
         let (src, lines) = (self.src, self.lines);
         let out = &mut self.out;
         match &stmt.kind {
-            StmtKind::Routine { keyword, .. } => {
+            StmtKind::Routine { keyword, name } => {
                 if !upper(src, *keyword).starts_with("DEFDAT") {
-                    out.facts.events.push(Event::Reset);
+                    out.facts
+                        .events
+                        .push(Event::Reset(name.map(|n| upper(src, n))));
                 }
             }
             StmtKind::Decl { type_name, vars } => {
@@ -471,6 +475,12 @@ impl<'a> Extractor<'a> {
             StmtKind::Call(call) => {
                 if let Some(s) = bas_call(src, call) {
                     out.facts.events.push(Event::Set(s));
+                } else if let ExprKind::Call(name, _) = &call.kind {
+                    // KUKA's own `BAS` is read by `bas_call`; its other modes set no frame.
+                    let name = upper(src, name.span);
+                    if name != "BAS" {
+                        out.facts.events.push(Event::Call(name));
+                    }
                 }
             }
             StmtKind::Branch(keyword) => {

@@ -131,6 +131,106 @@ fn computed_index_array(name: &str) -> Option<&str> {
     (!literal).then_some(array)
 }
 
+/// What a routine leaves set when it returns: the base and tool it sets on every path (`None`:
+/// left as the caller had it).
+#[derive(Clone, Default, PartialEq)]
+struct Exit {
+    base: Option<FrameRef>,
+    tool: Option<FrameRef>,
+}
+
+impl Exit {
+    fn apply_to(&self, state: &mut State) {
+        if let Some(b) = &self.base {
+            state.base = Some(b.clone());
+        }
+        if let Some(t) = &self.tool {
+            state.tool = Some(t.clone());
+        }
+    }
+}
+
+/// How many calls deep a routine's settings are followed into the routines it calls.
+const CALL_DEPTH: usize = 16;
+
+/// The [`Exit`] of every routine of the program (a subroutine that runs `BAS(#BASE,2)` or
+/// `$BASE=BASE_DATA[2]` sets the base of the motions after its call), found by following each
+/// routine's program order from an unknown entry; calls inside are followed by repeating this
+/// up to [`CALL_DEPTH`] times (a cycle settles or stops there).
+fn routine_exits(facts: &[Facts], fdats: &HashMap<String, Fdat>) -> HashMap<String, Exit> {
+    let mut exits: HashMap<String, Exit> = HashMap::default();
+    for _ in 0..CALL_DEPTH {
+        let mut next: HashMap<String, Exit> = HashMap::default();
+        for f in facts {
+            let mut current: Option<&str> = None;
+            let mut state = State::default();
+            let mut forks: Vec<Fork> = Vec::new();
+            let close = |name: Option<&str>, state: &State, next: &mut HashMap<String, Exit>| {
+                if let Some(n) = name {
+                    next.entry(n.to_owned()).or_insert(Exit {
+                        base: state.base.clone(),
+                        tool: state.tool.clone(),
+                    });
+                }
+            };
+            for ev in &f.events {
+                match ev {
+                    Event::Reset(name) => {
+                        close(current, &state, &mut next);
+                        current = name.as_deref();
+                        state = State::default();
+                        forks.clear();
+                    }
+                    Event::Call(name) => {
+                        if let Some(exit) = exits.get(name) {
+                            exit.apply_to(&mut state);
+                        }
+                    }
+                    Event::Branch(b) => branch(&mut state, &mut forks, *b),
+                    Event::Set(s) => state.apply(s, fdats),
+                    Event::Alias { .. } | Event::Motion { .. } => {}
+                }
+            }
+            close(current, &state, &mut next);
+        }
+        if next == exits {
+            break;
+        }
+        exits = next;
+    }
+    exits
+}
+
+/// Program order at `IF`/`SWITCH`: fork, switch branch, or join.
+fn branch(state: &mut State, forks: &mut Vec<Fork>, b: BranchEvent) {
+    match b {
+        BranchEvent::If | BranchEvent::Switch => {
+            forks.push(Fork::new(b == BranchEvent::If, state));
+        }
+        BranchEvent::Otherwise | BranchEvent::Case => {
+            if let Some(f) = forks.last_mut() {
+                if f.in_branch {
+                    f.outcomes.push(state.clone());
+                }
+                f.in_branch = true;
+                f.exhaustive |= b == BranchEvent::Otherwise;
+                *state = f.entry.clone();
+            }
+        }
+        BranchEvent::EndIf | BranchEvent::EndSwitch => {
+            // Blocks left open inside are joined on the way out.
+            let want_if = b == BranchEvent::EndIf;
+            while let Some(f) = forks.pop() {
+                let done = f.is_if == want_if;
+                *state = f.join(std::mem::take(state));
+                if done {
+                    break;
+                }
+            }
+        }
+    }
+}
+
 pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     let mut fdats: HashMap<String, Fdat> = HashMap::default();
     for f in facts.iter() {
@@ -187,6 +287,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             }
         }
     }
+    let exits = routine_exits(facts, &fdats);
     for fi in 0..files.len() {
         let events = facts
             .get_mut(fi)
@@ -197,37 +298,17 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         let mut forks: Vec<Fork> = Vec::new();
         for ev in &events {
             match ev {
-                Event::Reset => {
+                Event::Reset(_) => {
                     state = State::default();
                     aliases.clear();
                     forks.clear();
                 }
-                Event::Branch(b) => match b {
-                    BranchEvent::If | BranchEvent::Switch => {
-                        forks.push(Fork::new(*b == BranchEvent::If, &state));
+                Event::Call(name) => {
+                    if let Some(exit) = exits.get(name) {
+                        exit.apply_to(&mut state);
                     }
-                    BranchEvent::Otherwise | BranchEvent::Case => {
-                        if let Some(f) = forks.last_mut() {
-                            if f.in_branch {
-                                f.outcomes.push(state.clone());
-                            }
-                            f.in_branch = true;
-                            f.exhaustive |= *b == BranchEvent::Otherwise;
-                            state = f.entry.clone();
-                        }
-                    }
-                    BranchEvent::EndIf | BranchEvent::EndSwitch => {
-                        // Blocks left open inside are joined on the way out.
-                        let want_if = *b == BranchEvent::EndIf;
-                        while let Some(f) = forks.pop() {
-                            let done = f.is_if == want_if;
-                            state = f.join(std::mem::take(&mut state));
-                            if done {
-                                break;
-                            }
-                        }
-                    }
-                },
+                }
+                Event::Branch(b) => branch(&mut state, &mut forks, *b),
                 Event::Alias { name, source } => {
                     aliases.insert(name, source);
                 }

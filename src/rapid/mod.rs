@@ -4,7 +4,7 @@
 //! holds RAPID's lexer rules, grammar ([`parser`]), node kinds ([`tree`]) and extraction.
 //!
 //! ```
-//! use std::path::Path;
+//! use std::path::{Path, PathBuf};
 //! let src = b"MODULE m\r\n  CONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[500,9E9,9E9,9E9,9E9,9E9]];\r\nENDMODULE".to_vec();
 //! let file = trackfix::rapid::parse_file(Path::new("m.mod"), src.clone());
 //! assert!(file.round_trip);
@@ -18,7 +18,7 @@ pub mod parser;
 pub mod positions;
 pub mod tree;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 pub use parser::{Parse, parse};
 pub use tree::{Node, NodeKind, Tree};
@@ -39,35 +39,70 @@ pub fn print(src: &[u8]) -> Vec<u8> {
 /// Parses one RAPID module. Never fails: what the grammar does not know is kept verbatim and
 /// reported in the file's diagnostics.
 pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
-    let lines = LineIndex::new(&source);
-    let mut extractor = positions::Extractor::new(&lines, &source);
-    let parsed = parse(&source, &mut |s: parser::Statement<'_>| {
-        extractor.statement(s.src, s.arena, s.stmt, s.span)
-    });
-    let extracted = extractor.finish(&source);
-    let round_trip = parsed.tree.prints_back(&source);
-    let mut diagnostics = parsed.diagnostics;
-    if !round_trip {
-        diagnostics.push(
-            Diagnostic::error(
-                crate::syntax::Span::new(0, 0),
-                "internal error: the parsed tree does not print back to the file",
-            )
-            .with_hint("please report this file; trackfix will not rewrite it"),
-        );
-    }
-    diagnostics.extend(extracted.diagnostics);
-    diagnostics.sort_by_key(|d| (d.span.start, std::cmp::Reverse(d.severity)));
+    parse_task(vec![(path.to_owned(), source)])
+        .pop()
+        .unwrap_or_else(|| unreachable_empty(path))
+}
+
+fn unreachable_empty(path: &Path) -> ParsedFile {
     ParsedFile {
         path: path.to_owned(),
         language: Language::Rapid,
-        lines,
-        source,
-        positions: extracted.positions,
-        frames: extracted.frames,
-        offsets: extracted.offsets,
-        opaque: parsed.opaque,
-        diagnostics,
-        round_trip,
+        lines: LineIndex::new(b""),
+        source: Vec::new(),
+        positions: Vec::new(),
+        frames: Vec::new(),
+        offsets: Vec::new(),
+        opaque: 0,
+        diagnostics: Vec::new(),
+        round_trip: true,
     }
+}
+
+/// Parses the modules of one task and resolves their usage together
+/// ([`positions::finish_task`]): one [`ParsedFile`] per module, in order.
+pub fn parse_task(files: Vec<(PathBuf, Vec<u8>)>) -> Vec<ParsedFile> {
+    let lines: Vec<LineIndex> = files.iter().map(|(_, s)| LineIndex::new(s)).collect();
+    let mut parsed = Vec::with_capacity(files.len());
+    let mut extractors = Vec::with_capacity(files.len());
+    for ((_, source), lines) in files.iter().zip(&lines) {
+        let mut extractor = positions::Extractor::new(lines, source);
+        let p = parse(source, &mut |s: parser::Statement<'_>| {
+            extractor.statement(s.src, s.arena, s.stmt, s.span)
+        });
+        parsed.push(p);
+        extractors.push((extractor, source.as_slice()));
+    }
+    let extracted = positions::finish_task(extractors);
+    let mut out = Vec::with_capacity(files.len());
+    for ((((path, source), lines), parsed), extracted) in
+        files.into_iter().zip(lines).zip(parsed).zip(extracted)
+    {
+        let round_trip = parsed.tree.prints_back(&source);
+        let mut diagnostics = parsed.diagnostics;
+        if !round_trip {
+            diagnostics.push(
+                Diagnostic::error(
+                    crate::syntax::Span::new(0, 0),
+                    "internal error: the parsed tree does not print back to the file",
+                )
+                .with_hint("please report this file; trackfix will not rewrite it"),
+            );
+        }
+        diagnostics.extend(extracted.diagnostics);
+        diagnostics.sort_by_key(|d| (d.span.start, std::cmp::Reverse(d.severity)));
+        out.push(ParsedFile {
+            path,
+            language: Language::Rapid,
+            lines,
+            source,
+            positions: extracted.positions,
+            frames: extracted.frames,
+            offsets: extracted.offsets,
+            opaque: parsed.opaque,
+            diagnostics,
+            round_trip,
+        });
+    }
+    out
 }

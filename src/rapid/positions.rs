@@ -39,11 +39,22 @@ struct Symbol {
     module_scope: bool,
 }
 
+/// A routine of the module: its name, whether it is `LOCAL`, and its required parameters
+/// (`type name`) in the order a call's positional arguments bind to them.
+#[derive(Clone, Debug)]
+struct Routine {
+    name: Span,
+    local: bool,
+    params: Vec<(Span, Span)>,
+}
+
 /// A procedure call, kept until every declaration has been read.
 #[derive(Clone, Debug)]
 struct CallUse {
     name: Span,
     line: usize,
+    /// The routine the call is written in (index into the module's routines).
+    routine: Option<usize>,
     /// `\WObj:=` value.
     wobj: Option<Span>,
     /// `\Tool:=` value.
@@ -74,6 +85,12 @@ pub struct Extractor<'l> {
     uses: Vec<CallUse>,
     /// Whole-value assignments `name := [...]` (a frame set at run time).
     assigned: Vec<Span>,
+    routines: Vec<Routine>,
+    /// The routine being read (`None` at module level).
+    current: Option<usize>,
+    /// Positions declared in a scope other modules see (module data without `LOCAL`); inline
+    /// literals and routine data are private to their module.
+    exported: Vec<bool>,
 }
 
 /// What [`Extractor::finish`] returns.
@@ -108,6 +125,9 @@ impl<'l> Extractor<'l> {
             symbols: Vec::new(),
             uses: Vec::new(),
             assigned: Vec::new(),
+            routines: Vec::new(),
+            current: None,
+            exported: Vec::new(),
         }
     }
 
@@ -426,16 +446,47 @@ impl<'l> Extractor<'l> {
         (added, refs)
     }
 
-    /// Resolves usage and lints; consumes the extractor. `src` is the source parsed.
-    pub fn finish(mut self, src: &[u8]) -> Extracted {
-        let mut diagnostics = Vec::new();
-        let mut buf = String::new();
-        // Names declared twice in the module scope; the types of all names.
-        let n = self.symbols.len();
+    /// Resolves usage and lints of one module on its own; consumes the extractor.
+    pub fn finish(self, src: &[u8]) -> Extracted {
+        finish_task(vec![(self, src)]).pop().unwrap_or(Extracted {
+            positions: Vec::new(),
+            frames: Vec::new(),
+            offsets: Vec::new(),
+            diagnostics: Vec::new(),
+        })
+    }
+}
+
+/// A motion's frame and tool: what one use gives the targets it reaches.
+#[derive(Clone, Debug)]
+struct FrameUse {
+    wobj: Option<String>,
+    tool: Option<String>,
+    stationary: bool,
+    line: usize,
+}
+
+/// A routine's required parameter: (module, routine, parameter index).
+type ParamAt = (usize, usize, usize);
+
+/// How deep calls through routine parameters are followed.
+const CALL_DEPTH: usize = 16;
+
+/// Resolves usage over the modules of one task (one RAPID program), in the order given: a
+/// module's own declarations (routine data, `LOCAL` data) first, else the module data of the
+/// other modules that is not `LOCAL` (task and global scope). A target passed to a routine's
+/// required parameter is used as the routine's motions use that parameter (directly, through
+/// `Offs`/`RelTool`, or passed on to another routine: followed [`CALL_DEPTH`] calls deep,
+/// cycles cut). Returns one [`Extracted`] per module, in order.
+pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
+    let mut diagnostics: Vec<Vec<Diagnostic>> = vec![Vec::new(); modules.len()];
+    let mut buf = String::new();
+    // Duplicate module-scope names, per module; the types of all names in the task.
+    let mut type_of: NameMap<NameKey, SymType> = NameMap::default();
+    for (m, (x, src)) in modules.iter().enumerate() {
         let mut seen: NameMap<NameKey, Span> =
-            NameMap::with_capacity_and_hasher(n, Default::default());
-        let mut type_of: NameMap<NameKey, SymType> = NameMap::default();
-        for s in &self.symbols {
+            NameMap::with_capacity_and_hasher(x.symbols.len(), Default::default());
+        for s in &x.symbols {
             let k = NameKey(s.name.slice(src));
             if s.ty != SymType::Other {
                 type_of.insert(k, s.ty);
@@ -444,64 +495,149 @@ impl<'l> Extractor<'l> {
                 continue;
             }
             if let Some(first) = seen.get(&k) {
-                let line = self.lines.line(first.start);
-                diagnostics.push(
-                    Diagnostic::warning(
-                        s.name,
-                        format!(
-                            "`{}` is declared twice in the module (first on line {line})",
-                            text_of(src, s.name)
+                let line = x.lines.line(first.start);
+                if let Some(d) = diagnostics.get_mut(m) {
+                    d.push(
+                        Diagnostic::warning(
+                            s.name,
+                            format!(
+                                "`{}` is declared twice in the module (first on line {line})",
+                                text_of(src, s.name)
+                            ),
+                        )
+                        .with_hint(
+                            "rename or remove one declaration; RAPID names are case-insensitive",
                         ),
-                    )
-                    .with_hint(
-                        "rename or remove one declaration; RAPID names are case-insensitive",
-                    ),
-                );
+                    );
+                }
             } else {
                 seen.insert(k, s.name);
             }
         }
-        let is_tool = |n: &NameKey| n.is(b"tool0") || type_of.get(n) == Some(&SymType::Tool);
-        let is_zone = |n: &NameKey| {
-            n.is(b"fine") || n.numbered(b'z') || type_of.get(n) == Some(&SymType::Zone)
-        };
-        let is_speed = |n: &NameKey| {
-            n.is(b"vmax") || n.numbered(b'v') || type_of.get(n) == Some(&SymType::Speed)
-        };
-        let robhold: NameMap<NameKey, bool> = self
-            .frames
-            .iter()
-            .filter(|f| f.kind == FrameKind::WorkObject)
-            .filter_map(|f| Some((NameKey(f.name.as_bytes()), f.robhold?)))
-            .collect();
-        let mut declared = NameIndex::new('{', self.positions.len());
-        for (i, p) in self.positions.iter().enumerate() {
+    }
+    let is_tool = |n: &NameKey| n.is(b"tool0") || type_of.get(n) == Some(&SymType::Tool);
+    let is_zone =
+        |n: &NameKey| n.is(b"fine") || n.numbered(b'z') || type_of.get(n) == Some(&SymType::Zone);
+    let is_speed =
+        |n: &NameKey| n.is(b"vmax") || n.numbered(b'v') || type_of.get(n) == Some(&SymType::Speed);
+    let robhold: NameMap<NameKey, bool> = modules
+        .iter()
+        .flat_map(|(x, _)| &x.frames)
+        .filter(|f| f.kind == FrameKind::WorkObject)
+        .filter_map(|f| Some((NameKey(f.name.as_bytes()), f.robhold?)))
+        .collect();
+    let total: usize = modules.iter().map(|(x, _)| x.positions.len()).sum();
+    let mut declared: NameIndex<(usize, usize)> = NameIndex::new('{', total);
+    for (m, (x, _)) in modules.iter().enumerate() {
+        for (i, p) in x.positions.iter().enumerate() {
             if let Some(n) = &p.name {
-                declared.insert(n, i);
+                declared.insert(n, (m, i));
             }
         }
-        // A name, an element (`pArr{2}`), or a whole array or an element chosen at run time
-        // (`pArr`, `pArr{i}`): then every element of the array may be used.
-        let lookup = |r: &str| -> &[usize] {
-            match declared.exact(r) {
-                [] => declared.elements(declared.array_of(r).unwrap_or(r)),
-                hits => hits,
-            }
+    }
+    let visible = |m: usize, (m2, i): (usize, usize)| {
+        m2 == m
+            || modules
+                .get(m2)
+                .and_then(|(x, _)| x.exported.get(i).copied())
+                .unwrap_or(false)
+    };
+    // A name, an element (`pArr{2}`), or a whole array or an element chosen at run time
+    // (`pArr`, `pArr{i}`): then every element of the array may be used. The module's own
+    // declarations hide the task's.
+    let lookup = |m: usize, r: &str, out: &mut Vec<(usize, usize)>| {
+        let hits = match declared.exact(r) {
+            [] => declared.elements(declared.array_of(r).unwrap_or(r)),
+            hits => hits,
         };
-        let mut targets: Vec<usize> = Vec::new();
-        let mut names: Vec<Option<NameKey>> = Vec::new();
-        for u in &self.uses {
+        let own = hits.iter().any(|h| h.0 == m);
+        out.extend(
+            hits.iter()
+                .copied()
+                .filter(|&h| if own { h.0 == m } else { visible(m, h) }),
+        );
+    };
+    // Routines by name: the module's own first, else those of the task that are not LOCAL.
+    let routine_of = |m: usize, name: NameKey| -> Option<(usize, usize)> {
+        let find = |m2: usize, any: bool| {
+            let (x, src) = modules.get(m2)?;
+            x.routines
+                .iter()
+                .position(|r| (any || !r.local) && NameKey(r.name.slice(src)) == name)
+                .map(|r| (m2, r))
+        };
+        find(m, true).or_else(|| {
+            (0..modules.len())
+                .filter(|&m2| m2 != m)
+                .find_map(|m2| find(m2, false))
+        })
+    };
+    // The required parameter of the enclosing routine a reference names, if any.
+    let param_of = |m: usize, routine: Option<usize>, r: &str| -> Option<ParamAt> {
+        let (x, src) = modules.get(m)?;
+        let rt = routine?;
+        let base = r.split_once('{').map_or(r, |(a, _)| a);
+        x.routines
+            .get(rt)?
+            .params
+            .iter()
+            .position(|&(_, name)| NameKey(name.slice(src)) == NameKey(base.as_bytes()))
+            .map(|k| (m, rt, k))
+    };
+
+    let mut direct: Vec<((usize, usize), FrameUse)> = Vec::new();
+    let mut param_uses: std::collections::HashMap<ParamAt, Vec<FrameUse>> = Default::default();
+    let mut param_edges: std::collections::HashMap<ParamAt, Vec<ParamAt>> = Default::default();
+    let mut bindings: Vec<((usize, usize), ParamAt, usize)> = Vec::new();
+    let mut targets: Vec<(usize, usize)> = Vec::new();
+    let mut params: Vec<ParamAt> = Vec::new();
+    let mut names: Vec<Option<NameKey>> = Vec::new();
+    for (m, (x, src)) in modules.iter().enumerate() {
+        for u in &x.uses {
             targets.clear();
-            targets.extend_from_slice(&u.inline);
-            for sp in u.positional.iter().flatten() {
-                let k = key_into(&mut buf, src, *sp);
-                targets.extend_from_slice(lookup(k));
+            params.clear();
+            targets.extend(u.inline.iter().map(|&i| (m, i)));
+            let call = NameKey(u.name.slice(src));
+            let callee = routine_of(m, call);
+            let reach = |buf: &mut String,
+                         sp: Span,
+                         targets: &mut Vec<(usize, usize)>,
+                         params: &mut Vec<ParamAt>| {
+                let k = key_into(buf, src, sp);
+                match param_of(m, u.routine, k) {
+                    Some(p) => params.push(p),
+                    None => lookup(m, k, targets),
+                }
+            };
+            for (i, sp) in u.positional.iter().enumerate() {
+                let Some(sp) = *sp else { continue };
+                match callee {
+                    // An argument bound to a parameter of a routine of the task: used as that
+                    // routine uses the parameter.
+                    Some((cm, cr))
+                        if modules
+                            .get(cm)
+                            .and_then(|(cx, _)| cx.routines.get(cr))
+                            .is_some_and(|r| i < r.params.len()) =>
+                    {
+                        let k = key_into(&mut buf, src, sp);
+                        let to = (cm, cr, i);
+                        match param_of(m, u.routine, k) {
+                            Some(p) => param_edges.entry(p).or_default().push(to),
+                            None => {
+                                let mut hits = Vec::new();
+                                lookup(m, k, &mut hits);
+                                bindings.extend(hits.into_iter().map(|t| (t, to, u.line)));
+                            }
+                        }
+                    }
+                    _ => reach(&mut buf, sp, &mut targets, &mut params),
+                }
             }
             for &sp in &u.via_offset {
-                let k = key_into(&mut buf, src, sp);
-                targets.extend_from_slice(lookup(k));
+                reach(&mut buf, sp, &mut targets, &mut params);
             }
-            if targets.is_empty() {
+            if targets.is_empty() && params.is_empty() {
                 continue;
             }
             targets.sort_unstable();
@@ -519,7 +655,6 @@ impl<'l> Extractor<'l> {
                     .flatten()
                     .map(|sp| text_of(src, sp))
             };
-            let call = NameKey(u.name.slice(src));
             let tool = u
                 .tool
                 .map(|sp| text_of(src, sp).trim().to_owned())
@@ -549,29 +684,77 @@ impl<'l> Extractor<'l> {
             let stationary = wobj
                 .as_ref()
                 .is_some_and(|w| robhold.get(&NameKey(w.as_bytes())) == Some(&true));
+            let fu = FrameUse {
+                stationary: wobj.is_some() && stationary,
+                wobj,
+                tool,
+                line: u.line,
+            };
             for &t in &targets {
-                let Some(p) = self.positions.get_mut(t) else {
-                    continue;
-                };
-                p.usage.record(
-                    wobj.as_deref(),
-                    tool.as_deref(),
-                    wobj.is_some() && stationary,
-                    u.line,
-                );
+                direct.push((t, fu.clone()));
+            }
+            for &p in &params {
+                param_uses.entry(p).or_default().push(fu.clone());
             }
         }
+    }
+    let mut positions: Vec<Vec<Position>> = Vec::with_capacity(modules.len());
+    let mut rest = Vec::with_capacity(modules.len());
+    for (x, src) in modules {
+        positions.push(x.positions);
+        rest.push((x.frames, x.offsets, x.assigned, x.lines, src));
+    }
+    for ((m, i), fu) in direct {
+        if let Some(p) = positions.get_mut(m).and_then(|ps| ps.get_mut(i)) {
+            p.usage.record(
+                fu.wobj.as_deref(),
+                fu.tool.as_deref(),
+                fu.stationary,
+                fu.line,
+            );
+        }
+    }
+    // Through routine parameters: every motion use reachable from the bound parameter.
+    for ((m, i), to, line) in bindings {
+        let mut seen = std::collections::HashSet::new();
+        let mut stack = vec![(to, 0usize)];
+        let mut found: Vec<&FrameUse> = Vec::new();
+        while let Some((at, depth)) = stack.pop() {
+            if depth >= CALL_DEPTH || !seen.insert(at) {
+                continue;
+            }
+            found.extend(param_uses.get(&at).into_iter().flatten());
+            stack.extend(
+                param_edges
+                    .get(&at)
+                    .into_iter()
+                    .flatten()
+                    .map(|&next| (next, depth + 1)),
+            );
+        }
+        if let Some(p) = positions.get_mut(m).and_then(|ps| ps.get_mut(i)) {
+            for fu in found {
+                p.usage
+                    .record(fu.wobj.as_deref(), fu.tool.as_deref(), fu.stationary, line);
+            }
+        }
+    }
+    let all_frames: Vec<&FrameDecl> = rest.iter().flat_map(|r| &r.0).collect();
+    let mut assigned_notes: Vec<Vec<Diagnostic>> = Vec::new();
+    for (frames_m, _, assigned, _, src) in &rest {
+        let _ = frames_m;
+        let mut notes = Vec::new();
         // A frame given a whole new value in a routine: the declaration may not be what runs.
-        for &sp in &self.assigned {
+        for &sp in assigned {
             let k = key_into(&mut buf, src, sp);
-            let Some(f) = self.frames.iter().find(|f| f.name.eq_ignore_ascii_case(k)) else {
+            let Some(f) = all_frames.iter().find(|f| f.name.eq_ignore_ascii_case(k)) else {
                 continue;
             };
             let what = match f.kind {
                 FrameKind::Tool => "tool",
                 _ => "work object",
             };
-            diagnostics.push(
+            notes.push(
                 Diagnostic::warning(
                     sp,
                     format!(
@@ -584,14 +767,29 @@ impl<'l> Extractor<'l> {
                 ),
             );
         }
-        for p in &self.positions {
+        assigned_notes.push(notes);
+    }
+    drop(all_frames);
+    let mut out = Vec::with_capacity(rest.len());
+    for (m, ((frames, offsets, _, _, _), ps)) in rest.into_iter().zip(positions).enumerate() {
+        let mut d = diagnostics
+            .get_mut(m)
+            .map(std::mem::take)
+            .unwrap_or_default();
+        d.extend(
+            assigned_notes
+                .get_mut(m)
+                .map(std::mem::take)
+                .unwrap_or_default(),
+        );
+        for p in &ps {
             if p.usage.other_wobjs.is_empty() {
                 continue;
             }
             let mut all = vec![p.usage.wobj.clone().unwrap_or_default()];
             all.extend(p.usage.other_wobjs.iter().cloned());
             let lines: Vec<String> = p.usage.lines.iter().map(usize::to_string).collect();
-            diagnostics.push(
+            d.push(
                 Diagnostic::warning(
                     p.span,
                     format!(
@@ -607,13 +805,14 @@ impl<'l> Extractor<'l> {
                 ),
             );
         }
-        Extracted {
-            positions: self.positions,
-            frames: self.frames,
-            offsets: self.offsets,
-            diagnostics,
-        }
+        out.push(Extracted {
+            positions: ps,
+            frames,
+            offsets,
+            diagnostics: d,
+        });
     }
+    out
 }
 
 impl Extractor<'_> {
@@ -625,8 +824,78 @@ impl Extractor<'_> {
                 dims,
                 init,
                 module_scope,
+                local,
                 ..
             } => {
+                if module_scope {
+                    self.current = None;
+                }
+                let before = self.positions.len();
+                self.statement_decl(src, arena, type_name, name, dims, init, module_scope);
+                let exported = module_scope && !local;
+                self.exported.resize(before, false);
+                self.exported.resize(self.positions.len(), exported);
+            }
+            Stmt::Routine { name, local } => {
+                self.symbols.push(Symbol {
+                    name,
+                    ty: SymType::Other,
+                    module_scope: true,
+                });
+                self.current = Some(self.routines.len());
+                self.routines.push(Routine {
+                    name,
+                    local,
+                    params: Vec::new(),
+                });
+            }
+            Stmt::Param { type_name, name } => {
+                if let Some(r) = self.current.and_then(|r| self.routines.get_mut(r)) {
+                    r.params.push((type_name, name));
+                }
+            }
+            Stmt::Record { name } => self.records.push(RecordDecl {
+                name,
+                fields: Vec::new(),
+            }),
+            Stmt::RecordField { type_name, name } => {
+                if let Some(r) = self.records.last_mut() {
+                    r.fields.push((type_name, name));
+                }
+            }
+            Stmt::Call { name, args } => self.statement_call(src, arena, name, args, span),
+            Stmt::Assign { target, value } => {
+                self.scan(src, arena, true);
+                if arena
+                    .get(value)
+                    .is_some_and(|v| v.kind == ExprKind::Aggregate)
+                    && target
+                        .slice(src)
+                        .iter()
+                        .all(|b| b.is_ascii_alphanumeric() || *b == b'_')
+                {
+                    self.assigned.push(target);
+                }
+            }
+            Stmt::Other => {
+                self.scan(src, arena, true);
+            }
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn statement_decl(
+        &mut self,
+        src: &[u8],
+        arena: &Arena,
+        type_name: Span,
+        name: Span,
+        dims: u8,
+        init: Option<u32>,
+        module_scope: bool,
+    ) {
+        {
+            {
                 let ty = type_name.slice(src);
                 let is = |t: &[u8]| ty.eq_ignore_ascii_case(t);
                 let name_text = text_of(src, name);
@@ -751,78 +1020,52 @@ impl Extractor<'_> {
                     }
                 }
             }
-            Stmt::Record { name } => self.records.push(RecordDecl {
+        }
+    }
+
+    fn statement_call(&mut self, src: &[u8], arena: &Arena, name: Span, args: u32, span: Span) {
+        {
+            let (inline, via_offset) = self.scan(src, arena, true);
+            let mut u = CallUse {
                 name,
-                fields: Vec::new(),
-            }),
-            Stmt::RecordField { type_name, name } => {
-                if let Some(r) = self.records.last_mut() {
-                    r.fields.push((type_name, name));
-                }
-            }
-            Stmt::Routine { name } => self.symbols.push(Symbol {
-                name,
-                ty: SymType::Other,
-                module_scope: true,
-            }),
-            Stmt::Call { name, args } => {
-                let (inline, via_offset) = self.scan(src, arena, true);
-                let mut u = CallUse {
-                    name,
-                    line: self.lines.line(span.start),
-                    wobj: None,
-                    tool: None,
-                    positional: Vec::new(),
-                    via_offset,
-                    inline,
+                line: self.lines.line(span.start),
+                routine: self.current,
+                wobj: None,
+                tool: None,
+                positional: Vec::new(),
+                via_offset,
+                inline,
+            };
+            for a in arena.children(args) {
+                let Some(arg) = arena.get(a) else { continue };
+                let value = if arg.first == super::expr::NONE {
+                    None
+                } else {
+                    arena.get(arg.first)
                 };
-                for a in arena.children(args) {
-                    let Some(arg) = arena.get(a) else { continue };
-                    let value = if arg.first == super::expr::NONE {
-                        None
-                    } else {
-                        arena.get(arg.first)
-                    };
-                    if arg.switch {
-                        let nm = arg.name_span().slice(src);
-                        let v = value.map(|v| v.span());
-                        if nm.eq_ignore_ascii_case(b"WObj") {
-                            u.wobj = v;
-                        } else if nm.eq_ignore_ascii_case(b"Tool") {
-                            u.tool = v;
-                        }
-                    } else {
-                        // A required argument may be given by name: `..., fine, tool:=tGun;`.
-                        if arg.name_end > arg.name_start
-                            && arg.name_span().slice(src).eq_ignore_ascii_case(b"Tool")
-                        {
-                            u.tool = value.map(|v| v.span());
-                        }
-                        u.positional.push(
-                            value
-                                .filter(|v| matches!(v.kind, ExprKind::Ident | ExprKind::Access))
-                                .map(|v| v.span()),
-                        );
+                if arg.switch {
+                    let nm = arg.name_span().slice(src);
+                    let v = value.map(|v| v.span());
+                    if nm.eq_ignore_ascii_case(b"WObj") {
+                        u.wobj = v;
+                    } else if nm.eq_ignore_ascii_case(b"Tool") {
+                        u.tool = v;
                     }
-                }
-                self.uses.push(u);
-            }
-            Stmt::Assign { target, value } => {
-                self.scan(src, arena, true);
-                if arena
-                    .get(value)
-                    .is_some_and(|v| v.kind == ExprKind::Aggregate)
-                    && target
-                        .slice(src)
-                        .iter()
-                        .all(|b| b.is_ascii_alphanumeric() || *b == b'_')
-                {
-                    self.assigned.push(target);
+                } else {
+                    // A required argument may be given by name: `..., fine, tool:=tGun;`.
+                    if arg.name_end > arg.name_start
+                        && arg.name_span().slice(src).eq_ignore_ascii_case(b"Tool")
+                    {
+                        u.tool = value.map(|v| v.span());
+                    }
+                    u.positional.push(
+                        value
+                            .filter(|v| matches!(v.kind, ExprKind::Ident | ExprKind::Access))
+                            .map(|v| v.span()),
+                    );
                 }
             }
-            Stmt::Other => {
-                self.scan(src, arena, true);
-            }
+            self.uses.push(u);
         }
     }
 }

@@ -32,6 +32,59 @@ pub struct InspectOptions {
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct InspectReport {
     pub files: Vec<FileReport>,
+    /// The programs of more than one file (a RAPID task, a KSS tree, a KRL pair): which files
+    /// form each, and how many of its targets resolved to a frame.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub programs: Vec<ProgramReport>,
+}
+
+/// One program of several files.
+#[derive(Clone, Debug, Serialize)]
+pub struct ProgramReport {
+    pub language: Language,
+    pub files: Vec<String>,
+    pub targets: usize,
+    /// Targets whose work object / base is known.
+    pub resolved: usize,
+}
+
+impl ProgramReport {
+    pub fn of(program: &Program) -> Option<ProgramReport> {
+        let language = program.language()?;
+        let targets = program.files.iter().flat_map(|f| &f.positions);
+        Some(ProgramReport {
+            language,
+            files: program
+                .files
+                .iter()
+                .map(|f| f.path.display().to_string())
+                .collect(),
+            targets: targets.clone().count(),
+            resolved: targets.filter(|p| p.usage.wobj.is_some()).count(),
+        })
+    }
+}
+
+/// `program (rapid, 3 files): 4 of 4 targets resolved to a wobj`.
+impl std::fmt::Display for ProgramReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "program ({}, {} files): {} of {} targets resolved to a {}",
+            language_name(self.language),
+            self.files.len(),
+            self.resolved,
+            self.targets,
+            self.language.dialect().vocabulary().frame_column,
+        )
+    }
+}
+
+/// Where a frame is declared: file and 1-based line.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Place {
+    pub file: String,
+    pub line: usize,
 }
 
 impl InspectReport {
@@ -108,6 +161,9 @@ pub struct PositionRow {
     #[serde(flatten)]
     pub frame: FrameColumn,
     pub tool: Option<String>,
+    /// Where the tool is declared in the program (`null`-less: absent when not declared).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tool_at: Option<Place>,
 }
 
 /// The frame a position is used in, under the name its language gives that column (the
@@ -117,13 +173,19 @@ pub struct PositionRow {
 pub struct FrameColumn {
     pub column: &'static str,
     pub name: Option<String>,
+    /// Where the frame is declared in the program, under `"wobj_at"` / `"base_at"`; absent when
+    /// not declared (world, or unresolved).
+    pub at: Option<Place>,
 }
 
 impl Serialize for FrameColumn {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         use serde::ser::SerializeMap as _;
-        let mut map = s.serialize_map(Some(1))?;
+        let mut map = s.serialize_map(None)?;
         map.serialize_entry(self.column, &self.name)?;
+        if let Some(at) = &self.at {
+            map.serialize_entry(&format!("{}_at", self.column), at)?;
+        }
         map.end()
     }
 }
@@ -247,6 +309,7 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
     let frame = FrameColumn {
         column: file.language.dialect().vocabulary().frame_column,
         name: p.usage.wobj.clone(),
+        at: None,
     };
     PositionRow {
         name: p.name.clone(),
@@ -267,6 +330,7 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
         extax: nums(&p.extax),
         frame,
         tool: p.usage.tool.clone(),
+        tool_at: None,
     }
 }
 
@@ -333,13 +397,30 @@ pub fn inspect_file(file: &ParsedFile, options: InspectOptions) -> FileReport {
     }
 }
 
-/// The reports of every file of a program.
+/// The reports of every file of a program, each target with the place (file and line) of the
+/// work object or base and of the tool it resolved to, wherever in the program they are declared.
 pub fn inspect_program(program: &Program, options: InspectOptions) -> Vec<FileReport> {
-    program
+    let place = |name: &str, tool: bool| {
+        program.files.iter().find_map(|f| {
+            f.frames
+                .iter()
+                .find(|d| (d.kind == FrameKind::Tool) == tool && d.name.eq_ignore_ascii_case(name))
+                .map(|d| Place {
+                    file: f.path.display().to_string(),
+                    line: d.line,
+                })
+        })
+    };
+    let mut reports: Vec<FileReport> = program
         .files
         .iter()
         .map(|f| inspect_file(f, options))
-        .collect()
+        .collect();
+    for row in reports.iter_mut().flat_map(|r| &mut r.positions) {
+        row.frame.at = row.frame.name.as_deref().and_then(|n| place(n, false));
+        row.tool_at = row.tool.as_deref().and_then(|n| place(n, true));
+    }
+    reports
 }
 
 /// `inspect --format table`: one block per file.
@@ -437,6 +518,12 @@ pub fn render_table(report: &InspectReport) -> String {
                 w.severity.as_str(),
                 printable(&w.message)
             );
+        }
+    }
+    for p in &report.programs {
+        let _ = writeln!(out, "{p}");
+        for f in &p.files {
+            let _ = writeln!(out, "  {f}");
         }
     }
     out

@@ -74,6 +74,15 @@ struct Excerpt {
     cut_after: bool,
 }
 
+impl RefusalKind {
+    /// The target's values are only known when the program runs (an unset slot a `PERS` array
+    /// is filled with at run time): no offline transform can correct it, so summaries count such
+    /// refusals apart from the ones a change to the program would fix.
+    pub fn is_runtime_data(self) -> bool {
+        matches!(self, RefusalKind::ZeroQuaternion)
+    }
+}
+
 /// One refused target.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Refusal {

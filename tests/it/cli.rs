@@ -58,6 +58,25 @@ fn binary_and_xml_program_files_are_skipped_with_a_note() {
     assert!(stdout(&o).contains("2 skipped"), "{}", stdout(&o));
 }
 
+/// A `.pgf` that holds RAPID text (not RobotStudio's XML) is read as a module.
+#[test]
+fn a_pgf_holding_rapid_text_is_a_module() {
+    let dir = tempfile::tempdir().unwrap();
+    let pgf = dir.path().join("T_ROB1.pgf");
+    std::fs::write(
+        &pgf,
+        "MODULE m\n  CONST robtarget p:=[[1,2,3],[1,0,0,0],[0,0,0,0],[500,9E9,9E9,9E9,9E9,9E9]];\nENDMODULE\n",
+    )
+    .unwrap();
+    let o = trackfix(&["inspect", pgf.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        stdout(&o).ends_with("1 files, 1 positions\n"),
+        "{}",
+        stdout(&o)
+    );
+}
+
 #[test]
 fn man_page_and_completions_come_from_the_same_definitions() {
     let man = trackfix(&["man"]);

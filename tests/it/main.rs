@@ -8,6 +8,7 @@ mod kinematics;
 mod krl;
 mod output;
 mod parser_data;
+mod programs;
 mod rapid;
 mod report;
 mod rust_version;

@@ -186,6 +186,7 @@ impl Parser<'_, '_> {
     }
 
     pub(super) fn data_decl_inner(&mut self, module_scope: bool) -> PResult<Stmt> {
+        let local = self.at_kw(b"LOCAL");
         if self.at_any(&[b"LOCAL", b"TASK"]) {
             self.bump();
         }
@@ -226,6 +227,7 @@ impl Parser<'_, '_> {
             dims,
             init,
             module_scope,
+            local,
         })
     }
 
@@ -292,6 +294,7 @@ impl Parser<'_, '_> {
     /// `end_routine` too.
     pub(super) fn routine(&mut self, start: u32) {
         let branch = self.open(NodeKind::Routine, start);
+        let local = self.at_kw(b"LOCAL");
         if self.at_kw(b"LOCAL") || self.at_kw(b"TASK") {
             self.bump();
         }
@@ -302,21 +305,26 @@ impl Parser<'_, '_> {
             b"TRAP" => b"ENDTRAP",
             _ => b"ENDPROC",
         };
-        let head: PResult<Span> = (|| {
+        let head: PResult<(Span, Vec<(Span, Span)>)> = (|| {
             if kind == b"FUNC" {
                 self.expect_ident("the return type after FUNC")?;
             }
             let name = self.expect_ident("a routine name")?;
-            if kind != b"TRAP" {
-                self.params()?;
-            }
-            Ok(name.span())
+            let params = if kind != b"TRAP" {
+                self.params()?
+            } else {
+                Vec::new()
+            };
+            Ok((name.span(), params))
         })();
         match head {
-            Ok(name) => {
+            Ok((name, params)) => {
                 self.leaf(NodeKind::RoutineHead, start);
                 self.arena.clear();
-                self.emit(Stmt::Routine { name }, start);
+                self.emit(Stmt::Routine { name, local }, start);
+                for (type_name, name) in params {
+                    self.emit(Stmt::Param { type_name, name }, start);
+                }
             }
             Err(e) => self.recover(start, e),
         }
@@ -371,9 +379,15 @@ impl Parser<'_, '_> {
     /// `params = "(" [ param { ( "," | "|" ) param } ] ")"` with
     /// `param = [ "\" ] [ "INOUT" | "VAR" | "PERS" ] type ident [ "{" "*" { "," "*" } "}" ]`;
     /// read as a balanced parenthesis group (the positions never depend on parameters).
-    pub(super) fn params(&mut self) -> PResult<()> {
+    /// The parameter list; returns the required parameters (`type name`, in order: the
+    /// positional arguments of a call), skipping optional `\name` ones and `VAR`/`PERS`/`INOUT`.
+    pub(super) fn params(&mut self) -> PResult<Vec<(Span, Span)>> {
         self.expect_punct(b'(', "`(` before the parameter list")?;
         let mut depth = 1u32;
+        let mut required = Vec::new();
+        let mut words: Vec<Span> = Vec::new();
+        let mut optional = false;
+        let mut first = true;
         loop {
             match self.tok.kind {
                 TokenKind::Eof => return Err(self.error("`)` closing the parameter list")),
@@ -386,13 +400,32 @@ impl Parser<'_, '_> {
                 return Err(self.error("`)` closing the parameter list"));
             }
             let c = self.tok.punct(self.src);
+            if depth == 1 {
+                if first && c == b'\\' {
+                    optional = true;
+                }
+                if self.tok.kind == TokenKind::Ident && !self.at_any(&[b"VAR", b"PERS", b"INOUT"]) {
+                    words.push(self.tok.span());
+                }
+                first = false;
+            }
             self.bump();
             if c == b'(' {
                 depth += 1;
-            } else if c == b')' {
-                depth -= 1;
-                if depth == 0 {
-                    return Ok(());
+            } else if c == b')' || (c == b',' && depth == 1) {
+                if depth == 1 {
+                    if let (false, [ty, name, ..]) = (optional, words.as_slice()) {
+                        required.push((*ty, *name));
+                    }
+                    words.clear();
+                    optional = false;
+                    first = true;
+                }
+                if c == b')' {
+                    depth -= 1;
+                    if depth == 0 {
+                        return Ok(required);
+                    }
                 }
             }
         }

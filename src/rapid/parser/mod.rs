@@ -40,9 +40,14 @@ pub enum Stmt {
         dims: u8,
         init: Option<u32>,
         module_scope: bool,
+        /// Declared `LOCAL`: visible only in its module (otherwise in the whole task).
+        local: bool,
     },
-    /// `PROC`/`FUNC`/`TRAP` head (its name is a module-scope symbol).
-    Routine { name: Span },
+    /// `PROC`/`FUNC`/`TRAP` head (its name is a module-scope symbol); its required parameters
+    /// follow as [`Stmt::Param`].
+    Routine { name: Span, local: bool },
+    /// A required parameter of the routine just read, in order (`type name`).
+    Param { type_name: Span, name: Span },
     /// `RECORD name` (the components follow as [`Stmt::RecordField`]).
     Record { name: Span },
     /// `type name;` inside a `RECORD`.

@@ -1,0 +1,441 @@
+//! Whole programs: the modules of a RAPID task resolved together (task and global data across
+//! modules, `LOCAL` data private, targets used through routine parameters).
+
+use std::path::{Path, PathBuf};
+
+use trackfix::position::{Position, Program};
+use trackfix::program::{LoadOptions, collect_inputs, group_inputs, load_group};
+
+use crate::support::{root, trackfix};
+
+const TARGET: &str =
+    "[[812.5,-120,455],[0,0.7071068,0.7071068,0],[0,0,0,0],[1500,9E9,9E9,9E9,9E9,9E9]]";
+
+/// Writes `files` (path under the task folder, text) into a fresh `TASK1` folder.
+fn task(files: &[(&str, String)]) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let task = dir.path().join("TASK1");
+    for (path, text) in files {
+        let p = task.join(path);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, text).unwrap();
+    }
+    (dir, task)
+}
+
+fn programs(dir: &Path) -> Vec<Program> {
+    let groups = group_inputs(collect_inputs(&[dir.to_owned()]).unwrap());
+    groups
+        .iter()
+        .flat_map(|g| load_group(g, &LoadOptions::default()))
+        .map(Result::unwrap)
+        .collect()
+}
+
+fn target<'p>(program: &'p Program, name: &str) -> &'p Position {
+    program
+        .files
+        .iter()
+        .flat_map(|f| &f.positions)
+        .find(|p| p.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no target {name}"))
+}
+
+/// The new user's case: data in one module, the motion in another, the work object declared in
+/// the data module: one program, the target used with `wCar`, and `correct` moves it.
+#[test]
+fn data_and_motion_modules_of_one_task_resolve_together() {
+    let data = format!(
+        "MODULE Data\n  PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[2000,-600,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n  CONST robtarget p10:={TARGET};\nENDMODULE\n"
+    );
+    let main = "MODULE Main\n  PROC main()\n    MoveL p10,v200,fine,tool0\\WObj:=wCar;\n  ENDPROC\nENDMODULE\n";
+    let (_dir, task) = task(&[
+        ("PROGMOD/Data.mod", data.clone()),
+        ("PROGMOD/Main.mod", main.to_owned()),
+    ]);
+    let ps = programs(&task);
+    assert_eq!(ps.len(), 1, "one task, one program");
+    assert_eq!(ps[0].files.len(), 2);
+    let p10 = target(&ps[0], "p10");
+    assert_eq!(p10.usage.wobj.as_deref(), Some("wCar"));
+    assert_eq!(p10.usage.tool.as_deref(), Some("tool0"));
+
+    let out = task.parent().unwrap().join("out");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        task.to_str().unwrap(),
+        "--cell",
+        root().join("samples/cell.toml").to_str().unwrap(),
+        "--robot",
+        "r1",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let written = std::fs::read_to_string(out.join("PROGMOD/Data.mod")).unwrap();
+    assert_ne!(written, data, "p10 is corrected");
+    assert!(
+        written.contains("wCar:=[FALSE,TRUE,\"\",[[2000,-600,300]"),
+        "{written}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("PROGMOD/Main.mod")).unwrap(),
+        main
+    );
+}
+
+/// `LOCAL` data is its module's: another module's motion does not reach it (and a module's own
+/// declaration hides the task's of the same name).
+#[test]
+fn local_data_stays_in_its_module() {
+    let a = format!(
+        "MODULE A\n  LOCAL CONST robtarget pL:={TARGET};\n  CONST robtarget pG:={TARGET};\nENDMODULE\n"
+    );
+    let b = format!(
+        "MODULE B\n  CONST robtarget pOwn:={TARGET};\n  PROC r()\n    MoveL pL,v1,fine,tool0\\WObj:=wB;\n    MoveL pG,v1,fine,tool0\\WObj:=wB;\n  ENDPROC\nENDMODULE\n"
+    );
+    let (_dir, task) = task(&[("PROGMOD/A.mod", a), ("SYSMOD/B.sys", b)]);
+    let ps = programs(&task);
+    assert_eq!(ps.len(), 1);
+    assert_eq!(
+        target(&ps[0], "pL").usage.wobj,
+        None,
+        "LOCAL: not seen from B"
+    );
+    assert_eq!(target(&ps[0], "pG").usage.wobj.as_deref(), Some("wB"));
+}
+
+/// A target passed to a routine's parameter is used as the routine's motions use it: directly,
+/// through `Offs`/`RelTool`, and passed on to a further routine; recursion ends; two paths with
+/// different work objects leave both on the target (refused by name as before).
+#[test]
+fn targets_through_routine_parameters() {
+    let data = format!(
+        "MODULE Data\n  CONST robtarget p1:={TARGET};\n  CONST robtarget p2:={TARGET};\n  CONST robtarget p3:={TARGET};\n  CONST robtarget p4:={TARGET};\nENDMODULE\n"
+    );
+    let main = "MODULE Main\n\
+        PROC main()\n  Weld p1;\n  Outer 5, p2;\n  Spin p3;\n  Weld p4;\n  Other p4;\nENDPROC\n\
+        PROC Weld(robtarget p)\n  MoveL Offs(p,0,0,50),v200,z10,tGun\\WObj:=wCar;\nENDPROC\n\
+        PROC Outer(num n, INOUT robtarget q)\n  Weld q;\nENDPROC\n\
+        PROC Spin(robtarget s)\n  Spin s;\n  MoveJ RelTool(s,0,0,-10),v200,z10,tGun\\WObj:=wSpin;\nENDPROC\n\
+        PROC Other(robtarget o)\n  MoveL o,v200,z10,tGun\\WObj:=wOther;\nENDPROC\n\
+        ENDMODULE\n";
+    let (_dir, task) = task(&[
+        ("PROGMOD/Data.mod", data),
+        ("PROGMOD/Main.mod", main.to_owned()),
+    ]);
+    let ps = programs(&task);
+    let u = |n: &str| target(&ps[0], n).usage.clone();
+    assert_eq!(u("p1").wobj.as_deref(), Some("wCar"));
+    assert_eq!(u("p1").tool.as_deref(), Some("tGun"));
+    assert_eq!(
+        u("p1").lines,
+        vec![3],
+        "the line of the call that passes it"
+    );
+    assert_eq!(u("p2").wobj.as_deref(), Some("wCar"), "passed on by Outer");
+    assert_eq!(u("p3").wobj.as_deref(), Some("wSpin"), "recursive routine");
+    assert_eq!(u("p4").wobj.as_deref(), Some("wCar"));
+    assert_eq!(u("p4").other_wobjs, vec!["wOther".to_owned()]);
+}
+
+fn cartesian(program: &Program) -> Vec<(String, [f64; 3])> {
+    program
+        .files
+        .iter()
+        .flat_map(|f| &f.positions)
+        .filter_map(|p| Some((p.label(), p.cartesian.as_ref()?.translation()?)))
+        .collect()
+}
+
+/// Per program: every target of the RobotStudio-style sample backup is transformed, and
+/// zero(correct(P)) gives back P's numbers within the written precision (3 decimals, two
+/// roundings: 1.5e-3 mm).
+#[test]
+fn correct_then_zero_gives_back_the_sample_backup() {
+    let dir = tempfile::tempdir().unwrap();
+    let (c, z) = (dir.path().join("c"), dir.path().join("z"));
+    let sample = root().join("samples/robotstudio_backup");
+    let cell = root().join("samples/cell.toml");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        sample.to_str().unwrap(),
+        "--cell",
+        cell.to_str().unwrap(),
+        "--robot",
+        "r1",
+        "--out-dir",
+        c.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "every target transformed: {err}");
+    let (code, _, err) = trackfix(&[
+        "zero",
+        c.to_str().unwrap(),
+        "--cell",
+        cell.to_str().unwrap(),
+        "--robot",
+        "r1",
+        "--out-dir",
+        z.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let before = cartesian(&programs(&sample)[0]);
+    let corrected = cartesian(&programs(&c)[0]);
+    let after = cartesian(&programs(&z)[0]);
+    assert_eq!(before.len(), 4);
+    assert_eq!(before.len(), after.len());
+    let moved = before
+        .iter()
+        .zip(&corrected)
+        .any(|(a, b)| (0..3).any(|k| (a.1[k] - b.1[k]).abs() > 0.1));
+    assert!(moved, "correct moves the targets");
+    for (a, b) in before.iter().zip(&after) {
+        assert_eq!(a.0, b.0);
+        for k in 0..3 {
+            assert!(
+                (a.1[k] - b.1[k]).abs() <= 1.5e-3,
+                "{}: {:?} vs {:?}",
+                a.0,
+                a.1,
+                b.1
+            );
+        }
+    }
+}
+
+/// Writes `files` (path under `KRC/R1`, text) into a fresh KSS-style tree; returns the `R1` path.
+fn kss(files: &[(&str, &str)]) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let r1 = dir.path().join("KRC/R1");
+    for (path, text) in files {
+        let p = r1.join(path);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, text).unwrap();
+    }
+    (dir, r1)
+}
+
+const CONFIG: &str = "DEFDAT $CONFIG\n\
+    DECL E6POS XGLOBAL={X 150.0,Y 40.0,Z 380.0,A 180.0,B 0.0,C 180.0,S 6,T 27,E1 2500.0}\n\
+    DECL E6POS XUNUSED={X 1.0,Y 2.0,Z 3.0,A 0.0,B 0.0,C 0.0,S 6,T 27,E1 100.0}\n\
+    DECL E6AXIS XHOME={A1 0.0,A2 -90.0,A3 90.0,A4 0.0,A5 0.0,A6 0.0,E1 4000.0}\n\
+    BASE_DATA[1]={X 2150.0,Y -1480.0,Z 720.0,A 0.0,B 0.0,C 0.0}\n\
+    BASE_DATA[2]={X 3650.0,Y -1480.0,Z 720.0,A 90.0,B 0.0,C 0.0}\n\
+    TOOL_DATA[1]={X 0.0,Y 0.0,Z 245.0,A 0.0,B 0.0,C 0.0}\n\
+    ENDDAT\n";
+
+const P1: &str = "{X 410.0,Y -95.0,Z 230.0,A 180.0,B 0.0,C 180.0,S 6,T 27,E1 1500.0}";
+
+/// A KSS tree is one program: the `.src`/`.dat` pairs, lone `.src` files and the tree's own
+/// `$config.dat`. A base and tool set in a subroutine (of another file, called through a further
+/// subroutine) hold for the motions after the call; a subroutine that sets the base on one path
+/// only leaves it unknown; recursion ends; `$config.dat` points the program moves to are its
+/// targets, the others (and joint points like `XHOME`) are not.
+#[test]
+fn kss_tree_resolves_across_files_and_subroutines() {
+    let main_src = "DEF main( )\n  PTP XHOME\n  car( )\n  LIN XP1\n  LIN XGLOBAL\n  maybe( )\n  LIN XP2\n  other( )\n  LIN XP3\nEND\n";
+    let main_dat = format!(
+        "DEFDAT main PUBLIC\nDECL E6POS XP1={P1}\nDECL E6POS XP2={P1}\nDECL E6POS XP3={P1}\nENDDAT\n"
+    );
+    let subs = "GLOBAL DEF car( )\n  tools( )\n  BAS (#BASE,1 )\nEND\n\
+        DEF tools( )\n  $TOOL=TOOL_DATA[1]\nEND\n\
+        GLOBAL DEF maybe( )\n  IF $IN[1] THEN\n    BAS (#BASE,2 )\n  ENDIF\nEND\n\
+        GLOBAL DEF other( )\n  BAS (#BASE,2 )\n  other( )\nEND\n";
+    let (_dir, r1) = kss(&[
+        ("Program/main.src", main_src),
+        ("Program/main.dat", &main_dat),
+        ("Program/lib/subs.src", subs),
+        ("System/$config.dat", CONFIG),
+    ]);
+    let ps = programs(&r1);
+    assert_eq!(ps.len(), 1, "one tree, one program");
+    assert_eq!(ps[0].files.len(), 4);
+    let u = |n: &str| target(&ps[0], n).usage.clone();
+    assert_eq!(u("XP1").wobj.as_deref(), Some("BASE_DATA[1]"));
+    assert_eq!(
+        u("XP1").tool.as_deref(),
+        Some("TOOL_DATA[1]"),
+        "set two calls deep"
+    );
+    assert_eq!(u("XGLOBAL").wobj.as_deref(), Some("BASE_DATA[1]"));
+    assert_eq!(u("XP2").wobj, None, "base set on one path only: unknown");
+    assert_eq!(
+        u("XP3").wobj.as_deref(),
+        Some("BASE_DATA[2]"),
+        "recursive routine"
+    );
+    let config = ps[0]
+        .files
+        .iter()
+        .find(|f| f.path.ends_with("System/$config.dat"))
+        .unwrap();
+    let names: Vec<_> = config.positions.iter().map(|p| p.label()).collect();
+    assert_eq!(names, ["XGLOBAL"], "only the used Cartesian global point");
+}
+
+/// `$config.dat` is written only when something in it changed: a tree whose program moves to
+/// none of its points gets no `$config.dat` in the output; one that does gets it corrected.
+#[test]
+fn config_dat_is_written_only_when_changed() {
+    let cell = root().join("samples/cell.toml");
+    for (uses_global, expect_config) in [(false, false), (true, true)] {
+        let src = if uses_global {
+            "DEF m( )\n  BAS (#BASE,1 )\n  LIN XP1\n  LIN XGLOBAL\nEND\n"
+        } else {
+            "DEF m( )\n  BAS (#BASE,1 )\n  LIN XP1\nEND\n"
+        };
+        let dat = format!("DEFDAT m PUBLIC\nDECL E6POS XP1={P1}\nENDDAT\n");
+        let (dir, r1) = kss(&[
+            ("Program/m.src", src),
+            ("Program/m.dat", &dat),
+            ("System/$config.dat", CONFIG),
+        ]);
+        let out = dir.path().join("out");
+        let (code, _, err) = trackfix(&[
+            "correct",
+            r1.to_str().unwrap(),
+            "--cell",
+            cell.to_str().unwrap(),
+            "--robot",
+            "r1",
+            "--out-dir",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        let written = out.join("System/$config.dat");
+        assert_eq!(written.exists(), expect_config, "uses_global={uses_global}");
+        assert_ne!(
+            std::fs::read_to_string(out.join("Program/m.dat")).unwrap(),
+            dat
+        );
+        if expect_config {
+            let text = std::fs::read_to_string(written).unwrap();
+            assert!(!text.contains("XGLOBAL={X 150.0,"), "{text}");
+            assert!(
+                text.contains("XUNUSED={X 1.0,Y 2.0,Z 3.0,"),
+                "untouched: {text}"
+            );
+        }
+    }
+}
+
+/// zero(correct(P)) = P per program over the KSS-style sample tree (all three targets, the
+/// global one in `$config.dat` included).
+#[test]
+fn correct_then_zero_gives_back_the_kss_sample() {
+    let dir = tempfile::tempdir().unwrap();
+    let (c, z) = (dir.path().join("c"), dir.path().join("z"));
+    let sample = root().join("samples/kss_backup");
+    let cell = root().join("samples/cell.toml");
+    for (cmd, from, to) in [("correct", &sample, &c), ("zero", &c, &z)] {
+        let (code, _, err) = trackfix(&[
+            cmd,
+            from.to_str().unwrap(),
+            "--cell",
+            cell.to_str().unwrap(),
+            "--robot",
+            "r1",
+            "--out-dir",
+            to.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{cmd}: {err}");
+    }
+    let before = cartesian(&programs(&sample)[0]);
+    let corrected = cartesian(&programs(&c)[0]);
+    let after = cartesian(&programs(&z)[0]);
+    let names: Vec<_> = before.iter().map(|p| p.0.as_str()).collect();
+    assert_eq!(names, ["XP1", "XP2", "XPick_Point"]);
+    assert_eq!(after.len(), before.len());
+    for ((a, m), b) in before.iter().zip(&corrected).zip(&after) {
+        assert!(
+            (0..3).any(|k| (a.1[k] - m.1[k]).abs() > 0.1),
+            "{} moved",
+            a.0
+        );
+        for k in 0..3 {
+            assert!(
+                (a.1[k] - b.1[k]).abs() <= 1.5e-3,
+                "{}: {:?} vs {:?}",
+                a.0,
+                a.1,
+                b.1
+            );
+        }
+    }
+}
+
+/// `inspect --format json` of a task folder: each target names the file and line of the work
+/// object and tool it resolved to, and the program lists its files and how many targets resolved.
+#[test]
+fn inspect_json_places_frames_and_lists_the_program() {
+    let (code, out, err) = trackfix(&["inspect", "samples/robotstudio_backup", "--format", "json"]);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let p10 = &json["files"][0]["positions"][0];
+    assert_eq!(p10["name"], "p10");
+    assert_eq!(p10["wobj"], "wCar");
+    assert_eq!(
+        p10["wobj_at"]["file"],
+        "samples/robotstudio_backup/RAPID/TASK1/SYSMOD/user.sys"
+    );
+    assert_eq!(p10["wobj_at"]["line"], 3);
+    assert_eq!(
+        p10["tool_at"]["file"],
+        "samples/robotstudio_backup/RAPID/TASK1/PROGMOD/Data.mod"
+    );
+    assert_eq!(p10["tool_at"]["line"], 3);
+    let program = &json["programs"][0];
+    assert_eq!(program["files"].as_array().unwrap().len(), 3);
+    assert_eq!(
+        (program["targets"].as_u64(), program["resolved"].as_u64()),
+        (Some(4), Some(4))
+    );
+}
+
+/// Loose modules named together on the command line are one task: the new user's two files,
+/// outside any task folder, are transformed; named one at a time (or found by walking a plain
+/// folder) they stay separate programs and `p10` is refused.
+#[test]
+fn modules_named_together_are_one_task() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = format!(
+        "MODULE Data\n  PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[2000,-600,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n  CONST robtarget p10:={TARGET};\nENDMODULE\n"
+    );
+    let main = "MODULE Main\n  PROC main()\n    MoveL p10,v200,fine,tool0\\WObj:=wCar;\n  ENDPROC\nENDMODULE\n";
+    let (d, m) = (dir.path().join("Data.mod"), dir.path().join("Main.mod"));
+    std::fs::write(&d, &data).unwrap();
+    std::fs::write(&m, main).unwrap();
+    let groups = trackfix::program::collect_programs(&[d.clone(), m.clone()]).unwrap();
+    assert_eq!(groups, vec![vec![d.clone(), m.clone()]]);
+    let walked = trackfix::program::collect_programs(&[dir.path().to_owned()]).unwrap();
+    assert_eq!(walked.len(), 2, "a plain folder's modules stay separate");
+    let cell = root().join("samples/cell.toml");
+    let out = dir.path().join("out");
+    let args = |files: &[&Path]| {
+        let mut a: Vec<String> = vec!["correct".into()];
+        a.extend(files.iter().map(|f| f.to_str().unwrap().to_owned()));
+        a.extend(
+            [
+                "--cell",
+                cell.to_str().unwrap(),
+                "--robot",
+                "r1",
+                "--out-dir",
+            ]
+            .map(str::to_owned),
+        );
+        a.push(out.to_str().unwrap().to_owned());
+        a
+    };
+    let run = |files: &[&Path]| {
+        let a = args(files);
+        let a: Vec<&str> = a.iter().map(String::as_str).collect();
+        trackfix(&a)
+    };
+    let (code, _, err) = run(&[&d, &m]);
+    assert_eq!(code, 0, "{err}");
+    assert_ne!(std::fs::read_to_string(out.join("Data.mod")).unwrap(), data);
+    let (code, _, err) = run(&[&d]);
+    assert_ne!(code, 0, "alone, p10 is used by no motion");
+    assert!(err.contains("p10"), "{err}");
+}
