@@ -9,7 +9,7 @@ use trackfix::position::{Program, external_axis_index};
 use trackfix::program::{LoadError, LoadOptions, collect_inputs, load};
 use trackfix::report::{
     CheckSummary, InspectOptions, InspectReport, findings, inspect_program, render_csv,
-    render_table,
+    render_table, write_json,
 };
 
 use super::Exit;
@@ -143,6 +143,19 @@ pub fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
     let inspect = InspectOptions {
         skid_axis: args.skid,
     };
+    let mut out = std::io::stdout().lock();
+    if matches!(args.format, Format::Json) {
+        // Streamed: the rows of a large program are never all in memory at once.
+        let mut buffered = std::io::BufWriter::with_capacity(1 << 16, &mut out);
+        write_json(&batch.programs, inspect, &mut buffered).map_err(std::io::Error::from)?;
+        buffered.write_all(b"\n")?;
+        buffered.flush()?;
+        return Ok(if batch.errors > 0 {
+            Exit::Usage
+        } else {
+            Exit::Ok
+        });
+    }
     let report = InspectReport {
         files: batch
             .programs
@@ -150,16 +163,11 @@ pub fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
             .flat_map(|p| inspect_program(p, inspect))
             .collect(),
     };
-    let text = match args.format {
-        Format::Table => render_table(&report),
-        Format::Json => {
-            let mut s = serde_json::to_string_pretty(&report)?;
-            s.push('\n');
-            s
-        }
-        Format::Csv => render_csv(&report),
+    let text = if matches!(args.format, Format::Csv) {
+        render_csv(&report)
+    } else {
+        render_table(&report)
     };
-    let mut out = std::io::stdout().lock();
     out.write_all(text.as_bytes())?;
     if matches!(args.format, Format::Table) {
         // writeln!, not println!: a closed pipe must be an error we can map to success.

@@ -337,6 +337,77 @@ pub fn inspect_program(program: &Program, options: InspectOptions) -> Vec<FileRe
         .collect()
 }
 
+/// `inspect --format json` written straight to `out`, position by position: the same document as
+/// serialising the [`InspectReport`] of `programs` with `serde_json::to_writer_pretty`, without
+/// holding the report's rows (or the text) of a whole program at once, which took 13× the
+/// program's size for a large module.
+pub fn write_json<W: std::io::Write>(
+    programs: &[Program],
+    options: InspectOptions,
+    out: W,
+) -> serde_json::Result<()> {
+    use serde::ser::SerializeStruct as _;
+    let files = programs.iter().flat_map(|p| &p.files);
+    let mut ser = serde_json::Serializer::pretty(out);
+    let mut doc = serde::Serializer::serialize_struct(&mut ser, "InspectReport", 1)?;
+    doc.serialize_field(
+        "files",
+        &Lazy(|| files.clone().map(|file| StreamedFile { file, options })),
+    )?;
+    doc.end()
+}
+
+/// A sequence serialised from a fresh iterator, never collected.
+struct Lazy<F>(F);
+
+impl<F, I> Serialize for Lazy<F>
+where
+    F: Fn() -> I,
+    I: Iterator,
+    I::Item: Serialize,
+{
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq((self.0)())
+    }
+}
+
+/// A [`FileReport`] serialised field by field from the parsed file (same fields, same order).
+struct StreamedFile<'a> {
+    file: &'a ParsedFile,
+    options: InspectOptions,
+}
+
+impl Serialize for StreamedFile<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct as _;
+        let (file, options) = (self.file, self.options);
+        let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+        for p in &file.positions {
+            *counts.entry(p.kind.as_str()).or_insert(0) += 1;
+        }
+        let mut st = s.serialize_struct("FileReport", 7)?;
+        st.serialize_field("path", &file.path.display().to_string())?;
+        st.serialize_field("language", &file.language)?;
+        st.serialize_field(
+            "positions",
+            &Lazy(|| {
+                file.positions
+                    .iter()
+                    .map(|p| position_row(file, p, options))
+            }),
+        )?;
+        st.serialize_field(
+            "frames",
+            &Lazy(|| file.frames.iter().map(|f| frame_row(f, file.language))),
+        )?;
+        st.serialize_field("opaque", &file.opaque)?;
+        st.serialize_field("counts", &counts)?;
+        let warnings: Vec<Message> = lints(file).iter().map(|d| message(file, d)).collect();
+        st.serialize_field("warnings", &warnings)?;
+        st.end()
+    }
+}
+
 /// `inspect --format table`: one block per file.
 pub fn render_table(report: &InspectReport) -> String {
     let mut out = String::new();
@@ -457,5 +528,52 @@ fn csv_text(s: &str) -> String {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
         s.to_owned()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::program::{LoadOptions, load};
+
+    /// The streamed JSON is byte for byte the serialised report, for both languages (KRL with
+    /// `$config.dat` bases and Status/Turn, RAPID with inline literals and joint targets).
+    #[test]
+    fn streamed_json_equals_the_serialised_report() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let options = LoadOptions {
+            krl_config_dat: Some(root.join("samples/krl/$config.dat")),
+        };
+        let programs: Vec<Program> = [
+            "samples/rapid/spot_line.mod",
+            "samples/rapid/real_world_idioms.mod",
+            "samples/rapid/joints_only.mod",
+            "samples/krl/spot_line.src",
+            "samples/krl/pallet.src",
+        ]
+        .iter()
+        .map(|p| load(&root.join(p), &options).unwrap())
+        .collect();
+        let inspect = InspectOptions::default();
+        let report = InspectReport {
+            files: programs
+                .iter()
+                .flat_map(|p| inspect_program(p, inspect))
+                .collect(),
+        };
+        let mut streamed = Vec::new();
+        write_json(&programs, inspect, &mut streamed).unwrap();
+        assert!(
+            report
+                .files
+                .iter()
+                .map(|f| f.positions.len())
+                .sum::<usize>()
+                > 300
+        );
+        assert_eq!(
+            String::from_utf8(streamed).unwrap(),
+            serde_json::to_string_pretty(&report).unwrap()
+        );
     }
 }

@@ -9,6 +9,6 @@ pub mod transform;
 pub use check::{CheckSummary, QUATERNION_NORM_TOLERANCE, findings, lints};
 pub use inspect::{
     FileReport, FrameColumn, FrameRow, InspectOptions, InspectReport, Message, PoseColumns,
-    PositionRow, inspect_file, inspect_program, render_csv, render_table,
+    PositionRow, inspect_file, inspect_program, render_csv, render_table, write_json,
 };
 pub use transform::{FileSummary, would_change};
