@@ -24,15 +24,9 @@ impl NumLit {
             i += 1;
         }
         let int_start = i;
-        // The digits as an integer while they fit, for the exact fast path below.
+        // The digits as an integer, for the exact fast path below (valid up to 19 digits).
         let mut mantissa = 0u64;
-        let mut significant = 0u32;
-        let mut push = |d: u8| {
-            if mantissa != 0 || d != b'0' {
-                significant += 1;
-            }
-            mantissa = mantissa.wrapping_mul(10).wrapping_add((d - b'0') as u64);
-        };
+        let mut push = |d: u8| mantissa = mantissa.wrapping_mul(10).wrapping_add((d - b'0') as u64);
         while let Some(&d) = bytes.get(i).filter(|d| d.is_ascii_digit()) {
             push(d);
             i += 1;
@@ -77,7 +71,7 @@ impl NumLit {
             return None;
         }
         let power = exponent.saturating_sub(decimals);
-        let value = match exact_fast_path(mantissa, significant, power) {
+        let value = match exact_fast_path(mantissa, digits, power) {
             Some(v) if bytes.first() == Some(&b'-') => -v,
             Some(v) => v,
             None => {
@@ -154,8 +148,8 @@ const EXACT_POWERS: [f64; 23] = [
 /// `mantissa · 10^power` when one IEEE operation gives it exactly rounded (Clinger's fast
 /// path: the mantissa and the power of ten are both exact doubles, so the single rounding of
 /// the product or quotient is the correct one): every literal a robot program writes.
-fn exact_fast_path(mantissa: u64, significant: u32, power: i32) -> Option<f64> {
-    if significant > 19 || mantissa >= 1 << 53 {
+fn exact_fast_path(mantissa: u64, digits: usize, power: i32) -> Option<f64> {
+    if digits > 19 || mantissa >= 1 << 53 {
         return None;
     }
     let m = mantissa as f64;
@@ -229,17 +223,41 @@ impl Scaled {
     }
 
     /// Appends the digits: `-`, the integer part, and `places` decimals after a `.`.
+    ///
+    /// By hand into a stack buffer: through `write!` the formatting machinery was most of the
+    /// cost of a rewritten literal.
     fn write(self, places: usize, out: &mut String) {
-        use std::fmt::Write as _;
-        if self.negative {
-            out.push('-');
-        }
+        // Sign, 11 integer digits (< 2^35), '.', 12 decimals.
+        let mut buf = [0u8; 32];
+        let mut at = buf.len();
+        // One 128-bit division; both parts fit in u64 (below 2^35 and 10^12).
         let scale = 10u128.pow(places as u32);
-        // Both parts fit in u64: |value| < 2^35 and the decimals < 10^12.
-        let _ = write!(out, "{}", (self.units / scale) as u64);
-        if places > 0 {
-            let _ = write!(out, ".{:0places$}", (self.units % scale) as u64);
+        let mut int = (self.units / scale) as u64;
+        let mut frac = (self.units % scale) as u64;
+        for _ in 0..places {
+            at -= 1;
+            buf[at] = b'0' + (frac % 10) as u8;
+            frac /= 10;
         }
+        if places > 0 {
+            at -= 1;
+            buf[at] = b'.';
+        }
+        // The integer part: at least one digit.
+        loop {
+            at -= 1;
+            buf[at] = b'0' + (int % 10) as u8;
+            int /= 10;
+            if int == 0 {
+                break;
+            }
+        }
+        if self.negative {
+            at -= 1;
+            buf[at] = b'-';
+        }
+        // Only ASCII digits, '.' and '-' were written.
+        out.extend(buf[at..].iter().map(|&b| b as char));
     }
 }
 
