@@ -12,7 +12,7 @@ and a KUKA.Sim-style .src/.dat pair of about --krl-mb MB, then times, per input:
   trackfix check / correct / inspect --format json   for every --bin given
 
 CPU time (user + sys of the child, from os.wait4) is the median of --runs runs; peak memory is
-the child's maximum resident set. Output goes to a scratch folder and /dev/null. Give two
+the child's maximum resident set. Output goes to a scratch folder and file. Give two
 binaries (--bin before=/tmp/trackfix-before --bin after=target/release/trackfix) to compare
 builds back to back in the same run; the machine's load average is printed with the table.
 """
@@ -103,11 +103,12 @@ def run(argv: list[str]) -> tuple[float, int, int]:
     """CPU seconds, peak RSS in bytes and exit code of one child.
 
     Through /usr/bin/time when present: a child forked from this Python process would report
-    the interpreter's resident pages, copied at fork, as its own peak.
+    the interpreter's resident pages, copied at fork, as its own peak. Output goes to a scratch
+    file, not /dev/null: GNU grep stops at the first match when it sees /dev/null.
     """
-    with tempfile.NamedTemporaryFile("r") as report, open(os.devnull, "wb") as null:
+    with tempfile.NamedTemporaryFile("r") as report, tempfile.TemporaryFile() as sink:
         wrapped = [TIME, "-f", "%M", "-o", report.name, *argv] if TIME else argv
-        p = subprocess.Popen(wrapped, stdout=null, stderr=subprocess.PIPE)
+        p = subprocess.Popen(wrapped, stdout=sink, stderr=subprocess.PIPE)
         _, status, usage = os.wait4(p.pid, 0)
         err = p.stderr.read()
         p.stderr.close()
@@ -155,18 +156,26 @@ def main() -> None:
         inputs.append((f"KRL pair {size / 1e6:.0f} MB", src_path, size, "E6POS", dat_path, False))
 
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}, {os.cpu_count()} cores")
-    rows = []
+    print(f"CPU time: median of {args.runs}; peak: largest resident set of the runs")
+    print()
+    print("| input | command | CPU s | MB/s | peak MB | peak / file | vs baseline |")
+    print("|---|---|---:|---:|---:|---:|---|", flush=True)
+
+    def row(label: str, cmd: str, t: float, m: int, mb: float, note: str) -> None:
+        rate = f"{mb / t:.0f}" if t > 0 else "∞"
+        print(f"| {label} | {cmd} | {t:.3f} | {rate} | {m / 1e6:.0f} | {m / 1e6 / mb:.1f}× | {note} |", flush=True)
+
     for label, path, size, pattern, grep_file, rapid in inputs:
         mb = size / 1e6
         grep_t, grep_m = measure(["grep", "-c", pattern, grep_file], args.runs)
-        rows.append((label, f"grep -c {pattern}", grep_t, grep_m, mb, "1.0× grep"))
+        row(label, f"grep -c {pattern}", grep_t, grep_m, mb, "")
         py_t = None
         if rapid:
             py_t, py_m = measure(
                 [sys.executable, os.path.join(ROOT, "benches", "regex_baseline.py"), path, os.path.join(out_dir, "regex.mod")],
                 args.runs,
             )
-            rows.append((label, "regex_baseline.py", py_t, py_m, mb, ""))
+            row(label, "regex_baseline.py", py_t, py_m, mb, "")
         for name, exe in bins:
             commands = {
                 "check": [exe, "check", path],
@@ -181,16 +190,10 @@ def main() -> None:
                     note = f"{py_t / t:.1f}× faster than regex" if t < py_t else f"{t / py_t:.1f}× slower than regex"
                 else:
                     note = ""
-                rows.append((label, f"{name} {cmd}", t, m, mb, note))
+                row(label, f"{name} {cmd}", t, m, mb, note)
 
-    print(f"load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}; CPU time median of {args.runs}")
     print()
-    print("| input | command | CPU s | MB/s | peak MB | peak / file | vs baseline |")
-    print("|---|---|---:|---:|---:|---:|---|")
-    for label, cmd, t, m, mb, note in rows:
-        rate = f"{mb / t:.0f}" if t > 0 else "∞"
-        print(f"| {label} | {cmd} | {t:.3f} | {rate} | {m / 1e6:.0f} | {m / 1e6 / mb:.1f}× | {note} |")
-
+    print(f"load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
 
 if __name__ == "__main__":
     main()
