@@ -115,7 +115,7 @@ impl<'l> Extractor<'l> {
     /// `src` is only looked at to size the position list: every target literal starts with
     /// `[[`, and growing a vector of ~1 KB positions by doubling would copy it several times.
     pub fn new(lines: &'l LineIndex, src: &[u8]) -> Extractor<'l> {
-        let literals = src.windows(2).filter(|w| w == b"[[").count();
+        let literals = memchr::memmem::find_iter(src, b"[[").count();
         Extractor {
             records: Vec::new(),
             lines,

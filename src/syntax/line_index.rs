@@ -15,19 +15,13 @@ pub struct LineIndex {
 impl LineIndex {
     pub fn new(src: &[u8]) -> LineIndex {
         let mut starts = vec![0];
-        let mut i = 0;
-        while i < src.len() {
-            match src[i] {
-                b'\n' => starts.push(i + 1),
-                b'\r' => {
-                    if src.get(i + 1) == Some(&b'\n') {
-                        i += 1;
-                    }
-                    starts.push(i + 1);
-                }
-                _ => {}
+        // memchr2 scans a word at a time; a byte loop spent ~9 instructions per byte here.
+        for i in memchr::memchr2_iter(b'\n', b'\r', src) {
+            if src[i] == b'\r' && src.get(i + 1) == Some(&b'\n') {
+                // `\r\n` is one terminator: the `\n` the iterator finds next opens the line.
+                continue;
             }
-            i += 1;
+            starts.push(i + 1);
         }
         LineIndex {
             starts,
@@ -85,5 +79,26 @@ mod tests {
         assert_eq!(idx.line_span(src, 2).slice(src), b"bb");
         assert_eq!(idx.line_span(src, 4).slice(src), b"d");
         assert_eq!(idx.line_span(src, 9).slice(src), b"");
+    }
+
+    /// The byte-at-a-time rule the index implements, written out independently.
+    fn starts_by_bytes(src: &[u8]) -> Vec<usize> {
+        let mut starts = vec![0];
+        let mut i = 0;
+        while i < src.len() {
+            if src[i] == b'\n' || (src[i] == b'\r' && src.get(i + 1) != Some(&b'\n')) {
+                starts.push(i + 1);
+            }
+            i += 1;
+        }
+        starts
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn same_lines_as_a_byte_scan(src in proptest::collection::vec(
+            proptest::sample::select(vec![b'a', b'\r', b'\n', b' ']), 0..200)) {
+            proptest::prop_assert_eq!(LineIndex::new(&src).starts, starts_by_bytes(&src));
+        }
     }
 }
