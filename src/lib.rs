@@ -18,6 +18,7 @@
 //!
 //! The library never prints and never panics on input.
 
+#[warn(missing_docs, unreachable_pub)]
 pub mod accuracy;
 pub mod dialect;
 pub mod geometry;
