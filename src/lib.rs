@@ -21,7 +21,9 @@
 #[warn(missing_docs, unreachable_pub)]
 pub mod accuracy;
 pub mod dialect;
+#[warn(missing_docs, unreachable_pub)]
 pub mod geometry;
+#[warn(missing_docs, unreachable_pub)]
 pub mod kinematics;
 pub mod krl;
 pub mod located;
