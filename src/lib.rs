@@ -26,8 +26,10 @@ pub mod geometry;
 #[warn(missing_docs, unreachable_pub)]
 pub mod kinematics;
 pub mod krl;
+#[warn(missing_docs, unreachable_pub)]
 pub mod located;
 mod names;
+#[warn(missing_docs, unreachable_pub)]
 pub mod output;
 pub mod position;
 pub mod program;

@@ -9,13 +9,16 @@ use crate::syntax::{Diagnostic, LineIndex, Severity};
 /// A diagnostic located in one source.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Located {
+    /// The file, as the user named it (shown in the `path:line:col` prefix).
     pub path: PathBuf,
     /// The source the diagnostic's span points into.
     pub source: Vec<u8>,
+    /// What is wrong, where, and what to do.
     pub diagnostic: Diagnostic,
 }
 
 impl Located {
+    /// The diagnostic about `source`, read from `path`.
     pub fn new(path: impl Into<PathBuf>, source: Vec<u8>, diagnostic: Diagnostic) -> Located {
         Located {
             path: path.into(),
