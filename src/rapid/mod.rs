@@ -12,16 +12,18 @@
 //! assert_eq!(file.positions.len(), 1);
 //! ```
 
-pub mod expr;
-pub mod lexer;
-pub mod parser;
+pub(crate) mod expr;
+pub(crate) mod lexer;
+pub(crate) mod parser;
 pub mod positions;
-pub mod tree;
+pub(crate) mod tree;
 
 use std::path::Path;
 
-pub use parser::{Parse, parse};
-pub use tree::{Node, NodeKind, Tree};
+pub use lexer::{Token, TokenKind, tokenize};
+pub use parser::Parse;
+pub(crate) use parser::parse;
+pub use tree::{Node, NodeKind, Rapid, Tree};
 
 use crate::position::{Language, ParsedFile};
 use crate::syntax::{Diagnostic, LineIndex};
