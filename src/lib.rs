@@ -20,6 +20,7 @@
 
 #[warn(missing_docs, unreachable_pub)]
 pub mod accuracy;
+#[warn(missing_docs, unreachable_pub)]
 pub mod dialect;
 #[warn(missing_docs, unreachable_pub)]
 pub mod geometry;
