@@ -33,6 +33,7 @@ mod names;
 #[warn(missing_docs, unreachable_pub)]
 pub mod output;
 pub mod position;
+#[warn(missing_docs, unreachable_pub)]
 pub mod program;
 pub mod rapid;
 pub mod report;
