@@ -36,6 +36,7 @@ pub mod position;
 #[warn(missing_docs, unreachable_pub)]
 pub mod program;
 pub mod rapid;
+#[warn(missing_docs, unreachable_pub)]
 pub mod report;
 pub mod syntax;
 pub mod track;
