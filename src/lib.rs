@@ -32,6 +32,7 @@ pub mod located;
 mod names;
 #[warn(missing_docs, unreachable_pub)]
 pub mod output;
+#[warn(missing_docs, unreachable_pub)]
 pub mod position;
 #[warn(missing_docs, unreachable_pub)]
 pub mod program;
