@@ -41,6 +41,7 @@ pub mod rapid;
 pub mod report;
 pub mod syntax;
 pub mod track;
+#[warn(missing_docs, unreachable_pub)]
 pub mod transform;
 
 // What a user of the library needs, at the top (`docs/design.md §8`, the public API): load a
