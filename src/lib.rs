@@ -29,6 +29,7 @@ pub mod kinematics;
 pub mod krl;
 #[warn(missing_docs, unreachable_pub)]
 pub mod located;
+#[warn(unreachable_pub)]
 mod names;
 #[warn(missing_docs, unreachable_pub)]
 pub mod output;
