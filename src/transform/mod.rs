@@ -13,7 +13,7 @@ pub mod mirror;
 pub mod output;
 pub(crate) mod policy;
 pub mod refusal;
-pub mod rewrite;
+pub(crate) mod rewrite;
 pub mod track_correction;
 pub mod transfer;
 
