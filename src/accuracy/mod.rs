@@ -1,7 +1,8 @@
 //! Accuracy analysis from laser-tracker measurements (thesis chapters 3 and 5): ISO 9283 pose
-//! accuracy and repeatability ([`pose`]), path accuracy and repeatability on planes normal to
-//! the commanded path ([`path`]), the straight-line report of Table 5.1 ([`line`]), cutting a
-//! continuous recording into runs ([`segment`]) and the figures ([`plot`]).
+//! accuracy and repeatability ([`pose_accuracy`]), path accuracy and repeatability on planes
+//! normal to the commanded path ([`path_accuracy`]), the straight-line report of Table 5.1
+//! ([`LineReport`]), cutting a continuous recording into runs ([`RunInfo`]) and the figures
+//! ([`pose_svg`], [`path_svgs`]).
 //!
 //! Conventions: mm, degrees, seconds; angles `rx, ry, rz` are compared component by component
 //! as ISO 9283 does, each deviation wrapped to (-180, 180]. Standard deviations are over

@@ -3,8 +3,8 @@
 //!
 //! Grammar: `grammars/krl.ebnf`.
 //!
-//! - [`lexer`]: bytes → `(kind, u32 span)` tokens covering every byte;
-//! - [`parser`] and [`tree`]: the shared [`crate::syntax::Tree`] with one leaf per line under
+//! - `lexer` ([`lex`]): bytes → `(kind, u32 span)` tokens covering every byte;
+//! - `parser` ([`parse`], [`parse_with`]) and `tree` ([`NodeKind`], [`Stmt`]): the shared [`crate::syntax::Tree`] with one leaf per line under
 //!   routine and block branches, statements for what trackfix reads, opaque
 //!   nodes with located diagnostics for the rest; `tree.print(src) == src`;
 //! - `positions`: targets, joint positions, `BASE_DATA`/`TOOL_DATA` into the shared model;

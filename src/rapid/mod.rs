@@ -1,7 +1,8 @@
 //! ABB RAPID: lossless lexer, parser and printer, and the positions found in a module.
 //!
 //! Grammar: `grammars/rapid.ebnf`. The tree is the shared [`crate::syntax::Tree`]; this folder
-//! holds RAPID's lexer rules, grammar ([`parser`]), node kinds ([`tree`]) and extraction.
+//! holds RAPID's lexer rules ([`tokenize`]), grammar (`parser`, [`parse_tree`]), node kinds
+//! ([`NodeKind`]) and extraction.
 //!
 //! ```
 //! use std::path::Path;
