@@ -8,7 +8,9 @@
 //! - [`dialect`]: the one registry through which loading, reports and transforms reach a
 //!   language (extensions, load/reparse, vocabulary, configuration mirror rule);
 //! - [`geometry`]: poses, one constructor per rotation convention, rigid fits;
-//! - [`track`]: the track model from laser-tracker measurements to a profile;
+//! - [`track`]: the track model from laser-tracker measurements to a profile, and its
+//!   uncertainty;
+//! - [`frame`]: robot base, work objects, TCP and point-pair fits, track-compensated;
 //! - [`kinematics`]: the OPW arm model, ABB/KUKA configurations, reach and joint checks;
 //! - [`report`]: the output models of `inspect`, `check` and the transforms;
 //! - [`transform`]: `correct`, `zero`, `mirror`, `transfer` as rules of one driver, giving
@@ -22,8 +24,11 @@
 pub mod accuracy;
 #[warn(missing_docs, unreachable_pub)]
 pub mod dialect;
+pub mod digest;
+pub mod frame;
 #[warn(missing_docs, unreachable_pub)]
 pub mod geometry;
+pub mod html_report;
 #[warn(missing_docs, unreachable_pub)]
 pub mod kinematics;
 pub mod krl;

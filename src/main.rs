@@ -20,6 +20,7 @@ Examples:
   trackfix track identify samples/track/measurements.csv -o frames.csv
   trackfix track fit frames.csv -o profile.toml
   trackfix track show profile.toml --step 500
+  trackfix frame base points.csv --profile profile.toml -o base.toml
   trackfix correct program.mod --cell samples/cell.toml --robot r1 -o corrected.mod
   trackfix transfer samples/rapid/spot_line.mod --cell samples/cell.toml --from r1 --to r2 --mirror --out-dir out/
 
@@ -43,6 +44,9 @@ enum Command {
     /// Measure and model a linear track: identify, fit, show, spectrum.
     #[command(subcommand)]
     Track(cli::track::TrackCommand),
+    /// Frames from tracker and robot: base and track axis, work objects, TCP, point pairs.
+    #[command(subcommand)]
+    Frame(cli::frame::FrameCommand),
     /// Apply a track profile to every target (offline program → real track).
     Correct(cli::transform::CorrectArgs),
     /// Remove a track profile from an online-tuned program (→ straight track).
@@ -56,6 +60,8 @@ enum Command {
     /// ISO 9283 pose and path accuracy from laser-tracker measurements.
     #[command(subcommand)]
     Accuracy(cli::accuracy::AccuracyCommand),
+    /// Write the track report: one self-contained HTML file (measurements, model, controller figures).
+    Report(cli::report::ReportArgs),
     /// Print a shell completion script (bash, zsh, fish, powershell, elvish).
     #[command(
         after_help = "Example:\n  trackfix completions bash > /etc/bash_completion.d/trackfix"
@@ -98,12 +104,14 @@ fn main() -> ExitCode {
         Command::Inspect(a) => cli::inspect::run_inspect(a),
         Command::Check(a) => cli::inspect::run_check(a),
         Command::Track(c) => cli::track::run(c),
+        Command::Frame(c) => cli::frame::run(c),
         Command::Correct(a) => cli::transform::run_correct(a),
         Command::Zero(a) => cli::transform::run_zero(a),
         Command::Mirror(a) => cli::transform::run_mirror(a),
         Command::Transfer(a) => cli::transform::run_transfer(a),
         Command::Reach(a) => cli::reach::run(a),
         Command::Accuracy(c) => cli::accuracy::run(c),
+        Command::Report(a) => cli::report::run(a),
         Command::Completions { shell } => {
             // Rendered first: clap_complete panics on a failed write.
             let mut script = Vec::new();

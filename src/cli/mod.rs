@@ -1,8 +1,10 @@
 //! Subcommand implementations. Library calls only; printing and `anyhow` live here.
 
 pub mod accuracy;
+pub mod frame;
 pub mod inspect;
 pub mod reach;
+pub mod report;
 pub mod track;
 pub mod transform;
 

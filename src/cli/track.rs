@@ -6,7 +6,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use trackfix::geometry::{abb_quat_components, kuka_abc_angles, pose_to_xyz_deg};
+use trackfix::geometry::{abb_pose_literal, kuka_frame_literal, pose_to_xyz_deg};
 use trackfix::track::adjustment::{chord_bounds, manual_adjustment, twist_diagram};
 use trackfix::track::cell_nominal::{check_cell_nominal, write_nominal_into_cell};
 use trackfix::track::csv_table::NumericCsv;
@@ -20,6 +20,7 @@ use trackfix::track::nominal::{FitOptions, TrackFit, fit_track};
 use trackfix::track::plot::{profile_svg, spectrum_svg};
 use trackfix::track::point_export::{ColumnMap, points_csv, read_point_export};
 use trackfix::track::spectrum::{TUKEY_ALPHA, scan_from_table, scan_spectrum};
+use trackfix::track::uncertainty::{ProfileUncertainty, Sigma, knot_uncertainties};
 use trackfix::track::{
     Extrapolate, Gear, Knot, LocatedError, MeasuredIn, Profile, Reference, TrackError,
 };
@@ -65,7 +66,8 @@ Examples:
   trackfix track show samples/track/profile.toml
   trackfix track show samples/track/profile.toml --at 0 --at 250 --at 4000
   trackfix track show samples/track/profile.toml --step 500 --format csv
-  trackfix track show samples/track/profile.toml --plot profile.svg";
+  trackfix track show samples/track/profile.toml --plot profile.svg
+  trackfix track show samples/frames/profile.toml --step 1000 --tcp 1500,300,900";
 
 const SPECTRUM_EXAMPLES: &str = "\
 Examples:
@@ -123,6 +125,14 @@ pub struct FitArgs {
     /// The robot of --cell.
     #[arg(long, value_name = "NAME", requires = "cell")]
     pub robot: Option<String>,
+    /// The measurements.csv the frames were identified from: gives each knot its standard
+    /// uncertainties (u_dx ... u_rz), which `track show` carries to every skid.
+    #[arg(long, value_name = "measurements.csv")]
+    pub measurements: Option<PathBuf>,
+    /// Noise per axis of a measured point, mm (tracker and robot); default: from the
+    /// identification residuals. Needs --measurements.
+    #[arg(long, value_name = "MM", requires = "measurements")]
+    pub sigma: Option<f64>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -154,6 +164,37 @@ pub struct ShowArgs {
     /// Also write an SVG: the six deviation curves with their knots, and the twist diagram.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
+    /// Also give, at each skid, the expanded uncertainty (k = 2) of a corrected TCP at X,Y,Z
+    /// (robot base frame, mm). Needs a profile fitted with --measurements.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_xyz, allow_hyphen_values = true)]
+    pub tcp: Option<[f64; 3]>,
+}
+
+/// `X,Y,Z` in mm.
+fn parse_xyz(text: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let values: Vec<f64> = parts
+        .iter()
+        .map(|p| p.parse::<f64>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or_else(|| format!("`{text}`: write three numbers in mm, e.g. 1500,300,900"))?;
+    match values[..] {
+        [x, y, z] => Ok([x, y, z]),
+        _ => Err(format!(
+            "`{text}`: write three numbers in mm, e.g. 1500,300,900"
+        )),
+    }
+}
+
+/// A `show --format json` row: the knot's keys, then the TCP's uncertainty if asked.
+#[derive(serde::Serialize)]
+struct ShowRow {
+    #[serde(flatten)]
+    knot: Knot,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tcp_u: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tcp_expanded: Option<f64>,
 }
 
 const IMPORT_EXAMPLES: &str = "\
@@ -214,7 +255,7 @@ fn located_text(e: &(dyn std::error::Error + 'static)) -> Option<String> {
 }
 
 /// How a table was read when it was not plain CSV, on standard error.
-fn print_notes(table: &NumericCsv) {
+pub(crate) fn print_notes(table: &NumericCsv) {
     for note in &table.notes {
         let _ = writeln!(std::io::stderr(), "note: {note}");
     }
@@ -354,16 +395,6 @@ fn shift_text(shift: &FrameShift) -> String {
     )
 }
 
-fn sha256_hex(bytes: &[u8]) -> String {
-    use sha2::Digest as _;
-    sha2::Sha256::digest(bytes)
-        .iter()
-        .fold(String::new(), |mut s, b| {
-            let _ = write!(s, "{b:02x}");
-            s
-        })
-}
-
 fn default_name(output: &Path) -> String {
     let stem = output.file_stem().and_then(|s| s.to_str()).unwrap_or("");
     if stem == "profile"
@@ -392,7 +423,7 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         reference: a.reference,
         gear: a.gear,
         extrapolate: a.extrapolate,
-        source_sha256: sha256_hex(&bytes),
+        source_sha256: trackfix::digest::sha256_hex(&bytes),
     };
     let mut fit = fit_track(&frames, &opts).with_context(|| a.frames.display().to_string())?;
     let measured_in = match (a.measured_in, &a.cell) {
@@ -404,6 +435,36 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
     };
     if let Some(m) = measured_in {
         fit.profile = fit.profile.with_measured_in(m);
+    }
+    let mut noise_note = None;
+    if let Some(path) = &a.measurements {
+        let table = NumericCsv::read(path, &MEASUREMENTS_HEADER)?;
+        print_notes(&table);
+        let rows = measurements_from(&table)?;
+        let id = identify_excluding(&rows, &[]).with_context(|| path.display().to_string())?;
+        let same = id.fits.len() == frames.len()
+            && id.fits.iter().zip(&frames).all(|(f, g)| {
+                // frames.csv keeps 4 decimals of mm and 6 of degrees.
+                (f.skid - g.skid).abs() <= 1e-6 * (1.0 + g.skid.abs())
+                    && (f.fit.pose.translation.vector - g.pose.translation.vector).norm() < 1e-3
+                    && f.fit.pose.rotation.angle_to(&g.pose.rotation) < 1e-6
+            });
+        if !same {
+            anyhow::bail!(
+                "{}: its base frames are not those of {}: pass the measurements the frames were identified from (`trackfix track identify` of them gives the frames)",
+                path.display(),
+                a.frames.display()
+            );
+        }
+        let (u, sigma) =
+            knot_uncertainties(&rows, &id, a.sigma).with_context(|| path.display().to_string())?;
+        noise_note = Some(match sigma {
+            Sigma::Given(v) => format!("{v:.4} mm per axis (given)"),
+            Sigma::Estimated { sigma, dof } => {
+                format!("{sigma:.4} mm per axis (from the residuals, {dof} degrees of freedom)")
+            }
+        });
+        fit.profile = fit.profile.with_knot_uncertainties(&u)?;
     }
     let p = &fit.profile;
     p.save(&a.output)?;
@@ -427,6 +488,12 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         enum_name(a.gear),
         enum_name(a.extrapolate)
     );
+    if let Some(note) = &noise_note {
+        let _ = writeln!(
+            s,
+            "knot uncertainties from the identification noise: {note}"
+        );
+    }
     let _ = writeln!(s, "\nenter in the controller (measurement frame = world):");
     let _ = writeln!(
         s,
@@ -461,12 +528,11 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         s,
         "  base frame at skid 0: x {x:.3} y {y:.3} z {z:.3} mm, rx {rx:.4} ry {ry:.4} rz {rz:.4} deg"
     );
-    let q = abb_quat_components(&fit.base_at_zero.rotation, None);
-    let abc = kuka_abc_angles(&fit.base_at_zero.rotation, None);
     let _ = writeln!(
         s,
-        "    ABB [[{x:.3},{y:.3},{z:.3}],[{:.6},{:.6},{:.6},{:.6}]]   KUKA {{X {x:.3},Y {y:.3},Z {z:.3},A {:.4},B {:.4},C {:.4}}}",
-        q[0], q[1], q[2], q[3], abc[0], abc[1], abc[2]
+        "    ABB {}   KUKA {}",
+        abb_pose_literal(&fit.base_at_zero),
+        kuka_frame_literal(&fit.base_at_zero)
     );
     let _ = writeln!(
         s,
@@ -651,28 +717,77 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
         }
         return Ok(overview(&p));
     }
+    let pu = ProfileUncertainty::new(&p)?;
+    let tcp = match (&a.tcp, &pu) {
+        (Some(v), Some(_)) => Some(nalgebra::Vector3::new(v[0], v[1], v[2])),
+        (Some(_), None) => anyhow::bail!(
+            "{}: --tcp needs knot uncertainties, and this profile has none: fit it with `trackfix track fit FRAMES.csv --measurements MEASUREMENTS.csv`",
+            a.profile.display()
+        ),
+        (None, _) => None,
+    };
     let mut rows = Vec::with_capacity(skids.len());
     for &skid in &skids {
-        let c = p
-            .deviation_components(skid)
-            .with_context(|| format!("{}: --at {skid}", a.profile.display()))?;
-        rows.push((skid, c));
+        let at = || format!("{}: --at {skid}", a.profile.display());
+        let c = p.deviation_components(skid).with_context(at)?;
+        let (u, t) = match &pu {
+            Some(pu) => {
+                let u = pu.at(skid).with_context(at)?.u;
+                let t = match &tcp {
+                    Some(r) => Some(pu.tcp_at(skid, r).with_context(at)?),
+                    None => None,
+                };
+                (Some(u), t)
+            }
+            None => (None, None),
+        };
+        rows.push((skid, c, u, t));
     }
     let mut s = String::new();
     match a.format {
         ShowFormat::Json => {
             // Knot keeps the documented key order (a json! map would sort it).
-            let arr: Vec<Knot> = rows
+            let arr: Vec<ShowRow> = rows
                 .iter()
-                .map(|(skid, c)| Knot::from_components(*skid, c.map(round6)))
+                .map(|(skid, c, u, t)| ShowRow {
+                    knot: Knot::from_components(*skid, c.map(round6)).with_uncertainty(u.map(
+                        |u| {
+                            let mut r = [0.0; 6];
+                            for (i, (slot, v)) in r.iter_mut().zip(u).enumerate() {
+                                *slot = if i < 3 { clean(v, 4) } else { round6(v) };
+                            }
+                            r
+                        },
+                    )),
+                    tcp_u: t.map(|t| t.u.map(|v| clean(v, 4))),
+                    tcp_expanded: t.map(|t| clean(t.expanded, 4)),
+                })
                 .collect();
             s = serde_json::to_string_pretty(&arr)?;
             s.push('\n');
         }
         ShowFormat::Csv => {
-            s.push_str("skid,dx,dy,dz,rx,ry,rz\n");
-            for (skid, c) in &rows {
-                let _ = writeln!(s, "{skid},{}", deviation_cells(c, 0, 0, ","));
+            s.push_str("skid,dx,dy,dz,rx,ry,rz");
+            if pu.is_some() {
+                s.push_str(",u_dx,u_dy,u_dz,u_rx,u_ry,u_rz");
+            }
+            if tcp.is_some() {
+                s.push_str(",tcp_u_x,tcp_u_y,tcp_u_z,tcp_expanded");
+            }
+            s.push('\n');
+            for (skid, c, u, t) in &rows {
+                let _ = write!(s, "{skid},{}", deviation_cells(c, 0, 0, ","));
+                if let Some(u) = u {
+                    let _ = write!(s, ",{}", deviation_cells(u, 0, 0, ","));
+                }
+                if let Some(t) = t {
+                    let _ = write!(
+                        s,
+                        ",{:.4},{:.4},{:.4},{:.4}",
+                        t.u[0], t.u[1], t.u[2], t.expanded
+                    );
+                }
+                s.push('\n');
             }
         }
         ShowFormat::Table => {
@@ -686,8 +801,31 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
                 s,
                 "      skid    dx [mm]    dy [mm]    dz [mm]     rx [deg]     ry [deg]     rz [deg]"
             );
-            for (skid, c) in &rows {
+            for (skid, c, u, t) in &rows {
                 let _ = writeln!(s, "{skid:>10} {}", deviation_cells(c, 10, 12, " "));
+                if let Some(u) = u {
+                    let _ = writeln!(s, "{:>10} {}", "u (k=1)", deviation_cells(u, 10, 12, " "));
+                }
+                if let Some(t) = t {
+                    let _ = writeln!(
+                        s,
+                        "{:>10} U (k=2) {:.4} mm (u x {:.4} y {:.4} z {:.4} mm)",
+                        "TCP", t.expanded, t.u[0], t.u[1], t.u[2]
+                    );
+                }
+            }
+            if pu.is_some() {
+                let _ = writeln!(
+                    s,
+                    "u: standard uncertainty of D(s) from the knots' identification noise and the interpolation between knots"
+                );
+            }
+            if let Some(r) = &tcp {
+                let _ = writeln!(
+                    s,
+                    "TCP: a corrected TCP at ({}, {}, {}) mm in the robot base; U = 2*sqrt(u_x^2 + u_y^2 + u_z^2)",
+                    r.x, r.y, r.z
+                );
             }
         }
     }
@@ -750,6 +888,26 @@ fn overview(p: &Profile) -> String {
     for b in chord_bounds(p) {
         let d = b.distance.map(|c| c.distance.abs());
         let _ = writeln!(s, "{:>10}{:>10}{}", b.from, b.to, row6(&d));
+    }
+    if let Ok(Some(pu)) = ProfileUncertainty::new(p) {
+        let _ = writeln!(
+            s,
+            "\nlargest standard uncertainty (k=1) of D(s) per interval: knots' noise and interpolation"
+        );
+        let _ = writeln!(s, "      from        to{header}");
+        for w in p.knots().windows(2) {
+            let (a, b) = (w[0].skid, w[1].skid);
+            let mut worst = [0.0f64; 6];
+            // The interpolation part peaks mid-interval, the noise part at the knots.
+            for i in 0..=16 {
+                if let Ok(u) = pu.at(a + (b - a) * i as f64 / 16.0) {
+                    for (m, v) in worst.iter_mut().zip(u.u) {
+                        *m = m.max(v);
+                    }
+                }
+            }
+            let _ = writeln!(s, "{a:>10}{b:>10}{}", row6(&worst));
+        }
     }
     s
 }

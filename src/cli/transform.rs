@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, bail};
 
+use trackfix::html_report::{RunFile, RunInput, RunReport, run_report};
 use trackfix::output::{self, Destination, Roots, unified_diff};
 use trackfix::position::Program;
 use trackfix::program::{LoadOptions, collect_inputs, load};
@@ -49,6 +50,13 @@ pub struct OutputArgs {
     /// Leave unsupported targets (joint targets, 9E9 skids, …) unchanged instead of failing.
     #[arg(long)]
     pub skip_unsupported: bool,
+    /// Also write a self-contained HTML record of the run (inputs with their hashes, every
+    /// changed target old and new, refusals): what is handed over at buy-off.
+    #[arg(long, value_name = "FILE.html")]
+    pub report: Option<PathBuf>,
+    /// The files the run read besides its programs (cell, profiles), for the report.
+    #[arg(skip)]
+    pub also_read: Vec<(String, PathBuf)>,
 }
 
 const CORRECT_EXAMPLES: &str = "\
@@ -276,8 +284,68 @@ fn remedy_flag(remedy: Remedy) -> &'static str {
     }
 }
 
-/// Reports refusals, then diffs, checks or writes. The one place outcomes become an exit code.
+/// [`finish_outputs`], then the run report when one was asked for.
 fn finish(
+    command: &str,
+    results: &[ProgramResult],
+    out: &OutputArgs,
+    inputs: &[PathBuf],
+) -> anyhow::Result<Exit> {
+    let exit = finish_outputs(command, results, out, inputs)?;
+    if let Some(path) = &out.report {
+        write_run_report(path, command, results, out, exit)?;
+    }
+    Ok(exit)
+}
+
+/// The run report: what was read (with hashes), what changed, what was refused, and the
+/// outcome the exit code stands for.
+fn write_run_report(
+    path: &Path,
+    command: &str,
+    results: &[ProgramResult],
+    out: &OutputArgs,
+    exit: Exit,
+) -> anyhow::Result<()> {
+    let outcome = match exit {
+        Exit::Refused => "refused: nothing written".to_owned(),
+        _ if out.diff => "preview (diff): nothing written".to_owned(),
+        _ if out.check => "check: nothing written".to_owned(),
+        Exit::Ok => match (&out.output, &out.out_dir) {
+            (Some(o), _) => format!("written to {}", o.display()),
+            (_, Some(d)) => format!("written under {}", d.display()),
+            _ => "written in place".to_owned(),
+        },
+        e => format!("exit {}", e as u8),
+    };
+    let mut inputs = Vec::new();
+    for (role, file) in &out.also_read {
+        let bytes = output::read_input(file).with_context(|| file.display().to_string())?;
+        inputs.push(RunInput::new(role, &file.display().to_string(), &bytes, ""));
+    }
+    let report = RunReport {
+        command: command.to_owned(),
+        arguments: std::env::args().collect::<Vec<_>>().join(" "),
+        outcome,
+        inputs,
+        files: results
+            .iter()
+            .flat_map(|p| &p.files)
+            .map(RunFile::from_result)
+            .collect(),
+        checks: Vec::new(),
+    };
+    output::write_file(path, run_report(&report).as_bytes())?;
+    let _ = writeln!(
+        std::io::stderr(),
+        "wrote {}: the run report",
+        path.display()
+    );
+    Ok(())
+}
+
+/// Reports refusals, then diffs, checks or writes. The one place outcomes become an exit code.
+fn finish_outputs(
     command: &str,
     results: &[ProgramResult],
     out: &OutputArgs,
@@ -440,10 +508,14 @@ fn run_step(
     })
 }
 
-fn run_track(a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
+fn run_track(mut a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
     let cell = load_cell(&a.cell)?;
     let robot = cell.robot(&a.robot)?;
     let profile = load_profile(&cell, robot)?;
+    a.out.also_read = vec![
+        ("cell".to_owned(), a.cell.clone()),
+        (format!("profile of {}", robot.name), robot.profile.clone()),
+    ];
     let mut setup = TrackSetup::new(robot, &profile);
     setup.default_wobj = a.default_wobj.clone();
     run_step(
@@ -509,8 +581,13 @@ pub fn run_mirror(a: MirrorArgs) -> anyhow::Result<Exit> {
     report_located(run_mirror_inner(a))
 }
 
-fn run_mirror_inner(a: MirrorArgs) -> anyhow::Result<Exit> {
+fn run_mirror_inner(mut a: MirrorArgs) -> anyhow::Result<Exit> {
     let cell = a.cell.as_deref().map(load_cell).transpose()?;
+    a.out.also_read = a
+        .cell
+        .iter()
+        .map(|c| ("cell".to_owned(), c.clone()))
+        .collect();
     let robot = match (&cell, &a.robot) {
         (Some(c), Some(name)) => Some(c.robot(name)?),
         (None, Some(_)) => bail!("--robot needs --cell"),
@@ -550,12 +627,17 @@ pub fn run_transfer(a: TransferArgs) -> anyhow::Result<Exit> {
     report_located(run_transfer_inner(a))
 }
 
-fn run_transfer_inner(a: TransferArgs) -> anyhow::Result<Exit> {
+fn run_transfer_inner(mut a: TransferArgs) -> anyhow::Result<Exit> {
     let cell = load_cell(&a.cell)?;
     let from = cell.robot(&a.from)?;
     let to = cell.robot(&a.to)?;
     let from_profile = load_profile(&cell, from)?;
     let to_profile = load_profile(&cell, to)?;
+    a.out.also_read = vec![
+        ("cell".to_owned(), a.cell.clone()),
+        (format!("profile of {}", from.name), from.profile.clone()),
+        (format!("profile of {}", to.name), to.profile.clone()),
+    ];
     let mut plan = TransferPlan {
         from: TrackSetup::new(from, &from_profile),
         mirror: a.mirror.then(|| MirrorSettings {

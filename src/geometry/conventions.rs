@@ -127,6 +127,44 @@ pub fn origin(p: &Pose) -> Vector3<f64> {
     p.translation.vector
 }
 
+/// Rounds away a `-0.000000` (a negative value below the written precision).
+pub fn clean(v: f64, decimals: i32) -> f64 {
+    let scale = 10f64.powi(decimals);
+    let r = (v * scale).round() / scale;
+    if r == 0.0 { 0.0 } else { r }
+}
+
+/// A RAPID `pose` literal: position to 3 decimals (mm), quaternion scalar first to 6.
+pub fn abb_pose_literal(p: &Pose) -> String {
+    let t = p.translation.vector;
+    let q = abb_quat_components(&p.rotation, None);
+    format!(
+        "[[{:.3},{:.3},{:.3}],[{:.6},{:.6},{:.6},{:.6}]]",
+        clean(t.x, 3),
+        clean(t.y, 3),
+        clean(t.z, 3),
+        clean(q[0], 6),
+        clean(q[1], 6),
+        clean(q[2], 6),
+        clean(q[3], 6)
+    )
+}
+
+/// A KRL `FRAME` literal: position to 3 decimals (mm), A, B, C (Rz·Ry·Rx) to 4 (degrees).
+pub fn kuka_frame_literal(p: &Pose) -> String {
+    let t = p.translation.vector;
+    let abc = kuka_abc_angles(&p.rotation, None);
+    format!(
+        "{{X {:.3},Y {:.3},Z {:.3},A {:.4},B {:.4},C {:.4}}}",
+        clean(t.x, 3),
+        clean(t.y, 3),
+        clean(t.z, 3),
+        clean(abc[0], 4),
+        clean(abc[1], 4),
+        clean(abc[2], 4)
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

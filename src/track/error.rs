@@ -141,6 +141,9 @@ pub enum SkidProblem {
         /// How far from 1 `ratio` may be.
         tolerance: f64,
     },
+    /// The fit's normal matrix is singular: some motion of the frame moves no point.
+    #[error("the points do not fix all six degrees of freedom of the frame")]
+    Unconstrained,
 }
 
 /// Why sampling frames give no straight nominal track.
@@ -229,6 +232,28 @@ pub enum TrackError {
     /// The sampling frames give no straight nominal.
     #[error("{0}")]
     Nominal(NominalProblem),
+    /// A noise level that is not a non-negative number.
+    #[error("noise level {sigma} mm: give a non-negative number")]
+    NoiseLevel {
+        /// The level given, mm.
+        sigma: f64,
+    },
+    /// The fits leave no degree of freedom to estimate the noise from.
+    #[error(
+        "{points} point(s) leave no residual to estimate the noise from: give the noise level, or measure more points"
+    )]
+    NoNoiseEstimate {
+        /// Points measured.
+        points: usize,
+    },
+    /// Knot uncertainties given in code that do not match the profile's knots one to one.
+    #[error("{given} knot uncertainties for {knots} knots")]
+    KnotUncertaintyCount {
+        /// Uncertainties given.
+        given: usize,
+        /// Knots of the profile.
+        knots: usize,
+    },
     /// A scan the spectrum cannot use (too short, positions not increasing).
     #[error("{0}")]
     Scan(String),

@@ -93,9 +93,4 @@ pub fn frames_csv(frames: &[SamplingFrame]) -> String {
     out
 }
 
-/// Rounds away a `-0.000000` (a negative value below the written precision).
-pub fn clean(v: f64, decimals: i32) -> f64 {
-    let scale = 10f64.powi(decimals);
-    let r = (v * scale).round() / scale;
-    if r == 0.0 { 0.0 } else { r }
-}
+pub use crate::geometry::clean;

@@ -15,7 +15,10 @@ pub mod profile;
 pub mod simulate;
 pub mod spectrum;
 pub mod spline;
+pub mod uncertainty;
 
 pub use csv_table::NumericCsv;
 pub use error::{LocatedError, NominalProblem, SkidProblem, TrackError};
-pub use profile::{Extrapolate, Gear, Knot, MeasuredIn, Nominal, Profile, Reference};
+pub use profile::{
+    Extrapolate, Gear, Knot, KnotUncertainty, MeasuredIn, Nominal, Profile, Reference,
+};

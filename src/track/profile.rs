@@ -28,6 +28,38 @@ pub struct Knot {
     pub rx: f64,
     pub ry: f64,
     pub rz: f64,
+    /// Standard uncertainties (k = 1) of the six components from the identification noise
+    /// (mm, degrees); absent in profiles fitted without measurements, and in old profiles.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_dx: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_dy: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_dz: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_rx: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_ry: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_rz: Option<f64>,
+    /// The centroid of the points the knot's frame was identified from (base frame, mm):
+    /// there a position error does not correlate with the rotation error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_centre: Option<[f64; 3]>,
+    /// Standard uncertainties (k = 1) of a point at `u_centre` along the base axes, mm.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_centre_xyz: Option<[f64; 3]>,
+}
+
+/// A knot's standard uncertainties (k = 1) from the identification of its frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KnotUncertainty {
+    /// `[u_dx, u_dy, u_dz, u_rx, u_ry, u_rz]`, mm and degrees.
+    pub u: [f64; 6],
+    /// Centroid of the identification points, base frame, mm.
+    pub centre: [f64; 3],
+    /// Standard uncertainties of a point at `centre`, mm.
+    pub centre_xyz: [f64; 3],
 }
 
 impl Knot {
@@ -46,7 +78,38 @@ impl Knot {
             rx,
             ry,
             rz,
+            u_dx: None,
+            u_dy: None,
+            u_dz: None,
+            u_rx: None,
+            u_ry: None,
+            u_rz: None,
+            u_centre: None,
+            u_centre_xyz: None,
         }
+    }
+
+    /// `(u_centre, u_centre_xyz)` if the knot carries both.
+    pub fn centre_uncertainty(&self) -> Option<([f64; 3], [f64; 3])> {
+        Some((self.u_centre?, self.u_centre_xyz?))
+    }
+
+    /// `[u_dx, u_dy, u_dz, u_rx, u_ry, u_rz]` if the knot carries all six.
+    pub fn uncertainty(&self) -> Option<[f64; 6]> {
+        Some([
+            self.u_dx?, self.u_dy?, self.u_dz?, self.u_rx?, self.u_ry?, self.u_rz?,
+        ])
+    }
+
+    /// The same knot with standard uncertainties `[u_dx, …, u_rz]` (`None` removes them).
+    pub fn with_uncertainty(mut self, u: Option<[f64; 6]>) -> Knot {
+        let [a, b, c, d, e, f] = match u {
+            Some(u) => u.map(Some),
+            None => [None; 6],
+        };
+        (self.u_dx, self.u_dy, self.u_dz) = (a, b, c);
+        (self.u_rx, self.u_ry, self.u_rz) = (d, e, f);
+        self
     }
 
     /// A knot of no deviation at `skid`.
@@ -425,6 +488,24 @@ impl Profile {
         &self.splines
     }
 
+    /// Same profile with standard uncertainties on its knots, one per knot in knot order
+    /// (rounded to 1e-6 like the knots, the centre to 0.1 mm).
+    pub fn with_knot_uncertainties(mut self, u: &[KnotUncertainty]) -> Result<Profile, TrackError> {
+        if u.len() != self.file.knot.len() {
+            return Err(TrackError::KnotUncertaintyCount {
+                given: u.len(),
+                knots: self.file.knot.len(),
+            });
+        }
+        let r6 = |v: f64| (v * 1e6).round() / 1e6;
+        for (k, u) in self.file.knot.iter_mut().zip(u) {
+            *k = k.with_uncertainty(Some(u.u.map(r6)));
+            k.u_centre = Some(u.centre.map(|v| (v * 10.0).round() / 10.0));
+            k.u_centre_xyz = Some(u.centre_xyz.map(r6));
+        }
+        Ok(self)
+    }
+
     /// The frame the profile was measured in, if it says.
     pub fn measured_in(&self) -> Option<MeasuredIn> {
         self.file.measured_in
@@ -553,19 +634,13 @@ impl Profile {
 }
 
 fn data_sha256(file: &ProfileFile) -> String {
-    use sha2::Digest as _;
     use std::fmt::Write as _;
     // `{:?}` of f64 is the shortest text that reads back to the same number, as TOML writes it.
     let mut text = format!("{:?} {:?} {:?}\n", file.reference, file.gear, file.nominal);
     for k in &file.knot {
         let _ = writeln!(text, "{:?} {:?}", k.skid, k.components());
     }
-    sha2::Sha256::digest(text.as_bytes())
-        .iter()
-        .fold(String::new(), |mut s, b| {
-            let _ = write!(s, "{b:02x}");
-            s
-        })
+    crate::digest::sha256_hex(text.as_bytes())
 }
 
 fn build_splines(knots: &[Knot]) -> Result<[CubicSpline; 6], SplineError> {
@@ -658,15 +733,7 @@ mod tests {
     use super::*;
 
     fn knot(skid: f64, dz: f64, rx: f64) -> Knot {
-        Knot {
-            skid,
-            dx: 0.0,
-            dy: 0.0,
-            dz,
-            rx,
-            ry: 0.0,
-            rz: 0.0,
-        }
+        Knot::from_components(skid, [0.0, 0.0, dz, rx, 0.0, 0.0])
     }
 
     fn sample() -> Profile {
@@ -710,6 +777,29 @@ mod tests {
         let text = p.to_toml_string().unwrap();
         let back = Profile::from_toml_str(&text, Path::new("p.toml")).unwrap();
         assert_eq!(back, p);
+    }
+
+    #[test]
+    fn knot_uncertainties_round_trip_and_stay_optional() {
+        let p = sample();
+        let text = p.to_toml_string().unwrap();
+        assert!(!text.contains("u_dx"), "{text}");
+        let u = [KnotUncertainty {
+            u: [0.01, 0.02, 0.03, 0.0004, 0.0005, 0.0006],
+            centre: [1200.04, 0.0, 850.0],
+            centre_xyz: [0.006; 3],
+        }; 3];
+        let with = p.with_knot_uncertainties(&u).unwrap();
+        let text = with.to_toml_string().unwrap();
+        assert!(text.contains("u_dz = 0.03"), "{text}");
+        assert!(text.contains("u_centre = [1200.0, 0.0, 850.0]"), "{text}");
+        let back = Profile::from_toml_str(&text, Path::new("p.toml")).unwrap();
+        assert_eq!(back.knots()[1].uncertainty(), Some(u[1].u));
+        assert_eq!(
+            back.knots()[1].centre_uncertainty(),
+            Some(([1200.0, 0.0, 850.0], [0.006; 3]))
+        );
+        assert!(sample().with_knot_uncertainties(&u[..2]).is_err());
     }
 
     #[test]

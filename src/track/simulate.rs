@@ -149,6 +149,27 @@ impl TrackTruth {
         }
     }
 
+    /// A randomly deformed track for statistical tests: an `length_mm` track along base -y
+    /// starting at `start`, with sag 0.5-3 mm, bow ±2 mm, waviness 0.02-0.1 mm of 1.5-4 m
+    /// wavelength, twist ±0.04° and gear error ±2e-4, all drawn from `seed`.
+    pub fn random(start: Pose, length_mm: f64, seed: u64) -> TrackTruth {
+        let mut rng = SplitMix64::new(seed);
+        let mut between = |lo: f64, hi: f64| lo + (hi - lo) * rng.next_f64();
+        TrackTruth {
+            start,
+            axis_in_base: Vector3::new(0.0, -1.0, 0.0),
+            length_mm,
+            deformation: Deformation {
+                sag_mm: between(0.5, 3.0),
+                bow_mm: between(-2.0, 2.0),
+                wave_mm: between(0.02, 0.1),
+                wave_length_mm: between(1500.0, 4000.0),
+                twist_deg: between(-0.04, 0.04),
+                gear_error: between(-2e-4, 2e-4),
+            },
+        }
+    }
+
     /// The unit track axis in the base frame (`x` if `axis_in_base` is degenerate).
     fn axis(&self) -> Vector3<f64> {
         self.axis_in_base
@@ -315,6 +336,87 @@ pub fn scan_csv(rows: &[[f64; 4]]) -> String {
         let _ = writeln!(out, "{s},{x:.4},{y:.4},{z:.4}");
     }
     out
+}
+
+/// One row of a work-object touch-up file (`marks.csv`): the TCP on fixture mark `mark` at
+/// skid `skid`, as the controller reports it in its base frame, and the mark's CAD coordinates
+/// in the work object.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MarkRow {
+    pub mark: u32,
+    pub skid: f64,
+    pub robot: [f64; 3],
+    pub cad: [f64; 3],
+}
+
+/// The robot touches fixture marks: mark `j` (CAD coordinates `cad[j]` in work object `wobj`,
+/// world) at skid `skids[j]`; the controller reports `truth.base_frame(s)⁻¹·wobj·cad` plus
+/// Gaussian noise `noise_mm` per axis (robot repeatability and the touch).
+pub fn simulate_marks(
+    truth: &TrackTruth,
+    wobj: &Pose,
+    cad: &[Point3<f64>],
+    skids: &[f64],
+    noise_mm: f64,
+    seed: u64,
+) -> Vec<MarkRow> {
+    let mut rng = SplitMix64::new(seed);
+    cad.iter()
+        .zip(skids)
+        .enumerate()
+        .map(|(j, (c, &skid))| {
+            let p = truth.base_frame(skid).inverse() * (wobj * c);
+            let n = Vector3::new(rng.gaussian(), rng.gaussian(), rng.gaussian()) * noise_mm;
+            MarkRow {
+                mark: j as u32 + 1,
+                skid,
+                robot: [p.x + n.x, p.y + n.y, p.z + n.z],
+                cad: [c.x, c.y, c.z],
+            }
+        })
+        .collect()
+}
+
+/// `marks.csv` text (`mark,skid,robot_x,robot_y,robot_z,cad_x,cad_y,cad_z`; robot values with 3
+/// decimals as a controller shows them, CAD with 3).
+pub fn marks_csv(rows: &[MarkRow]) -> String {
+    let mut out = String::from("mark,skid,robot_x,robot_y,robot_z,cad_x,cad_y,cad_z\n");
+    for r in rows {
+        let _ = writeln!(
+            out,
+            "{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}",
+            r.mark, r.skid, r.robot[0], r.robot[1], r.robot[2], r.cad[0], r.cad[1], r.cad[2]
+        );
+    }
+    out
+}
+
+/// Flange poses (in the robot base) of a TCP pivot: the TCP `tcp` (flange frame) held on the
+/// fixed point `point` (base frame) in `count` orientations tilted up to ±35° about a mean tool
+/// direction pointing down, with Gaussian noise `noise_mm` on each flange position.
+pub fn simulate_pivot(
+    tcp: &Vector3<f64>,
+    point: &Point3<f64>,
+    count: usize,
+    noise_mm: f64,
+    seed: u64,
+) -> Vec<Pose> {
+    let mut rng = SplitMix64::new(seed);
+    (0..count)
+        .map(|k| {
+            let turn = 360.0 * k as f64 / count.max(1) as f64;
+            let tilt = 15.0 + 20.0 * rng.next_f64();
+            // Tool z points down (rx 180), turned about base z and tilted.
+            let r = crate::geometry::xyz_deg(
+                180.0 + tilt * turn.to_radians().cos(),
+                tilt * turn.to_radians().sin(),
+                turn,
+            );
+            let n = Vector3::new(rng.gaussian(), rng.gaussian(), rng.gaussian()) * noise_mm;
+            let p = point.coords - r * tcp + n;
+            Pose::from_parts(Translation3::from(p), r)
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -3,11 +3,13 @@
 mod accuracy;
 mod cli;
 mod dialect;
+mod frames;
 mod kinematics;
 mod krl;
 mod output;
 mod parser_data;
 mod rapid;
+mod report;
 mod rust_version;
 mod support;
 mod track;

@@ -1,0 +1,156 @@
+//! Frames measured with a laser tracker and the robot (docs/design.md): the robot base and
+//! track axis in the cell, compensated by the track profile ([`base`]); work objects touched at
+//! several skid positions ([`wobj`]); the TCP from pivot poses ([`tool`]); and the plain
+//! point-pair fit that ties a tracker to the cell's reference marks ([`pairs`]). Every result
+//! comes with its standard uncertainty from the fit's Jacobian, `σ²·(JᵀJ)⁻¹`.
+
+pub mod base;
+pub mod pairs;
+pub mod tool;
+pub mod wobj;
+
+use nalgebra::{DMatrix, DVector, Matrix6, Translation3, UnitQuaternion, Vector3};
+
+use crate::geometry::{Pose, pose_to_xyz_deg, wrap_deg};
+use crate::track::TrackError;
+use crate::track::uncertainty::Sigma;
+
+/// Why a frame cannot be identified from the data.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum FrameError {
+    /// The data do not fix the frame (too few points, collinear, one skid only, ...).
+    #[error("{0}")]
+    Underdetermined(String),
+    /// Reading the input, or the track profile, failed.
+    #[error(transparent)]
+    Track(#[from] TrackError),
+    /// A noise level that is not a non-negative number.
+    #[error("noise level {0} mm: give a non-negative number")]
+    BadSigma(f64),
+}
+
+/// The residual of one measured point: `measured - model`, mm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointResidual {
+    /// The skid position (0 where the data have none).
+    pub skid: f64,
+    /// The point, mark or pose number.
+    pub point: u32,
+    pub residual: Vector3<f64>,
+}
+
+impl PointResidual {
+    /// `|residual|` (seed Table 7.2's "rms" column).
+    pub fn norm(&self) -> f64 {
+        self.residual.norm()
+    }
+}
+
+/// `sqrt(mean |r|²)` of residuals.
+pub fn rms(residuals: &[PointResidual]) -> f64 {
+    if residuals.is_empty() {
+        return 0.0;
+    }
+    (residuals
+        .iter()
+        .map(|r| r.residual.norm_squared())
+        .sum::<f64>()
+        / residuals.len() as f64)
+        .sqrt()
+}
+
+/// The noise level for a fit: the given one, or `sqrt(SSR/dof)` from its residuals.
+pub(crate) fn sigma_of(
+    given: Option<f64>,
+    residuals: &[PointResidual],
+    parameters: usize,
+) -> Result<Sigma, FrameError> {
+    match given {
+        Some(s) if s.is_finite() && s >= 0.0 => Ok(Sigma::Given(s)),
+        Some(s) => Err(FrameError::BadSigma(s)),
+        None => {
+            let dof = (3 * residuals.len()).saturating_sub(parameters);
+            if dof == 0 {
+                return Err(FrameError::Underdetermined(format!(
+                    "{} point(s) leave no residual to estimate the noise from: give the noise level, or measure more points",
+                    residuals.len()
+                )));
+            }
+            let ssr: f64 = residuals.iter().map(|r| r.residual.norm_squared()).sum();
+            Ok(Sigma::Estimated {
+                sigma: (ssr / dof as f64).sqrt(),
+                dof,
+            })
+        }
+    }
+}
+
+/// Standard uncertainties (k = 1) of a pose written as `x, y, z, rx, ry, rz` (mm, degrees).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PoseUncertainty {
+    pub u: [f64; 6],
+}
+
+/// `pose·(δt, δθ)`: the right perturbation the fits and their covariances use.
+pub(crate) fn perturb_right(pose: &Pose, d: &[f64]) -> Pose {
+    let g = |i: usize| d.get(i).copied().unwrap_or(0.0);
+    let delta = Pose::from_parts(
+        Translation3::new(g(0), g(1), g(2)),
+        UnitQuaternion::from_scaled_axis(Vector3::new(g(3), g(4), g(5))),
+    );
+    pose * delta
+}
+
+/// Propagates the covariance of a right perturbation `(δt, δθ)` of `pose` (mm, rad) to its
+/// written values `x, y, z, rx, ry, rz` by a central-difference Jacobian.
+pub(crate) fn xyz_deg_uncertainty(pose: &Pose, cov: &Matrix6<f64>) -> PoseUncertainty {
+    let mut g = DMatrix::<f64>::zeros(6, 6);
+    for k in 0..6 {
+        let h = if k < 3 { 1e-3 } else { 1e-6 };
+        let mut d = [0.0; 6];
+        d[k] = h;
+        let plus = pose_to_xyz_deg(&perturb_right(pose, &d));
+        d[k] = -h;
+        let minus = pose_to_xyz_deg(&perturb_right(pose, &d));
+        for i in 0..6 {
+            let diff = if i < 3 {
+                plus[i] - minus[i]
+            } else {
+                wrap_deg(plus[i] - minus[i])
+            };
+            g[(i, k)] = diff / (2.0 * h);
+        }
+    }
+    let c = DMatrix::from_column_slice(6, 6, cov.as_slice());
+    let out = &g * c * g.transpose();
+    let mut u = [0.0; 6];
+    for (i, slot) in u.iter_mut().enumerate() {
+        *slot = out[(i, i)].max(0.0).sqrt();
+    }
+    PoseUncertainty { u }
+}
+
+/// Solves the normal equations `(JᵀJ)·δ = Jᵀr` with column scaling (the columns differ by
+/// orders of magnitude: mm against rad·m); returns `δ` and `(JᵀJ)⁻¹`, or `None` if singular.
+pub(crate) fn solve_normal(
+    jac: &DMatrix<f64>,
+    res: &DVector<f64>,
+) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    let n = jac.ncols();
+    let scale: Vec<f64> = (0..n)
+        .map(|k| {
+            let c = jac.column(k).norm();
+            if c > 0.0 { 1.0 / c } else { 1.0 }
+        })
+        .collect();
+    let mut js = jac.clone();
+    for (k, s) in scale.iter().enumerate() {
+        js.column_mut(k).scale_mut(*s);
+    }
+    let jtj = js.transpose() * &js;
+    let inv = crate::track::uncertainty::invert_spd(&jtj)?;
+    let step = &inv * (js.transpose() * res);
+    let d = DMatrix::from_diagonal(&DVector::from_vec(scale));
+    Some((&d * step, &d * inv * &d))
+}
