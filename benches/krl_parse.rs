@@ -86,12 +86,10 @@ fn dat_parse_streamed_and_print(bencher: Bencher, mb: usize) {
     bencher
         .counter(divan::counter::BytesCount::new(input.len()))
         .bench(|| {
-            let parse = trackfix::krl::parser::parse_with(
-                black_box(input),
-                &mut |s: trackfix::krl::tree::Stmt| {
+            let parse =
+                trackfix::krl::parse_with(black_box(input), &mut |s: trackfix::krl::Stmt| {
                     black_box(s);
-                },
-            );
+                });
             assert_eq!(parse.tree.print(input).len(), input.len());
         });
 }
@@ -136,5 +134,5 @@ fn dat_lex_only(bencher: Bencher, mb: usize) {
     let input = dat(mb);
     bencher
         .counter(divan::counter::BytesCount::new(input.len()))
-        .bench(|| trackfix::krl::lexer::lex(black_box(input)).len());
+        .bench(|| trackfix::krl::lex(black_box(input)).len());
 }

@@ -20,21 +20,53 @@
 //!
 //! The library never prints and never panics on input.
 
+#[warn(missing_docs, unreachable_pub)]
 pub mod accuracy;
+#[warn(missing_docs, unreachable_pub)]
 pub mod dialect;
 pub mod digest;
 pub mod frame;
+#[warn(missing_docs, unreachable_pub)]
 pub mod geometry;
 pub mod html_report;
+#[warn(missing_docs, unreachable_pub)]
 pub mod kinematics;
 pub mod krl;
+#[warn(missing_docs, unreachable_pub)]
 pub mod located;
+#[warn(unreachable_pub)]
 mod names;
+#[warn(missing_docs, unreachable_pub)]
 pub mod output;
+#[warn(missing_docs, unreachable_pub)]
 pub mod position;
+#[warn(missing_docs, unreachable_pub)]
 pub mod program;
 pub mod rapid;
+#[warn(missing_docs, unreachable_pub)]
 pub mod report;
 pub mod syntax;
 pub mod track;
+#[warn(missing_docs, unreachable_pub)]
 pub mod transform;
+
+// What a user of the library needs, at the top (`docs/design.md §8`, the public API): load a
+// program, read what it holds, parse a file, run a transform, build a report.
+pub use dialect::{Dialect, Language, Vocabulary, register as register_dialect};
+/// Parses a KRL file into its lossless tree and the statements trackfix reads.
+pub use krl::parse as parse_krl;
+pub use located::Located;
+pub use position::{
+    CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, Orientation,
+    ParsedFile, Position, PositionKind, Program, Skid, Usage,
+};
+pub use program::{LoadError, LoadOptions, collect_inputs, load};
+/// Parses a RAPID module into its lossless tree (positions are [`rapid::parse_file`]'s).
+pub use rapid::parse_tree as parse_rapid;
+pub use report::{
+    CheckSummary, FileSummary, InspectOptions, InspectReport, inspect_program, lints,
+};
+pub use transform::{
+    Cell, CellError, Direction, MirrorSettings, ProgramResult, Refusal, RefusalKind, Remedy,
+    TrackSetup, TransferPlan, TransformStep, apply, mirror, reparse, track_correction, transfer,
+};

@@ -9,10 +9,12 @@ use crate::syntax::{Diagnostic, Excerpt, LineIndex, Severity};
 /// A diagnostic located in one source.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Located {
+    /// The file, as the user named it (shown in the `path:line:col` prefix).
     pub path: PathBuf,
     /// The source the diagnostic's span points into: the whole file, or (see [`LineAt`]) only
     /// the piece of the line it shows.
     pub source: Vec<u8>,
+    /// What is wrong, where, and what to do.
     pub diagnostic: Diagnostic,
     /// Set when `source` is a piece of one line rather than the file.
     pub at: Option<LineAt>,
@@ -21,15 +23,20 @@ pub struct Located {
 /// Where a one-line excerpt sits in its file (see [`Excerpt`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LineAt {
+    /// 1-based line of the span's start.
     pub line: usize,
+    /// 1-based column (bytes) of the span's start.
     pub column: usize,
     /// Byte offset of the excerpt in the file.
     pub start: usize,
+    /// The line goes on before the excerpt (it was cut to a window around the span).
     pub cut_before: bool,
+    /// The line goes on after the excerpt.
     pub cut_after: bool,
 }
 
 impl Located {
+    /// The diagnostic about `source`, read from `path`.
     pub fn new(path: impl Into<PathBuf>, source: Vec<u8>, diagnostic: Diagnostic) -> Located {
         Located {
             path: path.into(),

@@ -28,6 +28,8 @@ pub struct PositionKind {
 }
 
 impl PositionKind {
+    /// A kind named `name` as its language writes the type; `cartesian` for a pose (which
+    /// transforms change), false for joint values.
     pub const fn new(name: &'static str, cartesian: bool) -> PositionKind {
         PositionKind { name, cartesian }
     }
@@ -46,11 +48,14 @@ impl PositionKind {
 /// A numeric literal inside a position, with the span of its text.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NumField {
+    /// The literal's bytes (what an edit replaces).
     pub span: Span,
+    /// The literal as written: its value and how it is spelled, so a rewrite keeps the style.
     pub lit: NumLit,
 }
 
 impl NumField {
+    /// The literal's value.
     pub fn value(&self) -> f64 {
         self.lit.value()
     }
@@ -61,6 +66,7 @@ impl NumField {
 pub struct BitField {
     /// The whole token, quotes included for the binary form.
     pub span: Span,
+    /// The value.
     pub value: u32,
     /// `Some(n)` for `'B…'` with n digits, `None` for a decimal integer.
     pub binary_digits: Option<usize>,
@@ -148,7 +154,9 @@ pub enum Config {
     Abb([Option<NumField>; 4]),
     /// KUKA Status and Turn.
     Kuka {
+        /// `S`, when written.
         status: Option<BitField>,
+        /// `T`, when written.
         turn: Option<BitField>,
     },
     /// Not written (POS without S/T, FRAME, joint targets).
@@ -209,26 +217,31 @@ impl Usage {
 pub struct Position {
     /// Declared name; `None` for an inline literal.
     pub name: Option<String>,
+    /// Its data type.
     pub kind: PositionKind,
     /// The literal (aggregate) itself.
     pub span: Span,
     /// 1-based line and column of the literal's start.
     pub line: usize,
+    /// 1-based column of the literal's start.
     pub column: usize,
     /// Translation and orientation, for Cartesian kinds.
     pub cartesian: Option<CartesianFields>,
     /// Robot axis values of joint kinds (`rax_1..rax_6`, `A1..A6`), degrees.
     pub joints: Vec<Option<NumField>>,
+    /// The robot configuration, as written.
     pub config: Config,
     /// External axes as written: RAPID `eax_a..eax_f`, KRL `E1..E6` (shorter if fewer are
     /// written).
     pub extax: Vec<Option<NumField>>,
+    /// The frames and tool of the motion instructions that reference it, and their lines.
     pub usage: Usage,
 }
 
 /// A skid value read from a target's external axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Skid {
+    /// The skid position, mm (the axis value as written).
     At(f64),
     /// `9E9`: the axis is not connected.
     NotConnected,
@@ -255,6 +268,7 @@ impl Position {
     }
 }
 
+/// What a declared frame is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum FrameKind {
     /// RAPID `wobjdata`.
@@ -270,8 +284,11 @@ pub enum FrameKind {
 pub struct FrameDecl {
     /// `wobj_car`, `tGun`, `BASE_DATA[3]`, `TOOL_DATA[1]`.
     pub name: String,
+    /// What it is.
     pub kind: FrameKind,
+    /// The declaration's bytes.
     pub span: Span,
+    /// 1-based line of the declaration.
     pub line: usize,
     /// RAPID wobjdata `robhold` (the robot holds the work object: stationary tool).
     pub robhold: Option<bool>,
@@ -296,6 +313,7 @@ impl FrameDecl {
     }
 }
 
+/// Which offset function a call is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OffsetKind {
     /// `Offs(p, dx, dy, dz)`: object-frame offsets.
@@ -307,8 +325,11 @@ pub enum OffsetKind {
 /// An `Offs` or `RelTool` call with numeric offset fields.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OffsetCall {
+    /// Which function.
     pub kind: OffsetKind,
+    /// The call's bytes.
     pub span: Span,
+    /// 1-based line of the call.
     pub line: usize,
     /// The first argument's text (usually a target name).
     pub target: String,
@@ -324,12 +345,19 @@ pub struct OffsetCall {
 /// One parsed source file and everything trackfix understands in it.
 #[derive(Clone, Debug)]
 pub struct ParsedFile {
+    /// The file, as named on input.
     pub path: PathBuf,
+    /// Its language (dialect).
     pub language: Language,
+    /// The bytes read; every span of the file points into them.
     pub source: Vec<u8>,
+    /// Line starts of `source`, for `line:column`.
     pub lines: LineIndex,
+    /// Every position declared or written inline, in file order.
     pub positions: Vec<Position>,
+    /// The work objects, tools and bases declared.
     pub frames: Vec<FrameDecl>,
+    /// The `Offs`/`RelTool` calls with numeric offsets.
     pub offsets: Vec<OffsetCall>,
     /// Constructs the grammar does not know, kept verbatim.
     pub opaque: usize,
@@ -355,6 +383,7 @@ impl ParsedFile {
 /// A program: one RAPID module, or a KRL `.src`/`.dat` pair (either may be alone).
 #[derive(Clone, Debug)]
 pub struct Program {
+    /// Its parsed files, each with its own positions, frames and diagnostics.
     pub files: Vec<ParsedFile>,
 }
 

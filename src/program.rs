@@ -18,17 +18,32 @@ pub struct LoadOptions {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum LoadError {
+    /// A file could not be read.
     #[error("{}: {source}", path.display())]
     Io {
+        /// The file.
         path: PathBuf,
+        /// Why.
         source: std::io::Error,
     },
+    /// A binary or encrypted file ([`crate::syntax::looks_binary`]); skipped, not parsed.
     #[error("{}: not a text module (binary or encrypted file); skipped", path.display())]
-    NotText { path: PathBuf },
+    NotText {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A RobotStudio program file: XML that lists modules, no RAPID of its own.
     #[error("{}: RobotStudio program file (.pgf, XML): it lists modules but holds no RAPID; skipped", path.display())]
-    ProgramXml { path: PathBuf },
+    ProgramXml {
+        /// The file.
+        path: PathBuf,
+    },
+    /// An extension no registered dialect claims.
     #[error("{}: unknown file type; expected {}", path.display(), known_extensions())]
-    UnknownType { path: PathBuf },
+    UnknownType {
+        /// The file.
+        path: PathBuf,
+    },
 }
 
 impl LoadError {

@@ -8,6 +8,7 @@ use std::path::PathBuf;
 /// A place in an input file: the message, the line as written and a caret under the field.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Located {
+    /// The input file, as given.
     pub path: PathBuf,
     /// 1-based line.
     pub line: u64,
@@ -17,6 +18,7 @@ pub struct Located {
     pub width: usize,
     /// The line as written, without its line break.
     pub line_text: String,
+    /// What is wrong, without the location (the `error:` line's text).
     pub message: String,
     /// What to do; empty when there is nothing to add.
     pub hint: String,
@@ -56,7 +58,9 @@ pub enum AccuracyError {
     /// A file could not be read.
     #[error("{}: {error}", path.display())]
     Io {
+        /// The file.
         path: PathBuf,
+        /// Why it could not be read.
         #[source]
         error: std::io::Error,
     },
@@ -65,7 +69,10 @@ pub enum AccuracyError {
     Input(Box<Located>),
     /// A file with neither a header nor data.
     #[error("{}: the file is empty (start it with its column names)", path.display())]
-    Empty { path: PathBuf },
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
     /// No commanded pose.
     #[error("no commanded poses: the commanded file needs one row per pose")]
     NoCommandedPoses,
@@ -73,20 +80,34 @@ pub enum AccuracyError {
     #[error(
         "point `{point}` has {visits} visit(s); repeatability needs at least 2 (ISO 9283 asks for 30 cycles)"
     )]
-    TooFewVisits { point: String, visits: usize },
+    TooFewVisits {
+        /// The commanded point's name.
+        point: String,
+        /// How many visits the measurement has of it.
+        visits: usize,
+    },
     /// A point of the later measurement that the earlier one lacks.
     #[error(
         "point `{point}` is not in the earlier measurement; compare measurements of the same poses"
     )]
-    NotInEarlier { point: String },
+    NotInEarlier {
+        /// The point's name.
+        point: String,
+    },
     /// A commanded path of fewer than two points.
     #[error(
         "the commanded path has {points} point(s); it needs at least 2 (start and end of a line)"
     )]
-    PathTooShort { points: usize },
+    PathTooShort {
+        /// How many points the commanded path has.
+        points: usize,
+    },
     /// Two consecutive commanded path points at the same place (1-based).
     #[error("commanded path points {first} and {} coincide; remove the repeated point", first + 1)]
-    CoincidentPoints { first: usize },
+    CoincidentPoints {
+        /// The first of the two, 1-based.
+        first: usize,
+    },
     /// Zero planes asked for.
     #[error("the number of planes must be at least 1")]
     NoPlanes,
@@ -94,12 +115,22 @@ pub enum AccuracyError {
     #[error(
         "{used} run(s) along the path in the commanded direction; path repeatability needs at least 2 (found {found} run(s) in all)"
     )]
-    TooFewRuns { used: usize, found: usize },
+    TooFewRuns {
+        /// Runs in the commanded direction (the ones the figures use).
+        used: usize,
+        /// Runs found in either direction.
+        found: usize,
+    },
     /// A run that does not reach a plane.
     #[error(
         "run `{run}` does not cross the plane at s = {s:.3} mm; record each run over the whole path"
     )]
-    NoCrossing { run: String, s: f64 },
+    NoCrossing {
+        /// The run's name (its cycle, or its number when found from the motion).
+        run: String,
+        /// The plane's arc length along the commanded path, mm.
+        s: f64,
+    },
     /// Runs to be found from the motion, but the recording has no times.
     #[error(
         "without a cycle column the runs are found from the motion, which needs a time column `t`"
@@ -107,7 +138,12 @@ pub enum AccuracyError {
     NoTimes,
     /// Too few samples to find runs in.
     #[error("{samples} samples are too few to find runs in (at least {needed})")]
-    TooFewSamples { samples: usize, needed: usize },
+    TooFewSamples {
+        /// Samples in the recording.
+        samples: usize,
+        /// The least number the run finder works with.
+        needed: usize,
+    },
     /// A recording that does not move.
     #[error("the recording does not move; nothing to cut into runs")]
     Standing,

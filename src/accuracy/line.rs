@@ -25,12 +25,16 @@ pub struct LineReport {
     /// Largest `|v − v_c| / v_c` in per cent while travelling (`v_c`: the commanded velocity,
     /// else the measured one).
     pub velocity_deviation_max_percent: Option<f64>,
+    /// Mean 10 %-90 % speed rise at the start of the runs, mm/s²; `None` without times.
     pub acceleration: Option<f64>,
+    /// The same at the end of the runs (a positive figure), mm/s²; `None` without times.
     pub deceleration: Option<f64>,
     /// Largest perpendicular distance to the path of any sample between the end planes
     /// (eq. 3.38), where it is and in which run.
     pub max_deviation: f64,
+    /// Arc length along the commanded path where the largest deviation is, mm.
     pub max_deviation_s: f64,
+    /// The run the largest deviation is in.
     pub max_deviation_run: String,
     /// Mean perpendicular distance over the same samples.
     pub mean_deviation: f64,
@@ -39,6 +43,7 @@ pub struct LineReport {
     /// Distance of the runs' mean start (first samples) and end (last samples) from the
     /// commanded start and end.
     pub start_deviation: f64,
+    /// Distance of the runs' mean end from the commanded end, mm.
     pub end_deviation: f64,
     /// The same figures per straight leg of the commanded path (one for a line): where a path
     /// changes direction the deviations of one leg do not hide those of the next.
@@ -50,12 +55,16 @@ pub struct LineReport {
 pub struct LegReport {
     /// 1-based.
     pub leg: usize,
+    /// Arc length where the leg starts, mm.
     pub from_s: f64,
+    /// Arc length where the leg ends, mm.
     pub to_s: f64,
+    /// Samples whose nearest path point is on this leg.
     pub samples: usize,
     /// Largest and mean perpendicular distance of the samples whose nearest path point is on
     /// this leg (eq. 3.38).
     pub max_deviation: f64,
+    /// Mean perpendicular distance of those samples, mm.
     pub mean_deviation: f64,
     /// Median windowed speed of those samples; `None` without times.
     pub measured_velocity: Option<f64>,
@@ -76,7 +85,7 @@ fn median(values: &[f64]) -> Option<f64> {
 }
 
 /// `(t − t_first, speed)` of each sample over the window; empty without times.
-pub fn speed_series(run: &Run) -> Vec<(f64, f64)> {
+pub(crate) fn speed_series(run: &Run) -> Vec<(f64, f64)> {
     let n = run.samples.len();
     let times: Option<Vec<f64>> = run.samples.iter().map(|s| s.t).collect();
     let Some(times) = times else {
@@ -96,7 +105,7 @@ pub fn speed_series(run: &Run) -> Vec<(f64, f64)> {
 }
 
 /// `(t − t_first, acceleration)`: the difference quotient of [`speed_series`] over the window.
-pub fn acceleration_series(run: &Run) -> Vec<(f64, f64)> {
+pub(crate) fn acceleration_series(run: &Run) -> Vec<(f64, f64)> {
     let v = speed_series(run);
     let n = v.len();
     (0..n)
@@ -130,7 +139,7 @@ fn mean(values: &[f64]) -> Option<f64> {
 }
 
 /// Table 5.1 from the runs used, the plane figures and RT.
-pub fn line_report(
+pub(crate) fn line_report(
     commanded: &Polyline,
     runs: &[Run],
     planes: &[PlaneAccuracy],

@@ -28,8 +28,11 @@ pub struct Polyline {
 pub struct Projection {
     /// Arc length of the foot; below 0 or above the length beyond the end planes.
     pub s: f64,
+    /// Perpendicular distance from the path, mm (eq. 3.38).
     pub distance: f64,
+    /// The point minus its foot on the path.
     pub offset: Vector3<f64>,
+    /// The 0-based segment the foot is on.
     pub segment: usize,
 }
 
@@ -59,10 +62,12 @@ impl Polyline {
         })
     }
 
+    /// The vertices, in path order.
     pub fn vertices(&self) -> &[Vector3<f64>] {
         &self.vertices
     }
 
+    /// Whether the vertices carry `[rx, ry, rz]`.
     pub fn has_angles(&self) -> bool {
         self.angles.is_some()
     }
@@ -149,10 +154,13 @@ impl Polyline {
 /// One sample of a recording.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sample {
+    /// 1-based line of the file the sample is on.
     pub line: u64,
     /// Time in seconds, when the recording has it.
     pub t: Option<f64>,
+    /// Measured position, mm.
     pub position: Vector3<f64>,
+    /// Measured `[rx, ry, rz]` in degrees, when the file has them.
     pub angles: Option<[f64; 3]>,
 }
 
@@ -160,14 +168,18 @@ pub struct Sample {
 /// sample's cycle.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Recording {
+    /// The samples, in file order.
     pub samples: Vec<Sample>,
+    /// Each sample's cycle, when the file has a `cycle` column (one per sample).
     pub cycles: Option<Vec<String>>,
 }
 
 /// One run along the path.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Run {
+    /// The cycle's name, or the run's 1-based number when runs were found from the motion.
     pub label: String,
+    /// The run's samples, in time order.
     pub samples: Vec<Sample>,
 }
 
@@ -270,8 +282,11 @@ pub fn read_recording(path: &Path, map: &ColumnMap) -> Result<Recording, Accurac
 /// samples on either side.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Crossing {
+    /// The crossing point, mm.
     pub position: Vector3<f64>,
+    /// `[rx, ry, rz]` at the crossing, degrees, when the samples have them.
     pub angles: Option<[f64; 3]>,
+    /// Time of the crossing, seconds, when the samples have times.
     pub t: Option<f64>,
 }
 
@@ -320,6 +335,7 @@ pub struct PlaneAccuracy {
     pub i: usize,
     /// Arc length `L·i/(M+1)`.
     pub s: f64,
+    /// The commanded point at `s`.
     pub commanded: [f64; 3],
     /// The barycentre of the runs' crossings (eq. 3.13).
     pub barycentre: [f64; 3],
@@ -329,21 +345,27 @@ pub struct PlaneAccuracy {
     /// `l̄ + 3·S_l` of the crossings around the barycentre (eqs 3.18-3.20).
     #[serde(rename = "RTp")]
     pub rtp: f64,
+    /// `l̄`, mean distance of the crossings from their barycentre (eq. 3.19).
     pub l_mean: f64,
+    /// `S_l`, the standard deviation behind RTp (eq. 3.20).
     #[serde(rename = "S_l")]
     pub s_l: f64,
     /// `|ā − a_c|` etc. (eqs 3.14-3.17), `None` without angles on both sides.
     #[serde(rename = "ATa")]
     pub at_a: Option<f64>,
+    /// Like `ATa`, about `ry`.
     #[serde(rename = "ATb")]
     pub at_b: Option<f64>,
+    /// Like `ATa`, about `rz`.
     #[serde(rename = "ATc")]
     pub at_c: Option<f64>,
     /// `3·S` of the crossings' angles (eqs 3.21-3.23), `None` without measured angles.
     #[serde(rename = "RTa")]
     pub rt_a: Option<f64>,
+    /// Like `RTa`, about `ry`.
     #[serde(rename = "RTb")]
     pub rt_b: Option<f64>,
+    /// Like `RTa`, about `rz`.
     #[serde(rename = "RTc")]
     pub rt_c: Option<f64>,
     /// Each run's crossing (for the plots).
@@ -358,23 +380,33 @@ pub struct PathReport {
     pub length: f64,
     /// Runs used for the figures.
     pub runs_used: usize,
+    /// `AT`: the largest `ATp` over the planes, mm.
     #[serde(rename = "AT")]
     pub at: f64,
+    /// `RT`: the largest `RTp` over the planes, mm.
     #[serde(rename = "RT")]
     pub rt: f64,
+    /// The largest `ATa` over the planes, degrees.
     #[serde(rename = "ATa")]
     pub at_a: Option<f64>,
+    /// The largest `ATb` over the planes, degrees.
     #[serde(rename = "ATb")]
     pub at_b: Option<f64>,
+    /// The largest `ATc` over the planes, degrees.
     #[serde(rename = "ATc")]
     pub at_c: Option<f64>,
+    /// The largest `RTa` over the planes, degrees.
     #[serde(rename = "RTa")]
     pub rt_a: Option<f64>,
+    /// The largest `RTb` over the planes, degrees.
     #[serde(rename = "RTb")]
     pub rt_b: Option<f64>,
+    /// The largest `RTc` over the planes, degrees.
     #[serde(rename = "RTc")]
     pub rt_c: Option<f64>,
+    /// The figures at each plane, in path order.
     pub planes: Vec<PlaneAccuracy>,
+    /// The straight-line report of Table 5.1 (`docs/design.md §11`).
     pub line: LineReport,
     /// Every run found in the recording, used or not, and why not.
     pub runs: Vec<RunInfo>,

@@ -13,8 +13,11 @@ use super::table::{ColumnMap, Table};
 /// A programmed pose, in the measurement frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CommandedPose {
+    /// The point's name, which the visits refer to.
     pub name: String,
+    /// 1-based line of the commanded file.
     pub line: u64,
+    /// Commanded position, mm.
     pub position: Vector3<f64>,
     /// `[rx, ry, rz]` in degrees, when the file has them.
     pub angles: Option<[f64; 3]>,
@@ -23,16 +26,22 @@ pub struct CommandedPose {
 /// One measured visit of a commanded pose.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Visit {
+    /// The commanded point visited.
     pub point: String,
+    /// The cycle, when the file has a `cycle` column.
     pub cycle: Option<String>,
+    /// 1-based line of the measured file.
     pub line: u64,
+    /// Measured position, mm.
     pub position: Vector3<f64>,
+    /// Measured `[rx, ry, rz]` in degrees, when the file has them.
     pub angles: Option<[f64; 3]>,
 }
 
 /// The figures of one commanded pose. JSON keys are the standard's symbols.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PointAccuracy {
+    /// The commanded point's name.
     pub point: String,
     /// Visits.
     pub n: usize,
@@ -42,15 +51,19 @@ pub struct PointAccuracy {
     /// `p̄ − p_c` per axis (eqs 3.2-3.3).
     #[serde(rename = "APx")]
     pub ap_x: f64,
+    /// `p̄ − p_c` along y, mm (eq. 3.3).
     #[serde(rename = "APy")]
     pub ap_y: f64,
+    /// `p̄ − p_c` along z, mm (eq. 3.3).
     #[serde(rename = "APz")]
     pub ap_z: f64,
     /// Mean of the wrapped angle deviations (eqs 3.4-3.5); `None` without angles on both sides.
     #[serde(rename = "APa")]
     pub ap_a: Option<f64>,
+    /// Like `APa`, about `ry`, degrees.
     #[serde(rename = "APb")]
     pub ap_b: Option<f64>,
+    /// Like `APa`, about `rz`, degrees.
     #[serde(rename = "APc")]
     pub ap_c: Option<f64>,
     /// `RP = l̄ + 3·S_l` (eqs 3.6-3.8).
@@ -59,8 +72,10 @@ pub struct PointAccuracy {
     /// `3·S_a` etc. (eqs 3.9-3.11); `None` without measured angles.
     #[serde(rename = "RPa")]
     pub rp_a: Option<f64>,
+    /// Like `RPa`, about `ry`, degrees.
     #[serde(rename = "RPb")]
     pub rp_b: Option<f64>,
+    /// Like `RPa`, about `rz`, degrees.
     #[serde(rename = "RPc")]
     pub rp_c: Option<f64>,
     /// The largest single distance of a visit from the commanded position (Table 3.3 "MAX").
@@ -68,13 +83,16 @@ pub struct PointAccuracy {
     pub max: f64,
     /// `l̄` and `S_l` behind RP.
     pub l_mean: f64,
+    /// `S_l`, over `n − 1` (eq. 3.8).
     #[serde(rename = "S_l")]
     pub s_l: f64,
     /// The smallest and largest `l_j` (Table 3.3's repeating deviation min/max).
     pub l_min: f64,
+    /// The largest `l_j`.
     pub l_max: f64,
     /// The barycentre `p̄` of the visits and the commanded position.
     pub mean: [f64; 3],
+    /// The commanded position, mm.
     pub commanded: [f64; 3],
     /// Each visit minus the commanded position, in visit order (for the plots).
     #[serde(skip)]
@@ -84,42 +102,60 @@ pub struct PointAccuracy {
 /// The worst of each figure over all points (largest magnitude; signed figures keep their sign).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PoseSummary {
+    /// Commanded points measured.
     pub points: usize,
+    /// Visits over all points.
     pub visits: usize,
+    /// The largest `AP`, mm.
     #[serde(rename = "AP")]
     pub ap: f64,
+    /// The `APx` of largest magnitude, signed, mm.
     #[serde(rename = "APx")]
     pub ap_x: f64,
+    /// The `APy` of largest magnitude, signed, mm.
     #[serde(rename = "APy")]
     pub ap_y: f64,
+    /// The `APz` of largest magnitude, signed, mm.
     #[serde(rename = "APz")]
     pub ap_z: f64,
+    /// The `APa` of largest magnitude, signed, degrees.
     #[serde(rename = "APa")]
     pub ap_a: Option<f64>,
+    /// The `APb` of largest magnitude, signed, degrees.
     #[serde(rename = "APb")]
     pub ap_b: Option<f64>,
+    /// The `APc` of largest magnitude, signed, degrees.
     #[serde(rename = "APc")]
     pub ap_c: Option<f64>,
+    /// The largest `RP`, mm.
     #[serde(rename = "RP")]
     pub rp: f64,
+    /// The largest `RPa`, degrees.
     #[serde(rename = "RPa")]
     pub rp_a: Option<f64>,
+    /// The largest `RPb`, degrees.
     #[serde(rename = "RPb")]
     pub rp_b: Option<f64>,
+    /// The largest `RPc`, degrees.
     #[serde(rename = "RPc")]
     pub rp_c: Option<f64>,
+    /// The largest `MAX`, mm.
     #[serde(rename = "MAX")]
     pub max: f64,
     /// Where the worst AP, RP and MAX are.
     pub worst_ap_point: String,
+    /// The point with the largest RP.
     pub worst_rp_point: String,
+    /// The point with the largest MAX.
     pub worst_max_point: String,
 }
 
 /// Pose accuracy and repeatability of a measurement.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PoseReport {
+    /// One entry per commanded point with visits, in commanded order.
     pub points: Vec<PointAccuracy>,
+    /// The worst figures over all points.
     pub summary: PoseSummary,
 }
 
@@ -373,7 +409,9 @@ pub fn pose_accuracy(
 /// One figure before and after, and the change in percent of before (negative: better).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Change {
+    /// The figure of the earlier measurement.
     pub before: f64,
+    /// The figure of the later measurement.
     pub after: f64,
     /// `after − before`.
     pub change: f64,
@@ -382,6 +420,7 @@ pub struct Change {
 }
 
 impl Change {
+    /// The change from `before` to `after`.
     pub fn new(before: f64, after: f64) -> Change {
         Change {
             before,
@@ -395,11 +434,15 @@ impl Change {
 /// How one point changed between two measurements.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PointChange {
+    /// The point's name (`"worst"` for the summary).
     pub point: String,
+    /// AP before and after, mm.
     #[serde(rename = "AP")]
     pub ap: Change,
+    /// RP before and after, mm.
     #[serde(rename = "RP")]
     pub rp: Change,
+    /// MAX before and after, mm.
     #[serde(rename = "MAX")]
     pub max: Change,
 }
@@ -407,7 +450,9 @@ pub struct PointChange {
 /// Before/after: the improvement a correction brought, per point and for the worst figures.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PoseComparison {
+    /// Per point of the later measurement, in its order.
     pub points: Vec<PointChange>,
+    /// The worst figures before and after.
     pub summary: PointChange,
 }
 

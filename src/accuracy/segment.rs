@@ -18,33 +18,43 @@ use super::error::AccuracyError;
 use super::path::{Polyline, Run, Sample};
 
 /// Half-width of the velocity window, in samples.
-pub const WINDOW: usize = 5;
+pub(crate) const WINDOW: usize = 5;
 /// Below this fraction of the travel speed a sample stands.
-pub const STOP_FRACTION: f64 = 0.1;
+pub(crate) const STOP_FRACTION: f64 = 0.1;
 /// A run used for the figures must reach from this fraction of the path length from the start
 /// to this fraction from the end.
-pub const COVER_FRACTION: f64 = 0.05;
+pub(crate) const COVER_FRACTION: f64 = 0.05;
 
 /// The direction of a run along the commanded path.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Direction {
+    /// From the first commanded point towards the last.
     Forward,
+    /// From the last commanded point towards the first.
     Backward,
 }
 
 /// A run found in the recording, whether it was used and, if not, why.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct RunInfo {
+    /// `cycle C` for a run of the `cycle` column, `run N` (1-based) for one found from the motion.
     pub label: String,
+    /// 1-based line of the run's first sample.
     pub first_line: u64,
+    /// 1-based line of the run's last sample.
     pub last_line: u64,
+    /// Samples in the run.
     pub samples: usize,
+    /// Which way along the path the run goes.
     pub direction: Direction,
-    /// The stretch of the path the run covers (arc lengths of its extreme samples).
+    /// The stretch of the path the run covers: the smallest arc length of its samples, mm.
     pub from_s: f64,
+    /// The largest arc length of its samples, mm.
     pub to_s: f64,
+    /// Whether the figures use this run.
     pub used: bool,
+    /// Why the run is not used; `None` when it is.
     pub note: Option<String>,
 }
 
@@ -87,7 +97,7 @@ fn info(commanded: &Polyline, label: String, samples: &[Sample]) -> RunInfo {
 }
 
 /// Runs from the `cycle` column, in order of first appearance.
-pub fn runs_by_cycle(
+pub(crate) fn runs_by_cycle(
     commanded: &Polyline,
     samples: &[Sample],
     cycles: &[String],
@@ -132,7 +142,7 @@ fn motion(commanded: &Polyline, samples: &[Sample], times: &[f64]) -> Vec<(f64, 
 }
 
 /// Runs of a continuous recording, cut at stops and reversals (see the module text).
-pub fn runs_by_motion(
+pub(crate) fn runs_by_motion(
     commanded: &Polyline,
     samples: &[Sample],
 ) -> Result<(Vec<Run>, Vec<RunInfo>), AccuracyError> {

@@ -8,15 +8,15 @@ use nalgebra::Vector3;
 
 /// Knuth's MMIX linear congruential generator.
 #[derive(Clone, Debug)]
-pub struct Lcg(u64);
+pub(crate) struct Lcg(u64);
 
 impl Lcg {
-    pub fn new(seed: u64) -> Lcg {
+    pub(crate) fn new(seed: u64) -> Lcg {
         Lcg(seed ^ 0x9E37_79B9_7F4A_7C15)
     }
 
     /// Uniform in [0, 1).
-    pub fn uniform(&mut self) -> f64 {
+    pub(crate) fn uniform(&mut self) -> f64 {
         self.0 = self
             .0
             .wrapping_mul(6_364_136_223_846_793_005)
@@ -25,7 +25,7 @@ impl Lcg {
     }
 
     /// Standard normal (Box-Muller).
-    pub fn normal(&mut self) -> f64 {
+    pub(crate) fn normal(&mut self) -> f64 {
         let u1 = self.uniform().max(1e-300);
         let u2 = self.uniform();
         (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
@@ -129,10 +129,13 @@ fn trapezoid(length: f64, speed: f64, accel: f64) -> (f64, impl Fn(f64) -> f64) 
 /// Settings of a simulated straight-line recording.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LineSimulation {
+    /// Start of the line, mm.
     pub start: [f64; 3],
+    /// End of the line, mm.
     pub end: [f64; 3],
-    /// mm/s and mm/s².
+    /// Travel speed, mm/s.
     pub speed: f64,
+    /// Acceleration at the start and deceleration at the end, mm/s².
     pub accel: f64,
     /// Sampling rate in Hz.
     pub rate: f64,
@@ -142,8 +145,9 @@ pub struct LineSimulation {
     pub offset: [f64; 3],
     /// Amplitude of the start overshoot (decays over 60 mm of travel), mm.
     pub overshoot: f64,
-    /// Per-run offset scatter and per-sample noise, mm.
+    /// Standard deviation per axis of the per-run offset scatter, mm.
     pub run_scatter: f64,
+    /// Standard deviation per axis of the per-sample noise, mm.
     pub noise: f64,
 }
 

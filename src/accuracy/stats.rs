@@ -8,53 +8,49 @@ use crate::geometry::wrap_deg;
 /// Running mean and sum of squared deviations (Welford): one pass over the visits, no
 /// cancellation when the values are large and the spread small (tracker coordinates in mm).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Running {
+pub(crate) struct Running {
     n: usize,
     mean: f64,
     m2: f64,
 }
 
 impl Running {
-    pub fn push(&mut self, x: f64) {
+    pub(crate) fn push(&mut self, x: f64) {
         self.n += 1;
         let delta = x - self.mean;
         self.mean += delta / self.n as f64;
         self.m2 += delta * (x - self.mean);
     }
 
-    pub fn n(&self) -> usize {
-        self.n
-    }
-
-    pub fn mean(&self) -> f64 {
+    pub(crate) fn mean(&self) -> f64 {
         self.mean
     }
 
     /// The sample standard deviation (over `n − 1`, eqs 3.8-3.11); `None` below 2 values.
-    pub fn std(&self) -> Option<f64> {
+    pub(crate) fn std(&self) -> Option<f64> {
         (self.n >= 2).then(|| (self.m2.max(0.0) / (self.n - 1) as f64).sqrt())
     }
 }
 
 /// The mean of points, component by component.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RunningPoint([Running; 3]);
+pub(crate) struct RunningPoint([Running; 3]);
 
 impl RunningPoint {
-    pub fn push(&mut self, p: &Vector3<f64>) {
+    pub(crate) fn push(&mut self, p: &Vector3<f64>) {
         for (r, v) in self.0.iter_mut().zip(p.iter()) {
             r.push(*v);
         }
     }
 
-    pub fn mean(&self) -> Vector3<f64> {
+    pub(crate) fn mean(&self) -> Vector3<f64> {
         Vector3::new(self.0[0].mean(), self.0[1].mean(), self.0[2].mean())
     }
 }
 
 /// `l̄` and `S_l` of the distances `l_j = |p_j − p̄|` (eqs 3.6-3.8 and 3.19-3.20): the centre
 /// is known only after all points, so this takes the points and the centre.
-pub fn spread<'a>(
+pub(crate) fn spread<'a>(
     points: impl Iterator<Item = &'a Vector3<f64>>,
     centre: &Vector3<f64>,
 ) -> Running {
@@ -66,18 +62,18 @@ pub fn spread<'a>(
 }
 
 /// `l̄ + 3·S_l` (eqs 3.7, 3.18); `None` below 2 values.
-pub fn repeatability(r: &Running) -> Option<f64> {
+pub(crate) fn repeatability(r: &Running) -> Option<f64> {
     r.std().map(|s| r.mean() + 3.0 * s)
 }
 
 /// The deviation of a measured angle from the commanded one in degrees, wrapped to
 /// (-180, 180]: 179.9° against -179.9° is 0.2°, not 359.8°.
-pub fn angle_deviation(measured: f64, commanded: f64) -> f64 {
+pub(crate) fn angle_deviation(measured: f64, commanded: f64) -> f64 {
     wrap_deg(measured - commanded)
 }
 
 /// `a + λ·(b − a)` for angles, along the shorter way round.
-pub fn angle_lerp(a: f64, b: f64, lambda: f64) -> f64 {
+pub(crate) fn angle_lerp(a: f64, b: f64, lambda: f64) -> f64 {
     wrap_deg(a + lambda * angle_deviation(b, a))
 }
 

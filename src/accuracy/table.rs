@@ -37,6 +37,7 @@ impl ColumnMap {
         Ok(ColumnMap { pairs })
     }
 
+    /// Whether the map names no column (every column is then matched by its role's name).
     pub fn is_empty(&self) -> bool {
         self.pairs.is_empty()
     }
@@ -105,7 +106,7 @@ fn clean(bytes: &[u8]) -> String {
 
 impl Table {
     /// Reads a file; lines starting with `#` and blank lines are skipped.
-    pub fn read(path: &Path, map: &ColumnMap) -> Result<Table, AccuracyError> {
+    pub(crate) fn read(path: &Path, map: &ColumnMap) -> Result<Table, AccuracyError> {
         let bytes = crate::output::read_input(path).map_err(|error| AccuracyError::Io {
             path: path.to_path_buf(),
             error,
@@ -114,7 +115,11 @@ impl Table {
     }
 
     /// Parses bytes; `path` is for messages only.
-    pub fn parse(path: &Path, bytes: &[u8], map: &ColumnMap) -> Result<Table, AccuracyError> {
+    pub(crate) fn parse(
+        path: &Path,
+        bytes: &[u8],
+        map: &ColumnMap,
+    ) -> Result<Table, AccuracyError> {
         let mut lines = Vec::new();
         let mut start = 0;
         let mut number = 0u64;
@@ -208,13 +213,13 @@ impl Table {
     }
 
     /// The index of `role`'s column, if the file has it.
-    pub fn optional(&self, role: &str) -> Option<usize> {
+    pub(crate) fn optional(&self, role: &str) -> Option<usize> {
         let name = self.map.column_for(role);
         self.headers.iter().position(|h| *h == name)
     }
 
     /// The index of `role`'s column, or an error at the header naming it.
-    pub fn column(&self, role: &str) -> Result<usize, AccuracyError> {
+    pub(crate) fn column(&self, role: &str) -> Result<usize, AccuracyError> {
         self.optional(role).ok_or_else(|| {
             let name = self.map.column_for(role);
             let hint = if name == role {
@@ -238,7 +243,7 @@ impl Table {
     }
 
     /// `rx, ry, rz` together or not at all: one or two of them is an error.
-    pub fn angle_columns(&self) -> Result<Option<[usize; 3]>, AccuracyError> {
+    pub(crate) fn angle_columns(&self) -> Result<Option<[usize; 3]>, AccuracyError> {
         let found = ["rx", "ry", "rz"].map(|r| self.optional(r));
         match found {
             [Some(a), Some(b), Some(c)] => Ok(Some([a, b, c])),
@@ -256,7 +261,7 @@ impl Table {
 
     /// Without a column map, a column that is not one of `roles` is an error: a misspelt header
     /// is not ignored silently. With a map, other columns are the export's own and are ignored.
-    pub fn refuse_unknown(&self, roles: &[&str]) -> Result<(), AccuracyError> {
+    pub(crate) fn refuse_unknown(&self, roles: &[&str]) -> Result<(), AccuracyError> {
         if !self.map.is_empty() {
             return Ok(());
         }
@@ -277,14 +282,14 @@ impl Table {
     }
 
     /// The text of field `index` of `row`.
-    pub fn text(&self, row: &Row, index: usize) -> String {
+    pub(crate) fn text(&self, row: &Row, index: usize) -> String {
         row.fields
             .get(index)
             .map_or_else(String::new, |&(a, b)| clean(&self.source[a..b]))
     }
 
     /// The number in field `index` of `row`; with `;` between fields a decimal comma is read.
-    pub fn number(&self, row: &Row, index: usize) -> Result<f64, AccuracyError> {
+    pub(crate) fn number(&self, row: &Row, index: usize) -> Result<f64, AccuracyError> {
         let text = self.text(row, index);
         let name = self.headers.get(index).cloned().unwrap_or_default();
         let normalised = if self.delimiter != b',' {
@@ -310,7 +315,7 @@ impl Table {
     }
 
     /// An error at `row`, under field `field` (the whole line when `None`).
-    pub fn located(
+    pub(crate) fn located(
         &self,
         row: &Row,
         field: Option<usize>,
@@ -340,7 +345,13 @@ impl Table {
     }
 
     /// An error under `role`'s field of `row`.
-    pub fn error_at(&self, row: &Row, role: &str, message: String, hint: &str) -> AccuracyError {
+    pub(crate) fn error_at(
+        &self,
+        row: &Row,
+        role: &str,
+        message: String,
+        hint: &str,
+    ) -> AccuracyError {
         self.located(row, self.optional(role), message, hint.to_owned())
     }
 }

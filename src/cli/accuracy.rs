@@ -6,11 +6,10 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use trackfix::accuracy::path::{read_commanded_path, read_recording};
-use trackfix::accuracy::plot::{path_svg, path_svgs, pose_svg};
-use trackfix::accuracy::pose::{compare, pose_accuracy, read_commanded_poses, read_visits};
 use trackfix::accuracy::{
     ColumnMap, PathOptions, PathReport, PointAccuracy, PoseComparison, PoseReport, PoseSummary,
+    compare, path_svg, path_svgs, pose_accuracy, pose_svg, read_commanded_path,
+    read_commanded_poses, read_recording, read_visits,
 };
 use trackfix::output::write_file;
 
@@ -397,7 +396,7 @@ fn run_path(a: &PathArgs) -> anyhow::Result<String> {
     }
     let commanded = read_commanded_path(&a.commanded, &ColumnMap::default())?;
     let recording = read_recording(&a.measured, &map)?;
-    let report = trackfix::accuracy::path::path_accuracy(
+    let report = trackfix::accuracy::path_accuracy(
         &commanded,
         &recording,
         PathOptions {
@@ -568,8 +567,8 @@ fn path_table(a: &PathArgs, r: &PathReport) -> String {
             run.last_line,
             run.samples,
             match run.direction {
-                trackfix::accuracy::segment::Direction::Forward => "forward",
-                trackfix::accuracy::segment::Direction::Backward => "backward",
+                trackfix::accuracy::Direction::Forward => "forward",
+                trackfix::accuracy::Direction::Backward => "backward",
             },
             tenths(run.from_s),
             tenths(run.to_s),

@@ -4,8 +4,8 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use trackfix::accuracy::pose::{pose_accuracy, read_commanded_poses, read_visits};
 use trackfix::accuracy::{AccuracyError, ColumnMap};
+use trackfix::accuracy::{pose_accuracy, read_commanded_poses, read_visits};
 use trackfix::html_report::accuracy::pose_result;
 use trackfix::html_report::track::TrackReport;
 use trackfix::html_report::{SourceFile, TrackInputs};

@@ -13,10 +13,11 @@ use super::{Dialect, Language, Vocabulary};
 
 /// The KRL dialect.
 #[derive(Clone, Copy, Debug)]
-pub struct Krl;
+pub(crate) struct Krl;
 
 #[allow(non_upper_case_globals)]
 impl Language {
+    /// KUKA KRL (`.src`, `.dat`, `.sub`).
     pub const Krl: Language = Language::of(&Krl);
 }
 

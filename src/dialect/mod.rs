@@ -7,8 +7,8 @@
 //! language. To add a language: one folder with its parser and a `Dialect`, and one line in
 //! [`BUILT_IN`] (or [`register`] at run time, as the stub dialect test does).
 
-pub mod krl;
-pub mod rapid;
+pub(crate) mod krl;
+pub(crate) mod rapid;
 
 use std::path::{Path, PathBuf};
 use std::sync::RwLock;
@@ -88,6 +88,8 @@ pub trait Dialect: Sync + 'static {
         Ok(Program { files })
     }
 
+    /// The language's words for the shared concepts (work object or base, stationary tool, …),
+    /// for reports and messages.
     fn vocabulary(&self) -> &'static Vocabulary;
 
     /// The mark that starts a comment running to the end of the line (`!`, `;`): trackfix's
@@ -138,10 +140,12 @@ impl Language {
         Language(dialect)
     }
 
+    /// The dialect behind the handle.
     pub fn dialect(self) -> &'static dyn Dialect {
         self.0
     }
 
+    /// The dialect's name (`"rapid"`, `"krl"`), as reports and JSON show it.
     pub fn name(self) -> &'static str {
         self.0.name()
     }

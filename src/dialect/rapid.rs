@@ -11,11 +11,13 @@ use crate::transform::rewrite::integer_edit;
 use super::{Dialect, Language, Vocabulary};
 
 /// The RAPID dialect.
+/// The RAPID dialect.
 #[derive(Clone, Copy, Debug)]
-pub struct Rapid;
+pub(crate) struct Rapid;
 
 #[allow(non_upper_case_globals)]
 impl Language {
+    /// ABB RAPID (`.mod`, `.modx`, `.sys`, `.sysx`, `.prg`).
     pub const Rapid: Language = Language::of(&Rapid);
 }
 

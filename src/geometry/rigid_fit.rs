@@ -18,14 +18,22 @@ use super::Pose;
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum RigidFitError {
+    /// Fewer than three pairs.
     #[error("{got} point pair(s), a rigid fit needs at least 3")]
-    TooFewPoints { got: usize },
+    TooFewPoints {
+        /// How many pairs were given.
+        got: usize,
+    },
+    /// The two point lists differ in length (source, target).
     #[error("{0} source points and {1} target points")]
     LengthMismatch(usize, usize),
+    /// The points lie on one line (or coincide): the rotation about it is undetermined.
     #[error("the points are collinear or coincident, so the rotation about their line is free")]
     Collinear,
+    /// A coordinate is NaN or infinite.
     #[error("a coordinate is not a finite number")]
     NotFinite,
+    /// nalgebra's SVD of the cross-covariance did not converge.
     #[error("the singular value decomposition did not converge")]
     Svd,
 }

@@ -37,8 +37,11 @@ pub struct KinematicsToml {
 /// A problem in the table, at `span` of the cell file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TableError {
+    /// The bytes of the cell file the problem is at.
     pub span: Span,
+    /// What is wrong.
     pub message: String,
+    /// What to do.
     pub hint: String,
 }
 

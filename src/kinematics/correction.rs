@@ -15,13 +15,18 @@ pub enum KinematicRefusal {
     Unreachable,
     /// The new pose is reachable in the configuration only with a joint outside its limits.
     OutsideLimit {
+        /// The axis, 1-based.
         axis: usize,
+        /// Its angle in the new pose, degrees.
         value: f64,
+        /// Its `[min, max]`, degrees.
         limits: [f64; 2],
     },
     /// The new pose needs another configuration (`before` is the written or original one).
     ConfigChange {
+        /// The written (or original) configuration.
         before: ConfigValue,
+        /// The configuration the new pose needs.
         after: ConfigValue,
     },
 }
@@ -55,6 +60,7 @@ pub struct KinematicCheck {
     /// The solution of the new pose in the same configuration nearest to `before` (or the
     /// nearest outside the limits / in another configuration when refused).
     pub after: Option<Joints>,
+    /// Why the transform is refused; `None` when the new pose is accepted.
     pub refusal: Option<KinematicRefusal>,
 }
 

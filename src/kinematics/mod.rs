@@ -31,7 +31,9 @@ pub enum ConfigValue {
     Abb([i32; 4]),
     /// KUKA Status and Turn (either may be absent in a program).
     Kuka {
+        /// The Status bits (`S`): the arm configuration (`docs/design.md §10`).
         status: Option<u32>,
+        /// The Turn bits (`T`): bit i set when axis A(i+1) is negative.
         turn: Option<u32>,
     },
 }
@@ -106,9 +108,11 @@ impl std::fmt::Display for ConfigValue {
 /// The solution of `flange` that a written configuration selects.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Selection {
+    /// The controller joints of the selected solution, degrees.
     pub joints: Joints,
     /// The written configuration selects these joints (always true without one).
     pub config_matches: bool,
+    /// Every joint is within its limits.
     pub within_limits: bool,
 }
 

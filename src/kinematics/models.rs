@@ -24,6 +24,7 @@ pub struct Model {
 }
 
 impl Model {
+    /// The arm model: geometry, joint map and limits.
     pub fn kinematics(&self) -> Kinematics {
         Kinematics {
             geometry: self.geometry,
@@ -39,6 +40,7 @@ impl Model {
 const KUKA_SIGNS: [f64; 6] = [-1.0, 1.0, 1.0, -1.0, 1.0, -1.0];
 const KUKA_OFFSETS: [f64; 6] = [0.0, -90.0, 0.0, 0.0, 0.0, 0.0];
 
+/// Every bundled model, by `name` (the cell file's `model = "NAME"`).
 pub const MODELS: &[Model] = &[
     Model {
         name: "abb_irb2400_10",

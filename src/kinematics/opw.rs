@@ -35,18 +35,26 @@ pub type Joints = [f64; 6];
 /// The seven OPW lengths in mm.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct OpwGeometry {
+    /// Forward offset of axis 2 from axis 1.
     pub a1: f64,
+    /// Forearm offset perpendicular to it (negative for ABB and KUKA arms).
     pub a2: f64,
+    /// Sideways offset of the arm plane.
     pub b: f64,
+    /// Height of axis 2 above the base.
     pub c1: f64,
+    /// Upper arm, axis 2 → axis 3.
     pub c2: f64,
+    /// Forearm, axis 3 → wrist centre.
     pub c3: f64,
+    /// Wrist centre → flange.
     pub c4: f64,
 }
 
 /// A robot arm: geometry, the controller-to-model joint map and the joint limits.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Kinematics {
+    /// The seven OPW lengths.
     pub geometry: OpwGeometry,
     /// `offset_i` in degrees (`q_i = sign_i·θ_i − offset_i`).
     pub offsets: [f64; 6],
@@ -226,6 +234,7 @@ impl Kinematics {
         std::array::from_fn(|i| (j[i] - self.limits[i][0]).min(self.limits[i][1] - j[i]))
     }
 
+    /// Whether every joint is within its limits (to 1e-9°).
     pub fn within_limits(&self, j: &Joints) -> bool {
         self.limit_margins(j).iter().all(|m| *m >= -1e-9)
     }

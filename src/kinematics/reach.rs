@@ -40,6 +40,7 @@ impl Default for ReachOptions {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ReachStatus {
+    /// Reachable in the written configuration, within the limits.
     Ok,
     /// No joint solution: the pose is out of the arm's reach.
     Unreachable,
@@ -52,6 +53,7 @@ pub enum ReachStatus {
 }
 
 impl ReachStatus {
+    /// The status as it appears in the JSON and table output (kebab-case).
     pub fn as_str(self) -> &'static str {
         match self {
             ReachStatus::Ok => "ok",
@@ -66,26 +68,36 @@ impl ReachStatus {
 /// One target's reach.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct TargetReach {
+    /// The target's name.
     pub name: String,
+    /// What kind of target it is (`robtarget`, `E6POS`, …), as the position model names it.
     pub kind: &'static str,
+    /// 1-based line of its declaration.
     pub line: usize,
+    /// The verdict.
     pub status: ReachStatus,
     /// `None` when not checked.
     pub reachable: Option<bool>,
+    /// The controller joints of the selected solution, degrees; `None` when not checked or unreachable.
     pub joints: Option<Joints>,
     /// `None` when nothing is written (or for joint targets).
     pub config_matches: Option<bool>,
+    /// The configuration the target writes, as text; `None` when it writes none.
     pub config_written: Option<String>,
+    /// The configuration of the selected solution, as text; `None` when not solved.
     pub config_solved: Option<String>,
     /// Per axis, degrees to the nearer limit (negative: outside).
     pub limit_margin_deg: Option<[f64; 6]>,
+    /// What the check noticed besides the verdict (why not checked, near a singularity, …).
     pub warnings: Vec<String>,
 }
 
 /// The targets of one file.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct FileReach {
+    /// The program file.
     pub path: std::path::PathBuf,
+    /// Its targets, in the order of the file.
     pub targets: Vec<TargetReach>,
 }
 

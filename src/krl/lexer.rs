@@ -2,6 +2,7 @@
 //! in order gives the source back (`grammars/krl.ebnf`, rule `token`).
 //!
 //! Tokens are `(kind, u32 span)`: no per-token allocation, which keeps a 50 MB `.dat` cheap.
+#![warn(missing_docs, unreachable_pub)]
 
 use crate::syntax::Span;
 
@@ -49,16 +50,21 @@ impl TokenKind {
 /// One token: its kind and its byte range in the source.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Token {
+    /// What the token is.
     pub kind: TokenKind,
+    /// Its first byte in the source.
     pub start: u32,
+    /// One past its last byte.
     pub end: u32,
 }
 
 impl Token {
+    /// `start..end` as a [`Span`].
     pub fn span(self) -> Span {
         Span::new(self.start as usize, self.end as usize)
     }
 
+    /// The token's bytes in `src`.
     pub fn text(self, src: &[u8]) -> &[u8] {
         self.span().slice(src)
     }
@@ -121,14 +127,14 @@ pub fn lex(src: &[u8]) -> Vec<Token> {
 /// The tokens of `src` one at a time, for the parser to consume a line at a time without
 /// holding the tokens of the whole file (five times the size of a position-heavy `.dat`).
 #[derive(Clone, Debug)]
-pub struct Lexer<'a> {
+pub(crate) struct Lexer<'a> {
     src: &'a [u8],
     i: usize,
     line_start: bool,
 }
 
 impl<'a> Lexer<'a> {
-    pub fn new(src: &'a [u8]) -> Lexer<'a> {
+    pub(crate) fn new(src: &'a [u8]) -> Lexer<'a> {
         Lexer {
             src,
             i: 0,
@@ -137,7 +143,7 @@ impl<'a> Lexer<'a> {
     }
 
     /// Byte offset of the next token.
-    pub fn offset(&self) -> usize {
+    pub(crate) fn offset(&self) -> usize {
         self.i
     }
 

@@ -3,8 +3,8 @@
 //!
 //! Grammar: `grammars/krl.ebnf`.
 //!
-//! - [`lexer`]: bytes → `(kind, u32 span)` tokens covering every byte;
-//! - [`parser`] and [`tree`]: the shared [`crate::syntax::Tree`] with one leaf per line under
+//! - `lexer` ([`lex`]): bytes → `(kind, u32 span)` tokens covering every byte;
+//! - `parser` ([`parse`], [`parse_with`]) and `tree` ([`NodeKind`], [`Stmt`]): the shared [`crate::syntax::Tree`] with one leaf per line under
 //!   routine and block branches, statements for what trackfix reads, opaque
 //!   nodes with located diagnostics for the rest; `tree.print(src) == src`;
 //! - `positions`: targets, joint positions, `BASE_DATA`/`TOOL_DATA` into the shared model;
@@ -20,18 +20,22 @@
 
 mod config_dat;
 mod dat_line;
-pub mod lexer;
+pub(crate) mod lexer;
 mod pair;
-pub mod parser;
+pub(crate) mod parser;
 mod positions;
 mod resolve;
-pub mod tree;
+pub(crate) mod tree;
 
 use std::path::Path;
 
 pub use config_dat::{config_frames, load_config_dat};
+pub use lexer::{Token, TokenKind, lex};
 pub use pair::{load_program, load_program_from_sources, partner_of};
-pub use parser::{Parse, parse};
+pub use parser::{MOTION_KEYWORDS, Parse, parse, parse_with};
+pub use tree::{
+    Aggregate, DeclVar, Expr, ExprKind, Field, Krl, Node, NodeKind, Stmt, StmtKind, Tree,
+};
 
 use crate::position::{Language, ParsedFile};
 use crate::syntax::LineIndex;

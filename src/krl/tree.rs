@@ -2,6 +2,7 @@
 //! source lines (KRL is line oriented), each owning a contiguous run of tokens including its
 //! trivia and newline, and whose branches are the `DEF … END` routines and `IF … ENDIF` blocks;
 //! plus the parsed statements that trackfix reads (declarations, assignments, calls, motions).
+#![warn(missing_docs, unreachable_pub)]
 
 use crate::syntax::Span;
 
@@ -61,10 +62,13 @@ pub enum NodeKind {
 /// spans.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Expr {
+    /// The expression's bytes, trivia excluded.
     pub span: Span,
+    /// What it is.
     pub kind: ExprKind,
 }
 
+/// The shapes of [`Expr`] trackfix distinguishes; operators and names are spans of the source.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ExprKind {
     /// A numeric literal, its sign included when written directly in front (`-12.5`).
@@ -98,21 +102,28 @@ pub enum ExprKind {
 pub struct Aggregate {
     /// `FRAME` in `{FRAME: X 1}`.
     pub type_name: Option<Span>,
+    /// The fields, in written order.
     pub fields: Vec<Field>,
 }
 
 /// `NAME value` inside an aggregate (`POINT2[] " "` keeps its `[]` out of the name).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Field {
+    /// The field's name (`X`, `S`, `POINT2`).
     pub name: Span,
+    /// Its value.
     pub value: Expr,
 }
 
 /// One declared variable: `name[dims] = init`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DeclVar {
+    /// The variable's name.
     pub name: Span,
+    /// One entry per written dimension, `None` where it is left empty (`a[,3]`); empty for a
+    /// scalar or `a[]`.
     pub dims: Vec<Option<Expr>>,
+    /// The initial value after `=`, when written.
     pub init: Option<Expr>,
 }
 
@@ -121,35 +132,49 @@ pub struct DeclVar {
 pub enum StmtKind {
     /// `DEF name`, `DEFFCT type name`, `DEFDAT name`.
     Routine {
+        /// The `DEF`, `DEFFCT` or `DEFDAT` keyword.
         keyword: Span,
+        /// The routine's name, when the line has one.
         name: Option<Span>,
     },
     /// `DECL type a = …, b`.
     Decl {
+        /// The data type (`E6POS`, `FRAME`, …).
         type_name: Span,
+        /// The variables declared, in order.
         vars: Vec<DeclVar>,
     },
+    /// `target = value`.
     Assign {
+        /// The left side (`$BASE`, `XP1.X`, …).
         target: Expr,
+        /// The right side.
         value: Expr,
     },
+    /// A subroutine call statement (`BAS(#INITMOV, 0)`): the call expression.
     Call(Expr),
     /// `IF`, `ELSE`, `ENDIF`, `SWITCH`, `CASE`, `DEFAULT`, `ENDSWITCH` (the keyword): where
     /// program order forks and joins, for following the base and tool.
     Branch(Span),
     /// `keyword target` / `keyword aux, target`, then approximation and `WITH` assignments.
     Motion {
+        /// `PTP`, `LIN`, `CIRC`, … (one of [`crate::krl::MOTION_KEYWORDS`]).
         keyword: Span,
+        /// The target expressions (two for `CIRC`: auxiliary point, then target).
         targets: Vec<Expr>,
+        /// `WITH name = value` assignments, in order.
         with: Vec<(Expr, Expr)>,
     },
 }
 
+/// One statement trackfix reads: where it is in the tree and what it says. What
+/// [`crate::krl::parse_with`] streams to its sink.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stmt {
     /// Index of the line's node in [`Tree::nodes`].
     pub node: u32,
     /// The statement's own text, trivia excluded.
     pub span: Span,
+    /// What it says.
     pub kind: StmtKind,
 }

@@ -28,32 +28,70 @@ pub use transaction::{FileWrite, Written, clean_stale, commit};
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum OutputError {
+    /// An output path is one of the inputs (writing it is what in-place writing is for).
     #[error("{}: refusing to overwrite an input file; write it in place instead", path.display())]
-    WouldOverwriteInput { path: PathBuf },
+    WouldOverwriteInput {
+        /// The input named as an output.
+        path: PathBuf,
+    },
+    /// One output file for several programs.
     #[error("one output file was named, but {count} programs were given; name an output folder")]
-    OneOutputManyPrograms { count: usize },
+    OneOutputManyPrograms {
+        /// How many programs were given.
+        count: usize,
+    },
+    /// Standard output as the destination of a program of several files.
     #[error(
         "standard output takes one file, but the program has {count} files to write (a KRL pair?); name an output file or folder"
     )]
-    OneStreamManyFiles { count: usize },
+    OneStreamManyFiles {
+        /// How many files the program has to write.
+        count: usize,
+    },
+    /// Two results map to the same destination.
     #[error("{} would be written twice (two inputs with the same name and no input folder to tell them apart?)", path.display())]
-    Duplicate { path: PathBuf },
+    Duplicate {
+        /// The destination.
+        path: PathBuf,
+    },
+    /// The destination exists and is not a regular file (or a symlink to one).
     #[error("{}: cannot write there: it is {what}", path.display())]
-    NotAFile { path: PathBuf, what: &'static str },
+    NotAFile {
+        /// The destination.
+        path: PathBuf,
+        /// What it is instead (`a directory`, …).
+        what: &'static str,
+    },
+    /// Another run holds the destination's lock file.
     #[error("{}: another trackfix run{} is writing it; try again when it has finished (a lock left by a killed run is removed automatically)", path.display(), pid.map(|p| format!(" (process {p})")).unwrap_or_default())]
-    Locked { path: PathBuf, pid: Option<u32> },
+    Locked {
+        /// The destination.
+        path: PathBuf,
+        /// The process the lock file names, when it names one.
+        pid: Option<u32>,
+    },
+    /// An input's bytes changed between reading it and replacing it.
     #[error("{}: changed since it was read (by another run?); nothing written, run again", path.display())]
-    ChangedSinceRead { path: PathBuf },
+    ChangedSinceRead {
+        /// The input.
+        path: PathBuf,
+    },
     // The OS error is part of the message and deliberately not a `source`: printed with its
     // chain, it would otherwise appear twice.
+    /// A file-system operation failed; the run was undone.
     #[error("{}: {error}; nothing written", path.display())]
     Io {
+        /// The file or directory operated on.
         path: PathBuf,
+        /// The OS error.
         error: std::io::Error,
     },
+    /// A run failed and undoing it failed too: some files may be changed.
     #[error("{error}, and undoing the run failed for: {}; the backups are kept", failures.join("; "))]
     RollbackFailed {
+        /// Why the run failed.
         error: Box<OutputError>,
+        /// Each step of the undo that failed, with its path and error.
         failures: Vec<String>,
     },
 }

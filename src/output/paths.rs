@@ -13,7 +13,10 @@ pub enum Destination {
     Dir(PathBuf),
     /// `--in-place`, keeping a numbered backup (`FILE.orig`, `FILE.orig.1`, …) unless `backup`
     /// is false.
-    InPlace { backup: bool },
+    InPlace {
+        /// Keep a backup of each replaced file.
+        backup: bool,
+    },
 }
 
 /// The input directories a run was given: under `--out-dir` a file found in one of them keeps

@@ -40,22 +40,28 @@ pub struct FileWrite {
 /// One file a committed run wrote.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Written {
+    /// The input the file was made from.
     pub input: PathBuf,
     /// The destination as named.
     pub path: PathBuf,
     /// The file actually replaced when `path` is a symlink.
     pub resolved: Option<PathBuf>,
+    /// Where the replaced file was kept, when a backup was made.
     pub backup: Option<PathBuf>,
 }
 
 /// The file-system operations a transaction performs; the seam where tests inject faults.
 pub trait Filesystem {
+    /// Creates one directory (its parent exists).
     fn create_dir(&self, path: &Path) -> std::io::Result<()>;
     /// Creates `path` (it must not exist), writes `bytes`, sets `mode` (Unix permission bits;
     /// `None`: 0644 less the umask) and syncs.
     fn write_new(&self, path: &Path, bytes: &[u8], mode: Option<u32>) -> std::io::Result<()>;
+    /// Renames `from` to `to`, replacing `to` atomically.
     fn rename(&self, from: &Path, to: &Path) -> std::io::Result<()>;
+    /// Removes a file.
     fn remove_file(&self, path: &Path) -> std::io::Result<()>;
+    /// Removes an empty directory.
     fn remove_dir(&self, path: &Path) -> std::io::Result<()>;
 }
 

@@ -3,14 +3,15 @@
 //! Aggregates, calls and arguments are allocated before their children, so their subtree is the
 //! index range `id..subtree_end`. Compound and access nodes wrap an operand that was read before
 //! it was known to be one, so they come after their first child; nothing relies on their range.
+#![warn(missing_docs, unreachable_pub)]
 
 use crate::syntax::Span;
 
 /// No node (end of a sibling list, no child).
-pub const NONE: u32 = u32::MAX;
+pub(crate) const NONE: u32 = u32::MAX;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ExprKind {
+pub(crate) enum ExprKind {
     /// A numeric literal, with a directly attached sign included in the span (`-0.5`).
     Num,
     Str,
@@ -36,7 +37,7 @@ pub enum ExprKind {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ExprNode {
+pub(crate) struct ExprNode {
     pub kind: ExprKind,
     pub start: u32,
     pub end: u32,
@@ -51,32 +52,32 @@ pub struct ExprNode {
 }
 
 impl ExprNode {
-    pub fn span(&self) -> Span {
+    pub(crate) fn span(&self) -> Span {
         Span::new(self.start as usize, self.end as usize)
     }
 
-    pub fn name_span(&self) -> Span {
+    pub(crate) fn name_span(&self) -> Span {
         Span::new(self.name_start as usize, self.name_end as usize)
     }
 }
 
 /// The expression nodes of the statement being read.
 #[derive(Clone, Debug, Default)]
-pub struct Arena {
+pub(crate) struct Arena {
     pub nodes: Vec<ExprNode>,
 }
 
 impl Arena {
-    pub fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.nodes.clear();
     }
 
-    pub fn get(&self, id: u32) -> Option<&ExprNode> {
+    pub(crate) fn get(&self, id: u32) -> Option<&ExprNode> {
         self.nodes.get(id as usize)
     }
 
     /// Allocates a node whose children will follow it.
-    pub fn open(&mut self, kind: ExprKind, start: u32) -> u32 {
+    pub(crate) fn open(&mut self, kind: ExprKind, start: u32) -> u32 {
         let id = self.nodes.len() as u32;
         self.nodes.push(ExprNode {
             kind,
@@ -93,7 +94,7 @@ impl Arena {
     }
 
     /// Closes node `id` at byte `end`: its subtree is everything allocated since.
-    pub fn close(&mut self, id: u32, end: u32) {
+    pub(crate) fn close(&mut self, id: u32, end: u32) {
         let len = self.nodes.len() as u32;
         if let Some(n) = self.nodes.get_mut(id as usize) {
             n.end = end;
@@ -101,12 +102,12 @@ impl Arena {
         }
     }
 
-    pub fn set_mut(&mut self, id: u32) -> Option<&mut ExprNode> {
+    pub(crate) fn set_mut(&mut self, id: u32) -> Option<&mut ExprNode> {
         self.nodes.get_mut(id as usize)
     }
 
     /// Links `child` after `last` (or as `parent`'s first child when `last` is [`NONE`]).
-    pub fn link(&mut self, parent: u32, last: u32, child: u32) {
+    pub(crate) fn link(&mut self, parent: u32, last: u32, child: u32) {
         if last == NONE {
             if let Some(p) = self.nodes.get_mut(parent as usize) {
                 p.first = child;
@@ -117,7 +118,7 @@ impl Arena {
     }
 
     /// The children of `id`, in order.
-    pub fn children(&self, id: u32) -> Children<'_> {
+    pub(crate) fn children(&self, id: u32) -> Children<'_> {
         Children {
             arena: self,
             next: self.get(id).map_or(NONE, |n| n.first),
@@ -125,7 +126,7 @@ impl Arena {
     }
 
     /// The value of an [`ExprKind::Arg`] (its child), or the node itself otherwise.
-    pub fn arg_value(&self, id: u32) -> Option<u32> {
+    pub(crate) fn arg_value(&self, id: u32) -> Option<u32> {
         let n = self.get(id)?;
         if n.kind == ExprKind::Arg {
             (n.first != NONE).then_some(n.first)
@@ -135,7 +136,7 @@ impl Arena {
     }
 }
 
-pub struct Children<'a> {
+pub(crate) struct Children<'a> {
     arena: &'a Arena,
     next: u32,
 }

@@ -7,6 +7,7 @@
 //! The lexer streams: it keeps no token vector (a 50 MB module has ~20 M tokens, and a vector of
 //! them would be larger than the file). It dispatches on the first byte by hand; identifiers
 //! and based numbers are small nom 8 recognisers over bytes, decimal numbers a hand loop.
+#![warn(missing_docs, unreachable_pub)]
 
 use nom::IResult;
 use nom::Parser as _;
@@ -63,15 +64,19 @@ impl TokenKind {
 /// A token: its kind and the byte range `start..end` of the source (u32 keeps it 12 bytes).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Token {
+    /// What the token is.
     pub kind: TokenKind,
     /// An identifier spelled like a RAPID keyword (any case): the parser compares keyword text
     /// only for these, so ordinary names cost one flag test.
     pub keyword: bool,
+    /// Its first byte in the source.
     pub start: u32,
+    /// One past its last byte.
     pub end: u32,
 }
 
 impl Token {
+    /// `start..end` as a [`crate::syntax::Span`].
     pub fn span(self) -> crate::syntax::Span {
         crate::syntax::Span::new(self.start as usize, self.end as usize)
     }
@@ -100,7 +105,7 @@ const PLACEHOLDERS: &[&[u8]] = &[
 
 /// A streaming lexer. Cheap to copy, which is how the parser looks ahead.
 #[derive(Clone, Copy, Debug)]
-pub struct Lexer<'a> {
+pub(crate) struct Lexer<'a> {
     src: &'a [u8],
     pos: usize,
     /// Inside a `%%%` header block (between the opening and closing `%%%` lines).
@@ -111,7 +116,7 @@ pub struct Lexer<'a> {
 
 impl<'a> Lexer<'a> {
     /// Sources longer than `u32::MAX` bytes are not lexed (the parser reports them).
-    pub fn new(src: &'a [u8]) -> Lexer<'a> {
+    pub(crate) fn new(src: &'a [u8]) -> Lexer<'a> {
         Lexer {
             src,
             pos: 0,
@@ -120,13 +125,9 @@ impl<'a> Lexer<'a> {
         }
     }
 
-    pub fn offset(&self) -> usize {
-        self.pos
-    }
-
     /// Continues lexing at `pos`, which must be a token boundary in code (not at a line start,
     /// not in a header, comment or string): the parser's fast path skips what it read itself.
-    pub fn seek(&mut self, pos: usize) {
+    pub(crate) fn seek(&mut self, pos: usize) {
         self.pos = pos.min(self.src.len());
         self.line_start = false;
     }
@@ -152,7 +153,7 @@ impl<'a> Lexer<'a> {
     /// The next token; [`TokenKind::Eof`] (empty) at the end, forever. Rules `newline`,
     /// `whitespace`, `comment`, `bom`, `header_line`, `string`, `placeholder`, `assign`,
     /// `compare2` and `punct`.
-    pub fn next_token(&mut self) -> Token {
+    pub(crate) fn next_token(&mut self) -> Token {
         let rest = self.src.get(self.pos..).unwrap_or(&[]);
         let Some(&b) = rest.first() else {
             return self.token(TokenKind::Eof, 0);
@@ -299,7 +300,7 @@ fn ident_len(rest: &[u8]) -> usize {
 /// `exponent`. A trailing `E` without
 /// digits is not part of the number (`1E` lexes as `1` then `E`). Decimal numbers are the
 /// hottest path of a robtarget file, so they are scanned by hand.
-pub fn number_len(rest: &[u8]) -> usize {
+pub(crate) fn number_len(rest: &[u8]) -> usize {
     if rest.first() == Some(&b'0')
         && rest
             .get(1)

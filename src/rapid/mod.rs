@@ -1,7 +1,8 @@
 //! ABB RAPID: lossless lexer, parser and printer, and the positions found in a module.
 //!
 //! Grammar: `grammars/rapid.ebnf`. The tree is the shared [`crate::syntax::Tree`]; this folder
-//! holds RAPID's lexer rules, grammar ([`parser`]), node kinds ([`tree`]) and extraction.
+//! holds RAPID's lexer rules ([`tokenize`]), grammar (`parser`, [`parse_tree`]), node kinds
+//! ([`NodeKind`]) and extraction.
 //!
 //! ```
 //! use std::path::{Path, PathBuf};
@@ -12,16 +13,18 @@
 //! assert_eq!(file.positions.len(), 1);
 //! ```
 
-pub mod expr;
-pub mod lexer;
-pub mod parser;
+pub(crate) mod expr;
+pub(crate) mod lexer;
+pub(crate) mod parser;
 pub mod positions;
-pub mod tree;
+pub(crate) mod tree;
 
 use std::path::{Path, PathBuf};
 
-pub use parser::{Parse, parse};
-pub use tree::{Node, NodeKind, Tree};
+pub use lexer::{Token, TokenKind, tokenize};
+pub use parser::Parse;
+pub(crate) use parser::parse;
+pub use tree::{Node, NodeKind, Rapid, Tree};
 
 use crate::position::{Language, ParsedFile};
 use crate::syntax::{Diagnostic, LineIndex};

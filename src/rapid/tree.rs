@@ -9,33 +9,44 @@
 //! which rules out a node per token. Expressions inside a statement are parsed (and their
 //! targets, frames and offsets extracted) while the statement is read, in a scratch arena that
 //! is reused for the next statement.
+#![warn(missing_docs, unreachable_pub)]
 
 /// What a node is. Branches: [`NodeKind::Root`], [`NodeKind::Module`], [`NodeKind::Routine`],
 /// [`NodeKind::Record`], [`NodeKind::If`], [`NodeKind::For`], [`NodeKind::While`],
 /// [`NodeKind::Test`], [`NodeKind::CompactIf`], [`NodeKind::Handler`]. Everything else is a leaf.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum NodeKind {
+    /// The whole module (branch): the root of every tree.
     Root,
     /// Whitespace, newlines and comments between two other leaves (or a BOM).
     Trivia,
     /// One `%%%` header line.
     Header,
+    /// `MODULE … ENDMODULE` (branch).
     Module,
     /// `MODULE name (attributes)`
     ModuleHead,
+    /// `ENDMODULE`.
     ModuleEnd,
     /// `[LOCAL|TASK] CONST|PERS|VAR type name [{dims}] [:= value];` and `ALIAS`.
     DataDecl,
+    /// `RECORD … ENDRECORD` (branch).
     Record,
+    /// `RECORD name`.
     RecordHead,
+    /// `type name;` inside a record.
     RecordField,
+    /// `ENDRECORD`.
     RecordEnd,
+    /// `PROC`/`FUNC`/`TRAP … END…` (branch).
     Routine,
     /// `[LOCAL] PROC name (params)`, `FUNC type name (params)`, `TRAP name`.
     RoutineHead,
     /// `ERROR [(errnos)]`, `UNDO`, `BACKWARD` and the statements after it.
     Handler,
+    /// The keyword line of a handler (`ERROR [(errnos)]`, `UNDO`, `BACKWARD`).
     HandlerHead,
+    /// `ENDPROC`, `ENDFUNC`, `ENDTRAP`.
     RoutineEnd,
     /// `name args;` (procedure call).
     Call,
@@ -49,17 +60,23 @@ pub enum NodeKind {
     Jump,
     /// An editor placeholder statement or item (`<SMT>`, `<DDN>`, ...).
     Placeholder,
+    /// `IF … ENDIF` (branch of its parts and statements).
     If,
     /// `IF cond THEN`, `ELSEIF cond THEN`, `ELSE`, `ENDIF`.
     IfPart,
     /// `IF cond statement` (one simple statement, no ENDIF).
     CompactIf,
+    /// The `IF cond` of a compact IF.
     CompactIfHead,
+    /// `FOR … ENDFOR` (branch).
     For,
     /// `FOR i FROM a TO b [STEP c] DO`, `ENDFOR`.
     ForPart,
+    /// `WHILE … ENDWHILE` (branch).
     While,
+    /// `WHILE cond DO`, `ENDWHILE`.
     WhilePart,
+    /// `TEST … ENDTEST` (branch).
     Test,
     /// `TEST expr`, `CASE a, b:`, `DEFAULT:`, `ENDTEST`.
     TestPart,

@@ -128,9 +128,13 @@ pub fn findings(file: &ParsedFile) -> Vec<Diagnostic> {
 /// The counts `check` ends with.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct CheckSummary {
+    /// Files read.
     pub files: usize,
+    /// Files that print back byte for byte.
     pub round_trips: usize,
+    /// Warnings and errors over all files.
     pub findings: usize,
+    /// Files with at least one finding.
     pub files_with_findings: usize,
     /// Files skipped with a note (binary, RobotStudio XML).
     pub skipped: usize,

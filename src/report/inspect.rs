@@ -31,6 +31,7 @@ pub struct InspectOptions {
 /// The whole `inspect --format json` document: `{"files": [...]}`.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct InspectReport {
+    /// One entry per file, in input order.
     pub files: Vec<FileReport>,
     /// The programs of more than one file (a RAPID task, a KSS tree, a KRL pair): which files
     /// form each, and how many of its targets resolved to a frame.
@@ -41,14 +42,18 @@ pub struct InspectReport {
 /// One program of several files.
 #[derive(Clone, Debug, Serialize)]
 pub struct ProgramReport {
+    /// The program's language.
     pub language: Language,
+    /// The files that form it, as named.
     pub files: Vec<String>,
+    /// Its Cartesian targets.
     pub targets: usize,
     /// Targets whose work object / base is known.
     pub resolved: usize,
 }
 
 impl ProgramReport {
+    /// The report of `program`; `None` for a program with no language (no files).
     pub fn of(program: &Program) -> Option<ProgramReport> {
         let language = program.language()?;
         let targets = program.files.iter().flat_map(|f| &f.positions);
@@ -83,7 +88,9 @@ impl std::fmt::Display for ProgramReport {
 /// Where a frame is declared: file and 1-based line.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct Place {
+    /// The file, as loaded.
     pub file: String,
+    /// 1-based line of the declaration.
     pub line: usize,
 }
 
@@ -103,14 +110,19 @@ impl InspectReport {
 /// One file of the report.
 #[derive(Clone, Debug, Serialize)]
 pub struct FileReport {
+    /// The file, as named on input.
     pub path: String,
+    /// Its language.
     pub language: Language,
+    /// Every position it declares or writes inline, in file order.
     pub positions: Vec<PositionRow>,
+    /// The work objects, tools and bases it declares.
     pub frames: Vec<FrameRow>,
     /// Constructs kept verbatim that the grammar does not know.
     pub opaque: usize,
     /// Positions by kind (`"robtarget": 212`).
     pub counts: BTreeMap<String, usize>,
+    /// The file's findings ([`crate::report::lints`]): its warnings and errors.
     pub warnings: Vec<Message>,
     /// trackfix's provenance stamp: the last transform that wrote the file.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -122,12 +134,19 @@ pub struct FileReport {
 /// A value that is not a numeric literal is `null`.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct PoseColumns {
+    /// Translation x, mm.
     pub x: Option<f64>,
+    /// Translation y, mm.
     pub y: Option<f64>,
+    /// Translation z, mm.
     pub z: Option<f64>,
+    /// The orientation as an ABB quaternion `[q1, q2, q3, q4]`, scalar first.
     pub q: Option<[f64; 4]>,
+    /// Fixed-axis angle about x, degrees.
     pub rx: Option<f64>,
+    /// Fixed-axis angle about y, degrees.
     pub ry: Option<f64>,
+    /// Fixed-axis angle about z, degrees.
     pub rz: Option<f64>,
 }
 
@@ -136,9 +155,13 @@ pub struct PoseColumns {
 pub struct PositionRow {
     /// Declared name; `null` for an inline literal.
     pub name: Option<String>,
+    /// The data type (`robtarget`, `E6POS`, …).
     pub kind: &'static str,
+    /// 1-based line of the position.
     pub line: usize,
+    /// 1-based column of the position.
     pub column: usize,
+    /// Translation and orientation.
     #[serde(flatten)]
     pub pose: PoseColumns,
     /// KRL only: `[A, B, C]` as written.
@@ -149,6 +172,7 @@ pub struct PositionRow {
     /// KRL only: Status and Turn as written (`"'B010'"`, `"2"`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub status: Option<String>,
+    /// KRL only: Turn as written.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub turn: Option<String>,
     /// Joint values of joint targets, degrees.
@@ -156,10 +180,12 @@ pub struct PositionRow {
     pub joints: Vec<Option<f64>>,
     /// The skid: the configured external axis; `null` when missing or not connected (9E9).
     pub skid: Option<f64>,
+    /// Every external axis value as written (`null` where not a numeric literal).
     pub extax: Vec<Option<f64>>,
     /// The work object (RAPID `wobj`) or base (KRL `base`) of the instructions using it.
     #[serde(flatten)]
     pub frame: FrameColumn,
+    /// The tool of the instructions using it; `null` when unused or unresolved.
     pub tool: Option<String>,
     /// Where the tool is declared in the program (`null`-less: absent when not declared).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -171,7 +197,9 @@ pub struct PositionRow {
 /// `"base": "BASE_DATA[3]"`; `null` when unused or unresolved.
 #[derive(Clone, Debug)]
 pub struct FrameColumn {
+    /// The column's name in the dialect's vocabulary (`wobj`, `base`).
     pub column: &'static str,
+    /// The frame's name; `null` when unused or unresolved.
     pub name: Option<String>,
     /// Where the frame is declared in the program, under `"wobj_at"` / `"base_at"`; absent when
     /// not declared (world, or unresolved).
@@ -193,15 +221,22 @@ impl Serialize for FrameColumn {
 /// A declared work object, tool or base, with its pose in world.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameRow {
+    /// Declared name.
     pub name: String,
+    /// The data type (`wobjdata`, `tooldata`, `FRAME`, …).
     pub kind: &'static str,
+    /// 1-based line of the declaration.
     pub line: usize,
+    /// The pose in world (DESIGN.md §2).
     #[serde(flatten)]
     pub pose: PoseColumns,
+    /// RAPID work objects and tools: `robhold` (the robot holds it).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub robhold: Option<bool>,
+    /// RAPID work objects: `ufprog` (the user frame is fixed, not moved by a mechanical unit).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ufprog: Option<bool>,
+    /// RAPID work objects: `ufmec`, the mechanical unit that moves the user frame.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ufmec: Option<String>,
 }
@@ -209,10 +244,15 @@ pub struct FrameRow {
 /// A located message.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct Message {
+    /// 1-based line.
     pub line: usize,
+    /// 1-based column.
     pub column: usize,
+    /// How serious it is.
     pub severity: Severity,
+    /// What is wrong.
     pub message: String,
+    /// What to do.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hint: Option<String>,
 }

@@ -9,14 +9,17 @@ use crate::transform::FileResult;
 /// The summary line of one transformed file.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct FileSummary {
+    /// The file, as named on input.
     pub path: PathBuf,
     /// Targets whose text changed.
     pub changed: usize,
-    /// Largest translation (mm) and rotation (degrees) change of any target.
+    /// Largest translation change of any target, mm.
     pub largest_mm: f64,
+    /// Largest rotation change of any target, degrees.
     pub largest_deg: f64,
     /// Smallest and largest skid of the changed targets.
     pub skid_range: Option<(f64, f64)>,
+    /// Targets left unchanged because the transform refused them.
     pub refused: usize,
     /// Where the file was written; `None` if it was not.
     pub written_to: Option<PathBuf>,

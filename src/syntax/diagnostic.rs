@@ -1,17 +1,25 @@
 //! Located messages about a source file, rendered the way compilers do.
+#![warn(missing_docs, unreachable_pub)]
 
 use super::{LineIndex, Span};
 use std::fmt::Write as _;
 
+/// How serious a diagnostic is, least first. The parser's choice is a default: whoever renders
+/// it (the CLI) may show it at another severity (`docs/design.md §8`, errors that render
+/// themselves).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Severity {
+    /// Information: nothing is wrong.
     Note,
+    /// Something to check; the result is still complete.
     Warning,
+    /// The input cannot be used as it is.
     Error,
 }
 
 impl Severity {
+    /// The word the rendering prints (`note`, `warning`, `error`).
     pub fn as_str(self) -> &'static str {
         match self {
             Severity::Note => "note",
@@ -24,13 +32,18 @@ impl Severity {
 /// A message about the bytes `span` of one source, with an optional hint saying what to do.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct Diagnostic {
+    /// How serious it is.
     pub severity: Severity,
+    /// The bytes of the source it is about (the caret covers them).
     pub span: Span,
+    /// What is wrong, in one line.
     pub message: String,
+    /// What to do about it (rendered as `= help: …`).
     pub hint: Option<String>,
 }
 
 impl Diagnostic {
+    /// A diagnostic without a hint.
     pub fn new(severity: Severity, span: Span, message: impl Into<String>) -> Diagnostic {
         Diagnostic {
             severity,
@@ -40,18 +53,22 @@ impl Diagnostic {
         }
     }
 
+    /// An error without a hint.
     pub fn error(span: Span, message: impl Into<String>) -> Diagnostic {
         Diagnostic::new(Severity::Error, span, message)
     }
 
+    /// A warning without a hint.
     pub fn warning(span: Span, message: impl Into<String>) -> Diagnostic {
         Diagnostic::new(Severity::Warning, span, message)
     }
 
+    /// A note without a hint.
     pub fn note(span: Span, message: impl Into<String>) -> Diagnostic {
         Diagnostic::new(Severity::Note, span, message)
     }
 
+    /// The same diagnostic with `hint` as what to do.
     pub fn with_hint(mut self, hint: impl Into<String>) -> Diagnostic {
         self.hint = Some(hint.into());
         self
@@ -159,15 +176,17 @@ fn push_byte(out: &mut String, b: u8) -> usize {
 /// One source line, or the window of it a diagnostic shows, with where it sits in its file.
 #[derive(Clone, Copy, Debug)]
 pub struct Excerpt<'a> {
-    /// 1-based line and column of the diagnostic's span start.
+    /// 1-based line of the diagnostic's span start.
     pub line: usize,
+    /// 1-based column (bytes) of the span start.
     pub column: usize,
     /// The bytes shown (no line terminator).
     pub text: &'a [u8],
     /// Byte offset of `text` in the file (the span's offsets are file offsets).
     pub start: usize,
-    /// Whether the line goes on before / after `text`.
+    /// Whether the line goes on before `text`.
     pub cut_before: bool,
+    /// Whether the line goes on after `text`.
     pub cut_after: bool,
 }
 

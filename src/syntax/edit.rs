@@ -1,15 +1,19 @@
 //! Span-splice rewriting: replace only the bytes a transform changes.
+#![warn(missing_docs, unreachable_pub)]
 
 use super::Span;
 
 /// Replace the bytes of `span` in the original source with `text`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Edit {
+    /// The bytes of the original source to replace (empty: insert at `span.start`).
     pub span: Span,
+    /// What they become.
     pub text: Vec<u8>,
 }
 
 impl Edit {
+    /// Replaces `span` with `text`.
     pub fn new(span: Span, text: impl Into<Vec<u8>>) -> Edit {
         Edit {
             span,
@@ -18,10 +22,19 @@ impl Edit {
     }
 }
 
+/// Why a set of edits cannot be applied. Either is a bug of the transform that made the edits,
+/// not of the input.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum EditError {
+    /// Two edits touch the same bytes.
     #[error("edits overlap at bytes {first:?} and {second:?}")]
-    Overlap { first: Span, second: Span },
+    Overlap {
+        /// The span of the earlier edit.
+        first: Span,
+        /// The span of the edit that overlaps it.
+        second: Span,
+    },
+    /// An edit's span is reversed or ends past the source.
     #[error("edit at bytes {0:?} lies outside the source")]
     OutOfBounds(Span),
 }

@@ -22,7 +22,8 @@ pub use line_index::LineIndex;
 pub use number::{NumLit, fixed};
 pub use span::Span;
 pub(crate) use tree::language;
-pub use tree::{Language, NoSink, Node, Sink, Tree, TreeBuilder, escape, refused_tree, too_large};
+pub use tree::{Language, NoSink, Node, Sink, Tree};
+pub(crate) use tree::{TreeBuilder, refused_tree, too_large};
 
 /// The UTF-8 byte order mark some editors put in front of a module.
 pub const BOM: &[u8] = b"\xEF\xBB\xBF";

@@ -1,4 +1,5 @@
 //! Byte ranges into a kept source buffer.
+#![warn(missing_docs, unreachable_pub)]
 
 use std::ops::Range;
 
@@ -8,19 +9,24 @@ use std::ops::Range;
 /// and an edit replaces exactly the bytes it names.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
 pub struct Span {
+    /// The first byte.
     pub start: usize,
+    /// One past the last byte.
     pub end: usize,
 }
 
 impl Span {
+    /// `start..end`.
     pub const fn new(start: usize, end: usize) -> Span {
         Span { start, end }
     }
 
+    /// Bytes covered.
     pub const fn len(self) -> usize {
         self.end - self.start
     }
 
+    /// Whether it covers no byte.
     pub const fn is_empty(self) -> bool {
         self.start == self.end
     }
@@ -30,6 +36,7 @@ impl Span {
         Span::new(self.start.min(other.start), self.end.max(other.end))
     }
 
+    /// The span as a range, to slice the source with.
     pub fn range(self) -> Range<usize> {
         self.start..self.end
     }

@@ -8,6 +8,7 @@
 //! that is lost, duplicated or out of place shows as a difference in [`Tree::prints_back`].
 //!
 //! Parsers build trees with a [`TreeBuilder`] and hand what they read to a [`Sink`].
+#![warn(missing_docs, unreachable_pub)]
 
 use std::fmt;
 
@@ -63,14 +64,18 @@ pub(crate) use language;
 /// One node: its kind, its bytes, and (for branches) where its subtree ends in [`Tree::nodes`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Node<K> {
+    /// What the node is; the language's kind enum.
     pub kind: K,
+    /// The node's first byte in the source.
     pub start: u32,
+    /// One past its last byte.
     pub end: u32,
     /// Index one past this node's last descendant (`self + 1` for a leaf).
     pub subtree_end: u32,
 }
 
 impl<K> Node<K> {
+    /// `start..end` as a [`Span`].
     pub fn span(&self) -> Span {
         Span::new(self.start as usize, self.end.max(self.start) as usize)
     }
@@ -78,6 +83,7 @@ impl<K> Node<K> {
 
 /// A parsed source: nodes in pre-order, the root first.
 pub struct Tree<L: Language> {
+    /// Every node, in pre-order (`docs/design.md §12`).
     pub nodes: Vec<Node<L::Kind>>,
 }
 
@@ -177,7 +183,7 @@ impl<L: Language> Tree<L> {
 /// Builds a [`Tree`] in pre-order: branches are opened and closed around their children, and
 /// bytes between two leaves become a [`Language::GAP`] leaf, so every byte lands in exactly one
 /// leaf.
-pub struct TreeBuilder<L: Language> {
+pub(crate) struct TreeBuilder<L: Language> {
     nodes: Vec<Node<L::Kind>>,
     /// End of the last leaf pushed.
     leaf_end: u32,
@@ -185,7 +191,7 @@ pub struct TreeBuilder<L: Language> {
 
 impl<L: Language> TreeBuilder<L> {
     /// A builder with room for `capacity` nodes, the root opened.
-    pub fn with_capacity(capacity: usize) -> TreeBuilder<L> {
+    pub(crate) fn with_capacity(capacity: usize) -> TreeBuilder<L> {
         let mut nodes = Vec::with_capacity(capacity.max(1));
         nodes.push(Node {
             kind: L::ROOT,
@@ -197,23 +203,13 @@ impl<L: Language> TreeBuilder<L> {
     }
 
     /// Number of nodes so far: the index the next node gets.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.nodes.len()
-    }
-
-    /// True before anything but the root was pushed.
-    pub fn is_empty(&self) -> bool {
-        self.nodes.len() <= 1
-    }
-
-    /// End of the last leaf pushed.
-    pub fn leaf_end(&self) -> u32 {
-        self.leaf_end
     }
 
     /// Pushes the bytes from the last leaf up to `upto` as a gap leaf, if there are any.
     #[inline]
-    pub fn gap(&mut self, upto: u32) {
+    pub(crate) fn gap(&mut self, upto: u32) {
         if upto > self.leaf_end {
             let idx = self.nodes.len() as u32;
             self.nodes.push(Node {
@@ -228,7 +224,7 @@ impl<L: Language> TreeBuilder<L> {
 
     /// Pushes a leaf of bytes `start..end` (after the gap before it).
     #[inline]
-    pub fn leaf(&mut self, kind: L::Kind, start: u32, end: u32) {
+    pub(crate) fn leaf(&mut self, kind: L::Kind, start: u32, end: u32) {
         let end = end.max(start);
         self.gap(start);
         let idx = self.nodes.len() as u32;
@@ -243,7 +239,7 @@ impl<L: Language> TreeBuilder<L> {
 
     /// Opens a branch at `start`; returns its index for [`TreeBuilder::close`].
     #[inline]
-    pub fn open(&mut self, kind: L::Kind, start: u32) -> usize {
+    pub(crate) fn open(&mut self, kind: L::Kind, start: u32) -> usize {
         self.gap(start);
         let idx = self.nodes.len();
         self.nodes.push(Node {
@@ -257,7 +253,7 @@ impl<L: Language> TreeBuilder<L> {
 
     /// Closes the branch opened at `idx`: it covers every node pushed since.
     #[inline]
-    pub fn close(&mut self, idx: usize) {
+    pub(crate) fn close(&mut self, idx: usize) {
         let len = self.nodes.len() as u32;
         let end = self.leaf_end;
         if let Some(n) = self.nodes.get_mut(idx) {
@@ -267,7 +263,7 @@ impl<L: Language> TreeBuilder<L> {
     }
 
     /// The tree: the bytes up to `src_len` after the last leaf become a gap, the root closed.
-    pub fn finish(mut self, src_len: u32) -> Tree<L> {
+    pub(crate) fn finish(mut self, src_len: u32) -> Tree<L> {
         self.gap(src_len);
         self.close(0);
         Tree { nodes: self.nodes }
@@ -277,6 +273,7 @@ impl<L: Language> TreeBuilder<L> {
 /// Receives what a parser reads (statements, events), as toml_parser's receivers do: one parser
 /// feeds several consumers. Any `FnMut(E)` closure is a sink.
 pub trait Sink<E> {
+    /// Takes one event, in source order.
     fn accept(&mut self, event: E);
 }
 
@@ -297,7 +294,7 @@ impl<E> Sink<E> for NoSink {
 
 /// The one size guard of every parser: spans are `u32`, so a source longer than `u32::MAX`
 /// bytes is reported, not parsed. `None` when `src` fits.
-pub fn too_large(src: &[u8]) -> Option<Diagnostic> {
+pub(crate) fn too_large(src: &[u8]) -> Option<Diagnostic> {
     (src.len() > u32::MAX as usize).then(|| {
         Diagnostic::error(Span::new(0, 0), "file larger than 4 GiB; not parsed")
             .with_hint("split the program; robot controllers do not load files this large")
@@ -305,14 +302,14 @@ pub fn too_large(src: &[u8]) -> Option<Diagnostic> {
 }
 
 /// The tree of a source [`too_large`] refused: the root and one empty opaque leaf.
-pub fn refused_tree<L: Language>(opaque: L::Kind) -> Tree<L> {
+pub(crate) fn refused_tree<L: Language>(opaque: L::Kind) -> Tree<L> {
     let mut b = TreeBuilder::<L>::with_capacity(2);
     b.leaf(opaque, 0, 0);
     b.finish(0)
 }
 
 /// Bytes as a quoted, escaped string: ASCII graphic as is, everything else `\xNN`/`\r`/`\n`.
-pub fn escape(bytes: &[u8]) -> String {
+pub(crate) fn escape(bytes: &[u8]) -> String {
     let mut s = String::with_capacity(bytes.len() + 2);
     s.push('"');
     for &b in bytes {

@@ -1,6 +1,7 @@
 //! What `track show` reports without `--at`/`--step`: the manual-adjustment table (seed eq.
 //! 4.54), the twist diagram (seed Fig. 4.34) and the spline-to-chord bound per interval (seed
 //! 4.9-4.12).
+#![warn(missing_docs, unreachable_pub)]
 
 use nalgebra::Vector3;
 
@@ -11,6 +12,7 @@ use super::spline::ChordDistance;
 /// what the adjustment screws must take out (the line itself is for the controller).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AdjustmentRow {
+    /// The knot's skid position, mm.
     pub skid: f64,
     /// dx, dy, dz (mm), rx, ry, rz (degrees).
     pub residual: [f64; 6],
@@ -48,9 +50,11 @@ pub const TWIST_LEVER_MM: f64 = 1000.0;
 /// One point of the twist diagram.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TwistPoint {
+    /// The knot's skid position, mm.
     pub skid: f64,
     /// x, y in mm, relative to the first knot.
     pub x: f64,
+    /// y in mm, relative to the first knot.
     pub y: f64,
 }
 
@@ -79,7 +83,9 @@ pub fn twist_diagram(profile: &Profile) -> Vec<TwistPoint> {
 /// The largest spline-to-chord distance of each component on one knot interval.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IntervalBound {
+    /// The interval's first knot, skid mm.
     pub from: f64,
+    /// Its last knot, skid mm.
     pub to: f64,
     /// dx, dy, dz (mm), rx, ry, rz (degrees).
     pub distance: [ChordDistance; 6],

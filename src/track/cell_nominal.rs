@@ -10,6 +10,7 @@
 //! - when the profile records `measured_in = "world"` (the tracker was aligned to the cell's
 //!   world frame): also `a` against `u`, and `B_0` against `N(0)` (position and rotation). A
 //!   design-value base instead of the fitted one fails here.
+#![warn(missing_docs, unreachable_pub)]
 
 use std::fmt;
 
@@ -37,10 +38,14 @@ pub struct NominalComparison {
     pub world: Option<WorldComparison>,
 }
 
+/// The cell against a profile measured in the world frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WorldComparison {
+    /// Angle between the cell's `track_axis` `a` and the profile's direction `u`, degrees.
     pub axis_deg: f64,
+    /// Distance between the cell's base and the nominal's at skid 0, mm.
     pub base_position_mm: f64,
+    /// Rotation between the cell's base and the nominal's at skid 0, degrees.
     pub base_rotation_deg: f64,
 }
 
@@ -49,16 +54,22 @@ pub struct WorldComparison {
 pub enum Disagreement {
     /// The track direction in the robot base frame.
     AxisInBase {
+        /// The angle between the two directions, degrees.
         angle_deg: f64,
     },
     /// The track direction in the world.
     Axis {
+        /// The angle between the two directions, degrees.
         angle_deg: f64,
     },
+    /// The base's position at skid 0.
     BasePosition {
+        /// The distance between the two, mm.
         distance_mm: f64,
     },
+    /// The base's rotation at skid 0.
     BaseRotation {
+        /// The rotation between the two, degrees.
         angle_deg: f64,
     },
 }
@@ -90,8 +101,11 @@ impl fmt::Display for Disagreement {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("the cell's base and track_axis disagree with profile `{profile}`: {}", list(.disagreements))]
 pub struct NominalMismatch {
+    /// The profile's name.
     pub profile: String,
+    /// Each quantity beyond its tolerance.
     pub disagreements: Vec<Disagreement>,
+    /// Every figure compared, within tolerance or not.
     pub comparison: NominalComparison,
 }
 
@@ -171,8 +185,10 @@ pub fn check_cell_nominal(
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum CellEditError {
+    /// The cell file is not TOML.
     #[error("the cell file is not valid TOML: {0}")]
     Parse(#[from] toml_edit::TomlError),
+    /// The cell file has no table for the robot (its name).
     #[error("the cell file has no [robot.{0}] table")]
     NoRobot(String),
 }

@@ -5,6 +5,7 @@
 //! locale is read: `;` between the fields and `,` as the decimal point, told as a note. Tab
 //! separated tables are read too. A file whose header names none of the expected columns is
 //! something else (`/etc/passwd` given as a table): the error does not quote it.
+#![warn(missing_docs, unreachable_pub)]
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -15,15 +16,20 @@ use crate::syntax::{LineIndex, Span};
 /// One data row and the 1-based line it came from.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NumericRow {
+    /// 1-based line of the file.
     pub line: u64,
+    /// The row's numbers, one per header column.
     pub values: Vec<f64>,
 }
 
 /// A CSV file whose every field is a number.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NumericCsv {
+    /// The file, as named.
     pub path: PathBuf,
+    /// The column names, as written.
     pub headers: Vec<String>,
+    /// The data rows, in file order.
     pub rows: Vec<NumericRow>,
     /// The 1-based line of the header (comment lines may come first).
     pub header_line: u64,

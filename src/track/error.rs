@@ -1,6 +1,7 @@
 //! Errors of the track model, by cause. Each carries its data; `Display` renders it (a located
 //! input error as `file:line:col: error: …` with the line, a caret and what to do, through
 //! [`Diagnostic::render`]).
+#![warn(missing_docs, unreachable_pub)]
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -57,6 +58,7 @@ impl LocatedError {
         self
     }
 
+    /// The file the error is in.
     pub fn path(&self) -> &Path {
         &self.path
     }
@@ -66,10 +68,12 @@ impl LocatedError {
         LineIndex::new(&self.source).line_col(self.diagnostic.span.start)
     }
 
+    /// What is wrong.
     pub fn message(&self) -> &str {
         &self.diagnostic.message
     }
 
+    /// What to do, when there is something to say.
     pub fn hint(&self) -> Option<&str> {
         self.diagnostic.hint.as_deref()
     }
@@ -79,6 +83,7 @@ impl LocatedError {
         self.column_name.as_deref()
     }
 
+    /// The located diagnostic behind the error.
     pub fn diagnostic(&self) -> &Diagnostic {
         &self.diagnostic
     }
@@ -107,20 +112,35 @@ impl std::error::Error for LocatedError {}
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum SkidProblem {
+    /// Fewer than three points.
     #[error("{count} point(s) measured, a base frame needs at least 3 non-collinear points")]
-    TooFewPoints { count: usize },
+    TooFewPoints {
+        /// Points measured at the skid position.
+        count: usize,
+    },
+    /// The rigid fit has no unique answer.
     #[error("{0}")]
     Degenerate(RigidFitError),
     /// The points lie too close to a line: the rotation about it is barely determined.
     #[error(
         "the points are nearly collinear: the fit's condition number is {condition:.0} (limit {limit:.0}), so noise turns into a large rotation about their line"
     )]
-    IllConditioned { condition: f64, limit: f64 },
+    IllConditioned {
+        /// The fit's condition number.
+        condition: f64,
+        /// The largest accepted.
+        limit: f64,
+    },
     /// The tracker points are spread `ratio` times as wide as the robot points.
     #[error(
         "the tracker points are spread {ratio:.6e} times as wide as the robot points (a rigid fit needs 1 within {tolerance}): the two point sets are in different units or do not belong together"
     )]
-    Scale { ratio: f64, tolerance: f64 },
+    Scale {
+        /// Spread of the tracker points over spread of the robot points.
+        ratio: f64,
+        /// How far from 1 `ratio` may be.
+        tolerance: f64,
+    },
     /// The fit's normal matrix is singular: some motion of the frame moves no point.
     #[error("the points do not fix all six degrees of freedom of the frame")]
     Unconstrained,
@@ -130,10 +150,16 @@ pub enum SkidProblem {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum NominalProblem {
+    /// Fewer than two sampling frames.
     #[error("{count} sampling frame(s), a track model needs at least 2")]
-    TooFewFrames { count: usize },
+    TooFewFrames {
+        /// Sampling frames given.
+        count: usize,
+    },
+    /// The frame origins do not move with the skid (no regression slope).
     #[error("the sampling frames do not move with the skid: no track direction")]
     NoDirection,
+    /// The sum of the frame rotations has no nearest rotation (SVD degenerate).
     #[error("the mean of the frame rotations is degenerate")]
     DegenerateRotation,
     /// The base moves `gear_factor` mm per commanded mm: not a track with a wrong gear ratio
@@ -141,7 +167,12 @@ pub enum NominalProblem {
     #[error(
         "the base moves {gear_factor:.6e} mm per commanded mm of skid (a track is within {tolerance} of 1): the frames are in other units than the skid, or the skid column is wrong"
     )]
-    ImplausibleGear { gear_factor: f64, tolerance: f64 },
+    ImplausibleGear {
+        /// Measured mm per commanded mm.
+        gear_factor: f64,
+        /// How far from 1 it may be.
+        tolerance: f64,
+    },
 }
 
 /// Everything that can go wrong in the track model, by cause.
@@ -155,11 +186,20 @@ pub enum TrackError {
     #[error(
         "skid {skid} mm is outside the profile's range [{min}, {max}] mm (measure further, or set extrapolate = \"clamp\" or \"linear\" in the profile)"
     )]
-    OutOfRange { skid: f64, min: f64, max: f64 },
+    OutOfRange {
+        /// The skid asked for, mm.
+        skid: f64,
+        /// The first knot's skid, mm.
+        min: f64,
+        /// The last knot's skid, mm.
+        max: f64,
+    },
     /// A file could not be read or written.
     #[error("{}: {error}", path.display())]
     Io {
+        /// The file.
         path: PathBuf,
+        /// Why.
         error: std::io::Error,
     },
     /// An input file (CSV table, profile) that is malformed at a known place.
@@ -167,27 +207,53 @@ pub enum TrackError {
     Input(Box<LocatedError>),
     /// Knots given in code that cannot carry a spline (too few, not increasing, not finite).
     #[error("{context}: {error}")]
-    Knots { context: String, error: SplineError },
+    Knots {
+        /// What the knots are for.
+        context: String,
+        /// Why they carry no spline.
+        error: SplineError,
+    },
     /// The measurements of one skid position give no trustworthy base frame.
     #[error("skid {skid} mm: {problem}")]
-    Skid { skid: f64, problem: SkidProblem },
+    Skid {
+        /// The skid position, mm.
+        skid: f64,
+        /// What is wrong with its points.
+        problem: SkidProblem,
+    },
     /// A point to leave out that no measurement row has.
     #[error("no point {point} at skid {skid} mm to exclude")]
-    UnknownExclusion { skid: f64, point: u32 },
+    UnknownExclusion {
+        /// The skid position asked for, mm.
+        skid: f64,
+        /// The point number asked for.
+        point: u32,
+    },
     /// The sampling frames give no straight nominal.
     #[error("{0}")]
     Nominal(NominalProblem),
     /// A noise level that is not a non-negative number.
     #[error("noise level {sigma} mm: give a non-negative number")]
-    NoiseLevel { sigma: f64 },
+    NoiseLevel {
+        /// The level given, mm.
+        sigma: f64,
+    },
     /// The fits leave no degree of freedom to estimate the noise from.
     #[error(
         "{points} point(s) leave no residual to estimate the noise from: give the noise level, or measure more points"
     )]
-    NoNoiseEstimate { points: usize },
+    NoNoiseEstimate {
+        /// Points measured.
+        points: usize,
+    },
     /// Knot uncertainties given in code that do not match the profile's knots one to one.
     #[error("{given} knot uncertainties for {knots} knots")]
-    KnotUncertaintyCount { given: usize, knots: usize },
+    KnotUncertaintyCount {
+        /// Uncertainties given.
+        given: usize,
+        /// Knots of the profile.
+        knots: usize,
+    },
     /// A scan the spectrum cannot use (too short, positions not increasing).
     #[error("{0}")]
     Scan(String),

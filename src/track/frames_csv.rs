@@ -1,5 +1,6 @@
 //! `frames.csv`: `skid,x,y,z,rx,ry,rz`, the robot base frame at each skid position in the
 //! measurement frame (DESIGN.md §6).
+#![warn(missing_docs, unreachable_pub)]
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -14,7 +15,9 @@ pub const FRAMES_HEADER: [&str; 7] = ["skid", "x", "y", "z", "rx", "ry", "rz"];
 /// The robot base frame identified at one skid position.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SamplingFrame {
+    /// The skid position, mm.
     pub skid: f64,
+    /// The base frame identified there, in the measurement frame.
     pub pose: Pose,
 }
 

@@ -7,6 +7,7 @@
 //! `$RAT_MOT_AX[i] = {N n, D d}` in `$machine.dat` (motor revolutions `N` per `D` axis units;
 //! for a linear axis per 1000 mm; `i = 7` for the first external axis E1) are motor turns per
 //! travel. For them `new = old / g`: a skid that travels short (`g < 1`) needs a larger ratio.
+#![warn(missing_docs, unreachable_pub)]
 
 /// The new motor-to-travel ratio (ABB's Transmission Gear Ratio, or KUKA's `N/D`) for the
 /// current one and the measured gear factor.
@@ -17,11 +18,14 @@ pub fn new_motor_ratio(current: f64, gear_factor: f64) -> f64 {
 /// A KUKA `$RAT_MOT_AX` fraction `{N n, D d}`: both are `INT` (32-bit).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct KukaRatio {
+    /// Numerator `N`.
     pub n: i64,
+    /// Denominator `D`.
     pub d: i64,
 }
 
 impl KukaRatio {
+    /// `N / D`.
     pub fn value(self) -> f64 {
         self.n as f64 / self.d as f64
     }

@@ -1,5 +1,6 @@
 //! `track identify`: the robot base frame at each skid position from laser-tracker points
 //! (`measurements.csv`, DESIGN.md §6), with per-point residuals (seed Table 7.2) and outliers.
+#![warn(missing_docs, unreachable_pub)]
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -103,7 +104,9 @@ const BISQUARE_LIMIT: f64 = 2.0 * OUTLIER_FACTOR;
 /// A point left out of the identification: `SKID:POINT` (skid in mm as written in the file).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Exclusion {
+    /// The skid position, mm.
     pub skid: f64,
+    /// The point number.
     pub point: u32,
 }
 
@@ -162,6 +165,7 @@ impl FrameShift {
 /// The fit at one skid position.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SkidFit {
+    /// The skid position, mm.
     pub skid: f64,
     /// Point numbers, in the order of `fit.residuals` (the excluded points are not among them).
     pub points: Vec<u32>,
@@ -171,13 +175,16 @@ pub struct SkidFit {
     pub robust_residuals: Vec<f64>,
     /// The excluded points of this skid, and how far the frame moved by leaving them out.
     pub excluded: Vec<u32>,
+    /// How far the frame moved by leaving them out; `None` without exclusions.
     pub exclusion_shift: Option<FrameShift>,
 }
 
 /// A point whose residual is far above the rest.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Outlier {
+    /// The skid position, mm.
     pub skid: f64,
+    /// The point number.
     pub point: u32,
     /// `|residual|` against the robust fit, mm.
     pub residual: f64,

@@ -1,5 +1,6 @@
 //! `track fit`: the controller's straight nominal, the gear factor and the deviations `D_i`
 //! (DESIGN.md §3.1-3.2), giving a [`Profile`].
+#![warn(missing_docs, unreachable_pub)]
 
 use nalgebra::{Matrix3, Translation3, UnitQuaternion, Vector3};
 
@@ -18,9 +19,13 @@ pub const GEAR_TOLERANCE: f64 = 0.05;
 /// How to fit a profile.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitOptions {
+    /// The profile's name, recorded in it.
     pub name: String,
+    /// Which nominal the deviations are taken from (`docs/design.md §3`).
     pub reference: Reference,
+    /// Whether the nominal keeps the gear drift or leaves it to a new gear factor.
     pub gear: Gear,
+    /// What evaluating the profile outside its knots does.
     pub extrapolate: Extrapolate,
     /// sha256 (hex) of the frames file, recorded in the profile.
     pub source_sha256: String,
@@ -41,7 +46,9 @@ impl Default for FitOptions {
 /// The least-squares line of one origin coordinate over skid (seed eq. 4.54).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CoordinateLine {
+    /// The coordinate at skid 0, mm.
     pub intercept: f64,
+    /// mm of the coordinate per mm of skid.
     pub slope: f64,
     /// `o_i - (intercept + slope·s_i)`.
     pub residuals: Vec<f64>,
@@ -50,6 +57,7 @@ pub struct CoordinateLine {
 /// The fitted track.
 #[derive(Clone, Debug)]
 pub struct TrackFit {
+    /// The profile: nominal and knots.
     pub profile: Profile,
     /// x, y, z lines of the origins.
     pub lines: [CoordinateLine; 3],

@@ -4,6 +4,7 @@
 //! `id`, `x`, `y`, `z`, any case) or given as a [`ColumnMap`] (`name=1,x=2,y=3,z=4` by
 //! position, or by header: `name=Punkt,x=X [mm],…`); without either the first four columns are
 //! name, x, y, z. Lines starting with `#` or `//` are comments.
+#![warn(missing_docs, unreachable_pub)]
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -15,16 +16,22 @@ use crate::syntax::{LineIndex, Span};
 /// Where one quantity is: a 1-based column number or a header name.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Column {
+    /// The n-th column, 1-based.
     Position(usize),
+    /// The column with this header (matched case-insensitively).
     Header(String),
 }
 
 /// Which columns hold the point name and x, y, z.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ColumnMap {
+    /// The point name's column.
     pub name: Column,
+    /// The x coordinate's column.
     pub x: Column,
+    /// The y coordinate's column.
     pub y: Column,
+    /// The z coordinate's column.
     pub z: Column,
 }
 
@@ -70,6 +77,7 @@ impl std::str::FromStr for ColumnMap {
 /// One exported point.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NamedPoint {
+    /// The point's name, as exported.
     pub name: String,
     /// mm, in the tracker's (or the frame it was told to report in) coordinates.
     pub xyz: [f64; 3],
@@ -80,6 +88,7 @@ pub struct NamedPoint {
 /// The points of an export and how it was read.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PointExport {
+    /// The points, in file order.
     pub points: Vec<NamedPoint>,
     /// How the file was read (separator, decimal commas, header, columns), for the user to
     /// check.

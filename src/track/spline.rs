@@ -4,6 +4,7 @@
 //! The spline is stored by its knot values and second derivatives `M_i`; on `[x_i, x_{i+1}]`
 //! with `h = x_{i+1} - x_i` and `t = (x - x_i)/h` it is the chord minus
 //! `h²/6 · t(1-t) · ((2-t)·M_i + (1+t)·M_{i+1})`, which makes the chord distance a closed form.
+#![warn(missing_docs, unreachable_pub)]
 
 /// End conditions of the spline.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -11,27 +12,47 @@ pub enum EndCondition {
     /// `S''(x_0) = S''(x_N) = 0` (the track model, DESIGN.md §3.3).
     Natural,
     /// Given first derivatives at both ends.
-    Clamped { start: f64, end: f64 },
+    Clamped {
+        /// `S'(x_0)`.
+        start: f64,
+        /// `S'(x_N)`.
+        end: f64,
+    },
 }
 
 /// Why a spline cannot be built.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum SplineError {
+    /// Fewer than two knots (the count).
     #[error("a spline needs at least 2 knots, got {0}")]
     TooFewKnots(usize),
+    /// Knot positions and values differ in number.
     #[error("{xs} knot positions but {ys} values")]
-    LengthMismatch { xs: usize, ys: usize },
+    LengthMismatch {
+        /// Knot positions.
+        xs: usize,
+        /// Values.
+        ys: usize,
+    },
+    /// A knot position not above the one before it.
     #[error(
         "knots must be strictly increasing: knot {index} at {value} follows {previous}; sort the rows and remove duplicates"
     )]
     NotIncreasing {
+        /// The knot's 0-based index.
         index: usize,
+        /// The position of the knot before it.
         previous: f64,
+        /// Its position.
         value: f64,
     },
+    /// A knot position or value is NaN or infinite.
     #[error("knot {index} is not a finite number")]
-    NotFinite { index: usize },
+    NotFinite {
+        /// The knot's 0-based index.
+        index: usize,
+    },
 }
 
 /// The largest distance between the spline and the chord on one interval.

@@ -35,18 +35,25 @@ use crate::syntax::Span;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum CellError {
+    /// The cell file could not be read.
     #[error("cannot read the cell file {}", path.display())]
     Io {
+        /// The cell file.
         path: PathBuf,
+        /// Why.
         source: std::io::Error,
     },
     /// A syntax or schema error at its place in the cell file (or at a robot's `profile`).
     #[error(transparent)]
     Invalid(Box<Located>),
+    /// A robot the cell file does not have.
     #[error("{}: no robot `{name}` in the cell file (robots: {})", path.display(), known.join(", "))]
     UnknownRobot {
+        /// The cell file.
         path: PathBuf,
+        /// The robot asked for.
         name: String,
+        /// The robots the cell file has.
         known: Vec<String>,
     },
 }
@@ -65,16 +72,22 @@ impl CellError {
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct FrameXyz {
+    /// Translation x, mm.
     #[serde(deserialize_with = "plausible_mm")]
     pub x: f64,
+    /// Translation y, mm.
     #[serde(deserialize_with = "plausible_mm")]
     pub y: f64,
+    /// Translation z, mm.
     #[serde(deserialize_with = "plausible_mm")]
     pub z: f64,
+    /// Rotation about x, degrees (applied first).
     #[serde(deserialize_with = "plausible_deg")]
     pub rx: f64,
+    /// Rotation about y, degrees.
     #[serde(deserialize_with = "plausible_deg")]
     pub ry: f64,
+    /// Rotation about z, degrees (applied last).
     #[serde(deserialize_with = "plausible_deg")]
     pub rz: f64,
 }
@@ -108,6 +121,7 @@ fn plausible_deg<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error
 }
 
 impl FrameXyz {
+    /// The pose, `R = Rz·Ry·Rx` (`geometry::conventions`).
     pub fn pose(&self) -> Pose {
         pose_xyz_deg(self.x, self.y, self.z, self.rx, self.ry, self.rz)
     }
@@ -117,8 +131,11 @@ impl FrameXyz {
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Plane {
+    /// The plane of x and y (normal z).
     Xy,
+    /// The plane of x and z (normal y).
     Xz,
+    /// The plane of y and z (normal x).
     Yz,
 }
 
@@ -137,12 +154,16 @@ impl Plane {
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Axis {
+    /// The tool's x axis.
     X,
+    /// The tool's y axis.
     Y,
+    /// The tool's z axis.
     Z,
 }
 
 impl Axis {
+    /// 0 for x, 1 for y, 2 for z.
     pub fn index(self) -> usize {
         match self {
             Axis::X => 0,
@@ -210,6 +231,7 @@ struct MirrorToml {
 /// One robot of the cell, validated.
 #[derive(Clone, Debug)]
 pub struct Robot {
+    /// Its name in the cell file (`[robot.NAME]`).
     pub name: String,
     /// The profile file, resolved against the cell file's folder.
     pub profile: PathBuf,
@@ -235,19 +257,28 @@ pub struct Robot {
 /// The `[mirror]` table.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MirrorTable {
+    /// `plane`: the reflected plane, in the mirror frame.
     pub plane: Option<Plane>,
+    /// `frame`: the mirror frame; `None` for the work object's (or world's) own.
     pub frame: Option<Pose>,
+    /// `frame_in`: what `frame` is given in.
     pub frame_in: FrameIn,
+    /// `tool_flip`: the tool axis to flip.
     pub tool_flip: Option<Axis>,
+    /// `config`: what happens to the robot configuration.
     pub config: Option<ConfigRule>,
+    /// `skid_map = [scale, offset]`: the mirrored skid `s' = scale·s + offset`.
     pub skid_map: Option<(f64, f64)>,
 }
 
 /// A validated cell file.
 #[derive(Clone, Debug)]
 pub struct Cell {
+    /// The cell file.
     pub path: PathBuf,
+    /// Its robots, by name.
     pub robots: BTreeMap<String, Robot>,
+    /// Its `[mirror]` table (all `None` when it has none).
     pub mirror: MirrorTable,
     /// The file's text, for messages located in it after loading.
     text: String,

@@ -29,7 +29,9 @@ pub struct TargetChange {
 /// The edits and refusals of one file.
 #[derive(Clone, Debug, Default)]
 pub struct FileEdits {
+    /// The span-splice edits to the file's source (`syntax::apply_edits`).
     pub edits: Vec<Edit>,
+    /// The targets left unchanged, and why.
     pub refusals: Vec<Refusal>,
     /// Things that look like targets but are none (unset `[0,0,0,0]` array slots): left as
     /// written and reported as notes, never refusals.
@@ -41,16 +43,19 @@ pub struct FileEdits {
 /// The edits of every file of a program, in the program's file order.
 #[derive(Clone, Debug, Default)]
 pub struct ProgramEdits {
+    /// One entry per file of the program.
     pub files: Vec<FileEdits>,
 }
 
 impl ProgramEdits {
+    /// No edits yet, one empty entry per file of `program`.
     pub fn for_program(program: &Program) -> ProgramEdits {
         ProgramEdits {
             files: vec![FileEdits::default(); program.files.len()],
         }
     }
 
+    /// Every refusal of every file, in file order.
     pub fn refusals(&self) -> impl Iterator<Item = &Refusal> {
         self.files.iter().flat_map(|f| &f.refusals)
     }
@@ -59,16 +64,22 @@ impl ProgramEdits {
 /// One file after a transform.
 #[derive(Clone, Debug)]
 pub struct FileResult {
+    /// The file, as loaded.
     pub path: PathBuf,
+    /// Its bytes before the transform.
     pub original: Vec<u8>,
+    /// Its bytes after: `original` with the edits spliced in, every other byte unchanged.
     pub output: Vec<u8>,
+    /// The targets left unchanged, and why.
     pub refusals: Vec<Refusal>,
     /// Unset slots and the like, left as written (see [`FileEdits::notes`]).
     pub notes: Vec<Refusal>,
+    /// One entry per target whose text changed.
     pub changes: Vec<TargetChange>,
 }
 
 impl FileResult {
+    /// Whether the output differs from the original.
     pub fn changed(&self) -> bool {
         self.original != self.output
     }
@@ -95,14 +106,17 @@ impl FileResult {
 /// A program after a transform.
 #[derive(Clone, Debug)]
 pub struct ProgramResult {
+    /// One entry per file of the program, in its order.
     pub files: Vec<FileResult>,
 }
 
 impl ProgramResult {
+    /// Every refusal of every file, in file order.
     pub fn refusals(&self) -> impl Iterator<Item = &Refusal> {
         self.files.iter().flat_map(|f| &f.refusals)
     }
 
+    /// Whether any file changed.
     pub fn changed(&self) -> bool {
         self.files.iter().any(FileResult::changed)
     }

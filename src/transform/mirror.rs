@@ -30,8 +30,11 @@ use super::rewrite::{MM_DECIMALS, OrientationHint, QUAT_DECIMALS, number_edit, p
 pub struct MirrorSettings {
     /// `M`: the mirror-plane frame in the work object (identity: the work object's own plane).
     pub frame: Pose,
+    /// The reflected plane, in `frame`.
     pub plane: Plane,
+    /// The tool axis flipped to keep the tool frame right-handed.
     pub tool_flip: Axis,
+    /// What happens to the robot configuration.
     pub config: ConfigRule,
     /// `s' = scale·s + offset`.
     pub skid_map: (f64, f64),

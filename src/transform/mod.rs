@@ -14,7 +14,7 @@ pub mod output;
 pub(crate) mod policy;
 pub mod refusal;
 pub mod rename;
-pub mod rewrite;
+pub(crate) mod rewrite;
 pub mod stamp;
 pub mod track_correction;
 pub mod transfer;

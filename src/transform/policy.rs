@@ -216,19 +216,19 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
 }
 
 /// Written angles (degrees) beyond this are no orientation: a typo or `9E9` in the wrong field.
-pub const PLAUSIBLE_DEG: f64 = 360.0;
+pub(crate) const PLAUSIBLE_DEG: f64 = 360.0;
 /// ABB `cf1, cf4, cf6, cfx` are quadrant and configuration numbers: small integers.
-pub const PLAUSIBLE_CF: f64 = 1000.0;
+pub(crate) const PLAUSIBLE_CF: f64 = 1000.0;
 /// KUKA Status has 3 bits in use, Turn 6.
 const KUKA_STATUS_MAX: u32 = 0b111;
 const KUKA_TURN_MAX: u32 = 0b11_1111;
 /// A written quaternion farther than this from unit length is no rotation (controllers reject
 /// anything beyond a few 1e-5; the check lint warns at 1e-4).
-pub const PLAUSIBLE_QUATERNION_NORM_ERROR: f64 = 0.01;
+pub(crate) const PLAUSIBLE_QUATERNION_NORM_ERROR: f64 = 0.01;
 
 /// What makes the literals of a Cartesian target absurd, in words ("has cf4 = 1.5, …"), or
 /// `None`. Shared by `check` (a finding) and every transform (a refusal).
-pub fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<String> {
+pub(crate) fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<String> {
     use crate::position::{Config, Orientation};
     if let Some(problem) = file
         .language

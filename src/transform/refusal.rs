@@ -86,15 +86,20 @@ impl RefusalKind {
 /// One refused target.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Refusal {
+    /// The file the target is in.
     pub path: PathBuf,
+    /// 1-based line of the refused literal or call.
     pub line: usize,
+    /// 1-based column of its start.
     pub column: usize,
     /// The refused literal or call in the file.
     #[serde(skip)]
     pub span: Span,
     /// The target's name or `inline robtarget`.
     pub target: String,
+    /// Why, as a category the caller can match on.
     pub kind: RefusalKind,
+    /// Why, in words.
     pub message: String,
     /// What to do, in words (no command-line flags).
     pub hint: String,

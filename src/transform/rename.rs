@@ -10,8 +10,11 @@ use super::stamp::header_name;
 /// One header renamed.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct Renamed {
+    /// The file whose header was renamed.
     pub path: PathBuf,
+    /// The name the `DEF`/`DEFDAT` had.
     pub from: String,
+    /// The name it has now: the output file's stem.
     pub to: String,
 }
 
@@ -19,9 +22,13 @@ pub struct Renamed {
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 #[error("{}: `{stem}` cannot be the name of a {language} program (its DEF/DEFDAT must be the file's name: a letter or `_` first, then letters, digits or `_`, at most {max} characters); choose another output name", path.display())]
 pub struct RenameError {
+    /// The output file.
     pub path: PathBuf,
+    /// Its stem, which cannot be a program name.
     pub stem: String,
+    /// The language's name, for the message.
     pub language: &'static str,
+    /// The longest program name the language allows.
     pub max: usize,
 }
 

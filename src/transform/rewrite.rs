@@ -1,17 +1,15 @@
 //! A new pose → edits of exactly the literal fields that change (DESIGN.md §5 formatting).
 
-use nalgebra::UnitQuaternion;
-
 use crate::geometry::{Pose, abb_quat_components, angle_between, kuka_abc_angles};
 use crate::position::{BitField, CartesianFields, NumField, Orientation};
 use crate::syntax::Edit;
 
 /// At least this many decimals for mm.
-pub const MM_DECIMALS: usize = 3;
+pub(crate) const MM_DECIMALS: usize = 3;
 /// At least this many decimals for quaternion components.
-pub const QUAT_DECIMALS: usize = 6;
+pub(crate) const QUAT_DECIMALS: usize = 6;
 /// At least this many decimals for degrees.
-pub const DEG_DECIMALS: usize = 4;
+pub(crate) const DEG_DECIMALS: usize = 4;
 
 /// Below this rotation change (rad) the orientation text is kept as written, even when the
 /// file's quaternion is not normalised: a zero-deviation profile must leave a file
@@ -20,7 +18,7 @@ const SAME_ROTATION_RAD: f64 = 1e-10;
 
 /// How to choose among equivalent orientation numbers.
 #[derive(Clone, Copy, Debug)]
-pub enum OrientationHint {
+pub(crate) enum OrientationHint {
     /// Keep the written numbers' branch: quaternion sign / ABC triple nearest the original.
     NearOriginal,
     /// A quaternion the result should lie close to (a mirror knows its analytic image).
@@ -29,7 +27,7 @@ pub enum OrientationHint {
 }
 
 /// An edit for `field` showing `new`, if it changes at the written precision.
-pub fn number_edit(field: &Option<NumField>, new: f64, min_decimals: usize) -> Option<Edit> {
+pub(crate) fn number_edit(field: &Option<NumField>, new: f64, min_decimals: usize) -> Option<Edit> {
     if !new.is_finite() {
         return None;
     }
@@ -39,13 +37,13 @@ pub fn number_edit(field: &Option<NumField>, new: f64, min_decimals: usize) -> O
 }
 
 /// An edit for an integer field (`cf1`…), if it changes.
-pub fn integer_edit(field: &Option<NumField>, new: i64) -> Option<Edit> {
+pub(crate) fn integer_edit(field: &Option<NumField>, new: i64) -> Option<Edit> {
     let f = field.as_ref()?;
     Some(Edit::new(f.span, f.lit.rewrite_integer(new)?))
 }
 
 /// An edit for a KUKA Status/Turn, if it changes.
-pub fn bits_edit(field: &Option<BitField>, new: u32) -> Option<Edit> {
+pub(crate) fn bits_edit(field: &Option<BitField>, new: u32) -> Option<Edit> {
     let f = field.as_ref()?;
     Some(Edit::new(f.span, f.rewrite(new)?))
 }
@@ -60,7 +58,7 @@ fn written<const N: usize>(fields: &[Option<NumField>; N]) -> Option<[f64; N]> {
 
 /// Edits that make `fields` say `new`. Fields whose text already says the new value (at their
 /// written precision) are kept.
-pub fn pose_edits(fields: &CartesianFields, new: &Pose, hint: OrientationHint) -> Vec<Edit> {
+pub(crate) fn pose_edits(fields: &CartesianFields, new: &Pose, hint: OrientationHint) -> Vec<Edit> {
     let mut edits = Vec::new();
     // Absurd literals (1e300 mm) overflow the composition; a half-written target would be worse
     // than none, so such a pose changes nothing.
@@ -106,14 +104,15 @@ pub fn pose_edits(fields: &CartesianFields, new: &Pose, hint: OrientationHint) -
 }
 
 /// Translation (mm) and rotation (degrees) between two poses: the "size" of a change.
-pub fn pose_change(a: &Pose, b: &Pose) -> (f64, f64) {
+pub(crate) fn pose_change(a: &Pose, b: &Pose) -> (f64, f64) {
     let mm = (a.translation.vector - b.translation.vector).norm();
     let deg = angle_between(&a.rotation, &b.rotation).to_degrees();
     (mm, deg)
 }
 
 /// `[w, i, j, k]` of a quaternion (ABB order).
-pub fn wijk(q: &UnitQuaternion<f64>) -> [f64; 4] {
+#[cfg(test)]
+pub(crate) fn wijk(q: &nalgebra::UnitQuaternion<f64>) -> [f64; 4] {
     let q = q.quaternion();
     [q.w, q.i, q.j, q.k]
 }

@@ -91,7 +91,7 @@ fn file(path: &str, language: Language, source: Vec<u8>, positions: Vec<Position
 }
 
 /// RAPID robtargets, one per line, all used with `wobj`.
-pub fn rapid(src: &str, wobj: &str) -> Program {
+pub(crate) fn rapid(src: &str, wobj: &str) -> Program {
     let bytes = src.as_bytes().to_vec();
     let mut positions = Vec::new();
     for (n, (s, e)) in line_spans(&bytes).into_iter().enumerate() {
@@ -120,7 +120,7 @@ pub fn rapid(src: &str, wobj: &str) -> Program {
 }
 
 /// KRL E6POS, one per line, all used with `base`.
-pub fn krl(src: &str, base: &str) -> Program {
+pub(crate) fn krl(src: &str, base: &str) -> Program {
     let bytes = src.as_bytes().to_vec();
     let mut positions = Vec::new();
     for (n, (s, e)) in line_spans(&bytes).into_iter().enumerate() {

@@ -24,6 +24,8 @@ use super::rewrite::OrientationHint;
 /// `D(s)`: anything that gives the track's deviation at a skid (a [`Profile`], or a test's
 /// closed form).
 pub trait Deviation: Sync {
+    /// `D(s)` at skid `s` (mm): the measured carriage frame relative to the nominal one,
+    /// `N(s)⁻¹·F(s)` (`docs/design.md §3`).
     fn deviation(&self, skid: f64) -> Result<Pose, TrackError>;
 }
 
@@ -49,6 +51,7 @@ pub enum Direction {
 }
 
 impl Direction {
+    /// The transform's name (`correct`, `zero`), as reports show it.
     pub fn as_str(self) -> &'static str {
         match self {
             Direction::Correct => "correct",
@@ -67,6 +70,7 @@ pub struct TrackSetup<'a> {
     pub skid_axis: usize,
     /// Work objects / bases overriding the program's (lower-case name → pose in world).
     pub frames: BTreeMap<String, Pose>,
+    /// The track's deviation `D(s)`.
     pub deviation: &'a dyn Deviation,
     /// The work object for declared targets no motion uses (`--default-wobj`).
     pub default_wobj: Option<String>,
@@ -76,6 +80,7 @@ pub struct TrackSetup<'a> {
 }
 
 impl<'a> TrackSetup<'a> {
+    /// The setup of a cell's `robot` with its track's `deviation`; no default work object.
     pub fn new(robot: &Robot, deviation: &'a dyn Deviation) -> TrackSetup<'a> {
         TrackSetup {
             base0: robot.base0,

@@ -17,25 +17,36 @@ use super::mirror::{MirrorSettings, Reflection, mirror, reflection_for};
 use super::rewrite::{DEG_DECIMALS, MM_DECIMALS, QUAT_DECIMALS, pose_change};
 use super::track_correction::{Direction, TrackSetup, track_correction};
 
+/// Why a chain of transforms stopped.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum TransferError {
+    /// A step's edits could not be applied (a bug of the step, not of the input).
     #[error(transparent)]
     Edit(#[from] EditError),
+    /// A step's output could not be parsed again.
     #[error(transparent)]
     Load(#[from] LoadError),
+    /// A step's output has another number of targets than its input, so the steps' changes
+    /// cannot be matched target by target.
     #[error("{}: the transformed file no longer has the same targets ({before} before, {after} after)", path.display())]
     Drift {
+        /// The file.
         path: PathBuf,
+        /// Targets before the step.
         before: usize,
+        /// Targets after it.
         after: usize,
     },
 }
 
 /// The three steps of a transfer.
 pub struct TransferPlan<'a> {
+    /// The source robot's track: its deviation is taken out (`zero`).
     pub from: TrackSetup<'a>,
+    /// The mirror between the two robots, when the target robot is a mirror image.
     pub mirror: Option<MirrorSettings>,
+    /// The target robot's track: its deviation is put in (`correct`).
     pub to: TrackSetup<'a>,
 }
 
@@ -64,6 +75,7 @@ pub fn reparse(
 pub enum TransformStep<'a> {
     /// `correct` or `zero` with a robot's track.
     Track(&'a TrackSetup<'a>, Direction),
+    /// `mirror` with its settings.
     Mirror(&'a MirrorSettings),
 }
 

@@ -3,12 +3,13 @@
 
 use nalgebra::Vector3;
 use proptest::prelude::*;
-use trackfix::accuracy::path::{Recording, Sample, path_accuracy, plane_crossing};
-use trackfix::accuracy::pose::{CommandedPose, Visit, compare, pose_accuracy};
 use trackfix::accuracy::simulate::{
     LineSimulation, THESIS_POINTS, edge_csvs, line_csvs, pose_csvs,
 };
-use trackfix::accuracy::{PathOptions, Polyline};
+use trackfix::accuracy::{
+    CommandedPose, PathOptions, Polyline, Recording, Sample, Visit, compare, path_accuracy,
+    plane_crossing, pose_accuracy,
+};
 
 use crate::support::{root, trackfix};
 
@@ -1219,7 +1220,7 @@ proptest! {
         let rec = Recording { samples, cycles };
         if let Ok(r) = path_accuracy(&poly, &rec, PathOptions { planes, commanded_speed: Some(100.0) }) {
             prop_assert!(r.at.is_finite() && r.rt.is_finite() && r.runs_used >= 2);
-            let _ = trackfix::accuracy::plot::path_svg(&poly, &r).unwrap();
+            let _ = trackfix::accuracy::path_svg(&poly, &r).unwrap();
         }
     }
 }

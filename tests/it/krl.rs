@@ -596,11 +596,11 @@ proptest! {
         for node in &tree.nodes {
             let span = tree.node_span(node);
             match node.kind {
-                krl::tree::NodeKind::RoutineStart => open = Some(span.start),
-                krl::tree::NodeKind::RoutineEnd => {
+                krl::NodeKind::RoutineStart => open = Some(span.start),
+                krl::NodeKind::RoutineEnd => {
                     if let Some(start) = open.take() {
                         let end = span.start
-                            + krl::lexer::lex(span.slice(&original.source))
+                            + krl::lex(span.slice(&original.source))
                                 .iter()
                                 .rev()
                                 .find(|t| !t.kind.is_trivia())

@@ -141,7 +141,7 @@ fn parser_gaps_are_closed() {
         .stmts
         .iter()
         .filter_map(|s| match &s.kind {
-            krl::tree::StmtKind::Decl { vars, .. } => {
+            krl::StmtKind::Decl { vars, .. } => {
                 Some(String::from_utf8_lossy(vars[0].name.slice(&src)).into_owned())
             }
             _ => None,
@@ -158,7 +158,7 @@ fn parser_gaps_are_closed() {
         .stmts
         .iter()
         .filter_map(|s| match &s.kind {
-            krl::tree::StmtKind::Routine { name: Some(n), .. } => {
+            krl::StmtKind::Routine { name: Some(n), .. } => {
                 Some(String::from_utf8_lossy(n.slice(&src)).into_owned())
             }
             _ => None,

@@ -778,11 +778,11 @@ proptest! {
         let f = assert_sound(&src);
         if op == 3 {
             // A control byte in code (not in a comment, string or header) is a located error.
-            let tok = rapid::lexer::tokenize(&src)
+            let tok = rapid::tokenize(&src)
                 .into_iter()
                 .find(|t| (t.start as usize) <= k && k < t.end as usize)
                 .unwrap();
-            if tok.kind == rapid::lexer::TokenKind::Unknown {
+            if tok.kind == rapid::TokenKind::Unknown {
                 prop_assert!(
                     f.diagnostics.iter().any(|d| d.severity == Severity::Error && d.span.start == tok.start as usize),
                     "byte at {k}: {:?}", f.diagnostics

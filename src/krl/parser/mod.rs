@@ -2,6 +2,7 @@
 //! or cannot parse becomes an [`NodeKind::Opaque`] node with a located diagnostic.
 //!
 //! Each function names the `grammars/krl.ebnf` rule it implements.
+#![warn(missing_docs, unreachable_pub)]
 
 mod expressions;
 mod statements;
@@ -15,10 +16,12 @@ use crate::syntax::{Diagnostic, Sink, Span, TreeBuilder};
 /// The result of parsing one file.
 #[derive(Clone, Debug, Default)]
 pub struct Parse {
+    /// The lossless tree: it prints back the source byte for byte.
     pub tree: Tree,
     /// The statements read, in order (kept by [`parse`]; empty after [`parse_with`], which
     /// streams them to its sink instead).
     pub stmts: Vec<Stmt>,
+    /// What could not be read, located; those lines are kept verbatim as opaque nodes.
     pub diagnostics: Vec<Diagnostic>,
     /// Lines kept verbatim because the grammar does not know them or could not parse them.
     pub opaque: usize,

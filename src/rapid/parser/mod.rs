@@ -5,6 +5,7 @@
 //! statement or item that does not fit its rule becomes an [`NodeKind::Opaque`] leaf running to
 //! the next `;` (or to the next block keyword), with a located diagnostic: the round trip holds
 //! for every input because leaves are byte ranges and every byte lands in exactly one leaf.
+#![warn(missing_docs, unreachable_pub)]
 
 mod expressions;
 mod items;
@@ -21,7 +22,7 @@ const MAX_DEPTH: u32 = 96;
 
 /// Storage class of a data declaration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Storage {
+pub(crate) enum Storage {
     Const,
     Pers,
     Var,
@@ -31,9 +32,11 @@ pub enum Storage {
 /// What the position extractor needs to know about a statement just read; expression ids
 /// point into the parser's [`Arena`].
 #[derive(Clone, Copy, Debug)]
-pub enum Stmt {
+pub(crate) enum Stmt {
     /// A data declaration. `module_scope` is false inside routines.
     Decl {
+        // Nothing reads the storage class yet; it is part of what the statement is.
+        #[allow(dead_code)]
         storage: Storage,
         type_name: Span,
         name: Span,
@@ -65,7 +68,7 @@ pub enum Stmt {
 /// the source, the scratch arena its expression ids point into (valid only during the call),
 /// the statement and its span.
 #[derive(Clone, Copy, Debug)]
-pub struct Statement<'e> {
+pub(crate) struct Statement<'e> {
     pub src: &'e [u8],
     pub arena: &'e Arena,
     pub stmt: &'e Stmt,
@@ -73,13 +76,16 @@ pub struct Statement<'e> {
 }
 
 /// What [`parse`] hands statements to: any `FnMut(Statement)` or [`crate::syntax::NoSink`].
-pub type StatementSink<'s> = dyn for<'e> Sink<Statement<'e>> + 's;
+pub(crate) type StatementSink<'s> = dyn for<'e> Sink<Statement<'e>> + 's;
 
 /// The result of parsing: the tree, what went wrong, and how many opaque nodes it holds.
 #[derive(Clone, Debug, Default)]
 pub struct Parse {
+    /// The lossless tree: it prints back the source byte for byte.
     pub tree: Tree,
+    /// What could not be read, located; the constructs are kept verbatim as [`NodeKind::Opaque`].
     pub diagnostics: Vec<Diagnostic>,
+    /// How many [`NodeKind::Opaque`] nodes the tree holds.
     pub opaque: usize,
 }
 
@@ -93,7 +99,7 @@ struct SyntaxError {
 type PResult<T> = Result<T, SyntaxError>;
 
 /// Parses a whole source. Never fails, never panics; see [`Parse`].
-pub fn parse(src: &[u8], sink: &mut StatementSink<'_>) -> Parse {
+pub(crate) fn parse(src: &[u8], sink: &mut StatementSink<'_>) -> Parse {
     if let Some(refused) = crate::syntax::too_large(src) {
         return Parse {
             tree: crate::syntax::refused_tree(NodeKind::Opaque),
