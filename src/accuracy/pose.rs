@@ -99,6 +99,27 @@ pub struct PointAccuracy {
     pub deviations: Vec<Vector3<f64>>,
 }
 
+impl PointAccuracy {
+    /// AP, APx, APy, APz, APa, APb, APc, RP, RPa, RPb, RPc, MAX: the figures in the order every
+    /// table, CSV and report writes them (`None` where orientations were not measured).
+    pub fn figures(&self) -> [Option<f64>; 12] {
+        [
+            Some(self.ap),
+            Some(self.ap_x),
+            Some(self.ap_y),
+            Some(self.ap_z),
+            self.ap_a,
+            self.ap_b,
+            self.ap_c,
+            Some(self.rp),
+            self.rp_a,
+            self.rp_b,
+            self.rp_c,
+            Some(self.max),
+        ]
+    }
+}
+
 /// The worst of each figure over all points (largest magnitude; signed figures keep their sign).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PoseSummary {

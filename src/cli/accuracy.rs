@@ -251,20 +251,7 @@ fn pose_csv(r: &PoseReport, change: Option<&PoseComparison>) -> String {
     }
     s.push('\n');
     for (i, p) in r.points.iter().enumerate() {
-        let cells = [
-            Some(p.ap),
-            Some(p.ap_x),
-            Some(p.ap_y),
-            Some(p.ap_z),
-            p.ap_a,
-            p.ap_b,
-            p.ap_c,
-            Some(p.rp),
-            p.rp_a,
-            p.rp_b,
-            p.rp_c,
-            Some(p.max),
-        ];
+        let cells = p.figures();
         let _ = write!(s, "{},{}", p.point, p.n);
         for c in cells {
             let _ = write!(s, ",{}", csv_cell(c));
@@ -314,25 +301,7 @@ fn pose_table(a: &PoseArgs, r: &PoseReport, change: Option<&PoseComparison>) -> 
         s.push('\n');
     };
     for p in &r.points {
-        row(
-            &mut s,
-            &p.point,
-            p.n.to_string(),
-            [
-                Some(p.ap),
-                Some(p.ap_x),
-                Some(p.ap_y),
-                Some(p.ap_z),
-                p.ap_a,
-                p.ap_b,
-                p.ap_c,
-                Some(p.rp),
-                p.rp_a,
-                p.rp_b,
-                p.rp_c,
-                Some(p.max),
-            ],
-        );
+        row(&mut s, &p.point, p.n.to_string(), p.figures());
     }
     let w = &r.summary;
     row(

@@ -25,23 +25,7 @@ pub fn pose_result(
         .iter()
         .map(|p| {
             let mut row = vec![p.point.clone(), p.n.to_string()];
-            row.extend(
-                [
-                    Some(p.ap),
-                    Some(p.ap_x),
-                    Some(p.ap_y),
-                    Some(p.ap_z),
-                    p.ap_a,
-                    p.ap_b,
-                    p.ap_c,
-                    Some(p.rp),
-                    p.rp_a,
-                    p.rp_b,
-                    p.rp_c,
-                    Some(p.max),
-                ]
-                .map(fixed),
-            );
+            row.extend(p.figures().map(fixed));
             row
         })
         .collect();
