@@ -32,6 +32,10 @@ pub enum RefusalKind {
     Implausible,
     /// An all-zero quaternion: an unset slot (e.g. of a `PERS` array), not an orientation.
     ZeroQuaternion,
+    /// With the robot's kinematics: the target is out of reach, outside the joint limits or in
+    /// another configuration than written, before or after the transform; or its tool is
+    /// unknown, so it cannot be checked.
+    Reach,
 }
 
 /// A setting of the transform that gets past a refusal; whoever shows the refusal says how to

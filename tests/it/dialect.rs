@@ -153,6 +153,7 @@ fn a_third_dialect_joins_with_one_registry_line() {
         frames: BTreeMap::new(),
         deviation: &sag,
         default_wobj: None,
+        arm: None,
     };
     let result = apply(
         &program,
