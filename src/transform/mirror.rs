@@ -46,7 +46,8 @@ pub struct MirrorSettings {
     pub skid_axis_to: Option<usize>,
     /// Also mirror the program's work objects, bases and tools.
     pub mirror_frames: bool,
-    /// Mirror joint targets (axes 1, 4, 6 negated) instead of refusing them.
+    /// Mirror joint targets (axes 1, 4, 6 negated) instead of refusing them; with `arm` they
+    /// are always mirrored, through kinematics.
     pub mirror_joints: bool,
     /// The plane given in world instead (`frame_in = "world"`): each target mirrors about it
     /// in its own work object, `M = W⁻¹·plane`.
@@ -293,7 +294,8 @@ impl TargetRule for MirrorRule<'_> {
     type Frame = Reflection;
 
     fn joint(&self, scope: Scope, p: &Position) -> Step {
-        if !self.settings.mirror_joints {
+        // With the arm's kinematics the mirror image is computed, not guessed: no need to ask.
+        if !self.settings.mirror_joints && self.settings.arm.is_none() {
             return Err(Why::new(
                 RefusalKind::JointTarget,
                 format!("{} is a joint target: it is not mirrored", describe(p)),

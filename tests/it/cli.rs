@@ -252,7 +252,7 @@ fn an_all_zero_quaternion_is_an_unset_slot() {
         "correct",
         path,
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
         "--diff",

@@ -60,29 +60,42 @@ fn snapshot_name(prefix: &str, sample: &str) -> String {
     format!("{prefix}_{}", file.replace(['.', '$'], "_"))
 }
 
-/// `--diff` of every sample under every command (refused targets skipped, and listed on
-/// stderr, which is part of the snapshot).
+/// `--diff` of every sample under every command by rule (the cell without kinematics: most
+/// samples show file idioms, not programs made for the cell's robots; refused targets skipped,
+/// and listed on stderr, which is part of the snapshot).
 #[test]
 fn diff_snapshots_of_every_sample_and_command() {
     let commands: [(&str, &[&str]); 4] = [
         (
             "correct",
-            &["correct", "--cell", "samples/cell.toml", "--robot", "r1"],
+            &[
+                "correct",
+                "--cell",
+                "samples/cell_rules.toml",
+                "--robot",
+                "r1",
+            ],
         ),
         (
             "zero",
-            &["zero", "--cell", "samples/cell.toml", "--robot", "r1"],
+            &["zero", "--cell", "samples/cell_rules.toml", "--robot", "r1"],
         ),
         (
             "mirror",
-            &["mirror", "--cell", "samples/cell.toml", "--robot", "r1"],
+            &[
+                "mirror",
+                "--cell",
+                "samples/cell_rules.toml",
+                "--robot",
+                "r1",
+            ],
         ),
         (
             "transfer",
             &[
                 "transfer",
                 "--cell",
-                "samples/cell.toml",
+                "samples/cell_rules.toml",
                 "--from",
                 "r1",
                 "--to",
@@ -142,7 +155,7 @@ fn refusal_messages() {
             "correct",
             sample,
             "--cell",
-            "samples/cell.toml",
+            "samples/cell_rules.toml",
             "--robot",
             "r1",
             "--out-dir",
@@ -155,7 +168,7 @@ fn refusal_messages() {
         );
         writeln!(all, "$ trackfix correct {sample} …\n{err}").unwrap();
     }
-    let cell = root().join("samples/cell.toml");
+    let cell = root().join("samples/cell_rules.toml");
     let cell = cell.to_str().unwrap();
     let cases = [
         (
@@ -232,7 +245,7 @@ fn mirror_refusal_messages() {
 #[test]
 fn transfer_moves_the_skid_to_the_other_robots_axis() {
     let dir = tempfile::tempdir().unwrap();
-    let cell_text = std::fs::read_to_string(root().join("samples/cell.toml"))
+    let cell_text = std::fs::read_to_string(root().join("samples/cell_rules.toml"))
         .unwrap()
         .replace("track/", &format!("{}/samples/track/", root().display()))
         .replace(
@@ -298,7 +311,7 @@ fn transfer_moves_the_skid_to_the_other_robots_axis() {
 #[test]
 fn cell_error_messages() {
     let dir = tempfile::tempdir().unwrap();
-    let sample = std::fs::read_to_string(root().join("samples/cell.toml")).unwrap();
+    let sample = std::fs::read_to_string(root().join("samples/cell_rules.toml")).unwrap();
     let profile = std::fs::read_to_string(root().join("samples/track/profile.toml")).unwrap();
     std::fs::create_dir(dir.path().join("track")).unwrap();
     std::fs::write(
@@ -356,7 +369,7 @@ fn cell_error_messages() {
         "correct",
         "samples/rapid/spot_line.mod",
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r3",
         "--diff",
@@ -378,7 +391,7 @@ fn default_wobj_resolves_unused_targets() {
         "correct",
         path.to_str().unwrap(),
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
         "--default-wobj",
@@ -395,7 +408,7 @@ fn default_wobj_resolves_unused_targets() {
 }
 
 fn sample_cell() -> Cell {
-    Cell::load(&root().join("samples/cell.toml")).unwrap()
+    Cell::load(&root().join("samples/cell_rules.toml")).unwrap()
 }
 
 fn load_with_cell(path: &Path, cell: &Cell, robot: &str) -> Program {
@@ -459,7 +472,7 @@ fn round_trips_through_files() {
         ("samples/krl/spot_line.src", "src"),
     ] {
         let (c, z) = (d(&format!("c.{ext}")), d(&format!("z.{ext}")));
-        let common = ["--cell", "samples/cell.toml", "--skip-unsupported"];
+        let common = ["--cell", "samples/cell_rules.toml", "--skip-unsupported"];
         run_ok(&[&["correct", sample, "--robot", "r1", "-o", &c], &common[..]].concat());
         run_ok(&[&["zero", &c, "--robot", "r1", "-o", &z], &common[..]].concat());
         let (m1, m2) = (d(&format!("m1.{ext}")), d(&format!("m2.{ext}")));
@@ -516,7 +529,7 @@ fn transfer_equals_zero_mirror_correct() {
         ("samples/rapid/spot_line.mod", "spot_line", "mod"),
         ("samples/krl/spot_line.src", "spot_line", "src"),
     ] {
-        let common = ["--cell", "samples/cell.toml", "--skip-unsupported"];
+        let common = ["--cell", "samples/cell_rules.toml", "--skip-unsupported"];
         let out = d(&format!("transfer_{ext}"));
         run_ok(
             &[
@@ -569,7 +582,7 @@ fn output_modes() {
     let inp = input.to_str().unwrap();
     let common = [
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
         "--skip-unsupported",
@@ -599,7 +612,7 @@ fn output_modes() {
         "correct",
         inp,
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
         "--in-place",
@@ -822,4 +835,46 @@ fn end_to_end_krl_correction_reaches_the_cad_points() {
     );
     assert_eq!(std::fs::read(out.join("e2e.src")).unwrap(), src.as_bytes());
     insta::assert_snapshot!("e2e_krl", summary);
+}
+
+/// The README's main command on the sample, with the cell's kinematics: no target refused (the
+/// joint target jHome moves through FK/IK with the tracks), and `correct`'s diff of jHome.
+#[test]
+fn readme_main_command_with_kinematics() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    let (code, _, err) = trackfix(&[
+        "transfer",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        "samples/cell.toml",
+        "--from",
+        "r1",
+        "--to",
+        "r2",
+        "--mirror",
+        "--out-dir",
+        out,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("227 target(s) changed"), "{err}");
+    let (code, diff, err) = trackfix(&[
+        "correct",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--diff",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let jhome: Vec<&str> = diff.lines().filter(|l| l.contains("jHome:=")).collect();
+    assert_eq!(
+        jhome,
+        [
+            "-  CONST jointtarget jHome:=[[0,-20,30,0,80,0],[150,9E+09,9E+09,9E+09,9E+09,9E+09]];",
+            "+  CONST jointtarget jHome:=[[0.0514,-19.9494,30.0292,-0.0669,79.9236,0.0997],[150,9E+09,9E+09,9E+09,9E+09,9E+09]];",
+        ]
+    );
 }
