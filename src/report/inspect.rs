@@ -105,6 +105,42 @@ pub struct PositionRow {
     #[serde(flatten)]
     pub frame: FrameColumn,
     pub tool: Option<String>,
+    /// With a robot's kinematics (`inspect --cell --robot`): the `reach` verdict and the joints
+    /// it solved (or the joint target's), degrees.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reach: Option<ReachColumns>,
+}
+
+/// The reach columns of a position.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReachColumns {
+    pub status: &'static str,
+    pub solved_joints: Option<[f64; 6]>,
+}
+
+impl InspectReport {
+    /// Adds the reach columns from `reach` (per file, its targets in the file's order).
+    pub fn add_reach(&mut self, reach: &[crate::kinematics::reach::FileReach]) {
+        for fr in reach {
+            let path = fr.path.display().to_string();
+            let Some(f) = self.files.iter_mut().find(|f| f.path == path) else {
+                continue;
+            };
+            for (row, t) in f.positions.iter_mut().zip(&fr.targets) {
+                row.reach = Some(ReachColumns {
+                    status: t.status.as_str(),
+                    solved_joints: t.joints,
+                });
+            }
+        }
+    }
+}
+
+fn reach_cells(p: &PositionRow) -> Option<[String; 7]> {
+    let r = p.reach.as_ref()?;
+    let j = |i: usize| r.solved_joints.map(|j| crate::syntax::fixed(j[i], 2));
+    let c = |i: usize| j(i).unwrap_or_else(|| "-".to_owned());
+    Some([r.status.to_owned(), c(0), c(1), c(2), c(3), c(4), c(5)])
 }
 
 /// The frame a position is used in, under the name its language gives that column (the
@@ -264,6 +300,7 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
         extax: nums(&p.extax),
         frame,
         tool: p.usage.tool.clone(),
+        reach: None,
     }
 }
 
@@ -344,15 +381,24 @@ pub fn render_table(report: &InspectReport) -> String {
         let _ = writeln!(out, "{} ({})", f.path, language_name(f.language));
         if !f.positions.is_empty() {
             let frame_col = f.language.dialect().vocabulary().frame_column;
-            let _ = writeln!(
+            let with_reach = f.positions.iter().any(|p| p.reach.is_some());
+            let _ = write!(
                 out,
                 "  {:<20} {:<11} {:>6} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:<12} {:<12}",
                 "name", "kind", "line", "x", "y", "z", "rx", "ry", "rz", "skid", frame_col, "tool"
             );
+            if with_reach {
+                let _ = write!(
+                    out,
+                    " {:<15} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
+                    "reach", "a1", "a2", "a3", "a4", "a5", "a6"
+                );
+            }
+            let _ = writeln!(out);
             for p in &f.positions {
                 let frame = &p.frame.name;
                 let [x, y, z, rx, ry, rz] = p.pose.cells();
-                let _ = writeln!(
+                let _ = write!(
                     out,
                     "  {:<20} {:<11} {:>6} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:<12} {:<12}",
                     p.name.as_deref().unwrap_or("*"),
@@ -368,6 +414,13 @@ pub fn render_table(report: &InspectReport) -> String {
                     frame.as_deref().unwrap_or("-"),
                     p.tool.as_deref().unwrap_or("-"),
                 );
+                if let Some([st, a1, a2, a3, a4, a5, a6]) = reach_cells(p) {
+                    let _ = write!(
+                        out,
+                        " {st:<15} {a1:>8} {a2:>8} {a3:>8} {a4:>8} {a5:>8} {a6:>8}"
+                    );
+                }
+                let _ = writeln!(out);
             }
         }
         for fr in &f.frames {
@@ -408,8 +461,17 @@ pub fn render_table(report: &InspectReport) -> String {
 
 /// `inspect --format csv`: one row per position.
 pub fn render_csv(report: &InspectReport) -> String {
+    let with_reach = report
+        .files
+        .iter()
+        .any(|f| f.positions.iter().any(|p| p.reach.is_some()));
     let mut out =
-        String::from("file,language,name,kind,line,x,y,z,q1,q2,q3,q4,rx,ry,rz,skid,frame,tool\n");
+        String::from("file,language,name,kind,line,x,y,z,q1,q2,q3,q4,rx,ry,rz,skid,frame,tool");
+    out.push_str(if with_reach {
+        ",reach,a1,a2,a3,a4,a5,a6\n"
+    } else {
+        "\n"
+    });
     for f in &report.files {
         for p in &f.positions {
             let q = |i: usize| p.pose.q.map(|q| q[i]);
@@ -434,7 +496,15 @@ pub fn render_csv(report: &InspectReport) -> String {
                 csv_text(frame.as_deref().unwrap_or("")),
                 csv_text(p.tool.as_deref().unwrap_or("")),
             ];
-            let _ = writeln!(out, "{}", fields.join(","));
+            let mut line = fields.join(",");
+            if with_reach {
+                let cells =
+                    reach_cells(p).map(|c| c.map(|v| if v == "-" { String::new() } else { v }));
+                let cells = cells.unwrap_or_default();
+                line.push(',');
+                line.push_str(&cells.join(","));
+            }
+            let _ = writeln!(out, "{line}");
         }
     }
     out

@@ -1018,3 +1018,60 @@ fn mirror_with_kinematics_mirrors_joints_and_configurations_by_ik() {
         );
     }
 }
+
+/// `inspect --cell --robot` adds the reach verdict and the solved joints (table, csv, json); the
+/// joint target's joints are its own.
+#[test]
+fn inspect_with_a_robot_adds_reach_columns() {
+    let args = |format: &str| {
+        let (code, out, err) = trackfix(&[
+            "inspect",
+            "samples/rapid/spot_line.mod",
+            "--cell",
+            "samples/cell.toml",
+            "--robot",
+            "r1",
+            "--format",
+            format,
+        ]);
+        assert_eq!(code, 0, "{err}");
+        out
+    };
+    let table = args("table");
+    let header = table.lines().nth(1).unwrap();
+    assert!(
+        header.ends_with("reach                 a1       a2       a3       a4       a5       a6"),
+        "{header}"
+    );
+    let pounce = table
+        .lines()
+        .find(|l| l.trim_start().starts_with("pPounce"))
+        .unwrap();
+    assert!(
+        pounce.ends_with("ok                -11.87    -1.62   -14.08    -8.45   115.20   163.72"),
+        "{pounce}"
+    );
+    let csv = args("csv");
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .ends_with(",tool,reach,a1,a2,a3,a4,a5,a6")
+    );
+    let jhome = csv.lines().find(|l| l.contains(",jHome,")).unwrap();
+    assert!(
+        jhome.ends_with(",ok,0.00,-20.00,30.00,0.00,80.00,0.00"),
+        "{jhome}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&args("json")).unwrap();
+    let rows = v["files"][0]["positions"].as_array().unwrap();
+    assert_eq!(rows.len(), 227);
+    assert!(rows.iter().all(|r| r["reach"]["status"] == "ok"));
+    assert_eq!(
+        rows[1]["reach"]["solved_joints"].as_array().unwrap().len(),
+        6
+    );
+    // Without --robot the columns are absent.
+    let (_, plain, _) = trackfix(&["inspect", "samples/rapid/spot_line.mod", "--format", "csv"]);
+    assert!(plain.lines().next().unwrap().ends_with(",frame,tool"));
+}
