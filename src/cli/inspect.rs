@@ -51,6 +51,13 @@ pub struct InspectArgs {
     /// KUKA $config.dat whose BASE_DATA/TOOL_DATA resolve KRL bases and tools.
     #[arg(long, value_name = "FILE")]
     pub config_dat: Option<PathBuf>,
+    /// The cell file: with --robot, adds each target's reach and joints (the robot needs
+    /// [robot.NAME.kinematics]).
+    #[arg(long, value_name = "FILE", requires = "robot")]
+    pub cell: Option<PathBuf>,
+    /// The robot of --cell whose arm solves the targets.
+    #[arg(long, requires = "cell")]
+    pub robot: Option<String>,
 }
 
 const CHECK_EXAMPLES: &str = "\
@@ -173,14 +180,31 @@ fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
 }
 
 pub fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
+    let cell = match (&args.cell, &args.robot) {
+        (Some(c), Some(r)) => {
+            let cell = trackfix::transform::Cell::load(c)?;
+            let robot = cell.robot(r)?.clone();
+            if robot.kinematics.is_none() {
+                anyhow::bail!(
+                    "{}: robot `{r}` has no [robot.{r}.kinematics] table; add `model = \"NAME\"` or the OPW lengths",
+                    c.display()
+                );
+            }
+            Some(robot)
+        }
+        _ => None,
+    };
     let options = LoadOptions {
-        krl_config_dat: args.config_dat.clone(),
+        krl_config_dat: match (&args.config_dat, &cell) {
+            (None, Some(r)) => r.config_dat.clone(),
+            (c, _) => c.clone(),
+        },
     };
     let batch = load_all(&args.files, &options)?;
     let inspect = InspectOptions {
         skid_axis: args.skid,
     };
-    let report = InspectReport {
+    let mut report = InspectReport {
         files: batch
             .programs
             .iter()
@@ -194,6 +218,15 @@ pub fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
             .filter_map(|(p, _)| ProgramReport::of(p))
             .collect(),
     };
+    if let Some(robot) = &cell
+        && let Some(kin) = &robot.kinematics
+    {
+        for p in &batch.programs {
+            let reach =
+                trackfix::kinematics::reach::reach_program(p, robot, kin, &Default::default());
+            report.add_reach(&reach);
+        }
+    }
     let text = match args.format {
         Format::Table => render_table(&report),
         Format::Json => {

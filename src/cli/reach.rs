@@ -12,8 +12,8 @@ use super::Exit;
 
 const REACH_EXAMPLES: &str = "\
 Examples:
-  trackfix reach samples/rapid/spot_line.mod --cell samples/cell_kinematics.toml --robot r1
-  trackfix reach samples/krl/spot_line.src --cell samples/cell_kinematics.toml --robot k1 --format json
+  trackfix reach samples/rapid/spot_line.mod --cell samples/cell.toml --robot r1
+  trackfix reach samples/krl/spot_line.src --cell samples/cell.toml --robot k1 --format json
 
 For every target at its skid s, in its work object W with tool TOOL, the flange in the robot base
   F = B(s)⁻¹ · W · T · TOOL⁻¹

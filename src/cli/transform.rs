@@ -1073,6 +1073,7 @@ fn mirror_settings(
         skid_axis_to: None,
         mirror_frames: o.mirror_frames,
         mirror_joints: o.mirror_joints,
+        arm: robot.and_then(|r| trackfix::transform::MirrorArm::of(r, default_wobj)),
     }
 }
 

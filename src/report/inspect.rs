@@ -190,6 +190,44 @@ pub struct PositionRow {
     /// Where the tool is declared in the program (`null`-less: absent when not declared).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tool_at: Option<Place>,
+    /// With a robot's kinematics (`inspect --cell --robot`): the `reach` verdict and the joints
+    /// it solved (or the joint target's), degrees.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reach: Option<ReachColumns>,
+}
+
+/// The reach columns of a position.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReachColumns {
+    /// The `reach` verdict (`ok`, `unreachable`, `outside-limit`, `config-mismatch`, `not-checked`).
+    pub status: &'static str,
+    /// The joints the solver found (or the joint target's own), degrees.
+    pub solved_joints: Option<[f64; 6]>,
+}
+
+impl InspectReport {
+    /// Adds the reach columns from `reach` (per file, its targets in the file's order).
+    pub fn add_reach(&mut self, reach: &[crate::kinematics::reach::FileReach]) {
+        for fr in reach {
+            let path = fr.path.display().to_string();
+            let Some(f) = self.files.iter_mut().find(|f| f.path == path) else {
+                continue;
+            };
+            for (row, t) in f.positions.iter_mut().zip(&fr.targets) {
+                row.reach = Some(ReachColumns {
+                    status: t.status.as_str(),
+                    solved_joints: t.joints,
+                });
+            }
+        }
+    }
+}
+
+fn reach_cells(p: &PositionRow) -> Option<[String; 7]> {
+    let r = p.reach.as_ref()?;
+    let j = |i: usize| r.solved_joints.map(|j| crate::syntax::fixed(j[i], 2));
+    let c = |i: usize| j(i).unwrap_or_else(|| "-".to_owned());
+    Some([r.status.to_owned(), c(0), c(1), c(2), c(3), c(4), c(5)])
 }
 
 /// The frame a position is used in, under the name its language gives that column (the
@@ -371,6 +409,7 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
         frame,
         tool: p.usage.tool.clone(),
         tool_at: None,
+        reach: None,
     }
 }
 
@@ -487,11 +526,20 @@ pub fn render_table(report: &InspectReport) -> String {
                 ("rx", "ry", "rz")
             };
             let st = if abc { " S/T" } else { "" };
-            let _ = writeln!(
+            let with_reach = f.positions.iter().any(|p| p.reach.is_some());
+            let _ = write!(
                 out,
                 "  {:<20} {:<11} {:>6} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:<12} {:<12}{st}",
                 "name", "kind", "line", "x", "y", "z", r1, r2, r3, "skid", frame_col, "tool"
             );
+            if with_reach {
+                let _ = write!(
+                    out,
+                    " {:<15} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
+                    "reach", "a1", "a2", "a3", "a4", "a5", "a6"
+                );
+            }
+            let _ = writeln!(out);
             for p in &f.positions {
                 let frame = &p.frame.name;
                 let [x, y, z, mut rx, mut ry, mut rz] = p.pose.cells();
@@ -507,7 +555,7 @@ pub fn render_table(report: &InspectReport) -> String {
                         t.as_deref().unwrap_or("-")
                     ),
                 };
-                let _ = writeln!(
+                let _ = write!(
                     out,
                     "  {:<20} {:<11} {:>6} {:>10} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:<12} {:<12}{st}",
                     printable(p.name.as_deref().unwrap_or("*")),
@@ -523,6 +571,13 @@ pub fn render_table(report: &InspectReport) -> String {
                     printable(frame.as_deref().unwrap_or("-")),
                     printable(p.tool.as_deref().unwrap_or("-")),
                 );
+                if let Some([st, a1, a2, a3, a4, a5, a6]) = reach_cells(p) {
+                    let _ = write!(
+                        out,
+                        " {st:<15} {a1:>8} {a2:>8} {a3:>8} {a4:>8} {a5:>8} {a6:>8}"
+                    );
+                }
+                let _ = writeln!(out);
             }
         }
         for fr in &f.frames {
@@ -571,8 +626,17 @@ pub fn render_table(report: &InspectReport) -> String {
 
 /// `inspect --format csv`: one row per position.
 pub fn render_csv(report: &InspectReport) -> String {
+    let with_reach = report
+        .files
+        .iter()
+        .any(|f| f.positions.iter().any(|p| p.reach.is_some()));
     let mut out =
-        String::from("file,language,name,kind,line,x,y,z,q1,q2,q3,q4,rx,ry,rz,skid,frame,tool\n");
+        String::from("file,language,name,kind,line,x,y,z,q1,q2,q3,q4,rx,ry,rz,skid,frame,tool");
+    out.push_str(if with_reach {
+        ",reach,a1,a2,a3,a4,a5,a6\n"
+    } else {
+        "\n"
+    });
     for f in &report.files {
         for p in &f.positions {
             let q = |i: usize| p.pose.q.map(|q| q[i]);
@@ -597,7 +661,15 @@ pub fn render_csv(report: &InspectReport) -> String {
                 csv_text(frame.as_deref().unwrap_or("")),
                 csv_text(p.tool.as_deref().unwrap_or("")),
             ];
-            let _ = writeln!(out, "{}", fields.join(","));
+            let mut line = fields.join(",");
+            if with_reach {
+                let cells =
+                    reach_cells(p).map(|c| c.map(|v| if v == "-" { String::new() } else { v }));
+                let cells = cells.unwrap_or_default();
+                line.push(',');
+                line.push_str(&cells.join(","));
+            }
+            let _ = writeln!(out, "{line}");
         }
     }
     out

@@ -21,9 +21,14 @@ use crate::syntax::Edit;
 use super::cell::{Axis, ConfigRule, Plane};
 use super::driver::{Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
+use super::kinematic_policy::fmt_joints;
+use super::kinematic_policy::{Arm, config_edits};
 use super::policy::{Why, common_refusal, describe, work_object_of};
 use super::refusal::{Refusal, RefusalKind, Remedy};
-use super::rewrite::{MM_DECIMALS, OrientationHint, QUAT_DECIMALS, number_edit, pose_edits};
+use super::rewrite::{
+    DEG_DECIMALS, MM_DECIMALS, OrientationHint, QUAT_DECIMALS, number_edit, pose_edits,
+};
+use crate::kinematics::{ConfigValue, mirror_config_by_ik, mirrored_joints};
 
 /// Everything `mirror` needs.
 #[derive(Clone, Debug, PartialEq)]
@@ -46,11 +51,63 @@ pub struct MirrorSettings {
     pub skid_axis_to: Option<usize>,
     /// Also mirror the program's work objects, bases and tools.
     pub mirror_frames: bool,
-    /// Mirror joint targets (axes 1, 4, 6 negated) instead of refusing them.
+    /// Mirror joint targets (axes 1, 4, 6 negated) instead of refusing them; with `arm` they
+    /// are always mirrored, through kinematics.
     pub mirror_joints: bool,
     /// The plane given in world instead (`frame_in = "world"`): each target mirrors about it
     /// in its own work object, `M = W⁻¹·plane`.
     pub world: Option<WorldPlane>,
+    /// The robot's arm and track, when the cell gives its kinematics: configurations and joint
+    /// targets are then mirrored through inverse kinematics (docs/design.md §10).
+    pub arm: Option<MirrorArm>,
+}
+
+/// What mirroring through kinematics needs: the arm, where the robot base is at each skid, and
+/// how a target's work object resolves.
+///
+/// The mirror-image robot is assumed to stand as this robot's mirror image in the xz plane of
+/// its base (a symmetric cell: `B' = Sa·B·Sy`): a flange pose `F` in this robot's base is then
+/// `Sy·F·Sy` in the other's, `Sy = diag(1, −1, 1)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MirrorArm {
+    /// The arm being mirrored, with the cell's tools.
+    pub arm: Arm,
+    /// `B_0`, the robot base at skid 0 (as [`TrackSetup`](super::TrackSetup)).
+    pub base0: Pose,
+    /// The unit track direction in the world, along which the base moves with the skid.
+    pub track_axis: Vector3<f64>,
+    /// Work objects / bases overriding the program's.
+    pub frames: BTreeMap<String, Pose>,
+    /// The work object of declared targets no motion uses.
+    pub default_wobj: Option<String>,
+}
+
+impl MirrorArm {
+    /// The arm of `robot`, if the cell gives it kinematics.
+    pub fn of(robot: &super::cell::Robot, default_wobj: Option<&str>) -> Option<MirrorArm> {
+        Some(MirrorArm {
+            arm: Arm::of(robot)?,
+            base0: robot.base0,
+            track_axis: robot.track_axis,
+            frames: robot.frames.clone(),
+            default_wobj: default_wobj.map(str::to_owned),
+        })
+    }
+
+    /// `B(s) = Trans(s·a)·B_0`.
+    fn base_at(&self, skid: f64) -> Pose {
+        Translation3::from(self.track_axis * skid) * self.base0
+    }
+}
+
+/// `Sy·F·Sy`: a flange pose in the mirror-image robot's base (see [`MirrorArm`]).
+pub fn mirrored_flange(f: &Pose) -> Pose {
+    let t = f.translation.vector;
+    let q = reflect_rotation(Vector3::y(), &f.rotation, Vector3::y());
+    Pose::from_parts(
+        Translation3::new(t.x, -t.y, t.z),
+        UnitQuaternion::from_quaternion(q),
+    )
 }
 
 /// A mirror plane given in world, and what resolves each target's work object.
@@ -77,6 +134,7 @@ impl Default for MirrorSettings {
             mirror_frames: false,
             mirror_joints: false,
             world: None,
+            arm: None,
         }
     }
 }
@@ -243,7 +301,8 @@ impl TargetRule for MirrorRule<'_> {
     type Frame = Reflection;
 
     fn joint(&self, scope: Scope, p: &Position) -> Step {
-        if !self.settings.mirror_joints {
+        // With the arm's kinematics the mirror image is computed, not guessed: no need to ask.
+        if !self.settings.mirror_joints && self.settings.arm.is_none() {
             return Err(Why::new(
                 RefusalKind::JointTarget,
                 format!("{} is a joint target: it is not mirrored", describe(p)),
@@ -252,13 +311,16 @@ impl TargetRule for MirrorRule<'_> {
             .with_remedy(Remedy::MirrorJoints)
             .at(scope.file, p));
         }
-        let mut edits: Vec<Edit> = [0, 3, 5]
-            .iter()
-            .filter_map(|&i| {
-                let f = p.joints.get(i)?;
-                flip_or_value_edit(f, -f.as_ref()?.value(), 0)
-            })
-            .collect();
+        let mut edits: Vec<Edit> = match &self.settings.arm {
+            None => [0, 3, 5]
+                .iter()
+                .filter_map(|&i| {
+                    let f = p.joints.get(i)?;
+                    flip_or_value_edit(f, -f.as_ref()?.value(), 0)
+                })
+                .collect(),
+            Some(m) => mirror_joints_by_ik(&m.arm, p).map_err(|why| why.at(scope.file, p))?,
+        };
         if let Some(why) = skid_refusal(p, self.settings) {
             return Err(why.at(scope.file, p));
         }
@@ -277,8 +339,12 @@ impl TargetRule for MirrorRule<'_> {
     fn refusal(&self, scope: Scope, p: &Position) -> Option<Why> {
         // A plane given in the work object mirrors a target used with two work objects the
         // same way in both; a plane in world does not.
-        common_refusal(scope.file, p)
-            .filter(|w| w.kind != RefusalKind::TwoWorkObjects || self.settings.world.is_some())
+        let common = common_refusal(scope.file, p)
+            .filter(|w| w.kind != RefusalKind::TwoWorkObjects || self.settings.world.is_some());
+        if common.is_some() || self.settings.arm.is_none() {
+            return common;
+        }
+        self.ik_config(scope, p).err()
     }
 
     fn skid(&self, _scope: Scope, p: &Position) -> Result<Option<f64>, Why> {
@@ -309,7 +375,11 @@ impl TargetRule for MirrorRule<'_> {
     fn more_edits(&self, scope: Scope, p: &Position) -> Vec<Edit> {
         let mut edits = Vec::new();
         if self.settings.config == ConfigRule::Mirror {
-            edits.extend(scope.file.language.dialect().mirror_config(&p.config));
+            match self.settings.arm.as_ref().map(|_| self.ik_config(scope, p)) {
+                // `refusal` has checked the target: the configuration is IK's.
+                Some(Ok(Some(c))) => edits.extend(config_edits(&p.config, &c)),
+                _ => edits.extend(scope.file.language.dialect().mirror_config(&p.config)),
+            }
         }
         edits.extend(skid_edits(scope.file, p, self.settings));
         edits
@@ -331,6 +401,91 @@ impl TargetRule for MirrorRule<'_> {
             Vec::new()
         }
     }
+}
+
+impl MirrorRule<'_> {
+    /// The configuration inverse kinematics finds for the mirrored target (`None` when the
+    /// target writes none), or why it is refused: the target does not reach as written, or its
+    /// mirror image is out of reach within the limits.
+    fn ik_config(&self, scope: Scope, p: &Position) -> Result<Option<ConfigValue>, Why> {
+        let Some(m) = &self.settings.arm else {
+            return Ok(None);
+        };
+        let Some(t) = p.cartesian.as_ref().and_then(|c| c.pose()) else {
+            return Ok(None);
+        };
+        let written = ConfigValue::written(&p.config);
+        let what = describe(p);
+        let skid = match p.skid(self.settings.skid_axis) {
+            Skid::At(s) => s,
+            _ => {
+                return Err(Why::new(
+                    RefusalKind::SkidMissing,
+                    format!("{what} has no skid position: its joints cannot be checked"),
+                    "write the skid position into the target",
+                ));
+            }
+        };
+        let w = work_object_of(scope.program, p, &m.frames, m.default_wobj.as_deref())?;
+        let tool = m.arm.tool(scope.program, p)?;
+        let flange = m.base_at(skid).inverse() * w * t * tool.inverse();
+        let language = scope.file.language;
+        let before = m.arm.joints_before(p, &flange, language)?;
+        let kin = &m.arm.kinematics;
+        let Some((_, solved)) =
+            mirror_config_by_ik(kin, &mirrored_flange(&flange), &before, language)
+        else {
+            return Err(Why::new(
+                RefusalKind::Reach,
+                format!(
+                    "{what}: its mirror image is out of reach within the limits: joints before {}, after none",
+                    fmt_joints(&before)
+                ),
+                "check the mirror plane and the mirror-image robot's cell",
+            ));
+        };
+        // KUKA programs may write only one of Status and Turn: keep to what is written.
+        Ok(written.map(|w| match (w, solved) {
+            (ConfigValue::Kuka { status, turn }, ConfigValue::Kuka { status: s, turn: t }) => {
+                ConfigValue::Kuka {
+                    status: status.and(s),
+                    turn: turn.and(t),
+                }
+            }
+            (_, solved) => solved,
+        }))
+    }
+}
+
+/// A joint target mirrored through kinematics: `FK(J')` = the mirror image of `FK(J)` (see
+/// [`MirrorArm`]), the solution within the limits nearest to the rule's
+/// `(−θ1, θ2, θ3, −θ4, θ5, −θ6)`. Where IK agrees with the rule to 1e-9° the rule's text is
+/// written (a flip keeps the literal's decimals).
+fn mirror_joints_by_ik(arm: &Arm, p: &Position) -> Result<Vec<Edit>, Why> {
+    let j = arm.joints_of(p)?;
+    let kin = &arm.kinematics;
+    let rule = mirrored_joints(&j);
+    let Some(new) = kin.nearest(&mirrored_flange(&kin.forward(&j)), &rule, false) else {
+        return Err(Why::new(
+            RefusalKind::Reach,
+            format!(
+                "{}: its mirror image is out of reach within the limits: joints before {}, after none",
+                describe(p),
+                fmt_joints(&j)
+            ),
+            "check the mirror-image robot's limits",
+        ));
+    };
+    let mut edits = Vec::new();
+    for (i, (f, v)) in p.joints.iter().zip(new).enumerate() {
+        let edit = if (v - rule[i]).abs() < 1e-9 {
+            flip_or_value_edit(f, rule[i], 0)
+        } else {
+            number_edit(f, v, DEG_DECIMALS)
+        };
+        edits.extend(edit);
+    }
+    Ok(edits)
 }
 
 /// `mirror` every target (and, if asked, frame) of `program`.

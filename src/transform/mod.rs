@@ -9,6 +9,7 @@
 pub mod cell;
 mod driver;
 pub mod edits;
+pub mod kinematic_policy;
 pub mod mirror;
 pub mod output;
 pub(crate) mod policy;
@@ -21,7 +22,8 @@ pub mod transfer;
 
 pub use cell::{Axis, Cell, CellError, ConfigRule, FrameIn, MirrorTable, Plane, Robot};
 pub use edits::{FileEdits, FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
-pub use mirror::{MirrorSettings, WorldPlane, mirror};
+pub use kinematic_policy::Arm;
+pub use mirror::{MirrorArm, MirrorSettings, WorldPlane, mirror};
 pub use refusal::{Refusal, RefusalKind, Remedy};
 pub use stamp::Stamp;
 pub use track_correction::{Deviation, Direction, TrackSetup, track_correction};

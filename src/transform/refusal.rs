@@ -47,6 +47,10 @@ pub enum RefusalKind {
     /// not a target: reported as a note, never a refusal (so nothing to keep).
     #[value(skip)]
     ZeroQuaternion,
+    /// With the robot's kinematics: the target is out of reach, outside the joint limits or in
+    /// another configuration than written, before or after the transform; or its tool is
+    /// unknown, so it cannot be checked.
+    Reach,
 }
 
 /// A setting of the transform that gets past a refusal; whoever shows the refusal says how to

@@ -15,11 +15,12 @@ use crate::position::{Position, Program, Skid};
 use crate::track::{Profile, TrackError};
 
 use super::cell::Robot;
-use super::driver::{Scope, TargetRule, apply_rule};
-use super::edits::ProgramEdits;
-use super::policy::{Why, describe, work_object_of};
+use super::driver::{Scope, Step, TargetRule, apply_rule};
+use super::edits::{ProgramEdits, TargetChange};
+use super::kinematic_policy::{Arm, joint_edits};
+use super::policy::{Why, describe, joint_target, work_object_of};
 use super::refusal::RefusalKind;
-use super::rewrite::OrientationHint;
+use super::rewrite::{OrientationHint, pose_change};
 
 /// `D(s)`: anything that gives the track's deviation at a skid (a [`Profile`], or a test's
 /// closed form).
@@ -77,6 +78,9 @@ pub struct TrackSetup<'a> {
     /// The profile's uncertainty, when it carries one: each corrected target then records the
     /// expanded uncertainty of its TCP.
     pub uncertainty: Option<&'a ProfileUncertainty>,
+    /// The robot's arm, when the cell gives its kinematics: every target is then checked and
+    /// joint targets are moved (docs/design.md §10).
+    pub arm: Option<Arm>,
 }
 
 impl<'a> TrackSetup<'a> {
@@ -90,6 +94,7 @@ impl<'a> TrackSetup<'a> {
             deviation,
             default_wobj: None,
             uncertainty: None,
+            arm: Arm::of(robot),
         }
     }
 
@@ -108,6 +113,38 @@ impl<'a> TrackSetup<'a> {
         };
         Ok(w.inverse() * b * d * b.inverse() * w)
     }
+
+    /// `D(s)⁻¹` (correct) or `D(s)` (zero): the change seen from the robot base at `s`.
+    pub fn base_change(&self, skid: f64, dir: Direction) -> Result<Pose, TrackError> {
+        let d = self.deviation.deviation(skid)?;
+        Ok(match dir {
+            Direction::Correct => d.inverse(),
+            Direction::Zero => d,
+        })
+    }
+}
+
+/// The refusal of a target whose skid the profile cannot evaluate.
+fn profile_refusal(what: &str, skid: f64, e: TrackError) -> Why {
+    match e {
+        TrackError::OutOfRange { min, max, .. } => Why::new(
+            RefusalKind::SkidOutOfRange,
+            format!("{what} is at skid {skid} mm, outside the profile's range [{min}, {max}] mm"),
+            "measure the track over this range, or set extrapolate = \"clamp\" or \"linear\" in the profile",
+        ),
+        other => Why::new(
+            RefusalKind::SkidOutOfRange,
+            format!("{what} at skid {skid} mm: {other}"),
+            "check the profile",
+        ),
+    }
+}
+
+/// A target's work object in world, and its tool on the flange when the arm is checked.
+struct TrackFrame {
+    w: Pose,
+    tool: Option<Pose>,
+    language: crate::position::Language,
 }
 
 /// `correct` or `zero` as a rule of the transform driver.
@@ -117,7 +154,35 @@ struct TrackRule<'s, 'a> {
 }
 
 impl TargetRule for TrackRule<'_, '_> {
-    type Frame = Pose;
+    type Frame = TrackFrame;
+
+    fn joint(&self, scope: Scope, p: &Position) -> Step {
+        let refuse = |why: Why| why.at(scope.file, p);
+        let Some(arm) = &self.setup.arm else {
+            return Err(refuse(joint_target(p)));
+        };
+        let j = arm.joints_of(p).map_err(refuse)?;
+        let skid = self.skid(scope, p).map_err(refuse)?.unwrap_or_default();
+        let change = self
+            .setup
+            .base_change(skid, self.dir)
+            .map_err(|e| refuse(profile_refusal(&describe(p), skid, e)))?;
+        let new = crate::kinematics::joint_target_correction(&arm.kinematics, &j, &change)
+            .map_err(|why| refuse(arm.joint_refusal(p, &j, &why)))?;
+        let kin = &arm.kinematics;
+        let (mm, deg) = pose_change(&kin.forward(&j), &kin.forward(&new));
+        let change = TargetChange {
+            mm,
+            deg,
+            skid: Some(skid),
+            name: p.name.clone(),
+            line: p.line,
+            // A joint target has no work object or tool: its TCP in the world is not known
+            // here, so no uncertainty is stated for it.
+            uncertainty_mm: None,
+        };
+        Ok(Some((joint_edits(p, &new), change)))
+    }
 
     fn skid(&self, scope: Scope, p: &Position) -> Result<Option<f64>, Why> {
         let what = describe(p);
@@ -143,48 +208,52 @@ impl TargetRule for TrackRule<'_, '_> {
         }
     }
 
-    fn frame(&self, scope: Scope, p: &Position) -> Result<Pose, Why> {
-        work_object_of(
+    fn frame(&self, scope: Scope, p: &Position) -> Result<TrackFrame, Why> {
+        let w = work_object_of(
             scope.program,
             p,
             &self.setup.frames,
             self.setup.default_wobj.as_deref(),
-        )
+        )?;
+        let tool = match &self.setup.arm {
+            Some(arm) => Some(arm.tool(scope.program, p)?),
+            None => None,
+        };
+        Ok(TrackFrame {
+            w,
+            tool,
+            language: scope.file.language,
+        })
     }
 
     fn new_pose(
         &self,
         p: &Position,
-        w: &Pose,
+        frame: &TrackFrame,
         skid: Option<f64>,
         t: &Pose,
     ) -> Result<(Pose, OrientationHint), Why> {
         let what = describe(p);
         // `skid` refused targets without one.
         let skid = skid.unwrap_or_default();
+        let w = &frame.w;
         let correction = self
             .setup
             .correction(w, skid, self.dir)
-            .map_err(|e| match e {
-                TrackError::OutOfRange { min, max, .. } => Why::new(
-                    RefusalKind::SkidOutOfRange,
-                    format!(
-                        "{what} is at skid {skid} mm, outside the profile's range [{min}, {max}] mm"
-                    ),
-                    "measure the track over this range, or set extrapolate = \"clamp\" or \"linear\" in the profile",
-                ),
-                other => Why::new(
-                    RefusalKind::SkidOutOfRange,
-                    format!("{what} at skid {skid} mm: {other}"),
-                    "check the profile",
-                ),
-            })?;
-        Ok((correction * t, OrientationHint::NearOriginal))
+            .map_err(|e| profile_refusal(&what, skid, e))?;
+        let new = correction * t;
+        if let (Some(arm), Some(tool)) = (&self.setup.arm, &frame.tool) {
+            // The flange in the base the controller computes: F = B(s)⁻¹·W·T·TOOL⁻¹.
+            let to_base = self.setup.base_at(skid).inverse() * w;
+            let flange = |t: &Pose| to_base * t * tool.inverse();
+            arm.check(p, &flange(t), &flange(&new), frame.language)?;
+        }
+        Ok((new, OrientationHint::NearOriginal))
     }
 
-    fn uncertainty(&self, w: &Pose, skid: Option<f64>, new: &Pose) -> Option<f64> {
+    fn uncertainty(&self, frame: &TrackFrame, skid: Option<f64>, new: &Pose) -> Option<f64> {
         let (pu, skid) = (self.setup.uncertainty?, skid?);
-        let tcp = w * nalgebra::Point3::from(new.translation.vector);
+        let tcp = frame.w * nalgebra::Point3::from(new.translation.vector);
         tcp_uncertainty_world(pu, &self.setup.base_at(skid), skid, &tcp)
             .ok()
             .map(|u| u.expanded)
@@ -215,6 +284,7 @@ mod tests {
             deviation: dev,
             default_wobj: None,
             uncertainty: None,
+            arm: None,
         }
     }
 

@@ -272,7 +272,7 @@ fn an_all_zero_quaternion_is_an_unset_slot() {
         "correct",
         path,
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
         "--diff",
@@ -336,9 +336,9 @@ fn krl_inspect_table_labels_a_b_c_and_shows_status_turn() {
         .lines()
         .find(|l| l.trim_start().starts_with("XP0 "))
         .unwrap();
-    // DECL E6POS XP0={X 1480.0,Y -1310.0,Z 1650.0,A -179.0,B 25.0,C 180.0,S 2,T 10,…}
+    // DECL E6POS XP0={X 1480.0,Y -2400.0,Z 1650.0,A -200.2528,B 41.2947,C 168.1590,S 2,T 10,…}
     assert!(
-        xp0.contains("-179.0000") && xp0.contains("25.0000") && xp0.contains("180.0000"),
+        xp0.contains("-200.2528") && xp0.contains("41.2947") && xp0.contains("168.1590"),
         "{xp0}"
     );
     assert!(xp0.ends_with(" 2/10"), "{xp0}");

@@ -154,6 +154,7 @@ fn a_third_dialect_joins_with_one_registry_line() {
         deviation: &sag,
         default_wobj: None,
         uncertainty: None,
+        arm: None,
     };
     let result = apply(
         &program,

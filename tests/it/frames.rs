@@ -304,6 +304,7 @@ fn work_object_with_track_compensation() {
         deviation: &profile,
         default_wobj: None,
         uncertainty: None,
+        arm: None,
     };
     let pu = ProfileUncertainty::new(&profile).unwrap();
     let fit = fit_wobj(&rows, &setup, pu.as_ref(), None).unwrap();
@@ -345,6 +346,7 @@ fn work_object_uncertainty_is_calibrated() {
         deviation: &identity,
         default_wobj: None,
         uncertainty: None,
+        arm: None,
     };
     let want = pose_to_xyz_deg(&wobj);
     let (mut inside, mut total) = (0, 0);

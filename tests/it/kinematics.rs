@@ -650,25 +650,26 @@ fn reach_cli_on_the_spot_line_sample() {
         "reach",
         "samples/rapid/spot_line.mod",
         "--cell",
-        "samples/cell_kinematics.toml",
+        "samples/cell.toml",
         "--robot",
         "r1",
     ]);
-    // The sample's confdata was written by hand, not by IK: most targets are in another
-    // configuration than the one written, which is exactly what reach is for.
-    assert_eq!(code, 1, "{err}");
+    // The sample's confdata is the one IK gives on the cell's IRB 4600 (written so): every
+    // target is reachable as written.
+    assert_eq!(code, 0, "{err}");
+    assert!(out.ends_with("227 target(s): 227 ok\n"), "{out}");
     insta::assert_snapshot!(out);
     let (code, json, _) = trackfix(&[
         "reach",
         "samples/rapid/spot_line.mod",
         "--cell",
-        "samples/cell_kinematics.toml",
+        "samples/cell.toml",
         "--robot",
         "r1",
         "--format",
         "json",
     ]);
-    assert_eq!(code, 1);
+    assert_eq!(code, 0);
     let v: serde_json::Value = serde_json::from_str(&json).unwrap();
     let targets = v["files"][0]["targets"].as_array().unwrap();
     assert_eq!(targets.len(), 227);
@@ -691,7 +692,7 @@ fn reach_cli_on_the_spot_line_sample() {
         "reach",
         "samples/rapid/spot_line.mod",
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
     ]);
@@ -726,25 +727,26 @@ fn reach_on_the_krl_sample_reads_status_and_turn() {
         "reach",
         "samples/krl/spot_line.src",
         "--cell",
-        "samples/cell_kinematics.toml",
+        "samples/cell.toml",
         "--robot",
         "k1",
         "--format",
         "json",
     ]);
-    assert_eq!(code, 1, "{err}");
+    assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&json).unwrap();
     let targets = v["files"][0]["targets"].as_array().unwrap();
     assert_eq!(targets.len(), 161);
+    assert!(targets.iter().all(|t| t["status"] == "ok"));
     let xp1 = &targets[1];
     assert_eq!(xp1["name"], "XP1");
     assert_eq!(xp1["status"], "ok");
     assert_eq!(xp1["config_written"], "S 6 T 50");
     assert_eq!(xp1["config_solved"], "S 6 T 50");
     assert_eq!(xp1["config_matches"], true);
-    // XP0 is in $WORLD at the far end of the line from the skid it names.
-    assert_eq!(targets[0]["status"], "unreachable");
-    assert_eq!(targets[0]["joints"], serde_json::Value::Null);
+    // XP0 is in $WORLD, above the car near the robot.
+    assert_eq!(targets[0]["name"], "XP0");
+    assert_eq!(targets[0]["config_solved"], "S 2 T 10");
 }
 
 #[test]
@@ -822,4 +824,254 @@ fn sample_home_joint_target_on_the_measured_track() {
     assert!(dp < 1e-3 && dr < 1e-9);
     let moved = (k.forward(&jc).translation.vector - k.forward(&j).translation.vector).norm();
     assert!((moved - 1.87).abs() < 0.01, "{moved}");
+}
+
+// ---- the transforms with kinematics ----
+
+fn parsed(src: &str) -> Program {
+    Program {
+        files: vec![trackfix::rapid::parse_file(
+            Path::new("m.mod"),
+            src.as_bytes().to_vec(),
+        )],
+    }
+}
+
+fn joints_in(program: &Program, name: &str) -> Joints {
+    let p = program.files[0]
+        .positions
+        .iter()
+        .find(|p| p.name.as_deref() == Some(name))
+        .unwrap();
+    let v: Vec<f64> = p
+        .joints
+        .iter()
+        .map(|f| f.as_ref().unwrap().value())
+        .collect();
+    [v[0], v[1], v[2], v[3], v[4], v[5]]
+}
+
+/// `correct` with kinematics: the joint target follows the deformed track with
+/// FK(J') = D⁻¹·FK(J) (design §10, 1e-3 mm through the written text), a consistent Cartesian
+/// target is corrected, and one whose written configuration does not reach it is refused by
+/// name as a `reach` refusal.
+#[test]
+fn correct_moves_joint_targets_and_checks_cartesian_ones() {
+    use trackfix::transform::{Direction, RefusalKind, TrackSetup, apply, track_correction};
+    let cell = Cell::parse(Path::new("cell.toml"), CELL).unwrap();
+    let robot = cell.robot("r1").unwrap();
+    let k = robot.kinematics.clone().unwrap();
+    let tool = robot.tools["tgun"];
+    let skid = 500.0;
+    let b = pose_xyz_deg(skid, -1000.0, 0.0, 0.0, 0.0, 90.0);
+    let good = [10.0, 20.0, -10.0, 30.0, 40.0, -50.0];
+    let target = b * k.forward(&good) * tool;
+    let cf = abb::config_of(&k, &good);
+    let mut src = String::from(
+        "MODULE M\n  PERS tooldata tGun:=[TRUE,[[0,0,0],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\n",
+    );
+    src += &robtarget("pGood", &target, cf, skid);
+    src += &robtarget("pWrongCf", &target, [cf[0] - 1, cf[1], cf[2], cf[3]], skid);
+    src +=
+        "  CONST jointtarget jA:=[[12.345678,25.5,-10.25,30,40,-200],[500,9E9,9E9,9E9,9E9,9E9]];\n";
+    src += "  PROC main()\n    MoveL pGood,v100,fine,tGun;\n    MoveL pWrongCf,v100,fine,tGun;\n    MoveAbsJ jA,v100,fine,tGun;\n  ENDPROC\nENDMODULE\n";
+    let program = parsed(&src);
+    let j = joints_in(&program, "jA");
+    assert!(k.within_limits(&j));
+    let d = deviation();
+    let dev = move |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(d) };
+    let setup = TrackSetup::new(robot, &dev);
+    let result = apply(
+        &program,
+        track_correction(&program, &setup, Direction::Correct),
+    )
+    .unwrap();
+    let refusals: Vec<_> = result.refusals().collect();
+    assert_eq!(refusals.len(), 1, "{refusals:?}");
+    assert_eq!(refusals[0].target, "pWrongCf");
+    assert_eq!(refusals[0].kind, RefusalKind::Reach);
+    assert!(
+        refusals[0].message.contains("does not reach it")
+            && refusals[0].message.contains("10.000, 20.000, -10.000"),
+        "{}",
+        refusals[0].message
+    );
+    let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+    let after = parsed(&out);
+    let jc = joints_in(&after, "jA");
+    let want = d.inverse() * k.forward(&j);
+    let (dp, dr) = pose_error(&k.forward(&jc), &want);
+    // Rotation to the written precision: six axes rounded to 0.5e-4° each, at most 5.3e-6 rad.
+    assert!(dp < 1e-3 && dr < 5.3e-6, "{dp} mm, {dr} rad\n{out}");
+    // Six decimals as written in axis 1, the house minimum of 4 elsewhere; the turn of axis 6
+    // kept.
+    let line = out.lines().find(|l| l.contains("jA:=")).unwrap();
+    let axes = line.split("[[").nth(1).unwrap().split(']').next().unwrap();
+    let decimals: Vec<usize> = axes
+        .split(',')
+        .map(|a| a.split('.').nth(1).map_or(0, str::len))
+        .collect();
+    assert_eq!(decimals, [6, 4, 4, 4, 4, 4], "{line}");
+    assert!((jc[5] + 200.0).abs() < 1.0, "{jc:?}");
+    // The good target moved (its pose is corrected), the wrong one is as written.
+    let before_line = |n: &str| src.lines().find(|l| l.contains(n)).unwrap().to_owned();
+    let after_line = |n: &str| out.lines().find(|l| l.contains(n)).unwrap().to_owned();
+    assert_ne!(before_line("pGood:="), after_line("pGood:="));
+    assert_eq!(before_line("pWrongCf:="), after_line("pWrongCf:="));
+}
+
+/// Without kinematics the joint target is refused as before.
+#[test]
+fn correct_without_kinematics_refuses_joint_targets() {
+    use trackfix::transform::{Direction, RefusalKind, TrackSetup, track_correction};
+    let cell = Cell::parse(
+        Path::new("cell.toml"),
+        &CELL.replace("[robot.r1.kinematics]\nmodel = \"abb_irb2400_10\"\n", ""),
+    )
+    .unwrap();
+    let robot = cell.robot("r1").unwrap();
+    assert!(robot.kinematics.is_none());
+    let program = parsed(
+        "MODULE M\n  CONST jointtarget jA:=[[10,20,-10,30,40,-50],[500,9E9,9E9,9E9,9E9,9E9]];\nENDMODULE\n",
+    );
+    let dev = |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(deviation()) };
+    let setup = TrackSetup::new(robot, &dev);
+    let edits = track_correction(&program, &setup, Direction::Correct);
+    let kinds: Vec<_> = edits.files[0].refusals.iter().map(|r| r.kind).collect();
+    assert_eq!(kinds, [RefusalKind::JointTarget]);
+}
+
+/// `mirror --mirror-joints` with kinematics: the joint target's mirror image through FK/IK is
+/// `(−θ1, θ2, θ3, −θ4, θ5, −θ6)` for an arm without sideways offset, written with the rule's
+/// text (a flip keeps the literal); the Cartesian target gets the configuration IK finds,
+/// which is the rule's away from quadrant boundaries.
+#[test]
+fn mirror_with_kinematics_mirrors_joints_and_configurations_by_ik() {
+    use trackfix::transform::{MirrorArm, MirrorSettings, apply, mirror};
+    let cell = Cell::parse(Path::new("cell.toml"), CELL).unwrap();
+    let robot = cell.robot("r1").unwrap();
+    let k = robot.kinematics.clone().unwrap();
+    let tool = robot.tools["tgun"];
+    let skid = 500.0;
+    let b = pose_xyz_deg(skid, -1000.0, 0.0, 0.0, 0.0, 90.0);
+    let mut src = String::from(
+        "MODULE M\n  PERS tooldata tGun:=[TRUE,[[0,0,0],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\n",
+    );
+    src += "  CONST jointtarget jA:=[[10.5,20,-10,30.25,40,-50],[500,9E9,9E9,9E9,9E9,9E9]];\n";
+    let samples: Vec<Joints> = vec![
+        [10.0, 20.0, -10.0, 30.0, 40.0, -50.0],
+        [-35.0, 5.0, 15.0, -120.0, -60.0, 170.0],
+        [120.0, -30.0, 40.0, 95.0, 20.0, -95.0],
+        [-100.0, 45.0, -30.0, -10.0, 70.0, 250.0],
+    ];
+    for (i, j) in samples.iter().enumerate() {
+        assert!(k.within_limits(j), "{j:?}");
+        src += &robtarget(
+            &format!("p{i}"),
+            &(b * k.forward(j) * tool),
+            abb::config_of(&k, j),
+            skid,
+        );
+    }
+    src += "  PROC main()\n    MoveAbsJ jA,v100,fine,tGun;\n";
+    for i in 0..samples.len() {
+        src += &format!("    MoveL p{i},v100,fine,tGun;\n");
+    }
+    src += "  ENDPROC\nENDMODULE\n";
+    let program = parsed(&src);
+    let with_arm = MirrorSettings {
+        mirror_joints: true,
+        arm: MirrorArm::of(robot, None),
+        ..MirrorSettings::default()
+    };
+    let result = apply(&program, mirror(&program, &with_arm)).unwrap();
+    assert!(
+        result.refusals().next().is_none(),
+        "{:?}",
+        result.refusals().collect::<Vec<_>>()
+    );
+    let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+    assert!(out.contains("jA:=[[-10.5,20,-10,-30.25,40,50],"), "{out}");
+    // The rule alone (no arm) gives the same configurations on these samples.
+    let by_rule = MirrorSettings {
+        mirror_joints: true,
+        ..MirrorSettings::default()
+    };
+    let rule_out = apply(&program, mirror(&program, &by_rule)).unwrap();
+    assert_eq!(
+        String::from_utf8(rule_out.files[0].output.clone()).unwrap(),
+        out
+    );
+    // And the configuration written is the one of the mirrored joints.
+    let after = parsed(&out);
+    for (i, j) in samples.iter().enumerate() {
+        let p = after.files[0]
+            .positions
+            .iter()
+            .find(|p| p.name.as_deref() == Some(&format!("p{i}")))
+            .unwrap();
+        let written = ConfigValue::written(&p.config).unwrap();
+        assert_eq!(
+            written,
+            ConfigValue::Abb(abb::config_of(&k, &mirrored_joints(j))),
+            "p{i}"
+        );
+    }
+}
+
+/// `inspect --cell --robot` adds the reach verdict and the solved joints (table, csv, json); the
+/// joint target's joints are its own.
+#[test]
+fn inspect_with_a_robot_adds_reach_columns() {
+    let args = |format: &str| {
+        let (code, out, err) = trackfix(&[
+            "inspect",
+            "samples/rapid/spot_line.mod",
+            "--cell",
+            "samples/cell.toml",
+            "--robot",
+            "r1",
+            "--format",
+            format,
+        ]);
+        assert_eq!(code, 0, "{err}");
+        out
+    };
+    let table = args("table");
+    let header = table.lines().nth(1).unwrap();
+    assert!(
+        header.ends_with("reach                 a1       a2       a3       a4       a5       a6"),
+        "{header}"
+    );
+    let pounce = table
+        .lines()
+        .find(|l| l.trim_start().starts_with("pPounce"))
+        .unwrap();
+    assert!(
+        pounce.ends_with("ok                -11.87    -1.62   -14.08    -8.45   115.20   163.72"),
+        "{pounce}"
+    );
+    let csv = args("csv");
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .ends_with(",tool,reach,a1,a2,a3,a4,a5,a6")
+    );
+    let jhome = csv.lines().find(|l| l.contains(",jHome,")).unwrap();
+    assert!(
+        jhome.ends_with(",ok,0.00,-20.00,30.00,0.00,80.00,0.00"),
+        "{jhome}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&args("json")).unwrap();
+    let rows = v["files"][0]["positions"].as_array().unwrap();
+    assert_eq!(rows.len(), 227);
+    assert!(rows.iter().all(|r| r["reach"]["status"] == "ok"));
+    assert_eq!(
+        rows[1]["reach"]["solved_joints"].as_array().unwrap().len(),
+        6
+    );
+    // Without --robot the columns are absent.
+    let (_, plain, _) = trackfix(&["inspect", "samples/rapid/spot_line.mod", "--format", "csv"]);
+    assert!(plain.lines().next().unwrap().ends_with(",frame,tool"));
 }

@@ -7,7 +7,7 @@ use std::process::{Command, Stdio};
 
 use crate::support::{root, trackfix};
 
-const CELL: &str = "samples/cell.toml";
+const CELL: &str = "samples/cell_rules.toml";
 
 /// A sample copied into a fresh folder, and the folder.
 fn copy_sample(sample: &str, name: &str) -> (tempfile::TempDir, PathBuf) {

@@ -65,7 +65,7 @@ fn data_and_motion_modules_of_one_task_resolve_together() {
         "correct",
         task.to_str().unwrap(),
         "--cell",
-        root().join("samples/cell.toml").to_str().unwrap(),
+        root().join("samples/cell_rules.toml").to_str().unwrap(),
         "--robot",
         "r1",
         "--out-dir",
@@ -156,7 +156,7 @@ fn correct_then_zero_gives_back_the_sample_backup() {
     let dir = tempfile::tempdir().unwrap();
     let (c, z) = (dir.path().join("c"), dir.path().join("z"));
     let sample = root().join("samples/robotstudio_backup");
-    let cell = root().join("samples/cell.toml");
+    let cell = root().join("samples/cell_rules.toml");
     let (code, _, err) = trackfix(&[
         "correct",
         sample.to_str().unwrap(),
@@ -277,7 +277,7 @@ fn kss_tree_resolves_across_files_and_subroutines() {
 /// none of its points gets no `$config.dat` in the output; one that does gets it corrected.
 #[test]
 fn config_dat_is_written_only_when_changed() {
-    let cell = root().join("samples/cell.toml");
+    let cell = root().join("samples/cell_rules.toml");
     for (uses_global, expect_config) in [(false, false), (true, true)] {
         let src = if uses_global {
             "DEF m( )\n  BAS (#BASE,1 )\n  LIN XP1\n  LIN XGLOBAL\nEND\n"
@@ -326,7 +326,7 @@ fn correct_then_zero_gives_back_the_kss_sample() {
     let dir = tempfile::tempdir().unwrap();
     let (c, z) = (dir.path().join("c"), dir.path().join("z"));
     let sample = root().join("samples/kss_backup");
-    let cell = root().join("samples/cell.toml");
+    let cell = root().join("samples/cell_rules.toml");
     for (cmd, from, to) in [("correct", &sample, &c), ("zero", &c, &z)] {
         let (code, _, err) = trackfix(&[
             cmd,
@@ -409,7 +409,7 @@ fn modules_named_together_are_one_task() {
     assert_eq!(groups, vec![vec![d.clone(), m.clone()]]);
     let walked = trackfix::program::collect_programs(&[dir.path().to_owned()]).unwrap();
     assert_eq!(walked.len(), 2, "a plain folder's modules stay separate");
-    let cell = root().join("samples/cell.toml");
+    let cell = root().join("samples/cell_rules.toml");
     let out = dir.path().join("out");
     let args = |files: &[&Path]| {
         let mut a: Vec<String> = vec!["correct".into()];

@@ -828,7 +828,7 @@ fn correct_with_report_writes_the_run_report() {
         "correct",
         "samples/rapid/spot_line.mod",
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
         "--skip-unsupported",
@@ -840,7 +840,7 @@ fn correct_with_report_writes_the_run_report() {
     assert_eq!(code, 4, "written, the joint target kept: {stderr}");
     assert!(stderr.contains("the run report"), "{stderr}");
     let html = std::fs::read_to_string(&report).unwrap();
-    let cell = std::fs::read(root().join("samples/cell.toml")).unwrap();
+    let cell = std::fs::read(root().join("samples/cell_rules.toml")).unwrap();
     let profile = std::fs::read(root().join("samples/track/profile.toml")).unwrap();
     for hash in [&cell, &profile].map(|b| trackfix::digest::sha256_hex(b)) {
         assert!(

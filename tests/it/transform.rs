@@ -60,14 +60,21 @@ fn snapshot_name(prefix: &str, sample: &str) -> String {
     format!("{prefix}_{}", file.replace(['.', '$'], "_"))
 }
 
-/// `--diff` of every sample under every command (refused targets skipped, and listed on
-/// stderr, which is part of the snapshot).
+/// `--diff` of every sample under every command by rule (the cell without kinematics: most
+/// samples show file idioms, not programs made for the cell's robots; refused targets skipped,
+/// and listed on stderr, which is part of the snapshot).
 #[test]
 fn diff_snapshots_of_every_sample_and_command() {
     let commands: [(&str, &[&str]); 4] = [
         (
             "correct",
-            &["correct", "--cell", "samples/cell.toml", "--robot", "r1"],
+            &[
+                "correct",
+                "--cell",
+                "samples/cell_rules.toml",
+                "--robot",
+                "r1",
+            ],
         ),
         (
             "zero",
@@ -75,7 +82,7 @@ fn diff_snapshots_of_every_sample_and_command() {
             &[
                 "zero",
                 "--cell",
-                "samples/cell.toml",
+                "samples/cell_rules.toml",
                 "--robot",
                 "r1",
                 "--force",
@@ -83,14 +90,20 @@ fn diff_snapshots_of_every_sample_and_command() {
         ),
         (
             "mirror",
-            &["mirror", "--cell", "samples/cell.toml", "--robot", "r1"],
+            &[
+                "mirror",
+                "--cell",
+                "samples/cell_rules.toml",
+                "--robot",
+                "r1",
+            ],
         ),
         (
             "transfer",
             &[
                 "transfer",
                 "--cell",
-                "samples/cell.toml",
+                "samples/cell_rules.toml",
                 "--from",
                 "r1",
                 "--to",
@@ -156,7 +169,7 @@ fn refusal_messages() {
             "correct",
             sample,
             "--cell",
-            "samples/cell.toml",
+            "samples/cell_rules.toml",
             "--robot",
             "r1",
             "--out-dir",
@@ -169,7 +182,7 @@ fn refusal_messages() {
         );
         writeln!(all, "$ trackfix correct {sample} …\n{err}").unwrap();
     }
-    let cell = root().join("samples/cell.toml");
+    let cell = root().join("samples/cell_rules.toml");
     let cell = cell.to_str().unwrap();
     let cases = [
         (
@@ -246,7 +259,7 @@ fn mirror_refusal_messages() {
 #[test]
 fn transfer_moves_the_skid_to_the_other_robots_axis() {
     let dir = tempfile::tempdir().unwrap();
-    let cell_text = std::fs::read_to_string(root().join("samples/cell.toml"))
+    let cell_text = std::fs::read_to_string(root().join("samples/cell_rules.toml"))
         .unwrap()
         .replace("track/", &format!("{}/samples/track/", root().display()))
         .replace(
@@ -312,7 +325,7 @@ fn transfer_moves_the_skid_to_the_other_robots_axis() {
 #[test]
 fn cell_error_messages() {
     let dir = tempfile::tempdir().unwrap();
-    let sample = std::fs::read_to_string(root().join("samples/cell.toml")).unwrap();
+    let sample = std::fs::read_to_string(root().join("samples/cell_rules.toml")).unwrap();
     let profile = std::fs::read_to_string(root().join("samples/track/profile.toml")).unwrap();
     std::fs::create_dir(dir.path().join("track")).unwrap();
     std::fs::write(
@@ -370,7 +383,7 @@ fn cell_error_messages() {
         "correct",
         "samples/rapid/spot_line.mod",
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r3",
         "--diff",
@@ -392,7 +405,7 @@ fn default_wobj_resolves_unused_targets() {
         "correct",
         path.to_str().unwrap(),
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
         "--default-wobj",
@@ -409,7 +422,7 @@ fn default_wobj_resolves_unused_targets() {
 }
 
 fn sample_cell() -> Cell {
-    Cell::load(&root().join("samples/cell.toml")).unwrap()
+    Cell::load(&root().join("samples/cell_rules.toml")).unwrap()
 }
 
 fn load_with_cell(path: &Path, cell: &Cell, robot: &str) -> Program {
@@ -480,7 +493,7 @@ fn round_trips_through_files() {
         ("samples/krl/spot_line.src", "src"),
     ] {
         let (c, z) = (d(&format!("c.{ext}")), d(&format!("z.{ext}")));
-        let common = ["--cell", "samples/cell.toml", "--skip-unsupported"];
+        let common = ["--cell", "samples/cell_rules.toml", "--skip-unsupported"];
         run_ok(&[&["correct", sample, "--robot", "r1", "-o", &c], &common[..]].concat());
         run_ok(&[&["zero", &c, "--robot", "r1", "-o", &z], &common[..]].concat());
         let (m1, m2) = (d(&format!("m1.{ext}")), d(&format!("m2.{ext}")));
@@ -564,7 +577,7 @@ fn transfer_equals_zero_mirror_correct() {
     ] {
         let common = [
             "--cell",
-            "samples/cell.toml",
+            "samples/cell_rules.toml",
             "--skip-unsupported",
             "--no-stamp",
         ];
@@ -667,7 +680,7 @@ fn output_modes() {
     let inp = input.to_str().unwrap();
     let common = [
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
         "--skip-unsupported",
@@ -697,7 +710,7 @@ fn output_modes() {
         "correct",
         inp,
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
         "--in-place",
@@ -1115,7 +1128,7 @@ fn keep_one_refusal_kind_at_a_time_and_exit_4_when_any_was_kept() {
                 "correct",
                 input.to_str().unwrap(),
                 "--cell",
-                "samples/cell.toml",
+                "samples/cell_rules.toml",
                 "--robot",
                 "r1",
                 "-o",
@@ -1161,7 +1174,7 @@ fn provenance_stamp_blocks_double_correction() {
     let d = |s: &str| dir.path().join(s).to_str().unwrap().to_owned();
     let common = [
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
         "--keep",
@@ -1391,7 +1404,7 @@ fn absurd_values_are_named_refusals_and_check_findings() {
         "correct",
         input.to_str().unwrap(),
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
         "--diff",
@@ -1420,7 +1433,7 @@ fn absurd_values_are_named_refusals_and_check_findings() {
         "correct",
         input.to_str().unwrap(),
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
         "--default-wobj",
@@ -1440,7 +1453,7 @@ fn absurd_values_are_named_refusals_and_check_findings() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::create_dir(dir.path().join("track")).unwrap();
     std::fs::write(dir.path().join("track/profile.toml"), absurd).unwrap();
-    let cell_text = std::fs::read_to_string(root().join("samples/cell.toml")).unwrap();
+    let cell_text = std::fs::read_to_string(root().join("samples/cell_rules.toml")).unwrap();
     std::fs::write(dir.path().join("cell.toml"), &cell_text).unwrap();
     let (code, _, err) = trackfix(&[
         "correct",
@@ -1474,7 +1487,7 @@ fn absurd_values_are_named_refusals_and_check_findings() {
     ]);
     assert_eq!(code, 2, "{err}");
     assert!(
-        err.contains("cell.toml:15:") && err.contains("not a plausible value"),
+        err.contains("cell.toml:19:") && err.contains("not a plausible value"),
         "{err}"
     );
 }
@@ -1496,7 +1509,7 @@ fn refusals_on_one_long_line_render_a_window() {
         "correct",
         input.to_str().unwrap(),
         "--cell",
-        "samples/cell.toml",
+        "samples/cell_rules.toml",
         "--robot",
         "r1",
         "--diff",
@@ -1604,7 +1617,7 @@ fn batch_reports_group_repeats_end_with_totals_and_speak_json() {
                     "correct",
                     input.to_str().unwrap(),
                     "--cell",
-                    "samples/cell.toml",
+                    "samples/cell_rules.toml",
                     "--robot",
                     "r1",
                     "--keep",
@@ -1689,4 +1702,46 @@ fn mirror_frames_mirrors_the_tool_load_centre_of_gravity() {
         "{out}"
     );
     drop(dir);
+}
+
+/// The README's main command on the sample, with the cell's kinematics: no target refused (the
+/// joint target jHome moves through FK/IK with the tracks), and `correct`'s diff of jHome.
+#[test]
+fn readme_main_command_with_kinematics() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    let (code, _, err) = trackfix(&[
+        "transfer",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        "samples/cell.toml",
+        "--from",
+        "r1",
+        "--to",
+        "r2",
+        "--mirror",
+        "--out-dir",
+        out,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("227 target(s) changed"), "{err}");
+    let (code, diff, err) = trackfix(&[
+        "correct",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--diff",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let jhome: Vec<&str> = diff.lines().filter(|l| l.contains("jHome:=")).collect();
+    assert_eq!(
+        jhome,
+        [
+            "-  CONST jointtarget jHome:=[[0,-20,30,0,80,0],[150,9E+09,9E+09,9E+09,9E+09,9E+09]];",
+            "+  CONST jointtarget jHome:=[[0.0514,-19.9494,30.0292,-0.0669,79.9236,0.0997],[150,9E+09,9E+09,9E+09,9E+09,9E+09]];",
+        ]
+    );
 }

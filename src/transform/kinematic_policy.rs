@@ -1,0 +1,219 @@
+//! What the transforms do with a robot's kinematics (docs/design.md §10): every changed
+//! Cartesian target is checked before and after, and joint targets are moved through forward
+//! and inverse kinematics instead of being refused.
+//!
+//! The rule, in one place:
+//! - before: the written configuration must reach the target within the limits (a target
+//!   whose `confdata` / Status-Turn selects another solution than the robot would take is a
+//!   wrong program, and "the same configuration after" would mean nothing);
+//! - after: the new pose must be reachable in that configuration within the limits
+//!   ([`check_target`]).
+//!
+//! Either failure is a [`RefusalKind::Reach`] refusal with the joints before and after.
+
+use std::collections::BTreeMap;
+
+use crate::geometry::Pose;
+use crate::kinematics::reach::resolve_tool;
+use crate::kinematics::{ConfigValue, Joints, Kinematics, check_target, select};
+use crate::position::{Config, Position, Program};
+use crate::syntax::Edit;
+
+use super::cell::Robot;
+use super::policy::{Why, describe};
+use super::refusal::RefusalKind;
+use super::rewrite::{DEG_DECIMALS, bits_edit, integer_edit, number_edit};
+
+/// A robot arm as the transforms need it: its kinematics and the cell's tools on its flange.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Arm {
+    /// The arm's OPW model, joint signs, offsets and limits.
+    pub kinematics: Kinematics,
+    /// Tools overriding the program's (lower-case name → pose on the flange).
+    pub tools: BTreeMap<String, Pose>,
+}
+
+impl Arm {
+    /// The arm of `robot`, if the cell gives it kinematics.
+    pub fn of(robot: &Robot) -> Option<Arm> {
+        Some(Arm {
+            kinematics: robot.kinematics.clone()?,
+            tools: robot.tools.clone(),
+        })
+    }
+
+    /// The tool `p` is used with, on the flange.
+    pub(crate) fn tool(&self, program: &Program, p: &Position) -> Result<Pose, Why> {
+        let what = describe(p);
+        let Some(name) = p.usage.tool.as_deref() else {
+            return Err(reach(
+                format!("{what} is not used with a tool: its joints cannot be checked"),
+                "use it in a motion instruction, or give the robot no kinematics",
+            ));
+        };
+        resolve_tool(program, &self.tools, name).map_err(|msg| {
+            reach(
+                format!("{what}: its joints cannot be checked: {msg}"),
+                "give the tool under [robot.NAME.tool] in the cell file",
+            )
+        })
+    }
+
+    /// The joints the written configuration selects for `flange` (in the robot base), or why
+    /// the target is wrong as written.
+    pub(crate) fn joints_before(
+        &self,
+        p: &Position,
+        flange: &Pose,
+        language: crate::position::Language,
+    ) -> Result<Joints, Why> {
+        let kin = &self.kinematics;
+        let what = describe(p);
+        let written = ConfigValue::written(&p.config);
+        let Some(sel) = select(kin, flange, written.as_ref()) else {
+            return Err(reach(
+                format!(
+                    "{what} is out of reach as written (the flange is {:.1} mm from the robot base)",
+                    flange.translation.vector.norm()
+                ),
+                "check the target, its work object and tool, and the robot's kinematics",
+            ));
+        };
+        let solved = match &written {
+            Some(w) => w.solved(kin, &sel.joints),
+            None => ConfigValue::of_joints(language, kin, &sel.joints),
+        };
+        if !sel.config_matches {
+            let w = written.map_or(String::new(), |w| w.to_string());
+            return Err(reach(
+                format!(
+                    "{what} is written with configuration {w}, which does not reach it; the \
+                     robot reaches it with {solved} at joints {}",
+                    fmt_joints(&sel.joints)
+                ),
+                "write the configuration the robot reaches the target with (see reach)",
+            ));
+        }
+        if !sel.within_limits {
+            return Err(reach(
+                format!(
+                    "{what} is outside the joint limits as written: joints {}",
+                    fmt_joints(&sel.joints)
+                ),
+                "move the target inside the robot's working range",
+            ));
+        }
+        Ok(sel.joints)
+    }
+
+    /// Checks a Cartesian target moved from flange `before` to `after` (both in the robot
+    /// base).
+    pub(crate) fn check(
+        &self,
+        p: &Position,
+        before: &Pose,
+        after: &Pose,
+        language: crate::position::Language,
+    ) -> Result<(), Why> {
+        self.joints_before(p, before, language)?;
+        let written = ConfigValue::written(&p.config);
+        let check = check_target(&self.kinematics, before, after, written.as_ref());
+        match check.message() {
+            None => Ok(()),
+            Some(m) => Err(reach(
+                format!("{}: {m}", describe(p)),
+                "the transform would move the robot through another posture: re-teach the target",
+            )),
+        }
+    }
+
+    /// A joint target's six axes, inside the limits.
+    pub(crate) fn joints_of(&self, p: &Position) -> Result<Joints, Why> {
+        let what = describe(p);
+        let values: Option<Vec<f64>> = p
+            .joints
+            .iter()
+            .take(6)
+            .map(|f| f.as_ref().map(|f| f.value()))
+            .collect();
+        let j: Joints = match values.as_deref() {
+            Some(&[a, b, c, d, e, f]) => [a, b, c, d, e, f],
+            _ => {
+                return Err(Why::new(
+                    RefusalKind::Expression,
+                    format!("{what} has axes that are not numbers"),
+                    "write the axes as numeric literals",
+                ));
+            }
+        };
+        if !self.kinematics.within_limits(&j) {
+            return Err(reach(
+                format!(
+                    "{what} is outside the joint limits as written: joints {}",
+                    fmt_joints(&j)
+                ),
+                "move the target inside the robot's working range",
+            ));
+        }
+        Ok(j)
+    }
+
+    /// The refusal of a joint target whose new pose has no solution in its branch.
+    pub(crate) fn joint_refusal(
+        &self,
+        p: &Position,
+        before: &Joints,
+        why: &crate::kinematics::KinematicRefusal,
+    ) -> Why {
+        reach(
+            format!(
+                "{}: {why}: joints before {}, after none in the same branch",
+                describe(p),
+                fmt_joints(before)
+            ),
+            "the transform would move the robot through another posture: re-teach the target",
+        )
+    }
+}
+
+/// A [`RefusalKind::Reach`] refusal.
+fn reach(message: String, hint: &str) -> Why {
+    Why::new(RefusalKind::Reach, message, hint)
+}
+
+/// `[10.000, 20.000, …]` degrees.
+pub(crate) fn fmt_joints(j: &Joints) -> String {
+    let v: Vec<String> = j.iter().map(|a| format!("{a:.3}")).collect();
+    format!("[{}]", v.join(", "))
+}
+
+/// Edits that make a joint target's axes say `new` (unchanged axes keep their text).
+pub(crate) fn joint_edits(p: &Position, new: &Joints) -> Vec<Edit> {
+    p.joints
+        .iter()
+        .zip(new)
+        .filter_map(|(f, v)| number_edit(f, *v, DEG_DECIMALS))
+        .collect()
+}
+
+/// Edits that make a written configuration say `new` (fields already saying it are kept).
+pub(crate) fn config_edits(config: &Config, new: &ConfigValue) -> Vec<Edit> {
+    match (config, new) {
+        (Config::Abb(fields), ConfigValue::Abb(values)) => fields
+            .iter()
+            .zip(values)
+            .filter_map(|(f, v)| integer_edit(f, i64::from(*v)))
+            .collect(),
+        (Config::Kuka { status, turn }, ConfigValue::Kuka { status: s, turn: t }) => {
+            let mut edits = Vec::new();
+            if let Some(s) = s {
+                edits.extend(bits_edit(status, *s));
+            }
+            if let Some(t) = t {
+                edits.extend(bits_edit(turn, *t));
+            }
+            edits
+        }
+        _ => Vec::new(),
+    }
+}
