@@ -580,7 +580,8 @@ fn load_options(robot: Option<&Robot>) -> LoadOptions {
 }
 
 /// A `$config.dat` is loaded for its bases; it is written only if a transform changed it
-/// (`--mirror-frames`), never copied along.
+/// (`--mirror-frames`, a global point), never copied along — unless a target of it was
+/// refused: the refusal must be reported and counted like any other.
 fn drop_untouched_config(results: &mut [ProgramResult], config_dat: Option<&Path>) {
     // A robot tree's own `$config.dat` is part of its program on the same terms.
     let is_config = |p: &Path| {
@@ -590,7 +591,9 @@ fn drop_untouched_config(results: &mut [ProgramResult], config_dat: Option<&Path
                 .is_some_and(|n| n.eq_ignore_ascii_case("$config.dat"))
     };
     for r in results {
-        r.files.retain(|f| f.changed() || !is_config(&f.path));
+        r.files.retain(|f| {
+            f.changed() || !f.refusals.is_empty() || !f.notes.is_empty() || !is_config(&f.path)
+        });
     }
 }
 

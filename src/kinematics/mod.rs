@@ -156,8 +156,18 @@ pub fn select(kin: &Kinematics, flange: &Pose, written: Option<&ConfigValue>) ->
     // Outside the limits but in the written configuration: report that solution (the turn
     // variant least outside), so the message is "outside a limit", not "another
     // configuration".
+    // Only an axis that can turn more than once around (a range over 360°, as axes 4 and 6
+    // usually have) gets turn variants here; an arm axis of a smaller range has one angle per
+    // solution, so a sign the written Turn demands against it is another configuration, not
+    // a limit.
     let wide = Kinematics {
-        limits: [[-720.0, 720.0]; 6],
+        limits: kin.limits.map(|[lo, hi]| {
+            if hi - lo > 360.0 {
+                [-720.0, 720.0]
+            } else {
+                [-180.0, 180.0]
+            }
+        }),
         ..kin.clone()
     };
     let violation =

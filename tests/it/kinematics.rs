@@ -343,6 +343,31 @@ fn the_written_configuration_selects_the_solution() {
     }
 }
 
+/// A KUKA Turn that demands a negative A2 of a pose the arm reaches only with A2 > 0 is
+/// another configuration, not "outside the limits" at A2 − 360° (axis 2 cannot turn around).
+#[test]
+fn a_turn_against_an_arm_axis_is_another_configuration_not_a_limit() {
+    let k = trackfix::kinematics::model("kuka_kr210_r3100_2")
+        .unwrap()
+        .kinematics();
+    assert!(k.limits[1][1] - k.limits[1][0] <= 360.0);
+    let j = [10.0, -60.0, 80.0, 20.0, 40.0, 30.0];
+    let f = k.forward(&j);
+    let ConfigValue::Kuka { status, turn } =
+        ConfigValue::of_joints(trackfix::Language::Krl, &k, &j)
+    else {
+        panic!("a KUKA configuration");
+    };
+    // Bit 1 (A2 < 0) cleared: the written Turn says A2 >= 0.
+    let written = ConfigValue::Kuka {
+        status,
+        turn: turn.map(|t| t & !0b10),
+    };
+    let s = trackfix::kinematics::select(&k, &f, Some(&written)).unwrap();
+    assert!(!s.config_matches, "{s:?}");
+    assert!(s.joints[1].abs() <= 180.0, "{:?}", s.joints);
+}
+
 #[test]
 fn mirrored_joints_give_the_mirrored_pose_and_ik_agrees_with_the_rule() {
     // Sa = Sb = diag(1, -1, 1) for the xz plane through the base.

@@ -439,3 +439,55 @@ fn modules_named_together_are_one_task() {
     assert_ne!(code, 0, "alone, p10 is used by no motion");
     assert!(err.contains("p10"), "{err}");
 }
+
+/// A refused target of a robot tree's own `$config.dat` is reported and stops the run like any
+/// other (before: the unchanged `$config.dat` was dropped from the results with its refusal, and
+/// the run exited 0 with the global point silently uncorrected). The point is out of reach of the
+/// sample cell's KR 210 at skid 2500 mm.
+#[test]
+fn a_refused_global_point_of_config_dat_is_reported() {
+    let tree = root().join("samples/kss_backup");
+    let dir = tempfile::tempdir().unwrap();
+    let copy = dir.path().join("kss_backup");
+    for entry in walk(&tree) {
+        let rel = entry.strip_prefix(&tree).unwrap();
+        let to = copy.join(rel);
+        std::fs::create_dir_all(to.parent().unwrap()).unwrap();
+        std::fs::copy(&entry, &to).unwrap();
+    }
+    let config = copy.join("KRC/R1/System/$config.dat");
+    let text = std::fs::read_to_string(&config).unwrap();
+    let far = text.replacen(",E1 2000.0,", ",E1 2500.0,", 1);
+    assert_ne!(far, text);
+    std::fs::write(&config, far).unwrap();
+    let out = dir.path().join("out");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        copy.to_str().unwrap(),
+        "--cell",
+        root().join("samples/cell.toml").to_str().unwrap(),
+        "--robot",
+        "k1",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("$config.dat:7:") && err.contains("E6POS `XPick_Point` is out of reach"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}
+
+fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(walk(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
+}
