@@ -10,6 +10,27 @@ use crate::syntax::{Diagnostic, Severity, Span};
 /// decimals give about 1e-6; RobotStudio's own output stays well inside 1e-4.
 pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-4;
 
+/// The offset of the first control byte of `src`. Each 64-byte block is tested without a
+/// branch per byte, which the compiler vectorises: a byte-by-byte search was 6 % of `check`.
+fn first_control_byte(src: &[u8]) -> Option<usize> {
+    use crate::syntax::is_control_byte;
+    let blocks = src.chunks_exact(64);
+    let tail = blocks.remainder();
+    let mut base = 0;
+    for block in blocks {
+        if block.iter().fold(false, |any, &b| any | is_control_byte(b)) {
+            return block
+                .iter()
+                .position(|&b| is_control_byte(b))
+                .map(|i| base + i);
+        }
+        base += 64;
+    }
+    tail.iter()
+        .position(|&b| is_control_byte(b))
+        .map(|i| base + i)
+}
+
 /// Everything `check` says about a file: the parser's diagnostics, a failed round trip, and the
 /// lints of the model (non-normalised quaternions, a target used with two work objects).
 /// Sorted by position.
@@ -30,11 +51,7 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
             .with_hint("this is a trackfix bug: please report it with the file attached"),
         );
     }
-    if let Some(at) = file
-        .source
-        .iter()
-        .position(|&b| crate::syntax::is_control_byte(b))
-    {
+    if let Some(at) = first_control_byte(&file.source) {
         let n = file
             .source
             .iter()
@@ -180,5 +197,35 @@ impl fmt::Display for CheckSummary {
             count_suffix(self.skipped, "skipped"),
             count_suffix(self.unreadable, "unreadable")
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::first_control_byte;
+    use crate::syntax::is_control_byte;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The block search finds what the byte-by-byte search finds, wherever the byte lies
+        /// relative to the 64-byte blocks (mostly printable text, a control byte now and then).
+        #[test]
+        fn block_search_equals_byte_search(
+            text in proptest::collection::vec(
+                prop_oneof![9 => 0x20u8..0x7f, 1 => any::<u8>()], 0..300),
+        ) {
+            let expected = text.iter().position(|&b| is_control_byte(b));
+            prop_assert_eq!(first_control_byte(&text), expected);
+        }
+    }
+
+    #[test]
+    fn a_control_byte_in_the_tail_or_a_later_block_is_found_at_its_offset() {
+        let mut text = vec![b'a'; 200];
+        assert_eq!(first_control_byte(&text), None);
+        text[199] = 0x1b;
+        assert_eq!(first_control_byte(&text), Some(199));
+        text[64] = 0x05;
+        assert_eq!(first_control_byte(&text), Some(64));
     }
 }

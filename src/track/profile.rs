@@ -588,7 +588,9 @@ impl Profile {
         // A skid written with fewer decimals than the knots must not fall off the end.
         let tol = 1e-9 * (1.0 + min.abs().max(max.abs()));
         let inside = skid >= min - tol && skid <= max + tol;
-        let eval = |s: f64| self.splines.clone().map(|sp| sp.value(s));
+        // By reference: cloning the six splines (their knot vectors) per target was most of the
+        // cost of `correct` outside parsing.
+        let eval = |s: f64| self.splines.each_ref().map(|sp| sp.value(s));
         if inside {
             return Ok(eval(skid.clamp(min, max)));
         }

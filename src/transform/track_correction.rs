@@ -186,25 +186,33 @@ impl TargetRule for TrackRule<'_, '_> {
 
     fn skid(&self, scope: Scope, p: &Position) -> Result<Option<f64>, Why> {
         let what = describe(p);
-        let axis = scope
-            .file
-            .language
-            .dialect()
-            .axis_name(self.setup.skid_axis);
+        let axis = || {
+            scope
+                .file
+                .language
+                .dialect()
+                .axis_name(self.setup.skid_axis)
+        };
         match p.skid(self.setup.skid_axis) {
             Skid::At(s) => Ok(Some(s)),
-            Skid::NotConnected => Err(Why::new(
-                RefusalKind::SkidNotConnected,
-                format!("{what} has {axis} = 9E9 (not connected): no skid position"),
-                format!(
-                    "write the skid position into {axis}, or set `skid` for this robot in the cell file"
-                ),
-            )),
-            Skid::Missing => Err(Why::new(
-                RefusalKind::SkidMissing,
-                format!("{what} has no numeric {axis}: no skid position"),
-                format!("write the skid position into {axis}"),
-            )),
+            Skid::NotConnected => {
+                let axis = axis();
+                Err(Why::new(
+                    RefusalKind::SkidNotConnected,
+                    format!("{what} has {axis} = 9E9 (not connected): no skid position"),
+                    format!(
+                        "write the skid position into {axis}, or set `skid` for this robot in the cell file"
+                    ),
+                ))
+            }
+            Skid::Missing => {
+                let axis = axis();
+                Err(Why::new(
+                    RefusalKind::SkidMissing,
+                    format!("{what} has no numeric {axis}: no skid position"),
+                    format!("write the skid position into {axis}"),
+                ))
+            }
         }
     }
 
