@@ -271,6 +271,7 @@ pub fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
     };
     let json = args.format == super::transform::ReportFormat::Json;
     let mut checked = Vec::new();
+    let mut program_reports = Vec::new();
     for (program, grouped) in batch.programs.iter().zip(&batch.grouped) {
         for file in &program.files {
             if json {
@@ -301,12 +302,17 @@ pub fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
             }
         }
         // A program of several inputs: which files form it and how much of it resolved.
+        // JSON keeps standard output one document: the programs are a list in it.
         if let Some(report) = grouped.then(|| ProgramReport::of(program)).flatten() {
-            writeln!(out, "{report}: {}", report.files.join(", "))?;
+            if json {
+                program_reports.push(report);
+            } else {
+                writeln!(out, "{report}: {}", report.files.join(", "))?;
+            }
         }
     }
     if json {
-        let doc = serde_json::json!({ "files": checked, "summary": summary });
+        let doc = serde_json::json!({ "files": checked, "programs": program_reports, "summary": summary });
         writeln!(out, "{}", serde_json::to_string_pretty(&doc)?)?;
     } else {
         writeln!(out, "{summary}")?;

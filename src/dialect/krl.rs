@@ -70,7 +70,10 @@ impl Dialect for Krl {
         files: Vec<(PathBuf, Vec<u8>)>,
         options: &LoadOptions,
     ) -> Result<Program, LoadError> {
-        crate::krl::load_program_from_sources(files, options)
+        // A KSS tree's own `$config.dat` was read instead of the cell's when it was loaded: the
+        // transformed tree is read again the same way, or its global points would vanish.
+        let own_config = files.iter().any(|(p, _)| is_config_dat(p));
+        crate::krl::load_program_from_sources(files, &tree_options(own_config, options))
     }
 
     /// A `.dat` whose `.src` is listed is dropped: loading the `.src` loads both. The `.dat` is
@@ -150,24 +153,13 @@ impl Dialect for Krl {
         }
         let mut seen = std::collections::BTreeSet::new();
         all.retain(|p| seen.insert(same_file(p)));
-        let own_config = all.iter().any(|p| {
-            p.file_name()
-                .and_then(|n| n.to_str())
-                .is_some_and(|n| n.eq_ignore_ascii_case("$config.dat"))
-        });
+        let own_config = all.iter().any(|p| is_config_dat(p));
         let mut sources = Vec::with_capacity(all.len());
         for p in all {
             let bytes = crate::program::read_source(&p)?;
             sources.push((p, bytes));
         }
-        let options = if own_config {
-            LoadOptions {
-                krl_config_dat: None,
-            }
-        } else {
-            options.clone()
-        };
-        crate::krl::load_program_from_sources(sources, &options)
+        crate::krl::load_program_from_sources(sources, &tree_options(own_config, options))
     }
 
     fn vocabulary(&self) -> &'static Vocabulary {
@@ -234,5 +226,23 @@ impl Dialect for Krl {
             .and_then(|t| bits_edit(turn, t.value ^ TURN_A1_A4_A6))
             .into_iter()
             .collect()
+    }
+}
+
+/// Whether `path` names a `$config.dat` (in any case).
+fn is_config_dat(path: &Path) -> bool {
+    path.file_name()
+        .and_then(|n| n.to_str())
+        .is_some_and(|n| n.eq_ignore_ascii_case("$config.dat"))
+}
+
+/// A program that holds its own `$config.dat` (a KSS tree) uses it, not the cell's.
+fn tree_options(own_config: bool, options: &LoadOptions) -> LoadOptions {
+    if own_config {
+        LoadOptions {
+            krl_config_dat: None,
+        }
+    } else {
+        options.clone()
     }
 }

@@ -232,8 +232,10 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
 pub(crate) const PLAUSIBLE_DEG: f64 = 360.0;
 /// ABB `cf1, cf4, cf6, cfx` are quadrant and configuration numbers: small integers.
 pub(crate) const PLAUSIBLE_CF: f64 = 1000.0;
-/// KUKA Status has 3 bits in use, Turn 6.
-const KUKA_STATUS_MAX: u32 = 0b111;
+/// KUKA Status: bits 0 to 2 are the arm configuration, bit 3 is unused and bit 4 marks a point
+/// taught on an absolutely accurate robot (KSS 8 writes `S 18`, `S 22` for those), so 5 bits.
+/// Turn has 6, one per axis.
+const KUKA_STATUS_MAX: u32 = 0b1_1111;
 const KUKA_TURN_MAX: u32 = 0b11_1111;
 /// A written quaternion farther than this from unit length is no rotation (controllers reject
 /// anything beyond a few 1e-5; the check lint warns at 1e-4).
@@ -298,7 +300,7 @@ pub(crate) fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<Str
             if let Some(s) = status
                 && s.value > KUKA_STATUS_MAX
             {
-                return Some(format!("has Status {}: only bits 0 to 2 exist", s.value));
+                return Some(format!("has Status {}: only bits 0 to 4 exist", s.value));
             }
             if let Some(t) = turn
                 && t.value > KUKA_TURN_MAX

@@ -125,7 +125,7 @@ impl<'a> TrackSetup<'a> {
 }
 
 /// The refusal of a target whose skid the profile cannot evaluate.
-fn profile_refusal(what: &str, skid: f64, e: TrackError) -> Why {
+fn profile_refusal(what: &impl std::fmt::Display, skid: f64, e: TrackError) -> Why {
     match e {
         TrackError::OutOfRange { min, max, .. } => Why::new(
             RefusalKind::SkidOutOfRange,

@@ -491,3 +491,59 @@ fn walk(dir: &Path) -> Vec<PathBuf> {
     }
     out
 }
+
+/// `transfer` of a KSS tree reads each step's output again with the tree's own `$config.dat`
+/// (not the cell's), so its global point stays a target through the chain: r1 → r2 moves it,
+/// r1 → r1 without a stamp gives every file back byte for byte.
+#[test]
+fn transfer_keeps_the_kss_trees_own_config_dat() {
+    let dir = tempfile::tempdir().unwrap();
+    let sample = root().join("samples/kss_backup");
+    let cell = root().join("samples/cell_rules.toml");
+    let config = "KRC/R1/System/$config.dat";
+    for to in ["r2", "r1"] {
+        let out = dir.path().join(to);
+        let (code, _, err) = trackfix(&[
+            "transfer",
+            sample.to_str().unwrap(),
+            "--cell",
+            cell.to_str().unwrap(),
+            "--from",
+            "r1",
+            "--to",
+            to,
+            "--no-stamp",
+            "--out-dir",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{to}: {err}");
+        let original = std::fs::read(sample.join(config)).unwrap();
+        match std::fs::read(out.join(config)) {
+            Ok(written) if to == "r2" => {
+                assert_ne!(written, original, "XPick_Point moved to r2's track")
+            }
+            Ok(written) => assert_eq!(written, original),
+            Err(_) => assert_eq!(to, "r1", "r2: `$config.dat` was not written: {err}"),
+        }
+        for f in ["KRC/R1/Program/weld_car.dat", "KRC/R1/Program/weld_car.src"] {
+            let written = std::fs::read(out.join(f)).unwrap();
+            let same = written == std::fs::read(sample.join(f)).unwrap();
+            assert_eq!(same, to == "r1" || f.ends_with(".src"), "{to}: {f}");
+        }
+    }
+}
+
+/// `check --format json` of a backup folder prints one JSON document: the per-program line of
+/// the text report becomes the `"programs"` list.
+#[test]
+fn check_json_of_a_tree_is_one_document() {
+    let (code, out, err) = trackfix(&["check", "samples/kss_backup", "--format", "json"]);
+    assert!(code == 0 || code == 1, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).expect("one JSON document");
+    let program = &json["programs"][0];
+    assert_eq!(program["files"].as_array().unwrap().len(), 4, "{out}");
+    assert_eq!(
+        (program["targets"].as_u64(), program["resolved"].as_u64()),
+        (Some(3), Some(3))
+    );
+}

@@ -1492,6 +1492,47 @@ fn absurd_values_are_named_refusals_and_check_findings() {
     );
 }
 
+/// KSS 8 sets Status bit 4 on a point taught with an absolutely accurate robot (`S 18`, `S 22`
+/// in real backups): such a point is transformed, its Status kept; bit 5 and above are refused.
+#[test]
+fn kuka_status_bit_4_is_a_real_status() {
+    let krl = "DEFDAT acc\nDECL E6POS XP1={X 900.0,Y 0.0,Z 600.0,A 0.0,B 90.0,C 0.0,S 22,T 2,E1 1500.0}\nDECL E6POS XP2={X 900.0,Y 0.0,Z 600.0,A 0.0,B 90.0,C 0.0,S 34,T 2,E1 1500.0}\nENDDAT\n";
+    let (dir, input) = scratch_with("acc.dat", krl);
+    let (code, out, _) = trackfix(&["check", input.to_str().unwrap()]);
+    assert_eq!(code, 1, "{out}");
+    assert!(!out.contains("`XP1` has Status"), "{out}");
+    assert!(
+        out.contains("`XP2` has Status 34: only bits 0 to 4 exist"),
+        "{out}"
+    );
+    let out_file = dir.path().join("out.dat");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        input.to_str().unwrap(),
+        "--cell",
+        "samples/cell_rules.toml",
+        "--robot",
+        "r1",
+        "--default-wobj",
+        "$WORLD",
+        "--keep",
+        "implausible",
+        "--no-stamp",
+        "-o",
+        out_file.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 4, "{err}");
+    assert!(err.contains("1 target(s) changed"), "{err}");
+    let written = std::fs::read_to_string(&out_file).unwrap();
+    let xp1 = written.lines().find(|l| l.contains("XP1")).unwrap();
+    assert!(xp1.contains(",S 22,T 2,E1 1500.0}"), "{xp1}");
+    assert!(
+        !xp1.contains("X 900.0,Y 0.0,Z 600.0,"),
+        "not transformed: {xp1}"
+    );
+    assert!(written.contains("S 34,T 2,E1 1500.0}"), "{written}");
+}
+
 /// 2,000 refused targets on one line: each diagnostic shows a window of the line, so the
 /// output grows linearly (before: every refusal kept and printed the whole 300 kB line).
 #[test]
