@@ -956,7 +956,9 @@ fn run_each(
     for cfg in other_configs {
         drop_untouched_config(&mut results, *cfg);
     }
-    finish(command, &results, out, files)
+    let exit = finish(command, &results, out, files);
+    super::leave_for_exit((programs, results));
+    exit
 }
 
 /// A file with a syntax error (or one that does not print back byte for byte) is never
