@@ -140,6 +140,12 @@ def main():
               f"{sum(r['positions'] for r in sel)} positions ({sum(r['track_targets'] for r in sel)} "
               f"with a track position), {c} of {t} targets transformed"
               f" ({100.0 * c / t if t else 0:.1f} %), {sum(r['opaque'] for r in sel)} opaque nodes")
+        # Targets with no track position (9E9, none written) and joint targets are not the
+        # track's to correct: the share that matters is of the others.
+        off_track = sum(kinds[k] for k in ("skid-not-connected", "skid-missing", "joint-target"))
+        on_track = t - off_track
+        print(f"  on the track: {c} of {on_track} transformed"
+              f" ({100.0 * c / on_track if on_track else 0:.1f} %)")
         for k, n in kinds.most_common():
             print(f"  refused {k:28} {n:>6}")
         for k, n in errors.most_common():
