@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Run trackfix over every controller backup under a directory and print one table.
 
-    python3 scripts/corpus-run.py DIR [--bin target/release/trackfix] [--cell samples/cell.toml]
+    python3 scripts/corpus-run.py DIR [--bin target/release/trackfix] [--cell samples/cell_rules.toml]
                                       [--robot r1] [--to r2] [--json OUT.json]
 
 A backup unit is a RobotStudio task folder (a folder holding `PROGMOD` and/or `SYSMOD`) or a KSS
@@ -106,7 +106,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dir")
     ap.add_argument("--bin", default="target/release/trackfix")
-    ap.add_argument("--cell", default="samples/cell.toml")
+    ap.add_argument("--cell", default="samples/cell_rules.toml")
     ap.add_argument("--robot", default="r1")
     ap.add_argument("--to", default="r2")
     ap.add_argument("--json", help="also write every row as JSON here")
