@@ -102,3 +102,45 @@ END\n";
         })
     );
 }
+
+#[test]
+fn a_transform_refuses_runtime_data_by_name_and_counts_it_apart() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ek.src");
+    std::fs::write(
+        &path,
+        "DEF ek( )\n  DECL E6POS XD={X 1,Y 2,Z 3,A 0,B 0,C 0,E1 500}\n  $BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,BASE_DATA[1])\n  LIN XD\nEND\n",
+    )
+    .unwrap();
+    let file = path.to_str().unwrap();
+    let args = [
+        "correct",
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        file,
+        "--diff",
+    ];
+    let (code, _, err) = crate::support::trackfix(&args);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains(
+            "E6POS `XD` is used with a base computed at run time (line 3): not correctable offline"
+        ),
+        "{err}"
+    );
+    assert!(err.contains("--keep runtime-data"), "{err}");
+    assert!(
+        err.contains(
+            "note: 1 of the 1 refused target(s) computed at run time: not correctable offline"
+        ),
+        "{err}"
+    );
+    let mut kept = args.to_vec();
+    kept.extend(["--keep", "runtime-data"]);
+    let (code, out, err) = crate::support::trackfix(&kept);
+    assert_ne!(code, 3, "{err}");
+    assert!(out.is_empty(), "nothing changes: {out}");
+    assert!(err.contains("[runtime-data]"), "{err}");
+}
