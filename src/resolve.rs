@@ -16,6 +16,36 @@ use crate::position::{FrameDecl, Position, RunTimeValue};
 /// cycles stop here.
 pub(crate) const CALL_DEPTH: usize = 16;
 
+/// The uses reached from routine parameter `from`: its own uses, then those of every parameter
+/// it is passed on to (`edges`: an argument of a call in the routine that names the parameter),
+/// followed [`CALL_DEPTH`] calls deep, each parameter once (a recursion stops).
+pub(crate) fn uses_through_parameters<'u, P, U>(
+    from: P,
+    uses: &'u std::collections::HashMap<P, Vec<U>>,
+    edges: &std::collections::HashMap<P, Vec<P>>,
+) -> Vec<&'u U>
+where
+    P: Copy + Eq + std::hash::Hash,
+{
+    let mut seen = std::collections::HashSet::new();
+    let mut stack = vec![(from, 0usize)];
+    let mut found = Vec::new();
+    while let Some((at, depth)) = stack.pop() {
+        if depth >= CALL_DEPTH || !seen.insert(at) {
+            continue;
+        }
+        found.extend(uses.get(&at).into_iter().flatten());
+        stack.extend(
+            edges
+                .get(&at)
+                .into_iter()
+                .flatten()
+                .map(|&next| (next, depth + 1)),
+        );
+    }
+    found
+}
+
 /// A value the program computes at run time and gives a declared name: a language-neutral
 /// fact. Literal values (`rdkWObj := [FALSE,TRUE,"",[[2100,…]]…]`) are not reported: they are
 /// known offline.
@@ -112,5 +142,31 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], open: char) {
                 p.usage.set_run_time(why);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::HashMap;
+
+    #[test]
+    fn parameters_are_followed_transitively_once_each_and_only_so_deep() {
+        // 0 → 1 → 2 → 0 (a cycle), 1 has a use, 2 has one; a chain 10 → 11 → … beyond the depth.
+        let uses: HashMap<u32, Vec<&str>> = [
+            (1, vec!["a"]),
+            (2, vec!["b"]),
+            (10 + CALL_DEPTH as u32, vec!["deep"]),
+        ]
+        .into();
+        let mut edges: HashMap<u32, Vec<u32>> = [(0, vec![1]), (1, vec![2]), (2, vec![0])].into();
+        for k in 10..10 + CALL_DEPTH as u32 {
+            edges.insert(k, vec![k + 1]);
+        }
+        let mut found = uses_through_parameters(0, &uses, &edges);
+        found.sort();
+        assert_eq!(found, [&"a", &"b"]);
+        assert!(uses_through_parameters(10, &uses, &edges).is_empty());
+        assert_eq!(uses_through_parameters(11, &uses, &edges), [&"deep"]);
     }
 }

@@ -492,8 +492,6 @@ struct FrameUse {
 /// A routine's required parameter: (module, routine, parameter index).
 type ParamAt = (usize, usize, usize);
 
-use crate::resolve::CALL_DEPTH;
-
 /// Resolves usage over the modules of one task (one RAPID program), in the order given: a
 /// module's own declarations (routine data, `LOCAL` data) first, else the module data of the
 /// other modules that is not `LOCAL` (task and global scope). A target passed to a routine's
@@ -740,22 +738,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
     }
     // Through routine parameters: every motion use reachable from the bound parameter.
     for ((m, i), to, line) in bindings {
-        let mut seen = std::collections::HashSet::new();
-        let mut stack = vec![(to, 0usize)];
-        let mut found: Vec<&FrameUse> = Vec::new();
-        while let Some((at, depth)) = stack.pop() {
-            if depth >= CALL_DEPTH || !seen.insert(at) {
-                continue;
-            }
-            found.extend(param_uses.get(&at).into_iter().flatten());
-            stack.extend(
-                param_edges
-                    .get(&at)
-                    .into_iter()
-                    .flatten()
-                    .map(|&next| (next, depth + 1)),
-            );
-        }
+        let found = crate::resolve::uses_through_parameters(to, &param_uses, &param_edges);
         if let Some(p) = positions.get_mut(m).and_then(|ps| ps.get_mut(i)) {
             for fu in found {
                 p.usage
