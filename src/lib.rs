@@ -45,6 +45,8 @@ pub mod program;
 pub mod rapid;
 #[warn(missing_docs, unreachable_pub)]
 pub mod report;
+#[warn(unreachable_pub)]
+mod resolve;
 pub mod syntax;
 pub mod track;
 #[warn(missing_docs, unreachable_pub)]

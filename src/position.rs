@@ -178,9 +178,58 @@ pub struct Usage {
     pub stationary_tool: bool,
     /// 1-based lines of the instructions that use it.
     pub lines: Vec<usize>,
+    /// Set when the target's pose is only known when the program runs: the first reason found.
+    pub run_time: Option<RunTimeValue>,
+}
+
+/// Why a target's pose is only known when the program runs, so no offline transform can
+/// correct it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RunTimeValue {
+    /// The program gives the target a computed value (`p10 := CRobT()`, `pArr{i} := …`,
+    /// `P[I] = $POS_ACT`) at `line`; for an array element written through a computed index,
+    /// every element of the array.
+    Target {
+        /// 1-based line of the assignment.
+        line: usize,
+    },
+    /// The work object or base of a motion that uses the target is computed when the program
+    /// runs (`wobj1.uframe := …`, `$BASE = EK(…)`).
+    Frame {
+        /// The frame's name, when it has one (`wobj1`); `None` for an expression that selects
+        /// the base (`$BASE = BASE_DATA[I]`).
+        name: Option<String>,
+        /// 1-based line of the assignment.
+        line: usize,
+    },
+}
+
+impl RunTimeValue {
+    /// Why, in words, after the target's description.
+    pub fn describe(&self) -> String {
+        match self {
+            RunTimeValue::Target { line } => {
+                format!("is given a computed value at run time (line {line})")
+            }
+            RunTimeValue::Frame {
+                name: Some(n),
+                line,
+            } => format!("is used with `{n}`, which is computed at run time (line {line})"),
+            RunTimeValue::Frame { name: None, line } => {
+                format!("is used with a base computed at run time (line {line})")
+            }
+        }
+    }
 }
 
 impl Usage {
+    /// Marks the target as known only at run time, keeping the first reason.
+    pub fn set_run_time(&mut self, why: RunTimeValue) {
+        if self.run_time.is_none() {
+            self.run_time = Some(why);
+        }
+    }
+
     /// Records one use by a motion at `line` with work object (or base) `wobj` and `tool`.
     /// The first work object stays the target's; another (names compared as the languages
     /// compare them, case-insensitively) is added to `other_wobjs`. The first tool stays.
@@ -290,12 +339,14 @@ pub struct FrameDecl {
     pub span: Span,
     /// 1-based line of the declaration.
     pub line: usize,
-    /// RAPID wobjdata `robhold` (the robot holds the work object: stationary tool).
-    pub robhold: Option<bool>,
-    /// RAPID wobjdata `ufprog` (`FALSE`: the user frame is moved by a mechanical unit).
-    pub ufprog: Option<bool>,
-    /// RAPID wobjdata `ufmec`.
-    pub ufmec: Option<String>,
+    /// Whether the robot holds it, where the language says (RAPID `robhold`): a work object
+    /// the robot holds, or a tool it does not, is a stationary-tool setup.
+    pub held_by_robot: Option<bool>,
+    /// Whether the frame stays where it is declared, where the language says (RAPID `ufprog`):
+    /// `Some(false)` is a frame a mechanical unit moves.
+    pub fixed: Option<bool>,
+    /// The mechanical unit that moves the frame, when named (RAPID `ufmec`).
+    pub moved_by: Option<String>,
     /// The frame itself: RAPID wobj `uframe`, tool `tframe`; KRL `BASE_DATA`/`TOOL_DATA` value.
     pub frame: Option<CartesianFields>,
     /// RAPID wobj `oframe` (object frame in the user frame).
@@ -335,11 +386,12 @@ pub struct OffsetCall {
     pub target: String,
     /// `dx, dy, dz` (mm); `None` where not a numeric literal.
     pub delta: [Option<NumField>; 3],
-    /// `\Rx, \Ry, \Rz` (degrees) of `RelTool`; `None` where absent or not a numeric literal.
+    /// Rotations about x, y, z (degrees; RAPID `RelTool`'s `\Rx, \Ry, \Rz`); `None` where
+    /// absent or not a numeric literal.
     pub rot: [Option<NumField>; 3],
-    /// Whether `\Rx, \Ry, \Rz` are written at all: with `rot` it tells an expression
-    /// (`\Rz:=angle`) from an absent switch.
-    pub rot_given: [bool; 3],
+    /// The rotations that are written as an expression (`\Rz:=angle`), not a number: an
+    /// absent rotation is zero, an expression is unknown offline.
+    pub rot_expression: [bool; 3],
 }
 
 /// One parsed source file and everything trackfix understands in it.

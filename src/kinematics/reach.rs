@@ -146,7 +146,7 @@ pub fn resolve_tool(
         .flat_map(|f| &f.frames)
         .find(|d| d.kind == FrameKind::Tool && d.name.eq_ignore_ascii_case(name));
     match decl {
-        Some(d) if d.robhold == Some(false) => Err(format!(
+        Some(d) if d.held_by_robot == Some(false) => Err(format!(
             "tool `{name}` is stationary (robhold FALSE): the robot holds the work piece"
         )),
         Some(d) => d

@@ -21,7 +21,10 @@ pub(crate) enum FrameRef {
     Data(u32),
     /// A frame declared in the program itself (`$BASE={…}` → `$BASE (line 12)`).
     Named(String),
-    /// Set by an expression trackfix cannot evaluate.
+    /// Set by an expression computed when the program runs (`EK(…)`, `BASE_DATA[I]`,
+    /// `BAS(#BASE, nBase)`): the span of that expression.
+    RunTime(Span),
+    /// Set by something trackfix cannot evaluate (a frame variable, branches that disagree).
     Unknown,
 }
 
@@ -106,6 +109,8 @@ pub(crate) struct Facts {
     pub inferred: Vec<bool>,
     /// Positional types this file declares, by upper-case name.
     pub declared: HashMap<String, PositionKind>,
+    /// Values computed at run time given to declared names (`XP1 = $POS_ACT`, `P[I] = …`).
+    pub assignments: Vec<crate::resolve::Assignment>,
 }
 
 /// A declared name as motions reference it: upper case, without blanks (`p[ 3 ]` → `P[3]`).
@@ -189,7 +194,27 @@ fn frame_ref(src: &[u8], e: &Expr) -> FrameRef {
     }
     match (&e.kind, upper(src, e.span).as_str()) {
         (ExprKind::Name, "$WORLD" | "$NULLFRAME") => FrameRef::Data(0),
+        _ if computed_at_run_time(src, e) => FrameRef::RunTime(e.span),
         _ => FrameRef::Unknown,
+    }
+}
+
+/// Whether a value is computed when the program runs: a call, an operation (the geometric
+/// operator `:` included), a component, an index that is not a number (`BASE_DATA[I]`), or a
+/// system variable (`$POS_ACT`). A literal, a plain variable or an element with a literal
+/// index is not.
+fn computed_at_run_time(src: &[u8], e: &Expr) -> bool {
+    match &e.kind {
+        ExprKind::Call(..)
+        | ExprKind::Binary(..)
+        | ExprKind::Unary(..)
+        | ExprKind::Paren(..)
+        | ExprKind::Member(..) => true,
+        ExprKind::Index(_, args) => args
+            .iter()
+            .any(|a| a.as_ref().is_none_or(|a| a.kind != ExprKind::Number)),
+        ExprKind::Name => src.get(e.span.start) == Some(&b'$'),
+        _ => false,
     }
 }
 
@@ -386,9 +411,9 @@ fn frame_decl(
         kind,
         span: agg_expr.span,
         line: lines.line(agg_expr.span.start),
-        robhold: None,
-        ufprog: None,
-        ufmec: None,
+        held_by_robot: None,
+        fixed: None,
+        moved_by: None,
         frame: Some(CartesianFields {
             trans: f.xyz,
             orient: f.abc_written.then_some(Orientation::Abc(f.abc)),
@@ -565,7 +590,7 @@ fn bas_call(src: &[u8], call: &Expr) -> Option<Setting> {
     let [Some(which), Some(n)] = args.as_slice() else {
         return None;
     };
-    let r = integer(src, n).map_or(FrameRef::Unknown, FrameRef::Data);
+    let r = integer(src, n).map_or(FrameRef::RunTime(n.span), FrameRef::Data);
     match upper(src, which.span).as_str() {
         "#BASE" => Some(Setting::Base(r)),
         "#TOOL" => Some(Setting::Tool(r)),
@@ -581,13 +606,13 @@ fn setting(src: &[u8], target: &Expr, value: &Expr) -> Option<Setting> {
         "$BASE" => Some(match &value.kind {
             ExprKind::Call(..) => fdat_of()
                 .map(Setting::BaseOfFdat)
-                .unwrap_or(Setting::Base(FrameRef::Unknown)),
+                .unwrap_or(Setting::Base(FrameRef::RunTime(value.span))),
             _ => Setting::Base(frame_ref(src, value)),
         }),
         "$TOOL" => Some(match &value.kind {
             ExprKind::Call(..) => fdat_of()
                 .map(Setting::ToolOfFdat)
-                .unwrap_or(Setting::Tool(FrameRef::Unknown)),
+                .unwrap_or(Setting::Tool(FrameRef::RunTime(value.span))),
             _ => Setting::Tool(frame_ref(src, value)),
         }),
         "$IPO_MODE" => match &value.kind {
@@ -615,7 +640,19 @@ fn assignment(
     let ExprKind::Aggregate(agg) = &value.kind else {
         if let Some(s) = setting(src, target, value) {
             out.facts.events.push(Event::Set(s));
-        } else if matches!(target.kind, ExprKind::Name | ExprKind::Index(..))
+            return;
+        }
+        let written = upper(src, target.span);
+        let name = written.split('.').next().unwrap_or_default();
+        if !name.starts_with('$')
+            && (computed_at_run_time(src, value) || computed_at_run_time(src, target))
+        {
+            out.facts.assignments.push(crate::resolve::Assignment {
+                name: name.to_owned(),
+                line: lines.line(target.span.start),
+            });
+        }
+        if matches!(target.kind, ExprKind::Name | ExprKind::Index(..))
             && matches!(value.kind, ExprKind::Name | ExprKind::Index(..))
         {
             let name = upper(src, target.span);

@@ -3,7 +3,7 @@
 //! position's [`Usage`].
 
 use super::positions::{BranchEvent, Event, Facts, Fdat, FrameRef, Ref, Setting, name_key};
-use crate::position::{Config, ParsedFile, PositionKind, Usage};
+use crate::position::{Config, ParsedFile, PositionKind, RunTimeValue, Usage};
 use crate::syntax::Diagnostic;
 
 use crate::names::NameIndex;
@@ -15,7 +15,7 @@ pub(crate) fn base_label(r: &FrameRef) -> Option<String> {
         FrameRef::Data(0) => Some("$WORLD".to_owned()),
         FrameRef::Data(n) => Some(format!("BASE_DATA[{n}]")),
         FrameRef::Named(s) => Some(s.clone()),
-        FrameRef::Unknown => None,
+        FrameRef::RunTime(_) | FrameRef::Unknown => None,
     }
 }
 
@@ -25,7 +25,7 @@ pub(crate) fn tool_label(r: &FrameRef) -> Option<String> {
         FrameRef::Data(0) => Some("$NULLFRAME".to_owned()),
         FrameRef::Data(n) => Some(format!("TOOL_DATA[{n}]")),
         FrameRef::Named(s) => Some(s.clone()),
-        FrameRef::Unknown => None,
+        FrameRef::RunTime(_) | FrameRef::Unknown => None,
     }
 }
 
@@ -115,10 +115,6 @@ impl State {
     }
 }
 
-fn record_use(u: &mut Usage, base: &Option<String>, tool: &Option<String>, tcp: bool, line: usize) {
-    u.record(base.as_deref(), tool.as_deref(), tcp, line);
-}
-
 /// Resolves base, tool and IPO mode of every motion of a program (files in the same order as
 /// `facts`), fills each used position's [`Usage`], promotes used `FRAME`s and candidate
 /// aggregates to positions, and reports motions whose base stays unknown.
@@ -150,8 +146,7 @@ impl Exit {
     }
 }
 
-/// How many calls deep a routine's settings are followed into the routines it calls.
-const CALL_DEPTH: usize = 16;
+use crate::resolve::CALL_DEPTH;
 
 /// The [`Exit`] of every routine of the program (a subroutine that runs `BAS(#BASE,2)` or
 /// `$BASE=BASE_DATA[2]` sets the base of the motions after its call), found by following each
@@ -325,6 +320,19 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                     }
                     let base = local.base.as_ref().and_then(base_label);
                     let tool = local.tool.as_ref().and_then(tool_label);
+                    let run_time = match (&local.base, files.get(fi)) {
+                        (Some(FrameRef::RunTime(at)), Some(f)) => Some(RunTimeValue::Frame {
+                            name: None,
+                            line: f.lines.line(at.start),
+                        }),
+                        _ => None,
+                    };
+                    let record_use = |u: &mut Usage| {
+                        u.record(base.as_deref(), tool.as_deref(), local.tcp, *line);
+                        if let Some(why) = &run_time {
+                            u.set_run_time(why.clone());
+                        }
+                    };
                     // Only a Cartesian target needs a base: a joint target (`PTP {A1 0, …}`,
                     // an E6AXIS) moves the same whatever the base.
                     let mut found = false;
@@ -335,7 +343,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                     .get_mut(fi)
                                     .and_then(|f| f.positions.iter_mut().find(|p| p.span == *s))
                                 {
-                                    record_use(&mut p.usage, &base, &tool, local.tcp, *line);
+                                    record_use(&mut p.usage);
                                     found |= p.cartesian.is_some();
                                 }
                             }
@@ -366,7 +374,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                         files.get_mut(f2).and_then(|f| f.positions.get_mut(i))
                                     };
                                     if let Some(p) = p {
-                                        record_use(&mut p.usage, &base, &tool, local.tcp, *line);
+                                        record_use(&mut p.usage);
                                         found |= p.cartesian.is_some();
                                     }
                                 }
@@ -409,6 +417,16 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         }
         file.diagnostics.sort_by_key(|d| d.span.start);
     }
+    let mut shared: Vec<crate::resolve::FileFacts<'_>> = files
+        .iter_mut()
+        .zip(facts.iter())
+        .map(|(file, fact)| crate::resolve::FileFacts {
+            positions: &mut file.positions,
+            frames: &file.frames,
+            assignments: &fact.assignments,
+        })
+        .collect();
+    crate::resolve::mark_run_time(&mut shared, '[');
 }
 
 #[cfg(test)]

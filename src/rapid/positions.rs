@@ -83,8 +83,11 @@ pub struct Extractor<'l> {
     offsets: Vec<OffsetCall>,
     symbols: Vec<Symbol>,
     uses: Vec<CallUse>,
-    /// Whole-value assignments `name := [...]` (a frame set at run time).
+    /// Whole-value assignments `name := [...]` of literal aggregates (a frame given a new
+    /// value that is known offline).
     assigned: Vec<Span>,
+    /// Assignments of values computed at run time (`p := CRobT()`, `wobj.uframe := …`).
+    computed: Vec<crate::resolve::Assignment>,
     routines: Vec<Routine>,
     /// The routine being read (`None` at module level).
     current: Option<usize>,
@@ -125,6 +128,7 @@ impl<'l> Extractor<'l> {
             symbols: Vec::new(),
             uses: Vec::new(),
             assigned: Vec::new(),
+            computed: Vec::new(),
             routines: Vec::new(),
             current: None,
             exported: Vec::new(),
@@ -331,9 +335,9 @@ impl<'l> Extractor<'l> {
             kind,
             span,
             line: self.lines.line(span.start),
-            robhold: None,
-            ufprog: None,
-            ufmec: None,
+            held_by_robot: None,
+            fixed: None,
+            moved_by: None,
             frame: None,
             oframe: None,
         };
@@ -342,11 +346,11 @@ impl<'l> Extractor<'l> {
         };
         let parts: Vec<u32> = arena.children(agg).take(5).collect();
         let part = |i: usize| parts.get(i).copied();
-        f.robhold = Self::bool_of(src, arena, part(0));
+        f.held_by_robot = Self::bool_of(src, arena, part(0));
         match kind {
             FrameKind::WorkObject => {
-                f.ufprog = Self::bool_of(src, arena, part(1));
-                f.ufmec = part(2)
+                f.fixed = Self::bool_of(src, arena, part(1));
+                f.moved_by = part(2)
                     .and_then(|i| arena.get(i))
                     .filter(|n| n.kind == ExprKind::Str)
                     .map(|n| {
@@ -390,7 +394,7 @@ impl<'l> Extractor<'l> {
                     };
                     let mut positional = Vec::new();
                     let mut rot: [Option<NumField>; 3] = [None, None, None];
-                    let mut rot_given = [false; 3];
+                    let mut rot_expression = [false; 3];
                     for a in arena.children(i) {
                         let Some(arg) = arena.get(a) else { continue };
                         let value = arena
@@ -407,11 +411,13 @@ impl<'l> Extractor<'l> {
                             } else {
                                 continue;
                             };
-                            if let Some(g) = rot_given.get_mut(slot) {
-                                *g = value.is_some();
-                            }
                             if let (Some(v), Some(r)) = (value, rot.get_mut(slot)) {
                                 *r = self.num(src, arena, v);
+                            }
+                            if let (Some(e), Some(r)) =
+                                (rot_expression.get_mut(slot), rot.get(slot))
+                            {
+                                *e = value.is_some() && r.is_none();
                             }
                         } else if let Some(v) = value {
                             positional.push(v);
@@ -437,7 +443,7 @@ impl<'l> Extractor<'l> {
                         target,
                         delta,
                         rot,
-                        rot_given,
+                        rot_expression,
                     });
                 }
                 _ => {}
@@ -457,6 +463,23 @@ impl<'l> Extractor<'l> {
     }
 }
 
+/// Whether expression `id` is a literal known offline: numbers, strings, `TRUE`/`FALSE` and
+/// aggregates of them (no name, call or operator).
+fn is_literal(src: &[u8], arena: &Arena, id: u32) -> bool {
+    let Some(n) = arena.get(id) else {
+        return false;
+    };
+    match n.kind {
+        ExprKind::Num | ExprKind::Str => true,
+        ExprKind::Ident => {
+            let t = n.span().slice(src);
+            t.eq_ignore_ascii_case(b"TRUE") || t.eq_ignore_ascii_case(b"FALSE")
+        }
+        ExprKind::Aggregate => arena.children(id).all(|c| is_literal(src, arena, c)),
+        _ => false,
+    }
+}
+
 /// A motion's frame and tool: what one use gives the targets it reaches.
 #[derive(Clone, Debug)]
 struct FrameUse {
@@ -468,9 +491,6 @@ struct FrameUse {
 
 /// A routine's required parameter: (module, routine, parameter index).
 type ParamAt = (usize, usize, usize);
-
-/// How deep calls through routine parameters are followed.
-const CALL_DEPTH: usize = 16;
 
 /// Resolves usage over the modules of one task (one RAPID program), in the order given: a
 /// module's own declarations (routine data, `LOCAL` data) first, else the module data of the
@@ -524,7 +544,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
         .iter()
         .flat_map(|(x, _)| &x.frames)
         .filter(|f| f.kind == FrameKind::WorkObject)
-        .filter_map(|f| Some((NameKey(f.name.as_bytes()), f.robhold?)))
+        .filter_map(|f| Some((NameKey(f.name.as_bytes()), f.held_by_robot?)))
         .collect();
     let total: usize = modules.iter().map(|(x, _)| x.positions.len()).sum();
     let mut declared: NameIndex<(usize, usize)> = NameIndex::new('{', total);
@@ -699,10 +719,12 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
         }
     }
     let mut positions: Vec<Vec<Position>> = Vec::with_capacity(modules.len());
+    let mut computed = Vec::with_capacity(modules.len());
     let mut rest = Vec::with_capacity(modules.len());
     for (x, src) in modules {
         positions.push(x.positions);
         rest.push((x.frames, x.offsets, x.assigned, x.lines, src));
+        computed.push(x.computed);
     }
     for ((m, i), fu) in direct {
         if let Some(p) = positions.get_mut(m).and_then(|ps| ps.get_mut(i)) {
@@ -716,22 +738,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
     }
     // Through routine parameters: every motion use reachable from the bound parameter.
     for ((m, i), to, line) in bindings {
-        let mut seen = std::collections::HashSet::new();
-        let mut stack = vec![(to, 0usize)];
-        let mut found: Vec<&FrameUse> = Vec::new();
-        while let Some((at, depth)) = stack.pop() {
-            if depth >= CALL_DEPTH || !seen.insert(at) {
-                continue;
-            }
-            found.extend(param_uses.get(&at).into_iter().flatten());
-            stack.extend(
-                param_edges
-                    .get(&at)
-                    .into_iter()
-                    .flatten()
-                    .map(|&next| (next, depth + 1)),
-            );
-        }
+        let found = crate::resolve::uses_through_parameters(to, &param_uses, &param_edges);
         if let Some(p) = positions.get_mut(m).and_then(|ps| ps.get_mut(i)) {
             for fu in found {
                 p.usage
@@ -739,6 +746,18 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
             }
         }
     }
+    let mut facts: Vec<crate::resolve::FileFacts<'_>> = positions
+        .iter_mut()
+        .zip(&rest)
+        .zip(&computed)
+        .map(|((ps, r), c)| crate::resolve::FileFacts {
+            positions: ps,
+            frames: &r.0,
+            assignments: c,
+        })
+        .collect();
+    crate::resolve::mark_run_time(&mut facts, '{');
+    drop(facts);
     let all_frames: Vec<&FrameDecl> = rest.iter().flat_map(|r| &r.0).collect();
     let mut assigned_notes: Vec<Vec<Diagnostic>> = Vec::new();
     for (frames_m, _, assigned, _, src) in &rest {
@@ -866,15 +885,26 @@ impl Extractor<'_> {
             Stmt::Call { name, args } => self.statement_call(src, arena, name, args, span),
             Stmt::Assign { target, value } => {
                 self.scan(src, arena, true);
-                if arena
-                    .get(value)
-                    .is_some_and(|v| v.kind == ExprKind::Aggregate)
-                    && target
-                        .slice(src)
-                        .iter()
-                        .all(|b| b.is_ascii_alphanumeric() || *b == b'_')
+                let literal = is_literal(src, arena, value);
+                let whole = target
+                    .slice(src)
+                    .iter()
+                    .all(|b| b.is_ascii_alphanumeric() || *b == b'_');
+                if whole
+                    && literal
+                    && arena
+                        .get(value)
+                        .is_some_and(|v| v.kind == ExprKind::Aggregate)
                 {
                     self.assigned.push(target);
+                } else if !literal || !whole {
+                    // `p10.trans.z := 20` changes part of the value: run time as well.
+                    let text = text_of(src, target);
+                    let name = text.split('.').next().unwrap_or_default().trim();
+                    self.computed.push(crate::resolve::Assignment {
+                        name: name.to_owned(),
+                        line: self.lines.line(span.start),
+                    });
                 }
             }
             Stmt::Other => {

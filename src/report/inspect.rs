@@ -432,9 +432,9 @@ fn frame_row(f: &FrameDecl, language: Language) -> FrameRow {
             .as_ref()
             .map(PoseColumns::of_pose)
             .unwrap_or_default(),
-        robhold: f.robhold,
-        ufprog: f.ufprog,
-        ufmec: f.ufmec.clone(),
+        robhold: f.held_by_robot,
+        ufprog: f.fixed,
+        ufmec: f.moved_by.clone(),
     }
 }
 

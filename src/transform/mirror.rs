@@ -622,13 +622,12 @@ fn mirror_offset(
         // A RelTool rotation changes sign unless it turns about the flipped tool axis.
         let rot_switch = ["\\Rx", "\\Ry", "\\Rz"]
             .into_iter()
-            .zip(&call.rot)
-            .zip(&call.rot_given)
+            .zip(&call.rot_expression)
             .zip(refl.tool_axis.iter())
-            .find(|(((_, f), given), n)| {
-                call.kind == OffsetKind::RelTool && **given && f.is_none() && **n == 0.0
+            .find(|((_, expression), n)| {
+                call.kind == OffsetKind::RelTool && **expression && **n == 0.0
             })
-            .map(|(((switch, _), _), _)| switch);
+            .map(|((switch, _), _)| switch);
         let offset_blocked = call
             .delta
             .iter()

@@ -73,12 +73,12 @@ pub(crate) fn resolve_frame(
             && d.name.eq_ignore_ascii_case(name)
     });
     match decl {
-        Some(d) if d.ufprog == Some(false) => Err(Why::new(
+        Some(d) if d.fixed == Some(false) => Err(Why::new(
             RefusalKind::MovingWorkObject,
             format!("work object `{name}` is moved by a mechanical unit (ufprog FALSE)"),
             "its position depends on that unit, not on the track: correct such targets by hand",
         )),
-        Some(d) if d.robhold == Some(true) => Err(Why::new(
+        Some(d) if d.held_by_robot == Some(true) => Err(Why::new(
             RefusalKind::StationaryTool,
             format!("work object `{name}` is held by the robot (robhold TRUE: stationary tool)"),
             "a stationary-tool target moves with the work piece, not the track: correct it by hand",
@@ -181,6 +181,13 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
             RefusalKind::ZeroQuaternion,
             format!("{what} has the quaternion [0,0,0,0]: an unset slot, not an orientation"),
             "teach the target (or leave the slot unused)",
+        );
+    }
+    if let Some(why) = &p.usage.run_time {
+        return refuse(
+            RefusalKind::RuntimeData,
+            format!("{what} {}: not correctable offline", why.describe()),
+            "correct the program's computation of it by hand, or teach the target",
         );
     }
     if p.cartesian.as_ref().and_then(|c| c.pose()).is_none() {

@@ -43,6 +43,10 @@ pub enum RefusalKind {
     /// cell value): nothing is written for it.
     #[value(alias = "non-finite")]
     ImplausibleResult,
+    /// The target's pose is only known when the program runs: the program computes the target
+    /// (`p10 := CRobT()`, a `PERS` array filled by the program) or the work object / base it is
+    /// used with (`wobj1.uframe := …`, `$BASE = EK(…)`). Not correctable offline.
+    RuntimeData,
     /// An all-zero quaternion: an unset slot (e.g. of a `PERS` array), not an orientation and
     /// not a target: reported as a note, never a refusal (so nothing to keep).
     #[value(skip)]
@@ -79,11 +83,11 @@ struct Excerpt {
 }
 
 impl RefusalKind {
-    /// The target's values are only known when the program runs (an unset slot a `PERS` array
-    /// is filled with at run time): no offline transform can correct it, so summaries count such
-    /// refusals apart from the ones a change to the program would fix.
+    /// The target's values are only known when the program runs: no offline transform can
+    /// correct it, so summaries count such refusals apart from the ones a change to the program
+    /// would fix. (An unset `[0,0,0,0]` slot is a note, not a refusal.)
     pub fn is_runtime_data(self) -> bool {
-        matches!(self, RefusalKind::ZeroQuaternion)
+        matches!(self, RefusalKind::RuntimeData)
     }
 }
 

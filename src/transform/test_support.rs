@@ -70,6 +70,7 @@ fn usage(wobj: &str, line: usize) -> Usage {
         other_wobjs: Vec::new(),
         stationary_tool: false,
         lines: vec![line],
+        run_time: None,
     }
 }
 

@@ -11,6 +11,7 @@ mod parser_data;
 mod programs;
 mod rapid;
 mod report;
+mod runtime_data;
 mod rust_version;
 mod support;
 mod track;

@@ -80,9 +80,9 @@ fn dump(f: &ParsedFile) -> String {
             fr.name,
             fr.kind,
             fr.line,
-            fr.robhold,
-            fr.ufprog,
-            fr.ufmec,
+            fr.held_by_robot,
+            fr.fixed,
+            fr.moved_by,
             cartesian(src, &fr.frame),
             cartesian(src, &fr.oframe)
         );
@@ -266,7 +266,7 @@ fn spot_line_is_a_track_program() {
     assert!((lastv - 7850.0).abs() < 1e-9);
     let car = frame(&f, "wobj_car");
     assert_eq!(
-        (car.robhold, car.ufprog, car.kind),
+        (car.held_by_robot, car.fixed, car.kind),
         (Some(false), Some(true), FrameKind::WorkObject)
     );
     let world = car.pose().unwrap();
@@ -328,10 +328,13 @@ fn usage_two_wobjs_is_flagged_with_a_warning() {
 fn usage_stationary_tool_and_moving_wobj() {
     let f = load("stationary_tool.mod");
     assert!(f.positions.iter().all(|p| p.usage.stationary_tool));
-    assert_eq!(frame(&f, "wNozzle").robhold, Some(true));
+    assert_eq!(frame(&f, "wNozzle").held_by_robot, Some(true));
     let m = load("moving_wobj.mod");
     let w = frame(&m, "wStn1");
-    assert_eq!((w.ufprog, w.ufmec.as_deref()), (Some(false), Some("STN1")));
+    assert_eq!(
+        (w.fixed, w.moved_by.as_deref()),
+        (Some(false), Some("STN1"))
+    );
     let seam2 = pos(&m, "pSeam2");
     assert_eq!(seam2.usage.wobj.as_deref(), Some("wStn1"));
     // ArcL: the tool is the declared tooldata, not the argument after the zone.

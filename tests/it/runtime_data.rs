@@ -1,0 +1,146 @@
+//! Runtime data: targets whose pose the program computes when it runs (or whose work object or
+//! base it computes) are marked, in both languages, by the shared resolution pass.
+
+use std::path::Path;
+
+use trackfix::position::{ParsedFile, RunTimeValue};
+use trackfix::{krl, rapid};
+
+fn run_time<'f>(f: &'f ParsedFile, name: &str) -> Option<&'f RunTimeValue> {
+    f.positions
+        .iter()
+        .find(|p| p.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no target {name}"))
+        .usage
+        .run_time
+        .as_ref()
+}
+
+const T: &str = "[[1,2,3],[1,0,0,0],[0,0,0,0],[500,9E9,9E9,9E9,9E9,9E9]]";
+
+#[test]
+fn rapid_targets_and_work_objects_computed_at_run_time_are_marked_literal_ones_are_not() {
+    let src = format!(
+        "MODULE R\n\
+  PERS wobjdata wFix:=[FALSE,TRUE,\"\",[[1000,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n\
+  PERS wobjdata wCalc:=[FALSE,TRUE,\"\",[[1000,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n\
+  PERS wobjdata wLit:=[FALSE,TRUE,\"\",[[1000,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n\
+  PERS robtarget pFix:={T};\n\
+  PERS robtarget pOnCalc:={T};\n\
+  PERS robtarget pOnLit:={T};\n\
+  PERS robtarget pBuf{{2}}:=[{T},{T}];\n\
+  PERS robtarget pHere:={T};\n\
+  PROC main()\n\
+    wCalc.uframe:=[[0,0,0],OrientZYX(nAngle,0,0)];\n\
+    wLit:=[FALSE,TRUE,\"\",[[900,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n\
+    pBuf{{i}}:=Offs(pFix,0,0,10);\n\
+    pHere:=CRobT();\n\
+    MoveL pFix,v100,fine,tool0\\WObj:=wFix;\n\
+    MoveL pOnCalc,v100,fine,tool0\\WObj:=wCalc;\n\
+    MoveL pOnLit,v100,fine,tool0\\WObj:=wLit;\n\
+    MoveL pBuf{{i}},v100,fine,tool0\\WObj:=wFix;\n\
+    MoveL pHere,v100,fine,tool0\\WObj:=wFix;\n\
+  ENDPROC\nENDMODULE\n"
+    );
+    let f = rapid::parse_file(Path::new("r.mod"), src.into_bytes());
+    assert_eq!(run_time(&f, "pFix"), None);
+    assert_eq!(
+        run_time(&f, "pOnCalc"),
+        Some(&RunTimeValue::Frame {
+            name: Some("wCalc".into()),
+            line: 11
+        })
+    );
+    // A literal value is known offline: the warning it always had, no refusal.
+    assert_eq!(run_time(&f, "pOnLit"), None);
+    // Written through a computed index: any element may be the one the program fills.
+    for n in ["pBuf{1}", "pBuf{2}"] {
+        assert_eq!(
+            run_time(&f, n),
+            Some(&RunTimeValue::Target { line: 13 }),
+            "{n}"
+        );
+    }
+    assert_eq!(
+        run_time(&f, "pHere"),
+        Some(&RunTimeValue::Target { line: 14 })
+    );
+}
+
+#[test]
+fn krl_bases_and_points_computed_at_run_time_are_marked_constant_bases_are_not() {
+    let src = b"DEF k( )\n\
+  DECL E6POS XA={X 1,Y 2,Z 3,A 0,B 0,C 0,E1 500}\n\
+  DECL E6POS XB={X 1,Y 2,Z 3,A 0,B 0,C 0,E1 500}\n\
+  DECL E6POS XC={X 1,Y 2,Z 3,A 0,B 0,C 0,E1 500}\n\
+  DECL E6POS XD={X 1,Y 2,Z 3,A 0,B 0,C 0,E1 500}\n\
+  $BASE=BASE_DATA[2]\n\
+  LIN XA\n\
+  $BASE=BASE_DATA[NBASE]\n\
+  LIN XB\n\
+  BAS(#BASE,2)\n\
+  XC=$POS_ACT\n\
+  LIN XC\n\
+  $BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,BASE_DATA[1])\n\
+  LIN XD\n\
+END\n";
+    let f = krl::parse_file(Path::new("k.src"), src.to_vec());
+    assert_eq!(run_time(&f, "XA"), None);
+    assert_eq!(
+        run_time(&f, "XB"),
+        Some(&RunTimeValue::Frame {
+            name: None,
+            line: 8
+        })
+    );
+    assert_eq!(run_time(&f, "XC"), Some(&RunTimeValue::Target { line: 11 }));
+    assert_eq!(
+        run_time(&f, "XD"),
+        Some(&RunTimeValue::Frame {
+            name: None,
+            line: 13
+        })
+    );
+}
+
+#[test]
+fn a_transform_refuses_runtime_data_by_name_and_counts_it_apart() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ek.src");
+    std::fs::write(
+        &path,
+        "DEF ek( )\n  DECL E6POS XD={X 1,Y 2,Z 3,A 0,B 0,C 0,E1 500}\n  $BASE=EK(MACHINE_DEF[2].ROOT,MACHINE_DEF[2].MECH_TYPE,BASE_DATA[1])\n  LIN XD\nEND\n",
+    )
+    .unwrap();
+    let file = path.to_str().unwrap();
+    let args = [
+        "correct",
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        file,
+        "--diff",
+    ];
+    let (code, _, err) = crate::support::trackfix(&args);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains(
+            "E6POS `XD` is used with a base computed at run time (line 3): not correctable offline"
+        ),
+        "{err}"
+    );
+    assert!(err.contains("--keep runtime-data"), "{err}");
+    assert!(
+        err.contains(
+            "note: 1 of the 1 refused target(s) computed at run time: not correctable offline"
+        ),
+        "{err}"
+    );
+    let mut kept = args.to_vec();
+    kept.extend(["--keep", "runtime-data"]);
+    let (code, out, err) = crate::support::trackfix(&kept);
+    assert_ne!(code, 3, "{err}");
+    assert!(out.is_empty(), "nothing changes: {out}");
+    assert!(err.contains("[runtime-data]"), "{err}");
+}
