@@ -28,7 +28,7 @@ pub struct InspectOptions {
     pub skid_axis: usize,
 }
 
-/// The whole `inspect --format json` document: `{"files": [...]}`.
+/// The whole JSON inspect document: `{"files": [...]}`.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct InspectReport {
     /// One entry per file, in input order.
@@ -463,7 +463,7 @@ pub fn inspect_program(program: &Program, options: InspectOptions) -> Vec<FileRe
     reports
 }
 
-/// `inspect --format table`: one block per file.
+/// The inspect table: one block per file.
 pub fn render_table(report: &InspectReport) -> String {
     let mut out = String::new();
     for f in &report.files {
@@ -569,7 +569,7 @@ pub fn render_table(report: &InspectReport) -> String {
     out
 }
 
-/// `inspect --format csv`: one row per position.
+/// The inspect CSV: one row per position.
 pub fn render_csv(report: &InspectReport) -> String {
     let mut out =
         String::from("file,language,name,kind,line,x,y,z,q1,q2,q3,q4,rx,ry,rz,skid,frame,tool\n");
@@ -615,7 +615,7 @@ fn opt(v: Option<f64>) -> String {
     v.map_or_else(String::new, |v| v.to_string())
 }
 
-/// A text cell of `inspect --format csv`. A spreadsheet runs a cell that starts with `=`, `+`,
+/// A text cell of the inspect CSV. A spreadsheet runs a cell that starts with `=`, `+`,
 /// `-` or `@` (or a tab / CR) as a formula: such a cell gets a leading `'` unless it is a number.
 fn csv_text(s: &str) -> String {
     let formula = s.starts_with(['=', '+', '@', '\t', '\r'])

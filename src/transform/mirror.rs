@@ -801,9 +801,9 @@ mod tests {
         }
     }
 
-    /// `--mirror-frames`: the work object and the tool mirror so that the world pose of the TCP
+    /// Mirroring the frames: the work object and the tool mirror so that the world pose of the TCP
     /// is the mirror image of the original in world (`Sa·W·T·Sb`), offsets follow Sa / Sb and
-    /// `--mirror-joints` negates axes 1, 4, 6.
+    /// mirroring joints negates axes 1, 4, 6.
     #[test]
     fn frames_offsets_and_joints_through_the_rapid_parser() {
         let p0 = parse(MODULE);

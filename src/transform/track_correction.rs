@@ -72,7 +72,8 @@ pub struct TrackSetup<'a> {
     pub frames: BTreeMap<String, Pose>,
     /// The track's deviation `D(s)`.
     pub deviation: &'a dyn Deviation,
-    /// The work object for declared targets no motion uses (`--default-wobj`).
+    /// The work object for declared targets no motion uses (the caller's
+    /// default; `None`: such targets are refused).
     pub default_wobj: Option<String>,
     /// The profile's uncertainty, when it carries one: each corrected target then records the
     /// expanded uncertainty of its TCP.
