@@ -2,7 +2,7 @@
 //! table, JSON or CSV.
 //!
 //! The report is built from the shared position model and the dialect's vocabulary only, so
-//! every language gets the same shape (DESIGN.md §5). Rendering returns strings; the binary
+//! every language gets the same shape (docs/design.md §5). Rendering returns strings; the binary
 //! prints them.
 
 use std::collections::BTreeMap;
@@ -130,7 +130,7 @@ pub struct FileReport {
 }
 
 /// A pose as reported: translation in mm, orientation as an ABB quaternion `[q1, q2, q3, q4]`
-/// (scalar first, for every language) and as fixed-axis angles in degrees (DESIGN.md §2).
+/// (scalar first, for every language) and as fixed-axis angles in degrees (docs/design.md §2).
 /// A value that is not a numeric literal is `null`.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct PoseColumns {
@@ -227,7 +227,7 @@ pub struct FrameRow {
     pub kind: &'static str,
     /// 1-based line of the declaration.
     pub line: usize,
-    /// The pose in world (DESIGN.md §2).
+    /// The pose in world (docs/design.md §2).
     #[serde(flatten)]
     pub pose: PoseColumns,
     /// RAPID work objects and tools: `robhold` (the robot holds it).

@@ -1,4 +1,4 @@
-//! `profile.toml`: a fitted track profile and its evaluation `D(s)` (DESIGN.md §3, §6).
+//! `profile.toml`: a fitted track profile and its evaluation `D(s)` (docs/design.md §3, §6).
 
 use std::path::Path;
 use std::sync::Arc;
@@ -17,7 +17,7 @@ pub const PROFILE_FORMAT: &str = "trackfix-profile/1";
 
 pub use super::error::TrackError;
 
-/// One sampling position's deviation `D_i` (mm, degrees; DESIGN.md §2 `rx, ry, rz`).
+/// One sampling position's deviation `D_i` (mm, degrees; docs/design.md §2 `rx, ry, rz`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Knot {
@@ -123,7 +123,7 @@ impl Knot {
     }
 }
 
-/// What `D(s)` does outside `[s_0, s_N]` (DESIGN.md §3.4).
+/// What `D(s)` does outside `[s_0, s_N]` (docs/design.md §3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Extrapolate {
@@ -135,7 +135,7 @@ pub enum Extrapolate {
     Linear,
 }
 
-/// Which straight line the deviations are taken from (DESIGN.md §3.1).
+/// Which straight line the deviations are taken from (docs/design.md §3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Reference {
@@ -145,7 +145,7 @@ pub enum Reference {
     First,
 }
 
-/// Whether the gear factor's drift stays in the profile (DESIGN.md §3.1).
+/// Whether the gear factor's drift stays in the profile (docs/design.md §3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 pub enum Gear {
     /// Keep the controller's gear ratio; its drift stays in the profile.
@@ -240,7 +240,7 @@ struct ProfileFile {
 }
 
 /// A fitted track profile: the nominal straight track and six natural cubic splines of the
-/// deviation (DESIGN.md §3).
+/// deviation (docs/design.md §3).
 #[derive(Clone, Debug)]
 pub struct Profile {
     file: ProfileFile,
@@ -651,13 +651,13 @@ impl Profile {
     }
 
     /// `D(s)`: the deviation of the real base from the nominal at skid `s`, in the nominal base
-    /// frame (DESIGN.md §3). Outside the range per the profile's `extrapolate` setting.
+    /// frame (docs/design.md §3). Outside the range per the profile's `extrapolate` setting.
     pub fn deviation(&self, skid: f64) -> Result<Pose, TrackError> {
         let [dx, dy, dz, rx, ry, rz] = self.deviation_components(skid)?;
         Ok(pose_xyz_deg(dx, dy, dz, rx, ry, rz))
     }
 
-    /// `N(s)`: the nominal base frame in the measurement frame (DESIGN.md §3.1); with gear
+    /// `N(s)`: the nominal base frame in the measurement frame (docs/design.md §3); with gear
     /// `recalibrated` the step per commanded mm is `g·u`, else `u`.
     pub fn nominal_frame(&self, skid: f64) -> Pose {
         let n = &self.file.nominal;

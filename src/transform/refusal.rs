@@ -1,4 +1,4 @@
-//! Targets a transform will not change, each with its location and what to do (DESIGN.md §4).
+//! Targets a transform will not change, each with its location and what to do (docs/design.md §4).
 
 use std::path::PathBuf;
 
