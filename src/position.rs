@@ -39,7 +39,7 @@ impl PositionKind {
         self.name
     }
 
-    /// Cartesian targets are transformed; joint targets never are (DESIGN.md §4).
+    /// Cartesian targets are transformed; joint targets never are (docs/design.md §4).
     pub fn is_cartesian(self) -> bool {
         self.cartesian
     }

@@ -477,7 +477,10 @@ fn path_table(a: &PathArgs, r: &PathReport) -> String {
         s.push('\n');
     }
     let l = &r.line;
-    let _ = writeln!(s, "\nstraight-line report (thesis Table 5.1)");
+    let _ = writeln!(
+        s,
+        "\nstraight-line report (docs/design.md §11; thesis Table 5.1)"
+    );
     let rows: [(&str, String); 12] = [
         ("path length", format!("{:.3} m", l.length / 1000.0)),
         ("commanded velocity", opt(l.commanded_velocity, "mm/s", 1)),

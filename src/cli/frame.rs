@@ -442,7 +442,7 @@ fn run_base(a: &BaseArgs) -> anyhow::Result<String> {
     }
     let _ = writeln!(
         s,
-        "\nresiduals = measured - B(s)*D(s)*robot (seed Table 7.2)"
+        "\nresiduals = measured - B(s)*D(s)*robot (docs/design.md §14; thesis Table 7.2)"
     );
     residual_table(&mut s, &fit.residuals, true, "point");
     Ok(s)

@@ -10,7 +10,7 @@ pub mod transform;
 
 use std::process::ExitCode;
 
-/// The documented exit codes (DESIGN.md §5).
+/// The documented exit codes (docs/design.md §7).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Exit {
     /// 0: everything went well.

@@ -313,7 +313,7 @@ fn run_identify(a: &IdentifyArgs) -> anyhow::Result<String> {
     );
     let _ = writeln!(
         s,
-        "residual = tracker point - fitted base frame * robot point (seed Table 7.2)"
+        "residual = tracker point - fitted base frame * robot point (docs/design.md §3; thesis Table 7.2)"
     );
     for f in &id.fits {
         let _ = writeln!(
@@ -536,7 +536,7 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
     );
     let _ = writeln!(
         s,
-        "\norigins against the skid (least squares, seed eq. 4.54):"
+        "\norigins against the skid (least squares, docs/design.md §3; thesis eq. 4.54):"
     );
     let _ = writeln!(
         s,
@@ -611,7 +611,7 @@ fn gear_advice(s: &mut String, g: f64, current: Option<&str>) -> anyhow::Result<
     );
     let _ = writeln!(
         s,
-        "      (a travel per motor turn, the gear factor of seed eq. 4.4, grows the other way: new = {g:.6} x current)"
+        "      (a travel per motor turn, the gear factor of docs/design.md §3, thesis eq. 4.4, grows the other way: new = {g:.6} x current)"
     );
     let Some(text) = current else {
         return Ok(());
@@ -860,7 +860,7 @@ fn overview(p: &Profile) -> String {
     let row6 = |c: &[f64; 6]| deviation_cells(c, 11, 13, "");
     let _ = writeln!(
         s,
-        "\nmanual adjustment: deviation of each component from its own regression line (seed eq. 4.54)"
+        "\nmanual adjustment: deviation of each component from its own regression line (docs/design.md §3; thesis eq. 4.54)"
     );
     let _ = writeln!(s, "      skid{header}");
     for r in manual_adjustment(p) {
@@ -882,7 +882,7 @@ fn overview(p: &Profile) -> String {
     }
     let _ = writeln!(
         s,
-        "\nlargest spline-to-chord distance per interval (seed 4.9-4.12)"
+        "\nlargest spline-to-chord distance per interval (docs/design.md §3; thesis eqs. 4.9-4.12)"
     );
     let _ = writeln!(s, "      from        to{header}");
     for b in chord_bounds(p) {
@@ -1001,7 +1001,7 @@ fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
             );
             let _ = writeln!(
                 s,
-                "recommended sampling spacing 1/(2f) = {spacing:.1} mm (seed eq. 4.12)"
+                "recommended sampling spacing 1/(2f) = {spacing:.1} mm (docs/design.md §3; thesis eq. 4.12)"
             );
         }
         _ => {

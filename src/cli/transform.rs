@@ -376,7 +376,7 @@ Examples:
   trackfix correct cad/*.mod --cell samples/cell.toml --robot r1 --diff
 
 For every Cartesian target at skid s (its own external axis), in its work object W:
-  T' = W⁻¹ · B(s) · D(s)⁻¹ · B(s)⁻¹ · W · T     (DESIGN.md §4)";
+  T' = W⁻¹ · B(s) · D(s)⁻¹ · B(s)⁻¹ · W · T     (docs/design.md §4)";
 
 const ZERO_EXAMPLES: &str = "\
 Examples:

@@ -12,8 +12,8 @@ use std::path::Path;
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, Point3, Vector3};
 
 use super::{
-    FrameError, PointResidual, PoseUncertainty, perturb_right, rms, sigma_of, solve_normal,
-    xyz_deg_uncertainty,
+    FrameError, PointResidual, PoseUncertainty, Underdetermined, perturb_right, rms, sigma_of,
+    solve_normal, xyz_deg_uncertainty,
 };
 use crate::geometry::Pose;
 use crate::geometry::rigid_fit::fit_rigid;
@@ -107,10 +107,7 @@ pub fn fit_base(
     sigma: Option<f64>,
 ) -> Result<BaseFit, FrameError> {
     if rows.len() < 4 {
-        return Err(FrameError::Underdetermined(format!(
-            "{} point(s): a base and a track axis need at least 4 (and at least 2 skid positions)",
-            rows.len()
-        )));
+        return Err(Underdetermined::TooFewBasePoints { got: rows.len() }.into());
     }
     let mut q = Vec::with_capacity(rows.len());
     for r in rows {
@@ -128,11 +125,8 @@ pub fn fit_base(
     let mut cof = DMatrix::<f64>::zeros(8, 8);
     for _ in 0..50 {
         let (jac, res) = linearise(&base0, &axis, &q, &meas, &skids);
-        let (step, inv) = solve_normal(&jac, &res).ok_or_else(|| {
-            FrameError::Underdetermined(
-                "the points do not fix the base and the track axis: spread them in all three directions and over the track".to_string(),
-            )
-        })?;
+        let (step, inv) = solve_normal(&jac, &res)
+            .ok_or_else(|| FrameError::from(Underdetermined::BaseAndAxis))?;
         cof = inv;
         iterations += 1;
         base0 = perturb_right(&base0, &step.as_slice()[..6]);
@@ -267,10 +261,7 @@ fn start(
         groups.entry(r.skid.to_bits()).or_default().push(j);
     }
     if groups.len() < 2 {
-        return Err(FrameError::Underdetermined(
-            "all points are at one skid position: the track axis needs points at two or more"
-                .to_string(),
-        ));
+        return Err(Underdetermined::OneSkid.into());
     }
     let mut order: Vec<&Vec<usize>> = groups.values().collect();
     order.sort_by_key(|g| std::cmp::Reverse(g.len()));
@@ -282,12 +273,7 @@ fn start(
             let dst: Vec<Point3<f64>> = g.iter().map(|&j| meas[j]).collect();
             fit_rigid(&src, &dst).ok().map(|f| f.pose.rotation)
         })
-        .ok_or_else(|| {
-            FrameError::Underdetermined(
-                "no skid position has 3 non-collinear points: measure at least 3 well-spread points at one of them"
-                    .to_string(),
-            )
-        })?;
+        .ok_or_else(|| FrameError::from(Underdetermined::NoRotation))?;
     let offsets: Vec<Vector3<f64>> = q
         .iter()
         .zip(meas)
@@ -301,11 +287,9 @@ fn start(
         t[c] = intercept;
         v[c] = slope;
     }
-    let axis = v.try_normalize(1e-9).ok_or_else(|| {
-        FrameError::Underdetermined(
-            "the measured points do not move with the skid: no track direction".to_string(),
-        )
-    })?;
+    let axis = v
+        .try_normalize(1e-9)
+        .ok_or_else(|| FrameError::from(Underdetermined::NoTrackDirection))?;
     Ok((
         Pose::from_parts(nalgebra::Translation3::from(t), rotation),
         axis,

@@ -11,6 +11,7 @@ pub mod wobj;
 
 use nalgebra::{DMatrix, DVector, Matrix6, Translation3, UnitQuaternion, Vector3};
 
+use crate::geometry::rigid_fit::RigidFitError;
 use crate::geometry::{Pose, pose_to_xyz_deg, wrap_deg};
 use crate::track::TrackError;
 use crate::track::uncertainty::Sigma;
@@ -20,14 +21,100 @@ use crate::track::uncertainty::Sigma;
 #[non_exhaustive]
 pub enum FrameError {
     /// The data do not fix the frame (too few points, collinear, one skid only, ...).
-    #[error("{0}")]
-    Underdetermined(String),
+    #[error(transparent)]
+    Underdetermined(#[from] Underdetermined),
     /// Reading the input, or the track profile, failed.
     #[error(transparent)]
     Track(#[from] TrackError),
     /// A noise level that is not a non-negative number.
     #[error("noise level {0} mm: give a non-negative number")]
     BadSigma(f64),
+}
+
+/// What the data lack to fix a frame: the counts and the missing property, rendered with
+/// what to measure on display.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Underdetermined {
+    /// As many unknowns as coordinates: nothing is left to estimate the noise from.
+    #[error(
+        "{points} point(s) leave no residual to estimate the noise from: give the noise level, or measure more points"
+    )]
+    NoResidual {
+        /// The points measured.
+        points: usize,
+    },
+    /// Too few points paired by number between the two files of a best fit.
+    #[error(
+        "{got} point(s) in both files: a best fit needs at least 3 non-collinear points, paired by point number"
+    )]
+    TooFewPairs {
+        /// The points paired.
+        got: usize,
+    },
+    /// The paired points do not fix a rigid fit.
+    #[error("{paired} paired points: {error}")]
+    PairFit {
+        /// The points paired.
+        paired: usize,
+        /// Why the fit fails.
+        error: RigidFitError,
+    },
+    /// The points fit, but their spread leaves a direction of the six free.
+    #[error("the points do not fix all six degrees of freedom")]
+    PointsSpread,
+    /// Too few points for a base and a track axis.
+    #[error(
+        "{got} point(s): a base and a track axis need at least 4 (and at least 2 skid positions)"
+    )]
+    TooFewBasePoints {
+        /// The points measured.
+        got: usize,
+    },
+    /// The normal equations of the base fit are singular.
+    #[error(
+        "the points do not fix the base and the track axis: spread them in all three directions and over the track"
+    )]
+    BaseAndAxis,
+    /// Every point at one skid position.
+    #[error("all points are at one skid position: the track axis needs points at two or more")]
+    OneSkid,
+    /// No skid position with three points that fix a rotation.
+    #[error(
+        "no skid position has 3 non-collinear points: measure at least 3 well-spread points at one of them"
+    )]
+    NoRotation,
+    /// The points do not move with the skid.
+    #[error("the measured points do not move with the skid: no track direction")]
+    NoTrackDirection,
+    /// Too few marks for a work object.
+    #[error("{got} mark(s): a work object needs at least 3 non-collinear marks")]
+    TooFewMarks {
+        /// The marks measured.
+        got: usize,
+    },
+    /// The marks lie on one line.
+    #[error(
+        "the marks are collinear: the rotation about their line is free; touch a mark off that line"
+    )]
+    CollinearMarks,
+    /// The marks do not fix a rigid fit for another reason.
+    #[error(transparent)]
+    MarkFit(RigidFitError),
+    /// The marks fit, but their spread leaves a direction of the six free.
+    #[error("the marks do not fix all six degrees of freedom")]
+    MarksSpread,
+    /// Too few flange poses for a TCP.
+    #[error("{got} pose(s): a TCP needs at least 3 (4 or more to see the error)")]
+    TooFewPoses {
+        /// The poses measured.
+        got: usize,
+    },
+    /// The flange orientations are too alike to fix the TCP.
+    #[error(
+        "the orientations do not differ enough to fix the TCP: tilt the tool about two different axes (at least 3 orientations)"
+    )]
+    OrientationsAlike,
 }
 
 /// The residual of one measured point: `measured - model`, mm.
@@ -72,10 +159,10 @@ pub(crate) fn sigma_of(
         None => {
             let dof = (3 * residuals.len()).saturating_sub(parameters);
             if dof == 0 {
-                return Err(FrameError::Underdetermined(format!(
-                    "{} point(s) leave no residual to estimate the noise from: give the noise level, or measure more points",
-                    residuals.len()
-                )));
+                return Err(Underdetermined::NoResidual {
+                    points: residuals.len(),
+                }
+                .into());
             }
             let ssr: f64 = residuals.iter().map(|r| r.residual.norm_squared()).sum();
             Ok(Sigma::Estimated {

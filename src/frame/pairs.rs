@@ -7,7 +7,9 @@ use std::path::Path;
 
 use nalgebra::{Matrix6, Point3};
 
-use super::{FrameError, PointResidual, PoseUncertainty, rms, sigma_of, xyz_deg_uncertainty};
+use super::{
+    FrameError, PointResidual, PoseUncertainty, Underdetermined, rms, sigma_of, xyz_deg_uncertainty,
+};
 use crate::geometry::Pose;
 use crate::geometry::rigid_fit::{RigidFitError, fit_rigid};
 use crate::track::TrackError;
@@ -118,11 +120,12 @@ pub fn fit_pairs(
         let src: Vec<Point3<f64>> = ids.iter().map(|k| measured[k]).collect();
         let dst: Vec<Point3<f64>> = ids.iter().map(|k| nominal[k]).collect();
         let fit = fit_rigid(&src, &dst).map_err(|e| {
-            FrameError::Underdetermined(match e {
-                RigidFitError::TooFewPoints { got } => format!(
-                    "{got} point(s) in both files: a best fit needs at least 3 non-collinear points, paired by point number"
-                ),
-                other => format!("{} paired points: {other}", ids.len()),
+            FrameError::from(match e {
+                RigidFitError::TooFewPoints { got } => Underdetermined::TooFewPairs { got },
+                error => Underdetermined::PairFit {
+                    paired: ids.len(),
+                    error,
+                },
             })
         })?;
         // A least-squares fit spreads one bad point over the others; its residual against
@@ -154,11 +157,8 @@ pub fn fit_pairs(
             })
             .collect();
         let sigma = sigma_of(sigma, &residuals, 6)?;
-        let cof = rigid_fit_cofactor(&src).ok_or_else(|| {
-            FrameError::Underdetermined(
-                "the points do not fix all six degrees of freedom".to_string(),
-            )
-        })?;
+        let cof = rigid_fit_cofactor(&src)
+            .ok_or_else(|| FrameError::from(Underdetermined::PointsSpread))?;
         let cov: Matrix6<f64> = cof * sigma.value().powi(2);
         return Ok(PairFit {
             u_pose: xyz_deg_uncertainty(&fit.pose, &cov),

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use nalgebra::{DMatrix, DVector, Point3, Translation3, Vector3};
 
-use super::{FrameError, PointResidual, rms, sigma_of};
+use super::{FrameError, PointResidual, Underdetermined, rms, sigma_of};
 use crate::geometry::{Pose, abb_quat, kuka_abc, xyz_deg};
 use crate::track::TrackError;
 use crate::track::csv_table::NumericCsv;
@@ -110,10 +110,7 @@ pub struct ToolFit {
 /// axis, else estimated with `3n - 6` degrees of freedom.
 pub fn fit_tool(poses: &[Pose], sigma: Option<f64>) -> Result<ToolFit, FrameError> {
     if poses.len() < 3 {
-        return Err(FrameError::Underdetermined(format!(
-            "{} pose(s): a TCP needs at least 3 (4 or more to see the error)",
-            poses.len()
-        )));
+        return Err(Underdetermined::TooFewPoses { got: poses.len() }.into());
     }
     let n = poses.len();
     let mut a = DMatrix::<f64>::zeros(3 * n, 6);
@@ -129,11 +126,8 @@ pub fn fit_tool(poses: &[Pose], sigma: Option<f64>) -> Result<ToolFit, FrameErro
         }
     }
     let ata = a.transpose() * &a;
-    let inv = invert_spd(&ata).ok_or_else(|| {
-        FrameError::Underdetermined(
-            "the orientations do not differ enough to fix the TCP: tilt the tool about two different axes (at least 3 orientations)".to_string(),
-        )
-    })?;
+    let inv =
+        invert_spd(&ata).ok_or_else(|| FrameError::from(Underdetermined::OrientationsAlike))?;
     let x = &inv * (a.transpose() * &b);
     let tcp = Vector3::new(x[0], x[1], x[2]);
     let point = Point3::new(x[3], x[4], x[5]);
@@ -175,6 +169,30 @@ mod tests {
             .map(|k| pose_xyz_deg(100.0 * k as f64, 0.0, 500.0, 0.0, 0.0, 60.0 * k as f64))
             .collect();
         let e = fit_tool(&poses, None).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                FrameError::Underdetermined(Underdetermined::OrientationsAlike)
+            ),
+            "{e:?}"
+        );
         assert!(e.to_string().contains("two different axes"), "{e}");
+    }
+
+    #[test]
+    fn what_is_missing_is_data_and_renders_with_its_count() {
+        let poses = [pose_xyz_deg(0.0, 0.0, 500.0, 0.0, 0.0, 0.0); 2];
+        let e = fit_tool(&poses, None).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                FrameError::Underdetermined(Underdetermined::TooFewPoses { got: 2 })
+            ),
+            "{e:?}"
+        );
+        assert_eq!(
+            e.to_string(),
+            "2 pose(s): a TCP needs at least 3 (4 or more to see the error)"
+        );
     }
 }

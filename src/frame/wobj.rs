@@ -6,7 +6,9 @@ use std::path::Path;
 
 use nalgebra::{Matrix3x6, Matrix6, Point3};
 
-use super::{FrameError, PointResidual, PoseUncertainty, rms, sigma_of, xyz_deg_uncertainty};
+use super::{
+    FrameError, PointResidual, PoseUncertainty, Underdetermined, rms, sigma_of, xyz_deg_uncertainty,
+};
 use crate::geometry::Pose;
 use crate::geometry::rigid_fit::{RigidFitError, fit_rigid};
 use crate::track::TrackError;
@@ -91,14 +93,10 @@ pub fn fit_wobj(
     }
     let cad: Vec<Point3<f64>> = rows.iter().map(|r| Point3::from(r.cad)).collect();
     let fit = fit_rigid(&cad, &world).map_err(|e| {
-        FrameError::Underdetermined(match e {
-            RigidFitError::TooFewPoints { got } => {
-                format!("{got} mark(s): a work object needs at least 3 non-collinear marks")
-            }
-            RigidFitError::Collinear => {
-                "the marks are collinear: the rotation about their line is free; touch a mark off that line".to_string()
-            }
-            other => other.to_string(),
+        FrameError::from(match e {
+            RigidFitError::TooFewPoints { got } => Underdetermined::TooFewMarks { got },
+            RigidFitError::Collinear => Underdetermined::CollinearMarks,
+            other => Underdetermined::MarkFit(other),
         })
     })?;
     let residuals: Vec<PointResidual> = rows
@@ -111,9 +109,8 @@ pub fn fit_wobj(
         })
         .collect();
     let sigma = sigma_of(sigma, &residuals, 6)?;
-    let cof = rigid_fit_cofactor(&cad).ok_or_else(|| {
-        FrameError::Underdetermined("the marks do not fix all six degrees of freedom".to_string())
-    })?;
+    let cof =
+        rigid_fit_cofactor(&cad).ok_or_else(|| FrameError::from(Underdetermined::MarksSpread))?;
     let mut cov: Matrix6<f64> = cof * sigma.value().powi(2);
     if let Some(pu) = profile_u {
         // J_j = R_W·[I, −[c_j]×]; the profile's errors are in the base axes, B0's rotation.

@@ -1,4 +1,4 @@
-//! One constructor and one writer per external rotation convention (DESIGN.md §2).
+//! One constructor and one writer per external rotation convention (docs/design.md §2).
 //!
 //! Every conversion between a file's numbers and a rotation goes through exactly one function
 //! here, so a convention lives in one place.

@@ -67,7 +67,7 @@ impl ControllerFigures {
     /// What to do with the gear factor, for this profile's gear setting.
     pub fn new_gear_text(&self) -> String {
         format!(
-            "new gear factor = {:.6} x current gear factor (seed eq. 4.4); {}",
+            "new gear factor = {:.6} x current gear factor (docs/design.md §3; thesis eq. 4.4); {}",
             self.gear_factor,
             match self.gear {
                 Gear::AsIs => "this profile keeps the drift instead (gear as-is)",

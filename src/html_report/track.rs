@@ -371,7 +371,7 @@ fn controller_section(p: &Profile, fit: Option<&TrackFit>) -> Section {
         ("KUKA (FRAME)", f.kuka_literal()),
     ]));
     if let Some(fit) = fit {
-        sec.sub("Origins against the skid (least squares, seed eq. 4.54)");
+        sec.sub("Origins against the skid (least squares, docs/design.md §3; thesis eq. 4.54)");
         let rows: Vec<Row> = ["x", "y", "z"]
             .iter()
             .zip(&fit.lines)
@@ -446,7 +446,7 @@ fn identification_section(id: &Identification) -> Section {
     let limit = OUTLIER_FACTOR * id.median_residual;
     let points: usize = id.fits.iter().map(|f| f.points.len()).sum();
     sec.para(&format!(
-        "{} base frames from {points} points. Residual = tracker point - fitted base frame x robot point (seed Table 7.2). Median point residual {:.4} mm; outlier limit {OUTLIER_FACTOR} x median = {limit:.4} mm.",
+        "{} base frames from {points} points. Residual = tracker point - fitted base frame x robot point (docs/design.md §3; thesis Table 7.2). Median point residual {:.4} mm; outlier limit {OUTLIER_FACTOR} x median = {limit:.4} mm.",
         id.fits.len(),
         id.median_residual
     ));
@@ -684,7 +684,7 @@ const SIX_HEADERS: [&str; 6] = [
 
 fn adjustment_section(p: &Profile) -> Section {
     let mut sec = Section::new("adjustment", headings::ADJUSTMENT);
-    sec.para("Deviation of each knot component from its own regression line over skid (seed eq. 4.54): what the adjustment screws must take out; the line itself is for the controller.");
+    sec.para("Deviation of each knot component from its own regression line over skid (docs/design.md §3; thesis eq. 4.54): what the adjustment screws must take out; the line itself is for the controller.");
     let rows: Vec<Row> = manual_adjustment(p)
         .iter()
         .map(|r| {
@@ -749,7 +749,7 @@ fn adjustment_section(p: &Profile) -> Section {
 
 fn bounds_section(p: &Profile) -> Section {
     let mut sec = Section::new("bounds", headings::BOUNDS);
-    sec.para("Largest distance between the spline and the straight chord through the two knots of each interval (seed 4.9-4.12): how much a linear interpolation would miss.");
+    sec.para("Largest distance between the spline and the straight chord through the two knots of each interval (docs/design.md §3; thesis eqs. 4.9-4.12): how much a linear interpolation would miss.");
     let bounds = chord_bounds(p);
     let rows: Vec<Row> = bounds
         .iter()
@@ -805,7 +805,7 @@ fn spectrum_section(spec: &Spectrum) -> Section {
                 ),
                 (
                     "recommended sampling spacing",
-                    format!("1/(2f) = {spacing:.1} mm (seed eq. 4.12)"),
+                    format!("1/(2f) = {spacing:.1} mm (docs/design.md §3; thesis eq. 4.12)"),
                 ),
             ]));
         }

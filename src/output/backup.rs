@@ -1,4 +1,4 @@
-//! `--in-place` backups: `FILE.orig`, then `FILE.orig.1`, `FILE.orig.2`, …: a backup is never
+//! Backups of files replaced in place: `FILE.orig`, then `FILE.orig.1`, `FILE.orig.2`, …: a backup is never
 //! overwritten, so the first one always holds the file as it was before trackfix first touched
 //! it.
 

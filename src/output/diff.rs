@@ -1,4 +1,4 @@
-//! The unified diff of `--diff`, in time linear in the file.
+//! The unified diff of a run's changes, in time linear in the file.
 //!
 //! A transform splices a few literals into a file that otherwise stays byte for byte, so the
 //! two versions agree almost everywhere. The diff walks both files line by line in step; where

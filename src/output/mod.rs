@@ -1,5 +1,5 @@
-//! Where transformed files go and how they get there: `-o FILE`, `-o -`, `--out-dir DIR`
-//! (mirroring the input tree), `--in-place` (numbered backups); the unified diff of `--diff`;
+//! Where transformed files go and how they get there: one file, standard output, a
+//! directory (mirroring the input tree), in place (numbered backups); the unified diff of a run;
 //! and safe reading of inputs.
 //!
 //! Every destination is decided and checked before the first byte is written, and a run's
@@ -105,7 +105,8 @@ pub fn plan_writes(
     plan(programs, dest, &Roots::default())
 }
 
-/// [`plan_writes`] with the input folders of the run (for `--out-dir`'s mirrored tree).
+/// [`plan_writes`] with the input folders of the run (for the tree [`Destination::Dir`]
+/// mirrors).
 pub fn plan(
     programs: &[ProgramResult],
     dest: &Destination,

@@ -8,10 +8,10 @@ pub enum Destination {
     /// `-o FILE`: one program; a KRL pair's second file takes the same stem with its own
     /// extension.
     File(PathBuf),
-    /// `--out-dir DIR`: every file at its path relative to the input directory it was found in
+    /// Into a directory: every file at its path relative to the input directory it was found in
     /// (see [`Roots`]), or under its own name when it was named directly.
     Dir(PathBuf),
-    /// `--in-place`, keeping a numbered backup (`FILE.orig`, `FILE.orig.1`, …) unless `backup`
+    /// In place, keeping a numbered backup (`FILE.orig`, `FILE.orig.1`, …) unless `backup`
     /// is false.
     InPlace {
         /// Keep a backup of each replaced file.
@@ -19,7 +19,7 @@ pub enum Destination {
     },
 }
 
-/// The input directories a run was given: under `--out-dir` a file found in one of them keeps
+/// The input directories a run was given: written into a directory, a file found in one of them keeps
 /// its path relative to it, so two `MainModule.mod` of different task folders stay apart.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Roots(Vec<PathBuf>);
@@ -60,7 +60,7 @@ fn is_plain_relative(p: &Path) -> bool {
 }
 
 /// Where one file of a program goes (`first`: the program's first file, whose stem names the
-/// program; `None` for a one-file program). `None` for an unchanged file under `--in-place`,
+/// program; `None` for a one-file program). `None` for an unchanged file written in place,
 /// which is left alone. With `-o`, the other file of a KRL pair takes the output's stem and its
 /// own extension; a file with another stem (a mirrored `$config.dat`) keeps its name, beside it.
 pub fn output_path(
@@ -72,7 +72,7 @@ pub fn output_path(
     output_path_under(dest, &Roots::default(), input, first, changed)
 }
 
-/// [`output_path`] with the run's input directories (for `--out-dir`).
+/// [`output_path`] with the run's input directories (for [`Destination::Dir`]).
 pub fn output_path_under(
     dest: &Destination,
     roots: &Roots,

@@ -2,7 +2,7 @@
 //! table, JSON or CSV.
 //!
 //! The report is built from the shared position model and the dialect's vocabulary only, so
-//! every language gets the same shape (DESIGN.md §5). Rendering returns strings; the binary
+//! every language gets the same shape (docs/design.md §5). Rendering returns strings; the binary
 //! prints them.
 
 use std::collections::BTreeMap;
@@ -28,7 +28,7 @@ pub struct InspectOptions {
     pub skid_axis: usize,
 }
 
-/// The whole `inspect --format json` document: `{"files": [...]}`.
+/// The whole JSON inspect document: `{"files": [...]}`.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct InspectReport {
     /// One entry per file, in input order.
@@ -130,7 +130,7 @@ pub struct FileReport {
 }
 
 /// A pose as reported: translation in mm, orientation as an ABB quaternion `[q1, q2, q3, q4]`
-/// (scalar first, for every language) and as fixed-axis angles in degrees (DESIGN.md §2).
+/// (scalar first, for every language) and as fixed-axis angles in degrees (docs/design.md §2).
 /// A value that is not a numeric literal is `null`.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct PoseColumns {
@@ -265,7 +265,7 @@ pub struct FrameRow {
     pub kind: &'static str,
     /// 1-based line of the declaration.
     pub line: usize,
-    /// The pose in world (DESIGN.md §2).
+    /// The pose in world (docs/design.md §2).
     #[serde(flatten)]
     pub pose: PoseColumns,
     /// RAPID work objects and tools: `robhold` (the robot holds it).
@@ -502,7 +502,7 @@ pub fn inspect_program(program: &Program, options: InspectOptions) -> Vec<FileRe
     reports
 }
 
-/// `inspect --format table`: one block per file.
+/// The inspect table: one block per file.
 pub fn render_table(report: &InspectReport) -> String {
     let mut out = String::new();
     for f in &report.files {
@@ -624,7 +624,7 @@ pub fn render_table(report: &InspectReport) -> String {
     out
 }
 
-/// `inspect --format csv`: one row per position.
+/// The inspect CSV: one row per position.
 pub fn render_csv(report: &InspectReport) -> String {
     let with_reach = report
         .files
@@ -687,7 +687,7 @@ fn opt(v: Option<f64>) -> String {
     v.map_or_else(String::new, |v| v.to_string())
 }
 
-/// A text cell of `inspect --format csv`. A spreadsheet runs a cell that starts with `=`, `+`,
+/// A text cell of the inspect CSV. A spreadsheet runs a cell that starts with `=`, `+`,
 /// `-` or `@` (or a tab / CR) as a formula: such a cell gets a leading `'` unless it is a number.
 fn csv_text(s: &str) -> String {
     let formula = s.starts_with(['=', '+', '@', '\t', '\r'])

@@ -123,7 +123,7 @@ impl fmt::Display for FileSummary {
     }
 }
 
-/// The line `--check` prints for a file that would change.
+/// The line a dry run (nothing written) prints for a file that would change.
 pub fn would_change(file: &FileResult) -> Option<String> {
     file.changed().then(|| {
         format!(

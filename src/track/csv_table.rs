@@ -156,7 +156,7 @@ impl NumericCsv {
                 (header_line, None),
                 "",
                 "the file has no header line".to_string(),
-                "start the file with its column names (the command's --help lists them)",
+                "start the file with its column names (the command's help lists them)",
             ));
         }
         if !accepted.is_empty() && !headers.iter().any(|h| accepted.contains(&h.as_str())) {

@@ -1,5 +1,5 @@
 //! What to enter in the controller for a measured gear factor `g` (the skid moves `g` mm per
-//! commanded mm, DESIGN.md §3.1).
+//! commanded mm, docs/design.md §3).
 //!
 //! The controllers store the inverse of the thesis's "gear factor": the thesis multiplies a
 //! travel per motor turn (eq. 4.4: `new = g · old`), while ABB's *Transmission Gear Ratio*

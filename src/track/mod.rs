@@ -1,4 +1,4 @@
-//! The track model (DESIGN.md §3): sampling frames, the straight nominal with its gear factor,
+//! The track model (docs/design.md §3): sampling frames, the straight nominal with its gear factor,
 //! deviations, natural cubic splines, error bounds and the frequency scan.
 
 pub mod adjustment;

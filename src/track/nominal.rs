@@ -1,5 +1,5 @@
 //! `track fit`: the controller's straight nominal, the gear factor and the deviations `D_i`
-//! (DESIGN.md §3.1-3.2), giving a [`Profile`].
+//! (docs/design.md §3), giving a [`Profile`].
 #![warn(missing_docs, unreachable_pub)]
 
 use nalgebra::{Matrix3, Translation3, UnitQuaternion, Vector3};
@@ -147,7 +147,7 @@ pub fn fit_track(frames: &[SamplingFrame], opts: &FitOptions) -> Result<TrackFit
     let knots: Vec<Knot> = frames
         .iter()
         .map(|f| {
-            // DESIGN.md §3.2: D_i = N(s_i)⁻¹·F_i.
+            // docs/design.md §3: D_i = N(s_i)⁻¹·F_i.
             let d = nominal_at(f.skid).inverse() * f.pose;
             Knot::from_components(f.skid, pose_to_xyz_deg(&d).map(round))
         })

@@ -1,4 +1,4 @@
-//! `profile.toml`: a fitted track profile and its evaluation `D(s)` (DESIGN.md §3, §6).
+//! `profile.toml`: a fitted track profile and its evaluation `D(s)` (docs/design.md §3, §6).
 
 use std::path::Path;
 use std::sync::Arc;
@@ -17,7 +17,7 @@ pub const PROFILE_FORMAT: &str = "trackfix-profile/1";
 
 pub use super::error::TrackError;
 
-/// One sampling position's deviation `D_i` (mm, degrees; DESIGN.md §2 `rx, ry, rz`).
+/// One sampling position's deviation `D_i` (mm, degrees; docs/design.md §2 `rx, ry, rz`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Knot {
@@ -123,7 +123,7 @@ impl Knot {
     }
 }
 
-/// What `D(s)` does outside `[s_0, s_N]` (DESIGN.md §3.4).
+/// What `D(s)` does outside `[s_0, s_N]` (docs/design.md §3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Extrapolate {
@@ -135,7 +135,7 @@ pub enum Extrapolate {
     Linear,
 }
 
-/// Which straight line the deviations are taken from (DESIGN.md §3.1).
+/// Which straight line the deviations are taken from (docs/design.md §3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Reference {
@@ -145,7 +145,7 @@ pub enum Reference {
     First,
 }
 
-/// Whether the gear factor's drift stays in the profile (DESIGN.md §3.1).
+/// Whether the gear factor's drift stays in the profile (docs/design.md §3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 pub enum Gear {
     /// Keep the controller's gear ratio; its drift stays in the profile.
@@ -240,7 +240,7 @@ struct ProfileFile {
 }
 
 /// A fitted track profile: the nominal straight track and six natural cubic splines of the
-/// deviation (DESIGN.md §3).
+/// deviation (docs/design.md §3).
 #[derive(Clone, Debug)]
 pub struct Profile {
     file: ProfileFile,
@@ -305,6 +305,37 @@ fn claims_to_be_a_profile(text: &str) -> bool {
         l.trim_start().strip_prefix("format").is_some_and(|rest| {
             rest.trim_start().starts_with('=') && rest.contains("trackfix-profile")
         })
+    })
+}
+
+/// The first knot value among the uncertainty keys that is no uncertainty: not finite, or
+/// negative for a standard uncertainty (`u_centre`, a position, only has to be finite).
+fn bad_uncertainty(knots: &[Knot]) -> Option<(usize, &'static str, f64)> {
+    knots.iter().enumerate().find_map(|(i, k)| {
+        let spreads = [
+            ("u_dx", k.u_dx),
+            ("u_dy", k.u_dy),
+            ("u_dz", k.u_dz),
+            ("u_rx", k.u_rx),
+            ("u_ry", k.u_ry),
+            ("u_rz", k.u_rz),
+        ]
+        .into_iter()
+        .chain(
+            k.u_centre_xyz
+                .into_iter()
+                .flatten()
+                .map(|v| ("u_centre_xyz", Some(v))),
+        )
+        .filter_map(|(key, v)| Some((key, v?)))
+        .find(|(_, v)| !v.is_finite() || *v < 0.0);
+        let centre = k
+            .u_centre
+            .into_iter()
+            .flatten()
+            .map(|v| ("u_centre", v))
+            .find(|(_, v)| !v.is_finite());
+        spreads.or(centre).map(|(key, v)| (i, key, v))
     })
 }
 
@@ -404,6 +435,19 @@ impl Profile {
                     file.format
                 ),
                 "fit the profile again with this version of trackfix, or use the version that wrote it",
+            )
+            .into());
+        }
+        if let Some((index, key, value)) = bad_uncertainty(&file.knot) {
+            let span = key_span(text, Some(("[[knot]]", index)), key)
+                .or_else(|| knot_header_span(text, index));
+            return Err(located(
+                span.unwrap_or_default(),
+                format!(
+                    "[[knot]] {}: {key} = {value}: an uncertainty is a finite number, 0 or more",
+                    index + 1
+                ),
+                "fit the profile again from its measurements, or remove the knot's u_* keys",
             )
             .into());
         }
@@ -609,13 +653,13 @@ impl Profile {
     }
 
     /// `D(s)`: the deviation of the real base from the nominal at skid `s`, in the nominal base
-    /// frame (DESIGN.md §3). Outside the range per the profile's `extrapolate` setting.
+    /// frame (docs/design.md §3). Outside the range per the profile's `extrapolate` setting.
     pub fn deviation(&self, skid: f64) -> Result<Pose, TrackError> {
         let [dx, dy, dz, rx, ry, rz] = self.deviation_components(skid)?;
         Ok(pose_xyz_deg(dx, dy, dz, rx, ry, rz))
     }
 
-    /// `N(s)`: the nominal base frame in the measurement frame (DESIGN.md §3.1); with gear
+    /// `N(s)`: the nominal base frame in the measurement frame (docs/design.md §3); with gear
     /// `recalibrated` the step per commanded mm is `g·u`, else `u`.
     pub fn nominal_frame(&self, skid: f64) -> Pose {
         let n = &self.file.nominal;
@@ -802,6 +846,62 @@ mod tests {
             Some(([1200.0, 0.0, 850.0], [0.006; 3]))
         );
         assert!(sample().with_knot_uncertainties(&u[..2]).is_err());
+    }
+
+    #[test]
+    fn uncertainties_that_are_none_are_located_errors() {
+        let u = [KnotUncertainty {
+            u: [0.01, 0.02, 0.03, 0.0004, 0.0005, 0.0006],
+            centre: [1200.0, 0.0, 850.0],
+            centre_xyz: [0.006; 3],
+        }; 3];
+        let text = sample()
+            .with_knot_uncertainties(&u)
+            .unwrap()
+            .to_toml_string()
+            .unwrap();
+        // The second knot's line `u_ry = 0.0005` (1-based line and column where it starts).
+        let second = text.match_indices("[[knot]]").nth(1).unwrap().0;
+        let at = second + text[second..].find("u_ry = 0.0005").unwrap();
+        let line = text[..at].matches('\n').count() + 1;
+        for (bad, shown) in [
+            ("u_ry = -0.0005", "u_ry = -0.0005"),
+            ("u_ry = nan", "u_ry = NaN"),
+            ("u_ry = inf", "u_ry = inf"),
+        ] {
+            let edited = format!(
+                "{}{}{}",
+                &text[..at],
+                bad,
+                &text[at + "u_ry = 0.0005".len()..]
+            );
+            let e = Profile::from_toml_str(&edited, Path::new("p.toml")).unwrap_err();
+            let msg = e.to_string();
+            assert!(msg.contains(&format!("p.toml:{line}:1")), "{msg}");
+            assert!(msg.contains(&format!("[[knot]] 2: {shown}")), "{msg}");
+        }
+        let centre = text.replace(
+            "u_centre = [1200.0, 0.0, 850.0]",
+            "u_centre = [nan, 0.0, 850.0]",
+        );
+        let e = Profile::from_toml_str(&centre, Path::new("p.toml")).unwrap_err();
+        assert!(e.to_string().contains("[[knot]] 1: u_centre = NaN"), "{e}");
+        let spread = text.replace(
+            "u_centre_xyz = [0.006, 0.006, 0.006]",
+            "u_centre_xyz = [0.006, -1.0, 0.006]",
+        );
+        assert_ne!(spread, text);
+        let e = Profile::from_toml_str(&spread, Path::new("p.toml")).unwrap_err();
+        assert!(
+            e.to_string().contains("[[knot]] 1: u_centre_xyz = -1"),
+            "{e}"
+        );
+        // A negative centre coordinate is a position, not an uncertainty.
+        let west = text.replace(
+            "u_centre = [1200.0, 0.0, 850.0]",
+            "u_centre = [-1200.0, 0.0, 850.0]",
+        );
+        assert!(Profile::from_toml_str(&west, Path::new("p.toml")).is_ok());
     }
 
     #[test]

@@ -247,7 +247,7 @@ pub fn sample_tcp_points() -> Vec<Point3<f64>> {
     .collect()
 }
 
-/// One row of `measurements.csv` (DESIGN.md §6).
+/// One row of `measurements.csv` (docs/design.md §6).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MeasurementRow {
     pub skid: f64,

@@ -1,5 +1,5 @@
 //! Cubic interpolating splines (seed eqs. 4.43-4.52, 7.5-7.11) and the spline-to-chord error
-//! bound between knots (seed 4.9-4.12, DESIGN.md §3.5).
+//! bound between knots (seed 4.9-4.12, docs/design.md §3).
 //!
 //! The spline is stored by its knot values and second derivatives `M_i`; on `[x_i, x_{i+1}]`
 //! with `h = x_{i+1} - x_i` and `t = (x - x_i)/h` it is the chord minus
@@ -9,7 +9,7 @@
 /// End conditions of the spline.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum EndCondition {
-    /// `S''(x_0) = S''(x_N) = 0` (the track model, DESIGN.md §3.3).
+    /// `S''(x_0) = S''(x_N) = 0` (the track model, docs/design.md §3).
     Natural,
     /// Given first derivatives at both ends.
     Clamped {

@@ -1,4 +1,4 @@
-//! `cell.toml` (DESIGN.md §6): the robots of a cell, their tracks, frames and the mirror plane.
+//! `cell.toml` (docs/design.md §6): the robots of a cell, their tracks, frames and the mirror plane.
 //!
 //! ```toml
 //! [robot.r1]
@@ -177,7 +177,7 @@ impl Axis {
 #[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum FrameIn {
-    /// In each target's work object (DESIGN.md §4; the default).
+    /// In each target's work object (docs/design.md §4; the default).
     #[default]
     Wobj,
     /// In world: the physical plane of the cell, taken into each target's resolved work object
@@ -324,7 +324,7 @@ impl Cell {
             located(
                 span,
                 e.message().trim().to_owned(),
-                "see DESIGN.md §6 or samples/cell.toml for the keys a cell file takes",
+                "see docs/design.md §6 or samples/cell.toml for the keys a cell file takes",
             )
         })?;
         let dir = path.parent().unwrap_or(Path::new(""));

@@ -31,7 +31,7 @@ pub(crate) trait TargetRule {
         Err(joint_target(p).at(scope.file, p))
     }
 
-    /// The checks before a Cartesian target is touched (DESIGN.md §4).
+    /// The checks before a Cartesian target is touched (docs/design.md §4).
     fn refusal(&self, scope: Scope, p: &Position) -> Option<Why> {
         common_refusal(scope.file, p)
     }

@@ -1,4 +1,4 @@
-//! `mirror` (DESIGN.md §4): `T' = M·Sa·M⁻¹ · T · Sb` in work-object coordinates.
+//! `mirror` (docs/design.md §4): `T' = M·Sa·M⁻¹ · T · Sb` in work-object coordinates.
 //!
 //! `Sa` reflects the normal of the mirror plane, `Sb` flips one tool axis so the tool frame is
 //! right-handed again. A reflection `S = I - 2nnᵀ` is minus the half turn about `n`, whose
@@ -955,9 +955,9 @@ mod tests {
         }
     }
 
-    /// `--mirror-frames`: the work object and the tool mirror so that the world pose of the TCP
+    /// Mirroring the frames: the work object and the tool mirror so that the world pose of the TCP
     /// is the mirror image of the original in world (`Sa·W·T·Sb`), offsets follow Sa / Sb and
-    /// `--mirror-joints` negates axes 1, 4, 6.
+    /// mirroring joints negates axes 1, 4, 6.
     #[test]
     fn frames_offsets_and_joints_through_the_rapid_parser() {
         let p0 = parse(MODULE);
@@ -1145,7 +1145,7 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(128))]
 
-        /// DESIGN.md §4: mirror(mirror(P)) = P in memory, 1e-6 mm, 1e-9 in quaternion components.
+        /// docs/design.md §4: mirror(mirror(P)) = P in memory, 1e-6 mm, 1e-9 in quaternion components.
         #[test]
         fn mirror_twice_in_memory(s in settings(), q in unit_quat(),
                                   x in -3000.0..3000.0f64, y in -3000.0..3000.0f64, z in -3000.0..3000.0f64) {

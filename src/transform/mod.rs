@@ -1,4 +1,4 @@
-//! Program transforms (DESIGN.md §4): `correct`, `zero`, `mirror`, `transfer`, and the cell
+//! Program transforms (docs/design.md §4): `correct`, `zero`, `mirror`, `transfer`, and the cell
 //! file that describes robots, tracks and the mirror plane.
 //!
 //! Every transform reads a [`Program`](crate::position::Program) and returns

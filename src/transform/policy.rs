@@ -1,4 +1,4 @@
-//! The refusal and frame-resolution rules every transform shares (DESIGN.md §4): which targets
+//! The refusal and frame-resolution rules every transform shares (docs/design.md §4): which targets
 //! no transform touches, and how a target's work object (or KRL base) becomes a pose in world.
 
 use std::collections::BTreeMap;

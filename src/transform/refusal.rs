@@ -1,4 +1,4 @@
-//! Targets a transform will not change, each with its location and what to do (DESIGN.md §4).
+//! Targets a transform will not change, each with its location and what to do (docs/design.md §4).
 
 use std::path::PathBuf;
 
@@ -7,7 +7,7 @@ use crate::position::ParsedFile;
 use crate::syntax::{Diagnostic, Severity, Span};
 
 /// Why a target is left untouched. Each kind can be kept as written on its own (the command
-/// line's `--keep KIND` lists exactly these, by their kebab-case names and the aliases below).
+/// line's keep option takes exactly these, by their kebab-case names and the aliases below).
 #[derive(
     Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, clap::ValueEnum,
 )]

@@ -1,4 +1,4 @@
-//! A new pose → edits of exactly the literal fields that change (DESIGN.md §5 formatting).
+//! A new pose → edits of exactly the literal fields that change (docs/design.md §5 formatting).
 
 use crate::geometry::{Pose, abb_quat_components, angle_between, kuka_abc_angles};
 use crate::position::{BitField, CartesianFields, NumField, Orientation};

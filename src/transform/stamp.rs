@@ -24,7 +24,7 @@ const TAG: &str = "trackfix:";
 pub struct Stamp {
     /// `correct`, `zero`, `mirror`, `transfer`.
     pub command: String,
-    /// The robot whose track the file is now for (`transfer`: the `--to` robot).
+    /// The robot whose track the file is now for (`transfer`: the robot transferred to).
     pub robot: Option<String>,
     /// The profile's name and the first 12 hex digits of its data hash.
     pub profile: Option<(String, String)>,

@@ -1,4 +1,4 @@
-//! `correct` and `zero` (DESIGN.md §4, seed eq. 4.55).
+//! `correct` and `zero` (docs/design.md §4, seed eq. 4.55).
 //!
 //! For a target `T` in work object `W` at skid `s`, with the controller's nominal base
 //! `B(s) = Trans(s·a)·B_0` and the profile's deviation `D(s)`:
@@ -73,7 +73,8 @@ pub struct TrackSetup<'a> {
     pub frames: BTreeMap<String, Pose>,
     /// The track's deviation `D(s)`.
     pub deviation: &'a dyn Deviation,
-    /// The work object for declared targets no motion uses (`--default-wobj`).
+    /// The work object for declared targets no motion uses (the caller's
+    /// default; `None`: such targets are refused).
     pub default_wobj: Option<String>,
     /// The profile's uncertainty, when it carries one: each corrected target then records the
     /// expanded uncertainty of its TCP.
@@ -324,7 +325,7 @@ mod tests {
         let t = pose_xyz_deg(100.0, 200.0, 300.0, 0.0, 0.0, 0.0);
         let v = (c * t).translation.vector - t.translation.vector;
         assert!((v - Vector3::new(0.0, 0.0, 1.0)).norm() < 1e-12, "{v}");
-        // And the physical check of DESIGN.md §4: B·D·B⁻¹·W·T' = W·T.
+        // And the physical check of docs/design.md §4: B·D·B⁻¹·W·T' = W·T.
         let b = s.base_at(3000.0);
         let d = sag(3000.0).unwrap();
         let reached = b * d * b.inverse() * w * (c * t);
@@ -383,7 +384,7 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(128))]
 
-        /// DESIGN.md §4: zero(correct(P)) = P in memory, 1e-6 mm and 1e-9 quaternion.
+        /// docs/design.md §4: zero(correct(P)) = P in memory, 1e-6 mm and 1e-9 quaternion.
         #[test]
         fn zero_undoes_correct_in_memory(
             base in (-3000.0..3000.0f64, -3000.0..3000.0f64, -500.0..500.0f64, -180.0..180.0f64),

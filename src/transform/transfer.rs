@@ -1,4 +1,4 @@
-//! `transfer` (DESIGN.md §4): zero with robot A, optionally mirror, correct with robot B.
+//! `transfer` (docs/design.md §4): zero with robot A, optionally mirror, correct with robot B.
 //!
 //! The three steps run through text exactly as three commands in a row would: each step's output
 //! is parsed again before the next, so the written precision rounds in the same places and
@@ -207,7 +207,7 @@ fn combine(
 }
 
 /// The translation, orientation and other literals of a target (the last: joints and external
-/// axes), and the unit of the last place the transforms write for each group (DESIGN.md §5:
+/// axes), and the unit of the last place the transforms write for each group (docs/design.md §5:
 /// at least 3 decimals for mm, 6 for quaternion components, 4 for degrees).
 struct TargetLiterals<'a> {
     trans: Vec<&'a NumField>,

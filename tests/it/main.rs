@@ -6,6 +6,7 @@ mod dialect;
 mod frames;
 mod kinematics;
 mod krl;
+mod library_text;
 mod output;
 mod parser_data;
 mod programs;

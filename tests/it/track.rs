@@ -496,7 +496,7 @@ proptest! {
 }
 
 /// `--gear recalibrated` takes the gear drift out of the profile; `as-is` keeps it along the
-/// track axis (DESIGN.md §3.1).
+/// track axis (docs/design.md §3).
 #[test]
 fn gear_recalibrated_removes_the_drift() {
     let truth = TrackTruth::sample_r1();

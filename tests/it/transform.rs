@@ -432,7 +432,7 @@ fn load_with_cell(path: &Path, cell: &Cell, robot: &str) -> Program {
     load(path, &opts).unwrap()
 }
 
-/// DESIGN.md §4: a profile of zero deviations leaves every sample byte-identical.
+/// docs/design.md §4: a profile of zero deviations leaves every sample byte-identical.
 #[test]
 fn zero_deviation_profile_leaves_every_sample_byte_identical() {
     let knots = (0..=8).map(|i| Knot::zero(i as f64 * 1000.0)).collect();
@@ -566,7 +566,7 @@ fn unnamed(bytes: &[u8]) -> String {
         .collect()
 }
 
-/// DESIGN.md §4: transfer equals zero; mirror; correct, byte for byte, through files.
+/// docs/design.md §4: transfer equals zero; mirror; correct, byte for byte, through files.
 #[test]
 fn transfer_equals_zero_mirror_correct() {
     let dir = tempfile::tempdir().unwrap();
