@@ -190,7 +190,7 @@ pub struct PositionRow {
     /// Where the tool is declared in the program (`null`-less: absent when not declared).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tool_at: Option<Place>,
-    /// With a robot's kinematics (`inspect --cell --robot`): the `reach` verdict and the joints
+    /// With a robot's kinematics (inspect given a cell and robot): the `reach` verdict and the joints
     /// it solved (or the joint target's), degrees.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reach: Option<ReachColumns>,
