@@ -1,6 +1,6 @@
 //! `frame base`: the robot base at skid 0, `B0`, and the unit track axis `a` in the cell (world)
 //! frame from TCP points measured at any skid positions, with `meas ≈ Trans(s·a)·B0·D(s)·robot`
-//! (seed §7.3; `D = I` is the uncompensated fit the seed compares against, Table 7.2).
+//! (thesis §7.3; `D = I` is the uncompensated fit the thesis compares against, Table 7.2).
 //!
 //! Eight parameters: `B0` perturbed on the right, `B0·(δt, δθ)`, and `a` tilted in its normal
 //! plane, `a ← (a + α·e1 + β·e2)/|…|`. The start is closed form (the rotation from the skid

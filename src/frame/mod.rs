@@ -128,7 +128,7 @@ pub struct PointResidual {
 }
 
 impl PointResidual {
-    /// `|residual|` (seed Table 7.2's "rms" column).
+    /// `|residual|` (thesis Table 7.2's "rms" column).
     pub fn norm(&self) -> f64 {
         self.residual.norm()
     }

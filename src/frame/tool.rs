@@ -1,4 +1,4 @@
-//! `frame tool`: the TCP from flange poses pivoting about one fixed point (seed §4.4, eqs.
+//! `frame tool`: the TCP from flange poses pivoting about one fixed point (thesis §4.4, eqs.
 //! 4.1-4.3). Every pose `(R_k, p_k)` puts the TCP `t` (flange frame) on the point `P` (base
 //! frame): `R_k·t + p_k = P`, linear in `(t, P)`; least squares over all poses, residual
 //! `R_k·t + p_k - P` per pose (what a controller's TCP routine reports as max/mean error).

@@ -20,7 +20,7 @@ pub fn wrap_deg(a: f64) -> f64 {
 }
 
 /// Rotation from fixed-axis angles in degrees: `R = Rz(rz)·Ry(ry)·Rx(rx)` (profiles and CSV
-/// files; the seed's α, β, γ, eq. 3.25).
+/// files; the thesis's α, β, γ, eq. 3.25).
 pub fn xyz_deg(rx: f64, ry: f64, rz: f64) -> UnitQuaternion<f64> {
     UnitQuaternion::from_euler_angles(rx.to_radians(), ry.to_radians(), rz.to_radians())
 }

@@ -1,7 +1,7 @@
 //! Rigid fit of point pairs: the pose `T` minimising `Σ |q_j - T·p_j|²`.
 //!
 //! Closed form first (Kabsch/Horn: SVD of the cross-covariance, written out here), then
-//! Gauss-Newton steps with the pseudo-inverse of the Jacobian (seed eq. 4.28). For equal weights
+//! Gauss-Newton steps with the pseudo-inverse of the Jacobian (thesis eq. 4.28). For equal weights
 //! the closed form is already the least-squares optimum; the refinement guards its numerics and
 //! reports how far it moved. A weighted variant serves robust (iteratively reweighted) fits.
 //!
@@ -60,7 +60,7 @@ pub struct RigidFit {
 }
 
 impl RigidFit {
-    /// `|residual|` per point (seed Table 7.2's "rms" column).
+    /// `|residual|` per point (thesis Table 7.2's "rms" column).
     pub fn residual_norms(&self) -> Vec<f64> {
         self.residuals.iter().map(|r| r.norm()).collect()
     }
@@ -200,7 +200,7 @@ fn kabsch(
     })
 }
 
-/// Gauss-Newton on a small-rotation update `T ← (δR, δt)·T` with the pseudo-inverse (seed eq.
+/// Gauss-Newton on a small-rotation update `T ← (δR, δt)·T` with the pseudo-inverse (thesis eq.
 /// 4.28): residual `r_j = q_j - T p_j`, `∂r_j/∂(δθ, δt) = [ [T p_j]×, -I ]`.
 /// With weights, each point's rows are scaled by `sqrt(w)`.
 fn gauss_newton(
@@ -323,7 +323,7 @@ mod tests {
 
     #[test]
     fn residuals_match_table_7_2_norms() {
-        // Point 1 of seed Table 7.2: (1.772, -1.084, -0.468) has rms 2.130 (the norm).
+        // Point 1 of thesis Table 7.2: (1.772, -1.084, -0.468) has rms 2.130 (the norm).
         let r = Vector3::<f64>::new(1.772, -1.084, -0.468);
         assert!((r.norm() - 2.130).abs() < 1e-3);
     }

@@ -1,5 +1,5 @@
-//! What `track show` reports when no skid is asked for: the manual-adjustment table (seed eq.
-//! 4.54), the twist diagram (seed Fig. 4.34) and the spline-to-chord bound per interval (seed
+//! What `track show` reports when no skid is asked for: the manual-adjustment table (thesis eq.
+//! 4.54), the twist diagram (thesis Fig. 4.34) and the spline-to-chord bound per interval (seed
 //! 4.9-4.12).
 #![warn(missing_docs, unreachable_pub)]
 
@@ -44,7 +44,7 @@ pub fn manual_adjustment(profile: &Profile) -> Vec<AdjustmentRow> {
         .collect()
 }
 
-/// The lever of the twist diagram: 1 m along +z of the base (seed Fig. 4.34).
+/// The lever of the twist diagram: 1 m along +z of the base (thesis Fig. 4.34).
 pub const TWIST_LEVER_MM: f64 = 1000.0;
 
 /// One point of the twist diagram.

@@ -43,7 +43,7 @@ impl Default for FitOptions {
     }
 }
 
-/// The least-squares line of one origin coordinate over skid (seed eq. 4.54).
+/// The least-squares line of one origin coordinate over skid (thesis eq. 4.54).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CoordinateLine {
     /// The coordinate at skid 0, mm.
@@ -63,7 +63,7 @@ pub struct TrackFit {
     pub lines: [CoordinateLine; 3],
     /// `m`: measured mm per commanded mm, as a vector.
     pub slope: Vector3<f64>,
-    /// `g = |m|`; the controller's new gear factor is `g · gear_old` (seed eq. 4.4).
+    /// `g = |m|`; the controller's new gear factor is `g · gear_old` (thesis eq. 4.4).
     pub gear_factor: f64,
     /// `u = m/|m|`, in the measurement frame.
     pub direction: Vector3<f64>,

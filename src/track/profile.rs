@@ -179,7 +179,7 @@ pub struct Nominal {
     pub direction: [f64; 3],
     /// `R_N` as `[rx, ry, rz]` degrees.
     pub rotation: [f64; 3],
-    /// `g = |m|`: measured mm per commanded mm (seed eq. 4.4).
+    /// `g = |m|`: measured mm per commanded mm (thesis eq. 4.4).
     pub gear_factor: f64,
 }
 

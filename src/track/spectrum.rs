@@ -4,7 +4,7 @@
 //! Tukey-windowed and transformed (real DFT); the amplitude in mm at spatial frequency `f` (1/mm)
 //! combines the three coordinates (`sqrt(ax² + ay² + az²)`, so it does not depend on how the
 //! tracker was turned). The highest frequency above the threshold `f_max` gives the sampling
-//! spacing `1/(2·f_max)` (seed eq. 4.12: 0.005/mm → 100 mm).
+//! spacing `1/(2·f_max)` (thesis eq. 4.12: 0.005/mm → 100 mm).
 
 use realfft::RealFftPlanner;
 
@@ -223,7 +223,7 @@ mod tests {
 
     #[test]
     fn finds_a_0_005_per_mm_wave_and_recommends_100_mm() {
-        // Seed eq. 4.12: 0.005/mm → 1/(2·0.005) = 100 mm.
+        // Thesis eq. 4.12: 0.005/mm → 1/(2·0.005) = 100 mm.
         let (s, p) = wave(10.0, 0.2, 0.005);
         let spec = scan_spectrum(&s, &p, 0.05).unwrap();
         let (f, _) = spec.highest.unwrap();

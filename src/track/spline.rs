@@ -1,4 +1,4 @@
-//! Cubic interpolating splines (seed eqs. 4.43-4.52, 7.5-7.11) and the spline-to-chord error
+//! Cubic interpolating splines (thesis eqs. 4.43-4.52, 7.5-7.11) and the spline-to-chord error
 //! bound between knots (seed 4.9-4.12, docs/design.md §3).
 //!
 //! The spline is stored by its knot values and second derivatives `M_i`; on `[x_i, x_{i+1}]`

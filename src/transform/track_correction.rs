@@ -1,4 +1,4 @@
-//! `correct` and `zero` (docs/design.md §4, seed eq. 4.55).
+//! `correct` and `zero` (docs/design.md §4, thesis eq. 4.55).
 //!
 //! For a target `T` in work object `W` at skid `s`, with the controller's nominal base
 //! `B(s) = Trans(s·a)·B_0` and the profile's deviation `D(s)`:
