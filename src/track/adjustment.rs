@@ -1,7 +1,6 @@
 //! What `track show` reports without `--at`/`--step`: the manual-adjustment table (seed eq.
 //! 4.54), the twist diagram (seed Fig. 4.34) and the spline-to-chord bound per interval (seed
 //! 4.9-4.12).
-#![warn(missing_docs, unreachable_pub)]
 
 use nalgebra::Vector3;
 
