@@ -20,36 +20,25 @@
 //!
 //! The library never prints and never panics on input.
 
-#[warn(missing_docs, unreachable_pub)]
 pub mod accuracy;
-#[warn(missing_docs, unreachable_pub)]
 pub mod dialect;
 pub mod digest;
 pub mod frame;
-#[warn(missing_docs, unreachable_pub)]
 pub mod geometry;
 pub mod html_report;
-#[warn(missing_docs, unreachable_pub)]
 pub mod kinematics;
 pub mod krl;
-#[warn(missing_docs, unreachable_pub)]
 pub mod located;
-#[warn(unreachable_pub)]
 mod names;
-#[warn(missing_docs, unreachable_pub)]
 pub mod output;
-#[warn(missing_docs, unreachable_pub)]
 pub mod position;
-#[warn(missing_docs, unreachable_pub)]
 pub mod program;
 pub mod rapid;
-#[warn(missing_docs, unreachable_pub)]
 pub mod report;
 #[warn(unreachable_pub)]
 mod resolve;
 pub mod syntax;
 pub mod track;
-#[warn(missing_docs, unreachable_pub)]
 pub mod transform;
 
 // What a user of the library needs, at the top (`docs/design.md §8`, the public API): load a

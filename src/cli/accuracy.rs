@@ -16,7 +16,7 @@ use trackfix::output::write_file;
 use super::Exit;
 
 #[derive(clap::Subcommand)]
-pub enum AccuracyCommand {
+pub(crate) enum AccuracyCommand {
     /// ISO 9283 pose accuracy AP and repeatability RP of visits to commanded poses.
     Pose(PoseArgs),
     /// ISO 9283 path accuracy AT and repeatability RT, and the straight-line report.
@@ -44,7 +44,7 @@ MEASURED.csv: cycle,t,x,y,z[,rx,ry,rz] samples (t in s). Without `cycle` the rec
 into runs at stops and reversals; runs against the commanded direction are listed, not used.";
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Format {
+pub(crate) enum Format {
     Table,
     Json,
     Csv,
@@ -52,7 +52,7 @@ pub enum Format {
 
 #[derive(clap::Args)]
 #[command(after_help = POSE_EXAMPLES)]
-pub struct PoseArgs {
+pub(crate) struct PoseArgs {
     /// COMMANDED.csv: point,x,y,z[,rx,ry,rz]
     pub commanded: PathBuf,
     /// MEASURED.csv: point,cycle,x,y,z[,rx,ry,rz]
@@ -75,7 +75,7 @@ pub struct PoseArgs {
 
 #[derive(clap::Args)]
 #[command(after_help = PATH_EXAMPLES)]
-pub struct PathArgs {
+pub(crate) struct PathArgs {
     /// COMMANDED.csv: x,y,z[,rx,ry,rz], the vertices of the programmed path.
     pub commanded: PathBuf,
     /// MEASURED.csv: [cycle,]t,x,y,z[,rx,ry,rz]
@@ -98,7 +98,7 @@ pub struct PathArgs {
     pub map: Option<String>,
 }
 
-pub fn run(command: AccuracyCommand) -> anyhow::Result<Exit> {
+pub(crate) fn run(command: AccuracyCommand) -> anyhow::Result<Exit> {
     let text = match command {
         AccuracyCommand::Pose(a) => run_pose(&a)?,
         AccuracyCommand::Path(a) => run_path(&a)?,

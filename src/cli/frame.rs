@@ -28,7 +28,7 @@ use super::Exit;
 use super::track::{print_notes, report_located};
 
 #[derive(clap::Subcommand)]
-pub enum FrameCommand {
+pub(crate) enum FrameCommand {
     /// Robot base at skid 0 and track axis in world from TCP points at several skids,
     /// compensated by the track profile.
     Base(BaseArgs),
@@ -45,7 +45,7 @@ pub enum FrameCommand {
 }
 
 #[derive(clap::Args)]
-pub struct SimulateArgs {
+pub(crate) struct SimulateArgs {
     /// Folder for base_points.csv, marks.csv, flange.csv, flange_abc.csv, marks_nominal.csv
     /// and marks_tracker.csv.
     #[arg(long)]
@@ -53,7 +53,7 @@ pub struct SimulateArgs {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Format {
+pub(crate) enum Format {
     Table,
     Json,
 }
@@ -95,7 +95,7 @@ above 4 x the median is rejected (while more than 4 remain).";
 
 #[derive(clap::Args)]
 #[command(after_help = BASE_EXAMPLES)]
-pub struct BaseArgs {
+pub(crate) struct BaseArgs {
     /// POINTS.csv: skid,point,robot_x,robot_y,robot_z,meas_x,meas_y,meas_z
     pub points: PathBuf,
     /// The track profile whose D(s) compensates the points.
@@ -114,7 +114,7 @@ pub struct BaseArgs {
 
 #[derive(clap::Args)]
 #[command(after_help = WOBJ_EXAMPLES)]
-pub struct WobjArgs {
+pub(crate) struct WobjArgs {
     /// MARKS.csv: mark,skid,robot_x,robot_y,robot_z,cad_x,cad_y,cad_z
     pub marks: PathBuf,
     /// The cell file with the robot's base, track axis and profile.
@@ -142,7 +142,7 @@ pub struct WobjArgs {
 
 #[derive(clap::Args)]
 #[command(after_help = TOOL_EXAMPLES)]
-pub struct ToolArgs {
+pub(crate) struct ToolArgs {
     /// FLANGE.csv: x,y,z with q1,q2,q3,q4 / rx,ry,rz / a,b,c
     pub flange: PathBuf,
     /// Noise per axis of a flange position, mm; default: from the residuals.
@@ -155,7 +155,7 @@ pub struct ToolArgs {
 
 #[derive(clap::Args)]
 #[command(after_help = PAIR_EXAMPLES)]
-pub struct PairArgs {
+pub(crate) struct PairArgs {
     /// point,x,y,z in the frame to fit into (e.g. the cell's reference marks).
     pub nominal: PathBuf,
     /// point,x,y,z as measured (e.g. by the tracker).
@@ -174,7 +174,7 @@ pub struct PairArgs {
     pub format: Format,
 }
 
-pub fn run(cmd: FrameCommand) -> anyhow::Result<Exit> {
+pub(crate) fn run(cmd: FrameCommand) -> anyhow::Result<Exit> {
     report_located(run_command(cmd))
 }
 

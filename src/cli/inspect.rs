@@ -16,7 +16,7 @@ use trackfix::syntax::printable;
 use super::Exit;
 
 #[derive(Clone, Copy, Debug, Default, clap::ValueEnum)]
-pub enum Format {
+pub(crate) enum Format {
     /// Aligned columns for people.
     #[default]
     Table,
@@ -38,7 +38,7 @@ Directories are searched recursively for .mod .modx .sys .sysx .prg (RAPID) and 
 /// List every position, work object and tool in RAPID/KRL programs.
 #[derive(clap::Args)]
 #[command(after_help = INSPECT_EXAMPLES)]
-pub struct InspectArgs {
+pub(crate) struct InspectArgs {
     /// Program files or directories (searched recursively).
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
@@ -73,7 +73,7 @@ Exit codes: 0 every file round-trips and is clean, 1 findings, 2 a file could no
 /// with two work objects or bases, names declared twice.
 #[derive(clap::Args)]
 #[command(after_help = CHECK_EXAMPLES)]
-pub struct CheckArgs {
+pub(crate) struct CheckArgs {
     /// Program files or directories (searched recursively).
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
@@ -179,7 +179,7 @@ fn load_all(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Batch> {
     Ok(batch)
 }
 
-pub fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
+pub(crate) fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
     let cell = match (&args.cell, &args.robot) {
         (Some(c), Some(r)) => {
             let cell = trackfix::transform::Cell::load(c)?;
@@ -251,7 +251,7 @@ pub fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
     Ok(exit)
 }
 
-pub fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
+pub(crate) fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
     let options = LoadOptions {
         krl_config_dat: args.config_dat.clone(),
     };

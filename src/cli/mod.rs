@@ -1,12 +1,12 @@
 //! Subcommand implementations. Library calls only; printing and `anyhow` live here.
 
-pub mod accuracy;
-pub mod frame;
-pub mod inspect;
-pub mod reach;
-pub mod report;
-pub mod track;
-pub mod transform;
+pub(crate) mod accuracy;
+pub(crate) mod frame;
+pub(crate) mod inspect;
+pub(crate) mod reach;
+pub(crate) mod report;
+pub(crate) mod track;
+pub(crate) mod transform;
 
 use std::process::ExitCode;
 
@@ -32,7 +32,7 @@ impl From<Exit> for ExitCode {
 }
 
 /// A closed stdout (`trackfix inspect … | head`) is not an error.
-pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
+pub(crate) fn is_broken_pipe(err: &anyhow::Error) -> bool {
     err.chain().any(|c| {
         c.downcast_ref::<std::io::Error>()
             .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)

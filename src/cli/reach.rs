@@ -24,7 +24,7 @@ Exit codes: 0 every target reachable in its configuration within the limits, 1 a
 unreachable, outside a limit, in another configuration or could not be checked, 2 input error.";
 
 #[derive(Clone, Copy, Debug, Default, clap::ValueEnum)]
-pub enum ReachFormat {
+pub(crate) enum ReachFormat {
     /// Aligned columns for people.
     #[default]
     Table,
@@ -35,7 +35,7 @@ pub enum ReachFormat {
 /// Check that every target is reachable, inside the joint limits and in its configuration.
 #[derive(clap::Args, Debug)]
 #[command(after_help = REACH_EXAMPLES)]
-pub struct ReachArgs {
+pub(crate) struct ReachArgs {
     /// RAPID modules, KRL programs (.src or .dat loads the pair) or folders.
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
@@ -55,7 +55,7 @@ pub struct ReachArgs {
     pub default_wobj: Option<String>,
 }
 
-pub fn run(a: ReachArgs) -> anyhow::Result<Exit> {
+pub(crate) fn run(a: ReachArgs) -> anyhow::Result<Exit> {
     let cell = Cell::load(&a.cell)?;
     let robot = cell.robot(&a.robot)?;
     let Some(kin) = robot.kinematics.as_ref() else {

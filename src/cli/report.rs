@@ -32,7 +32,7 @@ measurements -> frames (as track identify) -> profile (as track fit).";
 #[command(after_help = REPORT_EXAMPLES)]
 #[command(group = clap::ArgGroup::new("input").required(true).multiple(true)
     .args(["measurements", "frames", "profile", "scan", "accuracy_pose"]))]
-pub struct ReportArgs {
+pub(crate) struct ReportArgs {
     /// measurements.csv: skid,point,robot_x,robot_y,robot_z,meas_x,meas_y,meas_z
     #[arg(long, value_name = "M.csv")]
     pub measurements: Option<PathBuf>,
@@ -94,7 +94,7 @@ fn folder_name(path: &Path) -> Option<String> {
         .map(str::to_owned)
 }
 
-pub fn run(a: ReportArgs) -> anyhow::Result<Exit> {
+pub(crate) fn run(a: ReportArgs) -> anyhow::Result<Exit> {
     let result = report_located(run_inner(&a));
     // An accuracy input error already says `file:line:col: error: …` with the line and a hint.
     if let Err(err) = &result

@@ -29,7 +29,7 @@ use trackfix::transform::{Cell, CellError};
 use super::Exit;
 
 #[derive(clap::Subcommand)]
-pub enum TrackCommand {
+pub(crate) enum TrackCommand {
     /// Identify the robot base frame at each skid position from laser-tracker points.
     Identify(IdentifyArgs),
     /// Fit the nominal straight track, gear factor and deviation splines: frames.csv → profile.toml.
@@ -78,7 +78,7 @@ Recommends the sampling spacing 1/(2f) for the highest frequency above the thres
 
 #[derive(clap::Args)]
 #[command(after_help = IDENTIFY_EXAMPLES)]
-pub struct IdentifyArgs {
+pub(crate) struct IdentifyArgs {
     /// measurements.csv: skid,point,robot_x,robot_y,robot_z,meas_x,meas_y,meas_z
     pub measurements: PathBuf,
     /// Where to write frames.csv (skid,x,y,z,rx,ry,rz).
@@ -92,7 +92,7 @@ pub struct IdentifyArgs {
 
 #[derive(clap::Args)]
 #[command(after_help = FIT_EXAMPLES)]
-pub struct FitArgs {
+pub(crate) struct FitArgs {
     /// frames.csv: skid,x,y,z,rx,ry,rz in increasing skid order.
     pub frames: PathBuf,
     /// Where to write profile.toml.
@@ -136,7 +136,7 @@ pub struct FitArgs {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum ShowFormat {
+pub(crate) enum ShowFormat {
     Table,
     Json,
     Csv,
@@ -144,7 +144,7 @@ pub enum ShowFormat {
 
 #[derive(clap::Args)]
 #[command(after_help = SHOW_EXAMPLES)]
-pub struct ShowArgs {
+pub(crate) struct ShowArgs {
     /// profile.toml
     pub profile: PathBuf,
     /// Skid positions to evaluate D(s) at, in mm (repeatable, kept in order).
@@ -209,7 +209,7 @@ found from the header (name/point/id, x, y, z) or are the first four. Says how i
 
 #[derive(clap::Args)]
 #[command(after_help = IMPORT_EXAMPLES)]
-pub struct ImportArgs {
+pub(crate) struct ImportArgs {
     /// The tracker software's CSV/TXT point export.
     pub export: PathBuf,
     /// Which columns hold name, x, y, z: by position (name=1,x=2,y=3,z=4) or header name.
@@ -222,7 +222,7 @@ pub struct ImportArgs {
 
 #[derive(clap::Args)]
 #[command(after_help = SPECTRUM_EXAMPLES)]
-pub struct SpectrumArgs {
+pub(crate) struct SpectrumArgs {
     /// scan.csv: skid,x,y,z (or t,x,y,z with --speed).
     pub scan: PathBuf,
     /// Amplitude threshold in mm: frequencies above it must be sampled.
@@ -236,7 +236,7 @@ pub struct SpectrumArgs {
     pub plot: Option<PathBuf>,
 }
 
-pub fn run(cmd: TrackCommand) -> anyhow::Result<Exit> {
+pub(crate) fn run(cmd: TrackCommand) -> anyhow::Result<Exit> {
     report_located(run_command(cmd))
 }
 

@@ -32,7 +32,7 @@ use super::track::report_located;
 
 /// Where results go and what to do with refusals (shared by all four commands).
 #[derive(clap::Args, Debug)]
-pub struct OutputArgs {
+pub(crate) struct OutputArgs {
     /// Write the result to FILE (one program; a KRL pair writes FILE.src and FILE.dat).
     #[arg(short = 'o', long = "output", value_name = "FILE", conflicts_with_all = ["out_dir", "in_place"])]
     pub output: Option<PathBuf>,
@@ -87,7 +87,7 @@ pub struct OutputArgs {
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum ReportFormat {
+pub(crate) enum ReportFormat {
     #[default]
     Text,
     Json,
@@ -405,7 +405,7 @@ correct with --to's track: the same bytes as running the three commands in a row
 
 #[derive(clap::Args, Debug)]
 #[command(after_help = CORRECT_EXAMPLES)]
-pub struct CorrectArgs {
+pub(crate) struct CorrectArgs {
     /// RAPID modules, KRL programs (.src or .dat loads the pair) or folders.
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
@@ -424,7 +424,7 @@ pub struct CorrectArgs {
 
 #[derive(clap::Args, Debug)]
 #[command(after_help = ZERO_EXAMPLES)]
-pub struct ZeroArgs {
+pub(crate) struct ZeroArgs {
     #[command(flatten)]
     pub inner: CorrectArgs,
 }
@@ -432,7 +432,7 @@ pub struct ZeroArgs {
 /// Mirror options shared by `mirror` and `transfer --mirror`; each overrides the cell's
 /// `[mirror]` table.
 #[derive(clap::Args, Debug)]
-pub struct MirrorOptions {
+pub(crate) struct MirrorOptions {
     /// The plane of the work object (or of the cell's mirror frame) to mirror in.
     #[arg(long, value_enum)]
     pub plane: Option<Plane>,
@@ -455,7 +455,7 @@ pub struct MirrorOptions {
 
 #[derive(clap::Args, Debug)]
 #[command(after_help = MIRROR_EXAMPLES)]
-pub struct MirrorArgs {
+pub(crate) struct MirrorArgs {
     /// RAPID modules, KRL programs (.src or .dat loads the pair) or folders.
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
@@ -484,7 +484,7 @@ pub struct MirrorArgs {
 
 #[derive(clap::Args, Debug)]
 #[command(after_help = TRANSFER_EXAMPLES)]
-pub struct TransferArgs {
+pub(crate) struct TransferArgs {
     /// RAPID modules, KRL programs (.src or .dat loads the pair) or folders.
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
@@ -1031,7 +1031,7 @@ fn run_track(mut a: CorrectArgs, dir: Direction) -> anyhow::Result<Exit> {
     )
 }
 
-pub fn run_correct(a: CorrectArgs) -> anyhow::Result<Exit> {
+pub(crate) fn run_correct(a: CorrectArgs) -> anyhow::Result<Exit> {
     report_located(run_correct_inner(a))
 }
 
@@ -1039,7 +1039,7 @@ fn run_correct_inner(a: CorrectArgs) -> anyhow::Result<Exit> {
     run_track(a, Direction::Correct)
 }
 
-pub fn run_zero(a: ZeroArgs) -> anyhow::Result<Exit> {
+pub(crate) fn run_zero(a: ZeroArgs) -> anyhow::Result<Exit> {
     report_located(run_zero_inner(a))
 }
 
@@ -1082,7 +1082,7 @@ fn mirror_settings(
     }
 }
 
-pub fn run_mirror(a: MirrorArgs) -> anyhow::Result<Exit> {
+pub(crate) fn run_mirror(a: MirrorArgs) -> anyhow::Result<Exit> {
     report_located(run_mirror_inner(a))
 }
 
@@ -1164,7 +1164,7 @@ fn plane_name(p: Plane) -> &'static str {
     }
 }
 
-pub fn run_transfer(a: TransferArgs) -> anyhow::Result<Exit> {
+pub(crate) fn run_transfer(a: TransferArgs) -> anyhow::Result<Exit> {
     report_located(run_transfer_inner(a))
 }
 

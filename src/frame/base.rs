@@ -37,6 +37,7 @@ pub struct BaseFit {
     pub rms: f64,
     /// Whether `D(s)` of a profile was applied.
     pub compensated: bool,
+    /// The noise level the uncertainties below are scaled by, and where it came from.
     pub sigma: Sigma,
     /// Of `B0`'s `x, y, z, rx, ry, rz`.
     pub u_base: PoseUncertainty,
@@ -46,6 +47,7 @@ pub struct BaseFit {
     /// trace) of the modelled point, mm: how well the fitted frame places a TCP in the
     /// measured volume.
     pub u_point: f64,
+    /// Gauss-Newton steps taken until the step fell below the convergence threshold.
     pub iterations: usize,
 }
 

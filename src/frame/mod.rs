@@ -124,6 +124,7 @@ pub struct PointResidual {
     pub skid: f64,
     /// The point, mark or pose number.
     pub point: u32,
+    /// `measured - model` in world axes, mm.
     pub residual: Vector3<f64>,
 }
 
@@ -176,6 +177,7 @@ pub(crate) fn sigma_of(
 /// Standard uncertainties (k = 1) of a pose written as `x, y, z, rx, ry, rz` (mm, degrees).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PoseUncertainty {
+    /// `x, y, z` in mm, then `rx, ry, rz` in degrees.
     pub u: [f64; 6],
 }
 

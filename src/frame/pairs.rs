@@ -63,8 +63,11 @@ pub struct PairFit {
     pub rejected: Vec<PointResidual>,
     /// Point numbers in only one of the files: (nominal only, measured only).
     pub unpaired: (Vec<u32>, Vec<u32>),
+    /// `sqrt(mean |residual|²)` over the points used, mm.
     pub rms: f64,
+    /// The noise level the uncertainty is scaled by, and where it came from.
     pub sigma: Sigma,
+    /// Of `T`'s `x, y, z, rx, ry, rz`.
     pub u_pose: PoseUncertainty,
 }
 

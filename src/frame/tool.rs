@@ -96,13 +96,17 @@ pub struct ToolFit {
     pub point: Point3<f64>,
     /// `R_k·t + p_k - P` per pose (`point` = pose number, 1-based).
     pub residuals: Vec<PointResidual>,
+    /// `sqrt(mean |residual|²)`, mm.
     pub rms: f64,
-    /// Mean and largest `|residual|`, mm (the controller's "mean error" and "max error").
+    /// Mean `|residual|`, mm (the controller's "mean error").
     pub mean: f64,
+    /// Largest `|residual|`, mm (the controller's "max error").
     pub max: f64,
+    /// The noise level the uncertainties below are scaled by, and where it came from.
     pub sigma: Sigma,
-    /// Standard uncertainties of `t` and of `P`, mm.
+    /// Standard uncertainties of `t`'s components, mm.
     pub u_tcp: [f64; 3],
+    /// Standard uncertainties of `P`'s components, mm.
     pub u_point: [f64; 3],
 }
 

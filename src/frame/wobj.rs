@@ -29,7 +29,9 @@ pub struct WobjFit {
     pub wobj: Pose,
     /// `B(s)·D(s)·robot - W·cad` per mark, in input order, world axes.
     pub residuals: Vec<PointResidual>,
+    /// `sqrt(mean |residual|²)`, mm.
     pub rms: f64,
+    /// The noise level the uncertainty is scaled by, and where it came from.
     pub sigma: Sigma,
     /// Of `W`'s `x, y, z, rx, ry, rz`, from the marks' scatter only: an error of the cell's
     /// base frame moves `W` with it and is not included.

@@ -27,10 +27,12 @@ pub struct Section {
     pub id: String,
     /// Plain text, escaped when rendered.
     pub heading: String,
+    /// Already escaped HTML, built by the methods below.
     pub body: String,
 }
 
 impl Section {
+    /// An empty section; in `id` every character but ASCII letters and digits becomes `-`.
     pub fn new(id: &str, heading: &str) -> Section {
         Section {
             id: id
@@ -84,11 +86,14 @@ impl Section {
 /// `code`: a hash or path, monospace, broken anywhere so a narrow page keeps the table).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Cell {
+    /// Plain text, escaped when rendered.
     pub text: String,
+    /// The CSS class that sets it, if any.
     pub class: Option<&'static str>,
 }
 
 impl Cell {
+    /// A plain text cell.
     pub fn text(s: impl Into<String>) -> Cell {
         Cell {
             text: s.into(),
@@ -96,6 +101,7 @@ impl Cell {
         }
     }
 
+    /// A number cell.
     pub fn num(s: impl Into<String>) -> Cell {
         Cell {
             text: s.into(),
@@ -103,6 +109,7 @@ impl Cell {
         }
     }
 
+    /// A hash or path cell.
     pub fn code(s: impl Into<String>) -> Cell {
         Cell {
             text: s.into(),
@@ -114,15 +121,19 @@ impl Cell {
 /// A table row and an optional CSS class (`outlier` highlights it).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Row {
+    /// The cells in column order.
     pub cells: Vec<Cell>,
+    /// The CSS class of the row, if any.
     pub class: Option<&'static str>,
 }
 
 impl Row {
+    /// A row with no class.
     pub fn new(cells: Vec<Cell>) -> Row {
         Row { cells, class: None }
     }
 
+    /// The row with CSS class `class`.
     pub fn with_class(mut self, class: &'static str) -> Row {
         self.class = Some(class);
         self
@@ -232,6 +243,7 @@ pub struct Page {
     pub title: String,
     /// One line under the title (what the report is of), plain text.
     pub subtitle: String,
+    /// The sections in page order.
     pub sections: Vec<Section>,
 }
 

@@ -9,7 +9,7 @@ pub mod accuracy;
 pub mod figures;
 pub mod html;
 pub mod run;
-pub mod svg;
+pub(crate) mod svg;
 pub mod track;
 
 pub use crate::geometry::{abb_pose_literal, kuka_frame_literal};

@@ -16,12 +16,17 @@ use crate::transform::{FileResult, Refusal, TargetChange};
 
 /// Headings of the run report's fixed sections, in page order.
 pub mod headings {
+    /// The headline figures and outcome.
     pub const SUMMARY: &str = "Summary";
+    /// The cell, profiles and programs read, with their hashes.
     pub const INPUTS: &str = "Cell, profiles and programs";
+    /// The correction each target got, over its skid position.
     pub const ALONG_SKID: &str = "Correction along the skid";
     /// Followed by the file's path.
     pub const FILE_PREFIX: &str = "Changes in ";
+    /// The targets left unchanged, with why and what to do.
     pub const REFUSALS: &str = "Refused targets";
+    /// Reach, joint limit and configuration checks.
     pub const CHECKS: &str = "Kinematics checks";
 }
 
@@ -33,13 +38,16 @@ pub const MAX_LISTED_LINES: usize = 400;
 pub struct RunInput {
     /// What it is (`cell`, `profile r1`), plain text.
     pub role: String,
+    /// The path as given, plain text.
     pub path: String,
+    /// SHA-256 of the bytes read, hex: ties the report to the exact file.
     pub sha256: String,
     /// Anything worth recording (`8 m, 17 knots, extrapolate error`), plain text.
     pub detail: String,
 }
 
 impl RunInput {
+    /// Records a file read, hashing `bytes`.
     pub fn new(role: &str, path: &str, bytes: &[u8], detail: &str) -> RunInput {
         RunInput {
             role: role.to_owned(),
@@ -83,19 +91,26 @@ impl From<&TargetChange> for RunTarget {
 pub struct ChangedLine {
     /// 1-based line in the input (in the output for an added line).
     pub line: usize,
+    /// The line before the change (empty when added).
     pub old: String,
+    /// The line after the change (empty when removed).
     pub new: String,
 }
 
 /// One refused target, located.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunRefusal {
+    /// 1-based line of the target.
     pub line: usize,
+    /// 1-based column of the target.
     pub column: usize,
+    /// The target's name.
     pub target: String,
     /// The reason's key (`joint-target`, `skid-out-of-range`).
     pub kind: String,
+    /// What is wrong, plain text.
     pub message: String,
+    /// What to do about it, plain text.
     pub hint: String,
 }
 
@@ -118,11 +133,17 @@ impl From<&Refusal> for RunRefusal {
 /// One program file of the run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunFile {
+    /// The program path as given.
     pub path: String,
+    /// SHA-256 of the input, hex.
     pub input_sha256: String,
+    /// SHA-256 of the output, hex (equal to the input's when nothing changed).
     pub output_sha256: String,
+    /// Each corrected target with its correction.
     pub targets: Vec<RunTarget>,
+    /// The changed lines, at most `MAX_LISTED_LINES`.
     pub lines: Vec<ChangedLine>,
+    /// The targets left unchanged in this file.
     pub refusals: Vec<RunRefusal>,
 }
 
@@ -156,6 +177,7 @@ impl RunFile {
         }
     }
 
+    /// Whether the output differs from the input.
     pub fn changed(&self) -> bool {
         self.input_sha256 != self.output_sha256
     }
@@ -207,6 +229,7 @@ pub struct RunReport {
     pub outcome: String,
     /// The cell, profiles and other files read besides the programs.
     pub inputs: Vec<RunInput>,
+    /// Each program the run read.
     pub files: Vec<RunFile>,
     /// Kinematics checks (reach, joint limits, configuration), when the run made them.
     pub checks: Vec<DataTable>,

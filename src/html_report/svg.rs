@@ -9,19 +9,19 @@ use super::html::escape;
 
 /// A closed value interval of one axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Span {
-    pub lo: f64,
-    pub hi: f64,
+pub(crate) struct Span {
+    pub(crate) lo: f64,
+    pub(crate) hi: f64,
 }
 
 impl Span {
-    pub fn new(lo: f64, hi: f64) -> Span {
+    pub(crate) fn new(lo: f64, hi: f64) -> Span {
         Span { lo, hi }
     }
 
     /// The finite values' range with 6 % margin; a flat or empty series gets a small one around
     /// its value, so every chart has an extent.
-    pub fn padded(values: impl IntoIterator<Item = f64>) -> Span {
+    pub(crate) fn padded(values: impl IntoIterator<Item = f64>) -> Span {
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         for v in values.into_iter().filter(|v| v.is_finite()) {
             lo = lo.min(v);
@@ -40,7 +40,7 @@ impl Span {
     }
 
     /// The same range, widened to include `v`.
-    pub fn including(self, v: f64) -> Span {
+    pub(crate) fn including(self, v: f64) -> Span {
         if !v.is_finite() {
             return self;
         }
@@ -55,7 +55,7 @@ impl Span {
 
 /// Round tick positions (1, 2 or 5 × 10ⁿ apart) inside `span`, about `target` of them, and
 /// the number of decimals that prints them exactly.
-pub fn ticks(span: Span, target: usize) -> (Vec<f64>, usize) {
+pub(crate) fn ticks(span: Span, target: usize) -> (Vec<f64>, usize) {
     let raw = span.width() / target.max(1) as f64;
     let mag = 10f64.powf(raw.log10().floor());
     let step = [1.0, 2.0, 5.0, 10.0]
@@ -79,7 +79,7 @@ pub fn ticks(span: Span, target: usize) -> (Vec<f64>, usize) {
 }
 
 /// `v` with `decimals` digits, never `-0`.
-pub fn fmt_fixed(v: f64, decimals: usize) -> String {
+pub(crate) fn fmt_fixed(v: f64, decimals: usize) -> String {
     let s = format!("{v:.decimals$}");
     if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
         s[1..].to_owned()
@@ -95,7 +95,7 @@ fn c(v: f64) -> String {
 
 /// A chart under construction: a plot area mapped from data ranges, and its elements.
 #[derive(Clone, Debug)]
-pub struct Chart {
+pub(crate) struct Chart {
     width: f64,
     height: f64,
     left: f64,
@@ -114,7 +114,7 @@ pub struct Chart {
 
 impl Chart {
     /// A `width` × `height` px chart showing `x` × `y`.
-    pub fn new(width: f64, height: f64, x: Span, y: Span) -> Chart {
+    pub(crate) fn new(width: f64, height: f64, x: Span, y: Span) -> Chart {
         Chart {
             width,
             height,
@@ -132,12 +132,12 @@ impl Chart {
         }
     }
 
-    pub fn title(mut self, t: &str) -> Chart {
+    pub(crate) fn title(mut self, t: &str) -> Chart {
         self.title = t.to_owned();
         self
     }
 
-    pub fn labels(mut self, x: &str, y: &str) -> Chart {
+    pub(crate) fn labels(mut self, x: &str, y: &str) -> Chart {
         self.x_label = x.to_owned();
         self.y_label = y.to_owned();
         self
@@ -145,7 +145,7 @@ impl Chart {
 
     /// Widens one of the ranges so that a unit is as long on x as on y (the twist diagram must
     /// not exaggerate one direction).
-    pub fn equal_scale(mut self) -> Chart {
+    pub(crate) fn equal_scale(mut self) -> Chart {
         let (pw, ph) = (self.plot_width(), self.plot_height());
         let scale = (pw / self.x.width()).min(ph / self.y.width());
         let grow = |s: Span, len: f64| {
@@ -159,7 +159,7 @@ impl Chart {
     }
 
     /// Labels the x axis at these positions instead of numeric ticks.
-    pub fn x_categories(mut self, labels: Vec<(f64, String)>) -> Chart {
+    pub(crate) fn x_categories(mut self, labels: Vec<(f64, String)>) -> Chart {
         self.x_categories = Some(labels);
         self
     }
@@ -173,12 +173,12 @@ impl Chart {
     }
 
     /// Pixel x of data x.
-    pub fn px(&self, x: f64) -> f64 {
+    pub(crate) fn px(&self, x: f64) -> f64 {
         self.left + (x - self.x.lo) / self.x.width() * self.plot_width()
     }
 
     /// Pixel y of data y (up is up).
-    pub fn py(&self, y: f64) -> f64 {
+    pub(crate) fn py(&self, y: f64) -> f64 {
         self.top + (self.y.hi - y) / self.y.width() * self.plot_height()
     }
 
@@ -191,7 +191,7 @@ impl Chart {
     }
 
     /// A line through the points.
-    pub fn polyline(&mut self, pts: &[(f64, f64)], class: &str) {
+    pub(crate) fn polyline(&mut self, pts: &[(f64, f64)], class: &str) {
         let _ = writeln!(
             self.body,
             "<polyline class=\"{class}\" points=\"{}\"/>",
@@ -200,7 +200,7 @@ impl Chart {
     }
 
     /// The area between `lower` and `upper` (same x, in order).
-    pub fn band(&mut self, lower: &[(f64, f64)], upper: &[(f64, f64)]) {
+    pub(crate) fn band(&mut self, lower: &[(f64, f64)], upper: &[(f64, f64)]) {
         let mut pts: Vec<(f64, f64)> = lower.to_vec();
         pts.extend(upper.iter().rev());
         let _ = writeln!(
@@ -211,7 +211,7 @@ impl Chart {
     }
 
     /// A dot; `tip` becomes its tooltip.
-    pub fn dot(&mut self, x: f64, y: f64, r: f64, class: &str, tip: Option<&str>) {
+    pub(crate) fn dot(&mut self, x: f64, y: f64, r: f64, class: &str, tip: Option<&str>) {
         if !(x.is_finite() && y.is_finite()) {
             return;
         }
@@ -234,7 +234,7 @@ impl Chart {
     }
 
     /// A bar from `y = 0` (or the bottom of the range) to `y`, between `x0` and `x1`.
-    pub fn bar(&mut self, x0: f64, x1: f64, y: f64, class: &str, tip: &str) {
+    pub(crate) fn bar(&mut self, x0: f64, x1: f64, y: f64, class: &str, tip: &str) {
         let base = self.py(0.0_f64.clamp(self.y.lo, self.y.hi));
         let top = self.py(y);
         let (y0, h) = if top < base {
@@ -254,7 +254,7 @@ impl Chart {
     }
 
     /// A horizontal line across the plot at data `y`, labelled at its right end.
-    pub fn hline(&mut self, y: f64, class: &str, label: Option<&str>) {
+    pub(crate) fn hline(&mut self, y: f64, class: &str, label: Option<&str>) {
         let (x0, x1, py) = (self.left, self.left + self.plot_width(), self.py(y));
         let _ = writeln!(
             self.body,
@@ -276,7 +276,7 @@ impl Chart {
     }
 
     /// A vertical line over the plot at data `x`, labelled near its top.
-    pub fn vline(&mut self, x: f64, class: &str, label: Option<&str>) {
+    pub(crate) fn vline(&mut self, x: f64, class: &str, label: Option<&str>) {
         let (px, y0, y1) = (self.px(x), self.top, self.top + self.plot_height());
         let _ = writeln!(
             self.body,
@@ -304,7 +304,7 @@ impl Chart {
     }
 
     /// A text label at data (x, y), offset by (dx, dy) px.
-    pub fn label(&mut self, x: f64, y: f64, dx: f64, dy: f64, text: &str) {
+    pub(crate) fn label(&mut self, x: f64, y: f64, dx: f64, dy: f64, text: &str) {
         let _ = writeln!(
             self.body,
             "<text x=\"{}\" y=\"{}\">{}</text>",
@@ -316,7 +316,7 @@ impl Chart {
 
     /// The `<svg>` element: grid, axes, ticks, labels, then the data elements. No `xmlns`: the
     /// HTML parser puts inline SVG in its namespace, and the page stays free of any URL.
-    pub fn render(&self) -> String {
+    pub(crate) fn render(&self) -> String {
         let (w, h) = (self.width, self.height);
         let (l, t, pw, ph) = (self.left, self.top, self.plot_width(), self.plot_height());
         let mut s = String::new();

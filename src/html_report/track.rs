@@ -24,13 +24,21 @@ const UNITS: [&str; 6] = ["mm", "mm", "mm", "deg", "deg", "deg"];
 
 /// Headings of the track report's sections, in page order (tests look for them in the browser).
 pub mod headings {
+    /// The files read, with their hashes.
     pub const INPUTS: &str = "Inputs";
+    /// The numbers to type into the controller.
     pub const CONTROLLER: &str = "Enter in the controller";
+    /// How well the measured points fit each knot frame.
     pub const IDENTIFICATION: &str = "Identification residuals";
+    /// `D(s)` with its uncertainty band.
     pub const DEVIATION: &str = "Deviation along the track";
+    /// What to shim and turn at each rail segment.
     pub const ADJUSTMENT: &str = "Manual adjustment and twist diagram";
+    /// How far the spline may stray between knots.
     pub const BOUNDS: &str = "Spline error bounds per interval";
+    /// Whether the knot spacing resolves the rail's waviness.
     pub const SPECTRUM: &str = "Scan spectrum and sampling spacing";
+    /// Repeatability and accuracy of the measured poses.
     pub const ACCURACY: &str = "ISO 9283 accuracy";
 }
 
@@ -44,6 +52,7 @@ pub struct SourceFile {
 }
 
 impl SourceFile {
+    /// Records a file read, hashing `bytes`.
     pub fn new(path: impl Into<String>, bytes: &[u8]) -> SourceFile {
         SourceFile {
             path: path.into(),
@@ -56,8 +65,11 @@ impl SourceFile {
 /// checks): a title, column names and rows of already formatted cells.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DataTable {
+    /// The table's caption, plain text.
     pub title: String,
+    /// The column headings, plain text.
     pub columns: Vec<String>,
+    /// One formatted cell per column, plain text.
     pub rows: Vec<Vec<String>>,
     /// A sentence under the table (what the figures mean), plain text.
     pub note: Option<String>,
@@ -99,7 +111,9 @@ impl DataTable {
 pub struct AccuracyResult {
     /// (role, file), listed under the report's inputs.
     pub sources: Vec<(String, SourceFile)>,
+    /// The result tables, in page order.
     pub tables: Vec<DataTable>,
+    /// A chart: (SVG, caption).
     pub figure: Option<(String, String)>,
 }
 
@@ -128,6 +142,7 @@ pub struct ReportError {
     /// What the report was computing, naming the input.
     pub step: String,
     #[source]
+    /// The error the step stopped on.
     pub source: Box<TrackError>,
 }
 
@@ -138,11 +153,15 @@ pub struct TrackReport {
     pub sources: Vec<(String, SourceFile)>,
     /// Inputs computed rather than read: (what, from what).
     pub derived: Vec<(String, String)>,
+    /// The per-knot identification, when measurements were given.
     pub identification: Option<Identification>,
     /// The fit, when the profile was computed here.
     pub fit: Option<TrackFit>,
+    /// The profile shown (read, or the fit's).
     pub profile: Option<Profile>,
+    /// The scan's spectrum, when a scan was given.
     pub spectrum: Option<Spectrum>,
+    /// ISO 9283 results, one per accuracy run.
     pub accuracy: Vec<AccuracyResult>,
 }
 

@@ -4,7 +4,6 @@
 //! line and gives up (`None`) on anything else, so the general path decides every unusual line,
 //! its diagnostics included. `tests` below compare both paths on generated, mutated and sample
 //! lines.
-#![warn(missing_docs, unreachable_pub)]
 
 use super::lexer::{IDENT, is_ident_start, number_end};
 use super::tree::{Aggregate, DeclVar, Expr, ExprKind, Field, StmtKind};

@@ -2,7 +2,6 @@
 //! in order gives the source back (`grammars/krl.ebnf`, rule `token`).
 //!
 //! Tokens are `(kind, u32 span)`: no per-token allocation, which keeps a 50 MB `.dat` cheap.
-#![warn(missing_docs, unreachable_pub)]
 
 use crate::syntax::Span;
 

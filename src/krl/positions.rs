@@ -435,7 +435,7 @@ pub(crate) struct Extractor<'a> {
 }
 
 impl<'a> Extractor<'a> {
-    pub fn new(src: &'a [u8], lines: &'a LineIndex) -> Extractor<'a> {
+    pub(crate) fn new(src: &'a [u8], lines: &'a LineIndex) -> Extractor<'a> {
         Extractor {
             src,
             lines,
@@ -449,12 +449,12 @@ impl<'a> Extractor<'a> {
         }
     }
 
-    pub fn finish(mut self) -> (Extracted, Vec<Diagnostic>) {
+    pub(crate) fn finish(mut self) -> (Extracted, Vec<Diagnostic>) {
         self.out.facts.declared = self.declared;
         (self.out, self.diagnostics)
     }
 
-    pub fn statement(&mut self, stmt: &Stmt) {
+    pub(crate) fn statement(&mut self, stmt: &Stmt) {
         let (src, lines) = (self.src, self.lines);
         let out = &mut self.out;
         match &stmt.kind {

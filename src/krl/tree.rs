@@ -2,7 +2,6 @@
 //! source lines (KRL is line oriented), each owning a contiguous run of tokens including its
 //! trivia and newline, and whose branches are the `DEF … END` routines and `IF … ENDIF` blocks;
 //! plus the parsed statements that trackfix reads (declarations, assignments, calls, motions).
-#![warn(missing_docs, unreachable_pub)]
 
 use crate::syntax::Span;
 

@@ -3,7 +3,6 @@
 //! Aggregates, calls and arguments are allocated before their children, so their subtree is the
 //! index range `id..subtree_end`. Compound and access nodes wrap an operand that was read before
 //! it was known to be one, so they come after their first child; nothing relies on their range.
-#![warn(missing_docs, unreachable_pub)]
 
 use crate::syntax::Span;
 

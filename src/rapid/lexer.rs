@@ -7,7 +7,6 @@
 //! The lexer streams: it keeps no token vector (a 50 MB module has ~20 M tokens, and a vector of
 //! them would be larger than the file). It dispatches on the first byte by hand; identifiers
 //! and based numbers are small nom 8 recognisers over bytes, decimal numbers a hand loop.
-#![warn(missing_docs, unreachable_pub)]
 
 use nom::IResult;
 use nom::Parser as _;

@@ -98,9 +98,13 @@ pub struct Extractor<'l> {
 
 /// What [`Extractor::finish`] returns.
 pub struct Extracted {
+    /// The targets declared or written inline, in source order.
     pub positions: Vec<Position>,
+    /// The work object, tool and base declarations.
     pub frames: Vec<FrameDecl>,
+    /// The `Offs`/`RelTool` calls, for the offset rules.
     pub offsets: Vec<OffsetCall>,
+    /// What was deliberately not read as a target, and why.
     pub diagnostics: Vec<Diagnostic>,
 }
 

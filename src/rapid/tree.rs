@@ -9,7 +9,6 @@
 //! which rules out a node per token. Expressions inside a statement are parsed (and their
 //! targets, frames and offsets extracted) while the statement is read, in a scratch arena that
 //! is reused for the next statement.
-#![warn(missing_docs, unreachable_pub)]
 
 /// What a node is. Branches: [`NodeKind::Root`], [`NodeKind::Module`], [`NodeKind::Routine`],
 /// [`NodeKind::Record`], [`NodeKind::If`], [`NodeKind::For`], [`NodeKind::While`],

@@ -1,5 +1,4 @@
 //! Located messages about a source file, rendered the way compilers do.
-#![warn(missing_docs, unreachable_pub)]
 
 use super::{LineIndex, Span};
 use std::fmt::Write as _;

@@ -13,6 +13,7 @@ pub struct LineIndex {
 }
 
 impl LineIndex {
+    /// Indexes the line starts of `src` (LF, CRLF and lone CR each end a line).
     pub fn new(src: &[u8]) -> LineIndex {
         let mut starts = vec![0];
         // memchr2 scans a word at a time; a byte loop spent ~9 instructions per byte here.

@@ -90,6 +90,7 @@ impl NumLit {
         })
     }
 
+    /// The literal as a float, for the math; the text itself stays in the tree.
     pub fn value(&self) -> f64 {
         self.value
     }

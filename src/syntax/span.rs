@@ -1,5 +1,4 @@
 //! Byte ranges into a kept source buffer.
-#![warn(missing_docs, unreachable_pub)]
 
 use std::ops::Range;
 

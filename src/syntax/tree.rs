@@ -8,7 +8,6 @@
 //! that is lost, duplicated or out of place shows as a difference in [`Tree::prints_back`].
 //!
 //! Parsers build trees with a [`TreeBuilder`] and hand what they read to a [`Sink`].
-#![warn(missing_docs, unreachable_pub)]
 
 use std::fmt;
 

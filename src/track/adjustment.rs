@@ -1,7 +1,6 @@
 //! What `track show` reports when no skid is asked for: the manual-adjustment table (thesis eq.
 //! 4.54), the twist diagram (thesis Fig. 4.34) and the spline-to-chord bound per interval (seed
 //! 4.9-4.12).
-#![warn(missing_docs, unreachable_pub)]
 
 use nalgebra::Vector3;
 

@@ -10,7 +10,6 @@
 //! - when the profile records `measured_in = "world"` (the tracker was aligned to the cell's
 //!   world frame): also `a` against `u`, and `B_0` against `N(0)` (position and rotation). A
 //!   design-value base instead of the fitted one fails here.
-#![warn(missing_docs, unreachable_pub)]
 
 use std::fmt;
 

@@ -5,7 +5,6 @@
 //! locale is read: `;` between the fields and `,` as the decimal point, told as a note. Tab
 //! separated tables are read too. A file whose header names none of the expected columns is
 //! something else (`/etc/passwd` given as a table): the error does not quote it.
-#![warn(missing_docs, unreachable_pub)]
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

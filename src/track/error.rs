@@ -1,7 +1,6 @@
 //! Errors of the track model, by cause. Each carries its data; `Display` renders it (a located
 //! input error as `file:line:col: error: …` with the line, a caret and what to do, through
 //! [`Diagnostic::render`]).
-#![warn(missing_docs, unreachable_pub)]
 
 use std::fmt;
 use std::path::{Path, PathBuf};

@@ -1,6 +1,5 @@
 //! `frames.csv`: `skid,x,y,z,rx,ry,rz`, the robot base frame at each skid position in the
 //! measurement frame (docs/design.md §6).
-#![warn(missing_docs, unreachable_pub)]
 
 use std::fmt::Write as _;
 use std::path::Path;

@@ -7,7 +7,6 @@
 //! `$RAT_MOT_AX[i] = {N n, D d}` in `$machine.dat` (motor revolutions `N` per `D` axis units;
 //! for a linear axis per 1000 mm; `i = 7` for the first external axis E1) are motor turns per
 //! travel. For them `new = old / g`: a skid that travels short (`g < 1`) needs a larger ratio.
-#![warn(missing_docs, unreachable_pub)]
 
 /// The new motor-to-travel ratio (ABB's Transmission Gear Ratio, or KUKA's `N/D`) for the
 /// current one and the measured gear factor.

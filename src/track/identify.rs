@@ -1,6 +1,5 @@
 //! `track identify`: the robot base frame at each skid position from laser-tracker points
 //! (`measurements.csv`, docs/design.md §6), with per-point residuals (thesis Table 7.2) and outliers.
-#![warn(missing_docs, unreachable_pub)]
 
 use std::collections::BTreeMap;
 use std::path::Path;

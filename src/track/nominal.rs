@@ -1,6 +1,5 @@
 //! `track fit`: the controller's straight nominal, the gear factor and the deviations `D_i`
 //! (docs/design.md §3), giving a [`Profile`].
-#![warn(missing_docs, unreachable_pub)]
 
 use nalgebra::{Matrix3, Translation3, UnitQuaternion, Vector3};
 

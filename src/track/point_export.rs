@@ -4,7 +4,6 @@
 //! `id`, `x`, `y`, `z`, any case) or given as a [`ColumnMap`] (`name=1,x=2,y=3,z=4` by
 //! position, or by header: `name=Punkt,x=X [mm],…`); without either the first four columns are
 //! name, x, y, z. Lines starting with `#` or `//` are comments.
-#![warn(missing_docs, unreachable_pub)]
 
 use std::collections::BTreeMap;
 use std::path::Path;

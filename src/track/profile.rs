@@ -21,25 +21,37 @@ pub use super::error::TrackError;
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Knot {
+    /// The commanded track position `s_i`, mm.
     pub skid: f64,
+    /// Translation of the base frame from the nominal straight track, along the nominal's x, mm.
     pub dx: f64,
+    /// Translation along base y, mm.
     pub dy: f64,
+    /// Translation along base z, mm.
     pub dz: f64,
+    /// Fixed-axis rotation about x, degrees (applied first: `Rz·Ry·Rx`).
     pub rx: f64,
+    /// Rotation about base y, degrees.
     pub ry: f64,
+    /// Rotation about base z, degrees.
     pub rz: f64,
-    /// Standard uncertainties (k = 1) of the six components from the identification noise
-    /// (mm, degrees); absent in profiles fitted without measurements, and in old profiles.
+    /// Standard uncertainty (k = 1) of `dx` from the identification noise, mm; absent in
+    /// profiles fitted without measurements, and in old profiles (likewise the five below).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub u_dx: Option<f64>,
+    /// Of `dy`, mm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub u_dy: Option<f64>,
+    /// Of `dz`, mm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub u_dz: Option<f64>,
+    /// Of `rx`, degrees.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub u_rx: Option<f64>,
+    /// Of `ry`, degrees.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub u_ry: Option<f64>,
+    /// Of `rz`, degrees.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub u_rz: Option<f64>,
     /// The centroid of the points the knot's frame was identified from (base frame, mm):
@@ -510,14 +522,17 @@ impl Profile {
         &self.file.nominal
     }
 
+    /// Which straight line the deviations were taken from.
     pub fn reference(&self) -> Reference {
         self.file.reference
     }
 
+    /// Whether the gear factor's drift is in the deviations or in the nominal.
     pub fn gear(&self) -> Gear {
         self.file.gear
     }
 
+    /// What `D(s)` does outside the measured skid range.
     pub fn extrapolate(&self) -> Extrapolate {
         self.file.extrapolate
     }

@@ -27,10 +27,12 @@ pub struct SplitMix64 {
 }
 
 impl SplitMix64 {
+    /// A generator whose sequence is fixed by `seed`, so simulated data sets repeat.
     pub fn new(seed: u64) -> SplitMix64 {
         SplitMix64 { state: seed }
     }
 
+    /// The next 64 uniform bits.
     pub fn next_u64(&mut self) -> u64 {
         self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.state;
@@ -96,6 +98,7 @@ pub struct TrackTruth {
     pub axis_in_base: Vector3<f64>,
     /// Track length `L`, mm.
     pub length_mm: f64,
+    /// How the rails bend along the track.
     pub deformation: Deformation,
 }
 
@@ -250,6 +253,7 @@ pub fn sample_tcp_points() -> Vec<Point3<f64>> {
 /// One row of `measurements.csv` (docs/design.md §6).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MeasurementRow {
+    /// The commanded track position, mm.
     pub skid: f64,
     /// 1-based point number.
     pub point: u32,
@@ -343,9 +347,13 @@ pub fn scan_csv(rows: &[[f64; 4]]) -> String {
 /// in the work object.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MarkRow {
+    /// The fixture mark number.
     pub mark: u32,
+    /// The commanded track position, mm.
     pub skid: f64,
+    /// The TCP on the mark, in the robot base frame, mm.
     pub robot: [f64; 3],
+    /// The mark in the work object (CAD), mm.
     pub cad: [f64; 3],
 }
 

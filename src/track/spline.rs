@@ -4,7 +4,6 @@
 //! The spline is stored by its knot values and second derivatives `M_i`; on `[x_i, x_{i+1}]`
 //! with `h = x_{i+1} - x_i` and `t = (x - x_i)/h` it is the chord minus
 //! `h²/6 · t(1-t) · ((2-t)·M_i + (1+t)·M_{i+1})`, which makes the chord distance a closed form.
-#![warn(missing_docs, unreachable_pub)]
 
 /// End conditions of the spline.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -43,8 +43,13 @@ pub const INTERPOLATION_SHARE: f64 = 0.5;
 pub enum Sigma {
     /// Given by the user (tracker and robot noise combined, per axis), mm.
     Given(f64),
-    /// Pooled from the fit's residuals, mm, with its degrees of freedom.
-    Estimated { sigma: f64, dof: usize },
+    /// Pooled from the fit's residuals.
+    Estimated {
+        /// The pooled standard deviation, mm.
+        sigma: f64,
+        /// Residual count minus fitted parameters: how far the estimate can be trusted.
+        dof: usize,
+    },
 }
 
 impl Sigma {
@@ -169,6 +174,7 @@ pub fn knot_uncertainties(
 /// degrees, split by cause.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DeviationUncertainty {
+    /// The skid the uncertainties are evaluated at, mm.
     pub skid: f64,
     /// Combined: `sqrt(noise² + interpolation²)`.
     pub u: [f64; 6],

@@ -129,7 +129,7 @@ fn control_bytes_in_comments_are_text() {
     }
 }
 
-/// What the inputs are there for (issue 9's parser gaps), checked on the parse itself and
+/// What the inputs are there for (constructs once misparsed), checked on the parse itself and
 /// not only on the dump: the names and declarations come out as the grammar says.
 #[test]
 fn parser_gaps_are_closed() {

@@ -7,12 +7,12 @@ use trackfix::position::NumField;
 use trackfix::syntax::latin1;
 
 /// The package root, where the samples are.
-pub fn root() -> PathBuf {
+pub(crate) fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// Runs the built `trackfix` binary from the package root.
-pub fn run(args: &[&str]) -> Output {
+pub(crate) fn run(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_trackfix"))
         .args(args)
         .current_dir(root())
@@ -20,23 +20,23 @@ pub fn run(args: &[&str]) -> Output {
         .expect("the trackfix binary runs")
 }
 
-pub fn stdout(o: &Output) -> String {
+pub(crate) fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
-pub fn stderr(o: &Output) -> String {
+pub(crate) fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// Runs the binary; returns (exit code, stdout, stderr), -1 for a signal.
-pub fn trackfix(args: &[&str]) -> (i32, String, String) {
+pub(crate) fn trackfix(args: &[&str]) -> (i32, String, String) {
     let o = run(args);
     (o.status.code().unwrap_or(-1), stdout(&o), stderr(&o))
 }
 
 /// A numeric field as written in `src` (read back through its span), `-` where the field is not
 /// a numeric literal.
-pub fn text(src: &[u8], f: &Option<NumField>) -> String {
+pub(crate) fn text(src: &[u8], f: &Option<NumField>) -> String {
     match f {
         Some(f) => latin1(f.span.slice(src)),
         None => "-".to_owned(),
@@ -44,7 +44,7 @@ pub fn text(src: &[u8], f: &Option<NumField>) -> String {
 }
 
 /// Several fields as written, comma-separated.
-pub fn texts(src: &[u8], fs: &[Option<NumField>]) -> String {
+pub(crate) fn texts(src: &[u8], fs: &[Option<NumField>]) -> String {
     fs.iter()
         .map(|f| text(src, f))
         .collect::<Vec<_>>()

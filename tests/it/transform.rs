@@ -1,4 +1,4 @@
-//! Integration tests: program transforms (issue 5). Through the real parsers and the binary:
+//! Integration tests: program transforms. Through the real parsers and the binary:
 //! `--diff` snapshots of every sample and command, refusal messages, the invariants through
 //! files, `transfer = zero; mirror; correct`, and the end-to-end check from a simulated
 //! deformed track to the physical TCP error of corrected RAPID and KRL programs.
@@ -838,7 +838,7 @@ fn skid0(p: &trackfix::position::Position) -> f64 {
     }
 }
 
-/// Issue 5's end-to-end test, RAPID. Truth: `TrackTruth::sample_r1()` (2.5 mm sag, 1.5 mm bow,
+/// The end-to-end correction test, RAPID. Truth: `TrackTruth::sample_r1()` (2.5 mm sag, 1.5 mm bow,
 /// 0.08 mm waviness, 0.03° twist, gear error -1.5e-4), 10 tracker points at 17 skid positions
 /// every 500 mm, 0.01 mm noise; 79 targets every 100 mm of skid, 0.9-1.3 m from the base.
 /// Measured: uncorrected targets miss by 1.82 mm rms, corrected ones by 0.021 mm rms
@@ -904,7 +904,7 @@ fn correct_and_measure(e: &E2e, cad: &Path, output: &[&str], corrected: &Path) -
     format!("before rms {rb:.2} mm, after rms {ra:.3} mm")
 }
 
-/// Issue 5's end-to-end test, KRL (.src/.dat pair, BASE_DATA[1] from the cell), same track and
+/// The end-to-end correction test, KRL (.src/.dat pair, BASE_DATA[1] from the cell), same track and
 /// targets: uncorrected 1.82 mm rms, corrected 0.021 mm rms.
 #[test]
 fn end_to_end_krl_correction_reaches_the_cad_points() {

@@ -2,7 +2,6 @@
 //! or cannot parse becomes an [`NodeKind::Opaque`] node with a located diagnostic.
 //!
 //! Each function names the `grammars/krl.ebnf` rule it implements.
-#![warn(missing_docs, unreachable_pub)]
 
 mod expressions;
 mod statements;
