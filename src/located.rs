@@ -62,6 +62,34 @@ impl Located {
         }
     }
 
+    /// The diagnostic about `source`, keeping only the window of the span's line it shows (the
+    /// error then stays small however large the file is).
+    pub fn in_line(path: impl Into<PathBuf>, source: &[u8], diagnostic: Diagnostic) -> Located {
+        let index = LineIndex::new(source);
+        let (line, column) = index.line_col(diagnostic.span.start);
+        let line_span = index.line_span(source, line);
+        let text = line_span.slice(source);
+        let at = diagnostic
+            .span
+            .start
+            .saturating_sub(line_span.start)
+            .min(text.len());
+        let end = diagnostic
+            .span
+            .end
+            .saturating_sub(line_span.start)
+            .clamp(at, text.len());
+        let (from, to) = crate::syntax::window(text.len(), at, end);
+        let at = LineAt {
+            line,
+            column,
+            start: line_span.start + from,
+            cut_before: from > 0,
+            cut_after: to < text.len(),
+        };
+        Located::excerpt(path, text[from..to].to_vec(), at, diagnostic)
+    }
+
     /// The same message at another severity (a refusal the run skips is a warning).
     pub fn with_severity(mut self, severity: Severity) -> Located {
         self.diagnostic.severity = severity;
@@ -118,5 +146,16 @@ mod tests {
             "m.mod:2:1: warning: no `p1`\n  |\n2 | p1;\n  | ^^\n  = help: declare it"
         );
         assert!(l.to_string().starts_with("m.mod:2:1: error: "));
+    }
+
+    #[test]
+    fn in_line_keeps_the_line_and_renders_as_the_whole_source_does() {
+        let src = b"MODULE m\r\n  p1;\r\nENDMODULE\r\n";
+        let d = Diagnostic::error(Span::new(12, 14), "no `p1`").with_hint("declare it");
+        let whole = Located::new("m.mod", src.to_vec(), d.clone());
+        let cut = Located::in_line("m.mod", src, d);
+        assert_eq!(cut.line_col(), (2, 3));
+        assert_eq!(cut.source, b"  p1;");
+        assert_eq!(cut.to_string(), whole.to_string());
     }
 }

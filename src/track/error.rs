@@ -8,14 +8,15 @@ use std::sync::Arc;
 
 use super::spline::SplineError;
 use crate::geometry::rigid_fit::RigidFitError;
-use crate::syntax::{Diagnostic, LineIndex, Span};
+use crate::located::Located;
+use crate::syntax::{Diagnostic, Span};
 
-/// An error at a place in an input file (a CSV table, a profile).
+/// An error at a place in an input file (a CSV table, a profile): a [`Located`] diagnostic
+/// (the span's line only, so a file with many errors holds no copies of itself), with the
+/// CSV column it is in.
 #[derive(Clone, Debug)]
 pub struct LocatedError {
-    path: PathBuf,
-    source: Arc<[u8]>,
-    diagnostic: Diagnostic,
+    located: Located,
     /// The CSV column the error is in, if any.
     column_name: Option<String>,
     /// False for a file that is not what it was given as (`/etc/passwd` as a profile): its
@@ -37,9 +38,7 @@ impl LocatedError {
             diagnostic = diagnostic.with_hint(hint);
         }
         LocatedError {
-            path: path.to_path_buf(),
-            source,
-            diagnostic,
+            located: Located::in_line(path, &source, diagnostic),
             column_name: None,
             quote: true,
         }
@@ -59,22 +58,22 @@ impl LocatedError {
 
     /// The file the error is in.
     pub fn path(&self) -> &Path {
-        &self.path
+        &self.located.path
     }
 
     /// 1-based line and column (in bytes) of the error.
     pub fn line_col(&self) -> (usize, usize) {
-        LineIndex::new(&self.source).line_col(self.diagnostic.span.start)
+        self.located.line_col()
     }
 
     /// What is wrong.
     pub fn message(&self) -> &str {
-        &self.diagnostic.message
+        &self.located.diagnostic.message
     }
 
     /// What to do, when there is something to say.
     pub fn hint(&self) -> Option<&str> {
-        self.diagnostic.hint.as_deref()
+        self.located.diagnostic.hint.as_deref()
     }
 
     /// The CSV column the error is in.
@@ -84,21 +83,19 @@ impl LocatedError {
 
     /// The located diagnostic behind the error.
     pub fn diagnostic(&self) -> &Diagnostic {
-        &self.diagnostic
+        &self.located.diagnostic
     }
 }
 
 impl fmt::Display for LocatedError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let path = self.path.display().to_string();
         if self.quote {
-            let index = LineIndex::new(&self.source);
-            let text = self.diagnostic.render(&path, &self.source, &index);
-            return f.write_str(text.trim_end());
+            return self.located.fmt(f);
         }
         let (line, col) = self.line_col();
-        write!(f, "{path}:{line}:{col}: error: {}", self.diagnostic.message)?;
-        if let Some(hint) = &self.diagnostic.hint {
+        let path = self.path().display();
+        write!(f, "{path}:{line}:{col}: error: {}", self.message())?;
+        if let Some(hint) = self.hint() {
             write!(f, "\n  = help: {hint}")?;
         }
         Ok(())
