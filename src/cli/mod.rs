@@ -3,6 +3,7 @@
 pub mod accuracy;
 pub mod frame;
 pub mod inspect;
+pub mod messages;
 pub mod reach;
 pub mod report;
 pub mod track;
