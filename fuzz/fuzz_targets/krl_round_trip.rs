@@ -1,40 +1,17 @@
 //! Any bytes as a KRL `.src`/`.dat` pair (the input is cut at its first `\0` into the two
-//! files): the parser never panics, every file prints back byte for byte, and every span it
-//! reports (diagnostics, positions, fields) lies inside its file. Failures found here are
-//! replayed from `tests/fuzz_regressions/krl/` by `tests/it/krl.rs`.
+//! files): the parser never panics, every file prints back byte for byte, every span it reports
+//! lies inside its file, and on a pair without syntax errors `correct` and `mirror` never panic,
+//! their output reads again cleanly and prints back, and a zero deviation changes no byte. The
+//! checks live in `tests/it/fuzz_bodies.rs`; failures found here are kept in
+//! `tests/fuzz_regressions/krl/`, which `cargo test` replays through them.
 #![no_main]
 
-use std::path::PathBuf;
-
 use libfuzzer_sys::fuzz_target;
-use trackfix::program::LoadOptions;
+
+#[path = "../../tests/it/fuzz_bodies.rs"]
+#[allow(dead_code)]
+mod fuzz_bodies;
 
 fuzz_target!(|data: &[u8]| {
-    let (src, dat) = match data.iter().position(|&b| b == 0) {
-        Some(i) => (&data[..i], &data[i + 1..]),
-        None => (data, &data[..0]),
-    };
-    assert_eq!(trackfix::krl::parse(src).tree.print(src), src);
-    let files = vec![
-        (PathBuf::from("fuzz.dat"), dat.to_vec()),
-        (PathBuf::from("fuzz.src"), src.to_vec()),
-    ];
-    let program = trackfix::krl::load_program_from_sources(files, &LoadOptions::default())
-        .expect("nothing to read from disk");
-    for file in &program.files {
-        assert!(file.round_trip);
-        let len = file.source.len();
-        for d in &file.diagnostics {
-            assert!(d.span.start <= d.span.end && d.span.end <= len);
-            let _ = d.render("fuzz", &file.source, &file.lines);
-        }
-        for p in &file.positions {
-            assert!(p.span.end <= len);
-            if let Some(c) = &p.cartesian {
-                for f in c.trans.iter().flatten() {
-                    assert!(f.span.end <= len);
-                }
-            }
-        }
-    }
+    fuzz_bodies::krl_pair(data);
 });

@@ -14,6 +14,7 @@ use trackfix::report::{
 use trackfix::syntax::printable;
 
 use super::Exit;
+use super::messages::{Messages, Verbosity, shape};
 
 #[derive(Clone, Copy, Debug, Default, clap::ValueEnum)]
 pub(crate) enum Format {
@@ -84,6 +85,9 @@ pub(crate) struct CheckArgs {
     /// standard output.
     #[arg(long, value_enum, default_value_t = super::transform::ReportFormat::Text)]
     pub format: super::transform::ReportFormat,
+    /// `-q`: errors only (the exit code still counts every finding); `-v`: every finding.
+    #[command(flatten)]
+    pub verbosity: Verbosity,
 }
 
 /// One file of `check --format json`.
@@ -265,6 +269,9 @@ pub(crate) fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
     let json = args.format == super::transform::ReportFormat::Json;
     let mut checked = Vec::new();
     let mut program_reports = Vec::new();
+    // Findings of one kind across the batch: three shown, the rest counted (`-v`: all).
+    let mut messages = Messages::new(args.verbosity, false);
+    let quiet = args.verbosity.quiet;
     for (program, grouped) in batch.programs.iter().zip(&batch.grouped) {
         for file in &program.files {
             if json {
@@ -280,7 +287,7 @@ pub(crate) fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
                 });
                 continue;
             }
-            if let Some((stamp, _)) = trackfix::transform::stamp::find(file) {
+            if let Some((stamp, _)) = trackfix::transform::stamp::find(file).filter(|_| !quiet) {
                 writeln!(
                     out,
                     "{}: stamped: {}",
@@ -291,7 +298,9 @@ pub(crate) fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
             let found = findings(file);
             summary.add_file(file, found.len());
             for d in &found {
-                write!(out, "{}", file.render(d))?;
+                let text = file.render(d);
+                let text = text.strip_suffix('\n').unwrap_or(&text);
+                messages.show(&mut out, d.severity, &shape(&d.message), &text)?;
             }
         }
         // A program of several inputs: which files form it and how much of it resolved.
@@ -299,7 +308,7 @@ pub(crate) fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
         if let Some(report) = grouped.then(|| ProgramReport::of(program)).flatten() {
             if json {
                 program_reports.push(report);
-            } else {
+            } else if !quiet {
                 writeln!(out, "{report}: {}", report.files.join(", "))?;
             }
         }
@@ -308,7 +317,10 @@ pub(crate) fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
         let doc = serde_json::json!({ "files": checked, "programs": program_reports, "summary": summary });
         writeln!(out, "{}", serde_json::to_string_pretty(&doc)?)?;
     } else {
-        writeln!(out, "{summary}")?;
+        messages.finish(&mut out)?;
+        if !quiet {
+            writeln!(out, "{summary}")?;
+        }
     }
     let findings = summary.findings;
     let exit = if batch.errors > 0 {

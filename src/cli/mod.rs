@@ -3,6 +3,7 @@
 pub(crate) mod accuracy;
 pub(crate) mod frame;
 pub(crate) mod inspect;
+pub(crate) mod messages;
 pub(crate) mod reach;
 pub(crate) mod report;
 pub(crate) mod track;

@@ -28,6 +28,7 @@ use trackfix::transform::{
 };
 
 use super::Exit;
+use super::messages::{Messages, Verbosity};
 use super::track::report_located;
 
 /// Where results go and what to do with refusals (shared by all four commands).
@@ -67,12 +68,8 @@ pub(crate) struct OutputArgs {
     /// corrected for the robot, `zero` of a file not stamped as corrected for it.
     #[arg(long)]
     pub force: bool,
-    /// Print errors only: no per-file lines, warnings or notes.
-    #[arg(short, long, conflicts_with = "verbose")]
-    pub quiet: bool,
-    /// Print every warning and note (repeated ones are otherwise shown 3 times, then counted).
-    #[arg(short, long)]
-    pub verbose: bool,
+    #[command(flatten)]
+    pub verbosity: Verbosity,
     /// `json`: the summary, refusals and notes as one JSON document on standard output
     /// (nothing on standard error but a failure).
     #[arg(long, value_enum, default_value_t = ReportFormat::Text, conflicts_with = "diff")]
@@ -91,58 +88,6 @@ pub(crate) enum ReportFormat {
     #[default]
     Text,
     Json,
-}
-
-/// How many messages of one kind are shown before the rest are counted (unless `-v`).
-const SHOWN_PER_KIND: usize = 3;
-
-/// Prints diagnostics with repeats grouped: the first few of each kind, then a count.
-struct Messages<'a> {
-    out: &'a OutputArgs,
-    seen: std::collections::BTreeMap<(Severity, String), usize>,
-}
-
-impl<'a> Messages<'a> {
-    fn new(out: &'a OutputArgs) -> Self {
-        Messages {
-            out,
-            seen: Default::default(),
-        }
-    }
-
-    /// Shows `text` unless quiet (errors always), JSON, or the kind was shown often enough.
-    fn show(
-        &mut self,
-        w: &mut impl Write,
-        severity: Severity,
-        kind: &str,
-        text: &dyn std::fmt::Display,
-    ) -> std::io::Result<()> {
-        if self.out.format == ReportFormat::Json || (self.out.quiet && severity < Severity::Error) {
-            return Ok(());
-        }
-        let n = self.seen.entry((severity, kind.to_owned())).or_default();
-        *n += 1;
-        if *n <= SHOWN_PER_KIND || self.out.verbose {
-            writeln!(w, "{text}")?;
-        }
-        Ok(())
-    }
-
-    /// The counts of what was not shown.
-    fn finish(&self, w: &mut impl Write) -> std::io::Result<()> {
-        for ((severity, kind), n) in &self.seen {
-            if *n > SHOWN_PER_KIND && !self.out.verbose {
-                writeln!(
-                    w,
-                    "{}: … and {} more like this [{kind}] (-v shows all)",
-                    severity.as_str(),
-                    n - SHOWN_PER_KIND
-                )?;
-            }
-        }
-        Ok(())
-    }
 }
 
 /// One refusal or note in `--format json`.
@@ -675,7 +620,7 @@ fn write_run_report(
         checks: Vec::new(),
     };
     output::write_file(path, run_report(&report).as_bytes())?;
-    if out.format != ReportFormat::Json && !out.quiet {
+    if out.format != ReportFormat::Json && !out.verbosity.quiet {
         let _ = writeln!(
             std::io::stderr(),
             "wrote {}: the run report",
@@ -693,7 +638,7 @@ fn finish_outputs(
     inputs: &[PathBuf],
 ) -> anyhow::Result<Exit> {
     let mut stderr = std::io::stderr().lock();
-    let mut messages = Messages::new(out);
+    let mut messages = Messages::new(out.verbosity, out.format == ReportFormat::Json);
     for n in results
         .iter()
         .flat_map(|r| r.files.iter().flat_map(|f| &f.notes))
@@ -723,7 +668,7 @@ fn finish_outputs(
     }
     messages.finish(&mut stderr)?;
     let runtime = refused.iter().filter(|r| r.kind.is_runtime_data()).count();
-    if runtime > 0 && out.format != ReportFormat::Json && !out.quiet {
+    if runtime > 0 && out.format != ReportFormat::Json && !out.verbosity.quiet {
         writeln!(
             stderr,
             "note: {runtime} of the {} refused target(s) computed at run time: not correctable offline",
@@ -861,11 +806,11 @@ fn write_outputs(
             exit,
         );
     }
-    if written.is_empty() && !out.quiet {
+    if written.is_empty() && !out.verbosity.quiet {
         let _ = writeln!(stderr, "note: nothing written: no file changed");
     }
     let _ = summarize(command, results, &written, out, &mut stderr);
-    for r in renames.iter().filter(|_| !out.quiet) {
+    for r in renames.iter().filter(|_| !out.verbosity.quiet) {
         let _ = writeln!(
             stderr,
             "note: {}: renamed `{}` to `{}` in the written file, to match its new file name (the controller needs them equal)",
@@ -904,7 +849,7 @@ fn summarize(
     out: &OutputArgs,
     stderr: &mut impl std::io::Write,
 ) -> anyhow::Result<Exit> {
-    if out.quiet {
+    if out.verbosity.quiet {
         return Ok(Exit::Ok);
     }
     for summary in summaries(command, results, written) {
@@ -938,7 +883,7 @@ fn run_each(
     // A progress bar on a terminal only, for a batch long enough to wait for.
     let bar = if std::io::IsTerminal::is_terminal(&std::io::stderr())
         && programs.len() > 20
-        && !out.quiet
+        && !out.verbosity.quiet
         && out.format == ReportFormat::Text
     {
         indicatif::ProgressBar::new(programs.len() as u64)

@@ -422,3 +422,71 @@ fn man_pages_for_every_subcommand() {
         assert!(page.contains(&format!(".TH {name} 1")), "{name}");
     }
 }
+
+/// `check` prints findings as the transforms print refusals: three of a kind over the whole
+/// batch, then a count naming the kind (`-v`: every one); `-q` prints errors only and keeps the
+/// exit code of every finding; `-q -v` is a usage error.
+#[test]
+fn check_groups_repeated_findings_and_takes_quiet_and_verbose() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = |name: &str| {
+        format!(
+            "  CONST robtarget {name} := [[1,2,3],[1,0.05,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+        )
+    };
+    // Three off-norm quaternions in each of two modules, and a syntax error in the second.
+    let a = format!(
+        "MODULE A\n{}{}{}ENDMODULE\n",
+        target("pA1"),
+        target("pA2"),
+        target("pA3")
+    );
+    let b = format!(
+        "MODULE B\n{}{}{}  CONST num n := ;\nENDMODULE\n",
+        target("pB1"),
+        target("pB2"),
+        target("pB3")
+    );
+    std::fs::write(dir.path().join("a.mod"), a).unwrap();
+    std::fs::write(dir.path().join("b.mod"), b).unwrap();
+    let d = dir.path().to_str().unwrap();
+    let off_norm = |out: &str| {
+        out.lines()
+            .filter(|l| l.contains("warning: quaternion of `p"))
+            .count()
+    };
+    let count_line = "warning: … and 3 more like this [quaternion of `…` is not normalised (|q| = …)] (-v shows all)";
+
+    let o = trackfix(&["check", d]);
+    let out = stdout(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    assert_eq!(off_norm(&out), 3, "{out}");
+    assert!(out.lines().any(|l| l == count_line), "{out}");
+    assert!(out.contains("b.mod:5:"), "{out}");
+    assert!(out.contains(": error: "), "{out}");
+    assert!(
+        out.lines().last().unwrap().starts_with("checked 2 files:")
+            && out.contains("7 findings in 2 files"),
+        "{out}"
+    );
+
+    let o = trackfix(&["check", "-v", d]);
+    let out = stdout(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    assert_eq!(off_norm(&out), 6, "{out}");
+    assert!(!out.contains("more like this"), "{out}");
+
+    let o = trackfix(&["check", "--quiet", d]);
+    let out = stdout(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    assert!(!out.contains("warning"), "{out}");
+    assert!(!out.contains("checked 2 files"), "{out}");
+    assert_eq!(
+        out.lines().filter(|l| l.contains(": error: ")).count(),
+        1,
+        "{out}"
+    );
+
+    let o = trackfix(&["check", "-q", "-v", d]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}

@@ -4,6 +4,8 @@ mod accuracy;
 mod cli;
 mod dialect;
 mod frames;
+mod fuzz_bodies;
+mod fuzzed_transforms;
 mod kinematics;
 mod krl;
 mod library_text;
