@@ -290,18 +290,41 @@ fn check_stamps(
     Ok(Some(Exit::Refused))
 }
 
-/// Writes the stamp into every file the run changed (unless `--no-stamp`).
+/// Writes the stamp into every file the run changed (unless `--no-stamp`), after giving back the
+/// first-written decimals of the values the run brought back (`stamp::carry_precision`).
+///
+/// A `zero` of a file stamped as corrected for the same robot with the same profile that leaves
+/// no literal widened removes the stamp: the file is again as it was before `correct`.
 fn stamp_results(results: &mut [ProgramResult], prov: &Provenance, out: &OutputArgs) {
-    if out.no_stamp {
-        return;
-    }
     for f in results.iter_mut().flat_map(|r| r.files.iter_mut()) {
         if !f.changed() {
             continue;
         }
-        if let Some(d) = trackfix::dialect::dialect_of(&f.path)
-            && let Some(stamped) = stamp::write(&f.output, d, &prov.stamp)
-        {
+        let Some(d) = trackfix::dialect::dialect_of(&f.path) else {
+            continue;
+        };
+        let carried = stamp::carry_precision(&f.original, &f.output, d);
+        f.output = carried.output;
+        if out.no_stamp {
+            continue;
+        }
+        let old = stamp::find_stamp(&f.original, d).map(|(s, _)| s);
+        let undone = prov.stamp.command == "zero"
+            && carried.widened.is_empty()
+            && old.as_ref().is_some_and(|s| {
+                s.command == "correct"
+                    && s.robot == prov.stamp.robot
+                    && s.profile.as_ref().map(|p| &p.1) == prov.stamp.profile.as_ref().map(|p| &p.1)
+            });
+        if undone {
+            if let Some(stripped) = stamp::strip(&f.output, d) {
+                f.output = stripped;
+            }
+            continue;
+        }
+        let mut s = prov.stamp.clone();
+        s.widened = carried.widened;
+        if let Some(stamped) = stamp::write(&f.output, d, &s) {
             f.output = stamped;
         }
     }

@@ -12,6 +12,21 @@
 //! It makes a second `correct` for the same robot detectable (a file corrected twice carries its
 //! deviation twice), and a `zero` of a file never corrected. A later transform replaces the
 //! line, so a file carries at most one stamp: the last transform applied to it.
+//!
+//! A transform writes a changed number with at least the house decimals of its kind (3 for mm,
+//! 4 for degrees, 6 for quaternion components), so `-1200` corrected reads `-1200.873`. The
+//! stamp then also records how the widened literals were first written, so that a later
+//! transform that brings a value back can give back its text (`-1200.000` → `-1200`):
+//!
+//! ```text
+//! ! trackfix: correct robot=r1 widened=3:0*12,3*4,1;6:0*8 version=0.1.0
+//! ```
+//!
+//! `widened=` holds, for each house precision D that widened something (`3:`, `4:`, `6:`,
+//! separated by `;`), a run-length list (`d*n` is `n` times `d`, `d` alone once) with one entry
+//! per number literal of the file written with exactly D decimals, in file order (the stamp line
+//! itself not counted): the decimals it was first written with, D for one written so. Trailing
+//! entries of D are left off. See [`carry_precision`].
 
 use crate::position::ParsedFile;
 use crate::syntax::Span;
@@ -28,8 +43,96 @@ pub struct Stamp {
     pub robot: Option<String>,
     /// The profile's name and the first 12 hex digits of its data hash.
     pub profile: Option<(String, String)>,
+    /// How the literals this file's transforms widened were first written.
+    #[serde(skip_serializing_if = "Widened::is_empty")]
+    pub widened: Widened,
     /// trackfix's version.
     pub version: String,
+}
+
+/// The decimal places house precisions write at least (`rewrite::{MM,DEG,QUAT}_DECIMALS`).
+const HOUSE_DECIMALS: [usize; 3] = [
+    super::rewrite::MM_DECIMALS,
+    super::rewrite::DEG_DECIMALS,
+    super::rewrite::QUAT_DECIMALS,
+];
+
+/// For each house precision D, the decimals each literal written with exactly D decimals was
+/// first written with, in file order (see the module documentation).
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Widened(pub std::collections::BTreeMap<usize, Vec<usize>>);
+
+impl Widened {
+    /// True when no literal is recorded as widened.
+    pub fn is_empty(&self) -> bool {
+        self.0.iter().all(|(d, list)| list.iter().all(|e| e == d))
+    }
+
+    /// The `widened=` value: `3:0*12,3*4,1;6:0*8`.
+    fn text(&self) -> String {
+        let mut parts = Vec::new();
+        for (&d, list) in &self.0 {
+            let keep = list.iter().rposition(|e| *e != d).map_or(0, |i| i + 1);
+            if keep == 0 {
+                continue;
+            }
+            let mut runs: Vec<(usize, usize)> = Vec::new();
+            for &e in &list[..keep] {
+                match runs.last_mut() {
+                    Some((v, n)) if *v == e => *n += 1,
+                    _ => runs.push((e, 1)),
+                }
+            }
+            let runs: Vec<String> = runs
+                .iter()
+                .map(|&(v, n)| {
+                    if n == 1 {
+                        v.to_string()
+                    } else {
+                        format!("{v}*{n}")
+                    }
+                })
+                .collect();
+            parts.push(format!("{d}:{}", runs.join(",")));
+        }
+        parts.join(";")
+    }
+
+    /// Reads a `widened=` value; `None` if it is malformed (then nothing is restored).
+    fn parse(text: &str) -> Option<Widened> {
+        let mut out = std::collections::BTreeMap::new();
+        for part in text.split(';') {
+            let (d, runs) = part.split_once(':')?;
+            let d: usize = d.parse().ok()?;
+            if !HOUSE_DECIMALS.contains(&d) {
+                return None;
+            }
+            let mut list = Vec::new();
+            for run in runs.split(',') {
+                let (v, n) = match run.split_once('*') {
+                    Some((v, n)) => (v.parse::<usize>().ok()?, n.parse::<usize>().ok()?),
+                    None => (run.parse().ok()?, 1),
+                };
+                // A hostile stamp must not make us allocate without bound: no file holds more
+                // literals than bytes.
+                if v > d || list.len() + n > 1 << 28 {
+                    return None;
+                }
+                list.extend(std::iter::repeat_n(v, n));
+            }
+            out.insert(d, list);
+        }
+        Some(Widened(out))
+    }
+
+    /// The first-written decimals of the `index`-th literal written with `d` decimals.
+    fn of(&self, d: usize, index: usize) -> usize {
+        self.0
+            .get(&d)
+            .and_then(|l| l.get(index))
+            .copied()
+            .unwrap_or(d)
+    }
 }
 
 impl Stamp {
@@ -39,6 +142,7 @@ impl Stamp {
             command: command.to_owned(),
             robot: robot.map(str::to_owned),
             profile: profile.map(|(n, h)| (n.to_owned(), h.chars().take(12).collect())),
+            widened: Widened::default(),
             version: env!("CARGO_PKG_VERSION").to_owned(),
         }
     }
@@ -51,6 +155,9 @@ impl Stamp {
         }
         if let Some((name, hash)) = &self.profile {
             s.push_str(&format!(" profile={} sha256={hash}", token(name)));
+        }
+        if !self.widened.is_empty() {
+            s.push_str(&format!(" widened={}", self.widened.text()));
         }
         s.push_str(&format!(" version={}", self.version));
         s
@@ -65,6 +172,7 @@ impl Stamp {
             command,
             robot: None,
             profile: None,
+            widened: Widened::default(),
             version: String::new(),
         };
         let mut name = None;
@@ -75,6 +183,7 @@ impl Stamp {
                 Some(("sha256", v)) => {
                     stamp.profile = Some((name.take().unwrap_or_default(), v.to_owned()));
                 }
+                Some(("widened", v)) => stamp.widened = Widened::parse(v).unwrap_or_default(),
                 Some(("version", v)) => stamp.version = v.to_owned(),
                 _ => {}
             }
@@ -209,6 +318,11 @@ pub fn find(file: &ParsedFile) -> Option<(Stamp, Span)> {
     find_in(&file.source, file.language.dialect())
 }
 
+/// The stamp of the bytes `src` in `dialect` and the span of its line, if it has one.
+pub fn find_stamp(src: &[u8], dialect: &dyn crate::dialect::Dialect) -> Option<(Stamp, Span)> {
+    find_in(src, dialect)
+}
+
 fn find_in(src: &[u8], dialect: &dyn crate::dialect::Dialect) -> Option<(Stamp, Span)> {
     let mark = dialect.line_comment()?;
     let (_, after) = header(src, dialect.header_keywords())?;
@@ -257,6 +371,188 @@ pub fn strip(src: &[u8], dialect: &dyn crate::dialect::Dialect) -> Option<Vec<u8
     Some(out)
 }
 
+/// A number literal's place in a file: its byte span, decimals after the point, and whether it
+/// has an exponent.
+#[derive(Clone, Copy, Debug)]
+struct NumberToken {
+    start: usize,
+    end: usize,
+    decimals: usize,
+    exponent: bool,
+}
+
+/// Every number literal of `src` outside `skip`, in file order: a digit run with an optional
+/// `.` and digits and an optional exponent, not part of a name (`p10`, `$X1`) and not followed
+/// by a letter. Signs are not part of it. Dialect-free on purpose: the same scan of the same
+/// bytes gives the same list, comments and strings included, on both sides of a transform.
+fn number_tokens(src: &[u8], skip: Option<Span>) -> Vec<NumberToken> {
+    let word = |b: u8| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'$' | b'.' | b'#');
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < src.len() {
+        if let Some(s) = skip
+            && i == s.start
+        {
+            i = s.end.max(i + 1);
+            continue;
+        }
+        let b = src[i];
+        let starts =
+            b.is_ascii_digit() || (b == b'.' && src.get(i + 1).is_some_and(u8::is_ascii_digit));
+        if !starts || (i > 0 && word(src[i - 1])) {
+            // Skip the rest of a word so `p10` gives no token.
+            if word(b) {
+                while i < src.len() && word(src[i]) {
+                    i += 1;
+                }
+            } else {
+                i += 1;
+            }
+            continue;
+        }
+        let start = i;
+        while i < src.len() && src[i].is_ascii_digit() {
+            i += 1;
+        }
+        let mut decimals = 0;
+        if i < src.len() && src[i] == b'.' {
+            i += 1;
+            let f = i;
+            while i < src.len() && src[i].is_ascii_digit() {
+                i += 1;
+            }
+            decimals = i - f;
+        }
+        let mut exponent = false;
+        if i < src.len() && matches!(src[i], b'e' | b'E') {
+            let mut j = i + 1;
+            if j < src.len() && matches!(src[j], b'+' | b'-') {
+                j += 1;
+            }
+            if j < src.len() && src[j].is_ascii_digit() {
+                while j < src.len() && src[j].is_ascii_digit() {
+                    j += 1;
+                }
+                i = j;
+                exponent = true;
+            }
+        }
+        if i < src.len() && word(src[i]) {
+            // `1.2.3`, `12abc`: no number; skip the whole word.
+            while i < src.len() && word(src[i]) {
+                i += 1;
+            }
+            continue;
+        }
+        out.push(NumberToken {
+            start,
+            end: i,
+            decimals,
+            exponent,
+        });
+    }
+    out
+}
+
+/// What [`carry_precision`] made of a transform's output.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CarriedPrecision {
+    /// The output, with each value the transform brought back to its first-written decimals
+    /// written with them again.
+    pub output: Vec<u8>,
+    /// How the output's widened literals were first written: for the output's stamp.
+    pub widened: Widened,
+}
+
+/// Carries literal precision across a transform from `original` (stamped or not) to `output`
+/// (the transform's result, its stamp line not yet replaced).
+///
+/// The two files' number literals are paired in order (a transform replaces literals with
+/// literals; if the counts differ nothing is carried and `output` is returned as is). A literal
+/// the transform rewrote whose original was recorded as widened from `d` decimals by
+/// `original`'s stamp, and whose new text at the widened precision D ends in D − d zeros, is
+/// written with `d` decimals (`-1200.000` → `-1200`): only zeros are dropped, so a stamp out of
+/// step with the file can never change a value. Then every output literal written with exactly
+/// a house precision D gets its first-written decimals: a rewritten one's original decimals (or
+/// the earlier stamp's record of them), an unchanged one's record carried over.
+pub fn carry_precision(
+    original: &[u8],
+    output: &[u8],
+    dialect: &dyn crate::dialect::Dialect,
+) -> CarriedPrecision {
+    let old = find_in(original, dialect);
+    let old_widened = old
+        .as_ref()
+        .map(|(s, _)| s.widened.clone())
+        .unwrap_or_default();
+    let skip_in = old.as_ref().map(|(_, span)| *span);
+    let skip_out = find_in(output, dialect).map(|(_, span)| span);
+    let before = number_tokens(original, skip_in);
+    let after = number_tokens(output, skip_out);
+    if before.len() != after.len() {
+        return CarriedPrecision {
+            output: output.to_vec(),
+            widened: Widened::default(),
+        };
+    }
+    // The first-written decimals of each original literal.
+    let mut seen = std::collections::BTreeMap::<usize, usize>::new();
+    let first: Vec<usize> = before
+        .iter()
+        .map(|t| {
+            if t.exponent || !HOUSE_DECIMALS.contains(&t.decimals) {
+                return t.decimals;
+            }
+            let k = seen.entry(t.decimals).or_default();
+            let d = old_widened.of(t.decimals, *k);
+            *k += 1;
+            d
+        })
+        .collect();
+    let mut text = Vec::with_capacity(output.len());
+    let mut widened = Widened::default();
+    let mut at = 0;
+    for ((b, a), &d) in before.iter().zip(&after).zip(&first) {
+        let old_text = &original[b.start..b.end];
+        let new_text = &output[a.start..a.end];
+        let unchanged = old_text == new_text;
+        let mut written = new_text;
+        let house = !a.exponent && HOUSE_DECIMALS.contains(&a.decimals);
+        let mut first_decimals = if unchanged {
+            d
+        } else if b.exponent {
+            a.decimals
+        } else {
+            d.min(a.decimals)
+        };
+        // Only a literal the earlier stamp records as widened is narrowed again.
+        let recorded = !b.exponent && d < b.decimals;
+        if !unchanged && house && recorded && first_decimals < a.decimals {
+            let drop = a.decimals - first_decimals;
+            if new_text[new_text.len() - drop..].iter().all(|&c| c == b'0') {
+                let cut = if first_decimals == 0 { drop + 1 } else { drop };
+                written = &new_text[..new_text.len() - cut];
+                first_decimals = a.decimals;
+            }
+        }
+        if house && written.len() == new_text.len() {
+            widened
+                .0
+                .entry(a.decimals)
+                .or_default()
+                .push(first_decimals);
+        }
+        text.extend_from_slice(&output[at..a.start]);
+        text.extend_from_slice(written);
+        at = a.end;
+    }
+    text.extend_from_slice(&output[at..]);
+    CarriedPrecision {
+        output: text,
+        widened,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -267,6 +563,7 @@ mod tests {
             command: "correct".into(),
             robot: Some("r1".into()),
             profile: Some(("r1 track".into(), "0123456789ab".into())),
+            widened: Widened::default(),
             version: "9.9.9".into(),
         }
     }
@@ -309,5 +606,112 @@ mod tests {
         assert_eq!(write(b"DECL INT i\n", &KRL, &stamp()), None);
         // An ordinary comment after the header is not a stamp.
         assert_eq!(find_in(b"DEF a()\n; trackfix is great\nEND\n", &KRL), None);
+    }
+}
+
+#[cfg(test)]
+mod precision_tests {
+    use super::*;
+    use crate::dialect::rapid::Rapid as RAPID;
+    use crate::syntax::NumLit;
+
+    /// A module with one robtarget of the given literal texts (3 mm, 4 quaternion components).
+    fn module(mm: &[String], q: &[String]) -> Vec<u8> {
+        format!(
+            "MODULE m\n  ! p10 is 1.5 mm off\n  CONST robtarget p10:=[[{}],[{}],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\nENDMODULE\n",
+            mm.join(","),
+            q.join(",")
+        )
+        .into_bytes()
+    }
+
+    /// `text` (one literal) rewritten for `new` the way a transform writes it.
+    fn rewrite(text: &str, new: f64, house: usize) -> String {
+        NumLit::parse(text.as_bytes())
+            .unwrap()
+            .rewrite(new, house)
+            .unwrap_or_else(|| text.to_owned())
+    }
+
+    /// A literal with `decimals` places for `units · 10^-decimals`.
+    fn literal(units: i64, decimals: usize) -> String {
+        crate::syntax::fixed(units as f64 / 10f64.powi(decimals as i32), decimals)
+    }
+
+    #[test]
+    fn widened_round_trips_through_the_stamp_text() {
+        let mut w = Widened::default();
+        w.0.insert(3, vec![0, 0, 0, 3, 1, 3, 3]);
+        w.0.insert(6, vec![6, 6]);
+        assert_eq!(w.text(), "3:0*3,3,1");
+        let back = Widened::parse(&w.text()).unwrap();
+        assert_eq!(back.of(3, 4), 1);
+        assert_eq!(
+            back.of(3, 6),
+            3,
+            "a left-off trailing entry reads as written so"
+        );
+        assert_eq!(Widened::parse("3:0*2;6:1"), {
+            let mut x = Widened::default();
+            x.0.insert(3, vec![0, 0]);
+            x.0.insert(6, vec![1]);
+            Some(x)
+        });
+        for bad in ["", "3:", "5:0", "3:4", "3:0*x", "3:0*999999999999"] {
+            assert_eq!(Widened::parse(bad), None, "{bad}");
+        }
+    }
+
+    #[test]
+    fn a_stamp_out_of_step_only_drops_zeros() {
+        // The stamp says the first 3-decimal literal was written with 0 decimals, but the file
+        // was edited since: `12.500` stays, `13.000` loses only its zeros.
+        let src = b"MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [12.250, 13.250];\nENDMODULE\n";
+        let out = b"MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [12.500, 13.000];\nENDMODULE\n";
+        let c = carry_precision(src, out, &RAPID);
+        assert_eq!(
+            String::from_utf8(c.output).unwrap(),
+            "MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [12.500, 13];\nENDMODULE\n"
+        );
+        assert_eq!(c.widened.text(), "3:0");
+        // Numbers in names and exponents are no 3-decimal literals.
+        let t: Vec<_> = number_tokens(b"p10 1.5E+2 $x1 .5 7.250", None)
+            .iter()
+            .map(|t| (t.decimals, t.exponent))
+            .collect();
+        assert_eq!(t, [(1, true), (1, false), (3, false)]);
+    }
+
+    proptest::proptest! {
+        /// zero(correct(x)) == x byte for byte, with the stamp: a synthetic correction moves each
+        /// value by `delta` and writes it as a transform does (at least the house decimals); the
+        /// inverse writes the exact original value back. Original literals of 0–6 decimals.
+        #[test]
+        fn correct_then_zero_gives_back_the_bytes(
+            mm in proptest::collection::vec((-2_000_000i64..2_000_000, 0usize..=6), 3),
+            q in proptest::collection::vec((-1_000_000i64..1_000_000, 0usize..=6), 4),
+            delta in -3.0f64..3.0,
+        ) {
+            let mm_text: Vec<String> = mm.iter().map(|&(u, d)| literal(u, d)).collect();
+            let q_text: Vec<String> = q.iter().map(|&(u, d)| literal(u, d)).collect();
+            let original = module(&mm_text, &q_text);
+            let value = |t: &String| NumLit::parse(t.as_bytes()).unwrap().value();
+            let c_mm: Vec<String> = mm_text.iter().map(|t| rewrite(t, value(t) + delta, 3)).collect();
+            let c_q: Vec<String> = q_text.iter().map(|t| rewrite(t, value(t) + delta * 1e-3, 6)).collect();
+            let corrected = carry_precision(&original, &module(&c_mm, &c_q), &RAPID);
+            let mut stamp = Stamp::new("correct", Some("r1"), None);
+            stamp.widened = corrected.widened;
+            let stamped = write(&corrected.output, &RAPID, &stamp).unwrap();
+            // The inverse: each corrected literal rewritten for its original value.
+            let z_mm: Vec<String> = c_mm.iter().zip(&mm_text).map(|(c, o)| rewrite(c, value(o), 3)).collect();
+            let z_q: Vec<String> = c_q.iter().zip(&q_text).map(|(c, o)| rewrite(c, value(o), 6)).collect();
+            let zeroed = write(&module(&z_mm, &z_q), &RAPID, &stamp).unwrap();
+            let back = carry_precision(&stamped, &zeroed, &RAPID);
+            proptest::prop_assert!(back.widened.is_empty(), "{:?}", back.widened);
+            proptest::prop_assert_eq!(
+                String::from_utf8(strip(&back.output, &RAPID).unwrap()).unwrap(),
+                String::from_utf8(original).unwrap()
+            );
+        }
     }
 }
