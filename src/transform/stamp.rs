@@ -60,23 +60,28 @@ const HOUSE_DECIMALS: [usize; 3] = [
 /// For each house precision D, the decimals each literal written with exactly D decimals was
 /// first written with, in file order (see the module documentation).
 #[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub struct Widened(pub std::collections::BTreeMap<usize, Vec<usize>>);
+pub struct Widened(pub std::collections::BTreeMap<usize, Vec<u8>>);
 
 impl Widened {
     /// True when no literal is recorded as widened.
     pub fn is_empty(&self) -> bool {
-        self.0.iter().all(|(d, list)| list.iter().all(|e| e == d))
+        self.0
+            .iter()
+            .all(|(&d, list)| list.iter().all(|&e| e as usize == d))
     }
 
     /// The `widened=` value: `3:0*12,3*4,1;6:0*8`.
     fn text(&self) -> String {
         let mut parts = Vec::new();
         for (&d, list) in &self.0 {
-            let keep = list.iter().rposition(|e| *e != d).map_or(0, |i| i + 1);
+            let keep = list
+                .iter()
+                .rposition(|&e| e as usize != d)
+                .map_or(0, |i| i + 1);
             if keep == 0 {
                 continue;
             }
-            let mut runs: Vec<(usize, usize)> = Vec::new();
+            let mut runs: Vec<(u8, usize)> = Vec::new();
             for &e in &list[..keep] {
                 match runs.last_mut() {
                     Some((v, n)) if *v == e => *n += 1,
@@ -99,8 +104,11 @@ impl Widened {
     }
 
     /// Reads a `widened=` value; `None` if it is malformed (then nothing is restored).
-    fn parse(text: &str) -> Option<Widened> {
+    /// At most `limit` entries in all (a file of `limit` bytes holds fewer literals), so a
+    /// hostile stamp cannot make us allocate beyond the file's own size.
+    fn parse(text: &str, limit: usize) -> Option<Widened> {
         let mut out = std::collections::BTreeMap::new();
+        let mut total = 0usize;
         for part in text.split(';') {
             let (d, runs) = part.split_once(':')?;
             let d: usize = d.parse().ok()?;
@@ -110,12 +118,11 @@ impl Widened {
             let mut list = Vec::new();
             for run in runs.split(',') {
                 let (v, n) = match run.split_once('*') {
-                    Some((v, n)) => (v.parse::<usize>().ok()?, n.parse::<usize>().ok()?),
+                    Some((v, n)) => (v.parse::<u8>().ok()?, n.parse::<usize>().ok()?),
                     None => (run.parse().ok()?, 1),
                 };
-                // A hostile stamp must not make us allocate without bound: no file holds more
-                // literals than bytes.
-                if v > d || list.len() + n > 1 << 28 {
+                total += n;
+                if v as usize > d || total > limit {
                     return None;
                 }
                 list.extend(std::iter::repeat_n(v, n));
@@ -130,8 +137,7 @@ impl Widened {
         self.0
             .get(&d)
             .and_then(|l| l.get(index))
-            .copied()
-            .unwrap_or(d)
+            .map_or(d, |&e| e as usize)
     }
 }
 
@@ -164,7 +170,7 @@ impl Stamp {
     }
 
     /// Reads a stamp comment's text (after the comment mark); `None` if it is no stamp.
-    fn parse(text: &str) -> Option<Stamp> {
+    fn parse(text: &str, limit: usize) -> Option<Stamp> {
         let rest = text.trim().strip_prefix(TAG)?;
         let mut words = split_tokens(rest).into_iter();
         let command = words.next()?;
@@ -183,7 +189,9 @@ impl Stamp {
                 Some(("sha256", v)) => {
                     stamp.profile = Some((name.take().unwrap_or_default(), v.to_owned()));
                 }
-                Some(("widened", v)) => stamp.widened = Widened::parse(v).unwrap_or_default(),
+                Some(("widened", v)) => {
+                    stamp.widened = Widened::parse(v, limit).unwrap_or_default()
+                }
                 Some(("version", v)) => stamp.version = v.to_owned(),
                 _ => {}
             }
@@ -329,7 +337,7 @@ fn find_in(src: &[u8], dialect: &dyn crate::dialect::Dialect) -> Option<(Stamp, 
     let (start, end, next) = lines(&src[after..]).next()?;
     let text = crate::syntax::latin1(&src[after + start..after + end]);
     let comment = text.trim_start().strip_prefix(mark)?;
-    let stamp = Stamp::parse(comment)?;
+    let stamp = Stamp::parse(comment, src.len())?;
     Some((stamp, Span::new(after + start, after + next)))
 }
 
@@ -540,7 +548,7 @@ pub fn carry_precision(
                 .0
                 .entry(a.decimals)
                 .or_default()
-                .push(first_decimals);
+                .push(first_decimals as u8);
         }
         text.extend_from_slice(&output[at..a.start]);
         text.extend_from_slice(written);
@@ -644,21 +652,29 @@ mod precision_tests {
         w.0.insert(3, vec![0, 0, 0, 3, 1, 3, 3]);
         w.0.insert(6, vec![6, 6]);
         assert_eq!(w.text(), "3:0*3,3,1");
-        let back = Widened::parse(&w.text()).unwrap();
+        let back = Widened::parse(&w.text(), 100).unwrap();
         assert_eq!(back.of(3, 4), 1);
         assert_eq!(
             back.of(3, 6),
             3,
             "a left-off trailing entry reads as written so"
         );
-        assert_eq!(Widened::parse("3:0*2;6:1"), {
+        assert_eq!(Widened::parse("3:0*2;6:1", 100), {
             let mut x = Widened::default();
             x.0.insert(3, vec![0, 0]);
             x.0.insert(6, vec![1]);
             Some(x)
         });
-        for bad in ["", "3:", "5:0", "3:4", "3:0*x", "3:0*999999999999"] {
-            assert_eq!(Widened::parse(bad), None, "{bad}");
+        for bad in [
+            "",
+            "3:",
+            "5:0",
+            "3:4",
+            "3:0*x",
+            "3:0*999999999999",
+            "3:0*60,1*41",
+        ] {
+            assert_eq!(Widened::parse(bad, 100), None, "{bad}");
         }
     }
 
