@@ -85,7 +85,7 @@ pub(crate) struct CheckArgs {
     /// standard output.
     #[arg(long, value_enum, default_value_t = super::transform::ReportFormat::Text)]
     pub format: super::transform::ReportFormat,
-    /// `-q`: errors only (the exit code still counts every finding); `-v`: every finding.
+    // `-q`: errors only (the exit code still counts every finding); `-v`: every finding.
     #[command(flatten)]
     pub verbosity: Verbosity,
 }
