@@ -490,3 +490,19 @@ fn check_groups_repeated_findings_and_takes_quiet_and_verbose() {
     let o = trackfix(&["check", "-q", "-v", d]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
+
+/// The help of every transform and of `check`/`reach`, as the user reads it: the refusal kinds
+/// `--keep` takes, the formulas and the exit codes are reviewed in the snapshot when they change.
+#[test]
+fn help_of_the_transforms_and_checks() {
+    for cmd in ["correct", "zero", "mirror", "transfer", "check", "reach"] {
+        // Help wraps at the terminal's width (COLUMNS when no terminal): fixed here.
+        let o = Command::new(env!("CARGO_BIN_EXE_trackfix"))
+            .args([cmd, "--help"])
+            .env("COLUMNS", "100")
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{cmd}");
+        insta::assert_snapshot!(format!("help_{cmd}"), stdout(&o));
+    }
+}
