@@ -7,23 +7,12 @@ use std::path::PathBuf;
 use trackfix::program::{LoadOptions, collect_programs, load_group};
 
 use crate::fuzz_bodies::{Exercised, file_holds, krl_pair, one_file, transforms_hold};
-use crate::support::root;
+use crate::support::{self, root};
 
 fn files_under(dir: &str) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    let mut todo = vec![root().join(dir)];
-    while let Some(d) = todo.pop() {
-        for entry in std::fs::read_dir(&d).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                todo.push(path);
-            } else if path.extension().is_none_or(|e| e != "tree") {
-                out.push(path);
-            }
-        }
-    }
-    out.sort();
-    out
+    let mut files = support::files_under(&root().join(dir));
+    files.retain(|path| path.extension().is_none_or(|e| e != "tree"));
+    files
 }
 
 fn add(total: &mut Exercised, e: Option<Exercised>) -> bool {

@@ -634,8 +634,8 @@ fn real_corpus() {
     let Ok(dir) = std::env::var("TRACKFIX_KRL_CORPUS") else {
         return;
     };
-    let mut files: Vec<PathBuf> = walk(Path::new(&dir));
-    files.sort();
+    let mut files = crate::support::files_under(Path::new(&dir));
+    files.retain(|p| trackfix::program::language_of(p) == Some(trackfix::position::Language::Krl));
     for path in files {
         let src = std::fs::read(&path).unwrap();
         let declared = src
@@ -694,19 +694,6 @@ fn real_corpus() {
         assert!(file.round_trip);
         assert_eq!(declared, found, "{}", path.display());
     }
-}
-
-fn walk(dir: &Path) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    for e in std::fs::read_dir(dir).unwrap() {
-        let p = e.unwrap().path();
-        if p.is_dir() {
-            out.extend(walk(&p));
-        } else if trackfix::program::language_of(&p) == Some(trackfix::position::Language::Krl) {
-            out.push(p);
-        }
-    }
-    out
 }
 
 /// The tree, one line per node (routines and blocks as branches), and the diagnostics: a valid file and a

@@ -3,20 +3,9 @@
 //! reads advice about options it does not have (docs/design.md §8, errors that render
 //! themselves). Plain `//` comments are notes to the reader of the code and are not checked.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use crate::support::root;
-
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).expect("src/ is readable") {
-        let path = entry.expect("a directory entry").path();
-        if path.is_dir() {
-            rust_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path);
-        }
-    }
-}
+use crate::support::{files_under, root};
 
 /// Byte offsets of `--` followed by a lower-case letter, not preceded by another `-` (so a
 /// unified diff's `--- a/x` header is no flag).
@@ -44,9 +33,8 @@ fn flag_names_finds_flags_and_nothing_else() {
 #[test]
 fn library_text_names_no_command_line_flag() {
     let src = root().join("src");
-    let mut files = Vec::new();
-    rust_files(&src, &mut files);
-    files.sort();
+    let mut files = files_under(&src);
+    files.retain(|path| path.extension().is_some_and(|e| e == "rs"));
     assert!(
         files.len() > 50,
         "found only {} files under src/",

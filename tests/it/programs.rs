@@ -449,7 +449,7 @@ fn a_refused_global_point_of_config_dat_is_reported() {
     let tree = root().join("samples/kss_backup");
     let dir = tempfile::tempdir().unwrap();
     let copy = dir.path().join("kss_backup");
-    for entry in walk(&tree) {
+    for entry in crate::support::files_under(&tree) {
         let rel = entry.strip_prefix(&tree).unwrap();
         let to = copy.join(rel);
         std::fs::create_dir_all(to.parent().unwrap()).unwrap();
@@ -477,19 +477,6 @@ fn a_refused_global_point_of_config_dat_is_reported() {
         "{err}"
     );
     assert!(!out.exists());
-}
-
-fn walk(dir: &Path) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    for e in std::fs::read_dir(dir).unwrap() {
-        let p = e.unwrap().path();
-        if p.is_dir() {
-            out.extend(walk(&p));
-        } else {
-            out.push(p);
-        }
-    }
-    out
 }
 
 /// `transfer` of a KSS tree reads each step's output again with the tree's own `$config.dat`
