@@ -2,9 +2,10 @@
 //! `path:line:col: severity: message`, the line, a caret and the hint. The library returns the
 //! data; whoever shows it (the CLI) picks the severity and prints it.
 
+use std::ops::Range;
 use std::path::PathBuf;
 
-use crate::syntax::{Diagnostic, Excerpt, LineIndex, Severity};
+use crate::syntax::{Diagnostic, Excerpt, LineIndex, Severity, Span};
 
 /// A diagnostic located in one source.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -33,6 +34,27 @@ pub struct LineAt {
     pub cut_before: bool,
     /// The line goes on after the excerpt.
     pub cut_after: bool,
+}
+
+impl LineAt {
+    /// Where `span` starts in `source` (whose lines `index` holds), and the bytes of its line
+    /// an excerpt shows: the whole line, or a window around the span of a long one.
+    pub(crate) fn of(source: &[u8], index: &LineIndex, span: Span) -> (LineAt, Range<usize>) {
+        let (line, column) = index.line_col(span.start);
+        let line_span = index.line_span(source, line);
+        let len = line_span.end - line_span.start;
+        let at = span.start.saturating_sub(line_span.start).min(len);
+        let end = span.end.saturating_sub(line_span.start).clamp(at, len);
+        let (from, to) = crate::syntax::window(len, at, end);
+        let at = LineAt {
+            line,
+            column,
+            start: line_span.start + from,
+            cut_before: from > 0,
+            cut_after: to < len,
+        };
+        (at, line_span.start + from..line_span.start + to)
+    }
 }
 
 impl Located {
@@ -65,29 +87,8 @@ impl Located {
     /// The diagnostic about `source`, keeping only the window of the span's line it shows (the
     /// error then stays small however large the file is).
     pub fn in_line(path: impl Into<PathBuf>, source: &[u8], diagnostic: Diagnostic) -> Located {
-        let index = LineIndex::new(source);
-        let (line, column) = index.line_col(diagnostic.span.start);
-        let line_span = index.line_span(source, line);
-        let text = line_span.slice(source);
-        let at = diagnostic
-            .span
-            .start
-            .saturating_sub(line_span.start)
-            .min(text.len());
-        let end = diagnostic
-            .span
-            .end
-            .saturating_sub(line_span.start)
-            .clamp(at, text.len());
-        let (from, to) = crate::syntax::window(text.len(), at, end);
-        let at = LineAt {
-            line,
-            column,
-            start: line_span.start + from,
-            cut_before: from > 0,
-            cut_after: to < text.len(),
-        };
-        Located::excerpt(path, text[from..to].to_vec(), at, diagnostic)
+        let (at, shown) = LineAt::of(source, &LineIndex::new(source), diagnostic.span);
+        Located::excerpt(path, source[shown].to_vec(), at, diagnostic)
     }
 
     /// The same message at another severity (a refusal the run skips is a warning).

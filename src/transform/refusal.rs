@@ -69,19 +69,6 @@ pub enum Remedy {
     MirrorJoints,
 }
 
-/// The piece of the refused target's line a diagnostic shows (at most a window of
-/// [`WINDOW`](crate::syntax::WINDOW) bytes around the span), so that a refusal renders without
-/// its file and a line of 2,000 targets costs 2,000 small excerpts, not 2,000 copies of the line.
-#[derive(Clone, Debug, PartialEq, Eq)]
-struct Excerpt {
-    /// The bytes shown, without a line terminator.
-    text: Vec<u8>,
-    /// Byte offset of `text` in the file.
-    start: usize,
-    cut_before: bool,
-    cut_after: bool,
-}
-
 impl RefusalKind {
     /// The target's values are only known when the program runs: no offline transform can
     /// correct it, so summaries count such refusals apart from the ones a change to the program
@@ -113,8 +100,14 @@ pub struct Refusal {
     pub hint: String,
     /// A transform setting that gets past it, when there is one.
     pub remedy: Option<Remedy>,
+    /// Where the excerpt of the refused line sits in the file.
     #[serde(skip)]
-    excerpt: Excerpt,
+    at: LineAt,
+    /// The piece of the refused line a diagnostic shows (at most a window of
+    /// [`WINDOW`](crate::syntax::WINDOW) bytes around the span), so a refusal renders without
+    /// its file and a line of 2,000 targets costs 2,000 small excerpts, not 2,000 copies of it.
+    #[serde(skip)]
+    excerpt: Vec<u8>,
 }
 
 impl Refusal {
@@ -127,31 +120,19 @@ impl Refusal {
         hint: impl Into<String>,
         remedy: Option<Remedy>,
     ) -> Refusal {
-        let (line, column) = file.lines.line_col(span.start);
-        let line_span = file.lines.line_span(&file.source, line);
-        let text = line_span.slice(&file.source);
-        let at = span.start.saturating_sub(line_span.start).min(text.len());
-        let end = span
-            .end
-            .saturating_sub(line_span.start)
-            .clamp(at, text.len());
-        let (from, to) = crate::syntax::window(text.len(), at, end);
+        let (at, shown) = LineAt::of(&file.source, &file.lines, span);
         Refusal {
             path: file.path.clone(),
-            line,
-            column,
+            line: at.line,
+            column: at.column,
             span,
             target,
             kind,
             message,
             hint: hint.into(),
             remedy,
-            excerpt: Excerpt {
-                text: text[from..to].to_vec(),
-                start: line_span.start + from,
-                cut_before: from > 0,
-                cut_after: to < text.len(),
-            },
+            at,
+            excerpt: file.source[shown].to_vec(),
         }
     }
 
@@ -159,14 +140,7 @@ impl Refusal {
     /// what to do), rendered on `Display` with the refused line and a caret.
     pub fn located(&self, severity: Severity, hint: impl Into<String>) -> Located {
         let d = Diagnostic::new(severity, self.span, self.message.clone()).with_hint(hint);
-        let at = LineAt {
-            line: self.line,
-            column: self.column,
-            start: self.excerpt.start,
-            cut_before: self.excerpt.cut_before,
-            cut_after: self.excerpt.cut_after,
-        };
-        Located::excerpt(self.path.clone(), self.excerpt.text.clone(), at, d)
+        Located::excerpt(self.path.clone(), self.excerpt.clone(), self.at, d)
     }
 }
 
