@@ -19,7 +19,7 @@ mod tree;
 pub use diagnostic::{Diagnostic, Excerpt, Severity, WINDOW, latin1, printable, window};
 pub use edit::{Edit, EditError, apply_edits};
 pub use line_index::LineIndex;
-pub use number::{NumLit, fixed};
+pub use number::{NumLit, fixed, same_at};
 pub use span::Span;
 pub(crate) use tree::language;
 pub use tree::{Language, NoSink, Node, Sink, Tree};

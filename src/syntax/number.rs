@@ -4,16 +4,56 @@
 ///
 /// Like toml_edit's `Formatted<T>`, the value and the style of its text travel together: an
 /// unchanged value keeps its original bytes (they stay in the source, found by the field's span),
-/// a changed one is written with the original's decimals. The text itself is not copied: a
-/// 50 MB module holds millions of literals, and an allocation each would dominate parsing.
+/// a changed one is written with the original's decimals and style (no leading zero for `.5`,
+/// the same exponent for `1.5E+2`). The text itself is not copied: a 50 MB module holds millions
+/// of literals, and an allocation each would dominate parsing.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NumLit {
     value: f64,
     /// Decimal places the text resolves: mantissa decimals minus the exponent
     /// (`9E+09` → -9, `2.69E-07` → 9, `1.50` → 2).
     precision: i32,
+    /// The exponent as written, if the text has one that a rewrite can keep.
+    exponent: Option<Exponent>,
     /// The text starts with an explicit `+`.
     plus: bool,
+    /// No digit before the point (`.5`, `-.25`).
+    leading_point: bool,
+    /// Digits of the mantissa before the point (0 for `.5`).
+    int_digits: u8,
+}
+
+/// The integer digits a rewritten mantissa may have and keep its literal's exponent: a value
+/// that moved past 1000 times its original exponent is written plainly.
+const EXPONENT_INT_DIGITS: usize = 3;
+
+/// How a literal's exponent is spelled, so that a rewrite writes the same suffix.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Exponent {
+    value: i16,
+    /// `E` rather than `e`.
+    upper: bool,
+    /// An explicit `+` before a non-negative exponent.
+    plus: bool,
+    /// Digits written, leading zeros included (`E+09` → 2).
+    digits: u8,
+}
+
+impl Exponent {
+    /// Appends the suffix as written: `E+09`.
+    fn write(self, out: &mut String) {
+        out.push(if self.upper { 'E' } else { 'e' });
+        if self.value < 0 {
+            out.push('-');
+        } else if self.plus {
+            out.push('+');
+        }
+        let digits = self.value.unsigned_abs().to_string();
+        for _ in digits.len()..self.digits as usize {
+            out.push('0');
+        }
+        out.push_str(&digits);
+    }
 }
 
 impl NumLit {
@@ -31,9 +71,11 @@ impl NumLit {
             push(d);
             i += 1;
         }
-        let mut digits = i - int_start;
+        let int_digits = i - int_start;
+        let mut digits = int_digits;
         let mut decimals = 0i32;
-        if bytes.get(i) == Some(&b'.') {
+        let point = bytes.get(i) == Some(&b'.');
+        if point {
             i += 1;
             let frac_start = i;
             while let Some(&d) = bytes.get(i).filter(|d| d.is_ascii_digit()) {
@@ -47,9 +89,11 @@ impl NumLit {
             return None;
         }
         let mut exponent = 0i32;
-        if matches!(bytes.get(i), Some(b'e' | b'E')) {
+        let mut style = None;
+        if let Some(&letter @ (b'e' | b'E')) = bytes.get(i) {
             i += 1;
             let negative = bytes.get(i) == Some(&b'-');
+            let plus = bytes.get(i) == Some(&b'+');
             if matches!(bytes.get(i), Some(b'+' | b'-')) {
                 i += 1;
             }
@@ -66,6 +110,7 @@ impl NumLit {
             if negative {
                 exponent = -exponent;
             }
+            style = Some((letter == b'E', plus, i - exp_start));
         }
         if i != bytes.len() {
             return None;
@@ -83,10 +128,23 @@ impl NumLit {
         if !value.is_finite() {
             return None;
         }
+        // An exponent a rewrite can keep: small enough to spell again (|e| < 100, up to 3
+        // digits as written).
+        let exponent_style = style.and_then(|(upper, plus, digits)| {
+            Some(Exponent {
+                value: i16::try_from(exponent).ok().filter(|e| e.abs() < 100)?,
+                upper,
+                plus,
+                digits: u8::try_from(digits).ok().filter(|&d| d <= 3)?,
+            })
+        });
         Some(NumLit {
             value,
             precision: decimals.saturating_sub(exponent),
+            exponent: exponent_style,
             plus: bytes.first() == Some(&b'+'),
+            leading_point: point && int_digits == 0,
+            int_digits: int_digits.min(u8::MAX as usize) as u8,
         })
     }
 
@@ -100,13 +158,23 @@ impl NumLit {
         self.precision
     }
 
+    /// The decimal places [`rewrite`](Self::rewrite) writes a new value with:
+    /// `max(original decimals, min_decimals)` (at most 12).
+    pub fn places(&self, min_decimals: usize) -> usize {
+        self.precision.clamp(0, 12).max(min_decimals.min(12) as i32) as usize
+    }
+
     /// The text to write for `new`, or `None` when the original text already says it.
     ///
-    /// `new` is written with `max(original decimals, min_decimals)` places, never in exponent
-    /// form; if it rounds to the same text as the original value at that precision, the original
-    /// text is kept (so `0` stays `0` and `9E+09` stays `9E+09`).
+    /// `new` is written with [`places`](Self::places) decimals; if it rounds to the same text as
+    /// the original value at that precision, the original text is kept (so `0` stays `0` and
+    /// `9E+09` stays `9E+09`). The text keeps the original's style where it has one, so that a
+    /// later transform that brings the value back can give back its text (docs/design.md §5): an
+    /// explicit `+`; no leading zero below 1 for `.5` (`.512`); and the same exponent for
+    /// `1.5E+2` (`1.50123E+2`, `15.00123E+2`) while the mantissa has at most 3 integer digits
+    /// (or as many as the original's), else the plain form (`150012.300`).
     pub fn rewrite(&self, new: f64, min_decimals: usize) -> Option<String> {
-        let places = self.precision.clamp(0, 12).max(min_decimals.min(12) as i32) as usize;
+        let places = self.places(min_decimals);
         // Compare the rounded values as integers first: most fields of a corrected program
         // change, but the ones that don't (zeros, 9E9, unchanged quaternions) cost no text.
         if let (Some(a), Some(b)) = (Scaled::of(new, places), Scaled::of(self.value, places)) {
@@ -117,7 +185,25 @@ impl NumLit {
             if self.plus && !a.negative {
                 text.push('+');
             }
-            a.write(places, &mut text);
+            match self.exponent.map(|e| (e, places as i32 + e.value as i32)) {
+                // The same digits with the point moved by the exponent: `150123` units of
+                // 10^-3 are `1.50123E+2`.
+                Some((e, decimals))
+                    if (0..=18).contains(&decimals)
+                        && a.int_digits(decimals as usize)
+                            <= (self.int_digits as usize).max(EXPONENT_INT_DIGITS) =>
+                {
+                    a.write(decimals as usize, &mut text);
+                    e.write(&mut text);
+                }
+                _ => a.write(places, &mut text),
+            }
+            if self.leading_point && places > 0 {
+                // `0.512` → `.512`, `-0.512` → `-.512`.
+                if let Some(at) = text.find("0.").filter(|&at| !text[..at].contains(|c: char| c.is_ascii_digit())) {
+                    text.remove(at);
+                }
+            }
             return Some(text);
         }
         let written = fixed(new, places);
@@ -137,6 +223,15 @@ impl NumLit {
         } else {
             Some(new.to_string())
         }
+    }
+}
+
+/// True when `a` and `b` read the same written with `places` decimals: the comparison
+/// [`NumLit::rewrite`] makes before it keeps a literal's text.
+pub fn same_at(a: f64, b: f64, places: usize) -> bool {
+    match (Scaled::of(a, places), Scaled::of(b, places)) {
+        (Some(x), Some(y)) => x == y,
+        _ => fixed(a, places) == fixed(b, places),
     }
 }
 
@@ -223,17 +318,29 @@ impl Scaled {
         })
     }
 
-    /// Appends the digits: `-`, the integer part, and `places` decimals after a `.`.
+    /// Digits before the point when the units are written with `places` decimals (at least 1).
+    fn int_digits(self, places: usize) -> usize {
+        let mut int = self.units / 10u128.pow(places as u32);
+        let mut n = 1;
+        while int >= 10 {
+            int /= 10;
+            n += 1;
+        }
+        n
+    }
+
+    /// Appends the digits: `-`, the integer part, and `places` (at most 18) decimals after a
+    /// `.` — the value's own places, or more for the mantissa of an exponent form.
     ///
     /// By hand into a stack buffer: through `write!` the formatting machinery was most of the
     /// cost of a rewritten literal.
     fn write(self, places: usize, out: &mut String) {
-        // Sign, 11 integer digits (< 2^35), '.', 12 decimals.
-        let mut buf = [0u8; 32];
+        // Sign, 23 integer digits (units < 2^75, written with no decimals), '.', 18 decimals.
+        let mut buf = [0u8; 48];
         let mut at = buf.len();
-        // One 128-bit division; both parts fit in u64 (below 2^35 and 10^12).
+        // One 128-bit division; the decimals fit in u64 (below 10^18).
         let scale = 10u128.pow(places as u32);
-        let mut int = (self.units / scale) as u64;
+        let mut int = self.units / scale;
         let mut frac = (self.units % scale) as u64;
         for _ in 0..places {
             at -= 1;

@@ -9,7 +9,7 @@ use crate::syntax::Edit;
 use super::edits::{ProgramEdits, TargetChange};
 use super::policy::{Why, common_refusal, implausible_result, joint_target};
 use super::refusal::{Refusal, RefusalKind};
-use super::rewrite::{OrientationHint, pose_change, pose_edits};
+use super::rewrite::{OrientationHint, pose_change, reversible_pose_edits};
 
 /// Where a rule is looking: the program (for frames declared in other files) and the file.
 #[derive(Clone, Copy)]
@@ -50,6 +50,13 @@ pub(crate) trait TargetRule {
         skid: Option<f64>,
         t: &Pose,
     ) -> Result<(Pose, OrientationHint), Why>;
+
+    /// The change the inverse transform will apply to this target read back from the written
+    /// text (`zero`'s for `correct`), when the rule writes its results so that the inverse gives
+    /// back the original text (docs/design.md §5, round trip).
+    fn inverse(&self, _frame: &Self::Frame, _skid: Option<f64>) -> Option<Pose> {
+        None
+    }
 
     /// The expanded uncertainty (k = 2, mm) of the new target's TCP, when the rule knows one.
     fn uncertainty(&self, _frame: &Self::Frame, _skid: Option<f64>, _new: &Pose) -> Option<f64> {
@@ -125,7 +132,8 @@ fn cartesian<R: TargetRule>(rule: &R, scope: Scope, p: &Position) -> Step {
     if let Some(why) = implausible_result(p, &new) {
         return Err(refuse(why));
     }
-    let mut edits = pose_edits(fields, &new, hint);
+    let undo = rule.inverse(&frame, skid);
+    let mut edits = reversible_pose_edits(fields, &new, hint, undo.as_ref());
     edits.extend(rule.more_edits(scope, p));
     let (mm, deg) = pose_change(&t, &new);
     let uncertainty_mm = rule.uncertainty(&frame, skid, &new);

@@ -1,8 +1,12 @@
 //! A new pose → edits of exactly the literal fields that change (docs/design.md §5 formatting).
 
-use crate::geometry::{Pose, abb_quat_components, angle_between, kuka_abc_angles};
+use nalgebra::Translation3;
+
+use crate::geometry::{
+    Pose, abb_quat, abb_quat_components, angle_between, kuka_abc, kuka_abc_angles,
+};
 use crate::position::{BitField, CartesianFields, NumField, Orientation};
-use crate::syntax::Edit;
+use crate::syntax::{Edit, NumLit, same_at};
 
 /// At least this many decimals for mm.
 pub(crate) const MM_DECIMALS: usize = 3;
@@ -19,7 +23,8 @@ const SAME_ROTATION_RAD: f64 = 1e-10;
 /// How to choose among equivalent orientation numbers.
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum OrientationHint {
-    /// Keep the written numbers' branch: quaternion sign / ABC triple nearest the original.
+    /// Keep the written numbers' branch: quaternion sign / ABC triple nearest the original;
+    /// a quaternion also keeps its written norm when that is a rounded unit norm.
     NearOriginal,
     /// A quaternion the result should lie close to (a mirror knows its analytic image).
     /// KUKA angles are then written in the canonical range (-180, 180].
@@ -59,6 +64,22 @@ fn written<const N: usize>(fields: &[Option<NumField>; N]) -> Option<[f64; N]> {
 /// Edits that make `fields` say `new`. Fields whose text already says the new value (at their
 /// written precision) are kept.
 pub(crate) fn pose_edits(fields: &CartesianFields, new: &Pose, hint: OrientationHint) -> Vec<Edit> {
+    reversible_pose_edits(fields, new, hint, None)
+}
+
+/// [`pose_edits`], written so that the inverse transform gives back the original text where it
+/// can (docs/design.md §5, round trip): `undo` is the change the inverse applies to this
+/// target read back from the written text (`zero`'s for `correct`). Each field group
+/// (translation, orientation) is written as plain rounding when the inverse of that gives back
+/// every original literal at its written places; else as the nearest choice, within one unit
+/// of the last written place of each field, that does; else as plain rounding. A written value
+/// stays within 1.5 units of its last place of the exact value.
+pub(crate) fn reversible_pose_edits(
+    fields: &CartesianFields,
+    new: &Pose,
+    hint: OrientationHint,
+    undo: Option<&Pose>,
+) -> Vec<Edit> {
     let mut edits = Vec::new();
     // Absurd literals (1e300 mm) overflow the composition; a half-written target would be worse
     // than none, so such a pose changes nothing.
@@ -67,11 +88,20 @@ pub(crate) fn pose_edits(fields: &CartesianFields, new: &Pose, hint: Orientation
     if !finite {
         return edits;
     }
+    let old = fields.pose();
+    // A round trip needs the whole pose: the inverse reads it back.
+    let undo = undo.filter(|_| old.is_some());
     let t = new.translation.vector;
-    for (field, v) in fields.trans.iter().zip([t.x, t.y, t.z]) {
-        edits.extend(number_edit(field, v, MM_DECIMALS));
-    }
-    let Some(old) = fields.pose() else {
+    let texts = match (undo, present(&fields.trans)) {
+        (Some(undo), Some(trans)) => reversible(trans, [t.x, t.y, t.z], MM_DECIMALS, |w| {
+            let read = Pose::from_parts(Translation3::new(w[0], w[1], w[2]), Default::default());
+            let back = (undo * read).translation.vector;
+            Some([back.x, back.y, back.z])
+        }),
+        _ => plain(&fields.trans, [t.x, t.y, t.z], MM_DECIMALS),
+    };
+    push_edits(&mut edits, &fields.trans, texts);
+    let Some(old) = old else {
         return edits;
     };
     if angle_between(&old.rotation, &new.rotation) < SAME_ROTATION_RAD {
@@ -83,10 +113,28 @@ pub(crate) fn pose_edits(fields: &CartesianFields, new: &Pose, hint: Orientation
                 OrientationHint::NearOriginal => written(q),
                 OrientationHint::Expected(e) => Some(e),
             };
-            let c = abb_quat_components(&new.rotation, like);
-            for (field, v) in q.iter().zip(c) {
-                edits.extend(number_edit(field, v, QUAT_DECIMALS));
-            }
+            let keep_norm = matches!(hint, OrientationHint::NearOriginal);
+            let scale = |w: Option<[f64; 4]>| match w {
+                Some(w) if keep_norm => written_norm(w),
+                _ => 1.0,
+            };
+            let s = scale(written(q));
+            let c = abb_quat_components(&new.rotation, like).map(|v| v * s);
+            let texts = match (undo, present(q)) {
+                (Some(undo), Some(q)) => reversible(q, c, QUAT_DECIMALS, |w| {
+                    // The inverse reads the written quaternion normalised, and writes its
+                    // result with the sign nearest the written one, at the written norm.
+                    let read = abb_quat(w)?;
+                    let back = undo.rotation * read;
+                    if angle_between(&read, &back) < SAME_ROTATION_RAD {
+                        return Some(w);
+                    }
+                    let s = scale(Some(w));
+                    Some(abb_quat_components(&back, Some(w)).map(|v| v * s))
+                }),
+                _ => plain(q, c, QUAT_DECIMALS),
+            };
+            push_edits(&mut edits, q, texts);
         }
         Some(Orientation::Abc(abc)) => {
             let like = match hint {
@@ -94,13 +142,141 @@ pub(crate) fn pose_edits(fields: &CartesianFields, new: &Pose, hint: Orientation
                 OrientationHint::Expected(_) => None,
             };
             let angles = kuka_abc_angles(&new.rotation, like);
-            for (field, v) in abc.iter().zip(angles) {
-                edits.extend(number_edit(field, v, DEG_DECIMALS));
-            }
+            let texts = match (undo, present(abc)) {
+                (Some(undo), Some(abc)) => reversible(abc, angles, DEG_DECIMALS, |w| {
+                    let read = kuka_abc(w[0], w[1], w[2]);
+                    let back = undo.rotation * read;
+                    if angle_between(&read, &back) < SAME_ROTATION_RAD {
+                        return Some(w);
+                    }
+                    Some(kuka_abc_angles(&back, Some(w)))
+                }),
+                _ => plain(abc, angles, DEG_DECIMALS),
+            };
+            push_edits(&mut edits, abc, texts);
         }
         None => {}
     }
     edits
+}
+
+/// Below this distance of its norm from 1, a written quaternion's norm is kept: it is a unit
+/// quaternion rounded to 4 or more decimals (a rounding to 6 leaves up to about 1e-6).
+const KEPT_NORM: f64 = 1e-4;
+
+/// The norm a rewritten quaternion is written with: the written one's when that is a rounded
+/// unit quaternion (docs/design.md §5, round trip), else 1.
+///
+/// A file's quaternion rounded to 6 decimals has a norm up to about 1e-6 from 1; written
+/// normalised, each component would move by up to that much on top of the rotation, and a
+/// round trip (`correct` then `zero`) through normalised quaternions could not come back to
+/// such a quaternion's text. Kept, the written components are those of the new rotation at
+/// the norm the file chose; every reader normalises.
+fn written_norm(w: [f64; 4]) -> f64 {
+    let n = w.iter().map(|v| v * v).sum::<f64>().sqrt();
+    if (n - 1.0).abs() < KEPT_NORM { n } else { 1.0 }
+}
+
+/// Every field of a group, if all are numeric literals.
+fn present<const N: usize>(fields: &[Option<NumField>; N]) -> Option<[&NumField; N]> {
+    let mut out = [fields[0].as_ref()?; N];
+    for (o, f) in out.iter_mut().zip(fields) {
+        *o = f.as_ref()?;
+    }
+    Some(out)
+}
+
+/// Each field's text for `values` by plain rounding (`None`: kept as written).
+fn plain<const N: usize>(
+    fields: &[Option<NumField>; N],
+    values: [f64; N],
+    house: usize,
+) -> [Option<String>; N] {
+    std::array::from_fn(|i| {
+        let f = fields[i].as_ref().filter(|_| values[i].is_finite())?;
+        f.lit.rewrite(values[i], house)
+    })
+}
+
+fn push_edits<const N: usize>(
+    edits: &mut Vec<Edit>,
+    fields: &[Option<NumField>; N],
+    texts: [Option<String>; N],
+) {
+    for (f, text) in fields.iter().zip(texts) {
+        if let (Some(f), Some(text)) = (f, text) {
+            edits.push(Edit::new(f.span, text));
+        }
+    }
+}
+
+/// One field written for `v`: its text (`None`: kept) and the value the next run reads from it.
+fn write_one(field: &NumField, v: f64, house: usize) -> (Option<String>, f64) {
+    match field.lit.rewrite(v, house) {
+        Some(text) => {
+            // Our own output always parses; were it not to, the check below fails safe (the
+            // value read back then matches nothing and plain rounding is written).
+            let read = NumLit::parse(text.as_bytes()).map_or(f64::NAN, |l| l.value());
+            (Some(text), read)
+        }
+        None => (None, field.value()),
+    }
+}
+
+/// The texts for `exact` in `fields` (see [`reversible_pose_edits`]): `inverse` gives what the
+/// inverse transform writes for the values read back from the written texts.
+fn reversible<const N: usize>(
+    fields: [&NumField; N],
+    exact: [f64; N],
+    house: usize,
+    inverse: impl Fn([f64; N]) -> Option<[f64; N]>,
+) -> [Option<String>; N] {
+    if exact.iter().any(|v| !v.is_finite()) {
+        return std::array::from_fn(|_| None);
+    }
+    let places = fields.map(|f| f.lit.places(house));
+    let gives_back = |read: [f64; N]| {
+        inverse(read).is_some_and(|z| {
+            (0..N).all(|i| z[i].is_finite() && same_at(z[i], fields[i].value(), places[i]))
+        })
+    };
+    let first: [(Option<String>, f64); N] = std::array::from_fn(|i| write_one(fields[i], exact[i], house));
+    if gives_back(first.clone().map(|(_, v)| v)) {
+        return first.map(|(t, _)| t);
+    }
+    // Each field's choices: the plain rounding and the values one unit of its last written
+    // place either side, nearest to the exact value first.
+    let options: [Vec<(Option<String>, f64, f64)>; N] = std::array::from_fn(|i| {
+        let unit = 10f64.powi(-(places[i] as i32));
+        let mut o: Vec<_> = [0.0, -1.0, 1.0]
+            .iter()
+            .map(|k| {
+                let (text, read) = write_one(fields[i], exact[i] + k * unit, house);
+                (text, read, (read - exact[i]).abs() / unit)
+            })
+            .collect();
+        o.sort_by(|a, b| a.2.total_cmp(&b.2));
+        o
+    });
+    // Every combination, nearest (in units of the last places, summed) first; 81 at most.
+    let mut combos: Vec<([usize; N], f64)> = (0..3usize.pow(N as u32))
+        .map(|mut n| {
+            let pick: [usize; N] = std::array::from_fn(|_| {
+                let k = n % 3;
+                n /= 3;
+                k
+            });
+            let distance = (0..N).map(|i| options[i][pick[i]].2).sum();
+            (pick, distance)
+        })
+        .collect();
+    combos.sort_by(|a, b| a.1.total_cmp(&b.1));
+    for (pick, _) in combos {
+        if gives_back(std::array::from_fn(|i| options[i][pick[i]].1)) {
+            return std::array::from_fn(|i| options[i][pick[i]].0.clone());
+        }
+    }
+    first.map(|(t, _)| t)
 }
 
 /// Translation (mm) and rotation (degrees) between two poses: the "size" of a change.

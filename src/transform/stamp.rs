@@ -24,12 +24,18 @@
 //!
 //! `widened=` holds, for each house precision D that widened something (`3:`, `4:`, `6:`,
 //! separated by `;`), a run-length list (`d*n` is `n` times `d`, `d` alone once) with one entry
-//! per number literal of the file written with exactly D decimals, in file order (the stamp line
-//! itself not counted): the decimals it was first written with, D for one written so. Trailing
-//! entries of D are left off. See [`carry_precision`].
+//! per number literal of the file that resolves exactly D decimals, in file order (the stamp
+//! line itself not counted): the precision it was first written with, D for one written so.
+//! Trailing entries of D are left off. A literal's precision is its decimals minus its exponent:
+//! `-1200.873` resolves 3, and so does `1.50123E+2`, a rewrite of `1.5E+2` (which resolves -1,
+//! recorded as `3:-1`). See [`carry_precision`].
 
 use crate::position::ParsedFile;
 use crate::syntax::Span;
+
+/// The lowest first-written precision a `widened=` entry may hold (`1E+20` resolves -20; an
+/// exponent literal keeps its exponent when rewritten only below 100).
+const MIN_FIRST_PRECISION: i8 = -99;
 
 /// What every stamp comment starts with after the comment mark.
 const TAG: &str = "trackfix:";
@@ -57,17 +63,17 @@ const HOUSE_DECIMALS: [usize; 3] = [
     super::rewrite::QUAT_DECIMALS,
 ];
 
-/// For each house precision D, the decimals each literal written with exactly D decimals was
+/// For each house precision D, the precision each literal that resolves exactly D decimals was
 /// first written with, in file order (see the module documentation).
 #[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub struct Widened(pub std::collections::BTreeMap<usize, Vec<u8>>);
+pub struct Widened(pub std::collections::BTreeMap<usize, Vec<i8>>);
 
 impl Widened {
     /// True when no literal is recorded as widened.
     pub fn is_empty(&self) -> bool {
         self.0
             .iter()
-            .all(|(&d, list)| list.iter().all(|&e| e as usize == d))
+            .all(|(&d, list)| list.iter().all(|&e| e as i32 == d as i32))
     }
 
     /// The `widened=` value: `3:0*12,3*4,1;6:0*8`.
@@ -76,12 +82,12 @@ impl Widened {
         for (&d, list) in &self.0 {
             let keep = list
                 .iter()
-                .rposition(|&e| e as usize != d)
+                .rposition(|&e| e as i32 != d as i32)
                 .map_or(0, |i| i + 1);
             if keep == 0 {
                 continue;
             }
-            let mut runs: Vec<(u8, usize)> = Vec::new();
+            let mut runs: Vec<(i8, usize)> = Vec::new();
             for &e in &list[..keep] {
                 match runs.last_mut() {
                     Some((v, n)) if *v == e => *n += 1,
@@ -118,11 +124,11 @@ impl Widened {
             let mut list = Vec::new();
             for run in runs.split(',') {
                 let (v, n) = match run.split_once('*') {
-                    Some((v, n)) => (v.parse::<u8>().ok()?, n.parse::<usize>().ok()?),
+                    Some((v, n)) => (v.parse::<i8>().ok()?, n.parse::<usize>().ok()?),
                     None => (run.parse().ok()?, 1),
                 };
                 total += n;
-                if v as usize > d || total > limit {
+                if v as i32 > d as i32 || v < MIN_FIRST_PRECISION || total > limit {
                     return None;
                 }
                 list.extend(std::iter::repeat_n(v, n));
@@ -132,12 +138,12 @@ impl Widened {
         Some(Widened(out))
     }
 
-    /// The first-written decimals of the `index`-th literal written with `d` decimals.
-    fn of(&self, d: usize, index: usize) -> usize {
+    /// The first-written precision of the `index`-th literal that resolves `d` decimals.
+    fn of(&self, d: usize, index: usize) -> i32 {
         self.0
             .get(&d)
             .and_then(|l| l.get(index))
-            .map_or(d, |&e| e as usize)
+            .map_or(d as i32, |&e| e as i32)
     }
 }
 
@@ -379,14 +385,32 @@ pub fn strip(src: &[u8], dialect: &dyn crate::dialect::Dialect) -> Option<Vec<u8
     Some(out)
 }
 
-/// A number literal's place in a file: its byte span, decimals after the point, and whether it
-/// has an exponent.
+/// A number literal's place in a file: its byte span, decimals after the point, and its
+/// exponent (with where the mantissa ends).
 #[derive(Clone, Copy, Debug)]
 struct NumberToken {
     start: usize,
     end: usize,
     decimals: usize,
-    exponent: bool,
+    /// The exponent's value and the end of the mantissa, when the literal has one.
+    exponent: Option<(i32, usize)>,
+}
+
+impl NumberToken {
+    /// Decimal places the literal resolves: its decimals minus its exponent (`1.50123E+2` → 3).
+    fn precision(&self) -> i32 {
+        self.decimals as i32 - self.exponent.map_or(0, |(e, _)| e)
+    }
+
+    /// Whether it resolves exactly a house precision (the literals `widened=` lists).
+    fn house(&self) -> bool {
+        usize::try_from(self.precision()).is_ok_and(|p| HOUSE_DECIMALS.contains(&p))
+    }
+
+    /// The end of the mantissa (before any exponent).
+    fn mantissa_end(&self) -> usize {
+        self.exponent.map_or(self.end, |(_, at)| at)
+    }
 }
 
 /// Every number literal of `src` outside `skip`, in file order: a digit run with an optional
@@ -431,18 +455,21 @@ fn number_tokens(src: &[u8], skip: Option<Span>) -> Vec<NumberToken> {
             }
             decimals = i - f;
         }
-        let mut exponent = false;
+        let mut exponent = None;
         if i < src.len() && matches!(src[i], b'e' | b'E') {
             let mut j = i + 1;
+            let negative = j < src.len() && src[j] == b'-';
             if j < src.len() && matches!(src[j], b'+' | b'-') {
                 j += 1;
             }
             if j < src.len() && src[j].is_ascii_digit() {
+                let mut e = 0i32;
                 while j < src.len() && src[j].is_ascii_digit() {
+                    e = e.saturating_mul(10).saturating_add((src[j] - b'0') as i32);
                     j += 1;
                 }
+                exponent = Some((if negative { -e } else { e }, i));
                 i = j;
-                exponent = true;
             }
         }
         if i < src.len() && word(src[i]) {
@@ -477,12 +504,14 @@ pub struct CarriedPrecision {
 ///
 /// The two files' number literals are paired in order (a transform replaces literals with
 /// literals; if the counts differ nothing is carried and `output` is returned as is). A literal
-/// the transform rewrote whose original was recorded as widened from `d` decimals by
-/// `original`'s stamp, and whose new text at the widened precision D ends in D − d zeros, is
-/// written with `d` decimals (`-1200.000` → `-1200`): only zeros are dropped, so a stamp out of
-/// step with the file can never change a value. Then every output literal written with exactly
-/// a house precision D gets its first-written decimals: a rewritten one's original decimals (or
-/// the earlier stamp's record of them), an unchanged one's record carried over.
+/// the transform rewrote whose original was recorded as widened from precision `d` by
+/// `original`'s stamp, and whose new text at the widened precision D ends in D − d zeros (of
+/// the mantissa, for an exponent literal), is written with precision `d` (`-1200.000` →
+/// `-1200`, `1.50000E+2` → `1.5E+2`, `.500` → `.5`): only zeros are dropped, so a stamp out of
+/// step with the file can never change a value. Then every output literal that resolves exactly
+/// a house precision D gets its first-written precision: a rewritten one's original precision
+/// (or the earlier stamp's record of it), an unchanged one's record carried over, a narrowed one
+/// its own.
 pub fn carry_precision(
     original: &[u8],
     output: &[u8],
@@ -503,16 +532,16 @@ pub fn carry_precision(
             widened: Widened::default(),
         };
     }
-    // The first-written decimals of each original literal.
-    let mut seen = std::collections::BTreeMap::<usize, usize>::new();
-    let first: Vec<usize> = before
+    // The first-written precision of each original literal.
+    let mut seen = std::collections::BTreeMap::<i32, usize>::new();
+    let first: Vec<i32> = before
         .iter()
         .map(|t| {
-            if t.exponent || !HOUSE_DECIMALS.contains(&t.decimals) {
-                return t.decimals;
+            if !t.house() {
+                return t.precision();
             }
-            let k = seen.entry(t.decimals).or_default();
-            let d = old_widened.of(t.decimals, *k);
+            let k = seen.entry(t.precision()).or_default();
+            let d = old_widened.of(t.precision() as usize, *k);
             *k += 1;
             d
         })
@@ -524,34 +553,43 @@ pub fn carry_precision(
         let old_text = &original[b.start..b.end];
         let new_text = &output[a.start..a.end];
         let unchanged = old_text == new_text;
-        let mut written = new_text;
-        let house = !a.exponent && HOUSE_DECIMALS.contains(&a.decimals);
-        let mut first_decimals = if unchanged {
-            d
-        } else if b.exponent {
-            a.decimals
-        } else {
-            d.min(a.decimals)
-        };
+        let mut written = new_text.to_vec();
+        let mut precision = a.precision();
+        let first_precision = if unchanged { d } else { d.min(precision) };
         // Only a literal the earlier stamp records as widened is narrowed again.
-        let recorded = !b.exponent && d < b.decimals;
-        if !unchanged && house && recorded && first_decimals < a.decimals {
-            let drop = a.decimals - first_decimals;
-            if new_text[new_text.len() - drop..].iter().all(|&c| c == b'0') {
-                let cut = if first_decimals == 0 { drop + 1 } else { drop };
-                written = &new_text[..new_text.len() - cut];
-                first_decimals = a.decimals;
+        let recorded = d < b.precision();
+        if !unchanged && a.house() && recorded && first_precision < precision {
+            let drop = (precision - first_precision) as usize;
+            let mantissa = &output[a.start..a.mantissa_end()];
+            let int_digits = mantissa.iter().take_while(|c| c.is_ascii_digit()).count();
+            // Dropping all decimals drops the point too, unless nothing would be left of
+            // the mantissa (`.500`).
+            let zeros = drop <= a.decimals
+                && mantissa[mantissa.len() - drop..].iter().all(|&c| c == b'0')
+                && (drop < a.decimals || int_digits > 0);
+            if zeros {
+                let cut = if drop == a.decimals { drop + 1 } else { drop };
+                written = mantissa[..mantissa.len() - cut].to_vec();
+                written.extend_from_slice(&output[a.mantissa_end()..a.end]);
+                precision = first_precision;
             }
         }
-        if house && written.len() == new_text.len() {
-            widened
-                .0
-                .entry(a.decimals)
-                .or_default()
-                .push(first_decimals as u8);
+        // Every output literal of a house precision has an entry: a narrowed one too (it may
+        // have landed on another house precision, `0.123000` → `0.123`), so that the lists
+        // stay in step with the file.
+        if let Some(p) = usize::try_from(precision)
+            .ok()
+            .filter(|p| HOUSE_DECIMALS.contains(p))
+        {
+            let entry = if written.len() == new_text.len() {
+                first_precision
+            } else {
+                precision
+            };
+            widened.0.entry(p).or_default().push(entry as i8);
         }
         text.extend_from_slice(&output[at..a.start]);
-        text.extend_from_slice(written);
+        text.extend_from_slice(&written);
         at = a.end;
     }
     text.extend_from_slice(&output[at..]);
@@ -690,12 +728,22 @@ mod precision_tests {
             "MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [12.500, 13];\nENDMODULE\n"
         );
         assert_eq!(c.widened.text(), "3:0");
-        // Numbers in names and exponents are no 3-decimal literals.
-        let t: Vec<_> = number_tokens(b"p10 1.5E+2 $x1 .5 7.250", None)
+        // Numbers in names are none; an exponent literal resolves its decimals minus the
+        // exponent (`1.5E+2` -1, `1.50123E+2` 3, `2.5e-1` 2).
+        let t: Vec<_> = number_tokens(b"p10 1.5E+2 $x1 .5 7.250 1.50123E+2 2.5e-1", None)
             .iter()
-            .map(|t| (t.decimals, t.exponent))
+            .map(|t| (t.decimals, t.precision(), t.house()))
             .collect();
-        assert_eq!(t, [(1, true), (1, false), (3, false)]);
+        assert_eq!(
+            t,
+            [
+                (1, -1, false),
+                (1, 1, false),
+                (3, 3, true),
+                (5, 3, true),
+                (1, 2, false)
+            ]
+        );
     }
 
     proptest::proptest! {

@@ -260,6 +260,20 @@ impl TargetRule for TrackRule<'_, '_> {
         Ok((new, OrientationHint::NearOriginal))
     }
 
+    /// `correct` is written so that `zero` gives back the text it read: a program corrected for
+    /// a track and zeroed again is the program as drawn. `zero` is not written for a later
+    /// `correct`: a choice made for that could undo the one `correct` made, and a program
+    /// zeroed from an online-tuned one has no text to come back to.
+    fn inverse(&self, frame: &TrackFrame, skid: Option<f64>) -> Option<Pose> {
+        match self.dir {
+            Direction::Correct => self
+                .setup
+                .correction(&frame.w, skid.unwrap_or_default(), Direction::Zero)
+                .ok(),
+            Direction::Zero => None,
+        }
+    }
+
     fn uncertainty(&self, frame: &TrackFrame, skid: Option<f64>, new: &Pose) -> Option<f64> {
         let (pu, skid) = (self.setup.uncertainty?, skid?);
         let tcp = frame.w * nalgebra::Point3::from(new.translation.vector);
