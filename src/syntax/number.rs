@@ -200,7 +200,10 @@ impl NumLit {
             }
             if self.leading_point && places > 0 {
                 // `0.512` → `.512`, `-0.512` → `-.512`.
-                if let Some(at) = text.find("0.").filter(|&at| !text[..at].contains(|c: char| c.is_ascii_digit())) {
+                if let Some(at) = text
+                    .find("0.")
+                    .filter(|&at| !text[..at].contains(|c: char| c.is_ascii_digit()))
+                {
                     text.remove(at);
                 }
             }
@@ -508,6 +511,37 @@ mod tests {
         }
         let e = x.abs().log2().floor() as i32 + 1;
         (x / 2f64.powi(e), e)
+    }
+
+    #[test]
+    fn rewrites_keep_the_literals_style() {
+        let r = |text: &str, new: f64, house: usize| {
+            NumLit::parse(text.as_bytes())
+                .unwrap()
+                .rewrite(new, house)
+                .unwrap()
+        };
+        // No leading zero below 1, as written; from 1 on there is no other way.
+        assert_eq!(r(".5", 0.5123, 3), ".512");
+        assert_eq!(r("-.5", -0.25, 3), "-.250");
+        assert_eq!(r(".5", 1.75, 3), "1.750");
+        // The same exponent, its letter, sign and padding: the digits at the precision the
+        // literal resolves (at least the house decimals), the point moved.
+        assert_eq!(r("1.5E+2", 150.123, 3), "1.50123E+2");
+        assert_eq!(r("1.5E+2", -1500.5, 3), "-15.00500E+2");
+        assert_eq!(r("2.5e-001", 0.2512, 3), "2.51e-001");
+        assert_eq!(r("1.04259E-05", 1.0412e-5, 6), "1.04120E-05");
+        assert_eq!(r("1.04259E-05", -1.916148e-4, 6), "-19.16148E-05");
+        assert_eq!(r("+.5E+1", 5.1234, 3), "+.5123E+1");
+        // A mantissa past 3 integer digits: plain form.
+        assert_eq!(r("1.5E+2", 150000.5, 3), "150000.500");
+        // What the rewrite wrote reads back at the precision it wrote.
+        for text in ["1.50123E+2", "-15.00500E+2", "2.51e-001", ".512"] {
+            let lit = NumLit::parse(text.as_bytes()).unwrap();
+            assert_eq!(lit.places(3), 3, "{text}");
+        }
+        assert!(same_at(0.0004, 0.0, 3) && !same_at(0.0006, 0.0, 3));
+        assert!(same_at(-0.0000001, 0.0, 6));
     }
 
     #[test]

@@ -240,7 +240,8 @@ fn reversible<const N: usize>(
             (0..N).all(|i| z[i].is_finite() && same_at(z[i], fields[i].value(), places[i]))
         })
     };
-    let first: [(Option<String>, f64); N] = std::array::from_fn(|i| write_one(fields[i], exact[i], house));
+    let first: [(Option<String>, f64); N] =
+        std::array::from_fn(|i| write_one(fields[i], exact[i], house));
     if gives_back(first.clone().map(|(_, v)| v)) {
         return first.map(|(t, _)| t);
     }
@@ -354,6 +355,183 @@ mod tests {
         );
         assert!(pose_edits(&f, &huge, OrientationHint::NearOriginal).is_empty());
         assert_eq!(number_edit(&f.trans[1], f64::NAN, 3), None);
+    }
+
+    /// A pose's literals as one comma-separated text, and its fields (spans into that text).
+    fn text_fields(texts: &[String]) -> CartesianFields {
+        let mut at = 0;
+        let mut fields = Vec::new();
+        for t in texts {
+            fields.push(field(t, at));
+            at += t.len() + 1;
+        }
+        let trans = [fields[0].clone(), fields[1].clone(), fields[2].clone()];
+        let orient = match fields.len() {
+            7 => Orientation::Quaternion([
+                fields[3].clone(),
+                fields[4].clone(),
+                fields[5].clone(),
+                fields[6].clone(),
+            ]),
+            _ => Orientation::Abc([fields[3].clone(), fields[4].clone(), fields[5].clone()]),
+        };
+        CartesianFields {
+            trans,
+            orient: Some(orient),
+        }
+    }
+
+    /// The literal texts after `edits`, read back.
+    fn edited(texts: &[String], edits: &[Edit]) -> Vec<String> {
+        let src = texts.join(",");
+        let out = crate::syntax::apply_edits(src.as_bytes(), edits).unwrap();
+        String::from_utf8(out)
+            .unwrap()
+            .split(',')
+            .map(str::to_owned)
+            .collect()
+    }
+
+    /// `correct` writes with the inverse in view, `zero` plainly; returns the original, the
+    /// corrected and the zeroed texts. Literals written at exactly the house decimals, so
+    /// nothing is widened and zero's text must be the original's.
+    fn round_trip(texts: Vec<String>, change: &Pose) -> (Vec<String>, Vec<String>, Vec<String>) {
+        let f = text_fields(&texts);
+        let t = f.pose().unwrap();
+        let undo = change.inverse();
+        let e = reversible_pose_edits(
+            &f,
+            &(change * t),
+            OrientationHint::NearOriginal,
+            Some(&undo),
+        );
+        let corrected = edited(&texts, &e);
+        let g = text_fields(&corrected);
+        let back = undo * g.pose().unwrap();
+        let zeroed = edited(
+            &corrected,
+            &pose_edits(&g, &back, OrientationHint::NearOriginal),
+        );
+        (texts, corrected, zeroed)
+    }
+
+    /// Values within `units` units of the last written place of `exact` (each field).
+    fn within(written: &[String], exact: &[f64], units: f64) -> bool {
+        written.iter().zip(exact).all(|(w, e)| {
+            let lit = NumLit::parse(w.as_bytes()).unwrap();
+            (lit.value() - e).abs() <= units * 10f64.powi(-lit.precision()) + 1e-12
+        })
+    }
+
+    #[test]
+    fn spot_line_sp006_comes_back_though_plain_rounding_would_not() {
+        // samples/rapid/spot_line.mod SP006: |q| = 1 − 5.3e-7. Normalised, its q2 would read
+        // back 0.998401·(1 + 5.3e-7) ≈ 0.99840153 and be written 0.998402 whatever the
+        // rounding of the corrected text: the written norm is kept, and the corrected text is
+        // chosen so that zero lands on every component.
+        let texts = [
+            "-1331.770",
+            "-705.310",
+            "493.890",
+            "0.000556",
+            "-0.998401",
+            "-0.055646",
+            "-0.009984",
+        ]
+        .map(str::to_owned)
+        .to_vec();
+        let change = pose_xyz_deg(0.873, -0.412, 1.204, 0.011, -0.027, 0.019);
+        let (o, c, z) = round_trip(texts, &change);
+        assert_ne!(o, c);
+        assert_eq!(o, z);
+    }
+
+    #[test]
+    fn kuka_angles_away_from_gimbal_lock_come_back_as_written() {
+        // Away from B = ±90°, A, B and C come back as written.
+        let texts = [
+            "1100.000", "600.000", "900.000", "30.0000", "-45.5000", "170.2500",
+        ]
+        .map(str::to_owned)
+        .to_vec();
+        let change = pose_xyz_deg(0.873, -0.412, 1.204, 0.011, -0.027, 0.019);
+        let (o, c, z) = round_trip(texts, &change);
+        assert_ne!(o, c);
+        assert_eq!(o, z);
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+
+        /// docs/design.md §5 round trip: a random pose written at the house decimals (mm 3,
+        /// quaternion 6, KUKA degrees 4 away from B = ±90°), moved by a random small change
+        /// (mm and hundredths of a degree, as a track deviation) with the inverse in view, then
+        /// moved back plainly, gives the same text; each corrected value lies within 1.5 units
+        /// of its last place of the exact value.
+        #[test]
+        fn corrected_then_zeroed_gives_the_same_text(
+            xyz in (-3000.0..3000.0f64, -3000.0..3000.0f64, -500.0..2000.0f64),
+            rot in (-180.0..180.0f64, -85.0..85.0f64, -180.0..180.0f64),
+            d in (-3.0..3.0f64, -3.0..3.0f64, -3.0..3.0f64, -0.05..0.05f64, -0.05..0.05f64, -0.05..0.05f64),
+            kuka in proptest::bool::ANY,
+        ) {
+            let (x, y, z) = xyz;
+            let mut texts: Vec<String> = [x, y, z].iter().map(|v| crate::syntax::fixed(*v, 3)).collect();
+            if kuka {
+                texts.extend([rot.0, rot.1, rot.2].iter().map(|v| crate::syntax::fixed(*v, 4)));
+            } else {
+                let q = wijk(&crate::geometry::kuka_abc(rot.0, rot.1, rot.2));
+                texts.extend(q.iter().map(|v| crate::syntax::fixed(*v, 6)));
+            }
+            let change = pose_xyz_deg(d.0, d.1, d.2, d.3, d.4, d.5);
+            let f = text_fields(&texts);
+            let new = change * f.pose().unwrap();
+            let (o, c, back) = round_trip(texts, &change);
+            proptest::prop_assert_eq!(&o, &back, "corrected {:?}", c);
+            // The bound: against the exact values the corrected text stands for.
+            let t = new.translation.vector;
+            proptest::prop_assert!(within(&c[..3], &[t.x, t.y, t.z], 1.5), "{:?}", c);
+            let like: Vec<f64> = o[3..].iter().map(|s| s.parse().unwrap()).collect();
+            let exact: Vec<f64> = if kuka {
+                kuka_abc_angles(&new.rotation, Some([like[0], like[1], like[2]])).to_vec()
+            } else {
+                let n = like.iter().map(|v| v * v).sum::<f64>().sqrt();
+                abb_quat_components(&new.rotation, Some([like[0], like[1], like[2], like[3]]))
+                    .map(|v| v * n)
+                    .to_vec()
+            };
+            proptest::prop_assert!(within(&c[3..], &exact, 1.5), "{:?} {:?}", c, exact);
+        }
+    }
+
+    #[test]
+    fn a_rounded_quaternion_keeps_its_written_norm() {
+        let norm_after_turn = |q: [&str; 4]| {
+            let texts: Vec<String> = ["0", "0", "0"]
+                .iter()
+                .chain(&q)
+                .map(|s| s.to_string())
+                .collect();
+            let f = text_fields(&texts);
+            let turned = f.pose().unwrap() * pose_xyz_deg(0.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+            let out = edited(
+                &texts,
+                &pose_edits(&f, &turned, OrientationHint::NearOriginal),
+            );
+            assert_ne!(out, texts);
+            out[3..]
+                .iter()
+                .map(|s| s.parse::<f64>().unwrap().powi(2))
+                .sum::<f64>()
+                .sqrt()
+        };
+        // |q| = 0.99999 (4 decimals): turned, it is written at that norm, not normalised.
+        let written = (2.0 * 0.7071f64 * 0.7071).sqrt();
+        let n = norm_after_turn(["0.7071", "0", "0.7071", "0"]);
+        assert!((n - written).abs() < 2e-6, "{n} {written}");
+        // A quaternion far from unit (hand-typed `[1,0,0,1]`) is written normalised.
+        let n = norm_after_turn(["1", "0", "0", "1"]);
+        assert!((n - 1.0).abs() < 2e-6, "{n}");
     }
 
     #[test]

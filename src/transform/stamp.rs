@@ -746,6 +746,54 @@ mod precision_tests {
         );
     }
 
+    #[test]
+    fn exponent_and_leading_point_literals_narrow_back() {
+        // `correct` keeps each literal's style (NumLit::rewrite) and records its first
+        // precision: `1.5E+2` resolves -1, `.5` 1, `2.5e1` 0.
+        let src = b"MODULE m\n  x := [1.5E+2, .5, 2.5e1, 7.125];\nENDMODULE\n";
+        let corrected = b"MODULE m\n  x := [1.50123E+2, .512, 2.5123e1, 7.250];\nENDMODULE\n";
+        let c = carry_precision(src, corrected, &RAPID);
+        assert_eq!(c.output, corrected);
+        assert_eq!(c.widened.text(), "3:-1,1,0");
+        let mut stamp = Stamp::new("correct", Some("r1"), None);
+        stamp.widened = c.widened;
+        let stamped = write(&c.output, &RAPID, &stamp).unwrap();
+        assert!(String::from_utf8_lossy(&stamped).contains(" widened=3:-1,1,0 "));
+        // `zero` wrote the values back at the widened precision: only zeros are dropped, of the
+        // mantissa before an exponent, and `.500` keeps its point.
+        let zeroed = b"MODULE m\n  x := [1.50000E+2, .500, 2.5000e1, 7.125];\nENDMODULE\n";
+        let zeroed = write(zeroed, &RAPID, &stamp).unwrap();
+        let back = carry_precision(&stamped, &zeroed, &RAPID);
+        assert!(back.widened.is_empty(), "{:?}", back.widened);
+        assert_eq!(
+            String::from_utf8(strip(&back.output, &RAPID).unwrap()).unwrap(),
+            String::from_utf8(src.to_vec()).unwrap()
+        );
+        // A widened exponent literal zero does not land on keeps its record.
+        let off = write(
+            b"MODULE m\n  x := [1.50001E+2, .500, 2.5000e1, 7.125];\nENDMODULE\n",
+            &RAPID,
+            &stamp,
+        )
+        .unwrap();
+        assert_eq!(
+            carry_precision(&stamped, &off, &RAPID).widened.text(),
+            "3:-1"
+        );
+    }
+
+    #[test]
+    fn a_narrowed_literal_keeps_the_lists_in_step() {
+        // `0.123000` (a 3-decimal quaternion component widened to 6) narrows to `0.123`, a
+        // 3-decimal literal: it has its own entry in the 3-list, so the `12.500` after it keeps
+        // its record (0) in the next run.
+        let src = b"MODULE m\n! trackfix: correct widened=6:3;3:3,0 version=0\n  x := [0.123457, 0.000, 12.500];\nENDMODULE\n";
+        let out = b"MODULE m\n! trackfix: correct widened=6:3;3:3,0 version=0\n  x := [0.123000, 0.000, 12.750];\nENDMODULE\n";
+        let c = carry_precision(src, out, &RAPID);
+        assert!(String::from_utf8_lossy(&c.output).contains("[0.123, 0.000, 12.750]"));
+        assert_eq!(c.widened.0.get(&3), Some(&vec![3, 3, 0]));
+    }
+
     proptest::proptest! {
         /// zero(correct(x)) == x byte for byte, with the stamp: a synthetic correction moves each
         /// value by `delta` and writes it as a transform does (at least the house decimals); the
