@@ -591,7 +591,8 @@ mod tests {
                 .sqrt()
         };
         // |q| = 0.99999 (4 decimals): turned, it is written at that norm, not normalised.
-        let written = (2.0 * 0.7071f64 * 0.7071).sqrt();
+        // The norm of the written [0.7071, 0, 0.7071, 0], by its digits (0.7071² = 0.49999041).
+        let written = (2.0 * 0.49999041f64).sqrt();
         let n = norm_after_turn(["0.7071", "0", "0.7071", "0"]);
         assert!((n - written).abs() < 2e-6, "{n} {written}");
         // A quaternion far from unit (hand-typed `[1,0,0,1]`) is written normalised.
