@@ -12,16 +12,21 @@ pub struct NumLit {
     value: f64,
     /// Decimal places the text resolves: mantissa decimals minus the exponent
     /// (`9E+09` → -9, `2.69E-07` → 9, `1.50` → 2).
-    precision: i32,
+    /// (Saturated to ±32767: beyond 12 places every rewrite writes the same.)
+    precision: i16,
     /// The exponent as written, if the text has one that a rewrite can keep.
     exponent: Option<Exponent>,
-    /// The text starts with an explicit `+`.
-    plus: bool,
-    /// No digit before the point (`.5`, `-.25`).
-    leading_point: bool,
-    /// Digits of the mantissa before the point (0 for `.5`).
+    /// [`PLUS`], [`LEADING_POINT`]: kept in one byte so that a literal stays 16 bytes (a 50 MB
+    /// module holds millions).
+    style: u8,
+    /// Digits of the mantissa before the point (0 for `.5`; saturated at 255).
     int_digits: u8,
 }
+
+/// [`NumLit::style`]: the text starts with an explicit `+`.
+const PLUS: u8 = 1;
+/// [`NumLit::style`]: no digit before the point (`.5`, `-.25`).
+const LEADING_POINT: u8 = 2;
 
 /// The integer digits a rewritten mantissa may have and keep its literal's exponent: a value
 /// that moved past 1000 times its original exponent is written plainly.
@@ -30,7 +35,7 @@ const EXPONENT_INT_DIGITS: usize = 3;
 /// How a literal's exponent is spelled, so that a rewrite writes the same suffix.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Exponent {
-    value: i16,
+    value: i8,
     /// `E` rather than `e`.
     upper: bool,
     /// An explicit `+` before a non-negative exponent.
@@ -132,7 +137,7 @@ impl NumLit {
         // digits as written).
         let exponent_style = style.and_then(|(upper, plus, digits)| {
             Some(Exponent {
-                value: i16::try_from(exponent).ok().filter(|e| e.abs() < 100)?,
+                value: i8::try_from(exponent).ok().filter(|e| e.abs() < 100)?,
                 upper,
                 plus,
                 digits: u8::try_from(digits).ok().filter(|&d| d <= 3)?,
@@ -140,10 +145,19 @@ impl NumLit {
         });
         Some(NumLit {
             value,
-            precision: decimals.saturating_sub(exponent),
+            precision: decimals
+                .saturating_sub(exponent)
+                .clamp(i16::MIN as i32, i16::MAX as i32) as i16,
             exponent: exponent_style,
-            plus: bytes.first() == Some(&b'+'),
-            leading_point: point && int_digits == 0,
+            style: if bytes.first() == Some(&b'+') {
+                PLUS
+            } else {
+                0
+            } | if point && int_digits == 0 {
+                LEADING_POINT
+            } else {
+                0
+            },
             int_digits: int_digits.min(u8::MAX as usize) as u8,
         })
     }
@@ -155,13 +169,15 @@ impl NumLit {
 
     /// Decimal places the original text resolves (negative for `9E9`).
     pub fn precision(&self) -> i32 {
-        self.precision
+        self.precision as i32
     }
 
     /// The decimal places [`rewrite`](Self::rewrite) writes a new value with:
     /// `max(original decimals, min_decimals)` (at most 12).
     pub fn places(&self, min_decimals: usize) -> usize {
-        self.precision.clamp(0, 12).max(min_decimals.min(12) as i32) as usize
+        (self.precision as i32)
+            .clamp(0, 12)
+            .max(min_decimals.min(12) as i32) as usize
     }
 
     /// The text to write for `new`, or `None` when the original text already says it.
@@ -182,7 +198,7 @@ impl NumLit {
                 return None;
             }
             let mut text = String::with_capacity(24);
-            if self.plus && !a.negative {
+            if self.style & PLUS != 0 && !a.negative {
                 text.push('+');
             }
             match self.exponent.map(|e| (e, places as i32 + e.value as i32)) {
@@ -198,7 +214,7 @@ impl NumLit {
                 }
                 _ => a.write(places, &mut text),
             }
-            if self.leading_point && places > 0 {
+            if self.style & LEADING_POINT != 0 && places > 0 {
                 // `0.512` → `.512`, `-0.512` → `-.512`.
                 if let Some(at) = text
                     .find("0.")
@@ -213,7 +229,7 @@ impl NumLit {
         if written == fixed(self.value, places) {
             return None;
         }
-        if self.plus && !written.starts_with('-') {
+        if self.style & PLUS != 0 && !written.starts_with('-') {
             return Some(format!("+{written}"));
         }
         Some(written)
@@ -511,6 +527,12 @@ mod tests {
         }
         let e = x.abs().log2().floor() as i32 + 1;
         (x / 2f64.powi(e), e)
+    }
+
+    #[test]
+    fn a_literal_is_16_bytes() {
+        // Millions per large module: the style costs no size.
+        assert_eq!(std::mem::size_of::<NumLit>(), 16);
     }
 
     #[test]

@@ -391,15 +391,19 @@ pub fn strip(src: &[u8], dialect: &dyn crate::dialect::Dialect) -> Option<Vec<u8
 struct NumberToken {
     start: usize,
     end: usize,
-    decimals: usize,
-    /// The exponent's value and the end of the mantissa, when the literal has one.
-    exponent: Option<(i32, usize)>,
+    /// Digits after the point (of the mantissa).
+    decimals: u32,
+    /// The exponent's value (0 without one).
+    exponent: i32,
+    /// Bytes of the exponent suffix (`E+2` → 3; 0 without one). Kept small with the rest: a
+    /// large module has millions of literals, and two lists of them are held at once.
+    exponent_len: u32,
 }
 
 impl NumberToken {
     /// Decimal places the literal resolves: its decimals minus its exponent (`1.50123E+2` → 3).
     fn precision(&self) -> i32 {
-        self.decimals as i32 - self.exponent.map_or(0, |(e, _)| e)
+        (self.decimals as i32).saturating_sub(self.exponent)
     }
 
     /// Whether it resolves exactly a house precision (the literals `widened=` lists).
@@ -409,7 +413,7 @@ impl NumberToken {
 
     /// The end of the mantissa (before any exponent).
     fn mantissa_end(&self) -> usize {
-        self.exponent.map_or(self.end, |(_, at)| at)
+        self.end - self.exponent_len as usize
     }
 }
 
@@ -455,7 +459,7 @@ fn number_tokens(src: &[u8], skip: Option<Span>) -> Vec<NumberToken> {
             }
             decimals = i - f;
         }
-        let mut exponent = None;
+        let (mut exponent, mut exponent_len) = (0, 0);
         if i < src.len() && matches!(src[i], b'e' | b'E') {
             let mut j = i + 1;
             let negative = j < src.len() && src[j] == b'-';
@@ -468,7 +472,8 @@ fn number_tokens(src: &[u8], skip: Option<Span>) -> Vec<NumberToken> {
                     e = e.saturating_mul(10).saturating_add((src[j] - b'0') as i32);
                     j += 1;
                 }
-                exponent = Some((if negative { -e } else { e }, i));
+                exponent = if negative { -e } else { e };
+                exponent_len = (j - i) as u32;
                 i = j;
             }
         }
@@ -482,8 +487,9 @@ fn number_tokens(src: &[u8], skip: Option<Span>) -> Vec<NumberToken> {
         out.push(NumberToken {
             start,
             end: i,
-            decimals,
+            decimals: u32::try_from(decimals).unwrap_or(u32::MAX),
             exponent,
+            exponent_len,
         });
     }
     out
@@ -553,7 +559,10 @@ pub fn carry_precision(
         let old_text = &original[b.start..b.end];
         let new_text = &output[a.start..a.end];
         let unchanged = old_text == new_text;
-        let mut written = new_text.to_vec();
+        // The written text as the new text's mantissa head and its exponent (no allocation:
+        // a large module has millions of literals).
+        let mut written: (&[u8], &[u8]) = (new_text, &[]);
+        let mut narrowed = false;
         let mut precision = a.precision();
         let first_precision = if unchanged { d } else { d.min(precision) };
         // Only a literal the earlier stamp records as widened is narrowed again.
@@ -564,14 +573,18 @@ pub fn carry_precision(
             let int_digits = mantissa.iter().take_while(|c| c.is_ascii_digit()).count();
             // Dropping all decimals drops the point too, unless nothing would be left of
             // the mantissa (`.500`).
-            let zeros = drop <= a.decimals
+            let decimals = a.decimals as usize;
+            let zeros = drop <= decimals
                 && mantissa[mantissa.len() - drop..].iter().all(|&c| c == b'0')
-                && (drop < a.decimals || int_digits > 0);
+                && (drop < decimals || int_digits > 0);
             if zeros {
-                let cut = if drop == a.decimals { drop + 1 } else { drop };
-                written = mantissa[..mantissa.len() - cut].to_vec();
-                written.extend_from_slice(&output[a.mantissa_end()..a.end]);
+                let cut = if drop == decimals { drop + 1 } else { drop };
+                written = (
+                    &mantissa[..mantissa.len() - cut],
+                    &output[a.mantissa_end()..a.end],
+                );
                 precision = first_precision;
+                narrowed = true;
             }
         }
         // Every output literal of a house precision has an entry: a narrowed one too (it may
@@ -581,15 +594,13 @@ pub fn carry_precision(
             .ok()
             .filter(|p| HOUSE_DECIMALS.contains(p))
         {
-            let entry = if written.len() == new_text.len() {
-                first_precision
-            } else {
-                precision
-            };
-            widened.0.entry(p).or_default().push(entry as i8);
+            let entry = if narrowed { precision } else { first_precision };
+            let entry = entry.max(MIN_FIRST_PRECISION as i32) as i8;
+            widened.0.entry(p).or_default().push(entry);
         }
         text.extend_from_slice(&output[at..a.start]);
-        text.extend_from_slice(&written);
+        text.extend_from_slice(written.0);
+        text.extend_from_slice(written.1);
         at = a.end;
     }
     text.extend_from_slice(&output[at..]);
