@@ -1,6 +1,6 @@
 //! A new pose → edits of exactly the literal fields that change (docs/design.md §5 formatting).
 
-use nalgebra::Translation3;
+use nalgebra::{Translation3, UnitQuaternion};
 
 use crate::geometry::{
     Pose, abb_quat, abb_quat_components, angle_between, kuka_abc, kuka_abc_angles,
@@ -94,7 +94,10 @@ pub(crate) fn reversible_pose_edits(
     let t = new.translation.vector;
     let texts = match (undo, present(&fields.trans)) {
         (Some(undo), Some(trans)) => reversible(trans, [t.x, t.y, t.z], MM_DECIMALS, |w| {
-            let read = Pose::from_parts(Translation3::new(w[0], w[1], w[2]), Default::default());
+            let read = Pose::from_parts(
+                Translation3::new(w[0], w[1], w[2]),
+                UnitQuaternion::identity(),
+            );
             let back = (undo * read).translation.vector;
             Some([back.x, back.y, back.z])
         }),
