@@ -38,8 +38,8 @@ struct Exponent {
     value: i8,
     /// `E` rather than `e`.
     upper: bool,
-    /// An explicit `+` before a non-negative exponent.
-    plus: bool,
+    /// The sign as written: `+`, `-` (also of `E-0`), or 0 for none.
+    sign: u8,
     /// Digits written, leading zeros included (`E+09` → 2).
     digits: u8,
 }
@@ -48,10 +48,8 @@ impl Exponent {
     /// Appends the suffix as written: `E+09`.
     fn write(self, out: &mut String) {
         out.push(if self.upper { 'E' } else { 'e' });
-        if self.value < 0 {
-            out.push('-');
-        } else if self.plus {
-            out.push('+');
+        if self.sign != 0 {
+            out.push(self.sign as char);
         }
         let digits = self.value.unsigned_abs().to_string();
         for _ in digits.len()..self.digits as usize {
@@ -98,10 +96,13 @@ impl NumLit {
         if let Some(&letter @ (b'e' | b'E')) = bytes.get(i) {
             i += 1;
             let negative = bytes.get(i) == Some(&b'-');
-            let plus = bytes.get(i) == Some(&b'+');
-            if matches!(bytes.get(i), Some(b'+' | b'-')) {
-                i += 1;
-            }
+            let sign = match bytes.get(i) {
+                Some(&s @ (b'+' | b'-')) => {
+                    i += 1;
+                    s
+                }
+                _ => 0,
+            };
             let exp_start = i;
             while bytes.get(i).is_some_and(u8::is_ascii_digit) {
                 exponent = exponent
@@ -115,7 +116,7 @@ impl NumLit {
             if negative {
                 exponent = -exponent;
             }
-            style = Some((letter == b'E', plus, i - exp_start));
+            style = Some((letter == b'E', sign, i - exp_start));
         }
         if i != bytes.len() {
             return None;
@@ -135,11 +136,11 @@ impl NumLit {
         }
         // An exponent a rewrite can keep: small enough to spell again (|e| < 100, up to 3
         // digits as written).
-        let exponent_style = style.and_then(|(upper, plus, digits)| {
+        let exponent_style = style.and_then(|(upper, sign, digits)| {
             Some(Exponent {
                 value: i8::try_from(exponent).ok().filter(|e| e.abs() < 100)?,
                 upper,
-                plus,
+                sign,
                 digits: u8::try_from(digits).ok().filter(|&d| d <= 3)?,
             })
         });
@@ -555,6 +556,10 @@ mod tests {
         assert_eq!(r("1.04259E-05", 1.0412e-5, 6), "1.04120E-05");
         assert_eq!(r("1.04259E-05", -1.916148e-4, 6), "-19.16148E-05");
         assert_eq!(r("+.5E+1", 5.1234, 3), "+.5123E+1");
+        // The exponent's sign as written, `-0` too.
+        assert_eq!(r(".0e-0", -335.069, 3), "-335.069e-0");
+        // Beyond the exact writer's range (2^35) a value is written plainly.
+        assert_eq!(r("10.0E10", 0.0, 3), "0.000");
         // A mantissa past 3 integer digits: plain form.
         assert_eq!(r("1.5E+2", 150000.5, 3), "150000.500");
         // What the rewrite wrote reads back at the precision it wrote.
@@ -564,6 +569,60 @@ mod tests {
         }
         assert!(same_at(0.0004, 0.0, 3) && !same_at(0.0006, 0.0, 3));
         assert!(same_at(-0.0000001, 0.0, 6));
+    }
+
+    proptest::proptest! {
+        /// A rewrite in any style says the new value at the places it writes, reads back with
+        /// that precision, and keeps the style where it can: an exponent literal its exponent
+        /// suffix (while the mantissa stays within 3 integer digits), a leading-point literal no
+        /// leading zero below 1.
+        #[test]
+        fn rewrites_say_the_value_in_the_style(
+            int in "[0-9]{0,3}",
+            frac in "[0-9]{1,4}",
+            exp in proptest::option::of((proptest::sample::select(vec!["E", "e", "E+", "e-", "E-0"]), 0u8..12)),
+            sign in proptest::sample::select(vec!["", "-", "+"]),
+            new in -5000.0f64..5000.0,
+            house in proptest::sample::select(vec![3usize, 4, 6]),
+        ) {
+            let mut text = format!("{sign}{int}.{frac}");
+            if let Some((e, n)) = &exp {
+                text.push_str(&format!("{e}{n}"));
+            }
+            let lit = NumLit::parse(text.as_bytes()).unwrap();
+            let Some(out) = lit.rewrite(new, house) else {
+                proptest::prop_assert!(same_at(new, lit.value(), lit.places(house)));
+                return Ok(());
+            };
+            let back = NumLit::parse(out.as_bytes());
+            proptest::prop_assert!(back.is_some(), "{} → {}", text, out);
+            let back = back.unwrap();
+            let places = lit.places(house);
+            proptest::prop_assert_eq!(back.places(house), places, "{} → {}", text, out);
+            proptest::prop_assert!(same_at(back.value(), new, places), "{} → {} for {}", text, out, new);
+            match &exp {
+                Some((e, n)) if out.contains(['e', 'E']) => {
+                    proptest::prop_assert!(out.ends_with(&format!("{e}{n}")), "{} → {}", text, out);
+                }
+                Some((e, n)) => {
+                    // Plain only when the mantissa would pass 3 integer digits, or need more
+                    // than 18 decimals, or the original is beyond the exact writer's range
+                    // (2^35: a written `10.0E10`).
+                    let e = if e.contains('-') { -(*n as i32) } else { *n as i32 };
+                    let mantissa = new.abs() / 10f64.powi(e);
+                    proptest::prop_assert!(
+                        mantissa >= 999.0
+                            || places as i32 + e > 18
+                            || lit.value().abs() >= 34_359_738_368.0,
+                        "{} → {}", text, out
+                    );
+                }
+                None => proptest::prop_assert!(!out.contains(['e', 'E']), "{} → {}", text, out),
+            }
+            if int.is_empty() && exp.is_none() && new.abs() < 0.5 {
+                proptest::prop_assert!(!out.trim_start_matches(['-', '+']).starts_with('0'), "{} → {}", text, out);
+            }
+        }
     }
 
     #[test]
