@@ -427,11 +427,10 @@ mod tests {
     }
 
     #[test]
-    fn spot_line_sp006_comes_back_though_plain_rounding_would_not() {
-        // samples/rapid/spot_line.mod SP006: |q| = 1 − 5.3e-7. Normalised, its q2 would read
-        // back 0.998401·(1 + 5.3e-7) ≈ 0.99840153 and be written 0.998402 whatever the
-        // rounding of the corrected text: the written norm is kept, and the corrected text is
-        // chosen so that zero lands on every component.
+    fn spot_line_sp006_comes_back_by_its_kept_norm() {
+        // samples/rapid/spot_line.mod SP006: |q| = 1 + 5.1e-7. Read normalised, its q2 is
+        // 0.99840049, written `-0.998400` by a zero of normalised quaternions: a unit off. The
+        // written norm is kept, so zero lands on every component (docs/design.md §5).
         let texts = [
             "-1331.770",
             "-705.310",
