@@ -46,18 +46,49 @@ impl PositionKind {
 }
 
 /// A numeric literal inside a position, with the span of its text.
-#[derive(Clone, Debug, PartialEq)]
+///
+/// Sixteen bytes: a module holds about 17 of these per target, and with a `usize` span and a
+/// padded [`NumLit`] (32 bytes) they were a third of `check`'s peak memory. Inputs are at most
+/// [`MAX_INPUT_BYTES`](crate::output::MAX_INPUT_BYTES) (512 MiB), so a `u32` start always fits;
+/// a literal longer than 65,535 bytes is not stored as a number ([`NumField::new`] gives `None`,
+/// the field reads as an expression, which transforms refuse). The precision is kept clamped to
+/// an `i8`: rewrites use at most 12 places, so the clamp changes no text written.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NumField {
-    /// The literal's bytes (what an edit replaces).
-    pub span: Span,
-    /// The literal as written: its value and how it is spelled, so a rewrite keeps the style.
-    pub lit: NumLit,
+    value: f64,
+    start: u32,
+    len: u16,
+    precision: i8,
+    plus: bool,
 }
 
 impl NumField {
+    /// The field of literal `lit` written at `span`; `None` if the span does not fit the
+    /// compact form (see the type).
+    pub fn new(span: Span, lit: NumLit) -> Option<NumField> {
+        Some(NumField {
+            value: lit.value(),
+            start: u32::try_from(span.start).ok()?,
+            len: u16::try_from(span.end.checked_sub(span.start)?).ok()?,
+            precision: lit.precision().clamp(i8::MIN.into(), i8::MAX.into()) as i8,
+            plus: lit.plus(),
+        })
+    }
+
+    /// The literal's bytes (what an edit replaces).
+    pub fn span(&self) -> Span {
+        let start = self.start as usize;
+        Span::new(start, start + self.len as usize)
+    }
+
+    /// The literal as written: its value and how it is spelled, so a rewrite keeps the style.
+    pub fn lit(&self) -> NumLit {
+        NumLit::from_parts(self.value, self.precision.into(), self.plus)
+    }
+
     /// The literal's value.
     pub fn value(&self) -> f64 {
-        self.lit.value()
+        self.value
     }
 }
 

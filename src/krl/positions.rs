@@ -258,10 +258,7 @@ fn num_field(src: &[u8], e: &Expr) -> Option<NumField> {
     if e.kind != ExprKind::Number {
         return None;
     }
-    Some(NumField {
-        span: e.span,
-        lit: NumLit::parse(e.span.slice(src))?,
-    })
+    NumField::new(e.span, NumLit::parse(e.span.slice(src))?)
 }
 
 fn bit_field(src: &[u8], e: &Expr) -> Option<BitField> {

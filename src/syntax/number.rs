@@ -100,6 +100,21 @@ impl NumLit {
         self.precision
     }
 
+    /// Whether the text starts with an explicit `+`.
+    pub fn plus(&self) -> bool {
+        self.plus
+    }
+
+    /// The literal of these parts, as [`NumLit::parse`] gives them: a compact store (the
+    /// position model's fields) keeps the parts and rebuilds the literal to rewrite it.
+    pub(crate) fn from_parts(value: f64, precision: i32, plus: bool) -> NumLit {
+        NumLit {
+            value,
+            precision,
+            plus,
+        }
+    }
+
     /// The text to write for `new`, or `None` when the original text already says it.
     ///
     /// `new` is written with `max(original decimals, min_decimals)` places, never in exponent

@@ -262,11 +262,11 @@ fn skid_edits(file: &ParsedFile, p: &Position, settings: &MirrorSettings) -> Vec
     };
     let mapped_text = match mapped {
         Some(e) => e.text,
-        None => old.span.slice(&file.source).to_vec(),
+        None => old.span().slice(&file.source).to_vec(),
     };
     vec![
-        Edit::new(new.span, mapped_text),
-        Edit::new(old.span, new.span.slice(&file.source).to_vec()),
+        Edit::new(new.span(), mapped_text),
+        Edit::new(old.span(), new.span().slice(&file.source).to_vec()),
     ]
 }
 
@@ -736,7 +736,7 @@ fn mirror_tool_load(src: &[u8], d: &FrameDecl, own: &Reflection) -> Vec<Edit> {
     let Some(Some(last)) = q.last() else {
         return Vec::new();
     };
-    let nums = numbers_after(src, last.span.end, d.span.end.min(src.len()));
+    let nums = numbers_after(src, last.span().end, d.span.end.min(src.len()));
     // mass, cog x y z, aom q1..q4 (ix, iy, iz are moments about the aom axes: kept).
     if nums.len() < 8 {
         return Vec::new();

@@ -32,14 +32,14 @@ pub(crate) fn number_edit(field: &Option<NumField>, new: f64, min_decimals: usiz
         return None;
     }
     let f = field.as_ref()?;
-    let text = f.lit.rewrite(new, min_decimals)?;
-    Some(Edit::new(f.span, text))
+    let text = f.lit().rewrite(new, min_decimals)?;
+    Some(Edit::new(f.span(), text))
 }
 
 /// An edit for an integer field (`cf1`…), if it changes.
 pub(crate) fn integer_edit(field: &Option<NumField>, new: i64) -> Option<Edit> {
     let f = field.as_ref()?;
-    Some(Edit::new(f.span, f.lit.rewrite_integer(new)?))
+    Some(Edit::new(f.span(), f.lit().rewrite_integer(new)?))
 }
 
 /// An edit for a KUKA Status/Turn, if it changes.
@@ -124,10 +124,10 @@ mod tests {
     use crate::syntax::{NumLit, Span};
 
     fn field(text: &str, at: usize) -> Option<NumField> {
-        Some(NumField {
-            span: Span::new(at, at + text.len()),
-            lit: NumLit::parse(text.as_bytes()).unwrap(),
-        })
+        NumField::new(
+            Span::new(at, at + text.len()),
+            NumLit::parse(text.as_bytes()).unwrap(),
+        )
     }
 
     fn quat_fields(t: [&str; 3], q: [&str; 4]) -> CartesianFields {

@@ -39,10 +39,7 @@ fn numbers(src: &[u8], from: usize, to: usize) -> Vec<NumField> {
             }
         }
         if let Some(lit) = NumLit::parse(&src[s..i]) {
-            out.push(NumField {
-                span: Span::new(s, i),
-                lit,
-            });
+            out.extend(NumField::new(Span::new(s, i), lit));
         }
     }
     out
@@ -132,7 +129,7 @@ pub(crate) fn krl(src: &str, base: &str) -> Program {
         let o = |i: usize| Some(v[i].clone());
         let bits = |i: usize| {
             Some(BitField {
-                span: v[i].span,
+                span: v[i].span(),
                 value: v[i].value() as u32,
                 binary_digits: None,
             })
