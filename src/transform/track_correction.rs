@@ -280,7 +280,7 @@ mod tests {
     use crate::geometry::{abb_quat, pose_xyz_deg};
     use crate::position::Orientation;
     use crate::track::profile::{Extrapolate, Knot};
-    use crate::transform::edits::apply;
+    use crate::transform::edits::{apply, apply_owned};
     use crate::transform::test_support::{krl, rapid};
     use proptest::prelude::*;
 
@@ -298,7 +298,14 @@ mod tests {
     }
 
     fn text_after(p: &Program, s: &TrackSetup, dir: Direction) -> String {
-        let r = apply(p, track_correction(p, s, dir)).unwrap();
+        let edits = track_correction(p, s, dir);
+        let r = apply(p, edits.clone()).unwrap();
+        // Handing the program over gives the same files, byte for byte.
+        let owned = apply_owned(p.clone(), edits).unwrap();
+        for (a, b) in r.files.iter().zip(&owned.files) {
+            assert_eq!((&a.path, &a.original, &a.output), (&b.path, &b.original, &b.output));
+        }
+        assert_eq!(r.files.len(), owned.files.len());
         assert!(
             r.refusals().next().is_none(),
             "{:?}",
