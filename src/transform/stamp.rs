@@ -393,73 +393,93 @@ struct NumberToken {
 /// `.` and digits and an optional exponent, not part of a name (`p10`, `$X1`) and not followed
 /// by a letter. Signs are not part of it. Dialect-free on purpose: the same scan of the same
 /// bytes gives the same list, comments and strings included, on both sides of a transform.
-fn number_tokens(src: &[u8], skip: Option<Span>) -> Vec<NumberToken> {
-    let word = |b: u8| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'$' | b'.' | b'#');
-    let mut out = Vec::new();
-    let mut i = 0;
-    while i < src.len() {
-        if let Some(s) = skip
-            && i == s.start
-        {
-            i = s.end.max(i + 1);
-            continue;
-        }
-        let b = src[i];
-        let starts =
-            b.is_ascii_digit() || (b == b'.' && src.get(i + 1).is_some_and(u8::is_ascii_digit));
-        if !starts || (i > 0 && word(src[i - 1])) {
-            // Skip the rest of a word so `p10` gives no token.
-            if word(b) {
-                while i < src.len() && word(src[i]) {
+///
+/// An iterator, not a list: a corrected 20 MB module has 1.7 million literals on each side, and
+/// the two lists were the largest part of `correct`'s peak memory.
+fn number_tokens(src: &[u8], skip: Option<Span>) -> NumberTokens<'_> {
+    NumberTokens { src, skip, i: 0 }
+}
+
+/// The scan of [`number_tokens`].
+struct NumberTokens<'a> {
+    src: &'a [u8],
+    skip: Option<Span>,
+    i: usize,
+}
+
+impl Iterator for NumberTokens<'_> {
+    type Item = NumberToken;
+
+    fn next(&mut self) -> Option<NumberToken> {
+        let (src, skip) = (self.src, self.skip);
+        let word = |b: u8| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'$' | b'.' | b'#');
+        let mut i = self.i;
+        while i < src.len() {
+            if let Some(s) = skip
+                && i == s.start
+            {
+                i = s.end.max(i + 1);
+                continue;
+            }
+            let b = src[i];
+            let starts =
+                b.is_ascii_digit() || (b == b'.' && src.get(i + 1).is_some_and(u8::is_ascii_digit));
+            if !starts || (i > 0 && word(src[i - 1])) {
+                // Skip the rest of a word so `p10` gives no token.
+                if word(b) {
+                    while i < src.len() && word(src[i]) {
+                        i += 1;
+                    }
+                } else {
                     i += 1;
                 }
-            } else {
-                i += 1;
+                continue;
             }
-            continue;
-        }
-        let start = i;
-        while i < src.len() && src[i].is_ascii_digit() {
-            i += 1;
-        }
-        let mut decimals = 0;
-        if i < src.len() && src[i] == b'.' {
-            i += 1;
-            let f = i;
+            let start = i;
             while i < src.len() && src[i].is_ascii_digit() {
                 i += 1;
             }
-            decimals = i - f;
-        }
-        let mut exponent = false;
-        if i < src.len() && matches!(src[i], b'e' | b'E') {
-            let mut j = i + 1;
-            if j < src.len() && matches!(src[j], b'+' | b'-') {
-                j += 1;
+            let mut decimals = 0;
+            if i < src.len() && src[i] == b'.' {
+                i += 1;
+                let f = i;
+                while i < src.len() && src[i].is_ascii_digit() {
+                    i += 1;
+                }
+                decimals = i - f;
             }
-            if j < src.len() && src[j].is_ascii_digit() {
-                while j < src.len() && src[j].is_ascii_digit() {
+            let mut exponent = false;
+            if i < src.len() && matches!(src[i], b'e' | b'E') {
+                let mut j = i + 1;
+                if j < src.len() && matches!(src[j], b'+' | b'-') {
                     j += 1;
                 }
-                i = j;
-                exponent = true;
+                if j < src.len() && src[j].is_ascii_digit() {
+                    while j < src.len() && src[j].is_ascii_digit() {
+                        j += 1;
+                    }
+                    i = j;
+                    exponent = true;
+                }
             }
-        }
-        if i < src.len() && word(src[i]) {
-            // `1.2.3`, `12abc`: no number; skip the whole word.
-            while i < src.len() && word(src[i]) {
-                i += 1;
+            if i < src.len() && word(src[i]) {
+                // `1.2.3`, `12abc`: no number; skip the whole word.
+                while i < src.len() && word(src[i]) {
+                    i += 1;
+                }
+                continue;
             }
-            continue;
+            self.i = i;
+            return Some(NumberToken {
+                start,
+                end: i,
+                decimals,
+                exponent,
+            });
         }
-        out.push(NumberToken {
-            start,
-            end: i,
-            decimals,
-            exponent,
-        });
+        self.i = i;
+        None
     }
-    out
 }
 
 /// What [`carry_precision`] made of a transform's output.
@@ -495,32 +515,34 @@ pub fn carry_precision(
         .unwrap_or_default();
     let skip_in = old.as_ref().map(|(_, span)| *span);
     let skip_out = find_in(output, dialect).map(|(_, span)| span);
-    let before = number_tokens(original, skip_in);
-    let after = number_tokens(output, skip_out);
-    if before.len() != after.len() {
-        return CarriedPrecision {
-            output: output.to_vec(),
-            widened: Widened::default(),
-        };
-    }
-    // The first-written decimals of each original literal.
+    let mut before = number_tokens(original, skip_in);
+    let mut after = number_tokens(output, skip_out);
+    // The first-written decimals of each original literal: per house precision, the count of
+    // the original's literals written with it so far indexes the earlier stamp's record.
     let mut seen = std::collections::BTreeMap::<usize, usize>::new();
-    let first: Vec<usize> = before
-        .iter()
-        .map(|t| {
-            if t.exponent || !HOUSE_DECIMALS.contains(&t.decimals) {
-                return t.decimals;
-            }
-            let k = seen.entry(t.decimals).or_default();
-            let d = old_widened.of(t.decimals, *k);
-            *k += 1;
-            d
-        })
-        .collect();
     let mut text = Vec::with_capacity(output.len());
     let mut widened = Widened::default();
     let mut at = 0;
-    for ((b, a), &d) in before.iter().zip(&after).zip(&first) {
+    // The two files' literals in step; if one has more, nothing is carried.
+    loop {
+        let (b, a) = match (before.next(), after.next()) {
+            (Some(b), Some(a)) => (b, a),
+            (None, None) => break,
+            _ => {
+                return CarriedPrecision {
+                    output: output.to_vec(),
+                    widened: Widened::default(),
+                };
+            }
+        };
+        let d = if b.exponent || !HOUSE_DECIMALS.contains(&b.decimals) {
+            b.decimals
+        } else {
+            let k = seen.entry(b.decimals).or_default();
+            let d = old_widened.of(b.decimals, *k);
+            *k += 1;
+            d
+        };
         let old_text = &original[b.start..b.end];
         let new_text = &output[a.start..a.end];
         let unchanged = old_text == new_text;
@@ -692,10 +714,28 @@ mod precision_tests {
         assert_eq!(c.widened.text(), "3:0");
         // Numbers in names and exponents are no 3-decimal literals.
         let t: Vec<_> = number_tokens(b"p10 1.5E+2 $x1 .5 7.250", None)
-            .iter()
             .map(|t| (t.decimals, t.exponent))
             .collect();
         assert_eq!(t, [(1, true), (1, false), (3, false)]);
+    }
+
+    #[test]
+    fn literal_counts_that_differ_carry_nothing() {
+        // Without the extra literal `13.000` would become `13` (as above); with one more literal
+        // on either side the files cannot be paired, and the output is kept as it is.
+        let src = b"MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [12.250, 13.250];\nENDMODULE\n";
+        let out: &[u8] = b"MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [12.500, 13.000, 1];\nENDMODULE\n";
+        let c = carry_precision(src, out, &RAPID);
+        assert_eq!(c.output, out);
+        assert!(c.widened.is_empty());
+        let fewer: &[u8] =
+            b"MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [13.000];\nENDMODULE\n";
+        let c = carry_precision(src, fewer, &RAPID);
+        assert_eq!(c.output, fewer);
+        assert!(c.widened.is_empty());
+        // The last literal of the longer side is what tells: 2 against 3 and 3 against 2.
+        let c = carry_precision(out, src, &RAPID);
+        assert_eq!(c.output, src);
     }
 
     proptest::proptest! {
