@@ -261,7 +261,7 @@ fn skid_edits(file: &ParsedFile, p: &Position, settings: &MirrorSettings) -> Vec
         return Vec::new();
     };
     let mapped_text = match mapped {
-        Some(e) => e.text,
+        Some(e) => e.text.to_vec(),
         None => old.span().slice(&file.source).to_vec(),
     };
     vec![

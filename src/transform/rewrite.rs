@@ -163,7 +163,7 @@ mod tests {
         let e = pose_edits(&f, &turned, OrientationHint::NearOriginal);
         let texts: Vec<String> = e
             .iter()
-            .map(|e| String::from_utf8(e.text.clone()).unwrap())
+            .map(|e| String::from_utf8(e.text.to_vec()).unwrap())
             .collect();
         assert_eq!(texts, ["0.707107", "0.707107"]);
     }
@@ -185,6 +185,6 @@ mod tests {
         let f = quat_fields(["0", "0", "0"], ["-1", "0", "0", "0"]);
         let turned = f.pose().unwrap() * pose_xyz_deg(0.0, 0.0, 0.0, 0.0, 0.0, 1.0);
         let e = pose_edits(&f, &turned, OrientationHint::NearOriginal);
-        assert_eq!(String::from_utf8(e[0].text.clone()).unwrap(), "-0.999962");
+        assert_eq!(String::from_utf8(e[0].text.to_vec()).unwrap(), "-0.999962");
     }
 }
