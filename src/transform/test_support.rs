@@ -97,7 +97,7 @@ pub(crate) fn rapid(src: &str, wobj: &str) -> Program {
         if v.len() < 17 {
             continue;
         }
-        let o = |i: usize| Some(v[i].clone());
+        let o = |i: usize| Some(v[i]);
         positions.push(Position {
             name: Some(format!("p{}", n + 1)),
             kind: PositionKind::Robtarget,
@@ -126,7 +126,7 @@ pub(crate) fn krl(src: &str, base: &str) -> Program {
         if v.len() < 9 {
             continue;
         }
-        let o = |i: usize| Some(v[i].clone());
+        let o = |i: usize| Some(v[i]);
         let bits = |i: usize| {
             Some(BitField {
                 span: v[i].span(),

@@ -303,7 +303,10 @@ mod tests {
         // Handing the program over gives the same files, byte for byte.
         let owned = apply_owned(p.clone(), edits).unwrap();
         for (a, b) in r.files.iter().zip(&owned.files) {
-            assert_eq!((&a.path, &a.original, &a.output), (&b.path, &b.original, &b.output));
+            assert_eq!(
+                (&a.path, &a.original, &a.output),
+                (&b.path, &b.original, &b.output)
+            );
         }
         assert_eq!(r.files.len(), owned.files.len());
         assert!(
@@ -383,7 +386,7 @@ mod tests {
 
     fn quat(p: &Position) -> [f64; 4] {
         match &p.cartesian.as_ref().unwrap().orient {
-            Some(Orientation::Quaternion(q)) => q.clone().map(|f| f.unwrap().value()),
+            Some(Orientation::Quaternion(q)) => (*q).map(|f| f.unwrap().value()),
             _ => panic!(),
         }
     }
