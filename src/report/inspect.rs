@@ -536,7 +536,7 @@ pub fn inspect_program(program: &Program, options: InspectOptions) -> Vec<FileRe
 /// inputs together, as [`ProgramReport`]s list them), serialised as it is built: the same bytes
 /// as an [`InspectReport`] of [`inspect_program`] and [`ProgramReport::of`] (no reach columns),
 /// without holding a row per position. A 20 MB module's rows and their text were two thirds of
-/// `inspect --format json`'s peak memory.
+/// the peak memory of its JSON report.
 #[derive(Clone, Copy, Debug)]
 pub struct InspectJson<'a> {
     /// The programs, in input order.
