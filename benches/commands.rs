@@ -14,10 +14,10 @@ use std::sync::OnceLock;
 
 use divan::{AllocProfiler, Bencher, black_box, counter::BytesCount};
 use trackfix::program::{LoadOptions, load};
-use trackfix::report::{InspectOptions, InspectReport, findings, inspect_program};
+use trackfix::report::{InspectJson, InspectOptions, findings};
 use trackfix::track::Profile;
 use trackfix::transform::{
-    Cell, Direction, MirrorSettings, TrackSetup, apply, mirror, track_correction,
+    Cell, Direction, MirrorSettings, TrackSetup, apply_owned, mirror, track_correction,
 };
 
 #[global_allocator]
@@ -180,14 +180,16 @@ fn check(bencher: Bencher, case: Case) {
 fn inspect_json(bencher: Bencher, case: Case) {
     run(bencher, case, |path, s| {
         let p = load(path, &s.options).expect("program");
-        // What `inspect --format json` runs: the whole report, then serde_json.
-        let report = InspectReport {
-            files: inspect_program(&p, InspectOptions::default()),
-            programs: Vec::new(),
+        // What `inspect --format json` runs: the report written as it is built.
+        let programs = [p];
+        let doc = InspectJson {
+            programs: &programs,
+            grouped: &[false],
+            options: InspectOptions::default(),
         };
         let out = std::io::BufWriter::new(std::io::sink());
-        serde_json::to_writer_pretty(out, &report).expect("json");
-        p.files.len()
+        serde_json::to_writer_pretty(out, &doc).expect("json");
+        programs[0].files.len()
     });
 }
 
@@ -196,9 +198,11 @@ fn correct(bencher: Bencher, case: Case) {
     run(bencher, case, |path, s| {
         let p = load(path, &s.options).expect("program");
         let track = TrackSetup::new(&s.cell.robots["r1"], &s.profile);
-        let result = apply(&p, track_correction(&p, &track, Direction::Correct)).expect("edits");
+        // As the command does: the program is handed over, its model dropped before the outputs.
+        let edits = track_correction(&p, &track, Direction::Correct);
+        let result = apply_owned(p, edits).expect("edits");
         black_box(&result);
-        p.files.len()
+        result.files.len()
     });
 }
 
@@ -206,8 +210,9 @@ fn correct(bencher: Bencher, case: Case) {
 fn mirror_xz(bencher: Bencher, case: Case) {
     run(bencher, case, |path, s| {
         let p = load(path, &s.options).expect("program");
-        let result = apply(&p, mirror(&p, &MirrorSettings::default())).expect("edits");
+        let edits = mirror(&p, &MirrorSettings::default());
+        let result = apply_owned(p, edits).expect("edits");
         black_box(&result);
-        p.files.len()
+        result.files.len()
     });
 }

@@ -11,6 +11,9 @@ and a KUKA.Sim-style .src/.dat pair of about --krl-mb MB, then times, per input:
   benches/regex_baseline.py             a regex rewrite of every robtarget (RAPID only)
   trackfix check / correct / inspect --format json   for every --bin given
 
+`correct` uses samples/cell.toml without robot r1's arm (see bench_cell), so it corrects and
+writes every target.
+
 CPU time (user + sys of the child, from os.wait4) is the median of --runs runs; peak memory is
 the child's maximum resident set. Output goes to a scratch folder and file. Give two
 binaries (--bin before=/tmp/trackfix-before --bin after=target/release/trackfix) to compare
@@ -25,9 +28,7 @@ import sys
 import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-# The cell without kinematics: the generated targets are not placed for a real robot's reach,
-# and the figures are of the correction, not of the reach check.
-CELL = os.path.join(ROOT, "samples", "cell_rules.toml")
+CELL = os.path.join(ROOT, "samples", "cell.toml")
 
 
 def rapid_module(mb: float) -> bytes:
@@ -90,6 +91,29 @@ def krl_pair(mb: float) -> tuple[bytes, bytes]:
     return "".join(src).encode(), "".join(dat).encode()
 
 
+def bench_cell(work: str) -> str:
+    """samples/cell.toml without robot r1's kinematics, written under `work`.
+
+    With r1's arm the transforms check every target's reach, and the generated targets' written
+    configuration is not the one the arm reaches them with: `correct` would refuse all of them
+    and write nothing (exit 3). Without the arm it corrects and writes every target, the work
+    the regex script is compared with. Relative paths are made absolute (the copy lives
+    elsewhere).
+    """
+    samples = os.path.join(ROOT, "samples")
+    with open(CELL, encoding="utf-8") as f:
+        text = f.read()
+    text = text.replace('profile = "track/', f'profile = "{samples}/track/')
+    text = text.replace('config_dat = "krl/', f'config_dat = "{samples}/krl/')
+    arm = '[robot.r1.kinematics]\nmodel = "abb_irb4600_40_255"\n'
+    if arm not in text:
+        sys.exit(f"{CELL}: no [robot.r1.kinematics] table as expected; update bench_cell")
+    path = os.path.join(work, "cell-no-arm.toml")
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(text.replace(arm, ""))
+    return path
+
+
 def write_once(path: str, make) -> None:
     if not os.path.exists(path):
         data = make()
@@ -141,6 +165,7 @@ def main() -> None:
     os.makedirs(args.work, exist_ok=True)
     out_dir = os.path.join(args.work, "out")
     os.makedirs(out_dir, exist_ok=True)
+    cell = bench_cell(args.work)
 
     inputs = []  # (label, file to pass, bytes, grep pattern, file grep reads, is rapid)
     for mb in [float(s) for s in args.sizes.split(",") if s]:
@@ -182,7 +207,7 @@ def main() -> None:
             commands = {
                 "check": [exe, "check", path],
                 "inspect --format json": [exe, "inspect", "--format", "json", path],
-                "correct": [exe, "correct", path, "--cell", CELL, "--robot", "r1", "--out-dir", out_dir],
+                "correct": [exe, "correct", path, "--cell", cell, "--robot", "r1", "--out-dir", out_dir],
             }
             for cmd, argv in commands.items():
                 t, m = measure(argv, args.runs)

@@ -8,8 +8,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use trackfix::position::{Program, external_axis_index};
 use trackfix::program::{LoadError, LoadOptions, collect_programs, load_group};
 use trackfix::report::{
-    CheckSummary, InspectOptions, InspectReport, ProgramReport, findings, inspect_program,
-    render_csv, render_table,
+    CheckSummary, InspectJson, InspectOptions, InspectReport, ProgramReport, findings,
+    inspect_program, render_csv, render_table,
 };
 use trackfix::syntax::printable;
 
@@ -208,6 +208,25 @@ pub(crate) fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
     let inspect = InspectOptions {
         skid_axis: args.skid,
     };
+    let exit = if batch.errors > 0 {
+        Exit::Usage
+    } else {
+        Exit::Ok
+    };
+    if matches!(args.format, Format::Json) && cell.is_none() {
+        // Written as it is built: the rows of a large program never all exist at once.
+        let doc = InspectJson {
+            programs: &batch.programs,
+            grouped: &batch.grouped,
+            options: inspect,
+        };
+        let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+        serde_json::to_writer_pretty(&mut out, &doc).map_err(std::io::Error::from)?;
+        out.write_all(b"\n")?;
+        out.flush()?;
+        super::leave_for_exit(batch);
+        return Ok(exit);
+    }
     let mut report = InspectReport {
         files: batch
             .programs
@@ -246,11 +265,6 @@ pub(crate) fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
         // writeln!, not println!: a closed pipe must be an error we can map to success.
         writeln!(out, "{}", report.summary_line(batch.skipped, batch.errors))?;
     }
-    let exit = if batch.errors > 0 {
-        Exit::Usage
-    } else {
-        Exit::Ok
-    };
     super::leave_for_exit((batch, report, text));
     Ok(exit)
 }

@@ -24,7 +24,8 @@ use trackfix::transform::rename::rename_program;
 use trackfix::transform::stamp;
 use trackfix::transform::{
     Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, RefusalKind,
-    Remedy, Robot, Stamp, TrackSetup, TransferPlan, TransformStep, WorldPlane, apply, transfer,
+    Remedy, Robot, Stamp, TrackSetup, TransferPlan, TransformStep, WorldPlane, apply_owned,
+    transfer,
 };
 
 use super::Exit;
@@ -894,7 +895,7 @@ fn run_each(
     other_configs: &[Option<&Path>],
     out: &OutputArgs,
     prov: &Provenance,
-    transform: impl Fn(&Program) -> anyhow::Result<ProgramResult>,
+    transform: impl Fn(Program) -> anyhow::Result<ProgramResult>,
 ) -> anyhow::Result<Exit> {
     let programs = load_programs(files, &load_options(robot))?;
     if let Some(exit) = refuse_syntax_errors(command, &programs)? {
@@ -914,7 +915,9 @@ fn run_each(
         indicatif::ProgressBar::hidden()
     };
     let mut results = Vec::new();
-    for p in &programs {
+    // Each program is handed over: a transform keeps only the sources and its edits, so the
+    // model of a large program is gone before its outputs are built.
+    for p in programs {
         results.push(transform(p)?);
         bar.inc(1);
     }
@@ -925,7 +928,7 @@ fn run_each(
         drop_untouched_config(&mut results, *cfg);
     }
     let exit = finish(command, &results, out, files);
-    super::leave_for_exit((programs, results));
+    super::leave_for_exit(results);
     exit
 }
 
@@ -968,7 +971,8 @@ fn run_step(
     prov: &Provenance,
 ) -> anyhow::Result<Exit> {
     run_each(command, files, robot, &[], out, prov, |p| {
-        Ok(apply(p, step.edits(p))?)
+        let edits = step.edits(&p);
+        Ok(apply_owned(p, edits)?)
     })
 }
 
@@ -1174,6 +1178,6 @@ fn run_transfer_inner(mut a: TransferArgs) -> anyhow::Result<Exit> {
         &[to.config_dat.as_deref()],
         &a.out,
         &Provenance::new("transfer", Some(to), Some(&to_profile), StampRule::Any),
-        |p| Ok(transfer(p, &plan, &written)?),
+        |p| Ok(transfer(&p, &plan, &written)?),
     )
 }

@@ -145,10 +145,7 @@ impl<'l> Extractor<'l> {
             return None;
         }
         let span = n.span();
-        Some(NumField {
-            span,
-            lit: NumLit::parse(span.slice(src))?,
-        })
+        NumField::new(span, NumLit::parse(span.slice(src))?)
     }
 
     /// The first `N` elements of an aggregate as numeric fields (`None` where not a literal).

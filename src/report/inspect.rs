@@ -452,6 +452,17 @@ pub fn message(file: &ParsedFile, d: &Diagnostic) -> Message {
 
 /// The report of one parsed file.
 pub fn inspect_file(file: &ParsedFile, options: InspectOptions) -> FileReport {
+    let mut report = file_head(file);
+    report.positions = file
+        .positions
+        .iter()
+        .map(|p| position_row(file, p, options))
+        .collect();
+    report
+}
+
+/// A file's report without its positions: what is small (frames, counts, lints, stamp).
+fn file_head(file: &ParsedFile) -> FileReport {
     let mut counts = BTreeMap::new();
     for p in &file.positions {
         *counts.entry(p.kind.as_str().to_owned()).or_insert(0) += 1;
@@ -459,11 +470,7 @@ pub fn inspect_file(file: &ParsedFile, options: InspectOptions) -> FileReport {
     FileReport {
         path: file.path.display().to_string(),
         language: file.language,
-        positions: file
-            .positions
-            .iter()
-            .map(|p| position_row(file, p, options))
-            .collect(),
+        positions: Vec::new(),
         frames: file
             .frames
             .iter()
@@ -476,30 +483,163 @@ pub fn inspect_file(file: &ParsedFile, options: InspectOptions) -> FileReport {
     }
 }
 
+/// Where in `program` the work object or base (`tool` false) or the tool named `name` is
+/// declared.
+fn place(program: &Program, name: &str, tool: bool) -> Option<Place> {
+    program.files.iter().find_map(|f| {
+        f.frames
+            .iter()
+            .find(|d| (d.kind == FrameKind::Tool) == tool && d.name.eq_ignore_ascii_case(name))
+            .map(|d| Place {
+                file: f.path.display().to_string(),
+                line: d.line,
+            })
+    })
+}
+
+/// A position's row with the places of its frame and tool in `program`.
+fn program_row(
+    program: &Program,
+    file: &ParsedFile,
+    p: &Position,
+    options: InspectOptions,
+) -> PositionRow {
+    let mut row = position_row(file, p, options);
+    row.frame.at = row
+        .frame
+        .name
+        .as_deref()
+        .and_then(|n| place(program, n, false));
+    row.tool_at = row.tool.as_deref().and_then(|n| place(program, n, true));
+    row
+}
+
 /// The reports of every file of a program, each target with the place (file and line) of the
 /// work object or base and of the tool it resolved to, wherever in the program they are declared.
 pub fn inspect_program(program: &Program, options: InspectOptions) -> Vec<FileReport> {
-    let place = |name: &str, tool: bool| {
-        program.files.iter().find_map(|f| {
-            f.frames
-                .iter()
-                .find(|d| (d.kind == FrameKind::Tool) == tool && d.name.eq_ignore_ascii_case(name))
-                .map(|d| Place {
-                    file: f.path.display().to_string(),
-                    line: d.line,
-                })
-        })
-    };
-    let mut reports: Vec<FileReport> = program
+    program
         .files
         .iter()
-        .map(|f| inspect_file(f, options))
-        .collect();
-    for row in reports.iter_mut().flat_map(|r| &mut r.positions) {
-        row.frame.at = row.frame.name.as_deref().and_then(|n| place(n, false));
-        row.tool_at = row.tool.as_deref().and_then(|n| place(n, true));
+        .map(|f| {
+            let mut report = file_head(f);
+            report.positions = f
+                .positions
+                .iter()
+                .map(|p| program_row(program, f, p, options))
+                .collect();
+            report
+        })
+        .collect()
+}
+
+/// The JSON inspect document of `programs` (each with whether it was loaded from several
+/// inputs together, as [`ProgramReport`]s list them), serialised as it is built: the same bytes
+/// as an [`InspectReport`] of [`inspect_program`] and [`ProgramReport::of`] (no reach columns),
+/// without holding a row per position. A 20 MB module's rows and their text were two thirds of
+/// the peak memory of its JSON report.
+#[derive(Clone, Copy, Debug)]
+pub struct InspectJson<'a> {
+    /// The programs, in input order.
+    pub programs: &'a [Program],
+    /// Per program: loaded from several inputs together.
+    pub grouped: &'a [bool],
+    /// The options of the report.
+    pub options: InspectOptions,
+}
+
+impl Serialize for InspectJson<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        /// The shape of [`InspectReport`].
+        #[derive(Serialize)]
+        struct Doc<'a> {
+            files: LazyFiles<'a>,
+            #[serde(skip_serializing_if = "Vec::is_empty")]
+            programs: Vec<ProgramReport>,
+        }
+        Doc {
+            files: LazyFiles(*self),
+            programs: self
+                .programs
+                .iter()
+                .zip(self.grouped)
+                .filter(|(_, g)| **g)
+                .filter_map(|(p, _)| ProgramReport::of(p))
+                .collect(),
+        }
+        .serialize(s)
     }
-    reports
+}
+
+/// The files of an [`InspectJson`], each built when it is written.
+struct LazyFiles<'a>(InspectJson<'a>);
+
+impl Serialize for LazyFiles<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeSeq as _;
+        let files = self
+            .0
+            .programs
+            .iter()
+            .flat_map(|p| p.files.iter().map(move |f| (p, f)));
+        let mut seq = s.serialize_seq(Some(files.clone().count()))?;
+        for (program, file) in files {
+            let head = file_head(file);
+            seq.serialize_element(&LazyFile {
+                head: &head,
+                rows: LazyRows {
+                    program,
+                    file,
+                    options: self.0.options,
+                },
+            })?;
+        }
+        seq.end()
+    }
+}
+
+/// One file of an [`InspectJson`]: the fields of [`FileReport`], in its order, with the
+/// positions written row by row (the tests compare the two documents byte for byte).
+struct LazyFile<'a> {
+    head: &'a FileReport,
+    rows: LazyRows<'a>,
+}
+
+impl Serialize for LazyFile<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct as _;
+        let h = self.head;
+        let mut st = s.serialize_struct("FileReport", 7 + usize::from(h.stamp.is_some()))?;
+        st.serialize_field("path", &h.path)?;
+        st.serialize_field("language", &h.language)?;
+        st.serialize_field("positions", &self.rows)?;
+        st.serialize_field("frames", &h.frames)?;
+        st.serialize_field("opaque", &h.opaque)?;
+        st.serialize_field("counts", &h.counts)?;
+        st.serialize_field("warnings", &h.warnings)?;
+        match &h.stamp {
+            Some(stamp) => st.serialize_field("stamp", stamp)?,
+            None => st.skip_field("stamp")?,
+        }
+        st.end()
+    }
+}
+
+/// A file's positions, each row built, written and dropped in turn.
+struct LazyRows<'a> {
+    program: &'a Program,
+    file: &'a ParsedFile,
+    options: InspectOptions,
+}
+
+impl Serialize for LazyRows<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeSeq as _;
+        let mut seq = s.serialize_seq(Some(self.file.positions.len()))?;
+        for p in &self.file.positions {
+            seq.serialize_element(&program_row(self.program, self.file, p, self.options))?;
+        }
+        seq.end()
+    }
 }
 
 /// The inspect table: one block per file.

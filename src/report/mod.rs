@@ -8,7 +8,8 @@ pub mod transform;
 
 pub use check::{CheckSummary, QUATERNION_NORM_TOLERANCE, findings, lints};
 pub use inspect::{
-    FileReport, FrameColumn, FrameRow, InspectOptions, InspectReport, Message, Place, PoseColumns,
-    PositionRow, ProgramReport, inspect_file, inspect_program, message, render_csv, render_table,
+    FileReport, FrameColumn, FrameRow, InspectJson, InspectOptions, InspectReport, Message, Place,
+    PoseColumns, PositionRow, ProgramReport, inspect_file, inspect_program, message, render_csv,
+    render_table,
 };
 pub use transform::{FileSummary, would_change};

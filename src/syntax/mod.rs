@@ -17,7 +17,7 @@ mod span;
 mod tree;
 
 pub use diagnostic::{Diagnostic, Excerpt, Severity, WINDOW, latin1, printable, window};
-pub use edit::{Edit, EditError, apply_edits};
+pub use edit::{Edit, EditError, EditText, apply_edits};
 pub use line_index::LineIndex;
 pub use number::{NumLit, fixed, same_at};
 pub use span::Span;

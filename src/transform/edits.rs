@@ -138,3 +138,28 @@ pub fn apply(program: &Program, edits: ProgramEdits) -> Result<ProgramResult, Ed
     }
     Ok(ProgramResult { files })
 }
+
+/// [`apply`] for a program that is not needed after: each file's source becomes its result's
+/// `original` without a copy, and the rest of the model (positions, frames, diagnostics) is
+/// dropped before the first output is built. On a large program the model is several times the
+/// file, and with it alive the outputs and their copies (stamp, precision) set `correct`'s peak.
+pub fn apply_owned(program: Program, edits: ProgramEdits) -> Result<ProgramResult, EditError> {
+    let sources: Vec<(PathBuf, Vec<u8>)> = program
+        .files
+        .into_iter()
+        .map(|f| (f.path, f.source))
+        .collect();
+    let mut files = Vec::with_capacity(sources.len());
+    for ((path, original), fe) in sources.into_iter().zip(edits.files) {
+        let output = apply_edits(&original, &fe.edits)?;
+        files.push(FileResult {
+            path,
+            original,
+            output,
+            refusals: fe.refusals,
+            notes: fe.notes,
+            changes: fe.changes,
+        });
+    }
+    Ok(ProgramResult { files })
+}

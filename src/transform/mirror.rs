@@ -261,12 +261,12 @@ fn skid_edits(file: &ParsedFile, p: &Position, settings: &MirrorSettings) -> Vec
         return Vec::new();
     };
     let mapped_text = match mapped {
-        Some(e) => e.text,
-        None => old.span.slice(&file.source).to_vec(),
+        Some(e) => e.text.to_vec(),
+        None => old.span().slice(&file.source).to_vec(),
     };
     vec![
-        Edit::new(new.span, mapped_text),
-        Edit::new(old.span, new.span.slice(&file.source).to_vec()),
+        Edit::new(new.span(), mapped_text),
+        Edit::new(old.span(), new.span().slice(&file.source).to_vec()),
     ]
 }
 
@@ -661,7 +661,7 @@ fn mirror_offset(
                 None,
             )));
         }
-        let d = call.delta.clone().map(|f| f.map_or(0.0, |f| f.value()));
+        let d = call.delta.map(|f| f.map_or(0.0, |f| f.value()));
         let v = Vector3::new(d[0], d[1], d[2]);
         let new = match call.kind {
             OffsetKind::Offs => refl.vector(&v),
@@ -736,7 +736,7 @@ fn mirror_tool_load(src: &[u8], d: &FrameDecl, own: &Reflection) -> Vec<Edit> {
     let Some(Some(last)) = q.last() else {
         return Vec::new();
     };
-    let nums = numbers_after(src, last.span.end, d.span.end.min(src.len()));
+    let nums = numbers_after(src, last.span().end, d.span.end.min(src.len()));
     // mass, cog x y z, aom q1..q4 (ix, iy, iz are moments about the aom axes: kept).
     if nums.len() < 8 {
         return Vec::new();
@@ -823,7 +823,7 @@ mod tests {
 
     fn quat_of(p: &Position) -> [f64; 4] {
         match &p.cartesian.as_ref().unwrap().orient {
-            Some(Orientation::Quaternion(q)) => q.clone().map(|f| f.unwrap().value()),
+            Some(Orientation::Quaternion(q)) => (*q).map(|f| f.unwrap().value()),
             _ => panic!("not a quaternion"),
         }
     }
@@ -901,7 +901,7 @@ mod tests {
             1e-9
         ));
         let cf = |p: &Position| match &p.config {
-            Config::Abb(c) => c.clone().map(|f| f.unwrap().value()),
+            Config::Abb(c) => (*c).map(|f| f.unwrap().value()),
             _ => panic!(),
         };
         assert_eq!(cf(t50), [-1.0, 0.0, -1.0, 0.0]);

@@ -21,7 +21,9 @@ pub mod track_correction;
 pub mod transfer;
 
 pub use cell::{Axis, Cell, CellError, ConfigRule, FrameIn, MirrorTable, Plane, Robot};
-pub use edits::{FileEdits, FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
+pub use edits::{
+    FileEdits, FileResult, ProgramEdits, ProgramResult, TargetChange, apply, apply_owned,
+};
 pub use kinematic_policy::Arm;
 pub use mirror::{MirrorArm, MirrorSettings, WorldPlane, mirror};
 pub use refusal::{Refusal, RefusalKind, Remedy};

@@ -37,14 +37,14 @@ pub(crate) fn number_edit(field: &Option<NumField>, new: f64, min_decimals: usiz
         return None;
     }
     let f = field.as_ref()?;
-    let text = f.lit.rewrite(new, min_decimals)?;
-    Some(Edit::new(f.span, text))
+    let text = f.lit().rewrite(new, min_decimals)?;
+    Some(Edit::new(f.span(), text))
 }
 
 /// An edit for an integer field (`cf1`…), if it changes.
 pub(crate) fn integer_edit(field: &Option<NumField>, new: i64) -> Option<Edit> {
     let f = field.as_ref()?;
-    Some(Edit::new(f.span, f.lit.rewrite_integer(new)?))
+    Some(Edit::new(f.span(), f.lit().rewrite_integer(new)?))
 }
 
 /// An edit for a KUKA Status/Turn, if it changes.
@@ -197,7 +197,7 @@ fn plain<const N: usize>(
 ) -> [Option<String>; N] {
     std::array::from_fn(|i| {
         let f = fields[i].as_ref().filter(|_| values[i].is_finite())?;
-        f.lit.rewrite(values[i], house)
+        f.lit().rewrite(values[i], house)
     })
 }
 
@@ -208,14 +208,14 @@ fn push_edits<const N: usize>(
 ) {
     for (f, text) in fields.iter().zip(texts) {
         if let (Some(f), Some(text)) = (f, text) {
-            edits.push(Edit::new(f.span, text));
+            edits.push(Edit::new(f.span(), text));
         }
     }
 }
 
 /// One field written for `v`: its text (`None`: kept) and the value the next run reads from it.
 fn write_one(field: &NumField, v: f64, house: usize) -> (Option<String>, f64) {
-    match field.lit.rewrite(v, house) {
+    match field.lit().rewrite(v, house) {
         Some(text) => {
             // Our own output always parses; were it not to, the check below fails safe (the
             // value read back then matches nothing and plain rounding is written).
@@ -237,7 +237,7 @@ fn reversible<const N: usize>(
     if exact.iter().any(|v| !v.is_finite()) {
         return std::array::from_fn(|_| None);
     }
-    let places = fields.map(|f| f.lit.places(house));
+    let places = fields.map(|f| f.lit().places(house));
     let gives_back = |read: [f64; N]| {
         inverse(read).is_some_and(|z| {
             (0..N).all(|i| z[i].is_finite() && same_at(z[i], fields[i].value(), places[i]))
@@ -304,10 +304,10 @@ mod tests {
     use crate::syntax::{NumLit, Span};
 
     fn field(text: &str, at: usize) -> Option<NumField> {
-        Some(NumField {
-            span: Span::new(at, at + text.len()),
-            lit: NumLit::parse(text.as_bytes()).unwrap(),
-        })
+        NumField::new(
+            Span::new(at, at + text.len()),
+            NumLit::parse(text.as_bytes()).unwrap(),
+        )
     }
 
     fn quat_fields(t: [&str; 3], q: [&str; 4]) -> CartesianFields {
@@ -343,7 +343,7 @@ mod tests {
         let e = pose_edits(&f, &turned, OrientationHint::NearOriginal);
         let texts: Vec<String> = e
             .iter()
-            .map(|e| String::from_utf8(e.text.clone()).unwrap())
+            .map(|e| String::from_utf8(e.text.to_vec()).unwrap())
             .collect();
         assert_eq!(texts, ["0.707107", "0.707107"]);
     }
@@ -607,6 +607,6 @@ mod tests {
         let f = quat_fields(["0", "0", "0"], ["-1", "0", "0", "0"]);
         let turned = f.pose().unwrap() * pose_xyz_deg(0.0, 0.0, 0.0, 0.0, 0.0, 1.0);
         let e = pose_edits(&f, &turned, OrientationHint::NearOriginal);
-        assert_eq!(String::from_utf8(e[0].text.clone()).unwrap(), "-0.999962");
+        assert_eq!(String::from_utf8(e[0].text.to_vec()).unwrap(), "-0.999962");
     }
 }

@@ -805,6 +805,25 @@ mod precision_tests {
         assert_eq!(c.widened.0.get(&3), Some(&vec![3, 3, 0]));
     }
 
+    #[test]
+    fn literal_counts_that_differ_carry_nothing() {
+        // Without the extra literal `13.000` would become `13` (as above); with one more literal
+        // on either side the files cannot be paired, and the output is kept as it is.
+        let src = b"MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [12.250, 13.250];\nENDMODULE\n";
+        let out: &[u8] = b"MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [12.500, 13.000, 1];\nENDMODULE\n";
+        let c = carry_precision(src, out, &RAPID);
+        assert_eq!(c.output, out);
+        assert!(c.widened.is_empty());
+        let fewer: &[u8] =
+            b"MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [13.000];\nENDMODULE\n";
+        let c = carry_precision(src, fewer, &RAPID);
+        assert_eq!(c.output, fewer);
+        assert!(c.widened.is_empty());
+        // The last literal of the longer side is what tells: 2 against 3 and 3 against 2.
+        let c = carry_precision(out, src, &RAPID);
+        assert_eq!(c.output, src);
+    }
+
     proptest::proptest! {
         /// zero(correct(x)) == x byte for byte, with the stamp: a synthetic correction moves each
         /// value by `delta` and writes it as a transform does (at least the house decimals); the

@@ -39,10 +39,7 @@ fn numbers(src: &[u8], from: usize, to: usize) -> Vec<NumField> {
             }
         }
         if let Some(lit) = NumLit::parse(&src[s..i]) {
-            out.push(NumField {
-                span: Span::new(s, i),
-                lit,
-            });
+            out.extend(NumField::new(Span::new(s, i), lit));
         }
     }
     out
@@ -100,7 +97,7 @@ pub(crate) fn rapid(src: &str, wobj: &str) -> Program {
         if v.len() < 17 {
             continue;
         }
-        let o = |i: usize| Some(v[i].clone());
+        let o = |i: usize| Some(v[i]);
         positions.push(Position {
             name: Some(format!("p{}", n + 1)),
             kind: PositionKind::Robtarget,
@@ -129,10 +126,10 @@ pub(crate) fn krl(src: &str, base: &str) -> Program {
         if v.len() < 9 {
             continue;
         }
-        let o = |i: usize| Some(v[i].clone());
+        let o = |i: usize| Some(v[i]);
         let bits = |i: usize| {
             Some(BitField {
-                span: v[i].span,
+                span: v[i].span(),
                 value: v[i].value() as u32,
                 binary_digits: None,
             })

@@ -294,7 +294,7 @@ mod tests {
     use crate::geometry::{abb_quat, pose_xyz_deg};
     use crate::position::Orientation;
     use crate::track::profile::{Extrapolate, Knot};
-    use crate::transform::edits::apply;
+    use crate::transform::edits::{apply, apply_owned};
     use crate::transform::test_support::{krl, rapid};
     use proptest::prelude::*;
 
@@ -312,7 +312,17 @@ mod tests {
     }
 
     fn text_after(p: &Program, s: &TrackSetup, dir: Direction) -> String {
-        let r = apply(p, track_correction(p, s, dir)).unwrap();
+        let edits = track_correction(p, s, dir);
+        let r = apply(p, edits.clone()).unwrap();
+        // Handing the program over gives the same files, byte for byte.
+        let owned = apply_owned(p.clone(), edits).unwrap();
+        for (a, b) in r.files.iter().zip(&owned.files) {
+            assert_eq!(
+                (&a.path, &a.original, &a.output),
+                (&b.path, &b.original, &b.output)
+            );
+        }
+        assert_eq!(r.files.len(), owned.files.len());
         assert!(
             r.refusals().next().is_none(),
             "{:?}",
@@ -390,7 +400,7 @@ mod tests {
 
     fn quat(p: &Position) -> [f64; 4] {
         match &p.cartesian.as_ref().unwrap().orient {
-            Some(Orientation::Quaternion(q)) => q.clone().map(|f| f.unwrap().value()),
+            Some(Orientation::Quaternion(q)) => (*q).map(|f| f.unwrap().value()),
             _ => panic!(),
         }
     }

@@ -220,7 +220,7 @@ struct TargetLiterals<'a> {
 fn unit(fields: &[&NumField], house: i32) -> f64 {
     let places = fields
         .iter()
-        .map(|f| f.lit.precision().clamp(0, 12))
+        .map(|f| f.lit().precision().clamp(0, 12))
         .max()
         .unwrap_or(0)
         .max(house);
@@ -263,9 +263,9 @@ const CHAIN_ROUNDING_UNITS: f64 = 1.5;
 fn restore_unmoved(a: &ParsedFile, b: &ParsedFile) -> Result<Vec<u8>, EditError> {
     let mut edits = Vec::new();
     let mut keep = |f: &NumField, g: &NumField| {
-        let old = f.span.slice(&a.source);
-        if old != g.span.slice(&b.source) {
-            edits.push(Edit::new(g.span, old.to_vec()));
+        let old = f.span().slice(&a.source);
+        if old != g.span().slice(&b.source) {
+            edits.push(Edit::new(g.span(), old.to_vec()));
         }
     };
     let close = |f: &NumField, g: &NumField, house: i32| {

@@ -140,6 +140,78 @@ fn inspect_json_snapshot_per_sample() {
     }
 }
 
+/// `inspect --format json` writes its document as it builds it ([`InspectJson`]): the bytes are
+/// those of the whole report serialised at once, for every sample and for the backups' programs
+/// of several files (the `programs` list).
+///
+/// [`InspectJson`]: trackfix::report::InspectJson
+#[test]
+fn streamed_inspect_json_equals_the_whole_report() {
+    use trackfix::program::{LoadOptions, collect_programs, load_group};
+    use trackfix::report::{InspectJson, InspectReport, ProgramReport, inspect_program};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut batches: Vec<Vec<std::path::PathBuf>> = sample_programs()
+        .iter()
+        .map(|p| vec![root.join(p)])
+        .collect();
+    batches.push(vec![root.join("samples/robotstudio_backup")]);
+    batches.push(vec![root.join("samples/kss_backup")]);
+    batches.push(vec![root.join("samples")]);
+    let dir = tempfile::tempdir().unwrap();
+    let stamped = dir.path().join("stamped.mod");
+    std::fs::write(
+        &stamped,
+        "MODULE m\r\n! trackfix: correct robot=r1 profile=\"r1 track\" sha256=0123456789ab version=9.9.9\r\n  CONST robtarget p:=[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\r\nENDMODULE\r\n",
+    )
+    .unwrap();
+    batches.push(vec![stamped]);
+    let mut grouped_seen = 0;
+    let mut stamps_seen = 0;
+    for inputs in &batches {
+        let mut programs = Vec::new();
+        let mut grouped = Vec::new();
+        for group in collect_programs(inputs).expect("inputs listed") {
+            for p in load_group(&group, &LoadOptions::default())
+                .into_iter()
+                .flatten()
+            {
+                programs.push(p);
+                grouped.push(group.len() > 1);
+            }
+        }
+        let options = Default::default();
+        let whole = InspectReport {
+            files: programs
+                .iter()
+                .flat_map(|p| inspect_program(p, options))
+                .collect(),
+            programs: programs
+                .iter()
+                .zip(&grouped)
+                .filter(|(_, g)| **g)
+                .filter_map(|(p, _)| ProgramReport::of(p))
+                .collect(),
+        };
+        grouped_seen += whole.programs.len();
+        stamps_seen += whole.files.iter().filter(|f| f.stamp.is_some()).count();
+        let streamed = InspectJson {
+            programs: &programs,
+            grouped: &grouped,
+            options,
+        };
+        assert_eq!(
+            serde_json::to_string_pretty(&streamed).unwrap(),
+            serde_json::to_string_pretty(&whole).unwrap(),
+            "{inputs:?}"
+        );
+    }
+    assert!(
+        grouped_seen >= 2,
+        "the backups form programs of several files"
+    );
+    assert_eq!(stamps_seen, 1, "the stamped module's stamp is reported");
+}
+
 #[test]
 fn inspect_krl_with_config_dat_resolves_bases() {
     let o = trackfix(&[

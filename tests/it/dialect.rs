@@ -33,10 +33,7 @@ fn fields(src: &[u8], line: Span) -> Vec<NumField> {
     let mut at = line.start;
     for word in line.slice(src).split(|b| *b == b' ') {
         if let Some(lit) = NumLit::parse(word) {
-            out.push(NumField {
-                span: Span::new(at, at + word.len()),
-                lit,
-            });
+            out.extend(NumField::new(Span::new(at, at + word.len()), lit));
         }
         at += word.len() + 1;
     }

@@ -104,11 +104,11 @@ pub(crate) fn file_holds(file: &ParsedFile) {
         assert!(p.span.start <= p.span.end && p.span.end <= len);
         if let Some(c) = &p.cartesian {
             for f in c.trans.iter().flatten() {
-                assert!(f.span.end <= len);
+                assert!(f.span().end <= len);
             }
         }
         for f in p.extax.iter().flatten() {
-            assert!(f.span.end <= len);
+            assert!(f.span().end <= len);
         }
     }
 }

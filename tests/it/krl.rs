@@ -206,8 +206,8 @@ fn spot_line_has_160_points_on_the_track_resolved_through_fdat() {
     assert_eq!(p0.usage.wobj.as_deref(), Some("$WORLD"));
     // The spans point at the literal text.
     let e1 = p12.extax[0].as_ref().unwrap();
-    assert_eq!(e1.span.slice(&dat.source), b"690.750");
-    assert_eq!(NumLit::parse(b"690.750"), Some(e1.lit));
+    assert_eq!(e1.span().slice(&dat.source), b"690.750");
+    assert_eq!(NumLit::parse(b"690.750"), Some(e1.lit()));
     let cfg = &program.files[2];
     assert!(cfg.positions.is_empty());
     let bases: Vec<_> = cfg.frames.iter().map(|f| f.name.as_str()).collect();
@@ -246,7 +246,7 @@ fn config_dat_bases_and_tools() {
     let base3 = frames.iter().find(|f| f.name == "BASE_DATA[3]").unwrap();
     let src = std::fs::read(sample("$config.dat")).unwrap();
     let y = base3.frame.as_ref().unwrap().trans[1].as_ref().unwrap();
-    assert_eq!(y.span.slice(&src), b"1350.25");
+    assert_eq!(y.span().slice(&src), b"1350.25");
 }
 
 #[test]
@@ -539,7 +539,7 @@ proptest! {
             let c = p.cartesian.as_ref().unwrap();
             let Some(Orientation::Abc(abc)) = &c.orient else { panic!() };
             let got: Vec<&[u8]> = c.trans.iter().chain(abc.iter())
-                .map(|f| f.as_ref().unwrap().span.slice(&file.source))
+                .map(|f| f.as_ref().unwrap().span().slice(&file.source))
                 .collect();
             let want: Vec<&[u8]> = texts.iter().map(|t| t.as_bytes()).collect();
             prop_assert_eq!(got, want);
@@ -547,7 +547,7 @@ proptest! {
             prop_assert_eq!(status.as_ref().unwrap().value, *s);
             prop_assert_eq!(turn.as_ref().unwrap().value, *t);
             prop_assert_eq!(p.extax.len(), 2);
-            prop_assert_eq!(p.extax[0].as_ref().unwrap().span.slice(&file.source), e1.as_bytes());
+            prop_assert_eq!(p.extax[0].as_ref().unwrap().span().slice(&file.source), e1.as_bytes());
         }
     }
 

@@ -140,8 +140,8 @@ fn assert_spans_match(f: &ParsedFile) {
     let check = |field: &Option<NumField>| {
         if let Some(n) = field {
             assert_eq!(
-                NumLit::parse(n.span.slice(src)),
-                Some(n.lit),
+                NumLit::parse(n.span().slice(src)).and_then(|lit| NumField::new(n.span(), lit)),
+                Some(*n),
                 "{}",
                 f.path.display()
             );
@@ -244,7 +244,7 @@ fn spot_line_is_a_track_program() {
         last = s;
         for k in 1..6 {
             assert_eq!(p.skid(k), Skid::NotConnected);
-            assert_eq!(p.extax[k].as_ref().unwrap().span.slice(src), b"9E+09");
+            assert_eq!(p.extax[k].as_ref().unwrap().span().slice(src), b"9E+09");
         }
         assert_eq!(p.usage.wobj.as_deref(), Some("wobj_car"));
         assert_eq!(p.usage.tool.as_deref(), Some("tGun1"));
@@ -711,7 +711,7 @@ proptest! {
                 .into_iter()
                 .map(|o| {
                     o.as_ref()
-                        .map(|n| String::from_utf8_lossy(n.span.slice(&f.source)).into_owned())
+                        .map(|n| String::from_utf8_lossy(n.span().slice(&f.source)).into_owned())
                         .unwrap_or_default()
                 })
                 .collect();

@@ -56,7 +56,7 @@ pub(crate) fn trackfix(args: &[&str]) -> (i32, String, String) {
 /// a numeric literal.
 pub(crate) fn text(src: &[u8], f: &Option<NumField>) -> String {
     match f {
-        Some(f) => latin1(f.span.slice(src)),
+        Some(f) => latin1(f.span().slice(src)),
         None => "-".to_owned(),
     }
 }
