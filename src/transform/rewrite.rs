@@ -64,7 +64,7 @@ fn written<const N: usize>(fields: &[Option<NumField>; N]) -> Option<[f64; N]> {
 /// Edits that make `fields` say `new`. Fields whose text already says the new value (at their
 /// written precision) are kept.
 pub(crate) fn pose_edits(fields: &CartesianFields, new: &Pose, hint: OrientationHint) -> Vec<Edit> {
-    reversible_pose_edits(fields, new, hint, None)
+    reversible_pose_edits(fields, new, hint, None, None)
 }
 
 /// [`pose_edits`], written so that the inverse transform gives back the original text where it
@@ -74,11 +74,17 @@ pub(crate) fn pose_edits(fields: &CartesianFields, new: &Pose, hint: Orientation
 /// every original literal at its written places; else as the nearest choice, within one unit
 /// of the last written place of each field, that does; else as plain rounding. A written value
 /// stays within 1.5 units of its last place of the exact value.
+///
+/// KUKA angles at B = ±90° (gimbal lock): `keep_a` is the A `correct` recorded for this target
+/// in its stamp; where the result is at B = ±90° at the written places, the split that keeps it
+/// is written ([`lock_split`]). With `undo`, an original at B = ±90° is written so that the
+/// inverse, keeping the original's A so, gives back its text (`correct` records that A).
 pub(crate) fn reversible_pose_edits(
     fields: &CartesianFields,
     new: &Pose,
     hint: OrientationHint,
     undo: Option<&Pose>,
+    keep_a: Option<f64>,
 ) -> Vec<Edit> {
     let mut edits = Vec::new();
     // Absurd literals (1e300 mm) overflow the composition; a half-written target would be worse
@@ -144,7 +150,14 @@ pub(crate) fn reversible_pose_edits(
                 OrientationHint::NearOriginal => written(abc),
                 OrientationHint::Expected(_) => None,
             };
-            let angles = kuka_abc_angles(&new.rotation, like);
+            let places = abc.each_ref().map(|f| {
+                f.as_ref()
+                    .map_or(DEG_DECIMALS, |f| f.lit.places(DEG_DECIMALS))
+            });
+            let mut angles = kuka_abc_angles(&new.rotation, like);
+            if let Some(kept) = keep_a.and_then(|a| lock_split(&new.rotation, angles, a, places)) {
+                angles = kept;
+            }
             let texts = match (undo, present(abc)) {
                 (Some(undo), Some(abc)) => reversible(abc, angles, DEG_DECIMALS, |w| {
                     let read = kuka_abc(w[0], w[1], w[2]);
@@ -152,7 +165,16 @@ pub(crate) fn reversible_pose_edits(
                     if angle_between(&read, &back) < SAME_ROTATION_RAD {
                         return Some(w);
                     }
-                    Some(kuka_abc_angles(&back, Some(w)))
+                    let z = kuka_abc_angles(&back, Some(w));
+                    // The inverse keeps the original's A at the lock (it reads it from the
+                    // stamp): written at B = ±90°, the original's A is recorded.
+                    let at_lock = abc[1].value().abs() == 90.0;
+                    Some(
+                        at_lock
+                            .then(|| lock_split(&back, z, abc[0].value(), places))
+                            .flatten()
+                            .unwrap_or(z),
+                    )
                 }),
                 _ => plain(abc, angles, DEG_DECIMALS),
             };
@@ -161,6 +183,38 @@ pub(crate) fn reversible_pose_edits(
         None => {}
     }
     edits
+}
+
+/// The angles `[A, B, C]` of `exact` that keep A at `keep_a`, when `angles` (its angles as they
+/// would be written) are at B = ±90° at the written `places`: there only A − C (B = 90°) or
+/// A + C (B = -90°) is fixed by the rotation, `exact` = Rz(A ∓ C)·Ry(±90°), and every split
+/// is the same orientation. `None` off the lock, or when the split, rounded to its places, is
+/// not within one unit of the last place of B or C of `exact` (the orientation never changes
+/// beyond what writing it at those places does).
+pub(crate) fn lock_split(
+    exact: &UnitQuaternion<f64>,
+    angles: [f64; 3],
+    keep_a: f64,
+    places: [usize; 3],
+) -> Option<[f64; 3]> {
+    let round = |v: f64, p: usize| {
+        let s = 10f64.powi(p as i32);
+        (v * s).round() / s
+    };
+    let b = round(angles[1], places[1]);
+    if b.abs() != 90.0 || !keep_a.is_finite() {
+        return None;
+    }
+    // Rz(φ) = exact·Ry(∓90°)⁻¹, with φ = A − C at B = 90° and A + C at B = -90°.
+    let rest = exact * kuka_abc(0.0, b, 0.0).inverse();
+    let m = rest.to_rotation_matrix();
+    let phi = m[(1, 0)].atan2(m[(0, 0)]).to_degrees();
+    let c = if b > 0.0 { keep_a - phi } else { phi - keep_a };
+    // C on the branch of ±180° nearest the one it would have been written on.
+    let c = c + 360.0 * ((angles[2] - c) / 360.0).round();
+    let written = kuka_abc(keep_a, b, round(c, places[2]));
+    let unit = 10f64.powi(-(places[1].min(places[2]) as i32)).to_radians();
+    (angle_between(&written, exact) <= unit).then_some([keep_a, b, c])
 }
 
 /// Below this distance of its norm from 1, a written quaternion's norm is kept: it is a unit
@@ -407,6 +461,7 @@ mod tests {
             &(change * t),
             OrientationHint::NearOriginal,
             Some(&undo),
+            None,
         );
         let corrected = edited(&texts, &e);
         let g = text_fields(&corrected);

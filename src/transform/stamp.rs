@@ -52,6 +52,9 @@ pub struct Stamp {
     /// How the literals this file's transforms widened were first written.
     #[serde(skip_serializing_if = "Widened::is_empty")]
     pub widened: Widened,
+    /// The A of each target `correct` found at B = ±90° (see [`LockSplits`]).
+    #[serde(skip_serializing_if = "LockSplits::is_empty")]
+    pub gimbal: LockSplits,
     /// trackfix's version.
     pub version: String,
 }
@@ -147,6 +150,74 @@ impl Widened {
     }
 }
 
+/// The A of each KUKA target written at B = ±90°, as written, by the target's index among the
+/// file's targets (`gimbal=4:30,9:-12.5`).
+///
+/// At B = ±90° only A − C (B = 90°) or A + C (B = -90°) says the orientation; the split is the
+/// file's own choice. `correct` moves such a target off the lock, where its angles have one
+/// split only, so the corrected text no longer says which split the original had. `zero` reads
+/// this record and, where its result is at B = ±90° again at the written places, writes the
+/// split that keeps the recorded A (docs/design.md §5, round trip); never another orientation.
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct LockSplits(pub Vec<(usize, String)>);
+
+impl LockSplits {
+    /// True when no target is recorded.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// The record of `file`: every Cartesian target with A, B, C literals whose B is ±90.
+    pub fn of(file: &ParsedFile) -> LockSplits {
+        use crate::position::Orientation;
+        let mut out = Vec::new();
+        for (i, p) in file.positions.iter().enumerate() {
+            let Some(Orientation::Abc([Some(a), Some(b), Some(_)])) =
+                p.cartesian.as_ref().and_then(|c| c.orient.as_ref())
+            else {
+                continue;
+            };
+            if b.value().abs() == 90.0 && a.value().is_finite() {
+                let text = file
+                    .source
+                    .get(a.span.start..a.span.end)
+                    .unwrap_or_default();
+                out.push((i, crate::syntax::latin1(text)));
+            }
+        }
+        LockSplits(out)
+    }
+
+    /// The recorded A of the target at `index`, if any.
+    pub fn a_of(&self, index: usize) -> Option<f64> {
+        let at = self.0.binary_search_by_key(&index, |(i, _)| *i).ok()?;
+        self.0[at].1.parse().ok()
+    }
+
+    /// The `gimbal=` value: `4:30,9:-12.5`.
+    fn text(&self) -> String {
+        let parts: Vec<String> = self.0.iter().map(|(i, a)| format!("{i}:{a}")).collect();
+        parts.join(",")
+    }
+
+    /// Reads a `gimbal=` value; `None` if it is malformed or not in target order (then nothing
+    /// is kept). At most `limit` entries, as for `widened=`.
+    fn parse(text: &str, limit: usize) -> Option<LockSplits> {
+        let mut out: Vec<(usize, String)> = Vec::new();
+        for part in text.split(',') {
+            let (i, a) = part.split_once(':')?;
+            let i: usize = i.parse().ok()?;
+            let v: f64 = a.parse().ok()?;
+            let ordered = out.last().is_none_or(|(last, _)| *last < i);
+            if !v.is_finite() || !ordered || out.len() >= limit {
+                return None;
+            }
+            out.push((i, a.to_owned()));
+        }
+        Some(LockSplits(out))
+    }
+}
+
 impl Stamp {
     /// A stamp of this version of trackfix.
     pub fn new(command: &str, robot: Option<&str>, profile: Option<(&str, &str)>) -> Stamp {
@@ -155,6 +226,7 @@ impl Stamp {
             robot: robot.map(str::to_owned),
             profile: profile.map(|(n, h)| (n.to_owned(), h.chars().take(12).collect())),
             widened: Widened::default(),
+            gimbal: LockSplits::default(),
             version: env!("CARGO_PKG_VERSION").to_owned(),
         }
     }
@@ -171,6 +243,9 @@ impl Stamp {
         if !self.widened.is_empty() {
             s.push_str(&format!(" widened={}", self.widened.text()));
         }
+        if !self.gimbal.is_empty() {
+            s.push_str(&format!(" gimbal={}", self.gimbal.text()));
+        }
         s.push_str(&format!(" version={}", self.version));
         s
     }
@@ -185,6 +260,7 @@ impl Stamp {
             robot: None,
             profile: None,
             widened: Widened::default(),
+            gimbal: LockSplits::default(),
             version: String::new(),
         };
         let mut name = None;
@@ -197,6 +273,9 @@ impl Stamp {
                 }
                 Some(("widened", v)) => {
                     stamp.widened = Widened::parse(v, limit).unwrap_or_default()
+                }
+                Some(("gimbal", v)) => {
+                    stamp.gimbal = LockSplits::parse(v, limit).unwrap_or_default()
                 }
                 Some(("version", v)) => stamp.version = v.to_owned(),
                 _ => {}
@@ -621,6 +700,7 @@ mod tests {
             robot: Some("r1".into()),
             profile: Some(("r1 track".into(), "0123456789ab".into())),
             widened: Widened::default(),
+            gimbal: LockSplits::default(),
             version: "9.9.9".into(),
         }
     }
