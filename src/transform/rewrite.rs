@@ -517,6 +517,81 @@ mod tests {
         assert_eq!(o, z);
     }
 
+    /// Rz(A)·Ry(B)·Rx(C) from its three elementary matrices (degrees): KUKA's A, B, C, built
+    /// without the crate's conventions.
+    fn zyx_by_hand(a: f64, b: f64, c: f64) -> nalgebra::Matrix3<f64> {
+        let (a, b, c) = (a.to_radians(), b.to_radians(), c.to_radians());
+        let rz =
+            nalgebra::Matrix3::new(a.cos(), -a.sin(), 0.0, a.sin(), a.cos(), 0.0, 0.0, 0.0, 1.0);
+        let ry =
+            nalgebra::Matrix3::new(b.cos(), 0.0, b.sin(), 0.0, 1.0, 0.0, -b.sin(), 0.0, b.cos());
+        let rx =
+            nalgebra::Matrix3::new(1.0, 0.0, 0.0, 0.0, c.cos(), -c.sin(), 0.0, c.sin(), c.cos());
+        rz * ry * rx
+    }
+
+    /// The angle (degrees) between two rotation matrices, from the trace of `m1ᵀ·m2`.
+    fn degrees_between(m1: &nalgebra::Matrix3<f64>, m2: &nalgebra::Matrix3<f64>) -> f64 {
+        let cos = (((m1.transpose() * m2).trace() - 1.0) / 2.0).clamp(-1.0, 1.0);
+        cos.acos().to_degrees()
+    }
+
+    #[test]
+    fn the_lock_split_keeps_a_and_the_orientation() {
+        // B = 90°: Rz(A)·Ry(90°)·Rx(C) depends on A − C only; (50, 90, 30) kept at A = 30 is
+        // (30, 90, 10). B = -90°: A + C; (50, -90, 30) kept at A = 20 is (20, -90, 60).
+        for (b, keep, c_kept) in [(90.0, 30.0, 10.0), (-90.0, 20.0, 60.0)] {
+            let by_hand = zyx_by_hand(50.0, b, 30.0);
+            let exact = kuka_abc(50.0, b, 30.0);
+            let m = *exact.to_rotation_matrix().matrix();
+            assert!(degrees_between(&m, &by_hand) < 1e-9, "kuka_abc is Rz·Ry·Rx");
+            let [a, b2, c] = lock_split(&exact, [50.0, b, 30.0], keep, [4, 4, 4]).unwrap();
+            assert_eq!((a, b2), (keep, b));
+            assert!((c - c_kept).abs() < 1e-9, "{c}");
+            assert!(degrees_between(&zyx_by_hand(a, b2, c), &by_hand) < 1e-9);
+        }
+        // A result at B = 89.99996° is written at 90.0000: the split moves the orientation by
+        // no more than writing it at 4 places does.
+        let exact = kuka_abc(50.0, 89.99996, 30.0);
+        let [a, b, c] = lock_split(&exact, [50.0, 89.99996, 30.0], 30.0, [4, 4, 4]).unwrap();
+        assert_eq!((a, b), (30.0, 90.0));
+        let moved = degrees_between(
+            &zyx_by_hand(a, b, (c * 1e4).round() / 1e4),
+            &zyx_by_hand(50.0, 89.99996, 30.0),
+        );
+        assert!(moved <= 1e-4, "{moved}");
+        // Off the lock at the written places (89.9999 at 4, 89.99996 at 5): no split to keep.
+        let near = kuka_abc(50.0, 89.9999, 30.0);
+        assert_eq!(
+            lock_split(&near, [50.0, 89.9999, 30.0], 30.0, [4, 4, 4]),
+            None
+        );
+        assert_eq!(
+            lock_split(&exact, [50.0, 89.99996, 30.0], 30.0, [4, 5, 4]),
+            None
+        );
+    }
+
+    #[test]
+    fn kuka_angles_at_gimbal_lock_come_back_with_the_recorded_a() {
+        // `correct` moves (0, 90, 0) off the lock, where its angles have one split only.
+        let texts = [
+            "1100.000", "600.000", "900.000", "0.0000", "90.0000", "0.0000",
+        ]
+        .map(str::to_owned)
+        .to_vec();
+        let change = pose_xyz_deg(0.873, -0.412, 1.204, 0.011, -0.027, 0.019);
+        let (o, c, plain) = round_trip(texts, &change);
+        assert_ne!(c[4], o[4]);
+        // Without the record, zero writes its own split: the orientation, other angles.
+        assert_ne!(plain[3..], o[3..], "{c:?}");
+        // With the A `correct` records (0), zero writes the original text.
+        let g = text_fields(&c);
+        let back = change.inverse() * g.pose().unwrap();
+        let e = reversible_pose_edits(&g, &back, OrientationHint::NearOriginal, None, Some(0.0));
+        assert_eq!(edited(&c, &e), o, "{c:?}");
+    }
+
     /// docs/design.md §5 round trip: a pose written at the house decimals (mm 3, quaternion 6,
     /// KUKA degrees 4), moved by `d` (mm, then degrees about x, y, z) with the inverse in view,
     /// then moved back plainly, gives the same text; each corrected value lies within 1.5 units

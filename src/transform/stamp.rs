@@ -744,6 +744,34 @@ mod tests {
         // An ordinary comment after the header is not a stamp.
         assert_eq!(find_in(b"DEF a()\n; trackfix is great\nEND\n", &KRL), None);
     }
+    #[test]
+    fn gimbal_records_the_a_of_each_target_at_the_lock_and_reads_back() {
+        let src = "{X 1,Y 2,Z 3,A 30,B 45,C 10,S 2,T 35,E1 0}\n\
+                   {X 1,Y 2,Z 3,A 15.0,B 90,C 10,S 2,T 35,E1 0}\n\
+                   {X 1,Y 2,Z 3,A -12.5,B -90.0,C 10,S 2,T 35,E1 0}\n";
+        let p = crate::transform::test_support::krl(src, "b");
+        let splits = LockSplits::of(&p.files[0]);
+        // The first target is off the lock; the others' A as written, by target index.
+        assert_eq!(splits.text(), "1:15.0,2:-12.5");
+        assert_eq!(
+            (splits.a_of(0), splits.a_of(1), splits.a_of(2)),
+            (None, Some(15.0), Some(-12.5))
+        );
+        let mut s = stamp();
+        s.gimbal = splits.clone();
+        let dat = b"DEFDAT spot\nENDDAT\n";
+        let out = write(dat, &KRL, &s).unwrap();
+        assert!(String::from_utf8_lossy(&out).contains(" gimbal=1:15.0,2:-12.5 version="));
+        assert_eq!(find_in(&out, &KRL).unwrap().0, s);
+        // Malformed, out of target order or beyond the file's size: nothing is kept.
+        for bad in ["1:x", "2:1,1:1", "1:inf", "1", "1:1,2:2,3:3"] {
+            assert_eq!(
+                LockSplits::parse(bad, 2).unwrap_or_default(),
+                LockSplits::default(),
+                "{bad}"
+            );
+        }
+    }
 }
 
 #[cfg(test)]
