@@ -29,6 +29,10 @@
 //! Trailing entries of D are left off. A literal's precision is its decimals minus its exponent:
 //! `-1200.873` resolves 3, and so does `1.50123E+2`, a rewrite of `1.5E+2` (which resolves -1,
 //! recorded as `3:-1`). See [`carry_precision`].
+//!
+//! `correct` also records the A of each KUKA target written at B = ±90° (`gimbal=0:0.0,5:30`,
+//! by target index), whose split between A and C the corrected text no longer says; `zero`
+//! writes the split that keeps it ([`LockSplits`]).
 
 use crate::position::ParsedFile;
 use crate::syntax::Span;
