@@ -654,6 +654,36 @@ mod tests {
             check_round_trip(xyz, rot, [d.0, d.1, d.2, d.3, d.4, d.5], kuka)?;
         }
 
+        /// KUKA at B = ±90° (docs/design.md §4, splits at the lock): `correct` with `zero` in
+        /// view, `zero` keeping the A `correct` records, gives the same text.
+        #[test]
+        fn corrected_then_zeroed_at_gimbal_lock_keeps_the_split(
+            xyz in (-3000.0..3000.0f64, -3000.0..3000.0f64, -500.0..2000.0f64),
+            ac in (-179.0..179.0f64, -179.0..179.0f64),
+            up in proptest::bool::ANY,
+            d in (-3.0..3.0f64, -3.0..3.0f64, -3.0..3.0f64, -0.05..0.05f64, -0.05..0.05f64, -0.05..0.05f64),
+        ) {
+            let fixed = crate::syntax::fixed;
+            let b = if up { "90.0000" } else { "-90.0000" };
+            let texts = vec![
+                fixed(xyz.0, 3), fixed(xyz.1, 3), fixed(xyz.2, 3),
+                fixed(ac.0, 4), b.to_owned(), fixed(ac.1, 4),
+            ];
+            let change = pose_xyz_deg(d.0, d.1, d.2, d.3, d.4, d.5);
+            let f = text_fields(&texts);
+            let undo = change.inverse();
+            let e = reversible_pose_edits(
+                &f, &(change * f.pose().unwrap()), OrientationHint::NearOriginal, Some(&undo), None,
+            );
+            let c = edited(&texts, &e);
+            let g = text_fields(&c);
+            let kept = texts[3].parse::<f64>().unwrap();
+            let e = reversible_pose_edits(
+                &g, &(undo * g.pose().unwrap()), OrientationHint::NearOriginal, None, Some(kept),
+            );
+            proptest::prop_assert_eq!(&edited(&c, &e), &texts, "corrected {:?}", c);
+        }
+
     }
 
     #[test]
