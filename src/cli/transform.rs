@@ -338,10 +338,10 @@ fn stamp_results(
         }
         let mut s = prov.stamp.clone();
         s.widened = carried.widened;
-        if prov.stamp.command == "correct" {
-            if let Some(file) = parsed(&f.path) {
-                s.gimbal = stamp::LockSplits::of(file);
-            }
+        if prov.stamp.command == "correct"
+            && let Some(file) = parsed(&f.path)
+        {
+            s.gimbal = stamp::LockSplits::of(file);
         }
         if let Some(stamped) = stamp::write(&f.output, d, &s) {
             f.output = stamped;
