@@ -296,7 +296,21 @@ fn check_stamps(
 ///
 /// A `zero` of a file stamped as corrected for the same robot with the same profile that leaves
 /// no literal widened removes the stamp: the file is again as it was before `correct`.
-fn stamp_results(results: &mut [ProgramResult], prov: &Provenance, out: &OutputArgs) {
+///
+/// A `correct` also records the A of each KUKA target written at B = ±90° (`gimbal=`), so a
+/// `zero` can give back the split the file had.
+fn stamp_results(
+    programs: &[Program],
+    results: &mut [ProgramResult],
+    prov: &Provenance,
+    out: &OutputArgs,
+) {
+    let parsed = |path: &Path| {
+        programs
+            .iter()
+            .flat_map(|p| &p.files)
+            .find(|f| f.path == path)
+    };
     for f in results.iter_mut().flat_map(|r| r.files.iter_mut()) {
         if !f.changed() {
             continue;
@@ -325,6 +339,11 @@ fn stamp_results(results: &mut [ProgramResult], prov: &Provenance, out: &OutputA
         }
         let mut s = prov.stamp.clone();
         s.widened = carried.widened;
+        if prov.stamp.command == "correct"
+            && let Some(file) = parsed(&f.path)
+        {
+            s.gimbal = stamp::LockSplits::of(file);
+        }
         if let Some(stamped) = stamp::write(&f.output, d, &s) {
             f.output = stamped;
         }
@@ -922,7 +941,7 @@ fn run_each(
         bar.inc(1);
     }
     bar.finish_and_clear();
-    stamp_results(&mut results, prov, out);
+    stamp_results(&programs, &mut results, prov, out);
     drop_untouched_config(&mut results, robot.and_then(|r| r.config_dat.as_deref()));
     for cfg in other_configs {
         drop_untouched_config(&mut results, *cfg);

@@ -58,6 +58,12 @@ pub(crate) trait TargetRule {
         None
     }
 
+    /// Whether the rule writes KUKA targets at B = ±90° with the split a `correct` recorded in
+    /// the file's stamp (`zero`, the inverse of `correct`; docs/design.md §5, round trip).
+    fn keeps_lock_splits(&self) -> bool {
+        false
+    }
+
     /// The expanded uncertainty (k = 2, mm) of the new target's TCP, when the rule knows one.
     fn uncertainty(&self, _frame: &Self::Frame, _skid: Option<f64>, _new: &Pose) -> Option<f64> {
         None
@@ -84,9 +90,15 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
     let mut out = ProgramEdits::for_program(program);
     for (file, fe) in program.files.iter().zip(out.files.iter_mut()) {
         let scope = Scope { program, file };
-        for p in &file.positions {
+        let splits = rule
+            .keeps_lock_splits()
+            .then(|| super::stamp::find(file))
+            .flatten()
+            .map(|(s, _)| s.gimbal)
+            .unwrap_or_default();
+        for (i, p) in file.positions.iter().enumerate() {
             let step = if p.kind.is_cartesian() {
-                cartesian(rule, scope, p)
+                cartesian(rule, scope, p, splits.a_of(i))
             } else {
                 rule.joint(scope, p)
             };
@@ -114,7 +126,8 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
     out
 }
 
-fn cartesian<R: TargetRule>(rule: &R, scope: Scope, p: &Position) -> Step {
+/// One Cartesian target; `keep_a`: the A its file's stamp recorded for it at B = ±90°.
+fn cartesian<R: TargetRule>(rule: &R, scope: Scope, p: &Position, keep_a: Option<f64>) -> Step {
     let refuse = |why: Why| why.at(scope.file, p);
     if let Some(why) = rule.refusal(scope, p) {
         return Err(refuse(why));
@@ -133,7 +146,7 @@ fn cartesian<R: TargetRule>(rule: &R, scope: Scope, p: &Position) -> Step {
         return Err(refuse(why));
     }
     let undo = rule.inverse(&frame, skid);
-    let mut edits = reversible_pose_edits(fields, &new, hint, undo.as_ref());
+    let mut edits = reversible_pose_edits(fields, &new, hint, undo.as_ref(), keep_a);
     edits.extend(rule.more_edits(scope, p));
     let (mm, deg) = pose_change(&t, &new);
     let uncertainty_mm = rule.uncertainty(&frame, skid, &new);

@@ -64,7 +64,7 @@ fn written<const N: usize>(fields: &[Option<NumField>; N]) -> Option<[f64; N]> {
 /// Edits that make `fields` say `new`. Fields whose text already says the new value (at their
 /// written precision) are kept.
 pub(crate) fn pose_edits(fields: &CartesianFields, new: &Pose, hint: OrientationHint) -> Vec<Edit> {
-    reversible_pose_edits(fields, new, hint, None)
+    reversible_pose_edits(fields, new, hint, None, None)
 }
 
 /// [`pose_edits`], written so that the inverse transform gives back the original text where it
@@ -74,11 +74,17 @@ pub(crate) fn pose_edits(fields: &CartesianFields, new: &Pose, hint: Orientation
 /// every original literal at its written places; else as the nearest choice, within one unit
 /// of the last written place of each field, that does; else as plain rounding. A written value
 /// stays within 1.5 units of its last place of the exact value.
+///
+/// KUKA angles at B = ±90° (gimbal lock): `keep_a` is the A `correct` recorded for this target
+/// in its stamp; where the result is at B = ±90° at the written places, the split that keeps it
+/// is written ([`lock_split`]). With `undo`, an original at B = ±90° is written so that the
+/// inverse, keeping the original's A so, gives back its text (`correct` records that A).
 pub(crate) fn reversible_pose_edits(
     fields: &CartesianFields,
     new: &Pose,
     hint: OrientationHint,
     undo: Option<&Pose>,
+    keep_a: Option<f64>,
 ) -> Vec<Edit> {
     let mut edits = Vec::new();
     // Absurd literals (1e300 mm) overflow the composition; a half-written target would be worse
@@ -144,7 +150,14 @@ pub(crate) fn reversible_pose_edits(
                 OrientationHint::NearOriginal => written(abc),
                 OrientationHint::Expected(_) => None,
             };
-            let angles = kuka_abc_angles(&new.rotation, like);
+            let places = abc.each_ref().map(|f| {
+                f.as_ref()
+                    .map_or(DEG_DECIMALS, |f| f.lit.places(DEG_DECIMALS))
+            });
+            let mut angles = kuka_abc_angles(&new.rotation, like);
+            if let Some(kept) = keep_a.and_then(|a| lock_split(&new.rotation, angles, a, places)) {
+                angles = kept;
+            }
             let texts = match (undo, present(abc)) {
                 (Some(undo), Some(abc)) => reversible(abc, angles, DEG_DECIMALS, |w| {
                     let read = kuka_abc(w[0], w[1], w[2]);
@@ -152,7 +165,16 @@ pub(crate) fn reversible_pose_edits(
                     if angle_between(&read, &back) < SAME_ROTATION_RAD {
                         return Some(w);
                     }
-                    Some(kuka_abc_angles(&back, Some(w)))
+                    let z = kuka_abc_angles(&back, Some(w));
+                    // The inverse keeps the original's A at the lock (it reads it from the
+                    // stamp): written at B = ±90°, the original's A is recorded.
+                    let at_lock = abc[1].value().abs() == 90.0;
+                    Some(
+                        at_lock
+                            .then(|| lock_split(&back, z, abc[0].value(), places))
+                            .flatten()
+                            .unwrap_or(z),
+                    )
                 }),
                 _ => plain(abc, angles, DEG_DECIMALS),
             };
@@ -161,6 +183,38 @@ pub(crate) fn reversible_pose_edits(
         None => {}
     }
     edits
+}
+
+/// The angles `[A, B, C]` of `exact` that keep A at `keep_a`, when `angles` (its angles as they
+/// would be written) are at B = ±90° at the written `places`: there only A − C (B = 90°) or
+/// A + C (B = -90°) is fixed by the rotation, `exact` = Rz(A ∓ C)·Ry(±90°), and every split
+/// is the same orientation. `None` off the lock, or when the split, rounded to its places, is
+/// not within one unit of the last place of B or C of `exact` (the orientation never changes
+/// beyond what writing it at those places does).
+pub(crate) fn lock_split(
+    exact: &UnitQuaternion<f64>,
+    angles: [f64; 3],
+    keep_a: f64,
+    places: [usize; 3],
+) -> Option<[f64; 3]> {
+    let round = |v: f64, p: usize| {
+        let s = 10f64.powi(p as i32);
+        (v * s).round() / s
+    };
+    let b = round(angles[1], places[1]);
+    if b.abs() != 90.0 || !keep_a.is_finite() {
+        return None;
+    }
+    // Rz(φ) = exact·Ry(∓90°)⁻¹, with φ = A − C at B = 90° and A + C at B = -90°.
+    let rest = exact * kuka_abc(0.0, b, 0.0).inverse();
+    let m = rest.to_rotation_matrix();
+    let phi = m[(1, 0)].atan2(m[(0, 0)]).to_degrees();
+    let c = if b > 0.0 { keep_a - phi } else { phi - keep_a };
+    // C on the branch of ±180° nearest the one it would have been written on.
+    let c = c + 360.0 * ((angles[2] - c) / 360.0).round();
+    let written = kuka_abc(keep_a, b, round(c, places[2]));
+    let unit = 10f64.powi(-(places[1].min(places[2]) as i32)).to_radians();
+    (angle_between(&written, exact) <= unit).then_some([keep_a, b, c])
 }
 
 /// Below this distance of its norm from 1, a written quaternion's norm is kept: it is a unit
@@ -407,6 +461,7 @@ mod tests {
             &(change * t),
             OrientationHint::NearOriginal,
             Some(&undo),
+            None,
         );
         let corrected = edited(&texts, &e);
         let g = text_fields(&corrected);
@@ -460,6 +515,81 @@ mod tests {
         let (o, c, z) = round_trip(texts, &change);
         assert_ne!(o, c);
         assert_eq!(o, z);
+    }
+
+    /// Rz(A)·Ry(B)·Rx(C) from its three elementary matrices (degrees): KUKA's A, B, C, built
+    /// without the crate's conventions.
+    fn zyx_by_hand(a: f64, b: f64, c: f64) -> nalgebra::Matrix3<f64> {
+        let (a, b, c) = (a.to_radians(), b.to_radians(), c.to_radians());
+        let rz =
+            nalgebra::Matrix3::new(a.cos(), -a.sin(), 0.0, a.sin(), a.cos(), 0.0, 0.0, 0.0, 1.0);
+        let ry =
+            nalgebra::Matrix3::new(b.cos(), 0.0, b.sin(), 0.0, 1.0, 0.0, -b.sin(), 0.0, b.cos());
+        let rx =
+            nalgebra::Matrix3::new(1.0, 0.0, 0.0, 0.0, c.cos(), -c.sin(), 0.0, c.sin(), c.cos());
+        rz * ry * rx
+    }
+
+    /// The angle (degrees) between two rotation matrices, from the trace of `m1ᵀ·m2`.
+    fn degrees_between(m1: &nalgebra::Matrix3<f64>, m2: &nalgebra::Matrix3<f64>) -> f64 {
+        let cos = (((m1.transpose() * m2).trace() - 1.0) / 2.0).clamp(-1.0, 1.0);
+        cos.acos().to_degrees()
+    }
+
+    #[test]
+    fn the_lock_split_keeps_a_and_the_orientation() {
+        // B = 90°: Rz(A)·Ry(90°)·Rx(C) depends on A − C only; (50, 90, 30) kept at A = 30 is
+        // (30, 90, 10). B = -90°: A + C; (50, -90, 30) kept at A = 20 is (20, -90, 60).
+        for (b, keep, c_kept) in [(90.0, 30.0, 10.0), (-90.0, 20.0, 60.0)] {
+            let by_hand = zyx_by_hand(50.0, b, 30.0);
+            let exact = kuka_abc(50.0, b, 30.0);
+            let m = *exact.to_rotation_matrix().matrix();
+            assert!(degrees_between(&m, &by_hand) < 1e-9, "kuka_abc is Rz·Ry·Rx");
+            let [a, b2, c] = lock_split(&exact, [50.0, b, 30.0], keep, [4, 4, 4]).unwrap();
+            assert_eq!((a, b2), (keep, b));
+            assert!((c - c_kept).abs() < 1e-9, "{c}");
+            assert!(degrees_between(&zyx_by_hand(a, b2, c), &by_hand) < 1e-9);
+        }
+        // A result at B = 89.99996° is written at 90.0000: the split moves the orientation by
+        // no more than writing it at 4 places does.
+        let exact = kuka_abc(50.0, 89.99996, 30.0);
+        let [a, b, c] = lock_split(&exact, [50.0, 89.99996, 30.0], 30.0, [4, 4, 4]).unwrap();
+        assert_eq!((a, b), (30.0, 90.0));
+        let moved = degrees_between(
+            &zyx_by_hand(a, b, (c * 1e4).round() / 1e4),
+            &zyx_by_hand(50.0, 89.99996, 30.0),
+        );
+        assert!(moved <= 1e-4, "{moved}");
+        // Off the lock at the written places (89.9999 at 4, 89.99996 at 5): no split to keep.
+        let near = kuka_abc(50.0, 89.9999, 30.0);
+        assert_eq!(
+            lock_split(&near, [50.0, 89.9999, 30.0], 30.0, [4, 4, 4]),
+            None
+        );
+        assert_eq!(
+            lock_split(&exact, [50.0, 89.99996, 30.0], 30.0, [4, 5, 4]),
+            None
+        );
+    }
+
+    #[test]
+    fn kuka_angles_at_gimbal_lock_come_back_with_the_recorded_a() {
+        // `correct` moves (0, 90, 0) off the lock, where its angles have one split only.
+        let texts = [
+            "1100.000", "600.000", "900.000", "0.0000", "90.0000", "0.0000",
+        ]
+        .map(str::to_owned)
+        .to_vec();
+        let change = pose_xyz_deg(0.873, -0.412, 1.204, 0.011, -0.027, 0.019);
+        let (o, c, plain) = round_trip(texts, &change);
+        assert_ne!(c[4], o[4]);
+        // Without the record, zero writes its own split: the orientation, other angles.
+        assert_ne!(plain[3..], o[3..], "{c:?}");
+        // With the A `correct` records (0), zero writes the original text.
+        let g = text_fields(&c);
+        let back = change.inverse() * g.pose().unwrap();
+        let e = reversible_pose_edits(&g, &back, OrientationHint::NearOriginal, None, Some(0.0));
+        assert_eq!(edited(&c, &e), o, "{c:?}");
     }
 
     /// docs/design.md §5 round trip: a pose written at the house decimals (mm 3, quaternion 6,
@@ -522,6 +652,36 @@ mod tests {
             kuka in proptest::bool::ANY,
         ) {
             check_round_trip(xyz, rot, [d.0, d.1, d.2, d.3, d.4, d.5], kuka)?;
+        }
+
+        /// KUKA at B = ±90° (docs/design.md §4, splits at the lock): `correct` with `zero` in
+        /// view, `zero` keeping the A `correct` records, gives the same text.
+        #[test]
+        fn corrected_then_zeroed_at_gimbal_lock_keeps_the_split(
+            xyz in (-3000.0..3000.0f64, -3000.0..3000.0f64, -500.0..2000.0f64),
+            ac in (-179.0..179.0f64, -179.0..179.0f64),
+            up in proptest::bool::ANY,
+            d in (-3.0..3.0f64, -3.0..3.0f64, -3.0..3.0f64, -0.05..0.05f64, -0.05..0.05f64, -0.05..0.05f64),
+        ) {
+            let fixed = crate::syntax::fixed;
+            let b = if up { "90.0000" } else { "-90.0000" };
+            let texts = vec![
+                fixed(xyz.0, 3), fixed(xyz.1, 3), fixed(xyz.2, 3),
+                fixed(ac.0, 4), b.to_owned(), fixed(ac.1, 4),
+            ];
+            let change = pose_xyz_deg(d.0, d.1, d.2, d.3, d.4, d.5);
+            let f = text_fields(&texts);
+            let undo = change.inverse();
+            let e = reversible_pose_edits(
+                &f, &(change * f.pose().unwrap()), OrientationHint::NearOriginal, Some(&undo), None,
+            );
+            let c = edited(&texts, &e);
+            let g = text_fields(&c);
+            let kept = texts[3].parse::<f64>().unwrap();
+            let e = reversible_pose_edits(
+                &g, &(undo * g.pose().unwrap()), OrientationHint::NearOriginal, None, Some(kept),
+            );
+            proptest::prop_assert_eq!(&edited(&c, &e), &texts, "corrected {:?}", c);
         }
 
     }

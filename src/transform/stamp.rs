@@ -29,6 +29,10 @@
 //! Trailing entries of D are left off. A literal's precision is its decimals minus its exponent:
 //! `-1200.873` resolves 3, and so does `1.50123E+2`, a rewrite of `1.5E+2` (which resolves -1,
 //! recorded as `3:-1`). See [`carry_precision`].
+//!
+//! `correct` also records the A of each KUKA target written at B = ±90° (`gimbal=0:0.0,5:30`,
+//! by target index), whose split between A and C the corrected text no longer says; `zero`
+//! writes the split that keeps it ([`LockSplits`]).
 
 use crate::position::ParsedFile;
 use crate::syntax::Span;
@@ -52,6 +56,9 @@ pub struct Stamp {
     /// How the literals this file's transforms widened were first written.
     #[serde(skip_serializing_if = "Widened::is_empty")]
     pub widened: Widened,
+    /// The A of each target `correct` found at B = ±90° (see [`LockSplits`]).
+    #[serde(skip_serializing_if = "LockSplits::is_empty")]
+    pub gimbal: LockSplits,
     /// trackfix's version.
     pub version: String,
 }
@@ -147,6 +154,74 @@ impl Widened {
     }
 }
 
+/// The A of each KUKA target written at B = ±90°, as written, by the target's index among the
+/// file's targets (`gimbal=4:30,9:-12.5`).
+///
+/// At B = ±90° only A − C (B = 90°) or A + C (B = -90°) says the orientation; the split is the
+/// file's own choice. `correct` moves such a target off the lock, where its angles have one
+/// split only, so the corrected text no longer says which split the original had. `zero` reads
+/// this record and, where its result is at B = ±90° again at the written places, writes the
+/// split that keeps the recorded A (docs/design.md §5, round trip); never another orientation.
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct LockSplits(pub Vec<(usize, String)>);
+
+impl LockSplits {
+    /// True when no target is recorded.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// The record of `file`: every Cartesian target with A, B, C literals whose B is ±90.
+    pub fn of(file: &ParsedFile) -> LockSplits {
+        use crate::position::Orientation;
+        let mut out = Vec::new();
+        for (i, p) in file.positions.iter().enumerate() {
+            let Some(Orientation::Abc([Some(a), Some(b), Some(_)])) =
+                p.cartesian.as_ref().and_then(|c| c.orient.as_ref())
+            else {
+                continue;
+            };
+            if b.value().abs() == 90.0 && a.value().is_finite() {
+                let text = file
+                    .source
+                    .get(a.span.start..a.span.end)
+                    .unwrap_or_default();
+                out.push((i, crate::syntax::latin1(text)));
+            }
+        }
+        LockSplits(out)
+    }
+
+    /// The recorded A of the target at `index`, if any.
+    pub fn a_of(&self, index: usize) -> Option<f64> {
+        let at = self.0.binary_search_by_key(&index, |(i, _)| *i).ok()?;
+        self.0[at].1.parse().ok()
+    }
+
+    /// The `gimbal=` value: `4:30,9:-12.5`.
+    fn text(&self) -> String {
+        let parts: Vec<String> = self.0.iter().map(|(i, a)| format!("{i}:{a}")).collect();
+        parts.join(",")
+    }
+
+    /// Reads a `gimbal=` value; `None` if it is malformed or not in target order (then nothing
+    /// is kept). At most `limit` entries, as for `widened=`.
+    fn parse(text: &str, limit: usize) -> Option<LockSplits> {
+        let mut out: Vec<(usize, String)> = Vec::new();
+        for part in text.split(',') {
+            let (i, a) = part.split_once(':')?;
+            let i: usize = i.parse().ok()?;
+            let v: f64 = a.parse().ok()?;
+            let ordered = out.last().is_none_or(|(last, _)| *last < i);
+            if !v.is_finite() || !ordered || out.len() >= limit {
+                return None;
+            }
+            out.push((i, a.to_owned()));
+        }
+        Some(LockSplits(out))
+    }
+}
+
 impl Stamp {
     /// A stamp of this version of trackfix.
     pub fn new(command: &str, robot: Option<&str>, profile: Option<(&str, &str)>) -> Stamp {
@@ -155,6 +230,7 @@ impl Stamp {
             robot: robot.map(str::to_owned),
             profile: profile.map(|(n, h)| (n.to_owned(), h.chars().take(12).collect())),
             widened: Widened::default(),
+            gimbal: LockSplits::default(),
             version: env!("CARGO_PKG_VERSION").to_owned(),
         }
     }
@@ -171,6 +247,9 @@ impl Stamp {
         if !self.widened.is_empty() {
             s.push_str(&format!(" widened={}", self.widened.text()));
         }
+        if !self.gimbal.is_empty() {
+            s.push_str(&format!(" gimbal={}", self.gimbal.text()));
+        }
         s.push_str(&format!(" version={}", self.version));
         s
     }
@@ -185,6 +264,7 @@ impl Stamp {
             robot: None,
             profile: None,
             widened: Widened::default(),
+            gimbal: LockSplits::default(),
             version: String::new(),
         };
         let mut name = None;
@@ -197,6 +277,9 @@ impl Stamp {
                 }
                 Some(("widened", v)) => {
                     stamp.widened = Widened::parse(v, limit).unwrap_or_default()
+                }
+                Some(("gimbal", v)) => {
+                    stamp.gimbal = LockSplits::parse(v, limit).unwrap_or_default()
                 }
                 Some(("version", v)) => stamp.version = v.to_owned(),
                 _ => {}
@@ -621,6 +704,7 @@ mod tests {
             robot: Some("r1".into()),
             profile: Some(("r1 track".into(), "0123456789ab".into())),
             widened: Widened::default(),
+            gimbal: LockSplits::default(),
             version: "9.9.9".into(),
         }
     }
@@ -663,6 +747,34 @@ mod tests {
         assert_eq!(write(b"DECL INT i\n", &KRL, &stamp()), None);
         // An ordinary comment after the header is not a stamp.
         assert_eq!(find_in(b"DEF a()\n; trackfix is great\nEND\n", &KRL), None);
+    }
+    #[test]
+    fn gimbal_records_the_a_of_each_target_at_the_lock_and_reads_back() {
+        let src = "{X 1,Y 2,Z 3,A 30,B 45,C 10,S 2,T 35,E1 0}\n\
+                   {X 1,Y 2,Z 3,A 15.0,B 90,C 10,S 2,T 35,E1 0}\n\
+                   {X 1,Y 2,Z 3,A -12.5,B -90.0,C 10,S 2,T 35,E1 0}\n";
+        let p = crate::transform::test_support::krl(src, "b");
+        let splits = LockSplits::of(&p.files[0]);
+        // The first target is off the lock; the others' A as written, by target index.
+        assert_eq!(splits.text(), "1:15.0,2:-12.5");
+        assert_eq!(
+            (splits.a_of(0), splits.a_of(1), splits.a_of(2)),
+            (None, Some(15.0), Some(-12.5))
+        );
+        let mut s = stamp();
+        s.gimbal = splits.clone();
+        let dat = b"DEFDAT spot\nENDDAT\n";
+        let out = write(dat, &KRL, &s).unwrap();
+        assert!(String::from_utf8_lossy(&out).contains(" gimbal=1:15.0,2:-12.5 version="));
+        assert_eq!(find_in(&out, &KRL).unwrap().0, s);
+        // Malformed, out of target order or beyond the file's size: nothing is kept.
+        for bad in ["1:x", "2:1,1:1", "1:inf", "1", "1:1,2:2,3:3"] {
+            assert_eq!(
+                LockSplits::parse(bad, 2).unwrap_or_default(),
+                LockSplits::default(),
+                "{bad}"
+            );
+        }
     }
 }
 

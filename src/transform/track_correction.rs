@@ -274,6 +274,10 @@ impl TargetRule for TrackRule<'_, '_> {
         }
     }
 
+    fn keeps_lock_splits(&self) -> bool {
+        self.dir == Direction::Zero
+    }
+
     fn uncertainty(&self, frame: &TrackFrame, skid: Option<f64>, new: &Pose) -> Option<f64> {
         let (pu, skid) = (self.setup.uncertainty?, skid?);
         let tcp = frame.w * nalgebra::Point3::from(new.translation.vector);
