@@ -1,20 +1,235 @@
-//! The part of usage resolution that both languages share, over language-neutral facts that
-//! each language's extractor reports: how deep calls are followed, and which targets and frames
-//! the program computes when it runs (and so no offline transform can correct).
+//! Usage resolution for every language, over language-neutral facts that each language's
+//! extractor reports: the declarations of each file (name, scope, kind), its routines and their
+//! parameters, the instructions that use targets (the frame, tool and stationary-tool mode they
+//! move with, the arguments they pass, the references they make) and the values the program
+//! computes when it runs. This pass looks the references up among the program's declarations,
+//! follows targets through routine parameters, and records each target's [`Usage`].
 //!
-//! A language finds its facts in its own syntax (RAPID `p10 := CRobT()`, KRL `XP1 = $POS_ACT`);
-//! this pass looks them up among the program's declarations (array elements under the array's
-//! name, a file's own declarations before the other files') and marks the targets' [`Usage`].
+//! A language finds its facts in its own syntax (RAPID reads the frame from `\WObj:=`, KRL
+//! from program order: `$BASE=…`, `FDAT_ACT`, `BAS(#BASE,n)`) and says how its names reach
+//! declarations ([`Naming`]: the array bracket, when an element reference reaches the whole
+//! array, whether a file's own declarations hide the others').
 //!
 //! [`Usage`]: crate::position::Usage
 
-use crate::names::{NameIndex, fold};
+use crate::names::{NameIndex, NameKey, NameMap, fold, fold_into};
 use crate::position::{FrameDecl, Position, RunTimeValue};
+use crate::syntax::Span;
 
 /// How many calls deep a routine's effects on its callers are followed (a target passed on
 /// through RAPID routine parameters, a KRL subroutine that sets the base): deeper chains and
 /// cycles stop here.
 pub(crate) const CALL_DEPTH: usize = 16;
+
+/// How a language's references reach its declarations.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Naming {
+    /// The brackets of an array index (`{`…`}` RAPID, `[`…`]` KRL).
+    pub(crate) open: char,
+    /// See [`open`](Naming::open).
+    pub(crate) close: char,
+    /// When a reference reaches every element of an array.
+    pub(crate) arrays: ArrayReach,
+    /// Which files' declarations a reference sees.
+    pub(crate) scope: Scope,
+}
+
+/// When a reference reaches every element of an array.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ArrayReach {
+    /// A name not declared as written (the whole array `pArr`, an element chosen at run time
+    /// `pArr{i}`) reaches every element of the array it names or indexes (RAPID).
+    WhenUndeclared,
+    /// A name reaches its declaration, and an index that is not a literal (`P[I]`, `P[I+1,2]`)
+    /// every element of the array as well (KRL).
+    WhenIndexComputed,
+}
+
+/// Which files' declarations a reference sees.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Scope {
+    /// The file's own declarations hide the other files'; of those, only the exported ones are
+    /// seen (RAPID: routine and `LOCAL` data is private to its module).
+    OwnFileFirst,
+    /// Every declaration of the program (the two files of a KRL `.src`/`.dat` pair).
+    Program,
+}
+
+/// What a declared name is, as far as finding a motion's arguments goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum DeclKind {
+    /// A tool (RAPID `tooldata`).
+    Tool,
+    /// A zone (RAPID `zonedata`).
+    Zone,
+    /// A speed (RAPID `speeddata`).
+    Speed,
+    /// Anything else (a routine, a number, a target).
+    Other,
+}
+
+/// A declared name of a file.
+#[derive(Clone, Debug)]
+pub(crate) struct Declaration {
+    /// The name in the file's source.
+    pub(crate) name: Span,
+    /// What it declares.
+    pub(crate) kind: DeclKind,
+    /// Declared at file (module) level, where a second declaration of the name is an error.
+    pub(crate) file_scope: bool,
+}
+
+/// A name declared twice at file level.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Duplicate {
+    /// The file (index into the program's files).
+    pub(crate) file: usize,
+    /// The second declaration.
+    pub(crate) again: Span,
+    /// The first.
+    pub(crate) first: Span,
+}
+
+/// The kinds of the program's declared names (names compared as the languages compare them),
+/// and the names a file declares twice at file level. `files` gives each file's source and
+/// declarations, in program order; a later declaration of a kind other than
+/// [`DeclKind::Other`] wins.
+pub(crate) fn declarations<'s, 'd>(
+    files: impl IntoIterator<Item = (&'s [u8], &'d [Declaration])>,
+) -> (NameMap<NameKey<'s>, DeclKind>, Vec<Duplicate>) {
+    let mut kinds: NameMap<NameKey<'s>, DeclKind> = NameMap::default();
+    let mut twice = Vec::new();
+    for (file, (src, decls)) in files.into_iter().enumerate() {
+        let mut seen: NameMap<NameKey<'s>, Span> =
+            NameMap::with_capacity_and_hasher(decls.len(), Default::default());
+        for d in decls {
+            let k = NameKey(d.name.slice(src));
+            if d.kind != DeclKind::Other {
+                kinds.insert(k, d.kind);
+            }
+            if !d.file_scope {
+                continue;
+            }
+            match seen.get(&k) {
+                Some(&first) => twice.push(Duplicate {
+                    file,
+                    again: d.name,
+                    first,
+                }),
+                None => {
+                    seen.insert(k, d.name);
+                }
+            }
+        }
+    }
+    (kinds, twice)
+}
+
+/// A routine of a file that takes targets through its required parameters.
+#[derive(Clone, Debug)]
+pub(crate) struct Routine {
+    /// Its name in the file's source.
+    pub(crate) name: Span,
+    /// Private to its file (RAPID `LOCAL`).
+    pub(crate) local: bool,
+    /// Its required parameters' names, in the order a call's positional arguments bind to them.
+    pub(crate) params: Vec<Span>,
+}
+
+/// An instruction that uses targets: a motion (or a call that passes targets on) with the frame
+/// and tool it moves with.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Use<'a> {
+    /// 1-based line of the instruction.
+    pub(crate) line: usize,
+    /// The routine it is written in (index into the file's routines).
+    pub(crate) routine: Option<usize>,
+    /// The routine it calls, by name in the file's source; a routine of the program takes the
+    /// arguments its parameters bind to.
+    pub(crate) callee: Option<Span>,
+    /// The work object or base, as the language names it (`wobj0`, `BASE_DATA[3]`).
+    pub(crate) frame: Option<String>,
+    /// The tool, as the language names it.
+    pub(crate) tool: Option<String>,
+    /// A stationary-tool motion (RAPID `robhold TRUE`, KRL `IPO_FRAME #TCP`).
+    pub(crate) stationary: bool,
+    /// The frame is computed when the program runs: every target reached is, too.
+    pub(crate) run_time: Option<RunTimeValue>,
+    /// Positional arguments, in order, that are plain references (`None` for any other
+    /// expression), in the file's source.
+    pub(crate) args: Vec<Option<Span>>,
+    /// Further references in the file's source (RAPID `Offs`/`RelTool` first arguments).
+    pub(crate) refs: Vec<Span>,
+    /// Further references already [`fold`]ed (KRL: a motion's target and what it was copied
+    /// from).
+    pub(crate) folded: Vec<&'a str>,
+    /// Targets of the same file reached directly (inline literals), by index.
+    pub(crate) targets: Vec<usize>,
+}
+
+/// One file of a program as this pass sees it.
+pub(crate) struct FileFacts<'a> {
+    /// The bytes every span of the file's facts points into.
+    pub(crate) src: &'a [u8],
+    /// Its targets (their usage is recorded here).
+    pub(crate) positions: &'a mut [Position],
+    /// Per target, whether other files see it (`None`: all are seen).
+    pub(crate) exported: Option<&'a [bool]>,
+    /// Its frame declarations.
+    pub(crate) frames: &'a [FrameDecl],
+    /// Its routines.
+    pub(crate) routines: &'a [Routine],
+    /// Its instructions that use targets.
+    pub(crate) uses: &'a [Use<'a>],
+    /// Its run-time assignments.
+    pub(crate) assignments: &'a [Assignment],
+}
+
+/// Where a target is: (file, index into its positions).
+type TargetAt = (usize, usize);
+
+/// A routine's required parameter: (file, routine, parameter index).
+type ParamAt = (usize, usize, usize);
+
+/// `BASEPOS` for `BASEPOS[I]`, `P[I+1,2]`: an element chosen at run time, which may be any
+/// element of the array. `None` for a name or a literal index (`P[3]`).
+fn computed_index_array<'k>(naming: &Naming, key: &'k str) -> Option<&'k str> {
+    let (array, rest) = key.split_once(naming.open)?;
+    let index = rest.strip_suffix(naming.close)?;
+    let literal = index.bytes().all(|b| b.is_ascii_digit() || b == b',');
+    (!literal).then_some(array)
+}
+
+/// Where a folded reference in `file` points among `index`'s names, added to `out`
+/// (`exported` says whether a target is seen outside its file).
+fn lookup(
+    naming: &Naming,
+    index: &NameIndex<TargetAt>,
+    exported: &dyn Fn(TargetAt) -> bool,
+    file: usize,
+    key: &str,
+    out: &mut Vec<TargetAt>,
+) {
+    let exact = index.exact(key);
+    let (named, elements) = match naming.arrays {
+        ArrayReach::WhenUndeclared => match exact {
+            [] => (index.elements(index.array_of(key).unwrap_or(key)), &[][..]),
+            hits => (hits, &[][..]),
+        },
+        ArrayReach::WhenIndexComputed => (
+            exact,
+            computed_index_array(naming, key).map_or(&[][..], |a| index.elements(a)),
+        ),
+    };
+    let hits = named.iter().chain(elements).copied();
+    match naming.scope {
+        Scope::Program => out.extend(hits),
+        Scope::OwnFileFirst => {
+            let own = hits.clone().any(|h| h.0 == file);
+            out.extend(hits.filter(|&h| if own { h.0 == file } else { exported(h) }));
+        }
+    }
+}
 
 /// The uses reached from routine parameter `from`: its own uses, then those of every parameter
 /// it is passed on to (`edges`: an argument of a call in the routine that names the parameter),
@@ -57,39 +272,177 @@ pub(crate) struct Assignment {
     pub(crate) line: usize,
 }
 
-/// One file of a program as this pass sees it: its targets (marked here), its frame
-/// declarations and its run-time assignments.
-pub(crate) struct FileFacts<'a> {
-    pub(crate) positions: &'a mut [Position],
-    pub(crate) frames: &'a [FrameDecl],
-    pub(crate) assignments: &'a [Assignment],
-}
-
-/// Where a folded reference points among `index`'s names: the declaration itself, else (an
-/// element chosen at run time `pArr{i}`, or the whole array `pArr`) every element of the
-/// array; the file's own declarations hide the other files'.
-fn lookup(index: &NameIndex<(usize, usize)>, file: usize, key: &str) -> Vec<(usize, usize)> {
-    let hits = match index.exact(key) {
-        [] => index.elements(index.array_of(key).unwrap_or(key)),
-        hits => hits,
+/// Binds every use of the program (its files in `files`) to the targets it reaches and records
+/// their [`Usage`](crate::position::Usage): a reference is looked up as `naming` says; an
+/// argument bound to a required parameter of a routine of the program makes the target used as
+/// that routine uses the parameter (directly, through a reference, or passed on to another
+/// routine: followed [`CALL_DEPTH`] calls deep, cycles cut). A routine is found among the
+/// file's own first, else among the other files' that are not local.
+///
+/// Returns, per file and use, whether the use reaches a Cartesian target directly (a joint
+/// target moves the same whatever the frame).
+pub(crate) fn bind<'a>(files: &mut [FileFacts<'a>], naming: &Naming) -> Vec<Vec<bool>> {
+    let total: usize = files.iter().map(|f| f.positions.len()).sum();
+    let mut index: NameIndex<TargetAt> = NameIndex::new(naming.open, total);
+    for (m, f) in files.iter().enumerate() {
+        for (i, p) in f.positions.iter().enumerate() {
+            if let Some(n) = &p.name {
+                index.insert(n, (m, i));
+            }
+        }
+    }
+    let mut found: Vec<Vec<bool>> = files.iter().map(|f| vec![false; f.uses.len()]).collect();
+    let mut direct: Vec<(TargetAt, &'a Use<'a>)> = Vec::new();
+    let mut param_uses: std::collections::HashMap<ParamAt, Vec<&'a Use<'a>>> = Default::default();
+    let mut param_edges: std::collections::HashMap<ParamAt, Vec<ParamAt>> = Default::default();
+    let mut bindings: Vec<(TargetAt, ParamAt, usize)> = Vec::new();
+    {
+        let files: &[FileFacts<'a>] = files;
+        let exported = |(m, i): TargetAt| {
+            files.get(m).is_some_and(|f| {
+                f.exported
+                    .is_none_or(|e| e.get(i).copied().unwrap_or(false))
+            })
+        };
+        // Routines by name: the file's own first, else those of the program that are not local.
+        let routine_of = |m: usize, name: NameKey<'_>| -> Option<(usize, usize)> {
+            let find = |m2: usize, any: bool| {
+                let f = files.get(m2)?;
+                f.routines
+                    .iter()
+                    .position(|r| (any || !r.local) && NameKey(r.name.slice(f.src)) == name)
+                    .map(|r| (m2, r))
+            };
+            find(m, true).or_else(|| {
+                (0..files.len())
+                    .filter(|&m2| m2 != m)
+                    .find_map(|m2| find(m2, false))
+            })
+        };
+        // The required parameter of the enclosing routine a reference names, if any.
+        let param_of = |m: usize, routine: Option<usize>, key: &str| -> Option<ParamAt> {
+            let f = files.get(m)?;
+            let rt = routine?;
+            let base = key.split_once(naming.open).map_or(key, |(a, _)| a);
+            f.routines
+                .get(rt)?
+                .params
+                .iter()
+                .position(|&name| NameKey(name.slice(f.src)) == NameKey(base.as_bytes()))
+                .map(|k| (m, rt, k))
+        };
+        let mut buf = String::new();
+        let mut targets: Vec<TargetAt> = Vec::new();
+        let mut params: Vec<ParamAt> = Vec::new();
+        let mut hits: Vec<TargetAt> = Vec::new();
+        for (m, f) in files.iter().enumerate() {
+            let (src, uses) = (f.src, f.uses);
+            for (ui, u) in uses.iter().enumerate() {
+                targets.clear();
+                params.clear();
+                targets.extend(u.targets.iter().map(|&i| (m, i)));
+                let callee = u.callee.and_then(|c| routine_of(m, NameKey(c.slice(src))));
+                let reach = |key: &str, targets: &mut Vec<TargetAt>, params: &mut Vec<ParamAt>| {
+                    match param_of(m, u.routine, key) {
+                        Some(p) => params.push(p),
+                        None => lookup(naming, &index, &exported, m, key, targets),
+                    }
+                };
+                for (i, sp) in u.args.iter().enumerate() {
+                    let Some(sp) = *sp else { continue };
+                    let key = fold_into(&mut buf, sp.slice(src));
+                    match callee {
+                        // An argument bound to a parameter of a routine of the program: used as
+                        // that routine uses the parameter.
+                        Some((cm, cr))
+                            if files
+                                .get(cm)
+                                .and_then(|c| c.routines.get(cr))
+                                .is_some_and(|r| i < r.params.len()) =>
+                        {
+                            let to = (cm, cr, i);
+                            match param_of(m, u.routine, key) {
+                                Some(p) => param_edges.entry(p).or_default().push(to),
+                                None => {
+                                    hits.clear();
+                                    lookup(naming, &index, &exported, m, key, &mut hits);
+                                    bindings.extend(hits.iter().map(|&t| (t, to, u.line)));
+                                }
+                            }
+                        }
+                        _ => reach(key, &mut targets, &mut params),
+                    }
+                }
+                for &sp in &u.refs {
+                    reach(
+                        fold_into(&mut buf, sp.slice(src)),
+                        &mut targets,
+                        &mut params,
+                    );
+                }
+                for &key in &u.folded {
+                    reach(key, &mut targets, &mut params);
+                }
+                if targets.is_empty() && params.is_empty() {
+                    continue;
+                }
+                targets.sort_unstable();
+                targets.dedup();
+                if let Some(flag) = found.get_mut(m).and_then(|f| f.get_mut(ui)) {
+                    *flag = targets.iter().any(|&(f2, i)| {
+                        files
+                            .get(f2)
+                            .and_then(|f| f.positions.get(i))
+                            .is_some_and(|p| p.cartesian.is_some())
+                    });
+                }
+                direct.extend(targets.iter().map(|&t| (t, u)));
+                for &p in &params {
+                    param_uses.entry(p).or_default().push(u);
+                }
+            }
+        }
+    }
+    let mut record = |(m, i): TargetAt, u: &Use<'_>, line: usize| {
+        if let Some(p) = files.get_mut(m).and_then(|f| f.positions.get_mut(i)) {
+            p.usage
+                .record(u.frame.as_deref(), u.tool.as_deref(), u.stationary, line);
+            if let Some(why) = &u.run_time {
+                p.usage.set_run_time(why.clone());
+            }
+        }
     };
-    let own = hits.iter().any(|h| h.0 == file);
-    hits.iter()
-        .copied()
-        .filter(|h| !own || h.0 == file)
-        .collect()
+    for (t, u) in direct {
+        record(t, u, u.line);
+    }
+    // Through routine parameters: every use reachable from the bound parameter.
+    for (t, to, line) in bindings {
+        for u in uses_through_parameters(to, &param_uses, &param_edges) {
+            record(t, u, line);
+        }
+    }
+    found
 }
 
 /// Marks [`Usage::run_time`](crate::position::Usage) of every target of the program (its
 /// files in `files`) whose pose is only known at run time: a target the program assigns a
 /// computed value, then a target a motion uses with a work object or base the program
-/// assigns one. `open` is the bracket of an array index (`{` RAPID, `[` KRL).
-pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], open: char) {
+/// assigns one. An assignment reaches a declaration of its name, else every element of the
+/// array it names or indexes, the file's own declarations first (whether exported or not: the
+/// assignment changes the data wherever it is declared), in `naming`'s array brackets.
+pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
     if files.iter().all(|f| f.assignments.is_empty()) {
         return;
     }
-    let mut targets: NameIndex<(usize, usize)> = NameIndex::new(open, 0);
-    let mut frames: NameIndex<(usize, usize)> = NameIndex::new(open, 0);
+    let naming = Naming {
+        arrays: ArrayReach::WhenUndeclared,
+        scope: Scope::OwnFileFirst,
+        ..*naming
+    };
+    let seen = |_: TargetAt| true;
+    let mut hits = Vec::new();
+    let mut targets: NameIndex<TargetAt> = NameIndex::new(naming.open, 0);
+    let mut frames: NameIndex<TargetAt> = NameIndex::new(naming.open, 0);
     for (fi, f) in files.iter().enumerate() {
         for (i, p) in f.positions.iter().enumerate() {
             if let Some(n) = &p.name {
@@ -106,10 +459,12 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], open: char) {
     for (fi, f) in files.iter().enumerate() {
         for a in f.assignments {
             let key = fold(&a.name);
-            for (tf, ti) in lookup(&targets, fi, &key) {
-                assigned_targets.push((tf, ti, a.line));
-            }
-            for (df, di) in lookup(&frames, fi, &key) {
+            hits.clear();
+            lookup(&naming, &targets, &seen, fi, &key, &mut hits);
+            assigned_targets.extend(hits.iter().map(|&(tf, ti)| (tf, ti, a.line)));
+            hits.clear();
+            lookup(&naming, &frames, &seen, fi, &key, &mut hits);
+            for &(df, di) in &hits {
                 if let Some(d) = files.get(df).and_then(|f| f.frames.get(di)) {
                     assigned_frames
                         .entry(fold(&d.name))

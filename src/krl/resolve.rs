@@ -9,6 +9,15 @@ use crate::syntax::Diagnostic;
 use crate::names::NameIndex;
 pub(crate) use crate::names::NameMap as HashMap;
 
+/// How KRL references reach declarations: a name its declaration, an element chosen at run
+/// time (`P[I]`) every element of the array as well, in either file of the pair.
+const NAMING: crate::resolve::Naming = crate::resolve::Naming {
+    open: '[',
+    close: ']',
+    arrays: crate::resolve::ArrayReach::WhenIndexComputed,
+    scope: crate::resolve::Scope::Program,
+};
+
 /// The name trackfix gives a base: `BASE_DATA[n]`, `$WORLD` for base 0.
 pub(crate) fn base_label(r: &FrameRef) -> Option<String> {
     match r {
@@ -421,12 +430,16 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         .iter_mut()
         .zip(facts.iter())
         .map(|(file, fact)| crate::resolve::FileFacts {
+            src: &file.source,
             positions: &mut file.positions,
+            exported: None,
             frames: &file.frames,
+            routines: &[],
+            uses: &[],
             assignments: &fact.assignments,
         })
         .collect();
-    crate::resolve::mark_run_time(&mut shared, '[');
+    crate::resolve::mark_run_time(&mut shared, &NAMING);
 }
 
 #[cfg(test)]
