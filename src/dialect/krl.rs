@@ -209,17 +209,14 @@ impl Dialect for Krl {
         format!("E{}", index + 1)
     }
 
+    /// KRL writes Status and Turn (`S 6, T 27`).
     fn configuration_of(&self, kin: &Kinematics, j: &Joints) -> ConfigValue {
-        let (status, turn) = crate::kinematics::kuka::status_turn_of(kin, j);
-        ConfigValue::Kuka {
-            status: Some(status),
-            turn: Some(turn),
-        }
+        ConfigValue::status_turn_of(kin, j)
     }
 
     /// A mirror-image arm: the Turn bits of A1, A4 and A6 toggled; Status unchanged.
     fn mirror_config(&self, config: &Config) -> Vec<Edit> {
-        let Config::Kuka { turn, .. } = config else {
+        let Config::StatusTurn { turn, .. } = config else {
             return Vec::new();
         };
         turn.as_ref()

@@ -123,10 +123,11 @@ pub trait Dialect: Sync + 'static {
     /// the axes that change sign under a mirror, 1, 4 and 6, the other way).
     fn mirror_config(&self, config: &Config) -> Vec<Edit>;
 
-    /// The configuration the language writes for an arm at joints `j` (ABB `confdata`, KUKA
-    /// Status and Turn). A dialect without one of its own writes ABB's quadrant convention.
+    /// The configuration the language writes for an arm at joints `j`, in the convention its
+    /// targets hold ([`Config`]: axis quadrants as ABB `confdata`, Status and Turn bits as
+    /// KUKA `S`/`T`). A dialect without one of its own writes axis quadrants.
     fn configuration_of(&self, kin: &Kinematics, j: &Joints) -> ConfigValue {
-        ConfigValue::Abb(crate::kinematics::abb::config_of(kin, j))
+        ConfigValue::quadrants_of(kin, j)
     }
 }
 

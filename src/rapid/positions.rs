@@ -246,7 +246,7 @@ impl<'l> Extractor<'l> {
                         orient: Some(Orientation::Quaternion(self.nums::<4>(src, arena, rot))),
                     }),
                     Vec::new(),
-                    Config::Abb(self.nums::<4>(src, arena, conf)),
+                    Config::Quadrants(self.nums::<4>(src, arena, conf)),
                     self.nums_vec(src, arena, eax),
                 )
             }

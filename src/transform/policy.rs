@@ -290,7 +290,7 @@ pub(crate) fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<Str
         }
     }
     match &p.config {
-        Config::Abb(cf) => {
+        Config::Quadrants(cf) => {
             for (name, f) in ["cf1", "cf4", "cf6", "cfx"].iter().zip(cf) {
                 if let Some(f) = f {
                     let v = f.value();
@@ -303,7 +303,7 @@ pub(crate) fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<Str
                 }
             }
         }
-        Config::Kuka { status, turn } => {
+        Config::StatusTurn { status, turn } => {
             if let Some(s) = status
                 && s.value > KUKA_STATUS_MAX
             {
