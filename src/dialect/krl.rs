@@ -41,6 +41,10 @@ const TURN_A1_A4_A6: u32 = 0b10_1001;
 const VOCABULARY: Vocabulary = Vocabulary {
     frame_column: "base",
     frames: "bases",
+    frame: "base",
+    // A base on an external kinematic (a positioner) is `BASE_DATA[n]` with its
+    // `MACHINE_FRAME_DAT[n]` naming the kinematic (`MACH_IDX`), or `$BASE = EK(…)`.
+    moved_frame: "MACHINE_FRAME_DAT: an external kinematic",
     tool_kind: "tool",
     stationary_tool: "IPO_FRAME #TCP",
     world_frames: &["base_data[0]", "$nullframe", "$world"],

@@ -25,6 +25,11 @@ pub struct Vocabulary {
     pub frame_column: &'static str,
     /// The same in a sentence, plural: `work objects`, `bases`.
     pub frames: &'static str,
+    /// The same in a sentence, singular: `work object`, `base`.
+    pub frame: &'static str,
+    /// The setting that makes such a frame one a mechanical unit moves (so it is not where the
+    /// track puts it): `ufprog FALSE`, `MACHINE_FRAME_DAT: an external kinematic`.
+    pub moved_frame: &'static str,
     /// The data type of a tool declaration: `tooldata`, `tool`.
     pub tool_kind: &'static str,
     /// The setting that makes a target a stationary-tool point: `robhold TRUE`,

@@ -32,6 +32,8 @@ impl PositionKind {
 const VOCABULARY: Vocabulary = Vocabulary {
     frame_column: "wobj",
     frames: "work objects",
+    frame: "work object",
+    moved_frame: "ufprog FALSE",
     tool_kind: "tooldata",
     stationary_tool: "robhold TRUE",
     world_frames: &["wobj0"],
