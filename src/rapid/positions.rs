@@ -33,23 +33,13 @@ const NAMING: crate::resolve::Naming = crate::resolve::Naming {
     scope: crate::resolve::Scope::OwnFileFirst,
 };
 
-/// A procedure call, kept until every declaration has been read.
-#[derive(Clone, Debug)]
-struct CallUse {
-    name: Span,
-    line: usize,
-    /// The routine the call is written in (index into the module's routines).
-    routine: Option<usize>,
-    /// `\WObj:=` value.
+/// The frame and tool a call names explicitly (`\WObj:=`, `\Tool:=` or `tool:=`), kept
+/// with its [`Use`](crate::resolve::Use) until every declaration has been read: the frame and
+/// tool it moves with are found then.
+#[derive(Clone, Copy, Debug, Default)]
+struct Named {
     wobj: Option<Span>,
-    /// `\Tool:=` value.
     tool: Option<Span>,
-    /// Positional arguments that are plain references (`p10`, `pArr{3}`).
-    positional: Vec<Option<Span>>,
-    /// Targets referenced through `Offs`/`RelTool` first arguments.
-    via_offset: Vec<Span>,
-    /// Inline literals written in the call's arguments (indices into `positions`).
-    inline: Vec<usize>,
 }
 
 /// A `RECORD` declared in the module: its name and components (type, name).
@@ -69,7 +59,10 @@ pub struct Extractor<'l> {
     /// Every name declared, routines included (spans into the source: no copy per
     /// declaration).
     symbols: Vec<crate::resolve::Declaration>,
-    uses: Vec<CallUse>,
+    /// Every procedure call, as the shared pass binds it (frame and tool filled in by
+    /// [`finish_task`]), and what each names explicitly.
+    uses: Vec<crate::resolve::Use<'static>>,
+    named: Vec<Named>,
     /// Whole-value assignments `name := [...]` of literal aggregates (a frame given a new
     /// value that is known offline).
     assigned: Vec<Span>,
@@ -99,6 +92,15 @@ fn text_of(src: &[u8], span: Span) -> String {
     latin1(span.slice(src))
 }
 
+/// `s` without surrounding blanks, reusing its buffer when it has none (nearly always).
+fn trimmed(s: String) -> String {
+    if s.trim().len() == s.len() {
+        s
+    } else {
+        s.trim().to_owned()
+    }
+}
+
 /// A reference as a lookup key ([`fold`](crate::names::fold) of its text), written into a
 /// reused buffer.
 fn key_into<'b>(buf: &'b mut String, src: &[u8], span: Span) -> &'b str {
@@ -118,6 +120,7 @@ impl<'l> Extractor<'l> {
             offsets: Vec::new(),
             symbols: Vec::new(),
             uses: Vec::new(),
+            named: Vec::new(),
             assigned: Vec::new(),
             computed: Vec::new(),
             routines: Vec::new(),
@@ -504,10 +507,12 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
     let is_speed =
         |n: &NameKey| n.is(b"vmax") || n.numbered(b'v') || type_of.get(n) == Some(&DeclKind::Speed);
     let mut positions: Vec<Vec<Position>> = Vec::with_capacity(modules.len());
-    let mut calls: Vec<Vec<CallUse>> = Vec::with_capacity(modules.len());
+    let mut uses: Vec<Vec<crate::resolve::Use<'_>>> = Vec::with_capacity(modules.len());
+    let mut named: Vec<Vec<Named>> = Vec::with_capacity(modules.len());
     let mut rest = Vec::with_capacity(modules.len());
     for (x, src) in modules {
-        calls.push(x.uses);
+        uses.push(x.uses);
+        named.push(x.named);
         positions.push(x.positions);
         rest.push((
             x.frames, x.offsets, x.assigned, x.computed, x.routines, x.exported, src,
@@ -519,70 +524,45 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
         .filter(|f| f.kind == FrameKind::WorkObject)
         .filter_map(|f| Some((NameKey(f.name.as_bytes()), f.held_by_robot?)))
         .collect();
-    let mut uses: Vec<Vec<crate::resolve::Use<'_>>> = Vec::with_capacity(calls.len());
     let mut names: Vec<Option<NameKey>> = Vec::new();
-    for (module_calls, r) in calls.into_iter().zip(&rest) {
+    for ((module_uses, module_named), r) in uses.iter_mut().zip(&named).zip(&rest) {
         let src = r.6;
-        let mut found = Vec::with_capacity(module_calls.len());
-        for u in module_calls {
-            let call = NameKey(u.name.slice(src));
+        for (u, n) in module_uses.iter_mut().zip(module_named) {
+            let Some(callee) = u.callee else { continue };
+            let call = NameKey(callee.slice(src));
             names.clear();
-            names.extend(
-                u.positional
-                    .iter()
-                    .map(|p| p.map(|sp| NameKey(sp.slice(src)))),
-            );
+            names.extend(u.args.iter().map(|p| p.map(|sp| NameKey(sp.slice(src)))));
             let written = |i: usize| -> Option<String> {
-                u.positional
-                    .get(i)
-                    .copied()
-                    .flatten()
-                    .map(|sp| text_of(src, sp))
+                u.args.get(i).copied().flatten().map(|sp| text_of(src, sp))
             };
-            let tool = u
-                .tool
-                .map(|sp| text_of(src, sp).trim().to_owned())
-                .or_else(|| {
-                    if let Some(i) = names.iter().position(|n| n.as_ref().is_some_and(is_tool)) {
-                        return written(i);
-                    }
-                    let after = names
-                        .iter()
-                        .position(|n| n.as_ref().is_some_and(is_zone))
-                        .or_else(|| {
-                            call.starts_with(b"search")
-                                .then(|| {
-                                    names.iter().position(|n| n.as_ref().is_some_and(is_speed))
-                                })
-                                .flatten()
-                        })?;
-                    written(after + 1)
-                });
+            let tool = n.tool.map(|sp| trimmed(text_of(src, sp))).or_else(|| {
+                if let Some(i) = names.iter().position(|n| n.as_ref().is_some_and(is_tool)) {
+                    return written(i);
+                }
+                let after = names
+                    .iter()
+                    .position(|n| n.as_ref().is_some_and(is_zone))
+                    .or_else(|| {
+                        call.starts_with(b"search")
+                            .then(|| names.iter().position(|n| n.as_ref().is_some_and(is_speed)))
+                            .flatten()
+                    })?;
+                written(after + 1)
+            });
             let motion = MOTION_PREFIXES
                 .iter()
                 .any(|p| call.starts_with(p.as_bytes()));
-            let wobj = match u.wobj {
-                Some(sp) => Some(text_of(src, sp).trim().to_owned()),
+            let wobj = match n.wobj {
+                Some(sp) => Some(trimmed(text_of(src, sp))),
                 None => (motion || tool.is_some()).then(|| "wobj0".to_owned()),
             };
             let stationary = wobj
                 .as_ref()
                 .is_some_and(|w| robhold.get(&NameKey(w.as_bytes())) == Some(&true));
-            found.push(crate::resolve::Use {
-                line: u.line,
-                routine: u.routine,
-                callee: Some(u.name),
-                stationary: wobj.is_some() && stationary,
-                frame: wobj,
-                tool,
-                run_time: None,
-                args: u.positional,
-                refs: u.via_offset,
-                folded: Vec::new(),
-                targets: u.inline,
-            });
+            u.stationary = wobj.is_some() && stationary;
+            u.frame = wobj;
+            u.tool = tool;
         }
-        uses.push(found);
     }
     let mut facts: Vec<crate::resolve::FileFacts<'_>> = positions
         .iter_mut()
@@ -898,16 +878,15 @@ impl Extractor<'_> {
     fn statement_call(&mut self, src: &[u8], arena: &Arena, name: Span, args: u32, span: Span) {
         {
             let (inline, via_offset) = self.scan(src, arena, true);
-            let mut u = CallUse {
-                name,
+            let mut u = crate::resolve::Use {
                 line: self.lines.line(span.start),
                 routine: self.current,
-                wobj: None,
-                tool: None,
-                positional: Vec::new(),
-                via_offset,
-                inline,
+                callee: Some(name),
+                refs: via_offset,
+                targets: inline,
+                ..Default::default()
             };
+            let mut named = Named::default();
             for a in arena.children(args) {
                 let Some(arg) = arena.get(a) else { continue };
                 let value = if arg.first == super::expr::NONE {
@@ -919,18 +898,18 @@ impl Extractor<'_> {
                     let nm = arg.name_span().slice(src);
                     let v = value.map(|v| v.span());
                     if nm.eq_ignore_ascii_case(b"WObj") {
-                        u.wobj = v;
+                        named.wobj = v;
                     } else if nm.eq_ignore_ascii_case(b"Tool") {
-                        u.tool = v;
+                        named.tool = v;
                     }
                 } else {
                     // A required argument may be given by name: `..., fine, tool:=tGun;`.
                     if arg.name_end > arg.name_start
                         && arg.name_span().slice(src).eq_ignore_ascii_case(b"Tool")
                     {
-                        u.tool = value.map(|v| v.span());
+                        named.tool = value.map(|v| v.span());
                     }
-                    u.positional.push(
+                    u.args.push(
                         value
                             .filter(|v| matches!(v.kind, ExprKind::Ident | ExprKind::Access))
                             .map(|v| v.span()),
@@ -938,6 +917,7 @@ impl Extractor<'_> {
                 }
             }
             self.uses.push(u);
+            self.named.push(named);
         }
     }
 }
