@@ -272,156 +272,262 @@ pub(crate) struct Assignment {
     pub(crate) line: usize,
 }
 
-/// Binds every use of the program (its files in `files`) to the targets it reaches and records
-/// their [`Usage`](crate::position::Usage): a reference is looked up as `naming` says; an
-/// argument bound to a required parameter of a routine of the program makes the target used as
-/// that routine uses the parameter (directly, through a reference, or passed on to another
-/// routine: followed [`CALL_DEPTH`] calls deep, cycles cut). A routine is found among the
-/// file's own first, else among the other files' that are not local.
-///
-/// Returns, per file and use, whether the use reaches a Cartesian target directly (a joint
-/// target moves the same whatever the frame).
-pub(crate) fn bind<'a>(files: &mut [FileFacts<'a>], naming: &Naming) -> Vec<Vec<bool>> {
-    let total: usize = files.iter().map(|f| f.positions.len()).sum();
-    let mut index: NameIndex<TargetAt> = NameIndex::new(naming.open, total);
-    for (m, f) in files.iter().enumerate() {
-        for (i, p) in f.positions.iter().enumerate() {
-            if let Some(n) = &p.name {
-                index.insert(n, (m, i));
-            }
+/// What a use gives the targets it reaches: the frame and tool it moves with.
+#[derive(Clone, Debug)]
+struct MovesWith {
+    frame: Option<String>,
+    tool: Option<String>,
+    stationary: bool,
+    run_time: Option<RunTimeValue>,
+}
+
+impl MovesWith {
+    fn of(u: &Use<'_>) -> MovesWith {
+        MovesWith {
+            frame: u.frame.clone(),
+            tool: u.tool.clone(),
+            stationary: u.stationary,
+            run_time: u.run_time.clone(),
         }
     }
-    let mut found: Vec<Vec<bool>> = files.iter().map(|f| vec![false; f.uses.len()]).collect();
-    let mut direct: Vec<(TargetAt, &'a Use<'a>)> = Vec::new();
-    let mut param_uses: std::collections::HashMap<ParamAt, Vec<&'a Use<'a>>> = Default::default();
-    let mut param_edges: std::collections::HashMap<ParamAt, Vec<ParamAt>> = Default::default();
-    let mut bindings: Vec<(TargetAt, ParamAt, usize)> = Vec::new();
-    {
-        let files: &[FileFacts<'a>] = files;
-        let exported = |(m, i): TargetAt| {
-            files.get(m).is_some_and(|f| {
-                f.exported
-                    .is_none_or(|e| e.get(i).copied().unwrap_or(false))
-            })
-        };
-        // Routines by name: the file's own first, else those of the program that are not local.
-        let routine_of = |m: usize, name: NameKey<'_>| -> Option<(usize, usize)> {
-            let find = |m2: usize, any: bool| {
-                let f = files.get(m2)?;
-                f.routines
-                    .iter()
-                    .position(|r| (any || !r.local) && NameKey(r.name.slice(f.src)) == name)
-                    .map(|r| (m2, r))
-            };
-            find(m, true).or_else(|| {
-                (0..files.len())
-                    .filter(|&m2| m2 != m)
-                    .find_map(|m2| find(m2, false))
-            })
-        };
-        // The required parameter of the enclosing routine a reference names, if any.
-        let param_of = |m: usize, routine: Option<usize>, key: &str| -> Option<ParamAt> {
-            let f = files.get(m)?;
-            let rt = routine?;
-            let base = key.split_once(naming.open).map_or(key, |(a, _)| a);
-            f.routines
-                .get(rt)?
-                .params
-                .iter()
-                .position(|&name| NameKey(name.slice(f.src)) == NameKey(base.as_bytes()))
-                .map(|k| (m, rt, k))
-        };
-        let mut buf = String::new();
-        let mut targets: Vec<TargetAt> = Vec::new();
-        let mut params: Vec<ParamAt> = Vec::new();
-        let mut hits: Vec<TargetAt> = Vec::new();
+}
+
+/// Records one use at `line` with `frame`, `tool`, `stationary` and `run_time` in target `at`.
+#[allow(clippy::too_many_arguments)]
+fn record(
+    files: &mut [FileFacts<'_>],
+    (m, i): TargetAt,
+    frame: Option<&str>,
+    tool: Option<&str>,
+    stationary: bool,
+    run_time: Option<&RunTimeValue>,
+    line: usize,
+) {
+    if let Some(p) = files.get_mut(m).and_then(|f| f.positions.get_mut(i)) {
+        p.usage.record(frame, tool, stationary, line);
+        if let Some(why) = run_time {
+            p.usage.set_run_time(why.clone());
+        }
+    }
+}
+
+/// Binds the uses of a program (its files in `files`) to the targets they reach and records
+/// their [`Usage`](crate::position::Usage), one use at a time ([`Binder::bind`]), so a
+/// language that finds its uses in order need not keep them; [`Binder::finish`] then follows
+/// the targets passed to routine parameters.
+///
+/// A reference is looked up as the [`Naming`] says; an argument bound to a required parameter
+/// of a routine of the program makes the target used as that routine uses the parameter
+/// (directly, through a reference, or passed on to another routine: followed [`CALL_DEPTH`]
+/// calls deep, cycles cut). A routine is found among the file's own first, else among the
+/// other files' that are not local.
+pub(crate) struct Binder<'f, 'a> {
+    files: &'f mut [FileFacts<'a>],
+    naming: Naming,
+    index: NameIndex<TargetAt>,
+    param_uses: std::collections::HashMap<ParamAt, Vec<MovesWith>>,
+    param_edges: std::collections::HashMap<ParamAt, Vec<ParamAt>>,
+    bindings: Vec<(TargetAt, ParamAt, usize)>,
+    buf: String,
+    targets: Vec<TargetAt>,
+    params: Vec<ParamAt>,
+    hits: Vec<TargetAt>,
+}
+
+impl<'f, 'a> Binder<'f, 'a> {
+    /// A binder over the targets of `files` (indexed once).
+    pub(crate) fn new(files: &'f mut [FileFacts<'a>], naming: &Naming) -> Binder<'f, 'a> {
+        let total: usize = files.iter().map(|f| f.positions.len()).sum();
+        let mut index: NameIndex<TargetAt> = NameIndex::new(naming.open, total);
         for (m, f) in files.iter().enumerate() {
-            let (src, uses) = (f.src, f.uses);
-            for (ui, u) in uses.iter().enumerate() {
-                targets.clear();
-                params.clear();
-                targets.extend(u.targets.iter().map(|&i| (m, i)));
-                let callee = u.callee.and_then(|c| routine_of(m, NameKey(c.slice(src))));
-                let reach = |key: &str, targets: &mut Vec<TargetAt>, params: &mut Vec<ParamAt>| {
-                    match param_of(m, u.routine, key) {
-                        Some(p) => params.push(p),
-                        None => lookup(naming, &index, &exported, m, key, targets),
-                    }
+            for (i, p) in f.positions.iter().enumerate() {
+                if let Some(n) = &p.name {
+                    index.insert(n, (m, i));
+                }
+            }
+        }
+        Binder {
+            files,
+            naming: *naming,
+            index,
+            param_uses: Default::default(),
+            param_edges: Default::default(),
+            bindings: Vec::new(),
+            buf: String::new(),
+            targets: Vec::new(),
+            params: Vec::new(),
+            hits: Vec::new(),
+        }
+    }
+
+    /// The targets of file `file`, as the binder sees them.
+    pub(crate) fn positions(&self, file: usize) -> &[Position] {
+        self.files.get(file).map_or(&[], |f| &*f.positions)
+    }
+
+    /// Binds use `u` of file `m`: records it in every target it reaches now, and keeps what it
+    /// passes to routine parameters for [`Binder::finish`]. Returns whether it reaches a
+    /// Cartesian target directly (a joint target moves the same whatever the frame).
+    pub(crate) fn bind(&mut self, m: usize, u: &Use<'_>) -> bool {
+        let Binder {
+            files,
+            naming,
+            index,
+            param_uses,
+            param_edges,
+            bindings,
+            buf,
+            targets,
+            params,
+            hits,
+        } = self;
+        let naming = &*naming;
+        targets.clear();
+        params.clear();
+        targets.extend(u.targets.iter().map(|&i| (m, i)));
+        {
+            let files: &[FileFacts<'a>] = files;
+            let Some(f) = files.get(m) else {
+                return false;
+            };
+            let src = f.src;
+            let exported = |(m, i): TargetAt| {
+                files.get(m).is_some_and(|f| {
+                    f.exported
+                        .is_none_or(|e| e.get(i).copied().unwrap_or(false))
+                })
+            };
+            // Routines by name: the file's own first, else those of the program that are not
+            // local.
+            let routine_of = |name: NameKey<'_>| -> Option<(usize, usize)> {
+                let find = |m2: usize, any: bool| {
+                    let f = files.get(m2)?;
+                    f.routines
+                        .iter()
+                        .position(|r| (any || !r.local) && NameKey(r.name.slice(f.src)) == name)
+                        .map(|r| (m2, r))
                 };
-                for (i, sp) in u.args.iter().enumerate() {
-                    let Some(sp) = *sp else { continue };
-                    let key = fold_into(&mut buf, sp.slice(src));
-                    match callee {
-                        // An argument bound to a parameter of a routine of the program: used as
-                        // that routine uses the parameter.
-                        Some((cm, cr))
-                            if files
-                                .get(cm)
-                                .and_then(|c| c.routines.get(cr))
-                                .is_some_and(|r| i < r.params.len()) =>
-                        {
-                            let to = (cm, cr, i);
-                            match param_of(m, u.routine, key) {
-                                Some(p) => param_edges.entry(p).or_default().push(to),
-                                None => {
-                                    hits.clear();
-                                    lookup(naming, &index, &exported, m, key, &mut hits);
-                                    bindings.extend(hits.iter().map(|&t| (t, to, u.line)));
-                                }
+                find(m, true).or_else(|| {
+                    (0..files.len())
+                        .filter(|&m2| m2 != m)
+                        .find_map(|m2| find(m2, false))
+                })
+            };
+            // The required parameter of the enclosing routine a reference names, if any.
+            let param_of = |key: &str| -> Option<ParamAt> {
+                let rt = u.routine?;
+                let base = key.split_once(naming.open).map_or(key, |(a, _)| a);
+                f.routines
+                    .get(rt)?
+                    .params
+                    .iter()
+                    .position(|&name| NameKey(name.slice(src)) == NameKey(base.as_bytes()))
+                    .map(|k| (m, rt, k))
+            };
+            let reach =
+                |key: &str, targets: &mut Vec<TargetAt>, params: &mut Vec<ParamAt>| match param_of(
+                    key,
+                ) {
+                    Some(p) => params.push(p),
+                    None => lookup(naming, index, &exported, m, key, targets),
+                };
+            let callee = u.callee.and_then(|c| routine_of(NameKey(c.slice(src))));
+            for (i, sp) in u.args.iter().enumerate() {
+                let Some(sp) = *sp else { continue };
+                let key = fold_into(buf, sp.slice(src));
+                match callee {
+                    // An argument bound to a parameter of a routine of the program: used as
+                    // that routine uses the parameter.
+                    Some((cm, cr))
+                        if files
+                            .get(cm)
+                            .and_then(|c| c.routines.get(cr))
+                            .is_some_and(|r| i < r.params.len()) =>
+                    {
+                        let to = (cm, cr, i);
+                        match param_of(key) {
+                            Some(p) => param_edges.entry(p).or_default().push(to),
+                            None => {
+                                hits.clear();
+                                lookup(naming, index, &exported, m, key, hits);
+                                bindings.extend(hits.iter().map(|&t| (t, to, u.line)));
                             }
                         }
-                        _ => reach(key, &mut targets, &mut params),
                     }
+                    _ => reach(key, targets, params),
                 }
-                for &sp in &u.refs {
-                    reach(
-                        fold_into(&mut buf, sp.slice(src)),
-                        &mut targets,
-                        &mut params,
-                    );
-                }
-                for &key in &u.folded {
-                    reach(key, &mut targets, &mut params);
-                }
-                if targets.is_empty() && params.is_empty() {
-                    continue;
-                }
-                targets.sort_unstable();
-                targets.dedup();
-                if let Some(flag) = found.get_mut(m).and_then(|f| f.get_mut(ui)) {
-                    *flag = targets.iter().any(|&(f2, i)| {
-                        files
-                            .get(f2)
-                            .and_then(|f| f.positions.get(i))
-                            .is_some_and(|p| p.cartesian.is_some())
-                    });
-                }
-                direct.extend(targets.iter().map(|&t| (t, u)));
-                for &p in &params {
-                    param_uses.entry(p).or_default().push(u);
-                }
+            }
+            for &sp in &u.refs {
+                reach(fold_into(buf, sp.slice(src)), targets, params);
+            }
+            for &key in &u.folded {
+                reach(key, targets, params);
+            }
+        }
+        if targets.is_empty() && params.is_empty() {
+            return false;
+        }
+        targets.sort_unstable();
+        targets.dedup();
+        let mut cartesian = false;
+        for &t in targets.iter() {
+            record(
+                files,
+                t,
+                u.frame.as_deref(),
+                u.tool.as_deref(),
+                u.stationary,
+                u.run_time.as_ref(),
+                u.line,
+            );
+            cartesian |= files
+                .get(t.0)
+                .and_then(|f| f.positions.get(t.1))
+                .is_some_and(|p| p.cartesian.is_some());
+        }
+        for &p in params.iter() {
+            param_uses.entry(p).or_default().push(MovesWith::of(u));
+        }
+        cartesian
+    }
+
+    /// Records, in every target passed to a routine parameter, every use reachable from that
+    /// parameter, with the line of the call that passes the target.
+    pub(crate) fn finish(self) {
+        let Binder {
+            files,
+            param_uses,
+            param_edges,
+            bindings,
+            ..
+        } = self;
+        for (t, to, line) in bindings {
+            for w in uses_through_parameters(to, &param_uses, &param_edges) {
+                let (frame, tool) = (w.frame.as_deref(), w.tool.as_deref());
+                record(
+                    files,
+                    t,
+                    frame,
+                    tool,
+                    w.stationary,
+                    w.run_time.as_ref(),
+                    line,
+                );
             }
         }
     }
-    let mut record = |(m, i): TargetAt, u: &Use<'_>, line: usize| {
-        if let Some(p) = files.get_mut(m).and_then(|f| f.positions.get_mut(i)) {
-            p.usage
-                .record(u.frame.as_deref(), u.tool.as_deref(), u.stationary, line);
-            if let Some(why) = &u.run_time {
-                p.usage.set_run_time(why.clone());
-            }
-        }
-    };
-    for (t, u) in direct {
-        record(t, u, u.line);
-    }
-    // Through routine parameters: every use reachable from the bound parameter.
-    for (t, to, line) in bindings {
-        for u in uses_through_parameters(to, &param_uses, &param_edges) {
-            record(t, u, line);
+}
+
+/// Binds every use of `files` ([`FileFacts::uses`]) with a [`Binder`].
+pub(crate) fn bind(files: &mut [FileFacts<'_>], naming: &Naming) {
+    let uses: Vec<&[Use<'_>]> = files.iter().map(|f| f.uses).collect();
+    let mut binder = Binder::new(files, naming);
+    for (m, file_uses) in uses.into_iter().enumerate() {
+        for u in file_uses {
+            binder.bind(m, u);
         }
     }
-    found
+    binder.finish();
 }
 
 /// Marks [`Usage::run_time`](crate::position::Usage) of every target of the program (its

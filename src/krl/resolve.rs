@@ -274,112 +274,121 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         .iter_mut()
         .map(|f| std::mem::take(&mut f.events))
         .collect();
-    // Per file, its motions as the shared pass binds them, and per motion the span to warn at
-    // when its base is unknown.
-    let mut uses: Vec<Vec<crate::resolve::Use<'_>>> = Vec::with_capacity(events.len());
-    let mut unresolved: Vec<Vec<Option<crate::syntax::Span>>> = Vec::with_capacity(events.len());
-    for (fi, events) in events.iter().enumerate() {
-        let mut file_uses = Vec::new();
-        let mut file_unresolved = Vec::new();
-        let mut state = State::default();
-        let mut aliases: HashMap<&str, &str> = HashMap::default();
-        let mut forks: Vec<Fork> = Vec::new();
-        for ev in events {
-            match ev {
-                Event::Reset(_) => {
-                    state = State::default();
-                    aliases.clear();
-                    forks.clear();
-                }
-                Event::Call(name) => {
-                    if let Some(exit) = exits.get(name) {
-                        exit.apply_to(&mut state);
-                    }
-                }
-                Event::Branch(b) => branch(&mut state, &mut forks, *b),
-                Event::Alias { name, source } => {
-                    aliases.insert(name, source);
-                }
-                Event::Set(s) => state.apply(s, &fdats),
-                Event::Motion {
-                    span,
-                    line,
-                    refs,
-                    with,
-                } => {
-                    let mut local = state.clone();
-                    for s in with {
-                        local.apply(s, &fdats);
-                    }
-                    let file = files.get(fi);
-                    let mut u = crate::resolve::Use {
-                        line: *line,
-                        frame: local.base.as_ref().and_then(base_label),
-                        tool: local.tool.as_ref().and_then(tool_label),
-                        stationary: local.tcp,
-                        run_time: match (&local.base, file) {
-                            (Some(FrameRef::RunTime(at)), Some(f)) => Some(RunTimeValue::Frame {
-                                name: None,
-                                line: f.lines.line(at.start),
-                            }),
-                            _ => None,
-                        },
-                        ..Default::default()
-                    };
-                    for r in refs {
-                        match r {
-                            Ref::Inline(s) => u.targets.extend(
-                                file.and_then(|f| f.positions.iter().position(|p| p.span == *s)),
-                            ),
-                            Ref::Named(n) => {
-                                // The name itself, then what it was last copied from.
-                                let start = u.folded.len();
-                                u.folded.push(n.as_str());
-                                while u.folded.len() - start < 8 {
-                                    let chain = u.folded.get(start..).unwrap_or_default();
-                                    match chain.last().and_then(|c| aliases.get(c)) {
-                                        Some(&next) if !chain.contains(&next) => {
-                                            u.folded.push(next);
-                                        }
-                                        _ => break,
-                                    }
-                                }
-                            }
-                        }
-                    }
-                    file_unresolved.push(u.frame.is_none().then_some(*span));
-                    file_uses.push(u);
-                }
-            }
-        }
-        uses.push(file_uses);
-        unresolved.push(file_unresolved);
-    }
-    // The candidates go after each file's positions while the pass binds: a motion may use
-    // them.
+    // The candidates go after each file's positions while the motions are bound: a motion may
+    // use them.
     let counts: Vec<usize> = files.iter().map(|f| f.positions.len()).collect();
     for (file, fact) in files.iter_mut().zip(facts.iter_mut()) {
         file.positions.append(&mut fact.candidates);
     }
-    let mut bound: Vec<crate::resolve::FileFacts<'_>> = files
-        .iter_mut()
-        .zip(&uses)
-        .map(|(file, uses)| shared_facts(file, uses, &[]))
-        .collect();
-    let found = crate::resolve::bind(&mut bound, &NAMING);
-    drop(bound);
+    // Per file, the motions to warn about: a Cartesian target and no base.
+    let mut unresolved: Vec<Vec<crate::syntax::Span>> = vec![Vec::new(); files.len()];
+    {
+        let mut lines = Vec::with_capacity(files.len());
+        let mut bound: Vec<crate::resolve::FileFacts<'_>> = Vec::with_capacity(files.len());
+        for file in files.iter_mut() {
+            lines.push(&file.lines);
+            bound.push(crate::resolve::FileFacts {
+                src: &file.source,
+                positions: &mut file.positions,
+                exported: None,
+                frames: &file.frames,
+                routines: &[],
+                uses: &[],
+                assignments: &[],
+            });
+        }
+        let mut binder = crate::resolve::Binder::new(&mut bound, &NAMING);
+        for (fi, events) in events.into_iter().enumerate() {
+            // One use, its buffers reused from motion to motion.
+            let mut u = crate::resolve::Use::default();
+            let own = counts.get(fi).copied().unwrap_or_default();
+            let mut state = State::default();
+            let mut aliases: HashMap<&str, &str> = HashMap::default();
+            let mut forks: Vec<Fork> = Vec::new();
+            for ev in &events {
+                match ev {
+                    Event::Reset(_) => {
+                        state = State::default();
+                        aliases.clear();
+                        forks.clear();
+                    }
+                    Event::Call(name) => {
+                        if let Some(exit) = exits.get(name) {
+                            exit.apply_to(&mut state);
+                        }
+                    }
+                    Event::Branch(b) => branch(&mut state, &mut forks, *b),
+                    Event::Alias { name, source } => {
+                        aliases.insert(name, source);
+                    }
+                    Event::Set(s) => state.apply(s, &fdats),
+                    Event::Motion {
+                        span,
+                        line,
+                        refs,
+                        with,
+                    } => {
+                        let mut local = state.clone();
+                        for s in with {
+                            local.apply(s, &fdats);
+                        }
+                        u.line = *line;
+                        u.frame = local.base.as_ref().and_then(base_label);
+                        u.tool = local.tool.as_ref().and_then(tool_label);
+                        u.stationary = local.tcp;
+                        u.run_time = match (&local.base, lines.get(fi)) {
+                            (Some(FrameRef::RunTime(at)), Some(l)) => Some(RunTimeValue::Frame {
+                                name: None,
+                                line: l.line(at.start),
+                            }),
+                            _ => None,
+                        };
+                        u.targets.clear();
+                        u.folded.clear();
+                        for r in refs {
+                            match r {
+                                // An inline literal is one of the file's own positions.
+                                Ref::Inline(s) => u.targets.extend(
+                                    binder
+                                        .positions(fi)
+                                        .get(..own)
+                                        .and_then(|ps| ps.iter().position(|p| p.span == *s)),
+                                ),
+                                Ref::Named(n) => {
+                                    // The name itself, then what it was last copied from.
+                                    let start = u.folded.len();
+                                    u.folded.push(n.as_str());
+                                    while u.folded.len() - start < 8 {
+                                        let chain = u.folded.get(start..).unwrap_or_default();
+                                        match chain.last().and_then(|c| aliases.get(c)) {
+                                            Some(&next) if !chain.contains(&next) => {
+                                                u.folded.push(next);
+                                            }
+                                            _ => break,
+                                        }
+                                    }
+                                }
+                            }
+                        }
+                        // A motion to a point outside the program (`XHOME` of $config.dat) is
+                        // not this program's business, nor is one to a joint target only (it
+                        // moves the same whatever the base).
+                        if binder.bind(fi, &u)
+                            && u.frame.is_none()
+                            && let Some(w) = unresolved.get_mut(fi)
+                        {
+                            w.push(*span);
+                        }
+                    }
+                }
+            }
+        }
+        binder.finish();
+    }
     for (fi, file) in files.iter_mut().enumerate() {
-        // A motion to a point outside the program (`XHOME` of $config.dat) is not this
-        // program's business, nor is one to a joint target only (it moves the same whatever
-        // the base).
-        let motions = unresolved.get(fi).into_iter().flatten();
-        for (span, _) in motions
-            .zip(found.get(fi).into_iter().flatten())
-            .filter(|(_, found)| **found)
-        {
-            let Some(span) = span else { continue };
+        for &span in unresolved.get(fi).into_iter().flatten() {
             file.diagnostics.push(
-                Diagnostic::warning(*span, "the base of this motion is not resolved").with_hint(
+                Diagnostic::warning(span, "the base of this motion is not resolved").with_hint(
                     "set FDAT_ACT, $BASE=BASE_DATA[n] or BAS(#BASE,n) before it in the same DEF",
                 ),
             );
