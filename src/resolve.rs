@@ -137,7 +137,8 @@ pub(crate) struct Routine {
 }
 
 /// An instruction that uses targets: a motion (or a call that passes targets on) with the frame
-/// and tool it moves with.
+/// and tool it moves with. It borrows what it references: a language builds one as it goes and
+/// hands it to [`Binder::bind`].
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Use<'a> {
     /// 1-based line of the instruction.
@@ -157,14 +158,14 @@ pub(crate) struct Use<'a> {
     pub(crate) run_time: Option<RunTimeValue>,
     /// Positional arguments, in order, that are plain references (`None` for any other
     /// expression), in the file's source.
-    pub(crate) args: Vec<Option<Span>>,
+    pub(crate) args: &'a [Option<Span>],
     /// Further references in the file's source (RAPID `Offs`/`RelTool` first arguments).
-    pub(crate) refs: Vec<Span>,
+    pub(crate) refs: &'a [Span],
     /// Further references already [`fold`]ed (KRL: a motion's target and what it was copied
     /// from).
-    pub(crate) folded: Vec<&'a str>,
+    pub(crate) folded: &'a [&'a str],
     /// Targets of the same file reached directly (inline literals), by index.
-    pub(crate) targets: Vec<usize>,
+    pub(crate) targets: &'a [usize],
 }
 
 /// One file of a program as this pass sees it.
@@ -179,8 +180,6 @@ pub(crate) struct FileFacts<'a> {
     pub(crate) frames: &'a [FrameDecl],
     /// Its routines.
     pub(crate) routines: &'a [Routine],
-    /// Its instructions that use targets.
-    pub(crate) uses: &'a [Use<'a>],
     /// Its run-time assignments.
     pub(crate) assignments: &'a [Assignment],
 }
@@ -457,10 +456,10 @@ impl<'f, 'a> Binder<'f, 'a> {
                     _ => reach(key, targets, params),
                 }
             }
-            for &sp in &u.refs {
+            for &sp in u.refs {
                 reach(fold_into(buf, sp.slice(src)), targets, params);
             }
-            for &key in &u.folded {
+            for &key in u.folded {
                 reach(key, targets, params);
             }
         }
@@ -516,18 +515,6 @@ impl<'f, 'a> Binder<'f, 'a> {
             }
         }
     }
-}
-
-/// Binds every use of `files` ([`FileFacts::uses`]) with a [`Binder`].
-pub(crate) fn bind(files: &mut [FileFacts<'_>], naming: &Naming) {
-    let uses: Vec<&[Use<'_>]> = files.iter().map(|f| f.uses).collect();
-    let mut binder = Binder::new(files, naming);
-    for (m, file_uses) in uses.into_iter().enumerate() {
-        for u in file_uses {
-            binder.bind(m, u);
-        }
-    }
-    binder.finish();
 }
 
 /// Marks [`Usage::run_time`](crate::position::Usage) of every target of the program (its

@@ -224,9 +224,10 @@ fn branch(state: &mut State, forks: &mut Vec<Fork>, b: BranchEvent) {
 }
 
 /// Resolves base, tool and IPO mode of every motion of a program (files in the same order as
-/// `facts`) by following program order, hands the motions to the shared usage pass
-/// ([`crate::resolve::bind`]) to fill each used position's [`Usage`](crate::position::Usage), promotes used `FRAME`s
-/// and candidate aggregates to positions, and reports motions whose base stays unknown.
+/// `facts`) by following program order, hands each motion to the shared usage pass
+/// ([`crate::resolve::Binder`]) to fill the [`Usage`](crate::position::Usage) of the positions
+/// it uses, promotes used `FRAME`s and candidate aggregates to positions, and reports motions
+/// whose base stays unknown.
 pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     let mut fdats: HashMap<String, Fdat> = HashMap::default();
     for f in facts.iter() {
@@ -283,24 +284,13 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     // Per file, the motions to warn about: a Cartesian target and no base.
     let mut unresolved: Vec<Vec<crate::syntax::Span>> = vec![Vec::new(); files.len()];
     {
-        let mut lines = Vec::with_capacity(files.len());
-        let mut bound: Vec<crate::resolve::FileFacts<'_>> = Vec::with_capacity(files.len());
-        for file in files.iter_mut() {
-            lines.push(&file.lines);
-            bound.push(crate::resolve::FileFacts {
-                src: &file.source,
-                positions: &mut file.positions,
-                exported: None,
-                frames: &file.frames,
-                routines: &[],
-                uses: &[],
-                assignments: &[],
-            });
-        }
+        let (mut bound, lines): (Vec<_>, Vec<_>) =
+            files.iter_mut().map(|f| shared_facts(f, &[])).unzip();
         let mut binder = crate::resolve::Binder::new(&mut bound, &NAMING);
         for (fi, events) in events.into_iter().enumerate() {
-            // One use, its buffers reused from motion to motion.
-            let mut u = crate::resolve::Use::default();
+            // The targets and names of a motion, buffers reused from motion to motion.
+            let mut targets: Vec<usize> = Vec::new();
+            let mut folded: Vec<&str> = Vec::new();
             let own = counts.get(fi).copied().unwrap_or_default();
             let mut state = State::default();
             let mut aliases: HashMap<&str, &str> = HashMap::default();
@@ -332,23 +322,12 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                         for s in with {
                             local.apply(s, &fdats);
                         }
-                        u.line = *line;
-                        u.frame = local.base.as_ref().and_then(base_label);
-                        u.tool = local.tool.as_ref().and_then(tool_label);
-                        u.stationary = local.tcp;
-                        u.run_time = match (&local.base, lines.get(fi)) {
-                            (Some(FrameRef::RunTime(at)), Some(l)) => Some(RunTimeValue::Frame {
-                                name: None,
-                                line: l.line(at.start),
-                            }),
-                            _ => None,
-                        };
-                        u.targets.clear();
-                        u.folded.clear();
+                        targets.clear();
+                        folded.clear();
                         for r in refs {
                             match r {
                                 // An inline literal is one of the file's own positions.
-                                Ref::Inline(s) => u.targets.extend(
+                                Ref::Inline(s) => targets.extend(
                                     binder
                                         .positions(fi)
                                         .get(..own)
@@ -356,13 +335,13 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                 ),
                                 Ref::Named(n) => {
                                     // The name itself, then what it was last copied from.
-                                    let start = u.folded.len();
-                                    u.folded.push(n.as_str());
-                                    while u.folded.len() - start < 8 {
-                                        let chain = u.folded.get(start..).unwrap_or_default();
+                                    let start = folded.len();
+                                    folded.push(n.as_str());
+                                    while folded.len() - start < 8 {
+                                        let chain = folded.get(start..).unwrap_or_default();
                                         match chain.last().and_then(|c| aliases.get(c)) {
                                             Some(&next) if !chain.contains(&next) => {
-                                                u.folded.push(next);
+                                                folded.push(next);
                                             }
                                             _ => break,
                                         }
@@ -370,6 +349,24 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                 }
                             }
                         }
+                        let u = crate::resolve::Use {
+                            line: *line,
+                            frame: local.base.as_ref().and_then(base_label),
+                            tool: local.tool.as_ref().and_then(tool_label),
+                            stationary: local.tcp,
+                            run_time: match (&local.base, lines.get(fi)) {
+                                (Some(FrameRef::RunTime(at)), Some(l)) => {
+                                    Some(RunTimeValue::Frame {
+                                        name: None,
+                                        line: l.line(at.start),
+                                    })
+                                }
+                                _ => None,
+                            },
+                            folded: &folded,
+                            targets: &targets,
+                            ..Default::default()
+                        };
                         // A motion to a point outside the program (`XHOME` of $config.dat) is
                         // not this program's business, nor is one to a joint target only (it
                         // moves the same whatever the base).
@@ -416,28 +413,27 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     let mut shared: Vec<crate::resolve::FileFacts<'_>> = files
         .iter_mut()
         .zip(facts.iter())
-        .map(|(file, fact)| shared_facts(file, &[], &fact.assignments))
+        .map(|(file, fact)| shared_facts(file, &fact.assignments).0)
         .collect();
     crate::resolve::mark_run_time(&mut shared, &NAMING);
 }
 
-/// A file as the shared pass sees it: KRL has no routine parameters the pass follows (a
-/// subroutine's effect is the base and tool it leaves set, found in program order), and every
-/// declaration of the pair is seen from both files.
+/// A file as the shared pass sees it, and its line index: KRL has no routine parameters the
+/// pass follows (a subroutine's effect is the base and tool it leaves set, found in program
+/// order), and every declaration of the pair is seen from both files.
 fn shared_facts<'a>(
     file: &'a mut ParsedFile,
-    uses: &'a [crate::resolve::Use<'a>],
     assignments: &'a [crate::resolve::Assignment],
-) -> crate::resolve::FileFacts<'a> {
-    crate::resolve::FileFacts {
+) -> (crate::resolve::FileFacts<'a>, &'a crate::syntax::LineIndex) {
+    let facts = crate::resolve::FileFacts {
         src: &file.source,
         positions: &mut file.positions,
         exported: None,
         frames: &file.frames,
         routines: &[],
-        uses,
         assignments,
-    }
+    };
+    (facts, &file.lines)
 }
 
 #[cfg(test)]

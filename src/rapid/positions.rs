@@ -33,13 +33,24 @@ const NAMING: crate::resolve::Naming = crate::resolve::Naming {
     scope: crate::resolve::Scope::OwnFileFirst,
 };
 
-/// The frame and tool a call names explicitly (`\WObj:=`, `\Tool:=` or `tool:=`), kept
-/// with its [`Use`](crate::resolve::Use) until every declaration has been read: the frame and
-/// tool it moves with are found then.
-#[derive(Clone, Copy, Debug, Default)]
-struct Named {
+/// A procedure call, kept until every declaration has been read: the frame and tool it moves
+/// with are found then, and it is bound as a [`Use`](crate::resolve::Use).
+#[derive(Clone, Debug)]
+struct CallUse {
+    name: Span,
+    line: usize,
+    /// The routine the call is written in (index into the module's routines).
+    routine: Option<usize>,
+    /// `\WObj:=` value.
     wobj: Option<Span>,
+    /// `\Tool:=` (or `tool:=`) value.
     tool: Option<Span>,
+    /// Positional arguments that are plain references (`p10`, `pArr{3}`).
+    positional: Vec<Option<Span>>,
+    /// Targets referenced through `Offs`/`RelTool` first arguments.
+    via_offset: Vec<Span>,
+    /// Inline literals written in the call's arguments (indices into `positions`).
+    inline: Vec<usize>,
 }
 
 /// A `RECORD` declared in the module: its name and components (type, name).
@@ -59,10 +70,7 @@ pub struct Extractor<'l> {
     /// Every name declared, routines included (spans into the source: no copy per
     /// declaration).
     symbols: Vec<crate::resolve::Declaration>,
-    /// Every procedure call, as the shared pass binds it (frame and tool filled in by
-    /// [`finish_task`]), and what each names explicitly.
-    uses: Vec<crate::resolve::Use<'static>>,
-    named: Vec<Named>,
+    uses: Vec<CallUse>,
     /// Whole-value assignments `name := [...]` of literal aggregates (a frame given a new
     /// value that is known offline).
     assigned: Vec<Span>,
@@ -120,7 +128,6 @@ impl<'l> Extractor<'l> {
             offsets: Vec::new(),
             symbols: Vec::new(),
             uses: Vec::new(),
-            named: Vec::new(),
             assigned: Vec::new(),
             computed: Vec::new(),
             routines: Vec::new(),
@@ -475,7 +482,7 @@ fn is_literal(src: &[u8], arena: &Arena, id: u32) -> bool {
 }
 
 /// Resolves usage over the modules of one task (one RAPID program), in the order given, with
-/// the shared pass ([`crate::resolve::bind`]): this finds the facts it binds in RAPID's terms
+/// the shared pass (`resolve::Binder`): this finds the facts it binds in RAPID's terms
 /// (a call's work object `\WObj:=` or `wobj0`, its tool `\Tool:=` or the argument after the
 /// zone, a stationary tool from the work object's `robhold`), and reports the names declared
 /// twice in a module. Returns one [`Extracted`] per module, in order.
@@ -507,12 +514,10 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
     let is_speed =
         |n: &NameKey| n.is(b"vmax") || n.numbered(b'v') || type_of.get(n) == Some(&DeclKind::Speed);
     let mut positions: Vec<Vec<Position>> = Vec::with_capacity(modules.len());
-    let mut uses: Vec<Vec<crate::resolve::Use<'_>>> = Vec::with_capacity(modules.len());
-    let mut named: Vec<Vec<Named>> = Vec::with_capacity(modules.len());
+    let mut calls: Vec<Vec<CallUse>> = Vec::with_capacity(modules.len());
     let mut rest = Vec::with_capacity(modules.len());
     for (x, src) in modules {
-        uses.push(x.uses);
-        named.push(x.named);
+        calls.push(x.uses);
         positions.push(x.positions);
         rest.push((
             x.frames, x.offsets, x.assigned, x.computed, x.routines, x.exported, src,
@@ -524,18 +529,38 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
         .filter(|f| f.kind == FrameKind::WorkObject)
         .filter_map(|f| Some((NameKey(f.name.as_bytes()), f.held_by_robot?)))
         .collect();
+    let mut facts: Vec<crate::resolve::FileFacts<'_>> = positions
+        .iter_mut()
+        .zip(&rest)
+        .map(|(ps, r)| crate::resolve::FileFacts {
+            src: r.6,
+            positions: ps,
+            exported: Some(&r.5),
+            frames: &r.0,
+            routines: &r.4,
+            assignments: &r.3,
+        })
+        .collect();
+    let mut binder = crate::resolve::Binder::new(&mut facts, &NAMING);
     let mut names: Vec<Option<NameKey>> = Vec::new();
-    for ((module_uses, module_named), r) in uses.iter_mut().zip(&named).zip(&rest) {
+    for (m, (module_calls, r)) in calls.iter().zip(&rest).enumerate() {
         let src = r.6;
-        for (u, n) in module_uses.iter_mut().zip(module_named) {
-            let Some(callee) = u.callee else { continue };
-            let call = NameKey(callee.slice(src));
+        for u in module_calls {
+            let call = NameKey(u.name.slice(src));
             names.clear();
-            names.extend(u.args.iter().map(|p| p.map(|sp| NameKey(sp.slice(src)))));
+            names.extend(
+                u.positional
+                    .iter()
+                    .map(|p| p.map(|sp| NameKey(sp.slice(src)))),
+            );
             let written = |i: usize| -> Option<String> {
-                u.args.get(i).copied().flatten().map(|sp| text_of(src, sp))
+                u.positional
+                    .get(i)
+                    .copied()
+                    .flatten()
+                    .map(|sp| text_of(src, sp))
             };
-            let tool = n.tool.map(|sp| trimmed(text_of(src, sp))).or_else(|| {
+            let tool = u.tool.map(|sp| trimmed(text_of(src, sp))).or_else(|| {
                 if let Some(i) = names.iter().position(|n| n.as_ref().is_some_and(is_tool)) {
                     return written(i);
                 }
@@ -552,33 +577,32 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
             let motion = MOTION_PREFIXES
                 .iter()
                 .any(|p| call.starts_with(p.as_bytes()));
-            let wobj = match n.wobj {
+            let wobj = match u.wobj {
                 Some(sp) => Some(trimmed(text_of(src, sp))),
                 None => (motion || tool.is_some()).then(|| "wobj0".to_owned()),
             };
             let stationary = wobj
                 .as_ref()
                 .is_some_and(|w| robhold.get(&NameKey(w.as_bytes())) == Some(&true));
-            u.stationary = wobj.is_some() && stationary;
-            u.frame = wobj;
-            u.tool = tool;
+            binder.bind(
+                m,
+                &crate::resolve::Use {
+                    line: u.line,
+                    routine: u.routine,
+                    callee: Some(u.name),
+                    stationary: wobj.is_some() && stationary,
+                    frame: wobj,
+                    tool,
+                    run_time: None,
+                    args: &u.positional,
+                    refs: &u.via_offset,
+                    folded: &[],
+                    targets: &u.inline,
+                },
+            );
         }
     }
-    let mut facts: Vec<crate::resolve::FileFacts<'_>> = positions
-        .iter_mut()
-        .zip(&rest)
-        .zip(&uses)
-        .map(|((ps, r), u)| crate::resolve::FileFacts {
-            src: r.6,
-            positions: ps,
-            exported: Some(&r.5),
-            frames: &r.0,
-            routines: &r.4,
-            uses: u,
-            assignments: &r.3,
-        })
-        .collect();
-    crate::resolve::bind(&mut facts, &NAMING);
+    binder.finish();
     crate::resolve::mark_run_time(&mut facts, &NAMING);
     drop(facts);
     let all_frames: Vec<&FrameDecl> = rest.iter().flat_map(|r| &r.0).collect();
@@ -878,15 +902,16 @@ impl Extractor<'_> {
     fn statement_call(&mut self, src: &[u8], arena: &Arena, name: Span, args: u32, span: Span) {
         {
             let (inline, via_offset) = self.scan(src, arena, true);
-            let mut u = crate::resolve::Use {
+            let mut u = CallUse {
+                name,
                 line: self.lines.line(span.start),
                 routine: self.current,
-                callee: Some(name),
-                refs: via_offset,
-                targets: inline,
-                ..Default::default()
+                wobj: None,
+                tool: None,
+                positional: Vec::new(),
+                via_offset,
+                inline,
             };
-            let mut named = Named::default();
             for a in arena.children(args) {
                 let Some(arg) = arena.get(a) else { continue };
                 let value = if arg.first == super::expr::NONE {
@@ -898,18 +923,18 @@ impl Extractor<'_> {
                     let nm = arg.name_span().slice(src);
                     let v = value.map(|v| v.span());
                     if nm.eq_ignore_ascii_case(b"WObj") {
-                        named.wobj = v;
+                        u.wobj = v;
                     } else if nm.eq_ignore_ascii_case(b"Tool") {
-                        named.tool = v;
+                        u.tool = v;
                     }
                 } else {
                     // A required argument may be given by name: `..., fine, tool:=tGun;`.
                     if arg.name_end > arg.name_start
                         && arg.name_span().slice(src).eq_ignore_ascii_case(b"Tool")
                     {
-                        named.tool = value.map(|v| v.span());
+                        u.tool = value.map(|v| v.span());
                     }
-                    u.args.push(
+                    u.positional.push(
                         value
                             .filter(|v| matches!(v.kind, ExprKind::Ident | ExprKind::Access))
                             .map(|v| v.span()),
@@ -917,7 +942,6 @@ impl Extractor<'_> {
                 }
             }
             self.uses.push(u);
-            self.named.push(named);
         }
     }
 }

@@ -436,46 +436,39 @@ mod tests {
 
     #[test]
     fn a_refused_frame_is_named_in_the_words_of_its_language() {
-        let line = "1 2 3 0 0 0 2 0 0\n";
-        let kuka = with_frame(
-            krl(line, "BASE_DATA[2]"),
-            "BASE_DATA[2]",
-            FrameKind::Base,
-            true,
-        );
-        assert_eq!(
-            refusal(&kuka, "BASE_DATA[2]"),
-            "base `BASE_DATA[2]` is moved by a mechanical unit (MACHINE_FRAME_DAT: an external kinematic)"
-        );
-        let kuka = with_frame(
-            krl(line, "BASE_DATA[3]"),
-            "BASE_DATA[3]",
-            FrameKind::Base,
-            false,
-        );
-        assert_eq!(
-            refusal(&kuka, "BASE_DATA[3]"),
-            "base `BASE_DATA[3]` is held by the robot (IPO_FRAME #TCP: stationary tool)"
-        );
-        assert_eq!(
-            refusal(&kuka, "BASE_DATA[9]"),
-            "base `BASE_DATA[9]` is not declared in the program"
-        );
-        let abb_line = "1 2 3 1 0 0 0 0 0 0 0 9E9 9E9 9E9 9E9 9E9 9E9\n";
-        let abb = with_frame(rapid(abb_line, "wStn"), "wStn", FrameKind::WorkObject, true);
-        assert_eq!(
-            refusal(&abb, "wStn"),
-            "work object `wStn` is moved by a mechanical unit (ufprog FALSE)"
-        );
-        let abb = with_frame(
-            rapid(abb_line, "wHeld"),
-            "wHeld",
-            FrameKind::WorkObject,
-            false,
-        );
-        assert_eq!(
-            refusal(&abb, "wHeld"),
-            "work object `wHeld` is held by the robot (robhold TRUE: stationary tool)"
-        );
+        let kuka = |base: &str| krl("1 2 3 0 0 0 2 0 0\n", base);
+        let abb = |wobj: &str| rapid("1 2 3 1 0 0 0 0 0 0 0 9E9 9E9 9E9 9E9 9E9 9E9\n", wobj);
+        let cases = [
+            (
+                kuka("BASE_DATA[2]"),
+                ("BASE_DATA[2]", FrameKind::Base, true),
+                "base `BASE_DATA[2]` is moved by a mechanical unit (MACHINE_FRAME_DAT: an external kinematic)",
+            ),
+            (
+                kuka("BASE_DATA[3]"),
+                ("BASE_DATA[3]", FrameKind::Base, false),
+                "base `BASE_DATA[3]` is held by the robot (IPO_FRAME #TCP: stationary tool)",
+            ),
+            (
+                kuka("BASE_DATA[9]"),
+                ("BASE_DATA[3]", FrameKind::Base, false),
+                "base `BASE_DATA[9]` is not declared in the program",
+            ),
+            (
+                abb("wStn"),
+                ("wStn", FrameKind::WorkObject, true),
+                "work object `wStn` is moved by a mechanical unit (ufprog FALSE)",
+            ),
+            (
+                abb("wHeld"),
+                ("wHeld", FrameKind::WorkObject, false),
+                "work object `wHeld` is held by the robot (robhold TRUE: stationary tool)",
+            ),
+        ];
+        for (program, (declared, kind, moved), want) in cases {
+            let used = program.files[0].positions[0].usage.wobj.clone().unwrap();
+            let program = with_frame(program, declared, kind, moved);
+            assert_eq!(refusal(&program, &used), want);
+        }
     }
 }
