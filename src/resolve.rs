@@ -617,4 +617,62 @@ mod tests {
         assert!(uses_through_parameters(10, &uses, &edges).is_empty());
         assert_eq!(uses_through_parameters(11, &uses, &edges), [&"deep"]);
     }
+
+    #[test]
+    fn each_naming_reaches_arrays_and_other_files_as_its_language_does() {
+        // File 0 declares `P{1}`, `P{2}` (RAPID) / `P[1]`, `P[2]` (KRL) and `X`; file 1 declares
+        // `X` and `Y`; file 2 (the one looking) declares nothing.
+        let index = |open: char| {
+            let mut index: NameIndex<TargetAt> = NameIndex::new(open, 0);
+            let close = if open == '{' { '}' } else { ']' };
+            for (i, n) in [
+                format!("p{open}1{close}"),
+                format!("p{open}2{close}"),
+                "x".into(),
+            ]
+            .iter()
+            .enumerate()
+            {
+                index.insert(n, (0, i));
+            }
+            index.insert("x", (1, 0));
+            index.insert("y", (1, 1));
+            index
+        };
+        let rapid = Naming {
+            open: '{',
+            close: '}',
+            arrays: ArrayReach::WhenUndeclared,
+            scope: Scope::OwnFileFirst,
+        };
+        let krl = Naming {
+            open: '[',
+            close: ']',
+            arrays: ArrayReach::WhenIndexComputed,
+            scope: Scope::Program,
+        };
+        let reach = |naming: &Naming, exported: &dyn Fn(TargetAt) -> bool, file, key| {
+            let mut out = Vec::new();
+            lookup(naming, &index(naming.open), exported, file, key, &mut out);
+            out
+        };
+        let all = |_: TargetAt| true;
+        let only_y = |t: TargetAt| t == (1, 1);
+        // RAPID: the whole array, an element chosen at run time, an undeclared element.
+        assert_eq!(reach(&rapid, &all, 0, "P"), [(0, 0), (0, 1)]);
+        assert_eq!(reach(&rapid, &all, 0, "P{I}"), [(0, 0), (0, 1)]);
+        assert_eq!(reach(&rapid, &all, 0, "P{9}"), [(0, 0), (0, 1)]);
+        assert_eq!(reach(&rapid, &all, 0, "P{2}"), [(0, 1)]);
+        // The file's own `X` hides file 1's; from file 2, only exported declarations are seen.
+        assert_eq!(reach(&rapid, &all, 0, "X"), [(0, 2)]);
+        assert_eq!(reach(&rapid, &all, 2, "X"), [(0, 2), (1, 0)]);
+        assert_eq!(reach(&rapid, &only_y, 2, "X"), Vec::<TargetAt>::new());
+        assert_eq!(reach(&rapid, &only_y, 2, "Y"), [(1, 1)]);
+        // KRL: a literal index is that element only, a computed one every element; the whole
+        // array is no declaration; every file's `X` is seen.
+        assert_eq!(reach(&krl, &all, 0, "P[9]"), Vec::<TargetAt>::new());
+        assert_eq!(reach(&krl, &all, 0, "P[I+1]"), [(0, 0), (0, 1)]);
+        assert_eq!(reach(&krl, &all, 0, "P"), Vec::<TargetAt>::new());
+        assert_eq!(reach(&krl, &all, 0, "X"), [(0, 2), (1, 0)]);
+    }
 }
