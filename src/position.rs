@@ -173,13 +173,16 @@ impl CartesianFields {
     }
 }
 
-/// A robot configuration as written.
+/// A robot configuration as written, by convention (the dialect says which its targets
+/// write; [`Dialect::configuration_of`](crate::dialect::Dialect::configuration_of)).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Config {
-    /// ABB `[cf1, cf4, cf6, cfx]`.
-    Abb([Option<NumField>; 4]),
-    /// KUKA Status and Turn.
-    Kuka {
+    /// Axis quadrants `[cf1, cf4, cf6, cfx]`: the quarter turn axes 1, 4 and 6 are in, and the
+    /// arm configuration number (ABB `confdata`).
+    Quadrants([Option<NumField>; 4]),
+    /// Status and Turn bits: the arm configuration, and which axes are negative (KUKA `S`,
+    /// `T`).
+    StatusTurn {
         /// `S`, when written.
         status: Option<BitField>,
         /// `T`, when written.

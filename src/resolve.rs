@@ -1,20 +1,234 @@
-//! The part of usage resolution that both languages share, over language-neutral facts that
-//! each language's extractor reports: how deep calls are followed, and which targets and frames
-//! the program computes when it runs (and so no offline transform can correct).
+//! Usage resolution for every language, over language-neutral facts that each language's
+//! extractor reports: the declarations of each file (name, scope, kind), its routines and their
+//! parameters, the instructions that use targets (the frame, tool and stationary-tool mode they
+//! move with, the arguments they pass, the references they make) and the values the program
+//! computes when it runs. This pass looks the references up among the program's declarations,
+//! follows targets through routine parameters, and records each target's [`Usage`].
 //!
-//! A language finds its facts in its own syntax (RAPID `p10 := CRobT()`, KRL `XP1 = $POS_ACT`);
-//! this pass looks them up among the program's declarations (array elements under the array's
-//! name, a file's own declarations before the other files') and marks the targets' [`Usage`].
+//! A language finds its facts in its own syntax (RAPID reads the frame from `\WObj:=`, KRL
+//! from program order: `$BASE=…`, `FDAT_ACT`, `BAS(#BASE,n)`) and says how its names reach
+//! declarations ([`Naming`]: the array bracket, when an element reference reaches the whole
+//! array, whether a file's own declarations hide the others').
 //!
 //! [`Usage`]: crate::position::Usage
 
-use crate::names::{NameIndex, fold};
+use crate::names::{NameIndex, NameKey, NameMap, fold, fold_into};
 use crate::position::{FrameDecl, Position, RunTimeValue};
+use crate::syntax::Span;
 
 /// How many calls deep a routine's effects on its callers are followed (a target passed on
 /// through RAPID routine parameters, a KRL subroutine that sets the base): deeper chains and
 /// cycles stop here.
 pub(crate) const CALL_DEPTH: usize = 16;
+
+/// How a language's references reach its declarations.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Naming {
+    /// The brackets of an array index (`{`…`}` RAPID, `[`…`]` KRL).
+    pub(crate) open: char,
+    /// See [`open`](Naming::open).
+    pub(crate) close: char,
+    /// When a reference reaches every element of an array.
+    pub(crate) arrays: ArrayReach,
+    /// Which files' declarations a reference sees.
+    pub(crate) scope: Scope,
+}
+
+/// When a reference reaches every element of an array.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ArrayReach {
+    /// A name not declared as written (the whole array `pArr`, an element chosen at run time
+    /// `pArr{i}`) reaches every element of the array it names or indexes (RAPID).
+    WhenUndeclared,
+    /// A name reaches its declaration, and an index that is not a literal (`P[I]`, `P[I+1,2]`)
+    /// every element of the array as well (KRL).
+    WhenIndexComputed,
+}
+
+/// Which files' declarations a reference sees.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Scope {
+    /// The file's own declarations hide the other files'; of those, only the exported ones are
+    /// seen (RAPID: routine and `LOCAL` data is private to its module).
+    OwnFileFirst,
+    /// Every declaration of the program (the two files of a KRL `.src`/`.dat` pair).
+    Program,
+}
+
+/// What a declared name is, as far as finding a motion's arguments goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum DeclKind {
+    /// A tool (RAPID `tooldata`).
+    Tool,
+    /// A zone (RAPID `zonedata`).
+    Zone,
+    /// A speed (RAPID `speeddata`).
+    Speed,
+    /// Anything else (a routine, a number, a target).
+    Other,
+}
+
+/// A declared name of a file.
+#[derive(Clone, Debug)]
+pub(crate) struct Declaration {
+    /// The name in the file's source.
+    pub(crate) name: Span,
+    /// What it declares.
+    pub(crate) kind: DeclKind,
+    /// Declared at file (module) level, where a second declaration of the name is an error.
+    pub(crate) file_scope: bool,
+}
+
+/// A name declared twice at file level.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Duplicate {
+    /// The file (index into the program's files).
+    pub(crate) file: usize,
+    /// The second declaration.
+    pub(crate) again: Span,
+    /// The first.
+    pub(crate) first: Span,
+}
+
+/// The kinds of the program's declared names (names compared as the languages compare them),
+/// and the names a file declares twice at file level. `files` gives each file's source and
+/// declarations, in program order; a later declaration of a kind other than
+/// [`DeclKind::Other`] wins.
+pub(crate) fn declarations<'s, 'd>(
+    files: impl IntoIterator<Item = (&'s [u8], &'d [Declaration])>,
+) -> (NameMap<NameKey<'s>, DeclKind>, Vec<Duplicate>) {
+    let mut kinds: NameMap<NameKey<'s>, DeclKind> = NameMap::default();
+    let mut twice = Vec::new();
+    for (file, (src, decls)) in files.into_iter().enumerate() {
+        let mut seen: NameMap<NameKey<'s>, Span> =
+            NameMap::with_capacity_and_hasher(decls.len(), Default::default());
+        for d in decls {
+            let k = NameKey(d.name.slice(src));
+            if d.kind != DeclKind::Other {
+                kinds.insert(k, d.kind);
+            }
+            if !d.file_scope {
+                continue;
+            }
+            match seen.get(&k) {
+                Some(&first) => twice.push(Duplicate {
+                    file,
+                    again: d.name,
+                    first,
+                }),
+                None => {
+                    seen.insert(k, d.name);
+                }
+            }
+        }
+    }
+    (kinds, twice)
+}
+
+/// A routine of a file that takes targets through its required parameters.
+#[derive(Clone, Debug)]
+pub(crate) struct Routine {
+    /// Its name in the file's source.
+    pub(crate) name: Span,
+    /// Private to its file (RAPID `LOCAL`).
+    pub(crate) local: bool,
+    /// Its required parameters' names, in the order a call's positional arguments bind to them.
+    pub(crate) params: Vec<Span>,
+}
+
+/// An instruction that uses targets: a motion (or a call that passes targets on) with the frame
+/// and tool it moves with. It borrows what it references: a language builds one as it goes and
+/// hands it to [`Binder::bind`].
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Use<'a> {
+    /// 1-based line of the instruction.
+    pub(crate) line: usize,
+    /// The routine it is written in (index into the file's routines).
+    pub(crate) routine: Option<usize>,
+    /// The routine it calls, by name in the file's source; a routine of the program takes the
+    /// arguments its parameters bind to.
+    pub(crate) callee: Option<Span>,
+    /// The work object or base, as the language names it (`wobj0`, `BASE_DATA[3]`).
+    pub(crate) frame: Option<String>,
+    /// The tool, as the language names it.
+    pub(crate) tool: Option<String>,
+    /// A stationary-tool motion (RAPID `robhold TRUE`, KRL `IPO_FRAME #TCP`).
+    pub(crate) stationary: bool,
+    /// The frame is computed when the program runs: every target reached is, too.
+    pub(crate) run_time: Option<RunTimeValue>,
+    /// Positional arguments, in order, that are plain references (`None` for any other
+    /// expression), in the file's source.
+    pub(crate) args: &'a [Option<Span>],
+    /// Further references in the file's source (RAPID `Offs`/`RelTool` first arguments).
+    pub(crate) refs: &'a [Span],
+    /// Further references already [`fold`]ed (KRL: a motion's target and what it was copied
+    /// from).
+    pub(crate) folded: &'a [&'a str],
+    /// Targets of the same file reached directly (inline literals), by index.
+    pub(crate) targets: &'a [usize],
+}
+
+/// One file of a program as this pass sees it.
+pub(crate) struct FileFacts<'a> {
+    /// The bytes every span of the file's facts points into.
+    pub(crate) src: &'a [u8],
+    /// Its targets (their usage is recorded here).
+    pub(crate) positions: &'a mut [Position],
+    /// Per target, whether other files see it (`None`: all are seen).
+    pub(crate) exported: Option<&'a [bool]>,
+    /// Its frame declarations.
+    pub(crate) frames: &'a [FrameDecl],
+    /// Its routines.
+    pub(crate) routines: &'a [Routine],
+    /// Its run-time assignments.
+    pub(crate) assignments: &'a [Assignment],
+}
+
+/// Where a target is: (file, index into its positions).
+type TargetAt = (usize, usize);
+
+/// A routine's required parameter: (file, routine, parameter index).
+type ParamAt = (usize, usize, usize);
+
+/// `BASEPOS` for `BASEPOS[I]`, `P[I+1,2]`: an element chosen at run time, which may be any
+/// element of the array. `None` for a name or a literal index (`P[3]`).
+fn computed_index_array<'k>(naming: &Naming, key: &'k str) -> Option<&'k str> {
+    let (array, rest) = key.split_once(naming.open)?;
+    let index = rest.strip_suffix(naming.close)?;
+    let literal = index.bytes().all(|b| b.is_ascii_digit() || b == b',');
+    (!literal).then_some(array)
+}
+
+/// Where a folded reference in `file` points among `index`'s names, added to `out`
+/// (`exported` says whether a target is seen outside its file).
+fn lookup(
+    naming: &Naming,
+    index: &NameIndex<TargetAt>,
+    exported: &dyn Fn(TargetAt) -> bool,
+    file: usize,
+    key: &str,
+    out: &mut Vec<TargetAt>,
+) {
+    let exact = index.exact(key);
+    let (named, elements) = match naming.arrays {
+        ArrayReach::WhenUndeclared => match exact {
+            [] => (index.elements(index.array_of(key).unwrap_or(key)), &[][..]),
+            hits => (hits, &[][..]),
+        },
+        ArrayReach::WhenIndexComputed => (
+            exact,
+            computed_index_array(naming, key).map_or(&[][..], |a| index.elements(a)),
+        ),
+    };
+    let hits = named.iter().chain(elements).copied();
+    match naming.scope {
+        Scope::Program => out.extend(hits),
+        Scope::OwnFileFirst => {
+            let own = hits.clone().any(|h| h.0 == file);
+            out.extend(hits.filter(|&h| if own { h.0 == file } else { exported(h) }));
+        }
+    }
+}
 
 /// The uses reached from routine parameter `from`: its own uses, then those of every parameter
 /// it is passed on to (`edges`: an argument of a call in the routine that names the parameter),
@@ -57,39 +271,271 @@ pub(crate) struct Assignment {
     pub(crate) line: usize,
 }
 
-/// One file of a program as this pass sees it: its targets (marked here), its frame
-/// declarations and its run-time assignments.
-pub(crate) struct FileFacts<'a> {
-    pub(crate) positions: &'a mut [Position],
-    pub(crate) frames: &'a [FrameDecl],
-    pub(crate) assignments: &'a [Assignment],
+/// What a use gives the targets it reaches: the frame and tool it moves with.
+#[derive(Clone, Debug)]
+struct MovesWith {
+    frame: Option<String>,
+    tool: Option<String>,
+    stationary: bool,
+    run_time: Option<RunTimeValue>,
 }
 
-/// Where a folded reference points among `index`'s names: the declaration itself, else (an
-/// element chosen at run time `pArr{i}`, or the whole array `pArr`) every element of the
-/// array; the file's own declarations hide the other files'.
-fn lookup(index: &NameIndex<(usize, usize)>, file: usize, key: &str) -> Vec<(usize, usize)> {
-    let hits = match index.exact(key) {
-        [] => index.elements(index.array_of(key).unwrap_or(key)),
-        hits => hits,
-    };
-    let own = hits.iter().any(|h| h.0 == file);
-    hits.iter()
-        .copied()
-        .filter(|h| !own || h.0 == file)
-        .collect()
+impl MovesWith {
+    fn of(u: &Use<'_>) -> MovesWith {
+        MovesWith {
+            frame: u.frame.clone(),
+            tool: u.tool.clone(),
+            stationary: u.stationary,
+            run_time: u.run_time.clone(),
+        }
+    }
+}
+
+/// Records one use at `line` with `frame`, `tool`, `stationary` and `run_time` in target `at`.
+#[allow(clippy::too_many_arguments)]
+fn record(
+    files: &mut [FileFacts<'_>],
+    (m, i): TargetAt,
+    frame: Option<&str>,
+    tool: Option<&str>,
+    stationary: bool,
+    run_time: Option<&RunTimeValue>,
+    line: usize,
+) {
+    if let Some(p) = files.get_mut(m).and_then(|f| f.positions.get_mut(i)) {
+        p.usage.record(frame, tool, stationary, line);
+        if let Some(why) = run_time {
+            p.usage.set_run_time(why.clone());
+        }
+    }
+}
+
+/// Binds the uses of a program (its files in `files`) to the targets they reach and records
+/// their [`Usage`](crate::position::Usage), one use at a time ([`Binder::bind`]), so a
+/// language that finds its uses in order need not keep them; [`Binder::finish`] then follows
+/// the targets passed to routine parameters.
+///
+/// A reference is looked up as the [`Naming`] says; an argument bound to a required parameter
+/// of a routine of the program makes the target used as that routine uses the parameter
+/// (directly, through a reference, or passed on to another routine: followed [`CALL_DEPTH`]
+/// calls deep, cycles cut). A routine is found among the file's own first, else among the
+/// other files' that are not local.
+pub(crate) struct Binder<'f, 'a> {
+    files: &'f mut [FileFacts<'a>],
+    naming: Naming,
+    index: NameIndex<TargetAt>,
+    param_uses: std::collections::HashMap<ParamAt, Vec<MovesWith>>,
+    param_edges: std::collections::HashMap<ParamAt, Vec<ParamAt>>,
+    bindings: Vec<(TargetAt, ParamAt, usize)>,
+    buf: String,
+    targets: Vec<TargetAt>,
+    params: Vec<ParamAt>,
+    hits: Vec<TargetAt>,
+}
+
+impl<'f, 'a> Binder<'f, 'a> {
+    /// A binder over the targets of `files` (indexed once).
+    pub(crate) fn new(files: &'f mut [FileFacts<'a>], naming: &Naming) -> Binder<'f, 'a> {
+        let total: usize = files.iter().map(|f| f.positions.len()).sum();
+        let mut index: NameIndex<TargetAt> = NameIndex::new(naming.open, total);
+        for (m, f) in files.iter().enumerate() {
+            for (i, p) in f.positions.iter().enumerate() {
+                if let Some(n) = &p.name {
+                    index.insert(n, (m, i));
+                }
+            }
+        }
+        Binder {
+            files,
+            naming: *naming,
+            index,
+            param_uses: Default::default(),
+            param_edges: Default::default(),
+            bindings: Vec::new(),
+            buf: String::new(),
+            targets: Vec::new(),
+            params: Vec::new(),
+            hits: Vec::new(),
+        }
+    }
+
+    /// The targets of file `file`, as the binder sees them.
+    pub(crate) fn positions(&self, file: usize) -> &[Position] {
+        self.files.get(file).map_or(&[], |f| &*f.positions)
+    }
+
+    /// Binds use `u` of file `m`: records it in every target it reaches now, and keeps what it
+    /// passes to routine parameters for [`Binder::finish`]. Returns whether it reaches a
+    /// Cartesian target directly (a joint target moves the same whatever the frame).
+    pub(crate) fn bind(&mut self, m: usize, u: &Use<'_>) -> bool {
+        let Binder {
+            files,
+            naming,
+            index,
+            param_uses,
+            param_edges,
+            bindings,
+            buf,
+            targets,
+            params,
+            hits,
+        } = self;
+        let naming = &*naming;
+        targets.clear();
+        params.clear();
+        targets.extend(u.targets.iter().map(|&i| (m, i)));
+        {
+            let files: &[FileFacts<'a>] = files;
+            let Some(f) = files.get(m) else {
+                return false;
+            };
+            let src = f.src;
+            let exported = |(m, i): TargetAt| {
+                files.get(m).is_some_and(|f| {
+                    f.exported
+                        .is_none_or(|e| e.get(i).copied().unwrap_or(false))
+                })
+            };
+            // Routines by name: the file's own first, else those of the program that are not
+            // local.
+            let routine_of = |name: NameKey<'_>| -> Option<(usize, usize)> {
+                let find = |m2: usize, any: bool| {
+                    let f = files.get(m2)?;
+                    f.routines
+                        .iter()
+                        .position(|r| (any || !r.local) && NameKey(r.name.slice(f.src)) == name)
+                        .map(|r| (m2, r))
+                };
+                find(m, true).or_else(|| {
+                    (0..files.len())
+                        .filter(|&m2| m2 != m)
+                        .find_map(|m2| find(m2, false))
+                })
+            };
+            // The required parameter of the enclosing routine a reference names, if any.
+            let param_of = |key: &str| -> Option<ParamAt> {
+                let rt = u.routine?;
+                let base = key.split_once(naming.open).map_or(key, |(a, _)| a);
+                f.routines
+                    .get(rt)?
+                    .params
+                    .iter()
+                    .position(|&name| NameKey(name.slice(src)) == NameKey(base.as_bytes()))
+                    .map(|k| (m, rt, k))
+            };
+            let reach =
+                |key: &str, targets: &mut Vec<TargetAt>, params: &mut Vec<ParamAt>| match param_of(
+                    key,
+                ) {
+                    Some(p) => params.push(p),
+                    None => lookup(naming, index, &exported, m, key, targets),
+                };
+            let callee = u.callee.and_then(|c| routine_of(NameKey(c.slice(src))));
+            for (i, sp) in u.args.iter().enumerate() {
+                let Some(sp) = *sp else { continue };
+                let key = fold_into(buf, sp.slice(src));
+                match callee {
+                    // An argument bound to a parameter of a routine of the program: used as
+                    // that routine uses the parameter.
+                    Some((cm, cr))
+                        if files
+                            .get(cm)
+                            .and_then(|c| c.routines.get(cr))
+                            .is_some_and(|r| i < r.params.len()) =>
+                    {
+                        let to = (cm, cr, i);
+                        match param_of(key) {
+                            Some(p) => param_edges.entry(p).or_default().push(to),
+                            None => {
+                                hits.clear();
+                                lookup(naming, index, &exported, m, key, hits);
+                                bindings.extend(hits.iter().map(|&t| (t, to, u.line)));
+                            }
+                        }
+                    }
+                    _ => reach(key, targets, params),
+                }
+            }
+            for &sp in u.refs {
+                reach(fold_into(buf, sp.slice(src)), targets, params);
+            }
+            for &key in u.folded {
+                reach(key, targets, params);
+            }
+        }
+        if targets.is_empty() && params.is_empty() {
+            return false;
+        }
+        targets.sort_unstable();
+        targets.dedup();
+        let mut cartesian = false;
+        for &t in targets.iter() {
+            record(
+                files,
+                t,
+                u.frame.as_deref(),
+                u.tool.as_deref(),
+                u.stationary,
+                u.run_time.as_ref(),
+                u.line,
+            );
+            cartesian |= files
+                .get(t.0)
+                .and_then(|f| f.positions.get(t.1))
+                .is_some_and(|p| p.cartesian.is_some());
+        }
+        for &p in params.iter() {
+            param_uses.entry(p).or_default().push(MovesWith::of(u));
+        }
+        cartesian
+    }
+
+    /// Records, in every target passed to a routine parameter, every use reachable from that
+    /// parameter, with the line of the call that passes the target.
+    pub(crate) fn finish(self) {
+        let Binder {
+            files,
+            param_uses,
+            param_edges,
+            bindings,
+            ..
+        } = self;
+        for (t, to, line) in bindings {
+            for w in uses_through_parameters(to, &param_uses, &param_edges) {
+                let (frame, tool) = (w.frame.as_deref(), w.tool.as_deref());
+                record(
+                    files,
+                    t,
+                    frame,
+                    tool,
+                    w.stationary,
+                    w.run_time.as_ref(),
+                    line,
+                );
+            }
+        }
+    }
 }
 
 /// Marks [`Usage::run_time`](crate::position::Usage) of every target of the program (its
 /// files in `files`) whose pose is only known at run time: a target the program assigns a
 /// computed value, then a target a motion uses with a work object or base the program
-/// assigns one. `open` is the bracket of an array index (`{` RAPID, `[` KRL).
-pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], open: char) {
+/// assigns one. An assignment reaches a declaration of its name, else every element of the
+/// array it names or indexes, the file's own declarations first (whether exported or not: the
+/// assignment changes the data wherever it is declared), in `naming`'s array brackets.
+pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
     if files.iter().all(|f| f.assignments.is_empty()) {
         return;
     }
-    let mut targets: NameIndex<(usize, usize)> = NameIndex::new(open, 0);
-    let mut frames: NameIndex<(usize, usize)> = NameIndex::new(open, 0);
+    let naming = Naming {
+        arrays: ArrayReach::WhenUndeclared,
+        scope: Scope::OwnFileFirst,
+        ..*naming
+    };
+    let seen = |_: TargetAt| true;
+    let mut hits = Vec::new();
+    let mut targets: NameIndex<TargetAt> = NameIndex::new(naming.open, 0);
+    let mut frames: NameIndex<TargetAt> = NameIndex::new(naming.open, 0);
     for (fi, f) in files.iter().enumerate() {
         for (i, p) in f.positions.iter().enumerate() {
             if let Some(n) = &p.name {
@@ -106,10 +552,12 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], open: char) {
     for (fi, f) in files.iter().enumerate() {
         for a in f.assignments {
             let key = fold(&a.name);
-            for (tf, ti) in lookup(&targets, fi, &key) {
-                assigned_targets.push((tf, ti, a.line));
-            }
-            for (df, di) in lookup(&frames, fi, &key) {
+            hits.clear();
+            lookup(&naming, &targets, &seen, fi, &key, &mut hits);
+            assigned_targets.extend(hits.iter().map(|&(tf, ti)| (tf, ti, a.line)));
+            hits.clear();
+            lookup(&naming, &frames, &seen, fi, &key, &mut hits);
+            for &(df, di) in &hits {
                 if let Some(d) = files.get(df).and_then(|f| f.frames.get(di)) {
                     assigned_frames
                         .entry(fold(&d.name))
@@ -168,5 +616,63 @@ mod tests {
         assert_eq!(found, [&"a", &"b"]);
         assert!(uses_through_parameters(10, &uses, &edges).is_empty());
         assert_eq!(uses_through_parameters(11, &uses, &edges), [&"deep"]);
+    }
+
+    #[test]
+    fn each_naming_reaches_arrays_and_other_files_as_its_language_does() {
+        // File 0 declares `P{1}`, `P{2}` (RAPID) / `P[1]`, `P[2]` (KRL) and `X`; file 1 declares
+        // `X` and `Y`; file 2 (the one looking) declares nothing.
+        let index = |open: char| {
+            let mut index: NameIndex<TargetAt> = NameIndex::new(open, 0);
+            let close = if open == '{' { '}' } else { ']' };
+            for (i, n) in [
+                format!("p{open}1{close}"),
+                format!("p{open}2{close}"),
+                "x".into(),
+            ]
+            .iter()
+            .enumerate()
+            {
+                index.insert(n, (0, i));
+            }
+            index.insert("x", (1, 0));
+            index.insert("y", (1, 1));
+            index
+        };
+        let rapid = Naming {
+            open: '{',
+            close: '}',
+            arrays: ArrayReach::WhenUndeclared,
+            scope: Scope::OwnFileFirst,
+        };
+        let krl = Naming {
+            open: '[',
+            close: ']',
+            arrays: ArrayReach::WhenIndexComputed,
+            scope: Scope::Program,
+        };
+        let reach = |naming: &Naming, exported: &dyn Fn(TargetAt) -> bool, file, key| {
+            let mut out = Vec::new();
+            lookup(naming, &index(naming.open), exported, file, key, &mut out);
+            out
+        };
+        let all = |_: TargetAt| true;
+        let only_y = |t: TargetAt| t == (1, 1);
+        // RAPID: the whole array, an element chosen at run time, an undeclared element.
+        assert_eq!(reach(&rapid, &all, 0, "P"), [(0, 0), (0, 1)]);
+        assert_eq!(reach(&rapid, &all, 0, "P{I}"), [(0, 0), (0, 1)]);
+        assert_eq!(reach(&rapid, &all, 0, "P{9}"), [(0, 0), (0, 1)]);
+        assert_eq!(reach(&rapid, &all, 0, "P{2}"), [(0, 1)]);
+        // The file's own `X` hides file 1's; from file 2, only exported declarations are seen.
+        assert_eq!(reach(&rapid, &all, 0, "X"), [(0, 2)]);
+        assert_eq!(reach(&rapid, &all, 2, "X"), [(0, 2), (1, 0)]);
+        assert_eq!(reach(&rapid, &only_y, 2, "X"), Vec::<TargetAt>::new());
+        assert_eq!(reach(&rapid, &only_y, 2, "Y"), [(1, 1)]);
+        // KRL: a literal index is that element only, a computed one every element; the whole
+        // array is no declaration; every file's `X` is seen.
+        assert_eq!(reach(&krl, &all, 0, "P[9]"), Vec::<TargetAt>::new());
+        assert_eq!(reach(&krl, &all, 0, "P[I+1]"), [(0, 0), (0, 1)]);
+        assert_eq!(reach(&krl, &all, 0, "P"), Vec::<TargetAt>::new());
+        assert_eq!(reach(&krl, &all, 0, "X"), [(0, 2), (1, 0)]);
     }
 }

@@ -300,17 +300,11 @@ fn check_stamps(
 /// A `correct` also records the A of each KUKA target written at B = ±90° (`gimbal=`), so a
 /// `zero` can give back the split the file had.
 fn stamp_results(
-    programs: &[Program],
+    lock_splits: &[(PathBuf, stamp::LockSplits)],
     results: &mut [ProgramResult],
     prov: &Provenance,
     out: &OutputArgs,
 ) {
-    let parsed = |path: &Path| {
-        programs
-            .iter()
-            .flat_map(|p| &p.files)
-            .find(|f| f.path == path)
-    };
     for f in results.iter_mut().flat_map(|r| r.files.iter_mut()) {
         if !f.changed() {
             continue;
@@ -339,10 +333,8 @@ fn stamp_results(
         }
         let mut s = prov.stamp.clone();
         s.widened = carried.widened;
-        if prov.stamp.command == "correct"
-            && let Some(file) = parsed(&f.path)
-        {
-            s.gimbal = stamp::LockSplits::of(file);
+        if let Some((_, splits)) = lock_splits.iter().find(|(p, _)| *p == f.path) {
+            s.gimbal = splits.clone();
         }
         if let Some(stamped) = stamp::write(&f.output, d, &s) {
             f.output = stamped;
@@ -933,6 +925,16 @@ fn run_each(
     } else {
         indicatif::ProgressBar::hidden()
     };
+    // What the stamps need of the models, taken before the models are handed over.
+    let lock_splits: Vec<(PathBuf, stamp::LockSplits)> = if prov.stamp.command == "correct" {
+        programs
+            .iter()
+            .flat_map(|p| &p.files)
+            .map(|f| (f.path.clone(), stamp::LockSplits::of(f)))
+            .collect()
+    } else {
+        Vec::new()
+    };
     let mut results = Vec::new();
     // Each program is handed over: a transform keeps only the sources and its edits, so the
     // model of a large program is gone before its outputs are built.
@@ -941,7 +943,7 @@ fn run_each(
         bar.inc(1);
     }
     bar.finish_and_clear();
-    stamp_results(&programs, &mut results, prov, out);
+    stamp_results(&lock_splits, &mut results, prov, out);
     drop_untouched_config(&mut results, robot.and_then(|r| r.config_dat.as_deref()));
     for cfg in other_configs {
         drop_untouched_config(&mut results, *cfg);

@@ -41,6 +41,10 @@ const TURN_A1_A4_A6: u32 = 0b10_1001;
 const VOCABULARY: Vocabulary = Vocabulary {
     frame_column: "base",
     frames: "bases",
+    frame: "base",
+    // A base on an external kinematic (a positioner) is `BASE_DATA[n]` with its
+    // `MACHINE_FRAME_DAT[n]` naming the kinematic (`MACH_IDX`), or `$BASE = EK(…)`.
+    moved_frame: "MACHINE_FRAME_DAT: an external kinematic",
     tool_kind: "tool",
     stationary_tool: "IPO_FRAME #TCP",
     world_frames: &["base_data[0]", "$nullframe", "$world"],
@@ -209,17 +213,14 @@ impl Dialect for Krl {
         format!("E{}", index + 1)
     }
 
+    /// KRL writes Status and Turn (`S 6, T 27`).
     fn configuration_of(&self, kin: &Kinematics, j: &Joints) -> ConfigValue {
-        let (status, turn) = crate::kinematics::kuka::status_turn_of(kin, j);
-        ConfigValue::Kuka {
-            status: Some(status),
-            turn: Some(turn),
-        }
+        ConfigValue::status_turn_of(kin, j)
     }
 
     /// A mirror-image arm: the Turn bits of A1, A4 and A6 toggled; Status unchanged.
     fn mirror_config(&self, config: &Config) -> Vec<Edit> {
-        let Config::Kuka { turn, .. } = config else {
+        let Config::StatusTurn { turn, .. } = config else {
             return Vec::new();
         };
         turn.as_ref()

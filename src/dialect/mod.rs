@@ -25,6 +25,11 @@ pub struct Vocabulary {
     pub frame_column: &'static str,
     /// The same in a sentence, plural: `work objects`, `bases`.
     pub frames: &'static str,
+    /// The same in a sentence, singular: `work object`, `base`.
+    pub frame: &'static str,
+    /// The setting that makes such a frame one a mechanical unit moves (so it is not where the
+    /// track puts it): `ufprog FALSE`, `MACHINE_FRAME_DAT: an external kinematic`.
+    pub moved_frame: &'static str,
     /// The data type of a tool declaration: `tooldata`, `tool`.
     pub tool_kind: &'static str,
     /// The setting that makes a target a stationary-tool point: `robhold TRUE`,
@@ -123,10 +128,11 @@ pub trait Dialect: Sync + 'static {
     /// the axes that change sign under a mirror, 1, 4 and 6, the other way).
     fn mirror_config(&self, config: &Config) -> Vec<Edit>;
 
-    /// The configuration the language writes for an arm at joints `j` (ABB `confdata`, KUKA
-    /// Status and Turn). A dialect without one of its own writes ABB's quadrant convention.
+    /// The configuration the language writes for an arm at joints `j`, in the convention its
+    /// targets hold ([`Config`]: axis quadrants as ABB `confdata`, Status and Turn bits as
+    /// KUKA `S`/`T`). A dialect without one of its own writes axis quadrants.
     fn configuration_of(&self, kin: &Kinematics, j: &Joints) -> ConfigValue {
-        ConfigValue::Abb(crate::kinematics::abb::config_of(kin, j))
+        ConfigValue::quadrants_of(kin, j)
     }
 }
 

@@ -32,6 +32,8 @@ impl PositionKind {
 const VOCABULARY: Vocabulary = Vocabulary {
     frame_column: "wobj",
     frames: "work objects",
+    frame: "work object",
+    moved_frame: "ufprog FALSE",
     tool_kind: "tooldata",
     stationary_tool: "robhold TRUE",
     world_frames: &["wobj0"],
@@ -141,7 +143,7 @@ impl Dialect for Rapid {
 
     /// A mirror-image arm: `cf1, cf4, cf6 → -cf - 1` (the quadrant counted the other way).
     fn mirror_config(&self, config: &Config) -> Vec<Edit> {
-        let Config::Abb(cf) = config else {
+        let Config::Quadrants(cf) = config else {
             return Vec::new();
         };
         cf.iter()

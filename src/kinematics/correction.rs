@@ -154,7 +154,7 @@ pub fn check_target(
     }
     let other = nearest(&mut within.iter().copied()).unwrap_or(all_after[0]);
     let language_of = |c: Option<&ConfigValue>| match c {
-        Some(ConfigValue::Kuka { .. }) => crate::position::Language::Krl,
+        Some(ConfigValue::StatusTurn { .. }) => crate::position::Language::Krl,
         _ => crate::position::Language::Rapid,
     };
     let lang = language_of(written);

@@ -27,10 +27,10 @@ use crate::position::{Config, Language};
 /// A configuration as numbers: what a target writes, or what IK finds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ConfigValue {
-    /// ABB `[cf1, cf4, cf6, cfx]`.
-    Abb([i32; 4]),
-    /// KUKA Status and Turn (either may be absent in a program).
-    Kuka {
+    /// Axis quadrants `[cf1, cf4, cf6, cfx]` (ABB `confdata`).
+    Quadrants([i32; 4]),
+    /// Status and Turn bits (KUKA `S`, `T`; either may be absent in a program).
+    StatusTurn {
         /// The Status bits (`S`): the arm configuration (`docs/design.md §10`).
         status: Option<u32>,
         /// The Turn bits (`T`): bit i set when axis A(i+1) is negative.
@@ -42,7 +42,7 @@ impl ConfigValue {
     /// The configuration a target writes, if it writes one with numeric fields.
     pub fn written(config: &Config) -> Option<ConfigValue> {
         match config {
-            Config::Abb(f) => {
+            Config::Quadrants(f) => {
                 let mut out = [0; 4];
                 for (o, f) in out.iter_mut().zip(f) {
                     let v = f.as_ref()?.value();
@@ -51,10 +51,10 @@ impl ConfigValue {
                     }
                     *o = v as i32;
                 }
-                Some(ConfigValue::Abb(out))
+                Some(ConfigValue::Quadrants(out))
             }
-            Config::Kuka { status, turn } if status.is_some() || turn.is_some() => {
-                Some(ConfigValue::Kuka {
+            Config::StatusTurn { status, turn } if status.is_some() || turn.is_some() => {
+                Some(ConfigValue::StatusTurn {
                     status: status.as_ref().map(|b| b.value),
                     turn: turn.as_ref().map(|b| b.value),
                 })
@@ -63,7 +63,8 @@ impl ConfigValue {
         }
     }
 
-    /// The configuration of joints `j` in `language`'s terms.
+    /// The configuration of joints `j` in `language`'s terms (the convention its dialect
+    /// writes).
     pub fn of_joints(language: Language, kin: &Kinematics, j: &Joints) -> ConfigValue {
         language.dialect().configuration_of(kin, j)
     }
@@ -71,16 +72,30 @@ impl ConfigValue {
     /// Whether joints `j` are in this configuration.
     pub fn matches(&self, kin: &Kinematics, j: &Joints) -> bool {
         match *self {
-            ConfigValue::Abb(c) => abb::matches(kin, j, c),
-            ConfigValue::Kuka { status, turn } => kuka::matches(kin, j, status, turn),
+            ConfigValue::Quadrants(c) => abb::matches(kin, j, c),
+            ConfigValue::StatusTurn { status, turn } => kuka::matches(kin, j, status, turn),
         }
     }
 
-    /// The same vendor's configuration of joints `j`.
+    /// The configuration of joints `j` in the same convention as this one.
     pub fn solved(&self, kin: &Kinematics, j: &Joints) -> ConfigValue {
         match self {
-            ConfigValue::Abb(_) => ConfigValue::of_joints(Language::Rapid, kin, j),
-            ConfigValue::Kuka { .. } => ConfigValue::of_joints(Language::Krl, kin, j),
+            ConfigValue::Quadrants(_) => ConfigValue::quadrants_of(kin, j),
+            ConfigValue::StatusTurn { .. } => ConfigValue::status_turn_of(kin, j),
+        }
+    }
+
+    /// The axis quadrants of joints `j` ([`ConfigValue::Quadrants`]).
+    pub fn quadrants_of(kin: &Kinematics, j: &Joints) -> ConfigValue {
+        ConfigValue::Quadrants(abb::config_of(kin, j))
+    }
+
+    /// The Status and Turn bits of joints `j`, both written ([`ConfigValue::StatusTurn`]).
+    pub fn status_turn_of(kin: &Kinematics, j: &Joints) -> ConfigValue {
+        let (status, turn) = kuka::status_turn_of(kin, j);
+        ConfigValue::StatusTurn {
+            status: Some(status),
+            turn: Some(turn),
         }
     }
 }
@@ -89,8 +104,8 @@ impl std::fmt::Display for ConfigValue {
     /// ABB `[0,0,-1,0]`, KUKA `S 2 T 10` (decimal, as KRL writes them without `'B…'`).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            ConfigValue::Abb([a, b, c, d]) => write!(f, "[{a},{b},{c},{d}]"),
-            ConfigValue::Kuka { status, turn } => {
+            ConfigValue::Quadrants([a, b, c, d]) => write!(f, "[{a},{b},{c},{d}]"),
+            ConfigValue::StatusTurn { status, turn } => {
                 let mut sep = "";
                 if let Some(s) = status {
                     write!(f, "S {s}")?;

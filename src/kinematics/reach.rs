@@ -262,7 +262,8 @@ fn cartesian(
     };
     let written = ConfigValue::written(&p.config);
     r.config_written = written.map(|c| c.to_string());
-    let wobj = match wobj_of(p, options.default_wobj.as_deref()) {
+    let words = language.dialect().vocabulary();
+    let wobj = match wobj_of(p, options.default_wobj.as_deref(), words) {
         Ok(w) => w,
         Err(why) => return r.not_checked(why.message),
     };

@@ -398,7 +398,7 @@ fn build_position(
         }),
         joints: if joint { f.axes.into() } else { Vec::new() },
         config: match kind {
-            PositionKind::E6Pos | PositionKind::Pos => Config::Kuka {
+            PositionKind::E6Pos | PositionKind::Pos => Config::StatusTurn {
                 status: f.s,
                 turn: f.t,
             },

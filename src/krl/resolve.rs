@@ -1,13 +1,22 @@
 //! Which base and tool each motion of a program uses: program order within each `DEF`, forked
-//! and joined at `IF`/`SWITCH`, over every file of a `.src`/`.dat` pair; the result goes to each
-//! position's [`Usage`].
+//! and joined at `IF`/`SWITCH`, over every file of a `.src`/`.dat` pair. What a motion reaches
+//! (its target, what that was copied from) goes with its base and tool to the shared usage pass
+//! ([`crate::resolve`]), which fills each position's [`Usage`](crate::position::Usage).
 
 use super::positions::{BranchEvent, Event, Facts, Fdat, FrameRef, Ref, Setting, name_key};
-use crate::position::{Config, ParsedFile, PositionKind, RunTimeValue, Usage};
+use crate::position::{Config, ParsedFile, PositionKind, RunTimeValue};
 use crate::syntax::Diagnostic;
 
-use crate::names::NameIndex;
 pub(crate) use crate::names::NameMap as HashMap;
+
+/// How KRL references reach declarations: a name its declaration, an element chosen at run
+/// time (`P[I]`) every element of the array as well, in either file of the pair.
+const NAMING: crate::resolve::Naming = crate::resolve::Naming {
+    open: '[',
+    close: ']',
+    arrays: crate::resolve::ArrayReach::WhenIndexComputed,
+    scope: crate::resolve::Scope::Program,
+};
 
 /// The name trackfix gives a base: `BASE_DATA[n]`, `$WORLD` for base 0.
 pub(crate) fn base_label(r: &FrameRef) -> Option<String> {
@@ -115,18 +124,6 @@ impl State {
     }
 }
 
-/// Resolves base, tool and IPO mode of every motion of a program (files in the same order as
-/// `facts`), fills each used position's [`Usage`], promotes used `FRAME`s and candidate
-/// aggregates to positions, and reports motions whose base stays unknown.
-/// `BASEPOS` for `BASEPOS[I]`, `P[I+1,2]`: an element chosen at run time, which may be any
-/// element of the array. `None` for a name or a literal index (`P[3]`, looked up exactly).
-fn computed_index_array(name: &str) -> Option<&str> {
-    let (array, rest) = name.split_once('[')?;
-    let index = rest.strip_suffix(']')?;
-    let literal = index.bytes().all(|b| b.is_ascii_digit() || b == b',');
-    (!literal).then_some(array)
-}
-
 /// What a routine leaves set when it returns: the base and tool it sets on every path (`None`:
 /// left as the caller had it).
 #[derive(Clone, Default, PartialEq)]
@@ -226,6 +223,11 @@ fn branch(state: &mut State, forks: &mut Vec<Fork>, b: BranchEvent) {
     }
 }
 
+/// Resolves base, tool and IPO mode of every motion of a program (files in the same order as
+/// `facts`) by following program order, hands each motion to the shared usage pass
+/// ([`crate::resolve::Binder`]) to fill the [`Usage`](crate::position::Usage) of the positions
+/// it uses, promotes used `FRAME`s and candidate aggregates to positions, and reports motions
+/// whose base stays unknown.
 pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     let mut fdats: HashMap<String, Fdat> = HashMap::default();
     for f in facts.iter() {
@@ -233,22 +235,8 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             fdats.entry(k.clone()).or_insert_with(|| v.clone());
         }
     }
-    // Where each declared name lives: (file, in candidates?, index); array elements also
-    // under the array's name (`SPTP BASEPOS[I]` may move to any of `BASEPOS[1..n]`).
-    let mut declared_at: NameIndex<(usize, bool, usize)> = NameIndex::new('[', 0);
-    for (fi, (file, fact)) in files.iter().zip(facts.iter()).enumerate() {
-        for (i, p) in file.positions.iter().enumerate() {
-            if let Some(n) = &p.name {
-                declared_at.insert(n, (fi, false, i));
-            }
-        }
-        for (i, p) in fact.candidates.iter().enumerate() {
-            if let Some(n) = &p.name {
-                declared_at.insert(n, (fi, true, i));
-            }
-        }
-    }
-    let mut used_candidates: Vec<Vec<bool>> = facts
+    // Candidates that are positions whether or not a motion uses them.
+    let mut kept: Vec<Vec<bool>> = facts
         .iter()
         .map(|f| vec![false; f.candidates.len()])
         .collect();
@@ -260,13 +248,13 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             declared.entry(k.clone()).or_insert(*v);
         }
     }
-    for (fact, used) in facts.iter_mut().zip(used_candidates.iter_mut()) {
+    for (fact, kept) in facts.iter_mut().zip(kept.iter_mut()) {
         let Facts {
             candidates,
             inferred,
             ..
         } = fact;
-        for ((p, &guessed), u) in candidates.iter_mut().zip(inferred.iter()).zip(used) {
+        for ((p, &guessed), k) in candidates.iter_mut().zip(inferred.iter()).zip(kept) {
             let Some(name) = p.name.as_deref().filter(|_| guessed) else {
                 continue;
             };
@@ -277,135 +265,140 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                 if kind == PositionKind::Frame {
                     p.config = Config::None;
                 } else {
-                    *u = true;
+                    *k = true;
                 }
             }
         }
     }
     let exits = routine_exits(facts, &fdats);
-    for fi in 0..files.len() {
-        let events = facts
-            .get_mut(fi)
-            .map(|f| std::mem::take(&mut f.events))
-            .unwrap_or_default();
-        let mut state = State::default();
-        let mut aliases: HashMap<&str, &str> = HashMap::default();
-        let mut forks: Vec<Fork> = Vec::new();
-        for ev in &events {
-            match ev {
-                Event::Reset(_) => {
-                    state = State::default();
-                    aliases.clear();
-                    forks.clear();
-                }
-                Event::Call(name) => {
-                    if let Some(exit) = exits.get(name) {
-                        exit.apply_to(&mut state);
+    let events: Vec<Vec<Event>> = facts
+        .iter_mut()
+        .map(|f| std::mem::take(&mut f.events))
+        .collect();
+    // The candidates go after each file's positions while the motions are bound: a motion may
+    // use them.
+    let counts: Vec<usize> = files.iter().map(|f| f.positions.len()).collect();
+    for (file, fact) in files.iter_mut().zip(facts.iter_mut()) {
+        file.positions.append(&mut fact.candidates);
+    }
+    // Per file, the motions to warn about: a Cartesian target and no base.
+    let mut unresolved: Vec<Vec<crate::syntax::Span>> = vec![Vec::new(); files.len()];
+    {
+        let (mut bound, lines): (Vec<_>, Vec<_>) =
+            files.iter_mut().map(|f| shared_facts(f, &[])).unzip();
+        let mut binder = crate::resolve::Binder::new(&mut bound, &NAMING);
+        for (fi, events) in events.into_iter().enumerate() {
+            // The targets and names of a motion, buffers reused from motion to motion.
+            let mut targets: Vec<usize> = Vec::new();
+            let mut folded: Vec<&str> = Vec::new();
+            let own = counts.get(fi).copied().unwrap_or_default();
+            let mut state = State::default();
+            let mut aliases: HashMap<&str, &str> = HashMap::default();
+            let mut forks: Vec<Fork> = Vec::new();
+            for ev in &events {
+                match ev {
+                    Event::Reset(_) => {
+                        state = State::default();
+                        aliases.clear();
+                        forks.clear();
                     }
-                }
-                Event::Branch(b) => branch(&mut state, &mut forks, *b),
-                Event::Alias { name, source } => {
-                    aliases.insert(name, source);
-                }
-                Event::Set(s) => state.apply(s, &fdats),
-                Event::Motion {
-                    span,
-                    line,
-                    refs,
-                    with,
-                } => {
-                    let mut local = state.clone();
-                    for s in with {
-                        local.apply(s, &fdats);
-                    }
-                    let base = local.base.as_ref().and_then(base_label);
-                    let tool = local.tool.as_ref().and_then(tool_label);
-                    let run_time = match (&local.base, files.get(fi)) {
-                        (Some(FrameRef::RunTime(at)), Some(f)) => Some(RunTimeValue::Frame {
-                            name: None,
-                            line: f.lines.line(at.start),
-                        }),
-                        _ => None,
-                    };
-                    let record_use = |u: &mut Usage| {
-                        u.record(base.as_deref(), tool.as_deref(), local.tcp, *line);
-                        if let Some(why) = &run_time {
-                            u.set_run_time(why.clone());
-                        }
-                    };
-                    // Only a Cartesian target needs a base: a joint target (`PTP {A1 0, …}`,
-                    // an E6AXIS) moves the same whatever the base.
-                    let mut found = false;
-                    for r in refs {
-                        match r {
-                            Ref::Inline(s) => {
-                                if let Some(p) = files
-                                    .get_mut(fi)
-                                    .and_then(|f| f.positions.iter_mut().find(|p| p.span == *s))
-                                {
-                                    record_use(&mut p.usage);
-                                    found |= p.cartesian.is_some();
-                                }
-                            }
-                            Ref::Named(n) => {
-                                // The name itself, then what it was last copied from.
-                                let mut chain = vec![n.as_str()];
-                                while chain.len() < 8 {
-                                    match chain.last().and_then(|c| aliases.get(c)) {
-                                        Some(next) if !chain.contains(next) => chain.push(next),
-                                        _ => break,
-                                    }
-                                }
-                                let hits = chain.iter().flat_map(|c| {
-                                    declared_at.exact(c).iter().chain(
-                                        computed_index_array(c)
-                                            .map_or(&[][..], |a| declared_at.elements(a)),
-                                    )
-                                });
-                                for &(f2, cand, i) in hits {
-                                    let p = if cand {
-                                        if let Some(u) =
-                                            used_candidates.get_mut(f2).and_then(|v| v.get_mut(i))
-                                        {
-                                            *u = true;
-                                        }
-                                        facts.get_mut(f2).and_then(|f| f.candidates.get_mut(i))
-                                    } else {
-                                        files.get_mut(f2).and_then(|f| f.positions.get_mut(i))
-                                    };
-                                    if let Some(p) = p {
-                                        record_use(&mut p.usage);
-                                        found |= p.cartesian.is_some();
-                                    }
-                                }
-                            }
+                    Event::Call(name) => {
+                        if let Some(exit) = exits.get(name) {
+                            exit.apply_to(&mut state);
                         }
                     }
-                    // A motion to a point outside the program (`XHOME` of $config.dat) is not
-                    // this program's business, nor is a joint target.
-                    if base.is_none()
-                        && found
-                        && let Some(file) = files.get_mut(fi)
-                    {
-                        file.diagnostics.push(
-                            Diagnostic::warning(*span, "the base of this motion is not resolved")
-                                .with_hint(
-                                    "set FDAT_ACT, $BASE=BASE_DATA[n] or BAS(#BASE,n) before it in the same DEF",
+                    Event::Branch(b) => branch(&mut state, &mut forks, *b),
+                    Event::Alias { name, source } => {
+                        aliases.insert(name, source);
+                    }
+                    Event::Set(s) => state.apply(s, &fdats),
+                    Event::Motion {
+                        span,
+                        line,
+                        refs,
+                        with,
+                    } => {
+                        let mut local = state.clone();
+                        for s in with {
+                            local.apply(s, &fdats);
+                        }
+                        targets.clear();
+                        folded.clear();
+                        for r in refs {
+                            match r {
+                                // An inline literal is one of the file's own positions.
+                                Ref::Inline(s) => targets.extend(
+                                    binder
+                                        .positions(fi)
+                                        .get(..own)
+                                        .and_then(|ps| ps.iter().position(|p| p.span == *s)),
                                 ),
-                        );
+                                Ref::Named(n) => {
+                                    // The name itself, then what it was last copied from.
+                                    let start = folded.len();
+                                    folded.push(n.as_str());
+                                    while folded.len() - start < 8 {
+                                        let chain = folded.get(start..).unwrap_or_default();
+                                        match chain.last().and_then(|c| aliases.get(c)) {
+                                            Some(&next) if !chain.contains(&next) => {
+                                                folded.push(next);
+                                            }
+                                            _ => break,
+                                        }
+                                    }
+                                }
+                            }
+                        }
+                        let u = crate::resolve::Use {
+                            line: *line,
+                            frame: local.base.as_ref().and_then(base_label),
+                            tool: local.tool.as_ref().and_then(tool_label),
+                            stationary: local.tcp,
+                            run_time: match (&local.base, lines.get(fi)) {
+                                (Some(FrameRef::RunTime(at)), Some(l)) => {
+                                    Some(RunTimeValue::Frame {
+                                        name: None,
+                                        line: l.line(at.start),
+                                    })
+                                }
+                                _ => None,
+                            },
+                            folded: &folded,
+                            targets: &targets,
+                            ..Default::default()
+                        };
+                        // A motion to a point outside the program (`XHOME` of $config.dat) is
+                        // not this program's business, nor is one to a joint target only (it
+                        // moves the same whatever the base).
+                        if binder.bind(fi, &u)
+                            && u.frame.is_none()
+                            && let Some(w) = unresolved.get_mut(fi)
+                        {
+                            w.push(*span);
+                        }
                     }
                 }
             }
         }
+        binder.finish();
     }
     for (fi, file) in files.iter_mut().enumerate() {
-        let (Some(fact), Some(used)) = (facts.get_mut(fi), used_candidates.get(fi)) else {
+        for &span in unresolved.get(fi).into_iter().flatten() {
+            file.diagnostics.push(
+                Diagnostic::warning(span, "the base of this motion is not resolved").with_hint(
+                    "set FDAT_ACT, $BASE=BASE_DATA[n] or BAS(#BASE,n) before it in the same DEF",
+                ),
+            );
+        }
+        let (Some(fact), Some(kept)) = (facts.get_mut(fi), kept.get(fi)) else {
             continue;
         };
-        let cands = std::mem::take(&mut fact.candidates);
+        let cands = file
+            .positions
+            .split_off(counts.get(fi).copied().unwrap_or_default());
         let mut promoted = false;
-        for (p, &u) in cands.into_iter().zip(used) {
-            if u {
+        for (p, &k) in cands.into_iter().zip(kept) {
+            if k || !p.usage.lines.is_empty() {
                 file.positions.push(p);
                 promoted = true;
             } else {
@@ -420,13 +413,27 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     let mut shared: Vec<crate::resolve::FileFacts<'_>> = files
         .iter_mut()
         .zip(facts.iter())
-        .map(|(file, fact)| crate::resolve::FileFacts {
-            positions: &mut file.positions,
-            frames: &file.frames,
-            assignments: &fact.assignments,
-        })
+        .map(|(file, fact)| shared_facts(file, &fact.assignments).0)
         .collect();
-    crate::resolve::mark_run_time(&mut shared, '[');
+    crate::resolve::mark_run_time(&mut shared, &NAMING);
+}
+
+/// A file as the shared pass sees it, and its line index: KRL has no routine parameters the
+/// pass follows (a subroutine's effect is the base and tool it leaves set, found in program
+/// order), and every declaration of the pair is seen from both files.
+fn shared_facts<'a>(
+    file: &'a mut ParsedFile,
+    assignments: &'a [crate::resolve::Assignment],
+) -> (crate::resolve::FileFacts<'a>, &'a crate::syntax::LineIndex) {
+    let facts = crate::resolve::FileFacts {
+        src: &file.source,
+        positions: &mut file.positions,
+        exported: None,
+        frames: &file.frames,
+        routines: &[],
+        assignments,
+    };
+    (facts, &file.lines)
 }
 
 #[cfg(test)]

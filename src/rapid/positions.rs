@@ -8,11 +8,12 @@
 
 use super::expr::{Arena, ExprKind};
 use super::parser::Stmt;
-use crate::names::{NameIndex, NameKey, NameMap};
+use crate::names::{NameKey, NameMap};
 use crate::position::{
     CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, Orientation,
     Position, PositionKind, Usage,
 };
+use crate::resolve::DeclKind;
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, latin1};
 
 /// Instruction name prefixes that move the robot (or set up a move): their targets get the
@@ -22,33 +23,18 @@ const MOTION_PREFIXES: &[&str] = &[
     "trigl", "trigj", "trigc", "contact",
 ];
 
-/// The declared types usage resolution cares about.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum SymType {
-    Tool,
-    Zone,
-    Speed,
-    Other,
-}
+/// How RAPID references reach declarations: `pArr{i}` or `pArr` reaches every element of
+/// `pArr`; a module's own data (routine data, `LOCAL` data) hides the task's, and of the other
+/// modules only the module data that is not `LOCAL` is seen.
+const NAMING: crate::resolve::Naming = crate::resolve::Naming {
+    open: '{',
+    close: '}',
+    arrays: crate::resolve::ArrayReach::WhenUndeclared,
+    scope: crate::resolve::Scope::OwnFileFirst,
+};
 
-/// A declared name (spans into the source: no copy per declaration).
-#[derive(Clone, Debug)]
-struct Symbol {
-    name: Span,
-    ty: SymType,
-    module_scope: bool,
-}
-
-/// A routine of the module: its name, whether it is `LOCAL`, and its required parameters
-/// (`type name`) in the order a call's positional arguments bind to them.
-#[derive(Clone, Debug)]
-struct Routine {
-    name: Span,
-    local: bool,
-    params: Vec<(Span, Span)>,
-}
-
-/// A procedure call, kept until every declaration has been read.
+/// A procedure call, kept until every declaration has been read: the frame and tool it moves
+/// with are found then, and it is bound as a [`Use`](crate::resolve::Use).
 #[derive(Clone, Debug)]
 struct CallUse {
     name: Span,
@@ -57,7 +43,7 @@ struct CallUse {
     routine: Option<usize>,
     /// `\WObj:=` value.
     wobj: Option<Span>,
-    /// `\Tool:=` value.
+    /// `\Tool:=` (or `tool:=`) value.
     tool: Option<Span>,
     /// Positional arguments that are plain references (`p10`, `pArr{3}`).
     positional: Vec<Option<Span>>,
@@ -81,14 +67,16 @@ pub struct Extractor<'l> {
     positions: Vec<Position>,
     frames: Vec<FrameDecl>,
     offsets: Vec<OffsetCall>,
-    symbols: Vec<Symbol>,
+    /// Every name declared, routines included (spans into the source: no copy per
+    /// declaration).
+    symbols: Vec<crate::resolve::Declaration>,
     uses: Vec<CallUse>,
     /// Whole-value assignments `name := [...]` of literal aggregates (a frame given a new
     /// value that is known offline).
     assigned: Vec<Span>,
     /// Assignments of values computed at run time (`p := CRobT()`, `wobj.uframe := …`).
     computed: Vec<crate::resolve::Assignment>,
-    routines: Vec<Routine>,
+    routines: Vec<crate::resolve::Routine>,
     /// The routine being read (`None` at module level).
     current: Option<usize>,
     /// Positions declared in a scope other modules see (module data without `LOCAL`); inline
@@ -110,6 +98,15 @@ pub struct Extracted {
 
 fn text_of(src: &[u8], span: Span) -> String {
     latin1(span.slice(src))
+}
+
+/// `s` without surrounding blanks, reusing its buffer when it has none (nearly always).
+fn trimmed(s: String) -> String {
+    if s.trim().len() == s.len() {
+        s
+    } else {
+        s.trim().to_owned()
+    }
 }
 
 /// A reference as a lookup key ([`fold`](crate::names::fold) of its text), written into a
@@ -256,7 +253,7 @@ impl<'l> Extractor<'l> {
                         orient: Some(Orientation::Quaternion(self.nums::<4>(src, arena, rot))),
                     }),
                     Vec::new(),
-                    Config::Abb(self.nums::<4>(src, arena, conf)),
+                    Config::Quadrants(self.nums::<4>(src, arena, conf)),
                     self.nums_vec(src, arena, eax),
                 )
             }
@@ -481,188 +478,72 @@ fn is_literal(src: &[u8], arena: &Arena, id: u32) -> bool {
     }
 }
 
-/// A motion's frame and tool: what one use gives the targets it reaches.
-#[derive(Clone, Debug)]
-struct FrameUse {
-    wobj: Option<String>,
-    tool: Option<String>,
-    stationary: bool,
-    line: usize,
-}
-
-/// A routine's required parameter: (module, routine, parameter index).
-type ParamAt = (usize, usize, usize);
-
-/// Resolves usage over the modules of one task (one RAPID program), in the order given: a
-/// module's own declarations (routine data, `LOCAL` data) first, else the module data of the
-/// other modules that is not `LOCAL` (task and global scope). A target passed to a routine's
-/// required parameter is used as the routine's motions use that parameter (directly, through
-/// `Offs`/`RelTool`, or passed on to another routine: followed [`CALL_DEPTH`] calls deep,
-/// cycles cut). Returns one [`Extracted`] per module, in order.
+/// Resolves usage over the modules of one task (one RAPID program), in the order given, with
+/// the shared pass (`resolve::Binder`): this finds the facts it binds in RAPID's terms
+/// (a call's work object `\WObj:=` or `wobj0`, its tool `\Tool:=` or the argument after the
+/// zone, a stationary tool from the work object's `robhold`), and reports the names declared
+/// twice in a module. Returns one [`Extracted`] per module, in order.
 pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
     let mut diagnostics: Vec<Vec<Diagnostic>> = vec![Vec::new(); modules.len()];
     let mut buf = String::new();
-    // Duplicate module-scope names, per module; the types of all names in the task.
-    let mut type_of: NameMap<NameKey, SymType> = NameMap::default();
-    for (m, (x, src)) in modules.iter().enumerate() {
-        let mut seen: NameMap<NameKey, Span> =
-            NameMap::with_capacity_and_hasher(x.symbols.len(), Default::default());
-        for s in &x.symbols {
-            let k = NameKey(s.name.slice(src));
-            if s.ty != SymType::Other {
-                type_of.insert(k, s.ty);
-            }
-            if !s.module_scope {
-                continue;
-            }
-            if let Some(first) = seen.get(&k) {
-                let line = x.lines.line(first.start);
-                if let Some(d) = diagnostics.get_mut(m) {
-                    d.push(
-                        Diagnostic::warning(
-                            s.name,
-                            format!(
-                                "`{}` is declared twice in the module (first on line {line})",
-                                text_of(src, s.name)
-                            ),
-                        )
-                        .with_hint(
-                            "rename or remove one declaration; RAPID names are case-insensitive",
-                        ),
-                    );
-                }
-            } else {
-                seen.insert(k, s.name);
-            }
-        }
+    // The types of all names in the task; duplicate module-scope names, per module.
+    let (type_of, twice) =
+        crate::resolve::declarations(modules.iter().map(|(x, src)| (*src, x.symbols.as_slice())));
+    for t in twice {
+        let (Some((x, src)), Some(d)) = (modules.get(t.file), diagnostics.get_mut(t.file)) else {
+            continue;
+        };
+        let line = x.lines.line(t.first.start);
+        d.push(
+            Diagnostic::warning(
+                t.again,
+                format!(
+                    "`{}` is declared twice in the module (first on line {line})",
+                    text_of(src, t.again)
+                ),
+            )
+            .with_hint("rename or remove one declaration; RAPID names are case-insensitive"),
+        );
     }
-    let is_tool = |n: &NameKey| n.is(b"tool0") || type_of.get(n) == Some(&SymType::Tool);
+    let is_tool = |n: &NameKey| n.is(b"tool0") || type_of.get(n) == Some(&DeclKind::Tool);
     let is_zone =
-        |n: &NameKey| n.is(b"fine") || n.numbered(b'z') || type_of.get(n) == Some(&SymType::Zone);
+        |n: &NameKey| n.is(b"fine") || n.numbered(b'z') || type_of.get(n) == Some(&DeclKind::Zone);
     let is_speed =
-        |n: &NameKey| n.is(b"vmax") || n.numbered(b'v') || type_of.get(n) == Some(&SymType::Speed);
-    let robhold: NameMap<NameKey, bool> = modules
+        |n: &NameKey| n.is(b"vmax") || n.numbered(b'v') || type_of.get(n) == Some(&DeclKind::Speed);
+    let mut positions: Vec<Vec<Position>> = Vec::with_capacity(modules.len());
+    let mut calls: Vec<Vec<CallUse>> = Vec::with_capacity(modules.len());
+    let mut rest = Vec::with_capacity(modules.len());
+    for (x, src) in modules {
+        calls.push(x.uses);
+        positions.push(x.positions);
+        rest.push((
+            x.frames, x.offsets, x.assigned, x.computed, x.routines, x.exported, src,
+        ));
+    }
+    let robhold: NameMap<NameKey, bool> = rest
         .iter()
-        .flat_map(|(x, _)| &x.frames)
+        .flat_map(|r| &r.0)
         .filter(|f| f.kind == FrameKind::WorkObject)
         .filter_map(|f| Some((NameKey(f.name.as_bytes()), f.held_by_robot?)))
         .collect();
-    let total: usize = modules.iter().map(|(x, _)| x.positions.len()).sum();
-    let mut declared: NameIndex<(usize, usize)> = NameIndex::new('{', total);
-    for (m, (x, _)) in modules.iter().enumerate() {
-        for (i, p) in x.positions.iter().enumerate() {
-            if let Some(n) = &p.name {
-                declared.insert(n, (m, i));
-            }
-        }
-    }
-    let visible = |m: usize, (m2, i): (usize, usize)| {
-        m2 == m
-            || modules
-                .get(m2)
-                .and_then(|(x, _)| x.exported.get(i).copied())
-                .unwrap_or(false)
-    };
-    // A name, an element (`pArr{2}`), or a whole array or an element chosen at run time
-    // (`pArr`, `pArr{i}`): then every element of the array may be used. The module's own
-    // declarations hide the task's.
-    let lookup = |m: usize, r: &str, out: &mut Vec<(usize, usize)>| {
-        let hits = match declared.exact(r) {
-            [] => declared.elements(declared.array_of(r).unwrap_or(r)),
-            hits => hits,
-        };
-        let own = hits.iter().any(|h| h.0 == m);
-        out.extend(
-            hits.iter()
-                .copied()
-                .filter(|&h| if own { h.0 == m } else { visible(m, h) }),
-        );
-    };
-    // Routines by name: the module's own first, else those of the task that are not LOCAL.
-    let routine_of = |m: usize, name: NameKey| -> Option<(usize, usize)> {
-        let find = |m2: usize, any: bool| {
-            let (x, src) = modules.get(m2)?;
-            x.routines
-                .iter()
-                .position(|r| (any || !r.local) && NameKey(r.name.slice(src)) == name)
-                .map(|r| (m2, r))
-        };
-        find(m, true).or_else(|| {
-            (0..modules.len())
-                .filter(|&m2| m2 != m)
-                .find_map(|m2| find(m2, false))
+    let mut facts: Vec<crate::resolve::FileFacts<'_>> = positions
+        .iter_mut()
+        .zip(&rest)
+        .map(|(ps, r)| crate::resolve::FileFacts {
+            src: r.6,
+            positions: ps,
+            exported: Some(&r.5),
+            frames: &r.0,
+            routines: &r.4,
+            assignments: &r.3,
         })
-    };
-    // The required parameter of the enclosing routine a reference names, if any.
-    let param_of = |m: usize, routine: Option<usize>, r: &str| -> Option<ParamAt> {
-        let (x, src) = modules.get(m)?;
-        let rt = routine?;
-        let base = r.split_once('{').map_or(r, |(a, _)| a);
-        x.routines
-            .get(rt)?
-            .params
-            .iter()
-            .position(|&(_, name)| NameKey(name.slice(src)) == NameKey(base.as_bytes()))
-            .map(|k| (m, rt, k))
-    };
-
-    let mut direct: Vec<((usize, usize), FrameUse)> = Vec::new();
-    let mut param_uses: std::collections::HashMap<ParamAt, Vec<FrameUse>> = Default::default();
-    let mut param_edges: std::collections::HashMap<ParamAt, Vec<ParamAt>> = Default::default();
-    let mut bindings: Vec<((usize, usize), ParamAt, usize)> = Vec::new();
-    let mut targets: Vec<(usize, usize)> = Vec::new();
-    let mut params: Vec<ParamAt> = Vec::new();
+        .collect();
+    let mut binder = crate::resolve::Binder::new(&mut facts, &NAMING);
     let mut names: Vec<Option<NameKey>> = Vec::new();
-    for (m, (x, src)) in modules.iter().enumerate() {
-        for u in &x.uses {
-            targets.clear();
-            params.clear();
-            targets.extend(u.inline.iter().map(|&i| (m, i)));
+    for (m, (module_calls, r)) in calls.iter().zip(&rest).enumerate() {
+        let src = r.6;
+        for u in module_calls {
             let call = NameKey(u.name.slice(src));
-            let callee = routine_of(m, call);
-            let reach = |buf: &mut String,
-                         sp: Span,
-                         targets: &mut Vec<(usize, usize)>,
-                         params: &mut Vec<ParamAt>| {
-                let k = key_into(buf, src, sp);
-                match param_of(m, u.routine, k) {
-                    Some(p) => params.push(p),
-                    None => lookup(m, k, targets),
-                }
-            };
-            for (i, sp) in u.positional.iter().enumerate() {
-                let Some(sp) = *sp else { continue };
-                match callee {
-                    // An argument bound to a parameter of a routine of the task: used as that
-                    // routine uses the parameter.
-                    Some((cm, cr))
-                        if modules
-                            .get(cm)
-                            .and_then(|(cx, _)| cx.routines.get(cr))
-                            .is_some_and(|r| i < r.params.len()) =>
-                    {
-                        let k = key_into(&mut buf, src, sp);
-                        let to = (cm, cr, i);
-                        match param_of(m, u.routine, k) {
-                            Some(p) => param_edges.entry(p).or_default().push(to),
-                            None => {
-                                let mut hits = Vec::new();
-                                lookup(m, k, &mut hits);
-                                bindings.extend(hits.into_iter().map(|t| (t, to, u.line)));
-                            }
-                        }
-                    }
-                    _ => reach(&mut buf, sp, &mut targets, &mut params),
-                }
-            }
-            for &sp in &u.via_offset {
-                reach(&mut buf, sp, &mut targets, &mut params);
-            }
-            if targets.is_empty() && params.is_empty() {
-                continue;
-            }
-            targets.sort_unstable();
-            targets.dedup();
             names.clear();
             names.extend(
                 u.positional
@@ -676,93 +557,54 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
                     .flatten()
                     .map(|sp| text_of(src, sp))
             };
-            let tool = u
-                .tool
-                .map(|sp| text_of(src, sp).trim().to_owned())
-                .or_else(|| {
-                    if let Some(i) = names.iter().position(|n| n.as_ref().is_some_and(is_tool)) {
-                        return written(i);
-                    }
-                    let after = names
-                        .iter()
-                        .position(|n| n.as_ref().is_some_and(is_zone))
-                        .or_else(|| {
-                            call.starts_with(b"search")
-                                .then(|| {
-                                    names.iter().position(|n| n.as_ref().is_some_and(is_speed))
-                                })
-                                .flatten()
-                        })?;
-                    written(after + 1)
-                });
+            let tool = u.tool.map(|sp| trimmed(text_of(src, sp))).or_else(|| {
+                if let Some(i) = names.iter().position(|n| n.as_ref().is_some_and(is_tool)) {
+                    return written(i);
+                }
+                let after = names
+                    .iter()
+                    .position(|n| n.as_ref().is_some_and(is_zone))
+                    .or_else(|| {
+                        call.starts_with(b"search")
+                            .then(|| names.iter().position(|n| n.as_ref().is_some_and(is_speed)))
+                            .flatten()
+                    })?;
+                written(after + 1)
+            });
             let motion = MOTION_PREFIXES
                 .iter()
                 .any(|p| call.starts_with(p.as_bytes()));
             let wobj = match u.wobj {
-                Some(sp) => Some(text_of(src, sp).trim().to_owned()),
+                Some(sp) => Some(trimmed(text_of(src, sp))),
                 None => (motion || tool.is_some()).then(|| "wobj0".to_owned()),
             };
             let stationary = wobj
                 .as_ref()
                 .is_some_and(|w| robhold.get(&NameKey(w.as_bytes())) == Some(&true));
-            let fu = FrameUse {
-                stationary: wobj.is_some() && stationary,
-                wobj,
-                tool,
-                line: u.line,
-            };
-            for &t in &targets {
-                direct.push((t, fu.clone()));
-            }
-            for &p in &params {
-                param_uses.entry(p).or_default().push(fu.clone());
-            }
-        }
-    }
-    let mut positions: Vec<Vec<Position>> = Vec::with_capacity(modules.len());
-    let mut computed = Vec::with_capacity(modules.len());
-    let mut rest = Vec::with_capacity(modules.len());
-    for (x, src) in modules {
-        positions.push(x.positions);
-        rest.push((x.frames, x.offsets, x.assigned, x.lines, src));
-        computed.push(x.computed);
-    }
-    for ((m, i), fu) in direct {
-        if let Some(p) = positions.get_mut(m).and_then(|ps| ps.get_mut(i)) {
-            p.usage.record(
-                fu.wobj.as_deref(),
-                fu.tool.as_deref(),
-                fu.stationary,
-                fu.line,
+            binder.bind(
+                m,
+                &crate::resolve::Use {
+                    line: u.line,
+                    routine: u.routine,
+                    callee: Some(u.name),
+                    stationary: wobj.is_some() && stationary,
+                    frame: wobj,
+                    tool,
+                    run_time: None,
+                    args: &u.positional,
+                    refs: &u.via_offset,
+                    folded: &[],
+                    targets: &u.inline,
+                },
             );
         }
     }
-    // Through routine parameters: every motion use reachable from the bound parameter.
-    for ((m, i), to, line) in bindings {
-        let found = crate::resolve::uses_through_parameters(to, &param_uses, &param_edges);
-        if let Some(p) = positions.get_mut(m).and_then(|ps| ps.get_mut(i)) {
-            for fu in found {
-                p.usage
-                    .record(fu.wobj.as_deref(), fu.tool.as_deref(), fu.stationary, line);
-            }
-        }
-    }
-    let mut facts: Vec<crate::resolve::FileFacts<'_>> = positions
-        .iter_mut()
-        .zip(&rest)
-        .zip(&computed)
-        .map(|((ps, r), c)| crate::resolve::FileFacts {
-            positions: ps,
-            frames: &r.0,
-            assignments: c,
-        })
-        .collect();
-    crate::resolve::mark_run_time(&mut facts, '{');
+    binder.finish();
+    crate::resolve::mark_run_time(&mut facts, &NAMING);
     drop(facts);
     let all_frames: Vec<&FrameDecl> = rest.iter().flat_map(|r| &r.0).collect();
     let mut assigned_notes: Vec<Vec<Diagnostic>> = Vec::new();
-    for (frames_m, _, assigned, _, src) in &rest {
-        let _ = frames_m;
+    for (_, _, assigned, _, _, _, src) in &rest {
         let mut notes = Vec::new();
         // A frame given a whole new value in a routine: the declaration may not be what runs.
         for &sp in assigned {
@@ -791,7 +633,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
     }
     drop(all_frames);
     let mut out = Vec::with_capacity(rest.len());
-    for (m, ((frames, offsets, _, _, _), ps)) in rest.into_iter().zip(positions).enumerate() {
+    for (m, ((frames, offsets, ..), ps)) in rest.into_iter().zip(positions).enumerate() {
         let mut d = diagnostics
             .get_mut(m)
             .map(std::mem::take)
@@ -857,21 +699,21 @@ impl Extractor<'_> {
                 self.exported.resize(self.positions.len(), exported);
             }
             Stmt::Routine { name, local } => {
-                self.symbols.push(Symbol {
+                self.symbols.push(crate::resolve::Declaration {
                     name,
-                    ty: SymType::Other,
-                    module_scope: true,
+                    kind: DeclKind::Other,
+                    file_scope: true,
                 });
                 self.current = Some(self.routines.len());
-                self.routines.push(Routine {
+                self.routines.push(crate::resolve::Routine {
                     name,
                     local,
                     params: Vec::new(),
                 });
             }
-            Stmt::Param { type_name, name } => {
+            Stmt::Param { name } => {
                 if let Some(r) = self.current.and_then(|r| self.routines.get_mut(r)) {
-                    r.params.push((type_name, name));
+                    r.params.push(name);
                 }
             }
             Stmt::Record { name } => self.records.push(RecordDecl {
@@ -930,18 +772,18 @@ impl Extractor<'_> {
                 let ty = type_name.slice(src);
                 let is = |t: &[u8]| ty.eq_ignore_ascii_case(t);
                 let name_text = text_of(src, name);
-                self.symbols.push(Symbol {
+                self.symbols.push(crate::resolve::Declaration {
                     name,
-                    ty: if is(b"tooldata") {
-                        SymType::Tool
+                    kind: if is(b"tooldata") {
+                        DeclKind::Tool
                     } else if is(b"zonedata") {
-                        SymType::Zone
+                        DeclKind::Zone
                     } else if is(b"speeddata") {
-                        SymType::Speed
+                        DeclKind::Speed
                     } else {
-                        SymType::Other
+                        DeclKind::Other
                     },
-                    module_scope,
+                    file_scope: module_scope,
                 });
                 let target_kind = if is(b"robtarget") {
                     Some(PositionKind::Robtarget)

@@ -369,8 +369,8 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
     };
     let text = |span: Span| String::from_utf8_lossy(span.slice(&file.source)).into_owned();
     let (config, status, turn) = match &p.config {
-        Config::Abb(cf) => (nums(cf), None, None),
-        Config::Kuka { status, turn } => (
+        Config::Quadrants(cf) => (nums(cf), None, None),
+        Config::StatusTurn { status, turn } => (
             vec![
                 status.as_ref().map(|s| s.value as f64),
                 turn.as_ref().map(|t| t.value as f64),

@@ -142,7 +142,7 @@ fn cartesian<R: TargetRule>(rule: &R, scope: Scope, p: &Position, keep_a: Option
         return Ok(None);
     };
     let (new, hint) = rule.new_pose(p, &frame, skid, &t).map_err(refuse)?;
-    if let Some(why) = implausible_result(p, &new) {
+    if let Some(why) = implausible_result(p, &new, scope.file.language.dialect().vocabulary()) {
         return Err(refuse(why));
     }
     let undo = rule.inverse(&frame, skid);

@@ -199,12 +199,12 @@ pub(crate) fn joint_edits(p: &Position, new: &Joints) -> Vec<Edit> {
 /// Edits that make a written configuration say `new` (fields already saying it are kept).
 pub(crate) fn config_edits(config: &Config, new: &ConfigValue) -> Vec<Edit> {
     match (config, new) {
-        (Config::Abb(fields), ConfigValue::Abb(values)) => fields
+        (Config::Quadrants(fields), ConfigValue::Quadrants(values)) => fields
             .iter()
             .zip(values)
             .filter_map(|(f, v)| integer_edit(f, i64::from(*v)))
             .collect(),
-        (Config::Kuka { status, turn }, ConfigValue::Kuka { status: s, turn: t }) => {
+        (Config::StatusTurn { status, turn }, ConfigValue::StatusTurn { status: s, turn: t }) => {
             let mut edits = Vec::new();
             if let Some(s) = s {
                 edits.extend(bits_edit(status, *s));

@@ -446,12 +446,13 @@ impl MirrorRule<'_> {
         };
         // KUKA programs may write only one of Status and Turn: keep to what is written.
         Ok(written.map(|w| match (w, solved) {
-            (ConfigValue::Kuka { status, turn }, ConfigValue::Kuka { status: s, turn: t }) => {
-                ConfigValue::Kuka {
-                    status: status.and(s),
-                    turn: turn.and(t),
-                }
-            }
+            (
+                ConfigValue::StatusTurn { status, turn },
+                ConfigValue::StatusTurn { status: s, turn: t },
+            ) => ConfigValue::StatusTurn {
+                status: status.and(s),
+                turn: turn.and(t),
+            },
             (_, solved) => solved,
         }))
     }
@@ -901,7 +902,7 @@ mod tests {
             1e-9
         ));
         let cf = |p: &Position| match &p.config {
-            Config::Abb(c) => (*c).map(|f| f.unwrap().value()),
+            Config::Quadrants(c) => (*c).map(|f| f.unwrap().value()),
             _ => panic!(),
         };
         assert_eq!(cf(t50), [-1.0, 0.0, -1.0, 0.0]);

@@ -3,6 +3,7 @@
 
 use std::collections::BTreeMap;
 
+use crate::dialect::Vocabulary;
 use crate::geometry::Pose;
 use crate::position::{FrameKind, ParsedFile, Position, Program};
 
@@ -68,25 +69,39 @@ pub(crate) fn resolve_frame(
     if let Some(p) = overrides.get(&lower) {
         return Ok(*p);
     }
-    let decl = program.files.iter().flat_map(|f| &f.frames).find(|d| {
-        matches!(d.kind, FrameKind::WorkObject | FrameKind::Base)
-            && d.name.eq_ignore_ascii_case(name)
+    let decl = program.files.iter().find_map(|f| {
+        f.frames
+            .iter()
+            .find(|d| {
+                matches!(d.kind, FrameKind::WorkObject | FrameKind::Base)
+                    && d.name.eq_ignore_ascii_case(name)
+            })
+            .map(|d| (d, f.language))
     });
-    match decl {
+    // The words of the language that declares the frame, else of the program's.
+    let words = decl.map_or_else(|| words_of(program), |(_, l)| l.dialect().vocabulary());
+    let frame = words.frame;
+    match decl.map(|(d, _)| d) {
         Some(d) if d.fixed == Some(false) => Err(Why::new(
             RefusalKind::MovingWorkObject,
-            format!("work object `{name}` is moved by a mechanical unit (ufprog FALSE)"),
+            format!(
+                "{frame} `{name}` is moved by a mechanical unit ({})",
+                words.moved_frame
+            ),
             "its position depends on that unit, not on the track: correct such targets by hand",
         )),
         Some(d) if d.held_by_robot == Some(true) => Err(Why::new(
             RefusalKind::StationaryTool,
-            format!("work object `{name}` is held by the robot (robhold TRUE: stationary tool)"),
+            format!(
+                "{frame} `{name}` is held by the robot ({}: stationary tool)",
+                words.stationary_tool
+            ),
             "a stationary-tool target moves with the work piece, not the track: correct it by hand",
         )),
         Some(d) => d.pose().ok_or_else(|| {
             Why::new(
                 RefusalKind::UnresolvedWorkObject,
-                format!("work object `{name}` has fields that are not numbers"),
+                format!("{frame} `{name}` has fields that are not numbers"),
                 format!(
                     "give `{name}` as {{x,y,z,rx,ry,rz}} under [robot.NAME.wobj] in the cell file"
                 ),
@@ -95,33 +110,48 @@ pub(crate) fn resolve_frame(
         None if is_world(name) => Ok(Pose::identity()),
         None => Err(Why::new(
             RefusalKind::UnresolvedWorkObject,
-            format!("work object `{name}` is not declared in the program"),
+            format!("{frame} `{name}` is not declared in the program"),
             format!("add `{name}` under [robot.NAME.wobj] in the cell file"),
         )),
     }
 }
 
 /// The work object (or KRL base) a target is used with: its first use, else `default` for a
-/// declared target no motion uses.
-pub(crate) fn wobj_of(p: &Position, default: Option<&str>) -> Result<String, Why> {
+/// declared target no motion uses. `words` are the target's language's.
+pub(crate) fn wobj_of(
+    p: &Position,
+    default: Option<&str>,
+    words: &Vocabulary,
+) -> Result<String, Why> {
     let what = describe(p);
+    let frame = words.frame;
     match (&p.usage.wobj, p.usage.lines.is_empty()) {
         (Some(w), _) => Ok(w.clone()),
         (None, true) => match default {
             Some(d) => Ok(d.to_owned()),
             None => Err(Why::new(
                 RefusalKind::UnresolvedWorkObject,
-                format!("{what} is not used by any motion: its work object is unknown"),
-                "name the work object of targets no motion uses",
+                format!("{what} is not used by any motion: its {frame} is unknown"),
+                format!("name the {frame} of targets no motion uses"),
             )
             .with_remedy(Remedy::DefaultWorkObject)),
         },
         (None, false) => Err(Why::new(
             RefusalKind::UnresolvedWorkObject,
-            format!("{what} is used with a work object that cannot be resolved"),
-            "name the work object explicitly in the motion instruction",
+            format!("{what} is used with a {frame} that cannot be resolved"),
+            format!("name the {frame} explicitly in the motion instruction"),
         )),
     }
+}
+
+/// The words of `program`'s language (an empty program has none: RAPID's, as the cell file's
+/// `wobj` key).
+fn words_of(program: &Program) -> &'static Vocabulary {
+    program
+        .language()
+        .unwrap_or(crate::position::Language::Rapid)
+        .dialect()
+        .vocabulary()
 }
 
 /// The pose in world of the work object `p` is used with (`frames` override the program's).
@@ -131,7 +161,7 @@ pub(crate) fn work_object_of(
     frames: &BTreeMap<String, Pose>,
     default: Option<&str>,
 ) -> Result<Pose, Why> {
-    let name = wobj_of(p, default)?;
+    let name = wobj_of(p, default, words_of(program))?;
     resolve_frame(program, frames, &name).map_err(|why| Why {
         message: format!("{}: {}", describe(p), why.message),
         ..why
@@ -171,6 +201,7 @@ pub(crate) fn joint_target(p: &Position) -> Why {
 /// Checks that every transform makes before touching a Cartesian target; `None` = go ahead.
 pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
     let what = describe(p);
+    let words = file.language.dialect().vocabulary();
     let refuse = |kind, msg: String, hint: &str| Some(Why::new(kind, msg, hint));
     if !p.kind.is_cartesian() {
         return Some(joint_target(p));
@@ -205,7 +236,10 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
     if far {
         return refuse(
             RefusalKind::Implausible,
-            format!("{what} lies more than 1 km from its work object's origin"),
+            format!(
+                "{what} lies more than 1 km from its {}'s origin",
+                words.frame
+            ),
             "check the coordinates (mm)",
         );
     }
@@ -217,10 +251,12 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
         );
     }
     if p.usage.stationary_tool {
-        let setting = file.language.dialect().vocabulary().stationary_tool;
         return refuse(
             RefusalKind::StationaryTool,
-            format!("{what} is a stationary-tool point ({setting})"),
+            format!(
+                "{what} is a stationary-tool point ({})",
+                words.stationary_tool
+            ),
             "it moves with the work piece, not the track: correct it by hand",
         );
     }
@@ -228,8 +264,11 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
         let first = p.usage.wobj.as_deref().unwrap_or("?");
         return refuse(
             RefusalKind::TwoWorkObjects,
-            format!("{what} is used with two work objects (`{first}` and `{other}`)"),
-            "split it into one target per work object",
+            format!(
+                "{what} is used with two {} (`{first}` and `{other}`)",
+                words.frames
+            ),
+            &format!("split it into one target per {}", words.frame),
         );
     }
     None
@@ -290,7 +329,7 @@ pub(crate) fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<Str
         }
     }
     match &p.config {
-        Config::Abb(cf) => {
+        Config::Quadrants(cf) => {
             for (name, f) in ["cf1", "cf4", "cf6", "cfx"].iter().zip(cf) {
                 if let Some(f) = f {
                     let v = f.value();
@@ -303,7 +342,7 @@ pub(crate) fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<Str
                 }
             }
         }
-        Config::Kuka { status, turn } => {
+        Config::StatusTurn { status, turn } => {
             if let Some(s) = status
                 && s.value > KUKA_STATUS_MAX
             {
@@ -321,7 +360,8 @@ pub(crate) fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<Str
 }
 
 /// Why a computed pose cannot be written (not finite, or beyond any robot cell), or `None`.
-pub(crate) fn implausible_result(p: &Position, new: &Pose) -> Option<Why> {
+/// `words` are the target's language's.
+pub(crate) fn implausible_result(p: &Position, new: &Pose, words: &Vocabulary) -> Option<Why> {
     let t = new.translation.vector;
     let q = new.rotation.coords;
     let what = describe(p);
@@ -343,7 +383,8 @@ pub(crate) fn implausible_result(p: &Position, new: &Pose) -> Option<Why> {
         return Some(Why::new(
             RefusalKind::ImplausibleResult,
             format!(
-                "{what}: the computed position lies more than 1 km from its work object's origin"
+                "{what}: the computed position lies more than 1 km from its {}'s origin",
+                words.frame
             ),
             "check the profile and the cell file's base, track axis and frames for absurd values",
         ));
@@ -357,5 +398,77 @@ fn shown(v: f64) -> String {
         format!("{v}")
     } else {
         format!("{v:e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::position::FrameDecl;
+    use crate::syntax::Span;
+    use crate::transform::test_support::{krl, rapid};
+
+    /// A frame declaration `name` that a mechanical unit moves (`fixed`) or the robot holds.
+    fn with_frame(mut program: Program, name: &str, kind: FrameKind, moved: bool) -> Program {
+        let decl = FrameDecl {
+            name: name.to_owned(),
+            kind,
+            span: Span::new(0, 0),
+            line: 1,
+            held_by_robot: Some(!moved),
+            fixed: Some(!moved),
+            moved_by: None,
+            frame: None,
+            oframe: None,
+        };
+        if let Some(f) = program.files.first_mut() {
+            f.frames.push(decl);
+        }
+        program
+    }
+
+    fn refusal(program: &Program, name: &str) -> String {
+        match resolve_frame(program, &BTreeMap::new(), name) {
+            Err(why) => why.message,
+            Ok(_) => panic!("`{name}` resolved"),
+        }
+    }
+
+    #[test]
+    fn a_refused_frame_is_named_in_the_words_of_its_language() {
+        let kuka = |base: &str| krl("1 2 3 0 0 0 2 0 0\n", base);
+        let abb = |wobj: &str| rapid("1 2 3 1 0 0 0 0 0 0 0 9E9 9E9 9E9 9E9 9E9 9E9\n", wobj);
+        let cases = [
+            (
+                kuka("BASE_DATA[2]"),
+                ("BASE_DATA[2]", FrameKind::Base, true),
+                "base `BASE_DATA[2]` is moved by a mechanical unit (MACHINE_FRAME_DAT: an external kinematic)",
+            ),
+            (
+                kuka("BASE_DATA[3]"),
+                ("BASE_DATA[3]", FrameKind::Base, false),
+                "base `BASE_DATA[3]` is held by the robot (IPO_FRAME #TCP: stationary tool)",
+            ),
+            (
+                kuka("BASE_DATA[9]"),
+                ("BASE_DATA[3]", FrameKind::Base, false),
+                "base `BASE_DATA[9]` is not declared in the program",
+            ),
+            (
+                abb("wStn"),
+                ("wStn", FrameKind::WorkObject, true),
+                "work object `wStn` is moved by a mechanical unit (ufprog FALSE)",
+            ),
+            (
+                abb("wHeld"),
+                ("wHeld", FrameKind::WorkObject, false),
+                "work object `wHeld` is held by the robot (robhold TRUE: stationary tool)",
+            ),
+        ];
+        for (program, (declared, kind, moved), want) in cases {
+            let used = program.files[0].positions[0].usage.wobj.clone().unwrap();
+            let program = with_frame(program, declared, kind, moved);
+            assert_eq!(refusal(&program, &used), want);
+        }
     }
 }

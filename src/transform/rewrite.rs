@@ -152,7 +152,7 @@ pub(crate) fn reversible_pose_edits(
             };
             let places = abc.each_ref().map(|f| {
                 f.as_ref()
-                    .map_or(DEG_DECIMALS, |f| f.lit.places(DEG_DECIMALS))
+                    .map_or(DEG_DECIMALS, |f| f.lit().places(DEG_DECIMALS))
             });
             let mut angles = kuka_abc_angles(&new.rotation, like);
             if let Some(kept) = keep_a.and_then(|a| lock_split(&new.rotation, angles, a, places)) {
@@ -422,15 +422,10 @@ mod tests {
             fields.push(field(t, at));
             at += t.len() + 1;
         }
-        let trans = [fields[0].clone(), fields[1].clone(), fields[2].clone()];
+        let trans = [fields[0], fields[1], fields[2]];
         let orient = match fields.len() {
-            7 => Orientation::Quaternion([
-                fields[3].clone(),
-                fields[4].clone(),
-                fields[5].clone(),
-                fields[6].clone(),
-            ]),
-            _ => Orientation::Abc([fields[3].clone(), fields[4].clone(), fields[5].clone()]),
+            7 => Orientation::Quaternion([fields[3], fields[4], fields[5], fields[6]]),
+            _ => Orientation::Abc([fields[3], fields[4], fields[5]]),
         };
         CartesianFields {
             trans,

@@ -184,7 +184,7 @@ impl LockSplits {
             if b.value().abs() == 90.0 && a.value().is_finite() {
                 let text = file
                     .source
-                    .get(a.span.start..a.span.end)
+                    .get(a.span().start..a.span().end)
                     .unwrap_or_default();
                 out.push((i, crate::syntax::latin1(text)));
             }
@@ -478,8 +478,7 @@ struct NumberToken {
     decimals: u32,
     /// The exponent's value (0 without one).
     exponent: i32,
-    /// Bytes of the exponent suffix (`E+2` → 3; 0 without one). Kept small with the rest: a
-    /// large module has millions of literals, and two lists of them are held at once.
+    /// Bytes of the exponent suffix (`E+2` → 3; 0 without one).
     exponent_len: u32,
 }
 
@@ -504,78 +503,96 @@ impl NumberToken {
 /// `.` and digits and an optional exponent, not part of a name (`p10`, `$X1`) and not followed
 /// by a letter. Signs are not part of it. Dialect-free on purpose: the same scan of the same
 /// bytes gives the same list, comments and strings included, on both sides of a transform.
-fn number_tokens(src: &[u8], skip: Option<Span>) -> Vec<NumberToken> {
-    let word = |b: u8| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'$' | b'.' | b'#');
-    let mut out = Vec::new();
-    let mut i = 0;
-    while i < src.len() {
-        if let Some(s) = skip
-            && i == s.start
-        {
-            i = s.end.max(i + 1);
-            continue;
-        }
-        let b = src[i];
-        let starts =
-            b.is_ascii_digit() || (b == b'.' && src.get(i + 1).is_some_and(u8::is_ascii_digit));
-        if !starts || (i > 0 && word(src[i - 1])) {
-            // Skip the rest of a word so `p10` gives no token.
-            if word(b) {
-                while i < src.len() && word(src[i]) {
+fn number_tokens(src: &[u8], skip: Option<Span>) -> NumberTokens<'_> {
+    NumberTokens { src, skip, i: 0 }
+}
+
+/// The number literals of a file, in order (see [`number_tokens`]): scanned as they are asked
+/// for, so that two files' literals can be paired without a list of millions of each.
+struct NumberTokens<'a> {
+    src: &'a [u8],
+    skip: Option<Span>,
+    i: usize,
+}
+
+impl Iterator for NumberTokens<'_> {
+    type Item = NumberToken;
+
+    fn next(&mut self) -> Option<NumberToken> {
+        let (src, skip) = (self.src, self.skip);
+        let word = |b: u8| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'$' | b'.' | b'#');
+        let mut i = self.i;
+        while i < src.len() {
+            if let Some(s) = skip
+                && i == s.start
+            {
+                i = s.end.max(i + 1);
+                continue;
+            }
+            let b = src[i];
+            let starts =
+                b.is_ascii_digit() || (b == b'.' && src.get(i + 1).is_some_and(u8::is_ascii_digit));
+            if !starts || (i > 0 && word(src[i - 1])) {
+                // Skip the rest of a word so `p10` gives no token.
+                if word(b) {
+                    while i < src.len() && word(src[i]) {
+                        i += 1;
+                    }
+                } else {
                     i += 1;
                 }
-            } else {
-                i += 1;
+                continue;
             }
-            continue;
-        }
-        let start = i;
-        while i < src.len() && src[i].is_ascii_digit() {
-            i += 1;
-        }
-        let mut decimals = 0;
-        if i < src.len() && src[i] == b'.' {
-            i += 1;
-            let f = i;
+            let start = i;
             while i < src.len() && src[i].is_ascii_digit() {
                 i += 1;
             }
-            decimals = i - f;
-        }
-        let (mut exponent, mut exponent_len) = (0, 0);
-        if i < src.len() && matches!(src[i], b'e' | b'E') {
-            let mut j = i + 1;
-            let negative = j < src.len() && src[j] == b'-';
-            if j < src.len() && matches!(src[j], b'+' | b'-') {
-                j += 1;
+            let mut decimals = 0;
+            if i < src.len() && src[i] == b'.' {
+                i += 1;
+                let f = i;
+                while i < src.len() && src[i].is_ascii_digit() {
+                    i += 1;
+                }
+                decimals = i - f;
             }
-            if j < src.len() && src[j].is_ascii_digit() {
-                let mut e = 0i32;
-                while j < src.len() && src[j].is_ascii_digit() {
-                    e = e.saturating_mul(10).saturating_add((src[j] - b'0') as i32);
+            let (mut exponent, mut exponent_len) = (0, 0);
+            if i < src.len() && matches!(src[i], b'e' | b'E') {
+                let mut j = i + 1;
+                let negative = j < src.len() && src[j] == b'-';
+                if j < src.len() && matches!(src[j], b'+' | b'-') {
                     j += 1;
                 }
-                exponent = if negative { -e } else { e };
-                exponent_len = (j - i) as u32;
-                i = j;
+                if j < src.len() && src[j].is_ascii_digit() {
+                    let mut e = 0i32;
+                    while j < src.len() && src[j].is_ascii_digit() {
+                        e = e.saturating_mul(10).saturating_add((src[j] - b'0') as i32);
+                        j += 1;
+                    }
+                    exponent = if negative { -e } else { e };
+                    exponent_len = (j - i) as u32;
+                    i = j;
+                }
             }
-        }
-        if i < src.len() && word(src[i]) {
-            // `1.2.3`, `12abc`: no number; skip the whole word.
-            while i < src.len() && word(src[i]) {
-                i += 1;
+            if i < src.len() && word(src[i]) {
+                // `1.2.3`, `12abc`: no number; skip the whole word.
+                while i < src.len() && word(src[i]) {
+                    i += 1;
+                }
+                continue;
             }
-            continue;
+            self.i = i;
+            return Some(NumberToken {
+                start,
+                end: i,
+                decimals: u32::try_from(decimals).unwrap_or(u32::MAX),
+                exponent,
+                exponent_len,
+            });
         }
-        out.push(NumberToken {
-            start,
-            end: i,
-            decimals: u32::try_from(decimals).unwrap_or(u32::MAX),
-            exponent,
-            exponent_len,
-        });
+        self.i = i;
+        None
     }
-    out
 }
 
 /// What [`carry_precision`] made of a transform's output.
@@ -613,32 +630,34 @@ pub fn carry_precision(
         .unwrap_or_default();
     let skip_in = old.as_ref().map(|(_, span)| *span);
     let skip_out = find_in(output, dialect).map(|(_, span)| span);
-    let before = number_tokens(original, skip_in);
-    let after = number_tokens(output, skip_out);
-    if before.len() != after.len() {
-        return CarriedPrecision {
-            output: output.to_vec(),
-            widened: Widened::default(),
-        };
-    }
-    // The first-written precision of each original literal.
+    let mut before = number_tokens(original, skip_in);
+    let mut after = number_tokens(output, skip_out);
+    // The first-written precision of each original literal: per house precision, the count of
+    // the original's literals written with it so far indexes the earlier stamp's record.
     let mut seen = std::collections::BTreeMap::<i32, usize>::new();
-    let first: Vec<i32> = before
-        .iter()
-        .map(|t| {
-            if !t.house() {
-                return t.precision();
-            }
-            let k = seen.entry(t.precision()).or_default();
-            let d = old_widened.of(t.precision() as usize, *k);
-            *k += 1;
-            d
-        })
-        .collect();
     let mut text = Vec::with_capacity(output.len());
     let mut widened = Widened::default();
     let mut at = 0;
-    for ((b, a), &d) in before.iter().zip(&after).zip(&first) {
+    // The two files' literals in step; if one has more, nothing is carried.
+    loop {
+        let (b, a) = match (before.next(), after.next()) {
+            (Some(b), Some(a)) => (b, a),
+            (None, None) => break,
+            _ => {
+                return CarriedPrecision {
+                    output: output.to_vec(),
+                    widened: Widened::default(),
+                };
+            }
+        };
+        let d = if b.house() {
+            let k = seen.entry(b.precision()).or_default();
+            let d = old_widened.of(b.precision() as usize, *k);
+            *k += 1;
+            d
+        } else {
+            b.precision()
+        };
         let old_text = &original[b.start..b.end];
         let new_text = &output[a.start..a.end];
         let unchanged = old_text == new_text;
@@ -854,7 +873,6 @@ mod precision_tests {
         // Numbers in names are none; an exponent literal resolves its decimals minus the
         // exponent (`1.5E+2` -1, `1.50123E+2` 3, `2.5e-1` 2).
         let t: Vec<_> = number_tokens(b"p10 1.5E+2 $x1 .5 7.250 1.50123E+2 2.5e-1", None)
-            .iter()
             .map(|t| (t.decimals, t.precision(), t.house()))
             .collect();
         assert_eq!(

@@ -109,7 +109,7 @@ pub(crate) fn rapid(src: &str, wobj: &str) -> Program {
                 orient: Some(Orientation::Quaternion([o(3), o(4), o(5), o(6)])),
             }),
             joints: Vec::new(),
-            config: Config::Abb([o(7), o(8), o(9), o(10)]),
+            config: Config::Quadrants([o(7), o(8), o(9), o(10)]),
             extax: (11..17).map(o).collect(),
             usage: usage(wobj, n + 1),
         });
@@ -145,7 +145,7 @@ pub(crate) fn krl(src: &str, base: &str) -> Program {
                 orient: Some(Orientation::Abc([o(3), o(4), o(5)])),
             }),
             joints: Vec::new(),
-            config: Config::Kuka {
+            config: Config::StatusTurn {
                 status: bits(6),
                 turn: bits(7),
             },

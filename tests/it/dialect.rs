@@ -23,6 +23,8 @@ struct Stub;
 const VOCABULARY: Vocabulary = Vocabulary {
     frame_column: "frame",
     frames: "frames",
+    frame: "frame",
+    moved_frame: "moving frame",
     tool_kind: "tool",
     stationary_tool: "fixed tool",
     world_frames: &["world"],

@@ -335,7 +335,7 @@ fn the_written_configuration_selects_the_solution() {
         [-100.0, 5.0, 15.0, 60.0, 80.0, 200.0],
     ] {
         let f = k.forward(&j);
-        let written = ConfigValue::Abb(abb::config_of(&k, &j));
+        let written = ConfigValue::Quadrants(abb::config_of(&k, &j));
         let s = trackfix::kinematics::select(&k, &f, Some(&written)).unwrap();
         assert!(s.config_matches && s.within_limits);
         assert!(joints_close(&s.joints, &j, 1e-6), "{:?} vs {j:?}", s.joints);
@@ -353,13 +353,13 @@ fn a_turn_against_an_arm_axis_is_another_configuration_not_a_limit() {
     assert!(k.limits[1][1] - k.limits[1][0] <= 360.0);
     let j = [10.0, -60.0, 80.0, 20.0, 40.0, 30.0];
     let f = k.forward(&j);
-    let ConfigValue::Kuka { status, turn } =
+    let ConfigValue::StatusTurn { status, turn } =
         ConfigValue::of_joints(trackfix::Language::Krl, &k, &j)
     else {
         panic!("a KUKA configuration");
     };
     // Bit 1 (A2 < 0) cleared: the written Turn says A2 >= 0.
-    let written = ConfigValue::Kuka {
+    let written = ConfigValue::StatusTurn {
         status,
         turn: turn.map(|t| t & !0b10),
     };
@@ -424,7 +424,7 @@ fn mirrored_joints_give_the_mirrored_pose_and_ik_agrees_with_the_rule() {
             let [c1, c4, c6, cx] = abb::config_of(&k, &j);
             assert_eq!(
                 abb_c,
-                ConfigValue::Abb([-c1 - 1, -c4 - 1, -c6 - 1, cx]),
+                ConfigValue::Quadrants([-c1 - 1, -c4 - 1, -c6 - 1, cx]),
                 "{}",
                 m.name
             );
@@ -432,7 +432,7 @@ fn mirrored_joints_give_the_mirrored_pose_and_ik_agrees_with_the_rule() {
             let (st, t) = kuka::status_turn_of(&k, &j);
             assert_eq!(
                 kuka_c,
-                ConfigValue::Kuka {
+                ConfigValue::StatusTurn {
                     status: Some(st),
                     turn: Some(t ^ 0b101001)
                 },
@@ -486,7 +486,7 @@ fn check_target_refuses_unreachable_limit_and_configuration_changes() {
     let k = irb2400();
     let j = [10.0, 20.0, -10.0, 30.0, 40.0, -50.0];
     let f = k.forward(&j);
-    let written = ConfigValue::Abb(abb::config_of(&k, &j));
+    let written = ConfigValue::Quadrants(abb::config_of(&k, &j));
     // A small move: same configuration, joints close by.
     let moved = pose_xyz_deg(0.5, -0.3, 0.2, 0.0, 0.0, 0.01) * f;
     let c = check_target(&k, &f, &moved, Some(&written));
@@ -517,7 +517,7 @@ fn check_target_refuses_unreachable_limit_and_configuration_changes() {
     // Axis 5 bent past its 120° limit: in the written configuration only 123° reaches it.
     let edge = [0.0, 10.0, 20.0, 0.0, 118.0, 0.0];
     let fe = k.forward(&edge);
-    let w = ConfigValue::Abb(abb::config_of(&k, &edge));
+    let w = ConfigValue::Quadrants(abb::config_of(&k, &edge));
     let bent = k.forward(&[0.0, 10.0, 20.0, 0.0, 123.0, 0.0]);
     let c = check_target(&k, &fe, &bent, Some(&w));
     assert_eq!(
@@ -1038,7 +1038,7 @@ fn mirror_with_kinematics_mirrors_joints_and_configurations_by_ik() {
         let written = ConfigValue::written(&p.config).unwrap();
         assert_eq!(
             written,
-            ConfigValue::Abb(abb::config_of(&k, &mirrored_joints(j))),
+            ConfigValue::Quadrants(abb::config_of(&k, &mirrored_joints(j))),
             "p{i}"
         );
     }

@@ -61,7 +61,7 @@ fn dump_position(src: &[u8], p: &Position) -> String {
     if !p.joints.is_empty() {
         s += &format!(" axes=[{}]", texts(src, &p.joints));
     }
-    if let Config::Kuka { status, turn } = &p.config {
+    if let Config::StatusTurn { status, turn } = &p.config {
         let bit = |b: &Option<trackfix::position::BitField>| match b {
             Some(b) => format!("{}={}", String::from_utf8_lossy(b.span.slice(src)), b.value),
             None => "-".to_owned(),
@@ -265,7 +265,7 @@ fn binary_status_turn_and_kinds_in_bom_file() {
             ("inline E6POS".to_owned(), PositionKind::E6Pos),
         ]
     );
-    let Config::Kuka { status, turn } = &f.positions[0].config else {
+    let Config::StatusTurn { status, turn } = &f.positions[0].config else {
         panic!()
     };
     let (s, t) = (status.as_ref().unwrap(), turn.as_ref().unwrap());
@@ -543,7 +543,7 @@ proptest! {
                 .collect();
             let want: Vec<&[u8]> = texts.iter().map(|t| t.as_bytes()).collect();
             prop_assert_eq!(got, want);
-            let Config::Kuka { status, turn } = &p.config else { panic!() };
+            let Config::StatusTurn { status, turn } = &p.config else { panic!() };
             prop_assert_eq!(status.as_ref().unwrap().value, *s);
             prop_assert_eq!(turn.as_ref().unwrap().value, *t);
             prop_assert_eq!(p.extax.len(), 2);

@@ -93,7 +93,7 @@ fn dump(f: &ParsedFile) -> String {
             _ => cartesian(src, &p.cartesian),
         };
         let cfg = match &p.config {
-            Config::Abb(c) => format!("[{}]", texts(src, c)),
+            Config::Quadrants(c) => format!("[{}]", texts(src, c)),
             _ => "-".into(),
         };
         let u = &p.usage;
@@ -159,7 +159,7 @@ fn assert_spans_match(f: &ParsedFile) {
         check_cart(&p.cartesian);
         p.joints.iter().for_each(check);
         p.extax.iter().for_each(check);
-        if let Config::Abb(c) = &p.config {
+        if let Config::Quadrants(c) = &p.config {
             c.iter().for_each(check);
         }
         assert_eq!(p.span.slice(src).first(), Some(&b'['));
@@ -597,7 +597,7 @@ fn all_fields(p: &Position) -> Vec<&Option<NumField>> {
             v.extend(q.iter());
         }
     }
-    if let Config::Abb(c) = &p.config {
+    if let Config::Quadrants(c) = &p.config {
         v.extend(c.iter());
     }
     v.extend(p.extax.iter());

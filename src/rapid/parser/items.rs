@@ -322,8 +322,8 @@ impl Parser<'_, '_> {
                 self.leaf(NodeKind::RoutineHead, start);
                 self.arena.clear();
                 self.emit(Stmt::Routine { name, local }, start);
-                for (type_name, name) in params {
-                    self.emit(Stmt::Param { type_name, name }, start);
+                for (_, name) in params {
+                    self.emit(Stmt::Param { name }, start);
                 }
             }
             Err(e) => self.recover(start, e),

@@ -48,8 +48,8 @@ pub(crate) enum Stmt {
     /// `PROC`/`FUNC`/`TRAP` head (its name is a module-scope symbol); its required parameters
     /// follow as [`Stmt::Param`].
     Routine { name: Span, local: bool },
-    /// A required parameter of the routine just read, in order (`type name`).
-    Param { type_name: Span, name: Span },
+    /// A required parameter of the routine just read, in order: its name (of `type name`).
+    Param { name: Span },
     /// `RECORD name` (the components follow as [`Stmt::RecordField`]).
     Record { name: Span },
     /// `type name;` inside a `RECORD`.
