@@ -76,7 +76,10 @@ impl Arm {
                     "{what} is out of reach as written (the flange is {:.1} mm from the robot base)",
                     flange.translation.vector.norm()
                 ),
-                "check the target, its work object and tool, and the robot's kinematics",
+                format!(
+                    "check the target, its {} and tool, and the robot's kinematics",
+                    language.dialect().vocabulary().frame
+                ),
             ));
         };
         let solved = match &written {
@@ -177,7 +180,7 @@ impl Arm {
 }
 
 /// A [`RefusalKind::Reach`] refusal.
-fn reach(message: String, hint: &str) -> Why {
+fn reach(message: String, hint: impl Into<String>) -> Why {
     Why::new(RefusalKind::Reach, message, hint)
 }
 

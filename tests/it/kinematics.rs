@@ -1100,3 +1100,43 @@ fn inspect_with_a_robot_adds_reach_columns() {
     let (_, plain, _) = trackfix(&["inspect", "samples/rapid/spot_line.mod", "--format", "csv"]);
     assert!(plain.lines().next().unwrap().ends_with(",frame,tool"));
 }
+
+/// A refusal speaks the target's language: a KUKA target out of reach names its base, where
+/// the same refusal of a RAPID target names its work object.
+#[test]
+fn a_krl_target_out_of_reach_is_refused_in_krl_words() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        "samples/krl/spot_line.src",
+        dir.path().join("spot_line.src"),
+    )
+    .unwrap();
+    let dat = std::fs::read_to_string("samples/krl/spot_line.dat").unwrap();
+    assert!(dat.contains("X 592.548,"));
+    std::fs::write(
+        dir.path().join("spot_line.dat"),
+        dat.replacen("X 592.548,", "X 9592.548,", 1),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        dir.path().join("spot_line.src").to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "k1",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("E6POS `XP1` is out of reach as written (the flange is 9618.0 mm"),
+        "{err}"
+    );
+    assert!(
+        err.contains("help: check the target, its base and tool, and the robot's kinematics"),
+        "{err}"
+    );
+    assert!(!out.join("spot_line.dat").exists());
+}
