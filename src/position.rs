@@ -8,6 +8,7 @@
 //! [`Edit`]: crate::syntax::Edit
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use crate::geometry::{Pose, abb_quat, kuka_abc};
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span};
@@ -193,16 +194,19 @@ pub enum Config {
 }
 
 /// Where and how a target is used by the motion instructions that reference it.
+///
+/// The names are shared (`Arc<str>`): a module's targets are used with a handful of work
+/// objects and tools, and a copy per target was a tenth of `check`'s peak memory.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Usage {
     /// The RAPID work object, or the KRL base (`"BASE_DATA[3]"`), of the first use. `None` if
     /// never used or unresolved.
-    pub wobj: Option<String>,
+    pub wobj: Option<Arc<str>>,
     /// The tool of the first use.
-    pub tool: Option<String>,
+    pub tool: Option<Arc<str>>,
     /// Further distinct work objects the target is used with. Non-empty means the target is
     /// used with two work objects and cannot be transformed unambiguously.
-    pub other_wobjs: Vec<String>,
+    pub other_wobjs: Vec<Arc<str>>,
     /// The target is a stationary-tool point (KRL `IPO_FRAME #TCP`, RAPID `robhold TRUE`).
     pub stationary_tool: bool,
     /// 1-based lines of the instructions that use it.
@@ -269,19 +273,33 @@ impl Usage {
         stationary: bool,
         line: usize,
     ) {
+        let wobj = wobj.map(Arc::from);
+        let tool = tool.filter(|_| self.tool.is_none()).map(Arc::from);
+        self.record_shared(wobj.as_ref(), tool.as_ref(), stationary, line);
+    }
+
+    /// [`Usage::record`] with names already shared: a name kept is a clone of the `Arc`, not
+    /// a copy of the text.
+    pub fn record_shared(
+        &mut self,
+        wobj: Option<&Arc<str>>,
+        tool: Option<&Arc<str>>,
+        stationary: bool,
+        line: usize,
+    ) {
         if let Some(w) = wobj {
             match &self.wobj {
-                None => self.wobj = Some(w.to_owned()),
+                None => self.wobj = Some(Arc::clone(w)),
                 Some(first) if first.eq_ignore_ascii_case(w) => {}
                 Some(_) => {
                     if !self.other_wobjs.iter().any(|o| o.eq_ignore_ascii_case(w)) {
-                        self.other_wobjs.push(w.to_owned());
+                        self.other_wobjs.push(Arc::clone(w));
                     }
                 }
             }
         }
         if self.tool.is_none() {
-            self.tool = tool.map(str::to_owned);
+            self.tool = tool.cloned();
         }
         self.stationary_tool |= stationary;
         if !self.lines.contains(&line) {
@@ -504,7 +522,7 @@ mod tests {
         u.record(Some("wtable"), None, false, 20);
         assert_eq!(u.wobj.as_deref(), Some("wCar"));
         assert_eq!(u.tool.as_deref(), Some("tGun"));
-        assert_eq!(u.other_wobjs, ["wTable"]);
+        assert_eq!(u.other_wobjs, [Arc::from("wTable")]);
         assert!(u.stationary_tool);
         assert_eq!(u.lines, [10, 12, 20]);
     }

@@ -15,6 +15,7 @@
 use crate::names::{NameIndex, NameKey, NameMap, fold, fold_into};
 use crate::position::{FrameDecl, Position, RunTimeValue};
 use crate::syntax::Span;
+use std::sync::Arc;
 
 /// How many calls deep a routine's effects on its callers are followed (a target passed on
 /// through RAPID routine parameters, a KRL subroutine that sets the base): deeper chains and
@@ -291,10 +292,24 @@ impl MovesWith {
     }
 }
 
-/// Records one use at `line` with `frame`, `tool`, `stationary` and `run_time` in target `at`.
+/// The one shared copy of a frame or tool name as written (exact text: a target keeps the
+/// spelling of its first use), so that 100,000 targets used with `wCar` hold one `wCar`.
+fn shared(names: &mut std::collections::HashSet<Arc<str>>, name: Option<&str>) -> Option<Arc<str>> {
+    let name = name?;
+    if let Some(s) = names.get(name) {
+        return Some(Arc::clone(s));
+    }
+    let s: Arc<str> = Arc::from(name);
+    names.insert(Arc::clone(&s));
+    Some(s)
+}
+
+/// Records one use at `line` with `frame`, `tool`, `stationary` and `run_time` in target `at`
+/// (the names shared through `names`).
 #[allow(clippy::too_many_arguments)]
 fn record(
     files: &mut [FileFacts<'_>],
+    names: &mut std::collections::HashSet<Arc<str>>,
     (m, i): TargetAt,
     frame: Option<&str>,
     tool: Option<&str>,
@@ -303,7 +318,14 @@ fn record(
     line: usize,
 ) {
     if let Some(p) = files.get_mut(m).and_then(|f| f.positions.get_mut(i)) {
-        p.usage.record(frame, tool, stationary, line);
+        let frame = shared(names, frame);
+        let tool = if p.usage.tool.is_none() {
+            shared(names, tool)
+        } else {
+            None
+        };
+        p.usage
+            .record_shared(frame.as_ref(), tool.as_ref(), stationary, line);
         if let Some(why) = run_time {
             p.usage.set_run_time(why.clone());
         }
@@ -331,6 +353,7 @@ pub(crate) struct Binder<'f, 'a> {
     targets: Vec<TargetAt>,
     params: Vec<ParamAt>,
     hits: Vec<TargetAt>,
+    names: std::collections::HashSet<Arc<str>>,
 }
 
 impl<'f, 'a> Binder<'f, 'a> {
@@ -356,6 +379,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             targets: Vec::new(),
             params: Vec::new(),
             hits: Vec::new(),
+            names: Default::default(),
         }
     }
 
@@ -379,6 +403,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             targets,
             params,
             hits,
+            names,
         } = self;
         let naming = &*naming;
         targets.clear();
@@ -472,6 +497,7 @@ impl<'f, 'a> Binder<'f, 'a> {
         for &t in targets.iter() {
             record(
                 files,
+                names,
                 t,
                 u.frame.as_deref(),
                 u.tool.as_deref(),
@@ -498,6 +524,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             param_uses,
             param_edges,
             bindings,
+            mut names,
             ..
         } = self;
         for (t, to, line) in bindings {
@@ -505,6 +532,7 @@ impl<'f, 'a> Binder<'f, 'a> {
                 let (frame, tool) = (w.frame.as_deref(), w.tool.as_deref());
                 record(
                     files,
+                    &mut names,
                     t,
                     frame,
                     tool,

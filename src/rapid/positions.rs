@@ -33,24 +33,99 @@ const NAMING: crate::resolve::Naming = crate::resolve::Naming {
     scope: crate::resolve::Scope::OwnFileFirst,
 };
 
+/// A span in the 32-bit form the call records keep (inputs are at most
+/// [`MAX_INPUT_BYTES`](crate::output::MAX_INPUT_BYTES), so every offset fits): a call record
+/// of a 20 MB module is one of 100,000, and with `usize` spans and a vector each they were a
+/// fifth of `check`'s peak memory.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct CallSpan {
+    start: u32,
+    end: u32,
+}
+
+impl CallSpan {
+    /// `None` only for a span past 4 GiB, which no input reaches (see the type).
+    fn of(span: Span) -> Option<CallSpan> {
+        Some(CallSpan {
+            start: u32::try_from(span.start).ok()?,
+            end: u32::try_from(span.end).ok()?,
+        })
+    }
+
+    fn span(self) -> Span {
+        Span::new(self.start as usize, self.end as usize)
+    }
+}
+
 /// A procedure call, kept until every declaration has been read: the frame and tool it moves
-/// with are found then, and it is bound as a [`Use`](crate::resolve::Use).
-#[derive(Clone, Debug)]
+/// with are found then, and it is bound as a [`Use`](crate::resolve::Use). Its arguments,
+/// references and inline literals are ranges of the extractor's shared lists (one list each,
+/// not three vectors per call), from the `*_start` given here to the next call's.
+#[derive(Clone, Copy, Debug)]
 struct CallUse {
-    name: Span,
-    line: usize,
+    name: CallSpan,
+    line: u32,
     /// The routine the call is written in (index into the module's routines).
-    routine: Option<usize>,
+    routine: Option<u32>,
     /// `\WObj:=` value.
-    wobj: Option<Span>,
+    wobj: Option<CallSpan>,
     /// `\Tool:=` (or `tool:=`) value.
-    tool: Option<Span>,
-    /// Positional arguments that are plain references (`p10`, `pArr{3}`).
-    positional: Vec<Option<Span>>,
-    /// Targets referenced through `Offs`/`RelTool` first arguments.
-    via_offset: Vec<Span>,
-    /// Inline literals written in the call's arguments (indices into `positions`).
+    tool: Option<CallSpan>,
+    /// Start in [`Extractor::call_args`]: positional arguments that are plain references
+    /// (`p10`, `pArr{3}`).
+    args_start: u32,
+    /// Start in [`Extractor::call_refs`]: targets referenced through `Offs`/`RelTool` first
+    /// arguments.
+    refs_start: u32,
+    /// Start in [`Extractor::call_inline`]: inline literals written in the call's arguments
+    /// (indices into `positions`).
+    inline_start: u32,
+}
+
+/// A module's call records and the shared lists their ranges index.
+struct Calls {
+    uses: Vec<CallUse>,
+    args: Vec<Option<CallSpan>>,
+    refs: Vec<Span>,
     inline: Vec<usize>,
+}
+
+impl Calls {
+    /// Each call with its positional arguments, references and inline literals.
+    fn iter(
+        &self,
+    ) -> impl Iterator<Item = (&CallUse, &[Option<CallSpan>], &[Span], &[usize])> + '_ {
+        let range = |start: u32, next: Option<u32>, len: usize| {
+            start as usize..next.map_or(len, |n| n as usize)
+        };
+        self.uses.iter().enumerate().map(move |(k, u)| {
+            let next = self.uses.get(k + 1);
+            (
+                u,
+                self.args
+                    .get(range(
+                        u.args_start,
+                        next.map(|n| n.args_start),
+                        self.args.len(),
+                    ))
+                    .unwrap_or_default(),
+                self.refs
+                    .get(range(
+                        u.refs_start,
+                        next.map(|n| n.refs_start),
+                        self.refs.len(),
+                    ))
+                    .unwrap_or_default(),
+                self.inline
+                    .get(range(
+                        u.inline_start,
+                        next.map(|n| n.inline_start),
+                        self.inline.len(),
+                    ))
+                    .unwrap_or_default(),
+            )
+        })
+    }
 }
 
 /// A `RECORD` declared in the module: its name and components (type, name).
@@ -71,6 +146,13 @@ pub struct Extractor<'l> {
     /// declaration).
     symbols: Vec<crate::resolve::Declaration>,
     uses: Vec<CallUse>,
+    /// The calls' positional arguments, call after call (see [`CallUse`]); `None` for an
+    /// argument that is not a plain reference.
+    call_args: Vec<Option<CallSpan>>,
+    /// The calls' `Offs`/`RelTool` first arguments, call after call.
+    call_refs: Vec<Span>,
+    /// The calls' inline literals, call after call.
+    call_inline: Vec<usize>,
     /// Whole-value assignments `name := [...]` of literal aggregates (a frame given a new
     /// value that is known offline).
     assigned: Vec<Span>,
@@ -128,6 +210,9 @@ impl<'l> Extractor<'l> {
             offsets: Vec::new(),
             symbols: Vec::new(),
             uses: Vec::new(),
+            call_args: Vec::new(),
+            call_refs: Vec::new(),
+            call_inline: Vec::new(),
             assigned: Vec::new(),
             computed: Vec::new(),
             routines: Vec::new(),
@@ -511,10 +596,15 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
     let is_speed =
         |n: &NameKey| n.is(b"vmax") || n.numbered(b'v') || type_of.get(n) == Some(&DeclKind::Speed);
     let mut positions: Vec<Vec<Position>> = Vec::with_capacity(modules.len());
-    let mut calls: Vec<Vec<CallUse>> = Vec::with_capacity(modules.len());
+    let mut calls: Vec<Calls> = Vec::with_capacity(modules.len());
     let mut rest = Vec::with_capacity(modules.len());
     for (x, src) in modules {
-        calls.push(x.uses);
+        calls.push(Calls {
+            uses: x.uses,
+            args: x.call_args,
+            refs: x.call_refs,
+            inline: x.call_inline,
+        });
         positions.push(x.positions);
         rest.push((
             x.frames, x.offsets, x.assigned, x.computed, x.routines, x.exported, src,
@@ -540,42 +630,50 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
         .collect();
     let mut binder = crate::resolve::Binder::new(&mut facts, &NAMING);
     let mut names: Vec<Option<NameKey>> = Vec::new();
+    let mut positional: Vec<Option<Span>> = Vec::new();
     for (m, (module_calls, r)) in calls.iter().zip(&rest).enumerate() {
         let src = r.6;
-        for u in module_calls {
-            let call = NameKey(u.name.slice(src));
+        for (u, call_args, refs, inline) in module_calls.iter() {
+            let call = NameKey(u.name.span().slice(src));
+            positional.clear();
+            positional.extend(call_args.iter().map(|a| a.map(CallSpan::span)));
             names.clear();
             names.extend(
-                u.positional
+                positional
                     .iter()
                     .map(|p| p.map(|sp| NameKey(sp.slice(src)))),
             );
             let written = |i: usize| -> Option<String> {
-                u.positional
+                positional
                     .get(i)
                     .copied()
                     .flatten()
                     .map(|sp| text_of(src, sp))
             };
-            let tool = u.tool.map(|sp| trimmed(text_of(src, sp))).or_else(|| {
-                if let Some(i) = names.iter().position(|n| n.as_ref().is_some_and(is_tool)) {
-                    return written(i);
-                }
-                let after = names
-                    .iter()
-                    .position(|n| n.as_ref().is_some_and(is_zone))
-                    .or_else(|| {
-                        call.starts_with(b"search")
-                            .then(|| names.iter().position(|n| n.as_ref().is_some_and(is_speed)))
-                            .flatten()
-                    })?;
-                written(after + 1)
-            });
+            let tool = u
+                .tool
+                .map(|sp| trimmed(text_of(src, sp.span())))
+                .or_else(|| {
+                    if let Some(i) = names.iter().position(|n| n.as_ref().is_some_and(is_tool)) {
+                        return written(i);
+                    }
+                    let after = names
+                        .iter()
+                        .position(|n| n.as_ref().is_some_and(is_zone))
+                        .or_else(|| {
+                            call.starts_with(b"search")
+                                .then(|| {
+                                    names.iter().position(|n| n.as_ref().is_some_and(is_speed))
+                                })
+                                .flatten()
+                        })?;
+                    written(after + 1)
+                });
             let motion = MOTION_PREFIXES
                 .iter()
                 .any(|p| call.starts_with(p.as_bytes()));
             let wobj = match u.wobj {
-                Some(sp) => Some(trimmed(text_of(src, sp))),
+                Some(sp) => Some(trimmed(text_of(src, sp.span()))),
                 None => (motion || tool.is_some()).then(|| "wobj0".to_owned()),
             };
             let stationary = wobj
@@ -584,17 +682,17 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
             binder.bind(
                 m,
                 &crate::resolve::Use {
-                    line: u.line,
-                    routine: u.routine,
-                    callee: Some(u.name),
+                    line: u.line as usize,
+                    routine: u.routine.map(|r| r as usize),
+                    callee: Some(u.name.span()),
                     stationary: wobj.is_some() && stationary,
                     frame: wobj,
                     tool,
                     run_time: None,
-                    args: &u.positional,
-                    refs: &u.via_offset,
+                    args: &positional,
+                    refs,
                     folded: &[],
-                    targets: &u.inline,
+                    targets: inline,
                 },
             );
         }
@@ -897,48 +995,58 @@ impl Extractor<'_> {
     }
 
     fn statement_call(&mut self, src: &[u8], arena: &Arena, name: Span, args: u32, span: Span) {
-        {
-            let (inline, via_offset) = self.scan(src, arena, true);
-            let mut u = CallUse {
-                name,
-                line: self.lines.line(span.start),
-                routine: self.current,
-                wobj: None,
-                tool: None,
-                positional: Vec::new(),
-                via_offset,
-                inline,
+        let (inline, via_offset) = self.scan(src, arena, true);
+        let (Some(name), Ok(line), Ok(args_start), Ok(refs_start), Ok(inline_start)) = (
+            CallSpan::of(name),
+            u32::try_from(self.lines.line(span.start)),
+            u32::try_from(self.call_args.len()),
+            u32::try_from(self.call_refs.len()),
+            u32::try_from(self.call_inline.len()),
+        ) else {
+            // Past 4 GiB: no input is this large (see `CallSpan`).
+            return;
+        };
+        self.call_refs.extend(via_offset);
+        self.call_inline.extend(inline);
+        let mut u = CallUse {
+            name,
+            line,
+            routine: self.current.and_then(|r| u32::try_from(r).ok()),
+            wobj: None,
+            tool: None,
+            args_start,
+            refs_start,
+            inline_start,
+        };
+        for a in arena.children(args) {
+            let Some(arg) = arena.get(a) else { continue };
+            let value = if arg.first == super::expr::NONE {
+                None
+            } else {
+                arena.get(arg.first)
             };
-            for a in arena.children(args) {
-                let Some(arg) = arena.get(a) else { continue };
-                let value = if arg.first == super::expr::NONE {
-                    None
-                } else {
-                    arena.get(arg.first)
-                };
-                if arg.switch {
-                    let nm = arg.name_span().slice(src);
-                    let v = value.map(|v| v.span());
-                    if nm.eq_ignore_ascii_case(b"WObj") {
-                        u.wobj = v;
-                    } else if nm.eq_ignore_ascii_case(b"Tool") {
-                        u.tool = v;
-                    }
-                } else {
-                    // A required argument may be given by name: `..., fine, tool:=tGun;`.
-                    if arg.name_end > arg.name_start
-                        && arg.name_span().slice(src).eq_ignore_ascii_case(b"Tool")
-                    {
-                        u.tool = value.map(|v| v.span());
-                    }
-                    u.positional.push(
-                        value
-                            .filter(|v| matches!(v.kind, ExprKind::Ident | ExprKind::Access))
-                            .map(|v| v.span()),
-                    );
+            if arg.switch {
+                let nm = arg.name_span().slice(src);
+                let v = value.and_then(|v| CallSpan::of(v.span()));
+                if nm.eq_ignore_ascii_case(b"WObj") {
+                    u.wobj = v;
+                } else if nm.eq_ignore_ascii_case(b"Tool") {
+                    u.tool = v;
                 }
+            } else {
+                // A required argument may be given by name: `..., fine, tool:=tGun;`.
+                if arg.name_end > arg.name_start
+                    && arg.name_span().slice(src).eq_ignore_ascii_case(b"Tool")
+                {
+                    u.tool = value.and_then(|v| CallSpan::of(v.span()));
+                }
+                self.call_args.push(
+                    value
+                        .filter(|v| matches!(v.kind, ExprKind::Ident | ExprKind::Access))
+                        .and_then(|v| CallSpan::of(v.span())),
+                );
             }
-            self.uses.push(u);
         }
+        self.uses.push(u);
     }
 }

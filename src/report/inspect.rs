@@ -386,7 +386,7 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
     };
     let frame = FrameColumn {
         column: file.language.dialect().vocabulary().frame_column,
-        name: p.usage.wobj.clone(),
+        name: p.usage.wobj.as_deref().map(str::to_owned),
         at: None,
     };
     PositionRow {
@@ -407,7 +407,7 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
         skid,
         extax: nums(&p.extax),
         frame,
-        tool: p.usage.tool.clone(),
+        tool: p.usage.tool.as_deref().map(str::to_owned),
         tool_at: None,
         reach: None,
     }

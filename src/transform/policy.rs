@@ -126,7 +126,7 @@ pub(crate) fn wobj_of(
     let what = describe(p);
     let frame = words.frame;
     match (&p.usage.wobj, p.usage.lines.is_empty()) {
-        (Some(w), _) => Ok(w.clone()),
+        (Some(w), _) => Ok(w.to_string()),
         (None, true) => match default {
             Some(d) => Ok(d.to_owned()),
             None => Err(Why::new(

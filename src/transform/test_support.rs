@@ -62,8 +62,8 @@ fn line_spans(src: &[u8]) -> Vec<(usize, usize)> {
 
 fn usage(wobj: &str, line: usize) -> Usage {
     Usage {
-        wobj: Some(wobj.to_owned()),
-        tool: Some("tool0".to_owned()),
+        wobj: Some(wobj.into()),
+        tool: Some("tool0".into()),
         other_wobjs: Vec::new(),
         stationary_tool: false,
         lines: vec![line],

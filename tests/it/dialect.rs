@@ -68,7 +68,7 @@ fn parse(path: &Path, source: Vec<u8>) -> ParsedFile {
             config: Config::None,
             extax: vec![skid],
             usage: Usage {
-                wobj: Some("world".to_owned()),
+                wobj: Some("world".into()),
                 lines: vec![n + 1],
                 ..Usage::default()
             },

@@ -325,7 +325,10 @@ fn a_point_used_with_two_bases_is_flagged() {
         .find(|p| p.name.as_deref() == Some("XSHARED"))
         .unwrap();
     assert_eq!(shared.usage.wobj.as_deref(), Some("BASE_DATA[1]"));
-    assert_eq!(shared.usage.other_wobjs, ["BASE_DATA[2]"]);
+    assert_eq!(
+        shared.usage.other_wobjs,
+        [std::sync::Arc::from("BASE_DATA[2]")]
+    );
     assert_eq!(shared.usage.lines, [8, 10]);
     // BAS(#BASE,1) before XEND; the second DEF starts over and leaves it unresolved.
     let end = dat
@@ -737,7 +740,13 @@ fn pair_lookup_any_case_and_declared_types_across_the_pair() {
     let found: Vec<_> = src
         .positions
         .iter()
-        .map(|p| (p.label(), p.kind, p.usage.wobj.clone()))
+        .map(|p| {
+            (
+                p.label(),
+                p.kind,
+                p.usage.wobj.as_deref().map(str::to_owned),
+            )
+        })
         .collect();
     assert_eq!(
         found,
@@ -856,7 +865,13 @@ fn frame_array_moved_to_with_a_computed_index_makes_every_element_a_target() {
         .files
         .iter()
         .flat_map(|f| &f.positions)
-        .map(|p| (p.label(), p.usage.wobj.clone(), p.usage.lines.clone()))
+        .map(|p| {
+            (
+                p.label(),
+                p.usage.wobj.as_deref().map(str::to_owned),
+                p.usage.lines.clone(),
+            )
+        })
         .collect();
     assert_eq!(
         found,
@@ -970,7 +985,13 @@ fn kss_backup_oddities_parse_cleanly() {
         .files
         .iter()
         .flat_map(|f| &f.positions)
-        .map(|p| (p.label(), p.usage.wobj.clone(), p.usage.tool.clone()))
+        .map(|p| {
+            (
+                p.label(),
+                p.usage.wobj.as_deref().map(str::to_owned),
+                p.usage.tool.as_deref().map(str::to_owned),
+            )
+        })
         .collect();
     // `$ROBROOT` and the `$` workspace literal are system data, not targets.
     assert_eq!(

@@ -313,7 +313,7 @@ fn usage_two_wobjs_is_flagged_with_a_warning() {
     let f = load("two_wobjs.mod");
     let shared = pos(&f, "pShared");
     assert_eq!(shared.usage.wobj.as_deref(), Some("wLeft"));
-    assert_eq!(shared.usage.other_wobjs, vec!["wRight".to_owned()]);
+    assert_eq!(shared.usage.other_wobjs, [std::sync::Arc::from("wRight")]);
     assert_eq!(shared.usage.lines, vec![11, 13]);
     assert!(pos(&f, "pLeftOnly").usage.other_wobjs.is_empty());
     let warn = f
