@@ -476,6 +476,11 @@ fn a_refused_global_point_of_config_dat_is_reported() {
         err.contains("$config.dat:7:") && err.contains("E6POS `XPick_Point` is out of reach"),
         "{err}"
     );
+    // The hint speaks KRL: the target's frame is its base (RAPID says work object).
+    assert!(
+        err.contains("help: check the target, its base and tool, and the robot's kinematics"),
+        "{err}"
+    );
     assert!(!out.exists());
 }
 
