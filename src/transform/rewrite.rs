@@ -6,7 +6,7 @@ use crate::geometry::{
     Pose, abb_quat, abb_quat_components, angle_between, kuka_abc, kuka_abc_angles,
 };
 use crate::position::{BitField, CartesianFields, NumField, Orientation};
-use crate::syntax::{Edit, NumLit, same_at};
+use crate::syntax::{Edit, NumLit, fixed, same_at};
 
 /// At least this many decimals for mm.
 pub(crate) const MM_DECIMALS: usize = 3;
@@ -168,7 +168,7 @@ pub(crate) fn reversible_pose_edits(
                     let z = kuka_abc_angles(&back, Some(w));
                     // The inverse keeps the original's A at the lock (it reads it from the
                     // stamp): written at B = ±90°, the original's A is recorded.
-                    let at_lock = abc[1].value().abs() == 90.0;
+                    let at_lock = written_at_lock(abc[1]);
                     Some(
                         at_lock
                             .then(|| lock_split(&back, z, abc[0].value(), places))
@@ -185,6 +185,12 @@ pub(crate) fn reversible_pose_edits(
     edits
 }
 
+/// Whether a KUKA B is written at the gimbal lock (±90): the targets whose A a `correct`
+/// records in its stamp, and whose A the inverse then keeps.
+pub(crate) fn written_at_lock(b: &NumField) -> bool {
+    b.value().abs() == 90.0
+}
+
 /// The angles `[A, B, C]` of `exact` that keep A at `keep_a`, when `angles` (its angles as they
 /// would be written) are at B = ±90° at the written `places`: there only A − C (B = 90°) or
 /// A + C (B = -90°) is fixed by the rotation, `exact` = Rz(A ∓ C)·Ry(±90°), and every split
@@ -197,12 +203,11 @@ pub(crate) fn lock_split(
     keep_a: f64,
     places: [usize; 3],
 ) -> Option<[f64; 3]> {
-    let round = |v: f64, p: usize| {
-        let s = 10f64.powi(p as i32);
-        (v * s).round() / s
-    };
-    let b = round(angles[1], places[1]);
-    if b.abs() != 90.0 || !keep_a.is_finite() {
+    // At the lock as B will be written: rounded the way the writer rounds.
+    let b = [90.0, -90.0]
+        .into_iter()
+        .find(|&lock| same_at(angles[1], lock, places[1]))?;
+    if !keep_a.is_finite() {
         return None;
     }
     // Rz(φ) = exact·Ry(∓90°)⁻¹, with φ = A − C at B = 90° and A + C at B = -90°.
@@ -212,7 +217,8 @@ pub(crate) fn lock_split(
     let c = if b > 0.0 { keep_a - phi } else { phi - keep_a };
     // C on the branch of ±180° nearest the one it would have been written on.
     let c = c + 360.0 * ((angles[2] - c) / 360.0).round();
-    let written = kuka_abc(keep_a, b, round(c, places[2]));
+    let c_written = fixed(c, places[2]).parse().unwrap_or(c);
+    let written = kuka_abc(keep_a, b, c_written);
     let unit = 10f64.powi(-(places[1].min(places[2]) as i32)).to_radians();
     (angle_between(&written, exact) <= unit).then_some([keep_a, b, c])
 }

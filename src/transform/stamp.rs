@@ -181,12 +181,8 @@ impl LockSplits {
             else {
                 continue;
             };
-            if b.value().abs() == 90.0 && a.value().is_finite() {
-                let text = file
-                    .source
-                    .get(a.span().start..a.span().end)
-                    .unwrap_or_default();
-                out.push((i, crate::syntax::latin1(text)));
+            if super::rewrite::written_at_lock(b) && a.value().is_finite() {
+                out.push((i, crate::syntax::latin1(a.span().slice(&file.source))));
             }
         }
         LockSplits(out)
