@@ -95,34 +95,18 @@ impl Calls {
     fn iter(
         &self,
     ) -> impl Iterator<Item = (&CallUse, &[Option<CallSpan>], &[Span], &[usize])> + '_ {
-        let range = |start: u32, next: Option<u32>, len: usize| {
-            start as usize..next.map_or(len, |n| n as usize)
-        };
+        // One call's part of a shared list: from its start to the next call's (or the end).
+        fn part<T>(list: &[T], start: u32, next: Option<u32>) -> &[T] {
+            let end = next.map_or(list.len(), |n| n as usize);
+            list.get(start as usize..end).unwrap_or_default()
+        }
         self.uses.iter().enumerate().map(move |(k, u)| {
             let next = self.uses.get(k + 1);
             (
                 u,
-                self.args
-                    .get(range(
-                        u.args_start,
-                        next.map(|n| n.args_start),
-                        self.args.len(),
-                    ))
-                    .unwrap_or_default(),
-                self.refs
-                    .get(range(
-                        u.refs_start,
-                        next.map(|n| n.refs_start),
-                        self.refs.len(),
-                    ))
-                    .unwrap_or_default(),
-                self.inline
-                    .get(range(
-                        u.inline_start,
-                        next.map(|n| n.inline_start),
-                        self.inline.len(),
-                    ))
-                    .unwrap_or_default(),
+                part(&self.args, u.args_start, next.map(|n| n.args_start)),
+                part(&self.refs, u.refs_start, next.map(|n| n.refs_start)),
+                part(&self.inline, u.inline_start, next.map(|n| n.inline_start)),
             )
         })
     }
