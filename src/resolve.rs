@@ -440,7 +440,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             // The required parameter of the enclosing routine a reference names, if any.
             let param_of = |key: &str| -> Option<ParamAt> {
                 let rt = u.routine?;
-                let base = key.split_once(naming.open).map_or(key, |(a, _)| a);
+                let base = index.array_of(key).unwrap_or(key);
                 f.routines
                     .get(rt)?
                     .params
