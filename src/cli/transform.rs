@@ -930,7 +930,10 @@ fn run_each(
         programs
             .iter()
             .flat_map(|p| &p.files)
-            .map(|f| (f.path.clone(), stamp::LockSplits::of(f)))
+            .filter_map(|f| {
+                let splits = stamp::LockSplits::of(f);
+                (!splits.is_empty()).then(|| (f.path.clone(), splits))
+            })
             .collect()
     } else {
         Vec::new()
