@@ -37,22 +37,30 @@ enum TextRepr {
     Heap(Box<[u8]>),
 }
 
+impl EditText {
+    /// A copy of `text`: inline up to 22 bytes, so a written number costs no allocation.
+    pub fn from_bytes(text: &[u8]) -> EditText {
+        Self::inline(text).unwrap_or_else(|| EditText(TextRepr::Heap(text.into())))
+    }
+
+    fn inline(text: &[u8]) -> Option<EditText> {
+        let n = text.len();
+        // The length check keeps the conversion in range: `len as u8` ≤ 22.
+        if n > INLINE {
+            return None;
+        }
+        let mut bytes = [0; INLINE];
+        bytes.get_mut(..n)?.copy_from_slice(text);
+        Some(EditText(TextRepr::Inline {
+            len: n as u8,
+            bytes,
+        }))
+    }
+}
+
 impl From<Vec<u8>> for EditText {
     fn from(text: Vec<u8>) -> EditText {
-        match text.len() {
-            // The length checks keep both conversions in range: `len as u8` ≤ 22.
-            n if n <= INLINE => {
-                let mut bytes = [0; INLINE];
-                if let Some(dst) = bytes.get_mut(..n) {
-                    dst.copy_from_slice(&text);
-                }
-                EditText(TextRepr::Inline {
-                    len: n as u8,
-                    bytes,
-                })
-            }
-            _ => EditText(TextRepr::Heap(text.into_boxed_slice())),
-        }
+        Self::inline(&text).unwrap_or_else(|| EditText(TextRepr::Heap(text.into_boxed_slice())))
     }
 }
 
@@ -143,6 +151,12 @@ mod tests {
             Edit::new(Span::new(0, 1), "1.5"),
             Edit::new(Span::new(0, 1), b"1.5".to_vec())
         );
+        assert_eq!(
+            EditText::from_bytes(b"1.5"),
+            EditText::from(b"1.5".to_vec())
+        );
+        let long = [b'7'; 40];
+        assert_eq!(&*EditText::from_bytes(&long), &long[..]);
         assert_ne!(
             EditText::from(b"1.5".to_vec()),
             EditText::from(b"1.50".to_vec())

@@ -1,5 +1,7 @@
 //! Numeric literals that keep their original text and write new values in the same style.
 
+use super::EditText;
+
 /// A numeric literal as written: `12`, `-0.5`, `.5`, `9E9`, `9E+09`, `9e+9`, `2.69E-07`.
 ///
 /// Like toml_edit's `Formatted<T>`, the value and the style of its text travel together: an
@@ -46,16 +48,73 @@ struct Exponent {
 
 impl Exponent {
     /// Appends the suffix as written: `E+09`.
-    fn write(self, out: &mut String) {
-        out.push(if self.upper { 'E' } else { 'e' });
+    fn write(self, out: &mut Digits) {
+        out.push(if self.upper { b'E' } else { b'e' });
         if self.sign != 0 {
-            out.push(self.sign as char);
+            out.push(self.sign);
         }
-        let digits = self.value.unsigned_abs().to_string();
-        for _ in digits.len()..self.digits as usize {
-            out.push('0');
+        // |value| < 100 (see `NumLit::parse`): one or two digits.
+        let v = self.value.unsigned_abs();
+        let len = if v >= 10 { 2 } else { 1 };
+        for _ in len..self.digits as usize {
+            out.push(b'0');
         }
-        out.push_str(&digits);
+        if v >= 10 {
+            out.push(b'0' + v / 10 % 10);
+        }
+        out.push(b'0' + v % 10);
+    }
+}
+
+/// A number's text built on the stack: a rewritten literal is at most a sign, 23 integer
+/// digits, a point, 18 decimals and a 5-byte exponent suffix. Writing millions of literals
+/// through `String`s was an allocation each.
+struct Digits {
+    bytes: [u8; 64],
+    len: usize,
+}
+
+impl Digits {
+    fn new() -> Digits {
+        Digits {
+            bytes: [0; 64],
+            len: 0,
+        }
+    }
+
+    fn push(&mut self, b: u8) {
+        // Never full (see above); a byte past the end would be dropped, not a panic.
+        if let Some(slot) = self.bytes.get_mut(self.len) {
+            *slot = b;
+            self.len += 1;
+        }
+    }
+
+    fn extend(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.push(b);
+        }
+    }
+
+    fn as_bytes(&self) -> &[u8] {
+        self.bytes.get(..self.len).unwrap_or(&[])
+    }
+
+    /// `0.512` → `.512`, `-0.512` → `-.512`: drops the integer `0` of a mantissa below 1.
+    fn drop_leading_zero(&mut self) {
+        let text = self.as_bytes();
+        let Some(at) = text.iter().position(u8::is_ascii_digit) else {
+            return;
+        };
+        if text.get(at..at + 2) == Some(b"0.") {
+            self.bytes.copy_within(at + 1..self.len, at);
+            self.len -= 1;
+        }
+    }
+
+    fn as_string(&self) -> String {
+        // Only ASCII was written.
+        self.as_bytes().iter().map(|&b| b as char).collect()
     }
 }
 
@@ -191,6 +250,14 @@ impl NumLit {
     /// `1.5E+2` (`1.50123E+2`, `15.00123E+2`) while the mantissa has at most 3 integer digits
     /// (or as many as the original's), else the plain form (`150012.300`).
     pub fn rewrite(&self, new: f64, min_decimals: usize) -> Option<String> {
+        // Only ASCII is written.
+        self.rewrite_text(new, min_decimals)
+            .map(|t| t.iter().map(|&b| b as char).collect())
+    }
+
+    /// [`rewrite`](Self::rewrite) as the bytes of an edit: the common number is built on the
+    /// stack and kept inline, without an allocation.
+    pub fn rewrite_text(&self, new: f64, min_decimals: usize) -> Option<EditText> {
         let places = self.places(min_decimals);
         // Compare the rounded values as integers first: most fields of a corrected program
         // change, but the ones that don't (zeros, 9E9, unchanged quaternions) cost no text.
@@ -198,9 +265,9 @@ impl NumLit {
             if a == b {
                 return None;
             }
-            let mut text = String::with_capacity(24);
+            let mut text = Digits::new();
             if self.style & PLUS != 0 && !a.negative {
-                text.push('+');
+                text.push(b'+');
             }
             match self.exponent.map(|e| (e, places as i32 + e.value as i32)) {
                 // The same digits with the point moved by the exponent: `150123` units of
@@ -216,24 +283,18 @@ impl NumLit {
                 _ => a.write(places, &mut text),
             }
             if self.style & LEADING_POINT != 0 && places > 0 {
-                // `0.512` → `.512`, `-0.512` → `-.512`.
-                if let Some(at) = text
-                    .find("0.")
-                    .filter(|&at| !text[..at].contains(|c: char| c.is_ascii_digit()))
-                {
-                    text.remove(at);
-                }
+                text.drop_leading_zero();
             }
-            return Some(text);
+            return Some(EditText::from_bytes(text.as_bytes()));
         }
         let written = fixed(new, places);
         if written == fixed(self.value, places) {
             return None;
         }
         if self.style & PLUS != 0 && !written.starts_with('-') {
-            return Some(format!("+{written}"));
+            return Some(EditText::from(format!("+{written}").into_bytes()));
         }
-        Some(written)
+        Some(EditText::from(written.into_bytes()))
     }
 
     /// The text to write for an integer field (`cf1`, Status), or `None` if unchanged.
@@ -279,9 +340,9 @@ fn exact_fast_path(mantissa: u64, digits: usize, power: i32) -> Option<f64> {
 /// `value` with `places` decimals, without a negative zero.
 pub fn fixed(value: f64, places: usize) -> String {
     if let Some(scaled) = Scaled::of(value, places) {
-        let mut text = String::with_capacity(24);
+        let mut text = Digits::new();
         scaled.write(places, &mut text);
-        return text;
+        return text.as_string();
     }
     let s = format!("{value:.places$}");
     if s.starts_with('-') && s[1..].bytes().all(|b| b == b'0' || b == b'.') {
@@ -354,7 +415,7 @@ impl Scaled {
     ///
     /// By hand into a stack buffer: through `write!` the formatting machinery was most of the
     /// cost of a rewritten literal.
-    fn write(self, places: usize, out: &mut String) {
+    fn write(self, places: usize, out: &mut Digits) {
         // Sign, 23 integer digits (units < 2^75, written with no decimals), '.', 18 decimals.
         let mut buf = [0u8; 48];
         let mut at = buf.len();
@@ -384,8 +445,7 @@ impl Scaled {
             at -= 1;
             buf[at] = b'-';
         }
-        // Only ASCII digits, '.' and '-' were written.
-        out.extend(buf[at..].iter().map(|&b| b as char));
+        out.extend(buf.get(at..).unwrap_or(&[]));
     }
 }
 
@@ -486,9 +546,13 @@ mod tests {
             (0.1 + 0.2, 12),
         ] {
             let scaled = Scaled::of(value, places).unwrap();
-            let mut text = String::new();
+            let mut text = Digits::new();
             scaled.write(places, &mut text);
-            assert_eq!(text, by_format(value, places), "{value} .{places}");
+            assert_eq!(
+                text.as_string(),
+                by_format(value, places),
+                "{value} .{places}"
+            );
         }
         assert_eq!(Scaled::of(1e20, 3), None);
         assert_eq!(Scaled::of(1.0, 13), None);

@@ -6,7 +6,7 @@ use crate::geometry::{
     Pose, abb_quat, abb_quat_components, angle_between, kuka_abc, kuka_abc_angles,
 };
 use crate::position::{BitField, CartesianFields, NumField, Orientation};
-use crate::syntax::{Edit, NumLit, fixed, same_at};
+use crate::syntax::{Edit, EditText, NumLit, fixed, same_at};
 
 /// At least this many decimals for mm.
 pub(crate) const MM_DECIMALS: usize = 3;
@@ -37,8 +37,11 @@ pub(crate) fn number_edit(field: &Option<NumField>, new: f64, min_decimals: usiz
         return None;
     }
     let f = field.as_ref()?;
-    let text = f.lit().rewrite(new, min_decimals)?;
-    Some(Edit::new(f.span(), text))
+    let text = f.lit().rewrite_text(new, min_decimals)?;
+    Some(Edit {
+        span: f.span(),
+        text,
+    })
 }
 
 /// An edit for an integer field (`cf1`…), if it changes.
@@ -254,32 +257,35 @@ fn plain<const N: usize>(
     fields: &[Option<NumField>; N],
     values: [f64; N],
     house: usize,
-) -> [Option<String>; N] {
+) -> [Option<EditText>; N] {
     std::array::from_fn(|i| {
         let f = fields[i].as_ref().filter(|_| values[i].is_finite())?;
-        f.lit().rewrite(values[i], house)
+        f.lit().rewrite_text(values[i], house)
     })
 }
 
 fn push_edits<const N: usize>(
     edits: &mut Vec<Edit>,
     fields: &[Option<NumField>; N],
-    texts: [Option<String>; N],
+    texts: [Option<EditText>; N],
 ) {
     for (f, text) in fields.iter().zip(texts) {
         if let (Some(f), Some(text)) = (f, text) {
-            edits.push(Edit::new(f.span(), text));
+            edits.push(Edit {
+                span: f.span(),
+                text,
+            });
         }
     }
 }
 
 /// One field written for `v`: its text (`None`: kept) and the value the next run reads from it.
-fn write_one(field: &NumField, v: f64, house: usize) -> (Option<String>, f64) {
-    match field.lit().rewrite(v, house) {
+fn write_one(field: &NumField, v: f64, house: usize) -> (Option<EditText>, f64) {
+    match field.lit().rewrite_text(v, house) {
         Some(text) => {
             // Our own output always parses; were it not to, the check below fails safe (the
             // value read back then matches nothing and plain rounding is written).
-            let read = NumLit::parse(text.as_bytes()).map_or(f64::NAN, |l| l.value());
+            let read = NumLit::parse(&text).map_or(f64::NAN, |l| l.value());
             (Some(text), read)
         }
         None => (None, field.value()),
@@ -293,7 +299,7 @@ fn reversible<const N: usize>(
     exact: [f64; N],
     house: usize,
     inverse: impl Fn([f64; N]) -> Option<[f64; N]>,
-) -> [Option<String>; N] {
+) -> [Option<EditText>; N] {
     if exact.iter().any(|v| !v.is_finite()) {
         return std::array::from_fn(|_| None);
     }
@@ -303,14 +309,14 @@ fn reversible<const N: usize>(
             (0..N).all(|i| z[i].is_finite() && same_at(z[i], fields[i].value(), places[i]))
         })
     };
-    let first: [(Option<String>, f64); N] =
+    let first: [(Option<EditText>, f64); N] =
         std::array::from_fn(|i| write_one(fields[i], exact[i], house));
     if gives_back(first.clone().map(|(_, v)| v)) {
         return first.map(|(t, _)| t);
     }
     // Each field's choices: the plain rounding and the values one unit of its last written
     // place either side, nearest to the exact value first.
-    let options: [Vec<(Option<String>, f64, f64)>; N] = std::array::from_fn(|i| {
+    let options: [Vec<(Option<EditText>, f64, f64)>; N] = std::array::from_fn(|i| {
         let unit = 10f64.powi(-(places[i] as i32));
         let mut o: Vec<_> = [0.0, -1.0, 1.0]
             .iter()
