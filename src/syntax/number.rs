@@ -258,6 +258,21 @@ impl NumLit {
     /// [`rewrite`](Self::rewrite) as the bytes of an edit: the common number is built on the
     /// stack and kept inline, without an allocation.
     pub fn rewrite_text(&self, new: f64, min_decimals: usize) -> Option<EditText> {
+        self.rewrite_parts(new, min_decimals).map(|(text, _)| text)
+    }
+
+    /// [`rewrite_text`](Self::rewrite_text) and the value the text reads back as (what
+    /// [`NumLit::parse`] of it gives; NaN if it did not parse, which our own text always does).
+    pub fn rewrite_read(&self, new: f64, min_decimals: usize) -> Option<(EditText, f64)> {
+        let (text, read) = self.rewrite_parts(new, min_decimals)?;
+        let read = read
+            .or_else(|| NumLit::parse(&text).map(|l| l.value()))
+            .unwrap_or(f64::NAN);
+        Some((text, read))
+    }
+
+    /// The text, and its value when known without reading it back.
+    fn rewrite_parts(&self, new: f64, min_decimals: usize) -> Option<(EditText, Option<f64>)> {
         let places = self.places(min_decimals);
         // Compare the rounded values as integers first: most fields of a corrected program
         // change, but the ones that don't (zeros, 9E9, unchanged quaternions) cost no text.
@@ -285,16 +300,16 @@ impl NumLit {
             if self.style & LEADING_POINT != 0 && places > 0 {
                 text.drop_leading_zero();
             }
-            return Some(EditText::from_bytes(text.as_bytes()));
+            return Some((EditText::from_bytes(text.as_bytes()), a.read_back(places)));
         }
         let written = fixed(new, places);
         if written == fixed(self.value, places) {
             return None;
         }
         if self.style & PLUS != 0 && !written.starts_with('-') {
-            return Some(EditText::from(format!("+{written}").into_bytes()));
+            return Some((EditText::from(format!("+{written}").into_bytes()), None));
         }
-        Some(EditText::from(written.into_bytes()))
+        Some((EditText::from(written.into_bytes()), None))
     }
 
     /// The text to write for an integer field (`cf1`, Status), or `None` if unchanged.
@@ -397,6 +412,17 @@ impl Scaled {
             negative: value.is_sign_negative() && units != 0,
             units,
         })
+    }
+
+    /// What [`NumLit::parse`] reads from these units written with `places` decimals, in any of
+    /// the forms a rewrite writes (the digits are the units whichever way the point and the
+    /// exponent move them): the same single division of its exact fast path, when that applies.
+    fn read_back(self, places: usize) -> Option<f64> {
+        if self.units >= 1 << 53 || places > 22 {
+            return None;
+        }
+        let v = self.units as f64 / EXACT_POWERS[places];
+        Some(if self.negative { -v } else { v })
     }
 
     /// Digits before the point when the units are written with `places` decimals (at least 1).
@@ -654,6 +680,11 @@ mod tests {
                 text.push_str(&format!("{e}{n}"));
             }
             let lit = NumLit::parse(text.as_bytes()).unwrap();
+            // The value a rewrite reports is the one its text reads back as, bit for bit.
+            if let Some((t, read)) = lit.rewrite_read(new, house) {
+                let parsed = NumLit::parse(&t).map(|l| l.value().to_bits());
+                proptest::prop_assert_eq!(Some(read.to_bits()), parsed, "{} → {:?}", text, t);
+            }
             let Some(out) = lit.rewrite(new, house) else {
                 proptest::prop_assert!(same_at(new, lit.value(), lit.places(house)));
                 return Ok(());

@@ -6,7 +6,7 @@ use crate::geometry::{
     Pose, abb_quat, abb_quat_components, angle_between, kuka_abc, kuka_abc_angles,
 };
 use crate::position::{BitField, CartesianFields, NumField, Orientation};
-use crate::syntax::{Edit, EditText, NumLit, fixed, same_at};
+use crate::syntax::{Edit, EditText, fixed, same_at};
 
 /// At least this many decimals for mm.
 pub(crate) const MM_DECIMALS: usize = 3;
@@ -281,13 +281,10 @@ fn push_edits<const N: usize>(
 
 /// One field written for `v`: its text (`None`: kept) and the value the next run reads from it.
 fn write_one(field: &NumField, v: f64, house: usize) -> (Option<EditText>, f64) {
-    match field.lit().rewrite_text(v, house) {
-        Some(text) => {
-            // Our own output always parses; were it not to, the check below fails safe (the
-            // value read back then matches nothing and plain rounding is written).
-            let read = NumLit::parse(&text).map_or(f64::NAN, |l| l.value());
-            (Some(text), read)
-        }
+    match field.lit().rewrite_read(v, house) {
+        // Our own output always parses; were it not to, the value read back is NaN, the check
+        // after fails safe (it matches nothing) and plain rounding is written.
+        Some((text, read)) => (Some(text), read),
         None => (None, field.value()),
     }
 }
