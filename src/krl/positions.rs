@@ -9,7 +9,7 @@
 use super::resolve::HashMap;
 use super::tree::{Aggregate, Expr, ExprKind, Stmt, StmtKind};
 use crate::position::{
-    BitField, CartesianFields, Config, FrameDecl, FrameKind, NumField, Orientation, Position,
+    Axes, BitField, CartesianFields, Config, FrameDecl, FrameKind, NumField, Orientation, Position,
     PositionKind, Usage,
 };
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span};
@@ -384,7 +384,7 @@ fn build_position(
     f: Fields,
 ) -> Position {
     let (line, column) = lines.line_col(span.start);
-    let extax: Vec<Option<NumField>> = f.ext.into_iter().take(f.ext_written).collect();
+    let extax: Axes = f.ext.into_iter().take(f.ext_written).collect();
     let joint = matches!(kind, PositionKind::E6Axis | PositionKind::Axis);
     Position {
         name,

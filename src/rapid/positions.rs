@@ -10,8 +10,8 @@ use super::expr::{Arena, ExprKind};
 use super::parser::Stmt;
 use crate::names::{NameKey, NameMap};
 use crate::position::{
-    CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, Orientation,
-    Position, PositionKind, Usage,
+    Axes, CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind,
+    Orientation, Position, PositionKind, Usage,
 };
 use crate::resolve::DeclKind;
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, latin1};
@@ -245,6 +245,17 @@ impl<'l> Extractor<'l> {
         }
     }
 
+    /// The external axes aggregate's elements as numeric fields, in place (see [`Axes`]).
+    fn axes(&self, src: &[u8], arena: &Arena, id: Option<u32>) -> Axes {
+        match id.filter(|&id| arena.get(id).is_some_and(|n| n.kind == ExprKind::Aggregate)) {
+            Some(id) => arena
+                .children(id)
+                .map(|c| self.num(src, arena, c))
+                .collect(),
+            None => Axes::new(),
+        }
+    }
+
     /// `[[x,y,z],[q1,q2,q3,q4]]` (a pose) as Cartesian fields.
     fn pose_fields(&self, src: &[u8], arena: &Arena, id: Option<u32>) -> Option<CartesianFields> {
         let id = id?;
@@ -308,7 +319,7 @@ impl<'l> Extractor<'l> {
                     None,
                     self.nums_vec(src, arena, rax),
                     Config::None,
-                    self.nums_vec(src, arena, eax),
+                    self.axes(src, arena, eax),
                 )
             }
             _ => {
@@ -323,7 +334,7 @@ impl<'l> Extractor<'l> {
                     }),
                     Vec::new(),
                     Config::Quadrants(self.nums::<4>(src, arena, conf)),
-                    self.nums_vec(src, arena, eax),
+                    self.axes(src, arena, eax),
                 )
             }
         };

@@ -66,7 +66,7 @@ fn usage(wobj: &str, line: usize) -> Usage {
         tool: Some("tool0".into()),
         other_wobjs: Vec::new(),
         stationary_tool: false,
-        lines: vec![line],
+        lines: vec![line].into(),
         run_time: None,
     }
 }
@@ -149,7 +149,7 @@ pub(crate) fn krl(src: &str, base: &str) -> Program {
                 status: bits(6),
                 turn: bits(7),
             },
-            extax: vec![o(8)],
+            extax: vec![o(8)].into(),
             usage: usage(base, n + 1),
         });
     }
