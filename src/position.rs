@@ -211,8 +211,9 @@ pub struct Usage {
     pub stationary_tool: bool,
     /// 1-based lines of the instructions that use it.
     pub lines: Lines,
-    /// Set when the target's pose is only known when the program runs: the first reason found.
-    pub run_time: Option<RunTimeValue>,
+    /// Set when the target's pose is only known when the program runs: the first reason found
+    /// (boxed: rare, and a target's usage is kept for each of 100,000 targets).
+    pub run_time: Option<Box<RunTimeValue>>,
 }
 
 /// Why a target's pose is only known when the program runs, so no offline transform can
@@ -259,7 +260,7 @@ impl Usage {
     /// Marks the target as known only at run time, keeping the first reason.
     pub fn set_run_time(&mut self, why: RunTimeValue) {
         if self.run_time.is_none() {
-            self.run_time = Some(why);
+            self.run_time = Some(Box::new(why));
         }
     }
 
@@ -495,11 +496,110 @@ impl<const N: usize> PartialEq<[usize; N]> for Lines {
     }
 }
 
+/// Names up to this many bytes are kept in place in a [`Name`].
+const INLINE_NAME: usize = 22;
+
+/// A target's declared name as written: text that reads as a `&str` (`p.name.as_deref()`).
+///
+/// Names of up to 22 bytes (nearly all: `p10`, `XP100001`, `pGrid{2,1}`) are kept in place:
+/// a `String` each was 100,000 heap blocks on a 20 MB module. Longer ones are boxed.
+#[derive(Clone)]
+pub struct Name(NameRepr);
+
+#[derive(Clone)]
+enum NameRepr {
+    Inline(u8, [u8; INLINE_NAME]),
+    Boxed(Box<str>),
+}
+
+impl Name {
+    /// The name as text.
+    pub fn as_str(&self) -> &str {
+        match &self.0 {
+            // Always valid: the bytes are a whole `&str` copied in (see `From<&str>`).
+            NameRepr::Inline(len, bytes) => bytes
+                .get(..*len as usize)
+                .and_then(|b| std::str::from_utf8(b).ok())
+                .unwrap_or_default(),
+            NameRepr::Boxed(s) => s,
+        }
+    }
+}
+
+impl From<&str> for Name {
+    fn from(s: &str) -> Name {
+        let mut bytes = [0u8; INLINE_NAME];
+        match bytes.get_mut(..s.len()) {
+            Some(to) => {
+                to.copy_from_slice(s.as_bytes());
+                Name(NameRepr::Inline(s.len() as u8, bytes))
+            }
+            None => Name(NameRepr::Boxed(s.into())),
+        }
+    }
+}
+
+impl From<String> for Name {
+    fn from(s: String) -> Name {
+        if s.len() <= INLINE_NAME {
+            Name::from(s.as_str())
+        } else {
+            Name(NameRepr::Boxed(s.into_boxed_str()))
+        }
+    }
+}
+
+impl std::ops::Deref for Name {
+    type Target = str;
+
+    fn deref(&self) -> &str {
+        self.as_str()
+    }
+}
+
+impl PartialEq for Name {
+    fn eq(&self, other: &Name) -> bool {
+        self.as_str() == other.as_str()
+    }
+}
+
+impl Eq for Name {}
+
+impl PartialEq<str> for Name {
+    fn eq(&self, other: &str) -> bool {
+        self.as_str() == other
+    }
+}
+
+impl PartialEq<&str> for Name {
+    fn eq(&self, other: &&str) -> bool {
+        self.as_str() == *other
+    }
+}
+
+impl std::hash::Hash for Name {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.as_str().hash(state);
+    }
+}
+
+impl std::fmt::Debug for Name {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        std::fmt::Debug::fmt(self.as_str(), f)
+    }
+}
+
+impl std::fmt::Display for Name {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
 /// One target: a declaration (`name = Some`) or an inline literal in an instruction.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Position {
     /// Declared name; `None` for an inline literal.
-    pub name: Option<String>,
+    pub name: Option<Name>,
     /// Its data type.
     pub kind: PositionKind,
     /// The literal (aggregate) itself.
@@ -545,7 +645,7 @@ impl Position {
     /// A human name for messages: the declared name or `inline <kind>`.
     pub fn label(&self) -> String {
         match &self.name {
-            Some(n) => n.clone(),
+            Some(n) => n.to_string(),
             None => format!("inline {}", self.kind.as_str()),
         }
     }

@@ -9,8 +9,8 @@
 use super::resolve::HashMap;
 use super::tree::{Aggregate, Expr, ExprKind, Stmt, StmtKind};
 use crate::position::{
-    Axes, BitField, CartesianFields, Config, FrameDecl, FrameKind, NumField, Orientation, Position,
-    PositionKind, Usage,
+    Axes, BitField, CartesianFields, Config, FrameDecl, FrameKind, Name, NumField, Orientation,
+    Position, PositionKind, Usage,
 };
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span};
 
@@ -387,7 +387,7 @@ fn build_position(
     let extax: Axes = f.ext.into_iter().take(f.ext_written).collect();
     let joint = matches!(kind, PositionKind::E6Axis | PositionKind::Axis);
     Position {
-        name,
+        name: name.map(Name::from),
         kind,
         span,
         line,

@@ -10,7 +10,7 @@ use super::expr::{Arena, ExprKind};
 use super::parser::Stmt;
 use crate::names::{NameKey, NameMap};
 use crate::position::{
-    Axes, CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind,
+    Axes, CartesianFields, Config, FrameDecl, FrameKind, Name, NumField, OffsetCall, OffsetKind,
     Orientation, Position, PositionKind, Usage,
 };
 use crate::resolve::DeclKind;
@@ -339,7 +339,7 @@ impl<'l> Extractor<'l> {
             }
         };
         Some(Position {
-            name,
+            name: name.map(Name::from),
             kind,
             span,
             line,

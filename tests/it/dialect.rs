@@ -55,7 +55,7 @@ fn parse(path: &Path, source: Vec<u8>) -> ParsedFile {
             continue;
         }
         positions.push(Position {
-            name: Some(format!("t{}", n + 1)),
+            name: Some(format!("t{}", n + 1).into()),
             kind: PositionKind::new("stubpose", true),
             span,
             line: n + 1,
