@@ -36,11 +36,13 @@ const NAMING: crate::resolve::Naming = crate::resolve::Naming {
 /// A span in the 32-bit form the call records keep (inputs are at most
 /// [`MAX_INPUT_BYTES`](crate::output::MAX_INPUT_BYTES), so every offset fits): a call record
 /// of a 20 MB module is one of 100,000, and with `usize` spans and a vector each they were a
-/// fifth of `check`'s peak memory.
+/// fifth of `check`'s peak memory. The end is kept plus one, never zero, so that an
+/// `Option<CallSpan>` (a call's four or so arguments, its work object and tool) is eight
+/// bytes, not twelve.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct CallSpan {
     start: u32,
-    end: u32,
+    end_plus_one: std::num::NonZeroU32,
 }
 
 impl CallSpan {
@@ -48,12 +50,15 @@ impl CallSpan {
     fn of(span: Span) -> Option<CallSpan> {
         Some(CallSpan {
             start: u32::try_from(span.start).ok()?,
-            end: u32::try_from(span.end).ok()?,
+            end_plus_one: u32::try_from(span.end)
+                .ok()?
+                .checked_add(1)
+                .and_then(std::num::NonZeroU32::new)?,
         })
     }
 
     fn span(self) -> Span {
-        Span::new(self.start as usize, self.end as usize)
+        Span::new(self.start as usize, (self.end_plus_one.get() - 1) as usize)
     }
 }
 
