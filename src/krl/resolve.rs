@@ -229,10 +229,18 @@ fn branch(state: &mut State, forks: &mut Vec<Fork>, b: BranchEvent) {
 /// it uses, promotes used `FRAME`s and candidate aggregates to positions, and reports motions
 /// whose base stays unknown.
 pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
+    // The files' maps are moved into the program's (the first file's whole, the others' names
+    // it lacks), not copied: a copy of every `FDAT` and declared name was 10 MB of `check`'s
+    // peak on the 34 MB pair.
     let mut fdats: HashMap<String, Fdat> = HashMap::default();
-    for f in facts.iter() {
-        for (k, v) in &f.fdats {
-            fdats.entry(k.clone()).or_insert_with(|| v.clone());
+    for f in facts.iter_mut() {
+        let own = std::mem::take(&mut f.fdats);
+        if fdats.is_empty() {
+            fdats = own;
+        } else {
+            for (k, v) in own {
+                fdats.entry(k).or_insert(v);
+            }
         }
     }
     // Candidates that are positions whether or not a motion uses them.
@@ -243,9 +251,14 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     // `XP1={…}` in the `.src` of a point the `.dat` declares (`DECL POS XP1`): the declaration
     // gives the kind, and a non-FRAME declared point is a position whether or not it moves.
     let mut declared: HashMap<String, PositionKind> = HashMap::default();
-    for f in facts.iter() {
-        for (k, v) in &f.declared {
-            declared.entry(k.clone()).or_insert(*v);
+    for f in facts.iter_mut() {
+        let own = std::mem::take(&mut f.declared);
+        if declared.is_empty() {
+            declared = own;
+        } else {
+            for (k, v) in own {
+                declared.entry(k).or_insert(v);
+            }
         }
     }
     for (fact, kept) in facts.iter_mut().zip(kept.iter_mut()) {
