@@ -106,7 +106,7 @@ impl State {
                 self.tcp = f.tcp.unwrap_or(false);
             }
             Setting::Fdat(name) => {
-                let f = fdats.get(name);
+                let f = fdats.get(name.as_str());
                 self.base = Some(data(f.and_then(|f| f.base)));
                 self.tool = Some(data(f.and_then(|f| f.tool)));
                 self.tcp = f.and_then(|f| f.tcp).unwrap_or(false);
@@ -322,7 +322,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                     }
                     Event::Branch(b) => branch(&mut state, &mut forks, *b),
                     Event::Alias { name, source } => {
-                        aliases.insert(name, source);
+                        aliases.insert(name.as_str(), source.as_str());
                     }
                     Event::Set(s) => state.apply(s, &fdats),
                     Event::Motion {
