@@ -577,6 +577,14 @@ impl PartialEq<&str> for Name {
     }
 }
 
+/// A map keyed by names is looked up by `&str` (hashed and compared as the text, like the
+/// `Hash` and `Eq` here).
+impl std::borrow::Borrow<str> for Name {
+    fn borrow(&self) -> &str {
+        self.as_str()
+    }
+}
+
 impl std::hash::Hash for Name {
     fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
         self.as_str().hash(state);

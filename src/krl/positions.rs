@@ -100,7 +100,7 @@ pub(crate) struct Fdat {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Facts {
     pub events: Vec<Event>,
-    pub fdats: HashMap<String, Fdat>,
+    pub fdats: HashMap<Name, Fdat>,
     /// Declared `FRAME`s and aggregates assigned to names of unknown type: positions only when
     /// a motion uses them.
     pub candidates: Vec<Position>,
@@ -108,7 +108,7 @@ pub(crate) struct Facts {
     /// the name (the other file of the pair may).
     pub inferred: Vec<bool>,
     /// Positional types this file declares, by upper-case name.
-    pub declared: HashMap<String, PositionKind>,
+    pub declared: HashMap<Name, PositionKind>,
     /// Values computed at run time given to declared names (`XP1 = $POS_ACT`, `P[I] = …`).
     pub assignments: Vec<crate::resolve::Assignment>,
 }
@@ -468,7 +468,7 @@ fn frame_decl(
 pub(crate) struct Extractor<'a> {
     src: &'a [u8],
     lines: &'a LineIndex,
-    declared: HashMap<String, PositionKind>,
+    declared: HashMap<Name, PositionKind>,
     out: Extracted,
     /// Notes about what is deliberately not a target (relative motions, computed targets).
     pub diagnostics: Vec<Diagnostic>,
@@ -513,14 +513,16 @@ impl<'a> Extractor<'a> {
                 let is_fdat = is_word(src, *type_name, b"FDAT");
                 for v in vars {
                     if let Some(kind) = positional {
-                        self.declared.insert(upper(src, v.name), kind);
+                        self.declared.insert(upper_name(src, v.name), kind);
                     }
                     let Some(init) = &v.init else { continue };
                     let ExprKind::Aggregate(agg) = &init.kind else {
                         continue;
                     };
                     if is_fdat {
-                        out.facts.fdats.insert(upper(src, v.name), fdat(src, agg));
+                        out.facts
+                            .fdats
+                            .insert(upper_name(src, v.name), fdat(src, agg));
                     } else if let Some(kind) = positional {
                         let name = name_text(v.name.slice(src));
                         let f = read_fields(src, agg);
@@ -672,7 +674,7 @@ fn setting(src: &[u8], target: &Expr, value: &Expr) -> Option<Setting> {
 fn assignment(
     src: &[u8],
     lines: &LineIndex,
-    declared: &HashMap<String, PositionKind>,
+    declared: &HashMap<Name, PositionKind>,
     target: &Expr,
     value: &Expr,
     out: &mut Extracted,
@@ -750,7 +752,7 @@ fn assignment(
     }
     let f = read_fields(src, agg);
     let name = Some(name_text(target.span.slice(src)));
-    match declared.get(&base).copied() {
+    match declared.get(base.as_str()).copied() {
         Some(PositionKind::Frame) => {
             out.facts.candidates.push(build_position(
                 lines,
