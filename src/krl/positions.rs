@@ -577,7 +577,9 @@ impl<'a> Extractor<'a> {
                     );
                     return;
                 }
-                let mut refs = Vec::new();
+                // Sized for one reference per target (nearly always so): a vector grown from
+                // empty reserves four, and the motions' lists are kept until resolution.
+                let mut refs = Vec::with_capacity(targets.len());
                 for t in targets {
                     if !target_refs(src, lines, t, &mut refs, &mut out.positions) {
                         self.diagnostics.push(
