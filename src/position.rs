@@ -210,9 +210,10 @@ pub struct Usage {
     /// The target is a stationary-tool point (KRL `IPO_FRAME #TCP`, RAPID `robhold TRUE`).
     pub stationary_tool: bool,
     /// 1-based lines of the instructions that use it.
-    pub lines: Vec<usize>,
-    /// Set when the target's pose is only known when the program runs: the first reason found.
-    pub run_time: Option<RunTimeValue>,
+    pub lines: Lines,
+    /// Set when the target's pose is only known when the program runs: the first reason found
+    /// (boxed: rare, and a target's usage is kept for each of 100,000 targets).
+    pub run_time: Option<Box<RunTimeValue>>,
 }
 
 /// Why a target's pose is only known when the program runs, so no offline transform can
@@ -259,7 +260,7 @@ impl Usage {
     /// Marks the target as known only at run time, keeping the first reason.
     pub fn set_run_time(&mut self, why: RunTimeValue) {
         if self.run_time.is_none() {
-            self.run_time = Some(why);
+            self.run_time = Some(Box::new(why));
         }
     }
 
@@ -308,11 +309,305 @@ impl Usage {
     }
 }
 
+/// How many fields [`Axes`] keeps without a heap block: the six external axes of both
+/// languages (RAPID `eax_a..eax_f`, KRL `E1..E6`).
+const INLINE_AXES: usize = 6;
+
+/// A position's external axes as written: a list of fields that reads as a slice
+/// (`p.extax.get(0)`, `p.extax.len()`, `p.extax.iter()`).
+///
+/// Up to six are kept in place: a 20 MB module holds 100,000 targets, and a vector each was
+/// 14 MB of `check`'s peak and 100,000 allocations. A longer list (an aggregate that is not
+/// a RAPID `extjoint`) keeps all its fields, in a vector.
+#[derive(Clone, PartialEq)]
+pub struct Axes(AxesRepr);
+
+#[derive(Clone, PartialEq)]
+enum AxesRepr {
+    Inline(u8, [Option<NumField>; INLINE_AXES]),
+    Spilled(Vec<Option<NumField>>),
+}
+
+impl Axes {
+    /// No fields.
+    pub const fn new() -> Axes {
+        Axes(AxesRepr::Inline(0, [None; INLINE_AXES]))
+    }
+
+    /// Appends `field`.
+    pub fn push(&mut self, field: Option<NumField>) {
+        match &mut self.0 {
+            AxesRepr::Inline(len, fields) => match fields.get_mut(*len as usize) {
+                Some(slot) => {
+                    *slot = field;
+                    *len += 1;
+                }
+                None => {
+                    let mut all = Vec::with_capacity(INLINE_AXES * 2);
+                    all.extend_from_slice(fields);
+                    all.push(field);
+                    self.0 = AxesRepr::Spilled(all);
+                }
+            },
+            AxesRepr::Spilled(all) => all.push(field),
+        }
+    }
+}
+
+impl Default for Axes {
+    fn default() -> Axes {
+        Axes::new()
+    }
+}
+
+impl std::ops::Deref for Axes {
+    type Target = [Option<NumField>];
+
+    fn deref(&self) -> &[Option<NumField>] {
+        match &self.0 {
+            AxesRepr::Inline(len, fields) => fields.get(..*len as usize).unwrap_or_default(),
+            AxesRepr::Spilled(all) => all,
+        }
+    }
+}
+
+impl std::fmt::Debug for Axes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list().entries(self.iter()).finish()
+    }
+}
+
+impl FromIterator<Option<NumField>> for Axes {
+    fn from_iter<I: IntoIterator<Item = Option<NumField>>>(iter: I) -> Axes {
+        let mut out = Axes::new();
+        for f in iter {
+            out.push(f);
+        }
+        out
+    }
+}
+
+impl From<Vec<Option<NumField>>> for Axes {
+    fn from(v: Vec<Option<NumField>>) -> Axes {
+        v.into_iter().collect()
+    }
+}
+
+impl<'a> IntoIterator for &'a Axes {
+    type Item = &'a Option<NumField>;
+    type IntoIter = std::slice::Iter<'a, Option<NumField>>;
+
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
+}
+
+impl PartialEq<Vec<Option<NumField>>> for Axes {
+    fn eq(&self, other: &Vec<Option<NumField>>) -> bool {
+        **self == **other
+    }
+}
+
+/// The 1-based lines of the instructions that use a target, in the order found: a list that
+/// reads as a slice of `usize`.
+///
+/// Nearly every target is used once or twice: those are kept in place (a vector each was
+/// 100,000 heap blocks on a 20 MB module); more spill into a vector.
+#[derive(Clone, Default, PartialEq, Eq)]
+pub struct Lines(LinesRepr);
+
+#[derive(Clone, Default, PartialEq, Eq)]
+enum LinesRepr {
+    #[default]
+    None,
+    One([usize; 1]),
+    Two([usize; 2]),
+    More(Vec<usize>),
+}
+
+impl Lines {
+    /// Appends `line`.
+    pub fn push(&mut self, line: usize) {
+        self.0 = match std::mem::take(&mut self.0) {
+            LinesRepr::None => LinesRepr::One([line]),
+            LinesRepr::One([a]) => LinesRepr::Two([a, line]),
+            LinesRepr::Two([a, b]) => LinesRepr::More(vec![a, b, line]),
+            LinesRepr::More(mut v) => {
+                v.push(line);
+                LinesRepr::More(v)
+            }
+        };
+    }
+}
+
+impl std::ops::Deref for Lines {
+    type Target = [usize];
+
+    fn deref(&self) -> &[usize] {
+        match &self.0 {
+            LinesRepr::None => &[],
+            LinesRepr::One(a) => a,
+            LinesRepr::Two(a) => a,
+            LinesRepr::More(v) => v,
+        }
+    }
+}
+
+impl std::fmt::Debug for Lines {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list().entries(self.iter()).finish()
+    }
+}
+
+impl FromIterator<usize> for Lines {
+    fn from_iter<I: IntoIterator<Item = usize>>(iter: I) -> Lines {
+        let mut out = Lines::default();
+        for l in iter {
+            out.push(l);
+        }
+        out
+    }
+}
+
+impl From<Vec<usize>> for Lines {
+    fn from(v: Vec<usize>) -> Lines {
+        v.into_iter().collect()
+    }
+}
+
+impl<'a> IntoIterator for &'a Lines {
+    type Item = &'a usize;
+    type IntoIter = std::slice::Iter<'a, usize>;
+
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
+}
+
+impl PartialEq<Vec<usize>> for Lines {
+    fn eq(&self, other: &Vec<usize>) -> bool {
+        **self == **other
+    }
+}
+
+impl<const N: usize> PartialEq<[usize; N]> for Lines {
+    fn eq(&self, other: &[usize; N]) -> bool {
+        **self == other[..]
+    }
+}
+
+/// Names up to this many bytes are kept in place in a [`Name`].
+const INLINE_NAME: usize = 22;
+
+/// A target's declared name as written: text that reads as a `&str` (`p.name.as_deref()`).
+///
+/// Names of up to 22 bytes (nearly all: `p10`, `XP100001`, `pGrid{2,1}`) are kept in place:
+/// a `String` each was 100,000 heap blocks on a 20 MB module. Longer ones are boxed.
+#[derive(Clone)]
+pub struct Name(NameRepr);
+
+#[derive(Clone)]
+enum NameRepr {
+    Inline(u8, [u8; INLINE_NAME]),
+    Boxed(Box<str>),
+}
+
+impl Name {
+    /// The name as text.
+    pub fn as_str(&self) -> &str {
+        match &self.0 {
+            // Always valid: the bytes are a whole `&str` copied in (see `From<&str>`).
+            NameRepr::Inline(len, bytes) => bytes
+                .get(..*len as usize)
+                .and_then(|b| std::str::from_utf8(b).ok())
+                .unwrap_or_default(),
+            NameRepr::Boxed(s) => s,
+        }
+    }
+}
+
+impl From<&str> for Name {
+    fn from(s: &str) -> Name {
+        let mut bytes = [0u8; INLINE_NAME];
+        match bytes.get_mut(..s.len()) {
+            Some(to) => {
+                to.copy_from_slice(s.as_bytes());
+                Name(NameRepr::Inline(s.len() as u8, bytes))
+            }
+            None => Name(NameRepr::Boxed(s.into())),
+        }
+    }
+}
+
+impl From<String> for Name {
+    fn from(s: String) -> Name {
+        if s.len() <= INLINE_NAME {
+            Name::from(s.as_str())
+        } else {
+            Name(NameRepr::Boxed(s.into_boxed_str()))
+        }
+    }
+}
+
+impl std::ops::Deref for Name {
+    type Target = str;
+
+    fn deref(&self) -> &str {
+        self.as_str()
+    }
+}
+
+impl PartialEq for Name {
+    fn eq(&self, other: &Name) -> bool {
+        self.as_str() == other.as_str()
+    }
+}
+
+impl Eq for Name {}
+
+impl PartialEq<str> for Name {
+    fn eq(&self, other: &str) -> bool {
+        self.as_str() == other
+    }
+}
+
+impl PartialEq<&str> for Name {
+    fn eq(&self, other: &&str) -> bool {
+        self.as_str() == *other
+    }
+}
+
+/// A map keyed by names is looked up by `&str` (hashed and compared as the text, like the
+/// `Hash` and `Eq` here).
+impl std::borrow::Borrow<str> for Name {
+    fn borrow(&self) -> &str {
+        self.as_str()
+    }
+}
+
+impl std::hash::Hash for Name {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.as_str().hash(state);
+    }
+}
+
+impl std::fmt::Debug for Name {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        std::fmt::Debug::fmt(self.as_str(), f)
+    }
+}
+
+impl std::fmt::Display for Name {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
 /// One target: a declaration (`name = Some`) or an inline literal in an instruction.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Position {
     /// Declared name; `None` for an inline literal.
-    pub name: Option<String>,
+    pub name: Option<Name>,
     /// Its data type.
     pub kind: PositionKind,
     /// The literal (aggregate) itself.
@@ -329,7 +624,7 @@ pub struct Position {
     pub config: Config,
     /// External axes as written: RAPID `eax_a..eax_f`, KRL `E1..E6` (shorter if fewer are
     /// written).
-    pub extax: Vec<Option<NumField>>,
+    pub extax: Axes,
     /// The frames and tool of the motion instructions that reference it, and their lines.
     pub usage: Usage,
 }
@@ -358,7 +653,7 @@ impl Position {
     /// A human name for messages: the declared name or `inline <kind>`.
     pub fn label(&self) -> String {
         match &self.name {
-            Some(n) => n.clone(),
+            Some(n) => n.to_string(),
             None => format!("inline {}", self.kind.as_str()),
         }
     }

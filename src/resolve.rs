@@ -360,7 +360,7 @@ impl<'f, 'a> Binder<'f, 'a> {
     /// A binder over the targets of `files` (indexed once).
     pub(crate) fn new(files: &'f mut [FileFacts<'a>], naming: &Naming) -> Binder<'f, 'a> {
         let total: usize = files.iter().map(|f| f.positions.len()).sum();
-        let mut index: NameIndex<TargetAt> = NameIndex::new(naming.open, total);
+        let mut index = NameIndex::builder(naming.open, total);
         for (m, f) in files.iter().enumerate() {
             for (i, p) in f.positions.iter().enumerate() {
                 if let Some(n) = &p.name {
@@ -368,6 +368,7 @@ impl<'f, 'a> Binder<'f, 'a> {
                 }
             }
         }
+        let index = index.build();
         Binder {
             files,
             naming: *naming,
@@ -562,8 +563,8 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
     };
     let seen = |_: TargetAt| true;
     let mut hits = Vec::new();
-    let mut targets: NameIndex<TargetAt> = NameIndex::new(naming.open, 0);
-    let mut frames: NameIndex<TargetAt> = NameIndex::new(naming.open, 0);
+    let mut targets = NameIndex::builder(naming.open, 0);
+    let mut frames = NameIndex::builder(naming.open, 0);
     for (fi, f) in files.iter().enumerate() {
         for (i, p) in f.positions.iter().enumerate() {
             if let Some(n) = &p.name {
@@ -574,6 +575,8 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
             frames.insert(&d.name, (fi, i));
         }
     }
+    let (targets, frames): (NameIndex<TargetAt>, NameIndex<TargetAt>) =
+        (targets.build(), frames.build());
     let mut assigned_targets = Vec::new();
     // Folded frame name → (name as declared, line of the first assignment).
     let mut assigned_frames: crate::names::NameMap<String, (String, usize)> = Default::default();
@@ -651,7 +654,7 @@ mod tests {
         // File 0 declares `P{1}`, `P{2}` (RAPID) / `P[1]`, `P[2]` (KRL) and `X`; file 1 declares
         // `X` and `Y`; file 2 (the one looking) declares nothing.
         let index = |open: char| {
-            let mut index: NameIndex<TargetAt> = NameIndex::new(open, 0);
+            let mut index = NameIndex::builder(open, 0);
             let close = if open == '{' { '}' } else { ']' };
             for (i, n) in [
                 format!("p{open}1{close}"),
@@ -665,7 +668,7 @@ mod tests {
             }
             index.insert("x", (1, 0));
             index.insert("y", (1, 1));
-            index
+            index.build()
         };
         let rapid = Naming {
             open: '{',

@@ -10,8 +10,8 @@ use super::expr::{Arena, ExprKind};
 use super::parser::Stmt;
 use crate::names::{NameKey, NameMap};
 use crate::position::{
-    CartesianFields, Config, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, Orientation,
-    Position, PositionKind, Usage,
+    Axes, CartesianFields, Config, FrameDecl, FrameKind, Name, NumField, OffsetCall, OffsetKind,
+    Orientation, Position, PositionKind, Usage,
 };
 use crate::resolve::DeclKind;
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, latin1};
@@ -36,11 +36,13 @@ const NAMING: crate::resolve::Naming = crate::resolve::Naming {
 /// A span in the 32-bit form the call records keep (inputs are at most
 /// [`MAX_INPUT_BYTES`](crate::output::MAX_INPUT_BYTES), so every offset fits): a call record
 /// of a 20 MB module is one of 100,000, and with `usize` spans and a vector each they were a
-/// fifth of `check`'s peak memory.
+/// fifth of `check`'s peak memory. The end is kept plus one, never zero, so that an
+/// `Option<CallSpan>` (a call's four or so arguments, its work object and tool) is eight
+/// bytes, not twelve.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct CallSpan {
     start: u32,
-    end: u32,
+    end_plus_one: std::num::NonZeroU32,
 }
 
 impl CallSpan {
@@ -48,12 +50,15 @@ impl CallSpan {
     fn of(span: Span) -> Option<CallSpan> {
         Some(CallSpan {
             start: u32::try_from(span.start).ok()?,
-            end: u32::try_from(span.end).ok()?,
+            end_plus_one: u32::try_from(span.end)
+                .ok()?
+                .checked_add(1)
+                .and_then(std::num::NonZeroU32::new)?,
         })
     }
 
     fn span(self) -> Span {
-        Span::new(self.start as usize, self.end as usize)
+        Span::new(self.start as usize, (self.end_plus_one.get() - 1) as usize)
     }
 }
 
@@ -245,6 +250,17 @@ impl<'l> Extractor<'l> {
         }
     }
 
+    /// The external axes aggregate's elements as numeric fields, in place (see [`Axes`]).
+    fn axes(&self, src: &[u8], arena: &Arena, id: Option<u32>) -> Axes {
+        match id.filter(|&id| arena.get(id).is_some_and(|n| n.kind == ExprKind::Aggregate)) {
+            Some(id) => arena
+                .children(id)
+                .map(|c| self.num(src, arena, c))
+                .collect(),
+            None => Axes::new(),
+        }
+    }
+
     /// `[[x,y,z],[q1,q2,q3,q4]]` (a pose) as Cartesian fields.
     fn pose_fields(&self, src: &[u8], arena: &Arena, id: Option<u32>) -> Option<CartesianFields> {
         let id = id?;
@@ -308,7 +324,7 @@ impl<'l> Extractor<'l> {
                     None,
                     self.nums_vec(src, arena, rax),
                     Config::None,
-                    self.nums_vec(src, arena, eax),
+                    self.axes(src, arena, eax),
                 )
             }
             _ => {
@@ -323,12 +339,12 @@ impl<'l> Extractor<'l> {
                     }),
                     Vec::new(),
                     Config::Quadrants(self.nums::<4>(src, arena, conf)),
-                    self.nums_vec(src, arena, eax),
+                    self.axes(src, arena, eax),
                 )
             }
         };
         Some(Position {
-            name,
+            name: name.map(Name::from),
             kind,
             span,
             line,

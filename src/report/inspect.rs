@@ -390,7 +390,7 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
         at: None,
     };
     PositionRow {
-        name: p.name.clone(),
+        name: p.name.as_deref().map(str::to_owned),
         kind: p.kind.as_str(),
         line: p.line,
         column: p.column,

@@ -156,7 +156,7 @@ fn cartesian<R: TargetRule>(rule: &R, scope: Scope, p: &Position, keep_a: Option
             mm,
             deg,
             skid,
-            name: p.name.clone(),
+            name: p.name.as_deref().map(str::to_owned),
             line: p.line,
             uncertainty_mm,
         },

@@ -329,7 +329,7 @@ impl TargetRule for MirrorRule<'_> {
             mm: 0.0,
             deg: 0.0,
             skid: None,
-            name: p.name.clone(),
+            name: p.name.as_deref().map(str::to_owned),
             line: p.line,
             uncertainty_mm: None,
         };

@@ -66,7 +66,7 @@ fn usage(wobj: &str, line: usize) -> Usage {
         tool: Some("tool0".into()),
         other_wobjs: Vec::new(),
         stationary_tool: false,
-        lines: vec![line],
+        lines: vec![line].into(),
         run_time: None,
     }
 }
@@ -99,7 +99,7 @@ pub(crate) fn rapid(src: &str, wobj: &str) -> Program {
         }
         let o = |i: usize| Some(v[i]);
         positions.push(Position {
-            name: Some(format!("p{}", n + 1)),
+            name: Some(format!("p{}", n + 1).into()),
             kind: PositionKind::Robtarget,
             span: Span::new(s, e),
             line: n + 1,
@@ -135,7 +135,7 @@ pub(crate) fn krl(src: &str, base: &str) -> Program {
             })
         };
         positions.push(Position {
-            name: Some(format!("XP{}", n + 1)),
+            name: Some(format!("XP{}", n + 1).into()),
             kind: PositionKind::E6Pos,
             span: Span::new(s, e),
             line: n + 1,
@@ -149,7 +149,7 @@ pub(crate) fn krl(src: &str, base: &str) -> Program {
                 status: bits(6),
                 turn: bits(7),
             },
-            extax: vec![o(8)],
+            extax: vec![o(8)].into(),
             usage: usage(base, n + 1),
         });
     }

@@ -187,7 +187,7 @@ fn combine(
                     mm,
                     deg,
                     skid,
-                    name: p.name.clone(),
+                    name: p.name.as_deref().map(str::to_owned),
                     line: p.line,
                     uncertainty_mm: None,
                 }

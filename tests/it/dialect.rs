@@ -55,7 +55,7 @@ fn parse(path: &Path, source: Vec<u8>) -> ParsedFile {
             continue;
         }
         positions.push(Position {
-            name: Some(format!("t{}", n + 1)),
+            name: Some(format!("t{}", n + 1).into()),
             kind: PositionKind::new("stubpose", true),
             span,
             line: n + 1,
@@ -66,10 +66,10 @@ fn parse(path: &Path, source: Vec<u8>) -> ParsedFile {
             }),
             joints: Vec::new(),
             config: Config::None,
-            extax: vec![skid],
+            extax: vec![skid].into(),
             usage: Usage {
                 wobj: Some("world".into()),
-                lines: vec![n + 1],
+                lines: vec![n + 1].into(),
                 ..Usage::default()
             },
         });

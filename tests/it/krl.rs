@@ -869,7 +869,7 @@ fn frame_array_moved_to_with_a_computed_index_makes_every_element_a_target() {
             (
                 p.label(),
                 p.usage.wobj.as_deref().map(str::to_owned),
-                p.usage.lines.clone(),
+                p.usage.lines.to_vec(),
             )
         })
         .collect();

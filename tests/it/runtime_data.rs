@@ -13,7 +13,7 @@ fn run_time<'f>(f: &'f ParsedFile, name: &str) -> Option<&'f RunTimeValue> {
         .unwrap_or_else(|| panic!("no target {name}"))
         .usage
         .run_time
-        .as_ref()
+        .as_deref()
 }
 
 const T: &str = "[[1,2,3],[1,0,0,0],[0,0,0,0],[500,9E9,9E9,9E9,9E9,9E9]]";
