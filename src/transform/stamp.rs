@@ -145,7 +145,9 @@ impl Widened {
         Some(Widened(out))
     }
 
-    /// The first-written precision of the `index`-th literal that resolves `d` decimals.
+    /// The first-written precision of the `index`-th literal that resolves `d` decimals
+    /// ([`carry_precision`] reads the lists by slot instead, once per literal).
+    #[cfg(test)]
     fn of(&self, d: usize, index: usize) -> i32 {
         self.0
             .get(&d)
@@ -531,7 +533,19 @@ impl Iterator for NumberTokens<'_> {
         let (src, skip) = (self.src, self.skip);
         let word = |b: u8| WORD[b as usize];
         let mut i = self.i;
-        while i < src.len() {
+        loop {
+            // Bytes outside words start nothing: run over them in a tight loop, stopping at
+            // the skipped span's start while the scan may still land on it.
+            let limit = match skip {
+                Some(s) if i <= s.start => s.start.min(src.len()),
+                _ => src.len(),
+            };
+            while i < limit && !word(src[i]) {
+                i += 1;
+            }
+            if i >= src.len() {
+                break;
+            }
             if let Some(s) = skip
                 && i == s.start
             {
@@ -542,12 +556,8 @@ impl Iterator for NumberTokens<'_> {
             let starts =
                 b.is_ascii_digit() || (b == b'.' && src.get(i + 1).is_some_and(u8::is_ascii_digit));
             if !starts || (i > 0 && word(src[i - 1])) {
-                // Skip the rest of a word so `p10` gives no token.
-                if word(b) {
-                    while i < src.len() && word(src[i]) {
-                        i += 1;
-                    }
-                } else {
+                // Skip the rest of a word so `p10` gives no token (`b` is a word byte here).
+                while i < src.len() && word(src[i]) {
                     i += 1;
                 }
                 continue;
@@ -604,6 +614,11 @@ impl Iterator for NumberTokens<'_> {
     }
 }
 
+/// The place of house precision `p` in [`HOUSE_DECIMALS`], if it is one.
+fn house_slot(p: i32) -> Option<usize> {
+    HOUSE_DECIMALS.iter().position(|&d| d as i32 == p)
+}
+
 /// What [`carry_precision`] made of a transform's output.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CarriedPrecision {
@@ -641,11 +656,16 @@ pub fn carry_precision(
     let skip_out = find_in(output, dialect).map(|(_, span)| span);
     let mut before = number_tokens(original, skip_in);
     let mut after = number_tokens(output, skip_out);
-    // The first-written precision of each original literal: per house precision, the count of
-    // the original's literals written with it so far indexes the earlier stamp's record.
-    let mut seen = std::collections::BTreeMap::<i32, usize>::new();
-    let mut text = Vec::with_capacity(output.len());
-    let mut widened = Widened::default();
+    // Per house precision, by its place in HOUSE_DECIMALS (arrays, not maps: this runs once per
+    // literal of the file): the earlier stamp's record, how many of the original's literals
+    // resolve it so far (indexing that record), and the output's new record.
+    let old_lists: [&[i8]; 3] =
+        HOUSE_DECIMALS.map(|d| old_widened.0.get(&d).map_or(&[][..], Vec::as_slice));
+    let mut seen = [0usize; 3];
+    let mut lists: [Vec<i8>; 3] = Default::default();
+    // The output with the narrowed literals rewritten; copied up to `at` only once a literal
+    // is narrowed, so that unchanged stretches are copied whole.
+    let mut text = Vec::new();
     let mut at = 0;
     // The two files' literals in step; if one has more, nothing is carried.
     loop {
@@ -659,13 +679,15 @@ pub fn carry_precision(
                 };
             }
         };
-        let d = if b.house() {
-            let k = seen.entry(b.precision()).or_default();
-            let d = old_widened.of(b.precision() as usize, *k);
-            *k += 1;
-            d
-        } else {
-            b.precision()
+        let d = match house_slot(b.precision()) {
+            Some(h) => {
+                let d = old_lists[h]
+                    .get(seen[h])
+                    .map_or(HOUSE_DECIMALS[h] as i32, |&e| e as i32);
+                seen[h] += 1;
+                d
+            }
+            None => b.precision(),
         };
         let old_text = &original[b.start..b.end];
         let new_text = &output[a.start..a.end];
@@ -701,20 +723,28 @@ pub fn carry_precision(
         // Every output literal of a house precision has an entry: a narrowed one too (it may
         // have landed on another house precision, `0.123000` → `0.123`), so that the lists
         // stay in step with the file.
-        if let Some(p) = usize::try_from(precision)
-            .ok()
-            .filter(|p| HOUSE_DECIMALS.contains(p))
-        {
+        if let Some(h) = house_slot(precision) {
             let entry = if narrowed { precision } else { first_precision };
             let entry = entry.max(MIN_FIRST_PRECISION as i32) as i8;
-            widened.0.entry(p).or_default().push(entry);
+            lists[h].push(entry);
         }
-        text.extend_from_slice(&output[at..a.start]);
-        text.extend_from_slice(written.0);
-        text.extend_from_slice(written.1);
-        at = a.end;
+        if narrowed {
+            if text.is_empty() {
+                text.reserve(output.len());
+            }
+            text.extend_from_slice(&output[at..a.start]);
+            text.extend_from_slice(written.0);
+            text.extend_from_slice(written.1);
+            at = a.end;
+        }
     }
     text.extend_from_slice(&output[at..]);
+    let mut widened = Widened::default();
+    for (d, list) in HOUSE_DECIMALS.into_iter().zip(lists) {
+        if !list.is_empty() {
+            widened.0.insert(d, list);
+        }
+    }
     CarriedPrecision {
         output: text,
         widened,

@@ -165,9 +165,9 @@ impl<'a> Cursor<'a> {
             },
             TokenKind::Ident => {
                 let w = Word::of(t.text(self.src));
-                match w.as_str() {
-                    "AND" | "B_AND" => Some(2),
-                    s if BINARY_WORDS.contains(&s) => Some(1),
+                match w.bytes() {
+                    b"AND" | b"B_AND" => Some(2),
+                    _ if w.is_in(BINARY_WORDS) => Some(1),
                     _ => None,
                 }
             }

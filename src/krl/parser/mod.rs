@@ -93,8 +93,23 @@ impl Word {
         Word { buf, len }
     }
 
+    /// The upper-cased bytes; compared as bytes, so the hot keyword checks skip UTF-8
+    /// validation (every keyword is ASCII).
+    fn bytes(&self) -> &[u8] {
+        self.buf.get(..self.len).unwrap_or(&[])
+    }
+
+    fn is(&self, kw: &str) -> bool {
+        self.bytes() == kw.as_bytes()
+    }
+
+    fn is_in(&self, list: &[&str]) -> bool {
+        list.iter().any(|k| self.is(k))
+    }
+
+    /// As text, for the rare block keywords that are passed on by name.
     fn as_str(&self) -> &str {
-        std::str::from_utf8(self.buf.get(..self.len).unwrap_or(&[])).unwrap_or("")
+        std::str::from_utf8(self.bytes()).unwrap_or("")
     }
 }
 

@@ -60,17 +60,17 @@ impl LineParser<'_, '_> {
             return self.error(e);
         };
         let word = Word::of(head.text(self.src));
-        let w = word.as_str();
-        let result: Result<(NodeKind, Option<StmtKind>), PErr> = match w {
-            "DEF" | "DEFFCT" | "DEFDAT" => self.routine(&mut c, w, head.span()),
-            "END" | "ENDFCT" | "ENDDAT" if !global => {
+        let result: Result<(NodeKind, Option<StmtKind>), PErr> = match word.bytes() {
+            b"DEF" | b"DEFFCT" | b"DEFDAT" => self.routine(&mut c, word.as_str(), head.span()),
+            b"END" | b"ENDFCT" | b"ENDDAT" if !global => {
+                let w = word.as_str();
                 c.pos += 1;
                 c.expect_end(w).map(|()| {
                     self.close(w, head.span());
                     (NodeKind::RoutineEnd, None)
                 })
             }
-            "DECL" => {
+            b"DECL" => {
                 c.pos += 1;
                 while c.is_kw("GLOBAL") || c.is_kw("CONST") {
                     c.pos += 1;
@@ -83,10 +83,10 @@ impl LineParser<'_, '_> {
                     decl(&mut c).map(|k| (NodeKind::Declaration, Some(k)))
                 }
             }
-            "INTERRUPT" | "TRIGGER" => Ok((NodeKind::Simple, None)),
-            _ if DECL_KEYWORDS.contains(&w) => Ok((NodeKind::Declaration, None)),
+            b"INTERRUPT" | b"TRIGGER" => Ok((NodeKind::Simple, None)),
+            _ if word.is_in(DECL_KEYWORDS) => Ok((NodeKind::Declaration, None)),
             // `GLOBAL INT x = 10`: a predefined type may omit `DECL` after `GLOBAL` too.
-            _ if global && PREDEFINED_TYPES.contains(&w) => {
+            _ if global && word.is_in(PREDEFINED_TYPES) => {
                 decl(&mut c).map(|k| (NodeKind::Declaration, Some(k)))
             }
             _ if global => Err(PErr {
@@ -94,11 +94,9 @@ impl LineParser<'_, '_> {
                 message: format!("`GLOBAL` before `{}`", c.text(head)),
                 hint: "`GLOBAL` only qualifies DEF, DEFFCT, DECL, STRUC, ENUM, SIGNAL and INTERRUPT",
             }),
-            _ if MOTION_KEYWORDS.contains(&w) => {
-                motion(&mut c).map(|k| (NodeKind::Motion, Some(k)))
-            }
-            _ if SIMPLE_KEYWORDS.contains(&w) => Ok((NodeKind::Simple, None)),
-            "IF" => {
+            _ if word.is_in(MOTION_KEYWORDS) => motion(&mut c).map(|k| (NodeKind::Motion, Some(k))),
+            _ if word.is_in(SIMPLE_KEYWORDS) => Ok((NodeKind::Simple, None)),
+            b"IF" => {
                 let has_then = sig.last().is_some_and(|t| is_kw(self.src, Some(t), "THEN"));
                 if has_then {
                     self.push_open("IF", head.span(), NodeKind::Block);
@@ -111,14 +109,16 @@ impl LineParser<'_, '_> {
                     })
                 }
             }
-            "FOR" | "WHILE" | "LOOP" | "REPEAT" | "SWITCH" | "SPLINE" | "PTP_SPLINE" => {
+            b"FOR" | b"WHILE" | b"LOOP" | b"REPEAT" | b"SWITCH" | b"SPLINE" | b"PTP_SPLINE" => {
+                let w = word.as_str();
                 if let Some(k) = static_kw(w) {
                     self.push_open(k, head.span(), NodeKind::Block);
                 }
                 let branch = (w == "SWITCH").then(|| StmtKind::Branch(head.span()));
                 Ok((NodeKind::BlockOpen, branch))
             }
-            "ELSE" | "CASE" | "DEFAULT" => {
+            b"ELSE" | b"CASE" | b"DEFAULT" => {
+                let w = word.as_str();
                 let parent = if w == "ELSE" { "IF" } else { "SWITCH" };
                 if self.stack.last().is_some_and(|o| o.keyword == parent) {
                     Ok((NodeKind::BlockMiddle, Some(StmtKind::Branch(head.span()))))
@@ -130,7 +130,9 @@ impl LineParser<'_, '_> {
                     })
                 }
             }
-            "ENDIF" | "ENDFOR" | "ENDWHILE" | "ENDLOOP" | "UNTIL" | "ENDSWITCH" | "ENDSPLINE" => {
+            b"ENDIF" | b"ENDFOR" | b"ENDWHILE" | b"ENDLOOP" | b"UNTIL" | b"ENDSWITCH"
+            | b"ENDSPLINE" => {
+                let w = word.as_str();
                 let matched = self.stack.iter().any(|o| closer_of(o.keyword) == w);
                 self.close(w, head.span());
                 let branch = (matched && (w == "ENDIF" || w == "ENDSWITCH"))
@@ -259,7 +261,7 @@ impl LineParser<'_, '_> {
             let k = decl(c)?;
             // KRL lets `DECL` be omitted for predefined types only; a misspelt keyword
             // (`LIX XP1`) would otherwise pass silently as a declaration.
-            if !PREDEFINED_TYPES.contains(&ty.as_str()) {
+            if !ty.is_in(PREDEFINED_TYPES) {
                 self.out.diagnostics.push(
                     Diagnostic::warning(
                         head.span(),
@@ -348,7 +350,7 @@ fn decl(c: &mut Cursor<'_>) -> PResult<StmtKind> {
 fn motion(c: &mut Cursor<'_>) -> PResult<StmtKind> {
     let keyword = c.bump().map(|t| t.span()).unwrap_or(c.eol);
     let kw = Word::of(keyword.slice(c.src));
-    let circ = kw.as_str().contains("CIRC");
+    let circ = kw.bytes().windows(4).any(|w| w == b"CIRC");
     let mut targets = vec![c.expr()?];
     if circ {
         c.expect_punct(
@@ -372,11 +374,9 @@ fn motion(c: &mut Cursor<'_>) -> PResult<StmtKind> {
     let mut with = Vec::new();
     while let Some(t) = c.peek() {
         let word = Word::of(t.text(c.src));
-        if (t.kind == TokenKind::Ident && APPROXIMATION.contains(&word.as_str()))
-            || t.kind == TokenKind::Enum
-        {
+        if (t.kind == TokenKind::Ident && word.is_in(APPROXIMATION)) || t.kind == TokenKind::Enum {
             c.pos += 1;
-        } else if t.kind == TokenKind::Ident && word.as_str() == "WITH" {
+        } else if t.kind == TokenKind::Ident && word.is("WITH") {
             c.pos += 1;
             loop {
                 let lhs = c.postfix()?;
