@@ -12,7 +12,7 @@ and a KUKA.Sim-style .src/.dat pair of about --krl-mb MB, then times, per input:
   trackfix check / correct / inspect --format json   for every --bin given
 
 `correct` uses samples/cell.toml without robot r1's arm (see bench_cell), so it corrects and
-writes every target.
+writes every target, into a new empty folder each run.
 
 CPU time (user + sys of the child, from os.wait4) is the median of --runs runs; peak memory is
 the child's maximum resident set. Output goes to a scratch folder and file. Give two
@@ -22,6 +22,7 @@ builds back to back in the same run; the machine's load average is printed with 
 
 import argparse
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -148,8 +149,21 @@ def run(argv: list[str]) -> tuple[float, int, int]:
     return cpu, peak, code
 
 
-def measure(argv: list[str], runs: int) -> tuple[float, int]:
-    results = [run(argv) for _ in range(runs)]
+OUT = "{out}"
+
+
+def measure(argv: list[str], runs: int, work: str = "") -> tuple[float, int]:
+    """Median CPU time and largest peak of `runs` runs. An argument `OUT` becomes a new, empty
+    folder under `work` for each run: `correct` into a folder that already holds its outputs
+    first reads them (to restore them if the run fails), which is not the run being measured."""
+    results = []
+    for _ in range(runs):
+        out = tempfile.mkdtemp(prefix="out-", dir=work or None) if OUT in argv else None
+        try:
+            results.append(run([out if a == OUT else a for a in argv]))
+        finally:
+            if out:
+                shutil.rmtree(out)
     return statistics.median(r[0] for r in results), max(r[1] for r in results)
 
 
@@ -207,10 +221,10 @@ def main() -> None:
             commands = {
                 "check": [exe, "check", path],
                 "inspect --format json": [exe, "inspect", "--format", "json", path],
-                "correct": [exe, "correct", path, "--cell", cell, "--robot", "r1", "--out-dir", out_dir],
+                "correct": [exe, "correct", path, "--cell", cell, "--robot", "r1", "--out-dir", OUT],
             }
             for cmd, argv in commands.items():
-                t, m = measure(argv, args.runs)
+                t, m = measure(argv, args.runs, args.work)
                 if cmd == "check":
                     note = f"{t / grep_t:.1f}× grep"
                 elif cmd == "correct" and py_t is not None:
