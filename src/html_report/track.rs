@@ -106,7 +106,7 @@ impl DataTable {
 }
 
 /// One ISO 9283 result for the accuracy section: the files it comes from, its tables and
-/// optionally a chart (an inline SVG from [`super::svg`]) with its caption.
+/// optionally a chart (an inline SVG the private `svg` module draws) with its caption.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AccuracyResult {
     /// (role, file), listed under the report's inputs.
