@@ -3,7 +3,8 @@
 //! the browser, each section on its own page.
 //!
 //! Every text taken from a file goes through [`html::escape`]; charts are small hand-written
-//! SVG (the private `svg` module) printed with fixed decimals, so the same inputs give the same bytes.
+//! SVG (the private `svg` module) printed with fixed decimals, so the same inputs give the
+//! same bytes.
 
 pub mod accuracy;
 pub mod figures;
