@@ -226,26 +226,30 @@ fn branch(state: &mut State, forks: &mut Vec<Fork>, b: BranchEvent) {
     }
 }
 
+/// The files' maps as one: the first whole, then each later file's names the map lacks (the
+/// first file that has a name gives its entry). The maps are moved, not copied: a copy of
+/// every `FDAT` and declared name was 10 MB of `check`'s peak on a 34 MB pair.
+fn moved_together<V>(maps: impl Iterator<Item = HashMap<Name, V>>) -> HashMap<Name, V> {
+    let mut all: HashMap<Name, V> = HashMap::default();
+    for own in maps {
+        if all.is_empty() {
+            all = own;
+        } else {
+            for (k, v) in own {
+                all.entry(k).or_insert(v);
+            }
+        }
+    }
+    all
+}
+
 /// Resolves base, tool and IPO mode of every motion of a program (files in the same order as
 /// `facts`) by following program order, hands each motion to the shared usage pass
 /// ([`crate::resolve::Binder`]) to fill the [`Usage`](crate::position::Usage) of the positions
 /// it uses, promotes used `FRAME`s and candidate aggregates to positions, and reports motions
 /// whose base stays unknown.
 pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
-    // The files' maps are moved into the program's (the first file's whole, the others' names
-    // it lacks), not copied: a copy of every `FDAT` and declared name was 10 MB of `check`'s
-    // peak on the 34 MB pair.
-    let mut fdats: HashMap<Name, Fdat> = HashMap::default();
-    for f in facts.iter_mut() {
-        let own = std::mem::take(&mut f.fdats);
-        if fdats.is_empty() {
-            fdats = own;
-        } else {
-            for (k, v) in own {
-                fdats.entry(k).or_insert(v);
-            }
-        }
-    }
+    let fdats = moved_together(facts.iter_mut().map(|f| std::mem::take(&mut f.fdats)));
     // Candidates that are positions whether or not a motion uses them.
     let mut kept: Vec<Vec<bool>> = facts
         .iter()
@@ -253,17 +257,8 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         .collect();
     // `XP1={…}` in the `.src` of a point the `.dat` declares (`DECL POS XP1`): the declaration
     // gives the kind, and a non-FRAME declared point is a position whether or not it moves.
-    let mut declared: HashMap<Name, PositionKind> = HashMap::default();
-    for f in facts.iter_mut() {
-        let own = std::mem::take(&mut f.declared);
-        if declared.is_empty() {
-            declared = own;
-        } else {
-            for (k, v) in own {
-                declared.entry(k).or_insert(v);
-            }
-        }
-    }
+    let declared: HashMap<Name, PositionKind> =
+        moved_together(facts.iter_mut().map(|f| std::mem::take(&mut f.declared)));
     for (fact, kept) in facts.iter_mut().zip(kept.iter_mut()) {
         let Facts {
             candidates,
