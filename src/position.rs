@@ -524,6 +524,31 @@ impl Name {
             NameRepr::Boxed(s) => s,
         }
     }
+
+    /// The name's bytes: comparing names needs no UTF-8 check of the inline bytes (resolving a
+    /// KRL program compares and looks up names by the hundred thousand).
+    fn as_bytes(&self) -> &[u8] {
+        match &self.0 {
+            NameRepr::Inline(len, bytes) => bytes.get(..*len as usize).unwrap_or_default(),
+            NameRepr::Boxed(s) => s.as_bytes(),
+        }
+    }
+
+    /// A name of ASCII bytes, without the UTF-8 check a `&str` would need first; `None` if
+    /// `bytes` is not ASCII.
+    pub(crate) fn from_ascii(bytes: &[u8]) -> Option<Name> {
+        if !bytes.is_ascii() {
+            return None;
+        }
+        let mut inline = [0u8; INLINE_NAME];
+        Some(match inline.get_mut(..bytes.len()) {
+            Some(to) => {
+                to.copy_from_slice(bytes);
+                Name(NameRepr::Inline(bytes.len() as u8, inline))
+            }
+            None => Name::from(std::str::from_utf8(bytes).ok()?),
+        })
+    }
 }
 
 impl From<&str> for Name {
@@ -559,7 +584,7 @@ impl std::ops::Deref for Name {
 
 impl PartialEq for Name {
     fn eq(&self, other: &Name) -> bool {
-        self.as_str() == other.as_str()
+        self.as_bytes() == other.as_bytes()
     }
 }
 
@@ -567,13 +592,13 @@ impl Eq for Name {}
 
 impl PartialEq<str> for Name {
     fn eq(&self, other: &str) -> bool {
-        self.as_str() == other
+        self.as_bytes() == other.as_bytes()
     }
 }
 
 impl PartialEq<&str> for Name {
     fn eq(&self, other: &&str) -> bool {
-        self.as_str() == *other
+        self.as_bytes() == other.as_bytes()
     }
 }
 

@@ -172,25 +172,29 @@ impl Dialect for Krl {
 
     fn implausible_configuration(&self, literal: &[u8]) -> Option<String> {
         // `{X …, S 6, T 'B010101', …}`: Status and Turn are small integers or binary strings.
-        let text = crate::syntax::latin1(literal);
-        for field in text.split([',', '{', '}']) {
-            let field = field.trim();
-            let Some((name, value)) = field.split_once([' ', '\t']) else {
+        // Read on the bytes (every position of a check passes here): a byte is one character
+        // of the Latin-1 text the message quotes.
+        for field in literal.split(|&b| matches!(b, b',' | b'{' | b'}')) {
+            let field = trim_latin1(field);
+            let Some(at) = field.iter().position(|&b| matches!(b, b' ' | b'\t')) else {
                 continue;
             };
-            let which = match name.to_ascii_uppercase().as_str() {
-                "S" => "Status",
-                "T" => "Turn",
+            let (name, value) = (&field[..at], &field[at + 1..]);
+            let which = match name {
+                [b'S' | b's'] => "Status",
+                [b'T' | b't'] => "Turn",
                 _ => continue,
             };
-            let value = value.trim();
+            let value = trim_latin1(value);
             let binary = value.len() > 3
-                && value.starts_with('\'')
-                && value.ends_with('\'')
-                && value[1..2].eq_ignore_ascii_case("b");
-            if !binary && value.parse::<u32>().is_err() {
+                && value.starts_with(b"'")
+                && value.ends_with(b"'")
+                && matches!(value[1], b'B' | b'b');
+            let whole = std::str::from_utf8(value).is_ok_and(|v| v.parse::<u32>().is_ok());
+            if !binary && !whole {
                 return Some(format!(
-                    "has {which} {value}: Status and Turn are small whole numbers"
+                    "has {which} {}: Status and Turn are small whole numbers",
+                    crate::syntax::latin1(value)
                 ));
             }
         }
@@ -245,5 +249,83 @@ fn tree_options(own_config: bool, options: &LoadOptions) -> LoadOptions {
         }
     } else {
         options.clone()
+    }
+}
+
+/// `bytes` without the leading and trailing characters `str::trim` drops, each byte read as a
+/// Latin-1 character (tab to carriage return, space, NEL, no-break space).
+fn trim_latin1(bytes: &[u8]) -> &[u8] {
+    let space = |b: &u8| matches!(b, 0x09..=0x0D | b' ' | 0x85 | 0xA0);
+    let start = bytes.iter().position(|b| !space(b)).unwrap_or(bytes.len());
+    let end = bytes
+        .iter()
+        .rposition(|b| !space(b))
+        .map_or(start, |e| e + 1);
+    bytes.get(start..end).unwrap_or(&[])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The check as it was written on the Latin-1 text, for comparison.
+    fn on_text(literal: &[u8]) -> Option<String> {
+        let text = crate::syntax::latin1(literal);
+        for field in text.split([',', '{', '}']) {
+            let Some((name, value)) = field.trim().split_once([' ', '\t']) else {
+                continue;
+            };
+            let which = match name.to_ascii_uppercase().as_str() {
+                "S" => "Status",
+                "T" => "Turn",
+                _ => continue,
+            };
+            let value = value.trim();
+            let binary = value.len() > 3
+                && value.starts_with('\'')
+                && value.ends_with('\'')
+                && value.get(1..2).is_some_and(|b| b.eq_ignore_ascii_case("b"));
+            if !binary && value.parse::<u32>().is_err() {
+                return Some(format!(
+                    "has {which} {value}: Status and Turn are small whole numbers"
+                ));
+            }
+        }
+        None
+    }
+
+    proptest! {
+        #[test]
+        fn configuration_check_reads_bytes_as_the_text_check_did(
+            parts in proptest::collection::vec(
+                prop_oneof![
+                    Just(b"S".to_vec()), Just(b"t".to_vec()), Just(b"X".to_vec()),
+                    Just(b" ".to_vec()), Just(b"\t".to_vec()), Just(b",".to_vec()),
+                    Just(b"{".to_vec()), Just(b"}".to_vec()), Just(b"'".to_vec()),
+                    Just(b"B".to_vec()), Just(b"+".to_vec()), Just(vec![0x85]),
+                    Just(vec![0xA0]), Just(vec![0x0B]), Just(vec![0xE9]), Just(vec![0x1C]),
+                    "[0-9]{1,11}".prop_map(String::into_bytes),
+                ],
+                0..14,
+            )
+        ) {
+            let literal = parts.concat();
+            prop_assert_eq!(Krl.implausible_configuration(&literal), on_text(&literal));
+        }
+    }
+
+    #[test]
+    fn configuration_check_finds_what_it_should() {
+        let check = |s: &str| Krl.implausible_configuration(s.as_bytes());
+        assert_eq!(check("{X 1, S 6, T 'B010101'}"), None);
+        assert_eq!(
+            check("{X 1, S 6, T 1e30}").as_deref(),
+            Some("has Turn 1e30: Status and Turn are small whole numbers")
+        );
+        assert_eq!(
+            check("{s\t 'b'x, T 2}").as_deref(),
+            Some("has Status 'b'x: Status and Turn are small whole numbers")
+        );
     }
 }

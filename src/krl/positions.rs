@@ -156,7 +156,7 @@ fn upper_name(src: &[u8], span: Span) -> Name {
             for (t, b) in to.iter_mut().zip(text) {
                 *t = b.to_ascii_uppercase();
             }
-            Name::from(std::str::from_utf8(to).unwrap_or_default())
+            Name::from_ascii(to).unwrap_or_else(|| Name::from(upper(src, span)))
         }
         _ => Name::from(upper(src, span)),
     }

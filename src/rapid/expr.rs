@@ -4,7 +4,7 @@
 //! index range `id..subtree_end`. Compound and access nodes wrap an operand that was read before
 //! it was known to be one, so they come after their first child; nothing relies on their range.
 
-use crate::syntax::Span;
+use crate::syntax::{NumLit, Span};
 
 /// No node (end of a sibling list, no child).
 pub(crate) const NONE: u32 = u32::MAX;
@@ -48,6 +48,9 @@ pub(crate) struct ExprNode {
     pub first: u32,
     pub next: u32,
     pub subtree_end: u32,
+    /// For an [`ExprKind::Num`] read by the numeric-aggregate fast path: its literal in
+    /// [`Arena::lits`], parsed while the number was scanned ([`NONE`] otherwise).
+    pub lit: u32,
 }
 
 impl ExprNode {
@@ -64,11 +67,42 @@ impl ExprNode {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Arena {
     pub nodes: Vec<ExprNode>,
+    /// Literals already parsed by the parser, so that the extractor does not parse the same
+    /// bytes again (a robtarget file is mostly numbers).
+    lits: Vec<NumLit>,
 }
 
 impl Arena {
     pub(crate) fn clear(&mut self) {
         self.nodes.clear();
+        self.lits.clear();
+    }
+
+    /// Where [`truncate`](Self::truncate) can go back to.
+    pub(crate) fn mark(&self) -> (usize, usize) {
+        (self.nodes.len(), self.lits.len())
+    }
+
+    /// Drops every node (and literal) allocated since `mark`.
+    pub(crate) fn truncate(&mut self, (nodes, lits): (usize, usize)) {
+        self.nodes.truncate(nodes);
+        self.lits.truncate(lits);
+    }
+
+    /// Allocates a closed [`ExprKind::Num`] node spanning `start..end` whose literal is `lit`.
+    pub(crate) fn num(&mut self, start: u32, end: u32, lit: NumLit) -> u32 {
+        let id = self.open(ExprKind::Num, start);
+        if let Some(n) = self.nodes.get_mut(id as usize) {
+            n.end = end;
+            n.lit = self.lits.len() as u32;
+        }
+        self.lits.push(lit);
+        id
+    }
+
+    /// The literal the parser read for node `n`, if it did.
+    pub(crate) fn lit(&self, n: &ExprNode) -> Option<NumLit> {
+        self.lits.get(n.lit as usize).copied()
     }
 
     pub(crate) fn get(&self, id: u32) -> Option<&ExprNode> {
@@ -88,6 +122,7 @@ impl Arena {
             first: NONE,
             next: NONE,
             subtree_end: id + 1,
+            lit: NONE,
         });
         id
     }

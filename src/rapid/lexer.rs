@@ -299,7 +299,7 @@ fn ident_len(rest: &[u8]) -> usize {
 /// `exponent`. A trailing `E` without
 /// digits is not part of the number (`1E` lexes as `1` then `E`). Decimal numbers are the
 /// hottest path of a robtarget file, so they are scanned by hand.
-pub(crate) fn number_len(rest: &[u8]) -> usize {
+fn number_len(rest: &[u8]) -> usize {
     if rest.first() == Some(&b'0')
         && rest
             .get(1)

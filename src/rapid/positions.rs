@@ -216,7 +216,11 @@ impl<'l> Extractor<'l> {
             return None;
         }
         let span = n.span();
-        NumField::new(span, NumLit::parse(span.slice(src))?)
+        let lit = match arena.lit(n) {
+            Some(lit) => lit,
+            None => NumLit::parse(span.slice(src))?,
+        };
+        NumField::new(span, lit)
     }
 
     /// The first `N` elements of an aggregate as numeric fields (`None` where not a literal).

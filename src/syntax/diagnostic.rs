@@ -191,6 +191,12 @@ pub struct Excerpt<'a> {
 
 /// Bytes as Latin-1 text: every byte is one char, so columns stay columns.
 pub fn latin1(bytes: &[u8]) -> String {
+    // ASCII (names, nearly always) is the same text in one copy, not a char at a time.
+    if bytes.is_ascii()
+        && let Ok(text) = String::from_utf8(bytes.to_vec())
+    {
+        return text;
+    }
     bytes.iter().map(|&b| b as char).collect()
 }
 

@@ -121,6 +121,17 @@ impl Digits {
 impl NumLit {
     /// Parses a whole literal; `None` if `bytes` is not exactly one number.
     pub fn parse(bytes: &[u8]) -> Option<NumLit> {
+        match NumLit::parse_prefix(bytes)? {
+            (lit, len) if len == bytes.len() => Some(lit),
+            _ => None,
+        }
+    }
+
+    /// Parses the decimal literal that `bytes` starts with, and its length: what [`parse`](Self::parse)
+    /// gives for `&bytes[..len]`. `None` if `bytes` does not start with one, or if an exponent
+    /// letter follows without digits (`1E`, which a lexer ends before the letter). A parser that
+    /// scans its numbers with this hands the literal on instead of having it parsed again.
+    pub fn parse_prefix(bytes: &[u8]) -> Option<(NumLit, usize)> {
         let mut i = 0;
         if matches!(bytes.first(), Some(b'+' | b'-')) {
             i += 1;
@@ -177,9 +188,8 @@ impl NumLit {
             }
             style = Some((letter == b'E', sign, i - exp_start));
         }
-        if i != bytes.len() {
-            return None;
-        }
+        let len = i;
+        let bytes = bytes.get(..len)?;
         let power = exponent.saturating_sub(decimals);
         let value = match exact_fast_path(mantissa, digits, power) {
             Some(v) if bytes.first() == Some(&b'-') => -v,
@@ -203,23 +213,26 @@ impl NumLit {
                 digits: u8::try_from(digits).ok().filter(|&d| d <= 3)?,
             })
         });
-        Some(NumLit {
-            value,
-            precision: decimals
-                .saturating_sub(exponent)
-                .clamp(i16::MIN as i32, i16::MAX as i32) as i16,
-            exponent: exponent_style,
-            style: if bytes.first() == Some(&b'+') {
-                PLUS
-            } else {
-                0
-            } | if point && int_digits == 0 {
-                LEADING_POINT
-            } else {
-                0
+        Some((
+            NumLit {
+                value,
+                precision: decimals
+                    .saturating_sub(exponent)
+                    .clamp(i16::MIN as i32, i16::MAX as i32) as i16,
+                exponent: exponent_style,
+                style: if bytes.first() == Some(&b'+') {
+                    PLUS
+                } else {
+                    0
+                } | if point && int_digits == 0 {
+                    LEADING_POINT
+                } else {
+                    0
+                },
+                int_digits: int_digits.min(u8::MAX as usize) as u8,
             },
-            int_digits: int_digits.min(u8::MAX as usize) as u8,
-        })
+            len,
+        ))
     }
 
     /// The literal as a float, for the math; the text itself stays in the tree.

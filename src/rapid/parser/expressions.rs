@@ -11,7 +11,7 @@ impl Parser<'_, '_> {
     pub(super) fn numeric_aggregate(&mut self) -> Option<u32> {
         const MAX: usize = 16;
         let src = self.src;
-        let mark = self.arena.nodes.len();
+        let mark = self.arena.mark();
         let mut stack = [(NONE, NONE); MAX];
         let mut depth = 0usize;
         let mut i = self.tok.start as usize;
@@ -59,17 +59,14 @@ impl Parser<'_, '_> {
                     just_opened = false;
                 }
                 b'-' | b'+' | b'0'..=b'9' | b'.' if expect_elem && depth > 0 => {
-                    let digits = if matches!(b, b'-' | b'+') { i + 1 } else { i };
-                    let rest = src.get(digits..).unwrap_or(&[]);
-                    let starts_number = match rest.first() {
-                        Some(c) if c.is_ascii_digit() => true,
-                        Some(b'.') => rest.get(1).is_some_and(u8::is_ascii_digit),
-                        _ => false,
-                    };
-                    if !starts_number {
+                    // The literal is parsed while it is scanned, and kept for the extractor.
+                    // A decimal number ends where the lexer's `number_len` ends it; anything
+                    // `NumLit` does not read (based numbers, `1E`, overflow) goes to the
+                    // general path.
+                    let Some((lit, len)) = NumLit::parse_prefix(src.get(i..).unwrap_or(&[])) else {
                         break false;
-                    }
-                    let end = digits + super::super::lexer::number_len(rest);
+                    };
+                    let end = i + len;
                     // The next byte must end the token the way the lexer would end it.
                     if src
                         .get(end)
@@ -77,8 +74,7 @@ impl Parser<'_, '_> {
                     {
                         break false;
                     }
-                    let id = self.arena.open(ExprKind::Num, i as u32);
-                    self.arena.close(id, end as u32);
+                    let id = self.arena.num(i as u32, end as u32, lit);
                     let (parent, last) = stack[depth - 1];
                     self.arena.link(parent, last, id);
                     stack[depth - 1].1 = id;
@@ -90,7 +86,7 @@ impl Parser<'_, '_> {
             }
         };
         if !ok || root == NONE {
-            self.arena.nodes.truncate(mark);
+            self.arena.truncate(mark);
             return None;
         }
         self.lex.seek(i);
@@ -322,14 +318,44 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// The expression nodes and the following token, read with or without the fast path.
-    fn read(src: &[u8], fast: bool) -> (Vec<crate::rapid::expr::ExprNode>, Option<Token>) {
+    type Read = (
+        Vec<crate::rapid::expr::ExprNode>,
+        Vec<Option<String>>,
+        Option<Token>,
+    );
+
+    /// The expression nodes, the literal each number resolves to (handed on by the parser or
+    /// parsed from its span, as the extractor does; `Debug` keeps the sign of `-0`) and the
+    /// following token, read with or without the fast path.
+    fn read(src: &[u8], fast: bool) -> Read {
         let mut sink = crate::syntax::NoSink;
         let mut p = Parser::new(src, &mut sink);
         p.fast_aggregates = fast;
         match p.expr() {
-            Ok(_) => (p.arena.nodes.clone(), Some(p.tok)),
-            Err(_) => (Vec::new(), None),
+            Ok(_) => {
+                let lits = p
+                    .arena
+                    .nodes
+                    .iter()
+                    .map(|n| {
+                        let lit = p.arena.lit(n);
+                        assert!(
+                            fast || lit.is_none(),
+                            "only the fast path hands literals on"
+                        );
+                        let lit = lit.or_else(|| NumLit::parse(n.span().slice(src)));
+                        lit.map(|l| format!("{l:?}"))
+                    })
+                    .collect();
+                let nodes = p
+                    .arena
+                    .nodes
+                    .iter()
+                    .map(|n| crate::rapid::expr::ExprNode { lit: NONE, ..*n })
+                    .collect();
+                (nodes, lits, Some(p.tok))
+            }
+            Err(_) => (Vec::new(), Vec::new(), None),
         }
     }
 

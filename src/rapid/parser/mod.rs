@@ -13,7 +13,7 @@ mod statements;
 use super::expr::{Arena, ExprKind, NONE};
 use super::lexer::{Lexer, Token, TokenKind};
 use super::tree::{NodeKind, Rapid, Tree};
-use crate::syntax::{Diagnostic, Sink, Span, TreeBuilder};
+use crate::syntax::{Diagnostic, NumLit, Sink, Span, TreeBuilder};
 
 /// Nesting deeper than this (brackets, blocks) is reported instead of recursed into, so a
 /// hostile input cannot overflow the stack.
