@@ -76,7 +76,7 @@ pub struct RunTarget {
 impl From<&TargetChange> for RunTarget {
     fn from(c: &TargetChange) -> RunTarget {
         RunTarget {
-            name: c.name.clone(),
+            name: c.name.as_deref().map(str::to_owned),
             line: Some(c.line),
             skid: c.skid,
             mm: c.mm,

@@ -61,7 +61,11 @@ impl FileSummary {
                 .changes
                 .iter()
                 .filter(|c| c.uncertainty_mm.is_some_and(|u| c.mm < u))
-                .map(|c| c.name.clone().unwrap_or_else(|| format!("line {}", c.line)))
+                .map(|c| {
+                    c.name
+                        .as_deref()
+                        .map_or_else(|| format!("line {}", c.line), str::to_owned)
+                })
                 .collect(),
         }
     }
@@ -189,7 +193,7 @@ mod tests {
             mm,
             deg: 0.0,
             skid: Some(100.0),
-            name: Some(name.to_owned()),
+            name: Some(name.into()),
             line: 3,
             uncertainty_mm: Some(u),
         };

@@ -156,7 +156,7 @@ fn cartesian<R: TargetRule>(rule: &R, scope: Scope, p: &Position, keep_a: Option
             mm,
             deg,
             skid,
-            name: p.name.as_deref().map(str::to_owned),
+            name: p.name.clone(),
             line: p.line,
             uncertainty_mm,
         },

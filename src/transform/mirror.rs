@@ -329,7 +329,7 @@ impl TargetRule for MirrorRule<'_> {
             mm: 0.0,
             deg: 0.0,
             skid: None,
-            name: p.name.as_deref().map(str::to_owned),
+            name: p.name.clone(),
             line: p.line,
             uncertainty_mm: None,
         };

@@ -176,7 +176,7 @@ impl TargetRule for TrackRule<'_, '_> {
             mm,
             deg,
             skid: Some(skid),
-            name: p.name.as_deref().map(str::to_owned),
+            name: p.name.clone(),
             line: p.line,
             // A joint target has no work object or tool: its TCP in the world is not known
             // here, so no uncertainty is stated for it.

@@ -187,7 +187,7 @@ fn combine(
                     mm,
                     deg,
                     skid,
-                    name: p.name.as_deref().map(str::to_owned),
+                    name: p.name.clone(),
                     line: p.line,
                     uncertainty_mm: None,
                 }
