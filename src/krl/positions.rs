@@ -430,7 +430,7 @@ fn build_position(
     }
 }
 
-/// What [`extract`] found in one file.
+/// What an [`Extractor`] found in one file.
 pub(crate) struct Extracted {
     pub positions: Vec<Position>,
     pub frames: Vec<FrameDecl>,
