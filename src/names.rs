@@ -105,10 +105,20 @@ impl Eq for NameKey<'_> {}
 
 /// The owned key of a name: its [`NameKey`] bytes as text (`p[ 3 ]` → `P[3]`).
 pub(crate) fn fold(name: &str) -> String {
-    name.chars()
-        .filter(|c| !c.is_ascii_whitespace())
-        .map(|c| c.to_ascii_uppercase())
-        .collect()
+    let mut key = String::with_capacity(name.len());
+    fold_str_into(&mut key, name);
+    key
+}
+
+/// [`fold`] of `name` into a reused buffer.
+fn fold_str_into<'b>(buf: &'b mut String, name: &str) -> &'b str {
+    buf.clear();
+    buf.extend(
+        name.chars()
+            .filter(|c| !c.is_ascii_whitespace())
+            .map(|c| c.to_ascii_uppercase()),
+    );
+    buf
 }
 
 /// [`fold`] of source bytes (Latin-1) into a reused buffer.
@@ -329,16 +339,11 @@ impl<T: Copy> NameIndexBuilder<T> {
             in_exact,
             in_arrays,
         } = self;
-        buf.clear();
-        buf.extend(
-            name.chars()
-                .filter(|c| !c.is_ascii_whitespace())
-                .map(|c| c.to_ascii_uppercase()),
-        );
-        if let Some(array) = before(buf, *open) {
+        let key = fold_str_into(buf, name);
+        if let Some(array) = before(key, *open) {
             in_arrays.push((elements.intern(array), at));
         }
-        in_exact.push((exact.intern(buf), at));
+        in_exact.push((exact.intern(key), at));
     }
 
     /// The index of everything inserted.
