@@ -497,7 +497,7 @@ impl<const N: usize> PartialEq<[usize; N]> for Lines {
 }
 
 /// Names up to this many bytes are kept in place in a [`Name`].
-const INLINE_NAME: usize = 22;
+pub(crate) const INLINE_NAME: usize = 22;
 
 /// A target's declared name as written: text that reads as a `&str` (`p.name.as_deref()`).
 ///
@@ -540,27 +540,23 @@ impl Name {
         if !bytes.is_ascii() {
             return None;
         }
+        match Name::inline(bytes) {
+            Some(name) => Some(name),
+            None => Some(Name::from(std::str::from_utf8(bytes).ok()?)),
+        }
+    }
+
+    /// `bytes` kept in place, if they fit; the caller vouches that they are UTF-8.
+    fn inline(bytes: &[u8]) -> Option<Name> {
         let mut inline = [0u8; INLINE_NAME];
-        Some(match inline.get_mut(..bytes.len()) {
-            Some(to) => {
-                to.copy_from_slice(bytes);
-                Name(NameRepr::Inline(bytes.len() as u8, inline))
-            }
-            None => Name::from(std::str::from_utf8(bytes).ok()?),
-        })
+        inline.get_mut(..bytes.len())?.copy_from_slice(bytes);
+        Some(Name(NameRepr::Inline(bytes.len() as u8, inline)))
     }
 }
 
 impl From<&str> for Name {
     fn from(s: &str) -> Name {
-        let mut bytes = [0u8; INLINE_NAME];
-        match bytes.get_mut(..s.len()) {
-            Some(to) => {
-                to.copy_from_slice(s.as_bytes());
-                Name(NameRepr::Inline(s.len() as u8, bytes))
-            }
-            None => Name(NameRepr::Boxed(s.into())),
-        }
+        Name::inline(s.as_bytes()).unwrap_or_else(|| Name(NameRepr::Boxed(s.into())))
     }
 }
 

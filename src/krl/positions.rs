@@ -145,7 +145,7 @@ fn upper(src: &[u8], span: Span) -> String {
 /// motion's target, an alias and an `FDAT_ACT` are kept until the program is resolved, and a
 /// `String` each was 170,000 heap blocks on the 34 MB pair.
 fn upper_name(src: &[u8], span: Span) -> Name {
-    let mut buf = [0u8; 22];
+    let mut buf = [0u8; crate::position::INLINE_NAME];
     let text = span.slice(src);
     match buf.get_mut(..text.len()) {
         Some(to)
