@@ -149,11 +149,14 @@ impl Widened {
     /// ([`carry_precision`] reads the lists by slot instead, once per literal).
     #[cfg(test)]
     fn of(&self, d: usize, index: usize) -> i32 {
-        self.0
-            .get(&d)
-            .and_then(|l| l.get(index))
-            .map_or(d as i32, |&e| e as i32)
+        recorded(self.0.get(&d).map_or(&[][..], Vec::as_slice), index, d)
     }
+}
+
+/// The first-written precision entry `index` of a `d`-decimals list records: `d` itself where
+/// the list has no entry (the literal was written at `d` from the start).
+fn recorded(list: &[i8], index: usize, d: usize) -> i32 {
+    list.get(index).map_or(d as i32, |&e| e as i32)
 }
 
 /// The A of each KUKA target written at B = ±90°, as written, by the target's index among the
@@ -681,9 +684,7 @@ pub fn carry_precision(
         };
         let d = match house_slot(b.precision()) {
             Some(h) => {
-                let d = old_lists[h]
-                    .get(seen[h])
-                    .map_or(HOUSE_DECIMALS[h] as i32, |&e| e as i32);
+                let d = recorded(old_lists[h], seen[h], HOUSE_DECIMALS[h]);
                 seen[h] += 1;
                 d
             }
