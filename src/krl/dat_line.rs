@@ -185,12 +185,16 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    fn kept() -> crate::syntax::TreeBuilder<crate::krl::tree::Krl> {
+        crate::syntax::TreeBuilder::with_capacity(8)
+    }
+
     /// Both paths over `src`: the tree's nodes, statements, diagnostics and opaque count agree.
     fn same_as_general(src: &[u8]) {
         let mut fast_stmts = Vec::new();
-        let fast = parse_lines(src, &mut |s| fast_stmts.push(s), true);
+        let fast = parse_lines(src, &mut |s| fast_stmts.push(s), true, kept());
         let mut slow_stmts = Vec::new();
-        let slow = parse_lines(src, &mut |s| slow_stmts.push(s), false);
+        let slow = parse_lines(src, &mut |s| slow_stmts.push(s), false, kept());
         let shown = String::from_utf8_lossy(src);
         assert_eq!(fast.tree.nodes, slow.tree.nodes, "nodes of {shown:?}");
         assert_eq!(fast_stmts, slow_stmts, "statements of {shown:?}");
@@ -200,6 +204,10 @@ mod tests {
         );
         assert_eq!(fast.opaque, slow.opaque, "opaque count of {shown:?}");
         assert_eq!(fast.tree.print(src), src);
+        assert!(
+            fast.round_trip && slow.round_trip,
+            "round trip of {shown:?}"
+        );
     }
 
     #[test]

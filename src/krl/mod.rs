@@ -56,17 +56,18 @@ pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
 fn analyse(path: &Path, source: Vec<u8>) -> (ParsedFile, positions::Facts) {
     let lines = LineIndex::new(&source);
     let mut extractor = positions::Extractor::new(&source, &lines);
-    let parse = parser::parse_with(&source, &mut |stmt: tree::Stmt| extractor.statement(&stmt));
+    // The tree is not kept: only its round trip is needed here (checked as it is built), and
+    // a `DEF`/`DEFDAT` line is seen as its routine statement.
+    let mut has_routine = false;
+    let parse = parser::parse_streamed(&source, &mut |stmt: tree::Stmt| {
+        has_routine |= matches!(stmt.kind, tree::StmtKind::Routine { .. });
+        extractor.statement(&stmt)
+    });
     let (extracted, notes) = extractor.finish();
-    let round_trip = parse.tree.prints_back(&source);
+    let round_trip = parse.round_trip;
     let mut diagnostics = parse.diagnostics;
     diagnostics.extend(notes);
-    if !parse
-        .tree
-        .nodes
-        .iter()
-        .any(|n| n.kind == tree::NodeKind::RoutineStart)
-    {
+    if !has_routine {
         let at = lexer::Lexer::new(&source)
             .find(|t| !t.kind.is_trivia())
             .map_or(crate::syntax::Span::new(0, 0), |t| t.span());

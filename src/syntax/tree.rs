@@ -182,10 +182,28 @@ impl<L: Language> Tree<L> {
 /// Builds a [`Tree`] in pre-order: branches are opened and closed around their children, and
 /// bytes between two leaves become a [`Language::GAP`] leaf, so every byte lands in exactly one
 /// leaf.
+///
+/// A builder made by [`TreeBuilder::verifying`] keeps no nodes: it only checks, leaf by leaf,
+/// that the leaves cover the source in order. Loading a program needs that answer (a file that
+/// does not print back is never rewritten) but not the tree, which on a large module is 0.4
+/// times the file while the positions are being read.
 pub(crate) struct TreeBuilder<L: Language> {
+    /// The nodes, when kept.
     nodes: Vec<Node<L::Kind>>,
+    keep: bool,
+    /// Nodes pushed so far, kept or not: the index the next node gets.
+    count: u32,
     /// End of the last leaf pushed.
     leaf_end: u32,
+    /// Every leaf so far started where the one before it ended.
+    in_order: bool,
+}
+
+/// What a [`TreeBuilder`] built: the tree (empty for a verifying builder) and whether its
+/// leaves cover the source exactly, in order.
+pub(crate) struct Built<L: Language> {
+    pub(crate) tree: Tree<L>,
+    pub(crate) round_trip: bool,
 }
 
 impl<L: Language> TreeBuilder<L> {
@@ -198,25 +216,49 @@ impl<L: Language> TreeBuilder<L> {
             end: 0,
             subtree_end: 1,
         });
-        TreeBuilder { nodes, leaf_end: 0 }
+        TreeBuilder {
+            nodes,
+            keep: true,
+            count: 1,
+            leaf_end: 0,
+            in_order: true,
+        }
+    }
+
+    /// A builder that keeps no nodes and only checks the round trip (see the type).
+    pub(crate) fn verifying() -> TreeBuilder<L> {
+        TreeBuilder {
+            nodes: Vec::new(),
+            keep: false,
+            count: 1,
+            leaf_end: 0,
+            in_order: true,
+        }
     }
 
     /// Number of nodes so far: the index the next node gets.
     pub(crate) fn len(&self) -> usize {
-        self.nodes.len()
+        self.count as usize
+    }
+
+    #[inline]
+    fn push(&mut self, kind: L::Kind, start: u32, end: u32) {
+        if self.keep {
+            self.nodes.push(Node {
+                kind,
+                start,
+                end,
+                subtree_end: self.count + 1,
+            });
+        }
+        self.count += 1;
     }
 
     /// Pushes the bytes from the last leaf up to `upto` as a gap leaf, if there are any.
     #[inline]
     pub(crate) fn gap(&mut self, upto: u32) {
         if upto > self.leaf_end {
-            let idx = self.nodes.len() as u32;
-            self.nodes.push(Node {
-                kind: L::GAP,
-                start: self.leaf_end,
-                end: upto,
-                subtree_end: idx + 1,
-            });
+            self.push(L::GAP, self.leaf_end, upto);
             self.leaf_end = upto;
         }
     }
@@ -226,13 +268,10 @@ impl<L: Language> TreeBuilder<L> {
     pub(crate) fn leaf(&mut self, kind: L::Kind, start: u32, end: u32) {
         let end = end.max(start);
         self.gap(start);
-        let idx = self.nodes.len() as u32;
-        self.nodes.push(Node {
-            kind,
-            start,
-            end,
-            subtree_end: idx + 1,
-        });
+        // After the gap the leaf starts at the last one's end, unless it starts before it:
+        // bytes the tree would print twice.
+        self.in_order &= start == self.leaf_end;
+        self.push(kind, start, end);
         self.leaf_end = end;
     }
 
@@ -240,20 +279,15 @@ impl<L: Language> TreeBuilder<L> {
     #[inline]
     pub(crate) fn open(&mut self, kind: L::Kind, start: u32) -> usize {
         self.gap(start);
-        let idx = self.nodes.len();
-        self.nodes.push(Node {
-            kind,
-            start,
-            end: start,
-            subtree_end: idx as u32 + 1,
-        });
+        let idx = self.count as usize;
+        self.push(kind, start, start);
         idx
     }
 
     /// Closes the branch opened at `idx`: it covers every node pushed since.
     #[inline]
     pub(crate) fn close(&mut self, idx: usize) {
-        let len = self.nodes.len() as u32;
+        let len = self.count;
         let end = self.leaf_end;
         if let Some(n) = self.nodes.get_mut(idx) {
             n.subtree_end = len;
@@ -262,10 +296,13 @@ impl<L: Language> TreeBuilder<L> {
     }
 
     /// The tree: the bytes up to `src_len` after the last leaf become a gap, the root closed.
-    pub(crate) fn finish(mut self, src_len: u32) -> Tree<L> {
+    pub(crate) fn finish(mut self, src_len: u32) -> Built<L> {
         self.gap(src_len);
         self.close(0);
-        Tree { nodes: self.nodes }
+        Built {
+            round_trip: self.in_order && self.leaf_end == src_len,
+            tree: Tree { nodes: self.nodes },
+        }
     }
 }
 
@@ -304,7 +341,7 @@ pub(crate) fn too_large(src: &[u8]) -> Option<Diagnostic> {
 pub(crate) fn refused_tree<L: Language>(opaque: L::Kind) -> Tree<L> {
     let mut b = TreeBuilder::<L>::with_capacity(2);
     b.leaf(opaque, 0, 0);
-    b.finish(0)
+    b.finish(0).tree
 }
 
 /// Bytes as a quoted, escaped string: ASCII graphic as is, everything else `\xNN`/`\r`/`\n`.
@@ -358,7 +395,9 @@ mod tests {
         b.leaf(K::Word, 2, 5);
         b.close(block);
         b.leaf(K::Word, 6, 7);
-        let tree = b.finish(src.len() as u32);
+        let built = b.finish(src.len() as u32);
+        assert!(built.round_trip);
+        let tree = built.tree;
         assert_eq!(
             tree.dump(src),
             "Root@0..7\n  Word@0..1 \"a\"\n  Gap@1..2 \" \"\n  Block@2..5\n    Word@2..5 \"{b}\"\n  Gap@5..6 \" \"\n  Word@6..7 \"c\"\n"
@@ -372,6 +411,53 @@ mod tests {
         let mut doubled = tree.clone();
         doubled.nodes.insert(2, tree.nodes[1]);
         assert!(!doubled.prints_back(src));
+    }
+
+    /// The leaves of `builder_fills_gaps_and_nests_in_pre_order`, pushed into `b`.
+    fn toy_leaves(mut b: TreeBuilder<Toy>, src_len: u32) -> Built<Toy> {
+        b.leaf(K::Word, 0, 1);
+        let block = b.open(K::Block, 2);
+        b.leaf(K::Word, 2, 5);
+        b.close(block);
+        b.leaf(K::Word, 6, 7);
+        b.finish(src_len)
+    }
+
+    #[test]
+    fn a_verifying_builder_keeps_no_nodes_and_finds_what_prints_back_finds() {
+        let src = b"a {b} c";
+        let kept = toy_leaves(TreeBuilder::with_capacity(8), 7);
+        let verified = toy_leaves(TreeBuilder::verifying(), 7);
+        assert!(kept.round_trip && verified.round_trip);
+        assert!(verified.tree.nodes.is_empty());
+        assert_eq!(kept.tree.nodes.len(), 7);
+        assert!(kept.tree.prints_back(src));
+        // A source longer than the leaves (the finishing gap covers it) still round-trips; one
+        // shorter than them does not.
+        assert!(toy_leaves(TreeBuilder::verifying(), 9).round_trip);
+        assert!(!toy_leaves(TreeBuilder::verifying(), 6).round_trip);
+        // A leaf that starts inside the one before it: bytes printed twice.
+        for mut b in [
+            TreeBuilder::<Toy>::with_capacity(4),
+            TreeBuilder::verifying(),
+        ] {
+            b.leaf(K::Word, 0, 3);
+            b.leaf(K::Word, 2, 5);
+            let built = b.finish(5);
+            assert!(!built.round_trip);
+            if !built.tree.nodes.is_empty() {
+                assert!(!built.tree.prints_back(b"abcde"));
+            }
+        }
+        // Node indices advance the same whether or not the nodes are kept.
+        let mut kept = TreeBuilder::<Toy>::with_capacity(4);
+        let mut verifying = TreeBuilder::<Toy>::verifying();
+        for b in [&mut kept, &mut verifying] {
+            // Root, gap 0..1, the word, gap 2..3, then the block.
+            b.leaf(K::Word, 1, 2);
+            assert_eq!(b.open(K::Block, 3), 4);
+            assert_eq!(b.len(), 5);
+        }
     }
 
     #[test]

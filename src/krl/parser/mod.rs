@@ -15,8 +15,12 @@ use crate::syntax::{Diagnostic, Sink, Span, TreeBuilder};
 /// The result of parsing one file.
 #[derive(Clone, Debug, Default)]
 pub struct Parse {
-    /// The lossless tree: it prints back the source byte for byte.
+    /// The lossless tree: it prints back the source byte for byte. Empty after a parse that
+    /// streams its statements and keeps no tree (loading a program).
     pub tree: Tree,
+    /// The tree's leaves cover the source exactly, in order: printing gives it back. Checked
+    /// as the leaves are built, also when the tree is not kept.
+    pub round_trip: bool,
     /// The statements read, in order (kept by [`parse`]; empty after [`parse_with`], which
     /// streams them to its sink instead).
     pub stmts: Vec<Stmt>,
@@ -200,21 +204,37 @@ pub fn parse(src: &[u8]) -> Parse {
 /// it (`stmts` stays empty). Reading positions this way keeps memory at the
 /// size of the tokens: a 50 MB `.dat` holds millions of aggregate fields.
 pub fn parse_with(src: &[u8], sink: &mut dyn Sink<Stmt>) -> Parse {
-    parse_lines(src, sink, true)
+    // About one node per 60 bytes of a typical `.src`/`.dat` line.
+    parse_lines(
+        src,
+        sink,
+        true,
+        TreeBuilder::with_capacity(src.len() / 60 + 4),
+    )
+}
+
+/// [`parse_with`] for a caller that needs only the round trip of the tree, not its nodes
+/// ([`Parse::tree`] stays empty).
+pub(crate) fn parse_streamed(src: &[u8], sink: &mut dyn Sink<Stmt>) -> Parse {
+    parse_lines(src, sink, true, TreeBuilder::verifying())
 }
 
 /// The parser, with or without the `.dat` declaration fast path ([`super::dat_line`]); both
 /// give the same result, which the fast path's tests check. Rules `line` and `trivia`: one
 /// line at a time, trivia kept in the line's node.
-pub(super) fn parse_lines(src: &[u8], sink: &mut dyn Sink<Stmt>, fast: bool) -> Parse {
+pub(super) fn parse_lines(
+    src: &[u8],
+    sink: &mut dyn Sink<Stmt>,
+    fast: bool,
+    tree: TreeBuilder<Krl>,
+) -> Parse {
     let mut p = LineParser {
         src,
         out: Parse::default(),
         sink,
         stack: Vec::new(),
         folds: Vec::new(),
-        // About one node per 60 bytes of a typical `.src`/`.dat` line.
-        tree: TreeBuilder::with_capacity(src.len() / 60 + 4),
+        tree,
         line_start: 0,
         close_after_line: None,
     };
@@ -293,7 +313,9 @@ pub(super) fn parse_lines(src: &[u8], sink: &mut dyn Sink<Stmt>, fast: bool) -> 
                 .with_hint("add `;ENDFOLD` or the pendant will fold the rest of the file"),
         );
     }
-    p.out.tree = p.tree.finish(src.len() as u32);
+    let built = p.tree.finish(src.len() as u32);
+    p.out.tree = built.tree;
+    p.out.round_trip = built.round_trip;
     p.out
 }
 

@@ -329,7 +329,7 @@ mod tests {
     /// following token, read with or without the fast path.
     fn read(src: &[u8], fast: bool) -> Read {
         let mut sink = crate::syntax::NoSink;
-        let mut p = Parser::new(src, &mut sink);
+        let mut p = Parser::new(src, &mut sink, TreeBuilder::with_capacity(4));
         p.fast_aggregates = fast;
         match p.expr() {
             Ok(_) => {

@@ -80,8 +80,12 @@ pub(crate) type StatementSink<'s> = dyn for<'e> Sink<Statement<'e>> + 's;
 /// The result of parsing: the tree, what went wrong, and how many opaque nodes it holds.
 #[derive(Clone, Debug, Default)]
 pub struct Parse {
-    /// The lossless tree: it prints back the source byte for byte.
+    /// The lossless tree: it prints back the source byte for byte. Empty after a parse that
+    /// streams its statements and keeps no tree (loading a program).
     pub tree: Tree,
+    /// The tree's leaves cover the source exactly, in order: printing gives it back. Checked
+    /// as the leaves are built, also when the tree is not kept.
+    pub round_trip: bool,
     /// What could not be read, located; the constructs are kept verbatim as [`NodeKind::Opaque`].
     pub diagnostics: Vec<Diagnostic>,
     /// How many [`NodeKind::Opaque`] nodes the tree holds.
@@ -99,14 +103,27 @@ type PResult<T> = Result<T, SyntaxError>;
 
 /// Parses a whole source. Never fails, never panics; see [`Parse`].
 pub(crate) fn parse(src: &[u8], sink: &mut StatementSink<'_>) -> Parse {
+    // About two leaves per statement; robtarget files average ~45 bytes per leaf, so this
+    // avoids doubling (and a second copy) for typical modules.
+    parse_into(src, sink, TreeBuilder::with_capacity(src.len() / 40 + 4))
+}
+
+/// [`parse`] for a caller that takes the statements from `sink` and needs only the round trip
+/// of the tree, not its nodes ([`Parse::tree`] stays empty).
+pub(crate) fn parse_streamed(src: &[u8], sink: &mut StatementSink<'_>) -> Parse {
+    parse_into(src, sink, TreeBuilder::verifying())
+}
+
+fn parse_into(src: &[u8], sink: &mut StatementSink<'_>, tree: TreeBuilder<Rapid>) -> Parse {
     if let Some(refused) = crate::syntax::too_large(src) {
         return Parse {
             tree: crate::syntax::refused_tree(NodeKind::Opaque),
+            round_trip: false,
             diagnostics: vec![refused],
             opaque: 1,
         };
     }
-    let mut p = Parser::new(src, sink);
+    let mut p = Parser::new(src, sink, tree);
     p.file();
     p.finish()
 }
@@ -240,7 +257,11 @@ fn is_word_in(text: &[u8], words: &[&[u8]]) -> bool {
 }
 
 impl<'a, 's> Parser<'a, 's> {
-    fn new(src: &'a [u8], sink: &'s mut StatementSink<'s>) -> Parser<'a, 's> {
+    fn new(
+        src: &'a [u8],
+        sink: &'s mut StatementSink<'s>,
+        tree: TreeBuilder<Rapid>,
+    ) -> Parser<'a, 's> {
         let mut p = Parser {
             src,
             lex: Lexer::new(src),
@@ -252,9 +273,7 @@ impl<'a, 's> Parser<'a, 's> {
             },
             peeked: None,
             prev_end: 0,
-            // About two leaves per statement; robtarget files average ~45 bytes per leaf, so
-            // this avoids doubling (and a second copy) for typical modules.
-            tree: TreeBuilder::with_capacity(src.len() / 40 + 4),
+            tree,
             diagnostics: Vec::new(),
             opaque: 0,
             arena: Arena::default(),
@@ -269,9 +288,10 @@ impl<'a, 's> Parser<'a, 's> {
 
     fn finish(self) -> Parse {
         let end = self.src.len() as u32;
-        let tree: Tree = self.tree.finish(end);
+        let built = self.tree.finish(end);
         Parse {
-            tree,
+            tree: built.tree,
+            round_trip: built.round_trip,
             diagnostics: self.diagnostics,
             opaque: self.opaque,
         }
