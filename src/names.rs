@@ -5,6 +5,8 @@
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
+use hashbrown::hash_table::{Entry, HashTable};
+
 const K: u64 = 0x51_7c_c1_b7_27_22_0a_95;
 
 /// Names are short, trusted-enough keys (the file is the user's own program) and a module holds
@@ -141,8 +143,8 @@ pub(crate) fn fold_into<'b>(buf: &'b mut String, bytes: &[u8]) -> &'b str {
 /// A 20 MB module declares 100,000 targets: a map of `String` keys to a vector each held
 /// 170 bytes and three heap blocks per name (a tenth of `check`'s peak memory, and its
 /// allocations a sixth of the time). Here every folded name is one run of a shared text, the
-/// declarations are grouped in one list, and a small open-addressing table of `u32` finds a
-/// name's group: about 40 bytes per name and no block of its own.
+/// declarations are grouped in one list, and a hash table of `u32` finds a name's group: about
+/// 40 bytes per name and no block of its own.
 pub(crate) struct NameIndex<T> {
     /// The bracket that opens an array index (`{` in RAPID, `[` in KRL).
     open: u8,
@@ -167,9 +169,9 @@ struct Groups<T> {
     text: String,
     /// Each name's range of `text`.
     names: Vec<(u32, u32)>,
-    /// Open addressing over `names`: 0 is free, `k + 1` is name `k`. A power of two, at most
-    /// half full.
-    slots: Vec<u32>,
+    /// Name `k` as `k`, hashed by its text: the names are in `text`, so the table holds
+    /// four bytes a name.
+    table: HashTable<u32>,
     /// Name `k`'s declarations are `values[ends[k - 1]..ends[k]]` (`0..ends[0]` for the first).
     ends: Vec<u32>,
     values: Vec<T>,
@@ -181,63 +183,44 @@ fn hash_of(key: &[u8]) -> u64 {
     h.finish()
 }
 
+/// Name `k` of `text` and `names` (a free function: the table's closures borrow these two
+/// fields while the table itself is borrowed mutably).
+fn name_in<'t>(text: &'t str, names: &[(u32, u32)], k: u32) -> &'t str {
+    names
+        .get(k as usize)
+        .and_then(|&(s, e)| text.get(s as usize..e as usize))
+        .unwrap_or_default()
+}
+
 impl<T: Copy> Groups<T> {
     fn with_capacity(n: usize) -> Groups<T> {
         Groups {
             text: String::new(),
             names: Vec::with_capacity(n),
-            slots: vec![0; (2 * n).next_power_of_two().max(16)],
+            table: HashTable::with_capacity(n),
             ends: Vec::new(),
             values: Vec::new(),
         }
     }
 
-    fn name(&self, k: u32) -> &str {
-        self.names
-            .get(k as usize)
-            .and_then(|&(s, e)| self.text.get(s as usize..e as usize))
-            .unwrap_or_default()
-    }
-
-    /// The slot of `key`: where it is, or the free one where it goes.
-    fn slot(&self, key: &str) -> usize {
-        let mask = self.slots.len() - 1;
-        let mut i = hash_of(key.as_bytes()) as usize & mask;
-        loop {
-            match self.slots.get(i) {
-                Some(&k) if k != 0 && self.name(k - 1) != key => i = (i + 1) & mask,
-                _ => return i,
-            }
-        }
-    }
-
     /// The group of `key`, added if new.
     fn intern(&mut self, key: &str) -> u32 {
-        if 2 * (self.names.len() + 1) > self.slots.len() {
-            let mut slots = vec![0u32; self.slots.len() * 2];
-            let mask = slots.len() - 1;
-            for k in 0..self.names.len() as u32 {
-                let mut i = hash_of(self.name(k).as_bytes()) as usize & mask;
-                while slots.get(i).is_some_and(|&s| s != 0) {
-                    i = (i + 1) & mask;
-                }
-                if let Some(s) = slots.get_mut(i) {
-                    *s = k + 1;
-                }
-            }
-            self.slots = slots;
-        }
-        let i = self.slot(key);
-        match self.slots.get(i) {
-            Some(&k) if k != 0 => k - 1,
-            _ => {
-                let k = self.names.len() as u32;
-                let start = self.text.len() as u32;
-                self.text.push_str(key);
-                self.names.push((start, self.text.len() as u32));
-                if let Some(s) = self.slots.get_mut(i) {
-                    *s = k + 1;
-                }
+        let Groups {
+            text, names, table, ..
+        } = self;
+        let hash = hash_of(key.as_bytes());
+        match table.entry(
+            hash,
+            |&k| name_in(text, names, k) == key,
+            |&k| hash_of(name_in(text, names, k).as_bytes()),
+        ) {
+            Entry::Occupied(e) => *e.get(),
+            Entry::Vacant(e) => {
+                let k = names.len() as u32;
+                let start = text.len() as u32;
+                text.push_str(key);
+                names.push((start, text.len() as u32));
+                e.insert(k);
                 k
             }
         }
@@ -279,10 +262,12 @@ impl<T: Copy> Groups<T> {
     }
 
     fn get(&self, key: &str) -> &[T] {
-        let Some(&k) = self.slots.get(self.slot(key)).filter(|&&k| k != 0) else {
+        let Some(&k) = self.table.find(hash_of(key.as_bytes()), |&k| {
+            name_in(&self.text, &self.names, k) == key
+        }) else {
             return &[];
         };
-        let k = (k - 1) as usize;
+        let k = k as usize;
         let start = k
             .checked_sub(1)
             .and_then(|p| self.ends.get(p))
