@@ -31,10 +31,12 @@ fn dump(language: &str, path: &Path, src: &[u8]) -> (String, Vec<Diagnostic>, bo
     let (mut out, diagnostics, prints_back) = match language {
         "rapid" => {
             let p = rapid::parse_tree(src);
+            assert_eq!(p.round_trip, p.tree.prints_back(src), "{}", path.display());
             (p.tree.dump(src), p.diagnostics, p.tree.prints_back(src))
         }
         _ => {
             let p = krl::parse(src);
+            assert_eq!(p.round_trip, p.tree.prints_back(src), "{}", path.display());
             (p.tree.dump(src), p.diagnostics, p.tree.prints_back(src))
         }
     };
