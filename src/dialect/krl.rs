@@ -228,7 +228,7 @@ impl Dialect for Krl {
             return Vec::new();
         };
         turn.as_ref()
-            .and_then(|t| bits_edit(turn, t.value ^ TURN_A1_A4_A6))
+            .and_then(|t| bits_edit(turn, t.value() ^ TURN_A1_A4_A6))
             .into_iter()
             .collect()
     }
