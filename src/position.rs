@@ -22,27 +22,46 @@ pub use crate::dialect::Language;
 /// What a position literal is, by its declared or inferred data type: the type's name as its
 /// language writes it, and whether it is Cartesian. Each dialect defines its kinds
 /// (`PositionKind::Robtarget`, `PositionKind::E6Pos`, …).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct PositionKind {
-    name: &'static str,
-    cartesian: bool,
+///
+/// One pointer to its [`KindSpec`], which the dialect keeps in a constant: every target holds
+/// its kind, and a name and a flag in place were 24 bytes each.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub struct PositionKind(&'static KindSpec);
+
+/// A [`PositionKind`]'s name and whether it is Cartesian. Written as a literal,
+/// `&KindSpec { .. }` is a constant the program keeps (`'static`), wherever it is written.
+#[derive(Debug, PartialEq, Eq, Hash)]
+pub struct KindSpec {
+    /// The type's name as its language writes it (`robtarget`, `E6POS`).
+    pub name: &'static str,
+    /// A pose, which transforms change; false for joint values.
+    pub cartesian: bool,
 }
 
 impl PositionKind {
-    /// A kind named `name` as its language writes the type; `cartesian` for a pose (which
-    /// transforms change), false for joint values.
-    pub const fn new(name: &'static str, cartesian: bool) -> PositionKind {
-        PositionKind { name, cartesian }
+    /// The kind `spec` describes:
+    /// `PositionKind::new(&KindSpec { name: "robtarget", cartesian: true })`.
+    pub const fn new(spec: &'static KindSpec) -> PositionKind {
+        PositionKind(spec)
     }
 
     /// The name `inspect` prints (as the language writes it: `robtarget`, `E6POS`).
     pub fn as_str(self) -> &'static str {
-        self.name
+        self.0.name
     }
 
     /// Cartesian targets are transformed; joint targets never are (docs/design.md §4).
     pub fn is_cartesian(self) -> bool {
-        self.cartesian
+        self.0.cartesian
+    }
+}
+
+impl std::fmt::Debug for PositionKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PositionKind")
+            .field("name", &self.0.name)
+            .field("cartesian", &self.0.cartesian)
+            .finish()
     }
 }
 
