@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use crate::geometry::{Pose, abb_quat, kuka_abc};
-use crate::syntax::{Diagnostic, LineIndex, NumLit, Span};
+use crate::syntax::{Diagnostic, LineIndex, NumLit, PackedLit, Span};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
 /// Values at or above this are RAPID/KRL "not connected" external axes (`9E9`, `9E+09`).
@@ -22,93 +22,173 @@ pub use crate::dialect::Language;
 /// What a position literal is, by its declared or inferred data type: the type's name as its
 /// language writes it, and whether it is Cartesian. Each dialect defines its kinds
 /// (`PositionKind::Robtarget`, `PositionKind::E6Pos`, …).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct PositionKind {
-    name: &'static str,
-    cartesian: bool,
+///
+/// One pointer to its [`KindSpec`], which the dialect keeps in a constant: every target holds
+/// its kind, and a name and a flag in place were 24 bytes each.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub struct PositionKind(&'static KindSpec);
+
+/// A [`PositionKind`]'s name and whether it is Cartesian. Written as a literal,
+/// `&KindSpec { .. }` is a constant the program keeps (`'static`), wherever it is written.
+#[derive(Debug, PartialEq, Eq, Hash)]
+pub struct KindSpec {
+    /// The type's name as its language writes it (`robtarget`, `E6POS`).
+    pub name: &'static str,
+    /// A pose, which transforms change; false for joint values.
+    pub cartesian: bool,
 }
 
 impl PositionKind {
-    /// A kind named `name` as its language writes the type; `cartesian` for a pose (which
-    /// transforms change), false for joint values.
-    pub const fn new(name: &'static str, cartesian: bool) -> PositionKind {
-        PositionKind { name, cartesian }
+    /// The kind `spec` describes:
+    /// `PositionKind::new(&KindSpec { name: "robtarget", cartesian: true })`.
+    pub const fn new(spec: &'static KindSpec) -> PositionKind {
+        PositionKind(spec)
     }
 
     /// The name `inspect` prints (as the language writes it: `robtarget`, `E6POS`).
     pub fn as_str(self) -> &'static str {
-        self.name
+        self.0.name
     }
 
     /// Cartesian targets are transformed; joint targets never are (docs/design.md §4).
     pub fn is_cartesian(self) -> bool {
-        self.cartesian
+        self.0.cartesian
+    }
+}
+
+impl std::fmt::Debug for PositionKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PositionKind")
+            .field("name", &self.0.name)
+            .field("cartesian", &self.0.cartesian)
+            .finish()
     }
 }
 
 /// A numeric literal inside a position, with the span of its text.
 ///
-/// Twenty-four bytes: a module holds about 17 of these per target, and with a `usize` span
-/// (40 bytes) they were a third of `check`'s peak memory. Inputs are at most
-/// [`MAX_INPUT_BYTES`](crate::output::MAX_INPUT_BYTES) (512 MiB), so a `u32` start always fits;
-/// a literal longer than 65,535 bytes is not stored as a number ([`NumField::new`] gives `None`,
-/// the field reads as an expression, which transforms refuse).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Sixteen bytes, and `Option<NumField>` too: a module holds about 17 of these per target, and
+/// at 24 bytes they were more than a third of `check`'s heap peak on a 20 MB module. The value is kept as
+/// is, the literal's style and the text's length packed in four bytes beside a `u32` start
+/// (inputs are at most [`MAX_INPUT_BYTES`](crate::output::MAX_INPUT_BYTES), 512 MiB, so a start
+/// always fits). A literal the compact form cannot hold — text longer than 255 bytes, or a
+/// precision beyond ±8191 decimals without an exponent a rewrite keeps (`1E-9000`) — is not
+/// stored as a number ([`NumField::new`] gives `None`, the field reads as an expression, which
+/// transforms refuse).
+#[derive(Clone, Copy, PartialEq)]
 pub struct NumField {
-    lit: NumLit,
+    value: f64,
     start: u32,
-    len: u16,
+    packed: PackedLit,
 }
 
+/// Most of a target is these fields: a layout change that grows them fails the build.
+const _: () = assert!(std::mem::size_of::<Option<NumField>>() == 16);
+
 impl NumField {
-    /// The field of literal `lit` written at `span`; `None` if the span does not fit the
-    /// compact form (see the type).
+    /// The field of literal `lit` written at `span` (its text: `span` is as long as the
+    /// literal); `None` if it does not fit the compact form (see the type).
     pub fn new(span: Span, lit: NumLit) -> Option<NumField> {
         Some(NumField {
-            lit,
+            value: lit.value(),
             start: u32::try_from(span.start).ok()?,
-            len: u16::try_from(span.end.checked_sub(span.start)?).ok()?,
+            packed: lit.pack(span.end.checked_sub(span.start)?)?,
         })
     }
 
     /// The literal's bytes (what an edit replaces).
     pub fn span(&self) -> Span {
         let start = self.start as usize;
-        Span::new(start, start + self.len as usize)
+        Span::new(start, start + self.packed.len())
     }
 
     /// The literal as written: its value and how it is spelled, so a rewrite keeps the style.
     pub fn lit(&self) -> NumLit {
-        self.lit
+        NumLit::unpack(self.value, self.packed)
     }
 
     /// The literal's value.
     pub fn value(&self) -> f64 {
-        self.lit.value()
+        self.value
+    }
+}
+
+impl std::fmt::Debug for NumField {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("NumField")
+            .field("span", &self.span())
+            .field("lit", &self.lit())
+            .finish()
     }
 }
 
 /// A KUKA Status or Turn as written: decimal (`S 6`) or a binary string (`S 'B110'`).
-#[derive(Clone, Debug, PartialEq, Eq)]
+///
+/// Sixteen bytes, and `Option<BitField>` too (with a `usize` span and digit count it was 40):
+/// every KRL Cartesian target has two.
+#[derive(Clone, Copy, PartialEq, Eq)]
 pub struct BitField {
-    /// The whole token, quotes included for the binary form.
-    pub span: Span,
-    /// The value.
-    pub value: u32,
-    /// `Some(n)` for `'B…'` with n digits, `None` for a decimal integer.
-    pub binary_digits: Option<usize>,
+    start: u32,
+    len: u32,
+    value: u32,
+    binary_digits: Option<u8>,
 }
 
 impl BitField {
+    /// The field written at `span` (the whole token, quotes included for the binary form)
+    /// with `value`, and `Some(n)` for `'B…'` with n digits, `None` for a decimal integer;
+    /// `None` if a span bound passes `u32` or there are more than 255 digits (neither in an
+    /// input trackfix reads, nor in a Status or Turn of 32 bits).
+    pub fn new(span: Span, value: u32, binary_digits: Option<usize>) -> Option<BitField> {
+        Some(BitField {
+            start: u32::try_from(span.start).ok()?,
+            len: u32::try_from(span.end.checked_sub(span.start)?).ok()?,
+            value,
+            binary_digits: match binary_digits {
+                Some(n) => Some(u8::try_from(n).ok()?),
+                None => None,
+            },
+        })
+    }
+
+    /// The whole token, quotes included for the binary form.
+    pub fn span(&self) -> Span {
+        let start = self.start as usize;
+        Span::new(start, start + self.len as usize)
+    }
+
+    /// The value.
+    pub fn value(&self) -> u32 {
+        self.value
+    }
+
+    /// `Some(n)` for `'B…'` with n digits, `None` for a decimal integer.
+    pub fn binary_digits(&self) -> Option<usize> {
+        self.binary_digits.map(usize::from)
+    }
+
     /// The text for `new` in the same style, or `None` if the value is unchanged.
     pub fn rewrite(&self, new: u32) -> Option<String> {
         if new == self.value {
             return None;
         }
-        Some(match self.binary_digits {
+        Some(match self.binary_digits() {
             Some(n) => format!("'B{new:0n$b}'"),
             None => new.to_string(),
         })
+    }
+}
+
+/// Two per KRL target, as for [`NumField`].
+const _: () = assert!(std::mem::size_of::<Option<BitField>>() <= 16);
+
+impl std::fmt::Debug for BitField {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BitField")
+            .field("span", &self.span())
+            .field("value", &self.value)
+            .field("binary_digits", &self.binary_digits)
+            .finish()
     }
 }
 
@@ -841,6 +921,111 @@ mod tests {
         assert_eq!(u.other_wobjs, [Arc::from("wTable")]);
         assert!(u.stationary_tool);
         assert_eq!(u.lines, [10, 12, 20]);
+    }
+
+    /// A literal text from its parts: sign, integer digits, point, decimals, exponent.
+    fn literal(
+        sign: &str,
+        int: &str,
+        frac: Option<&str>,
+        exp: Option<(&str, &str, &str)>,
+    ) -> String {
+        let mut text = format!("{sign}{int}");
+        if let Some(f) = frac {
+            text.push('.');
+            text.push_str(f);
+        }
+        if let Some((letter, sign, digits)) = exp {
+            text.push_str(letter);
+            text.push_str(sign);
+            text.push_str(digits);
+        }
+        text
+    }
+
+    proptest::proptest! {
+        /// A field gives back the literal and span it was made of, bit for bit, and every
+        /// literal a program plausibly writes (up to 40 bytes, exponent below 100) is kept.
+        #[test]
+        fn a_field_keeps_its_literal(
+            sign in proptest::sample::select(vec!["", "+", "-"]),
+            int in "[0-9]{0,20}",
+            frac in proptest::option::of("[0-9]{0,40}"),
+            exp in proptest::option::of((
+                proptest::sample::select(vec!["E", "e"]),
+                proptest::sample::select(vec!["", "+", "-"]),
+                "[0-9]{1,4}",
+            )),
+            nines in proptest::sample::select(vec![
+                "", "9E9", "9E+09", "9e+9", "9E+009", "-9E9", "+9E9", "9.0E9", "9E09",
+            ]),
+            start in 0usize..=u32::MAX as usize - 256,
+        ) {
+            let text = if nines.is_empty() {
+                literal(sign, &int, frac.as_deref(), exp.as_ref().map(|(l, s, d)| (*l, *s, d.as_str())))
+            } else {
+                nines.to_owned()
+            };
+            // Texts that are no literal (`.`, `-E5`) have no field to make.
+            let Some(lit) = NumLit::parse(text.as_bytes()) else {
+                return Ok(());
+            };
+            let span = Span::new(start, start + text.len());
+            let field = NumField::new(span, lit);
+            if let Some(f) = field {
+                proptest::prop_assert_eq!((f.lit(), f.span()), (lit, span), "{}", text);
+                proptest::prop_assert_eq!(f.value().to_bits(), lit.value().to_bits(), "{}", text);
+                proptest::prop_assert_eq!(f.lit().value().to_bits(), lit.value().to_bits());
+            }
+            let exponent = text
+                .find(['e', 'E'])
+                .and_then(|at| text[at + 1..].parse::<i64>().ok())
+                .unwrap_or(0);
+            if text.len() <= 40 && exponent.abs() < 100 {
+                proptest::prop_assert!(field.is_some(), "{}", text);
+            }
+        }
+    }
+
+    #[test]
+    fn a_field_refuses_what_it_cannot_keep() {
+        let field = |text: &str, len: usize| {
+            NumField::new(
+                Span::new(7, 7 + len),
+                NumLit::parse(text.as_bytes()).unwrap(),
+            )
+        };
+        let long = format!("1.{}", "5".repeat(253));
+        assert_eq!(field(&long, 255).map(|f| f.span().len()), Some(255));
+        let longer = format!("1.{}", "5".repeat(254));
+        assert_eq!(field(&longer, 256), None);
+        // Precision beyond ±8191 without a kept exponent (four exponent digits are not kept).
+        assert!(field("1E-8191", 7).is_some());
+        assert_eq!(field("1E-8192", 7), None);
+        assert!(field("1E-0099", 7).is_some());
+        // The precision of a kept exponent's literal comes from the length of its text: a span
+        // of another length would give another literal.
+        assert!(field("1.25E+2", 7).is_some());
+        assert_eq!(field("1.25E+2", 6), None);
+        assert_eq!(field("1.25E+2", 8), None);
+        assert_eq!(field("1", 0), None);
+    }
+
+    #[test]
+    fn a_bit_field_keeps_what_it_was_given() {
+        let b = BitField::new(Span::new(10, 16), 2, Some(3)).unwrap();
+        assert_eq!(
+            (b.span(), b.value(), b.binary_digits()),
+            (Span::new(10, 16), 2, Some(3))
+        );
+        assert_eq!(b.rewrite(5).as_deref(), Some("'B101'"));
+        let d = BitField::new(Span::new(3, 5), 35, None).unwrap();
+        assert_eq!(
+            (d.span(), d.value(), d.binary_digits()),
+            (Span::new(3, 5), 35, None)
+        );
+        assert_eq!(d.rewrite(35), None);
+        assert_eq!(BitField::new(Span::new(0, 300), 0, Some(256)), None);
     }
 
     #[test]

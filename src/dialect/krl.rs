@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::kinematics::{ConfigValue, Joints, Kinematics};
-use crate::position::{Config, PositionKind, Program};
+use crate::position::{Config, KindSpec, PositionKind, Program};
 use crate::program::{LoadError, LoadOptions};
 use crate::syntax::Edit;
 use crate::transform::rewrite::bits_edit;
@@ -24,15 +24,30 @@ impl Language {
 #[allow(non_upper_case_globals)]
 impl PositionKind {
     /// KRL `E6POS`.
-    pub const E6Pos: PositionKind = PositionKind::new("E6POS", true);
+    pub const E6Pos: PositionKind = PositionKind::new(&KindSpec {
+        name: "E6POS",
+        cartesian: true,
+    });
     /// KRL `POS`.
-    pub const Pos: PositionKind = PositionKind::new("POS", true);
+    pub const Pos: PositionKind = PositionKind::new(&KindSpec {
+        name: "POS",
+        cartesian: true,
+    });
     /// KRL `FRAME` used as a motion target.
-    pub const Frame: PositionKind = PositionKind::new("FRAME", true);
+    pub const Frame: PositionKind = PositionKind::new(&KindSpec {
+        name: "FRAME",
+        cartesian: true,
+    });
     /// KRL `E6AXIS`.
-    pub const E6Axis: PositionKind = PositionKind::new("E6AXIS", false);
+    pub const E6Axis: PositionKind = PositionKind::new(&KindSpec {
+        name: "E6AXIS",
+        cartesian: false,
+    });
     /// KRL `AXIS`.
-    pub const Axis: PositionKind = PositionKind::new("AXIS", false);
+    pub const Axis: PositionKind = PositionKind::new(&KindSpec {
+        name: "AXIS",
+        cartesian: false,
+    });
 }
 
 /// Turn bits of A1, A4 and A6: a mirror-image robot runs those axes with the opposite sign.
@@ -228,7 +243,7 @@ impl Dialect for Krl {
             return Vec::new();
         };
         turn.as_ref()
-            .and_then(|t| bits_edit(turn, t.value ^ TURN_A1_A4_A6))
+            .and_then(|t| bits_edit(turn, t.value() ^ TURN_A1_A4_A6))
             .into_iter()
             .collect()
     }

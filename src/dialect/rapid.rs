@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::position::{Config, PositionKind, Program};
+use crate::position::{Config, KindSpec, PositionKind, Program};
 use crate::program::{LoadError, LoadOptions, read_source};
 use crate::syntax::Edit;
 use crate::transform::rewrite::integer_edit;
@@ -24,9 +24,15 @@ impl Language {
 #[allow(non_upper_case_globals)]
 impl PositionKind {
     /// RAPID `robtarget`.
-    pub const Robtarget: PositionKind = PositionKind::new("robtarget", true);
+    pub const Robtarget: PositionKind = PositionKind::new(&KindSpec {
+        name: "robtarget",
+        cartesian: true,
+    });
     /// RAPID `jointtarget`.
-    pub const Jointtarget: PositionKind = PositionKind::new("jointtarget", false);
+    pub const Jointtarget: PositionKind = PositionKind::new(&KindSpec {
+        name: "jointtarget",
+        cartesian: false,
+    });
 }
 
 const VOCABULARY: Vocabulary = Vocabulary {

@@ -55,8 +55,8 @@ impl ConfigValue {
             }
             Config::StatusTurn { status, turn } if status.is_some() || turn.is_some() => {
                 Some(ConfigValue::StatusTurn {
-                    status: status.as_ref().map(|b| b.value),
-                    turn: turn.as_ref().map(|b| b.value),
+                    status: status.as_ref().map(|b| b.value()),
+                    turn: turn.as_ref().map(|b| b.value()),
                 })
             }
             _ => None,

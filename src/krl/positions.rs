@@ -306,18 +306,10 @@ fn num_field(src: &[u8], e: &Expr) -> Option<NumField> {
 
 fn bit_field(src: &[u8], e: &Expr) -> Option<BitField> {
     match e.kind {
-        ExprKind::Number => Some(BitField {
-            span: e.span,
-            value: integer(src, e)?,
-            binary_digits: None,
-        }),
+        ExprKind::Number => BitField::new(e.span, integer(src, e)?, None),
         ExprKind::Quoted => {
             let (value, digits) = bit_string(e.span.slice(src))?;
-            Some(BitField {
-                span: e.span,
-                value,
-                binary_digits: Some(digits),
-            })
+            BitField::new(e.span, value, Some(digits))
         }
         _ => None,
     }

@@ -372,11 +372,11 @@ fn position_row(file: &ParsedFile, p: &Position, options: InspectOptions) -> Pos
         Config::Quadrants(cf) => (nums(cf), None, None),
         Config::StatusTurn { status, turn } => (
             vec![
-                status.as_ref().map(|s| s.value as f64),
-                turn.as_ref().map(|t| t.value as f64),
+                status.as_ref().map(|s| s.value() as f64),
+                turn.as_ref().map(|t| t.value() as f64),
             ],
-            status.as_ref().map(|s| text(s.span)),
-            turn.as_ref().map(|t| text(t.span)),
+            status.as_ref().map(|s| text(s.span())),
+            turn.as_ref().map(|t| text(t.span())),
         ),
         Config::None => (Vec::new(), None, None),
     };

@@ -19,6 +19,7 @@ mod tree;
 pub use diagnostic::{Diagnostic, Excerpt, Severity, WINDOW, latin1, printable, window};
 pub use edit::{Edit, EditError, EditText, apply_edits};
 pub use line_index::LineIndex;
+pub(crate) use number::PackedLit;
 pub use number::{NumLit, fixed, same_at};
 pub use span::Span;
 pub(crate) use tree::language;

@@ -1,5 +1,7 @@
 //! Numeric literals that keep their original text and write new values in the same style.
 
+use std::num::NonZeroU32;
+
 use super::EditText;
 
 /// A numeric literal as written: `12`, `-0.5`, `.5`, `9E9`, `9E+09`, `9e+9`, `2.69E-07`.
@@ -331,6 +333,102 @@ impl NumLit {
             None
         } else {
             Some(new.to_string())
+        }
+    }
+}
+
+/// A [`NumLit`] without its value, and the length of its text, in four bytes: with the value
+/// and a `u32` start a numeric field is 16 bytes (a 20 MB module holds 1.7 million of them).
+///
+/// Bits 0-7 hold the length (1..=255) and 8-15 the integer digits; bit 16 is [`PLUS`] (and
+/// [`LEADING_POINT`] is no integer digits). Bit 17 says an exponent is kept; then bit 18 is
+/// its letter's case, 19-20 its sign as written (none, `+`, `-`: the value's sign follows),
+/// 21-22 its digits and 23-29 its absolute value (below 100), and the precision is not stored:
+/// the length less the sign, integer digits and suffix is the point and decimals, and the
+/// precision is the decimals less the exponent. Without an exponent, bits 18-31 are the
+/// precision (14-bit two's complement).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct PackedLit(NonZeroU32);
+
+/// [`PackedLit`]: the exponent's sign as written, by its 2-bit code.
+const EXPONENT_SIGNS: [u8; 4] = [0, b'+', b'-', 0];
+
+/// [`PackedLit`]: the precision range bits 18-31 hold.
+const PACKED_PRECISION: std::ops::RangeInclusive<i16> = -(1 << 13)..=(1 << 13) - 1;
+
+impl PackedLit {
+    /// The length of the literal's text.
+    pub(crate) fn len(self) -> usize {
+        (self.0.get() & 0xff) as usize
+    }
+}
+
+impl NumLit {
+    /// The literal without its value, with `len`, the length of its text; `None` if the text
+    /// is empty or longer than 255 bytes, or the precision of a literal without a kept
+    /// exponent is beyond ±8191 (`1E-9000`), or `len` is not what the text of this literal can
+    /// be.
+    pub(crate) fn pack(&self, len: usize) -> Option<PackedLit> {
+        // No literal is empty, and a length of at least 1 makes the word non-zero.
+        let len = u8::try_from(len).ok().filter(|&l| l > 0)?;
+        let mut bits = u32::from(len) | u32::from(self.int_digits) << 8;
+        if self.style & PLUS != 0 {
+            bits |= 1 << 16;
+        }
+        match self.exponent {
+            Some(e) => {
+                let sign = EXPONENT_SIGNS.iter().position(|&s| s == e.sign)? as u32;
+                bits |= 1 << 17
+                    | u32::from(e.upper) << 18
+                    | sign << 19
+                    | u32::from(e.digits & 3) << 21
+                    | u32::from(e.value.unsigned_abs() & 0x7f) << 23;
+            }
+            None if PACKED_PRECISION.contains(&self.precision) => {
+                bits |= (self.precision as u32 & 0x3fff) << 18;
+            }
+            None => return None,
+        }
+        let packed = PackedLit(NonZeroU32::new(bits)?);
+        // What does not fit the layout, or a length that is not this literal's (the derived
+        // precision would be wrong), reads back as another literal: refused.
+        (NumLit::unpack(self.value, packed) == *self).then_some(packed)
+    }
+
+    /// The literal [`pack`](Self::pack) packed, with its value.
+    pub(crate) fn unpack(value: f64, packed: PackedLit) -> NumLit {
+        let bits = packed.0.get();
+        let int_digits = (bits >> 8) as u8;
+        let plus = bits & 1 << 16 != 0;
+        let style = if plus { PLUS } else { 0 } | if int_digits == 0 { LEADING_POINT } else { 0 };
+        let (precision, exponent) = if bits & 1 << 17 != 0 {
+            let sign = EXPONENT_SIGNS[(bits >> 19 & 3) as usize];
+            let digits = (bits >> 21 & 3) as u8;
+            let abs = (bits >> 23 & 0x7f) as i8;
+            let e = Exponent {
+                value: if sign == b'-' { -abs } else { abs },
+                upper: bits & 1 << 18 != 0,
+                sign,
+                digits,
+            };
+            // The text is: sign, integer digits, point and decimals, `E`, sign, digits.
+            let signed = usize::from(plus || value.is_sign_negative());
+            let suffix = 1 + usize::from(sign != 0) + digits as usize;
+            let point_and_decimals = packed
+                .len()
+                .saturating_sub(signed + int_digits as usize + suffix);
+            let decimals = point_and_decimals.saturating_sub(1) as i16;
+            (decimals - i16::from(e.value), Some(e))
+        } else {
+            // An arithmetic shift brings the 14-bit precision down with its sign.
+            (((bits as i32) >> 18) as i16, None)
+        };
+        NumLit {
+            value,
+            precision,
+            exponent,
+            style,
+            int_digits,
         }
     }
 }

@@ -344,14 +344,14 @@ pub(crate) fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<Str
         }
         Config::StatusTurn { status, turn } => {
             if let Some(s) = status
-                && s.value > KUKA_STATUS_MAX
+                && s.value() > KUKA_STATUS_MAX
             {
-                return Some(format!("has Status {}: only bits 0 to 4 exist", s.value));
+                return Some(format!("has Status {}: only bits 0 to 4 exist", s.value()));
             }
             if let Some(t) = turn
-                && t.value > KUKA_TURN_MAX
+                && t.value() > KUKA_TURN_MAX
             {
-                return Some(format!("has Turn {}: only bits 0 to 5 exist", t.value));
+                return Some(format!("has Turn {}: only bits 0 to 5 exist", t.value()));
             }
         }
         Config::None => {}

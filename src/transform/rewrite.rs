@@ -53,7 +53,7 @@ pub(crate) fn integer_edit(field: &Option<NumField>, new: i64) -> Option<Edit> {
 /// An edit for a KUKA Status/Turn, if it changes.
 pub(crate) fn bits_edit(field: &Option<BitField>, new: u32) -> Option<Edit> {
     let f = field.as_ref()?;
-    Some(Edit::new(f.span, f.rewrite(new)?))
+    Some(Edit::new(f.span(), f.rewrite(new)?))
 }
 
 fn written<const N: usize>(fields: &[Option<NumField>; N]) -> Option<[f64; N]> {

@@ -127,13 +127,7 @@ pub(crate) fn krl(src: &str, base: &str) -> Program {
             continue;
         }
         let o = |i: usize| Some(v[i]);
-        let bits = |i: usize| {
-            Some(BitField {
-                span: v[i].span(),
-                value: v[i].value() as u32,
-                binary_digits: None,
-            })
-        };
+        let bits = |i: usize| BitField::new(v[i].span(), v[i].value() as u32, None);
         positions.push(Position {
             name: Some(format!("XP{}", n + 1).into()),
             kind: PositionKind::E6Pos,

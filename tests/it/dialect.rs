@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use trackfix::dialect::{Dialect, Language, Vocabulary, register};
 use trackfix::geometry::{Pose, pose_xyz_deg};
 use trackfix::position::{
-    CartesianFields, Config, NumField, Orientation, ParsedFile, Position, PositionKind, Program,
-    Usage,
+    CartesianFields, Config, KindSpec, NumField, Orientation, ParsedFile, Position, PositionKind,
+    Program, Usage,
 };
 use trackfix::program::{LoadError, LoadOptions, load, read_source};
 use trackfix::syntax::{LineIndex, NumLit, Span};
@@ -56,7 +56,10 @@ fn parse(path: &Path, source: Vec<u8>) -> ParsedFile {
         }
         positions.push(Position {
             name: Some(format!("t{}", n + 1).into()),
-            kind: PositionKind::new("stubpose", true),
+            kind: PositionKind::new(&KindSpec {
+                name: "stubpose",
+                cartesian: true,
+            }),
             span,
             line: n + 1,
             column: 1,

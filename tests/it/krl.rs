@@ -63,7 +63,11 @@ fn dump_position(src: &[u8], p: &Position) -> String {
     }
     if let Config::StatusTurn { status, turn } = &p.config {
         let bit = |b: &Option<trackfix::position::BitField>| match b {
-            Some(b) => format!("{}={}", String::from_utf8_lossy(b.span.slice(src)), b.value),
+            Some(b) => format!(
+                "{}={}",
+                String::from_utf8_lossy(b.span().slice(src)),
+                b.value()
+            ),
             None => "-".to_owned(),
         };
         s += &format!(" S={} T={}", bit(status), bit(turn));
@@ -269,9 +273,9 @@ fn binary_status_turn_and_kinds_in_bom_file() {
         panic!()
     };
     let (s, t) = (status.as_ref().unwrap(), turn.as_ref().unwrap());
-    assert_eq!((s.value, s.binary_digits), (2, Some(3)));
-    assert_eq!((t.value, t.binary_digits), (35, Some(6)));
-    assert_eq!(s.span.slice(&f.source), b"'B010'");
+    assert_eq!((s.value(), s.binary_digits()), (2, Some(3)));
+    assert_eq!((t.value(), t.binary_digits()), (35, Some(6)));
+    assert_eq!(s.span().slice(&f.source), b"'B010'");
     assert_eq!(t.rewrite(35 ^ 0b101001).as_deref(), Some("'B001010'"));
     // Joint positions: A1..A6 and E1, no Cartesian part.
     let park = &f.positions[2];
@@ -547,8 +551,8 @@ proptest! {
             let want: Vec<&[u8]> = texts.iter().map(|t| t.as_bytes()).collect();
             prop_assert_eq!(got, want);
             let Config::StatusTurn { status, turn } = &p.config else { panic!() };
-            prop_assert_eq!(status.as_ref().unwrap().value, *s);
-            prop_assert_eq!(turn.as_ref().unwrap().value, *t);
+            prop_assert_eq!(status.as_ref().unwrap().value(), *s);
+            prop_assert_eq!(turn.as_ref().unwrap().value(), *t);
             prop_assert_eq!(p.extax.len(), 2);
             prop_assert_eq!(p.extax[0].as_ref().unwrap().span().slice(&file.source), e1.as_bytes());
         }
