@@ -112,7 +112,13 @@ pub fn apply_edits(src: &[u8], edits: &[Edit]) -> Result<Vec<u8>, EditError> {
     let mut order: Vec<&Edit> = edits.iter().collect();
     order.sort_by_key(|e| (e.span.start, e.span.end));
     order.dedup_by(|b, a| a.span == b.span && a.text == b.text);
-    let mut out = Vec::with_capacity(src.len() + 16 * order.len());
+    // The exact size (edits checked below): the output of a large program is as large as its
+    // source, and room to spare would be held for the rest of the run.
+    let size = order.iter().fold(src.len(), |n, e| {
+        let removed = e.span.end.saturating_sub(e.span.start);
+        n.saturating_add(e.text.len()).saturating_sub(removed)
+    });
+    let mut out = Vec::with_capacity(size);
     let mut pos = 0;
     let mut prev: Option<Span> = None;
     for e in order {
