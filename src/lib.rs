@@ -20,6 +20,8 @@
 //!
 //! The library never prints and never panics on input.
 
+#![forbid(unsafe_code)]
+
 pub mod accuracy;
 pub mod dialect;
 pub mod digest;

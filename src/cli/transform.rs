@@ -312,7 +312,7 @@ fn stamp_results(
         let Some(d) = trackfix::dialect::dialect_of(&f.path) else {
             continue;
         };
-        let carried = stamp::carry_precision(&f.original, &f.output, d);
+        let carried = stamp::carry_precision(&f.original, std::mem::take(&mut f.output), d);
         f.output = carried.output;
         if out.no_stamp {
             continue;
@@ -326,9 +326,7 @@ fn stamp_results(
                     && s.profile.as_ref().map(|p| &p.1) == prov.stamp.profile.as_ref().map(|p| &p.1)
             });
         if undone {
-            if let Some(stripped) = stamp::strip(&f.output, d) {
-                f.output = stripped;
-            }
+            stamp::strip_in_place(&mut f.output, d);
             continue;
         }
         let mut s = prov.stamp.clone();
@@ -336,9 +334,7 @@ fn stamp_results(
         if let Some((_, splits)) = lock_splits.iter().find(|(p, _)| *p == f.path) {
             s.gimbal = splits.clone();
         }
-        if let Some(stamped) = stamp::write(&f.output, d, &s) {
-            f.output = stamped;
-        }
+        stamp::write_in_place(&mut f.output, d, &s);
     }
 }
 

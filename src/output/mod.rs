@@ -13,6 +13,7 @@ pub mod paths;
 pub mod read;
 pub mod transaction;
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use crate::transform::ProgramResult;
@@ -98,20 +99,20 @@ pub enum OutputError {
 
 /// Every write of a run, checked: no input is overwritten (except in place), no file is
 /// written twice. In place, only files that change are written.
-pub fn plan_writes(
-    programs: &[ProgramResult],
+pub fn plan_writes<'a>(
+    programs: &'a [ProgramResult],
     dest: &Destination,
-) -> Result<Vec<FileWrite>, OutputError> {
+) -> Result<Vec<FileWrite<'a>>, OutputError> {
     plan(programs, dest, &Roots::default())
 }
 
 /// [`plan_writes`] with the input folders of the run (for the tree [`Destination::Dir`]
-/// mirrors).
-pub fn plan(
-    programs: &[ProgramResult],
+/// mirrors). The writes borrow the results' bytes.
+pub fn plan<'a>(
+    programs: &'a [ProgramResult],
     dest: &Destination,
     roots: &Roots,
-) -> Result<Vec<FileWrite>, OutputError> {
+) -> Result<Vec<FileWrite<'a>>, OutputError> {
     let inputs: Vec<PathBuf> = programs
         .iter()
         .flat_map(|p| &p.files)
@@ -133,8 +134,8 @@ pub fn plan(
             writes.push(FileWrite {
                 input: f.path.clone(),
                 path,
-                bytes: f.output.clone(),
-                expected: in_place.then(|| f.original.clone()),
+                bytes: Cow::Borrowed(&f.output),
+                expected: in_place.then_some(Cow::Borrowed(&f.original)),
                 backup: matches!(dest, Destination::InPlace { backup: true }),
             });
         }
@@ -157,7 +158,7 @@ pub fn plan(
 }
 
 /// Writes every planned file as one transaction ([`transaction::commit`]).
-pub fn write_all(writes: &[FileWrite]) -> Result<Vec<Written>, OutputError> {
+pub fn write_all(writes: &[FileWrite<'_>]) -> Result<Vec<Written>, OutputError> {
     commit(writes)
 }
 
@@ -185,7 +186,7 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     commit(&[FileWrite {
         input: path.to_owned(),
         path: path.to_owned(),
-        bytes: bytes.to_vec(),
+        bytes: Cow::Borrowed(bytes),
         expected: None,
         backup: false,
     }])
@@ -214,7 +215,8 @@ mod tests {
     fn krl_pair_with_o_keeps_each_extension() {
         let mut r = result("in/a.src", "x", "y");
         r.files.push(result("in/a.dat", "x", "y").files.remove(0));
-        let w = plan_writes(&[r], &Destination::File(PathBuf::from("out/b.src"))).unwrap();
+        let results = [r];
+        let w = plan_writes(&results, &Destination::File(PathBuf::from("out/b.src"))).unwrap();
         assert_eq!(w[0].path, Path::new("out/b.src"));
         assert_eq!(w[1].path, Path::new("out/b.dat"));
     }
@@ -225,17 +227,19 @@ mod tests {
         r.files.push(result("in/a.dat", "x", "y").files.remove(0));
         r.files
             .push(result("cfg/$config.dat", "x", "y").files.remove(0));
-        let w = plan_writes(&[r], &Destination::File(PathBuf::from("out/b.src"))).unwrap();
+        let results = [r];
+        let w = plan_writes(&results, &Destination::File(PathBuf::from("out/b.src"))).unwrap();
         assert_eq!(w[2].path, Path::new("out/$config.dat"));
     }
 
     #[test]
     fn in_place_writes_changed_files_with_their_original_for_the_backup() {
-        let plan = plan_writes(
-            &[result("a.mod", "x", "y"), result("b.mod", "z", "z")],
-            &Destination::InPlace { backup: true },
-        )
-        .unwrap();
+        let results = [result("a.mod", "x", "y"), result("b.mod", "z", "z")];
+        let plan = plan_writes(&results, &Destination::InPlace { backup: true }).unwrap();
+        // Lent, not copied: the write holds the result's own bytes.
+        assert!(
+            matches!(plan[0].bytes, std::borrow::Cow::Borrowed(b) if std::ptr::eq(b, results[0].files[0].output.as_slice()))
+        );
         assert_eq!(plan.len(), 1);
         assert_eq!(plan[0].path, Path::new("a.mod"));
         assert_eq!(plan[0].expected.as_deref(), Some(&b"x"[..]));
@@ -250,7 +254,10 @@ mod tests {
         let r = result(input.to_str().unwrap(), "x", "y");
         let e = plan_writes(std::slice::from_ref(&r), &Destination::File(input.clone()));
         assert!(matches!(e, Err(OutputError::WouldOverwriteInput { .. })));
-        let e = plan_writes(&[r], &Destination::Dir(dir.path().to_owned()));
+        let e = plan_writes(
+            std::slice::from_ref(&r),
+            &Destination::Dir(dir.path().to_owned()),
+        );
         assert!(matches!(e, Err(OutputError::WouldOverwriteInput { .. })));
     }
 

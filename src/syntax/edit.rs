@@ -3,21 +3,48 @@
 use super::Span;
 
 /// Replace the bytes of `span` in the original source with `text`.
-#[derive(Clone, Debug, PartialEq, Eq)]
+///
+/// 24 bytes: the span is kept as two `u32` offsets (trackfix reads no file of 4 GiB or more,
+/// `output::MAX_INPUT_BYTES`; its parsers keep `u32` offsets too). A `correct` of a 20 MB
+/// module holds 700,000 edits next to the whole model, and two `usize` offsets were 5.6 MB of
+/// its peak. A span that does not fit is kept as a reversed one, which [`apply_edits`] refuses
+/// as [`EditError::OutOfBounds`]: never an edit at another place.
+#[derive(Clone, PartialEq, Eq)]
 pub struct Edit {
-    /// The bytes of the original source to replace (empty: insert at `span.start`).
-    pub span: Span,
-    /// What they become.
+    start: u32,
+    end: u32,
+    /// What the bytes of [`span`](Edit::span) become.
     pub text: EditText,
 }
 
 impl Edit {
     /// Replaces `span` with `text`.
     pub fn new(span: Span, text: impl Into<Vec<u8>>) -> Edit {
-        Edit {
-            span,
-            text: EditText::from(text.into()),
-        }
+        Edit::with_text(span, EditText::from(text.into()))
+    }
+
+    /// Replaces `span` with `text`, already an [`EditText`].
+    pub fn with_text(span: Span, text: EditText) -> Edit {
+        let (start, end) = match (u32::try_from(span.start), u32::try_from(span.end)) {
+            (Ok(start), Ok(end)) => (start, end),
+            _ => (u32::MAX, 0),
+        };
+        Edit { start, end, text }
+    }
+
+    /// The bytes of the original source to replace (empty: insert at `span().start`).
+    pub fn span(&self) -> Span {
+        Span::new(self.start as usize, self.end as usize)
+    }
+}
+
+/// With its span as a [`Span`]: `Edit { span: Span { start: 1, end: 4 }, text: [..] }`.
+impl std::fmt::Debug for Edit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Edit")
+            .field("span", &self.span())
+            .field("text", &self.text)
+            .finish()
     }
 }
 
@@ -110,25 +137,32 @@ pub enum EditError {
 /// target referenced twice is rewritten once); any other overlap is an error rather than a guess.
 pub fn apply_edits(src: &[u8], edits: &[Edit]) -> Result<Vec<u8>, EditError> {
     let mut order: Vec<&Edit> = edits.iter().collect();
-    order.sort_by_key(|e| (e.span.start, e.span.end));
-    order.dedup_by(|b, a| a.span == b.span && a.text == b.text);
-    let mut out = Vec::with_capacity(src.len() + 16 * order.len());
+    order.sort_by_key(|e| (e.start, e.end));
+    order.dedup_by(|b, a| (a.start, a.end) == (b.start, b.end) && a.text == b.text);
+    // The exact size (edits checked below): the output of a large program is as large as its
+    // source, and room to spare would be held for the rest of the run.
+    let size = order.iter().fold(src.len(), |n, e| {
+        let removed = e.end.saturating_sub(e.start) as usize;
+        n.saturating_add(e.text.len()).saturating_sub(removed)
+    });
+    let mut out = Vec::with_capacity(size);
     let mut pos = 0;
     let mut prev: Option<Span> = None;
     for e in order {
-        if e.span.start > e.span.end || e.span.end > src.len() {
-            return Err(EditError::OutOfBounds(e.span));
+        let span = e.span();
+        if span.start > span.end || span.end > src.len() {
+            return Err(EditError::OutOfBounds(span));
         }
-        if e.span.start < pos {
+        if span.start < pos {
             return Err(EditError::Overlap {
-                first: prev.unwrap_or(e.span),
-                second: e.span,
+                first: prev.unwrap_or(span),
+                second: span,
             });
         }
-        out.extend_from_slice(&src[pos..e.span.start]);
+        out.extend_from_slice(&src[pos..span.start]);
         out.extend_from_slice(&e.text);
-        pos = e.span.end;
-        prev = Some(e.span);
+        pos = span.end;
+        prev = Some(span);
     }
     out.extend_from_slice(&src[pos..]);
     Ok(out)
@@ -141,7 +175,7 @@ mod tests {
     #[test]
     fn edit_text_reads_back_inline_and_on_the_heap() {
         assert_eq!(std::mem::size_of::<EditText>(), 16);
-        assert_eq!(std::mem::size_of::<Edit>(), 32);
+        assert_eq!(std::mem::size_of::<Edit>(), 24);
         for n in [0, 1, 13, 14, 15, 22, 23, 64] {
             let bytes: Vec<u8> = (0..n).map(|i| b'0' + (i % 10) as u8).collect();
             let t = EditText::from(bytes.clone());
@@ -201,6 +235,29 @@ mod tests {
             apply_edits(src, &[Edit::new(Span::new(4, 9), "x")]),
             Err(EditError::OutOfBounds(_))
         ));
+    }
+
+    #[test]
+    fn spans_read_back_and_one_past_u32_is_refused_not_moved() {
+        let e = Edit::new(Span::new(7, 12), "1.5");
+        assert_eq!(e.span(), Span::new(7, 12));
+        assert_eq!(
+            format!("{e:?}"),
+            "Edit { span: Span { start: 7, end: 12 }, text: [49, 46, 53] }"
+        );
+        let top = u32::MAX as usize;
+        assert_eq!(
+            Edit::new(Span::new(top, top), "x").span(),
+            Span::new(top, top)
+        );
+        if let Some(past) = top.checked_add(1) {
+            let e = Edit::new(Span::new(past, past), "x");
+            assert!(e.span().start > e.span().end);
+            assert_eq!(
+                apply_edits(b"ab", &[e]),
+                Err(EditError::OutOfBounds(Span::new(top, 0)))
+            );
+        }
     }
 
     #[test]

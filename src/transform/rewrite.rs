@@ -38,10 +38,7 @@ pub(crate) fn number_edit(field: &Option<NumField>, new: f64, min_decimals: usiz
     }
     let f = field.as_ref()?;
     let text = f.lit().rewrite_text(new, min_decimals)?;
-    Some(Edit {
-        span: f.span(),
-        text,
-    })
+    Some(Edit::with_text(f.span(), text))
 }
 
 /// An edit for an integer field (`cf1`…), if it changes.
@@ -271,10 +268,7 @@ fn push_edits<const N: usize>(
 ) {
     for (f, text) in fields.iter().zip(texts) {
         if let (Some(f), Some(text)) = (f, text) {
-            edits.push(Edit {
-                span: f.span(),
-                text,
-            });
+            edits.push(Edit::with_text(f.span(), text));
         }
     }
 }

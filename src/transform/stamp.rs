@@ -435,38 +435,65 @@ fn find_in(src: &[u8], dialect: &dyn crate::dialect::Dialect) -> Option<(Stamp, 
 /// is inserted, with the header line's own line end. `None` when the language has no line
 /// comment or the file no header (nothing to put it after).
 pub fn write(src: &[u8], dialect: &dyn crate::dialect::Dialect, stamp: &Stamp) -> Option<Vec<u8>> {
-    let mark = dialect.line_comment()?;
-    let (end, next) = header(src, dialect.header_keywords())?;
-    let eol: &[u8] = if next > end { &src[end..next] } else { b"\n" };
+    let mut out = src.to_vec();
+    write_in_place(&mut out, dialect, stamp).then_some(out)
+}
+
+/// [`write`] into `src` itself: the bytes after the stamp line move, the file is not copied
+/// (it is a transform's whole output). `false`, and `src` unchanged, where [`write`] gives
+/// `None`.
+pub fn write_in_place(
+    src: &mut Vec<u8>,
+    dialect: &dyn crate::dialect::Dialect,
+    stamp: &Stamp,
+) -> bool {
+    let Some(mark) = dialect.line_comment() else {
+        return false;
+    };
+    let Some((end, next)) = header(src, dialect.header_keywords()) else {
+        return false;
+    };
+    let eol = if next > end { &src[end..next] } else { b"\n" };
     let mut line = format!("{mark} {}", stamp.text()).into_bytes();
-    line.extend_from_slice(eol);
-    let mut out = Vec::with_capacity(src.len() + line.len() + 1);
-    match find_in(src, dialect) {
+    let (at, replaced) = match find_in(src, dialect) {
         Some((_, span)) => {
-            out.extend_from_slice(&src[..span.start]);
-            out.extend_from_slice(&line);
-            out.extend_from_slice(&src[span.end..]);
+            line.extend_from_slice(eol);
+            (span.start, span.end - span.start)
+        }
+        // The header is the file's last line, without a terminator: the stamp line gets the
+        // terminator before it instead of after.
+        None if next == end => {
+            line.splice(0..0, eol.iter().copied());
+            (next, 0)
         }
         None => {
-            out.extend_from_slice(&src[..next]);
-            if next == end {
-                // The header is the file's last line, without a terminator.
-                out.extend_from_slice(eol);
-                line.truncate(line.len() - eol.len());
-            }
-            out.extend_from_slice(&line);
-            out.extend_from_slice(&src[next..]);
+            line.extend_from_slice(eol);
+            (next, 0)
         }
-    }
-    Some(out)
+    };
+    splice(src, at, replaced, &line);
+    true
+}
+
+/// Replaces `len` bytes at `at` with `with`, growing the buffer by exactly what it needs.
+fn splice(src: &mut Vec<u8>, at: usize, len: usize, with: &[u8]) {
+    src.reserve_exact(with.len().saturating_sub(len));
+    src.splice(at..at + len, with.iter().copied());
 }
 
 /// `src` without its stamp line (as it was before trackfix stamped it), if it has one.
 pub fn strip(src: &[u8], dialect: &dyn crate::dialect::Dialect) -> Option<Vec<u8>> {
-    let (_, span) = find_in(src, dialect)?;
-    let mut out = src[..span.start].to_vec();
-    out.extend_from_slice(&src[span.end..]);
-    Some(out)
+    let mut out = src.to_vec();
+    strip_in_place(&mut out, dialect).then_some(out)
+}
+
+/// [`strip`] from `src` itself; `false`, and `src` unchanged, when it has no stamp.
+pub fn strip_in_place(src: &mut Vec<u8>, dialect: &dyn crate::dialect::Dialect) -> bool {
+    let Some((_, span)) = find_in(src, dialect) else {
+        return false;
+    };
+    src.drain(span.start..span.end);
+    true
 }
 
 /// A number literal's place in a file: its byte span, decimals after the point, and its
@@ -504,14 +531,19 @@ impl NumberToken {
 /// `.` and digits and an optional exponent, not part of a name (`p10`, `$X1`) and not followed
 /// by a letter. Signs are not part of it. Dialect-free on purpose: the same scan of the same
 /// bytes gives the same list, comments and strings included, on both sides of a transform.
-fn number_tokens(src: &[u8], skip: Option<Span>) -> NumberTokens<'_> {
-    NumberTokens { src, skip, i: 0 }
+fn number_tokens(skip: Option<Span>) -> NumberTokens {
+    NumberTokens { skip, i: 0 }
 }
 
 /// The number literals of a file, in order (see [`number_tokens`]): scanned as they are asked
 /// for, so that two files' literals can be paired without a list of millions of each.
-struct NumberTokens<'a> {
-    src: &'a [u8],
+///
+/// The scanner keeps only its place; each step is given the bytes. A step reads nothing before
+/// the end of the token it last returned (that token is followed by a byte outside words), so
+/// the bytes before it may be rewritten between steps: [`carry_precision`] narrows literals in
+/// the buffer it scans.
+#[derive(Clone)]
+struct NumberTokens {
     skip: Option<Span>,
     i: usize,
 }
@@ -529,11 +561,10 @@ static WORD: [bool; 256] = {
     table
 };
 
-impl Iterator for NumberTokens<'_> {
-    type Item = NumberToken;
-
-    fn next(&mut self) -> Option<NumberToken> {
-        let (src, skip) = (self.src, self.skip);
+impl NumberTokens {
+    /// The next literal of `src` (the same bytes at and after the place as at the last step).
+    fn next(&mut self, src: &[u8]) -> Option<NumberToken> {
+        let skip = self.skip;
         let word = |b: u8| WORD[b as usize];
         let mut i = self.i;
         loop {
@@ -645,9 +676,13 @@ pub struct CarriedPrecision {
 /// a house precision D gets its first-written precision: a rewritten one's original precision
 /// (or the earlier stamp's record of it), an unchanged one's record carried over, a narrowed one
 /// its own.
+///
+/// `output` is taken and given back, not copied: narrowing only drops bytes, so it is done in
+/// place, and an output with nothing to narrow (every `correct`) is returned untouched. A copy
+/// of a large program's output here was as large as the file, next to its original and output.
 pub fn carry_precision(
     original: &[u8],
-    output: &[u8],
+    mut output: Vec<u8>,
     dialect: &dyn crate::dialect::Dialect,
 ) -> CarriedPrecision {
     let old = find_in(original, dialect);
@@ -656,9 +691,9 @@ pub fn carry_precision(
         .map(|(s, _)| s.widened.clone())
         .unwrap_or_default();
     let skip_in = old.as_ref().map(|(_, span)| *span);
-    let skip_out = find_in(output, dialect).map(|(_, span)| span);
-    let mut before = number_tokens(original, skip_in);
-    let mut after = number_tokens(output, skip_out);
+    let skip_out = find_in(&output, dialect).map(|(_, span)| span);
+    let mut before = number_tokens(skip_in);
+    let mut after = number_tokens(skip_out);
     // Per house precision, by its place in HOUSE_DECIMALS (arrays, not maps: this runs once per
     // literal of the file): the earlier stamp's record, how many of the original's literals
     // resolve it so far (indexing that record), and the output's new record.
@@ -666,18 +701,21 @@ pub fn carry_precision(
         HOUSE_DECIMALS.map(|d| old_widened.0.get(&d).map_or(&[][..], Vec::as_slice));
     let mut seen = [0usize; 3];
     let mut lists: [Vec<i8>; 3] = Default::default();
-    // The output with the narrowed literals rewritten; copied up to `at` only once a literal
-    // is narrowed, so that unchanged stretches are copied whole.
-    let mut text = Vec::new();
+    // The narrowing, in place: `output[..kept]` is final, `output[at..]` not yet looked at (the
+    // scan reads only there); the bytes between are moved down once a literal is narrowed,
+    // never before, so an output without one is not moved at all.
+    let mut kept = 0;
     let mut at = 0;
-    // The two files' literals in step; if one has more, nothing is carried.
+    // Whether the two files are known to hold as many literals (checked before the first byte
+    // moves, so that an output is never left half narrowed).
+    let mut in_step = false;
     loop {
-        let (b, a) = match (before.next(), after.next()) {
+        let (b, a) = match (before.next(original), after.next(&output)) {
             (Some(b), Some(a)) => (b, a),
             (None, None) => break,
             _ => {
                 return CarriedPrecision {
-                    output: output.to_vec(),
+                    output,
                     widened: Widened::default(),
                 };
             }
@@ -690,13 +728,10 @@ pub fn carry_precision(
             }
             None => b.precision(),
         };
-        let old_text = &original[b.start..b.end];
-        let new_text = &output[a.start..a.end];
-        let unchanged = old_text == new_text;
-        // The written text as the new text's mantissa head and its exponent (no allocation:
-        // a large module has millions of literals).
-        let mut written: (&[u8], &[u8]) = (new_text, &[]);
-        let mut narrowed = false;
+        let unchanged = original[b.start..b.end] == output[a.start..a.end];
+        // The written text as a head of the new mantissa and the exponent: how many bytes
+        // of the literal are dropped before its exponent (none: written as it is).
+        let mut cut = 0;
         let mut precision = a.precision();
         let first_precision = if unchanged { d } else { d.min(precision) };
         // Only a literal the earlier stamp records as widened is narrowed again.
@@ -712,15 +747,11 @@ pub fn carry_precision(
                 && mantissa[mantissa.len() - drop..].iter().all(|&c| c == b'0')
                 && (drop < decimals || int_digits > 0);
             if zeros {
-                let cut = if drop == decimals { drop + 1 } else { drop };
-                written = (
-                    &mantissa[..mantissa.len() - cut],
-                    &output[a.mantissa_end()..a.end],
-                );
+                cut = if drop == decimals { drop + 1 } else { drop };
                 precision = first_precision;
-                narrowed = true;
             }
         }
+        let narrowed = cut > 0;
         // Every output literal of a house precision has an entry: a narrowed one too (it may
         // have landed on another house precision, `0.123000` → `0.123`), so that the lists
         // stay in step with the file.
@@ -730,26 +761,43 @@ pub fn carry_precision(
             lists[h].push(entry);
         }
         if narrowed {
-            if text.is_empty() {
-                text.reserve(output.len());
+            if !in_step {
+                let (mut b2, mut a2) = (before.clone(), after.clone());
+                loop {
+                    match (b2.next(original), a2.next(&output)) {
+                        (Some(_), Some(_)) => {}
+                        (None, None) => break,
+                        _ => {
+                            return CarriedPrecision {
+                                output,
+                                widened: Widened::default(),
+                            };
+                        }
+                    }
+                }
+                in_step = true;
             }
-            text.extend_from_slice(&output[at..a.start]);
-            text.extend_from_slice(written.0);
-            text.extend_from_slice(written.1);
+            // Up to the cut, then the exponent after it: both move down, never up.
+            let head = a.mantissa_end() - cut;
+            output.copy_within(at..head, kept);
+            kept += head - at;
+            output.copy_within(a.mantissa_end()..a.end, kept);
+            kept += a.end - a.mantissa_end();
             at = a.end;
         }
     }
-    text.extend_from_slice(&output[at..]);
+    if at > kept {
+        let len = output.len();
+        output.copy_within(at..len, kept);
+        output.truncate(kept + len - at);
+    }
     let mut widened = Widened::default();
     for (d, list) in HOUSE_DECIMALS.into_iter().zip(lists) {
         if !list.is_empty() {
             widened.0.insert(d, list);
         }
     }
-    CarriedPrecision {
-        output: text,
-        widened,
-    }
+    CarriedPrecision { output, widened }
 }
 
 #[cfg(test)]
@@ -788,6 +836,42 @@ mod tests {
     }
 
     #[test]
+    fn stamps_and_strips_in_place_as_the_copying_forms_do() {
+        let src = b"&ACCESS RVP\r\nDEFDAT spot\r\nDECL E6POS XP1={X 1}\r\nENDDAT\r\n".to_vec();
+        let mut buf = src.clone();
+        assert!(write_in_place(&mut buf, &KRL, &stamp()));
+        assert_eq!(Some(&buf), write(&src, &KRL, &stamp()).as_ref());
+        // Replacing the stamp with a longer and a shorter one moves only what follows it.
+        let mut long = stamp();
+        long.robot = Some("a_much_longer_robot_name".into());
+        assert!(write_in_place(&mut buf, &KRL, &long));
+        assert_eq!(find_in(&buf, &KRL).unwrap().0, long);
+        assert!(buf.ends_with(b"\r\nDECL E6POS XP1={X 1}\r\nENDDAT\r\n"));
+        assert!(write_in_place(&mut buf, &KRL, &stamp()));
+        assert_eq!(Some(&buf), write(&src, &KRL, &stamp()).as_ref());
+        assert!(strip_in_place(&mut buf, &KRL));
+        assert_eq!(buf, src);
+        // Nothing to strip, nothing to stamp after: the bytes are left alone.
+        assert!(!strip_in_place(&mut buf, &KRL));
+        assert_eq!(buf, src);
+        let mut headless = b"DECL INT i\n".to_vec();
+        assert!(!write_in_place(&mut headless, &KRL, &stamp()));
+        assert_eq!(headless, b"DECL INT i\n");
+    }
+
+    #[test]
+    fn an_output_with_nothing_to_narrow_is_given_back_unmoved() {
+        let src = b"MODULE m\n  x := [12.250, 13.250];\nENDMODULE\n";
+        let out = b"MODULE m\n  x := [12.500, 13.000];\nENDMODULE\n".to_vec();
+        let (at, capacity) = (out.as_ptr(), out.capacity());
+        let c = carry_precision(src, out, &RAPID);
+        // The same buffer, not a copy of it (no stamp: nothing was widened before).
+        assert_eq!((c.output.as_ptr(), c.output.capacity()), (at, capacity));
+        assert_eq!(c.output, b"MODULE m\n  x := [12.500, 13.000];\nENDMODULE\n");
+        assert!(c.widened.is_empty(), "{:?}", c.widened);
+    }
+
+    #[test]
     fn krl_stamps_def_and_defdat_and_reads_back() {
         let dat = b"&ACCESS RVP\nDEFDAT  spot\nDECL E6POS XP1={X 1}\nENDDAT\n";
         let out = write(dat, &KRL, &stamp()).unwrap();
@@ -802,6 +886,12 @@ mod tests {
         let src = b"DEF spot( )\nEND";
         let out = write(src, &KRL, &stamp()).unwrap();
         assert!(out.starts_with(b"DEF spot( )\n; trackfix: correct"));
+        // A header that ends the file gets the line end before the stamp, none after.
+        let out = write(b"DEF spot( )", &KRL, &stamp()).unwrap();
+        assert_eq!(
+            String::from_utf8(out).unwrap(),
+            "DEF spot( )\n; trackfix: correct robot=r1 profile=\"r1 track\" sha256=0123456789ab version=9.9.9"
+        );
         // A file without a header (nothing to follow) is not stamped.
         assert_eq!(write(b"DECL INT i\n", &KRL, &stamp()), None);
         // An ordinary comment after the header is not a stamp.
@@ -904,7 +994,7 @@ mod precision_tests {
         // was edited since: `12.500` stays, `13.000` loses only its zeros.
         let src = b"MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [12.250, 13.250];\nENDMODULE\n";
         let out = b"MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [12.500, 13.000];\nENDMODULE\n";
-        let c = carry_precision(src, out, &RAPID);
+        let c = carry_precision(src, out.to_vec(), &RAPID);
         assert_eq!(
             String::from_utf8(c.output).unwrap(),
             "MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [12.500, 13];\nENDMODULE\n"
@@ -912,7 +1002,9 @@ mod precision_tests {
         assert_eq!(c.widened.text(), "3:0");
         // Numbers in names are none; an exponent literal resolves its decimals minus the
         // exponent (`1.5E+2` -1, `1.50123E+2` 3, `2.5e-1` 2).
-        let t: Vec<_> = number_tokens(b"p10 1.5E+2 $x1 .5 7.250 1.50123E+2 2.5e-1", None)
+        let text = b"p10 1.5E+2 $x1 .5 7.250 1.50123E+2 2.5e-1";
+        let mut scan = number_tokens(None);
+        let t: Vec<_> = std::iter::from_fn(|| scan.next(text))
             .map(|t| (t.decimals, t.precision(), t.house()))
             .collect();
         assert_eq!(
@@ -933,7 +1025,7 @@ mod precision_tests {
         // precision: `1.5E+2` resolves -1, `.5` 1, `2.5e1` 0.
         let src = b"MODULE m\n  x := [1.5E+2, .5, 2.5e1, 7.125];\nENDMODULE\n";
         let corrected = b"MODULE m\n  x := [1.50123E+2, .512, 2.5123e1, 7.250];\nENDMODULE\n";
-        let c = carry_precision(src, corrected, &RAPID);
+        let c = carry_precision(src, corrected.to_vec(), &RAPID);
         assert_eq!(c.output, corrected);
         assert_eq!(c.widened.text(), "3:-1,1,0");
         let mut stamp = Stamp::new("correct", Some("r1"), None);
@@ -944,7 +1036,7 @@ mod precision_tests {
         // mantissa before an exponent, and `.500` keeps its point.
         let zeroed = b"MODULE m\n  x := [1.50000E+2, .500, 2.5000e1, 7.125];\nENDMODULE\n";
         let zeroed = write(zeroed, &RAPID, &stamp).unwrap();
-        let back = carry_precision(&stamped, &zeroed, &RAPID);
+        let back = carry_precision(&stamped, zeroed.clone(), &RAPID);
         assert!(back.widened.is_empty(), "{:?}", back.widened);
         assert_eq!(
             String::from_utf8(strip(&back.output, &RAPID).unwrap()).unwrap(),
@@ -958,7 +1050,7 @@ mod precision_tests {
         )
         .unwrap();
         assert_eq!(
-            carry_precision(&stamped, &off, &RAPID).widened.text(),
+            carry_precision(&stamped, off, &RAPID).widened.text(),
             "3:-1"
         );
     }
@@ -970,7 +1062,7 @@ mod precision_tests {
         // its record (0) in the next run.
         let src = b"MODULE m\n! trackfix: correct widened=6:3;3:3,0 version=0\n  x := [0.123457, 0.000, 12.500];\nENDMODULE\n";
         let out = b"MODULE m\n! trackfix: correct widened=6:3;3:3,0 version=0\n  x := [0.123000, 0.000, 12.750];\nENDMODULE\n";
-        let c = carry_precision(src, out, &RAPID);
+        let c = carry_precision(src, out.to_vec(), &RAPID);
         assert!(String::from_utf8_lossy(&c.output).contains("[0.123, 0.000, 12.750]"));
         assert_eq!(c.widened.0.get(&3), Some(&vec![3, 3, 0]));
     }
@@ -981,16 +1073,16 @@ mod precision_tests {
         // on either side the files cannot be paired, and the output is kept as it is.
         let src = b"MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [12.250, 13.250];\nENDMODULE\n";
         let out: &[u8] = b"MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [12.500, 13.000, 1];\nENDMODULE\n";
-        let c = carry_precision(src, out, &RAPID);
+        let c = carry_precision(src, out.to_vec(), &RAPID);
         assert_eq!(c.output, out);
         assert!(c.widened.is_empty());
         let fewer: &[u8] =
             b"MODULE m\n! trackfix: correct widened=3:0*2 version=0\n  x := [13.000];\nENDMODULE\n";
-        let c = carry_precision(src, fewer, &RAPID);
+        let c = carry_precision(src, fewer.to_vec(), &RAPID);
         assert_eq!(c.output, fewer);
         assert!(c.widened.is_empty());
         // The last literal of the longer side is what tells: 2 against 3 and 3 against 2.
-        let c = carry_precision(out, src, &RAPID);
+        let c = carry_precision(out, src.to_vec(), &RAPID);
         assert_eq!(c.output, src);
     }
 
@@ -1010,7 +1102,7 @@ mod precision_tests {
             let value = |t: &String| NumLit::parse(t.as_bytes()).unwrap().value();
             let c_mm: Vec<String> = mm_text.iter().map(|t| rewrite(t, value(t) + delta, 3)).collect();
             let c_q: Vec<String> = q_text.iter().map(|t| rewrite(t, value(t) + delta * 1e-3, 6)).collect();
-            let corrected = carry_precision(&original, &module(&c_mm, &c_q), &RAPID);
+            let corrected = carry_precision(&original, module(&c_mm, &c_q), &RAPID);
             let mut stamp = Stamp::new("correct", Some("r1"), None);
             stamp.widened = corrected.widened;
             let stamped = write(&corrected.output, &RAPID, &stamp).unwrap();
@@ -1018,7 +1110,7 @@ mod precision_tests {
             let z_mm: Vec<String> = c_mm.iter().zip(&mm_text).map(|(c, o)| rewrite(c, value(o), 3)).collect();
             let z_q: Vec<String> = c_q.iter().zip(&q_text).map(|(c, o)| rewrite(c, value(o), 6)).collect();
             let zeroed = write(&module(&z_mm, &z_q), &RAPID, &stamp).unwrap();
-            let back = carry_precision(&stamped, &zeroed, &RAPID);
+            let back = carry_precision(&stamped, zeroed.clone(), &RAPID);
             proptest::prop_assert!(back.widened.is_empty(), "{:?}", back.widened);
             proptest::prop_assert_eq!(
                 String::from_utf8(strip(&back.output, &RAPID).unwrap()).unwrap(),
