@@ -28,8 +28,8 @@ pub use crate::dialect::Language;
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
 pub struct PositionKind(&'static KindSpec);
 
-/// A [`PositionKind`]'s name and whether it is Cartesian. Written as a literal,
-/// `&KindSpec { .. }` is a constant the program keeps (`'static`), wherever it is written.
+/// A [`PositionKind`]'s name and whether it is Cartesian. Written in a `const` item,
+/// `PositionKind::new(&KindSpec::pose("…"))` keeps it as a constant of the program (`'static`).
 #[derive(Debug, PartialEq, Eq, Hash)]
 pub struct KindSpec {
     /// The type's name as its language writes it (`robtarget`, `E6POS`).
@@ -38,9 +38,27 @@ pub struct KindSpec {
     pub cartesian: bool,
 }
 
+impl KindSpec {
+    /// A Cartesian kind named `name`.
+    pub const fn pose(name: &'static str) -> KindSpec {
+        KindSpec {
+            name,
+            cartesian: true,
+        }
+    }
+
+    /// A kind of joint values named `name`.
+    pub const fn joints(name: &'static str) -> KindSpec {
+        KindSpec {
+            name,
+            cartesian: false,
+        }
+    }
+}
+
 impl PositionKind {
     /// The kind `spec` describes:
-    /// `PositionKind::new(&KindSpec { name: "robtarget", cartesian: true })`.
+    /// `PositionKind::new(&KindSpec::pose("robtarget"))`.
     pub const fn new(spec: &'static KindSpec) -> PositionKind {
         PositionKind(spec)
     }

@@ -24,30 +24,15 @@ impl Language {
 #[allow(non_upper_case_globals)]
 impl PositionKind {
     /// KRL `E6POS`.
-    pub const E6Pos: PositionKind = PositionKind::new(&KindSpec {
-        name: "E6POS",
-        cartesian: true,
-    });
+    pub const E6Pos: PositionKind = PositionKind::new(&KindSpec::pose("E6POS"));
     /// KRL `POS`.
-    pub const Pos: PositionKind = PositionKind::new(&KindSpec {
-        name: "POS",
-        cartesian: true,
-    });
+    pub const Pos: PositionKind = PositionKind::new(&KindSpec::pose("POS"));
     /// KRL `FRAME` used as a motion target.
-    pub const Frame: PositionKind = PositionKind::new(&KindSpec {
-        name: "FRAME",
-        cartesian: true,
-    });
+    pub const Frame: PositionKind = PositionKind::new(&KindSpec::pose("FRAME"));
     /// KRL `E6AXIS`.
-    pub const E6Axis: PositionKind = PositionKind::new(&KindSpec {
-        name: "E6AXIS",
-        cartesian: false,
-    });
+    pub const E6Axis: PositionKind = PositionKind::new(&KindSpec::joints("E6AXIS"));
     /// KRL `AXIS`.
-    pub const Axis: PositionKind = PositionKind::new(&KindSpec {
-        name: "AXIS",
-        cartesian: false,
-    });
+    pub const Axis: PositionKind = PositionKind::new(&KindSpec::joints("AXIS"));
 }
 
 /// Turn bits of A1, A4 and A6: a mirror-image robot runs those axes with the opposite sign.

@@ -24,15 +24,9 @@ impl Language {
 #[allow(non_upper_case_globals)]
 impl PositionKind {
     /// RAPID `robtarget`.
-    pub const Robtarget: PositionKind = PositionKind::new(&KindSpec {
-        name: "robtarget",
-        cartesian: true,
-    });
+    pub const Robtarget: PositionKind = PositionKind::new(&KindSpec::pose("robtarget"));
     /// RAPID `jointtarget`.
-    pub const Jointtarget: PositionKind = PositionKind::new(&KindSpec {
-        name: "jointtarget",
-        cartesian: false,
-    });
+    pub const Jointtarget: PositionKind = PositionKind::new(&KindSpec::joints("jointtarget"));
 }
 
 const VOCABULARY: Vocabulary = Vocabulary {

@@ -726,10 +726,26 @@ mod tests {
             let c = edited(&texts, &e);
             let g = text_fields(&c);
             let kept = texts[3].parse::<f64>().unwrap();
-            let e = reversible_pose_edits(
-                &g, &(undo * g.pose().unwrap()), OrientationHint::NearOriginal, None, Some(kept),
-            );
-            proptest::prop_assert_eq!(&edited(&c, &e), &texts, "corrected {:?}", c);
+            let zeroed = |corrected: &[String]| {
+                let g = text_fields(corrected);
+                let e = reversible_pose_edits(
+                    &g, &(undo * g.pose().unwrap()), OrientationHint::NearOriginal, None, Some(kept),
+                );
+                edited(corrected, &e)
+            };
+            let z = zeroed(&c);
+            proptest::prop_assert_eq!(&z[..3], &texts[..3], "corrected {:?}", c);
+            if z[3..] != texts[3..] {
+                // Written off the lock (B a few units from ±90°), A and C are nearly one
+                // rotation and a unit of the written angles can be far from every text that
+                // comes back. The promise is the choice within one unit that comes back, where
+                // one does: none may.
+                let missed = choices_within_one_unit(&c, 3..6).find(|ch| zeroed(ch)[3..] == texts[3..]);
+                proptest::prop_assert!(
+                    missed.is_none(),
+                    "corrected {:?} does not come back, but {:?} would", c, missed
+                );
+            }
         }
 
     }

@@ -18,6 +18,9 @@ use trackfix::syntax::{LineIndex, NumLit, Span};
 use trackfix::track::TrackError;
 use trackfix::transform::{Direction, TrackSetup, apply, reparse, track_correction};
 
+/// The stub dialect's one kind (a constant: a `KindSpec` is kept by reference).
+const STUB_POSE: PositionKind = PositionKind::new(&KindSpec::pose("stubpose"));
+
 struct Stub;
 
 const VOCABULARY: Vocabulary = Vocabulary {
@@ -56,10 +59,7 @@ fn parse(path: &Path, source: Vec<u8>) -> ParsedFile {
         }
         positions.push(Position {
             name: Some(format!("t{}", n + 1).into()),
-            kind: PositionKind::new(&KindSpec {
-                name: "stubpose",
-                cartesian: true,
-            }),
+            kind: STUB_POSE,
             span,
             line: n + 1,
             column: 1,
