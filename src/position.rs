@@ -106,6 +106,7 @@ const _: () = assert!(std::mem::size_of::<Option<NumField>>() == 16);
 impl NumField {
     /// The field of literal `lit` written at `span` (its text: `span` is as long as the
     /// literal); `None` if it does not fit the compact form (see the type).
+    #[inline]
     pub fn new(span: Span, lit: NumLit) -> Option<NumField> {
         Some(NumField {
             value: lit.value(),
@@ -121,6 +122,7 @@ impl NumField {
     }
 
     /// The literal as written: its value and how it is spelled, so a rewrite keeps the style.
+    #[inline]
     pub fn lit(&self) -> NumLit {
         NumLit::unpack(self.value, self.packed)
     }
@@ -926,6 +928,7 @@ pub fn external_axis_index(name: &str) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::strategy::Strategy as _;
 
     #[test]
     fn a_use_records_the_first_frame_and_tool_and_every_other_frame_once() {
@@ -972,7 +975,12 @@ mod tests {
             exp in proptest::option::of((
                 proptest::sample::select(vec!["E", "e"]),
                 proptest::sample::select(vec!["", "+", "-"]),
-                "[0-9]{1,4}",
+                // Zeros (`E-0`, `E+00`) and the bounds a rewrite keeps, and any digits.
+                proptest::prop_oneof![
+                    proptest::sample::select(vec!["0", "00", "000", "09", "99", "100", "0099"])
+                        .prop_map(|s| s.to_owned()),
+                    "[0-9]{1,4}",
+                ],
             )),
             nines in proptest::sample::select(vec![
                 "", "9E9", "9E+09", "9e+9", "9E+009", "-9E9", "+9E9", "9.0E9", "9E09",
@@ -1021,6 +1029,7 @@ mod tests {
         assert!(field("1E-8191", 7).is_some());
         assert_eq!(field("1E-8192", 7), None);
         assert!(field("1E-0099", 7).is_some());
+        assert!(field(".0e-0", 5).is_some());
         // The precision of a kept exponent's literal comes from the length of its text: a span
         // of another length would give another literal.
         assert!(field("1.25E+2", 7).is_some());

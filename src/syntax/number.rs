@@ -342,10 +342,10 @@ impl NumLit {
 ///
 /// Bits 0-7 hold the length (1..=255) and 8-15 the integer digits; bit 16 is [`PLUS`] (and
 /// [`LEADING_POINT`] is no integer digits). Bit 17 says an exponent is kept; then bit 18 is
-/// its letter's case, 19-20 its sign as written (none, `+`, `-`: the value's sign follows),
-/// 21-22 its digits and 23-29 its absolute value (below 100), and the precision is not stored:
-/// the length less the sign, integer digits and suffix is the point and decimals, and the
-/// precision is the decimals less the exponent. Without an exponent, bits 18-31 are the
+/// its letter's case, 19-20 its sign as written (none, `+`, `-`, which the exponent's value
+/// has), 21-22 its digits and 23-29 its absolute value (below 100), and the precision is not
+/// stored: the length less the sign, integer digits and suffix is the point and decimals, and
+/// the precision is the decimals less the exponent. Without a kept exponent, bits 18-31 are the
 /// precision (14-bit two's complement).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct PackedLit(NonZeroU32);
@@ -368,34 +368,51 @@ impl NumLit {
     /// is empty or longer than 255 bytes, or the precision of a literal without a kept
     /// exponent is beyond ±8191 (`1E-9000`), or `len` is not what the text of this literal can
     /// be.
+    #[inline]
     pub(crate) fn pack(&self, len: usize) -> Option<PackedLit> {
         // No literal is empty, and a length of at least 1 makes the word non-zero.
         let len = u8::try_from(len).ok().filter(|&l| l > 0)?;
-        let mut bits = u32::from(len) | u32::from(self.int_digits) << 8;
-        if self.style & PLUS != 0 {
-            bits |= 1 << 16;
+        // The leading point is not stored: it is a literal without integer digits.
+        let leading = if self.int_digits == 0 {
+            LEADING_POINT
+        } else {
+            0
+        };
+        if self.style & !PLUS != leading {
+            return None;
         }
+        let plus = self.style & PLUS != 0;
+        let mut bits = u32::from(len) | u32::from(self.int_digits) << 8 | u32::from(plus) << 16;
         match self.exponent {
             Some(e) => {
                 let sign = EXPONENT_SIGNS.iter().position(|&s| s == e.sign)? as u32;
+                let abs = e.value.unsigned_abs();
+                // The exponent's sign is its written sign's; its precision follows from `len`.
+                let signed = usize::from(plus || self.value.is_sign_negative());
+                if e.digits > 3
+                    || abs > 0x7f
+                    || (e.value < 0 && e.sign != b'-')
+                    || (e.value > 0 && e.sign == b'-')
+                    || kept_precision(len, signed, self.int_digits, e) != self.precision
+                {
+                    return None;
+                }
                 bits |= 1 << 17
                     | u32::from(e.upper) << 18
                     | sign << 19
-                    | u32::from(e.digits & 3) << 21
-                    | u32::from(e.value.unsigned_abs() & 0x7f) << 23;
+                    | u32::from(e.digits) << 21
+                    | u32::from(abs) << 23;
             }
             None if PACKED_PRECISION.contains(&self.precision) => {
                 bits |= (self.precision as u32 & 0x3fff) << 18;
             }
             None => return None,
         }
-        let packed = PackedLit(NonZeroU32::new(bits)?);
-        // What does not fit the layout, or a length that is not this literal's (the derived
-        // precision would be wrong), reads back as another literal: refused.
-        (NumLit::unpack(self.value, packed) == *self).then_some(packed)
+        NonZeroU32::new(bits).map(PackedLit)
     }
 
     /// The literal [`pack`](Self::pack) packed, with its value.
+    #[inline]
     pub(crate) fn unpack(value: f64, packed: PackedLit) -> NumLit {
         let bits = packed.0.get();
         let int_digits = (bits >> 8) as u8;
@@ -403,22 +420,15 @@ impl NumLit {
         let style = if plus { PLUS } else { 0 } | if int_digits == 0 { LEADING_POINT } else { 0 };
         let (precision, exponent) = if bits & 1 << 17 != 0 {
             let sign = EXPONENT_SIGNS[(bits >> 19 & 3) as usize];
-            let digits = (bits >> 21 & 3) as u8;
             let abs = (bits >> 23 & 0x7f) as i8;
             let e = Exponent {
                 value: if sign == b'-' { -abs } else { abs },
                 upper: bits & 1 << 18 != 0,
                 sign,
-                digits,
+                digits: (bits >> 21 & 3) as u8,
             };
-            // The text is: sign, integer digits, point and decimals, `E`, sign, digits.
             let signed = usize::from(plus || value.is_sign_negative());
-            let suffix = 1 + usize::from(sign != 0) + digits as usize;
-            let point_and_decimals = packed
-                .len()
-                .saturating_sub(signed + int_digits as usize + suffix);
-            let decimals = point_and_decimals.saturating_sub(1) as i16;
-            (decimals - i16::from(e.value), Some(e))
+            (kept_precision(bits as u8, signed, int_digits, e), Some(e))
         } else {
             // An arithmetic shift brings the 14-bit precision down with its sign.
             (((bits as i32) >> 18) as i16, None)
@@ -431,6 +441,14 @@ impl NumLit {
             int_digits,
         }
     }
+}
+
+/// The precision of a literal with a kept exponent `e` whose text is `len` bytes: the text is a
+/// sign (`signed`), `int_digits`, the point and decimals, and the suffix (`E`, sign, digits).
+fn kept_precision(len: u8, signed: usize, int_digits: u8, e: Exponent) -> i16 {
+    let suffix = 1 + usize::from(e.sign != 0) + e.digits as usize;
+    let point_and_decimals = (len as usize).saturating_sub(signed + int_digits as usize + suffix);
+    point_and_decimals.saturating_sub(1) as i16 - i16::from(e.value)
 }
 
 /// True when `a` and `b` read the same written with `places` decimals: the comparison
