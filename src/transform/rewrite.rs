@@ -724,7 +724,6 @@ mod tests {
                 &f, &(change * f.pose().unwrap()), OrientationHint::NearOriginal, Some(&undo), None,
             );
             let c = edited(&texts, &e);
-            let g = text_fields(&c);
             let kept = texts[3].parse::<f64>().unwrap();
             let zeroed = |corrected: &[String]| {
                 let g = text_fields(corrected);

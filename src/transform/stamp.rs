@@ -439,8 +439,8 @@ pub fn write(src: &[u8], dialect: &dyn crate::dialect::Dialect, stamp: &Stamp) -
     write_in_place(&mut out, dialect, stamp).then_some(out)
 }
 
-/// [`write`] into `src` itself: the bytes after the stamp line move, the file is not copied
-/// (it is a transform's whole output). `false`, and `src` unchanged, where [`write`] gives
+/// [`write()`] into `src` itself: the bytes after the stamp line move, the file is not copied
+/// (it is a transform's whole output). `false`, and `src` unchanged, where [`write()`] gives
 /// `None`.
 pub fn write_in_place(
     src: &mut Vec<u8>,
