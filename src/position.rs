@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use crate::geometry::{Pose, abb_quat, kuka_abc};
-use crate::syntax::{Diagnostic, LineIndex, NumLit, PackedLit, Span};
+use crate::syntax::{Diagnostic, LineIndex, NumLit, PackedLit, Span, Span32};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
 /// Values at or above this are RAPID/KRL "not connected" external axes (`9E9`, `9E+09`).
@@ -148,8 +148,7 @@ impl std::fmt::Debug for NumField {
 /// every KRL Cartesian target has two.
 #[derive(Clone, Copy, PartialEq, Eq)]
 pub struct BitField {
-    start: u32,
-    len: u32,
+    span: Span32,
     value: u32,
     binary_digits: Option<u8>,
 }
@@ -157,12 +156,14 @@ pub struct BitField {
 impl BitField {
     /// The field written at `span` (the whole token, quotes included for the binary form)
     /// with `value`, and `Some(n)` for `'B…'` with n digits, `None` for a decimal integer;
-    /// `None` if a span bound passes `u32` or there are more than 255 digits (neither in an
-    /// input trackfix reads, nor in a Status or Turn of 32 bits).
+    /// `None` if the span is reversed, an offset does not fit 32 bits, or there are more than
+    /// 255 digits (neither in an input trackfix reads, nor in a Status or Turn of 32 bits).
     pub fn new(span: Span, value: u32, binary_digits: Option<usize>) -> Option<BitField> {
+        if span.start > span.end {
+            return None;
+        }
         Some(BitField {
-            start: u32::try_from(span.start).ok()?,
-            len: u32::try_from(span.end.checked_sub(span.start)?).ok()?,
+            span: Span32::of(span)?,
             value,
             binary_digits: match binary_digits {
                 Some(n) => Some(u8::try_from(n).ok()?),
@@ -173,8 +174,7 @@ impl BitField {
 
     /// The whole token, quotes included for the binary form.
     pub fn span(&self) -> Span {
-        let start = self.start as usize;
-        Span::new(start, start + self.len as usize)
+        self.span.span()
     }
 
     /// The value.

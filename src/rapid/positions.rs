@@ -14,7 +14,7 @@ use crate::position::{
     Orientation, Position, PositionKind, Usage,
 };
 use crate::resolve::DeclKind;
-use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, latin1};
+use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, Span32, latin1};
 
 /// Instruction name prefixes that move the robot (or set up a move): their targets get the
 /// default work object `wobj0` when no `\WObj` is given.
@@ -33,49 +33,20 @@ const NAMING: crate::resolve::Naming = crate::resolve::Naming {
     scope: crate::resolve::Scope::OwnFileFirst,
 };
 
-/// A span in the 32-bit form the call records keep (inputs are at most
-/// [`MAX_INPUT_BYTES`](crate::output::MAX_INPUT_BYTES), so every offset fits): a call record
-/// of a 20 MB module is one of 100,000, and with `usize` spans and a vector each they were a
-/// fifth of `check`'s peak memory. The end is kept plus one, never zero, so that an
-/// `Option<CallSpan>` (a call's four or so arguments, its work object and tool) is eight
-/// bytes, not twelve.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct CallSpan {
-    start: u32,
-    end_plus_one: std::num::NonZeroU32,
-}
-
-impl CallSpan {
-    /// `None` only for a span past 4 GiB, which no input reaches (see the type).
-    fn of(span: Span) -> Option<CallSpan> {
-        Some(CallSpan {
-            start: u32::try_from(span.start).ok()?,
-            end_plus_one: u32::try_from(span.end)
-                .ok()?
-                .checked_add(1)
-                .and_then(std::num::NonZeroU32::new)?,
-        })
-    }
-
-    fn span(self) -> Span {
-        Span::new(self.start as usize, (self.end_plus_one.get() - 1) as usize)
-    }
-}
-
 /// A procedure call, kept until every declaration has been read: the frame and tool it moves
 /// with are found then, and it is bound as a [`Use`](crate::resolve::Use). Its arguments,
 /// references and inline literals are ranges of the extractor's shared lists (one list each,
 /// not three vectors per call), from the `*_start` given here to the next call's.
 #[derive(Clone, Copy, Debug)]
 struct CallUse {
-    name: CallSpan,
+    name: Span32,
     line: u32,
     /// The routine the call is written in (index into the module's routines).
     routine: Option<u32>,
     /// `\WObj:=` value.
-    wobj: Option<CallSpan>,
+    wobj: Option<Span32>,
     /// `\Tool:=` (or `tool:=`) value.
-    tool: Option<CallSpan>,
+    tool: Option<Span32>,
     /// Start in [`Extractor::call_args`]: positional arguments that are plain references
     /// (`p10`, `pArr{3}`).
     args_start: u32,
@@ -90,16 +61,14 @@ struct CallUse {
 /// A module's call records and the shared lists their ranges index.
 struct Calls {
     uses: Vec<CallUse>,
-    args: Vec<Option<CallSpan>>,
+    args: Vec<Option<Span32>>,
     refs: Vec<Span>,
     inline: Vec<usize>,
 }
 
 impl Calls {
     /// Each call with its positional arguments, references and inline literals.
-    fn iter(
-        &self,
-    ) -> impl Iterator<Item = (&CallUse, &[Option<CallSpan>], &[Span], &[usize])> + '_ {
+    fn iter(&self) -> impl Iterator<Item = (&CallUse, &[Option<Span32>], &[Span], &[usize])> + '_ {
         // One call's part of a shared list: from its start to the next call's (or the end).
         fn part<T>(list: &[T], start: u32, next: Option<u32>) -> &[T] {
             let end = next.map_or(list.len(), |n| n as usize);
@@ -137,7 +106,7 @@ pub struct Extractor<'l> {
     uses: Vec<CallUse>,
     /// The calls' positional arguments, call after call (see [`CallUse`]); `None` for an
     /// argument that is not a plain reference.
-    call_args: Vec<Option<CallSpan>>,
+    call_args: Vec<Option<Span32>>,
     /// The calls' `Offs`/`RelTool` first arguments, call after call.
     call_refs: Vec<Span>,
     /// The calls' inline literals, call after call.
@@ -640,7 +609,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
         for (u, call_args, refs, inline) in module_calls.iter() {
             let call = NameKey(u.name.span().slice(src));
             positional.clear();
-            positional.extend(call_args.iter().map(|a| a.map(CallSpan::span)));
+            positional.extend(call_args.iter().map(|a| a.map(Span32::span)));
             names.clear();
             names.extend(
                 positional
@@ -1001,13 +970,13 @@ impl Extractor<'_> {
     fn statement_call(&mut self, src: &[u8], arena: &Arena, name: Span, args: u32, span: Span) {
         let (inline, via_offset) = self.scan(src, arena, true);
         let (Some(name), Ok(line), Ok(args_start), Ok(refs_start), Ok(inline_start)) = (
-            CallSpan::of(name),
+            Span32::of(name),
             u32::try_from(self.lines.line(span.start)),
             u32::try_from(self.call_args.len()),
             u32::try_from(self.call_refs.len()),
             u32::try_from(self.call_inline.len()),
         ) else {
-            // Past 4 GiB: no input is this large (see `CallSpan`).
+            // Past 4 GiB: no input is this large (see `Span32`).
             return;
         };
         self.call_refs.extend(via_offset);
@@ -1031,7 +1000,7 @@ impl Extractor<'_> {
             };
             if arg.switch {
                 let nm = arg.name_span().slice(src);
-                let v = value.and_then(|v| CallSpan::of(v.span()));
+                let v = value.and_then(|v| Span32::of(v.span()));
                 if nm.eq_ignore_ascii_case(b"WObj") {
                     u.wobj = v;
                 } else if nm.eq_ignore_ascii_case(b"Tool") {
@@ -1042,12 +1011,12 @@ impl Extractor<'_> {
                 if arg.name_end > arg.name_start
                     && arg.name_span().slice(src).eq_ignore_ascii_case(b"Tool")
                 {
-                    u.tool = value.and_then(|v| CallSpan::of(v.span()));
+                    u.tool = value.and_then(|v| Span32::of(v.span()));
                 }
                 self.call_args.push(
                     value
                         .filter(|v| matches!(v.kind, ExprKind::Ident | ExprKind::Access))
-                        .and_then(|v| CallSpan::of(v.span())),
+                        .and_then(|v| Span32::of(v.span())),
                 );
             }
         }

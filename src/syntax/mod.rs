@@ -22,6 +22,7 @@ pub use line_index::LineIndex;
 pub(crate) use number::PackedLit;
 pub use number::{NumLit, fixed, same_at};
 pub use span::Span;
+pub(crate) use span::Span32;
 pub(crate) use tree::language;
 pub use tree::{Language, NoSink, Node, Sink, Tree};
 pub(crate) use tree::{TreeBuilder, refused_tree, too_large};

@@ -46,6 +46,36 @@ impl Span {
     }
 }
 
+/// A [`Span`] in two 32-bit offsets, for the records kept by the hundred thousand (call
+/// records, Status/Turn fields, edits): inputs are at most
+/// [`MAX_INPUT_BYTES`](crate::output::MAX_INPUT_BYTES) and the parsers' offsets are `u32`, so
+/// every offset of a file trackfix reads fits. The end is kept plus one, never zero, so that an
+/// `Option<Span32>` is eight bytes too.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Span32 {
+    start: u32,
+    end_plus_one: std::num::NonZeroU32,
+}
+
+impl Span32 {
+    /// `None` only for an offset past 4 GiB, which no input reaches (see the type). A reversed
+    /// span is kept as it is.
+    pub(crate) fn of(span: Span) -> Option<Span32> {
+        Some(Span32 {
+            start: u32::try_from(span.start).ok()?,
+            end_plus_one: u32::try_from(span.end)
+                .ok()?
+                .checked_add(1)
+                .and_then(std::num::NonZeroU32::new)?,
+        })
+    }
+
+    /// The span as offsets.
+    pub(crate) fn span(self) -> Span {
+        Span::new(self.start as usize, (self.end_plus_one.get() - 1) as usize)
+    }
+}
+
 impl From<Range<usize>> for Span {
     fn from(r: Range<usize>) -> Span {
         Span::new(r.start, r.end)
