@@ -20,7 +20,7 @@ use trackfix::track::cell_nominal::check_cell_nominal;
 use trackfix::track::uncertainty::ProfileUncertainty;
 use trackfix::track::{Profile, TrackError};
 use trackfix::transform::cell::skid_axis_index;
-use trackfix::transform::rename::rename_program;
+use trackfix::transform::rename::{Renamed, rename_program};
 use trackfix::transform::stamp;
 use trackfix::transform::{
     Axis, Cell, ConfigRule, Direction, FrameIn, MirrorSettings, Plane, ProgramResult, RefusalKind,
@@ -108,7 +108,7 @@ struct JsonReport<'a> {
     files: Vec<FileSummary>,
     refusals: Vec<JsonRefusal<'a>>,
     notes: Vec<&'a trackfix::transform::Refusal>,
-    renamed: &'a [trackfix::transform::rename::Renamed],
+    renamed: &'a [Renamed],
     totals: Totals,
 }
 
@@ -164,7 +164,7 @@ fn json_report(
     command: &str,
     results: &[ProgramResult],
     summaries: Vec<FileSummary>,
-    renamed: &[trackfix::transform::rename::Renamed],
+    renamed: &[Renamed],
     written: usize,
     out: &OutputArgs,
     exit: Exit,
@@ -601,10 +601,11 @@ fn remedy_flag(remedy: Remedy) -> &'static str {
 fn finish(
     command: &str,
     results: &[ProgramResult],
+    renames: &[Renamed],
     out: &OutputArgs,
     inputs: &[PathBuf],
 ) -> anyhow::Result<Exit> {
-    let exit = finish_outputs(command, results, out, inputs)?;
+    let exit = finish_outputs(command, results, renames, out, inputs)?;
     if let Some(path) = &out.report {
         write_run_report(path, command, results, out, exit)?;
     }
@@ -665,6 +666,7 @@ fn write_run_report(
 fn finish_outputs(
     command: &str,
     results: &[ProgramResult],
+    renames: &[Renamed],
     out: &OutputArgs,
     inputs: &[PathBuf],
 ) -> anyhow::Result<Exit> {
@@ -758,13 +760,36 @@ fn finish_outputs(
         }
         return Ok(exit);
     }
-    write_outputs(command, results, out, inputs)
+    write_outputs(command, results, renames, out, inputs)
+}
+
+/// A KRL program written under a new name (`-o FILE`) gets its DEF/DEFDAT renamed to match:
+/// KSS loads a module only when they agree. The results themselves are renamed, before anything
+/// is shown or written, so the diff, the check, the files written and the run report's hashes
+/// all speak of the same bytes.
+fn rename_for_output(
+    results: &mut [ProgramResult],
+    out: &OutputArgs,
+) -> anyhow::Result<Vec<Renamed>> {
+    let stem = match &out.output {
+        Some(o) if o.as_os_str() != "-" => o.file_stem(),
+        _ => None,
+    };
+    let Some(stem) = stem.map(|s| s.to_string_lossy().into_owned()) else {
+        return Ok(Vec::new());
+    };
+    let mut renames = Vec::new();
+    for r in results {
+        renames.extend(rename_program(r, &stem)?);
+    }
+    Ok(renames)
 }
 
 /// Writes the results (one transaction, `trackfix::output`) and lists every file written.
 fn write_outputs(
     command: &str,
     results: &[ProgramResult],
+    renames: &[Renamed],
     out: &OutputArgs,
     inputs: &[PathBuf],
 ) -> anyhow::Result<Exit> {
@@ -781,23 +806,6 @@ fn write_outputs(
                 .join(", ")
         );
     }
-    // A KRL program written under a new name gets its DEF/DEFDAT renamed to match (KSS loads a
-    // module only when they agree).
-    let renamed_results: Vec<ProgramResult>;
-    let mut renames = Vec::new();
-    let results = match &out.output {
-        Some(o) if o.as_os_str() != "-" => {
-            let mut all = results.to_vec();
-            if let Some(stem) = o.file_stem().map(|s| s.to_string_lossy().into_owned()) {
-                for r in &mut all {
-                    renames.extend(rename_program(r, &stem)?);
-                }
-            }
-            renamed_results = all;
-            &renamed_results[..]
-        }
-        _ => results,
-    };
     let dest = if let Some(o) = &out.output {
         if o.as_os_str() == "-" {
             let bytes = output::stream_output(results)?;
@@ -831,7 +839,7 @@ fn write_outputs(
             command,
             results,
             summaries,
-            &renames,
+            renames,
             written.len(),
             out,
             exit,
@@ -947,7 +955,8 @@ fn run_each(
     for cfg in other_configs {
         drop_untouched_config(&mut results, *cfg);
     }
-    let exit = finish(command, &results, out, files);
+    let renames = rename_for_output(&mut results, out)?;
+    let exit = finish(command, &results, &renames, out, files);
     super::leave_for_exit(results);
     exit
 }

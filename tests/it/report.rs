@@ -871,3 +871,39 @@ fn correct_with_report_writes_the_run_report() {
     );
     assert!(out.join("spot_line.mod").is_file());
 }
+
+/// A KRL pair written under a new name (`-o side_b.src`) has its DEF/DEFDAT renamed: the run
+/// report's output hashes are those of the files on disk, not of the outputs before the rename.
+#[test]
+fn run_report_hashes_the_renamed_files_that_were_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let report = tmp.path().join("run.html");
+    let out = tmp.path().join("side_b.src");
+    let (code, _, stderr) = trackfix(&[
+        "correct",
+        "samples/krl/spot_line.src",
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--skip-unsupported",
+        "-o",
+        out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert!(code == 0 || code == 4, "{stderr}");
+    assert!(
+        stderr.contains("renamed `spot_line` to `side_b`"),
+        "{stderr}"
+    );
+    let html = std::fs::read_to_string(&report).unwrap();
+    for written in [out.clone(), out.with_extension("dat")] {
+        let hash = trackfix::digest::sha256_hex(&std::fs::read(&written).unwrap());
+        assert!(
+            html.contains(&hash),
+            "the report gives {} its hash {hash}",
+            written.display()
+        );
+    }
+}
