@@ -3,12 +3,15 @@
 //! Order: resolve and check every destination, take a lock beside each, verify that files
 //! written in place still hold what the run read, create missing folders, write the backups,
 //! write every new content to a temporary file beside its target, and only then rename the
-//! temporaries over their targets. A failure at any step undoes every step before it, in
-//! reverse: renamed targets get their old bytes back, temporaries, backups, locks and created
-//! folders are removed. So a KRL pair never ends with a new `.src` beside an old `.dat`.
+//! temporaries over their targets. A file replaced that the run did not read (an earlier
+//! output in an out dir) is first given a second name, so the run holds no copy of it. A
+//! failure at any step undoes every step before it, in reverse: renamed targets get their old
+//! file back (renamed back from its second name, or written from the bytes read), temporaries,
+//! second names, backups, locks and created folders are removed. So a KRL pair never ends with
+//! a new `.src` beside an old `.dat`.
 //!
-//! Temporaries and locks carry names a later run recognises (`.NAME.trackfix-tmp-PID`,
-//! `.NAME.trackfix-lock` holding the PID): a run removes those whose process is gone from every
+//! Temporaries, second names and locks carry names a later run recognises
+//! (`.NAME.trackfix-tmp-PID`, `.NAME.trackfix-old-PID`, `.NAME.trackfix-lock` holding the PID): a run removes those whose process is gone from every
 //! folder it writes to, so even a kill leaves nothing a later run does not clean up.
 //!
 //! Every change to the file system goes through [`Filesystem`], so tests can fail the k-th
@@ -64,6 +67,8 @@ pub trait Filesystem {
     fn write_new(&self, path: &Path, bytes: &[u8], mode: Option<u32>) -> std::io::Result<()>;
     /// Renames `from` to `to`, replacing `to` atomically.
     fn rename(&self, from: &Path, to: &Path) -> std::io::Result<()>;
+    /// Gives the file `original` a second name, `link` (which must not exist).
+    fn hard_link(&self, original: &Path, link: &Path) -> std::io::Result<()>;
     /// Removes a file.
     fn remove_file(&self, path: &Path) -> std::io::Result<()>;
     /// Removes an empty directory.
@@ -110,6 +115,10 @@ impl Filesystem for RealFs {
         std::fs::rename(from, to)
     }
 
+    fn hard_link(&self, original: &Path, link: &Path) -> std::io::Result<()> {
+        std::fs::hard_link(original, link)
+    }
+
     fn remove_file(&self, path: &Path) -> std::io::Result<()> {
         std::fs::remove_file(path)
     }
@@ -120,6 +129,7 @@ impl Filesystem for RealFs {
 }
 
 const TEMP_MARK: &str = ".trackfix-tmp-";
+const KEPT_MARK: &str = ".trackfix-old-";
 const LOCK_MARK: &str = ".trackfix-lock";
 /// A lock without a process id this old is left by a killed run.
 const EMPTY_LOCK_STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(10);
@@ -127,6 +137,12 @@ const EMPTY_LOCK_STALE_AFTER: std::time::Duration = std::time::Duration::from_se
 /// `dir/.NAME.trackfix-tmp-PID`: the temporary file beside `target`.
 pub fn temp_path(target: &Path) -> PathBuf {
     hidden_sibling(target, &format!("{TEMP_MARK}{}", std::process::id()))
+}
+
+/// `dir/.NAME.trackfix-old-PID`: a second name for the file `target` held before the run
+/// replaced it, so a rollback can put it back without a copy of its bytes.
+fn kept_path(target: &Path) -> PathBuf {
+    hidden_sibling(target, &format!("{KEPT_MARK}{}", std::process::id()))
 }
 
 /// `dir/.NAME.trackfix-lock`: the lock beside `target`.
@@ -148,8 +164,8 @@ fn lock_holder(lock: &Path) -> Option<u32> {
     std::fs::read_to_string(lock).ok()?.trim().parse().ok()
 }
 
-/// Removes the temporaries and locks of runs that are gone (killed) from `dir`; returns what
-/// it removed. Files of live runs and every other file are left alone.
+/// Removes the temporaries, kept names and locks of runs that are gone (killed) from `dir`;
+/// returns what it removed. Files of live runs and every other file are left alone.
 pub fn clean_stale(dir: &Path) -> Vec<PathBuf> {
     let mut removed = Vec::new();
     let Ok(entries) = std::fs::read_dir(if dir.as_os_str().is_empty() {
@@ -165,10 +181,12 @@ pub fn clean_stale(dir: &Path) -> Vec<PathBuf> {
         if !name.starts_with('.') {
             continue;
         }
-        let stale = if let Some(pos) = name.rfind(TEMP_MARK) {
-            name[pos + TEMP_MARK.len()..]
-                .parse::<u32>()
-                .is_ok_and(|pid| pid != std::process::id() && !process_alive(pid))
+        let of_pid = |mark: &str| {
+            name.rfind(mark)
+                .map(|pos| name[pos + mark.len()..].parse::<u32>())
+        };
+        let stale = if let Some(pid) = of_pid(TEMP_MARK).or_else(|| of_pid(KEPT_MARK)) {
+            pid.is_ok_and(|pid| pid != std::process::id() && !process_alive(pid))
         } else if name.ends_with(LOCK_MARK) {
             match lock_holder(&entry.path()) {
                 Some(pid) => !process_alive(pid),
@@ -202,8 +220,6 @@ struct Target<'a> {
     existed: bool,
     /// Unix permission bits of the replaced file (kept), `None` for a new file.
     mode: Option<u32>,
-    /// The bytes to restore on rollback (for a file that existed).
-    old: Option<Vec<u8>>,
 }
 
 fn io_err(path: &Path, error: std::io::Error) -> OutputError {
@@ -241,7 +257,6 @@ fn resolve<'a>(write: &'a FileWrite<'a>) -> Result<Target<'a>, OutputError> {
                 real: path.clone(),
                 existed: false,
                 mode: None,
-                old: None,
             });
         }
         Err(e) => return Err(io_err(path, e)),
@@ -261,16 +276,11 @@ fn resolve<'a>(write: &'a FileWrite<'a>) -> Result<Target<'a>, OutputError> {
             what: kind_of(&meta),
         });
     }
-    let old = match &write.expected {
-        Some(_) => None,
-        None => Some(std::fs::read(&real).map_err(|e| io_err(&real, e))?),
-    };
     Ok(Target {
         write,
         real,
         existed: true,
         mode: mode_of(&meta),
-        old,
     })
 }
 
@@ -283,6 +293,11 @@ struct Journal {
     temps: Vec<PathBuf>,
     /// Indices of targets whose temporary has been renamed over them.
     renamed: Vec<usize>,
+    /// Targets replaced that were not read (an earlier output in an out dir), each under a
+    /// second name ([`kept_path`]) until the run ends: a rollback renames it back.
+    kept: Vec<(usize, PathBuf)>,
+    /// The same, read into memory where the file system has no hard links.
+    old: Vec<(usize, Vec<u8>)>,
 }
 
 /// Folders missing above `path`, outermost first.
@@ -325,9 +340,13 @@ pub fn commit_with(
     let mut journal = Journal::default();
     match run(fs, &targets, &mut journal) {
         Ok(backups) => {
+            // The run is complete: the names the replaced files were kept under, and the
+            // locks, are no longer needed; one whose removal fails is stale and the next run
+            // removes it.
+            for (_, kept) in &journal.kept {
+                let _ = fs.remove_file(kept);
+            }
             for lock in &journal.locks {
-                // The run is complete; a lock left by a failed removal is stale and the
-                // next run removes it.
                 let _ = fs.remove_file(lock);
             }
             Ok(targets
@@ -402,6 +421,11 @@ fn run(
             _ => None,
         });
     }
+    for (i, t) in targets.iter().enumerate() {
+        if t.existed && t.write.expected.is_none() {
+            keep_replaced(fs, i, t, journal)?;
+        }
+    }
     for t in targets {
         let tmp = temp_path(&t.real);
         // A temporary of this name is from an earlier process with the same id.
@@ -418,6 +442,29 @@ fn run(
         journal.renamed.push(i);
     }
     Ok(backups)
+}
+
+/// Keeps what `t` holds now, which the run did not read (an earlier output), for a rollback:
+/// a second name costs no memory, where a copy of an out dir's files would add their size to
+/// the run's peak. Without hard links (some network shares and FAT volumes) the bytes are
+/// read instead.
+fn keep_replaced(
+    fs: &dyn Filesystem,
+    i: usize,
+    t: &Target<'_>,
+    journal: &mut Journal,
+) -> Result<(), OutputError> {
+    let kept = kept_path(&t.real);
+    // A file of this name is from an earlier process with the same id.
+    let _ = std::fs::remove_file(&kept);
+    match fs.hard_link(&t.real, &kept) {
+        Ok(()) => journal.kept.push((i, kept)),
+        Err(_) => {
+            let old = std::fs::read(&t.real).map_err(|e| io_err(&t.real, e))?;
+            journal.old.push((i, old));
+        }
+    }
+    Ok(())
 }
 
 fn lock(fs: &dyn Filesystem, t: &Target<'_>, journal: &mut Journal) -> Result<(), OutputError> {
@@ -490,23 +537,38 @@ fn rollback(
     };
     let mut restored_all = true;
     for &i in journal.renamed.iter().rev() {
-        let t = &targets[i];
-        if t.existed {
-            let old = t
-                .old
-                .as_deref()
-                .or(t.write.expected.as_deref())
-                .unwrap_or_default();
-            let tmp = temp_path(&t.real);
-            let _ = fs.remove_file(&tmp);
-            let ok = note(&tmp, fs.write_new(&tmp, old, t.mode))
-                && note(&t.real, fs.rename(&tmp, &t.real));
-            if !ok {
-                restored_all = false;
-                let _ = fs.remove_file(&tmp);
-            }
-        } else {
+        let Some(t) = targets.get(i) else { continue };
+        if !t.existed {
             note(&t.real, fs.remove_file(&t.real));
+            continue;
+        }
+        if let Some((_, kept)) = journal.kept.iter().find(|(k, _)| *k == i) {
+            // The file it replaced, under its second name: renamed back, atomically.
+            restored_all &= note(&t.real, fs.rename(kept, &t.real));
+            continue;
+        }
+        let old = journal
+            .old
+            .iter()
+            .find(|(k, _)| *k == i)
+            .map(|(_, b)| b.as_slice())
+            .or(t.write.expected.as_deref())
+            .unwrap_or_default();
+        let tmp = temp_path(&t.real);
+        let _ = fs.remove_file(&tmp);
+        let ok =
+            note(&tmp, fs.write_new(&tmp, old, t.mode)) && note(&t.real, fs.rename(&tmp, &t.real));
+        if !ok {
+            restored_all = false;
+            let _ = fs.remove_file(&tmp);
+        }
+    }
+    // The second name of a file never replaced is an extra name only. One that was put back
+    // is gone with the rename; where the rename back failed it is the only copy of the old
+    // file, and kept.
+    for (i, kept) in journal.kept.iter().rev() {
+        if !journal.renamed.contains(i) {
+            note(kept, fs.remove_file(kept));
         }
     }
     for tmp in journal.temps.iter().rev() {
@@ -543,11 +605,13 @@ mod tests {
         DiskFull,
     }
 
-    /// The real file system, failing its `fail_at`-th operation (counting from 0).
+    /// The real file system, failing its `fail_at`-th operation (counting from 0); without
+    /// `links`, a file system that cannot make hard links.
     struct FaultFs {
         fail_at: usize,
         fault: Fault,
         count: Cell<usize>,
+        links: bool,
     }
 
     impl FaultFs {
@@ -556,6 +620,14 @@ mod tests {
                 fail_at,
                 fault,
                 count: Cell::new(0),
+                links: true,
+            }
+        }
+
+        fn without_links(self) -> FaultFs {
+            FaultFs {
+                links: false,
+                ..self
             }
         }
 
@@ -600,6 +672,17 @@ mod tests {
             }
             RealFs.rename(from, to)
         }
+        fn hard_link(&self, original: &Path, link: &Path) -> std::io::Result<()> {
+            // Counted either way, so the k-th operation is the same step with or without links.
+            let fails = self.fails_now();
+            if !self.links {
+                return Err(std::io::ErrorKind::Unsupported.into());
+            }
+            if fails {
+                return Err(self.error());
+            }
+            RealFs.hard_link(original, link)
+        }
         fn remove_file(&self, path: &Path) -> std::io::Result<()> {
             if self.fails_now() {
                 return Err(self.error());
@@ -639,9 +722,10 @@ mod tests {
         }
     }
 
-    /// A KRL pair corrected in place (backups), and a module written into new folders of an
-    /// output tree: 2 locks + 2 backups + 2 temporaries + 2 renames + 2 unlocks, and 2 folders
-    /// + 1 lock + 1 temporary + 1 rename + 1 unlock.
+    /// A KRL pair corrected in place (backups), a module written into new folders of an
+    /// output tree, and one over an earlier output: 2 locks + 2 backups + 2 temporaries + 2
+    /// renames + 2 unlocks; 2 folders + 1 lock + 1 temporary + 1 rename + 1 unlock; 1 lock + 1
+    /// second name + 1 temporary + 1 rename + 1 removal of the second name + 1 unlock.
     fn scenario(root: &Path) -> Vec<FileWrite<'static>> {
         let src = root.join("spot.src");
         let dat = root.join("spot.dat");
@@ -651,9 +735,14 @@ mod tests {
         std::fs::write(root.join("spot.src.orig"), "first original\n").unwrap();
         let module = root.join("main.mod");
         std::fs::write(&module, "MODULE m\nENDMODULE\n").unwrap();
+        std::fs::create_dir(root.join("prev")).unwrap();
+        let earlier = root.join("prev/main.mod");
+        std::fs::write(&earlier, "MODULE earlier\nENDMODULE\n").unwrap();
+        // The earlier output is not last, so a later rename's failure puts it back.
         vec![
             write(&src, &src, "DEF spot()\n; new\nEND\n", true),
             write(&dat, &dat, "DEFDAT spot\n; new\nENDDAT\n", true),
+            write(&module, &earlier, "MODULE again\nENDMODULE\n", false),
             write(
                 &module,
                 &root.join("out/task/main.mod"),
@@ -673,16 +762,33 @@ mod tests {
         let ops = counting.count.get();
         assert_eq!(
             ops,
-            2 + 3 + 2 + 3 + 3 + 3,
-            "create 2 folders, lock, back up, write, rename, unlock"
+            2 + 4 + 2 + 1 + 4 + 4 + 1 + 4,
+            "create 2 folders, lock, back up, keep the earlier output, write, rename, \
+             remove its second name, unlock"
         );
 
-        for fault in [Fault::Error, Fault::DiskFull] {
+        // Without hard links the earlier output is read instead: no second name to remove.
+        let dir = tempfile::tempdir().unwrap();
+        let writes = scenario(dir.path());
+        let counting = FaultFs::new(usize::MAX, Fault::Error).without_links();
+        commit_with(&counting, &writes).unwrap();
+        let ops_without_links = counting.count.get();
+        assert_eq!(ops_without_links, ops - 1);
+
+        // After the folders, locks and backups: the second name of the earlier output.
+        const LINK_OP: usize = 2 + 4 + 2;
+        for (fault, links) in [
+            (Fault::Error, true),
+            (Fault::DiskFull, true),
+            (Fault::Error, false),
+        ] {
+            let ops = if links { ops } else { ops_without_links };
             for k in 0..ops {
                 let dir = tempfile::tempdir().unwrap();
                 let writes = scenario(dir.path());
                 let before = snapshot(dir.path());
                 let fs = FaultFs::new(k, fault);
+                let fs = if links { fs } else { fs.without_links() };
                 let result = commit_with(&fs, &writes);
                 match result {
                     Err(e) => {
@@ -694,8 +800,10 @@ mod tests {
                         );
                     }
                     Ok(_) => {
-                        // Only a failed unlock lets the run succeed: every output is complete
-                        // and the stale lock is the only extra file, which the next run removes.
+                        // Only a failed hard link (the earlier output is read instead), a
+                        // failed unlock, or a failed removal of a replaced file's second name
+                        // lets the run succeed: every output is complete and that stale file is
+                        // the only extra one, which the next run removes.
                         for w in &writes {
                             assert_eq!(
                                 std::fs::read(&w.path).unwrap(),
@@ -704,8 +812,16 @@ mod tests {
                             );
                         }
                         let removed = clean_stale_of_dead_run(dir.path());
+                        if k == LINK_OP {
+                            assert_eq!(removed, Vec::<PathBuf>::new(), "{fault:?} at {k}");
+                            continue;
+                        }
                         assert_eq!(removed.len(), 1, "{fault:?} at {k}: {removed:?}");
-                        assert!(removed[0].to_string_lossy().ends_with(".trackfix-lock"));
+                        let name = removed[0].to_string_lossy();
+                        assert!(
+                            name.ends_with(LOCK_MARK) || name.contains(KEPT_MARK),
+                            "{name}"
+                        );
                     }
                 }
             }
@@ -717,7 +833,7 @@ mod tests {
         let mut removed = Vec::new();
         for e in walkdir::WalkDir::new(root).into_iter().map(|e| e.unwrap()) {
             let name = e.file_name().to_string_lossy().into_owned();
-            if name.ends_with(LOCK_MARK) || name.contains(TEMP_MARK) {
+            if name.ends_with(LOCK_MARK) || name.contains(TEMP_MARK) || name.contains(KEPT_MARK) {
                 std::fs::remove_file(e.path()).unwrap();
                 removed.push(e.path().to_owned());
             }
