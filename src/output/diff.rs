@@ -7,6 +7,10 @@
 //! `similar` crate does for a text) is quadratic when the changes are spread over a large
 //! file: 332 s for a 20 MB module.
 //!
+//! A block too large for Myers (a module whose 100,000 declarations were all rewritten: 80 s)
+//! is a block rewritten in place: its end is found along the few diagonals near the one it
+//! starts on, and its lines are paired old with new in order.
+//!
 //! The output is the format `similar` writes (`--- a/…`, `+++ b/…`, hunks with one line of
 //! context), so diffs read as before.
 
@@ -22,9 +26,12 @@ use crate::syntax::latin1;
 const CONTEXT: usize = 1;
 /// Equal lines in a row that count as the two files agreeing again.
 const RESYNC: usize = 3;
-/// The largest block (old + new lines) searched for a point of agreement; beyond it the rest is
-/// diffed as one block (a file rewritten throughout).
+/// The largest block (old + new lines) searched for a point of agreement in every direction;
+/// beyond it the search follows the diagonals of a block rewritten in place.
 const MAX_BLOCK: usize = 4000;
+/// How many more lines one side of a block rewritten in place may have (lines a transform
+/// added, such as a stamp), for the search beyond [`MAX_BLOCK`].
+const MAX_SHIFT: usize = 8;
 
 /// Lines as `similar` splits them: after `\n`, `\r\n` or a lone `\r`.
 fn lines(text: &[u8]) -> Vec<&[u8]> {
@@ -111,30 +118,101 @@ fn resync(a: &Side<'_>, i: usize, b: &Side<'_>, j: usize) -> (usize, usize) {
             }
         }
     }
-    (a.len(), b.len())
+    far_resync(a, i, b, j).unwrap_or((a.len(), b.len()))
+}
+
+/// Beyond [`MAX_BLOCK`]: the nearest point of agreement on the diagonals at most
+/// [`MAX_SHIFT`] lines off the one from `i`/`j`, in time linear in the block. `None` if the
+/// files do not agree again there.
+fn far_resync(a: &Side<'_>, i: usize, b: &Side<'_>, j: usize) -> Option<(usize, usize)> {
+    let mut best: Option<(usize, usize)> = None;
+    let diagonals = std::iter::once((0, 0)).chain((1..=MAX_SHIFT).flat_map(|s| [(s, 0), (0, s)]));
+    for (dx, dy) in diagonals {
+        let (mut x, mut y) = (i + dx, j + dy);
+        while x <= a.len() && y <= b.len() {
+            if best.is_some_and(|(bx, by)| x + y >= bx + by) {
+                break;
+            }
+            if (x, y) != (i, j) && agree(a, x, b, y) {
+                best = Some((x, y));
+                break;
+            }
+            x += 1;
+            y += 1;
+        }
+    }
+    best
+}
+
+/// The operations of a block rewritten in place: its lines paired old with new in order (equal
+/// pairs are kept as equal), and the lines one side has more deleted or inserted at its end.
+/// Linear where Myers' algorithm would be quadratic in the block.
+fn paired(
+    a: &Side<'_>,
+    old: std::ops::Range<usize>,
+    b: &Side<'_>,
+    new: std::ops::Range<usize>,
+    ops: &mut Vec<DiffOp>,
+) {
+    let n = old.len().min(new.len());
+    let mut k = 0;
+    while k < n {
+        let equal = same(a, old.start + k, b, new.start + k);
+        let run = (k..n)
+            .take_while(|&t| same(a, old.start + t, b, new.start + t) == equal)
+            .count();
+        let (old_index, new_index) = (old.start + k, new.start + k);
+        if equal {
+            push_equal(ops, old_index, new_index, run);
+        } else {
+            ops.push(DiffOp::Replace {
+                old_index,
+                old_len: run,
+                new_index,
+                new_len: run,
+            });
+        }
+        k += run;
+    }
+    if old.len() > n {
+        ops.push(DiffOp::Delete {
+            old_index: old.start + n,
+            old_len: old.len() - n,
+            new_index: new.start + n,
+        });
+    }
+    if new.len() > n {
+        ops.push(DiffOp::Insert {
+            old_index: old.start + n,
+            new_index: new.start + n,
+            new_len: new.len() - n,
+        });
+    }
+}
+
+/// Appends `len` equal lines from `i`/`j`, merged into the equal run before them.
+fn push_equal(ops: &mut Vec<DiffOp>, i: usize, j: usize, len: usize) {
+    if len == 0 {
+        return;
+    }
+    if let Some(DiffOp::Equal {
+        old_index, len: l, ..
+    }) = ops.last_mut()
+        && *old_index + *l == i
+    {
+        *l += len;
+        return;
+    }
+    ops.push(DiffOp::Equal {
+        old_index: i,
+        new_index: j,
+        len,
+    });
 }
 
 /// The line operations turning `old` into `new`, in order.
 fn ops(a: &Side<'_>, b: &Side<'_>) -> Vec<DiffOp> {
     let mut ops: Vec<DiffOp> = Vec::new();
-    let push_equal = |ops: &mut Vec<DiffOp>, i: usize, j: usize, len: usize| {
-        if len == 0 {
-            return;
-        }
-        if let Some(DiffOp::Equal {
-            old_index, len: l, ..
-        }) = ops.last_mut()
-            && *old_index + *l == i
-        {
-            *l += len;
-            return;
-        }
-        ops.push(DiffOp::Equal {
-            old_index: i,
-            new_index: j,
-            len,
-        });
-    };
     let (mut i, mut j) = (0, 0);
     while i < a.len() || j < b.len() {
         let start = (i, j);
@@ -147,6 +225,11 @@ fn ops(a: &Side<'_>, b: &Side<'_>) -> Vec<DiffOp> {
             break;
         }
         let (ei, ej) = resync(a, i, b, j);
+        if (ei - i) + (ej - j) > 2 * MAX_BLOCK {
+            paired(a, i..ei, b, j..ej, &mut ops);
+            (i, j) = (ei, ej);
+            continue;
+        }
         for op in capture_diff_deadline(Algorithm::Myers, &a.lines, i..ei, &b.lines, j..ej, None) {
             match op {
                 DiffOp::Equal {
