@@ -50,8 +50,8 @@ pub use dialect::{Dialect, Language, Vocabulary, register as register_dialect};
 pub use krl::parse as parse_krl;
 pub use located::Located;
 pub use position::{
-    Axes, CartesianFields, Config, FrameDecl, FrameKind, Lines, Name, NumField, OffsetCall,
-    OffsetKind, Orientation, ParsedFile, Position, PositionKind, Program, Skid, Usage,
+    Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Lines, Name, NumField,
+    OffsetCall, OffsetKind, Orientation, ParsedFile, Position, PositionKind, Program, Skid, Usage,
 };
 pub use program::{LoadError, LoadOptions, collect_inputs, load};
 /// Parses a RAPID module into its lossless tree (positions are [`rapid::parse_file`]'s).

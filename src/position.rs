@@ -293,28 +293,90 @@ pub enum Config {
     None,
 }
 
+/// A work object's, base's or tool's name as a target's [`Usage`] keeps it: text that reads as
+/// a `&str` (`u.wobj.as_deref() == Some("wCar")`), shared by every target used with the frame.
+///
+/// One pointer (an `Arc<str>` is two): a module's targets are used with a handful of frames
+/// and tools, and each of 100,000 targets holds two of these.
+#[derive(Clone, PartialEq, Eq, Hash)]
+pub struct FrameName(Arc<Box<str>>);
+
+impl From<&str> for FrameName {
+    fn from(s: &str) -> FrameName {
+        FrameName(Arc::new(s.into()))
+    }
+}
+
+impl std::ops::Deref for FrameName {
+    type Target = str;
+
+    fn deref(&self) -> &str {
+        &self.0
+    }
+}
+
+/// A set of names is looked up by `&str` (hashed and compared as the text, like the derived
+/// `Hash` and `Eq`).
+impl std::borrow::Borrow<str> for FrameName {
+    fn borrow(&self) -> &str {
+        &self.0
+    }
+}
+
+impl PartialEq<str> for FrameName {
+    fn eq(&self, other: &str) -> bool {
+        **self.0 == *other
+    }
+}
+
+impl PartialEq<&str> for FrameName {
+    fn eq(&self, other: &&str) -> bool {
+        **self.0 == **other
+    }
+}
+
+impl std::fmt::Debug for FrameName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        std::fmt::Debug::fmt(&**self.0, f)
+    }
+}
+
+impl std::fmt::Display for FrameName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
 /// Where and how a target is used by the motion instructions that reference it.
 ///
-/// The names are shared (`Arc<str>`): a module's targets are used with a handful of work
-/// objects and tools, and a copy per target was a tenth of `check`'s peak memory.
+/// Forty-eight bytes (it was 96), one per target: the names are shared [`FrameName`]s, and
+/// what few targets have — a second work object, a reason their pose is only known at run
+/// time — is kept apart, behind one pointer ([`Usage::other_wobjs`], [`Usage::run_time`]).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Usage {
     /// The RAPID work object, or the KRL base (`"BASE_DATA[3]"`), of the first use. `None` if
     /// never used or unresolved.
-    pub wobj: Option<Arc<str>>,
+    pub wobj: Option<FrameName>,
     /// The tool of the first use.
-    pub tool: Option<Arc<str>>,
-    /// Further distinct work objects the target is used with. Non-empty means the target is
-    /// used with two work objects and cannot be transformed unambiguously.
-    pub other_wobjs: Vec<Arc<str>>,
+    pub tool: Option<FrameName>,
     /// The target is a stationary-tool point (KRL `IPO_FRAME #TCP`, RAPID `robhold TRUE`).
     pub stationary_tool: bool,
     /// 1-based lines of the instructions that use it.
     pub lines: Lines,
-    /// Set when the target's pose is only known when the program runs: the first reason found
-    /// (boxed: rare, and a target's usage is kept for each of 100,000 targets).
-    pub run_time: Option<Box<RunTimeValue>>,
+    /// Further work objects and the run-time reason, when there are any.
+    rare: Option<Box<RareUsage>>,
 }
+
+/// The parts of a [`Usage`] that few targets have.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+struct RareUsage {
+    other_wobjs: Vec<FrameName>,
+    run_time: Option<RunTimeValue>,
+}
+
+/// A target's usage is kept for each of 100,000 targets: a layout change that grows it fails
+/// the build.
+const _: () = assert!(std::mem::size_of::<Usage>() <= 48);
 
 /// Why a target's pose is only known when the program runs, so no offline transform can
 /// correct it.
@@ -357,10 +419,22 @@ impl RunTimeValue {
 }
 
 impl Usage {
+    /// Further distinct work objects the target is used with. Non-empty means the target is
+    /// used with two work objects and cannot be transformed unambiguously.
+    pub fn other_wobjs(&self) -> &[FrameName] {
+        self.rare.as_ref().map_or(&[], |r| &r.other_wobjs)
+    }
+
+    /// Set when the target's pose is only known when the program runs: the first reason found.
+    pub fn run_time(&self) -> Option<&RunTimeValue> {
+        self.rare.as_ref()?.run_time.as_ref()
+    }
+
     /// Marks the target as known only at run time, keeping the first reason.
     pub fn set_run_time(&mut self, why: RunTimeValue) {
-        if self.run_time.is_none() {
-            self.run_time = Some(Box::new(why));
+        let rare = self.rare.get_or_insert_with(Box::default);
+        if rare.run_time.is_none() {
+            rare.run_time = Some(why);
         }
     }
 
@@ -374,27 +448,28 @@ impl Usage {
         stationary: bool,
         line: usize,
     ) {
-        let wobj = wobj.map(Arc::from);
-        let tool = tool.filter(|_| self.tool.is_none()).map(Arc::from);
+        let wobj = wobj.map(FrameName::from);
+        let tool = tool.filter(|_| self.tool.is_none()).map(FrameName::from);
         self.record_shared(wobj.as_ref(), tool.as_ref(), stationary, line);
     }
 
-    /// [`Usage::record`] with names already shared: a name kept is a clone of the `Arc`, not
+    /// [`Usage::record`] with names already shared: a name kept is a clone of the handle, not
     /// a copy of the text.
     pub fn record_shared(
         &mut self,
-        wobj: Option<&Arc<str>>,
-        tool: Option<&Arc<str>>,
+        wobj: Option<&FrameName>,
+        tool: Option<&FrameName>,
         stationary: bool,
         line: usize,
     ) {
         if let Some(w) = wobj {
             match &self.wobj {
-                None => self.wobj = Some(Arc::clone(w)),
+                None => self.wobj = Some(w.clone()),
                 Some(first) if first.eq_ignore_ascii_case(w) => {}
                 Some(_) => {
-                    if !self.other_wobjs.iter().any(|o| o.eq_ignore_ascii_case(w)) {
-                        self.other_wobjs.push(Arc::clone(w));
+                    let rare = self.rare.get_or_insert_with(Box::default);
+                    if !rare.other_wobjs.iter().any(|o| o.eq_ignore_ascii_case(w)) {
+                        rare.other_wobjs.push(w.clone());
                     }
                 }
             }
@@ -403,6 +478,8 @@ impl Usage {
             self.tool = tool.cloned();
         }
         self.stationary_tool |= stationary;
+        // Lines of an input of at most 512 MiB fit 32 bits.
+        let line = u32::try_from(line).unwrap_or(u32::MAX);
         if !self.lines.contains(&line) {
             self.lines.push(line);
         }
@@ -509,46 +586,60 @@ impl PartialEq<Vec<Option<NumField>>> for Axes {
 }
 
 /// The 1-based lines of the instructions that use a target, in the order found: a list that
-/// reads as a slice of `usize`.
+/// reads as a slice of `u32` (lines of an input of at most 512 MiB fit).
 ///
-/// Nearly every target is used once or twice: those are kept in place (a vector each was
-/// 100,000 heap blocks on a 20 MB module); more spill into a vector.
+/// Sixteen bytes. Nearly every target is used once or twice: up to three lines are kept in
+/// place (a vector each was 100,000 heap blocks on a 20 MB module); more spill into a vector,
+/// behind one pointer so that the rare long list does not widen every target's.
 #[derive(Clone, Default, PartialEq, Eq)]
 pub struct Lines(LinesRepr);
 
-#[derive(Clone, Default, PartialEq, Eq)]
+/// How many lines [`Lines`] keeps in place.
+const INLINE_LINES: usize = 3;
+
+#[derive(Clone, PartialEq, Eq)]
 enum LinesRepr {
-    #[default]
-    None,
-    One([usize; 1]),
-    Two([usize; 2]),
-    More(Vec<usize>),
+    Inline(u8, [u32; INLINE_LINES]),
+    #[allow(clippy::box_collection)] // a thin pointer: see `Lines`
+    Spilled(Box<Vec<u32>>),
 }
+
+impl Default for LinesRepr {
+    fn default() -> LinesRepr {
+        LinesRepr::Inline(0, [0; INLINE_LINES])
+    }
+}
+
+const _: () = assert!(std::mem::size_of::<Lines>() <= 16);
 
 impl Lines {
     /// Appends `line`.
-    pub fn push(&mut self, line: usize) {
-        self.0 = match std::mem::take(&mut self.0) {
-            LinesRepr::None => LinesRepr::One([line]),
-            LinesRepr::One([a]) => LinesRepr::Two([a, line]),
-            LinesRepr::Two([a, b]) => LinesRepr::More(vec![a, b, line]),
-            LinesRepr::More(mut v) => {
-                v.push(line);
-                LinesRepr::More(v)
-            }
-        };
+    pub fn push(&mut self, line: u32) {
+        match &mut self.0 {
+            LinesRepr::Inline(len, lines) => match lines.get_mut(*len as usize) {
+                Some(slot) => {
+                    *slot = line;
+                    *len += 1;
+                }
+                None => {
+                    let mut all = Vec::with_capacity(INLINE_LINES * 2);
+                    all.extend_from_slice(lines);
+                    all.push(line);
+                    self.0 = LinesRepr::Spilled(Box::new(all));
+                }
+            },
+            LinesRepr::Spilled(all) => all.push(line),
+        }
     }
 }
 
 impl std::ops::Deref for Lines {
-    type Target = [usize];
+    type Target = [u32];
 
-    fn deref(&self) -> &[usize] {
+    fn deref(&self) -> &[u32] {
         match &self.0 {
-            LinesRepr::None => &[],
-            LinesRepr::One(a) => a,
-            LinesRepr::Two(a) => a,
-            LinesRepr::More(v) => v,
+            LinesRepr::Inline(len, lines) => lines.get(..*len as usize).unwrap_or_default(),
+            LinesRepr::Spilled(all) => all,
         }
     }
 }
@@ -559,8 +650,8 @@ impl std::fmt::Debug for Lines {
     }
 }
 
-impl FromIterator<usize> for Lines {
-    fn from_iter<I: IntoIterator<Item = usize>>(iter: I) -> Lines {
+impl FromIterator<u32> for Lines {
+    fn from_iter<I: IntoIterator<Item = u32>>(iter: I) -> Lines {
         let mut out = Lines::default();
         for l in iter {
             out.push(l);
@@ -569,29 +660,29 @@ impl FromIterator<usize> for Lines {
     }
 }
 
-impl From<Vec<usize>> for Lines {
-    fn from(v: Vec<usize>) -> Lines {
+impl From<Vec<u32>> for Lines {
+    fn from(v: Vec<u32>) -> Lines {
         v.into_iter().collect()
     }
 }
 
 impl<'a> IntoIterator for &'a Lines {
-    type Item = &'a usize;
-    type IntoIter = std::slice::Iter<'a, usize>;
+    type Item = &'a u32;
+    type IntoIter = std::slice::Iter<'a, u32>;
 
     fn into_iter(self) -> Self::IntoIter {
         self.iter()
     }
 }
 
-impl PartialEq<Vec<usize>> for Lines {
-    fn eq(&self, other: &Vec<usize>) -> bool {
+impl PartialEq<Vec<u32>> for Lines {
+    fn eq(&self, other: &Vec<u32>) -> bool {
         **self == **other
     }
 }
 
-impl<const N: usize> PartialEq<[usize; N]> for Lines {
-    fn eq(&self, other: &[usize; N]) -> bool {
+impl<const N: usize> PartialEq<[u32; N]> for Lines {
+    fn eq(&self, other: &[u32; N]) -> bool {
         **self == other[..]
     }
 }
@@ -939,9 +1030,29 @@ mod tests {
         u.record(Some("wtable"), None, false, 20);
         assert_eq!(u.wobj.as_deref(), Some("wCar"));
         assert_eq!(u.tool.as_deref(), Some("tGun"));
-        assert_eq!(u.other_wobjs, [Arc::from("wTable")]);
+        assert_eq!(u.other_wobjs(), ["wTable"]);
         assert!(u.stationary_tool);
         assert_eq!(u.lines, [10, 12, 20]);
+    }
+
+    proptest::proptest! {
+        /// Lines read back as pushed, in place or spilled, and a usage records each line once.
+        #[test]
+        fn lines_keep_what_was_pushed(lines in proptest::collection::vec(1u32..50, 0..12)) {
+            let kept: Lines = lines.iter().copied().collect();
+            proptest::prop_assert_eq!(&*kept, &lines[..]);
+            let mut u = Usage::default();
+            for &l in &lines {
+                u.record(Some("w"), None, false, l as usize);
+            }
+            let mut once = Vec::new();
+            for &l in &lines {
+                if !once.contains(&l) {
+                    once.push(l);
+                }
+            }
+            proptest::prop_assert_eq!(&*u.lines, &once[..]);
+        }
     }
 
     /// A literal text from its parts: sign, integer digits, point, decimals, exponent.

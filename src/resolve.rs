@@ -13,9 +13,8 @@
 //! [`Usage`]: crate::position::Usage
 
 use crate::names::{NameIndex, NameKey, NameMap, fold, fold_into};
-use crate::position::{FrameDecl, Position, RunTimeValue};
+use crate::position::{FrameDecl, FrameName, Position, RunTimeValue};
 use crate::syntax::Span;
-use std::sync::Arc;
 
 /// How many calls deep a routine's effects on its callers are followed (a target passed on
 /// through RAPID routine parameters, a KRL subroutine that sets the base): deeper chains and
@@ -294,13 +293,16 @@ impl MovesWith {
 
 /// The one shared copy of a frame or tool name as written (exact text: a target keeps the
 /// spelling of its first use), so that 100,000 targets used with `wCar` hold one `wCar`.
-fn shared(names: &mut std::collections::HashSet<Arc<str>>, name: Option<&str>) -> Option<Arc<str>> {
+fn shared(
+    names: &mut std::collections::HashSet<FrameName>,
+    name: Option<&str>,
+) -> Option<FrameName> {
     let name = name?;
     if let Some(s) = names.get(name) {
-        return Some(Arc::clone(s));
+        return Some(s.clone());
     }
-    let s: Arc<str> = Arc::from(name);
-    names.insert(Arc::clone(&s));
+    let s = FrameName::from(name);
+    names.insert(s.clone());
     Some(s)
 }
 
@@ -309,7 +311,7 @@ fn shared(names: &mut std::collections::HashSet<Arc<str>>, name: Option<&str>) -
 #[allow(clippy::too_many_arguments)]
 fn record(
     files: &mut [FileFacts<'_>],
-    names: &mut std::collections::HashSet<Arc<str>>,
+    names: &mut std::collections::HashSet<FrameName>,
     (m, i): TargetAt,
     frame: Option<&str>,
     tool: Option<&str>,
@@ -353,7 +355,7 @@ pub(crate) struct Binder<'f, 'a> {
     targets: Vec<TargetAt>,
     params: Vec<ParamAt>,
     hits: Vec<TargetAt>,
-    names: std::collections::HashSet<Arc<str>>,
+    names: std::collections::HashSet<FrameName>,
 }
 
 impl<'f, 'a> Binder<'f, 'a> {
@@ -611,7 +613,7 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
                 .usage
                 .wobj
                 .iter()
-                .chain(&p.usage.other_wobjs)
+                .chain(p.usage.other_wobjs())
                 .find_map(|w| assigned_frames.get(&fold(w)));
             if let Some((name, line)) = frame {
                 let why = RunTimeValue::Frame {

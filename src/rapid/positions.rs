@@ -716,12 +716,12 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
                 .unwrap_or_default(),
         );
         for p in &ps {
-            if p.usage.other_wobjs.is_empty() {
+            if p.usage.other_wobjs().is_empty() {
                 continue;
             }
-            let mut all = vec![p.usage.wobj.clone().unwrap_or_default()];
-            all.extend(p.usage.other_wobjs.iter().cloned());
-            let lines: Vec<String> = p.usage.lines.iter().map(usize::to_string).collect();
+            let mut all = vec![p.usage.wobj.as_deref().unwrap_or_default()];
+            all.extend(p.usage.other_wobjs().iter().map(|w| &**w));
+            let lines: Vec<String> = p.usage.lines.iter().map(u32::to_string).collect();
             d.push(
                 Diagnostic::warning(
                     p.span,

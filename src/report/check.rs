@@ -110,7 +110,7 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
                 ),
             );
         }
-        if !p.usage.other_wobjs.is_empty() {
+        if !p.usage.other_wobjs().is_empty() {
             let already = file.diagnostics.iter().any(|d| {
                 d.span.start <= p.span.start
                     && p.span.start < d.span.end.max(d.span.start + 1)
@@ -118,8 +118,8 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
             });
             if !already {
                 let what = file.language.dialect().vocabulary().frames;
-                let mut all = vec![p.usage.wobj.clone().unwrap_or_default()];
-                all.extend(p.usage.other_wobjs.iter().cloned());
+                let mut all = vec![p.usage.wobj.as_deref().unwrap_or_default()];
+                all.extend(p.usage.other_wobjs().iter().map(|w| &**w));
                 out.push(
                     Diagnostic::warning(
                         p.span,

@@ -214,7 +214,7 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
             "teach the target (or leave the slot unused)",
         );
     }
-    if let Some(why) = &p.usage.run_time {
+    if let Some(why) = p.usage.run_time() {
         return refuse(
             RefusalKind::RuntimeData,
             format!("{what} {}: not correctable offline", why.describe()),
@@ -260,7 +260,7 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
             "it moves with the work piece, not the track: correct it by hand",
         );
     }
-    if let Some(other) = p.usage.other_wobjs.first() {
+    if let Some(other) = p.usage.other_wobjs().first() {
         let first = p.usage.wobj.as_deref().unwrap_or("?");
         return refuse(
             RefusalKind::TwoWorkObjects,

@@ -61,14 +61,9 @@ fn line_spans(src: &[u8]) -> Vec<(usize, usize)> {
 }
 
 fn usage(wobj: &str, line: usize) -> Usage {
-    Usage {
-        wobj: Some(wobj.into()),
-        tool: Some("tool0".into()),
-        other_wobjs: Vec::new(),
-        stationary_tool: false,
-        lines: vec![line].into(),
-        run_time: None,
-    }
+    let mut u = Usage::default();
+    u.record(Some(wobj), Some("tool0"), false, line);
+    u
 }
 
 fn file(path: &str, language: Language, source: Vec<u8>, positions: Vec<Position>) -> Program {

@@ -70,10 +70,10 @@ fn parse(path: &Path, source: Vec<u8>) -> ParsedFile {
             joints: Vec::new(),
             config: Config::None,
             extax: vec![skid].into(),
-            usage: Usage {
-                wobj: Some("world".into()),
-                lines: vec![n + 1].into(),
-                ..Usage::default()
+            usage: {
+                let mut u = Usage::default();
+                u.record(Some("world"), None, false, n + 1);
+                u
             },
         });
     }

@@ -83,8 +83,8 @@ fn dump_position(src: &[u8], p: &Position) -> String {
             u.tool.as_deref().unwrap_or("?"),
             u.lines
         );
-        if !u.other_wobjs.is_empty() {
-            s += &format!(" also={:?}", u.other_wobjs);
+        if !u.other_wobjs().is_empty() {
+            s += &format!(" also={:?}", u.other_wobjs());
         }
         if u.stationary_tool {
             s += " stationary-tool";
@@ -195,7 +195,7 @@ fn spot_line_has_160_points_on_the_track_resolved_through_fdat() {
         .unwrap();
     assert_eq!(p12.usage.wobj.as_deref(), Some("BASE_DATA[1]"));
     assert_eq!(p12.usage.tool.as_deref(), Some("TOOL_DATA[1]"));
-    assert!(p12.usage.other_wobjs.is_empty());
+    assert!(p12.usage.other_wobjs().is_empty());
     assert!(!p12.usage.stationary_tool);
     let src = &program.files[0];
     let line = src.lines.line(
@@ -204,7 +204,7 @@ fn spot_line_has_160_points_on_the_track_resolved_through_fdat() {
             .position(|w| w == b"LIN XP12 C_DIS")
             .unwrap(),
     );
-    assert_eq!(p12.usage.lines, [line]);
+    assert_eq!(p12.usage.lines, [u32::try_from(line).unwrap()]);
     // P0 is taught in BASE_NO 0: the world.
     let p0 = &dat.positions[0];
     assert_eq!(p0.usage.wobj.as_deref(), Some("$WORLD"));
@@ -329,10 +329,7 @@ fn a_point_used_with_two_bases_is_flagged() {
         .find(|p| p.name.as_deref() == Some("XSHARED"))
         .unwrap();
     assert_eq!(shared.usage.wobj.as_deref(), Some("BASE_DATA[1]"));
-    assert_eq!(
-        shared.usage.other_wobjs,
-        [std::sync::Arc::from("BASE_DATA[2]")]
-    );
+    assert_eq!(shared.usage.other_wobjs(), ["BASE_DATA[2]"]);
     assert_eq!(shared.usage.lines, [8, 10]);
     // BAS(#BASE,1) before XEND; the second DEF starts over and leaves it unresolved.
     let end = dat

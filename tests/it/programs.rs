@@ -136,7 +136,7 @@ fn targets_through_routine_parameters() {
     assert_eq!(u("p2").wobj.as_deref(), Some("wCar"), "passed on by Outer");
     assert_eq!(u("p3").wobj.as_deref(), Some("wSpin"), "recursive routine");
     assert_eq!(u("p4").wobj.as_deref(), Some("wCar"));
-    assert_eq!(u("p4").other_wobjs, [std::sync::Arc::from("wOther")]);
+    assert_eq!(u("p4").other_wobjs(), ["wOther"]);
 }
 
 fn cartesian(program: &Program) -> Vec<(String, [f64; 3])> {

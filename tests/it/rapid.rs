@@ -108,10 +108,10 @@ fn dump(f: &ParsedFile) -> String {
             texts(src, &p.extax),
             u.wobj.as_deref().unwrap_or("-"),
             u.tool.as_deref().unwrap_or("-"),
-            if u.other_wobjs.is_empty() {
+            if u.other_wobjs().is_empty() {
                 String::new()
             } else {
-                format!(" ALSO={}", u.other_wobjs.join("+"))
+                format!(" ALSO={}", u.other_wobjs().join("+"))
             },
             if u.stationary_tool { " STATIONARY" } else { "" },
             u.lines
@@ -248,7 +248,7 @@ fn spot_line_is_a_track_program() {
         }
         assert_eq!(p.usage.wobj.as_deref(), Some("wobj_car"));
         assert_eq!(p.usage.tool.as_deref(), Some("tGun1"));
-        assert!(p.usage.other_wobjs.is_empty());
+        assert!(p.usage.other_wobjs().is_empty());
         // Tool pointing down: the tool z axis has a negative world z component.
         let pose = p.cartesian.as_ref().unwrap().pose().unwrap();
         let z = pose.rotation * nalgebra::Vector3::z();
@@ -313,9 +313,9 @@ fn usage_two_wobjs_is_flagged_with_a_warning() {
     let f = load("two_wobjs.mod");
     let shared = pos(&f, "pShared");
     assert_eq!(shared.usage.wobj.as_deref(), Some("wLeft"));
-    assert_eq!(shared.usage.other_wobjs, [std::sync::Arc::from("wRight")]);
+    assert_eq!(shared.usage.other_wobjs(), ["wRight"]);
     assert_eq!(shared.usage.lines, vec![11, 13]);
-    assert!(pos(&f, "pLeftOnly").usage.other_wobjs.is_empty());
+    assert!(pos(&f, "pLeftOnly").usage.other_wobjs().is_empty());
     let warn = f
         .diagnostics
         .iter()

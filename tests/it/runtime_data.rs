@@ -12,8 +12,7 @@ fn run_time<'f>(f: &'f ParsedFile, name: &str) -> Option<&'f RunTimeValue> {
         .find(|p| p.name.as_deref() == Some(name))
         .unwrap_or_else(|| panic!("no target {name}"))
         .usage
-        .run_time
-        .as_deref()
+        .run_time()
 }
 
 const T: &str = "[[1,2,3],[1,0,0,0],[0,0,0,0],[500,9E9,9E9,9E9,9E9,9E9]]";
