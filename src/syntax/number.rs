@@ -93,9 +93,11 @@ impl Digits {
     }
 
     fn extend(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.push(b);
-        }
+        // Never full (see above); what would not fit is dropped, not a panic.
+        let end = (self.len + bytes.len()).min(self.bytes.len());
+        let n = end - self.len;
+        self.bytes[self.len..end].copy_from_slice(&bytes[..n]);
+        self.len = end;
     }
 
     fn as_bytes(&self) -> &[u8] {
@@ -569,6 +571,17 @@ pub fn same_at(a: f64, b: f64, places: usize) -> bool {
     }
 }
 
+/// 10^0 … 10^19, the powers of ten a `u64` holds: what [`Scaled`] scales and splits by.
+const POW10: [u64; 20] = {
+    let mut p = [1u64; 20];
+    let mut i = 1;
+    while i < 20 {
+        p[i] = p[i - 1] * 10;
+        i += 1;
+    }
+    p
+};
+
 /// Powers of ten that are exact in an `f64`.
 const EXACT_POWERS: [f64; 23] = [
     1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
@@ -632,7 +645,7 @@ impl Scaled {
         };
         let shift = u32::try_from(-exp).ok().filter(|&s| s > 0)?;
         // mantissa < 2^53 and 10^places < 2^40: the product fits with 35 bits to spare.
-        let product = mantissa as u128 * 10u128.pow(places as u32);
+        let product = mantissa as u128 * POW10[places] as u128;
         let units = if shift >= 128 {
             // product < 2^93, so the value is below half a unit.
             0
@@ -665,13 +678,18 @@ impl Scaled {
 
     /// Digits before the point when the units are written with `places` decimals (at least 1).
     fn int_digits(self, places: usize) -> usize {
-        let mut int = self.units / 10u128.pow(places as u32);
-        let mut n = 1;
-        while int >= 10 {
-            int /= 10;
-            n += 1;
-        }
-        n
+        // By u64 where the units fit (a u128 division is a call).
+        let Ok(units) = u64::try_from(self.units) else {
+            let mut int = self.units / POW10[places] as u128;
+            let mut n = 1;
+            while int >= 10 {
+                int /= 10;
+                n += 1;
+            }
+            return n;
+        };
+        let int = units / POW10[places];
+        1 + POW10[1..].iter().take_while(|&&p| int >= p).count()
     }
 
     /// Appends the digits: `-`, the integer part, and `places` (at most 18) decimals after a
@@ -683,10 +701,16 @@ impl Scaled {
         // Sign, 23 integer digits (units < 2^75, written with no decimals), '.', 18 decimals.
         let mut buf = [0u8; 48];
         let mut at = buf.len();
-        // One 128-bit division; the decimals fit in u64 (below 10^18).
-        let scale = 10u128.pow(places as u32);
-        let mut int = self.units / scale;
-        let mut frac = (self.units % scale) as u64;
+        // The decimals fit in u64 (below 10^18), and so does the integer part of every value
+        // but the largest with the most places (units < 2^75): then one 128-bit division.
+        let scale = POW10[places];
+        let (mut int, mut frac) = match u64::try_from(self.units) {
+            Ok(units) => ((units / scale) as u128, units % scale),
+            Err(_) => (
+                self.units / scale as u128,
+                (self.units % scale as u128) as u64,
+            ),
+        };
         for _ in 0..places {
             at -= 1;
             buf[at] = b'0' + (frac % 10) as u8;
@@ -696,7 +720,13 @@ impl Scaled {
             at -= 1;
             buf[at] = b'.';
         }
-        // The integer part: at least one digit.
+        // The integer part: at least one digit; by u64 where it fits (a u128 `%` is a call).
+        while int > u64::MAX as u128 {
+            at -= 1;
+            buf[at] = b'0' + (int % 10) as u8;
+            int /= 10;
+        }
+        let mut int = int as u64;
         loop {
             at -= 1;
             buf[at] = b'0' + (int % 10) as u8;
