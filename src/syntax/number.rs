@@ -135,6 +135,7 @@ impl NumLit {
     /// gives for `&bytes[..len]`. `None` if `bytes` does not start with one, or if an exponent
     /// letter follows without digits (`1E`, which a lexer ends before the letter). A parser that
     /// scans its numbers with this hands the literal on instead of having it parsed again.
+    #[inline]
     pub fn parse_prefix(bytes: &[u8]) -> Option<(NumLit, usize)> {
         NumLit::parse_plain(bytes).or_else(|| NumLit::parse_general(bytes))
     }
@@ -144,7 +145,8 @@ impl NumLit {
     /// gives exactly (see [`exact_fast_path`]). One pass over the bytes with the digits summed
     /// as they go; `None` for anything else, which [`parse_general`](Self::parse_general)
     /// reads (and also for what no path reads, such as `1E`). The general path spent most of
-    /// `check`'s number reading on the cases this leaves to it.
+    /// `check`'s number reading on the cases this leaves to it; inlined into the parser's
+    /// loop, the call's own cost goes too.
     #[inline]
     fn parse_plain(bytes: &[u8]) -> Option<(NumLit, usize)> {
         let (sign, mut i) = match bytes.first() {
@@ -244,6 +246,7 @@ impl NumLit {
 
     /// [`parse_prefix`](Self::parse_prefix) for every literal: any number of digits, any
     /// exponent (through `str::parse` where the fast path does not give the value exactly).
+    #[inline(never)]
     fn parse_general(bytes: &[u8]) -> Option<(NumLit, usize)> {
         let mut i = 0;
         if matches!(bytes.first(), Some(b'+' | b'-')) {
