@@ -331,69 +331,64 @@ fn number_len(rest: &[u8]) -> usize {
     i
 }
 
-/// Every word the parser treats as a keyword somewhere (reserved words, operators, `NOT`).
+/// Declares [`KEYWORDS`] and the exact test for them from one list, so that the filter built
+/// from the list and the test cannot disagree.
+macro_rules! keywords {
+    ($($k:literal),* $(,)?) => {
+        /// Every word the parser treats as a keyword somewhere (reserved words, operators,
+        /// `NOT`), upper case.
+        const KEYWORDS: &[&[u8]] = &[$($k),*];
+
+        /// Whether `upper` (upper case) is one of [`KEYWORDS`].
+        fn is_keyword_upper(upper: &[u8]) -> bool {
+            matches!(upper, $($k)|*)
+        }
+    };
+}
+
+keywords! {
+    b"MODULE", b"ENDMODULE", b"PROC", b"ENDPROC", b"FUNC", b"ENDFUNC", b"TRAP", b"ENDTRAP",
+    b"RECORD", b"ENDRECORD", b"CONST", b"PERS", b"VAR", b"ALIAS", b"LOCAL", b"TASK", b"INOUT",
+    b"IF", b"THEN", b"ELSEIF", b"ELSE", b"ENDIF", b"FOR", b"FROM", b"TO", b"STEP", b"DO",
+    b"ENDFOR", b"WHILE", b"ENDWHILE", b"TEST", b"CASE", b"DEFAULT", b"ENDTEST", b"GOTO",
+    b"RETURN", b"RAISE", b"EXIT", b"RETRY", b"TRYNEXT", b"CONNECT", b"WITH", b"ERROR", b"UNDO",
+    b"BACKWARD", b"DIV", b"MOD", b"AND", b"OR", b"XOR", b"NOT",
+}
+
+/// The shortest and longest keyword.
+const KEYWORD_LEN: std::ops::RangeInclusive<usize> = 2..=9;
+
+/// For each keyword length, a bit per (first letter, second letter) pair some keyword of that
+/// length starts with (letters by their low 5 bits, so either case): most identifiers are
+/// names (`p8169`, `MoveL`, `tGun`), and this tells them from keywords with two loads instead
+/// of an upper-cased copy and a string match. Bytes other than letters may share a pair's bits;
+/// they only pass on to the exact test.
+static KEYWORD_PAIRS: [[u32; 32]; 10] = {
+    let mut table = [[0u32; 32]; 10];
+    let mut k = 0;
+    while k < KEYWORDS.len() {
+        let w = KEYWORDS[k];
+        table[w.len()][(w[0] & 31) as usize] |= 1 << (w[1] & 31);
+        k += 1;
+    }
+    table
+};
+
+/// Whether `text` is a keyword, in any case.
 fn is_keyword(text: &[u8]) -> bool {
-    if text.len() < 2 || text.len() > 9 {
+    let &[first, second, ..] = text else {
+        return false;
+    };
+    if !KEYWORD_LEN.contains(&text.len())
+        || KEYWORD_PAIRS[text.len()][(first & 31) as usize] & 1 << (second & 31) == 0
+    {
         return false;
     }
     let mut buf = [0u8; 9];
     for (b, c) in buf.iter_mut().zip(text) {
         *b = c.to_ascii_uppercase();
     }
-    matches!(
-        &buf[..text.len()],
-        b"MODULE"
-            | b"ENDMODULE"
-            | b"PROC"
-            | b"ENDPROC"
-            | b"FUNC"
-            | b"ENDFUNC"
-            | b"TRAP"
-            | b"ENDTRAP"
-            | b"RECORD"
-            | b"ENDRECORD"
-            | b"CONST"
-            | b"PERS"
-            | b"VAR"
-            | b"ALIAS"
-            | b"LOCAL"
-            | b"TASK"
-            | b"INOUT"
-            | b"IF"
-            | b"THEN"
-            | b"ELSEIF"
-            | b"ELSE"
-            | b"ENDIF"
-            | b"FOR"
-            | b"FROM"
-            | b"TO"
-            | b"STEP"
-            | b"DO"
-            | b"ENDFOR"
-            | b"WHILE"
-            | b"ENDWHILE"
-            | b"TEST"
-            | b"CASE"
-            | b"DEFAULT"
-            | b"ENDTEST"
-            | b"GOTO"
-            | b"RETURN"
-            | b"RAISE"
-            | b"EXIT"
-            | b"RETRY"
-            | b"TRYNEXT"
-            | b"CONNECT"
-            | b"WITH"
-            | b"ERROR"
-            | b"UNDO"
-            | b"BACKWARD"
-            | b"DIV"
-            | b"MOD"
-            | b"AND"
-            | b"OR"
-            | b"XOR"
-            | b"NOT"
-    )
+    is_keyword_upper(&buf[..text.len()])
 }
 
 /// `based = "0x" hexdigits | "0b" bits | "0o" octdigits`.
@@ -418,6 +413,34 @@ mod tests {
             .into_iter()
             .map(|t| (t.kind, crate::syntax::latin1(t.text(src))))
             .collect()
+    }
+
+    proptest::proptest! {
+        /// The pair filter never turns a keyword away: `is_keyword` is a case-blind compare
+        /// with every keyword, for names, keywords in any case, and keywords one byte off.
+        #[test]
+        fn keywords_are_what_the_list_says(
+            word in "[A-Za-z_][A-Za-z0-9_\u{c0}-\u{ff}]{0,10}",
+            k in 0..KEYWORDS.len(),
+            flip in proptest::collection::vec(proptest::bool::ANY, 9),
+            edit in proptest::option::of((0usize..9, proptest::sample::select(b"aZ_0\xc4".to_vec()))),
+        ) {
+            let oracle = |t: &[u8]| KEYWORDS.iter().any(|k| k.eq_ignore_ascii_case(t));
+            // Latin-1: each char one byte.
+            let word: Vec<u8> = word.chars().map(|c| c as u8).collect();
+            proptest::prop_assert_eq!(is_keyword(&word), oracle(&word));
+            let mut kw: Vec<u8> = KEYWORDS[k]
+                .iter()
+                .zip(&flip)
+                .map(|(&c, &f)| if f { c.to_ascii_lowercase() } else { c })
+                .collect();
+            proptest::prop_assert!(is_keyword(&kw));
+            if let Some((at, c)) = edit {
+                let at = at.min(kw.len() - 1);
+                kw[at] = c;
+                proptest::prop_assert_eq!(is_keyword(&kw), oracle(&kw));
+            }
+        }
     }
 
     fn concat(src: &[u8]) -> Vec<u8> {

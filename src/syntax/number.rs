@@ -93,9 +93,11 @@ impl Digits {
     }
 
     fn extend(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.push(b);
-        }
+        // Never full (see above); what would not fit is dropped, not a panic.
+        let end = (self.len + bytes.len()).min(self.bytes.len());
+        let n = end - self.len;
+        self.bytes[self.len..end].copy_from_slice(&bytes[..n]);
+        self.len = end;
     }
 
     fn as_bytes(&self) -> &[u8] {
@@ -133,7 +135,119 @@ impl NumLit {
     /// gives for `&bytes[..len]`. `None` if `bytes` does not start with one, or if an exponent
     /// letter follows without digits (`1E`, which a lexer ends before the letter). A parser that
     /// scans its numbers with this hands the literal on instead of having it parsed again.
+    #[inline]
     pub fn parse_prefix(bytes: &[u8]) -> Option<(NumLit, usize)> {
+        NumLit::parse_plain(bytes).or_else(|| NumLit::parse_general(bytes))
+    }
+
+    /// [`parse_prefix`](Self::parse_prefix) for the literal nearly every program writes: at
+    /// most 19 digits, no exponent or one of at most 2 digits, and a value Clinger's fast path
+    /// gives exactly (see [`exact_fast_path`]). One pass over the bytes with the digits summed
+    /// as they go; `None` for anything else, which [`parse_general`](Self::parse_general)
+    /// reads (and also for what no path reads, such as `1E`). The general path spent most of
+    /// `check`'s number reading on the cases this leaves to it; inlined into the parser's
+    /// loop, the call's own cost goes too.
+    #[inline]
+    fn parse_plain(bytes: &[u8]) -> Option<(NumLit, usize)> {
+        let (sign, mut i) = match bytes.first() {
+            Some(&s @ (b'+' | b'-')) => (s, 1),
+            _ => (0, 0),
+        };
+        let int_start = i;
+        let mut mantissa = 0u64;
+        // Wrapping: more than 19 digits are refused below, before the sum is used.
+        while let Some(d) = bytes
+            .get(i)
+            .map(|b| b.wrapping_sub(b'0'))
+            .filter(|&d| d <= 9)
+        {
+            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+            i += 1;
+        }
+        let int_digits = i - int_start;
+        let point = bytes.get(i) == Some(&b'.');
+        let mut decimals = 0;
+        if point {
+            i += 1;
+            let frac_start = i;
+            while let Some(d) = bytes
+                .get(i)
+                .map(|b| b.wrapping_sub(b'0'))
+                .filter(|&d| d <= 9)
+            {
+                mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+                i += 1;
+            }
+            decimals = i - frac_start;
+        }
+        let digits = int_digits + decimals;
+        if digits == 0 || digits > 19 || mantissa >= 1 << 53 {
+            return None;
+        }
+        let mut exponent = None;
+        if let Some(&letter @ (b'e' | b'E')) = bytes.get(i) {
+            i += 1;
+            let exp_sign = match bytes.get(i) {
+                Some(&s @ (b'+' | b'-')) => {
+                    i += 1;
+                    s
+                }
+                _ => 0,
+            };
+            let exp_start = i;
+            let mut value = 0i8;
+            while let Some(d) = bytes
+                .get(i)
+                .map(|b| b.wrapping_sub(b'0'))
+                .filter(|&d| d <= 9)
+            {
+                if i - exp_start == 2 {
+                    return None;
+                }
+                value = value * 10 + d as i8;
+                i += 1;
+            }
+            if i == exp_start {
+                return None;
+            }
+            exponent = Some(Exponent {
+                value: if exp_sign == b'-' { -value } else { value },
+                upper: letter == b'E',
+                sign: exp_sign,
+                digits: (i - exp_start) as u8,
+            });
+        }
+        let e = exponent.map_or(0, |e| i32::from(e.value));
+        let decimals = decimals as i32;
+        let m = mantissa as f64;
+        let power = e - decimals;
+        let value = match power {
+            0..=22 => m * EXACT_POWERS[power as usize],
+            -22..=-1 => m / EXACT_POWERS[(-power) as usize],
+            _ => return None,
+        };
+        Some((
+            NumLit {
+                value: if sign == b'-' { -value } else { value },
+                // |decimals| ≤ 19 and |e| ≤ 99.
+                precision: (decimals - e) as i16,
+                exponent,
+                style: if sign == b'+' { PLUS } else { 0 }
+                    | if point && int_digits == 0 {
+                        LEADING_POINT
+                    } else {
+                        0
+                    },
+                int_digits: int_digits as u8,
+            },
+            i,
+        ))
+    }
+
+    /// [`parse_prefix`](Self::parse_prefix) for every literal: any number of digits, any
+    /// exponent (through `str::parse` where the fast path does not give the value exactly).
+    #[inline(never)]
+    fn parse_general(bytes: &[u8]) -> Option<(NumLit, usize)> {
         let mut i = 0;
         if matches!(bytes.first(), Some(b'+' | b'-')) {
             i += 1;
@@ -460,6 +574,17 @@ pub fn same_at(a: f64, b: f64, places: usize) -> bool {
     }
 }
 
+/// 10^0 … 10^19, the powers of ten a `u64` holds: what [`Scaled`] scales and splits by.
+const POW10: [u64; 20] = {
+    let mut p = [1u64; 20];
+    let mut i = 1;
+    while i < 20 {
+        p[i] = p[i - 1] * 10;
+        i += 1;
+    }
+    p
+};
+
 /// Powers of ten that are exact in an `f64`.
 const EXACT_POWERS: [f64; 23] = [
     1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
@@ -523,7 +648,7 @@ impl Scaled {
         };
         let shift = u32::try_from(-exp).ok().filter(|&s| s > 0)?;
         // mantissa < 2^53 and 10^places < 2^40: the product fits with 35 bits to spare.
-        let product = mantissa as u128 * 10u128.pow(places as u32);
+        let product = mantissa as u128 * POW10[places] as u128;
         let units = if shift >= 128 {
             // product < 2^93, so the value is below half a unit.
             0
@@ -556,13 +681,18 @@ impl Scaled {
 
     /// Digits before the point when the units are written with `places` decimals (at least 1).
     fn int_digits(self, places: usize) -> usize {
-        let mut int = self.units / 10u128.pow(places as u32);
-        let mut n = 1;
-        while int >= 10 {
-            int /= 10;
-            n += 1;
-        }
-        n
+        // By u64 where the units fit (a u128 division is a call).
+        let Ok(units) = u64::try_from(self.units) else {
+            let mut int = self.units / POW10[places] as u128;
+            let mut n = 1;
+            while int >= 10 {
+                int /= 10;
+                n += 1;
+            }
+            return n;
+        };
+        let int = units / POW10[places];
+        1 + POW10[1..].iter().take_while(|&&p| int >= p).count()
     }
 
     /// Appends the digits: `-`, the integer part, and `places` (at most 18) decimals after a
@@ -574,10 +704,16 @@ impl Scaled {
         // Sign, 23 integer digits (units < 2^75, written with no decimals), '.', 18 decimals.
         let mut buf = [0u8; 48];
         let mut at = buf.len();
-        // One 128-bit division; the decimals fit in u64 (below 10^18).
-        let scale = 10u128.pow(places as u32);
-        let mut int = self.units / scale;
-        let mut frac = (self.units % scale) as u64;
+        // The decimals fit in u64 (below 10^18), and so does the integer part of every value
+        // but the largest with the most places (units < 2^75): then one 128-bit division.
+        let scale = POW10[places];
+        let (mut int, mut frac) = match u64::try_from(self.units) {
+            Ok(units) => ((units / scale) as u128, units % scale),
+            Err(_) => (
+                self.units / scale as u128,
+                (self.units % scale as u128) as u64,
+            ),
+        };
         for _ in 0..places {
             at -= 1;
             buf[at] = b'0' + (frac % 10) as u8;
@@ -587,7 +723,13 @@ impl Scaled {
             at -= 1;
             buf[at] = b'.';
         }
-        // The integer part: at least one digit.
+        // The integer part: at least one digit; by u64 where it fits (a u128 `%` is a call).
+        while int > u64::MAX as u128 {
+            at -= 1;
+            buf[at] = b'0' + (int % 10) as u8;
+            int /= 10;
+        }
+        let mut int = int as u64;
         loop {
             at -= 1;
             buf[at] = b'0' + (int % 10) as u8;
@@ -670,6 +812,84 @@ mod tests {
                 proptest::prop_assert_eq!(ours, None);
             } else {
                 proptest::prop_assert_eq!(ours.map(f64::to_bits), std.map(f64::to_bits), "{}", text);
+            }
+        }
+    }
+
+    /// A literal's text as programs and hostile inputs write it: a sign, integer digits, a point
+    /// and decimals (up to 25 digits each, past the 19 the fast path takes), an exponent in
+    /// either case with or without a sign and with leading zeros (`9E+09`, `2.5e-001`).
+    fn literal_text() -> impl proptest::strategy::Strategy<Value = String> {
+        use proptest::prelude::*;
+        (
+            proptest::sample::select(vec!["", "-", "+"]),
+            "[0-9]{0,25}",
+            proptest::option::of("[0-9]{0,25}"),
+            proptest::option::of((
+                proptest::sample::select(vec!["E", "e"]),
+                proptest::sample::select(vec!["", "+", "-"]),
+                "[0-9]{1,3}",
+            )),
+        )
+            .prop_map(|(sign, int, frac, exp)| {
+                let mut text = format!("{sign}{int}");
+                if let Some(f) = frac {
+                    text.push('.');
+                    text.push_str(&f);
+                }
+                if let Some((e, s, d)) = exp {
+                    text.push_str(&format!("{e}{s}{d}"));
+                }
+                text
+            })
+    }
+
+    #[test]
+    fn the_common_literals_take_the_fast_path() {
+        // What a robtarget holds: if these fell back, the proptest below would test nothing.
+        for text in [
+            "-1520.30", "0.707107", "0", "+12.5", ".5", "5.", "9E+09", "9E9", "2.69E-07",
+        ] {
+            let plain = NumLit::parse_plain(text.as_bytes());
+            assert_eq!(plain, NumLit::parse_general(text.as_bytes()), "{text}");
+            assert!(plain.is_some(), "{text}");
+        }
+        // Past 19 digits, 2^53, 10^±22 or a 2-digit exponent: the general path.
+        for text in [
+            "12345678901234567890",
+            "9007199254740993",
+            "1E23",
+            "1e-23",
+            "1.5E+009",
+        ] {
+            assert_eq!(NumLit::parse_plain(text.as_bytes()), None, "{text}");
+            assert!(NumLit::parse_general(text.as_bytes()).is_some(), "{text}");
+        }
+    }
+
+    proptest::proptest! {
+        /// Whichever path reads it, a literal's value is the correctly rounded one `str::parse`
+        /// (an independent reader) gives, bit for bit; and the fast path reads the same literal
+        /// as the general one, style and precision included. (What follows is no exponent
+        /// letter: `1.5E` is no literal at all.)
+        #[test]
+        fn both_paths_read_what_std_reads(text in literal_text(), tail in "[ ,\\]a-dx;]?") {
+            let std: Option<f64> = text.parse().ok();
+            let whole = format!("{text}{tail}");
+            let ours = NumLit::parse_prefix(whole.as_bytes());
+            match ours {
+                Some((lit, len)) => {
+                    proptest::prop_assert_eq!(len, text.len(), "{}", whole);
+                    proptest::prop_assert_eq!(Some(lit.value().to_bits()), std.map(f64::to_bits), "{}", text);
+                }
+                // Only a text without digits in its mantissa (or, beyond f64, an infinity).
+                None => proptest::prop_assert!(
+                    std.is_none_or(|v| v.is_infinite()),
+                    "{} reads as {:?}", text, std
+                ),
+            }
+            if let Some(plain) = NumLit::parse_plain(whole.as_bytes()) {
+                proptest::prop_assert_eq!(Some(plain), NumLit::parse_general(whole.as_bytes()), "{}", whole);
             }
         }
     }

@@ -648,6 +648,93 @@ impl NumberTokens {
     }
 }
 
+/// A stretch of the original that the output holds unchanged, `delta` bytes further on (the
+/// transform's edits before it changed the length by that much): `original[start..end]` equals
+/// `output[start + delta..end + delta]`, and `end` is the first byte where they differ (or the
+/// end of either file).
+///
+/// [`carry_precision`] scans both files' literals, but a transform leaves most of a file as it
+/// was (the words, the separators, the literals it did not change): there the output's next
+/// literal is the original's, moved by `delta`, and need not be scanned again.
+#[derive(Clone, Copy, Default)]
+struct Alike {
+    delta: isize,
+    start: usize,
+    end: usize,
+    /// The stretch runs to the end of both files.
+    to_the_end: bool,
+}
+
+impl Alike {
+    /// The output's next literal (or its end, `Some(None)`) when the scan of the original that
+    /// went from `b_from` to `b` read only bytes the output holds the same from `a_from` on:
+    /// the scanner keeps nothing but its place, and reads from the byte before its place up to
+    /// the byte after the literal it returns (see [`NumberTokens`]), so the same bytes give the
+    /// same literal. `None` when that is not known: then the output is scanned.
+    fn output_token(
+        &mut self,
+        b: Option<NumberToken>,
+        b_from: usize,
+        a_from: usize,
+        original: &[u8],
+        output: &[u8],
+    ) -> Option<Option<NumberToken>> {
+        // At the very start there is no byte before the place to compare.
+        if (b_from == 0) != (a_from == 0) {
+            return None;
+        }
+        let (lo, lo_out) = (b_from.saturating_sub(1), a_from.saturating_sub(1));
+        let delta = lo_out as isize - lo as isize;
+        // A stretch found from an earlier place with the same delta ends where it ended.
+        if delta != self.delta || lo < self.start || lo >= self.end {
+            let len = common_len(
+                original.get(lo..).unwrap_or(&[]),
+                output.get(lo_out..).unwrap_or(&[]),
+            );
+            *self = Alike {
+                delta,
+                start: lo,
+                end: lo + len,
+                to_the_end: lo + len == original.len() && lo_out + len == output.len(),
+            };
+        }
+        let moved = |t: NumberToken| NumberToken {
+            start: t.start.wrapping_add_signed(delta),
+            end: t.end.wrapping_add_signed(delta),
+            ..t
+        };
+        match b {
+            // The byte after the literal (which ends it) is read too, where there is one.
+            Some(t) if t.end < self.end || (self.to_the_end && t.end == self.end) => {
+                Some(Some(moved(t)))
+            }
+            None if self.to_the_end => Some(None),
+            _ => None,
+        }
+    }
+}
+
+/// How many bytes `a` and `b` start with alike: 16 at a time (most of a transformed file is
+/// the same on both sides, in stretches of tens of bytes between its changed numbers).
+fn common_len(a: &[u8], b: &[u8]) -> usize {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let (chunks_a, _) = a.as_chunks::<16>();
+    let (chunks_b, _) = b.as_chunks::<16>();
+    for (k, (x, y)) in chunks_a.iter().zip(chunks_b).enumerate() {
+        let diff = u128::from_le_bytes(*x) ^ u128::from_le_bytes(*y);
+        if diff != 0 {
+            return k * 16 + (diff.trailing_zeros() / 8) as usize;
+        }
+    }
+    let done = chunks_a.len() * 16;
+    done + a[done..]
+        .iter()
+        .zip(&b[done..])
+        .take_while(|(x, y)| x == y)
+        .count()
+}
+
 /// The place of house precision `p` in [`HOUSE_DECIMALS`], if it is one.
 fn house_slot(p: i32) -> Option<usize> {
     HOUSE_DECIMALS.iter().position(|&d| d as i32 == p)
@@ -682,8 +769,20 @@ pub struct CarriedPrecision {
 /// of a large program's output here was as large as the file, next to its original and output.
 pub fn carry_precision(
     original: &[u8],
+    output: Vec<u8>,
+    dialect: &dyn crate::dialect::Dialect,
+) -> CarriedPrecision {
+    carry(original, output, dialect, true)
+}
+
+/// [`carry_precision`]; with `shortcut`, the output's literals in stretches it holds unchanged
+/// are taken from the original's scan instead of scanned again (see [`Alike`]). Without it
+/// both files are scanned throughout: what the tests compare the shortcut with.
+fn carry(
+    original: &[u8],
     mut output: Vec<u8>,
     dialect: &dyn crate::dialect::Dialect,
+    shortcut: bool,
 ) -> CarriedPrecision {
     let old = find_in(original, dialect);
     let old_widened = old
@@ -709,8 +808,25 @@ pub fn carry_precision(
     // Whether the two files are known to hold as many literals (checked before the first byte
     // moves, so that an output is never left half narrowed).
     let mut in_step = false;
+    let mut alike = Alike::default();
     loop {
-        let (b, a) = match (before.next(original), after.next(&output)) {
+        let (b_from, a_from) = (before.i, after.i);
+        let b = before.next(original);
+        // The skipped spans (the stamp lines, at the head) are behind both scans.
+        let past_skips =
+            skip_in.is_none_or(|s| b_from > s.start) && skip_out.is_none_or(|s| a_from > s.start);
+        let same = match shortcut && past_skips {
+            true => alike.output_token(b, b_from, a_from, original, &output),
+            false => None,
+        };
+        let a = match same {
+            Some(a) => {
+                after.i = a.map_or(output.len(), |a| a.end);
+                a
+            }
+            None => after.next(&output),
+        };
+        let (b, a) = match (b, a) {
             (Some(b), Some(a)) => (b, a),
             (None, None) => break,
             _ => {
@@ -728,7 +844,7 @@ pub fn carry_precision(
             }
             None => b.precision(),
         };
-        let unchanged = original[b.start..b.end] == output[a.start..a.end];
+        let unchanged = same.is_some() || original[b.start..b.end] == output[a.start..a.end];
         // The written text as a head of the new mantissa and the exponent: how many bytes
         // of the literal are dropped before its exponent (none: written as it is).
         let mut cut = 0;
@@ -1084,6 +1200,76 @@ mod precision_tests {
         // The last literal of the longer side is what tells: 2 against 3 and 3 against 2.
         let c = carry_precision(out, src.to_vec(), &RAPID);
         assert_eq!(c.output, src);
+    }
+
+    #[test]
+    fn a_literal_ended_differently_in_the_output_is_scanned_there() {
+        // `1]` became `1x`: the byte that ends the literal changed, and the output has one
+        // literal less, so nothing may be carried (`12.000` stays). Were the output's literals
+        // taken from the original's up to the changed byte, `12.000` would lose its zeros.
+        let src = b"MODULE m\n! trackfix: correct widened=3:0 version=0\n  x := [12.250, 1];\nENDMODULE\n";
+        let out = b"MODULE m\n! trackfix: correct widened=3:0 version=0\n  x := [12.000, 1x;\nENDMODULE\n";
+        let c = carry_precision(src, out.to_vec(), &RAPID);
+        assert_eq!(c.output, out);
+        // And the byte before it: `[5` became `p5`, a name.
+        let src = b"MODULE m\n! trackfix: correct widened=3:0 version=0\n  x := [12.250, [5];\nENDMODULE\n";
+        let out = b"MODULE m\n! trackfix: correct widened=3:0 version=0\n  x := [12.000, p5];\nENDMODULE\n";
+        assert_eq!(carry_precision(src, out.to_vec(), &RAPID).output, out);
+        // The same edits with the literal count kept: `12.000` narrows.
+        let out = b"MODULE m\n! trackfix: correct widened=3:0 version=0\n  x := [12.000, [6];\nENDMODULE\n";
+        let c = carry_precision(src, out.to_vec(), &RAPID);
+        assert!(String::from_utf8_lossy(&c.output).contains("[12, [6]"));
+    }
+
+    /// Pieces of a program text for the shortcut's proptest: literals of every precision and
+    /// style, names with digits, separators, and the bytes that end or extend a literal.
+    const PIECES: [&str; 22] = [
+        "12", "1.250", "0.5", "-700.00", "1.5E+2", ".5", "9E9", "12.000", "0.123000", "7.", "p10",
+        "$x1", "e", "E+", ", ", "[", "]", "\n", " ", "\r\n", ".", "x",
+    ];
+
+    proptest::proptest! {
+        /// Taking the output's literals from the original's scan where the output holds the
+        /// same bytes changes nothing: the result is the one of scanning both files throughout,
+        /// whatever was edited (literals rewritten longer or shorter, bytes that end a literal
+        /// or join it to a name, inserted and deleted pieces).
+        #[test]
+        fn the_shortcut_changes_no_result(
+            pieces in proptest::collection::vec(0..PIECES.len(), 0..60),
+            edits in proptest::collection::vec((0usize..60, proptest::option::of(0..PIECES.len()), proptest::bool::ANY), 0..8),
+            widened in proptest::sample::select(vec!["", "3:0*3,1,0", "3:2,0;6:3*2", "4:0;3:1*4"]),
+        ) {
+            let head = if widened.is_empty() {
+                "MODULE m\n".to_owned()
+            } else {
+                format!("MODULE m\n! trackfix: correct widened={widened} version=0\n")
+            };
+            let text = |p: &[usize]| {
+                let mut t = head.clone();
+                for &i in p {
+                    t.push_str(PIECES[i]);
+                }
+                t.push_str("\nENDMODULE\n");
+                t.into_bytes()
+            };
+            let original = text(&pieces);
+            let mut changed = pieces.clone();
+            for &(at, with, insert) in &edits {
+                let at = at.min(changed.len());
+                match with {
+                    Some(w) if insert || at == changed.len() => changed.insert(at, w),
+                    Some(w) => changed[at] = w,
+                    None if at < changed.len() => {
+                        changed.remove(at);
+                    }
+                    None => {}
+                }
+            }
+            let output = text(&changed);
+            let fast = carry(&original, output.clone(), &RAPID, true);
+            let full = carry(&original, output, &RAPID, false);
+            proptest::prop_assert_eq!(fast, full);
+        }
     }
 
     proptest::proptest! {
