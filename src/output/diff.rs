@@ -245,6 +245,17 @@ fn ops(a: &Side<'_>, b: &Side<'_>) -> Vec<DiffOp> {
     ops
 }
 
+/// The lines of `old` and `new` (each with its line ending) and the operations turning one
+/// into the other, in order: the diff [`unified_diff`] prints, for other views of a change.
+pub(crate) fn line_ops<'a>(
+    old: &'a [u8],
+    new: &'a [u8],
+) -> (Vec<&'a [u8]>, Vec<&'a [u8]>, Vec<DiffOp>) {
+    let (a, b) = (Side::new(old), Side::new(new));
+    let ops = ops(&a, &b);
+    (a.lines, b.lines, ops)
+}
+
 /// A unified diff of one file (empty if unchanged). Bytes are shown as Latin-1 so that a
 /// Windows-125x comment never breaks the diff.
 pub fn unified_diff(path: &Path, old: &[u8], new: &[u8]) -> String {
