@@ -383,6 +383,55 @@ mod tests {
         assert_eq!(d.matches("\n@@ ").count(), 4000);
     }
 
+    /// The new text rebuilt from the old one and the operations: any correct diff gives it.
+    fn rebuilt(old: &[u8], new: &[u8]) -> Vec<u8> {
+        let (a, b, ops) = line_ops(old, new);
+        let mut out = Vec::new();
+        for op in ops {
+            match op {
+                DiffOp::Equal { .. } => a[op.old_range()].iter().for_each(|l| out.extend(*l)),
+                DiffOp::Delete { .. } => {}
+                DiffOp::Insert { .. } | DiffOp::Replace { .. } => {
+                    b[op.new_range()].iter().for_each(|l| out.extend(*l))
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn a_large_block_rewritten_in_place_is_paired_line_by_line() {
+        // 30,000 declarations all rewritten, a stamp line added above them and one line
+        // dropped in the middle: far beyond what Myers' algorithm is run on.
+        let old: String = std::iter::once("MODULE m\n".to_owned())
+            .chain((0..30_000).map(|i| format!("  CONST robtarget p{i}:=[[{i},0,0]];\n")))
+            .chain(["ENDMODULE\n".to_owned()])
+            .collect();
+        let new: String = ["MODULE m\n".to_owned(), "! stamp\n".to_owned()]
+            .into_iter()
+            .chain(
+                (0..30_000)
+                    .filter(|&i| i != 15_000)
+                    .map(|i| format!("  CONST robtarget p{i}:=[[{i}.5,0,0]];\n")),
+            )
+            .chain(["ENDMODULE\n".to_owned()])
+            .collect();
+        assert_eq!(rebuilt(old.as_bytes(), new.as_bytes()), new.as_bytes());
+        let d = unified_diff(Path::new("m.mod"), old.as_bytes(), new.as_bytes());
+        assert_eq!(
+            d.lines()
+                .filter(|l| l.starts_with('-') && !l.starts_with("---"))
+                .count(),
+            30_000
+        );
+        assert_eq!(
+            d.lines()
+                .filter(|l| l.starts_with('+') && !l.starts_with("+++"))
+                .count(),
+            30_000
+        );
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(300))]
         /// Sparse edits of a text whose lines are mostly distinct, with repeated ones (like
