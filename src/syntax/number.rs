@@ -156,28 +156,14 @@ impl NumLit {
         let int_start = i;
         let mut mantissa = 0u64;
         // Wrapping: more than 19 digits are refused below, before the sum is used.
-        while let Some(d) = bytes
-            .get(i)
-            .map(|b| b.wrapping_sub(b'0'))
-            .filter(|&d| d <= 9)
-        {
-            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
-            i += 1;
-        }
+        take_digits(bytes, &mut i, &mut mantissa);
         let int_digits = i - int_start;
         let point = bytes.get(i) == Some(&b'.');
         let mut decimals = 0;
         if point {
             i += 1;
             let frac_start = i;
-            while let Some(d) = bytes
-                .get(i)
-                .map(|b| b.wrapping_sub(b'0'))
-                .filter(|&d| d <= 9)
-            {
-                mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
-                i += 1;
-            }
+            take_digits(bytes, &mut i, &mut mantissa);
             decimals = i - frac_start;
         }
         let digits = int_digits + decimals;
@@ -743,6 +729,20 @@ impl Scaled {
             buf[at] = b'-';
         }
         out.extend(buf.get(at..).unwrap_or(&[]));
+    }
+}
+
+/// Appends the decimal digits of `bytes` from `*i` on to `mantissa` (wrapping: the caller
+/// refuses more digits than a `u64` holds), and moves `*i` past them.
+#[inline]
+fn take_digits(bytes: &[u8], i: &mut usize, mantissa: &mut u64) {
+    while let Some(d) = bytes
+        .get(*i)
+        .map(|b| b.wrapping_sub(b'0'))
+        .filter(|&d| d <= 9)
+    {
+        *mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+        *i += 1;
     }
 }
 
