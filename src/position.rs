@@ -425,6 +425,13 @@ impl Usage {
         self.rare.as_ref().map_or(&[], |r| &r.other_wobjs)
     }
 
+    /// Every work object the target is used with: the first use's, then the others (which
+    /// only a target with a first one has).
+    pub fn work_objects(&self) -> impl Iterator<Item = &str> {
+        let others = self.other_wobjs().iter().map(|w| &**w);
+        self.wobj.as_deref().into_iter().chain(others)
+    }
+
     /// Set when the target's pose is only known when the program runs: the first reason found.
     pub fn run_time(&self) -> Option<&RunTimeValue> {
         self.rare.as_ref()?.run_time.as_ref()

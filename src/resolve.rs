@@ -611,9 +611,7 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
         for p in f.positions.iter_mut() {
             let frame = p
                 .usage
-                .wobj
-                .iter()
-                .chain(p.usage.other_wobjs())
+                .work_objects()
                 .find_map(|w| assigned_frames.get(&fold(w)));
             if let Some((name, line)) = frame {
                 let why = RunTimeValue::Frame {

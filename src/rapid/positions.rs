@@ -719,8 +719,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
             if p.usage.other_wobjs().is_empty() {
                 continue;
             }
-            let mut all = vec![p.usage.wobj.as_deref().unwrap_or_default()];
-            all.extend(p.usage.other_wobjs().iter().map(|w| &**w));
+            let all: Vec<&str> = p.usage.work_objects().collect();
             let lines: Vec<String> = p.usage.lines.iter().map(u32::to_string).collect();
             d.push(
                 Diagnostic::warning(

@@ -118,8 +118,7 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
             });
             if !already {
                 let what = file.language.dialect().vocabulary().frames;
-                let mut all = vec![p.usage.wobj.as_deref().unwrap_or_default()];
-                all.extend(p.usage.other_wobjs().iter().map(|w| &**w));
+                let all: Vec<&str> = p.usage.work_objects().collect();
                 out.push(
                     Diagnostic::warning(
                         p.span,
