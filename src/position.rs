@@ -493,6 +493,58 @@ impl Usage {
     }
 }
 
+/// A short list kept in place, up to `N` items, read as a slice; a longer one spills into a
+/// vector behind one pointer (so the rare long list does not widen every target's). What
+/// [`Axes`] and [`Lines`] hold: one each for 100,000 targets, where a vector each was 100,000
+/// heap blocks.
+#[derive(Clone)]
+enum InlineList<T, const N: usize> {
+    Inline(u8, [T; N]),
+    #[allow(clippy::box_collection)] // a thin pointer: see the type
+    Spilled(Box<Vec<T>>),
+}
+
+impl<T: Copy, const N: usize> InlineList<T, N> {
+    /// No items; `fill` only fills the unused places.
+    const fn empty(fill: T) -> InlineList<T, N> {
+        InlineList::Inline(0, [fill; N])
+    }
+
+    fn push(&mut self, item: T) {
+        match self {
+            InlineList::Inline(len, items) => match items.get_mut(*len as usize) {
+                Some(slot) => {
+                    *slot = item;
+                    *len += 1;
+                }
+                None => {
+                    let mut all = Vec::with_capacity(N * 2);
+                    all.extend_from_slice(items);
+                    all.push(item);
+                    *self = InlineList::Spilled(Box::new(all));
+                }
+            },
+            InlineList::Spilled(all) => all.push(item),
+        }
+    }
+
+    fn as_slice(&self) -> &[T] {
+        match self {
+            InlineList::Inline(len, items) => items.get(..*len as usize).unwrap_or_default(),
+            InlineList::Spilled(all) => all,
+        }
+    }
+}
+
+/// Lists are equal by their items, wherever they are kept.
+impl<T: Copy + PartialEq, const N: usize> PartialEq for InlineList<T, N> {
+    fn eq(&self, other: &Self) -> bool {
+        self.as_slice() == other.as_slice()
+    }
+}
+
+impl<T: Copy + Eq, const N: usize> Eq for InlineList<T, N> {}
+
 /// How many fields [`Axes`] keeps without a heap block: the six external axes of both
 /// languages (RAPID `eax_a..eax_f`, KRL `E1..E6`).
 const INLINE_AXES: usize = 6;
@@ -504,37 +556,17 @@ const INLINE_AXES: usize = 6;
 /// 14 MB of `check`'s peak and 100,000 allocations. A longer list (an aggregate that is not
 /// a RAPID `extjoint`) keeps all its fields, in a vector.
 #[derive(Clone, PartialEq)]
-pub struct Axes(AxesRepr);
-
-#[derive(Clone, PartialEq)]
-enum AxesRepr {
-    Inline(u8, [Option<NumField>; INLINE_AXES]),
-    Spilled(Vec<Option<NumField>>),
-}
+pub struct Axes(InlineList<Option<NumField>, INLINE_AXES>);
 
 impl Axes {
     /// No fields.
     pub const fn new() -> Axes {
-        Axes(AxesRepr::Inline(0, [None; INLINE_AXES]))
+        Axes(InlineList::empty(None))
     }
 
     /// Appends `field`.
     pub fn push(&mut self, field: Option<NumField>) {
-        match &mut self.0 {
-            AxesRepr::Inline(len, fields) => match fields.get_mut(*len as usize) {
-                Some(slot) => {
-                    *slot = field;
-                    *len += 1;
-                }
-                None => {
-                    let mut all = Vec::with_capacity(INLINE_AXES * 2);
-                    all.extend_from_slice(fields);
-                    all.push(field);
-                    self.0 = AxesRepr::Spilled(all);
-                }
-            },
-            AxesRepr::Spilled(all) => all.push(field),
-        }
+        self.0.push(field);
     }
 }
 
@@ -548,10 +580,7 @@ impl std::ops::Deref for Axes {
     type Target = [Option<NumField>];
 
     fn deref(&self) -> &[Option<NumField>] {
-        match &self.0 {
-            AxesRepr::Inline(len, fields) => fields.get(..*len as usize).unwrap_or_default(),
-            AxesRepr::Spilled(all) => all,
-        }
+        self.0.as_slice()
     }
 }
 
@@ -596,47 +625,25 @@ impl PartialEq<Vec<Option<NumField>>> for Axes {
 /// reads as a slice of `u32` (lines of an input of at most 512 MiB fit).
 ///
 /// Sixteen bytes. Nearly every target is used once or twice: up to three lines are kept in
-/// place (a vector each was 100,000 heap blocks on a 20 MB module); more spill into a vector,
-/// behind one pointer so that the rare long list does not widen every target's.
-#[derive(Clone, Default, PartialEq, Eq)]
-pub struct Lines(LinesRepr);
+/// place, more spill into a vector (see [`InlineList`]).
+#[derive(Clone, PartialEq, Eq)]
+pub struct Lines(InlineList<u32, INLINE_LINES>);
 
 /// How many lines [`Lines`] keeps in place.
 const INLINE_LINES: usize = 3;
 
-#[derive(Clone, PartialEq, Eq)]
-enum LinesRepr {
-    Inline(u8, [u32; INLINE_LINES]),
-    #[allow(clippy::box_collection)] // a thin pointer: see `Lines`
-    Spilled(Box<Vec<u32>>),
-}
+const _: () = assert!(std::mem::size_of::<Lines>() <= 16);
 
-impl Default for LinesRepr {
-    fn default() -> LinesRepr {
-        LinesRepr::Inline(0, [0; INLINE_LINES])
+impl Default for Lines {
+    fn default() -> Lines {
+        Lines(InlineList::empty(0))
     }
 }
-
-const _: () = assert!(std::mem::size_of::<Lines>() <= 16);
 
 impl Lines {
     /// Appends `line`.
     pub fn push(&mut self, line: u32) {
-        match &mut self.0 {
-            LinesRepr::Inline(len, lines) => match lines.get_mut(*len as usize) {
-                Some(slot) => {
-                    *slot = line;
-                    *len += 1;
-                }
-                None => {
-                    let mut all = Vec::with_capacity(INLINE_LINES * 2);
-                    all.extend_from_slice(lines);
-                    all.push(line);
-                    self.0 = LinesRepr::Spilled(Box::new(all));
-                }
-            },
-            LinesRepr::Spilled(all) => all.push(line),
-        }
+        self.0.push(line);
     }
 }
 
@@ -644,10 +651,7 @@ impl std::ops::Deref for Lines {
     type Target = [u32];
 
     fn deref(&self) -> &[u32] {
-        match &self.0 {
-            LinesRepr::Inline(len, lines) => lines.get(..*len as usize).unwrap_or_default(),
-            LinesRepr::Spilled(all) => all,
-        }
+        self.0.as_slice()
     }
 }
 
