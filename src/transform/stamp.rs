@@ -827,16 +827,6 @@ fn carry(
             }
             None => after.next(&output),
         };
-        // A literal the output holds as it was (most of them) is recorded as it was recorded,
-        // and nothing else happens to it: what the general steps below come to for it.
-        if let (Some(Some(_)), Some(b)) = (same, b) {
-            if let Some(h) = house_slot(b.precision()) {
-                let d = recorded(old_lists[h], seen[h], HOUSE_DECIMALS[h]);
-                seen[h] += 1;
-                lists[h].push(d.max(MIN_FIRST_PRECISION as i32) as i8);
-            }
-            continue;
-        }
         let (b, a) = match (b, a) {
             (Some(b), Some(a)) => (b, a),
             (None, None) => break,
