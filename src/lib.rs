@@ -51,7 +51,8 @@ pub use krl::parse as parse_krl;
 pub use located::Located;
 pub use position::{
     Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Lines, Name, NumField,
-    OffsetCall, OffsetKind, Orientation, ParsedFile, Position, PositionKind, Program, Skid, Usage,
+    OffsetCall, OffsetKind, Orientation, ParsedFile, Position, PositionKind, PositionList, Program,
+    Skid, Usage,
 };
 pub use program::{LoadError, LoadOptions, collect_inputs, load};
 /// Parses a RAPID module into its lossless tree (positions are [`rapid::parse_file`]'s).

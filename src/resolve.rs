@@ -13,7 +13,7 @@
 //! [`Usage`]: crate::position::Usage
 
 use crate::names::{NameIndex, NameKey, NameMap, fold, fold_into};
-use crate::position::{FrameDecl, FrameName, Position, RunTimeValue};
+use crate::position::{FrameDecl, FrameName, RunTimeValue};
 use crate::syntax::Span;
 
 /// How many calls deep a routine's effects on its callers are followed (a target passed on
@@ -173,7 +173,7 @@ pub(crate) struct FileFacts<'a> {
     /// The bytes every span of the file's facts points into.
     pub(crate) src: &'a [u8],
     /// Its targets (their usage is recorded here).
-    pub(crate) positions: &'a mut [Position],
+    pub(crate) positions: &'a mut crate::position::PositionList,
     /// Per target, whether other files see it (`None`: all are seen).
     pub(crate) exported: Option<&'a [bool]>,
     /// Its frame declarations.
@@ -319,17 +319,16 @@ fn record(
     run_time: Option<&RunTimeValue>,
     line: usize,
 ) {
-    if let Some(p) = files.get_mut(m).and_then(|f| f.positions.get_mut(i)) {
+    if let Some(usage) = files.get_mut(m).and_then(|f| f.positions.usage_mut(i)) {
         let frame = shared(names, frame);
-        let tool = if p.usage.tool.is_none() {
+        let tool = if usage.tool.is_none() {
             shared(names, tool)
         } else {
             None
         };
-        p.usage
-            .record_shared(frame.as_ref(), tool.as_ref(), stationary, line);
+        usage.record_shared(frame.as_ref(), tool.as_ref(), stationary, line);
         if let Some(why) = run_time {
-            p.usage.set_run_time(why.clone());
+            usage.set_run_time(why.clone());
         }
     }
 }
@@ -364,8 +363,8 @@ impl<'f, 'a> Binder<'f, 'a> {
         let total: usize = files.iter().map(|f| f.positions.len()).sum();
         let mut index = NameIndex::builder(naming.open, total);
         for (m, f) in files.iter().enumerate() {
-            for (i, p) in f.positions.iter().enumerate() {
-                if let Some(n) = &p.name {
+            for i in 0..f.positions.len() {
+                if let Some(n) = f.positions.name(i) {
                     index.insert(n, (m, i));
                 }
             }
@@ -386,9 +385,9 @@ impl<'f, 'a> Binder<'f, 'a> {
         }
     }
 
-    /// The targets of file `file`, as the binder sees them.
-    pub(crate) fn positions(&self, file: usize) -> &[Position] {
-        self.files.get(file).map_or(&[], |f| &*f.positions)
+    /// The targets of file `file`, as the binder sees them, and the source they point into.
+    pub(crate) fn positions(&self, file: usize) -> Option<(&crate::position::PositionList, &[u8])> {
+        self.files.get(file).map(|f| (&*f.positions, f.src))
     }
 
     /// Binds use `u` of file `m`: records it in every target it reaches now, and keeps what it
@@ -510,8 +509,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             );
             cartesian |= files
                 .get(t.0)
-                .and_then(|f| f.positions.get(t.1))
-                .is_some_and(|p| p.cartesian.is_some());
+                .is_some_and(|f| f.positions.has_cartesian(t.1));
         }
         for &p in params.iter() {
             param_uses.entry(p).or_default().push(MovesWith::of(u));
@@ -568,8 +566,8 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
     let mut targets = NameIndex::builder(naming.open, 0);
     let mut frames = NameIndex::builder(naming.open, 0);
     for (fi, f) in files.iter().enumerate() {
-        for (i, p) in f.positions.iter().enumerate() {
-            if let Some(n) = &p.name {
+        for i in 0..f.positions.len() {
+            if let Some(n) = f.positions.name(i) {
                 targets.insert(n, (fi, i));
             }
         }
@@ -600,17 +598,16 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
         }
     }
     for (tf, ti, line) in assigned_targets {
-        if let Some(p) = files.get_mut(tf).and_then(|f| f.positions.get_mut(ti)) {
-            p.usage.set_run_time(RunTimeValue::Target { line });
+        if let Some(usage) = files.get_mut(tf).and_then(|f| f.positions.usage_mut(ti)) {
+            usage.set_run_time(RunTimeValue::Target { line });
         }
     }
     if assigned_frames.is_empty() {
         return;
     }
     for f in files.iter_mut() {
-        for p in f.positions.iter_mut() {
-            let frame = p
-                .usage
+        for usage in f.positions.usages_mut() {
+            let frame = usage
                 .work_objects()
                 .find_map(|w| assigned_frames.get(&fold(w)));
             if let Some((name, line)) = frame {
@@ -618,7 +615,7 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
                     name: Some(name.clone()),
                     line: *line,
                 };
-                p.usage.set_run_time(why);
+                usage.set_run_time(why);
             }
         }
     }

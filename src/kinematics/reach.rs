@@ -176,14 +176,13 @@ pub fn reach_program(
         .map(|file| FileReach {
             path: file.path.clone(),
             targets: file
-                .positions
-                .iter()
+                .positions()
                 .map(|p| {
-                    let r = TargetReach::new(p);
+                    let r = TargetReach::new(&p);
                     if p.kind.is_cartesian() {
-                        cartesian(program, file.language, p, robot, &setup, kin, options, r)
+                        cartesian(program, file.language, &p, robot, &setup, kin, options, r)
                     } else {
-                        joint_target(p, kin, options, r)
+                        joint_target(&p, kin, options, r)
                     }
                 })
                 .collect(),

@@ -142,6 +142,7 @@ fn config_file(mut file: crate::position::ParsedFile) -> crate::position::Parsed
 /// Of a `$config.dat` resolved with a program, only the Cartesian points a motion of the program
 /// uses are the program's (`XHOME` and the points other programs move to are not).
 fn keep_used_points(file: &mut crate::position::ParsedFile) {
-    file.positions
-        .retain(|p| p.cartesian.is_some() && !p.usage.lines.is_empty());
+    file.positions.retain(&file.source, |p| {
+        p.cartesian.is_some() && !p.usage.lines.is_empty()
+    });
 }

@@ -10,7 +10,7 @@ use super::resolve::HashMap;
 use super::tree::{Aggregate, Expr, ExprKind, Stmt, StmtKind};
 use crate::position::{
     Axes, BitField, CartesianFields, Config, FrameDecl, FrameKind, Name, NumField, Orientation,
-    Position, PositionKind, Usage,
+    Position, PositionKind, PositionList, Usage,
 };
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span};
 
@@ -424,7 +424,7 @@ fn build_position(
 
 /// What an [`Extractor`] found in one file.
 pub(crate) struct Extracted {
-    pub positions: Vec<Position>,
+    pub positions: PositionList,
     pub frames: Vec<FrameDecl>,
     pub facts: Facts,
 }
@@ -473,7 +473,7 @@ impl<'a> Extractor<'a> {
             lines,
             declared: HashMap::default(),
             out: Extracted {
-                positions: Vec::new(),
+                positions: PositionList::new(),
                 frames: Vec::new(),
                 facts: Facts::default(),
             },
@@ -523,7 +523,7 @@ impl<'a> Extractor<'a> {
                             out.facts.candidates.push(p);
                             out.facts.inferred.push(false);
                         } else {
-                            out.positions.push(p);
+                            out.positions.push(p, src);
                         }
                     }
                 }
@@ -759,7 +759,7 @@ fn assignment(
         }
         Some(kind) => out
             .positions
-            .push(build_position(lines, value.span, kind, name, f)),
+            .push(build_position(lines, value.span, kind, name, f), src),
         None => {
             if let Some(kind) = inferred_kind(src, agg, &f) {
                 out.facts
@@ -779,7 +779,7 @@ fn target_refs(
     lines: &LineIndex,
     e: &Expr,
     refs: &mut Vec<Ref>,
-    positions: &mut Vec<Position>,
+    positions: &mut PositionList,
 ) -> bool {
     match &e.kind {
         ExprKind::Name | ExprKind::Index(..) => {
@@ -789,7 +789,7 @@ fn target_refs(
         ExprKind::Aggregate(agg) => {
             let f = read_fields(src, agg);
             if let Some(kind) = inferred_kind(src, agg, &f) {
-                positions.push(build_position(lines, e.span, kind, None, f));
+                positions.push(build_position(lines, e.span, kind, None, f), src);
                 refs.push(Ref::Inline(e.span));
             }
             true

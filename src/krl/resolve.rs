@@ -290,7 +290,8 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     // use them.
     let counts: Vec<usize> = files.iter().map(|f| f.positions.len()).collect();
     for (file, fact) in files.iter_mut().zip(facts.iter_mut()) {
-        file.positions.append(&mut fact.candidates);
+        file.positions
+            .extend(std::mem::take(&mut fact.candidates), &file.source);
     }
     // Per file, the motions to warn about: a Cartesian target and no base.
     let mut unresolved: Vec<Vec<crate::syntax::Span>> = vec![Vec::new(); files.len()];
@@ -338,12 +339,11 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                         for r in refs {
                             match r {
                                 // An inline literal is one of the file's own positions.
-                                Ref::Inline(s) => targets.extend(
-                                    binder
-                                        .positions(fi)
-                                        .get(..own)
-                                        .and_then(|ps| ps.iter().position(|p| p.span == *s)),
-                                ),
+                                Ref::Inline(s) => {
+                                    targets.extend(binder.positions(fi).and_then(|(ps, _)| {
+                                        (0..own.min(ps.len())).find(|&i| ps.span(i) == Some(*s))
+                                    }))
+                                }
                                 Ref::Named(n) => {
                                     // The name itself, then what it was last copied from.
                                     let start = folded.len();
@@ -406,18 +406,18 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         };
         let cands = file
             .positions
-            .split_off(counts.get(fi).copied().unwrap_or_default());
+            .split_off(counts.get(fi).copied().unwrap_or_default(), &file.source);
         let mut promoted = false;
         for (p, &k) in cands.into_iter().zip(kept) {
             if k || !p.usage.lines.is_empty() {
-                file.positions.push(p);
+                file.positions.push(p, &file.source);
                 promoted = true;
             } else {
                 fact.candidates.push(p);
             }
         }
         if promoted {
-            file.positions.sort_by_key(|p| p.span.start);
+            file.positions.sort_by_start();
         }
         file.diagnostics.sort_by_key(|d| d.span.start);
     }
@@ -465,8 +465,8 @@ END\n";
         let f = crate::krl::parse_file(Path::new("b.src"), src.to_vec());
         let usage: Vec<_> = f
             .positions
-            .iter()
-            .map(|p| (p.usage.wobj.as_deref(), p.usage.tool.as_deref()))
+            .usages()
+            .map(|u| (u.wobj.as_deref(), u.tool.as_deref()))
             .collect();
         assert_eq!(
             usage,
@@ -490,7 +490,7 @@ END\n";
         let src = b"DEF a()\n  DECL E6POS XP1={X 1,Y 2,Z 3,A 0,B 0,C 0}\n  DECL E6POS XCOPY\n  $BASE=BASE_DATA[4]\n  XCOPY = XP1\n  XCOPY.Z = XCOPY.Z + 100\n  LIN XCOPY\nEND\n";
         let f = crate::krl::parse_file(Path::new("a.src"), src.to_vec());
         assert_eq!(f.positions.len(), 1);
-        let u = &f.positions[0].usage;
+        let u = &f.position(0).unwrap().usage;
         assert_eq!(u.wobj.as_deref(), Some("BASE_DATA[4]"));
         assert_eq!(u.lines, [7]);
     }
@@ -509,14 +509,8 @@ END\n";
         );
         let usage: Vec<_> = f
             .positions
-            .iter()
-            .map(|p| {
-                (
-                    p.usage.wobj.as_deref(),
-                    p.usage.tool.as_deref(),
-                    p.usage.stationary_tool,
-                )
-            })
+            .usages()
+            .map(|u| (u.wobj.as_deref(), u.tool.as_deref(), u.stationary_tool))
             .collect();
         assert_eq!(
             usage,

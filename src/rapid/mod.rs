@@ -53,7 +53,7 @@ fn unreachable_empty(path: &Path) -> ParsedFile {
         language: Language::Rapid,
         lines: LineIndex::new(b""),
         source: Vec::new(),
-        positions: Vec::new(),
+        positions: crate::position::PositionList::new(),
         frames: Vec::new(),
         offsets: Vec::new(),
         opaque: 0,

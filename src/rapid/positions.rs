@@ -11,7 +11,7 @@ use super::parser::Stmt;
 use crate::names::{NameKey, NameMap};
 use crate::position::{
     Axes, CartesianFields, Config, FrameDecl, FrameKind, Name, NumField, OffsetCall, OffsetKind,
-    Orientation, Position, PositionKind, Usage,
+    Orientation, Position, PositionKind, PositionList, Usage,
 };
 use crate::resolve::DeclKind;
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, Span32, latin1};
@@ -97,7 +97,7 @@ struct RecordDecl {
 pub struct Extractor<'l> {
     records: Vec<RecordDecl>,
     lines: &'l LineIndex,
-    positions: Vec<Position>,
+    positions: PositionList,
     frames: Vec<FrameDecl>,
     offsets: Vec<OffsetCall>,
     /// Every name declared, routines included (spans into the source: no copy per
@@ -127,7 +127,7 @@ pub struct Extractor<'l> {
 /// What [`Extractor::finish`] returns.
 pub struct Extracted {
     /// The targets declared or written inline, in source order.
-    pub positions: Vec<Position>,
+    pub positions: PositionList,
     /// The work object, tool and base declarations.
     pub frames: Vec<FrameDecl>,
     /// The `Offs`/`RelTool` calls, for the offset rules.
@@ -157,13 +157,14 @@ fn key_into<'b>(buf: &'b mut String, src: &[u8], span: Span) -> &'b str {
 
 impl<'l> Extractor<'l> {
     /// `src` is only looked at to size the position list: every target literal starts with
-    /// `[[`, and growing a vector of ~1 KB positions by doubling would copy it several times.
+    /// `[[`, and growing the list by doubling would copy it several times. A robtarget packs
+    /// into about 60 bytes (see [`PositionList`]).
     pub fn new(lines: &'l LineIndex, src: &[u8]) -> Extractor<'l> {
         let literals = memchr::memmem::find_iter(src, b"[[").count();
         Extractor {
             records: Vec::new(),
             lines,
-            positions: Vec::with_capacity(literals),
+            positions: PositionList::with_capacity(literals, 64),
             frames: Vec::new(),
             offsets: Vec::new(),
             symbols: Vec::new(),
@@ -435,7 +436,7 @@ impl<'l> Extractor<'l> {
                         && let Some(p) = self.position(src, arena, i, kind, None)
                     {
                         added.push(self.positions.len());
-                        self.positions.push(p);
+                        self.positions.push(p, src);
                         skip_until = n.subtree_end;
                     }
                 }
@@ -511,7 +512,7 @@ impl<'l> Extractor<'l> {
     /// Resolves usage and lints of one module on its own; consumes the extractor.
     pub fn finish(self, src: &[u8]) -> Extracted {
         finish_task(vec![(self, src)]).pop().unwrap_or(Extracted {
-            positions: Vec::new(),
+            positions: PositionList::new(),
             frames: Vec::new(),
             offsets: Vec::new(),
             diagnostics: Vec::new(),
@@ -568,7 +569,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
         |n: &NameKey| n.is(b"fine") || n.numbered(b'z') || type_of.get(n) == Some(&DeclKind::Zone);
     let is_speed =
         |n: &NameKey| n.is(b"vmax") || n.numbered(b'v') || type_of.get(n) == Some(&DeclKind::Speed);
-    let mut positions: Vec<Vec<Position>> = Vec::with_capacity(modules.len());
+    let mut positions: Vec<PositionList> = Vec::with_capacity(modules.len());
     let mut calls: Vec<Calls> = Vec::with_capacity(modules.len());
     let mut rest = Vec::with_capacity(modules.len());
     for (x, src) in modules {
@@ -704,7 +705,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
     }
     drop(all_frames);
     let mut out = Vec::with_capacity(rest.len());
-    for (m, ((frames, offsets, ..), ps)) in rest.into_iter().zip(positions).enumerate() {
+    for (m, ((frames, offsets, .., src), ps)) in rest.into_iter().zip(positions).enumerate() {
         let mut d = diagnostics
             .get_mut(m)
             .map(std::mem::take)
@@ -715,10 +716,11 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
                 .map(std::mem::take)
                 .unwrap_or_default(),
         );
-        for p in &ps {
-            if p.usage.other_wobjs().is_empty() {
-                continue;
-            }
+        let twice_used = ps
+            .usages()
+            .enumerate()
+            .filter(|(_, u)| !u.other_wobjs().is_empty());
+        for p in twice_used.filter_map(|(i, _)| ps.get(i, src)) {
             let all: Vec<&str> = p.usage.work_objects().collect();
             let lines: Vec<String> = p.usage.lines.iter().map(u32::to_string).collect();
             d.push(
@@ -881,7 +883,7 @@ impl Extractor<'_> {
                             _ => format!("{}{suffix}", text_of(src, name)),
                         };
                         if let Some(p) = self.position(src, arena, *id, kind, Some(full)) {
-                            self.positions.push(p);
+                            self.positions.push(p, src);
                         }
                     }
                     self.scan(src, arena, false);
@@ -936,25 +938,20 @@ impl Extractor<'_> {
                             };
                             let full = format!("{name_text}{suffix}.{}", text_of(src, field));
                             if let Some(p) = self.position(src, arena, part, kind, Some(full)) {
-                                self.positions.push(p);
+                                self.positions.push(p, src);
                             }
                         }
                     }
                     let named = self.positions.len();
                     self.scan(src, arena, true);
                     if named > before {
-                        let spans: Vec<Span> = self
-                            .positions
-                            .get(before..named)
-                            .map(|ps| ps.iter().map(|p| p.span).collect())
-                            .unwrap_or_default();
+                        let span_of = |ps: &PositionList, i| ps.span(i);
+                        let spans: Vec<Span> = (before..named)
+                            .filter_map(|i| span_of(&self.positions, i))
+                            .collect();
                         let mut i = named;
                         while i < self.positions.len() {
-                            if self
-                                .positions
-                                .get(i)
-                                .is_some_and(|p| spans.contains(&p.span))
-                            {
+                            if span_of(&self.positions, i).is_some_and(|sp| spans.contains(&sp)) {
                                 self.positions.remove(i);
                             } else {
                                 i += 1;

@@ -68,7 +68,7 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
             .with_hint("delete it; trackfix shows such bytes escaped, as \\x1b"),
         );
     }
-    for p in &file.positions {
+    for p in file.positions() {
         if let Some(q) = p
             .cartesian
             .as_ref()
@@ -103,7 +103,7 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
                 );
             }
         }
-        if let Some(problem) = crate::transform::policy::implausible_literal(file, p) {
+        if let Some(problem) = crate::transform::policy::implausible_literal(file, &p) {
             out.push(
                 Diagnostic::warning(p.span, format!("`{}` {problem}", p.label())).with_hint(
                     "a typo or a placeholder: transforms refuse the target until it is fixed",

@@ -56,7 +56,7 @@ impl ProgramReport {
     /// The report of `program`; `None` for a program with no language (no files).
     pub fn of(program: &Program) -> Option<ProgramReport> {
         let language = program.language()?;
-        let targets = program.files.iter().flat_map(|f| &f.positions);
+        let targets = || program.files.iter().flat_map(|f| f.positions.usages());
         Some(ProgramReport {
             language,
             files: program
@@ -64,8 +64,8 @@ impl ProgramReport {
                 .iter()
                 .map(|f| f.path.display().to_string())
                 .collect(),
-            targets: targets.clone().count(),
-            resolved: targets.filter(|p| p.usage.wobj.is_some()).count(),
+            targets: targets().count(),
+            resolved: targets().filter(|u| u.wobj.is_some()).count(),
         })
     }
 }
@@ -454,9 +454,8 @@ pub fn message(file: &ParsedFile, d: &Diagnostic) -> Message {
 pub fn inspect_file(file: &ParsedFile, options: InspectOptions) -> FileReport {
     let mut report = file_head(file);
     report.positions = file
-        .positions
-        .iter()
-        .map(|p| position_row(file, p, options))
+        .positions()
+        .map(|p| position_row(file, &p, options))
         .collect();
     report
 }
@@ -464,8 +463,8 @@ pub fn inspect_file(file: &ParsedFile, options: InspectOptions) -> FileReport {
 /// A file's report without its positions: what is small (frames, counts, lints, stamp).
 fn file_head(file: &ParsedFile) -> FileReport {
     let mut counts = BTreeMap::new();
-    for p in &file.positions {
-        *counts.entry(p.kind.as_str().to_owned()).or_insert(0) += 1;
+    for (_, kind, _) in (0..file.positions.len()).filter_map(|i| file.positions.head(i)) {
+        *counts.entry(kind.as_str().to_owned()).or_insert(0) += 1;
     }
     FileReport {
         path: file.path.display().to_string(),
@@ -523,9 +522,8 @@ pub fn inspect_program(program: &Program, options: InspectOptions) -> Vec<FileRe
         .map(|f| {
             let mut report = file_head(f);
             report.positions = f
-                .positions
-                .iter()
-                .map(|p| program_row(program, f, p, options))
+                .positions()
+                .map(|p| program_row(program, f, &p, options))
                 .collect();
             report
         })
@@ -635,8 +633,8 @@ impl Serialize for LazyRows<'_> {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         use serde::ser::SerializeSeq as _;
         let mut seq = s.serialize_seq(Some(self.file.positions.len()))?;
-        for p in &self.file.positions {
-            seq.serialize_element(&program_row(self.program, self.file, p, self.options))?;
+        for p in self.file.positions() {
+            seq.serialize_element(&program_row(self.program, self.file, &p, self.options))?;
         }
         seq.end()
     }

@@ -461,6 +461,17 @@ impl PackedLit {
     pub(crate) fn len(self) -> usize {
         (self.0.get() & 0xff) as usize
     }
+
+    /// The packed word, to be stored and given back to [`PackedLit::from_bits`].
+    pub(crate) fn bits(self) -> u32 {
+        self.0.get()
+    }
+
+    /// The literal a word from [`PackedLit::bits`] packs; `None` for zero, which no literal
+    /// packs to.
+    pub(crate) fn from_bits(bits: u32) -> Option<PackedLit> {
+        NonZeroU32::new(bits).map(PackedLit)
+    }
 }
 
 impl NumLit {

@@ -96,11 +96,11 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
             .flatten()
             .map(|(s, _)| s.gimbal)
             .unwrap_or_default();
-        for (i, p) in file.positions.iter().enumerate() {
+        for (i, p) in file.positions().enumerate() {
             let step = if p.kind.is_cartesian() {
-                cartesian(rule, scope, p, splits.a_of(i))
+                cartesian(rule, scope, &p, splits.a_of(i))
             } else {
-                rule.joint(scope, p)
+                rule.joint(scope, &p)
             };
             match step {
                 Ok(Some((edits, change))) if !edits.is_empty() => {

@@ -517,7 +517,7 @@ pub(crate) fn reflection_for(
 
 /// The declared target an `Offs` offsets: `p10` in `Offs(p10, …)`, `pBed` in
 /// `Offs(RelTool(pBed, …), …)`, `pGrid` in `Offs(pGrid{r,c}, …)`; every array element of it.
-fn offset_targets<'p>(program: &'p Program, text: &str) -> Vec<&'p Position> {
+fn offset_targets(program: &Program, text: &str) -> Vec<Position> {
     let inner = text.rsplit('(').next().unwrap_or(text).trim_start();
     let base: String = inner
         .chars()
@@ -530,13 +530,17 @@ fn offset_targets<'p>(program: &'p Program, text: &str) -> Vec<&'p Position> {
     program
         .files
         .iter()
-        .flat_map(|f| &f.positions)
-        .filter(|p| {
-            p.name.as_deref().is_some_and(|n| {
-                n.eq_ignore_ascii_case(&base)
-                    || n.get(..element.len())
-                        .is_some_and(|h| h.eq_ignore_ascii_case(&element))
-            })
+        .flat_map(|f| {
+            let named = |i: &usize| {
+                f.positions.name(*i).is_some_and(|n| {
+                    n.eq_ignore_ascii_case(&base)
+                        || n.get(..element.len())
+                            .is_some_and(|h| h.eq_ignore_ascii_case(&element))
+                })
+            };
+            (0..f.positions.len())
+                .filter(named)
+                .filter_map(|i| f.position(i))
         })
         .collect()
 }
@@ -887,7 +891,10 @@ mod tests {
         );
         let text = mirrored_text(&rapid(&src, "wobj0"), &MirrorSettings::default());
         let m = rapid(&text, "wobj0");
-        let (t50, t10) = (&m.files[0].positions[0], &m.files[0].positions[1]);
+        let (t50, t10) = (
+            &m.files[0].position(0).unwrap(),
+            &m.files[0].position(1).unwrap(),
+        );
         let trans = t50.cartesian.as_ref().unwrap().translation().unwrap();
         assert_eq!(trans, [298.36, -100.97, 250.58]);
         // Quaternions up to the sign of the whole, to the 6 decimals RobotStudio printed.
@@ -984,8 +991,7 @@ mod tests {
         let wobj = |f: &ParsedFile| frame(f, "wCar");
         let tool = |f: &ParsedFile| frame(f, "tGun");
         let target = |f: &ParsedFile| {
-            f.positions
-                .iter()
+            f.positions()
                 .find(|p| p.name.as_deref() == Some("p1"))
                 .unwrap()
                 .cartesian
@@ -1036,8 +1042,7 @@ mod tests {
         let p1 = parse(&out);
         let w = p1.files[0].frames[0].pose().unwrap();
         let pos = |f: &ParsedFile, n: &str| {
-            f.positions
-                .iter()
+            f.positions()
                 .find(|p| p.name.as_deref() == Some(n))
                 .unwrap()
                 .cartesian
@@ -1187,7 +1192,7 @@ mod tests {
             let p0 = rapid(&line, "wobj0");
             let once = mirrored_text(&p0, &s);
             let twice = mirrored_text(&rapid(&once, "wobj0"), &s);
-            let (a, b) = (&p0.files[0].positions[0], &rapid(&twice, "wobj0").files[0].positions[0]);
+            let (a, b) = (&p0.files[0].position(0).unwrap(), &rapid(&twice, "wobj0").files[0].position(0).unwrap());
             let ta = a.cartesian.as_ref().unwrap().translation().unwrap();
             let tb = b.cartesian.as_ref().unwrap().translation().unwrap();
             for (u, v) in ta.iter().zip(tb) {

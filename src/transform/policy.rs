@@ -466,7 +466,13 @@ mod tests {
             ),
         ];
         for (program, (declared, kind, moved), want) in cases {
-            let used = program.files[0].positions[0].usage.wobj.clone().unwrap();
+            let used = program.files[0]
+                .position(0)
+                .unwrap()
+                .usage
+                .wobj
+                .clone()
+                .unwrap();
             let program = with_frame(program, declared, kind, moved);
             assert_eq!(refusal(&program, &used), want);
         }

@@ -156,7 +156,7 @@ mod tests {
             "w",
         );
         let f = &p.files[0];
-        let target = &f.positions[0];
+        let target = &f.position(0).unwrap();
         let span = Span::new(target.span.start + 1, target.span.start + 8);
         let r = Refusal::new(
             f,

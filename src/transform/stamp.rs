@@ -180,7 +180,9 @@ impl LockSplits {
     pub fn of(file: &ParsedFile) -> LockSplits {
         use crate::position::Orientation;
         let mut out = Vec::new();
-        for (i, p) in file.positions.iter().enumerate() {
+        // Only A, B, C targets are decoded: a RAPID module has none.
+        let abc = (0..file.positions.len()).filter(|&i| file.positions.writes_abc(i));
+        for (i, p) in abc.filter_map(|i| Some((i, file.position(i)?))) {
             let Some(Orientation::Abc([Some(a), Some(b), Some(_)])) =
                 p.cartesian.as_ref().and_then(|c| c.orient.as_ref())
             else {

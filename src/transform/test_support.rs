@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use crate::position::{
     BitField, CartesianFields, Config, Language, NumField, Orientation, ParsedFile, Position,
-    PositionKind, Program, Usage,
+    PositionKind, PositionList, Program, Usage,
 };
 use crate::syntax::{LineIndex, NumLit, Span};
 
@@ -72,8 +72,8 @@ fn file(path: &str, language: Language, source: Vec<u8>, positions: Vec<Position
             path: PathBuf::from(path),
             language,
             lines: LineIndex::new(&source),
+            positions: PositionList::packed(positions, &source),
             source,
-            positions,
             frames: Vec::new(),
             offsets: Vec::new(),
             opaque: 0,

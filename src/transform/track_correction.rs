@@ -462,7 +462,7 @@ mod tests {
             let c = text_after(&p0, &s, Direction::Correct);
             let back = text_after(&rapid(&c, "wobj_car"), &s, Direction::Zero);
             let p1 = rapid(&back, "wobj_car");
-            let (a, b) = (&p0.files[0].positions[0], &p1.files[0].positions[0]);
+            let (a, b) = (&p0.files[0].position(0).unwrap(), &p1.files[0].position(0).unwrap());
             let (ta, tb) = (a.cartesian.as_ref().unwrap().translation().unwrap(), b.cartesian.as_ref().unwrap().translation().unwrap());
             for (u, v) in ta.iter().zip(tb) { prop_assert!((u - v).abs() <= 1.5e-3, "{line}{c}{back}"); }
             let ra = abb_quat(quat(a)).unwrap();
@@ -472,7 +472,7 @@ mod tests {
             let kl = format!("{{X {x:.3},Y {y:.3},Z {z:.3},A {:.4},B {:.4},C {:.4},S 2,T 0,E1 {skid:.2}}}\n", abc.0, abc.1, abc.2);
             let kc = text_after(&krl(&kl, "wobj_car"), &s, Direction::Correct);
             let kb = text_after(&krl(&kc, "wobj_car"), &s, Direction::Zero);
-            let (ka, kz) = (krl(&kl, "w").files[0].positions[0].cartesian.clone().unwrap(), krl(&kb, "w").files[0].positions[0].cartesian.clone().unwrap());
+            let (ka, kz) = (krl(&kl, "w").files[0].position(0).unwrap().cartesian.clone().unwrap(), krl(&kb, "w").files[0].position(0).unwrap().cartesian.clone().unwrap());
             let (pa, pz) = (ka.pose().unwrap(), kz.pose().unwrap());
             prop_assert!((pa.translation.vector - pz.translation.vector).amax() <= 1.5e-3, "{kl}{kc}{kb}");
             prop_assert!(pa.rotation.angle_to(&pz.rotation).to_degrees() < 3e-4, "{kl}{kc}{kb}");

@@ -161,9 +161,8 @@ fn combine(
             .cloned()
             .collect();
         let changes = a
-            .positions
-            .iter()
-            .zip(&b.positions)
+            .positions()
+            .zip(b.positions())
             .filter(|(p, q)| p.span.slice(&a.source) != q.span.slice(&b.source))
             .map(|(p, q)| {
                 let poses = p
@@ -171,7 +170,7 @@ fn combine(
                     .as_ref()
                     .and_then(|c| c.pose())
                     .map(|x| match (mirror, &own) {
-                        (Some(m), Some(own)) => match reflection_for(start, p, m, own) {
+                        (Some(m), Some(own)) => match reflection_for(start, &p, m, own) {
                             Ok(r) => r.target(&x).0,
                             Err(_) => x,
                         },
@@ -271,8 +270,8 @@ fn restore_unmoved(a: &ParsedFile, b: &ParsedFile) -> Result<Vec<u8>, EditError>
     let close = |f: &NumField, g: &NumField, house: i32| {
         (f.value() - g.value()).abs() <= CHAIN_ROUNDING_UNITS * unit(&[f, g], house) * (1.0 + 1e-9)
     };
-    for (p, q) in a.positions.iter().zip(&b.positions) {
-        let (x, y) = (target_literals(p), target_literals(q));
+    for (p, q) in a.positions().zip(b.positions()) {
+        let (x, y) = (target_literals(&p), target_literals(&q));
         if x.others.len() == y.others.len() {
             for (f, g) in x.others.iter().zip(&y.others) {
                 if close(f, g, MM_DECIMALS as i32) {
@@ -289,7 +288,7 @@ fn restore_unmoved(a: &ParsedFile, b: &ParsedFile) -> Result<Vec<u8>, EditError>
             .zip(&y.trans)
             .all(|(f, g)| close(f, g, MM_DECIMALS as i32));
         let rot = |t: &Position| t.cartesian.as_ref().and_then(|c| c.rotation());
-        let orient_back = match (rot(p), rot(q)) {
+        let orient_back = match (rot(&p), rot(&q)) {
             (Some(r), Some(s)) => r.angle_to(&s) <= CHAIN_ROUNDING_UNITS * x.orient_unit_rad,
             _ => x.orient.is_empty(),
         };

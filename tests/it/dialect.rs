@@ -82,8 +82,8 @@ fn parse(path: &Path, source: Vec<u8>) -> ParsedFile {
         language: Language::of(&Stub),
         round_trip: true,
         lines,
+        positions: trackfix::PositionList::packed(positions, &source),
         source,
-        positions,
         frames: Vec::new(),
         offsets: Vec::new(),
         opaque: 0,
@@ -171,7 +171,9 @@ fn a_third_dialect_joins_with_one_registry_line() {
         refused[0].message
     );
     let again = reparse(&program, &result, &LoadOptions::default()).unwrap();
-    let t = again.files[0].positions[0]
+    let t = again.files[0]
+        .position(0)
+        .unwrap()
         .cartesian
         .as_ref()
         .unwrap()

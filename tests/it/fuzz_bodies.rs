@@ -100,7 +100,7 @@ pub(crate) fn file_holds(file: &ParsedFile) {
         assert!(d.span.start <= d.span.end && d.span.end <= len);
         let _ = file.render(d);
     }
-    for p in &file.positions {
+    for p in file.positions() {
         assert!(p.span.start <= p.span.end && p.span.end <= len);
         if let Some(c) = &p.cartesian {
             for f in c.trans.iter().flatten() {

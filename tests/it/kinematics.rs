@@ -864,8 +864,7 @@ fn parsed(src: &str) -> Program {
 
 fn joints_in(program: &Program, name: &str) -> Joints {
     let p = program.files[0]
-        .positions
-        .iter()
+        .positions()
         .find(|p| p.name.as_deref() == Some(name))
         .unwrap();
     let v: Vec<f64> = p
@@ -1031,8 +1030,7 @@ fn mirror_with_kinematics_mirrors_joints_and_configurations_by_ik() {
     let after = parsed(&out);
     for (i, j) in samples.iter().enumerate() {
         let p = after.files[0]
-            .positions
-            .iter()
+            .positions()
             .find(|p| p.name.as_deref() == Some(&format!("p{i}")))
             .unwrap();
         let written = ConfigValue::written(&p.config).unwrap();

@@ -104,8 +104,8 @@ fn dump_program(program: &Program) -> String {
             f.opaque,
             f.round_trip
         );
-        for p in &f.positions {
-            out += &dump_position(&f.source, p);
+        for p in f.positions() {
+            out += &dump_position(&f.source, &p);
             out.push('\n');
         }
         for fr in &f.frames {
@@ -178,7 +178,7 @@ fn spot_line_has_160_points_on_the_track_resolved_through_fdat() {
     let dat = &program.files[1];
     assert_eq!(dat.positions.len(), 161);
     let mut e1 = Vec::new();
-    for p in &dat.positions {
+    for p in dat.positions() {
         assert_eq!(p.kind, PositionKind::E6Pos);
         let trackfix::position::Skid::At(s) = p.skid(0) else {
             panic!("{} has no skid", p.label());
@@ -189,8 +189,7 @@ fn spot_line_has_160_points_on_the_track_resolved_through_fdat() {
     }
     assert!(e1.iter().cloned().fold(0.0, f64::max) - e1[0] > 7500.0);
     let p12 = dat
-        .positions
-        .iter()
+        .positions()
         .find(|p| p.name.as_deref() == Some("XP12"))
         .unwrap();
     assert_eq!(p12.usage.wobj.as_deref(), Some("BASE_DATA[1]"));
@@ -206,7 +205,7 @@ fn spot_line_has_160_points_on_the_track_resolved_through_fdat() {
     );
     assert_eq!(p12.usage.lines, [u32::try_from(line).unwrap()]);
     // P0 is taught in BASE_NO 0: the world.
-    let p0 = &dat.positions[0];
+    let p0 = &dat.position(0).unwrap();
     assert_eq!(p0.usage.wobj.as_deref(), Some("$WORLD"));
     // The spans point at the literal text.
     let e1 = p12.extax[0].as_ref().unwrap();
@@ -256,7 +255,7 @@ fn config_dat_bases_and_tools() {
 #[test]
 fn binary_status_turn_and_kinds_in_bom_file() {
     let f = parse_sample("bom_cell.src");
-    let kinds: Vec<_> = f.positions.iter().map(|p| (p.label(), p.kind)).collect();
+    let kinds: Vec<_> = f.positions().map(|p| (p.label(), p.kind)).collect();
     assert_eq!(
         kinds,
         [
@@ -269,7 +268,7 @@ fn binary_status_turn_and_kinds_in_bom_file() {
             ("inline E6POS".to_owned(), PositionKind::E6Pos),
         ]
     );
-    let Config::StatusTurn { status, turn } = &f.positions[0].config else {
+    let Config::StatusTurn { status, turn } = &f.position(0).unwrap().config else {
         panic!()
     };
     let (s, t) = (status.as_ref().unwrap(), turn.as_ref().unwrap());
@@ -278,13 +277,13 @@ fn binary_status_turn_and_kinds_in_bom_file() {
     assert_eq!(s.span().slice(&f.source), b"'B010'");
     assert_eq!(t.rewrite(35 ^ 0b101001).as_deref(), Some("'B001010'"));
     // Joint positions: A1..A6 and E1, no Cartesian part.
-    let park = &f.positions[2];
+    let park = &f.position(2).unwrap();
     assert!(park.cartesian.is_none());
     assert_eq!(park.joints.len(), 6);
     assert_eq!(park.joints[4].as_ref().unwrap().value(), 35.5);
     assert_eq!(park.extax.len(), 1);
     // Every position is used, with BASE_DATA[1] and TOOL_DATA[2].
-    for p in &f.positions {
+    for p in f.positions() {
         assert_eq!(
             p.usage.wobj.as_deref(),
             Some("BASE_DATA[1]"),
@@ -300,8 +299,7 @@ fn fdat_tcp_and_with_clauses_resolve() {
     let program = load("glue_tcp.src", false);
     let dat = &program.files[1];
     let by = |n: &str| {
-        dat.positions
-            .iter()
+        dat.positions()
             .find(|p| p.name.as_deref() == Some(n))
             .unwrap()
     };
@@ -324,8 +322,7 @@ fn a_point_used_with_two_bases_is_flagged() {
     assert_eq!(program.files.len(), 2);
     let dat = &program.files[1];
     let shared = dat
-        .positions
-        .iter()
+        .positions()
         .find(|p| p.name.as_deref() == Some("XSHARED"))
         .unwrap();
     assert_eq!(shared.usage.wobj.as_deref(), Some("BASE_DATA[1]"));
@@ -333,8 +330,7 @@ fn a_point_used_with_two_bases_is_flagged() {
     assert_eq!(shared.usage.lines, [8, 10]);
     // BAS(#BASE,1) before XEND; the second DEF starts over and leaves it unresolved.
     let end = dat
-        .positions
-        .iter()
+        .positions()
         .find(|p| p.name.as_deref() == Some("XEND"))
         .unwrap();
     assert_eq!(end.usage.wobj.as_deref(), Some("BASE_DATA[1]"));
@@ -352,7 +348,7 @@ fn a_point_used_with_two_bases_is_flagged() {
 fn frames_are_targets_only_when_a_motion_uses_them() {
     let program = load("pallet.src", false);
     let dat = &program.files[1];
-    let names: Vec<_> = dat.positions.iter().map(|p| p.label()).collect();
+    let names: Vec<_> = dat.positions().map(|p| p.label()).collect();
     // FPALLET only appears in `:` expressions, FUNUSED nowhere: neither is a target.
     assert_eq!(names, ["XPICK_APP", "XPICK", "XPLACE_REL"]);
     let src = &program.files[0];
@@ -364,13 +360,18 @@ fn frames_are_targets_only_when_a_motion_uses_them() {
         .filter(|d| d.message.starts_with("computed target"))
         .count();
     assert_eq!(warnings, 1);
-    assert_eq!(dat.positions[1].usage.wobj.as_deref(), Some("BASE_DATA[3]"));
-    assert_eq!(dat.positions[1].usage.tool.as_deref(), Some("TOOL_DATA[2]"));
+    assert_eq!(
+        dat.position(1).unwrap().usage.wobj.as_deref(),
+        Some("BASE_DATA[3]")
+    );
+    assert_eq!(
+        dat.position(1).unwrap().usage.tool.as_deref(),
+        Some("TOOL_DATA[2]")
+    );
     // A FRAME that a motion does use is a target (bom_cell's FCHECK).
     let f = parse_sample("bom_cell.src");
     let fcheck = f
-        .positions
-        .iter()
+        .positions()
         .find(|p| p.kind == PositionKind::Frame)
         .unwrap();
     assert_eq!(fcheck.config, Config::None);
@@ -380,7 +381,7 @@ fn frames_are_targets_only_when_a_motion_uses_them() {
 fn lowercase_file_without_final_newline() {
     let f = parse_sample("lower_case.src");
     assert!(f.round_trip);
-    let labels: Vec<_> = f.positions.iter().map(|p| (p.label(), p.line)).collect();
+    let labels: Vec<_> = f.positions().map(|p| (p.label(), p.line)).collect();
     assert_eq!(
         labels,
         [
@@ -391,7 +392,7 @@ fn lowercase_file_without_final_newline() {
             ("inline E6POS".to_owned(), 15),
         ]
     );
-    for p in &f.positions {
+    for p in f.positions() {
         assert_eq!(
             p.usage.wobj.as_deref(),
             Some("BASE_DATA[2]"),
@@ -399,7 +400,7 @@ fn lowercase_file_without_final_newline() {
             p.label()
         );
     }
-    let circ_aux = &f.positions[4];
+    let circ_aux = &f.position(4).unwrap();
     assert!(circ_aux.extax.is_empty());
     let c = circ_aux.cartesian.as_ref().unwrap();
     assert!(c.orient.is_none());
@@ -539,7 +540,7 @@ proptest! {
         let file = krl::parse_file(Path::new("gen.dat"), src.into_bytes());
         prop_assert!(file.diagnostics.is_empty(), "{:?}", file.diagnostics);
         prop_assert_eq!(file.positions.len(), expected.len());
-        for (p, (texts, s, t, e1)) in file.positions.iter().zip(&expected) {
+        for (p, (texts, s, t, e1)) in file.positions().zip(&expected) {
             let c = p.cartesian.as_ref().unwrap();
             let Some(Orientation::Abc(abc)) = &c.orient else { panic!() };
             let got: Vec<&[u8]> = c.trans.iter().chain(abc.iter())
@@ -658,14 +659,13 @@ fn real_corpus() {
         let file = krl::parse_file(&path, src);
         let program = krl::load_program(&path, &LoadOptions::default()).unwrap();
         let found = file
-            .positions
-            .iter()
+            .positions()
             .filter(|p| p.name.is_some() && p.kind != PositionKind::Frame)
             .count();
         let frames_used = program
             .files
             .iter()
-            .flat_map(|f| &f.positions)
+            .flat_map(|f| f.positions())
             .filter(|p| p.kind == PositionKind::Frame)
             .count();
         let errors: Vec<String> = file
@@ -685,7 +685,7 @@ fn real_corpus() {
         for e in errors.iter().take(5) {
             println!("{e}");
         }
-        for p in program.files.iter().flat_map(|f| &f.positions).take(12) {
+        for p in program.files.iter().flat_map(|f| f.positions()).take(12) {
             println!(
                 "    {} {} base={:?} tool={:?} lines={:?}",
                 p.kind.as_str(),
@@ -739,8 +739,7 @@ fn pair_lookup_any_case_and_declared_types_across_the_pair() {
     assert_eq!(names, ["Cell.SRC", "cell.dat"]);
     let src = &named_dat.files[0];
     let found: Vec<_> = src
-        .positions
-        .iter()
+        .positions()
         .map(|p| {
             (
                 p.label(),
@@ -818,18 +817,16 @@ fn program_from_sources_in_memory_matches_the_program_from_disk() {
             p.files
                 .iter()
                 .flat_map(|f| {
-                    std::iter::once(f.path.display().to_string()).chain(f.positions.iter().map(
-                        |pos| {
-                            format!(
-                                "{} {:?} {:?} {:?} {:?}",
-                                pos.label(),
-                                pos.usage.wobj,
-                                pos.usage.tool,
-                                pos.usage.stationary_tool,
-                                pos.usage.lines
-                            )
-                        },
-                    ))
+                    std::iter::once(f.path.display().to_string()).chain(f.positions().map(|pos| {
+                        format!(
+                            "{} {:?} {:?} {:?} {:?}",
+                            pos.label(),
+                            pos.usage.wobj,
+                            pos.usage.tool,
+                            pos.usage.stationary_tool,
+                            pos.usage.lines
+                        )
+                    }))
                 })
                 .collect()
         };
@@ -865,7 +862,7 @@ fn frame_array_moved_to_with_a_computed_index_makes_every_element_a_target() {
     let found: Vec<_> = program
         .files
         .iter()
-        .flat_map(|f| &f.positions)
+        .flat_map(|f| f.positions())
         .map(|p| {
             (
                 p.label(),
@@ -931,7 +928,7 @@ fn fuzz_regressions_replay() {
                 assert!(d.span.start <= d.span.end && d.span.end <= len);
                 assert!(file.render(d).starts_with("fuzz."));
             }
-            for p in &file.positions {
+            for p in file.positions() {
                 assert!(p.span.end <= len);
             }
         }
@@ -985,7 +982,7 @@ fn kss_backup_oddities_parse_cleanly() {
     let found: Vec<_> = loaded
         .files
         .iter()
-        .flat_map(|f| &f.positions)
+        .flat_map(|f| f.positions())
         .map(|p| {
             (
                 p.label(),

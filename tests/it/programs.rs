@@ -32,11 +32,11 @@ fn programs(dir: &Path) -> Vec<Program> {
         .collect()
 }
 
-fn target<'p>(program: &'p Program, name: &str) -> &'p Position {
+fn target(program: &Program, name: &str) -> Position {
     program
         .files
         .iter()
-        .flat_map(|f| &f.positions)
+        .flat_map(|f| f.positions())
         .find(|p| p.name.as_deref() == Some(name))
         .unwrap_or_else(|| panic!("no target {name}"))
 }
@@ -143,7 +143,7 @@ fn cartesian(program: &Program) -> Vec<(String, [f64; 3])> {
     program
         .files
         .iter()
-        .flat_map(|f| &f.positions)
+        .flat_map(|f| f.positions())
         .filter_map(|p| Some((p.label(), p.cartesian.as_ref()?.translation()?)))
         .collect()
 }
@@ -269,7 +269,7 @@ fn kss_tree_resolves_across_files_and_subroutines() {
         .iter()
         .find(|f| f.path.ends_with("System/$config.dat"))
         .unwrap();
-    let names: Vec<_> = config.positions.iter().map(|p| p.label()).collect();
+    let names: Vec<_> = config.positions().map(|p| p.label()).collect();
     assert_eq!(names, ["XGLOBAL"], "only the used Cartesian global point");
 }
 

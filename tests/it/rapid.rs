@@ -39,9 +39,8 @@ fn load(name: &str) -> ParsedFile {
     rapid::parse_file(Path::new(name), src)
 }
 
-fn pos<'a>(f: &'a ParsedFile, name: &str) -> &'a Position {
-    f.positions
-        .iter()
+fn pos(f: &ParsedFile, name: &str) -> Position {
+    f.positions()
         .find(|p| p.name.as_deref() == Some(name))
         .unwrap_or_else(|| panic!("no position {name}"))
 }
@@ -87,7 +86,7 @@ fn dump(f: &ParsedFile) -> String {
             cartesian(src, &fr.oframe)
         );
     }
-    for p in &f.positions {
+    for p in f.positions() {
         let body = match p.kind {
             PositionKind::Jointtarget => format!("[{}]", texts(src, &p.joints)),
             _ => cartesian(src, &p.cartesian),
@@ -155,7 +154,7 @@ fn assert_spans_match(f: &ParsedFile) {
             }
         }
     };
-    for p in &f.positions {
+    for p in f.positions() {
         check_cart(&p.cartesian);
         p.joints.iter().for_each(check);
         p.extax.iter().for_each(check);
@@ -228,13 +227,13 @@ fn spot_line_is_a_track_program() {
         !src.windows(2).any(|w| w[1] == b'\n' && w[0] != b'\r'),
         "CRLF only"
     );
-    let declared: Vec<&Position> = f.positions.iter().filter(|p| p.name.is_some()).collect();
-    let spots: Vec<&&Position> = declared
+    let declared: Vec<Position> = f.positions().filter(|p| p.name.is_some()).collect();
+    let spots: Vec<&Position> = declared
         .iter()
         .filter(|p| p.name.as_deref().is_some_and(|n| n.starts_with("Sp")))
         .collect();
     assert_eq!(spots.len(), 216);
-    assert_eq!(f.positions.iter().filter(|p| p.name.is_none()).count(), 9);
+    assert_eq!(f.positions().filter(|p| p.name.is_none()).count(), 9);
     let mut last = 0.0;
     for p in &spots {
         let Skid::At(s) = p.skid(0) else {
@@ -297,13 +296,11 @@ fn nine_e_nine_styles_and_expression_fields() {
     assert_eq!(pos(&f, "pE").skid(0), Skid::Missing);
     // Keywords and optional arguments in any case.
     assert!(
-        f.positions
-            .iter()
+        f.positions()
             .all(|p| p.usage.wobj.as_deref() == Some("wTable"))
     );
     assert!(
-        f.positions
-            .iter()
+        f.positions()
             .all(|p| p.usage.tool.as_deref() == Some("tPen"))
     );
 }
@@ -327,7 +324,7 @@ fn usage_two_wobjs_is_flagged_with_a_warning() {
 #[test]
 fn usage_stationary_tool_and_moving_wobj() {
     let f = load("stationary_tool.mod");
-    assert!(f.positions.iter().all(|p| p.usage.stationary_tool));
+    assert!(f.positions().all(|p| p.usage.stationary_tool));
     assert_eq!(frame(&f, "wNozzle").held_by_robot, Some(true));
     let m = load("moving_wobj.mod");
     let w = frame(&m, "wStn1");
@@ -353,7 +350,7 @@ fn usage_through_arrays_and_offsets() {
     // `pGrid{ 2, 1 }` names one element; `pGrid{r,c}` in Offs may be any.
     assert_eq!(pos(&f, "pGrid{2,1}").usage.lines, vec![18, 22]);
     assert_eq!(pos(&f, "pGrid{1,2}").usage.lines, vec![18]);
-    let g21 = pos(&f, "pGrid{2,1}").cartesian.as_ref().unwrap();
+    let g21 = pos(&f, "pGrid{2,1}").cartesian.unwrap();
     assert_eq!(g21.translation(), Some([0.0, 500.0, 50.0]));
     let o = &f.offsets[0];
     assert_eq!(o.target, "pGrid{r,c}");
@@ -370,10 +367,10 @@ fn offsets_reltool_rotations_and_inline_targets() {
     assert_eq!(texts(&src, &r.delta), "1.5,-2,0");
     assert_eq!(texts(&src, &r.rot), "10,-,-45.5");
     assert_eq!(f.positions.len(), 2);
-    let assigned = &f.positions[0];
+    let assigned = &f.position(0).unwrap();
     assert_eq!((assigned.line, assigned.column), (4, 9));
     assert!(assigned.usage.wobj.is_none(), "an assignment is not a use");
-    let inline = &f.positions[1];
+    let inline = &f.position(1).unwrap();
     assert_eq!(inline.usage.wobj.as_deref(), Some("wobjX"));
     assert_eq!(inline.usage.tool.as_deref(), Some("tool0"));
     assert_eq!(
@@ -706,8 +703,8 @@ proptest! {
         prop_assert_eq!(f.opaque, 0, "{:?}", f.diagnostics);
         prop_assert!(f.diagnostics.iter().all(|d| d.severity != Severity::Error));
         prop_assert_eq!(f.positions.len(), expected.len());
-        for (p, lits) in f.positions.iter().zip(&expected) {
-            let got: Vec<String> = all_fields(p)
+        for (p, lits) in f.positions().zip(&expected) {
+            let got: Vec<String> = all_fields(&p)
                 .into_iter()
                 .map(|o| {
                     o.as_ref()
@@ -719,7 +716,7 @@ proptest! {
             let wobj = if p.name.is_some() { "wobj1" } else { "wobj0" };
             prop_assert_eq!(p.usage.wobj.as_deref(), Some(wobj));
         }
-        prop_assert_eq!(f.positions.iter().filter(|p| p.name.is_none()).count(), inline);
+        prop_assert_eq!(f.positions().filter(|p| p.name.is_none()).count(), inline);
     }
 
     #[test]
@@ -864,18 +861,22 @@ fn hostile_nesting_is_reported_not_overflowed() {
 fn inline_targets_with_external_axes_in_a_variable() {
     let src = b"MODULE m\nPROC p()\n  MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],rdkExtJoints],v100,z1,tool0;\n  MoveAbsJ [[0,0,0,0,90,0],rdkExtJoints],v100,z1,tool0;\n  p1 := [[1,2,3],[1,0,0,0]];\nENDPROC\nENDMODULE\n".to_vec();
     let f = rapid::parse_file(Path::new("x.mod"), src);
-    let kinds: Vec<PositionKind> = f.positions.iter().map(|p| p.kind).collect();
+    let kinds: Vec<PositionKind> = f.positions().map(|p| p.kind).collect();
     assert_eq!(
         kinds,
         vec![PositionKind::Robtarget, PositionKind::Jointtarget]
     );
     assert!(
-        f.positions
-            .iter()
+        f.positions()
             .all(|p| p.extax.is_empty() && p.skid(0) == Skid::Missing)
     );
     assert_eq!(
-        f.positions[0].cartesian.as_ref().unwrap().translation(),
+        f.position(0)
+            .unwrap()
+            .cartesian
+            .as_ref()
+            .unwrap()
+            .translation(),
         Some([1.0, 2.0, 3.0])
     );
 }
@@ -912,7 +913,7 @@ fn a_missing_semicolon_ends_at_the_line_break_and_the_next_target_is_found() {
         errors[0]
     );
     assert_eq!(f.positions.len(), 1);
-    let p = &f.positions[0];
+    let p = &f.position(0).unwrap();
     assert_eq!(p.line, 4);
     assert_eq!(p.usage.wobj.as_deref(), Some("wCar"));
     assert_eq!(p.usage.tool.as_deref(), Some("tGun"));
@@ -938,10 +939,9 @@ fn second_round_idioms_sample() {
     let f = load("cell_idioms.mod");
     // Robtargets inside the value of a record declared in the module are named by component,
     // once each, and a move through the component gives their usage.
-    let named: Vec<&str> = f
-        .positions
-        .iter()
-        .filter_map(|p| p.name.as_deref())
+    let named: Vec<String> = f
+        .positions()
+        .filter_map(|p| p.name.map(|n| n.to_string()))
         .collect();
     assert_eq!(
         named,
@@ -1024,7 +1024,7 @@ fn real_corpus() {
     for path in files {
         let src = std::fs::read(&path).unwrap();
         let f = rapid::parse_file(&path, src);
-        let count = |k: PositionKind| f.positions.iter().filter(|p| p.kind == k).count();
+        let count = |k: PositionKind| f.positions().filter(|p| p.kind == k).count();
         println!(
             "{}: round_trip={} robtargets={} jointtargets={} frames={} opaque={}",
             path.display(),

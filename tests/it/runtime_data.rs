@@ -6,13 +6,13 @@ use std::path::Path;
 use trackfix::position::{ParsedFile, RunTimeValue};
 use trackfix::{krl, rapid};
 
-fn run_time<'f>(f: &'f ParsedFile, name: &str) -> Option<&'f RunTimeValue> {
-    f.positions
-        .iter()
+fn run_time(f: &ParsedFile, name: &str) -> Option<RunTimeValue> {
+    f.positions()
         .find(|p| p.name.as_deref() == Some(name))
         .unwrap_or_else(|| panic!("no target {name}"))
         .usage
         .run_time()
+        .cloned()
 }
 
 const T: &str = "[[1,2,3],[1,0,0,0],[0,0,0,0],[500,9E9,9E9,9E9,9E9,9E9]]";
@@ -45,7 +45,7 @@ fn rapid_targets_and_work_objects_computed_at_run_time_are_marked_literal_ones_a
     assert_eq!(run_time(&f, "pFix"), None);
     assert_eq!(
         run_time(&f, "pOnCalc"),
-        Some(&RunTimeValue::Frame {
+        Some(RunTimeValue::Frame {
             name: Some("wCalc".into()),
             line: 11
         })
@@ -56,13 +56,13 @@ fn rapid_targets_and_work_objects_computed_at_run_time_are_marked_literal_ones_a
     for n in ["pBuf{1}", "pBuf{2}"] {
         assert_eq!(
             run_time(&f, n),
-            Some(&RunTimeValue::Target { line: 13 }),
+            Some(RunTimeValue::Target { line: 13 }),
             "{n}"
         );
     }
     assert_eq!(
         run_time(&f, "pHere"),
-        Some(&RunTimeValue::Target { line: 14 })
+        Some(RunTimeValue::Target { line: 14 })
     );
 }
 
@@ -87,15 +87,15 @@ END\n";
     assert_eq!(run_time(&f, "XA"), None);
     assert_eq!(
         run_time(&f, "XB"),
-        Some(&RunTimeValue::Frame {
+        Some(RunTimeValue::Frame {
             name: None,
             line: 8
         })
     );
-    assert_eq!(run_time(&f, "XC"), Some(&RunTimeValue::Target { line: 11 }));
+    assert_eq!(run_time(&f, "XC"), Some(RunTimeValue::Target { line: 11 }));
     assert_eq!(
         run_time(&f, "XD"),
-        Some(&RunTimeValue::Frame {
+        Some(RunTimeValue::Frame {
             name: None,
             line: 13
         })

@@ -463,7 +463,7 @@ fn poses(program: &Program) -> Vec<(String, Pose)> {
     program
         .files
         .iter()
-        .flat_map(|f| &f.positions)
+        .flat_map(|f| f.positions())
         .filter_map(|p| Some((p.label(), p.cartesian.as_ref()?.pose()?)))
         .collect()
 }
@@ -815,7 +815,7 @@ fn physical_errors(
     program: &Program,
     skid_of: impl Fn(&trackfix::position::Position) -> f64,
 ) -> Vec<f64> {
-    let positions: Vec<_> = program.files.iter().flat_map(|f| &f.positions).collect();
+    let positions: Vec<_> = program.files.iter().flat_map(|f| f.positions()).collect();
     assert_eq!(positions.len(), e.targets.len());
     positions
         .iter()

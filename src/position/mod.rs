@@ -19,6 +19,9 @@ pub const NOT_CONNECTED: f64 = 8.9e9;
 
 pub use crate::dialect::Language;
 
+mod list;
+pub use list::PositionList;
+
 /// What a position literal is, by its declared or inferred data type: the type's name as its
 /// language writes it, and whether it is Cartesian. Each dialect defines its kinds
 /// (`PositionKind::Robtarget`, `PositionKind::E6Pos`, …).
@@ -130,6 +133,28 @@ impl NumField {
     /// The literal's value.
     pub fn value(&self) -> f64 {
         self.value
+    }
+
+    /// The field of the literal [`NumLit::parse_prefix`] reads at `start` of `src`, if it
+    /// reads one there that fits the compact form.
+    #[inline]
+    pub(crate) fn read_at(src: &[u8], start: usize) -> Option<NumField> {
+        let (lit, len) = NumLit::parse_prefix(src.get(start..)?)?;
+        NumField::new(Span::new(start, start.checked_add(len)?), lit)
+    }
+
+    /// Start, value and packed style, for [`NumField::from_parts`].
+    pub(crate) fn parts(&self) -> (u32, f64, u32) {
+        (self.start, self.value, self.packed.bits())
+    }
+
+    /// The field [`NumField::parts`] gave; `None` for a style word no field has.
+    pub(crate) fn from_parts(start: u32, value: f64, packed: u32) -> Option<NumField> {
+        Some(NumField {
+            value,
+            start,
+            packed: PackedLit::from_bits(packed)?,
+        })
     }
 }
 
@@ -970,8 +995,9 @@ pub struct ParsedFile {
     pub source: Vec<u8>,
     /// Line starts of `source`, for `line:column`.
     pub lines: LineIndex,
-    /// Every position declared or written inline, in file order.
-    pub positions: Vec<Position>,
+    /// Every position declared or written inline, in file order, packed
+    /// ([`ParsedFile::positions`] decodes them).
+    pub positions: PositionList,
     /// The work objects, tools and bases declared.
     pub frames: Vec<FrameDecl>,
     /// The `Offs`/`RelTool` calls with numeric offsets.
@@ -985,6 +1011,16 @@ pub struct ParsedFile {
 }
 
 impl ParsedFile {
+    /// Every position, in file order, decoded.
+    pub fn positions(&self) -> impl ExactSizeIterator<Item = Position> + '_ {
+        self.positions.iter(&self.source)
+    }
+
+    /// Position `i`, decoded.
+    pub fn position(&self, i: usize) -> Option<Position> {
+        self.positions.get(i, &self.source)
+    }
+
     /// `path:line:col` of a byte offset.
     pub fn location(&self, offset: usize) -> String {
         let (l, c) = self.lines.line_col(offset);

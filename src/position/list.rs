@@ -1,0 +1,752 @@
+//! A file's positions, kept packed: each one's fields as a few bytes that point into the
+//! source, decoded into a [`Position`] when asked for.
+//!
+//! A generated 20 MB RAPID module holds 100,000 targets; as [`Position`]s they were half of
+//! `check`'s peak (432 bytes each, 17 number fields of 16 bytes). Packed, a number field the
+//! source spells is its offset from the field before (one or two bytes): its value, style and
+//! length are read again from the source ([`NumField::read_at`]), which gives the same field
+//! bit for bit — checked when it is packed; a field that would not come back so is kept whole.
+//! The usage stays unpacked beside the bytes: binding records it after the positions are read.
+//! See docs/design.md, "Positions in memory".
+
+use super::{
+    Axes, BitField, CartesianFields, Config, Name, NumField, Orientation, Position, PositionKind,
+    Usage,
+};
+use crate::syntax::Span;
+
+/// The positions of one file, in the order pushed (see the module).
+#[derive(Clone, Debug, Default)]
+pub struct PositionList {
+    heads: Vec<Head>,
+    bytes: Vec<u8>,
+    /// The kinds met, indexed by the packed kind byte (a program has a handful).
+    kinds: Vec<PositionKind>,
+}
+
+#[derive(Clone, Debug)]
+struct Head {
+    usage: Usage,
+    /// Where the position's packed bytes start in [`PositionList::bytes`].
+    body: usize,
+}
+
+/// Slot tags of a number or bit field.
+const ABSENT: u8 = 0;
+const READ_AGAIN: u8 = 1;
+const WHOLE: u8 = 2;
+
+/// Cartesian part tags: none, or the translation with no orientation, a quaternion, or A, B, C.
+const NO_CARTESIAN: u8 = 0;
+const NO_ORIENTATION: u8 = 1;
+const QUATERNION: u8 = 2;
+const ABC: u8 = 3;
+
+/// Configuration tags.
+const NO_CONFIG: u8 = 0;
+const QUADRANTS: u8 = 1;
+const STATUS_TURN: u8 = 2;
+
+impl PositionList {
+    /// No positions.
+    pub fn new() -> PositionList {
+        PositionList::default()
+    }
+
+    /// No positions, with room for `positions` of about `bytes_each` packed bytes.
+    pub fn with_capacity(positions: usize, bytes_each: usize) -> PositionList {
+        PositionList {
+            heads: Vec::with_capacity(positions),
+            bytes: Vec::with_capacity(positions.saturating_mul(bytes_each)),
+            kinds: Vec::new(),
+        }
+    }
+
+    /// `ps`, whose spans point into `src`, packed.
+    pub fn packed(ps: impl IntoIterator<Item = Position>, src: &[u8]) -> PositionList {
+        let mut list = PositionList::new();
+        list.extend(ps, src);
+        list
+    }
+
+    /// How many positions.
+    pub fn len(&self) -> usize {
+        self.heads.len()
+    }
+
+    /// No positions.
+    pub fn is_empty(&self) -> bool {
+        self.heads.is_empty()
+    }
+
+    /// Appends `p`, whose spans point into `src`.
+    pub fn push(&mut self, p: Position, src: &[u8]) {
+        // Every test run checks each position it reads through its packed bytes.
+        #[cfg(debug_assertions)]
+        let pushed = p.clone();
+        let body = self.bytes.len();
+        let kind = match self.kinds.iter().position(|&k| k == p.kind) {
+            Some(k) => k,
+            None => {
+                self.kinds.push(p.kind);
+                self.kinds.len() - 1
+            }
+        };
+        let mut w = Writer {
+            out: &mut self.bytes,
+            src,
+            cursor: p.span.start,
+        };
+        w.uint(p.span.start as u64);
+        w.uint((p.span.end - p.span.start.min(p.span.end)) as u64);
+        w.uint(kind as u64);
+        match &p.name {
+            Some(n) => {
+                w.uint(n.len() as u64 + 1);
+                w.out.extend_from_slice(n.as_bytes());
+            }
+            None => w.uint(0),
+        }
+        w.uint(p.line as u64);
+        w.uint(p.column as u64);
+        match &p.cartesian {
+            None => w.byte(NO_CARTESIAN),
+            Some(c) => {
+                match &c.orient {
+                    None => w.byte(NO_ORIENTATION),
+                    Some(Orientation::Quaternion(_)) => w.byte(QUATERNION),
+                    Some(Orientation::Abc(_)) => w.byte(ABC),
+                }
+                w.nums(&c.trans);
+                match &c.orient {
+                    None => {}
+                    Some(Orientation::Quaternion(q)) => w.nums(q),
+                    Some(Orientation::Abc(abc)) => w.nums(abc),
+                }
+            }
+        }
+        w.uint(p.joints.len() as u64);
+        w.nums(&p.joints);
+        match &p.config {
+            Config::None => w.byte(NO_CONFIG),
+            Config::Quadrants(q) => {
+                w.byte(QUADRANTS);
+                w.nums(q);
+            }
+            Config::StatusTurn { status, turn } => {
+                w.byte(STATUS_TURN);
+                w.bits(status.as_ref());
+                w.bits(turn.as_ref());
+            }
+        }
+        w.uint(p.extax.len() as u64);
+        w.nums(&p.extax);
+        self.heads.push(Head {
+            usage: p.usage,
+            body,
+        });
+        #[cfg(debug_assertions)]
+        debug_assert_eq!(self.get(self.len() - 1, src).as_ref(), Some(&pushed));
+    }
+
+    /// Position `i`, decoded against `src` (the bytes it was pushed with).
+    pub fn get(&self, i: usize, src: &[u8]) -> Option<Position> {
+        self.get_head(self.heads.get(i)?, src)
+    }
+
+    fn get_head(&self, head: &Head, src: &[u8]) -> Option<Position> {
+        let mut r = self.reader(head, src)?;
+        let (span, kind, name, line, column) = r.head(&self.kinds)?;
+        let name = match name {
+            // Nearly every name is ASCII, which needs no UTF-8 check.
+            Some(text) => Some(match Name::from_ascii(text) {
+                Some(n) => n,
+                None => Name::from(std::str::from_utf8(text).ok()?),
+            }),
+            None => None,
+        };
+        let cartesian = match r.byte()? {
+            NO_CARTESIAN => None,
+            tag => {
+                let trans = r.nums::<3>()?;
+                let orient = match tag {
+                    NO_ORIENTATION => None,
+                    QUATERNION => Some(Orientation::Quaternion(r.nums::<4>()?)),
+                    ABC => Some(Orientation::Abc(r.nums::<3>()?)),
+                    _ => return None,
+                };
+                Some(CartesianFields { trans, orient })
+            }
+        };
+        let joints = (0..r.uint()?)
+            .map(|_| r.num())
+            .collect::<Option<Vec<_>>>()?;
+        let config = match r.byte()? {
+            NO_CONFIG => Config::None,
+            QUADRANTS => Config::Quadrants(r.nums::<4>()?),
+            STATUS_TURN => Config::StatusTurn {
+                status: r.bits()?,
+                turn: r.bits()?,
+            },
+            _ => return None,
+        };
+        let extax = (0..r.uint()?).map(|_| r.num()).collect::<Option<Axes>>()?;
+        Some(Position {
+            name,
+            kind,
+            span,
+            line,
+            column,
+            cartesian,
+            joints,
+            config,
+            extax,
+            usage: head.usage.clone(),
+        })
+    }
+
+    /// Every position in order, decoded against `src`.
+    pub fn iter<'a>(&'a self, src: &'a [u8]) -> impl ExactSizeIterator<Item = Position> + 'a {
+        // Every position pushed decodes (a proptest and the data tests hold it): the
+        // `filter_map` never drops one, and the count stays exact.
+        (0..self.len()).map(move |i| self.get(i, src).unwrap_or_else(|| self.placeholder(i)))
+    }
+
+    /// A position that could not be decoded: never met (see [`PositionList::iter`]); it keeps
+    /// the count, with no fields, rather than shift the indices of the rest.
+    fn placeholder(&self, i: usize) -> Position {
+        Position {
+            name: None,
+            kind: self
+                .kinds
+                .first()
+                .copied()
+                .unwrap_or(PositionKind::Robtarget),
+            span: Span::new(0, 0),
+            line: 0,
+            column: 0,
+            cartesian: None,
+            joints: Vec::new(),
+            config: Config::None,
+            extax: Axes::new(),
+            usage: self
+                .heads
+                .get(i)
+                .map(|h| h.usage.clone())
+                .unwrap_or_default(),
+        }
+    }
+
+    /// The span, kind and declared name of position `i`, without decoding its fields.
+    pub fn head(&self, i: usize) -> Option<(Span, PositionKind, Option<&str>)> {
+        let (span, kind, name, ..) = self.reader(self.heads.get(i)?, &[])?.head(&self.kinds)?;
+        let name = match name {
+            Some(text) => Some(std::str::from_utf8(text).ok()?),
+            None => None,
+        };
+        Some((span, kind, name))
+    }
+
+    /// The literal's span of position `i`, without decoding its fields.
+    pub fn span(&self, i: usize) -> Option<Span> {
+        let (span, ..) = self.reader(self.heads.get(i)?, &[])?.head(&self.kinds)?;
+        Some(span)
+    }
+
+    /// The declared name of position `i` (`None` for an inline literal).
+    pub fn name(&self, i: usize) -> Option<&str> {
+        let (_, _, name, ..) = self.reader(self.heads.get(i)?, &[])?.head(&self.kinds)?;
+        std::str::from_utf8(name?).ok()
+    }
+
+    /// Whether position `i` has Cartesian fields ([`Position::cartesian`] is `Some`).
+    pub fn has_cartesian(&self, i: usize) -> bool {
+        self.cartesian_tag(i).is_some_and(|tag| tag != NO_CARTESIAN)
+    }
+
+    /// Whether position `i` writes its orientation as A, B, C ([`Orientation::Abc`]).
+    pub fn writes_abc(&self, i: usize) -> bool {
+        self.cartesian_tag(i) == Some(ABC)
+    }
+
+    fn cartesian_tag(&self, i: usize) -> Option<u8> {
+        let mut r = self.reader(self.heads.get(i)?, &[])?;
+        r.head(&self.kinds)?;
+        r.byte()
+    }
+
+    /// The usage of position `i`.
+    pub fn usage(&self, i: usize) -> Option<&Usage> {
+        self.heads.get(i).map(|h| &h.usage)
+    }
+
+    /// The usage of position `i`, to record a use in.
+    pub fn usage_mut(&mut self, i: usize) -> Option<&mut Usage> {
+        self.heads.get_mut(i).map(|h| &mut h.usage)
+    }
+
+    /// Every position's usage, in order.
+    pub fn usages(&self) -> impl ExactSizeIterator<Item = &Usage> + '_ {
+        self.heads.iter().map(|h| &h.usage)
+    }
+
+    /// Every position's usage, in order, to change.
+    pub fn usages_mut(&mut self) -> impl ExactSizeIterator<Item = &mut Usage> + '_ {
+        self.heads.iter_mut().map(|h| &mut h.usage)
+    }
+
+    /// Removes position `i` (its packed bytes stay, unreferenced).
+    pub fn remove(&mut self, i: usize) {
+        if i < self.heads.len() {
+            self.heads.remove(i);
+        }
+    }
+
+    /// Appends every position of `ps`, whose spans point into `src`.
+    pub fn extend(&mut self, ps: impl IntoIterator<Item = Position>, src: &[u8]) {
+        for p in ps {
+            self.push(p, src);
+        }
+    }
+
+    /// Removes the positions from `at` on and gives them back decoded, in order.
+    pub fn split_off(&mut self, at: usize, src: &[u8]) -> Vec<Position> {
+        let tail: Vec<Position> = (at..self.len()).filter_map(|i| self.get(i, src)).collect();
+        self.heads.truncate(at);
+        tail
+    }
+
+    /// Keeps only the positions `keep` holds to (their packed bytes stay, unreferenced).
+    pub fn retain(&mut self, src: &[u8], mut keep: impl FnMut(&Position) -> bool) {
+        let mut kept = Vec::with_capacity(self.heads.len());
+        for h in std::mem::take(&mut self.heads) {
+            if self.get_head(&h, src).is_some_and(|p| keep(&p)) {
+                kept.push(h);
+            }
+        }
+        self.heads = kept;
+    }
+
+    /// Removes every position.
+    pub fn clear(&mut self) {
+        self.heads.clear();
+        self.bytes.clear();
+    }
+
+    /// Orders the positions by where their literal starts (a stable sort).
+    pub fn sort_by_start(&mut self) {
+        let mut keyed: Vec<(usize, Head)> = std::mem::take(&mut self.heads)
+            .into_iter()
+            .map(|h| {
+                let start = self.reader(&h, &[]).and_then(|mut r| r.uint()).unwrap_or(0);
+                (start as usize, h)
+            })
+            .collect();
+        keyed.sort_by_key(|(start, _)| *start);
+        self.heads = keyed.into_iter().map(|(_, h)| h).collect();
+    }
+
+    fn reader<'a>(&'a self, head: &Head, src: &'a [u8]) -> Option<Reader<'a>> {
+        Some(Reader {
+            bytes: self.bytes.get(head.body..)?,
+            src,
+            cursor: 0,
+        })
+    }
+}
+
+/// Writes one position's packed bytes.
+struct Writer<'a> {
+    out: &'a mut Vec<u8>,
+    src: &'a [u8],
+    /// Where the field before ended (the literal's start before the first).
+    cursor: usize,
+}
+
+impl Writer<'_> {
+    fn byte(&mut self, b: u8) {
+        self.out.push(b);
+    }
+
+    /// LEB128: seven bits a byte, low first.
+    fn uint(&mut self, mut v: u64) {
+        while v >= 0x80 {
+            self.out.push(v as u8 | 0x80);
+            v >>= 7;
+        }
+        self.out.push(v as u8);
+    }
+
+    /// Zigzag, then LEB128: a KRL aggregate may write its fields in any order.
+    fn int(&mut self, v: i64) {
+        self.uint(((v << 1) ^ (v >> 63)) as u64);
+    }
+
+    fn offset(&mut self, at: usize) {
+        self.int(at as i64 - self.cursor as i64);
+        self.cursor = at;
+    }
+
+    fn nums(&mut self, fields: &[Option<NumField>]) {
+        for f in fields {
+            self.num(f.as_ref());
+        }
+    }
+
+    fn num(&mut self, f: Option<&NumField>) {
+        let Some(f) = f else {
+            return self.byte(ABSENT);
+        };
+        let span = f.span();
+        if NumField::read_at(self.src, span.start).as_ref() == Some(f) {
+            self.byte(READ_AGAIN);
+            self.offset(span.start);
+        } else {
+            let (_, value, packed) = f.parts();
+            self.byte(WHOLE);
+            self.offset(span.start);
+            self.out.extend_from_slice(&value.to_bits().to_le_bytes());
+            self.out.extend_from_slice(&packed.to_le_bytes());
+        }
+        self.cursor = span.end;
+    }
+
+    fn bits(&mut self, f: Option<&BitField>) {
+        let Some(f) = f else {
+            return self.byte(ABSENT);
+        };
+        let span = f.span();
+        self.byte(WHOLE);
+        self.offset(span.start);
+        self.uint((span.end - span.start.min(span.end)) as u64);
+        self.uint(u64::from(f.value()));
+        match f.binary_digits() {
+            Some(n) => self.uint(n as u64 + 1),
+            None => self.uint(0),
+        }
+        self.cursor = span.end;
+    }
+}
+
+/// Reads one position's packed bytes back.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    src: &'a [u8],
+    cursor: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn byte(&mut self) -> Option<u8> {
+        let (&b, rest) = self.bytes.split_first()?;
+        self.bytes = rest;
+        Some(b)
+    }
+
+    fn uint(&mut self) -> Option<u64> {
+        let mut v = 0u64;
+        for shift in (0..64).step_by(7) {
+            let b = self.byte()?;
+            v |= u64::from(b & 0x7f) << shift;
+            if b < 0x80 {
+                return Some(v);
+            }
+        }
+        None
+    }
+
+    fn usize(&mut self) -> Option<usize> {
+        usize::try_from(self.uint()?).ok()
+    }
+
+    fn offset(&mut self) -> Option<usize> {
+        let z = self.uint()?;
+        let delta = (z >> 1) as i64 ^ -((z & 1) as i64);
+        self.cursor = usize::try_from(self.cursor as i64 + delta).ok()?;
+        Some(self.cursor)
+    }
+
+    /// Span, kind, name's text, line and column: the fields every position has, first.
+    #[allow(clippy::type_complexity)]
+    fn head(
+        &mut self,
+        kinds: &[PositionKind],
+    ) -> Option<(Span, PositionKind, Option<&'a [u8]>, usize, usize)> {
+        let start = self.usize()?;
+        let span = Span::new(start, start.checked_add(self.usize()?)?);
+        self.cursor = start;
+        let kind = *kinds.get(self.usize()?)?;
+        let name = match self.usize()? {
+            0 => None,
+            n => {
+                let (text, rest) = self.bytes.split_at_checked(n - 1)?;
+                self.bytes = rest;
+                Some(text)
+            }
+        };
+        Some((span, kind, name, self.usize()?, self.usize()?))
+    }
+
+    fn num(&mut self) -> Option<Option<NumField>> {
+        let f = match self.byte()? {
+            ABSENT => return Some(None),
+            READ_AGAIN => {
+                let start = self.offset()?;
+                NumField::read_at(self.src, start)?
+            }
+            WHOLE => {
+                let start = u32::try_from(self.offset()?).ok()?;
+                let (value, rest) = self.bytes.split_first_chunk::<8>()?;
+                let (packed, rest) = rest.split_first_chunk::<4>()?;
+                self.bytes = rest;
+                NumField::from_parts(
+                    start,
+                    f64::from_bits(u64::from_le_bytes(*value)),
+                    u32::from_le_bytes(*packed),
+                )?
+            }
+            _ => return None,
+        };
+        self.cursor = f.span().end;
+        Some(Some(f))
+    }
+
+    fn nums<const N: usize>(&mut self) -> Option<[Option<NumField>; N]> {
+        let mut out = [None; N];
+        for o in &mut out {
+            *o = self.num()?;
+        }
+        Some(out)
+    }
+
+    fn bits(&mut self) -> Option<Option<BitField>> {
+        match self.byte()? {
+            ABSENT => Some(None),
+            WHOLE => {
+                let start = self.offset()?;
+                let end = start.checked_add(self.usize()?)?;
+                let value = u32::try_from(self.uint()?).ok()?;
+                let digits = match self.usize()? {
+                    0 => None,
+                    n => Some(n - 1),
+                };
+                self.cursor = end;
+                Some(Some(BitField::new(Span::new(start, end), value, digits)?))
+            }
+            _ => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::position::{FrameName, Lines};
+    use proptest::prelude::*;
+
+    /// Literals as programs write them; the last ones go past what the compact form or the
+    /// fast path takes.
+    const TEXTS: &[&str] = &[
+        "-1520.30",
+        "0.707107",
+        "0",
+        "9E+09",
+        "9E9",
+        "+12.5",
+        ".5",
+        "5.",
+        "2.69E-07",
+        "-0.000",
+        "1234567890123456789012",
+        "1E400",
+    ];
+
+    /// A source of literals separated by `,` and the span of each.
+    fn source(picks: &[usize]) -> (Vec<u8>, Vec<Span>) {
+        let mut src = b"[".to_vec();
+        let mut spans = Vec::new();
+        for (k, &t) in picks.iter().enumerate() {
+            if k > 0 {
+                src.push(b',');
+            }
+            let text = TEXTS[t % TEXTS.len()].as_bytes();
+            spans.push(Span::new(src.len(), src.len() + text.len()));
+            src.extend_from_slice(text);
+        }
+        src.push(b']');
+        (src, spans)
+    }
+
+    /// A field for literal `k`: as the source reads it, or (`moved`) the literal of `j`
+    /// placed at `k`'s start, which the source does not read back (kept whole).
+    fn field(src: &[u8], spans: &[Span], k: usize, moved: Option<usize>) -> Option<NumField> {
+        let at = spans.get(k % spans.len().max(1))?;
+        match moved {
+            None => NumField::read_at(src, at.start),
+            Some(j) => {
+                let from = spans.get(j % spans.len())?;
+                let (lit, len) = NumLit::parse_prefix(from.slice(src))?;
+                NumField::new(Span::new(at.start, at.start + len), lit)
+            }
+        }
+    }
+
+    use crate::syntax::NumLit;
+
+    type Pick = Option<(usize, Option<usize>)>;
+
+    fn picks(n: usize) -> impl Strategy<Value = Vec<Pick>> {
+        proptest::collection::vec(
+            proptest::option::weighted(0.85, (0usize..64, proptest::option::of(0usize..64))),
+            n,
+        )
+    }
+
+    proptest! {
+        /// Every position comes back from its packed bytes as it was pushed: fields the source
+        /// reads back and fields kept whole, in any order (KRL writes fields in any order),
+        /// absent fields, long and non-ASCII names, bit fields and spilled axis lists.
+        #[test]
+        fn a_position_decodes_to_what_was_pushed(
+            lits in proptest::collection::vec(0usize..TEXTS.len(), 1..24),
+            cart in 0u8..4,
+            fields in picks(7),
+            joints in proptest::collection::vec(
+                proptest::option::weighted(0.85, (0usize..64, proptest::option::of(0usize..64))),
+                0..8,
+            ),
+            config in 0u8..3,
+            quads in picks(4),
+            bits in proptest::collection::vec(
+                proptest::option::of((0usize..64, 0u32..64, proptest::option::of(1usize..9))),
+                2,
+            ),
+            extax in proptest::collection::vec(
+                proptest::option::weighted(0.85, (0usize..64, proptest::option::of(0usize..64))),
+                0..10,
+            ),
+            name in proptest::option::of("[a-zA-Z_é{}0-9,]{0,40}"),
+            kind in 0usize..3,
+            (line, column) in (0usize..100_000, 0usize..500),
+            wobj in proptest::option::of("w[A-Za-z]{0,4}"),
+            lines in proptest::collection::vec(1u32..5000, 0..6),
+            others in 1usize..3,
+        ) {
+            let (src, spans) = source(&lits);
+            let f = |p: &Pick| p.and_then(|(k, moved)| field(&src, &spans, k, moved));
+            let all: Vec<Option<NumField>> = fields.iter().map(f).collect();
+            let cartesian = (cart > 0).then(|| CartesianFields {
+                trans: [all[0], all[1], all[2]],
+                orient: match cart {
+                    1 => None,
+                    2 => Some(Orientation::Quaternion([all[3], all[4], all[5], all[6]])),
+                    _ => Some(Orientation::Abc([all[3], all[4], all[5]])),
+                },
+            });
+            let bit = |b: &Option<(usize, u32, Option<usize>)>| {
+                b.and_then(|(k, value, digits)| {
+                    BitField::new(spans[k % spans.len()], value, digits)
+                })
+            };
+            let config = match config {
+                0 => Config::None,
+                1 => Config::Quadrants([f(&quads[0]), f(&quads[1]), f(&quads[2]), f(&quads[3])]),
+                _ => Config::StatusTurn { status: bit(&bits[0]), turn: bit(&bits[1]) },
+            };
+            let mut usage = Usage::default();
+            for (n, &l) in lines.iter().enumerate() {
+                let w = wobj.as_deref().map(|w| if n % others == 0 { w.to_owned() } else { format!("{w}{n}") });
+                usage.record(w.as_deref(), Some("tGun"), n == 2, l as usize);
+            }
+            let kinds = [PositionKind::Robtarget, PositionKind::E6Pos, PositionKind::Jointtarget];
+            let p = Position {
+                name: name.map(Name::from),
+                kind: kinds[kind],
+                span: Span::new(1, src.len() - 1),
+                line,
+                column,
+                cartesian,
+                joints: joints.iter().map(f).collect(),
+                config,
+                extax: extax.iter().map(f).collect(),
+                usage,
+            };
+            let mut list = PositionList::new();
+            // A second position first: a position's bytes do not start at 0.
+            let mut first = p.clone();
+            first.name = None;
+            first.kind = kinds[(kind + 1) % 3];
+            list.push(first.clone(), &src);
+            list.push(p.clone(), &src);
+            prop_assert_eq!(list.len(), 2);
+            prop_assert_eq!(list.get(0, &src), Some(first.clone()));
+            prop_assert_eq!(list.get(1, &src), Some(p.clone()));
+            prop_assert_eq!(list.head(1), Some((p.span, p.kind, p.name.as_deref())));
+            prop_assert_eq!(list.has_cartesian(1), p.cartesian.is_some());
+            prop_assert_eq!(list.iter(&src).collect::<Vec<_>>(), vec![first, p]);
+        }
+    }
+
+    #[test]
+    fn only_fields_the_source_spells_are_read_again() {
+        // `9E+09` read again is one tag byte and one offset; a field the source does not
+        // spell (here the literal of `0.707107` placed where `9E+09` is written) keeps its
+        // value and style: 14 bytes more.
+        let (src, spans) = source(&[3, 1]);
+        let read = NumField::read_at(&src, spans[0].start);
+        let moved = field(&src, &spans, 0, Some(1));
+        assert_ne!(read, moved);
+        let position = |f: Option<NumField>| Position {
+            name: None,
+            kind: PositionKind::Jointtarget,
+            span: Span::new(1, src.len() - 1),
+            line: 1,
+            column: 2,
+            cartesian: None,
+            joints: vec![f],
+            config: Config::None,
+            extax: Axes::new(),
+            usage: Usage::default(),
+        };
+        let mut list = PositionList::new();
+        list.push(position(read), &src);
+        let one = list.bytes.len();
+        list.push(position(moved), &src);
+        assert_eq!(list.bytes.len() - one, one + 12);
+        assert_eq!(list.get(0, &src).unwrap().joints, vec![read]);
+        assert_eq!(list.get(1, &src).unwrap().joints, vec![moved]);
+    }
+
+    #[test]
+    fn usage_recorded_after_the_push_is_the_decoded_usage() {
+        let src = b"[1,2]";
+        let p = Position {
+            name: Some(Name::from("p10")),
+            kind: PositionKind::Jointtarget,
+            span: Span::new(0, 5),
+            line: 3,
+            column: 4,
+            cartesian: None,
+            joints: vec![NumField::read_at(src, 1), NumField::read_at(src, 3)],
+            config: Config::None,
+            extax: Axes::new(),
+            usage: Usage::default(),
+        };
+        let mut list = PositionList::packed([p.clone()], src);
+        let shared = FrameName::from("wCar");
+        list.usage_mut(0)
+            .unwrap()
+            .record_shared(Some(&shared), None, false, 12);
+        let got = list.get(0, src).unwrap();
+        assert_eq!(got.usage.wobj.as_deref(), Some("wCar"));
+        assert_eq!(got.usage.lines, Lines::from(vec![12]));
+        assert_eq!(
+            Position {
+                usage: got.usage.clone(),
+                ..p
+            },
+            got
+        );
+        assert_eq!(list.name(0), Some("p10"));
+        assert_eq!(list.span(0), Some(Span::new(0, 5)));
+    }
+}
