@@ -81,6 +81,18 @@ impl PositionList {
 
     /// Appends `p`, whose spans point into `src`.
     pub fn push(&mut self, p: Position, src: &[u8]) {
+        self.pack(p, src, false);
+    }
+
+    /// [`push`](Self::push) for a caller whose every number field of `p` is what
+    /// [`NumField::read_at`] reads at the field's start (a parser that scanned the literal with
+    /// [`NumLit::parse_prefix`](crate::syntax::NumLit::parse_prefix) there): the fields are
+    /// packed as read again without reading them once more.
+    pub(crate) fn push_read_at(&mut self, p: Position, src: &[u8]) {
+        self.pack(p, src, true);
+    }
+
+    fn pack(&mut self, p: Position, src: &[u8], read_at: bool) {
         // Every test run checks each position it reads through its packed bytes.
         #[cfg(debug_assertions)]
         let pushed = p.clone();
@@ -96,6 +108,7 @@ impl PositionList {
             out: &mut self.bytes,
             src,
             cursor: p.span.start,
+            read_at,
         };
         w.uint(p.span.start as u64);
         w.uint((p.span.end - p.span.start.min(p.span.end)) as u64);
@@ -361,6 +374,9 @@ struct Writer<'a> {
     src: &'a [u8],
     /// Where the field before ended (the literal's start before the first).
     cursor: usize,
+    /// Every field is what [`NumField::read_at`] reads at its start (see
+    /// [`PositionList::push_read_at`]).
+    read_at: bool,
 }
 
 impl Writer<'_> {
@@ -398,7 +414,7 @@ impl Writer<'_> {
             return self.byte(ABSENT);
         };
         let span = f.span();
-        if NumField::read_at(self.src, span.start).as_ref() == Some(f) {
+        if self.read_at || NumField::read_at(self.src, span.start).as_ref() == Some(f) {
             self.byte(READ_AGAIN);
             self.offset(span.start);
         } else {

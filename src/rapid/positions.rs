@@ -122,6 +122,9 @@ pub struct Extractor<'l> {
     /// Positions declared in a scope other modules see (module data without `LOCAL`); inline
     /// literals and routine data are private to their module.
     exported: Vec<bool>,
+    /// A number field of the position being built was not scanned by the numeric-aggregate
+    /// path (see [`Extractor::push`]).
+    read_elsewhere: std::cell::Cell<bool>,
 }
 
 /// What [`Extractor::finish`] returns.
@@ -177,6 +180,18 @@ impl<'l> Extractor<'l> {
             routines: Vec::new(),
             current: None,
             exported: Vec::new(),
+            read_elsewhere: std::cell::Cell::new(false),
+        }
+    }
+
+    /// Appends position `p` as [`Extractor::position`] just built it. Its number fields came
+    /// from the numeric-aggregate scan, which read each with `NumLit::parse_prefix` at its
+    /// start, unless one took the general path: then the list checks each field itself.
+    fn push(&mut self, p: Position, src: &[u8]) {
+        if self.read_elsewhere.replace(false) {
+            self.positions.push(p, src);
+        } else {
+            self.positions.push_read_at(p, src);
         }
     }
 
@@ -188,7 +203,10 @@ impl<'l> Extractor<'l> {
         let span = n.span();
         let lit = match arena.lit(n) {
             Some(lit) => lit,
-            None => NumLit::parse(span.slice(src))?,
+            None => {
+                self.read_elsewhere.set(true);
+                NumLit::parse(span.slice(src))?
+            }
         };
         NumField::new(span, lit)
     }
@@ -283,6 +301,7 @@ impl<'l> Extractor<'l> {
         kind: PositionKind,
         name: Option<String>,
     ) -> Option<Position> {
+        self.read_elsewhere.set(false);
         let n = arena.get(id)?;
         if n.kind != ExprKind::Aggregate {
             return None;
@@ -436,7 +455,7 @@ impl<'l> Extractor<'l> {
                         && let Some(p) = self.position(src, arena, i, kind, None)
                     {
                         added.push(self.positions.len());
-                        self.positions.push(p, src);
+                        self.push(p, src);
                         skip_until = n.subtree_end;
                     }
                 }
@@ -883,7 +902,7 @@ impl Extractor<'_> {
                             _ => format!("{}{suffix}", text_of(src, name)),
                         };
                         if let Some(p) = self.position(src, arena, *id, kind, Some(full)) {
-                            self.positions.push(p, src);
+                            self.push(p, src);
                         }
                     }
                     self.scan(src, arena, false);
@@ -938,7 +957,7 @@ impl Extractor<'_> {
                             };
                             let full = format!("{name_text}{suffix}.{}", text_of(src, field));
                             if let Some(p) = self.position(src, arena, part, kind, Some(full)) {
-                                self.positions.push(p, src);
+                                self.push(p, src);
                             }
                         }
                     }
