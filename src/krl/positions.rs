@@ -297,11 +297,20 @@ fn bit_string(text: &[u8]) -> Option<(u32, usize)> {
     Some((v, digits.len()))
 }
 
-fn num_field(src: &[u8], e: &Expr) -> Option<NumField> {
+/// The number field of token `e`: the literal `NumField::read_at` reads at its start when that
+/// is the whole token (nearly always), so the position list need not read it again
+/// (`read_elsewhere` stays false); else the token read on its own.
+fn num_field(src: &[u8], e: &Expr, read_elsewhere: &mut bool) -> Option<NumField> {
     if e.kind != ExprKind::Number {
         return None;
     }
-    NumField::new(e.span, NumLit::parse(e.span.slice(src))?)
+    match NumField::read_at(src, e.span.start) {
+        Some(f) if f.span() == e.span => Some(f),
+        _ => {
+            *read_elsewhere = true;
+            NumField::new(e.span, NumLit::parse(e.span.slice(src))?)
+        }
+    }
 }
 
 fn bit_field(src: &[u8], e: &Expr) -> Option<BitField> {
@@ -328,6 +337,8 @@ struct Fields {
     ext_written: usize,
     cartesian_written: bool,
     joints_written: bool,
+    /// A number field is not what `NumField::read_at` reads at its start (see `num_field`).
+    read_elsewhere: bool,
 }
 
 fn read_fields(src: &[u8], agg: &Aggregate) -> Fields {
@@ -344,13 +355,13 @@ fn read_fields(src: &[u8], agg: &Aggregate) -> Fields {
         match (name.len(), upper0, digit) {
             (1, b'X' | b'Y' | b'Z', _) => {
                 if let Some(slot) = f.xyz.get_mut(usize::from(upper0 - b'X')) {
-                    *slot = num_field(src, v);
+                    *slot = num_field(src, v, &mut f.read_elsewhere);
                 }
                 f.cartesian_written = true;
             }
             (1, b'A' | b'B' | b'C', _) => {
                 if let Some(slot) = f.abc.get_mut(usize::from(upper0 - b'A')) {
-                    *slot = num_field(src, v);
+                    *slot = num_field(src, v, &mut f.read_elsewhere);
                 }
                 f.abc_written = true;
                 f.cartesian_written = true;
@@ -359,13 +370,13 @@ fn read_fields(src: &[u8], agg: &Aggregate) -> Fields {
             (1, b'T', _) => f.t = bit_field(src, v),
             (2, b'A', Some(i)) => {
                 if let Some(slot) = f.axes.get_mut(i) {
-                    *slot = num_field(src, v);
+                    *slot = num_field(src, v, &mut f.read_elsewhere);
                 }
                 f.joints_written = true;
             }
             (2, b'E', Some(i)) => {
                 if let Some(slot) = f.ext.get_mut(i) {
-                    *slot = num_field(src, v);
+                    *slot = num_field(src, v, &mut f.read_elsewhere);
                 }
                 f.ext_written = f.ext_written.max(i + 1);
             }
@@ -518,12 +529,13 @@ impl<'a> Extractor<'a> {
                     } else if let Some(kind) = positional {
                         let name = name_text(v.name.slice(src));
                         let f = read_fields(src, agg);
+                        let read_elsewhere = f.read_elsewhere;
                         let p = build_position(lines, init.span, kind, Some(name), f);
                         if kind == PositionKind::Frame {
                             out.facts.candidates.push(p);
                             out.facts.inferred.push(false);
                         } else {
-                            out.positions.push(p, src);
+                            push(&mut out.positions, src, p, read_elsewhere);
                         }
                     }
                 }
@@ -757,9 +769,11 @@ fn assignment(
             ));
             out.facts.inferred.push(false);
         }
-        Some(kind) => out
-            .positions
-            .push(build_position(lines, value.span, kind, name, f), src),
+        Some(kind) => {
+            let read_elsewhere = f.read_elsewhere;
+            let p = build_position(lines, value.span, kind, name, f);
+            push(&mut out.positions, src, p, read_elsewhere);
+        }
         None => {
             if let Some(kind) = inferred_kind(src, agg, &f) {
                 out.facts
@@ -768,6 +782,16 @@ fn assignment(
                 out.facts.inferred.push(true);
             }
         }
+    }
+}
+
+/// Appends `p`, built from fields that `read_elsewhere` says were or were not all read at
+/// their start with `NumField::read_at` (then the list packs them without reading them again).
+fn push(list: &mut PositionList, src: &[u8], p: Position, read_elsewhere: bool) {
+    if read_elsewhere {
+        list.push(p, src);
+    } else {
+        list.push_read_at(p, src);
     }
 }
 
@@ -789,7 +813,9 @@ fn target_refs(
         ExprKind::Aggregate(agg) => {
             let f = read_fields(src, agg);
             if let Some(kind) = inferred_kind(src, agg, &f) {
-                positions.push(build_position(lines, e.span, kind, None, f), src);
+                let read_elsewhere = f.read_elsewhere;
+                let p = build_position(lines, e.span, kind, None, f);
+                push(positions, src, p, read_elsewhere);
                 refs.push(Ref::Inline(e.span));
             }
             true
