@@ -71,8 +71,9 @@ pub(crate) enum DeclKind {
 /// A declared name of a file.
 #[derive(Clone, Debug)]
 pub(crate) struct Declaration {
-    /// The name in the file's source.
-    pub(crate) name: Span,
+    /// The name in the file's source (a module declares a name per target: 32-bit offsets keep
+    /// the list at 12 bytes an entry).
+    pub(crate) name: crate::syntax::Span32,
     /// What it declares.
     pub(crate) kind: DeclKind,
     /// Declared at file (module) level, where a second declaration of the name is an error.
@@ -97,27 +98,39 @@ pub(crate) struct Duplicate {
 pub(crate) fn declarations<'s, 'd>(
     files: impl IntoIterator<Item = (&'s [u8], &'d [Declaration])>,
 ) -> (NameMap<NameKey<'s>, DeclKind>, Vec<Duplicate>) {
+    use hashbrown::hash_table::{Entry, HashTable};
+    use std::hash::BuildHasher as _;
     let mut kinds: NameMap<NameKey<'s>, DeclKind> = NameMap::default();
     let mut twice = Vec::new();
+    let hasher = std::hash::BuildHasherDefault::<crate::names::NameHasher>::default();
     for (file, (src, decls)) in files.into_iter().enumerate() {
-        let mut seen: NameMap<NameKey<'s>, Span> =
-            NameMap::with_capacity_and_hasher(decls.len(), Default::default());
-        for d in decls {
-            let k = NameKey(d.name.slice(src));
+        // The file-level names seen so far, as indices into `decls` (hashed by the name they
+        // point to): four bytes an entry, where a map of keys and spans was 32 and, built
+        // while every position of the module is held, set `check`'s peak.
+        let name_of = |i: u32| decls.get(i as usize).map(|d| d.name.span());
+        let key_of = |i: u32| name_of(i).map(|sp| NameKey(sp.slice(src)));
+        let mut seen: HashTable<u32> = HashTable::with_capacity(decls.len());
+        for (i, d) in decls.iter().enumerate() {
+            let k = NameKey(d.name.span().slice(src));
             if d.kind != DeclKind::Other {
                 kinds.insert(k, d.kind);
             }
             if !d.file_scope {
                 continue;
             }
-            match seen.get(&k) {
-                Some(&first) => twice.push(Duplicate {
+            let entry = seen.entry(
+                hasher.hash_one(k),
+                |&j| key_of(j) == Some(k),
+                |&j| key_of(j).map_or(0, |k| hasher.hash_one(k)),
+            );
+            match entry {
+                Entry::Occupied(e) => twice.extend(name_of(*e.get()).map(|first| Duplicate {
                     file,
-                    again: d.name,
+                    again: d.name.span(),
                     first,
-                }),
-                None => {
-                    seen.insert(k, d.name);
+                })),
+                Entry::Vacant(e) => {
+                    e.insert(i as u32);
                 }
             }
         }

@@ -790,11 +790,13 @@ impl Extractor<'_> {
                 self.exported.resize(self.positions.len(), exported);
             }
             Stmt::Routine { name, local } => {
-                self.symbols.push(crate::resolve::Declaration {
-                    name,
-                    kind: DeclKind::Other,
-                    file_scope: true,
-                });
+                // Past 4 GiB a name has no 32-bit span: no input is this large (see `Span32`).
+                self.symbols
+                    .extend(Span32::of(name).map(|name| crate::resolve::Declaration {
+                        name,
+                        kind: DeclKind::Other,
+                        file_scope: true,
+                    }));
                 self.current = Some(self.routines.len());
                 self.routines.push(crate::resolve::Routine {
                     name,
@@ -863,19 +865,20 @@ impl Extractor<'_> {
                 let ty = type_name.slice(src);
                 let is = |t: &[u8]| ty.eq_ignore_ascii_case(t);
                 let name_text = text_of(src, name);
-                self.symbols.push(crate::resolve::Declaration {
-                    name,
-                    kind: if is(b"tooldata") {
-                        DeclKind::Tool
-                    } else if is(b"zonedata") {
-                        DeclKind::Zone
-                    } else if is(b"speeddata") {
-                        DeclKind::Speed
-                    } else {
-                        DeclKind::Other
-                    },
-                    file_scope: module_scope,
-                });
+                self.symbols
+                    .extend(Span32::of(name).map(|name| crate::resolve::Declaration {
+                        name,
+                        kind: if is(b"tooldata") {
+                            DeclKind::Tool
+                        } else if is(b"zonedata") {
+                            DeclKind::Zone
+                        } else if is(b"speeddata") {
+                            DeclKind::Speed
+                        } else {
+                            DeclKind::Other
+                        },
+                        file_scope: module_scope,
+                    }));
                 let target_kind = if is(b"robtarget") {
                     Some(PositionKind::Robtarget)
                 } else if is(b"jointtarget") {
