@@ -200,6 +200,15 @@ pub(crate) struct FileFacts<'a> {
 /// Where a target is: (file, index into its positions).
 type TargetAt = (usize, usize);
 
+/// A [`TargetAt`] as a name index keeps it, in 32 bits each: the index holds one per declared
+/// target and is built while every position of the program is held.
+type Indexed = (u32, u32);
+
+/// `at` for a name index; `None` past 2^32 files or targets (no input has that many).
+fn indexed((m, i): TargetAt) -> Option<Indexed> {
+    Some((u32::try_from(m).ok()?, u32::try_from(i).ok()?))
+}
+
 /// A routine's required parameter: (file, routine, parameter index).
 type ParamAt = (usize, usize, usize);
 
@@ -216,7 +225,7 @@ fn computed_index_array<'k>(naming: &Naming, key: &'k str) -> Option<&'k str> {
 /// (`exported` says whether a target is seen outside its file).
 fn lookup(
     naming: &Naming,
-    index: &NameIndex<TargetAt>,
+    index: &NameIndex<Indexed>,
     exported: &dyn Fn(TargetAt) -> bool,
     file: usize,
     key: &str,
@@ -233,7 +242,10 @@ fn lookup(
             computed_index_array(naming, key).map_or(&[][..], |a| index.elements(a)),
         ),
     };
-    let hits = named.iter().chain(elements).copied();
+    let hits = named
+        .iter()
+        .chain(elements)
+        .map(|&(m, i)| (m as usize, i as usize));
     match naming.scope {
         Scope::Program => out.extend(hits),
         Scope::OwnFileFirst => {
@@ -359,7 +371,7 @@ fn record(
 pub(crate) struct Binder<'f, 'a> {
     files: &'f mut [FileFacts<'a>],
     naming: Naming,
-    index: NameIndex<TargetAt>,
+    index: NameIndex<Indexed>,
     param_uses: std::collections::HashMap<ParamAt, Vec<MovesWith>>,
     param_edges: std::collections::HashMap<ParamAt, Vec<ParamAt>>,
     bindings: Vec<(TargetAt, ParamAt, usize)>,
@@ -377,8 +389,8 @@ impl<'f, 'a> Binder<'f, 'a> {
         let mut index = NameIndex::builder(naming.open, total);
         for (m, f) in files.iter().enumerate() {
             for i in 0..f.positions.len() {
-                if let Some(n) = f.positions.name(i) {
-                    index.insert(n, (m, i));
+                if let (Some(n), Some(at)) = (f.positions.name(i), indexed((m, i))) {
+                    index.insert(n, at);
                 }
             }
         }
@@ -580,15 +592,17 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
     let mut frames = NameIndex::builder(naming.open, 0);
     for (fi, f) in files.iter().enumerate() {
         for i in 0..f.positions.len() {
-            if let Some(n) = f.positions.name(i) {
-                targets.insert(n, (fi, i));
+            if let (Some(n), Some(at)) = (f.positions.name(i), indexed((fi, i))) {
+                targets.insert(n, at);
             }
         }
         for (i, d) in f.frames.iter().enumerate() {
-            frames.insert(&d.name, (fi, i));
+            if let Some(at) = indexed((fi, i)) {
+                frames.insert(&d.name, at);
+            }
         }
     }
-    let (targets, frames): (NameIndex<TargetAt>, NameIndex<TargetAt>) =
+    let (targets, frames): (NameIndex<Indexed>, NameIndex<Indexed>) =
         (targets.build(), frames.build());
     let mut assigned_targets = Vec::new();
     // Folded frame name → (name as declared, line of the first assignment).
@@ -674,7 +688,7 @@ mod tests {
             .iter()
             .enumerate()
             {
-                index.insert(n, (0, i));
+                index.insert(n, (0, i as u32));
             }
             index.insert("x", (1, 0));
             index.insert("y", (1, 1));
