@@ -41,8 +41,9 @@ const NAMING: crate::resolve::Naming = crate::resolve::Naming {
 struct CallUse {
     name: Span32,
     line: u32,
-    /// The routine the call is written in (index into the module's routines).
-    routine: Option<u32>,
+    /// The routine the call is written in (index into the module's routines), plus one: four
+    /// bytes, where an `Option<u32>` is eight (a module has a call per target).
+    routine: Option<std::num::NonZeroU32>,
     /// `\WObj:=` value.
     wobj: Option<Span32>,
     /// `\Tool:=` (or `tool:=`) value.
@@ -57,6 +58,9 @@ struct CallUse {
     /// (indices into `positions`).
     inline_start: u32,
 }
+
+/// A module holds a call per target: a layout change that grows the record fails the build.
+const _: () = assert!(std::mem::size_of::<CallUse>() == 44);
 
 /// A module's call records and the shared lists their ranges index.
 struct Calls {
@@ -676,7 +680,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
                 m,
                 &crate::resolve::Use {
                     line: u.line as usize,
-                    routine: u.routine.map(|r| r as usize),
+                    routine: u.routine.map(|r| r.get() as usize - 1),
                     callee: Some(u.name.span()),
                     stationary: wobj.is_some() && stationary,
                     frame: wobj,
@@ -1002,7 +1006,10 @@ impl Extractor<'_> {
         let mut u = CallUse {
             name,
             line,
-            routine: self.current.and_then(|r| u32::try_from(r).ok()),
+            routine: self
+                .current
+                .and_then(|r| u32::try_from(r + 1).ok())
+                .and_then(std::num::NonZeroU32::new),
             wobj: None,
             tool: None,
             args_start,
