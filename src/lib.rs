@@ -58,7 +58,7 @@ pub use program::{LoadError, LoadOptions, collect_inputs, load};
 /// Parses a RAPID module into its lossless tree (positions are [`rapid::parse_file`]'s).
 pub use rapid::parse_tree as parse_rapid;
 pub use report::{
-    CheckSummary, FileSummary, InspectOptions, InspectReport, inspect_program, lints,
+    CheckSummary, FileSummary, InspectOptions, InspectReport, errors, inspect_program, lints,
 };
 pub use transform::{
     Cell, CellError, Direction, MirrorSettings, ProgramResult, Refusal, RefusalKind, Remedy,

@@ -968,10 +968,7 @@ fn refuse_syntax_errors(command: &str, programs: &[Program]) -> anyhow::Result<O
     let mut stderr = std::io::stderr().lock();
     let mut bad = Vec::new();
     for file in programs.iter().flat_map(|p| &p.files) {
-        let errors: Vec<_> = trackfix::report::lints(file)
-            .into_iter()
-            .filter(|d| d.severity == Severity::Error)
-            .collect();
+        let errors = trackfix::report::errors(file);
         for d in &errors {
             writeln!(stderr, "{}", file.render(d).trim_end())?;
         }

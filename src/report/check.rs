@@ -42,15 +42,7 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
                 .with_hint("a truncated copy? restore it from the controller's backup"),
         );
     }
-    if !file.round_trip {
-        out.push(
-            Diagnostic::error(
-                Span::new(0, 0),
-                "printing the parsed file does not give back its bytes",
-            )
-            .with_hint("this is a trackfix bug: please report it with the file attached"),
-        );
-    }
+    out.extend(round_trip_error(file));
     if let Some(at) = first_control_byte(&file.source) {
         let n = file
             .source
@@ -129,6 +121,31 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
             }
         }
     }
+    out.sort_by_key(|d| (d.span.start, d.span.end));
+    out
+}
+
+/// A failed round trip, as an error.
+fn round_trip_error(file: &ParsedFile) -> Option<Diagnostic> {
+    (!file.round_trip).then(|| {
+        Diagnostic::error(
+            Span::new(0, 0),
+            "printing the parsed file does not give back its bytes",
+        )
+        .with_hint("this is a trackfix bug: please report it with the file attached")
+    })
+}
+
+/// The errors among [`lints`]: the parser's and a failed round trip (every lint of the model
+/// is a warning or a note), without decoding a position. Sorted by position.
+pub fn errors(file: &ParsedFile) -> Vec<Diagnostic> {
+    let mut out: Vec<Diagnostic> = file
+        .diagnostics
+        .iter()
+        .filter(|d| d.severity == Severity::Error)
+        .cloned()
+        .collect();
+    out.extend(round_trip_error(file));
     out.sort_by_key(|d| (d.span.start, d.span.end));
     out
 }

@@ -193,3 +193,39 @@ fn readme_example_is_this_doc_test() {
     assert_eq!(rust_block(&readme), rust_block(&doc));
     assert_eq!(rust_block(&doc).len(), 2);
 }
+
+/// `report::errors` (what a transform checks before it writes, without decoding a position) is
+/// exactly the errors among `report::lints`, for every test input: broken ones with errors, and
+/// clean ones whose positions give warnings and notes.
+#[test]
+fn errors_are_the_errors_among_the_lints() {
+    use trackfix::syntax::Severity;
+    let mut with_errors = 0;
+    for language in ["rapid", "krl"] {
+        for outcome in ["ok", "err"] {
+            for path in inputs(language, outcome) {
+                let src = std::fs::read(&path).unwrap();
+                let file = match language {
+                    "rapid" => rapid::parse_file(&path, src),
+                    _ => krl::parse_file(&path, src),
+                };
+                let from_lints: Vec<Diagnostic> = trackfix::report::lints(&file)
+                    .into_iter()
+                    .filter(|d| d.severity == Severity::Error)
+                    .collect();
+                let errors = trackfix::report::errors(&file);
+                assert_eq!(
+                    format!("{errors:?}"),
+                    format!("{from_lints:?}"),
+                    "{}",
+                    path.display()
+                );
+                with_errors += usize::from(!errors.is_empty());
+            }
+        }
+    }
+    assert!(
+        with_errors > 0,
+        "no input with errors: the comparison tests nothing"
+    );
+}
