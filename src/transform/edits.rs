@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use crate::position::{Name, Program};
-use crate::syntax::{Edit, EditError, apply_edits};
+use crate::syntax::{EditError, EditList};
 
 use super::refusal::Refusal;
 
@@ -31,8 +31,8 @@ pub struct TargetChange {
 /// The edits and refusals of one file.
 #[derive(Clone, Debug, Default)]
 pub struct FileEdits {
-    /// The span-splice edits to the file's source (`syntax::apply_edits`).
-    pub edits: Vec<Edit>,
+    /// The span-splice edits to the file's source, packed ([`EditList`]).
+    pub edits: EditList,
     /// The targets left unchanged, and why.
     pub refusals: Vec<Refusal>,
     /// Things that look like targets but are none (unset `[0,0,0,0]` array slots): left as
@@ -128,7 +128,7 @@ impl ProgramResult {
 pub fn apply(program: &Program, edits: ProgramEdits) -> Result<ProgramResult, EditError> {
     let mut files = Vec::with_capacity(program.files.len());
     for (file, fe) in program.files.iter().zip(edits.files) {
-        let output = apply_edits(&file.source, &fe.edits)?;
+        let output = fe.edits.apply(&file.source)?;
         files.push(FileResult {
             path: file.path.clone(),
             original: file.source.clone(),
@@ -153,7 +153,7 @@ pub fn apply_owned(program: Program, edits: ProgramEdits) -> Result<ProgramResul
         .collect();
     let mut files = Vec::with_capacity(sources.len());
     for ((path, original), fe) in sources.into_iter().zip(edits.files) {
-        let output = apply_edits(&original, &fe.edits)?;
+        let output = fe.edits.apply(&original)?;
         files.push(FileResult {
             path,
             original,
