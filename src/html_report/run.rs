@@ -154,7 +154,7 @@ impl RunFile {
             &r.path.display().to_string(),
             &r.original,
             &r.output,
-            r.changes.iter().map(RunTarget::from).collect(),
+            r.changes.iter().map(|c| RunTarget::from(&c)).collect(),
             r.refusals.iter().map(RunRefusal::from).collect(),
         )
     }

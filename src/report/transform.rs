@@ -150,7 +150,7 @@ mod tests {
             output: b"y".to_vec(),
             refusals: Vec::new(),
             notes: Vec::new(),
-            changes,
+            changes: changes.into_iter().collect(),
         }
     }
 

@@ -41,6 +41,19 @@ impl Chunks {
         &mut self.chunks[last]
     }
 
+    /// Gives back the last chunk's room to spare (nothing more is to be added, or little).
+    pub(crate) fn shrink_to_fit(&mut self) {
+        if let Some(c) = self.chunks.last_mut() {
+            c.shrink_to_fit();
+        }
+    }
+
+    /// The bytes the records take (not the room to spare).
+    #[cfg(test)]
+    pub(crate) fn bytes(&self) -> usize {
+        self.chunks.iter().map(Vec::len).sum()
+    }
+
     /// Where the first record starts.
     pub(crate) fn start(&self) -> Place {
         Place { chunk: 0, at: 0 }
@@ -181,5 +194,8 @@ mod tests {
         log.room(MAX_CHUNK).push(7);
         let mut at_end = end;
         assert_eq!(log.rest(&mut at_end), [7]);
+        log.shrink_to_fit();
+        let last = log.chunks.last().unwrap();
+        assert_eq!(last.capacity(), last.len());
     }
 }
