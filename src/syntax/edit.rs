@@ -162,6 +162,8 @@ pub struct EditList {
     log: Chunks,
     runs: Vec<Run>,
     len: usize,
+    /// How much the edits lengthen the source (shorten it, below zero), duplicates included.
+    growth: isize,
     /// The span of the last edit added: the next one continues its run unless it sorts before.
     last: (u32, u32),
 }
@@ -180,6 +182,7 @@ impl EditList {
     }
 
     /// Adds `edit` (a copy of its text).
+    #[inline]
     pub fn push(&mut self, edit: &Edit) {
         let key = (edit.start, edit.end);
         let prev_start = match self.runs.last_mut() {
@@ -196,13 +199,38 @@ impl EditList {
             }
         };
         let text: &[u8] = &edit.text;
-        let out = self.log.room(3 * VARINT_MAX + text.len());
         // Within a run starts never decrease; an edit kept reversed (`Edit::with_text`) has
         // a negative length.
-        put_varint(out, u64::from(edit.start - prev_start));
-        put_varint(out, zigzag(i64::from(edit.end) - i64::from(edit.start)));
-        put_varint(out, text.len() as u64);
-        out.extend_from_slice(text);
+        let mut head = [0; 3 * VARINT_MAX + INLINE];
+        let mut n = 0;
+        put_varint(&mut head, &mut n, u64::from(edit.start - prev_start));
+        put_varint(
+            &mut head,
+            &mut n,
+            zigzag(i64::from(edit.end) - i64::from(edit.start)),
+        );
+        put_varint(&mut head, &mut n, text.len() as u64);
+        match &edit.text.0 {
+            // A number: its head and its inline bytes go in as one block of fixed size (no
+            // copy of a length known only here), then the block is cut to what they take.
+            TextRepr::Inline { bytes, .. } => {
+                head[n..n + INLINE].copy_from_slice(bytes);
+                let out = self.log.room(head.len());
+                let end = out.len() + n + text.len();
+                out.extend_from_slice(&head);
+                out.truncate(end);
+            }
+            TextRepr::Heap(_) => {
+                let out = self.log.room(n + text.len());
+                out.extend_from_slice(&head[..n]);
+                out.extend_from_slice(text);
+            }
+        }
+        let removed = edit.end.saturating_sub(edit.start) as isize;
+        self.growth = self
+            .growth
+            .saturating_add(text.len() as isize)
+            .saturating_sub(removed);
         self.last = key;
         self.len += 1;
     }
@@ -227,17 +255,19 @@ impl EditList {
         })
     }
 
-    /// `src` with the edits spliced in (see [`apply_edits`]): sized exactly, then written.
+    /// `src` with the edits spliced in (see [`apply_edits`]), in one pass over the edits.
+    ///
+    /// The output is sized exactly: the output of a large program is as large as its source,
+    /// and room to spare would be held for the rest of the run. The size is summed as the edits
+    /// come in; only an identical duplicate in another run (dropped here) makes it differ, and
+    /// then the output is fitted at the end. An edit out of bounds or overlapping another ends
+    /// the pass with the error, and what was written is dropped.
     pub fn apply(&self, src: &[u8]) -> Result<Vec<u8>, EditError> {
-        // The exact size, and every edit checked, before a byte is written: the output of a
-        // large program is as large as its source, and room to spare would be held for the
-        // rest of the run.
-        let mut size = src.len();
+        let size = src.len().saturating_add_signed(self.growth);
+        let mut out = Vec::with_capacity(size);
         let mut pos = 0;
         let mut prev: Option<Span> = None;
         for e in self.sorted() {
-            let removed = e.end.saturating_sub(e.start) as usize;
-            size = size.saturating_add(e.text.len()).saturating_sub(removed);
             let span = e.span();
             if span.start > span.end || span.end > src.len() {
                 return Err(EditError::OutOfBounds(span));
@@ -248,18 +278,15 @@ impl EditList {
                     second: span,
                 });
             }
-            pos = span.end;
-            prev = Some(span);
-        }
-        let mut out = Vec::with_capacity(size);
-        let mut pos = 0;
-        for e in self.sorted() {
-            let span = e.span();
             out.extend_from_slice(&src[pos..span.start]);
             out.extend_from_slice(e.text);
             pos = span.end;
+            prev = Some(span);
         }
         out.extend_from_slice(&src[pos..]);
+        if out.capacity() != out.len() {
+            out.shrink_to_fit();
+        }
         Ok(out)
     }
 
@@ -267,23 +294,29 @@ impl EditList {
     /// duplicate of the edit before it left out.
     fn sorted(&self) -> Sorted<'_> {
         let mut cursors: Vec<Cursor> = self.runs.iter().map(|r| Cursor::of(*r)).collect();
-        let heads: Vec<Option<Record>> = cursors.iter_mut().map(|c| c.next(&self.log)).collect();
+        let mut heads: Vec<Option<Record>> =
+            cursors.iter_mut().map(|c| c.next(&self.log)).collect();
         let heap = heads
             .iter()
             .enumerate()
+            .skip(1)
             .filter_map(|(i, h)| h.map(|h| Reverse((h.start, h.end, i))))
             .collect();
+        let head = heads.first_mut().and_then(Option::take);
         Sorted {
             log: &self.log,
             cursors,
             heads,
             heap,
+            run: 0,
+            head,
             last: None,
         }
     }
 }
 
 impl Extend<Edit> for EditList {
+    #[inline]
     fn extend<I: IntoIterator<Item = Edit>>(&mut self, edits: I) {
         for e in edits {
             self.push(&e);
@@ -338,6 +371,7 @@ impl Cursor {
 
     /// The run's next edit. The log holds what [`EditList::push`] wrote, so every record reads
     /// back whole; one that did not would end the run.
+    #[inline]
     fn next<'a>(&mut self, log: &'a Chunks) -> Option<Record<'a>> {
         if self.left == 0 {
             return None;
@@ -357,33 +391,57 @@ impl Cursor {
     }
 }
 
-/// [`EditList::sorted`]: the runs merged by span.
+/// [`EditList::sorted`]: the runs merged by span. The run taken from stays the same while
+/// its next edit sorts before every other run's (all of them, for a file of one run): only a
+/// change of run goes through the heap.
 struct Sorted<'a> {
     log: &'a Chunks,
     cursors: Vec<Cursor>,
-    /// Each run's next edit, not yet given.
+    /// The next edit of each run but the current one, not yet given.
     heads: Vec<Option<Record<'a>>>,
-    /// The heads by (start, end, run): equal spans in the order of their runs.
+    /// Those heads by (start, end, run): equal spans in the order of their runs.
     heap: BinaryHeap<Reverse<(u32, u32, usize)>>,
+    /// The run taken from, and its next edit.
+    run: usize,
+    head: Option<Record<'a>>,
     last: Option<Record<'a>>,
 }
 
 impl<'a> Iterator for Sorted<'a> {
     type Item = Record<'a>;
 
+    #[inline]
     fn next(&mut self) -> Option<Record<'a>> {
         loop {
-            let Reverse((_, _, run)) = self.heap.pop()?;
-            let head = self.heads.get_mut(run)?.take()?;
-            if let Some(next) = self.cursors.get_mut(run)?.next(self.log) {
-                self.heap.push(Reverse((next.start, next.end, run)));
-                self.heads[run] = Some(next);
+            let key = self.head.map(|h| (h.start, h.end, self.run));
+            match (key, self.heap.peek()) {
+                (Some(key), Some(&Reverse(top))) if top < key => {
+                    // Another run's edit comes first: the current one waits in the heap.
+                    self.heads[self.run] = self.head.take();
+                    self.heap.push(Reverse(key));
+                    self.take_top();
+                }
+                (None, Some(_)) => self.take_top(),
+                (None, None) => return None,
+                _ => {}
             }
+            let head = self.head?;
+            self.head = self.cursors.get_mut(self.run)?.next(self.log);
             if self.last == Some(head) {
                 continue;
             }
             self.last = Some(head);
             return Some(head);
+        }
+    }
+}
+
+impl Sorted<'_> {
+    /// Makes the run of the heap's first edit the current one.
+    fn take_top(&mut self) {
+        if let Some(Reverse((_, _, run))) = self.heap.pop() {
+            self.run = run;
+            self.head = self.heads.get_mut(run).and_then(Option::take);
         }
     }
 }

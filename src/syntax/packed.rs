@@ -25,20 +25,26 @@ pub(crate) struct Chunks {
 impl Chunks {
     /// The chunk to append a record of at most `max` bytes to: the last one, or a new one when
     /// the last has less room. Appending up to `max` bytes to it never reallocates.
+    #[inline]
     pub(crate) fn room(&mut self, max: usize) -> &mut Vec<u8> {
         let fits = self
             .chunks
             .last()
             .is_some_and(|c| c.capacity() - c.len() >= max);
         if !fits {
-            let next = self
-                .chunks
-                .last()
-                .map_or(FIRST_CHUNK, |c| (c.capacity() * 2).min(MAX_CHUNK));
-            self.chunks.push(Vec::with_capacity(next.max(max)));
+            self.grow(max);
         }
         let last = self.chunks.len() - 1;
         &mut self.chunks[last]
+    }
+
+    #[cold]
+    fn grow(&mut self, max: usize) {
+        let next = self
+            .chunks
+            .last()
+            .map_or(FIRST_CHUNK, |c| (c.capacity() * 2).min(MAX_CHUNK));
+        self.chunks.push(Vec::with_capacity(next.max(max)));
     }
 
     /// Gives back the last chunk's room to spare (nothing more is to be added, or little).
@@ -72,7 +78,18 @@ impl Chunks {
 
     /// The bytes from `place` to the end of its chunk, moving `place` to the next chunk when
     /// its own is read to the end (a record never spans two).
+    #[inline]
     pub(crate) fn rest(&self, place: &mut Place) -> &[u8] {
+        if let Some(c) = self.chunks.get(place.chunk)
+            && place.at < c.len()
+        {
+            return &c[place.at..];
+        }
+        self.next_chunk(place)
+    }
+
+    #[cold]
+    fn next_chunk(&self, place: &mut Place) -> &[u8] {
         while let Some(c) = self.chunks.get(place.chunk) {
             if place.at < c.len() {
                 return &c[place.at..];
@@ -95,17 +112,32 @@ pub(crate) struct Place {
 /// The most bytes [`put_varint`] writes.
 pub(crate) const VARINT_MAX: usize = 10;
 
-/// Appends `v` in LEB128: seven bits a byte, low first, the high bit set on all but the last.
-pub(crate) fn put_varint(out: &mut Vec<u8>, mut v: u64) {
+/// Writes `v` in LEB128 (seven bits a byte, low first, the high bit set on all but the last)
+/// at `buf[*n..]`, moving `*n` past it; `buf` has room for [`VARINT_MAX`] bytes there.
+#[inline]
+pub(crate) fn put_varint(buf: &mut [u8], n: &mut usize, mut v: u64) {
     while v >= 0x80 {
-        out.push((v as u8) | 0x80);
+        buf[*n] = (v as u8) | 0x80;
+        *n += 1;
         v >>= 7;
     }
-    out.push(v as u8);
+    buf[*n] = v as u8;
+    *n += 1;
 }
 
 /// Reads a [`put_varint`] number at `*at`, moving `*at` past it; `None` past the end.
+#[inline]
 pub(crate) fn read_varint(bytes: &[u8], at: &mut usize) -> Option<u64> {
+    // Most numbers of a log (offsets between edits, lengths) take one byte.
+    let b = *bytes.get(*at)?;
+    if b < 0x80 {
+        *at += 1;
+        return Some(u64::from(b));
+    }
+    read_varint_long(bytes, at)
+}
+
+fn read_varint_long(bytes: &[u8], at: &mut usize) -> Option<u64> {
     let mut v = 0u64;
     let mut shift = 0;
     loop {
@@ -120,11 +152,13 @@ pub(crate) fn read_varint(bytes: &[u8], at: &mut usize) -> Option<u64> {
 }
 
 /// A signed number as an unsigned one for [`put_varint`], small either side of zero.
+#[inline]
 pub(crate) fn zigzag(v: i64) -> u64 {
     ((v << 1) ^ (v >> 63)) as u64
 }
 
 /// The inverse of [`zigzag`].
+#[inline]
 pub(crate) fn unzigzag(v: u64) -> i64 {
     ((v >> 1) as i64) ^ -((v & 1) as i64)
 }
@@ -146,10 +180,12 @@ mod tests {
             u32::MAX as u64,
             u64::MAX,
         ];
-        let mut out = Vec::new();
+        let mut out = vec![0; values.len() * VARINT_MAX];
+        let mut n = 0;
         for v in values {
-            put_varint(&mut out, v);
+            put_varint(&mut out, &mut n, v);
         }
+        out.truncate(n);
         assert_eq!(out[..4], [0, 1, 127, 0x80]);
         let mut at = 0;
         for v in values {

@@ -33,12 +33,15 @@ pub struct TargetChange {
 /// A `correct` of a 20 MB module changes 100,000 targets; as [`TargetChange`]s (80 bytes) in a
 /// vector grown by doubling they took 10.5 MB, next to the source and the output. Here a record
 /// is a byte of which parts it has, the numbers as they are (8 bytes each, so every value reads
-/// back bit for bit), the line in LEB128 and the name's bytes (about 30 bytes for a named
-/// target; see `syntax::packed`). They read back as [`TargetChange`]s, in the order they were
+/// back bit for bit), the line and the name's length in LEB128, and the name's text in one
+/// string beside the log (about 30 bytes for a named target; see `syntax::packed`). They read back as [`TargetChange`]s, in the order they were
 /// added.
 #[derive(Clone, Default)]
 pub struct Changes {
     log: Chunks,
+    /// The names, one after the other (a record has its name's length): text sliced back
+    /// without checking it again.
+    names: String,
     len: usize,
 }
 
@@ -55,24 +58,27 @@ impl Changes {
 
     /// Adds one changed target.
     pub fn push(&mut self, c: TargetChange) {
-        let name = c.name.as_deref().map(str::as_bytes);
+        let name = c.name.as_deref();
         let flags = (c.skid.is_some() as u8) * HAS_SKID
             | (c.uncertainty_mm.is_some() as u8) * HAS_UNCERTAINTY
             | (name.is_some() as u8) * HAS_NAME;
-        let out = self
-            .log
-            .room(1 + 4 * 8 + 2 * VARINT_MAX + name.map_or(0, <[u8]>::len));
-        out.push(flags);
+        let mut head = [0; 1 + 4 * 8 + 2 * VARINT_MAX];
+        head[0] = flags;
+        let mut n = 1;
         for v in [Some(c.mm), Some(c.deg), c.skid, c.uncertainty_mm]
             .into_iter()
             .flatten()
         {
-            out.extend_from_slice(&v.to_le_bytes());
+            head[n..n + 8].copy_from_slice(&v.to_le_bytes());
+            n += 8;
         }
-        put_varint(out, c.line as u64);
+        put_varint(&mut head, &mut n, c.line as u64);
         if let Some(name) = name {
-            put_varint(out, name.len() as u64);
-            out.extend_from_slice(name);
+            put_varint(&mut head, &mut n, name.len() as u64);
+        }
+        self.log.room(n).extend_from_slice(&head[..n]);
+        if let Some(name) = &c.name {
+            self.names.push_str(name);
         }
         self.len += 1;
     }
@@ -87,10 +93,11 @@ impl Changes {
         self.len == 0
     }
 
-    /// The changes, in the order they were added.
-    pub fn iter(&self) -> impl Iterator<Item = TargetChange> + '_ {
+    /// The changes, in the order they were added, read in place (the name borrowed).
+    pub fn iter(&self) -> impl Iterator<Item = ChangeRef<'_>> + '_ {
         let mut place = self.log.start();
         let mut left = self.len;
+        let mut name_at = 0;
         std::iter::from_fn(move || {
             if left == 0 {
                 return None;
@@ -98,7 +105,7 @@ impl Changes {
             let bytes = self.log.rest(&mut place);
             let mut at = 0;
             // The log holds what `push` wrote, so every record reads back whole.
-            let c = read_change(bytes, &mut at)?;
+            let c = read_change(bytes, &mut at, &self.names, &mut name_at)?;
             place.at += at;
             left -= 1;
             Some(c)
@@ -108,36 +115,72 @@ impl Changes {
     /// Gives back the room to spare (the file's changes are all in).
     pub fn shrink_to_fit(&mut self) {
         self.log.shrink_to_fit();
+        self.names.shrink_to_fit();
     }
 }
 
-/// One [`Changes::push`] record at `*at`, moving `*at` past it.
-fn read_change(bytes: &[u8], at: &mut usize) -> Option<TargetChange> {
+/// One changed target as [`Changes`] hold it: a [`TargetChange`] with its name borrowed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChangeRef<'a> {
+    /// Translation change in mm.
+    pub mm: f64,
+    /// Rotation change in degrees.
+    pub deg: f64,
+    /// The skid value the target was transformed at.
+    pub skid: Option<f64>,
+    /// The target's name, when it has one.
+    pub name: Option<&'a str>,
+    /// 1-based line of the target.
+    pub line: usize,
+    /// Expanded uncertainty (k = 2, mm) of the corrected TCP, when known.
+    pub uncertainty_mm: Option<f64>,
+}
+
+impl ChangeRef<'_> {
+    /// As a [`TargetChange`] of its own.
+    pub fn to_change(&self) -> TargetChange {
+        TargetChange {
+            mm: self.mm,
+            deg: self.deg,
+            skid: self.skid,
+            name: self.name.map(Name::from),
+            line: self.line,
+            uncertainty_mm: self.uncertainty_mm,
+        }
+    }
+}
+
+/// One [`Changes::push`] record at `*at`, moving `*at` past it, with its name from `names` at
+/// `*name_at` (moved past it).
+#[inline]
+fn read_change<'a>(
+    bytes: &[u8],
+    at: &mut usize,
+    names: &'a str,
+    name_at: &mut usize,
+) -> Option<ChangeRef<'a>> {
     let flags = *bytes.get(*at)?;
     *at += 1;
-    let mut number = |present: bool| -> Option<Option<f64>> {
-        if !present {
-            return Some(None);
-        }
-        let b = bytes.get(*at..*at + 8)?;
-        *at += 8;
-        Some(Some(f64::from_le_bytes(b.try_into().ok()?)))
+    let mm = f64_at(bytes, at)?;
+    let deg = f64_at(bytes, at)?;
+    let skid = match flags & HAS_SKID {
+        0 => None,
+        _ => Some(f64_at(bytes, at)?),
     };
-    let mm = number(true)??;
-    let deg = number(true)??;
-    let skid = number(flags & HAS_SKID != 0)?;
-    let uncertainty_mm = number(flags & HAS_UNCERTAINTY != 0)?;
+    let uncertainty_mm = match flags & HAS_UNCERTAINTY {
+        0 => None,
+        _ => Some(f64_at(bytes, at)?),
+    };
     let line = usize::try_from(read_varint(bytes, at)?).ok()?;
     let name = if flags & HAS_NAME != 0 {
         let n = usize::try_from(read_varint(bytes, at)?).ok()?;
-        let text = bytes.get(*at..at.checked_add(n)?)?;
-        *at += n;
-        // The bytes of a `str` pushed whole.
-        Some(Name::from(std::str::from_utf8(text).ok()?))
+        let name = names.get(*name_at..name_at.checked_add(n)?)?;
+        *name_at += n;
+        Some(name)
     } else {
         None
     };
-    Some(TargetChange {
+    Some(ChangeRef {
         mm,
         deg,
         skid,
@@ -145,6 +188,14 @@ fn read_change(bytes: &[u8], at: &mut usize) -> Option<TargetChange> {
         line,
         uncertainty_mm,
     })
+}
+
+/// The eight bytes at `*at` as a number, moving `*at` past them.
+#[inline(always)]
+fn f64_at(bytes: &[u8], at: &mut usize) -> Option<f64> {
+    let b = bytes.get(*at..)?.first_chunk::<8>()?;
+    *at += 8;
+    Some(f64::from_le_bytes(*b))
 }
 
 impl FromIterator<TargetChange> for Changes {
@@ -157,7 +208,8 @@ impl FromIterator<TargetChange> for Changes {
     }
 }
 
-/// Equal when they read back as the same changes (however the bytes are chunked).
+/// Equal when they read back as the same changes (however the bytes are chunked; a NaN is
+/// unequal to itself, as in a [`TargetChange`]).
 impl PartialEq for Changes {
     fn eq(&self, other: &Changes) -> bool {
         self.len == other.len && self.iter().eq(other.iter())
@@ -336,7 +388,7 @@ mod tests {
             .collect();
         let packed: Changes = all.iter().cloned().collect();
         assert_eq!(packed.len(), all.len());
-        let back: Vec<TargetChange> = packed.iter().collect();
+        let back: Vec<TargetChange> = packed.iter().map(|c| c.to_change()).collect();
         assert_eq!(back.len(), all.len());
         for (a, b) in all.iter().zip(&back) {
             // NaN is not equal to itself: compare the bits.
@@ -351,8 +403,8 @@ mod tests {
             assert_eq!(bits(a), bits(b));
             assert_eq!((&a.name, a.line), (&b.name, b.line));
         }
-        // Packed, a change takes a byte of flags, its numbers, its line and its name: no
-        // padding, no room for absent parts.
+        // Packed, a change takes a byte of flags, its numbers, its line and its name (its
+        // length in the log, its text beside it): no padding, no room for absent parts.
         let varint = |v: usize| (usize::BITS - v.max(1).leading_zeros()).div_ceil(7) as usize;
         let want: usize = all
             .iter()
@@ -362,12 +414,16 @@ mod tests {
                 1 + 16 + 8 * optional + varint(c.line) + name
             })
             .sum();
-        assert_eq!(packed.log.bytes(), want);
+        assert_eq!(packed.log.bytes() + packed.names.len(), want);
         let mut shrunk = packed.clone();
         shrunk.shrink_to_fit();
         shrunk.push(all[1].clone());
         assert_eq!(shrunk.len(), all.len() + 1);
-        assert_eq!(shrunk.iter().last().as_ref(), Some(&all[1]));
+        assert_eq!(
+            shrunk.iter().last().map(|c| c.to_change()),
+            Some(all[1].clone())
+        );
+        assert_eq!(shrunk.iter().nth(1).and_then(|c| c.name), Some(long));
         assert!(Changes::new().is_empty());
         assert_eq!(Changes::new().iter().count(), 0);
     }
