@@ -63,7 +63,6 @@ impl FileSummary {
                 .filter(|c| c.uncertainty_mm.is_some_and(|u| c.mm < u))
                 .map(|c| {
                     c.name
-                        .as_deref()
                         .map_or_else(|| format!("line {}", c.line), str::to_owned)
                 })
                 .collect(),

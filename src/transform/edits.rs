@@ -59,9 +59,14 @@ impl Changes {
     /// Adds one changed target.
     pub fn push(&mut self, c: TargetChange) {
         let name = c.name.as_deref();
-        let flags = (c.skid.is_some() as u8) * HAS_SKID
-            | (c.uncertainty_mm.is_some() as u8) * HAS_UNCERTAINTY
-            | (name.is_some() as u8) * HAS_NAME;
+        let flags = [
+            (c.skid.is_some(), HAS_SKID),
+            (c.uncertainty_mm.is_some(), HAS_UNCERTAINTY),
+            (name.is_some(), HAS_NAME),
+        ]
+        .into_iter()
+        .filter(|&(present, _)| present)
+        .fold(0, |flags, (_, bit)| flags | bit);
         let mut head = [0; 1 + 4 * 8 + 2 * VARINT_MAX];
         head[0] = flags;
         let mut n = 1;
@@ -379,7 +384,7 @@ mod tests {
                 name: match i % 4 {
                     0 => None,
                     1 => Some(long.into()),
-                    2 => Some("").map(Into::into),
+                    2 => Some("".into()),
                     _ => Some(format!("p{i}").into()),
                 },
                 line: if i == 7 { usize::MAX } else { i * 3 + 1 },
