@@ -12,7 +12,7 @@ use super::svg::{Chart, Span, fmt_fixed};
 use super::track::DataTable;
 use crate::digest::sha256_hex;
 use crate::syntax::latin1;
-use crate::transform::{FileResult, Refusal, TargetChange};
+use crate::transform::{ChangeRef, FileResult, Refusal};
 
 /// Headings of the run report's fixed sections, in page order.
 pub mod headings {
@@ -73,10 +73,10 @@ pub struct RunTarget {
     pub deg: f64,
 }
 
-impl From<&TargetChange> for RunTarget {
-    fn from(c: &TargetChange) -> RunTarget {
+impl From<ChangeRef<'_>> for RunTarget {
+    fn from(c: ChangeRef<'_>) -> RunTarget {
         RunTarget {
-            name: c.name.as_deref().map(str::to_owned),
+            name: c.name.map(str::to_owned),
             line: Some(c.line),
             skid: c.skid,
             mm: c.mm,

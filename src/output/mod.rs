@@ -206,7 +206,7 @@ mod tests {
                 output: new.as_bytes().to_vec(),
                 refusals: Vec::new(),
                 notes: Vec::new(),
-                changes: Vec::new(),
+                changes: Default::default(),
             }],
         }
     }

@@ -63,7 +63,6 @@ impl FileSummary {
                 .filter(|c| c.uncertainty_mm.is_some_and(|u| c.mm < u))
                 .map(|c| {
                     c.name
-                        .as_deref()
                         .map_or_else(|| format!("line {}", c.line), str::to_owned)
                 })
                 .collect(),
@@ -150,7 +149,7 @@ mod tests {
             output: b"y".to_vec(),
             refusals: Vec::new(),
             notes: Vec::new(),
-            changes,
+            changes: changes.into_iter().collect(),
         }
     }
 

@@ -1,14 +1,18 @@
 //! Span-splice rewriting: replace only the bytes a transform changes.
 
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
 use super::Span;
+use super::packed::{Chunks, Place, VARINT_MAX, put_varint, read_varint, unzigzag, zigzag};
 
 /// Replace the bytes of `span` in the original source with `text`.
 ///
 /// 24 bytes: the span is kept as two `u32` offsets (trackfix reads no file of 4 GiB or more,
-/// `output::MAX_INPUT_BYTES`; its parsers keep `u32` offsets too). A `correct` of a 20 MB
-/// module holds 700,000 edits next to the whole model, and two `usize` offsets were 5.6 MB of
-/// its peak. A span that does not fit is kept as a reversed one, which [`apply_edits`] refuses
-/// as [`EditError::OutOfBounds`]: never an edit at another place.
+/// `output::MAX_INPUT_BYTES`; its parsers keep `u32` offsets too). A transform makes a few per
+/// target and a file's [`EditList`] keeps them packed. A span that does not fit is kept as a
+/// reversed one, which [`apply_edits`] refuses as [`EditError::OutOfBounds`]: never an edit at
+/// another place.
 #[derive(Clone, PartialEq, Eq)]
 pub struct Edit {
     start: u32,
@@ -50,12 +54,10 @@ impl std::fmt::Debug for Edit {
 
 /// The bytes an [`Edit`] writes: up to 14 kept inline, longer ones on the heap.
 ///
-/// Almost every edit is one number (`-1517.563`, `0.7071068`): a `correct` of a 20 MB module
-/// holds 700,000 of them, next to the whole model, until the output is built, and a heap block
-/// each was a fifth of its peak memory. 14 bytes hold every number trackfix writes at the
-/// precisions it reads; a longer text sits behind a thin pointer, so an `EditText` is 16
-/// bytes and an [`Edit`] 32 (it was 40 with 22 inline bytes: 5.6 MB of that peak).
-/// Reads as a byte slice (`Deref<Target = [u8]>`).
+/// Almost every edit is one number (`-1517.563`, `0.7071068`), written once per changed field:
+/// 14 bytes hold every number trackfix writes at the precisions it reads, so writing one costs
+/// no allocation; a longer text sits behind a thin pointer, so an `EditText` is 16 bytes and
+/// an [`Edit`] 24. Reads as a byte slice (`Deref<Target = [u8]>`).
 #[derive(Clone, PartialEq, Eq)]
 pub struct EditText(TextRepr);
 
@@ -135,37 +137,313 @@ pub enum EditError {
 ///
 /// Edits may come in any order. Two edits of the same span with the same text count as one (a
 /// target referenced twice is rewritten once); any other overlap is an error rather than a guess.
+/// The same as collecting them into an [`EditList`] and [`applying`](EditList::apply) it.
 pub fn apply_edits(src: &[u8], edits: &[Edit]) -> Result<Vec<u8>, EditError> {
-    let mut order: Vec<&Edit> = edits.iter().collect();
-    order.sort_by_key(|e| (e.start, e.end));
-    order.dedup_by(|b, a| (a.start, a.end) == (b.start, b.end) && a.text == b.text);
-    // The exact size (edits checked below): the output of a large program is as large as its
-    // source, and room to spare would be held for the rest of the run.
-    let size = order.iter().fold(src.len(), |n, e| {
-        let removed = e.end.saturating_sub(e.start) as usize;
-        n.saturating_add(e.text.len()).saturating_sub(removed)
-    });
-    let mut out = Vec::with_capacity(size);
-    let mut pos = 0;
-    let mut prev: Option<Span> = None;
-    for e in order {
-        let span = e.span();
-        if span.start > span.end || span.end > src.len() {
-            return Err(EditError::OutOfBounds(span));
-        }
-        if span.start < pos {
-            return Err(EditError::Overlap {
-                first: prev.unwrap_or(span),
-                second: span,
-            });
-        }
-        out.extend_from_slice(&src[pos..span.start]);
-        out.extend_from_slice(&e.text);
-        pos = span.end;
-        prev = Some(span);
+    let mut list = EditList::default();
+    for e in edits {
+        list.push(e);
     }
-    out.extend_from_slice(&src[pos..]);
-    Ok(out)
+    list.apply(src)
+}
+
+/// The edits of one file, packed: what a transform holds from its first target until the
+/// output is built.
+///
+/// A `correct` of a 20 MB module makes 700,000 edits; as [`Edit`]s in a vector grown by
+/// doubling they took 22 MB, and sorting them for [`apply_edits`] 5.6 MB of references more,
+/// next to the source and the output being built. Here an edit is its offset from the edit
+/// before it, its length and its text, in bytes (about 12 for a written number; see
+/// `syntax::packed`), and the edits are not sorted: they are kept as the runs in which they came
+/// in order (a transform's edits come in file order, target by target, so a file has a few runs:
+/// its targets, its offset calls, its declarations), and [`apply`](EditList::apply) merges
+/// the runs.
+#[derive(Clone, Default)]
+pub struct EditList {
+    log: Chunks,
+    runs: Vec<Run>,
+    len: usize,
+    /// How much the edits lengthen the source (shorten it, below zero), duplicates included.
+    growth: isize,
+    /// The span of the last edit added: the next one continues its run unless it sorts before.
+    last: (u32, u32),
+}
+
+/// Edits that came in order: where the first one starts in the log, and how many there are.
+#[derive(Clone, Copy, Debug)]
+struct Run {
+    place: Place,
+    count: usize,
+}
+
+impl EditList {
+    /// No edits.
+    pub fn new() -> EditList {
+        EditList::default()
+    }
+
+    /// Adds `edit` (a copy of its text).
+    #[inline]
+    pub fn push(&mut self, edit: &Edit) {
+        let key = (edit.start, edit.end);
+        let prev_start = match self.runs.last_mut() {
+            Some(run) if key >= self.last => {
+                run.count += 1;
+                self.last.0
+            }
+            _ => {
+                self.runs.push(Run {
+                    place: self.log.end(),
+                    count: 1,
+                });
+                0
+            }
+        };
+        let text: &[u8] = &edit.text;
+        // Within a run starts never decrease; an edit kept reversed (`Edit::with_text`) has
+        // a negative length.
+        let mut head = [0; 3 * VARINT_MAX + INLINE];
+        let mut n = 0;
+        put_varint(&mut head, &mut n, u64::from(edit.start - prev_start));
+        put_varint(
+            &mut head,
+            &mut n,
+            zigzag(i64::from(edit.end) - i64::from(edit.start)),
+        );
+        put_varint(&mut head, &mut n, text.len() as u64);
+        match &edit.text.0 {
+            // A number: its head and its inline bytes go in as one block of fixed size (no
+            // copy of a length known only here), then the block is cut to what they take.
+            TextRepr::Inline { bytes, .. } => {
+                head[n..n + INLINE].copy_from_slice(bytes);
+                let out = self.log.room(head.len());
+                let end = out.len() + n + text.len();
+                out.extend_from_slice(&head);
+                out.truncate(end);
+            }
+            TextRepr::Heap(_) => {
+                let out = self.log.room(n + text.len());
+                out.extend_from_slice(&head[..n]);
+                out.extend_from_slice(text);
+            }
+        }
+        let removed = edit.end.saturating_sub(edit.start) as isize;
+        self.growth = self
+            .growth
+            .saturating_add(text.len() as isize)
+            .saturating_sub(removed);
+        self.last = key;
+        self.len += 1;
+    }
+
+    /// How many edits were added (identical duplicates included).
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether no edit was added.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The edits, in the order they were added.
+    pub fn iter(&self) -> impl Iterator<Item = Edit> + '_ {
+        let log = &self.log;
+        self.runs.iter().flat_map(move |run| {
+            let mut cursor = Cursor::of(*run);
+            std::iter::from_fn(move || cursor.next(log))
+                .map(|r| Edit::with_text(r.span(), EditText::from_bytes(r.text)))
+        })
+    }
+
+    /// `src` with the edits spliced in (see [`apply_edits`]), in one pass over the edits.
+    ///
+    /// The output is sized exactly: the output of a large program is as large as its source,
+    /// and room to spare would be held for the rest of the run. The size is summed as the edits
+    /// come in; only an identical duplicate in another run (dropped here) makes it differ, and
+    /// then the output is fitted at the end. An edit out of bounds or overlapping another ends
+    /// the pass with the error, and what was written is dropped.
+    pub fn apply(&self, src: &[u8]) -> Result<Vec<u8>, EditError> {
+        let size = src.len().saturating_add_signed(self.growth);
+        let mut out = Vec::with_capacity(size);
+        let mut pos = 0;
+        let mut prev: Option<Span> = None;
+        for e in self.sorted() {
+            let span = e.span();
+            if span.start > span.end || span.end > src.len() {
+                return Err(EditError::OutOfBounds(span));
+            }
+            if span.start < pos {
+                return Err(EditError::Overlap {
+                    first: prev.unwrap_or(span),
+                    second: span,
+                });
+            }
+            out.extend_from_slice(&src[pos..span.start]);
+            out.extend_from_slice(e.text);
+            pos = span.end;
+            prev = Some(span);
+        }
+        out.extend_from_slice(&src[pos..]);
+        if out.capacity() != out.len() {
+            out.shrink_to_fit();
+        }
+        Ok(out)
+    }
+
+    /// The edits by span (a stable order: equal spans as they were added), each identical
+    /// duplicate of the edit before it left out.
+    fn sorted(&self) -> Sorted<'_> {
+        let mut cursors: Vec<Cursor> = self.runs.iter().map(|r| Cursor::of(*r)).collect();
+        let mut heads: Vec<Option<Record>> =
+            cursors.iter_mut().map(|c| c.next(&self.log)).collect();
+        let heap = heads
+            .iter()
+            .enumerate()
+            .skip(1)
+            .filter_map(|(i, h)| h.map(|h| Reverse((h.start, h.end, i))))
+            .collect();
+        let head = heads.first_mut().and_then(Option::take);
+        Sorted {
+            log: &self.log,
+            cursors,
+            heads,
+            heap,
+            run: 0,
+            head,
+            last: None,
+        }
+    }
+}
+
+impl Extend<Edit> for EditList {
+    #[inline]
+    fn extend<I: IntoIterator<Item = Edit>>(&mut self, edits: I) {
+        for e in edits {
+            self.push(&e);
+        }
+    }
+}
+
+impl FromIterator<Edit> for EditList {
+    fn from_iter<I: IntoIterator<Item = Edit>>(edits: I) -> EditList {
+        let mut list = EditList::default();
+        list.extend(edits);
+        list
+    }
+}
+
+/// As the list of its edits, in the order they were added.
+impl std::fmt::Debug for EditList {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list().entries(self.iter()).finish()
+    }
+}
+
+/// One edit read back from the log.
+#[derive(Clone, Copy, PartialEq, Eq)]
+struct Record<'a> {
+    start: u32,
+    end: u32,
+    text: &'a [u8],
+}
+
+impl Record<'_> {
+    fn span(&self) -> Span {
+        Span::new(self.start as usize, self.end as usize)
+    }
+}
+
+/// Reads one run back.
+struct Cursor {
+    place: Place,
+    left: usize,
+    prev_start: u32,
+}
+
+impl Cursor {
+    fn of(run: Run) -> Cursor {
+        Cursor {
+            place: run.place,
+            left: run.count,
+            prev_start: 0,
+        }
+    }
+
+    /// The run's next edit. The log holds what [`EditList::push`] wrote, so every record reads
+    /// back whole; one that did not would end the run.
+    #[inline]
+    fn next<'a>(&mut self, log: &'a Chunks) -> Option<Record<'a>> {
+        if self.left == 0 {
+            return None;
+        }
+        let bytes = log.rest(&mut self.place);
+        let mut at = 0;
+        let start = u64::from(self.prev_start).checked_add(read_varint(bytes, &mut at)?)?;
+        let start = u32::try_from(start).ok()?;
+        let len = unzigzag(read_varint(bytes, &mut at)?);
+        let end = u32::try_from(i64::from(start).checked_add(len)?).ok()?;
+        let n = usize::try_from(read_varint(bytes, &mut at)?).ok()?;
+        let text = bytes.get(at..at.checked_add(n)?)?;
+        self.place.at += at + n;
+        self.left -= 1;
+        self.prev_start = start;
+        Some(Record { start, end, text })
+    }
+}
+
+/// [`EditList::sorted`]: the runs merged by span. The run taken from stays the same while
+/// its next edit sorts before every other run's (all of them, for a file of one run): only a
+/// change of run goes through the heap.
+struct Sorted<'a> {
+    log: &'a Chunks,
+    cursors: Vec<Cursor>,
+    /// The next edit of each run but the current one, not yet given.
+    heads: Vec<Option<Record<'a>>>,
+    /// Those heads by (start, end, run): equal spans in the order of their runs.
+    heap: BinaryHeap<Reverse<(u32, u32, usize)>>,
+    /// The run taken from, and its next edit.
+    run: usize,
+    head: Option<Record<'a>>,
+    last: Option<Record<'a>>,
+}
+
+impl<'a> Iterator for Sorted<'a> {
+    type Item = Record<'a>;
+
+    #[inline]
+    fn next(&mut self) -> Option<Record<'a>> {
+        loop {
+            let key = self.head.map(|h| (h.start, h.end, self.run));
+            match (key, self.heap.peek()) {
+                (Some(key), Some(&Reverse(top))) if top < key => {
+                    // Another run's edit comes first: the current one waits in the heap.
+                    self.heads[self.run] = self.head.take();
+                    self.heap.push(Reverse(key));
+                    self.take_top();
+                }
+                (None, Some(_)) => self.take_top(),
+                (None, None) => return None,
+                _ => {}
+            }
+            let head = self.head?;
+            self.head = self.cursors.get_mut(self.run)?.next(self.log);
+            if self.last == Some(head) {
+                continue;
+            }
+            self.last = Some(head);
+            return Some(head);
+        }
+    }
+}
+
+impl Sorted<'_> {
+    /// Makes the run of the heap's first edit the current one.
+    fn take_top(&mut self) {
+        if let Some(Reverse((_, _, run))) = self.heap.pop() {
+            self.run = run;
+            self.head = self.heads.get_mut(run).and_then(Option::take);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -258,6 +536,102 @@ mod tests {
                 Err(EditError::OutOfBounds(Span::new(top, 0)))
             );
         }
+    }
+
+    /// The splice as it was written before the edits were packed: sort (stable) by span, drop
+    /// each identical duplicate of the edit kept before it, check, copy.
+    fn splice_by_sorting(src: &[u8], edits: &[Edit]) -> Result<Vec<u8>, EditError> {
+        let mut order: Vec<&Edit> = edits.iter().collect();
+        order.sort_by_key(|e| (e.start, e.end));
+        order.dedup_by(|b, a| (a.start, a.end) == (b.start, b.end) && a.text == b.text);
+        let mut out = Vec::new();
+        let mut pos = 0;
+        let mut prev: Option<Span> = None;
+        for e in order {
+            let span = e.span();
+            if span.start > span.end || span.end > src.len() {
+                return Err(EditError::OutOfBounds(span));
+            }
+            if span.start < pos {
+                return Err(EditError::Overlap {
+                    first: prev.unwrap_or(span),
+                    second: span,
+                });
+            }
+            out.extend_from_slice(&src[pos..span.start]);
+            out.extend_from_slice(&e.text);
+            pos = span.end;
+            prev = Some(span);
+        }
+        out.extend_from_slice(&src[pos..]);
+        Ok(out)
+    }
+
+    proptest::proptest! {
+        /// Any edits in any order (in runs, shuffled, duplicated, overlapping, out of bounds,
+        /// texts inline and on the heap): the packed list splices as sorting did, its output is
+        /// sized exactly, and it reads back as it was given.
+        #[test]
+        fn the_packed_list_splices_as_sorting_did(
+            src_len in 0usize..60,
+            spans in proptest::collection::vec((0usize..64, 0usize..6, 0usize..20), 0..40),
+            dups in proptest::collection::vec(0usize..40, 0..6),
+            shuffle in proptest::collection::vec(0usize..40, 0..20),
+        ) {
+            let src: Vec<u8> = (0..src_len).map(|i| b'a' + (i % 26) as u8).collect();
+            let mut edits: Vec<Edit> = spans
+                .iter()
+                .map(|&(start, len, text)| {
+                    let text: Vec<u8> = (0..text).map(|i| b'0' + (i % 10) as u8).collect();
+                    Edit::new(Span::new(start, start + len), text)
+                })
+                .collect();
+            // Mostly in order (as a transform makes them), with a few moved and repeated.
+            edits.sort_by_key(|e| e.span().start);
+            for (i, &k) in shuffle.iter().enumerate() {
+                if !edits.is_empty() {
+                    let n = edits.len();
+                    edits.swap(i % n, k % n);
+                }
+            }
+            for &d in &dups {
+                if let Some(e) = edits.get(d).cloned() {
+                    edits.insert(d, e);
+                }
+            }
+            let list: EditList = edits.iter().cloned().collect();
+            proptest::prop_assert_eq!(list.len(), edits.len());
+            proptest::prop_assert_eq!(list.iter().collect::<Vec<_>>(), edits.clone());
+            let packed = list.apply(&src);
+            proptest::prop_assert_eq!(&packed, &splice_by_sorting(&src, &edits));
+            if let Ok(out) = packed {
+                proptest::prop_assert_eq!(out.capacity(), out.len());
+            }
+        }
+    }
+
+    #[test]
+    fn edits_in_order_make_one_run_and_reversed_ones_one_each() {
+        let e = |at: usize, text: &str| Edit::new(Span::new(at, at + 1), text);
+        let forward: EditList = (0..10).map(|i| e(2 * i, "xy")).collect();
+        assert_eq!(forward.runs.len(), 1);
+        // Equal spans continue the run (a target rewritten twice).
+        let mut again = forward.clone();
+        again.push(&e(18, "xy"));
+        assert_eq!(again.runs.len(), 1);
+        let backward: EditList = (0..10).rev().map(|i| e(2 * i, "xy")).collect();
+        assert_eq!(backward.runs.len(), 10);
+        let src = b"abcdefghijklmnopqrst";
+        let want = apply_edits(src, &forward.iter().collect::<Vec<_>>()).unwrap();
+        assert_eq!(want, b"xybxydxyfxyhxyjxylxynxypxyrxyt");
+        assert_eq!(backward.apply(src).unwrap(), want);
+        assert_eq!(again.apply(src).unwrap(), want);
+        assert_eq!(
+            format!("{:?}", EditList::from_iter([e(3, "1")])),
+            "[Edit { span: Span { start: 3, end: 4 }, text: [49] }]"
+        );
+        assert!(EditList::new().is_empty());
+        assert_eq!(EditList::new().apply(b"ab").unwrap(), b"ab");
     }
 
     #[test]

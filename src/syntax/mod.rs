@@ -13,11 +13,12 @@ mod edit;
 pub(crate) mod grammar_check;
 mod line_index;
 mod number;
+pub(crate) mod packed;
 mod span;
 mod tree;
 
 pub use diagnostic::{Diagnostic, Excerpt, Severity, WINDOW, latin1, printable, window};
-pub use edit::{Edit, EditError, EditText, apply_edits};
+pub use edit::{Edit, EditError, EditList, EditText, apply_edits};
 pub use line_index::LineIndex;
 pub(crate) use number::PackedLit;
 pub use number::{NumLit, fixed, same_at};

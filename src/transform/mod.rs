@@ -22,7 +22,8 @@ pub mod transfer;
 
 pub use cell::{Axis, Cell, CellError, ConfigRule, FrameIn, MirrorTable, Plane, Robot};
 pub use edits::{
-    FileEdits, FileResult, ProgramEdits, ProgramResult, TargetChange, apply, apply_owned,
+    ChangeRef, Changes, FileEdits, FileResult, ProgramEdits, ProgramResult, TargetChange, apply,
+    apply_owned,
 };
 pub use kinematic_policy::Arm;
 pub use mirror::{MirrorArm, MirrorSettings, WorldPlane, mirror};

@@ -108,7 +108,7 @@ mod tests {
             output: text.as_bytes().to_vec(),
             refusals: Vec::new(),
             notes: Vec::new(),
-            changes: Vec::new(),
+            changes: Default::default(),
         }
     }
 
