@@ -2,7 +2,8 @@
 //! source, decoded into a [`Position`] when asked for.
 //!
 //! A generated 20 MB RAPID module holds 100,000 targets; as [`Position`]s they were half of
-//! `check`'s peak (432 bytes each, 17 number fields of 16 bytes). Packed, a number field the
+//! `check`'s peak (432 bytes each, 17 number fields of 16 bytes). Packed (LEB128, as
+//! [`packed`] writes it), a number field the
 //! source spells is its offset from the field before (one or two bytes): its value, style and
 //! length are read again from the source ([`NumField::read_at`]), which gives the same field
 //! bit for bit — checked when it is packed; a field that would not come back so is kept whole.
@@ -13,7 +14,7 @@ use super::{
     Axes, BitField, CartesianFields, Config, Name, NumField, Orientation, Position, PositionKind,
     Usage,
 };
-use crate::syntax::Span;
+use crate::syntax::{Span, packed};
 
 /// The positions of one file, in the order pushed (see the module).
 #[derive(Clone, Debug, Default)]
@@ -384,18 +385,13 @@ impl Writer<'_> {
         self.out.push(b);
     }
 
-    /// LEB128: seven bits a byte, low first.
-    fn uint(&mut self, mut v: u64) {
-        while v >= 0x80 {
-            self.out.push(v as u8 | 0x80);
-            v >>= 7;
-        }
-        self.out.push(v as u8);
+    fn uint(&mut self, v: u64) {
+        packed::push_varint(self.out, v);
     }
 
-    /// Zigzag, then LEB128: a KRL aggregate may write its fields in any order.
+    /// Zigzagged: a KRL aggregate may write its fields in any order.
     fn int(&mut self, v: i64) {
-        self.uint(((v << 1) ^ (v >> 63)) as u64);
+        self.uint(packed::zigzag(v));
     }
 
     fn offset(&mut self, at: usize) {
@@ -459,15 +455,10 @@ impl<'a> Reader<'a> {
     }
 
     fn uint(&mut self) -> Option<u64> {
-        let mut v = 0u64;
-        for shift in (0..64).step_by(7) {
-            let b = self.byte()?;
-            v |= u64::from(b & 0x7f) << shift;
-            if b < 0x80 {
-                return Some(v);
-            }
-        }
-        None
+        let mut at = 0;
+        let v = packed::read_varint(self.bytes, &mut at)?;
+        self.bytes = self.bytes.get(at..)?;
+        Some(v)
     }
 
     fn usize(&mut self) -> Option<usize> {
@@ -475,8 +466,7 @@ impl<'a> Reader<'a> {
     }
 
     fn offset(&mut self) -> Option<usize> {
-        let z = self.uint()?;
-        let delta = (z >> 1) as i64 ^ -((z & 1) as i64);
+        let delta = packed::unzigzag(self.uint()?);
         self.cursor = usize::try_from(self.cursor as i64 + delta).ok()?;
         Some(self.cursor)
     }

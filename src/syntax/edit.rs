@@ -251,7 +251,7 @@ impl EditList {
         self.runs.iter().flat_map(move |run| {
             let mut cursor = Cursor::of(*run);
             std::iter::from_fn(move || cursor.next(log))
-                .map(|r| Edit::with_text(r.span(), EditText::from_bytes(r.text)))
+                .map(|r| Edit::with_text(r.span(), EditText::from_bytes(r.text(log))))
         })
     }
 
@@ -262,12 +262,18 @@ impl EditList {
     /// come in; only an identical duplicate in another run (dropped here) makes it differ, and
     /// then the output is fitted at the end. An edit out of bounds or overlapping another ends
     /// the pass with the error, and what was written is dropped.
-    pub fn apply(&self, src: &[u8]) -> Result<Vec<u8>, EditError> {
+    ///
+    /// The list is consumed: each chunk of its log is freed once every run has read past it,
+    /// so the edits shrink as the output grows (on a 20 MB module they were 7.9 MB of
+    /// `correct`'s peak, held beside the whole output).
+    pub fn apply(mut self, src: &[u8]) -> Result<Vec<u8>, EditError> {
         let size = src.len().saturating_add_signed(self.growth);
         let mut out = Vec::with_capacity(size);
         let mut pos = 0;
         let mut prev: Option<Span> = None;
-        for e in self.sorted() {
+        let mut merge = self.sorted();
+        let mut released = 0;
+        while let Some(e) = merge.next(&self.log) {
             let span = e.span();
             if span.start > span.end || span.end > src.len() {
                 return Err(EditError::OutOfBounds(span));
@@ -279,9 +285,13 @@ impl EditList {
                 });
             }
             out.extend_from_slice(&src[pos..span.start]);
-            out.extend_from_slice(e.text);
+            out.extend_from_slice(e.text(&self.log));
             pos = span.end;
             prev = Some(span);
+            if e.text.chunk > released {
+                released = merge.lowest_chunk().min(e.text.chunk);
+                self.log.release_before(released);
+            }
         }
         out.extend_from_slice(&src[pos..]);
         if out.capacity() != out.len() {
@@ -292,7 +302,7 @@ impl EditList {
 
     /// The edits by span (a stable order: equal spans as they were added), each identical
     /// duplicate of the edit before it left out.
-    fn sorted(&self) -> Sorted<'_> {
+    fn sorted(&self) -> Sorted {
         let mut cursors: Vec<Cursor> = self.runs.iter().map(|r| Cursor::of(*r)).collect();
         let mut heads: Vec<Option<Record>> =
             cursors.iter_mut().map(|c| c.next(&self.log)).collect();
@@ -304,7 +314,6 @@ impl EditList {
             .collect();
         let head = heads.first_mut().and_then(Option::take);
         Sorted {
-            log: &self.log,
             cursors,
             heads,
             heap,
@@ -339,17 +348,28 @@ impl std::fmt::Debug for EditList {
     }
 }
 
-/// One edit read back from the log.
+/// One edit read back from the log: its span, and where its text is (a place, not a borrow,
+/// so that [`EditList::apply`] can free the chunks it has read past).
 #[derive(Clone, Copy, PartialEq, Eq)]
-struct Record<'a> {
+struct Record {
     start: u32,
     end: u32,
-    text: &'a [u8],
+    text: Place,
+    len: usize,
 }
 
-impl Record<'_> {
+impl Record {
     fn span(&self) -> Span {
         Span::new(self.start as usize, self.end as usize)
+    }
+
+    fn text<'a>(&self, log: &'a Chunks) -> &'a [u8] {
+        log.get(self.text, self.len)
+    }
+
+    /// The same edit: span and text.
+    fn same(&self, other: &Record, log: &Chunks) -> bool {
+        (self.start, self.end) == (other.start, other.end) && self.text(log) == other.text(log)
     }
 }
 
@@ -372,7 +392,7 @@ impl Cursor {
     /// The run's next edit. The log holds what [`EditList::push`] wrote, so every record reads
     /// back whole; one that did not would end the run.
     #[inline]
-    fn next<'a>(&mut self, log: &'a Chunks) -> Option<Record<'a>> {
+    fn next(&mut self, log: &Chunks) -> Option<Record> {
         if self.left == 0 {
             return None;
         }
@@ -383,35 +403,42 @@ impl Cursor {
         let len = unzigzag(read_varint(bytes, &mut at)?);
         let end = u32::try_from(i64::from(start).checked_add(len)?).ok()?;
         let n = usize::try_from(read_varint(bytes, &mut at)?).ok()?;
-        let text = bytes.get(at..at.checked_add(n)?)?;
+        bytes.get(at..at.checked_add(n)?)?;
+        let text = Place {
+            at: self.place.at + at,
+            ..self.place
+        };
         self.place.at += at + n;
         self.left -= 1;
         self.prev_start = start;
-        Some(Record { start, end, text })
+        Some(Record {
+            start,
+            end,
+            text,
+            len: n,
+        })
     }
 }
 
 /// [`EditList::sorted`]: the runs merged by span. The run taken from stays the same while
 /// its next edit sorts before every other run's (all of them, for a file of one run): only a
 /// change of run goes through the heap.
-struct Sorted<'a> {
-    log: &'a Chunks,
+struct Sorted {
     cursors: Vec<Cursor>,
     /// The next edit of each run but the current one, not yet given.
-    heads: Vec<Option<Record<'a>>>,
+    heads: Vec<Option<Record>>,
     /// Those heads by (start, end, run): equal spans in the order of their runs.
     heap: BinaryHeap<Reverse<(u32, u32, usize)>>,
     /// The run taken from, and its next edit.
     run: usize,
-    head: Option<Record<'a>>,
-    last: Option<Record<'a>>,
+    head: Option<Record>,
+    last: Option<Record>,
 }
 
-impl<'a> Iterator for Sorted<'a> {
-    type Item = Record<'a>;
-
+impl Sorted {
+    /// The next edit by span, read from `log`.
     #[inline]
-    fn next(&mut self) -> Option<Record<'a>> {
+    fn next(&mut self, log: &Chunks) -> Option<Record> {
         loop {
             let key = self.head.map(|h| (h.start, h.end, self.run));
             match (key, self.heap.peek()) {
@@ -426,23 +453,38 @@ impl<'a> Iterator for Sorted<'a> {
                 _ => {}
             }
             let head = self.head?;
-            self.head = self.cursors.get_mut(self.run)?.next(self.log);
-            if self.last == Some(head) {
+            self.head = self.cursors.get_mut(self.run)?.next(log);
+            if self.last.is_some_and(|l| l.same(&head, log)) {
                 continue;
             }
             self.last = Some(head);
             return Some(head);
         }
     }
-}
 
-impl Sorted<'_> {
     /// Makes the run of the heap's first edit the current one.
     fn take_top(&mut self) {
         if let Some(Reverse((_, _, run))) = self.heap.pop() {
             self.run = run;
             self.head = self.heads.get_mut(run).and_then(Option::take);
         }
+    }
+
+    /// The first chunk of the log still to be read: what the runs have not read yet, the
+    /// edits read ahead, and the last edit given (the next is compared with it).
+    fn lowest_chunk(&self) -> usize {
+        let unread = self
+            .cursors
+            .iter()
+            .filter(|c| c.left > 0)
+            .map(|c| c.place.chunk);
+        let read_ahead = self
+            .heads
+            .iter()
+            .chain([&self.head, &self.last])
+            .flatten()
+            .map(|r| r.text.chunk);
+        unread.chain(read_ahead).min().unwrap_or(usize::MAX)
     }
 }
 
@@ -632,6 +674,30 @@ mod tests {
         );
         assert!(EditList::new().is_empty());
         assert_eq!(EditList::new().apply(b"ab").unwrap(), b"ab");
+    }
+
+    /// Runs that interleave over many chunks of the log, with duplicates across runs: `apply`
+    /// frees each chunk once every run has read past it, and must not free one an edit read
+    /// ahead (a run waiting in the merge) or the last edit given still points into.
+    #[test]
+    fn runs_merged_over_many_chunks_splice_as_sorting_did() {
+        let src: Vec<u8> = (0..60_000).map(|i| b'a' + (i % 26) as u8).collect();
+        let e = |at: usize, text: &str| Edit::new(Span::new(at, at + 1), text);
+        // Pushed first and written last: a run of one, read ahead at the start, whose text
+        // sits in the first chunk while every other run reads past it.
+        let mut edits = vec![e(59_001, "first pushed, last written")];
+        // The first half's even bytes, the second half's, then the first half's odd bytes
+        // (a second run interleaving with the first over every one of its chunks), then
+        // some of the first run again (identical: dropped) and a heap-sized text.
+        edits.extend((0..15_000).map(|i| e(2 * i, "even")));
+        edits.extend((15_000..30_000).map(|i| e(2 * i, "late")));
+        edits.extend((0..15_000).map(|i| e(2 * i + 1, "odd")));
+        edits.extend((0..15_000).step_by(7).map(|i| e(2 * i, "even")));
+        edits.push(e(59_999, &"long text on the heap ".repeat(4)));
+        let list: EditList = edits.iter().cloned().collect();
+        assert!(list.runs.len() >= 3);
+        assert!(list.log.chunks_len() > 10, "the edits fit in few chunks");
+        assert_eq!(list.apply(&src), splice_by_sorting(&src, &edits));
     }
 
     #[test]

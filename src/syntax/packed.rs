@@ -54,6 +54,12 @@ impl Chunks {
         }
     }
 
+    /// How many chunks.
+    #[cfg(test)]
+    pub(crate) fn chunks_len(&self) -> usize {
+        self.chunks.len()
+    }
+
     /// The bytes the records take (not the room to spare).
     #[cfg(test)]
     pub(crate) fn bytes(&self) -> usize {
@@ -101,10 +107,32 @@ impl Chunks {
     }
 }
 
+impl Chunks {
+    /// The `len` bytes at `place` (within its chunk); empty if they are not there (a chunk
+    /// released).
+    pub(crate) fn get(&self, place: Place, len: usize) -> &[u8] {
+        self.chunks
+            .get(place.chunk)
+            .and_then(|c| c.get(place.at..place.at.checked_add(len)?))
+            .unwrap_or_default()
+    }
+
+    /// Frees the chunks before chunk `chunk` (a reader done with them): their places read as
+    /// empty from now on, the others stay where they are.
+    pub(crate) fn release_before(&mut self, chunk: usize) {
+        for c in self.chunks.iter_mut().take(chunk) {
+            if c.capacity() > 0 {
+                *c = Vec::new();
+            }
+        }
+    }
+}
+
 /// A place in [`Chunks`]: a chunk and a byte in it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Place {
-    chunk: usize,
+    /// The chunk.
+    pub(crate) chunk: usize,
     /// The byte in the chunk.
     pub(crate) at: usize,
 }
@@ -123,6 +151,14 @@ pub(crate) fn put_varint(buf: &mut [u8], n: &mut usize, mut v: u64) {
     }
     buf[*n] = v as u8;
     *n += 1;
+}
+
+/// Appends `v` to `out` as [`put_varint`] writes it.
+pub(crate) fn push_varint(out: &mut Vec<u8>, v: u64) {
+    let mut buf = [0u8; VARINT_MAX];
+    let mut n = 0;
+    put_varint(&mut buf, &mut n, v);
+    out.extend_from_slice(buf.get(..n).unwrap_or_default());
 }
 
 /// Reads a [`put_varint`] number at `*at`, moving `*at` past it; `None` past the end.
