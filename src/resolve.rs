@@ -204,7 +204,8 @@ type TargetAt = (usize, usize);
 /// target and is built while every position of the program is held.
 type Indexed = (u32, u32);
 
-/// `at` for a name index; `None` past 2^32 files or targets (no input has that many).
+/// A target's place as a name index keeps it; `None` past 2^32 files or targets (no input has
+/// that many).
 fn indexed((m, i): TargetAt) -> Option<Indexed> {
     Some((u32::try_from(m).ok()?, u32::try_from(i).ok()?))
 }

@@ -112,7 +112,8 @@ impl PositionList {
             read_at,
         };
         w.uint(p.span.start as u64);
-        w.uint((p.span.end - p.span.start.min(p.span.end)) as u64);
+        // Signed: a span a dialect gives reversed comes back as it was given.
+        w.int(p.span.end as i64 - p.span.start as i64);
         w.uint(kind as u64);
         match &p.name {
             Some(n) => {
@@ -478,7 +479,8 @@ impl<'a> Reader<'a> {
         kinds: &[PositionKind],
     ) -> Option<(Span, PositionKind, Option<&'a [u8]>, usize, usize)> {
         let start = self.usize()?;
-        let span = Span::new(start, start.checked_add(self.usize()?)?);
+        let end = i64::try_from(start).ok()? + packed::unzigzag(self.uint()?);
+        let span = Span::new(start, usize::try_from(end).ok()?);
         self.cursor = start;
         let kind = *kinds.get(self.usize()?)?;
         let name = match self.usize()? {
@@ -636,6 +638,7 @@ mod tests {
             wobj in proptest::option::of("w[A-Za-z]{0,4}"),
             lines in proptest::collection::vec(1u32..5000, 0..6),
             others in 1usize..3,
+            reversed in proptest::bool::weighted(0.1),
         ) {
             let (src, spans) = source(&lits);
             let f = |p: &Pick| p.and_then(|(k, moved)| field(&src, &spans, k, moved));
@@ -667,7 +670,12 @@ mod tests {
             let p = Position {
                 name: name.map(Name::from),
                 kind: kinds[kind],
-                span: Span::new(1, src.len() - 1),
+                // A dialect may give a span reversed; it comes back as given.
+                span: if reversed {
+                    Span::new(src.len() - 1, 1)
+                } else {
+                    Span::new(1, src.len() - 1)
+                },
                 line,
                 column,
                 cartesian,
