@@ -4,7 +4,7 @@
 //! A generated 20 MB RAPID module holds 100,000 targets; as [`Position`]s they were half of
 //! `check`'s peak (432 bytes each, 17 number fields of 16 bytes). Packed (LEB128, as
 //! [`packed`] writes it), a number field the
-//! source spells is its offset from the field before (one or two bytes): its value, style and
+//! source spells is its offset from the start of the field before (one or two bytes): its value, style and
 //! length are read again from the source ([`NumField::read_at`]), which gives the same field
 //! bit for bit — checked when it is packed; a field that would not come back so is kept whole.
 //! The usage stays unpacked beside the bytes: binding records it after the positions are read.
@@ -184,27 +184,14 @@ impl PositionList {
             NO_CARTESIAN => None,
             tag => {
                 let trans = r.nums::<3>()?;
-                let orient = match tag {
-                    NO_ORIENTATION => None,
-                    QUATERNION => Some(Orientation::Quaternion(r.nums::<4>()?)),
-                    ABC => Some(Orientation::Abc(r.nums::<3>()?)),
-                    _ => return None,
-                };
+                let orient = r.orientation(tag)?;
                 Some(CartesianFields { trans, orient })
             }
         };
         let joints = (0..r.uint()?)
             .map(|_| r.num())
             .collect::<Option<Vec<_>>>()?;
-        let config = match r.byte()? {
-            NO_CONFIG => Config::None,
-            QUADRANTS => Config::Quadrants(r.nums::<4>()?),
-            STATUS_TURN => Config::StatusTurn {
-                status: r.bits()?,
-                turn: r.bits()?,
-            },
-            _ => return None,
-        };
+        let config = r.config()?;
         let extax = (0..r.uint()?).map(|_| r.num()).collect::<Option<Axes>>()?;
         Some(Position {
             name,
@@ -272,6 +259,31 @@ impl PositionList {
     pub fn name(&self, i: usize) -> Option<&str> {
         let (_, _, name, ..) = self.reader(self.heads.get(i)?, &[])?.head(&self.kinds)?;
         std::str::from_utf8(name?).ok()
+    }
+
+    /// The orientation and the configuration of position `i` as written, its other fields
+    /// stepped over unread: what `check`'s lints look at (a field is found from the one before
+    /// without reading the literal between).
+    pub fn orientation_and_config(
+        &self,
+        i: usize,
+        src: &[u8],
+    ) -> Option<(Option<Orientation>, Config)> {
+        let mut r = self.reader(self.heads.get(i)?, src)?;
+        r.head(&self.kinds)?;
+        let orient = match r.byte()? {
+            NO_CARTESIAN => None,
+            tag => {
+                for _ in 0..3 {
+                    r.skip_num()?;
+                }
+                r.orientation(tag)?
+            }
+        };
+        for _ in 0..r.uint()? {
+            r.skip_num()?;
+        }
+        Some((orient, r.config()?))
     }
 
     /// Whether position `i` has Cartesian fields ([`Position::cartesian`] is `Some`).
@@ -374,7 +386,8 @@ impl PositionList {
 struct Writer<'a> {
     out: &'a mut Vec<u8>,
     src: &'a [u8],
-    /// Where the field before ended (the literal's start before the first).
+    /// Where the field before started (the literal's start before the first): offsets from
+    /// it let a reader step over a field without reading its literal.
     cursor: usize,
     /// Every field is what [`NumField::read_at`] reads at its start (see
     /// [`PositionList::push_read_at`]).
@@ -421,7 +434,6 @@ impl Writer<'_> {
             self.out.extend_from_slice(&value.to_bits().to_le_bytes());
             self.out.extend_from_slice(&packed.to_le_bytes());
         }
-        self.cursor = span.end;
     }
 
     fn bits(&mut self, f: Option<&BitField>) {
@@ -437,7 +449,6 @@ impl Writer<'_> {
             Some(n) => self.uint(n as u64 + 1),
             None => self.uint(0),
         }
-        self.cursor = span.end;
     }
 }
 
@@ -514,8 +525,45 @@ impl<'a> Reader<'a> {
             }
             _ => return None,
         };
-        self.cursor = f.span().end;
         Some(Some(f))
+    }
+
+    /// Steps over a field [`Reader::num`] would read, without reading its literal.
+    fn skip_num(&mut self) -> Option<()> {
+        match self.byte()? {
+            ABSENT => {}
+            READ_AGAIN => {
+                self.offset()?;
+            }
+            WHOLE => {
+                self.offset()?;
+                self.bytes = self.bytes.get(12..)?;
+            }
+            _ => return None,
+        }
+        Some(())
+    }
+
+    /// The orientation after a Cartesian tag, its translation stepped over or read.
+    fn orientation(&mut self, tag: u8) -> Option<Option<Orientation>> {
+        Some(match tag {
+            NO_ORIENTATION => None,
+            QUATERNION => Some(Orientation::Quaternion(self.nums::<4>()?)),
+            ABC => Some(Orientation::Abc(self.nums::<3>()?)),
+            _ => return None,
+        })
+    }
+
+    fn config(&mut self) -> Option<Config> {
+        Some(match self.byte()? {
+            NO_CONFIG => Config::None,
+            QUADRANTS => Config::Quadrants(self.nums::<4>()?),
+            STATUS_TURN => Config::StatusTurn {
+                status: self.bits()?,
+                turn: self.bits()?,
+            },
+            _ => return None,
+        })
     }
 
     fn nums<const N: usize>(&mut self) -> Option<[Option<NumField>; N]> {
@@ -537,7 +585,6 @@ impl<'a> Reader<'a> {
                     0 => None,
                     n => Some(n - 1),
                 };
-                self.cursor = end;
                 Some(Some(BitField::new(Span::new(start, end), value, digits)?))
             }
             _ => None,
@@ -696,6 +743,10 @@ mod tests {
             prop_assert_eq!(list.get(1, &src), Some(p.clone()));
             prop_assert_eq!(list.head(1), Some((p.span, p.kind, p.name.as_deref())));
             prop_assert_eq!(list.has_cartesian(1), p.cartesian.is_some());
+            prop_assert_eq!(
+                list.orientation_and_config(1, &src),
+                Some((p.cartesian.as_ref().and_then(|c| c.orient.clone()), p.config.clone()))
+            );
             prop_assert_eq!(list.iter(&src).collect::<Vec<_>>(), vec![first, p]);
         }
     }

@@ -247,6 +247,16 @@ pub enum Orientation {
     Abc([Option<NumField>; 3]),
 }
 
+impl Orientation {
+    /// The quaternion as written, for ABB literals with all four fields numeric.
+    pub fn written_quaternion(&self) -> Option<[f64; 4]> {
+        match self {
+            Orientation::Quaternion(q) => values(q),
+            Orientation::Abc(_) => None,
+        }
+    }
+}
+
 /// The Cartesian part of a target or frame: translation and orientation fields.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CartesianFields {
@@ -283,10 +293,7 @@ impl CartesianFields {
 
     /// The quaternion as written, for ABB literals with all four fields numeric.
     pub fn written_quaternion(&self) -> Option<[f64; 4]> {
-        match self.orient.as_ref()? {
-            Orientation::Quaternion(q) => values(q),
-            Orientation::Abc(_) => None,
-        }
+        self.orient.as_ref()?.written_quaternion()
     }
 
     /// The pose, if every field is a numeric literal (and the quaternion is not zero).
@@ -900,10 +907,15 @@ impl Position {
 
     /// A human name for messages: the declared name or `inline <kind>`.
     pub fn label(&self) -> String {
-        match &self.name {
-            Some(n) => n.to_string(),
-            None => format!("inline {}", self.kind.as_str()),
-        }
+        label(self.name.as_deref(), self.kind)
+    }
+}
+
+/// [`Position::label`] of a target named `name` (`None`: inline) of `kind`.
+pub(crate) fn label(name: Option<&str>, kind: PositionKind) -> String {
+    match name {
+        Some(n) => n.to_owned(),
+        None => format!("inline {}", kind.as_str()),
     }
 }
 

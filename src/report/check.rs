@@ -3,7 +3,7 @@
 
 use std::fmt;
 
-use crate::position::{CartesianFields, ParsedFile, Program};
+use crate::position::{Orientation, ParsedFile, Program};
 use crate::syntax::{Diagnostic, Severity, Span};
 
 /// How far `|q|` may stray from 1 before `check` calls a quaternion non-normalised. Six written
@@ -60,33 +60,35 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
             .with_hint("delete it; trackfix shows such bytes escaped, as \\x1b"),
         );
     }
-    for p in file.positions() {
-        if let Some(q) = p
-            .cartesian
-            .as_ref()
-            .and_then(CartesianFields::written_quaternion)
-        {
+    // Only the orientation and the configuration of each target are read (the lints look at
+    // nothing else), and its name only for a finding.
+    let list = &file.positions;
+    for i in 0..list.len() {
+        let (Some((span, kind, name)), Some((orient, config))) =
+            (list.head(i), list.orientation_and_config(i, &file.source))
+        else {
+            continue;
+        };
+        let label = || crate::position::label(name, kind);
+        if let Some(q) = orient.as_ref().and_then(Orientation::written_quaternion) {
             let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
             if norm == 0.0 {
                 // Unused slots of PERS robtarget arrays are written this way by controllers:
                 // worth knowing, not a defect of the program.
                 out.push(
                     Diagnostic::note(
-                        p.span,
-                        format!(
-                            "`{}` has the quaternion [0,0,0,0]: an unset slot",
-                            p.label()
-                        ),
+                        span,
+                        format!("`{}` has the quaternion [0,0,0,0]: an unset slot", label()),
                     )
                     .with_hint("transforms leave it as written and report it"),
                 );
             } else if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
                 out.push(
                     Diagnostic::warning(
-                        p.span,
+                        span,
                         format!(
                             "quaternion of `{}` is not normalised (|q| = {norm:.6})",
-                            p.label()
+                            label()
                         ),
                     )
                     .with_hint(
@@ -95,26 +97,29 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
                 );
             }
         }
-        if let Some(problem) = crate::transform::policy::implausible_literal(file, &p) {
+        if let Some(problem) =
+            crate::transform::policy::implausible_fields(file, span, orient.as_ref(), &config)
+        {
             out.push(
-                Diagnostic::warning(p.span, format!("`{}` {problem}", p.label())).with_hint(
+                Diagnostic::warning(span, format!("`{}` {problem}", label())).with_hint(
                     "a typo or a placeholder: transforms refuse the target until it is fixed",
                 ),
             );
         }
-        if !p.usage.other_wobjs().is_empty() {
+        let Some(usage) = list.usage(i) else { continue };
+        if !usage.other_wobjs().is_empty() {
             let already = file.diagnostics.iter().any(|d| {
-                d.span.start <= p.span.start
-                    && p.span.start < d.span.end.max(d.span.start + 1)
+                d.span.start <= span.start
+                    && span.start < d.span.end.max(d.span.start + 1)
                     && d.message.contains("work object")
             });
             if !already {
                 let what = file.language.dialect().vocabulary().frames;
-                let all: Vec<&str> = p.usage.work_objects().collect();
+                let all: Vec<&str> = usage.work_objects().collect();
                 out.push(
                     Diagnostic::warning(
-                        p.span,
-                        format!("`{}` is used with two {what}: {}", p.label(), all.join(", ")),
+                        span,
+                        format!("`{}` is used with two {what}: {}", label(), all.join(", ")),
                     )
                     .with_hint("a transform cannot move one target for two frames; declare one target per frame"),
                 );

@@ -290,45 +290,54 @@ pub(crate) const PLAUSIBLE_QUATERNION_NORM_ERROR: f64 = 0.01;
 /// What makes the literals of a Cartesian target absurd, in words ("has cf4 = 1.5, …"), or
 /// `None`. Shared by `check` (a finding) and every transform (a refusal).
 pub(crate) fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<String> {
+    let orient = p.cartesian.as_ref().and_then(|c| c.orient.as_ref());
+    implausible_fields(file, p.span, orient, &p.config)
+}
+
+/// [`implausible_literal`] of the target written at `span`, from the fields it looks at: its
+/// orientation and configuration (`check` reads only these of each target).
+pub(crate) fn implausible_fields(
+    file: &ParsedFile,
+    span: crate::syntax::Span,
+    orient: Option<&crate::position::Orientation>,
+    config: &crate::position::Config,
+) -> Option<String> {
     use crate::position::{Config, Orientation};
     if let Some(problem) = file
         .language
         .dialect()
-        .implausible_configuration(p.span.slice(&file.source))
+        .implausible_configuration(span.slice(&file.source))
     {
         return Some(problem);
     }
-    if let Some(c) = &p.cartesian {
-        match &c.orient {
-            Some(Orientation::Abc(abc)) => {
-                for (name, f) in ["A", "B", "C"].iter().zip(abc) {
-                    if let Some(f) = f
-                        && !(f.value().is_finite() && f.value().abs() <= PLAUSIBLE_DEG)
-                    {
-                        return Some(format!(
-                            "has {name} = {}: not an angle in degrees",
-                            shown(f.value())
-                        ));
-                    }
+    match orient {
+        Some(Orientation::Abc(abc)) => {
+            for (name, f) in ["A", "B", "C"].iter().zip(abc) {
+                if let Some(f) = f
+                    && !(f.value().is_finite() && f.value().abs() <= PLAUSIBLE_DEG)
+                {
+                    return Some(format!(
+                        "has {name} = {}: not an angle in degrees",
+                        shown(f.value())
+                    ));
                 }
             }
-            Some(Orientation::Quaternion(_)) => {
-                if let Some(q) = c.written_quaternion() {
-                    let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-                    if norm != 0.0
-                        && !(norm.is_finite()
-                            && (norm - 1.0).abs() <= PLAUSIBLE_QUATERNION_NORM_ERROR)
-                    {
-                        return Some(format!(
-                            "has a quaternion of length {norm:.4}: not a rotation"
-                        ));
-                    }
-                }
-            }
-            None => {}
         }
+        Some(o @ Orientation::Quaternion(_)) => {
+            if let Some(q) = o.written_quaternion() {
+                let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if norm != 0.0
+                    && !(norm.is_finite() && (norm - 1.0).abs() <= PLAUSIBLE_QUATERNION_NORM_ERROR)
+                {
+                    return Some(format!(
+                        "has a quaternion of length {norm:.4}: not a rotation"
+                    ));
+                }
+            }
+        }
+        None => {}
     }
-    match &p.config {
+    match config {
         Config::Quadrants(cf) => {
             for (name, f) in ["cf1", "cf4", "cf6", "cfx"].iter().zip(cf) {
                 if let Some(f) = f {
