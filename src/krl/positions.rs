@@ -535,7 +535,7 @@ impl<'a> Extractor<'a> {
                             out.facts.candidates.push(p);
                             out.facts.inferred.push(false);
                         } else {
-                            push(&mut out.positions, src, p, read_elsewhere);
+                            out.positions.push_checking(p, src, read_elsewhere);
                         }
                     }
                 }
@@ -772,7 +772,7 @@ fn assignment(
         Some(kind) => {
             let read_elsewhere = f.read_elsewhere;
             let p = build_position(lines, value.span, kind, name, f);
-            push(&mut out.positions, src, p, read_elsewhere);
+            out.positions.push_checking(p, src, read_elsewhere);
         }
         None => {
             if let Some(kind) = inferred_kind(src, agg, &f) {
@@ -782,16 +782,6 @@ fn assignment(
                 out.facts.inferred.push(true);
             }
         }
-    }
-}
-
-/// Appends `p`, built from fields that `read_elsewhere` says were or were not all read at
-/// their start with `NumField::read_at` (then the list packs them without reading them again).
-fn push(list: &mut PositionList, src: &[u8], p: Position, read_elsewhere: bool) {
-    if read_elsewhere {
-        list.push(p, src);
-    } else {
-        list.push_read_at(p, src);
     }
 }
 
@@ -815,7 +805,7 @@ fn target_refs(
             if let Some(kind) = inferred_kind(src, agg, &f) {
                 let read_elsewhere = f.read_elsewhere;
                 let p = build_position(lines, e.span, kind, None, f);
-                push(positions, src, p, read_elsewhere);
+                positions.push_checking(p, src, read_elsewhere);
                 refs.push(Ref::Inline(e.span));
             }
             true

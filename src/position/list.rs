@@ -37,6 +37,9 @@ const ABSENT: u8 = 0;
 const READ_AGAIN: u8 = 1;
 const WHOLE: u8 = 2;
 
+/// What a whole number field keeps after its offset: the value's bits and the packed style.
+const WHOLE_VALUE_AND_STYLE: usize = 8 + 4;
+
 /// Cartesian part tags: none, or the translation with no orientation, a quaternion, or A, B, C.
 const NO_CARTESIAN: u8 = 0;
 const NO_ORIENTATION: u8 = 1;
@@ -82,18 +85,14 @@ impl PositionList {
 
     /// Appends `p`, whose spans point into `src`.
     pub fn push(&mut self, p: Position, src: &[u8]) {
-        self.pack(p, src, false);
+        self.push_checking(p, src, true);
     }
 
-    /// [`push`](Self::push) for a caller whose every number field of `p` is what
-    /// [`NumField::read_at`] reads at the field's start (a parser that scanned the literal with
-    /// [`NumLit::parse_prefix`](crate::syntax::NumLit::parse_prefix) there): the fields are
-    /// packed as read again without reading them once more.
-    pub(crate) fn push_read_at(&mut self, p: Position, src: &[u8]) {
-        self.pack(p, src, true);
-    }
-
-    fn pack(&mut self, p: Position, src: &[u8], read_at: bool) {
+    /// [`push`](Self::push), checking each number field against what [`NumField::read_at`]
+    /// reads at its start only if `check`: a parser that read every field of `p` so (scanned
+    /// with [`NumLit::parse_prefix`](crate::syntax::NumLit::parse_prefix) there) passes false,
+    /// and the fields are packed as read again without reading them once more.
+    pub(crate) fn push_checking(&mut self, p: Position, src: &[u8], check: bool) {
         // Every test run checks each position it reads through its packed bytes.
         #[cfg(debug_assertions)]
         let pushed = p.clone();
@@ -109,7 +108,7 @@ impl PositionList {
             out: &mut self.bytes,
             src,
             cursor: p.span.start,
-            read_at,
+            check,
         };
         w.uint(p.span.start as u64);
         // Signed: a span a dialect gives reversed comes back as it was given.
@@ -209,8 +208,8 @@ impl PositionList {
 
     /// Every position in order, decoded against `src`.
     pub fn iter<'a>(&'a self, src: &'a [u8]) -> impl ExactSizeIterator<Item = Position> + 'a {
-        // Every position pushed decodes (a proptest and the data tests hold it): the
-        // `filter_map` never drops one, and the count stays exact.
+        // Every position pushed decodes (a proptest and, in debug builds, every push holds it):
+        // the placeholder is never given, and it keeps the count and the indices exact.
         (0..self.len()).map(move |i| self.get(i, src).unwrap_or_else(|| self.placeholder(i)))
     }
 
@@ -251,14 +250,12 @@ impl PositionList {
 
     /// The literal's span of position `i`, without decoding its fields.
     pub fn span(&self, i: usize) -> Option<Span> {
-        let (span, ..) = self.reader(self.heads.get(i)?, &[])?.head(&self.kinds)?;
-        Some(span)
+        Some(self.head(i)?.0)
     }
 
     /// The declared name of position `i` (`None` for an inline literal).
     pub fn name(&self, i: usize) -> Option<&str> {
-        let (_, _, name, ..) = self.reader(self.heads.get(i)?, &[])?.head(&self.kinds)?;
-        std::str::from_utf8(name?).ok()
+        self.head(i)?.2
     }
 
     /// The orientation and the configuration of position `i` as written, its other fields
@@ -389,9 +386,9 @@ struct Writer<'a> {
     /// Where the field before started (the literal's start before the first): offsets from
     /// it let a reader step over a field without reading its literal.
     cursor: usize,
-    /// Every field is what [`NumField::read_at`] reads at its start (see
-    /// [`PositionList::push_read_at`]).
-    read_at: bool,
+    /// Whether a field is checked against what [`NumField::read_at`] reads at its start (see
+    /// [`PositionList::push_checking`]).
+    check: bool,
 }
 
 impl Writer<'_> {
@@ -424,7 +421,7 @@ impl Writer<'_> {
             return self.byte(ABSENT);
         };
         let span = f.span();
-        if self.read_at || NumField::read_at(self.src, span.start).as_ref() == Some(f) {
+        if !self.check || NumField::read_at(self.src, span.start).as_ref() == Some(f) {
             self.byte(READ_AGAIN);
             self.offset(span.start);
         } else {
@@ -537,7 +534,7 @@ impl<'a> Reader<'a> {
             }
             WHOLE => {
                 self.offset()?;
-                self.bytes = self.bytes.get(12..)?;
+                self.bytes = self.bytes.get(WHOLE_VALUE_AND_STYLE..)?;
             }
             _ => return None,
         }

@@ -127,7 +127,7 @@ pub struct Extractor<'l> {
     /// literals and routine data are private to their module.
     exported: Vec<bool>,
     /// A number field of the position being built was not scanned by the numeric-aggregate
-    /// path (see [`Extractor::push`]).
+    /// path, so the list checks its fields (see [`Extractor::push`]).
     read_elsewhere: std::cell::Cell<bool>,
 }
 
@@ -192,11 +192,8 @@ impl<'l> Extractor<'l> {
     /// from the numeric-aggregate scan, which read each with `NumLit::parse_prefix` at its
     /// start, unless one took the general path: then the list checks each field itself.
     fn push(&mut self, p: Position, src: &[u8]) {
-        if self.read_elsewhere.replace(false) {
-            self.positions.push(p, src);
-        } else {
-            self.positions.push_read_at(p, src);
-        }
+        let check = self.read_elsewhere.replace(false);
+        self.positions.push_checking(p, src, check);
     }
 
     fn num(&self, src: &[u8], arena: &Arena, id: u32) -> Option<NumField> {
@@ -971,13 +968,12 @@ impl Extractor<'_> {
                     let named = self.positions.len();
                     self.scan(src, arena, true);
                     if named > before {
-                        let span_of = |ps: &PositionList, i| ps.span(i);
                         let spans: Vec<Span> = (before..named)
-                            .filter_map(|i| span_of(&self.positions, i))
+                            .filter_map(|i| self.positions.span(i))
                             .collect();
                         let mut i = named;
                         while i < self.positions.len() {
-                            if span_of(&self.positions, i).is_some_and(|sp| spans.contains(&sp)) {
+                            if self.positions.span(i).is_some_and(|sp| spans.contains(&sp)) {
                                 self.positions.remove(i);
                             } else {
                                 i += 1;
