@@ -425,7 +425,7 @@ impl Writer<'_> {
             self.byte(READ_AGAIN);
             self.offset(span.start);
         } else {
-            let (_, value, packed) = f.parts();
+            let (value, packed) = f.value_and_style();
             self.byte(WHOLE);
             self.offset(span.start);
             self.out.extend_from_slice(&value.to_bits().to_le_bytes());

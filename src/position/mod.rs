@@ -143,12 +143,14 @@ impl NumField {
         NumField::new(Span::new(start, start.checked_add(len)?), lit)
     }
 
-    /// Start, value and packed style, for [`NumField::from_parts`].
-    pub(crate) fn parts(&self) -> (u32, f64, u32) {
-        (self.start, self.value, self.packed.bits())
+    /// Value and packed style, for [`NumField::from_parts`] (with the start, which
+    /// [`span`](Self::span) gives).
+    pub(crate) fn value_and_style(&self) -> (f64, u32) {
+        (self.value, self.packed.bits())
     }
 
-    /// The field [`NumField::parts`] gave; `None` for a style word no field has.
+    /// The field at `start` with what [`NumField::value_and_style`] gave; `None` for a style
+    /// word no field has.
     pub(crate) fn from_parts(start: u32, value: f64, packed: u32) -> Option<NumField> {
         Some(NumField {
             value,
