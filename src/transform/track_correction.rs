@@ -18,7 +18,7 @@ use super::cell::Robot;
 use super::driver::{NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
 use super::kinematic_policy::{Arm, joint_edits};
-use super::policy::{Why, describe, joint_target, work_object_of};
+use super::policy::{LastWorkObject, Why, describe, joint_target};
 use super::refusal::RefusalKind;
 use super::rewrite::{OrientationHint, pose_change};
 
@@ -168,6 +168,7 @@ struct TrackFrame {
 struct TrackRule<'s, 'a> {
     setup: &'s TrackSetup<'a>,
     dir: Direction,
+    work_objects: LastWorkObject,
 }
 
 impl TargetRule for TrackRule<'_, '_> {
@@ -234,7 +235,7 @@ impl TargetRule for TrackRule<'_, '_> {
     }
 
     fn frame(&self, scope: Scope, p: &Position) -> Result<TrackFrame, Why> {
-        let w = work_object_of(
+        let w = self.work_objects.work_object_of(
             scope.program,
             p,
             &self.setup.frames,
@@ -300,7 +301,12 @@ impl TargetRule for TrackRule<'_, '_> {
 
 /// `correct` or `zero` every Cartesian target of `program` with `setup`'s track.
 pub fn track_correction(program: &Program, setup: &TrackSetup, dir: Direction) -> ProgramEdits {
-    apply_rule(program, &TrackRule { setup, dir })
+    let rule = TrackRule {
+        setup,
+        dir,
+        work_objects: LastWorkObject::default(),
+    };
+    apply_rule(program, &rule)
 }
 
 #[cfg(test)]
