@@ -21,7 +21,7 @@ pub use diagnostic::{Diagnostic, Excerpt, Severity, WINDOW, latin1, printable, w
 pub use edit::{Edit, EditError, EditList, EditText, apply_edits};
 pub use line_index::LineIndex;
 pub(crate) use number::PackedLit;
-pub use number::{NumLit, fixed, same_at};
+pub use number::{NumLit, Rounded, fixed, same_at};
 pub use span::Span;
 pub(crate) use span::Span32;
 pub(crate) use tree::language;

@@ -389,9 +389,20 @@ impl NumLit {
     /// The text, and its value when known without reading it back.
     fn rewrite_parts(&self, new: f64, min_decimals: usize) -> Option<(EditText, Option<f64>)> {
         let places = self.places(min_decimals);
+        self.rewrite_at(new, places, Scaled::of(self.value, places))
+    }
+
+    /// [`rewrite_parts`](Self::rewrite_parts) at `places`, with `own`: the literal's value
+    /// rounded there ([`Scaled::of`]).
+    fn rewrite_at(
+        &self,
+        new: f64,
+        places: usize,
+        own: Option<Scaled>,
+    ) -> Option<(EditText, Option<f64>)> {
         // Compare the rounded values as integers first: most fields of a corrected program
         // change, but the ones that don't (zeros, 9E9, unchanged quaternions) cost no text.
-        if let (Some(a), Some(b)) = (Scaled::of(new, places), Scaled::of(self.value, places)) {
+        if let (Some(a), Some(b)) = (Scaled::of(new, places), own) {
             if a == b {
                 return None;
             }
@@ -427,12 +438,63 @@ impl NumLit {
         Some((EditText::from(written.into_bytes()), None))
     }
 
+    /// The literal with its value rounded at the places a rewrite with `min_decimals` writes,
+    /// for several rewrites and comparisons at those places ([`Rounded`]).
+    pub fn rounded(&self, min_decimals: usize) -> Rounded {
+        let places = self.places(min_decimals);
+        Rounded {
+            lit: *self,
+            places,
+            own: Scaled::of(self.value, places),
+        }
+    }
+
     /// The text to write for an integer field (`cf1`, Status), or `None` if unchanged.
     pub fn rewrite_integer(&self, new: i64) -> Option<String> {
         if self.value == new as f64 {
             None
         } else {
             Some(new.to_string())
+        }
+    }
+}
+
+/// A literal and its value rounded at the places a rewrite of it writes ([`NumLit::rounded`]),
+/// computed once: a round-trip rewrite writes each literal and compares what the inverse gives
+/// back with its value at those places ([`Rounded::same`]), and rounded the literal's own value
+/// again for each.
+#[derive(Clone, Copy, Debug)]
+pub struct Rounded {
+    lit: NumLit,
+    places: usize,
+    own: Option<Scaled>,
+}
+
+impl Rounded {
+    /// The places a rewrite writes ([`NumLit::places`]).
+    pub fn places(&self) -> usize {
+        self.places
+    }
+
+    /// The literal's value.
+    pub fn value(&self) -> f64 {
+        self.lit.value
+    }
+
+    /// [`NumLit::rewrite_read`] with the `min_decimals` the rounding was made for.
+    pub fn rewrite_read(&self, new: f64) -> Option<(EditText, f64)> {
+        let (text, read) = self.lit.rewrite_at(new, self.places, self.own)?;
+        let read = read
+            .or_else(|| NumLit::parse(&text).map(|l| l.value()))
+            .unwrap_or(f64::NAN);
+        Some((text, read))
+    }
+
+    /// [`same_at`]`(v, value, places)`: whether `v` reads as the literal's value at the places.
+    pub fn same(&self, v: f64) -> bool {
+        match (Scaled::of(v, self.places), self.own) {
+            (Some(x), Some(y)) => x == y,
+            _ => fixed(v, self.places) == fixed(self.lit.value, self.places),
         }
     }
 }
@@ -672,7 +734,8 @@ impl Scaled {
         if self.units >= 1 << 53 || places > 22 {
             return None;
         }
-        let v = self.units as f64 / EXACT_POWERS[places];
+        // Below 2^53 the units are a u64 (a u128 conversion is a call), exactly an f64.
+        let v = self.units as u64 as f64 / EXACT_POWERS[places];
         Some(if self.negative { -v } else { v })
     }
 
@@ -1077,6 +1140,31 @@ mod tests {
             if int.is_empty() && exp.is_none() && new.abs() < 0.5 {
                 proptest::prop_assert!(!out.trim_start_matches(['-', '+']).starts_with('0'), "{} → {}", text, out);
             }
+        }
+    }
+
+    proptest::proptest! {
+        /// A literal rounded once rewrites and compares as the literal does each time.
+        #[test]
+        fn a_rounded_literal_rewrites_and_compares_as_the_literal(
+            text in literal_text(),
+            new in proptest::prop_oneof![-5000.0f64..5000.0, -1.0f64..1.0, proptest::num::f64::ANY],
+            near in proptest::option::of(-2i32..=2),
+            house in proptest::sample::select(vec![0usize, 3, 4, 6, 12, 14]),
+        ) {
+            let Some(lit) = NumLit::parse(text.as_bytes()) else {
+                return Ok(());
+            };
+            // Also values a unit or two of the last place from the literal's own.
+            let new = match near {
+                Some(k) => lit.value() + k as f64 * 10f64.powi(-(lit.places(house) as i32)),
+                None => new,
+            };
+            let r = lit.rounded(house);
+            proptest::prop_assert_eq!(r.places(), lit.places(house));
+            let bits = |x: Option<(EditText, f64)>| x.map(|(t, v)| (t, v.to_bits()));
+            proptest::prop_assert_eq!(bits(r.rewrite_read(new)), bits(lit.rewrite_read(new, house)), "{} {}", text, new);
+            proptest::prop_assert_eq!(r.same(new), same_at(new, lit.value(), lit.places(house)), "{} {}", text, new);
         }
     }
 

@@ -21,6 +21,19 @@ pub(crate) struct Scope<'a> {
 /// The outcome for one target: its edits and change record, nothing to do, or a refusal.
 pub(crate) type Step = Result<Option<(Vec<Edit>, TargetChange)>, Box<Refusal>>;
 
+/// What a rule makes of one target.
+pub(crate) struct NewPose {
+    /// The target's new pose.
+    pub pose: Pose,
+    /// How to write its orientation.
+    pub hint: OrientationHint,
+    /// The change the inverse transform will apply to this target read back from the written
+    /// text (`zero`'s for `correct`), when the rule writes its results so that the inverse
+    /// gives back the original text (docs/design.md §5, round trip). Given with the pose: both
+    /// come from one evaluation of the track's deviation.
+    pub undo: Option<Pose>,
+}
+
 /// What one transform does to each target, offset call and frame declaration.
 pub(crate) trait TargetRule {
     /// What the rule needs from a target's work object (its pose, a mirror plane in it, …).
@@ -42,21 +55,14 @@ pub(crate) trait TargetRule {
     /// The target's work object as the rule needs it.
     fn frame(&self, scope: Scope, p: &Position) -> Result<Self::Frame, Why>;
 
-    /// The new pose of a target at `t`, and how to write its orientation.
+    /// The new pose of a target at `t`, how to write its orientation, and the inverse's change.
     fn new_pose(
         &self,
         p: &Position,
         frame: &Self::Frame,
         skid: Option<f64>,
         t: &Pose,
-    ) -> Result<(Pose, OrientationHint), Why>;
-
-    /// The change the inverse transform will apply to this target read back from the written
-    /// text (`zero`'s for `correct`), when the rule writes its results so that the inverse gives
-    /// back the original text (docs/design.md §5, round trip).
-    fn inverse(&self, _frame: &Self::Frame, _skid: Option<f64>) -> Option<Pose> {
-        None
-    }
+    ) -> Result<NewPose, Why>;
 
     /// Whether the rule writes KUKA targets at B = ±90° with the split a `correct` recorded in
     /// the file's stamp (`zero`, the inverse of `correct`; docs/design.md §5, round trip).
@@ -141,11 +147,14 @@ fn cartesian<R: TargetRule>(rule: &R, scope: Scope, p: &Position, keep_a: Option
     let Some(t) = fields.pose() else {
         return Ok(None);
     };
-    let (new, hint) = rule.new_pose(p, &frame, skid, &t).map_err(refuse)?;
+    let NewPose {
+        pose: new,
+        hint,
+        undo,
+    } = rule.new_pose(p, &frame, skid, &t).map_err(refuse)?;
     if let Some(why) = implausible_result(p, &new, scope.file.language.dialect().vocabulary()) {
         return Err(refuse(why));
     }
-    let undo = rule.inverse(&frame, skid);
     let mut edits = reversible_pose_edits(fields, &new, hint, undo.as_ref(), keep_a);
     edits.extend(rule.more_edits(scope, p));
     let (mm, deg) = pose_change(&t, &new);

@@ -19,7 +19,7 @@ use crate::position::{
 use crate::syntax::Edit;
 
 use super::cell::{Axis, ConfigRule, Plane};
-use super::driver::{Scope, Step, TargetRule, apply_rule};
+use super::driver::{NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
 use super::kinematic_policy::fmt_joints;
 use super::kinematic_policy::{Arm, config_edits};
@@ -367,9 +367,13 @@ impl TargetRule for MirrorRule<'_> {
         refl: &Reflection,
         _skid: Option<f64>,
         t: &Pose,
-    ) -> Result<(Pose, OrientationHint), Why> {
+    ) -> Result<NewPose, Why> {
         let (new, expected) = refl.target(t);
-        Ok((new, OrientationHint::Expected(expected)))
+        Ok(NewPose {
+            pose: new,
+            hint: OrientationHint::Expected(expected),
+            undo: None,
+        })
     }
 
     fn more_edits(&self, scope: Scope, p: &Position) -> Vec<Edit> {

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use crate::dialect::Vocabulary;
 use crate::geometry::Pose;
-use crate::position::{FrameKind, ParsedFile, Position, Program};
+use crate::position::{FrameKind, FrameName, ParsedFile, Position, Program};
 
 use super::refusal::{Refusal, RefusalKind, Remedy};
 
@@ -166,6 +166,38 @@ pub(crate) fn work_object_of(
         message: format!("{}: {}", describe(p), why.message),
         ..why
     })
+}
+
+/// The work object [`work_object_of`] last resolved by name, for the targets after it: a
+/// program's targets are used with a handful of work objects, in long runs of one, and
+/// resolving one by name (its text copied and lower-cased, the overrides searched) was 2 % of
+/// `correct`. What a name resolves to depends on the program and the overrides only, which a
+/// rule keeps for its whole run; a name that does not resolve is resolved again each time (the
+/// refusal names the target).
+#[derive(Default)]
+pub(crate) struct LastWorkObject(std::cell::RefCell<Option<(FrameName, Pose)>>);
+
+impl LastWorkObject {
+    /// [`work_object_of`], for the same `program`, `frames` and `default` at every call.
+    pub(crate) fn work_object_of(
+        &self,
+        program: &Program,
+        p: &Position,
+        frames: &BTreeMap<String, Pose>,
+        default: Option<&str>,
+    ) -> Result<Pose, Why> {
+        let Some(name) = &p.usage.wobj else {
+            return work_object_of(program, p, frames, default);
+        };
+        if let Some((last, pose)) = &*self.0.borrow()
+            && last == name
+        {
+            return Ok(*pose);
+        }
+        let pose = work_object_of(program, p, frames, default)?;
+        *self.0.borrow_mut() = Some((name.clone(), pose));
+        Ok(pose)
+    }
 }
 
 /// `robtarget \`p10\`` for a declared target, `inline robtarget` for a literal in an instruction.
@@ -441,6 +473,48 @@ mod tests {
             Err(why) => why.message,
             Ok(_) => panic!("`{name}` resolved"),
         }
+    }
+
+    #[test]
+    fn the_last_work_object_is_what_resolving_it_again_gives() {
+        // Runs of one work object, a change, world, a name that does not resolve, an unused
+        // target, and back: each target's frame as resolved on its own.
+        let line = "[[1,2,3],[1,0,0,0],[0,0,0,0],[0,9E9,9E9,9E9,9E9,9E9]]\n";
+        let names = [
+            Some("wobj_a"),
+            Some("wobj_a"),
+            Some("wobj_b"),
+            Some("wobj_b"),
+            Some("wobj0"),
+            Some("nowhere"),
+            None,
+            Some("wobj_a"),
+        ];
+        let mut program = rapid(&line.repeat(names.len()), "wobj_a");
+        for (u, name) in program.files[0].positions.usages_mut().zip(names) {
+            *u = crate::position::Usage::default();
+            if name.is_some() {
+                u.record(name, Some("tool0"), false, 1);
+            }
+        }
+        let frames = BTreeMap::from([
+            (
+                "wobj_a".to_owned(),
+                crate::geometry::pose_xyz_deg(100.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+            ),
+            (
+                "wobj_b".to_owned(),
+                crate::geometry::pose_xyz_deg(0.0, 200.0, 0.0, 0.0, 0.0, 90.0),
+            ),
+        ]);
+        let last = LastWorkObject::default();
+        let mut resolved = Vec::new();
+        for p in program.files[0].positions() {
+            let alone = work_object_of(&program, &p, &frames, None);
+            assert_eq!(last.work_object_of(&program, &p, &frames, None), alone);
+            resolved.push(alone.is_ok());
+        }
+        assert_eq!(resolved, [true, true, true, true, true, false, false, true]);
     }
 
     #[test]

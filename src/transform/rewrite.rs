@@ -6,7 +6,7 @@ use crate::geometry::{
     Pose, abb_quat, abb_quat_components, angle_between, kuka_abc, kuka_abc_angles,
 };
 use crate::position::{BitField, CartesianFields, NumField, Orientation};
-use crate::syntax::{Edit, EditText, fixed, same_at};
+use crate::syntax::{Edit, EditText, Rounded, fixed, same_at};
 
 /// At least this many decimals for mm.
 pub(crate) const MM_DECIMALS: usize = 3;
@@ -86,7 +86,9 @@ pub(crate) fn reversible_pose_edits(
     undo: Option<&Pose>,
     keep_a: Option<f64>,
 ) -> Vec<Edit> {
-    let mut edits = Vec::new();
+    // Room for a translation and a quaternion: grown from empty, the vector was allocated
+    // twice a target.
+    let mut edits = Vec::with_capacity(7);
     // Absurd literals (1e300 mm) overflow the composition; a half-written target would be worse
     // than none, so such a pose changes nothing.
     let finite = new.translation.vector.iter().all(|v| v.is_finite())
@@ -274,8 +276,8 @@ fn push_edits<const N: usize>(
 }
 
 /// One field written for `v`: its text (`None`: kept) and the value the next run reads from it.
-fn write_one(field: &NumField, v: f64, house: usize) -> (Option<EditText>, f64) {
-    match field.lit().rewrite_read(v, house) {
+fn write_one(field: &Rounded, v: f64) -> (Option<EditText>, f64) {
+    match field.rewrite_read(v) {
         // Our own output always parses; were it not to, the value read back is NaN, the check
         // after fails safe (it matches nothing) and plain rounding is written.
         Some((text, read)) => (Some(text), read),
@@ -294,14 +296,14 @@ fn reversible<const N: usize>(
     if exact.iter().any(|v| !v.is_finite()) {
         return std::array::from_fn(|_| None);
     }
-    let places = fields.map(|f| f.lit().places(house));
+    // Each literal rounded at its places once: every choice is written and checked there.
+    let rounded = fields.map(|f| f.lit().rounded(house));
+    let places = rounded.map(|r| r.places());
     let gives_back = |read: [f64; N]| {
-        inverse(read).is_some_and(|z| {
-            (0..N).all(|i| z[i].is_finite() && same_at(z[i], fields[i].value(), places[i]))
-        })
+        inverse(read).is_some_and(|z| (0..N).all(|i| z[i].is_finite() && rounded[i].same(z[i])))
     };
     let first: [(Option<EditText>, f64); N] =
-        std::array::from_fn(|i| write_one(fields[i], exact[i], house));
+        std::array::from_fn(|i| write_one(&rounded[i], exact[i]));
     if gives_back(first.clone().map(|(_, v)| v)) {
         return first.map(|(t, _)| t);
     }
@@ -312,7 +314,7 @@ fn reversible<const N: usize>(
         let mut o: Vec<_> = [0.0, -1.0, 1.0]
             .iter()
             .map(|k| {
-                let (text, read) = write_one(fields[i], exact[i] + k * unit, house);
+                let (text, read) = write_one(&rounded[i], exact[i] + k * unit);
                 (text, read, (read - exact[i]).abs() / unit)
             })
             .collect();

@@ -15,10 +15,10 @@ use crate::position::{Position, Program, Skid};
 use crate::track::{Profile, TrackError};
 
 use super::cell::Robot;
-use super::driver::{Scope, Step, TargetRule, apply_rule};
+use super::driver::{NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
 use super::kinematic_policy::{Arm, joint_edits};
-use super::policy::{Why, describe, joint_target, work_object_of};
+use super::policy::{LastWorkObject, Why, describe, joint_target};
 use super::refusal::RefusalKind;
 use super::rewrite::{OrientationHint, pose_change};
 
@@ -106,13 +106,29 @@ impl<'a> TrackSetup<'a> {
 
     /// The work-object-frame change `W⁻¹·B·D^∓1·B⁻¹·W` at skid `s` (left factor of `T`).
     pub fn correction(&self, w: &Pose, skid: f64, dir: Direction) -> Result<Pose, TrackError> {
+        Ok(self.correction_both_ways(w, skid, dir, false)?.0)
+    }
+
+    /// [`correction`](Self::correction) in `dir`, and with `inverse` also in the other
+    /// direction (what the inverse transform applies), from one evaluation of the deviation:
+    /// each pose is the one `correction` gives, bit for bit (the same products in the same
+    /// order), at the cost of one spline evaluation, not two.
+    fn correction_both_ways(
+        &self,
+        w: &Pose,
+        skid: f64,
+        dir: Direction,
+        inverse: bool,
+    ) -> Result<(Pose, Option<Pose>), TrackError> {
         let b = self.base_at(skid);
         let d = self.deviation.deviation(skid)?;
-        let d = match dir {
-            Direction::Correct => d.inverse(),
-            Direction::Zero => d,
+        let (wb, bi) = (w.inverse() * b, b.inverse());
+        let through = |d: Pose| wb * d * bi * w;
+        let (this, other) = match dir {
+            Direction::Correct => (through(d.inverse()), inverse.then(|| through(d))),
+            Direction::Zero => (through(d), inverse.then(|| through(d.inverse()))),
         };
-        Ok(w.inverse() * b * d * b.inverse() * w)
+        Ok((this, other))
     }
 
     /// `D(s)⁻¹` (correct) or `D(s)` (zero): the change seen from the robot base at `s`.
@@ -152,6 +168,7 @@ struct TrackFrame {
 struct TrackRule<'s, 'a> {
     setup: &'s TrackSetup<'a>,
     dir: Direction,
+    work_objects: LastWorkObject,
 }
 
 impl TargetRule for TrackRule<'_, '_> {
@@ -218,7 +235,7 @@ impl TargetRule for TrackRule<'_, '_> {
     }
 
     fn frame(&self, scope: Scope, p: &Position) -> Result<TrackFrame, Why> {
-        let w = work_object_of(
+        let w = self.work_objects.work_object_of(
             scope.program,
             p,
             &self.setup.frames,
@@ -235,20 +252,25 @@ impl TargetRule for TrackRule<'_, '_> {
         })
     }
 
+    /// `correct` is written so that `zero` gives back the text it read (its change is the
+    /// undo): a program corrected for a track and zeroed again is the program as drawn. `zero`
+    /// is not written for a later `correct`: a choice made for that could undo the one
+    /// `correct` made, and a program zeroed from an online-tuned one has no text to come back
+    /// to.
     fn new_pose(
         &self,
         p: &Position,
         frame: &TrackFrame,
         skid: Option<f64>,
         t: &Pose,
-    ) -> Result<(Pose, OrientationHint), Why> {
+    ) -> Result<NewPose, Why> {
         let what = describe(p);
         // `skid` refused targets without one.
         let skid = skid.unwrap_or_default();
         let w = &frame.w;
-        let correction = self
+        let (correction, undo) = self
             .setup
-            .correction(w, skid, self.dir)
+            .correction_both_ways(w, skid, self.dir, self.dir == Direction::Correct)
             .map_err(|e| profile_refusal(&what, skid, e))?;
         let new = correction * t;
         if let (Some(arm), Some(tool)) = (&self.setup.arm, &frame.tool) {
@@ -257,21 +279,11 @@ impl TargetRule for TrackRule<'_, '_> {
             let flange = |t: &Pose| to_base * t * tool.inverse();
             arm.check(p, &flange(t), &flange(&new), frame.language)?;
         }
-        Ok((new, OrientationHint::NearOriginal))
-    }
-
-    /// `correct` is written so that `zero` gives back the text it read: a program corrected for
-    /// a track and zeroed again is the program as drawn. `zero` is not written for a later
-    /// `correct`: a choice made for that could undo the one `correct` made, and a program
-    /// zeroed from an online-tuned one has no text to come back to.
-    fn inverse(&self, frame: &TrackFrame, skid: Option<f64>) -> Option<Pose> {
-        match self.dir {
-            Direction::Correct => self
-                .setup
-                .correction(&frame.w, skid.unwrap_or_default(), Direction::Zero)
-                .ok(),
-            Direction::Zero => None,
-        }
+        Ok(NewPose {
+            pose: new,
+            hint: OrientationHint::NearOriginal,
+            undo,
+        })
     }
 
     fn keeps_lock_splits(&self) -> bool {
@@ -289,7 +301,12 @@ impl TargetRule for TrackRule<'_, '_> {
 
 /// `correct` or `zero` every Cartesian target of `program` with `setup`'s track.
 pub fn track_correction(program: &Program, setup: &TrackSetup, dir: Direction) -> ProgramEdits {
-    apply_rule(program, &TrackRule { setup, dir })
+    let rule = TrackRule {
+        setup,
+        dir,
+        work_objects: LastWorkObject::default(),
+    };
+    apply_rule(program, &rule)
 }
 
 #[cfg(test)]
@@ -438,6 +455,33 @@ mod tests {
             prop_assert!((a.coords - b.coords).amax() < 1e-9 || (a.coords + b.coords).amax() < 1e-9);
             // The correction is a real one (tenths of mm), not a no-op.
             prop_assert!((corrected.translation.vector - t.translation.vector).norm() > 1e-3);
+        }
+
+        /// The undo a correction comes with is the other direction's correction bit for bit
+        /// (what a second evaluation of the deviation gave), both ways.
+        #[test]
+        fn the_undo_is_the_other_directions_correction(
+            base in (-3000.0..3000.0f64, -3000.0..3000.0f64, -500.0..500.0f64, -180.0..180.0f64),
+            w in (-3000.0..3000.0f64, -3000.0..3000.0f64, 0.0..1500.0f64, -180.0..180.0f64, -30.0..30.0f64),
+            skid in 0.0..8000.0f64,
+            amp in (0.05..5.0f64, 0.001..0.1f64, 500.0..9000.0f64),
+        ) {
+            let dev = move |s: f64| -> Result<Pose, TrackError> {
+                let u = s / amp.2;
+                Ok(pose_xyz_deg(amp.0 * u.cos(), amp.0 * u.sin(), -amp.0 * (2.0 * u).sin(),
+                                amp.1 * u.sin(), -amp.1 * u.cos(), amp.1 * (3.0 * u).sin()))
+            };
+            let s = setup(&dev, pose_xyz_deg(base.0, base.1, base.2, 0.0, 0.0, base.3), Vector3::new(1.0, 0.01, 0.0));
+            let w = pose_xyz_deg(w.0, w.1, w.2, 0.0, w.4, w.3);
+            // `W⁻¹·B·D^∓1·B⁻¹·W` as one expression, each direction on its own.
+            let b = s.base_at(skid);
+            let d = dev(skid).unwrap();
+            let correct = w.inverse() * b * d.inverse() * b.inverse() * w;
+            let zero = w.inverse() * b * d * b.inverse() * w;
+            for (dir, this, other) in [(Direction::Correct, correct, zero), (Direction::Zero, zero, correct)] {
+                prop_assert_eq!(s.correction_both_ways(&w, skid, dir, true).unwrap(), (this, Some(other)));
+                prop_assert_eq!(s.correction(&w, skid, dir).unwrap(), this);
+            }
         }
 
         /// Through text: zero(correct(file)) gives back the file's numbers to written precision.
