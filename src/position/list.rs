@@ -97,32 +97,20 @@ impl PositionList {
         #[cfg(debug_assertions)]
         let pushed = p.clone();
         let body = self.bytes.len();
-        let kind = match self.kinds.iter().position(|&k| k == p.kind) {
-            Some(k) => k,
-            None => {
-                self.kinds.push(p.kind);
-                self.kinds.len() - 1
-            }
-        };
+        let kind = self.kind_index(p.kind);
         let mut w = Writer {
             out: &mut self.bytes,
             src,
             cursor: p.span.start,
             check,
         };
-        w.uint(p.span.start as u64);
-        // Signed: a span a dialect gives reversed comes back as it was given.
-        w.int(p.span.end as i64 - p.span.start as i64);
-        w.uint(kind as u64);
-        match &p.name {
-            Some(n) => {
-                w.uint(n.len() as u64 + 1);
-                w.out.extend_from_slice(n.as_bytes());
-            }
-            None => w.uint(0),
-        }
-        w.uint(p.line as u64);
-        w.uint(p.column as u64);
+        w.head(
+            p.span,
+            kind,
+            p.name.as_ref().map(|n| n.as_bytes()),
+            p.line,
+            p.column,
+        );
         match &p.cartesian {
             None => w.byte(NO_CARTESIAN),
             Some(c) => {
@@ -161,6 +149,49 @@ impl PositionList {
         });
         #[cfg(debug_assertions)]
         debug_assert_eq!(self.get(self.len() - 1, src).as_ref(), Some(&pushed));
+    }
+
+    /// Appends a robtarget-shaped position whose every number field is a literal that
+    /// [`NumField::read_at`] reads back at its start: the bytes [`push_checking`]
+    /// (`check` false) writes for it, straight from where the fields start, with no
+    /// [`Position`] built. A parser that scanned each literal with
+    /// [`NumLit::parse_prefix`](crate::syntax::NumLit::parse_prefix) and saw it fit the
+    /// compact form ([`NumField::new`]) gives this; it is most of what a robtarget file holds.
+    ///
+    /// [`push_checking`]: Self::push_checking
+    pub(crate) fn push_read_again(&mut self, t: &ReadAgainTarget<'_>) {
+        let body = self.bytes.len();
+        let kind = self.kind_index(t.kind);
+        let mut w = Writer {
+            out: &mut self.bytes,
+            src: &[],
+            cursor: t.span.start,
+            check: false,
+        };
+        w.head(t.span, kind, t.name, t.line, t.column);
+        w.byte(QUATERNION);
+        w.read_again(&t.trans);
+        w.read_again(&t.quaternion);
+        // No joints.
+        w.uint(0);
+        w.byte(QUADRANTS);
+        w.read_again(&t.quadrants);
+        w.uint(t.extax.len() as u64);
+        w.read_again(t.extax);
+        self.heads.push(Head {
+            usage: Usage::default(),
+            body,
+        });
+    }
+
+    fn kind_index(&mut self, kind: PositionKind) -> usize {
+        match self.kinds.iter().position(|&k| k == kind) {
+            Some(k) => k,
+            None => {
+                self.kinds.push(kind);
+                self.kinds.len() - 1
+            }
+        }
     }
 
     /// Position `i`, decoded against `src` (the bytes it was pushed with).
@@ -379,6 +410,22 @@ impl PositionList {
     }
 }
 
+/// A robtarget as [`PositionList::push_read_again`] takes it: where its literal is, what it
+/// is named, and where each of its number fields starts.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ReadAgainTarget<'a> {
+    pub span: Span,
+    pub kind: PositionKind,
+    /// The declared name's text (UTF-8), as [`Position::name`] holds it.
+    pub name: Option<&'a [u8]>,
+    pub line: usize,
+    pub column: usize,
+    pub trans: [usize; 3],
+    pub quaternion: [usize; 4],
+    pub quadrants: [usize; 4],
+    pub extax: &'a [usize],
+}
+
 /// Writes one position's packed bytes.
 struct Writer<'a> {
     out: &'a mut Vec<u8>,
@@ -403,6 +450,31 @@ impl Writer<'_> {
     /// Zigzagged: a KRL aggregate may write its fields in any order.
     fn int(&mut self, v: i64) {
         self.uint(packed::zigzag(v));
+    }
+
+    /// Span, kind index, name's text, line and column: what [`Reader::head`] reads.
+    fn head(&mut self, span: Span, kind: usize, name: Option<&[u8]>, line: usize, column: usize) {
+        self.uint(span.start as u64);
+        // Signed: a span a dialect gives reversed comes back as it was given.
+        self.int(span.end as i64 - span.start as i64);
+        self.uint(kind as u64);
+        match name {
+            Some(n) => {
+                self.uint(n.len() as u64 + 1);
+                self.out.extend_from_slice(n);
+            }
+            None => self.uint(0),
+        }
+        self.uint(line as u64);
+        self.uint(column as u64);
+    }
+
+    /// Number fields read again at these starts, as [`Writer::num`] packs them unchecked.
+    fn read_again(&mut self, starts: &[usize]) {
+        for &at in starts {
+            self.byte(READ_AGAIN);
+            self.offset(at);
+        }
     }
 
     fn offset(&mut self, at: usize) {

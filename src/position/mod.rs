@@ -21,6 +21,7 @@ pub use crate::dialect::Language;
 
 mod list;
 pub use list::PositionList;
+pub(crate) use list::ReadAgainTarget;
 
 /// What a position literal is, by its declared or inferred data type: the type's name as its
 /// language writes it, and whether it is Cartesian. Each dialect defines its kinds
