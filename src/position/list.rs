@@ -821,6 +821,55 @@ mod tests {
     }
 
     #[test]
+    fn read_again_target_packs_what_push_packs_for_it() {
+        let src = b"[[-1520.30,.5,9E+09],[0.707107,0,+12.5,2.69E-07],[0,0,-1,0],[5.,9E9]]";
+        let starts: Vec<usize> = (1..src.len())
+            .filter(|&i| {
+                (src[i].is_ascii_digit() || matches!(src[i], b'.' | b'-' | b'+'))
+                    && matches!(src[i - 1], b'[' | b',')
+            })
+            .collect();
+        let field = |k: usize| NumField::read_at(src, starts[k]);
+        let p = Position {
+            name: Some(Name::from("p10")),
+            kind: PositionKind::Robtarget,
+            span: Span::new(0, src.len()),
+            line: 7,
+            column: 3,
+            cartesian: Some(CartesianFields {
+                trans: [field(0), field(1), field(2)],
+                orient: Some(Orientation::Quaternion([
+                    field(3),
+                    field(4),
+                    field(5),
+                    field(6),
+                ])),
+            }),
+            joints: Vec::new(),
+            config: Config::Quadrants([field(7), field(8), field(9), field(10)]),
+            extax: [field(11), field(12)].into_iter().collect(),
+            usage: Usage::default(),
+        };
+        let mut general = PositionList::new();
+        general.push_checking(p.clone(), src, false);
+        let mut direct = PositionList::new();
+        direct.push_read_again(&ReadAgainTarget {
+            span: p.span,
+            kind: p.kind,
+            name: Some(b"p10"),
+            line: 7,
+            column: 3,
+            trans: [starts[0], starts[1], starts[2]],
+            quaternion: [starts[3], starts[4], starts[5], starts[6]],
+            quadrants: [starts[7], starts[8], starts[9], starts[10]],
+            extax: &starts[11..],
+        });
+        assert_eq!(starts.len(), 13);
+        assert_eq!(direct.bytes, general.bytes);
+        assert_eq!(direct.get(0, src), Some(p));
+    }
+
+    #[test]
     fn only_fields_the_source_spells_are_read_again() {
         // `9E+09` read again is one tag byte and one offset; a field the source does not
         // spell (here the literal of `0.707107` placed where `9E+09` is written) keeps its
