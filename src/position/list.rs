@@ -289,16 +289,16 @@ impl PositionList {
         self.head(i)?.2
     }
 
-    /// The orientation and the configuration of position `i` as written, its other fields
+    /// The head, orientation and configuration of position `i` as written, its other fields
     /// stepped over unread: what `check`'s lints look at (a field is found from the one before
     /// without reading the literal between).
-    pub fn orientation_and_config(
-        &self,
+    pub fn orientation_and_config<'a>(
+        &'a self,
         i: usize,
-        src: &[u8],
-    ) -> Option<(Option<Orientation>, Config)> {
+        src: &'a [u8],
+    ) -> Option<OrientationAndConfig<'a>> {
         let mut r = self.reader(self.heads.get(i)?, src)?;
-        r.head(&self.kinds)?;
+        let (span, kind, name, ..) = r.head(&self.kinds)?;
         let orient = match r.byte()? {
             NO_CARTESIAN => None,
             tag => {
@@ -311,7 +311,13 @@ impl PositionList {
         for _ in 0..r.uint()? {
             r.skip_num()?;
         }
-        Some((orient, r.config()?))
+        Some(OrientationAndConfig {
+            span,
+            kind,
+            name,
+            orient,
+            config: r.config()?,
+        })
     }
 
     /// Whether position `i` has Cartesian fields ([`Position::cartesian`] is `Some`).
@@ -407,6 +413,28 @@ impl PositionList {
             src,
             cursor: 0,
         })
+    }
+}
+
+/// What [`PositionList::orientation_and_config`] reads of a position.
+#[derive(Clone, Debug)]
+pub struct OrientationAndConfig<'a> {
+    /// The literal's bytes.
+    pub span: Span,
+    /// What kind of target it is.
+    pub kind: PositionKind,
+    /// The declared name's text, read as UTF-8 only when it is shown ([`Self::name`]).
+    name: Option<&'a [u8]>,
+    /// The orientation as written (`None` without Cartesian fields or orientation).
+    pub orient: Option<Orientation>,
+    /// The configuration as written.
+    pub config: Config,
+}
+
+impl OrientationAndConfig<'_> {
+    /// The declared name (`None` for an inline literal).
+    pub fn name(&self) -> Option<&str> {
+        std::str::from_utf8(self.name?).ok()
     }
 }
 
@@ -812,9 +840,18 @@ mod tests {
             prop_assert_eq!(list.get(1, &src), Some(p.clone()));
             prop_assert_eq!(list.head(1), Some((p.span, p.kind, p.name.as_deref())));
             prop_assert_eq!(list.has_cartesian(1), p.cartesian.is_some());
+            let read = list.orientation_and_config(1, &src).map(|t| {
+                (t.span, t.kind, t.name().map(str::to_owned), t.orient, t.config)
+            });
             prop_assert_eq!(
-                list.orientation_and_config(1, &src),
-                Some((p.cartesian.as_ref().and_then(|c| c.orient.clone()), p.config.clone()))
+                read,
+                Some((
+                    p.span,
+                    p.kind,
+                    p.name.as_deref().map(str::to_owned),
+                    p.cartesian.as_ref().and_then(|c| c.orient.clone()),
+                    p.config.clone()
+                ))
             );
             prop_assert_eq!(list.iter(&src).collect::<Vec<_>>(), vec![first, p]);
         }

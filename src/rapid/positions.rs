@@ -352,8 +352,8 @@ impl<'l> Extractor<'l> {
     }
 
     /// Packs the scalar robtarget `[[x,y,z],[q1..q4],[cf1..cfx],[eax..]]` at `id` declared as
-    /// `name` straight from the arena, when its fields are all literals the numeric scan read
-    /// that fit the compact form and its name is ASCII: what [`Extractor::position`] and
+    /// `name` straight from the arena, when it has these four parts, its fields are all
+    /// literals the numeric scan read that fit the compact form, and its name is ASCII: what [`Extractor::position`] and
     /// [`Extractor::push`] give for it, without building a [`Position`]. `false` (nothing
     /// pushed) for any other shape, which the general path reads.
     fn push_read_again(&mut self, src: &[u8], arena: &Arena, id: u32, name: Span) -> bool {
@@ -383,11 +383,12 @@ impl<'l> Extractor<'l> {
         let mut parts = arena.children(id);
         let (mut trans, mut quaternion, mut quadrants) = ([0; 3], [0; 4], [0; 4]);
         let mut extax = [0; MAX_AXES];
-        let (Some(3), Some(4), Some(4), Some(axes)) = (
+        let (Some(3), Some(4), Some(4), Some(axes), None) = (
             starts(parts.next(), &mut trans),
             starts(parts.next(), &mut quaternion),
             starts(parts.next(), &mut quadrants),
             starts(parts.next(), &mut extax),
+            parts.next(),
         ) else {
             return false;
         };
@@ -967,7 +968,14 @@ impl Extractor<'_> {
                     && dims == 0
                     && init.is_some_and(|id| self.push_read_again(src, arena, id, name))
                 {
-                    self.scan(src, arena, false);
+                    // The statement's expressions are that literal's numbers and brackets:
+                    // no call for `scan` to find.
+                    #[cfg(debug_assertions)]
+                    {
+                        let offsets = self.offsets.len();
+                        self.scan(src, arena, false);
+                        assert_eq!(self.offsets.len(), offsets);
+                    }
                     return;
                 }
                 let name_text = text_of(src, name);
