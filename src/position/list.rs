@@ -97,32 +97,20 @@ impl PositionList {
         #[cfg(debug_assertions)]
         let pushed = p.clone();
         let body = self.bytes.len();
-        let kind = match self.kinds.iter().position(|&k| k == p.kind) {
-            Some(k) => k,
-            None => {
-                self.kinds.push(p.kind);
-                self.kinds.len() - 1
-            }
-        };
+        let kind = self.kind_index(p.kind);
         let mut w = Writer {
             out: &mut self.bytes,
             src,
             cursor: p.span.start,
             check,
         };
-        w.uint(p.span.start as u64);
-        // Signed: a span a dialect gives reversed comes back as it was given.
-        w.int(p.span.end as i64 - p.span.start as i64);
-        w.uint(kind as u64);
-        match &p.name {
-            Some(n) => {
-                w.uint(n.len() as u64 + 1);
-                w.out.extend_from_slice(n.as_bytes());
-            }
-            None => w.uint(0),
-        }
-        w.uint(p.line as u64);
-        w.uint(p.column as u64);
+        w.head(
+            p.span,
+            kind,
+            p.name.as_ref().map(|n| n.as_bytes()),
+            p.line,
+            p.column,
+        );
         match &p.cartesian {
             None => w.byte(NO_CARTESIAN),
             Some(c) => {
@@ -161,6 +149,49 @@ impl PositionList {
         });
         #[cfg(debug_assertions)]
         debug_assert_eq!(self.get(self.len() - 1, src).as_ref(), Some(&pushed));
+    }
+
+    /// Appends a robtarget-shaped position whose every number field is a literal that
+    /// [`NumField::read_at`] reads back at its start: the bytes [`push_checking`]
+    /// (`check` false) writes for it, straight from where the fields start, with no
+    /// [`Position`] built. A parser that scanned each literal with
+    /// [`NumLit::parse_prefix`](crate::syntax::NumLit::parse_prefix) and saw it fit the
+    /// compact form ([`NumField::new`]) gives this; it is most of what a robtarget file holds.
+    ///
+    /// [`push_checking`]: Self::push_checking
+    pub(crate) fn push_read_again(&mut self, t: &ReadAgainTarget<'_>) {
+        let body = self.bytes.len();
+        let kind = self.kind_index(t.kind);
+        let mut w = Writer {
+            out: &mut self.bytes,
+            src: &[],
+            cursor: t.span.start,
+            check: false,
+        };
+        w.head(t.span, kind, t.name, t.line, t.column);
+        w.byte(QUATERNION);
+        w.read_again(&t.trans);
+        w.read_again(&t.quaternion);
+        // No joints.
+        w.uint(0);
+        w.byte(QUADRANTS);
+        w.read_again(&t.quadrants);
+        w.uint(t.extax.len() as u64);
+        w.read_again(t.extax);
+        self.heads.push(Head {
+            usage: Usage::default(),
+            body,
+        });
+    }
+
+    fn kind_index(&mut self, kind: PositionKind) -> usize {
+        match self.kinds.iter().position(|&k| k == kind) {
+            Some(k) => k,
+            None => {
+                self.kinds.push(kind);
+                self.kinds.len() - 1
+            }
+        }
     }
 
     /// Position `i`, decoded against `src` (the bytes it was pushed with).
@@ -258,16 +289,16 @@ impl PositionList {
         self.head(i)?.2
     }
 
-    /// The orientation and the configuration of position `i` as written, its other fields
+    /// The head, orientation and configuration of position `i` as written, its other fields
     /// stepped over unread: what `check`'s lints look at (a field is found from the one before
     /// without reading the literal between).
-    pub fn orientation_and_config(
-        &self,
+    pub fn orientation_and_config<'a>(
+        &'a self,
         i: usize,
-        src: &[u8],
-    ) -> Option<(Option<Orientation>, Config)> {
+        src: &'a [u8],
+    ) -> Option<OrientationAndConfig<'a>> {
         let mut r = self.reader(self.heads.get(i)?, src)?;
-        r.head(&self.kinds)?;
+        let (span, kind, name, ..) = r.head(&self.kinds)?;
         let orient = match r.byte()? {
             NO_CARTESIAN => None,
             tag => {
@@ -280,7 +311,13 @@ impl PositionList {
         for _ in 0..r.uint()? {
             r.skip_num()?;
         }
-        Some((orient, r.config()?))
+        Some(OrientationAndConfig {
+            span,
+            kind,
+            name,
+            orient,
+            config: r.config()?,
+        })
     }
 
     /// Whether position `i` has Cartesian fields ([`Position::cartesian`] is `Some`).
@@ -379,6 +416,44 @@ impl PositionList {
     }
 }
 
+/// What [`PositionList::orientation_and_config`] reads of a position.
+#[derive(Clone, Debug)]
+pub struct OrientationAndConfig<'a> {
+    /// The literal's bytes.
+    pub span: Span,
+    /// What kind of target it is.
+    pub kind: PositionKind,
+    /// The declared name's text, read as UTF-8 only when it is shown ([`Self::name`]).
+    name: Option<&'a [u8]>,
+    /// The orientation as written (`None` without Cartesian fields or orientation).
+    pub orient: Option<Orientation>,
+    /// The configuration as written.
+    pub config: Config,
+}
+
+impl OrientationAndConfig<'_> {
+    /// The declared name (`None` for an inline literal).
+    pub fn name(&self) -> Option<&str> {
+        std::str::from_utf8(self.name?).ok()
+    }
+}
+
+/// A robtarget as [`PositionList::push_read_again`] takes it: where its literal is, what it
+/// is named, and where each of its number fields starts.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ReadAgainTarget<'a> {
+    pub span: Span,
+    pub kind: PositionKind,
+    /// The declared name's text (UTF-8), as [`Position::name`] holds it.
+    pub name: Option<&'a [u8]>,
+    pub line: usize,
+    pub column: usize,
+    pub trans: [usize; 3],
+    pub quaternion: [usize; 4],
+    pub quadrants: [usize; 4],
+    pub extax: &'a [usize],
+}
+
 /// Writes one position's packed bytes.
 struct Writer<'a> {
     out: &'a mut Vec<u8>,
@@ -403,6 +478,31 @@ impl Writer<'_> {
     /// Zigzagged: a KRL aggregate may write its fields in any order.
     fn int(&mut self, v: i64) {
         self.uint(packed::zigzag(v));
+    }
+
+    /// Span, kind index, name's text, line and column: what [`Reader::head`] reads.
+    fn head(&mut self, span: Span, kind: usize, name: Option<&[u8]>, line: usize, column: usize) {
+        self.uint(span.start as u64);
+        // Signed: a span a dialect gives reversed comes back as it was given.
+        self.int(span.end as i64 - span.start as i64);
+        self.uint(kind as u64);
+        match name {
+            Some(n) => {
+                self.uint(n.len() as u64 + 1);
+                self.out.extend_from_slice(n);
+            }
+            None => self.uint(0),
+        }
+        self.uint(line as u64);
+        self.uint(column as u64);
+    }
+
+    /// Number fields read again at these starts, as [`Writer::num`] packs them unchecked.
+    fn read_again(&mut self, starts: &[usize]) {
+        for &at in starts {
+            self.byte(READ_AGAIN);
+            self.offset(at);
+        }
     }
 
     fn offset(&mut self, at: usize) {
@@ -740,12 +840,70 @@ mod tests {
             prop_assert_eq!(list.get(1, &src), Some(p.clone()));
             prop_assert_eq!(list.head(1), Some((p.span, p.kind, p.name.as_deref())));
             prop_assert_eq!(list.has_cartesian(1), p.cartesian.is_some());
+            let read = list.orientation_and_config(1, &src).map(|t| {
+                (t.span, t.kind, t.name().map(str::to_owned), t.orient, t.config)
+            });
             prop_assert_eq!(
-                list.orientation_and_config(1, &src),
-                Some((p.cartesian.as_ref().and_then(|c| c.orient.clone()), p.config.clone()))
+                read,
+                Some((
+                    p.span,
+                    p.kind,
+                    p.name.as_deref().map(str::to_owned),
+                    p.cartesian.as_ref().and_then(|c| c.orient.clone()),
+                    p.config.clone()
+                ))
             );
             prop_assert_eq!(list.iter(&src).collect::<Vec<_>>(), vec![first, p]);
         }
+    }
+
+    #[test]
+    fn read_again_target_packs_what_push_packs_for_it() {
+        let src = b"[[-1520.30,.5,9E+09],[0.707107,0,+12.5,2.69E-07],[0,0,-1,0],[5.,9E9]]";
+        let starts: Vec<usize> = (1..src.len())
+            .filter(|&i| {
+                (src[i].is_ascii_digit() || matches!(src[i], b'.' | b'-' | b'+'))
+                    && matches!(src[i - 1], b'[' | b',')
+            })
+            .collect();
+        let field = |k: usize| NumField::read_at(src, starts[k]);
+        let p = Position {
+            name: Some(Name::from("p10")),
+            kind: PositionKind::Robtarget,
+            span: Span::new(0, src.len()),
+            line: 7,
+            column: 3,
+            cartesian: Some(CartesianFields {
+                trans: [field(0), field(1), field(2)],
+                orient: Some(Orientation::Quaternion([
+                    field(3),
+                    field(4),
+                    field(5),
+                    field(6),
+                ])),
+            }),
+            joints: Vec::new(),
+            config: Config::Quadrants([field(7), field(8), field(9), field(10)]),
+            extax: [field(11), field(12)].into_iter().collect(),
+            usage: Usage::default(),
+        };
+        let mut general = PositionList::new();
+        general.push_checking(p.clone(), src, false);
+        let mut direct = PositionList::new();
+        direct.push_read_again(&ReadAgainTarget {
+            span: p.span,
+            kind: p.kind,
+            name: Some(b"p10"),
+            line: 7,
+            column: 3,
+            trans: [starts[0], starts[1], starts[2]],
+            quaternion: [starts[3], starts[4], starts[5], starts[6]],
+            quadrants: [starts[7], starts[8], starts[9], starts[10]],
+            extax: &starts[11..],
+        });
+        assert_eq!(starts.len(), 13);
+        assert_eq!(direct.bytes, general.bytes);
+        assert_eq!(direct.get(0, src), Some(p));
     }
 
     #[test]

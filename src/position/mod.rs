@@ -20,7 +20,8 @@ pub const NOT_CONNECTED: f64 = 8.9e9;
 pub use crate::dialect::Language;
 
 mod list;
-pub use list::PositionList;
+pub(crate) use list::ReadAgainTarget;
+pub use list::{OrientationAndConfig, PositionList};
 
 /// What a position literal is, by its declared or inferred data type: the type's name as its
 /// language writes it, and whether it is Cartesian. Each dialect defines its kinds

@@ -287,7 +287,7 @@ static IDENT_CONTINUE: [bool; 256] = {
 
 /// `ident = letter { letter | digit | "_" }` (grammars/rapid.ebnf): the length of the
 /// identifier `rest` starts with (its first byte is a letter or `_`).
-fn ident_len(rest: &[u8]) -> usize {
+pub(super) fn ident_len(rest: &[u8]) -> usize {
     1 + rest
         .iter()
         .skip(1)
@@ -375,7 +375,7 @@ static KEYWORD_PAIRS: [[u32; 32]; 10] = {
 };
 
 /// Whether `text` is a keyword, in any case.
-fn is_keyword(text: &[u8]) -> bool {
+pub(super) fn is_keyword(text: &[u8]) -> bool {
     let &[first, second, ..] = text else {
         return false;
     };

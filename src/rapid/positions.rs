@@ -11,7 +11,7 @@ use super::parser::Stmt;
 use crate::names::{NameKey, NameMap};
 use crate::position::{
     Axes, CartesianFields, Config, FrameDecl, FrameKind, Name, NumField, OffsetCall, OffsetKind,
-    Orientation, Position, PositionKind, PositionList, Usage,
+    Orientation, Position, PositionKind, PositionList, ReadAgainTarget, Usage,
 };
 use crate::resolve::DeclKind;
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, Span32, latin1};
@@ -349,6 +349,77 @@ impl<'l> Extractor<'l> {
             extax,
             usage: Usage::default(),
         })
+    }
+
+    /// Packs the scalar robtarget `[[x,y,z],[q1..q4],[cf1..cfx],[eax..]]` at `id` declared as
+    /// `name` straight from the arena, when it has these four parts, its fields are all
+    /// literals the numeric scan read that fit the compact form, and its name is ASCII: what [`Extractor::position`] and
+    /// [`Extractor::push`] give for it, without building a [`Position`]. `false` (nothing
+    /// pushed) for any other shape, which the general path reads.
+    fn push_read_again(&mut self, src: &[u8], arena: &Arena, id: u32, name: Span) -> bool {
+        /// More external axes than a controller has go to the general path.
+        const MAX_AXES: usize = 12;
+        let name_text = name.slice(src);
+        let Some(n) = arena.get(id).filter(|n| n.kind == ExprKind::Aggregate) else {
+            return false;
+        };
+        if !name_text.is_ascii() {
+            return false;
+        }
+        // Each child of `part` a literal read while scanning, that packs: their starts.
+        let starts = |part: Option<u32>, out: &mut [usize]| -> Option<usize> {
+            let part = arena.get(part?).filter(|n| n.kind == ExprKind::Aggregate)?;
+            let mut count = 0;
+            let mut next = part.first;
+            while let Some(c) = arena.get(next) {
+                let lit = arena.lit(c).filter(|_| c.kind == ExprKind::Num)?;
+                lit.pack(c.span().len())?;
+                *out.get_mut(count)? = c.start as usize;
+                count += 1;
+                next = c.next;
+            }
+            Some(count)
+        };
+        let mut parts = arena.children(id);
+        let (mut trans, mut quaternion, mut quadrants) = ([0; 3], [0; 4], [0; 4]);
+        let mut extax = [0; MAX_AXES];
+        let (Some(3), Some(4), Some(4), Some(axes), None) = (
+            starts(parts.next(), &mut trans),
+            starts(parts.next(), &mut quaternion),
+            starts(parts.next(), &mut quadrants),
+            starts(parts.next(), &mut extax),
+            parts.next(),
+        ) else {
+            return false;
+        };
+        let span = n.span();
+        let (line, column) = self.lines.line_col(span.start);
+        self.positions.push_read_again(&ReadAgainTarget {
+            span,
+            kind: PositionKind::Robtarget,
+            name: Some(name_text),
+            line,
+            column,
+            trans,
+            quaternion,
+            quadrants,
+            extax: &extax[..axes],
+        });
+        // Every test run holds the packed target to what the general path reads.
+        #[cfg(debug_assertions)]
+        {
+            let general = self.position(
+                src,
+                arena,
+                id,
+                PositionKind::Robtarget,
+                Some(text_of(src, name)),
+            );
+            assert!(!self.read_elsewhere.replace(false));
+            let last = self.positions.len() - 1;
+            assert_eq!(self.positions.get(last, src), general);
+        }
+        true
     }
 
     /// The elements of a declared value with `dims` array dimensions, with their 1-based
@@ -865,7 +936,6 @@ impl Extractor<'_> {
             {
                 let ty = type_name.slice(src);
                 let is = |t: &[u8]| ty.eq_ignore_ascii_case(t);
-                let name_text = text_of(src, name);
                 self.symbols
                     .extend(Span32::of(name).map(|name| crate::resolve::Declaration {
                         name,
@@ -894,6 +964,21 @@ impl Extractor<'_> {
                 } else {
                     None
                 };
+                if target_kind == Some(PositionKind::Robtarget)
+                    && dims == 0
+                    && init.is_some_and(|id| self.push_read_again(src, arena, id, name))
+                {
+                    // The statement's expressions are that literal's numbers and brackets:
+                    // no call for `scan` to find.
+                    #[cfg(debug_assertions)]
+                    {
+                        let offsets = self.offsets.len();
+                        self.scan(src, arena, false);
+                        assert_eq!(self.offsets.len(), offsets);
+                    }
+                    return;
+                }
+                let name_text = text_of(src, name);
                 let mut elements = Vec::new();
                 if let Some(init) = init {
                     Self::elements(arena, init, dims, &mut Vec::new(), &mut elements);

@@ -64,12 +64,11 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
     // nothing else), and its name only for a finding.
     let list = &file.positions;
     for i in 0..list.len() {
-        let (Some((span, kind, name)), Some((orient, config))) =
-            (list.head(i), list.orientation_and_config(i, &file.source))
-        else {
+        let Some(target) = list.orientation_and_config(i, &file.source) else {
             continue;
         };
-        let label = || crate::position::label(name, kind);
+        let (span, orient, config) = (target.span, &target.orient, &target.config);
+        let label = || crate::position::label(target.name(), target.kind);
         if let Some(q) = orient.as_ref().and_then(Orientation::written_quaternion) {
             let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
             if norm == 0.0 {
@@ -98,7 +97,7 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
             }
         }
         if let Some(problem) =
-            crate::transform::policy::implausible_fields(file, span, orient.as_ref(), &config)
+            crate::transform::policy::implausible_fields(file, span, orient.as_ref(), config)
         {
             out.push(
                 Diagnostic::warning(span, format!("`{}` {problem}", label())).with_hint(

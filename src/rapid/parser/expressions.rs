@@ -269,7 +269,7 @@ impl Parser<'_, '_> {
                 }
             }
             TokenKind::Punct if t.punct(self.src) == b'[' => {
-                if self.fast_aggregates
+                if self.fast_paths
                     && let Some(id) = self.numeric_aggregate()
                 {
                     return Ok(id);
@@ -330,7 +330,7 @@ mod tests {
     fn read(src: &[u8], fast: bool) -> Read {
         let mut sink = crate::syntax::NoSink;
         let mut p = Parser::new(src, &mut sink, TreeBuilder::with_capacity(4));
-        p.fast_aggregates = fast;
+        p.fast_paths = fast;
         match p.expr() {
             Ok(_) => {
                 let lits = p

@@ -11,7 +11,7 @@ mod items;
 mod statements;
 
 use super::expr::{Arena, ExprKind, NONE};
-use super::lexer::{Lexer, Token, TokenKind};
+use super::lexer::{Lexer, Token, TokenKind, ident_len, is_keyword};
 use super::tree::{NodeKind, Rapid, Tree};
 use crate::syntax::{Diagnostic, NumLit, Sink, Span, TreeBuilder};
 
@@ -145,9 +145,9 @@ struct Parser<'a, 's> {
     depth: u32,
     /// The unknown token already reported as the cause of an error (not reported twice).
     reported_unknown: Option<u32>,
-    /// Use [`Parser::numeric_aggregate`] (off only in tests that compare it with the general
-    /// path).
-    fast_aggregates: bool,
+    /// Use the fast paths [`Parser::numeric_aggregate`] and [`Parser::plain_call_args`] (off
+    /// only in tests that compare them with the general path).
+    fast_paths: bool,
     sink: &'s mut StatementSink<'s>,
 }
 
@@ -279,7 +279,7 @@ impl<'a, 's> Parser<'a, 's> {
             arena: Arena::default(),
             depth: 0,
             reported_unknown: None,
-            fast_aggregates: true,
+            fast_paths: true,
             sink,
         };
         p.tok = p.next_significant();

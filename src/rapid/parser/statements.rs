@@ -157,6 +157,11 @@ impl Parser<'_, '_> {
 
     /// `call_args = [ arg { [ "," ] arg } ] ";"` — a comma before a `\switch` is optional.
     pub(super) fn call_args(&mut self, start: u32) -> PResult<u32> {
+        if self.fast_paths
+            && let Some(args) = self.plain_call_args(start)
+        {
+            return Ok(args);
+        }
         let args = self.arena.open(ExprKind::Args, start);
         let mut last = NONE;
         let mut first = true;
@@ -174,6 +179,101 @@ impl Parser<'_, '_> {
             self.arena.link(args, last, a);
             last = a;
         }
+    }
+
+    /// Fast path of `call_args` for the arguments nearly every motion line has: plain names,
+    /// `name:=name`, `\switch` and `\switch:=name`, with commas and blanks between
+    /// (`MoveL p10, v1000, z10, tGun\WObj:=wCar;`). It builds exactly the nodes the general
+    /// path would, straight from the bytes, and ends after the `;`; on anything else (a
+    /// number, a call, a comment, an operator...) it undoes its nodes and returns `None`, and
+    /// the general path reads the arguments.
+    fn plain_call_args(&mut self, start: u32) -> Option<u32> {
+        // The general path reads each argument one level deeper; past the limit it refuses.
+        if self.depth > MAX_DEPTH {
+            return None;
+        }
+        let src = self.src;
+        let blanks = |mut i: usize| {
+            while matches!(src.get(i), Some(b' ' | b'\t' | b'\r' | b'\n')) {
+                i += 1;
+            }
+            i
+        };
+        // The end of the name at `i`: an identifier that is no keyword (a keyword may be an
+        // operator or end the statement, which the general path decides).
+        let name = |i: usize| -> Option<usize> {
+            let rest = src.get(i..)?;
+            if !matches!(rest.first()?, b'a'..=b'z' | b'A'..=b'Z' | b'_') {
+                return None;
+            }
+            let len = ident_len(rest);
+            (!is_keyword(rest.get(..len)?)).then_some(i + len)
+        };
+        let assign_after = |i: usize| -> Option<usize> {
+            let at = blanks(i);
+            (src.get(at..at + 2) == Some(b":=")).then(|| blanks(at + 2))
+        };
+        let mark = self.arena.mark();
+        let args = self.arena.open(ExprKind::Args, start);
+        let mut last = NONE;
+        let mut i = self.tok.start as usize;
+        let mut first = true;
+        let ok = loop {
+            i = blanks(i);
+            match src.get(i) {
+                Some(b';') => break true,
+                Some(b',') if !first => i = blanks(i + 1),
+                Some(b'\\') => {}
+                _ if first => {}
+                _ => break false,
+            }
+            first = false;
+            let a = self.arena.open(ExprKind::Arg, i as u32);
+            let (label, value) = if src.get(i) == Some(&b'\\') {
+                let at = blanks(i + 1);
+                let Some(end) = name(at) else { break false };
+                (Some((at, end, true)), assign_after(end).ok_or(end))
+            } else {
+                let Some(end) = name(i) else { break false };
+                match assign_after(end) {
+                    Some(v) => (Some((i, end, false)), Ok(v)),
+                    None => (None, Ok(i)),
+                }
+            };
+            if let Some((from, to, switch)) = label
+                && let Some(n) = self.arena.set_mut(a)
+            {
+                n.switch = switch;
+                n.name_start = from as u32;
+                n.name_end = to as u32;
+            }
+            let end = match value {
+                Ok(at) => {
+                    let Some(end) = name(at) else { break false };
+                    let v = self.arena.open(ExprKind::Ident, at as u32);
+                    self.arena.close(v, end as u32);
+                    self.arena.link(a, NONE, v);
+                    end
+                }
+                // A switch without a value.
+                Err(end) => end,
+            };
+            self.arena.close(a, end as u32);
+            self.arena.link(args, last, a);
+            last = a;
+            i = end;
+        };
+        if !ok {
+            self.arena.truncate(mark);
+            return None;
+        }
+        let end = i + 1;
+        self.arena.close(args, end as u32);
+        self.lex.seek(end);
+        self.peeked = None;
+        self.prev_end = end as u32;
+        self.tok = self.next_significant();
+        Some(args)
     }
 
     /// `arg = "\" ident [ ( ":=" | "?" ) expr ] | [ ident ":=" ] expr`
@@ -420,5 +520,103 @@ impl Parser<'_, '_> {
         }
         self.block_end(b"ENDTEST", opener);
         self.close(branch);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// What a call statement leaves behind: the result, the expression nodes, and where the
+    /// parser stands after it (the next token and the end of the last one consumed).
+    type Read = (
+        Result<(NodeKind, String), &'static str>,
+        Vec<crate::rapid::expr::ExprNode>,
+        Token,
+        u32,
+    );
+
+    fn read(src: &[u8], fast: bool) -> Read {
+        let mut sink = crate::syntax::NoSink;
+        let mut p = Parser::new(src, &mut sink, TreeBuilder::with_capacity(4));
+        p.fast_paths = fast;
+        let result = p
+            .simple_statement()
+            .map(|(kind, stmt)| (kind, format!("{stmt:?}")))
+            .map_err(|e| e.expected);
+        (result, p.arena.nodes.clone(), p.tok, p.prev_end)
+    }
+
+    /// Argument lists of the fast path's shape, with pieces it leaves to the general path
+    /// mixed in: numbers, calls, accesses, operators, comments, keywords, odd separators.
+    fn call() -> impl Strategy<Value = String> {
+        let name = prop_oneof![
+            "[a-zA-Z_][a-zA-Z0-9_]{0,6}",
+            Just("tool0".to_owned()),
+            Just("AND".to_owned()),
+            Just("Ñame".to_owned()),
+        ];
+        let arg = prop_oneof![
+            4 => name.clone(),
+            2 => (name.clone(), "[ ]{0,1}", name.clone()).prop_map(|(s, b, v)| format!("\\{s}{b}:={b}{v}")),
+            1 => name.clone().prop_map(|s| format!("\\{s}")),
+            1 => (name.clone(), name.clone()).prop_map(|(n, v)| format!("{n}:={v}")),
+            1 => Just("Offs(p1,0,0,10)".to_owned()),
+            1 => Just("-5".to_owned()),
+            1 => Just("0.5".to_owned()),
+            1 => Just("a.b".to_owned()),
+            1 => Just("a{2}".to_owned()),
+            1 => Just("a+b".to_owned()),
+            1 => Just("\\T?t".to_owned()),
+            1 => Just("! c\n x".to_owned()),
+            1 => Just("\"s\"".to_owned()),
+            1 => Just("".to_owned()),
+        ];
+        let sep = prop_oneof![
+            Just(", ".to_owned()),
+            Just(",".to_owned()),
+            Just(" ,\r\n  ".to_owned()),
+            Just("".to_owned()),
+            Just(" ".to_owned()),
+            Just(",,".to_owned()),
+            Just(" : ".to_owned()),
+        ];
+        (
+            proptest::collection::vec((sep, arg), 0..6),
+            prop_oneof![Just(";"), Just(" ;"), Just(""), Just(";;")],
+        )
+            .prop_map(|(parts, end)| {
+                let mut s = "MoveL ".to_owned();
+                for (k, (sep, arg)) in parts.iter().enumerate() {
+                    if k > 0 || arg.starts_with('\\') {
+                        s.push_str(sep);
+                    }
+                    s.push_str(arg);
+                }
+                format!("{s}{end}\r\n  next")
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+
+        #[test]
+        fn fast_call_args_path_builds_what_the_general_path_builds(c in call()) {
+            prop_assert_eq!(read(c.as_bytes(), true), read(c.as_bytes(), false));
+        }
+    }
+
+    #[test]
+    fn a_motion_line_takes_the_fast_path() {
+        let src = b"MoveL p10, v1000, z10, tGun\\WObj:=wCar;\nx";
+        let mut sink = crate::syntax::NoSink;
+        let mut p = Parser::new(src, &mut sink, TreeBuilder::with_capacity(4));
+        p.bump();
+        assert!(p.plain_call_args(5).is_some());
+        // Args, then per argument an Arg and its Ident (the switch's value too).
+        assert_eq!(p.arena.nodes.len(), 1 + 5 * 2);
+        assert_eq!(p.tok.start as usize, src.len() - 1);
+        assert_eq!(read(src, true), read(src, false));
     }
 }
