@@ -161,10 +161,12 @@ pub(crate) struct Use<'a> {
     /// The routine it calls, by name in the file's source; a routine of the program takes the
     /// arguments its parameters bind to.
     pub(crate) callee: Option<Span>,
-    /// The work object or base, as the language names it (`wobj0`, `BASE_DATA[3]`).
-    pub(crate) frame: Option<String>,
-    /// The tool, as the language names it.
-    pub(crate) tool: Option<String>,
+    /// The work object or base, as the language names it (`wobj0`, `BASE_DATA[3]`): a shared
+    /// handle, which a language makes once per distinct name (100,000 targets used with `wCar`
+    /// hold one `wCar`, and a use costs no copy of the text).
+    pub(crate) frame: Option<FrameName>,
+    /// The tool, as the language names it (shared like [`frame`](Use::frame)).
+    pub(crate) tool: Option<FrameName>,
     /// A stationary-tool motion (RAPID `robhold TRUE`, KRL `IPO_FRAME #TCP`).
     pub(crate) stationary: bool,
     /// The frame is computed when the program runs: every target reached is, too.
@@ -300,8 +302,8 @@ pub(crate) struct Assignment {
 /// What a use gives the targets it reaches: the frame and tool it moves with.
 #[derive(Clone, Debug)]
 struct MovesWith {
-    frame: Option<String>,
-    tool: Option<String>,
+    frame: Option<FrameName>,
+    tool: Option<FrameName>,
     stationary: bool,
     run_time: Option<RunTimeValue>,
 }
@@ -317,42 +319,18 @@ impl MovesWith {
     }
 }
 
-/// The one shared copy of a frame or tool name as written (exact text: a target keeps the
-/// spelling of its first use), so that 100,000 targets used with `wCar` hold one `wCar`.
-fn shared(
-    names: &mut std::collections::HashSet<FrameName>,
-    name: Option<&str>,
-) -> Option<FrameName> {
-    let name = name?;
-    if let Some(s) = names.get(name) {
-        return Some(s.clone());
-    }
-    let s = FrameName::from(name);
-    names.insert(s.clone());
-    Some(s)
-}
-
-/// Records one use at `line` with `frame`, `tool`, `stationary` and `run_time` in target `at`
-/// (the names shared through `names`).
-#[allow(clippy::too_many_arguments)]
+/// Records one use at `line` with `frame`, `tool`, `stationary` and `run_time` in target `at`.
 fn record(
     files: &mut [FileFacts<'_>],
-    names: &mut std::collections::HashSet<FrameName>,
     (m, i): TargetAt,
-    frame: Option<&str>,
-    tool: Option<&str>,
+    frame: Option<&FrameName>,
+    tool: Option<&FrameName>,
     stationary: bool,
     run_time: Option<&RunTimeValue>,
     line: usize,
 ) {
     if let Some(usage) = files.get_mut(m).and_then(|f| f.positions.usage_mut(i)) {
-        let frame = shared(names, frame);
-        let tool = if usage.tool.is_none() {
-            shared(names, tool)
-        } else {
-            None
-        };
-        usage.record_shared(frame.as_ref(), tool.as_ref(), stationary, line);
+        usage.record_shared(frame, tool, stationary, line);
         if let Some(why) = run_time {
             usage.set_run_time(why.clone());
         }
@@ -380,7 +358,6 @@ pub(crate) struct Binder<'f, 'a> {
     targets: Vec<TargetAt>,
     params: Vec<ParamAt>,
     hits: Vec<TargetAt>,
-    names: std::collections::HashSet<FrameName>,
 }
 
 impl<'f, 'a> Binder<'f, 'a> {
@@ -407,7 +384,6 @@ impl<'f, 'a> Binder<'f, 'a> {
             targets: Vec::new(),
             params: Vec::new(),
             hits: Vec::new(),
-            names: Default::default(),
         }
     }
 
@@ -431,7 +407,6 @@ impl<'f, 'a> Binder<'f, 'a> {
             targets,
             params,
             hits,
-            names,
         } = self;
         let naming = &*naming;
         targets.clear();
@@ -525,10 +500,9 @@ impl<'f, 'a> Binder<'f, 'a> {
         for &t in targets.iter() {
             record(
                 files,
-                names,
                 t,
-                u.frame.as_deref(),
-                u.tool.as_deref(),
+                u.frame.as_ref(),
+                u.tool.as_ref(),
                 u.stationary,
                 u.run_time.as_ref(),
                 u.line,
@@ -551,18 +525,15 @@ impl<'f, 'a> Binder<'f, 'a> {
             param_uses,
             param_edges,
             bindings,
-            mut names,
             ..
         } = self;
         for (t, to, line) in bindings {
             for w in uses_through_parameters(to, &param_uses, &param_edges) {
-                let (frame, tool) = (w.frame.as_deref(), w.tool.as_deref());
                 record(
                     files,
-                    &mut names,
                     t,
-                    frame,
-                    tool,
+                    w.frame.as_ref(),
+                    w.tool.as_ref(),
                     w.stationary,
                     w.run_time.as_ref(),
                     line,

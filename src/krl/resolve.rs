@@ -4,7 +4,7 @@
 //! ([`crate::resolve`]), which fills each position's [`Usage`](crate::position::Usage).
 
 use super::positions::{BranchEvent, Event, Facts, Fdat, FrameRef, Ref, Setting, name_key};
-use crate::position::{Config, Name, ParsedFile, PositionKind, RunTimeValue};
+use crate::position::{Config, FrameName, Name, ParsedFile, PositionKind, RunTimeValue};
 use crate::syntax::Diagnostic;
 
 pub(crate) use crate::names::NameMap as HashMap;
@@ -35,6 +35,40 @@ pub(crate) fn tool_label(r: &FrameRef) -> Option<String> {
         FrameRef::Data(n) => Some(format!("TOOL_DATA[{n}]")),
         FrameRef::Named(s) => Some(s.clone()),
         FrameRef::RunTime(_) | FrameRef::Unknown => None,
+    }
+}
+
+/// The names of the bases and tools a program's motions use, each made once: thousands of
+/// motions with base 1 share one `BASE_DATA[1]`, where a name each was a `format!` per motion.
+#[derive(Default)]
+struct FrameLabels {
+    /// `BASE_DATA[n]` (false) and `TOOL_DATA[n]` (true) by number.
+    data: HashMap<(bool, u32), FrameName>,
+    /// Frames the program declares, by name.
+    named: HashMap<String, FrameName>,
+}
+
+impl FrameLabels {
+    /// The name of base (`tool` false) or tool `r`, as [`base_label`] and [`tool_label`] give it.
+    fn get(&mut self, r: &FrameRef, tool: bool) -> Option<FrameName> {
+        let label = |r: &FrameRef| if tool { tool_label(r) } else { base_label(r) };
+        match r {
+            FrameRef::Data(n) => Some(
+                self.data
+                    .entry((tool, *n))
+                    .or_insert_with(|| FrameName::from(label(r).unwrap_or_default().as_str()))
+                    .clone(),
+            ),
+            FrameRef::Named(s) => Some(match self.named.get(s.as_str()) {
+                Some(name) => name.clone(),
+                None => {
+                    let name = FrameName::from(s.as_str());
+                    self.named.insert(s.clone(), name.clone());
+                    name
+                }
+            }),
+            FrameRef::RunTime(_) | FrameRef::Unknown => None,
+        }
     }
 }
 
@@ -299,6 +333,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         let (mut bound, lines): (Vec<_>, Vec<_>) =
             files.iter_mut().map(|f| shared_facts(f, &[])).unzip();
         let mut binder = crate::resolve::Binder::new(&mut bound, &NAMING);
+        let mut labels = FrameLabels::default();
         for (fi, events) in events.into_iter().enumerate() {
             // The targets and names of a motion, buffers reused from motion to motion.
             let mut targets: Vec<usize> = Vec::new();
@@ -362,8 +397,8 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                         }
                         let u = crate::resolve::Use {
                             line: *line,
-                            frame: local.base.as_ref().and_then(base_label),
-                            tool: local.tool.as_ref().and_then(tool_label),
+                            frame: local.base.as_ref().and_then(|b| labels.get(b, false)),
+                            tool: local.tool.as_ref().and_then(|t| labels.get(t, true)),
                             stationary: local.tcp,
                             run_time: match (&local.base, lines.get(fi)) {
                                 (Some(FrameRef::RunTime(at)), Some(l)) => {

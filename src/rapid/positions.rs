@@ -10,8 +10,8 @@ use super::expr::{Arena, ExprKind};
 use super::parser::Stmt;
 use crate::names::{NameKey, NameMap};
 use crate::position::{
-    Axes, CartesianFields, Config, FrameDecl, FrameKind, Name, NumField, OffsetCall, OffsetKind,
-    Orientation, Position, PositionKind, PositionList, ReadAgainTarget, Usage,
+    Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Name, NumField, OffsetCall,
+    OffsetKind, Orientation, Position, PositionKind, PositionList, ReadAgainTarget, Usage,
 };
 use crate::resolve::DeclKind;
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, Span32, latin1};
@@ -147,12 +147,49 @@ fn text_of(src: &[u8], span: Span) -> String {
     latin1(span.slice(src))
 }
 
-/// `s` without surrounding blanks, reusing its buffer when it has none (nearly always).
-fn trimmed(s: String) -> String {
-    if s.trim().len() == s.len() {
-        s
-    } else {
-        s.trim().to_owned()
+/// `bytes` without the blanks [`str::trim`] takes off their Latin-1 text: ASCII white space and
+/// the two Latin-1 ones, NEL (0x85) and NO-BREAK SPACE (0xA0). `latin1(trim_latin1(b))` is
+/// `latin1(b).trim()`, without making the untrimmed text first.
+fn trim_latin1(bytes: &[u8]) -> &[u8] {
+    let blank = |b: &u8| matches!(b, b'\t'..=b'\r' | b' ' | 0x85 | 0xA0);
+    let start = bytes.iter().position(|b| !blank(b)).unwrap_or(bytes.len());
+    let end = bytes
+        .iter()
+        .rposition(|b| !blank(b))
+        .map_or(start, |e| e + 1);
+    bytes.get(start..end).unwrap_or_default()
+}
+
+/// A frame or tool name as the usage pass gives it to targets: the shared handle, and whether
+/// the work object of that name holds the tool (`robhold`: a stationary-tool motion).
+#[derive(Clone)]
+struct FrameText {
+    name: FrameName,
+    robhold: bool,
+}
+
+/// The frame and tool names the calls of a task are written with, made once per distinct
+/// text: a module's 100,000 calls name a handful of frames and tools, so a call's `\WObj:=wCar`
+/// costs a lookup of the bytes, not a `String` and the hashing of its text into a shared set.
+/// Keyed by the exact bytes: a target keeps the spelling of its first use.
+struct FrameTexts<'s, 'r> {
+    known: NameMap<&'s [u8], FrameText>,
+    robhold: &'r NameMap<NameKey<'r>, bool>,
+}
+
+impl<'s, 'r> FrameTexts<'s, 'r> {
+    /// The name written as `bytes` (its Latin-1 text).
+    fn get(&mut self, bytes: &'s [u8]) -> FrameText {
+        if let Some(t) = self.known.get(bytes) {
+            return t.clone();
+        }
+        let text = latin1(bytes);
+        let t = FrameText {
+            robhold: self.robhold.get(&NameKey(text.as_bytes())) == Some(&true),
+            name: FrameName::from(text.as_str()),
+        };
+        self.known.insert(bytes, t.clone());
+        t
     }
 }
 
@@ -694,6 +731,27 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
         })
         .collect();
     let mut binder = crate::resolve::Binder::new(&mut facts, &NAMING);
+    let mut frame_texts = FrameTexts {
+        known: NameMap::default(),
+        robhold: &robhold,
+    };
+    let wobj0 = frame_texts.get(b"wobj0");
+    // The positional argument that gives a call's tool: one of the task's tools, else the
+    // argument after the zone (a search's after its speed, when it has no zone).
+    let tool_index = |call: &NameKey, names: &[Option<NameKey>]| -> Option<usize> {
+        if let Some(i) = names.iter().position(|n| n.as_ref().is_some_and(is_tool)) {
+            return Some(i);
+        }
+        let after = names
+            .iter()
+            .position(|n| n.as_ref().is_some_and(is_zone))
+            .or_else(|| {
+                call.starts_with(b"search")
+                    .then(|| names.iter().position(|n| n.as_ref().is_some_and(is_speed)))
+                    .flatten()
+            })?;
+        Some(after + 1)
+    };
     let mut names: Vec<Option<NameKey>> = Vec::new();
     let mut positional: Vec<Option<Span>> = Vec::new();
     for (m, (module_calls, r)) in calls.iter().zip(&rest).enumerate() {
@@ -708,51 +766,30 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
                     .iter()
                     .map(|p| p.map(|sp| NameKey(sp.slice(src)))),
             );
-            let written = |i: usize| -> Option<String> {
-                positional
-                    .get(i)
-                    .copied()
-                    .flatten()
-                    .map(|sp| text_of(src, sp))
+            let tool = match u.tool {
+                Some(sp) => Some(frame_texts.get(trim_latin1(sp.span().slice(src)))),
+                None => tool_index(&call, &names).and_then(|i| {
+                    let sp = positional.get(i).copied().flatten()?;
+                    Some(frame_texts.get(sp.slice(src)))
+                }),
             };
-            let tool = u
-                .tool
-                .map(|sp| trimmed(text_of(src, sp.span())))
-                .or_else(|| {
-                    if let Some(i) = names.iter().position(|n| n.as_ref().is_some_and(is_tool)) {
-                        return written(i);
-                    }
-                    let after = names
-                        .iter()
-                        .position(|n| n.as_ref().is_some_and(is_zone))
-                        .or_else(|| {
-                            call.starts_with(b"search")
-                                .then(|| {
-                                    names.iter().position(|n| n.as_ref().is_some_and(is_speed))
-                                })
-                                .flatten()
-                        })?;
-                    written(after + 1)
-                });
             let motion = MOTION_PREFIXES
                 .iter()
                 .any(|p| call.starts_with(p.as_bytes()));
             let wobj = match u.wobj {
-                Some(sp) => Some(trimmed(text_of(src, sp.span()))),
-                None => (motion || tool.is_some()).then(|| "wobj0".to_owned()),
+                Some(sp) => Some(frame_texts.get(trim_latin1(sp.span().slice(src)))),
+                None => (motion || tool.is_some()).then(|| wobj0.clone()),
             };
-            let stationary = wobj
-                .as_ref()
-                .is_some_and(|w| robhold.get(&NameKey(w.as_bytes())) == Some(&true));
+            let stationary = wobj.as_ref().is_some_and(|w| w.robhold);
             binder.bind(
                 m,
                 &crate::resolve::Use {
                     line: u.line as usize,
                     routine: u.routine.map(|r| r.get() as usize - 1),
                     callee: Some(u.name.span()),
-                    stationary: wobj.is_some() && stationary,
-                    frame: wobj,
-                    tool,
+                    stationary,
+                    frame: wobj.map(|w| w.name),
+                    tool: tool.map(|t| t.name),
                     run_time: None,
                     args: &positional,
                     refs,
@@ -1127,5 +1164,29 @@ impl Extractor<'_> {
             }
         }
         self.uses.push(u);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trimming_the_bytes_trims_their_text() {
+        // Every byte value alone, at both ends of a name, inside one, and doubled.
+        for b in 0..=255u8 {
+            for bytes in [
+                vec![b],
+                vec![b, b'w', b],
+                vec![b'w', b, b'1'],
+                vec![b, b, b'w', b'1', b],
+            ] {
+                assert_eq!(
+                    latin1(trim_latin1(&bytes)),
+                    latin1(&bytes).trim(),
+                    "{bytes:?}"
+                );
+            }
+        }
     }
 }

@@ -925,6 +925,44 @@ fn a_missing_semicolon_ends_at_the_line_break_and_the_next_target_is_found() {
 }
 
 #[test]
+fn frame_names_keep_the_first_spelling_and_compare_without_case() {
+    // The same work object and tool written three ways, one holding the tool (`robhold`).
+    let t = "[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]";
+    let src = format!(
+        "MODULE m\n  PERS wobjdata wStn:=[TRUE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n\
+  CONST robtarget p1:={t};\n  CONST robtarget p2:={t};\n  CONST robtarget p3:={t};\n\
+  PROC q()\n    MoveL p1, v100, z10, tPen\\WObj:= wStn ;\n    MoveL p1, v100, z10, TPEN\\WObj:=WSTN;\n\
+    MoveL p2, v100, z10, TPEN\\WObj:=WSTN;\n    MoveL p2, v100, z10, tPen\\WObj:=wStn;\n\
+    MoveL p3, v100, fine, tPen;\n  ENDPROC\nENDMODULE\n"
+    );
+    let f = rapid::parse_file(Path::new("w.mod"), src.into_bytes());
+    assert!(f.diagnostics.is_empty(), "{:?}", f.diagnostics);
+    let usage = |n: &str| {
+        let u = pos(&f, n).usage;
+        (
+            u.wobj.as_deref().map(str::to_owned),
+            u.tool.as_deref().map(str::to_owned),
+            u.other_wobjs().len(),
+            u.stationary_tool,
+            u.lines.to_vec(),
+        )
+    };
+    let some = |s: &str| Some(s.to_owned());
+    assert_eq!(
+        usage("p1"),
+        (some("wStn"), some("tPen"), 0, true, vec![7, 8])
+    );
+    assert_eq!(
+        usage("p2"),
+        (some("WSTN"), some("TPEN"), 0, true, vec![9, 10])
+    );
+    assert_eq!(
+        usage("p3"),
+        (some("wobj0"), some("tPen"), 0, false, vec![11])
+    );
+}
+
+#[test]
 fn a_tool_given_by_name_is_the_tool() {
     let src = b"MODULE m\nCONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\nPROC p()\n  MoveL ToPoint:=p1, Speed:=v100, Tool:=tCam, Zone:=fine;\nENDPROC\nENDMODULE\n".to_vec();
     let f = rapid::parse_file(Path::new("n.mod"), src);
