@@ -426,6 +426,22 @@ mod tests {
         }
     }
 
+    /// A generated deformation of amplitude `amp.0` mm and `amp.1` degrees over a wavelength
+    /// of `amp.2` mm: mm-size translations, hundredths of a degree.
+    fn deformation(amp: (f64, f64, f64)) -> impl Fn(f64) -> Result<Pose, TrackError> {
+        move |s: f64| {
+            let u = s / amp.2;
+            Ok(pose_xyz_deg(
+                amp.0 * u.cos(),
+                amp.0 * u.sin(),
+                -amp.0 * (2.0 * u).sin(),
+                amp.1 * u.sin(),
+                -amp.1 * u.cos(),
+                amp.1 * (3.0 * u).sin(),
+            ))
+        }
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(128))]
 
@@ -439,12 +455,7 @@ mod tests {
             skid in 0.0..8000.0f64,
             amp in (0.05..5.0f64, 0.001..0.1f64, 500.0..9000.0f64),
         ) {
-            // A generated deformation: mm-size translations, hundredths of a degree.
-            let dev = move |s: f64| -> Result<Pose, TrackError> {
-                let u = s / amp.2;
-                Ok(pose_xyz_deg(amp.0 * u.cos(), amp.0 * u.sin(), -amp.0 * (2.0 * u).sin(),
-                                amp.1 * u.sin(), -amp.1 * u.cos(), amp.1 * (3.0 * u).sin()))
-            };
+            let dev = deformation(amp);
             let s = setup(&dev, pose_xyz_deg(base.0, base.1, base.2, 0.0, 0.0, base.3), Vector3::new(axis.0, axis.1, axis.2));
             let w = pose_xyz_deg(w.0, w.1, w.2, 0.0, w.4, w.3);
             let t = pose_xyz_deg(t.0, t.1, t.2, t.3, t.4, t.5);
@@ -466,11 +477,7 @@ mod tests {
             skid in 0.0..8000.0f64,
             amp in (0.05..5.0f64, 0.001..0.1f64, 500.0..9000.0f64),
         ) {
-            let dev = move |s: f64| -> Result<Pose, TrackError> {
-                let u = s / amp.2;
-                Ok(pose_xyz_deg(amp.0 * u.cos(), amp.0 * u.sin(), -amp.0 * (2.0 * u).sin(),
-                                amp.1 * u.sin(), -amp.1 * u.cos(), amp.1 * (3.0 * u).sin()))
-            };
+            let dev = deformation(amp);
             let s = setup(&dev, pose_xyz_deg(base.0, base.1, base.2, 0.0, 0.0, base.3), Vector3::new(1.0, 0.01, 0.0));
             let w = pose_xyz_deg(w.0, w.1, w.2, 0.0, w.4, w.3);
             // `W⁻¹·B·D^∓1·B⁻¹·W` as one expression, each direction on its own.
