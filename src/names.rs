@@ -262,9 +262,19 @@ impl<T: Copy> Groups<T> {
     }
 
     fn get(&self, key: &str) -> &[T] {
-        let Some(&k) = self.table.find(hash_of(key.as_bytes()), |&k| {
-            name_in(&self.text, &self.names, k) == key
-        }) else {
+        // Most programs declare no array: the empty table needs no hash.
+        if self.names.is_empty() {
+            return &[];
+        }
+        self.get_hashed(key, hash_of(key.as_bytes()))
+    }
+
+    /// [`Groups::get`] of `key` hashed as `hash`.
+    fn get_hashed(&self, key: &str, hash: u64) -> &[T] {
+        let Some(&k) = self
+            .table
+            .find(hash, |&k| name_in(&self.text, &self.names, k) == key)
+        else {
             return &[];
         };
         let k = k as usize;
@@ -305,6 +315,21 @@ impl<T: Copy> NameIndex<T> {
     /// Every element of the array `key` (a [`fold`]ed name without index).
     pub(crate) fn elements(&self, key: &str) -> &[T] {
         self.elements.get(key)
+    }
+
+    /// The declarations named exactly `key` (a [`fold`]ed name), else every element of the
+    /// array it names or indexes: [`NameIndex::exact`], else [`NameIndex::elements`] of
+    /// [`NameIndex::array_of`] `key` (or of `key`), a name without index hashed once for both.
+    pub(crate) fn exact_else_elements(&self, key: &str) -> &[T] {
+        let hash = hash_of(key.as_bytes());
+        let exact = self.exact.get_hashed(key, hash);
+        if !exact.is_empty() || self.elements.names.is_empty() {
+            return exact;
+        }
+        match self.array_of(key) {
+            Some(array) => self.elements.get(array),
+            None => self.elements.get_hashed(key, hash),
+        }
     }
 
     /// The array `key` indexes (`PARR` for `PARR{I}`), if it has an index.
@@ -396,6 +421,40 @@ mod tests {
         assert_eq!(ix.array_of("P10"), None);
         assert!(ix.exact("PARR").is_empty());
         assert!(ix.elements("P10").is_empty());
+    }
+
+    #[test]
+    fn exact_else_elements_is_the_exact_name_else_its_array() {
+        // One index with arrays, one without (whose empty element table is never hashed).
+        let mut with = NameIndex::builder('{', 0);
+        let mut without = NameIndex::builder('{', 0);
+        for (i, n) in ["p10", "pArr{1}", "pArr{ 2 }", "P10", "q"]
+            .iter()
+            .enumerate()
+        {
+            with.insert(n, i);
+            if !n.contains('{') {
+                without.insert(n, i);
+            }
+        }
+        for ix in [with.build(), without.build()] {
+            for key in [
+                "P10", "PARR{2}", "PARR{9}", "PARR{I}", "PARR", "Q", "R", "R{1}", "",
+            ] {
+                let general = match ix.exact(key) {
+                    [] => ix.elements(ix.array_of(key).unwrap_or(key)),
+                    hits => hits,
+                };
+                assert_eq!(ix.exact_else_elements(key), general, "{key}");
+            }
+        }
+        let mut b = NameIndex::builder('{', 0);
+        b.insert("pArr{1}", 1);
+        b.insert("pArr{2}", 2);
+        let ix = b.build();
+        assert_eq!(ix.exact_else_elements("PARR"), [1, 2]);
+        assert_eq!(ix.exact_else_elements("PARR{I}"), [1, 2]);
+        assert_eq!(ix.exact_else_elements("PARR{2}"), [2]);
     }
 
     #[test]

@@ -234,14 +234,10 @@ fn lookup(
     key: &str,
     out: &mut Vec<TargetAt>,
 ) {
-    let exact = index.exact(key);
     let (named, elements) = match naming.arrays {
-        ArrayReach::WhenUndeclared => match exact {
-            [] => (index.elements(index.array_of(key).unwrap_or(key)), &[][..]),
-            hits => (hits, &[][..]),
-        },
+        ArrayReach::WhenUndeclared => (index.exact_else_elements(key), &[][..]),
         ArrayReach::WhenIndexComputed => (
-            exact,
+            index.exact(key),
             computed_index_array(naming, key).map_or(&[][..], |a| index.elements(a)),
         ),
     };
@@ -441,12 +437,18 @@ impl<'f, 'a> Binder<'f, 'a> {
                 })
             };
             // The required parameter of the enclosing routine a reference names, if any.
+            let own_params = u
+                .routine
+                .and_then(|rt| f.routines.get(rt))
+                .map_or(&[][..], |r| &r.params);
             let param_of = |key: &str| -> Option<ParamAt> {
+                // Most routines take no target: nothing to look for.
+                if own_params.is_empty() {
+                    return None;
+                }
                 let rt = u.routine?;
                 let base = index.array_of(key).unwrap_or(key);
-                f.routines
-                    .get(rt)?
-                    .params
+                own_params
                     .iter()
                     .position(|&name| NameKey(name.slice(src)) == NameKey(base.as_bytes()))
                     .map(|k| (m, rt, k))
