@@ -379,11 +379,7 @@ impl NumLit {
     /// [`rewrite_text`](Self::rewrite_text) and the value the text reads back as (what
     /// [`NumLit::parse`] of it gives; NaN if it did not parse, which our own text always does).
     pub fn rewrite_read(&self, new: f64, min_decimals: usize) -> Option<(EditText, f64)> {
-        let (text, read) = self.rewrite_parts(new, min_decimals)?;
-        let read = read
-            .or_else(|| NumLit::parse(&text).map(|l| l.value()))
-            .unwrap_or(f64::NAN);
-        Some((text, read))
+        self.rewrite_parts(new, min_decimals).map(read_back)
     }
 
     /// The text, and its value when known without reading it back.
@@ -483,19 +479,14 @@ impl Rounded {
 
     /// [`NumLit::rewrite_read`] with the `min_decimals` the rounding was made for.
     pub fn rewrite_read(&self, new: f64) -> Option<(EditText, f64)> {
-        let (text, read) = self.lit.rewrite_at(new, self.places, self.own)?;
-        let read = read
-            .or_else(|| NumLit::parse(&text).map(|l| l.value()))
-            .unwrap_or(f64::NAN);
-        Some((text, read))
+        self.lit
+            .rewrite_at(new, self.places, self.own)
+            .map(read_back)
     }
 
     /// [`same_at`]`(v, value, places)`: whether `v` reads as the literal's value at the places.
     pub fn same(&self, v: f64) -> bool {
-        match (Scaled::of(v, self.places), self.own) {
-            (Some(x), Some(y)) => x == y,
-            _ => fixed(v, self.places) == fixed(self.lit.value, self.places),
-        }
+        same_as_rounded(v, self.lit.value, self.own, self.places)
     }
 }
 
@@ -627,10 +618,25 @@ fn kept_precision(len: u8, signed: usize, int_digits: u8, e: Exponent) -> i16 {
 /// True when `a` and `b` read the same written with `places` decimals: the comparison
 /// [`NumLit::rewrite`] makes before it keeps a literal's text.
 pub fn same_at(a: f64, b: f64, places: usize) -> bool {
-    match (Scaled::of(a, places), Scaled::of(b, places)) {
+    same_as_rounded(a, b, Scaled::of(b, places), places)
+}
+
+/// [`same_at`] with `b` already rounded at `places` (`b_scaled`, [`Scaled::of`]).
+fn same_as_rounded(a: f64, b: f64, b_scaled: Option<Scaled>, places: usize) -> bool {
+    match (Scaled::of(a, places), b_scaled) {
         (Some(x), Some(y)) => x == y,
         _ => fixed(a, places) == fixed(b, places),
     }
+}
+
+/// A rewrite's text with the value it reads back as: the one known from writing it, else
+/// what [`NumLit::parse`] of the text gives (NaN if it did not parse, which our own text
+/// always does).
+fn read_back((text, read): (EditText, Option<f64>)) -> (EditText, f64) {
+    let read = read
+        .or_else(|| NumLit::parse(&text).map(|l| l.value()))
+        .unwrap_or(f64::NAN);
+    (text, read)
 }
 
 /// 10^0 … 10^19, the powers of ten a `u64` holds: what [`Scaled`] scales and splits by.
