@@ -390,9 +390,9 @@ impl<'l> Extractor<'l> {
 
     /// Packs the scalar robtarget `[[x,y,z],[q1..q4],[cf1..cfx],[eax..]]` at `id` declared as
     /// `name` straight from the arena, when it has these four parts, its fields are all
-    /// literals the numeric scan read that fit the compact form, and its name is ASCII: what [`Extractor::position`] and
-    /// [`Extractor::push`] give for it, without building a [`Position`]. `false` (nothing
-    /// pushed) for any other shape, which the general path reads.
+    /// literals the numeric scan read that fit the compact form, and its name is ASCII: what
+    /// [`Extractor::position`] and [`Extractor::push`] give for it, without building a
+    /// [`Position`]. `false` (nothing pushed) for any other shape, which the general path reads.
     fn push_read_again(&mut self, src: &[u8], arena: &Arena, id: u32, name: Span) -> bool {
         /// More external axes than a controller has go to the general path.
         const MAX_AXES: usize = 12;
