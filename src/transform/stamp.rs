@@ -788,6 +788,9 @@ fn carry(
     shortcut: bool,
 ) -> CarriedPrecision {
     let old = find_in(original, dialect);
+    if shortcut && old.is_none() && find_in(&output, dialect).is_none() {
+        return carry_unstamped(original, output);
+    }
     let old_widened = old
         .as_ref()
         .map(|(s, _)| s.widened.clone())
@@ -917,6 +920,101 @@ fn carry(
         }
     }
     CarriedPrecision { output, widened }
+}
+
+/// [`carry`] for an original without a stamp (the usual input of `correct`), whose output
+/// has none yet either: nothing is recorded as widened, so nothing is narrowed and the output
+/// is given back as it is; only the record is built.
+///
+/// Without an earlier record a literal's first precision is its own, so a pair's entry is the
+/// lower of the two literals' precisions (an unchanged literal's is its own), and an entry of
+/// the literal's own house precision D is the one a list holds anyway where it has none: only
+/// the output's count of D-literals is kept for those, and a list is filled up to it where a
+/// literal first written with fewer decimals comes. In the stretches the output holds
+/// unchanged (see [`Alike`]) the original's literals are only counted, not paired: 51.6 M
+/// instructions on the 2 MB bench module, where [`carry`]'s pairing of every literal was 73.5 M.
+fn carry_unstamped(original: &[u8], output: Vec<u8>) -> CarriedPrecision {
+    let unpaired = |output| CarriedPrecision {
+        output,
+        widened: Widened::default(),
+    };
+    let mut before = number_tokens(None);
+    let mut after = number_tokens(None);
+    // The output's literals of each house precision so far, and the lists up to the last entry
+    // that is not the precision itself.
+    let mut count = [0usize; 3];
+    let mut lists: [Vec<i8>; 3] = Default::default();
+    loop {
+        let (b_from, a_from) = (before.i, after.i);
+        // The stretch the two scans are alike in from here on: from the byte before their
+        // places (the scanner reads it), none at the start of just one of the files.
+        let (lo, lo_out) = (b_from.saturating_sub(1), a_from.saturating_sub(1));
+        let (end, to_the_end) = if (b_from == 0) == (a_from == 0) {
+            let len = common_len(&original[lo..], &output[lo_out..]);
+            let to_the_end = lo + len == original.len() && lo_out + len == output.len();
+            (lo + len, to_the_end)
+        } else {
+            (lo, false)
+        };
+        // The original's literals that end inside it (with the byte after them) are the
+        // output's too: counted only.
+        let mut from = b_from;
+        let b = loop {
+            let b = before.next(original);
+            match b {
+                Some(t) if t.end < end || (to_the_end && t.end == end) => {
+                    if let Some(h) = house_slot(t.precision()) {
+                        count[h] += 1;
+                    }
+                    from = t.end;
+                }
+                None if to_the_end => {
+                    // The output ends alike: no literal left on either side.
+                    return CarriedPrecision {
+                        output,
+                        widened: filled(lists, count),
+                    };
+                }
+                _ => break b,
+            }
+        };
+        // The first literal that is not known alike: scanned on both sides, from the places
+        // after the last literal counted.
+        after.i = from.wrapping_add_signed(a_from as isize - b_from as isize);
+        let a = after.next(&output);
+        let (b, a) = match (b, a) {
+            (Some(b), Some(a)) => (b, a),
+            (None, None) => {
+                return CarriedPrecision {
+                    output,
+                    widened: filled(lists, count),
+                };
+            }
+            _ => return unpaired(output),
+        };
+        if let Some(h) = house_slot(a.precision()) {
+            let entry = b.precision().min(a.precision());
+            if entry != a.precision() {
+                let entry = entry.max(MIN_FIRST_PRECISION as i32) as i8;
+                lists[h].resize(count[h], HOUSE_DECIMALS[h] as i8);
+                lists[h].push(entry);
+            }
+            count[h] += 1;
+        }
+    }
+}
+
+/// The record of [`carry_unstamped`]'s lists, each filled up to its count of literals with
+/// the house precision itself.
+fn filled(lists: [Vec<i8>; 3], count: [usize; 3]) -> Widened {
+    let mut widened = Widened::default();
+    for (h, mut list) in lists.into_iter().enumerate() {
+        list.resize(count[h], HOUSE_DECIMALS[h] as i8);
+        if !list.is_empty() {
+            widened.0.insert(HOUSE_DECIMALS[h], list);
+        }
+    }
+    widened
 }
 
 #[cfg(test)]
@@ -1231,11 +1329,40 @@ mod precision_tests {
         "$x1", "e", "E+", ", ", "[", "]", "\n", " ", "\r\n", ".", "x",
     ];
 
+    /// The program text of `pieces` after `head`.
+    fn text(head: &str, pieces: &[usize]) -> Vec<u8> {
+        let mut t = head.to_owned();
+        for &i in pieces {
+            t.push_str(PIECES[i]);
+        }
+        t.push_str("\nENDMODULE\n");
+        t.into_bytes()
+    }
+
+    /// `pieces` with `edits` applied: `(at, piece, insert)` replaces or inserts a piece, or
+    /// removes one (no piece).
+    fn edited(pieces: &[usize], edits: &[(usize, Option<usize>, bool)]) -> Vec<usize> {
+        let mut changed = pieces.to_vec();
+        for &(at, with, insert) in edits {
+            let at = at.min(changed.len());
+            match with {
+                Some(w) if insert || at == changed.len() => changed.insert(at, w),
+                Some(w) => changed[at] = w,
+                None if at < changed.len() => {
+                    changed.remove(at);
+                }
+                None => {}
+            }
+        }
+        changed
+    }
+
     proptest::proptest! {
         /// Taking the output's literals from the original's scan where the output holds the
         /// same bytes changes nothing: the result is the one of scanning both files throughout,
         /// whatever was edited (literals rewritten longer or shorter, bytes that end a literal
-        /// or join it to a name, inserted and deleted pieces).
+        /// or join it to a name, inserted and deleted pieces). Without a stamp that is
+        /// [`carry_unstamped`]'s result.
         #[test]
         fn the_shortcut_changes_no_result(
             pieces in proptest::collection::vec(0..PIECES.len(), 0..60),
@@ -1247,31 +1374,25 @@ mod precision_tests {
             } else {
                 format!("MODULE m\n! trackfix: correct widened={widened} version=0\n")
             };
-            let text = |p: &[usize]| {
-                let mut t = head.clone();
-                for &i in p {
-                    t.push_str(PIECES[i]);
-                }
-                t.push_str("\nENDMODULE\n");
-                t.into_bytes()
-            };
-            let original = text(&pieces);
-            let mut changed = pieces.clone();
-            for &(at, with, insert) in &edits {
-                let at = at.min(changed.len());
-                match with {
-                    Some(w) if insert || at == changed.len() => changed.insert(at, w),
-                    Some(w) => changed[at] = w,
-                    None if at < changed.len() => {
-                        changed.remove(at);
-                    }
-                    None => {}
-                }
-            }
-            let output = text(&changed);
+            let original = text(&head, &pieces);
+            let output = text(&head, &edited(&pieces, &edits));
             let fast = carry(&original, output.clone(), &RAPID, true);
             let full = carry(&original, output, &RAPID, false);
             proptest::prop_assert_eq!(fast, full);
+        }
+
+        /// Counting instead of pairing the literals of an unstamped file where the output holds
+        /// them unchanged gives the record of pairing them all, and the output untouched.
+        #[test]
+        fn the_unstamped_record_is_the_plain_one(
+            pieces in proptest::collection::vec(0..PIECES.len(), 0..80),
+            edits in proptest::collection::vec((0usize..80, proptest::option::of(0..PIECES.len()), proptest::bool::ANY), 0..12),
+        ) {
+            let original = text("MODULE m\n", &pieces);
+            let output = text("MODULE m\n", &edited(&pieces, &edits));
+            let fast = carry_unstamped(&original, output.clone());
+            proptest::prop_assert_eq!(&fast.output, &output);
+            proptest::prop_assert_eq!(fast, carry(&original, output, &RAPID, false));
         }
     }
 
