@@ -104,9 +104,11 @@ impl PositionList {
             cursor: p.span.start,
             check,
         };
+        let orient = p.cartesian.as_ref().and_then(|c| c.orient.as_ref());
         w.head(
             p.span,
             kind,
+            crate::report::values_pass_lints(orient, &p.config),
             p.name.as_ref().map(|n| n.as_bytes()),
             p.line,
             p.column,
@@ -168,7 +170,7 @@ impl PositionList {
             cursor: t.span.start,
             check: false,
         };
-        w.head(t.span, kind, t.name, t.line, t.column);
+        w.head(t.span, kind, t.values_pass_lints, t.name, t.line, t.column);
         w.byte(QUATERNION);
         w.read_again(&t.trans);
         w.read_again(&t.quaternion);
@@ -201,7 +203,14 @@ impl PositionList {
 
     fn get_head(&self, head: &Head, src: &[u8]) -> Option<Position> {
         let mut r = self.reader(head, src)?;
-        let (span, kind, name, line, column) = r.head(&self.kinds)?;
+        let PackedHead {
+            span,
+            kind,
+            name,
+            line,
+            column,
+            ..
+        } = r.head(&self.kinds)?;
         let name = match name {
             // Nearly every name is ASCII, which needs no UTF-8 check.
             Some(text) => Some(match Name::from_ascii(text) {
@@ -271,7 +280,9 @@ impl PositionList {
 
     /// The span, kind and declared name of position `i`, without decoding its fields.
     pub fn head(&self, i: usize) -> Option<(Span, PositionKind, Option<&str>)> {
-        let (span, kind, name, ..) = self.reader(self.heads.get(i)?, &[])?.head(&self.kinds)?;
+        let PackedHead {
+            span, kind, name, ..
+        } = self.reader(self.heads.get(i)?, &[])?.head(&self.kinds)?;
         let name = match name {
             Some(text) => Some(std::str::from_utf8(text).ok()?),
             None => None,
@@ -298,7 +309,9 @@ impl PositionList {
         src: &'a [u8],
     ) -> Option<OrientationAndConfig<'a>> {
         let mut r = self.reader(self.heads.get(i)?, src)?;
-        let (span, kind, name, ..) = r.head(&self.kinds)?;
+        let PackedHead {
+            span, kind, name, ..
+        } = r.head(&self.kinds)?;
         let orient = match r.byte()? {
             NO_CARTESIAN => None,
             tag => {
@@ -317,6 +330,29 @@ impl PositionList {
             name,
             orient,
             config: r.config()?,
+        })
+    }
+
+    /// What `check`'s lints need of position `i`: its head, and its orientation and
+    /// configuration only where the lints could find something in them. Whether they could
+    /// was decided when it was pushed ([`values_pass_lints`](crate::report::values_pass_lints),
+    /// one bit beside the kind): reading eight literals of every target again was 13 % of
+    /// `check`, for lints that pass nearly every target.
+    pub fn for_lints<'a>(&'a self, i: usize, src: &'a [u8]) -> Option<TargetForLints<'a>> {
+        let head = self.heads.get(i)?;
+        let h = self.reader(head, &[])?.head(&self.kinds)?;
+        let values = match h.values_pass_lints {
+            true => None,
+            false => {
+                let t = self.orientation_and_config(i, src)?;
+                Some((t.orient, t.config))
+            }
+        };
+        Some(TargetForLints {
+            span: h.span,
+            kind: h.kind,
+            name: h.name,
+            values,
         })
     }
 
@@ -438,6 +474,26 @@ impl OrientationAndConfig<'_> {
     }
 }
 
+/// What [`PositionList::for_lints`] reads of a position.
+#[derive(Clone, Debug)]
+pub struct TargetForLints<'a> {
+    /// The literal's bytes.
+    pub span: Span,
+    /// What kind of target it is.
+    pub kind: PositionKind,
+    name: Option<&'a [u8]>,
+    /// The orientation and configuration as written, where the lints that look at values
+    /// could find something in them; `None` where they pass.
+    pub values: Option<(Option<Orientation>, Config)>,
+}
+
+impl TargetForLints<'_> {
+    /// The declared name (`None` for an inline literal).
+    pub fn name(&self) -> Option<&str> {
+        std::str::from_utf8(self.name?).ok()
+    }
+}
+
 /// A robtarget as [`PositionList::push_read_again`] takes it: where its literal is, what it
 /// is named, and where each of its number fields starts.
 #[derive(Clone, Copy, Debug)]
@@ -452,6 +508,9 @@ pub(crate) struct ReadAgainTarget<'a> {
     pub quaternion: [usize; 4],
     pub quadrants: [usize; 4],
     pub extax: &'a [usize],
+    /// [`values_pass_lints`](crate::report::values_pass_lints) of its orientation and
+    /// configuration.
+    pub values_pass_lints: bool,
 }
 
 /// Writes one position's packed bytes.
@@ -480,12 +539,23 @@ impl Writer<'_> {
         self.uint(packed::zigzag(v));
     }
 
-    /// Span, kind index, name's text, line and column: what [`Reader::head`] reads.
-    fn head(&mut self, span: Span, kind: usize, name: Option<&[u8]>, line: usize, column: usize) {
+    /// Span, kind index with the lints' verdict, name's text, line and column: what
+    /// [`Reader::head`] reads.
+    fn head(
+        &mut self,
+        span: Span,
+        kind: usize,
+        values_pass_lints: bool,
+        name: Option<&[u8]>,
+        line: usize,
+        column: usize,
+    ) {
         self.uint(span.start as u64);
         // Signed: a span a dialect gives reversed comes back as it was given.
         self.int(span.end as i64 - span.start as i64);
-        self.uint(kind as u64);
+        // The verdict as the low bit: a program has a handful of kinds, so it still fits the
+        // one byte the kind took alone.
+        self.uint((kind as u64) << 1 | u64::from(values_pass_lints));
         match name {
             Some(n) => {
                 self.uint(n.len() as u64 + 1);
@@ -549,6 +619,17 @@ impl Writer<'_> {
     }
 }
 
+/// What [`Reader::head`] reads: span, kind, the lints' verdict on the values, name's text,
+/// line and column.
+struct PackedHead<'a> {
+    span: Span,
+    kind: PositionKind,
+    values_pass_lints: bool,
+    name: Option<&'a [u8]>,
+    line: usize,
+    column: usize,
+}
+
 /// Reads one position's packed bytes back.
 struct Reader<'a> {
     bytes: &'a [u8],
@@ -580,17 +661,14 @@ impl<'a> Reader<'a> {
         Some(self.cursor)
     }
 
-    /// Span, kind, name's text, line and column: the fields every position has, first.
-    #[allow(clippy::type_complexity)]
-    fn head(
-        &mut self,
-        kinds: &[PositionKind],
-    ) -> Option<(Span, PositionKind, Option<&'a [u8]>, usize, usize)> {
+    /// The fields every position has, first.
+    fn head(&mut self, kinds: &[PositionKind]) -> Option<PackedHead<'a>> {
         let start = self.usize()?;
         let end = i64::try_from(start).ok()? + packed::unzigzag(self.uint()?);
         let span = Span::new(start, usize::try_from(end).ok()?);
         self.cursor = start;
-        let kind = *kinds.get(self.usize()?)?;
+        let kind_and_verdict = self.usize()?;
+        let kind = *kinds.get(kind_and_verdict >> 1)?;
         let name = match self.usize()? {
             0 => None,
             n => {
@@ -599,7 +677,14 @@ impl<'a> Reader<'a> {
                 Some(text)
             }
         };
-        Some((span, kind, name, self.usize()?, self.usize()?))
+        Some(PackedHead {
+            span,
+            kind,
+            values_pass_lints: kind_and_verdict & 1 == 1,
+            name,
+            line: self.usize()?,
+            column: self.usize()?,
+        })
     }
 
     fn num(&mut self) -> Option<Option<NumField>> {
@@ -900,6 +985,10 @@ mod tests {
             quaternion: [starts[3], starts[4], starts[5], starts[6]],
             quadrants: [starts[7], starts[8], starts[9], starts[10]],
             extax: &starts[11..],
+            values_pass_lints: crate::report::values_pass_lints(
+                p.cartesian.as_ref().and_then(|c| c.orient.as_ref()),
+                &p.config,
+            ),
         });
         assert_eq!(starts.len(), 13);
         assert_eq!(direct.bytes, general.bytes);

@@ -403,8 +403,9 @@ impl<'l> Extractor<'l> {
         if !name_text.is_ascii() {
             return false;
         }
-        // Each child of `part` a literal read while scanning, that packs: their starts.
-        let starts = |part: Option<u32>, out: &mut [usize]| -> Option<usize> {
+        // Each child of `part` a literal read while scanning, that packs: their starts, and
+        // as many of their values as `values` has room for (what the lints' verdict reads).
+        let starts = |part: Option<u32>, out: &mut [usize], values: &mut [f64]| -> Option<usize> {
             let part = arena.get(part?).filter(|n| n.kind == ExprKind::Aggregate)?;
             let mut count = 0;
             let mut next = part.first;
@@ -412,6 +413,9 @@ impl<'l> Extractor<'l> {
                 let lit = arena.lit(c).filter(|_| c.kind == ExprKind::Num)?;
                 lit.pack(c.span().len())?;
                 *out.get_mut(count)? = c.start as usize;
+                if let Some(slot) = values.get_mut(count) {
+                    *slot = lit.value();
+                }
                 count += 1;
                 next = c.next;
             }
@@ -419,12 +423,13 @@ impl<'l> Extractor<'l> {
         };
         let mut parts = arena.children(id);
         let (mut trans, mut quaternion, mut quadrants) = ([0; 3], [0; 4], [0; 4]);
+        let (mut q, mut cf) = ([0.0; 4], [0.0; 4]);
         let mut extax = [0; MAX_AXES];
         let (Some(3), Some(4), Some(4), Some(axes), None) = (
-            starts(parts.next(), &mut trans),
-            starts(parts.next(), &mut quaternion),
-            starts(parts.next(), &mut quadrants),
-            starts(parts.next(), &mut extax),
+            starts(parts.next(), &mut trans, &mut []),
+            starts(parts.next(), &mut quaternion, &mut q),
+            starts(parts.next(), &mut quadrants, &mut cf),
+            starts(parts.next(), &mut extax, &mut []),
             parts.next(),
         ) else {
             return false;
@@ -441,6 +446,7 @@ impl<'l> Extractor<'l> {
             quaternion,
             quadrants,
             extax: &extax[..axes],
+            values_pass_lints: crate::report::check::robtarget_values_pass_lints(q, cf),
         });
         // Every test run holds the packed target to what the general path reads.
         #[cfg(debug_assertions)]

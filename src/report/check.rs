@@ -3,7 +3,7 @@
 
 use std::fmt;
 
-use crate::position::{Orientation, ParsedFile, Program};
+use crate::position::{Config, Orientation, ParsedFile, Program};
 use crate::syntax::{Diagnostic, Severity, Span};
 
 /// How far `|q|` may stray from 1 before `check` calls a quaternion non-normalised. Six written
@@ -61,44 +61,28 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
         );
     }
     // Only the orientation and the configuration of each target are read (the lints look at
-    // nothing else), and its name only for a finding.
+    // nothing else), only where the verdict kept with it says they could find something
+    // (`values_pass_lints`), and its name only for a finding.
     let list = &file.positions;
     for i in 0..list.len() {
-        let Some(target) = list.orientation_and_config(i, &file.source) else {
+        let Some(target) = list.for_lints(i, &file.source) else {
             continue;
         };
-        let (span, orient, config) = (target.span, &target.orient, &target.config);
+        let span = target.span;
         let label = || crate::position::label(target.name(), target.kind);
-        if let Some(q) = orient.as_ref().and_then(Orientation::written_quaternion) {
-            let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if norm == 0.0 {
-                // Unused slots of PERS robtarget arrays are written this way by controllers:
-                // worth knowing, not a defect of the program.
-                out.push(
-                    Diagnostic::note(
-                        span,
-                        format!("`{}` has the quaternion [0,0,0,0]: an unset slot", label()),
-                    )
-                    .with_hint("transforms leave it as written and report it"),
-                );
-            } else if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
-                out.push(
-                    Diagnostic::warning(
-                        span,
-                        format!(
-                            "quaternion of `{}` is not normalised (|q| = {norm:.6})",
-                            label()
-                        ),
-                    )
-                    .with_hint(
-                        "the controller rejects it; `trackfix correct` writes normalised quaternions",
-                    ),
-                );
-            }
+        #[cfg(debug_assertions)]
+        if target.values.is_none() {
+            let t = list.orientation_and_config(i, &file.source);
+            debug_assert!(t.is_some_and(|t| values_pass_lints(t.orient.as_ref(), &t.config)));
         }
-        if let Some(problem) =
-            crate::transform::policy::implausible_fields(file, span, orient.as_ref(), config)
-        {
+        let problem = match &target.values {
+            None => crate::transform::policy::implausible_text(file, span),
+            Some((orient, config)) => {
+                out.extend(quaternion_finding(span, orient.as_ref(), label));
+                crate::transform::policy::implausible_fields(file, span, orient.as_ref(), config)
+            }
+        };
+        if let Some(problem) = problem {
             out.push(
                 Diagnostic::warning(span, format!("`{}` {problem}", label())).with_hint(
                     "a typo or a placeholder: transforms refuse the target until it is fixed",
@@ -127,6 +111,75 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
     }
     out.sort_by_key(|d| (d.span.start, d.span.end));
     out
+}
+
+/// The quaternion's length, as the lints measure it.
+fn norm(q: [f64; 4]) -> f64 {
+    q.iter().map(|v| v * v).sum::<f64>().sqrt()
+}
+
+/// What the lints say of a written quaternion: a note for `[0,0,0,0]`, a warning when it is
+/// not normalised. `label` names the target.
+fn quaternion_finding(
+    span: Span,
+    orient: Option<&Orientation>,
+    label: impl Fn() -> String,
+) -> Option<Diagnostic> {
+    let q = orient.and_then(Orientation::written_quaternion)?;
+    let norm = norm(q);
+    if norm == 0.0 {
+        // Unused slots of PERS robtarget arrays are written this way by controllers: worth
+        // knowing, not a defect of the program.
+        Some(
+            Diagnostic::note(
+                span,
+                format!("`{}` has the quaternion [0,0,0,0]: an unset slot", label()),
+            )
+            .with_hint("transforms leave it as written and report it"),
+        )
+    } else if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
+        Some(
+            Diagnostic::warning(
+                span,
+                format!(
+                    "quaternion of `{}` is not normalised (|q| = {norm:.6})",
+                    label()
+                ),
+            )
+            .with_hint(
+                "the controller rejects it; `trackfix correct` writes normalised quaternions",
+            ),
+        )
+    } else {
+        None
+    }
+}
+
+/// Whether the lints that look at a target's values (the quaternion's length, the
+/// plausibility of the orientation and the configuration) find nothing in these: worked out
+/// once as the target is packed, so that [`lints`] reads the values again only of the few
+/// targets where they may find something.
+pub fn values_pass_lints(orient: Option<&Orientation>, config: &Config) -> bool {
+    let quaternion_passes = orient
+        .and_then(Orientation::written_quaternion)
+        .is_none_or(|q| {
+            let norm = norm(q);
+            // Written so that a NaN length does not pass.
+            norm != 0.0 && (norm - 1.0).abs() <= QUATERNION_NORM_TOLERANCE
+        });
+    quaternion_passes && crate::transform::policy::implausible_values(orient, config).is_none()
+}
+
+/// [`values_pass_lints`] of a robtarget that writes all four quaternion components and all
+/// four of `cf1, cf4, cf6, cfx`, from the values alone: what the parser's fast path packs,
+/// once per target of a file (the general function cost about as much as the reading saved).
+pub(crate) fn robtarget_values_pass_lints(q: [f64; 4], cf: [f64; 4]) -> bool {
+    use crate::transform::policy::{plausible_cf, plausible_quaternion_norm};
+    let norm = norm(q);
+    norm != 0.0
+        && (norm - 1.0).abs() <= QUATERNION_NORM_TOLERANCE
+        && plausible_quaternion_norm(norm)
+        && cf.into_iter().all(plausible_cf)
 }
 
 /// A failed round trip, as an error.
@@ -223,8 +276,57 @@ impl fmt::Display for CheckSummary {
 #[cfg(test)]
 mod tests {
     use super::first_control_byte;
+    use crate::position::{Config, Orientation};
     use crate::syntax::is_control_byte;
     use proptest::prelude::*;
+
+    /// The verdict kept with each packed target says "pass" exactly where the lints of a file
+    /// holding only that target find nothing in its values: a target that passes is never
+    /// looked at again, so a wrong "pass" would hide a finding.
+    #[test]
+    fn the_packed_verdict_is_what_the_lints_find() {
+        let cases = [
+            ("[0,0.707107,0.707107,0]", "[0,0,-1,0]", true),
+            ("[1,0,0,0]", "[-1,2,0,1]", true),
+            ("[0,0,0,0]", "[0,0,0,0]", false),
+            ("[1.0002,0,0,0]", "[0,0,0,0]", false),
+            ("[1.00009,0,0,0]", "[0,0,0,0]", true),
+            ("[1.5,0,0,0]", "[0,0,0,0]", false),
+            ("[1,0,0,0]", "[0,1.5,0,0]", false),
+            ("[1,0,0,0]", "[0,0,9E9,0]", false),
+        ];
+        for (q, cf, passes) in cases {
+            let text = format!(
+                "MODULE m\n  CONST robtarget p:=[[1,2,3],{q},{cf},[9E9,9E9,9E9,9E9,9E9,9E9]];\nENDMODULE\n"
+            );
+            let file = crate::rapid::parse_file(std::path::Path::new("m.mod"), text.into_bytes());
+            let p = file.positions.get(0, &file.source).unwrap();
+            let orient = p.cartesian.as_ref().and_then(|c| c.orient.as_ref());
+            assert_eq!(
+                super::values_pass_lints(orient, &p.config),
+                passes,
+                "{q} {cf}"
+            );
+            let values = |f: &[Option<crate::position::NumField>]| -> [f64; 4] {
+                std::array::from_fn(|k| f[k].unwrap().value())
+            };
+            let (Some(Orientation::Quaternion(qf)), Config::Quadrants(cff)) = (orient, &p.config)
+            else {
+                panic!("a robtarget");
+            };
+            assert_eq!(
+                super::robtarget_values_pass_lints(values(qf), values(cff)),
+                passes,
+                "{q} {cf}"
+            );
+            let target = file.positions.for_lints(0, &file.source).unwrap();
+            assert_eq!(target.values.is_none(), passes, "{q} {cf}");
+            let found = super::lints(&file)
+                .iter()
+                .any(|d| d.message.contains("`p`"));
+            assert_eq!(found, !passes, "{q} {cf}");
+        }
+    }
 
     proptest! {
         /// The block search finds what the byte-by-byte search finds, wherever the byte lies

@@ -6,7 +6,9 @@ pub mod check;
 pub mod inspect;
 pub mod transform;
 
-pub use check::{CheckSummary, QUATERNION_NORM_TOLERANCE, errors, findings, lints};
+pub use check::{
+    CheckSummary, QUATERNION_NORM_TOLERANCE, errors, findings, lints, values_pass_lints,
+};
 pub use inspect::{
     FileReport, FrameColumn, FrameRow, InspectJson, InspectOptions, InspectReport, Message, Place,
     PoseColumns, PositionRow, ProgramReport, inspect_file, inspect_program, message, render_csv,

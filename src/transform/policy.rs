@@ -326,6 +326,20 @@ pub(crate) fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<Str
     implausible_fields(file, p.span, orient, &p.config)
 }
 
+/// Whether a written quaternion of this (non-zero) length is a rotation.
+#[inline]
+pub(crate) fn plausible_quaternion_norm(norm: f64) -> bool {
+    norm.is_finite() && (norm - 1.0).abs() <= PLAUSIBLE_QUATERNION_NORM_ERROR
+}
+
+/// Whether `v` may be one of ABB's `cf1, cf4, cf6, cfx`: a finite small integer. Compared with
+/// its truncation to an integer rather than through `f64::fract`, which is a call into libm
+/// on the baseline x86-64 target; the two agree within the bound.
+#[inline]
+pub(crate) fn plausible_cf(v: f64) -> bool {
+    v.abs() <= PLAUSIBLE_CF && v == f64::from(v as i32)
+}
+
 /// [`implausible_literal`] of the target written at `span`, from the fields it looks at: its
 /// orientation and configuration (`check` reads only these of each target).
 pub(crate) fn implausible_fields(
@@ -334,14 +348,25 @@ pub(crate) fn implausible_fields(
     orient: Option<&crate::position::Orientation>,
     config: &crate::position::Config,
 ) -> Option<String> {
-    use crate::position::{Config, Orientation};
-    if let Some(problem) = file
-        .language
+    implausible_text(file, span).or_else(|| implausible_values(orient, config))
+}
+
+/// What the dialect finds absurd in the text of the target written at `span` (a KRL Status
+/// spelled out of range, say), or `None`: the part of [`implausible_fields`] that reads no
+/// field.
+pub(crate) fn implausible_text(file: &ParsedFile, span: crate::syntax::Span) -> Option<String> {
+    file.language
         .dialect()
         .implausible_configuration(span.slice(&file.source))
-    {
-        return Some(problem);
-    }
+}
+
+/// The part of [`implausible_fields`] that looks at the values of the orientation and the
+/// configuration only.
+pub(crate) fn implausible_values(
+    orient: Option<&crate::position::Orientation>,
+    config: &crate::position::Config,
+) -> Option<String> {
+    use crate::position::{Config, Orientation};
     match orient {
         Some(Orientation::Abc(abc)) => {
             for (name, f) in ["A", "B", "C"].iter().zip(abc) {
@@ -358,9 +383,7 @@ pub(crate) fn implausible_fields(
         Some(o @ Orientation::Quaternion(_)) => {
             if let Some(q) = o.written_quaternion() {
                 let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-                if norm != 0.0
-                    && !(norm.is_finite() && (norm - 1.0).abs() <= PLAUSIBLE_QUATERNION_NORM_ERROR)
-                {
+                if norm != 0.0 && !plausible_quaternion_norm(norm) {
                     return Some(format!(
                         "has a quaternion of length {norm:.4}: not a rotation"
                     ));
@@ -374,7 +397,7 @@ pub(crate) fn implausible_fields(
             for (name, f) in ["cf1", "cf4", "cf6", "cfx"].iter().zip(cf) {
                 if let Some(f) = f {
                     let v = f.value();
-                    if !(v.is_finite() && v.fract() == 0.0 && v.abs() <= PLAUSIBLE_CF) {
+                    if !plausible_cf(v) {
                         return Some(format!(
                             "has {name} = {}: a configuration is a small integer",
                             shown(f.value())
