@@ -403,9 +403,8 @@ impl<'l> Extractor<'l> {
         if !name_text.is_ascii() {
             return false;
         }
-        // Each child of `part` a literal read while scanning, that packs: their starts, and
-        // as many of their values as `values` has room for (what the lints' verdict reads).
-        let starts = |part: Option<u32>, out: &mut [usize], values: &mut [f64]| -> Option<usize> {
+        // Each child of `part` a literal read while scanning, that packs: their starts.
+        let starts = |part: Option<u32>, out: &mut [usize]| -> Option<usize> {
             let part = arena.get(part?).filter(|n| n.kind == ExprKind::Aggregate)?;
             let mut count = 0;
             let mut next = part.first;
@@ -413,9 +412,6 @@ impl<'l> Extractor<'l> {
                 let lit = arena.lit(c).filter(|_| c.kind == ExprKind::Num)?;
                 lit.pack(c.span().len())?;
                 *out.get_mut(count)? = c.start as usize;
-                if let Some(slot) = values.get_mut(count) {
-                    *slot = lit.value();
-                }
                 count += 1;
                 next = c.next;
             }
@@ -423,17 +419,33 @@ impl<'l> Extractor<'l> {
         };
         let mut parts = arena.children(id);
         let (mut trans, mut quaternion, mut quadrants) = ([0; 3], [0; 4], [0; 4]);
-        let (mut q, mut cf) = ([0.0; 4], [0.0; 4]);
         let mut extax = [0; MAX_AXES];
         let (Some(3), Some(4), Some(4), Some(axes), None) = (
-            starts(parts.next(), &mut trans, &mut []),
-            starts(parts.next(), &mut quaternion, &mut q),
-            starts(parts.next(), &mut quadrants, &mut cf),
-            starts(parts.next(), &mut extax, &mut []),
+            starts(parts.next(), &mut trans),
+            starts(parts.next(), &mut quaternion),
+            starts(parts.next(), &mut quadrants),
+            starts(parts.next(), &mut extax),
             parts.next(),
         ) else {
             return false;
         };
+        // The values the lints' verdict reads, of the four literals of a part just read (read
+        // here rather than while gathering the starts, which slowed every part's loop more).
+        let values = |part: Option<u32>| -> [f64; 4] {
+            let mut out = [f64::NAN; 4];
+            for (o, c) in out
+                .iter_mut()
+                .zip(part.map(|p| arena.children(p)).into_iter().flatten())
+            {
+                *o = arena
+                    .get(c)
+                    .and_then(|n| arena.lit(n))
+                    .map_or(f64::NAN, |l| l.value());
+            }
+            out
+        };
+        let mut parts = arena.children(id).skip(1);
+        let (q, cf) = (values(parts.next()), values(parts.next()));
         let span = n.span();
         let (line, column) = self.lines.line_col(span.start);
         self.positions.push_read_again(&ReadAgainTarget {
