@@ -70,6 +70,11 @@ impl NameKey<'_> {
             .map(u8::to_ascii_uppercase)
     }
 
+    /// The first folded byte (`None` for a blank name): names that differ in it differ.
+    pub(crate) fn first(&self) -> Option<u8> {
+        self.bytes().next()
+    }
+
     /// The name is `word` (any case).
     pub(crate) fn is(&self, word: &[u8]) -> bool {
         self.bytes().eq(word.iter().map(u8::to_ascii_uppercase))
@@ -400,6 +405,11 @@ mod tests {
         assert!(NameKey(b"SearchL").starts_with(b"search"));
         assert!(NameKey(b"z10").numbered(b'z') && !NameKey(b"z").numbered(b'z'));
         assert!(!NameKey(b"zone").numbered(b'z'));
+        assert_eq!((a.first(), b.first()), (Some(b'P'), Some(b'P')));
+        assert_eq!(
+            (NameKey(b" t").first(), NameKey(b" ").first()),
+            (Some(b'T'), None)
+        );
         assert_eq!(fold("p[ 3 ]"), "P[3]");
         let mut buf = String::new();
         assert_eq!(fold_into(&mut buf, b"pArr{ 2 }"), "PARR{2}");
