@@ -398,9 +398,9 @@ impl<'f, 'a> Binder<'f, 'a> {
     }
 
     /// Binds use `u` of file `m`: records it in every target it reaches now, and keeps what it
-    /// passes to routine parameters for [`Binder::finish`]. Returns whether it reaches a
-    /// Cartesian target directly (a joint target moves the same whatever the frame).
-    pub(crate) fn bind(&mut self, m: usize, u: &Use<'_>) -> bool {
+    /// passes to routine parameters for [`Binder::finish`]. [`Binder::reached_cartesian`]
+    /// then says whether it reached a Cartesian target directly.
+    pub(crate) fn bind(&mut self, m: usize, u: &Use<'_>) {
         let Binder {
             files,
             naming,
@@ -421,7 +421,7 @@ impl<'f, 'a> Binder<'f, 'a> {
         {
             let files: &[FileFacts<'a>] = files;
             let Some(f) = files.get(m) else {
-                return false;
+                return;
             };
             let src = f.src;
             let exported = |(m, i): TargetAt| {
@@ -528,11 +528,10 @@ impl<'f, 'a> Binder<'f, 'a> {
             }
         }
         if targets.is_empty() && params.is_empty() {
-            return false;
+            return;
         }
         targets.sort_unstable();
         targets.dedup();
-        let mut cartesian = false;
         for &t in targets.iter() {
             record(
                 files,
@@ -543,14 +542,21 @@ impl<'f, 'a> Binder<'f, 'a> {
                 u.run_time.as_ref(),
                 u.line,
             );
-            cartesian |= files
-                .get(t.0)
-                .is_some_and(|f| f.positions.has_cartesian(t.1));
         }
         for &p in params.iter() {
             param_uses.entry(p).or_default().push(MovesWith::of(u));
         }
-        cartesian
+    }
+
+    /// Whether the use last bound reached a Cartesian target directly (a joint target moves
+    /// the same whatever the frame). Asked only by a language that warns about it: reading
+    /// each target's fields for the answer was a tenth of binding a RAPID motion.
+    pub(crate) fn reached_cartesian(&self) -> bool {
+        self.targets.iter().any(|&(m, i)| {
+            self.files
+                .get(m)
+                .is_some_and(|f| f.positions.has_cartesian(i))
+        })
     }
 
     /// Records, in every target passed to a routine parameter, every use reachable from that
