@@ -300,9 +300,10 @@ impl<T: Copy> Groups<T> {
     }
 }
 
-/// The part of a folded `key` before the first `open` byte, if it has one.
+/// The part of a folded `key` before the first `open` byte, if it has one. A name is a few
+/// bytes: a plain search beats `memchr`'s call and set-up.
 fn before(key: &str, open: u8) -> Option<&str> {
-    let at = memchr::memchr(open, key.as_bytes())?;
+    let at = key.bytes().position(|b| b == open)?;
     key.get(..at)
 }
 
