@@ -354,7 +354,15 @@ pub(crate) struct Binder<'f, 'a> {
     targets: Vec<TargetAt>,
     params: Vec<ParamAt>,
     hits: Vec<TargetAt>,
+    /// References of each file, as written, that reach no target: a module's 10,000 motions
+    /// pass the same few speeds, zones and tools (`v1000, z10, tGun`), which are no target,
+    /// and folding and looking each up again was a third of the pass. The file's bytes are
+    /// hashed as they are, not folded.
+    misses: std::collections::HashSet<(usize, &'a [u8]), MissHasher>,
 }
+
+/// The hasher of [`Binder`]'s misses.
+type MissHasher = std::hash::BuildHasherDefault<crate::names::NameHasher>;
 
 impl<'f, 'a> Binder<'f, 'a> {
     /// A binder over the targets of `files` (indexed once).
@@ -380,6 +388,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             targets: Vec::new(),
             params: Vec::new(),
             hits: Vec::new(),
+            misses: Default::default(),
         }
     }
 
@@ -389,9 +398,9 @@ impl<'f, 'a> Binder<'f, 'a> {
     }
 
     /// Binds use `u` of file `m`: records it in every target it reaches now, and keeps what it
-    /// passes to routine parameters for [`Binder::finish`]. Returns whether it reaches a
-    /// Cartesian target directly (a joint target moves the same whatever the frame).
-    pub(crate) fn bind(&mut self, m: usize, u: &Use<'_>) -> bool {
+    /// passes to routine parameters for [`Binder::finish`]. [`Binder::reached_cartesian`]
+    /// then says whether it reached a Cartesian target directly.
+    pub(crate) fn bind(&mut self, m: usize, u: &Use<'_>) {
         let Binder {
             files,
             naming,
@@ -403,6 +412,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             targets,
             params,
             hits,
+            misses,
         } = self;
         let naming = &*naming;
         targets.clear();
@@ -411,7 +421,7 @@ impl<'f, 'a> Binder<'f, 'a> {
         {
             let files: &[FileFacts<'a>] = files;
             let Some(f) = files.get(m) else {
-                return false;
+                return;
             };
             let src = f.src;
             let exported = |(m, i): TargetAt| {
@@ -460,10 +470,33 @@ impl<'f, 'a> Binder<'f, 'a> {
                     Some(p) => params.push(p),
                     None => lookup(naming, index, &exported, m, key, targets),
                 };
+            // `reach` of a reference written as `raw` in the file, folded only when it may
+            // reach something: a parameter, or a target `misses` does not know it misses.
+            let reach_raw =
+                |raw: &'a [u8],
+                 buf: &mut String,
+                 misses: &mut std::collections::HashSet<(usize, &'a [u8]), MissHasher>,
+                 targets: &mut Vec<TargetAt>,
+                 params: &mut Vec<ParamAt>| {
+                    if !own_params.is_empty()
+                        && let Some(p) = param_of(fold_into(buf, raw))
+                    {
+                        params.push(p);
+                        return;
+                    }
+                    if misses.contains(&(m, raw)) {
+                        return;
+                    }
+                    let before = targets.len();
+                    lookup(naming, index, &exported, m, fold_into(buf, raw), targets);
+                    if targets.len() == before {
+                        misses.insert((m, raw));
+                    }
+                };
             let callee = u.callee.and_then(|c| routine_of(NameKey(c.slice(src))));
             for (i, sp) in u.args.iter().enumerate() {
                 let Some(sp) = *sp else { continue };
-                let key = fold_into(buf, sp.slice(src));
+                let raw = sp.slice(src);
                 match callee {
                     // An argument bound to a parameter of a routine of the program: used as
                     // that routine uses the parameter.
@@ -474,6 +507,7 @@ impl<'f, 'a> Binder<'f, 'a> {
                             .is_some_and(|r| i < r.params.len()) =>
                     {
                         let to = (cm, cr, i);
+                        let key = fold_into(buf, raw);
                         match param_of(key) {
                             Some(p) => param_edges.entry(p).or_default().push(to),
                             None => {
@@ -483,22 +517,21 @@ impl<'f, 'a> Binder<'f, 'a> {
                             }
                         }
                     }
-                    _ => reach(key, targets, params),
+                    _ => reach_raw(raw, buf, misses, targets, params),
                 }
             }
             for &sp in u.refs {
-                reach(fold_into(buf, sp.slice(src)), targets, params);
+                reach_raw(sp.slice(src), buf, misses, targets, params);
             }
             for &key in u.folded {
                 reach(key, targets, params);
             }
         }
         if targets.is_empty() && params.is_empty() {
-            return false;
+            return;
         }
         targets.sort_unstable();
         targets.dedup();
-        let mut cartesian = false;
         for &t in targets.iter() {
             record(
                 files,
@@ -509,14 +542,21 @@ impl<'f, 'a> Binder<'f, 'a> {
                 u.run_time.as_ref(),
                 u.line,
             );
-            cartesian |= files
-                .get(t.0)
-                .is_some_and(|f| f.positions.has_cartesian(t.1));
         }
         for &p in params.iter() {
             param_uses.entry(p).or_default().push(MovesWith::of(u));
         }
-        cartesian
+    }
+
+    /// Whether the use last bound reached a Cartesian target directly (a joint target moves
+    /// the same whatever the frame). Asked only by a language that warns about it: reading
+    /// each target's fields for the answer was a tenth of binding a RAPID motion.
+    pub(crate) fn reached_cartesian(&self) -> bool {
+        self.targets.iter().any(|&(m, i)| {
+            self.files
+                .get(m)
+                .is_some_and(|f| f.positions.has_cartesian(i))
+        })
     }
 
     /// Records, in every target passed to a routine parameter, every use reachable from that

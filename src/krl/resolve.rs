@@ -416,8 +416,9 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                         // A motion to a point outside the program (`XHOME` of $config.dat) is
                         // not this program's business, nor is one to a joint target only (it
                         // moves the same whatever the base).
-                        if binder.bind(fi, &u)
-                            && u.frame.is_none()
+                        binder.bind(fi, &u);
+                        if u.frame.is_none()
+                            && binder.reached_cartesian()
                             && let Some(w) = unresolved.get_mut(fi)
                         {
                             w.push(*span);
