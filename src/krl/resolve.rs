@@ -339,6 +339,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             let mut targets: Vec<usize> = Vec::new();
             let mut folded: Vec<&str> = Vec::new();
             let own = counts.get(fi).copied().unwrap_or_default();
+            let mut inline_at: Option<HashMap<crate::syntax::Span, usize>> = None;
             let mut state = State::default();
             let mut aliases: HashMap<&str, &str> = HashMap::default();
             let mut forks: Vec<Fork> = Vec::new();
@@ -373,11 +374,23 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                         folded.clear();
                         for r in refs {
                             match r {
-                                // An inline literal is one of the file's own positions.
+                                // An inline literal is one of the file's own positions:
+                                // the first with its span, found through a table made at
+                                // the file's first inline literal (a scan of the positions
+                                // per literal was quadratic in a file's inline motions).
                                 Ref::Inline(s) => {
-                                    targets.extend(binder.positions(fi).and_then(|(ps, _)| {
-                                        (0..own.min(ps.len())).find(|&i| ps.span(i) == Some(*s))
-                                    }))
+                                    let at = inline_at.get_or_insert_with(|| {
+                                        let mut at = HashMap::default();
+                                        if let Some((ps, _)) = binder.positions(fi) {
+                                            for i in 0..own.min(ps.len()) {
+                                                if let Some(span) = ps.span(i) {
+                                                    at.entry(span).or_insert(i);
+                                                }
+                                            }
+                                        }
+                                        at
+                                    });
+                                    targets.extend(at.get(s).copied());
                                 }
                                 Ref::Named(n) => {
                                     // The name itself, then what it was last copied from.
