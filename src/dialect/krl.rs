@@ -174,24 +174,26 @@ impl Dialect for Krl {
         // `{X …, S 6, T 'B010101', …}`: Status and Turn are small integers or binary strings.
         // Read on the bytes (every position of a check passes here): a byte is one character
         // of the Latin-1 text the message quotes.
+        // Only a field whose name is the one letter S or T is read: one that does not start
+        // so is stepped over to the next separator without being trimmed or split (this runs
+        // for every target of a `check`, whose fields are mostly `X 1200.5`).
         for field in literal.split(|&b| matches!(b, b',' | b'{' | b'}')) {
-            let field = trim_latin1(field);
-            let Some(at) = field.iter().position(|&b| matches!(b, b' ' | b'\t')) else {
-                continue;
-            };
-            let (name, value) = (&field[..at], &field[at + 1..]);
-            let which = match name {
-                [b'S' | b's'] => "Status",
-                [b'T' | b't'] => "Turn",
+            let field = trim_latin1_start(field);
+            let which = match field {
+                [b'S' | b's', b' ' | b'\t', ..] => "Status",
+                [b'T' | b't', b' ' | b'\t', ..] => "Turn",
                 _ => continue,
             };
-            let value = trim_latin1(value);
+            let value = trim_latin1(&field[2..]);
+            if value.is_empty() {
+                // `S ` is the name alone, its space trimmed away: no value to read.
+                continue;
+            }
             let binary = value.len() > 3
                 && value.starts_with(b"'")
                 && value.ends_with(b"'")
                 && matches!(value[1], b'B' | b'b');
-            let whole = std::str::from_utf8(value).is_ok_and(|v| v.parse::<u32>().is_ok());
-            if !binary && !whole {
+            if !binary && !reads_as_u32(value) {
                 return Some(format!(
                     "has {which} {}: Status and Turn are small whole numbers",
                     crate::syntax::latin1(value)
@@ -255,13 +257,41 @@ fn tree_options(own_config: bool, options: &LoadOptions) -> LoadOptions {
 /// `bytes` without the leading and trailing characters `str::trim` drops, each byte read as a
 /// Latin-1 character (tab to carriage return, space, NEL, no-break space).
 fn trim_latin1(bytes: &[u8]) -> &[u8] {
-    let space = |b: &u8| matches!(b, 0x09..=0x0D | b' ' | 0x85 | 0xA0);
-    let start = bytes.iter().position(|b| !space(b)).unwrap_or(bytes.len());
-    let end = bytes
+    let start = trim_latin1_start(bytes);
+    let end = start
         .iter()
-        .rposition(|b| !space(b))
-        .map_or(start, |e| e + 1);
-    bytes.get(start..end).unwrap_or(&[])
+        .rposition(|b| !latin1_space(*b))
+        .map_or(0, |e| e + 1);
+    start.get(..end).unwrap_or(&[])
+}
+
+/// What `str::trim_start` leaves of the Latin-1 text `bytes`.
+fn trim_latin1_start(bytes: &[u8]) -> &[u8] {
+    let start = bytes
+        .iter()
+        .position(|b| !latin1_space(*b))
+        .unwrap_or(bytes.len());
+    bytes.get(start..).unwrap_or(&[])
+}
+
+/// The bytes whose Latin-1 character is white space to `str::trim`.
+fn latin1_space(b: u8) -> bool {
+    matches!(b, 0x09..=0x0D | b' ' | 0x85 | 0xA0)
+}
+
+/// Whether `str::parse::<u32>` reads `text`: an optional `+`, then digits of a value that
+/// fits 32 bits (any number of leading zeros). On the bytes: no UTF-8 check, no error built.
+fn reads_as_u32(text: &[u8]) -> bool {
+    let digits = text.strip_prefix(b"+").unwrap_or(text);
+    !digits.is_empty()
+        && digits
+            .iter()
+            .try_fold(0u32, |v, &b| {
+                let d = b.wrapping_sub(b'0');
+                (d <= 9).then_some(())?;
+                v.checked_mul(10)?.checked_add(u32::from(d))
+            })
+            .is_some()
 }
 
 #[cfg(test)]
@@ -296,6 +326,9 @@ mod tests {
     }
 
     proptest! {
+        // Short texts, cheap to check: enough cases to meet a field that is a name and spaces
+        // only (`S ,`), which the default 256 can miss.
+        #![proptest_config(ProptestConfig::with_cases(8192))]
         #[test]
         fn configuration_check_reads_bytes_as_the_text_check_did(
             parts in proptest::collection::vec(
@@ -315,10 +348,35 @@ mod tests {
         }
     }
 
+    proptest! {
+        /// The byte reading of a whole number is `str::parse::<u32>`'s.
+        #[test]
+        fn reads_as_u32_is_parse(text in "[+-]?[0-9]{0,12}|[0-9+ a]{0,4}") {
+            prop_assert_eq!(reads_as_u32(text.as_bytes()), text.parse::<u32>().is_ok());
+        }
+    }
+
+    #[test]
+    fn reads_as_u32_at_the_edges() {
+        for (text, ok) in [
+            ("4294967295", true),
+            ("4294967296", false),
+            ("+0004294967295", true),
+            ("+", false),
+            ("", false),
+            ("-0", false),
+            ("++1", false),
+        ] {
+            assert_eq!(reads_as_u32(text.as_bytes()), ok, "{text}");
+            assert_eq!(text.parse::<u32>().is_ok(), ok, "{text}");
+        }
+    }
+
     #[test]
     fn configuration_check_finds_what_it_should() {
         let check = |s: &str| Krl.implausible_configuration(s.as_bytes());
         assert_eq!(check("{X 1, S 6, T 'B010101'}"), None);
+        assert_eq!(check("{S ,T \t}"), None);
         assert_eq!(
             check("{X 1, S 6, T 1e30}").as_deref(),
             Some("has Turn 1e30: Status and Turn are small whole numbers")
