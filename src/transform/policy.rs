@@ -472,6 +472,21 @@ mod tests {
     use crate::syntax::Span;
     use crate::transform::test_support::{krl, rapid};
 
+    /// The integer test of a configuration value is `is_finite && fract == 0 && |v| ≤ bound`,
+    /// at the bound, either side of whole numbers, for -0, NaN and the infinities.
+    #[test]
+    fn plausible_cf_is_the_fract_test() {
+        let fract_test = |v: f64| v.is_finite() && v.fract() == 0.0 && v.abs() <= PLAUSIBLE_CF;
+        let mut values = vec![f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 9e9, -9e9, 1e300];
+        for whole in [0.0, 1.0, -1.0, 4.0, 999.0, 1000.0, 1001.0, -1000.0, -1001.0] {
+            values.extend([whole, -whole, whole + 0.5, whole - 1e-9, whole + 1e-12]);
+            values.push(f64::from_bits(whole.to_bits() + 1));
+        }
+        for v in values {
+            assert_eq!(plausible_cf(v), fract_test(v), "{v:e}");
+        }
+    }
+
     /// A frame declaration `name` that a mechanical unit moves (`fixed`) or the robot holds.
     fn with_frame(mut program: Program, name: &str, kind: FrameKind, moved: bool) -> Program {
         let decl = FrameDecl {
