@@ -359,7 +359,18 @@ pub(crate) struct Binder<'f, 'a> {
     /// and folding and looking each up again was a third of the pass. The file's bytes are
     /// hashed as they are, not folded.
     misses: std::collections::HashSet<(usize, &'a [u8]), MissHasher>,
+    /// The routines of each name: (file, index, local), in file order and each file's order.
+    /// A call's routine was found by scanning every routine of the program, per call:
+    /// quadratic in a task of many routines calling each other (3,000 routines: 4 G
+    /// instructions).
+    routines: NameMap<NameKey<'a>, Vec<(usize, usize, bool)>>,
+    /// The callee last looked up (file, name as written) and what it found: a module's motions
+    /// call the same instruction one after another.
+    last_callee: Option<LastCallee<'a>>,
 }
+
+/// A callee's name as written in a file, and the routine it names there (file, index), if any.
+type LastCallee<'a> = (usize, &'a [u8], Option<(usize, usize)>);
 
 /// The hasher of [`Binder`]'s misses.
 type MissHasher = std::hash::BuildHasherDefault<crate::names::NameHasher>;
@@ -377,6 +388,15 @@ impl<'f, 'a> Binder<'f, 'a> {
             }
         }
         let index = index.build();
+        let mut routines: NameMap<NameKey<'a>, Vec<(usize, usize, bool)>> = NameMap::default();
+        for (m, f) in files.iter().enumerate() {
+            for (r, routine) in f.routines.iter().enumerate() {
+                routines
+                    .entry(NameKey(routine.name.slice(f.src)))
+                    .or_default()
+                    .push((m, r, routine.local));
+            }
+        }
         Binder {
             files,
             naming: *naming,
@@ -389,6 +409,8 @@ impl<'f, 'a> Binder<'f, 'a> {
             params: Vec::new(),
             hits: Vec::new(),
             misses: Default::default(),
+            routines,
+            last_callee: None,
         }
     }
 
@@ -413,6 +435,8 @@ impl<'f, 'a> Binder<'f, 'a> {
             params,
             hits,
             misses,
+            routines,
+            last_callee,
         } = self;
         let naming = &*naming;
         targets.clear();
@@ -431,20 +455,13 @@ impl<'f, 'a> Binder<'f, 'a> {
                 })
             };
             // Routines by name: the file's own first, else those of the program that are not
-            // local.
-            let routine_of = |name: NameKey<'_>| -> Option<(usize, usize)> {
-                let find = |m2: usize, any: bool| {
-                    let f = files.get(m2)?;
-                    f.routines
-                        .iter()
-                        .position(|r| (any || !r.local) && NameKey(r.name.slice(f.src)) == name)
-                        .map(|r| (m2, r))
-                };
-                find(m, true).or_else(|| {
-                    (0..files.len())
-                        .filter(|&m2| m2 != m)
-                        .find_map(|m2| find(m2, false))
-                })
+            // local (the first file that has one).
+            let routine_of = |name: NameKey<'a>| -> Option<(usize, usize)> {
+                let all = routines.get(&name)?;
+                all.iter()
+                    .find(|&&(m2, ..)| m2 == m)
+                    .or_else(|| all.iter().find(|&&(m2, _, local)| m2 != m && !local))
+                    .map(|&(m2, r, _)| (m2, r))
             };
             // The required parameter of the enclosing routine a reference names, if any.
             let own_params = u
@@ -493,7 +510,17 @@ impl<'f, 'a> Binder<'f, 'a> {
                         misses.insert((m, raw));
                     }
                 };
-            let callee = u.callee.and_then(|c| routine_of(NameKey(c.slice(src))));
+            let callee = u.callee.and_then(|c| {
+                let name = c.slice(src);
+                match *last_callee {
+                    Some((lm, last, found)) if lm == m && last == name => found,
+                    _ => {
+                        let found = routine_of(NameKey(name));
+                        *last_callee = Some((m, name, found));
+                        found
+                    }
+                }
+            });
             for (i, sp) in u.args.iter().enumerate() {
                 let Some(sp) = *sp else { continue };
                 let raw = sp.slice(src);

@@ -139,6 +139,46 @@ fn targets_through_routine_parameters() {
     assert_eq!(u("p4").other_wobjs(), ["wOther"]);
 }
 
+/// A call names the routine of its own module first (`LOCAL` or not), else the first other
+/// module's routine that is not `LOCAL`: with a `LOCAL` routine of that name in a module before
+/// it, the call from a third module binds to the later module's global one.
+#[test]
+fn a_call_binds_its_own_modules_routine_then_a_global_one() {
+    let data = format!(
+        "MODULE Data\n  CONST robtarget pA:={TARGET};\n  CONST robtarget pB:={TARGET};\n  CONST robtarget pC:={TARGET};\nENDMODULE\n"
+    );
+    let a = "MODULE A\n\
+        LOCAL PROC Place(robtarget p)\n  MoveL p,v200,z10,tGun\\WObj:=wA;\nENDPROC\n\
+        PROC FromA()\n  Place pA;\nENDPROC\nENDMODULE\n";
+    let b = "MODULE B\n\
+        PROC Place(robtarget p)\n  MoveL p,v200,z10,tGun\\WObj:=wB;\nENDPROC\n\
+        PROC FromB()\n  Place pB;\nENDPROC\nENDMODULE\n";
+    let c = "MODULE C\nPROC FromC()\n  Place pC;\nENDPROC\nENDMODULE\n";
+    let (_dir, task) = task(&[
+        ("PROGMOD/A.mod", a.to_owned()),
+        ("PROGMOD/B.mod", b.to_owned()),
+        ("PROGMOD/C.mod", c.to_owned()),
+        ("PROGMOD/Data.mod", data),
+    ]);
+    let ps = programs(&task);
+    let wobj = |n: &str| target(&ps[0], n).usage.wobj.as_deref().map(str::to_owned);
+    assert_eq!(
+        wobj("pA").as_deref(),
+        Some("wA"),
+        "its own module's LOCAL routine"
+    );
+    assert_eq!(
+        wobj("pB").as_deref(),
+        Some("wB"),
+        "its own module's routine"
+    );
+    assert_eq!(
+        wobj("pC").as_deref(),
+        Some("wB"),
+        "the global one, not A's LOCAL one"
+    );
+}
+
 fn cartesian(program: &Program) -> Vec<(String, [f64; 3])> {
     program
         .files
