@@ -56,6 +56,9 @@ impl Hasher for NameHasher {
 /// A map keyed by names, with [`NameHasher`].
 pub(crate) type NameMap<K, V> = HashMap<K, V, BuildHasherDefault<NameHasher>>;
 
+/// A set hashed as [`NameMap`] hashes its keys.
+pub(crate) type NameSet<K> = std::collections::HashSet<K, BuildHasherDefault<NameHasher>>;
+
 /// A name in the source, compared as the languages compare names. Borrows the source: no copy
 /// per declaration or use.
 #[derive(Clone, Copy, Debug)]

@@ -12,7 +12,7 @@
 //!
 //! [`Usage`]: crate::position::Usage
 
-use crate::names::{NameIndex, NameKey, NameMap, fold, fold_into};
+use crate::names::{NameIndex, NameKey, NameMap, NameSet, fold, fold_into};
 use crate::position::{FrameDecl, FrameName, RunTimeValue};
 use crate::syntax::Span;
 
@@ -358,7 +358,7 @@ pub(crate) struct Binder<'f, 'a> {
     /// pass the same few speeds, zones and tools (`v1000, z10, tGun`), which are no target,
     /// and folding and looking each up again was a third of the pass. The file's bytes are
     /// hashed as they are, not folded.
-    misses: std::collections::HashSet<(usize, &'a [u8]), MissHasher>,
+    misses: NameSet<(usize, &'a [u8])>,
     /// The routines of each name: (file, index, local), in file order and each file's order.
     /// A call's routine was found by scanning every routine of the program, per call:
     /// quadratic in a task of many routines calling each other (3,000 routines: 4 G
@@ -371,9 +371,6 @@ pub(crate) struct Binder<'f, 'a> {
 
 /// A callee's name as written in a file, and the routine it names there (file, index), if any.
 type LastCallee<'a> = (usize, &'a [u8], Option<(usize, usize)>);
-
-/// The hasher of [`Binder`]'s misses.
-type MissHasher = std::hash::BuildHasherDefault<crate::names::NameHasher>;
 
 impl<'f, 'a> Binder<'f, 'a> {
     /// A binder over the targets of `files` (indexed once).
@@ -489,27 +486,26 @@ impl<'f, 'a> Binder<'f, 'a> {
                 };
             // `reach` of a reference written as `raw` in the file, folded only when it may
             // reach something: a parameter, or a target `misses` does not know it misses.
-            let reach_raw =
-                |raw: &'a [u8],
-                 buf: &mut String,
-                 misses: &mut std::collections::HashSet<(usize, &'a [u8]), MissHasher>,
-                 targets: &mut Vec<TargetAt>,
-                 params: &mut Vec<ParamAt>| {
-                    if !own_params.is_empty()
-                        && let Some(p) = param_of(fold_into(buf, raw))
-                    {
-                        params.push(p);
-                        return;
-                    }
-                    if misses.contains(&(m, raw)) {
-                        return;
-                    }
-                    let before = targets.len();
-                    lookup(naming, index, &exported, m, fold_into(buf, raw), targets);
-                    if targets.len() == before {
-                        misses.insert((m, raw));
-                    }
-                };
+            let reach_raw = |raw: &'a [u8],
+                             buf: &mut String,
+                             misses: &mut NameSet<(usize, &'a [u8])>,
+                             targets: &mut Vec<TargetAt>,
+                             params: &mut Vec<ParamAt>| {
+                if !own_params.is_empty()
+                    && let Some(p) = param_of(fold_into(buf, raw))
+                {
+                    params.push(p);
+                    return;
+                }
+                if misses.contains(&(m, raw)) {
+                    return;
+                }
+                let before = targets.len();
+                lookup(naming, index, &exported, m, fold_into(buf, raw), targets);
+                if targets.len() == before {
+                    misses.insert((m, raw));
+                }
+            };
             let callee = u.callee.and_then(|c| {
                 let name = c.slice(src);
                 match *last_callee {

@@ -113,9 +113,12 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
     out
 }
 
-/// The quaternion's length, as the lints measure it.
-fn norm(q: [f64; 4]) -> f64 {
-    q.iter().map(|v| v * v).sum::<f64>().sqrt()
+use crate::transform::policy::quaternion_norm as norm;
+
+/// Whether a quaternion of this length passes the lints: not `[0,0,0,0]` and normalised
+/// (written so that a NaN length does not pass).
+fn norm_passes_lints(norm: f64) -> bool {
+    norm != 0.0 && (norm - 1.0).abs() <= QUATERNION_NORM_TOLERANCE
 }
 
 /// What the lints say of a written quaternion: a note for `[0,0,0,0]`, a warning when it is
@@ -162,11 +165,7 @@ fn quaternion_finding(
 pub fn values_pass_lints(orient: Option<&Orientation>, config: &Config) -> bool {
     let quaternion_passes = orient
         .and_then(Orientation::written_quaternion)
-        .is_none_or(|q| {
-            let norm = norm(q);
-            // Written so that a NaN length does not pass.
-            norm != 0.0 && (norm - 1.0).abs() <= QUATERNION_NORM_TOLERANCE
-        });
+        .is_none_or(|q| norm_passes_lints(norm(q)));
     quaternion_passes && crate::transform::policy::implausible_values(orient, config).is_none()
 }
 
@@ -176,10 +175,7 @@ pub fn values_pass_lints(orient: Option<&Orientation>, config: &Config) -> bool 
 pub(crate) fn robtarget_values_pass_lints(q: [f64; 4], cf: [f64; 4]) -> bool {
     use crate::transform::policy::{plausible_cf, plausible_quaternion_norm};
     let norm = norm(q);
-    norm != 0.0
-        && (norm - 1.0).abs() <= QUATERNION_NORM_TOLERANCE
-        && plausible_quaternion_norm(norm)
-        && cf.into_iter().all(plausible_cf)
+    norm_passes_lints(norm) && plausible_quaternion_norm(norm) && cf.into_iter().all(plausible_cf)
 }
 
 /// A failed round trip, as an error.

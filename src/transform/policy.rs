@@ -326,6 +326,12 @@ pub(crate) fn implausible_literal(file: &ParsedFile, p: &Position) -> Option<Str
     implausible_fields(file, p.span, orient, &p.config)
 }
 
+/// The length of a written quaternion, as the lints and the plausibility checks measure it.
+#[inline]
+pub(crate) fn quaternion_norm(q: [f64; 4]) -> f64 {
+    q.iter().map(|v| v * v).sum::<f64>().sqrt()
+}
+
 /// Whether a written quaternion of this (non-zero) length is a rotation.
 #[inline]
 pub(crate) fn plausible_quaternion_norm(norm: f64) -> bool {
@@ -382,7 +388,7 @@ pub(crate) fn implausible_values(
         }
         Some(o @ Orientation::Quaternion(_)) => {
             if let Some(q) = o.written_quaternion() {
-                let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+                let norm = quaternion_norm(q);
                 if norm != 0.0 && !plausible_quaternion_norm(norm) {
                     return Some(format!(
                         "has a quaternion of length {norm:.4}: not a rotation"

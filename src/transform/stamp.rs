@@ -669,6 +669,27 @@ struct Alike {
 }
 
 impl Alike {
+    /// The stretch the original from `b_from` and the output from `a_from` hold alike, from the
+    /// byte before those places (the scanner reads it); `None` at the start of just one of the
+    /// files, where there is no byte before to compare.
+    #[inline]
+    fn at(b_from: usize, a_from: usize, original: &[u8], output: &[u8]) -> Option<Alike> {
+        if (b_from == 0) != (a_from == 0) {
+            return None;
+        }
+        let (lo, lo_out) = (b_from.saturating_sub(1), a_from.saturating_sub(1));
+        let len = common_len(
+            original.get(lo..).unwrap_or(&[]),
+            output.get(lo_out..).unwrap_or(&[]),
+        );
+        Some(Alike {
+            delta: lo_out as isize - lo as isize,
+            start: lo,
+            end: lo + len,
+            to_the_end: lo + len == original.len() && lo_out + len == output.len(),
+        })
+    }
+
     /// The output's next literal (or its end, `Some(None)`) when the scan of the original that
     /// went from `b_from` to `b` read only bytes the output holds the same from `a_from` on:
     /// the scanner keeps nothing but its place, and reads from the byte before its place up to
@@ -690,16 +711,7 @@ impl Alike {
         let delta = lo_out as isize - lo as isize;
         // A stretch found from an earlier place with the same delta ends where it ended.
         if delta != self.delta || lo < self.start || lo >= self.end {
-            let len = common_len(
-                original.get(lo..).unwrap_or(&[]),
-                output.get(lo_out..).unwrap_or(&[]),
-            );
-            *self = Alike {
-                delta,
-                start: lo,
-                end: lo + len,
-                to_the_end: lo + len == original.len() && lo_out + len == output.len(),
-            };
+            *self = Alike::at(b_from, a_from, original, output)?;
         }
         let moved = |t: NumberToken| NumberToken {
             start: t.start.wrapping_add_signed(delta),
@@ -946,16 +958,10 @@ fn carry_unstamped(original: &[u8], output: Vec<u8>) -> CarriedPrecision {
     let mut lists: [Vec<i8>; 3] = Default::default();
     loop {
         let (b_from, a_from) = (before.i, after.i);
-        // The stretch the two scans are alike in from here on: from the byte before their
-        // places (the scanner reads it), none at the start of just one of the files.
-        let (lo, lo_out) = (b_from.saturating_sub(1), a_from.saturating_sub(1));
-        let (end, to_the_end) = if (b_from == 0) == (a_from == 0) {
-            let len = common_len(&original[lo..], &output[lo_out..]);
-            let to_the_end = lo + len == original.len() && lo_out + len == output.len();
-            (lo + len, to_the_end)
-        } else {
-            (lo, false)
-        };
+        // The stretch the two scans are alike in from here on (none at the start of just one
+        // of the files).
+        let (end, to_the_end) = Alike::at(b_from, a_from, original, &output)
+            .map_or((b_from.saturating_sub(1), false), |a| (a.end, a.to_the_end));
         // The original's literals that end inside it (with the byte after them) are the
         // output's too: counted only.
         let mut from = b_from;
