@@ -74,7 +74,7 @@ pub fn parse_task(files: Vec<(PathBuf, Vec<u8>)>) -> Vec<ParsedFile> {
     for ((_, source), lines) in files.iter().zip(&lines) {
         let mut extractor = positions::Extractor::new(lines, source);
         let p = parser::parse_streamed(source, &mut |s: parser::Statement<'_>| {
-            extractor.statement(s.src, s.arena, s.stmt, s.span)
+            extractor.statement(s)
         });
         parsed.push((p.round_trip, p.diagnostics, p.opaque));
         extractors.push((extractor, source.as_slice()));

@@ -7,7 +7,7 @@
 //! further down the module.
 
 use super::expr::{Arena, ExprKind};
-use super::parser::Stmt;
+use super::parser::{RobtargetLiteral, Statement, Stmt};
 use crate::names::{NameKey, NameMap};
 use crate::position::{
     Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Name, NumField, OffsetCall,
@@ -426,15 +426,23 @@ impl<'l> Extractor<'l> {
     /// [`Extractor::position`] and [`Extractor::push`] give for it, without building a
     /// [`Position`]. `false` (nothing pushed) for any other shape, which the general path reads.
     fn push_read_again(&mut self, src: &[u8], arena: &Arena, id: u32, name: Span) -> bool {
-        /// More external axes than a controller has go to the general path.
-        const MAX_AXES: usize = 12;
-        let name_text = name.slice(src);
-        let Some(n) = arena.get(id).filter(|n| n.kind == ExprKind::Aggregate) else {
-            return false;
-        };
-        if !name_text.is_ascii() {
+        if !name.slice(src).is_ascii() {
             return false;
         }
+        let Some(literal) = Self::literal_in(arena, id) else {
+            return false;
+        };
+        self.push_literal(src, &literal, name);
+        // Every test run holds the packed target to what the general path reads.
+        #[cfg(debug_assertions)]
+        self.assert_read_as_general(src, arena, id, name);
+        true
+    }
+
+    /// The robtarget literal at `id` as [`Parser::robtarget_literal`](super::parser) reads
+    /// it, from the arena: four parts, all literals the numeric scan read that pack.
+    fn literal_in(arena: &Arena, id: u32) -> Option<RobtargetLiteral> {
+        let n = arena.get(id).filter(|n| n.kind == ExprKind::Aggregate)?;
         // Each child of `part` a literal read while scanning, that packs: their starts.
         let starts = |part: Option<u32>, out: &mut [usize]| -> Option<usize> {
             let part = arena.get(part?).filter(|n| n.kind == ExprKind::Aggregate)?;
@@ -449,22 +457,20 @@ impl<'l> Extractor<'l> {
             }
             Some(count)
         };
+        let mut literal = RobtargetLiteral::EMPTY;
         let mut parts = arena.children(id);
-        let (mut trans, mut quaternion, mut quadrants) = ([0; 3], [0; 4], [0; 4]);
-        let mut extax = [0; MAX_AXES];
         let (Some(3), Some(4), Some(4), Some(axes), None) = (
-            starts(parts.next(), &mut trans),
-            starts(parts.next(), &mut quaternion),
-            starts(parts.next(), &mut quadrants),
-            starts(parts.next(), &mut extax),
+            starts(parts.next(), &mut literal.trans),
+            starts(parts.next(), &mut literal.quaternion),
+            starts(parts.next(), &mut literal.quadrants),
+            starts(parts.next(), &mut literal.extax),
             parts.next(),
         ) else {
-            return false;
+            return None;
         };
         // The values the lints' verdict reads, of the four literals of a part just read (read
         // here rather than while gathering the starts, which slowed every part's loop more).
-        let values = |part: Option<u32>| -> [f64; 4] {
-            let mut out = [f64::NAN; 4];
+        let values = |part: Option<u32>, out: &mut [f64; 4]| {
             for (o, c) in out
                 .iter_mut()
                 .zip(part.map(|p| arena.children(p)).into_iter().flatten())
@@ -474,39 +480,48 @@ impl<'l> Extractor<'l> {
                     .and_then(|n| arena.lit(n))
                     .map_or(f64::NAN, |l| l.value());
             }
-            out
         };
         let mut parts = arena.children(id).skip(1);
-        let (q, cf) = (values(parts.next()), values(parts.next()));
-        let span = n.span();
-        let (line, column) = self.lines.line_col(span.start);
+        values(parts.next(), &mut literal.q);
+        values(parts.next(), &mut literal.cf);
+        literal.axes = axes;
+        literal.span = n.span();
+        Some(literal)
+    }
+
+    /// Packs robtarget `literal` declared as `name` (ASCII).
+    fn push_literal(&mut self, src: &[u8], literal: &RobtargetLiteral, name: Span) {
+        let (line, column) = self.lines.line_col(literal.span.start);
         self.positions.push_read_again(&ReadAgainTarget {
-            span,
+            span: literal.span,
             kind: PositionKind::Robtarget,
-            name: Some(name_text),
+            name: Some(name.slice(src)),
             line,
             column,
-            trans,
-            quaternion,
-            quadrants,
-            extax: &extax[..axes],
-            values_pass_lints: crate::report::check::robtarget_values_pass_lints(q, cf),
+            trans: literal.trans,
+            quaternion: literal.quaternion,
+            quadrants: literal.quadrants,
+            extax: &literal.extax[..literal.axes],
+            values_pass_lints: crate::report::check::robtarget_values_pass_lints(
+                literal.q, literal.cf,
+            ),
         });
-        // Every test run holds the packed target to what the general path reads.
-        #[cfg(debug_assertions)]
-        {
-            let general = self.position(
-                src,
-                arena,
-                id,
-                PositionKind::Robtarget,
-                Some(text_of(src, name)),
-            );
-            assert!(!self.read_elsewhere.replace(false));
-            let last = self.positions.len() - 1;
-            assert_eq!(self.positions.get(last, src), general);
-        }
-        true
+    }
+
+    /// Asserts that the target last pushed is what the general path reads of the robtarget
+    /// at `id` declared as `name`.
+    #[cfg(debug_assertions)]
+    fn assert_read_as_general(&mut self, src: &[u8], arena: &Arena, id: u32, name: Span) {
+        let general = self.position(
+            src,
+            arena,
+            id,
+            PositionKind::Robtarget,
+            Some(text_of(src, name)),
+        );
+        assert!(!self.read_elsewhere.replace(false));
+        let last = self.positions.len() - 1;
+        assert_eq!(self.positions.get(last, src), general);
     }
 
     /// The elements of a declared value with `dims` array dimensions, with their 1-based
@@ -938,7 +953,14 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
 }
 
 impl Extractor<'_> {
-    pub(super) fn statement(&mut self, src: &[u8], arena: &Arena, stmt: &Stmt, span: Span) {
+    pub(super) fn statement(&mut self, statement: Statement<'_>) {
+        let Statement {
+            src,
+            arena,
+            stmt,
+            span,
+            literal,
+        } = statement;
         match *stmt {
             Stmt::Decl {
                 type_name,
@@ -953,7 +975,16 @@ impl Extractor<'_> {
                     self.current = None;
                 }
                 let before = self.positions.len();
-                self.statement_decl(src, arena, type_name, name, dims, init, module_scope);
+                self.statement_decl(
+                    src,
+                    arena,
+                    type_name,
+                    name,
+                    dims,
+                    init,
+                    literal,
+                    module_scope,
+                );
                 let exported = module_scope && !local;
                 self.exported.resize(before, false);
                 self.exported.resize(self.positions.len(), exported);
@@ -1027,6 +1058,7 @@ impl Extractor<'_> {
         name: Span,
         dims: u8,
         init: Option<u32>,
+        literal: Option<&RobtargetLiteral>,
         module_scope: bool,
     ) {
         {
@@ -1061,6 +1093,16 @@ impl Extractor<'_> {
                 } else {
                     None
                 };
+                if let Some(literal) = literal {
+                    // Read by the parser's fast path, which the arena's value (debug builds
+                    // only) must match.
+                    self.push_literal(src, literal, name);
+                    #[cfg(debug_assertions)]
+                    if let Some(id) = init {
+                        self.assert_read_as_general(src, arena, id, name);
+                    }
+                    return;
+                }
                 if target_kind == Some(PositionKind::Robtarget)
                     && dims == 0
                     && init.is_some_and(|id| self.push_read_again(src, arena, id, name))
@@ -1247,6 +1289,119 @@ mod tests {
             assert_eq!(&*fast.name, latin1(bytes));
         }
         assert!(texts.get(b"wHeld").robhold && !texts.get(b"wCar").robhold);
+    }
+
+    /// What the extractor makes of one module read with or without the parser's fast paths:
+    /// the targets, their usage and what the extractor and parser report.
+    type Read = (Vec<(Option<crate::position::Position>, String)>, String);
+
+    fn extracted(src: &[u8], fast: bool) -> Read {
+        let lines = LineIndex::new(src);
+        let mut x = Extractor::new(&lines, src);
+        let mut sink = |s: Statement<'_>| x.statement(s);
+        let parse = if fast {
+            crate::rapid::parser::parse_streamed(src, &mut sink)
+        } else {
+            crate::rapid::parser::parse_streamed_plain(src, &mut sink)
+        };
+        let out = finish_task(vec![(x, src)]).remove(0);
+        let targets = (0..out.positions.len())
+            .map(|i| {
+                let usage = format!("{:?}", out.positions.usage(i));
+                (out.positions.get(i, src), usage)
+            })
+            .collect();
+        let report = format!(
+            "{:?}\n{:?}\n{:?}",
+            parse.diagnostics, out.diagnostics, out.frames
+        );
+        (targets, report)
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig {
+            cases: 512, ..proptest::prelude::ProptestConfig::default()
+        })]
+        /// Robtarget declarations of the fast path's shape and of shapes it leaves to the
+        /// general path, one after another (so that the literals it remembers per field are
+        /// followed by other texts there, `0` by `0.5`): the same targets and reports either
+        /// way.
+        #[test]
+        fn declared_targets_read_alike_with_and_without_the_fast_paths(
+            decls in proptest::collection::vec(declaration(), 1..8),
+        ) {
+            let mut src = b"MODULE M\r\n".to_vec();
+            for d in &decls {
+                src.extend_from_slice(d);
+            }
+            src.extend_from_slice(b"PROC main()\r\n  MoveL p1, v10, z1, tool0;\r\nENDPROC\r\nENDMODULE\r\n");
+            let fast = extracted(&src, true);
+            let plain = extracted(&src, false);
+            proptest::prop_assert_eq!(fast, plain);
+        }
+    }
+
+    fn declaration() -> impl proptest::strategy::Strategy<Value = Vec<u8>> {
+        use proptest::prelude::*;
+        // Mostly literals the fast path reads, some that share a head with another (`0`,
+        // `0.5`), a few it leaves to the general path.
+        let number = prop_oneof![
+            12 => proptest::sample::select(vec![
+                "0", "0.5", "-0.5", ".5", "5.", "+1", "9E+09", "9E9", "9e+9", "9E09",
+                "1.50E+2", "0.707107", "-0.707107", "-1520.30", "0.000000", "1", "-1",
+                "0.3826834323650898",
+            ]),
+            1 => proptest::sample::select(vec![
+                "12345678901234567890", "1E", "1.2.3", "x", "1E-9000", "-0.38268343236508977",
+            ]),
+        ];
+        let sep = proptest::sample::select(vec![",", " , ", ",\r\n    ", ",\t"]);
+        // The four parts' lengths of a robtarget, or any others.
+        let lengths = prop_oneof![
+            6 => (1usize..=13).prop_map(|axes| vec![3, 4, 4, axes]),
+            1 => proptest::collection::vec(0usize..14, 3..6),
+        ];
+        let parts = (lengths, sep)
+            .prop_flat_map(move |(lengths, sep)| {
+                let parts: Vec<_> = lengths
+                    .into_iter()
+                    .map(|n| proptest::collection::vec(number.clone(), n))
+                    .collect();
+                (parts, Just(sep))
+            })
+            .prop_map(|(parts, sep)| {
+                parts
+                    .iter()
+                    .map(|ns| format!("[{}]", ns.join(sep)))
+                    .collect::<Vec<_>>()
+                    .join(",")
+            });
+        let head = prop_oneof![
+            6 => Just("CONST robtarget p1"),
+            1 => proptest::sample::select(vec![
+            "PERS ROBTARGET p_2",
+            "VAR robtarget p\u{c4}",
+            "CONST robtarget pa{2}",
+            "LOCAL CONST robtarget p3",
+            "CONST jointtarget j1",
+        ]),
+        ];
+        let tail = prop_oneof![
+            6 => Just(";"),
+            1 => proptest::sample::select(vec![" ;", " ! c\r\n;", ".trans;", " + p1;", ""]),
+        ];
+        (head, parts, tail, proptest::bool::weighted(0.9)).prop_map(|(head, parts, tail, wrap)| {
+            let value = if wrap { format!("[{parts}]") } else { parts };
+            // `Ä` as Latin-1, the way a controller writes it.
+            let head = head.replace('\u{c4}', "\u{1}");
+            let mut line = format!("  {head}:={value}{tail}\r\n").into_bytes();
+            for b in &mut line {
+                if *b == 1 {
+                    *b = 0xc4;
+                }
+            }
+            line
+        })
     }
 
     #[test]

@@ -96,6 +96,140 @@ impl Parser<'_, '_> {
         Some(root)
     }
 
+    /// Fast path of a scalar robtarget declaration's value, at its `[`: the literal
+    /// `[[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[eax_a,…]]` with one to
+    /// [`MAX_EXTERNAL_AXES`] external axes, blanks between, every number one that
+    /// [`NumLit::parse_prefix`] reads and that packs, and `;` right after it. Read into
+    /// [`Parser::literal`] straight from the bytes, with no expression nodes: the extractor
+    /// packs it as it is (most of a robtarget file is these, and building the nodes to walk
+    /// them once was a fifth of reading the file). On anything else nothing is read and the
+    /// general path reads the value; [`Parser::literal_read_again`] holds the two to the same
+    /// end in every debug build.
+    pub(super) fn robtarget_literal(&mut self) -> bool {
+        let src = self.src;
+        let start = self.tok.start as usize;
+        if src.get(start) != Some(&b'[') {
+            return false;
+        }
+        let blanks = |mut i: usize| {
+            while matches!(src.get(i), Some(b' ' | b'\t' | b'\r' | b'\n')) {
+                i += 1;
+            }
+            i
+        };
+        // Whether a number ends before `at` the way the lexer ends it (a number cut short,
+        // `0` of `0.5`, does not).
+        let ends = |at: usize| {
+            !src.get(at)
+                .is_some_and(|c| c.is_ascii_alphanumeric() || matches!(c, b'_' | b'.'))
+        };
+        // The bracketed list of numbers at `i`: each start into `starts`, as many values as
+        // `values` holds, each literal into `seen` (as far as it holds); how many there are
+        // and the index after the `]`.
+        let list = |i: usize,
+                    starts: &mut [usize],
+                    values: &mut [f64],
+                    seen: &mut [Option<SeenLiteral>]|
+         -> Option<(usize, usize)> {
+            let mut i = blanks(i);
+            if src.get(i) != Some(&b'[') {
+                return None;
+            }
+            i += 1;
+            let mut count = 0;
+            loop {
+                i = blanks(i);
+                let last = seen.get_mut(count);
+                let (number, len) = match last {
+                    Some(Some(s)) if s.at(src, i) && ends(i + s.len) => {
+                        debug_assert_eq!(
+                            format!("{:?}", NumLit::parse_prefix(&src[i..])),
+                            format!("{:?}", Some((s.number, s.len)))
+                        );
+                        (s.number, s.len)
+                    }
+                    _ => {
+                        // Where `numeric_aggregate` reads a number (ended as the lexer ends
+                        // it, below).
+                        if !matches!(src.get(i), Some(b'-' | b'+' | b'0'..=b'9' | b'.')) {
+                            return None;
+                        }
+                        let (number, len) = NumLit::parse_prefix(src.get(i..)?)?;
+                        if !ends(i + len) {
+                            return None;
+                        }
+                        number.pack(len)?;
+                        if let (Some(s), Some(now)) =
+                            (last, SeenLiteral::of(src.get(i..i + len)?, number))
+                        {
+                            *s = Some(now);
+                        }
+                        (number, len)
+                    }
+                };
+                let end = i + len;
+                *starts.get_mut(count)? = i;
+                if let Some(v) = values.get_mut(count) {
+                    *v = number.value();
+                }
+                count += 1;
+                i = blanks(end);
+                match src.get(i)? {
+                    b',' => i += 1,
+                    b']' => return Some((count, i + 1)),
+                    _ => return None,
+                }
+            }
+        };
+        let comma = |i: usize| (src.get(blanks(i)) == Some(&b',')).then(|| blanks(i) + 1);
+        let lit = &mut self.literal;
+        let (trans, rest) = self.seen.split_at_mut(3);
+        let (quaternion, rest) = rest.split_at_mut(4);
+        let (quadrants, extax) = rest.split_at_mut(4);
+        let read = (|| {
+            let (3, i) = list(start + 1, &mut lit.trans, &mut [], trans)? else {
+                return None;
+            };
+            let (4, i) = list(comma(i)?, &mut lit.quaternion, &mut lit.q, quaternion)? else {
+                return None;
+            };
+            let (4, i) = list(comma(i)?, &mut lit.quadrants, &mut lit.cf, quadrants)? else {
+                return None;
+            };
+            let (axes, i) = list(comma(i)?, &mut lit.extax, &mut [], extax)?;
+            let i = blanks(i);
+            (src.get(i) == Some(&b']') && src.get(blanks(i + 1)) == Some(&b';'))
+                .then_some((axes, i + 1))
+        })();
+        let Some((axes, end)) = read else {
+            return false;
+        };
+        lit.axes = axes;
+        lit.span = Span::new(start, end);
+        self.lex.seek(end);
+        self.peeked = None;
+        self.prev_end = end as u32;
+        self.tok = self.next_significant();
+        true
+    }
+
+    /// Reads the value [`Parser::robtarget_literal`] just read again, with the general fast
+    /// path, and asserts that it ends where that one did: the arena's node of the value.
+    #[cfg(debug_assertions)]
+    pub(super) fn literal_read_again(&mut self) -> u32 {
+        let after = (self.tok, self.prev_end);
+        let start = self.literal.span.start as u32;
+        self.tok = Token {
+            kind: TokenKind::Punct,
+            keyword: false,
+            start,
+            end: start + 1,
+        };
+        let id = self.numeric_aggregate();
+        assert_eq!((self.tok, self.prev_end), after);
+        id.unwrap_or(NONE)
+    }
+
     // ---- expressions --------------------------------------------------------------------
 
     /// `expr = unary { binop unary }` with

@@ -177,15 +177,17 @@ impl Parser<'_, '_> {
     ///              [ ":=" expr ] ";" | "ALIAS" type ident ";"`, with rule `dims`.
     pub(super) fn data_decl(&mut self, start: u32, module_scope: bool) {
         match self.data_decl_inner(module_scope) {
-            Ok(stmt) => {
+            Ok((stmt, literal)) => {
                 self.leaf(NodeKind::DataDecl, start);
-                self.emit(stmt, start);
+                self.emit_with(stmt, start, literal);
             }
             Err(e) => self.recover(start, e),
         }
     }
 
-    pub(super) fn data_decl_inner(&mut self, module_scope: bool) -> PResult<Stmt> {
+    /// The declaration, and whether its value is the robtarget literal the fast path read
+    /// ([`Parser::robtarget_literal`], into [`Parser::literal`]).
+    pub(super) fn data_decl_inner(&mut self, module_scope: bool) -> PResult<(Stmt, bool)> {
         let local = self.at_kw(b"LOCAL");
         if self.at_any(&[b"LOCAL", b"TASK"]) {
             self.bump();
@@ -215,12 +217,26 @@ impl Parser<'_, '_> {
             }
         }
         let mut init = None;
+        let mut literal = false;
         if self.tok.kind == TokenKind::Assign {
             self.bump();
-            init = Some(self.expr()?);
+            literal = dims == 0
+                && self.fast_paths
+                && self.text(ty).eq_ignore_ascii_case(b"robtarget")
+                && self.text(name).is_ascii()
+                && self.robtarget_literal();
+            if !literal {
+                init = Some(self.expr()?);
+            }
+            // Every test run holds the fast path to the general one: the same end, and the
+            // arena's value for the extractor to compare with.
+            #[cfg(debug_assertions)]
+            if literal {
+                init = Some(self.literal_read_again());
+            }
         }
         self.expect_punct(b';', "`;` at the end of the declaration")?;
-        Ok(Stmt::Decl {
+        let stmt = Stmt::Decl {
             storage,
             type_name: ty.span(),
             name: name.span(),
@@ -228,7 +244,8 @@ impl Parser<'_, '_> {
             init,
             module_scope,
             local,
-        })
+        };
+        Ok((stmt, literal))
     }
 
     /// `record = [ "LOCAL" | "TASK" ] "RECORD" ident { type ident ";" } "ENDRECORD"`

@@ -72,7 +72,85 @@ pub(crate) struct Statement<'e> {
     pub arena: &'e Arena,
     pub stmt: &'e Stmt,
     pub span: Span,
+    /// A [`Stmt::Decl`]'s robtarget value, when the declaration fast path read it: then the
+    /// value is not in the arena (release builds give no `init`).
+    pub literal: Option<&'e RobtargetLiteral>,
 }
+
+/// More external axes than a controller has are left to the general path.
+pub(crate) const MAX_EXTERNAL_AXES: usize = 12;
+
+/// A scalar robtarget's value `[[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[eax_a,…]]` as the
+/// declaration fast path ([`Parser::robtarget_literal`]) reads it: where it is, where each
+/// number starts, and the values the lints' verdict needs. Every number is a literal that
+/// [`NumLit::parse_prefix`] reads and that fits the compact form ([`NumLit::pack`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RobtargetLiteral {
+    /// From its `[` to its `]`.
+    pub span: Span,
+    pub trans: [usize; 3],
+    pub quaternion: [usize; 4],
+    pub quadrants: [usize; 4],
+    /// The first `axes` are the external axes' starts.
+    pub extax: [usize; MAX_EXTERNAL_AXES],
+    pub axes: usize,
+    /// The values of the quaternion's and the configuration's literals.
+    pub q: [f64; 4],
+    pub cf: [f64; 4],
+}
+
+impl RobtargetLiteral {
+    pub(crate) const EMPTY: RobtargetLiteral = RobtargetLiteral {
+        span: Span { start: 0, end: 0 },
+        trans: [0; 3],
+        quaternion: [0; 4],
+        quadrants: [0; 4],
+        extax: [0; MAX_EXTERNAL_AXES],
+        axes: 0,
+        q: [f64::NAN; 4],
+        cf: [f64::NAN; 4],
+    };
+}
+
+/// A literal [`Parser::robtarget_literal`] read at one place of a robtarget (a part's field):
+/// the next target's literal there is often the same text (`9E+09`, the orientation and
+/// configuration of a run of targets), and comparing up to 16 bytes is a fraction of reading
+/// and packing it again.
+#[derive(Clone, Copy, Debug)]
+struct SeenLiteral {
+    /// The text's bytes, little-endian, and the mask of its length.
+    text: u128,
+    mask: u128,
+    len: usize,
+    number: NumLit,
+}
+
+impl SeenLiteral {
+    /// The literal of `text`, which `number` is (and which packs), if it is 16 bytes or fewer.
+    fn of(text: &[u8], number: NumLit) -> Option<SeenLiteral> {
+        let len = text.len();
+        let mut bytes = [0u8; 16];
+        bytes.get_mut(..len)?.copy_from_slice(text);
+        Some(SeenLiteral {
+            text: u128::from_le_bytes(bytes),
+            mask: u128::MAX.checked_shr(8 * (16 - len) as u32).unwrap_or(0),
+            len,
+            number,
+        })
+    }
+
+    /// Whether `src` holds this text at `i` (with 16 bytes to read there).
+    #[inline]
+    fn at(&self, src: &[u8], i: usize) -> bool {
+        src.get(i..)
+            .and_then(|rest| rest.first_chunk::<16>())
+            .is_some_and(|w| u128::from_le_bytes(*w) & self.mask == self.text)
+    }
+}
+
+/// The fields of a robtarget literal [`Parser::robtarget_literal`] remembers a literal of:
+/// translation, quaternion, configuration and external axes.
+const SEEN_FIELDS: usize = 3 + 4 + 4 + MAX_EXTERNAL_AXES;
 
 /// What [`parse`] hands statements to: any `FnMut(Statement)` or [`crate::syntax::NoSink`].
 pub(crate) type StatementSink<'s> = dyn for<'e> Sink<Statement<'e>> + 's;
@@ -114,6 +192,15 @@ pub(crate) fn parse_streamed(src: &[u8], sink: &mut StatementSink<'_>) -> Parse 
     parse_into(src, sink, TreeBuilder::verifying())
 }
 
+/// [`parse_streamed`] on the general paths alone: what the tests hold the fast paths to.
+#[cfg(test)]
+pub(crate) fn parse_streamed_plain(src: &[u8], sink: &mut StatementSink<'_>) -> Parse {
+    let mut p = Parser::new(src, sink, TreeBuilder::verifying());
+    p.fast_paths = false;
+    p.file();
+    p.finish()
+}
+
 fn parse_into(src: &[u8], sink: &mut StatementSink<'_>, tree: TreeBuilder<Rapid>) -> Parse {
     if let Some(refused) = crate::syntax::too_large(src) {
         return Parse {
@@ -148,6 +235,11 @@ struct Parser<'a, 's> {
     /// Use the fast paths [`Parser::numeric_aggregate`] and [`Parser::plain_call_args`] (off
     /// only in tests that compare them with the general path).
     fast_paths: bool,
+    /// What [`Parser::robtarget_literal`] last read (reused: it is most of a robtarget file's
+    /// declarations).
+    literal: RobtargetLiteral,
+    /// The literal it last read at each field.
+    seen: [Option<SeenLiteral>; SEEN_FIELDS],
     sink: &'s mut StatementSink<'s>,
 }
 
@@ -280,6 +372,8 @@ impl<'a, 's> Parser<'a, 's> {
             depth: 0,
             reported_unknown: None,
             fast_paths: true,
+            literal: RobtargetLiteral::EMPTY,
+            seen: [None; SEEN_FIELDS],
             sink,
         };
         p.tok = p.next_significant();
@@ -432,12 +526,18 @@ impl<'a, 's> Parser<'a, 's> {
     }
 
     fn emit(&mut self, stmt: Stmt, start: u32) {
+        self.emit_with(stmt, start, false);
+    }
+
+    /// [`Parser::emit`], handing on [`Parser::literal`] too when `literal`.
+    fn emit_with(&mut self, stmt: Stmt, start: u32, literal: bool) {
         let span = Span::new(start as usize, self.prev_end as usize);
         self.sink.accept(Statement {
             src: self.src,
             arena: &self.arena,
             stmt: &stmt,
             span,
+            literal: literal.then_some(&self.literal),
         });
     }
 
