@@ -1291,10 +1291,10 @@ mod tests {
         assert!(texts.get(b"wHeld").robhold && !texts.get(b"wCar").robhold);
     }
 
-    /// What the extractor makes of one module read with or without the parser's fast paths:
-    /// the targets, their usage and what the extractor and parser report.
+    /// Targets with their usage (as `Debug` text), and the parser's and extractor's reports.
     type Read = (Vec<(Option<crate::position::Position>, String)>, String);
 
+    /// What the extractor makes of one module read with or without the parser's fast paths.
     fn extracted(src: &[u8], fast: bool) -> Read {
         let lines = LineIndex::new(src);
         let mut x = Extractor::new(&lines, src);

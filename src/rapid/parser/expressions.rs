@@ -159,9 +159,7 @@ impl Parser<'_, '_> {
                             return None;
                         }
                         number.pack(len)?;
-                        if let (Some(s), Some(now)) =
-                            (last, SeenLiteral::of(src.get(i..i + len)?, number))
-                        {
+                        if let (Some(s), Some(now)) = (last, SeenLiteral::of(src, i, len, number)) {
                             *s = Some(now);
                         }
                         (number, len)

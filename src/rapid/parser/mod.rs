@@ -126,14 +126,15 @@ struct SeenLiteral {
 }
 
 impl SeenLiteral {
-    /// The literal of `text`, which `number` is (and which packs), if it is 16 bytes or fewer.
-    fn of(text: &[u8], number: NumLit) -> Option<SeenLiteral> {
-        let len = text.len();
-        let mut bytes = [0u8; 16];
-        bytes.get_mut(..len)?.copy_from_slice(text);
+    /// The literal `number` (which packs) of the `len` bytes at `i` of `src`, when they are 16
+    /// or fewer and 16 bytes can be read there, as [`SeenLiteral::at`] reads them (the word is
+    /// masked, not copied: a copy of a variable length was a call to memcpy per literal).
+    fn of(src: &[u8], i: usize, len: usize, number: NumLit) -> Option<SeenLiteral> {
+        let word = src.get(i..)?.first_chunk::<16>()?;
+        let mask = u128::MAX.checked_shr(8 * 16usize.checked_sub(len)? as u32)?;
         Some(SeenLiteral {
-            text: u128::from_le_bytes(bytes),
-            mask: u128::MAX.checked_shr(8 * (16 - len) as u32).unwrap_or(0),
+            text: u128::from_le_bytes(*word) & mask,
+            mask,
             len,
             number,
         })
