@@ -12,7 +12,7 @@
 //!
 //! [`Usage`]: crate::position::Usage
 
-use crate::names::{NameIndex, NameKey, NameMap, NameSet, fold, fold_into};
+use crate::names::{FirstLetters, NameIndex, NameKey, NameMap, NameSet, fold, fold_into};
 use crate::position::{FrameDecl, FrameName, RunTimeValue};
 use crate::syntax::Span;
 
@@ -364,6 +364,9 @@ pub(crate) struct Binder<'f, 'a> {
     /// quadratic in a task of many routines calling each other (3,000 routines: 4 G
     /// instructions).
     routines: NameMap<NameKey<'a>, Vec<(usize, usize, bool)>>,
+    /// The first letters of the targets' names: a reference starting with none of them is
+    /// not looked up.
+    first_letters: FirstLetters,
     /// The callee last looked up (file, name as written) and what it found: a module's motions
     /// call the same instruction one after another.
     last_callee: Option<LastCallee<'a>>,
@@ -377,10 +380,12 @@ impl<'f, 'a> Binder<'f, 'a> {
     pub(crate) fn new(files: &'f mut [FileFacts<'a>], naming: &Naming) -> Binder<'f, 'a> {
         let total: usize = files.iter().map(|f| f.positions.len()).sum();
         let mut index = NameIndex::builder(naming.open, total);
+        let mut first_letters = FirstLetters::new();
         for (m, f) in files.iter().enumerate() {
             for i in 0..f.positions.len() {
                 if let (Some(n), Some(at)) = (f.positions.name(i), indexed((m, i))) {
                     index.insert(n, at);
+                    first_letters.insert(n);
                 }
             }
         }
@@ -407,6 +412,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             hits: Vec::new(),
             misses: Default::default(),
             routines,
+            first_letters,
             last_callee: None,
         }
     }
@@ -433,6 +439,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             hits,
             misses,
             routines,
+            first_letters,
             last_callee,
         } = self;
         let naming = &*naming;
@@ -497,7 +504,7 @@ impl<'f, 'a> Binder<'f, 'a> {
                     params.push(p);
                     return;
                 }
-                if misses.contains(&(m, raw)) {
+                if !first_letters.may_start(raw) || misses.contains(&(m, raw)) {
                     return;
                 }
                 let before = targets.len();
