@@ -131,6 +131,29 @@ impl<'a> Lexer<'a> {
         self.line_start = false;
     }
 
+    /// Steps over the blanks and line ends at the place, which would lex as whitespace and
+    /// newline tokens, without making a token of each: the parser drops them, and two or
+    /// three per line (the line end and the indentation) were a fifth of its lexing. The
+    /// lexer is left as those tokens leave it. Not inside a header, whose lines are read
+    /// whole, blanks included.
+    pub(crate) fn skip_blanks(&mut self) {
+        if self.in_header {
+            return;
+        }
+        let mut line_start = self.line_start;
+        let mut i = self.pos;
+        while let Some(&c) = self.src.get(i) {
+            match c {
+                b'\n' | b'\r' => line_start = true,
+                b' ' | b'\t' | 0x0C | 0x1A => {}
+                _ => break,
+            }
+            i += 1;
+        }
+        self.pos = i;
+        self.line_start = line_start;
+    }
+
     fn token(&mut self, kind: TokenKind, len: usize) -> Token {
         let start = self.pos;
         self.pos = (start + len).min(self.src.len());
@@ -440,6 +463,37 @@ mod tests {
                 kw[at] = c;
                 proptest::prop_assert_eq!(is_keyword(&kw), oracle(&kw));
             }
+        }
+    }
+
+    proptest::proptest! {
+        /// Skipping blanks before each token gives the tokens other than blanks and line ends
+        /// that lexing them one by one gives, headers and BOMs included.
+        #[test]
+        fn skipped_blanks_leave_the_other_tokens_as_they_were(
+            parts in proptest::collection::vec(proptest::sample::select(vec![
+                " ", "  ", "\t", "\r", "\n", "\r\n", "\x0c", "%%%", "  %%%", "VERSION:1",
+                "a", "p10", "!c", "\"s\"", ";", ":=", "1.5", "\u{feff}", "x y",
+            ]), 0..24),
+        ) {
+            let src = parts.concat().into_bytes();
+            let significant = |skip: bool| {
+                let mut lex = Lexer::new(&src);
+                let mut out = Vec::new();
+                loop {
+                    if skip {
+                        lex.skip_blanks();
+                    }
+                    let t = lex.next_token();
+                    if t.kind == TokenKind::Eof {
+                        break out;
+                    }
+                    if !matches!(t.kind, TokenKind::Whitespace | TokenKind::Newline) {
+                        out.push(t);
+                    }
+                }
+            };
+            proptest::prop_assert_eq!(significant(true), significant(false));
         }
     }
 

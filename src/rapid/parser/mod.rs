@@ -396,6 +396,7 @@ impl<'a, 's> Parser<'a, 's> {
 
     fn next_significant(&mut self) -> Token {
         loop {
+            self.lex.skip_blanks();
             let t = self.lex.next_token();
             if !t.kind.is_trivia() {
                 return t;
