@@ -148,8 +148,9 @@ impl NumLit {
     /// packed list reads each field of a target again from the source so: through a
     /// [`NumLit`] and `pack`'s checks (which a literal from anywhere needs) the packing cost
     /// half as much again as the reading; what the fast path reads always packs, and its word
-    /// is built from what was read.
-    #[inline]
+    /// is built from what was read. Inlined into the list's reading of each field, as
+    /// `parse_prefix` is into the parser's.
+    #[inline(always)]
     pub(crate) fn parse_packed(bytes: &[u8]) -> Option<(f64, PackedLit)> {
         match Plain::read(bytes) {
             Some(p) => Some((p.value, p.packed()?)),
