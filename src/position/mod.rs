@@ -137,11 +137,17 @@ impl NumField {
     }
 
     /// The field of the literal [`NumLit::parse_prefix`] reads at `start` of `src`, if it
-    /// reads one there that fits the compact form.
-    #[inline]
+    /// reads one there that fits the compact form: [`NumField::new`] of it, the literal
+    /// packed as it is read ([`NumLit::parse_packed`]).
+    #[inline(always)]
     pub(crate) fn read_at(src: &[u8], start: usize) -> Option<NumField> {
-        let (lit, len) = NumLit::parse_prefix(src.get(start..)?)?;
-        NumField::new(Span::new(start, start.checked_add(len)?), lit)
+        let (value, packed) = NumLit::parse_packed(src.get(start..)?)?;
+        start.checked_add(packed.len())?;
+        Some(NumField {
+            value,
+            start: u32::try_from(start).ok()?,
+            packed,
+        })
     }
 
     /// Value and packed style, for [`NumField::from_parts`] (with the start, which

@@ -137,97 +137,34 @@ impl NumLit {
     /// scans its numbers with this hands the literal on instead of having it parsed again.
     #[inline]
     pub fn parse_prefix(bytes: &[u8]) -> Option<(NumLit, usize)> {
-        NumLit::parse_plain(bytes).or_else(|| NumLit::parse_general(bytes))
+        match Plain::read(bytes) {
+            Some(p) => Some((p.lit(), p.len)),
+            None => NumLit::parse_general(bytes),
+        }
     }
 
-    /// [`parse_prefix`](Self::parse_prefix) for the literal nearly every program writes: at
-    /// most 19 digits, no exponent or one of at most 2 digits, and a value Clinger's fast path
-    /// gives exactly (see [`exact_fast_path`]). One pass over the bytes with the digits summed
-    /// as they go; `None` for anything else, which [`parse_general`](Self::parse_general)
-    /// reads (and also for what no path reads, such as `1E`). The general path spent most of
-    /// `check`'s number reading on the cases this leaves to it; inlined into the parser's
-    /// loop, the call's own cost goes too.
-    #[inline]
+    /// The value and the packed literal ([`pack`](Self::pack) with its length) of what
+    /// [`parse_prefix`](Self::parse_prefix) reads; `None` also where that does not pack. A
+    /// packed list reads each field of a target again from the source so: through a
+    /// [`NumLit`] and `pack`'s checks (which a literal from anywhere needs) the packing cost
+    /// half as much again as the reading; what the fast path reads always packs, and its word
+    /// is built from what was read. Inlined into the list's reading of each field, as
+    /// `parse_prefix` is into the parser's.
+    #[inline(always)]
+    pub(crate) fn parse_packed(bytes: &[u8]) -> Option<(f64, PackedLit)> {
+        match Plain::read(bytes) {
+            Some(p) => Some((p.value, p.packed()?)),
+            None => {
+                let (lit, len) = NumLit::parse_general(bytes)?;
+                Some((lit.value, lit.pack(len)?))
+            }
+        }
+    }
+
+    /// The fast path of [`parse_prefix`](Self::parse_prefix) alone ([`Plain::read`]).
+    #[cfg(test)]
     fn parse_plain(bytes: &[u8]) -> Option<(NumLit, usize)> {
-        let (sign, mut i) = match bytes.first() {
-            Some(&s @ (b'+' | b'-')) => (s, 1),
-            _ => (0, 0),
-        };
-        let int_start = i;
-        let mut mantissa = 0u64;
-        // Wrapping: more than 19 digits are refused below, before the sum is used.
-        take_digits(bytes, &mut i, &mut mantissa);
-        let int_digits = i - int_start;
-        let point = bytes.get(i) == Some(&b'.');
-        let mut decimals = 0;
-        if point {
-            i += 1;
-            let frac_start = i;
-            take_digits(bytes, &mut i, &mut mantissa);
-            decimals = i - frac_start;
-        }
-        let digits = int_digits + decimals;
-        if digits == 0 || digits > 19 || mantissa >= 1 << 53 {
-            return None;
-        }
-        let mut exponent = None;
-        if let Some(&letter @ (b'e' | b'E')) = bytes.get(i) {
-            i += 1;
-            let exp_sign = match bytes.get(i) {
-                Some(&s @ (b'+' | b'-')) => {
-                    i += 1;
-                    s
-                }
-                _ => 0,
-            };
-            let exp_start = i;
-            let mut value = 0i8;
-            while let Some(d) = bytes
-                .get(i)
-                .map(|b| b.wrapping_sub(b'0'))
-                .filter(|&d| d <= 9)
-            {
-                if i - exp_start == 2 {
-                    return None;
-                }
-                value = value * 10 + d as i8;
-                i += 1;
-            }
-            if i == exp_start {
-                return None;
-            }
-            exponent = Some(Exponent {
-                value: if exp_sign == b'-' { -value } else { value },
-                upper: letter == b'E',
-                sign: exp_sign,
-                digits: (i - exp_start) as u8,
-            });
-        }
-        let e = exponent.map_or(0, |e| i32::from(e.value));
-        let decimals = decimals as i32;
-        let m = mantissa as f64;
-        let power = e - decimals;
-        let value = match power {
-            0..=22 => m * EXACT_POWERS[power as usize],
-            -22..=-1 => m / EXACT_POWERS[(-power) as usize],
-            _ => return None,
-        };
-        Some((
-            NumLit {
-                value: if sign == b'-' { -value } else { value },
-                // |decimals| ≤ 19 and |e| ≤ 99.
-                precision: (decimals - e) as i16,
-                exponent,
-                style: if sign == b'+' { PLUS } else { 0 }
-                    | if point && int_digits == 0 {
-                        LEADING_POINT
-                    } else {
-                        0
-                    },
-                int_digits: int_digits as u8,
-            },
-            i,
-        ))
+        Plain::read(bytes).map(|p| (p.lit(), p.len))
     }
 
     /// [`parse_prefix`](Self::parse_prefix) for every literal: any number of digits, any
@@ -826,9 +763,277 @@ fn take_digits(bytes: &[u8], i: &mut usize, mantissa: &mut u64) {
     }
 }
 
+/// A literal as the fast path of [`NumLit::parse_prefix`] reads it, which the literal and its
+/// packed word ([`PackedLit`]) are built from: at most 19 digits, no exponent or one of at most
+/// 2 digits, and a value Clinger's fast path gives exactly (see [`exact_fast_path`]).
+#[derive(Clone, Copy)]
+struct Plain {
+    /// The value, with its sign.
+    value: f64,
+    /// The length of the text.
+    len: usize,
+    /// `+`, `-`, or 0 for none.
+    sign: u8,
+    int_digits: u8,
+    point: bool,
+    decimals: u8,
+    exponent: Option<Exponent>,
+}
+
+impl Plain {
+    /// The literal nearly every program writes (see the type), in one pass over the bytes:
+    /// `None` for anything else, which [`NumLit::parse_general`] reads (and also for what no
+    /// path reads, such as `1E`). The general path spent most of `check`'s number reading on
+    /// the cases this leaves to it; inlined into the parser's loop, the call's own cost goes
+    /// too.
+    #[inline(always)]
+    fn read(bytes: &[u8]) -> Option<Plain> {
+        let (sign, int_start) = match bytes.first() {
+            Some(&s @ (b'+' | b'-')) => (s, 1),
+            _ => (0, 0),
+        };
+        let m = Mantissa::read(bytes, int_start);
+        let digits = m.int_digits + m.decimals;
+        // The sum wrapped past 19 digits: refused before it is used.
+        if digits == 0 || digits > 19 || m.value >= 1 << 53 {
+            return None;
+        }
+        let mut i = m.end;
+        let mut exponent = None;
+        if let Some(&letter @ (b'e' | b'E')) = bytes.get(i) {
+            i += 1;
+            let exp_sign = match bytes.get(i) {
+                Some(&s @ (b'+' | b'-')) => {
+                    i += 1;
+                    s
+                }
+                _ => 0,
+            };
+            let exp_start = i;
+            // One digit or two; a third is the general path's.
+            let mut value = digit(bytes, i)?;
+            i += 1;
+            if let Some(d) = digit(bytes, i) {
+                value = value * 10 + d;
+                i += 1;
+                if digit(bytes, i).is_some() {
+                    return None;
+                }
+            }
+            // Below 100.
+            let value = value as i8;
+            exponent = Some(Exponent {
+                value: if exp_sign == b'-' { -value } else { value },
+                upper: letter == b'E',
+                sign: exp_sign,
+                digits: (i - exp_start) as u8,
+            });
+        }
+        let e = exponent.map_or(0, |e| i32::from(e.value));
+        let mantissa = m.value as f64;
+        let power = e - m.decimals as i32;
+        let value = match power {
+            0..=22 => mantissa * EXACT_POWERS[power as usize],
+            -22..=-1 => mantissa / EXACT_POWERS[(-power) as usize],
+            _ => return None,
+        };
+        Some(Plain {
+            value: if sign == b'-' { -value } else { value },
+            len: i,
+            sign,
+            // At most 19 each.
+            int_digits: m.int_digits as u8,
+            point: m.point,
+            decimals: m.decimals as u8,
+            exponent,
+        })
+    }
+
+    fn lit(self) -> NumLit {
+        NumLit {
+            value: self.value,
+            // |decimals| ≤ 19 and |e| ≤ 99.
+            precision: (i16::from(self.decimals) - self.exponent.map_or(0, |e| i16::from(e.value))),
+            exponent: self.exponent,
+            style: if self.sign == b'+' { PLUS } else { 0 }
+                | if self.point && self.int_digits == 0 {
+                    LEADING_POINT
+                } else {
+                    0
+                },
+            int_digits: self.int_digits,
+        }
+    }
+
+    /// `self.lit().pack(self.len)`, which packs every literal read so: its text is at most 25
+    /// bytes, it has a leading point exactly when it has no integer digits (it has digits), and
+    /// its exponent, of at most 2 digits, has the sign as written (`-` for `-0` too), and its
+    /// precision is the decimals less it, which is what the length gives back. Built straight
+    /// from the parts, without those checks.
+    #[inline(always)]
+    fn packed(self) -> Option<PackedLit> {
+        let mut bits =
+            self.len as u32 | u32::from(self.int_digits) << 8 | u32::from(self.sign == b'+') << 16;
+        bits |= match self.exponent {
+            Some(e) => {
+                let sign = match e.sign {
+                    b'+' => 1,
+                    b'-' => 2,
+                    _ => 0,
+                };
+                1 << 17
+                    | u32::from(e.upper) << 18
+                    | sign << 19
+                    | u32::from(e.digits) << 21
+                    | u32::from(e.value.unsigned_abs()) << 23
+            }
+            // The precision is the decimals, 0 to 19.
+            None => u32::from(self.decimals) << 18,
+        };
+        NonZeroU32::new(bits).map(PackedLit)
+    }
+}
+
+/// The digit at `bytes[i]`, if there is one.
+#[inline(always)]
+fn digit(bytes: &[u8], i: usize) -> Option<u8> {
+    bytes
+        .get(i)
+        .map(|b| b.wrapping_sub(b'0'))
+        .filter(|&d| d <= 9)
+}
+
+/// A literal's mantissa, `int[.frac]`, as [`Plain::read`] reads it.
+struct Mantissa {
+    /// The digits as one integer (wrapping: past 19 digits the caller refuses it).
+    value: u64,
+    int_digits: usize,
+    /// A point follows the integer digits.
+    point: bool,
+    decimals: usize,
+    /// Where it ends.
+    end: usize,
+}
+
+impl Mantissa {
+    /// The mantissa from `start`, byte by byte with the digits summed as they go.
+    ///
+    /// Eight bytes at a time (the digits found by their top bits, the value in three
+    /// multiplies) cost more on a robot program: most of its literals have one digit (`0`,
+    /// `-1`, `9E+09`), where a word's reading costs twice a byte's, and the longer ones
+    /// (`-1520.30`, `0.707107`) no more than six or seven digits, which a word saved too little
+    /// on (`rcheck` 190.9 M by bytes, 194.2 M by words).
+    #[inline(always)]
+    fn read(bytes: &[u8], start: usize) -> Mantissa {
+        let mut i = start;
+        let mut value = 0;
+        take_digits(bytes, &mut i, &mut value);
+        let int_digits = i - start;
+        let point = bytes.get(i) == Some(&b'.');
+        let mut decimals = 0;
+        if point {
+            i += 1;
+            let frac_start = i;
+            take_digits(bytes, &mut i, &mut value);
+            decimals = i - frac_start;
+        }
+        Mantissa {
+            value,
+            int_digits,
+            point,
+            decimals,
+            end: i,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The fast path as it read a literal byte by byte, before it read eight at a time: the
+    /// reference the reading by words is held to.
+    fn plain_bytewise(bytes: &[u8]) -> Option<(NumLit, usize)> {
+        let (sign, mut i) = match bytes.first() {
+            Some(&s @ (b'+' | b'-')) => (s, 1),
+            _ => (0, 0),
+        };
+        let int_start = i;
+        let mut mantissa = 0u64;
+        // Wrapping: more than 19 digits are refused below, before the sum is used.
+        take_digits(bytes, &mut i, &mut mantissa);
+        let int_digits = i - int_start;
+        let point = bytes.get(i) == Some(&b'.');
+        let mut decimals = 0;
+        if point {
+            i += 1;
+            let frac_start = i;
+            take_digits(bytes, &mut i, &mut mantissa);
+            decimals = i - frac_start;
+        }
+        let digits = int_digits + decimals;
+        if digits == 0 || digits > 19 || mantissa >= 1 << 53 {
+            return None;
+        }
+        let mut exponent = None;
+        if let Some(&letter @ (b'e' | b'E')) = bytes.get(i) {
+            i += 1;
+            let exp_sign = match bytes.get(i) {
+                Some(&s @ (b'+' | b'-')) => {
+                    i += 1;
+                    s
+                }
+                _ => 0,
+            };
+            let exp_start = i;
+            let mut value = 0i8;
+            while let Some(d) = bytes
+                .get(i)
+                .map(|b| b.wrapping_sub(b'0'))
+                .filter(|&d| d <= 9)
+            {
+                if i - exp_start == 2 {
+                    return None;
+                }
+                value = value * 10 + d as i8;
+                i += 1;
+            }
+            if i == exp_start {
+                return None;
+            }
+            exponent = Some(Exponent {
+                value: if exp_sign == b'-' { -value } else { value },
+                upper: letter == b'E',
+                sign: exp_sign,
+                digits: (i - exp_start) as u8,
+            });
+        }
+        let e = exponent.map_or(0, |e| i32::from(e.value));
+        let decimals = decimals as i32;
+        let m = mantissa as f64;
+        let power = e - decimals;
+        let value = match power {
+            0..=22 => m * EXACT_POWERS[power as usize],
+            -22..=-1 => m / EXACT_POWERS[(-power) as usize],
+            _ => return None,
+        };
+        Some((
+            NumLit {
+                value: if sign == b'-' { -value } else { value },
+                // |decimals| ≤ 19 and |e| ≤ 99.
+                precision: (decimals - e) as i16,
+                exponent,
+                style: if sign == b'+' { PLUS } else { 0 }
+                    | if point && int_digits == 0 {
+                        LEADING_POINT
+                    } else {
+                        0
+                    },
+                int_digits: int_digits as u8,
+            },
+            i,
+        ))
+    }
 
     #[test]
     fn parses_every_style() {
@@ -971,6 +1176,87 @@ mod tests {
             if let Some(plain) = NumLit::parse_plain(whole.as_bytes()) {
                 proptest::prop_assert_eq!(Some(plain), NumLit::parse_general(whole.as_bytes()), "{}", whole);
             }
+        }
+    }
+
+    /// Literals at the fast path's edges: leading zeros, 15 to 20 digits, 2^53 either side,
+    /// no digits on one side of the point, signs, exponents of one to three digits and
+    /// 10^±22 either side.
+    const PLAIN_EDGES: &[&str] = &[
+        "0",
+        "-0",
+        "+0",
+        "007",
+        "-0.000",
+        ".5",
+        "-.25",
+        "+.5",
+        "5.",
+        "-5.",
+        ".",
+        "-",
+        "+",
+        "-.",
+        "123456789012345",
+        "1234567890123456",
+        "12345678901234567",
+        "1234567890123456789",
+        "12345678901234567890",
+        "9007199254740991",
+        "9007199254740992",
+        "0.9007199254740993",
+        "1.234567890123456789",
+        "000000000000000000001",
+        "9E+09",
+        "9E9",
+        "9e-9",
+        "2.69E-07",
+        ".0e-0",
+        "1E+22",
+        "1E22",
+        "1E23",
+        "1e-22",
+        "1e-23",
+        "1.5E+009",
+        "1E",
+        "1E+",
+        "1e-",
+        "0.0000000000000000000001",
+        "123.456e+21",
+    ];
+
+    #[test]
+    fn the_plain_path_reads_the_edges_as_before() {
+        for text in PLAIN_EDGES {
+            // Alone (the end of the slice right after it) and followed as in a program.
+            for tail in ["", ",", "]", "x", ".5", "e5", "E+1"] {
+                let whole = format!("{text}{tail}");
+                let bytes = whole.as_bytes();
+                assert_eq!(NumLit::parse_plain(bytes), plain_bytewise(bytes), "{whole}");
+                let packed = NumLit::parse_packed(bytes).map(|(v, p)| (v.to_bits(), p));
+                let by_lit = NumLit::parse_prefix(bytes)
+                    .and_then(|(lit, len)| Some((lit.value.to_bits(), lit.pack(len)?)));
+                assert_eq!(packed, by_lit, "{whole}");
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// The fast path reads what it read byte by byte with a literal's parts in one pass
+        /// (literals, and any text of a literal's bytes); and a literal read packed is the
+        /// literal `parse_prefix` reads, packed with its length, bit for bit.
+        #[test]
+        fn the_plain_path_reads_as_before_and_packs_as_pack(
+            text in proptest::prop_oneof![literal_text(), "[-+0-9.eE]{0,30}"],
+            tail in proptest::option::of("[ ,\\]a-dx;.eE0-9+-]{1,3}"),
+        ) {
+            let whole = format!("{text}{}", tail.unwrap_or_default());
+            let bytes = whole.as_bytes();
+            proptest::prop_assert_eq!(NumLit::parse_plain(bytes), plain_bytewise(bytes), "{}", whole);
+            let packed = NumLit::parse_packed(bytes).map(|(v, p)| (v.to_bits(), p));
+            let by_lit = NumLit::parse_prefix(bytes)
+                .and_then(|(lit, len)| Some((lit.value.to_bits(), lit.pack(len)?)));
+            proptest::prop_assert_eq!(packed, by_lit, "{}", whole);
         }
     }
 
