@@ -61,7 +61,8 @@ impl std::fmt::Debug for Edit {
 #[derive(Clone, PartialEq, Eq)]
 pub struct EditText(TextRepr);
 
-const INLINE: usize = 14;
+/// The longest text an [`EditText`] keeps inline.
+pub(crate) const INLINE: usize = 14;
 
 #[derive(Clone, PartialEq, Eq)]
 enum TextRepr {
@@ -74,6 +75,20 @@ impl EditText {
     /// A copy of `text`: inline up to 14 bytes, so a written number costs no allocation.
     pub fn from_bytes(text: &[u8]) -> EditText {
         Self::inline(text).unwrap_or_else(|| EditText(TextRepr::Heap(Box::new(text.into()))))
+    }
+
+    /// `bytes[..len]` as an inline text, the array taken as it is: a number writer builds
+    /// its text in place, and the copy [`from_bytes`](Self::from_bytes) makes (a call, its
+    /// length not known until then) was a good part of writing one. The bytes past `len`
+    /// must be zero, as [`from_bytes`](Self::from_bytes) leaves them, so that equal texts
+    /// compare equal. `None` past 14 bytes.
+    #[inline]
+    pub(crate) fn inline_array(bytes: [u8; INLINE], len: usize) -> Option<EditText> {
+        debug_assert!(bytes.iter().skip(len).all(|&b| b == 0));
+        Some(EditText(TextRepr::Inline {
+            len: u8::try_from(len).ok().filter(|&n| n as usize <= INLINE)?,
+            bytes,
+        }))
     }
 
     fn inline(text: &[u8]) -> Option<EditText> {
