@@ -305,7 +305,7 @@ fn reversible<const N: usize>(
     };
     let first: [(Option<EditText>, f64); N] =
         std::array::from_fn(|i| write_one(&rounded[i], exact[i]));
-    if gives_back(first.clone().map(|(_, v)| v)) {
+    if gives_back(first.each_ref().map(|(_, v)| *v)) {
         return first.map(|(t, _)| t);
     }
     // Each field's choices: the plain rounding and the values one unit of its last written
