@@ -441,7 +441,7 @@ impl Cursor {
 
     /// The run's next edit. The log holds what [`EditList::push`] wrote, so every record reads
     /// back whole; one that did not would end the run.
-    #[inline]
+    #[inline(always)]
     fn next(&mut self, log: &Chunks) -> Option<Record> {
         if self.left == 0 {
             return None;
