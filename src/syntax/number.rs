@@ -410,6 +410,15 @@ impl NumLit {
             let text = text.unwrap_or_else(|| self.text_by_digits(a, places));
             return Some((text, a.read_back(places)));
         }
+        self.rewrite_by_format(new, places)
+    }
+
+    /// [`rewrite_at`](Self::rewrite_at) for values [`Scaled`] does not take (beyond 2^35 or
+    /// 12 places), through `format!`. Apart: its strings kept out of the common path, whose
+    /// every call set up their room.
+    #[cold]
+    #[inline(never)]
+    fn rewrite_by_format(&self, new: f64, places: usize) -> Option<(EditText, Option<f64>)> {
         let written = fixed(new, places);
         if written == fixed(self.value, places) {
             return None;
@@ -634,11 +643,20 @@ pub fn same_at(a: f64, b: f64, places: usize) -> bool {
 }
 
 /// [`same_at`] with `b` already rounded at `places` (`b_scaled`, [`Scaled::of`]).
+#[inline]
 fn same_as_rounded(a: f64, b: f64, b_scaled: Option<Scaled>, places: usize) -> bool {
     match (Scaled::of(a, places), b_scaled) {
         (Some(x), Some(y)) => x == y,
-        _ => fixed(a, places) == fixed(b, places),
+        _ => same_by_format(a, b, places),
     }
+}
+
+/// [`same_as_rounded`] for values [`Scaled`] does not take, by their texts; apart, as
+/// [`NumLit::rewrite_by_format`].
+#[cold]
+#[inline(never)]
+fn same_by_format(a: f64, b: f64, places: usize) -> bool {
+    fixed(a, places) == fixed(b, places)
 }
 
 /// A rewrite's text with the value it reads back as: the one known from writing it, else
@@ -813,7 +831,7 @@ impl Scaled {
     fn inline_text(self, places: usize, style: u8) -> Option<EditText> {
         let units = u64::try_from(self.units).ok()?;
         let scale = *POW10.get(places)?;
-        let (mut int, mut frac) = (units / scale, units % scale);
+        let (int, frac) = (units / scale, units % scale);
         let signed = self.negative || style & PLUS != 0;
         // `.512`: no integer `0` below 1 where the literal was written so.
         let int_len = if int == 0 && places > 0 && style & LEADING_POINT != 0 {
@@ -827,28 +845,16 @@ impl Scaled {
             return None;
         }
         let mut bytes = [0u8; INLINE];
-        let mut put = |at: usize, b: u8| {
-            if let Some(slot) = bytes.get_mut(at) {
-                *slot = b;
-            }
-        };
-        let mut at = len;
-        for _ in 0..places {
-            at -= 1;
-            put(at, b'0' + (frac % 10) as u8);
-            frac /= 10;
+        put_digits(&mut bytes, len, frac, places);
+        let int_end = len - point - places;
+        if point > 0
+            && let Some(slot) = bytes.get_mut(int_end)
+        {
+            *slot = b'.';
         }
-        if point > 0 {
-            at -= 1;
-            put(at, b'.');
-        }
-        for _ in 0..int_len {
-            at -= 1;
-            put(at, b'0' + (int % 10) as u8);
-            int /= 10;
-        }
+        put_digits(&mut bytes, int_end, int, int_len);
         if signed {
-            put(0, if self.negative { b'-' } else { b'+' });
+            bytes[0] = if self.negative { b'-' } else { b'+' };
         }
         EditText::inline_array(bytes, len)
     }
@@ -917,6 +923,42 @@ impl Scaled {
             buf[at] = b'-';
         }
         out.extend(buf.get(at..).unwrap_or(&[]));
+    }
+}
+
+/// `00` … `99`, for [`put_digits`].
+static DIGIT_PAIRS: [u8; 200] = {
+    let mut table = [0u8; 200];
+    let mut i = 0;
+    while i < 100 {
+        table[2 * i] = b'0' + (i / 10) as u8;
+        table[2 * i + 1] = b'0' + (i % 10) as u8;
+        i += 1;
+    }
+    table
+};
+
+/// Writes the last `n` decimal digits of `v` into `bytes`, ending before `end` (at least `n`),
+/// two at a time: one division a pair (a digit a division was most of writing a number).
+#[inline(always)]
+fn put_digits(bytes: &mut [u8], end: usize, mut v: u64, n: usize) {
+    let mut at = end;
+    let mut left = n;
+    while left >= 2 {
+        at -= 2;
+        let pair = (v % 100) as usize * 2;
+        v /= 100;
+        if let (Some(slot), Some(digits)) =
+            (bytes.get_mut(at..at + 2), DIGIT_PAIRS.get(pair..pair + 2))
+        {
+            slot.copy_from_slice(digits);
+        }
+        left -= 2;
+    }
+    if left == 1
+        && let Some(slot) = bytes.get_mut(at - 1)
+    {
+        *slot = b'0' + (v % 10) as u8;
     }
 }
 
