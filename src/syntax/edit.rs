@@ -61,7 +61,8 @@ impl std::fmt::Debug for Edit {
 #[derive(Clone, PartialEq, Eq)]
 pub struct EditText(TextRepr);
 
-const INLINE: usize = 14;
+/// The longest text an [`EditText`] keeps inline.
+pub(crate) const INLINE: usize = 14;
 
 #[derive(Clone, PartialEq, Eq)]
 enum TextRepr {
@@ -74,6 +75,20 @@ impl EditText {
     /// A copy of `text`: inline up to 14 bytes, so a written number costs no allocation.
     pub fn from_bytes(text: &[u8]) -> EditText {
         Self::inline(text).unwrap_or_else(|| EditText(TextRepr::Heap(Box::new(text.into()))))
+    }
+
+    /// `bytes[..len]` as an inline text, the array taken as it is: a number writer builds
+    /// its text in place, and the copy [`from_bytes`](Self::from_bytes) makes (a call, its
+    /// length not known until then) was a good part of writing one. The bytes past `len`
+    /// must be zero, as [`from_bytes`](Self::from_bytes) leaves them, so that equal texts
+    /// compare equal. `None` past 14 bytes.
+    #[inline]
+    pub(crate) fn inline_array(bytes: [u8; INLINE], len: usize) -> Option<EditText> {
+        debug_assert!(bytes.iter().skip(len).all(|&b| b == 0));
+        Some(EditText(TextRepr::Inline {
+            len: u8::try_from(len).ok().filter(|&n| n as usize <= INLINE)?,
+            bytes,
+        }))
     }
 
     fn inline(text: &[u8]) -> Option<EditText> {
@@ -199,18 +214,46 @@ impl EditList {
             }
         };
         let text: &[u8] = &edit.text;
+        let delta = edit.start - prev_start;
+        let len = zigzag(i64::from(edit.end) - i64::from(edit.start));
+        match &edit.text.0 {
+            // A number a few bytes after the edit before (the next field of a target): its
+            // three numbers take a byte each, written with its text as one block of fixed
+            // size, cut to what they take.
+            TextRepr::Inline { len: n, bytes } if delta < 0x80 && len < 0x80 => {
+                let mut block = [0; 3 + INLINE];
+                block[0] = delta as u8;
+                block[1] = len as u8;
+                block[2] = *n;
+                block[3..].copy_from_slice(bytes);
+                let out = self.log.room(block.len());
+                let end = out.len() + 3 + usize::from(*n);
+                out.extend_from_slice(&block);
+                out.truncate(end);
+            }
+            _ => self.push_record(u64::from(delta), len, &edit.text),
+        }
+        let removed = edit.end.saturating_sub(edit.start) as isize;
+        self.growth = self
+            .growth
+            .saturating_add(text.len() as isize)
+            .saturating_sub(removed);
+        self.last = key;
+        self.len += 1;
+    }
+
+    /// [`push`](Self::push)'s record of any size: the offset from the start of the edit before
+    /// in its run, the length (zigzagged), then the text's length and the text.
+    fn push_record(&mut self, delta: u64, len: u64, edit_text: &EditText) {
+        let text: &[u8] = edit_text;
         // Within a run starts never decrease; an edit kept reversed (`Edit::with_text`) has
         // a negative length.
         let mut head = [0; 3 * VARINT_MAX + INLINE];
         let mut n = 0;
-        put_varint(&mut head, &mut n, u64::from(edit.start - prev_start));
-        put_varint(
-            &mut head,
-            &mut n,
-            zigzag(i64::from(edit.end) - i64::from(edit.start)),
-        );
+        put_varint(&mut head, &mut n, delta);
+        put_varint(&mut head, &mut n, len);
         put_varint(&mut head, &mut n, text.len() as u64);
-        match &edit.text.0 {
+        match &edit_text.0 {
             // A number: its head and its inline bytes go in as one block of fixed size (no
             // copy of a length known only here), then the block is cut to what they take.
             TextRepr::Inline { bytes, .. } => {
@@ -226,13 +269,6 @@ impl EditList {
                 out.extend_from_slice(text);
             }
         }
-        let removed = edit.end.saturating_sub(edit.start) as isize;
-        self.growth = self
-            .growth
-            .saturating_add(text.len() as isize)
-            .saturating_sub(removed);
-        self.last = key;
-        self.len += 1;
     }
 
     /// How many edits were added (identical duplicates included).
@@ -302,7 +338,21 @@ impl EditList {
 
     /// The edits by span (a stable order: equal spans as they were added), each identical
     /// duplicate of the edit before it left out.
-    fn sorted(&self) -> Sorted {
+    fn sorted(&self) -> Merge {
+        match self.runs[..] {
+            // The edits came in order (a transform's targets in file order, then its offset
+            // calls after them): read straight from the run, without the merge's heap and
+            // its bookkeeping per edit.
+            [run] => Merge::One {
+                cursor: Cursor::of(run),
+                last: None,
+            },
+            _ => Merge::Many(self.merged()),
+        }
+    }
+
+    /// [`sorted`](Self::sorted) for edits in several runs.
+    fn merged(&self) -> Sorted {
         let mut cursors: Vec<Cursor> = self.runs.iter().map(|r| Cursor::of(*r)).collect();
         let mut heads: Vec<Option<Record>> =
             cursors.iter_mut().map(|c| c.next(&self.log)).collect();
@@ -391,18 +441,31 @@ impl Cursor {
 
     /// The run's next edit. The log holds what [`EditList::push`] wrote, so every record reads
     /// back whole; one that did not would end the run.
-    #[inline]
+    #[inline(always)]
     fn next(&mut self, log: &Chunks) -> Option<Record> {
         if self.left == 0 {
             return None;
         }
         let bytes = log.rest(&mut self.place);
-        let mut at = 0;
-        let start = u64::from(self.prev_start).checked_add(read_varint(bytes, &mut at)?)?;
-        let start = u32::try_from(start).ok()?;
-        let len = unzigzag(read_varint(bytes, &mut at)?);
+        let (start, len, n, at) = match *bytes {
+            // Nearly every record's three numbers take a byte each (the offset from the edit
+            // before within a target, a number's length, its text's): read at once.
+            [delta, len, n, ..] if (delta | len | n) < 0x80 => (
+                self.prev_start.checked_add(u32::from(delta))?,
+                unzigzag(u64::from(len)),
+                usize::from(n),
+                3,
+            ),
+            _ => {
+                let mut at = 0;
+                let start = u64::from(self.prev_start).checked_add(read_varint(bytes, &mut at)?)?;
+                let start = u32::try_from(start).ok()?;
+                let len = unzigzag(read_varint(bytes, &mut at)?);
+                let n = usize::try_from(read_varint(bytes, &mut at)?).ok()?;
+                (start, len, n, at)
+            }
+        };
         let end = u32::try_from(i64::from(start).checked_add(len)?).ok()?;
-        let n = usize::try_from(read_varint(bytes, &mut at)?).ok()?;
         bytes.get(at..at.checked_add(n)?)?;
         let text = Place {
             at: self.place.at + at,
@@ -420,7 +483,50 @@ impl Cursor {
     }
 }
 
-/// [`EditList::sorted`]: the runs merged by span. The run taken from stays the same while
+/// [`EditList::sorted`]: one run read as it is, or several merged.
+enum Merge {
+    One {
+        cursor: Cursor,
+        /// The last edit given (the next is compared with it).
+        last: Option<Record>,
+    },
+    Many(Sorted),
+}
+
+impl Merge {
+    /// The next edit by span, read from `log`.
+    #[inline]
+    fn next(&mut self, log: &Chunks) -> Option<Record> {
+        match self {
+            Merge::One { cursor, last } => loop {
+                let head = cursor.next(log)?;
+                if last.is_some_and(|l| l.same(&head, log)) {
+                    continue;
+                }
+                *last = Some(head);
+                return Some(head);
+            },
+            Merge::Many(sorted) => sorted.next(log),
+        }
+    }
+
+    /// The first chunk of the log still to be read ([`Sorted::lowest_chunk`]).
+    fn lowest_chunk(&self) -> usize {
+        match self {
+            Merge::One { cursor, last } => {
+                let unread = (cursor.left > 0).then_some(cursor.place.chunk);
+                unread
+                    .into_iter()
+                    .chain(last.map(|r| r.text.chunk))
+                    .min()
+                    .unwrap_or(usize::MAX)
+            }
+            Merge::Many(sorted) => sorted.lowest_chunk(),
+        }
+    }
+}
+
+/// [`EditList::merged`]: the runs merged by span. The run taken from stays the same while
 /// its next edit sorts before every other run's (all of them, for a file of one run): only a
 /// change of run goes through the heap.
 struct Sorted {

@@ -3,6 +3,7 @@
 use std::num::NonZeroU32;
 
 use super::EditText;
+use super::edit::INLINE;
 
 /// A numeric literal as written: `12`, `-0.5`, `.5`, `9E9`, `9E+09`, `9e+9`, `2.69E-07`.
 ///
@@ -339,28 +340,22 @@ impl NumLit {
             if a == b {
                 return None;
             }
-            let mut text = Digits::new();
-            if self.style & PLUS != 0 && !a.negative {
-                text.push(b'+');
-            }
-            match self.exponent.map(|e| (e, places as i32 + e.value as i32)) {
-                // The same digits with the point moved by the exponent: `150123` units of
-                // 10^-3 are `1.50123E+2`.
-                Some((e, decimals))
-                    if (0..=18).contains(&decimals)
-                        && a.int_digits(decimals as usize)
-                            <= (self.int_digits as usize).max(EXPONENT_INT_DIGITS) =>
-                {
-                    a.write(decimals as usize, &mut text);
-                    e.write(&mut text);
-                }
-                _ => a.write(places, &mut text),
-            }
-            if self.style & LEADING_POINT != 0 && places > 0 {
-                text.drop_leading_zero();
-            }
-            return Some((EditText::from_bytes(text.as_bytes()), a.read_back(places)));
+            let text = match self.exponent {
+                None => a.inline_text(places, self.style),
+                Some(_) => None,
+            };
+            let text = text.unwrap_or_else(|| self.text_by_digits(a, places));
+            return Some((text, a.read_back(places)));
         }
+        self.rewrite_by_format(new, places)
+    }
+
+    /// [`rewrite_at`](Self::rewrite_at) for values [`Scaled`] does not take (beyond 2^35 or
+    /// 12 places), through `format!`. Apart: its strings kept out of the common path, whose
+    /// every call set up their room.
+    #[cold]
+    #[inline(never)]
+    fn rewrite_by_format(&self, new: f64, places: usize) -> Option<(EditText, Option<f64>)> {
         let written = fixed(new, places);
         if written == fixed(self.value, places) {
             return None;
@@ -369,6 +364,32 @@ impl NumLit {
             return Some((EditText::from(format!("+{written}").into_bytes()), None));
         }
         Some((EditText::from(written.into_bytes()), None))
+    }
+
+    /// The text of `a` at `places` in the literal's style, built in a [`Digits`]: every form
+    /// [`rewrite_at`](Self::rewrite_at) writes, and the reference of [`Scaled::inline_text`].
+    fn text_by_digits(&self, a: Scaled, places: usize) -> EditText {
+        let mut text = Digits::new();
+        if self.style & PLUS != 0 && !a.negative {
+            text.push(b'+');
+        }
+        match self.exponent.map(|e| (e, places as i32 + e.value as i32)) {
+            // The same digits with the point moved by the exponent: `150123` units of
+            // 10^-3 are `1.50123E+2`.
+            Some((e, decimals))
+                if (0..=18).contains(&decimals)
+                    && a.int_digits(decimals as usize)
+                        <= (self.int_digits as usize).max(EXPONENT_INT_DIGITS) =>
+            {
+                a.write(decimals as usize, &mut text);
+                e.write(&mut text);
+            }
+            _ => a.write(places, &mut text),
+        }
+        if self.style & LEADING_POINT != 0 && places > 0 {
+            text.drop_leading_zero();
+        }
+        EditText::from_bytes(text.as_bytes())
     }
 
     /// The literal with its value rounded at the places a rewrite with `min_decimals` writes,
@@ -559,11 +580,20 @@ pub fn same_at(a: f64, b: f64, places: usize) -> bool {
 }
 
 /// [`same_at`] with `b` already rounded at `places` (`b_scaled`, [`Scaled::of`]).
+#[inline]
 fn same_as_rounded(a: f64, b: f64, b_scaled: Option<Scaled>, places: usize) -> bool {
     match (Scaled::of(a, places), b_scaled) {
         (Some(x), Some(y)) => x == y,
-        _ => fixed(a, places) == fixed(b, places),
+        _ => same_by_format(a, b, places),
     }
+}
+
+/// [`same_as_rounded`] for values [`Scaled`] does not take, by their texts; apart, as
+/// [`NumLit::rewrite_by_format`].
+#[cold]
+#[inline(never)]
+fn same_by_format(a: f64, b: f64, places: usize) -> bool {
+    fixed(a, places) == fixed(b, places)
 }
 
 /// A rewrite's text with the value it reads back as: the one known from writing it, else
@@ -586,6 +616,9 @@ const POW10: [u64; 20] = {
     }
     p
 };
+
+/// [`Scaled::by_float`]'s bound on the scaled value.
+const TWO_TO_40: f64 = (1u64 << 40) as f64;
 
 /// Powers of ten that are exact in an `f64`.
 const EXACT_POWERS: [f64; 23] = [
@@ -634,9 +667,53 @@ struct Scaled {
 }
 
 impl Scaled {
+    #[inline]
     fn of(value: f64, places: usize) -> Option<Scaled> {
-        // 2^35 mm is 34,000 km: every coordinate, angle or quaternion a program holds.
-        if !value.is_finite() || places > 12 || value.abs() >= 34_359_738_368.0 {
+        if !Scaled::in_range(value, places) {
+            return None;
+        }
+        Scaled::by_float(value, places).or_else(|| Scaled::exactly(value, places))
+    }
+
+    /// The values [`of`](Self::of) scales: finite, below 2^35 (34,000 km in mm: every
+    /// coordinate, angle or quaternion a program holds) and at most 12 places.
+    #[inline]
+    fn in_range(value: f64, places: usize) -> bool {
+        value.is_finite() && places <= 12 && value.abs() < 34_359_738_368.0
+    }
+
+    /// [`of`](Self::of) by one multiplication, where that decides the rounding: `None` when
+    /// the scaled value is 2^40 or more, or within 2^-12 of a half unit, which
+    /// [`exactly`](Self::exactly) settles. Below 2^40 the product of the value and the exact
+    /// power of ten is within 2^-13 of the exact product (one rounding, 2^-53 relative), so a
+    /// fraction further than that from one half rounds the same either way; the fraction is
+    /// exact (the truncation is within a factor 2 of the product). Every rewrite and
+    /// comparison scales a value (three a written field), and the exact path's 128-bit
+    /// arithmetic was most of their cost.
+    #[inline]
+    fn by_float(value: f64, places: usize) -> Option<Scaled> {
+        let x = value.abs() * EXACT_POWERS[places.min(22)];
+        // Not below (or NaN): left to the exact path.
+        if x.partial_cmp(&TWO_TO_40) != Some(std::cmp::Ordering::Less) {
+            return None;
+        }
+        // Below 2^40 by `i64`: one instruction each way (a `u64` conversion is several).
+        let int = x as i64;
+        let fraction = x - int as f64;
+        if (fraction - 0.5).abs() <= 1.0 / 4096.0 {
+            return None;
+        }
+        let units = int as u64 + u64::from(fraction > 0.5);
+        Some(Scaled {
+            negative: value.is_sign_negative() && units != 0,
+            units: u128::from(units),
+        })
+    }
+
+    /// [`of`](Self::of) from the binary value exactly.
+    #[inline(never)]
+    fn exactly(value: f64, places: usize) -> Option<Scaled> {
+        if !Scaled::in_range(value, places) {
             return None;
         }
         // value = mantissa · 2^exp exactly; below 2^35 with a 53-bit mantissa, exp < -17.
@@ -680,6 +757,43 @@ impl Scaled {
         // Below 2^53 the units are a u64 (a u128 conversion is a call), exactly an f64.
         let v = self.units as u64 as f64 / EXACT_POWERS[places];
         Some(if self.negative { -v } else { v })
+    }
+
+    /// [`NumLit::text_by_digits`] for a literal without an exponent and of `style`, written
+    /// straight into the bytes of an inline [`EditText`]: its length known first, the digits
+    /// from the last one back. `None` where the text is longer than an inline one or the
+    /// units pass a `u64`. Nearly every written number is one of these (`-1520.873`), and the
+    /// copies through the stack buffers, each a call, were most of the cost of writing it.
+    #[inline]
+    fn inline_text(self, places: usize, style: u8) -> Option<EditText> {
+        let units = u64::try_from(self.units).ok()?;
+        let scale = *POW10.get(places)?;
+        let (int, frac) = (units / scale, units % scale);
+        let signed = self.negative || style & PLUS != 0;
+        // `.512`: no integer `0` below 1 where the literal was written so.
+        let int_len = if int == 0 && places > 0 && style & LEADING_POINT != 0 {
+            0
+        } else {
+            1 + POW10[1..].iter().take_while(|&&p| int >= p).count()
+        };
+        let point = usize::from(places > 0);
+        let len = usize::from(signed) + int_len + point + places;
+        if len > INLINE {
+            return None;
+        }
+        let mut bytes = [0u8; INLINE];
+        put_digits(&mut bytes, len, frac, places);
+        let int_end = len - point - places;
+        if point > 0
+            && let Some(slot) = bytes.get_mut(int_end)
+        {
+            *slot = b'.';
+        }
+        put_digits(&mut bytes, int_end, int, int_len);
+        if signed {
+            bytes[0] = if self.negative { b'-' } else { b'+' };
+        }
+        EditText::inline_array(bytes, len)
     }
 
     /// Digits before the point when the units are written with `places` decimals (at least 1).
@@ -746,6 +860,42 @@ impl Scaled {
             buf[at] = b'-';
         }
         out.extend(buf.get(at..).unwrap_or(&[]));
+    }
+}
+
+/// `00` … `99`, for [`put_digits`].
+static DIGIT_PAIRS: [u8; 200] = {
+    let mut table = [0u8; 200];
+    let mut i = 0;
+    while i < 100 {
+        table[2 * i] = b'0' + (i / 10) as u8;
+        table[2 * i + 1] = b'0' + (i % 10) as u8;
+        i += 1;
+    }
+    table
+};
+
+/// Writes the last `n` decimal digits of `v` into `bytes`, ending before `end` (at least `n`),
+/// two at a time: one division a pair (a digit a division was most of writing a number).
+#[inline(always)]
+fn put_digits(bytes: &mut [u8], end: usize, mut v: u64, n: usize) {
+    let mut at = end;
+    let mut left = n;
+    while left >= 2 {
+        at -= 2;
+        let pair = (v % 100) as usize * 2;
+        v /= 100;
+        if let (Some(slot), Some(digits)) =
+            (bytes.get_mut(at..at + 2), DIGIT_PAIRS.get(pair..pair + 2))
+        {
+            slot.copy_from_slice(digits);
+        }
+        left -= 2;
+    }
+    if left == 1
+        && let Some(slot) = bytes.get_mut(at - 1)
+    {
+        *slot = b'0' + (v % 10) as u8;
     }
 }
 
@@ -1323,6 +1473,49 @@ mod tests {
             let v = units as f64 / 10f64.powi(places as i32 + 1);
             let v = f64::from_bits((v.to_bits() as i64 + nudge as i64) as u64);
             proptest::prop_assert_eq!(fixed(v, places), by_format(v, places));
+        }
+    }
+
+    proptest::proptest! {
+        /// The scaling by one multiplication gives what the exact scaling gives, or leaves the
+        /// value to it: values of every magnitude, and values just beside a half unit (the
+        /// ties and their neighbours, where the product's rounding could tip the result).
+        #[test]
+        fn scaling_by_float_is_the_exact_scaling(
+            value in proptest::num::f64::NORMAL | proptest::num::f64::SUBNORMAL | proptest::num::f64::ZERO,
+            scale in -15i32..12,
+            units in -10_000_000_000i64..10_000_000_000,
+            nudge in -3i64..=3,
+            places in 0usize..=13,
+        ) {
+            let (m, _) = frexp(value);
+            let spread = m * 10f64.powi(scale);
+            let half = (units as f64 + 0.5) / 10f64.powi(places as i32);
+            let half = f64::from_bits((half.to_bits() as i64 + nudge) as u64);
+            for v in [value, spread, half, -half, f64::NAN, f64::NEG_INFINITY] {
+                proptest::prop_assert_eq!(Scaled::of(v, places), Scaled::exactly(v, places), "{} .{}", v, places);
+                if let Some(fast) = Scaled::by_float(v, places).filter(|_| Scaled::in_range(v, places)) {
+                    proptest::prop_assert_eq!(Some(fast), Scaled::exactly(v, places), "{} .{}", v, places);
+                }
+            }
+        }
+
+        /// The text written in place is the one built in the stack buffer, in every plain
+        /// style (`+`, a leading point, both, neither), wherever it fits inline.
+        #[test]
+        fn the_inline_text_is_the_digits_text(
+            units in 0u64..100_000_000_000_000,
+            negative in proptest::bool::ANY,
+            places in 0usize..=12,
+            style in proptest::sample::select(vec!["1.5", "+1.5", ".5", "+.5"]),
+        ) {
+            let lit = NumLit::parse(style.as_bytes()).unwrap();
+            let a = Scaled { negative: negative && units != 0, units: u128::from(units) };
+            let by_digits = lit.text_by_digits(a, places);
+            match a.inline_text(places, lit.style) {
+                Some(inline) => proptest::prop_assert_eq!(inline, by_digits),
+                None => proptest::prop_assert!(by_digits.len() > INLINE, "{:?}", by_digits),
+            }
         }
     }
 

@@ -2,6 +2,7 @@
 
 use nalgebra::{Translation3, UnitQuaternion};
 
+use super::policy::quaternion_norm;
 use crate::geometry::{
     Pose, abb_quat, abb_quat_components, angle_between, kuka_abc, kuka_abc_angles,
 };
@@ -238,7 +239,7 @@ const KEPT_NORM: f64 = 1e-4;
 /// such a quaternion's text. Kept, the written components are those of the new rotation at
 /// the norm the file chose; every reader normalises.
 fn written_norm(w: [f64; 4]) -> f64 {
-    let n = w.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let n = quaternion_norm(w);
     if (n - 1.0).abs() < KEPT_NORM { n } else { 1.0 }
 }
 
@@ -304,7 +305,7 @@ fn reversible<const N: usize>(
     };
     let first: [(Option<EditText>, f64); N] =
         std::array::from_fn(|i| write_one(&rounded[i], exact[i]));
-    if gives_back(first.clone().map(|(_, v)| v)) {
+    if gives_back(first.each_ref().map(|(_, v)| *v)) {
         return first.map(|(t, _)| t);
     }
     // Each field's choices: the plain rounding and the values one unit of its last written
@@ -679,7 +680,7 @@ mod tests {
         let exact: Vec<f64> = if kuka {
             kuka_abc_angles(&new.rotation, Some([like[0], like[1], like[2]])).to_vec()
         } else {
-            let n = like.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let n = quaternion_norm([like[0], like[1], like[2], like[3]]);
             abb_quat_components(&new.rotation, Some([like[0], like[1], like[2], like[3]]))
                 .map(|v| v * n)
                 .to_vec()

@@ -960,8 +960,14 @@ fn carry_unstamped(original: &[u8], output: Vec<u8>) -> CarriedPrecision {
         let (b_from, a_from) = (before.i, after.i);
         // The stretch the two scans are alike in from here on (none at the start of just one
         // of the files).
-        let (end, to_the_end) = Alike::at(b_from, a_from, original, &output)
-            .map_or((b_from.saturating_sub(1), false), |a| (a.end, a.to_the_end));
+        let lo = b_from.saturating_sub(1);
+        let (end, to_the_end) = match (original.get(lo), output.get(a_from.saturating_sub(1))) {
+            // Differing at once (after a literal the transform rewrote, its last digits):
+            // what `Alike::at` finds, without comparing a stretch.
+            (Some(x), Some(y)) if x != y => (lo, false),
+            _ => Alike::at(b_from, a_from, original, &output)
+                .map_or((lo, false), |a| (a.end, a.to_the_end)),
+        };
         // The original's literals that end inside it (with the byte after them) are the
         // output's too: counted only.
         let mut from = b_from;
