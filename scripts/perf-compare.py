@@ -17,7 +17,8 @@ writes every target, into a new empty folder each run.
 CPU time (user + sys of the child, from os.wait4) is the median of --runs runs; peak memory is
 the child's maximum resident set. Output goes to a scratch folder and file. Give two
 binaries (--bin before=/tmp/trackfix-before --bin after=target/release/trackfix) to compare
-builds back to back in the same run; the machine's load average is printed with the table.
+builds in the same run, their runs of each command taken in turn; the machine's load average
+is printed with the table.
 """
 
 import argparse
@@ -156,15 +157,23 @@ def measure(argv: list[str], runs: int, work: str = "") -> tuple[float, int]:
     """Median CPU time and largest peak of `runs` runs. An argument `OUT` becomes a new, empty
     folder under `work` for each run: `correct` into a folder that already holds its outputs
     first reads them (to restore them if the run fails), which is not the run being measured."""
-    results = []
+    return measure_alternating([argv], runs, work)[0]
+
+
+def measure_alternating(argvs: list[list[str]], runs: int, work: str = "") -> list[tuple[float, int]]:
+    """`measure` of each command line, their runs taken in turn (one of each, then the next of
+    each): on a shared machine the load drifts within a minute, and runs of one binary after
+    the other's moved the CPU times of the same instructions by a third."""
+    results: list[list[tuple[float, int, int]]] = [[] for _ in argvs]
     for _ in range(runs):
-        out = tempfile.mkdtemp(prefix="out-", dir=work or None) if OUT in argv else None
-        try:
-            results.append(run([out if a == OUT else a for a in argv]))
-        finally:
-            if out:
-                shutil.rmtree(out)
-    return statistics.median(r[0] for r in results), max(r[1] for r in results)
+        for argv, out_of in zip(argvs, results):
+            out = tempfile.mkdtemp(prefix="out-", dir=work or None) if OUT in argv else None
+            try:
+                out_of.append(run([out if a == OUT else a for a in argv]))
+            finally:
+                if out:
+                    shutil.rmtree(out)
+    return [(statistics.median(r[0] for r in rs), max(r[1] for r in rs)) for rs in results]
 
 
 def main() -> None:
@@ -217,14 +226,14 @@ def main() -> None:
                 args.runs,
             )
             row(label, "regex_baseline.py", py_t, py_m, mb, "")
-        for name, exe in bins:
-            commands = {
-                "check": [exe, "check", path],
-                "inspect --format json": [exe, "inspect", "--format", "json", path],
-                "correct": [exe, "correct", path, "--cell", cell, "--robot", "r1", "--out-dir", OUT],
-            }
-            for cmd, argv in commands.items():
-                t, m = measure(argv, args.runs, args.work)
+        commands = {
+            "check": lambda exe: [exe, "check", path],
+            "inspect --format json": lambda exe: [exe, "inspect", "--format", "json", path],
+            "correct": lambda exe: [exe, "correct", path, "--cell", cell, "--robot", "r1", "--out-dir", OUT],
+        }
+        for cmd, argv_of in commands.items():
+            measured = measure_alternating([argv_of(exe) for _, exe in bins], args.runs, args.work)
+            for (name, _), (t, m) in zip(bins, measured):
                 if cmd == "check":
                     note = f"{t / grep_t:.1f}× grep"
                 elif cmd == "correct" and py_t is not None:
