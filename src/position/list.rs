@@ -698,17 +698,10 @@ impl<'a> Reader<'a> {
     /// a call each they were half of a head.
     #[inline(always)]
     fn head_uint(&mut self) -> Option<u64> {
-        let mut v = 0u64;
-        let mut shift = 0;
-        loop {
-            let (&b, rest) = self.bytes.split_first()?;
-            self.bytes = rest;
-            v |= u64::from(b & 0x7f).checked_shl(shift)?;
-            if b < 0x80 {
-                return Some(v);
-            }
-            shift += 7;
-        }
+        let mut at = 0;
+        let v = packed::read_varint_inlined(self.bytes, &mut at)?;
+        self.bytes = self.bytes.get(at..)?;
+        Some(v)
     }
 
     #[inline(always)]

@@ -177,6 +177,14 @@ pub(crate) fn read_varint(bytes: &[u8], at: &mut usize) -> Option<u64> {
 }
 
 fn read_varint_long(bytes: &[u8], at: &mut usize) -> Option<u64> {
+    read_varint_inlined(bytes, at)
+}
+
+/// [`read_varint`] written out where it is called, for a reader that takes several numbers in
+/// a row (a position's head, read by every use of a position), where a call each was half of
+/// the reading.
+#[inline(always)]
+pub(crate) fn read_varint_inlined(bytes: &[u8], at: &mut usize) -> Option<u64> {
     let mut v = 0u64;
     let mut shift = 0;
     loop {
