@@ -1101,8 +1101,9 @@ impl Mantissa {
 mod tests {
     use super::*;
 
-    /// The fast path as it read a literal byte by byte, before it read eight at a time: the
-    /// reference the reading by words is held to.
+    /// The fast path as it read a literal in one function, before its reading was shared by
+    /// `parse_prefix` and `parse_packed` (`Plain::read`, `Mantissa::read`): the reference the
+    /// shared reading is held to.
     fn plain_bytewise(bytes: &[u8]) -> Option<(NumLit, usize)> {
         let (sign, mut i) = match bytes.first() {
             Some(&s @ (b'+' | b'-')) => (s, 1),
