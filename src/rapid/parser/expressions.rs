@@ -60,20 +60,10 @@ impl Parser<'_, '_> {
                 }
                 b'-' | b'+' | b'0'..=b'9' | b'.' if expect_elem && depth > 0 => {
                     // The literal is parsed while it is scanned, and kept for the extractor.
-                    // A decimal number ends where the lexer's `number_len` ends it; anything
-                    // `NumLit` does not read (based numbers, `1E`, overflow) goes to the
-                    // general path.
-                    let Some((lit, len)) = NumLit::parse_prefix(src.get(i..).unwrap_or(&[])) else {
+                    let Some((lit, len)) = fast_number(src, i) else {
                         break false;
                     };
                     let end = i + len;
-                    // The next byte must end the token the way the lexer would end it.
-                    if src
-                        .get(end)
-                        .is_some_and(|c| c.is_ascii_alphanumeric() || matches!(c, b'_' | b'.'))
-                    {
-                        break false;
-                    }
                     let id = self.arena.num(i as u32, end as u32, lit);
                     let (parent, last) = stack[depth - 1];
                     self.arena.link(parent, last, id);
@@ -89,10 +79,7 @@ impl Parser<'_, '_> {
             self.arena.truncate(mark);
             return None;
         }
-        self.lex.seek(i);
-        self.peeked = None;
-        self.prev_end = i as u32;
-        self.tok = self.next_significant();
+        self.resume_at(i);
         Some(root)
     }
 
@@ -111,18 +98,7 @@ impl Parser<'_, '_> {
         if src.get(start) != Some(&b'[') {
             return false;
         }
-        let blanks = |mut i: usize| {
-            while matches!(src.get(i), Some(b' ' | b'\t' | b'\r' | b'\n')) {
-                i += 1;
-            }
-            i
-        };
-        // Whether a number ends before `at` the way the lexer ends it (a number cut short,
-        // `0` of `0.5`, does not).
-        let ends = |at: usize| {
-            !src.get(at)
-                .is_some_and(|c| c.is_ascii_alphanumeric() || matches!(c, b'_' | b'.'))
-        };
+        let blanks = |i: usize| blanks_end(src, i);
         // The bracketed list of numbers at `i`: each start into `starts`, as many values as
         // `values` holds, each literal into `seen` (as far as it holds); how many there are
         // and the index after the `]`.
@@ -141,7 +117,7 @@ impl Parser<'_, '_> {
                 i = blanks(i);
                 let last = seen.get_mut(count);
                 let (number, len) = match last {
-                    Some(Some(s)) if s.at(src, i) && ends(i + s.len) => {
+                    Some(Some(s)) if s.at(src, i) && token_ends(src, i + s.len) => {
                         debug_assert_eq!(
                             format!("{:?}", NumLit::parse_prefix(&src[i..])),
                             format!("{:?}", Some((s.number, s.len)))
@@ -149,15 +125,7 @@ impl Parser<'_, '_> {
                         (s.number, s.len)
                     }
                     _ => {
-                        // Where `numeric_aggregate` reads a number (ended as the lexer ends
-                        // it, below).
-                        if !matches!(src.get(i), Some(b'-' | b'+' | b'0'..=b'9' | b'.')) {
-                            return None;
-                        }
-                        let (number, len) = NumLit::parse_prefix(src.get(i..)?)?;
-                        if !ends(i + len) {
-                            return None;
-                        }
+                        let (number, len) = fast_number(src, i)?;
                         number.pack(len)?;
                         if let (Some(s), Some(now)) = (last, SeenLiteral::of(src, i, len, number)) {
                             *s = Some(now);
@@ -204,10 +172,7 @@ impl Parser<'_, '_> {
         };
         lit.axes = axes;
         lit.span = Span::new(start, end);
-        self.lex.seek(end);
-        self.peeked = None;
-        self.prev_end = end as u32;
-        self.tok = self.next_significant();
+        self.resume_at(end);
         true
     }
 

@@ -193,22 +193,8 @@ impl Parser<'_, '_> {
             return None;
         }
         let src = self.src;
-        let blanks = |mut i: usize| {
-            while matches!(src.get(i), Some(b' ' | b'\t' | b'\r' | b'\n')) {
-                i += 1;
-            }
-            i
-        };
-        // The end of the name at `i`: an identifier that is no keyword (a keyword may be an
-        // operator or end the statement, which the general path decides).
-        let name = |i: usize| -> Option<usize> {
-            let rest = src.get(i..)?;
-            if !matches!(rest.first()?, b'a'..=b'z' | b'A'..=b'Z' | b'_') {
-                return None;
-            }
-            let len = ident_len(rest);
-            (!is_keyword(rest.get(..len)?)).then_some(i + len)
-        };
+        let blanks = |i: usize| blanks_end(src, i);
+        let name = |i: usize| plain_name(src, i);
         let assign_after = |i: usize| -> Option<usize> {
             let at = blanks(i);
             (src.get(at..at + 2) == Some(b":=")).then(|| blanks(at + 2))
@@ -282,10 +268,7 @@ impl Parser<'_, '_> {
         }
         let end = i + 1;
         self.arena.close(args, end as u32);
-        self.lex.seek(end);
-        self.peeked = None;
-        self.prev_end = end as u32;
-        self.tok = self.next_significant();
+        self.resume_at(end);
         Some(args)
     }
 
@@ -302,12 +285,7 @@ impl Parser<'_, '_> {
         paren: usize,
     ) -> Option<(u32, usize)> {
         let src = self.src;
-        let blanks = |mut i: usize| {
-            while matches!(src.get(i), Some(b' ' | b'\t' | b'\r' | b'\n')) {
-                i += 1;
-            }
-            i
-        };
+        let blanks = |i: usize| blanks_end(src, i);
         let call = self.arena.open(ExprKind::Call, name as u32);
         let n = self.arena.set_mut(call)?;
         n.name_start = name as u32;
@@ -319,29 +297,13 @@ impl Parser<'_, '_> {
             return Some((call, i + 1));
         }
         loop {
-            let rest = src.get(i..)?;
             // A name that is no keyword, or a number with its sign, ended as the lexer ends
             // it (what the numeric-aggregate fast path reads).
-            let (kind, end) = match rest.first()? {
-                b'a'..=b'z' | b'A'..=b'Z' | b'_' => {
-                    let len = ident_len(rest);
-                    if is_keyword(rest.get(..len)?) {
-                        return None;
-                    }
-                    (ExprKind::Ident, i + len)
-                }
-                b'-' | b'+' | b'0'..=b'9' | b'.' => {
-                    let (_, len) = NumLit::parse_prefix(rest)?;
-                    (ExprKind::Num, i + len)
-                }
-                _ => return None,
+            let (kind, end) = match plain_name(src, i) {
+                Some(end) if token_ends(src, end) => (ExprKind::Ident, end),
+                Some(_) => return None,
+                None => (ExprKind::Num, i + fast_number(src, i)?.1),
             };
-            if src
-                .get(end)
-                .is_some_and(|c| c.is_ascii_alphanumeric() || matches!(c, b'_' | b'.'))
-            {
-                return None;
-            }
             let a = self.arena.open(ExprKind::Arg, i as u32);
             let v = self.arena.open(kind, i as u32);
             self.arena.close(v, end as u32);
