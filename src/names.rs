@@ -73,11 +73,6 @@ impl NameKey<'_> {
             .map(u8::to_ascii_uppercase)
     }
 
-    /// The first folded byte (`None` for a blank name): names that differ in it differ.
-    pub(crate) fn first(&self) -> Option<u8> {
-        self.bytes().next()
-    }
-
     /// The name is `word` (any case).
     pub(crate) fn is(&self, word: &[u8]) -> bool {
         self.bytes().eq(word.iter().map(u8::to_ascii_uppercase))
@@ -176,12 +171,24 @@ impl FirstLetters {
         match name.chars().find(|c| !c.is_ascii_whitespace()) {
             Some(c) => {
                 if let Ok(b) = u8::try_from(u32::from(c)) {
-                    self.bytes[usize::from(b.to_ascii_uppercase())] = true;
-                    self.bytes[usize::from(b.to_ascii_lowercase())] = true;
+                    self.mark(b);
                 }
             }
             None => self.empty = true,
         }
+    }
+
+    /// [`insert`](Self::insert) of a name as source bytes (Latin-1).
+    pub(crate) fn insert_bytes(&mut self, name: &[u8]) {
+        match name.iter().find(|b| !b.is_ascii_whitespace()) {
+            Some(&b) => self.mark(b),
+            None => self.empty = true,
+        }
+    }
+
+    fn mark(&mut self, b: u8) {
+        self.bytes[usize::from(b.to_ascii_uppercase())] = true;
+        self.bytes[usize::from(b.to_ascii_lowercase())] = true;
     }
 
     /// Whether source bytes `raw` may fold to a name whose first character was inserted.
@@ -451,6 +458,15 @@ mod tests {
             for name in [name.clone(), format!(" {name}")] {
                 let mut letters = FirstLetters::new();
                 letters.insert(&name);
+                // The same name as a source's bytes, where it is Latin-1.
+                let mut from_bytes = FirstLetters::new();
+                let latin1: Option<Vec<u8>> = name
+                    .chars()
+                    .map(|c| u8::try_from(u32::from(c)).ok())
+                    .collect();
+                if let Some(bytes) = &latin1 {
+                    from_bytes.insert_bytes(bytes);
+                }
                 let mut folded = String::new();
                 let key = fold_str_into(&mut folded, &name).to_owned();
                 for b in 0u8..=255 {
@@ -458,6 +474,13 @@ mod tests {
                         let mut buf = String::new();
                         if fold_into(&mut buf, &raw) == key {
                             assert!(letters.may_start(&raw), "{name:?} {raw:?}");
+                        }
+                        if latin1.is_some() {
+                            assert_eq!(
+                                from_bytes.may_start(&raw),
+                                letters.may_start(&raw),
+                                "{name:?} {raw:?}"
+                            );
                         }
                     }
                 }
@@ -483,11 +506,14 @@ mod tests {
         assert!(NameKey(b"SearchL").starts_with(b"search"));
         assert!(NameKey(b"z10").numbered(b'z') && !NameKey(b"z").numbered(b'z'));
         assert!(!NameKey(b"zone").numbered(b'z'));
-        assert_eq!((a.first(), b.first()), (Some(b'P'), Some(b'P')));
-        assert_eq!(
-            (NameKey(b" t").first(), NameKey(b" ").first()),
-            (Some(b'T'), None)
-        );
+        // A key's first letter, past blanks and in either case, is what FirstLetters keeps.
+        let mut letters = FirstLetters::new();
+        letters.insert_bytes(a.0);
+        letters.insert_bytes(b" t");
+        assert!(letters.may_start(b.0) && letters.may_start(b"T1") && !letters.may_start(b" "));
+        let mut blank = FirstLetters::new();
+        blank.insert_bytes(b" ");
+        assert!(blank.may_start(b"") && !blank.may_start(b"t"));
         assert_eq!(fold("p[ 3 ]"), "P[3]");
         let mut buf = String::new();
         assert_eq!(fold_into(&mut buf, b"pArr{ 2 }"), "PARR{2}");

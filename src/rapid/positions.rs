@@ -8,7 +8,7 @@
 
 use super::expr::{Arena, ExprKind};
 use super::parser::{RobtargetLiteral, Statement, Stmt};
-use crate::names::{NameKey, NameMap};
+use crate::names::{FirstLetters, NameKey, NameMap};
 use crate::position::{
     Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Name, NumField, OffsetCall,
     OffsetKind, Orientation, Position, PositionKind, PositionList, ReadAgainTarget, Usage,
@@ -760,18 +760,12 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
     // The first letters of the task's declared tools, zones and speeds: a call's targets
     // (`p10`) and most of its other arguments start with a letter none of them does, and are
     // not looked up (hashing each argument of 11,000 calls, folded, was 3 M instructions).
-    let mut first_letters = [false; 256];
+    let mut first_letters = FirstLetters::new();
     for n in type_of.keys() {
-        if let Some(slot) = first_letters.get_mut(usize::from(n.first().unwrap_or(0))) {
-            *slot = true;
-        }
+        first_letters.insert_bytes(n.0);
     }
-    let declared = |n: &NameKey, kind: DeclKind| {
-        first_letters
-            .get(usize::from(n.first().unwrap_or(0)))
-            .is_some_and(|&may| may)
-            && type_of.get(n) == Some(&kind)
-    };
+    let declared =
+        |n: &NameKey, kind: DeclKind| first_letters.may_start(n.0) && type_of.get(n) == Some(&kind);
     let is_tool = |n: &NameKey| n.is(b"tool0") || declared(n, DeclKind::Tool);
     let is_zone = |n: &NameKey| n.is(b"fine") || n.numbered(b'z') || declared(n, DeclKind::Zone);
     let is_speed = |n: &NameKey| n.is(b"vmax") || n.numbered(b'v') || declared(n, DeclKind::Speed);
