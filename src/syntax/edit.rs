@@ -343,11 +343,14 @@ impl EditList {
             // The edits came in order (a transform's targets in file order, then its offset
             // calls after them): read straight from the run, without the merge's heap and
             // its bookkeeping per edit.
-            [run] => Merge::One {
-                cursor: Cursor::of(run),
+            [run] => Merge {
+                runs: Runs::One(Cursor::of(run)),
                 last: None,
             },
-            _ => Merge::Many(self.merged()),
+            _ => Merge {
+                runs: Runs::Many(self.merged()),
+                last: None,
+            },
         }
     }
 
@@ -369,7 +372,6 @@ impl EditList {
             heap,
             run: 0,
             head,
-            last: None,
         }
     }
 }
@@ -439,6 +441,15 @@ impl Cursor {
         }
     }
 
+    /// The chunk of the log its next edit is in (`usize::MAX` once it has none).
+    fn lowest_chunk(&self) -> usize {
+        if self.left > 0 {
+            self.place.chunk
+        } else {
+            usize::MAX
+        }
+    }
+
     /// The run's next edit. The log holds what [`EditList::push`] wrote, so every record reads
     /// back whole; one that did not would end the run.
     #[inline(always)]
@@ -483,13 +494,17 @@ impl Cursor {
     }
 }
 
-/// [`EditList::sorted`]: one run read as it is, or several merged.
-enum Merge {
-    One {
-        cursor: Cursor,
-        /// The last edit given (the next is compared with it).
-        last: Option<Record>,
-    },
+/// [`EditList::sorted`]: the edits of one run read as they are, or of several merged, each
+/// identical duplicate of the edit before it left out.
+struct Merge {
+    runs: Runs,
+    /// The last edit given (the next is compared with it).
+    last: Option<Record>,
+}
+
+/// Where [`Merge`] reads the edits from, in order by span.
+enum Runs {
+    One(Cursor),
     Many(Sorted),
 }
 
@@ -497,32 +512,27 @@ impl Merge {
     /// The next edit by span, read from `log`.
     #[inline]
     fn next(&mut self, log: &Chunks) -> Option<Record> {
-        match self {
-            Merge::One { cursor, last } => loop {
-                let head = cursor.next(log)?;
-                if last.is_some_and(|l| l.same(&head, log)) {
-                    continue;
-                }
-                *last = Some(head);
-                return Some(head);
-            },
-            Merge::Many(sorted) => sorted.next(log),
+        loop {
+            let head = match &mut self.runs {
+                Runs::One(cursor) => cursor.next(log)?,
+                Runs::Many(sorted) => sorted.next(log)?,
+            };
+            if self.last.is_some_and(|l| l.same(&head, log)) {
+                continue;
+            }
+            self.last = Some(head);
+            return Some(head);
         }
     }
 
-    /// The first chunk of the log still to be read ([`Sorted::lowest_chunk`]).
+    /// The first chunk of the log still to be read: what the runs have not given yet, and the
+    /// last edit given.
     fn lowest_chunk(&self) -> usize {
-        match self {
-            Merge::One { cursor, last } => {
-                let unread = (cursor.left > 0).then_some(cursor.place.chunk);
-                unread
-                    .into_iter()
-                    .chain(last.map(|r| r.text.chunk))
-                    .min()
-                    .unwrap_or(usize::MAX)
-            }
-            Merge::Many(sorted) => sorted.lowest_chunk(),
-        }
+        let runs = match &self.runs {
+            Runs::One(cursor) => cursor.lowest_chunk(),
+            Runs::Many(sorted) => sorted.lowest_chunk(),
+        };
+        runs.min(self.last.map_or(usize::MAX, |r| r.text.chunk))
     }
 }
 
@@ -538,34 +548,27 @@ struct Sorted {
     /// The run taken from, and its next edit.
     run: usize,
     head: Option<Record>,
-    last: Option<Record>,
 }
 
 impl Sorted {
     /// The next edit by span, read from `log`.
     #[inline]
     fn next(&mut self, log: &Chunks) -> Option<Record> {
-        loop {
-            let key = self.head.map(|h| (h.start, h.end, self.run));
-            match (key, self.heap.peek()) {
-                (Some(key), Some(&Reverse(top))) if top < key => {
-                    // Another run's edit comes first: the current one waits in the heap.
-                    self.heads[self.run] = self.head.take();
-                    self.heap.push(Reverse(key));
-                    self.take_top();
-                }
-                (None, Some(_)) => self.take_top(),
-                (None, None) => return None,
-                _ => {}
+        let key = self.head.map(|h| (h.start, h.end, self.run));
+        match (key, self.heap.peek()) {
+            (Some(key), Some(&Reverse(top))) if top < key => {
+                // Another run's edit comes first: the current one waits in the heap.
+                self.heads[self.run] = self.head.take();
+                self.heap.push(Reverse(key));
+                self.take_top();
             }
-            let head = self.head?;
-            self.head = self.cursors.get_mut(self.run)?.next(log);
-            if self.last.is_some_and(|l| l.same(&head, log)) {
-                continue;
-            }
-            self.last = Some(head);
-            return Some(head);
+            (None, Some(_)) => self.take_top(),
+            (None, None) => return None,
+            _ => {}
         }
+        let head = self.head?;
+        self.head = self.cursors.get_mut(self.run)?.next(log);
+        Some(head)
     }
 
     /// Makes the run of the heap's first edit the current one.
@@ -576,18 +579,14 @@ impl Sorted {
         }
     }
 
-    /// The first chunk of the log still to be read: what the runs have not read yet, the
-    /// edits read ahead, and the last edit given (the next is compared with it).
+    /// The first chunk of the log still to be read: what the runs have not read yet and the
+    /// edits read ahead.
     fn lowest_chunk(&self) -> usize {
-        let unread = self
-            .cursors
-            .iter()
-            .filter(|c| c.left > 0)
-            .map(|c| c.place.chunk);
+        let unread = self.cursors.iter().map(Cursor::lowest_chunk);
         let read_ahead = self
             .heads
             .iter()
-            .chain([&self.head, &self.last])
+            .chain([&self.head])
             .flatten()
             .map(|r| r.text.chunk);
         unread.chain(read_ahead).min().unwrap_or(usize::MAX)

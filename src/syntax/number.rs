@@ -247,7 +247,9 @@ impl NumLit {
         // digits as written).
         let exponent_style = style.and_then(|(upper, sign, digits)| {
             Some(Exponent {
-                value: i8::try_from(exponent).ok().filter(|e| e.unsigned_abs() < 100)?,
+                value: i8::try_from(exponent)
+                    .ok()
+                    .filter(|e| e.unsigned_abs() < 100)?,
                 upper,
                 sign,
                 digits: u8::try_from(digits).ok().filter(|&d| d <= 3)?,
