@@ -662,7 +662,14 @@ impl<'a> Reader<'a> {
     }
 
     fn offset(&mut self) -> Option<usize> {
-        let delta = packed::unzigzag(self.uint()?);
+        let zigzagged = self.uint()?;
+        self.moved_by(zigzagged)
+    }
+
+    /// Moves the cursor by a field's zigzagged offset from the field before: its start.
+    #[inline(always)]
+    fn moved_by(&mut self, zigzagged: u64) -> Option<usize> {
+        let delta = packed::unzigzag(zigzagged);
         self.cursor = usize::try_from(self.cursor as i64 + delta).ok()?;
         Some(self.cursor)
     }
@@ -717,9 +724,8 @@ impl<'a> Reader<'a> {
         // one byte. Through the general tag and LEB128 reading that was a fifth of a field.
         if let [READ_AGAIN, delta @ 0..0x80, rest @ ..] = self.bytes {
             self.bytes = rest;
-            let delta = packed::unzigzag(u64::from(*delta));
-            self.cursor = usize::try_from(self.cursor as i64 + delta).ok()?;
-            return Some(Some(NumField::read_at(self.src, self.cursor)?));
+            let start = self.moved_by(u64::from(*delta))?;
+            return Some(Some(NumField::read_at(self.src, start)?));
         }
         let f = match self.byte()? {
             ABSENT => return Some(None),
