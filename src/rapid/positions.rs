@@ -7,7 +7,7 @@
 //! further down the module.
 
 use super::expr::{Arena, ExprKind};
-use super::parser::{RobtargetLiteral, Statement, Stmt};
+use super::parser::{PlainArgs, RobtargetLiteral, Statement, Stmt};
 use crate::names::{FirstLetters, NameKey, NameMap};
 use crate::position::{
     Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Name, NumField, OffsetCall,
@@ -954,6 +954,7 @@ impl Extractor<'_> {
             stmt,
             span,
             literal,
+            plain_args,
         } = statement;
         match *stmt {
             Stmt::Decl {
@@ -1012,7 +1013,9 @@ impl Extractor<'_> {
                     r.fields.push((type_name, name));
                 }
             }
-            Stmt::Call { name, args } => self.statement_call(src, arena, name, args, span),
+            Stmt::Call { name, args } => {
+                self.statement_call(src, arena, name, args, plain_args, span)
+            }
             Stmt::Assign { target, value } => {
                 self.scan(src, arena, true);
                 let literal = is_literal(src, arena, value);
@@ -1203,8 +1206,23 @@ impl Extractor<'_> {
         }
     }
 
-    fn statement_call(&mut self, src: &[u8], arena: &Arena, name: Span, args: u32, span: Span) {
-        let (inline, via_offset) = self.scan(src, arena, true);
+    /// A call's use: its callee, line and routine, its tool and work object, its positional
+    /// arguments, and the targets written in it or reached through an offset (`Offs(p10, ..)`).
+    /// Arguments the parser read as plain names (`plain`) hold neither: no expression of
+    /// theirs is looked at.
+    fn statement_call(
+        &mut self,
+        src: &[u8],
+        arena: &Arena,
+        name: Span,
+        args: u32,
+        plain: Option<&PlainArgs>,
+        span: Span,
+    ) {
+        let (inline, via_offset) = match plain {
+            Some(_) => (Vec::new(), Vec::new()),
+            None => self.scan(src, arena, true),
+        };
         let (Some(name), Ok(line), Ok(args_start), Ok(refs_start), Ok(inline_start)) = (
             Span32::of(name),
             u32::try_from(self.lines.line(span.start)),
@@ -1230,36 +1248,61 @@ impl Extractor<'_> {
             refs_start,
             inline_start,
         };
-        for a in arena.children(args) {
-            let Some(arg) = arena.get(a) else { continue };
-            let value = if arg.first == super::expr::NONE {
-                None
-            } else {
-                arena.get(arg.first)
-            };
-            if arg.switch {
-                let nm = arg.name_span().slice(src);
-                let v = value.and_then(|v| Span32::of(v.span()));
-                if nm.eq_ignore_ascii_case(b"WObj") {
-                    u.wobj = v;
-                } else if nm.eq_ignore_ascii_case(b"Tool") {
-                    u.tool = v;
+        match plain {
+            Some(plain) => {
+                for a in plain.iter() {
+                    self.call_arg(&mut u, src, a.switch, a.label, a.value.map(|v| (v, true)));
                 }
-            } else {
-                // A required argument may be given by name: `..., fine, tool:=tGun;`.
-                if arg.name_end > arg.name_start
-                    && arg.name_span().slice(src).eq_ignore_ascii_case(b"Tool")
-                {
-                    u.tool = value.and_then(|v| Span32::of(v.span()));
+            }
+            None => {
+                for a in arena.children(args) {
+                    let Some(arg) = arena.get(a) else { continue };
+                    let value = if arg.first == super::expr::NONE {
+                        None
+                    } else {
+                        arena.get(arg.first)
+                    };
+                    let value = value.map(|v| {
+                        let name = matches!(v.kind, ExprKind::Ident | ExprKind::Access);
+                        (v.span(), name)
+                    });
+                    self.call_arg(&mut u, src, arg.switch, arg.name_span(), value);
                 }
-                self.call_args.push(
-                    value
-                        .filter(|v| matches!(v.kind, ExprKind::Ident | ExprKind::Access))
-                        .and_then(|v| Span32::of(v.span())),
-                );
             }
         }
         self.uses.push(u);
+    }
+
+    /// Records one argument of call `u`: written `\label` (`switch`) or `label:=` (a label
+    /// empty for a plain value), with its value's span and whether that value is a name (or
+    /// an access, `p{2}`).
+    fn call_arg(
+        &mut self,
+        u: &mut CallUse,
+        src: &[u8],
+        switch: bool,
+        label: Span,
+        value: Option<(Span, bool)>,
+    ) {
+        let v = value.and_then(|(v, _)| Span32::of(v));
+        if switch {
+            let nm = label.slice(src);
+            if nm.eq_ignore_ascii_case(b"WObj") {
+                u.wobj = v;
+            } else if nm.eq_ignore_ascii_case(b"Tool") {
+                u.tool = v;
+            }
+        } else {
+            // A required argument may be given by name: `..., fine, tool:=tGun;`.
+            if label.end > label.start && label.slice(src).eq_ignore_ascii_case(b"Tool") {
+                u.tool = v;
+            }
+            self.call_args.push(
+                value
+                    .filter(|&(_, name)| name)
+                    .and_then(|(v, _)| Span32::of(v)),
+            );
+        }
     }
 }
 

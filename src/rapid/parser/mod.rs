@@ -75,6 +75,56 @@ pub(crate) struct Statement<'e> {
     /// A [`Stmt::Decl`]'s robtarget value, when the declaration fast path read it: then the
     /// value is not in the arena (release builds give no `init`).
     pub literal: Option<&'e RobtargetLiteral>,
+    /// A [`Stmt::Call`]'s arguments, when each is a plain name (see [`PlainArgs`]): then they
+    /// are not in the arena (the call's `args` is [`NONE`]).
+    pub plain_args: Option<&'e PlainArgs>,
+}
+
+/// The most arguments [`PlainArgs`] holds; a call with more takes the arena's paths.
+pub(crate) const MAX_PLAIN_ARGS: usize = 16;
+
+/// A call's arguments as [`Parser::plain_args`] reads them when every one is a plain name,
+/// `name:=name`, `\switch` or `\switch:=name` (`MoveL p10, v1000, z10, tGun\WObj:=wCar;`,
+/// most lines of a program): in a fixed array, not as expression nodes, which the extractor
+/// then walked back (building and reading a motion's eleven nodes was a tenth of `check`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PlainArgs {
+    pub args: [PlainArg; MAX_PLAIN_ARGS],
+    pub len: usize,
+}
+
+impl PlainArgs {
+    const EMPTY: PlainArgs = PlainArgs {
+        args: [PlainArg::EMPTY; MAX_PLAIN_ARGS],
+        len: 0,
+    };
+
+    pub(crate) fn iter(&self) -> impl Iterator<Item = &PlainArg> {
+        self.args.iter().take(self.len)
+    }
+}
+
+/// One argument of [`PlainArgs`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct PlainArg {
+    /// From the argument's first byte (its `\` for a switch) to its end.
+    pub span: Span,
+    /// The argument's name (`WObj` of `\WObj:=wCar`, `tool` of `tool:=tGun`), empty at the
+    /// argument's start for a plain value, as an [`ExprKind::Arg`] node has it.
+    pub label: Span,
+    /// Written `\name`.
+    pub switch: bool,
+    /// The name given as its value; `None` for a switch without one.
+    pub value: Option<Span>,
+}
+
+impl PlainArg {
+    const EMPTY: PlainArg = PlainArg {
+        span: Span { start: 0, end: 0 },
+        label: Span { start: 0, end: 0 },
+        switch: false,
+        value: None,
+    };
 }
 
 /// More external axes than a controller has are left to the general path.
@@ -241,6 +291,8 @@ struct Parser<'a, 's> {
     literal: RobtargetLiteral,
     /// The literal it last read at each field.
     seen: [Option<SeenLiteral>; SEEN_FIELDS],
+    /// What [`Parser::plain_args`] last read.
+    plain: PlainArgs,
     sink: &'s mut StatementSink<'s>,
 }
 
@@ -420,6 +472,7 @@ impl<'a, 's> Parser<'a, 's> {
             reported_unknown: None,
             fast_paths: true,
             literal: RobtargetLiteral::EMPTY,
+            plain: PlainArgs::EMPTY,
             seen: [None; SEEN_FIELDS],
             sink,
         };
@@ -582,19 +635,29 @@ impl<'a, 's> Parser<'a, 's> {
         self.tree.close(idx);
     }
 
+    /// Hands `stmt` to the sink; a call whose arguments [`Parser::plain_args`] read (its
+    /// `args` is [`NONE`]) with them.
     fn emit(&mut self, stmt: Stmt, start: u32) {
-        self.emit_with(stmt, start, false);
-    }
-
-    /// [`Parser::emit`], handing on [`Parser::literal`] too when `literal`.
-    fn emit_with(&mut self, stmt: Stmt, start: u32, literal: bool) {
-        let span = Span::new(start as usize, self.prev_end as usize);
+        let plain = matches!(stmt, Stmt::Call { args: NONE, .. });
         self.sink.accept(Statement {
             src: self.src,
             arena: &self.arena,
             stmt: &stmt,
-            span,
+            span: Span::new(start as usize, self.prev_end as usize),
+            literal: None,
+            plain_args: plain.then_some(&self.plain),
+        });
+    }
+
+    /// [`Parser::emit`] of a declaration, handing on [`Parser::literal`] too when `literal`.
+    fn emit_with(&mut self, stmt: Stmt, start: u32, literal: bool) {
+        self.sink.accept(Statement {
+            src: self.src,
+            arena: &self.arena,
+            stmt: &stmt,
+            span: Span::new(start as usize, self.prev_end as usize),
             literal: literal.then_some(&self.literal),
+            plain_args: None,
         });
     }
 

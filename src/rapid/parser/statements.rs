@@ -156,11 +156,16 @@ impl Parser<'_, '_> {
     }
 
     /// `call_args = [ arg { [ "," ] arg } ] ";"` — a comma before a `\switch` is optional.
+    ///
+    /// [`NONE`] when [`Parser::plain_args`] read them (into [`Parser::plain`], not the arena).
     pub(super) fn call_args(&mut self, start: u32) -> PResult<u32> {
-        if self.fast_paths
-            && let Some(args) = self.plain_call_args(start)
-        {
-            return Ok(args);
+        if self.fast_paths {
+            if self.plain_args() {
+                return Ok(NONE);
+            }
+            if let Some(args) = self.plain_call_args(start) {
+                return Ok(args);
+            }
         }
         let args = self.arena.open(ExprKind::Args, start);
         let mut last = NONE;
@@ -179,6 +184,65 @@ impl Parser<'_, '_> {
             self.arena.link(args, last, a);
             last = a;
         }
+    }
+
+    /// The fastest path of `call_args`, for a call whose every argument is a plain name,
+    /// `name:=name`, `\switch` or `\switch:=name`: reads them as [`Parser::plain_call_args`]
+    /// does, into [`Parser::plain`] instead of expression nodes, and ends after the `;`. On
+    /// anything else (a function call in an argument too) it reads nothing and says `false`.
+    fn plain_args(&mut self) -> bool {
+        // The general path reads each argument one level deeper; past the limit it refuses.
+        if self.depth > MAX_DEPTH {
+            return false;
+        }
+        let src = self.src;
+        let blanks = |i: usize| blanks_end(src, i);
+        let name = |i: usize| plain_name(src, i);
+        // Each name is read once, and the blanks after it once: what follows decides what it
+        // was (a label before `:=`, a value, or a function's name before `(`).
+        let mut i = self.tok.start as usize;
+        let mut len = 0;
+        loop {
+            match src.get(i) {
+                Some(b';') => break,
+                Some(b',') if len > 0 => i = blanks(i + 1),
+                Some(b'\\') => {}
+                _ if len == 0 => {}
+                _ => return false,
+            }
+            let start = i;
+            let switch = src.get(i) == Some(&b'\\');
+            let at = if switch { blanks(i + 1) } else { i };
+            let Some(end) = name(at) else { return false };
+            let mut after = blanks(end);
+            let (label, value, end) = if src.get(after..after + 2) == Some(b":=") {
+                let v = blanks(after + 2);
+                let Some(v_end) = name(v) else { return false };
+                after = blanks(v_end);
+                (Span::new(at, end), Some(Span::new(v, v_end)), v_end)
+            } else if switch {
+                (Span::new(at, end), None, end)
+            } else {
+                (Span::new(at, at), Some(Span::new(at, end)), end)
+            };
+            if src.get(after) == Some(&b'(') {
+                return false;
+            }
+            let Some(slot) = self.plain.args.get_mut(len) else {
+                return false;
+            };
+            *slot = PlainArg {
+                span: Span::new(start, end),
+                label,
+                switch,
+                value,
+            };
+            len += 1;
+            i = after;
+        }
+        self.plain.len = len;
+        self.resume_at(i + 1);
+        true
     }
 
     /// Fast path of `call_args` for the arguments nearly every motion line has: plain names,
@@ -588,11 +652,45 @@ mod tests {
         let mut sink = crate::syntax::NoSink;
         let mut p = Parser::new(src, &mut sink, TreeBuilder::with_capacity(4));
         p.fast_paths = fast;
-        let result = p
-            .simple_statement()
-            .map(|(kind, stmt)| (kind, format!("{stmt:?}")))
+        let result = p.simple_statement();
+        let mut arena = p.arena.clone();
+        let result = result
+            .map(|(kind, stmt)| match stmt {
+                Stmt::Call { name, args: NONE } => {
+                    let args = plain_args_as_nodes(&mut arena, &p.plain, name.end, p.prev_end);
+                    (kind, format!("{:?}", Stmt::Call { name, args }))
+                }
+                stmt => (kind, format!("{stmt:?}")),
+            })
             .map_err(|e| e.expected);
-        (result, p.arena.nodes.clone(), p.tok, p.prev_end)
+        (result, arena.nodes, p.tok, p.prev_end)
+    }
+
+    /// The nodes the general path builds for the arguments `plain` holds, from `start` (the
+    /// callee's end) to `end` (after the `;`), appended to `arena`: what the plain-argument
+    /// path stands for.
+    fn plain_args_as_nodes(arena: &mut Arena, plain: &PlainArgs, start: usize, end: u32) -> u32 {
+        let args = arena.open(ExprKind::Args, start as u32);
+        let mut last = NONE;
+        for a in plain.iter() {
+            let arg = arena.open(ExprKind::Arg, a.span.start as u32);
+            if a.label.end > a.label.start {
+                let n = arena.set_mut(arg).unwrap();
+                n.switch = a.switch;
+                n.name_start = a.label.start as u32;
+                n.name_end = a.label.end as u32;
+            }
+            if let Some(v) = a.value {
+                let id = arena.open(ExprKind::Ident, v.start as u32);
+                arena.close(id, v.end as u32);
+                arena.link(arg, NONE, id);
+            }
+            arena.close(arg, a.span.end as u32);
+            arena.link(args, last, arg);
+            last = arg;
+        }
+        arena.close(args, end);
+        args
     }
 
     /// Argument lists of the fast path's shape, with pieces it leaves to the general path
@@ -683,6 +781,43 @@ mod tests {
         assert!(p.plain_call_args(5).is_some());
         assert_eq!(read(src, true), read(src, false));
         (p.arena.nodes.len(), p.tok.start as usize)
+    }
+
+    #[test]
+    fn plain_names_are_read_without_nodes() {
+        let src = b"MoveL p10, v1000, z10, tGun\\WObj:=wCar, \\Conc;\nx";
+        let mut sink = crate::syntax::NoSink;
+        let mut p = Parser::new(src, &mut sink, TreeBuilder::with_capacity(4));
+        p.bump();
+        assert!(p.plain_args());
+        assert!(p.arena.nodes.is_empty());
+        let texts: Vec<_> = p
+            .plain
+            .iter()
+            .map(|a| {
+                let text = |s: Span| String::from_utf8_lossy(s.slice(src)).into_owned();
+                (text(a.span), text(a.label), a.switch, a.value.map(text))
+            })
+            .collect();
+        let t = |s: &str| s.to_owned();
+        assert_eq!(
+            texts,
+            [
+                (t("p10"), t(""), false, Some(t("p10"))),
+                (t("v1000"), t(""), false, Some(t("v1000"))),
+                (t("z10"), t(""), false, Some(t("z10"))),
+                (t("tGun"), t(""), false, Some(t("tGun"))),
+                (t("\\WObj:=wCar"), t("WObj"), true, Some(t("wCar"))),
+                (t("\\Conc"), t("Conc"), true, None),
+            ]
+        );
+        assert_eq!(p.tok.start as usize, src.len() - 1);
+        // An argument that calls a function is the node path's.
+        let src = b"MoveL Offs(p10,0,0,10), v1000, z10, tGun;\nx";
+        let mut p = Parser::new(src, &mut sink, TreeBuilder::with_capacity(4));
+        p.bump();
+        assert!(!p.plain_args());
+        assert_eq!(p.tok.start, 6);
     }
 
     #[test]
