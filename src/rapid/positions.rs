@@ -1366,10 +1366,15 @@ mod tests {
         #[test]
         fn declared_targets_read_alike_with_and_without_the_fast_paths(
             decls in proptest::collection::vec(declaration(), 1..8),
+            twice in proptest::bool::ANY,
         ) {
             let mut src = b"MODULE M\r\n".to_vec();
             for d in &decls {
                 src.extend_from_slice(d);
+                // The same parts again, which the fast path takes from the one before.
+                if twice {
+                    src.extend_from_slice(d);
+                }
             }
             src.extend_from_slice(b"PROC main()\r\n  MoveL p1, v10, z1, tool0;\r\nENDPROC\r\nENDMODULE\r\n");
             let fast = extracted(&src, true);
@@ -1439,6 +1444,52 @@ mod tests {
             }
             line
         })
+    }
+
+    #[test]
+    fn parts_taken_from_the_target_before_read_as_the_general_path_reads_them() {
+        let q = [
+            "[0,0,1,0]",
+            "[0.000000,0.707107,0.707107,0.000000]",
+            // The first 16 bytes as above, then other digits; then past 64 bytes.
+            "[0.000000,0.707107,0.707108,0.000000]",
+            "[0.000000000000001,0.707106781186548,0.707106781186548,0.000000000000001]",
+        ];
+        let cf = [
+            "[0,0,-1,0]",
+            "[0,0,-1,1]",
+            "[-1,-2,-2,0]",
+            "[ 0 , 0 , -1 , 0 ]",
+        ];
+        let mut src = b"MODULE M\r\n".to_vec();
+        let mut n = 0;
+        for (a, b) in [
+            (0, 0),
+            (1, 0),
+            (1, 0),
+            (2, 0),
+            (2, 1),
+            (3, 1),
+            (3, 1),
+            (1, 2),
+            (1, 3),
+        ] {
+            for _ in 0..2 {
+                n += 1;
+                let line = format!(
+                    "  CONST robtarget p{n}:=[[1,2,3],{},{},[{n},9E+09]];\r\n",
+                    q[a], cf[b]
+                );
+                src.extend_from_slice(line.as_bytes());
+            }
+        }
+        src.extend_from_slice(b"ENDMODULE\r\n");
+        let fast = extracted(&src, true);
+        assert_eq!(fast, extracted(&src, false));
+        assert_eq!(fast.0.len(), 18);
+        let p = fast.0[9].0.as_ref().unwrap();
+        assert_eq!(p.label(), "p10");
+        assert!(format!("{p:?}").contains("0.707108"), "{p:?}");
     }
 
     #[test]

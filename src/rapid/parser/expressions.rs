@@ -152,14 +152,21 @@ impl Parser<'_, '_> {
         let (trans, rest) = self.seen.split_at_mut(3);
         let (quaternion, rest) = rest.split_at_mut(4);
         let (quadrants, extax) = rest.split_at_mut(4);
+        let [q_part, cf_part] = &mut self.seen_parts;
         let read = (|| {
             let (3, i) = list(start + 1, &mut lit.trans, &mut [], trans)? else {
                 return None;
             };
-            let (4, i) = list(comma(i)?, &mut lit.quaternion, &mut lit.q, quaternion)? else {
+            let (q_at, q) = (blanks(comma(i)?), &mut lit.quaternion);
+            let (4, i) =
+                SeenPart::take_or_read(q_part, src, q_at, q, &mut lit.q, quaternion, &list)?
+            else {
                 return None;
             };
-            let (4, i) = list(comma(i)?, &mut lit.quadrants, &mut lit.cf, quadrants)? else {
+            let (cf_at, cf) = (blanks(comma(i)?), &mut lit.quadrants);
+            let (4, i) =
+                SeenPart::take_or_read(cf_part, src, cf_at, cf, &mut lit.cf, quadrants, &list)?
+            else {
                 return None;
             };
             let (axes, i) = list(comma(i)?, &mut lit.extax, &mut [], extax)?;

@@ -199,6 +199,114 @@ impl SeenLiteral {
     }
 }
 
+/// A part of a robtarget literal [`Parser::robtarget_literal`] read (the quaternion or the
+/// configuration, `[` to `]`): its text, where its numbers start in it, and their values.
+#[derive(Clone, Copy, Debug)]
+struct SeenPart {
+    text: [u8; SeenPart::MAX_LEN],
+    len: usize,
+    offsets: [u8; 4],
+    values: [f64; 4],
+}
+
+impl SeenPart {
+    /// Longer parts are not remembered (four numbers of 15 digits are 67 bytes).
+    const MAX_LEN: usize = 64;
+
+    /// The part `src[i..end]` whose four numbers start at `starts` and have `values`.
+    fn of(src: &[u8], i: usize, end: usize, starts: &[usize], values: &[f64]) -> Option<SeenPart> {
+        let bytes = src.get(i..end)?;
+        let mut part = SeenPart {
+            text: [0; SeenPart::MAX_LEN],
+            len: bytes.len(),
+            offsets: [0; 4],
+            values: [0.0; 4],
+        };
+        part.text.get_mut(..bytes.len())?.copy_from_slice(bytes);
+        if starts.len() != 4 || values.len() != 4 {
+            return None;
+        }
+        for (o, &s) in part.offsets.iter_mut().zip(starts) {
+            *o = u8::try_from(s.checked_sub(i)?).ok()?;
+        }
+        part.values.copy_from_slice(values);
+        Some(part)
+    }
+
+    /// Whether `src` holds this part's text at `i`. Its first 16 bytes are compared as a
+    /// masked word first: a part that differs mostly does there, and a slice compare is a
+    /// call.
+    #[inline]
+    fn at(&self, src: &[u8], i: usize) -> bool {
+        let mask = u128::MAX
+            .checked_shr(8 * 16usize.saturating_sub(self.len) as u32)
+            .unwrap_or(0);
+        let word = |b: &[u8]| {
+            b.first_chunk::<16>()
+                .map(|w| u128::from_le_bytes(*w) & mask)
+        };
+        src.get(i..).and_then(word) == word(&self.text)
+            && src.get(i..i + self.len) == self.text.get(..self.len)
+    }
+
+    /// The part at `i` (past blanks) read by `list` (starts into `starts`, values into
+    /// `values`, each literal into `seen`: its count and the index after it), or taken whole
+    /// from `memo`, the last one read at its place, when it is the same text (a run of targets
+    /// with one orientation and configuration). While each part differs from the one before
+    /// (targets each with their own orientation), only one in 16 is compared and remembered:
+    /// copying every part's text cost more than the compares saved. Inlined: a call per part
+    /// was 50 instructions.
+    #[inline(always)]
+    fn take_or_read(
+        (memo, misses): &mut (Option<SeenPart>, u8),
+        src: &[u8],
+        i: usize,
+        starts: &mut [usize],
+        values: &mut [f64],
+        seen: &mut [Option<SeenLiteral>],
+        list: &impl Fn(
+            usize,
+            &mut [usize],
+            &mut [f64],
+            &mut [Option<SeenLiteral>],
+        ) -> Option<(usize, usize)>,
+    ) -> Option<(usize, usize)> {
+        let tried = *misses <= 2 || *misses % 16 == 0;
+        if tried
+            && let Some(m) = memo
+            && m.at(src, i)
+        {
+            let read = m.read(i, starts, values);
+            #[cfg(debug_assertions)]
+            {
+                let (mut s, mut v, mut l) = (starts.to_vec(), values.to_vec(), seen.to_vec());
+                assert_eq!(list(i, &mut s, &mut v, &mut l), read);
+                assert_eq!(s, starts);
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&v), bits(values));
+            }
+            *misses = 0;
+            return read;
+        }
+        let (count, end) = list(i, starts, values, seen)?;
+        *misses = misses.wrapping_add(1);
+        if tried {
+            *memo = SeenPart::of(src, i, end, starts.get(..count)?, values);
+        }
+        Some((count, end))
+    }
+
+    /// What reading the part at `i` gives, as [`SeenPart::at`] found it there: its numbers'
+    /// starts and values into `starts` and `values`, the count and the index after the part.
+    fn read(&self, i: usize, starts: &mut [usize], values: &mut [f64]) -> Option<(usize, usize)> {
+        for (s, &o) in starts.get_mut(..4)?.iter_mut().zip(&self.offsets) {
+            *s = i + usize::from(o);
+        }
+        values.get_mut(..4)?.copy_from_slice(&self.values);
+        Some((4, i + self.len))
+    }
+}
+
 /// The fields of a robtarget literal [`Parser::robtarget_literal`] remembers a literal of:
 /// translation, quaternion, configuration and external axes.
 const SEEN_FIELDS: usize = 3 + 4 + 4 + MAX_EXTERNAL_AXES;
@@ -291,6 +399,9 @@ struct Parser<'a, 's> {
     literal: RobtargetLiteral,
     /// The literal it last read at each field.
     seen: [Option<SeenLiteral>; SEEN_FIELDS],
+    /// The quaternion and the configuration it last read, and how many times in a row each
+    /// was not the one before.
+    seen_parts: [(Option<SeenPart>, u8); 2],
     /// What [`Parser::plain_args`] last read.
     plain: PlainArgs,
     sink: &'s mut StatementSink<'s>,
@@ -474,6 +585,7 @@ impl<'a, 's> Parser<'a, 's> {
             literal: RobtargetLiteral::EMPTY,
             plain: PlainArgs::EMPTY,
             seen: [None; SEEN_FIELDS],
+            seen_parts: [(None, 0); 2],
             sink,
         };
         p.tok = p.next_significant();
