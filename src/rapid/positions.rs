@@ -1461,9 +1461,11 @@ mod tests {
             "[-1,-2,-2,0]",
             "[ 0 , 0 , -1 , 0 ]",
         ];
+        // What follows the first external axis.
+        let axes = [",9E+09]", ",9E+09,9E+09]", " , 9E9 ]", "]", ",9E+09,9E+08]"];
         let mut src = b"MODULE M\r\n".to_vec();
         let mut n = 0;
-        for (a, b) in [
+        for (k, (a, b)) in [
             (0, 0),
             (1, 0),
             (1, 0),
@@ -1473,12 +1475,17 @@ mod tests {
             (3, 1),
             (1, 2),
             (1, 3),
-        ] {
+        ]
+        .into_iter()
+        .enumerate()
+        {
             for _ in 0..2 {
                 n += 1;
                 let line = format!(
-                    "  CONST robtarget p{n}:=[[1,2,3],{},{},[{n},9E+09]];\r\n",
-                    q[a], cf[b]
+                    "  CONST robtarget p{n}:=[[1,2,3],{},{},[{n}{}];\r\n",
+                    q[a],
+                    cf[b],
+                    axes[k % axes.len()]
                 );
                 src.extend_from_slice(line.as_bytes());
             }

@@ -3,6 +3,9 @@
 
 use super::*;
 
+/// The starts of a list's numbers (as many as a robtarget's external axes).
+type ListStarts = [usize; MAX_EXTERNAL_AXES];
+
 impl Parser<'_, '_> {
     /// Fast path of `aggregate` for the shape that makes up most of a robtarget file:
     /// brackets, commas, numbers with an attached sign, spaces and newlines — nothing else.
@@ -102,10 +105,17 @@ impl Parser<'_, '_> {
         // The bracketed list of numbers at `i`: each start into `starts`, as many values as
         // `values` holds, each literal into `seen` (as far as it holds); how many there are
         // and the index after the `]`.
+        //
+        // With `tail` (the external axes), what follows the first number is taken whole from
+        // the list read before when it is the same text (a track's position, then `9E+09`
+        // for each unused axis: alike in every target of a program), and remembered when not,
+        // as [`SeenPart::take_or_read`] takes a part. A debug build reads it all the same and
+        // holds the two to each other.
         let list = |i: usize,
                     starts: &mut [usize],
                     values: &mut [f64],
-                    seen: &mut [Option<SeenLiteral>]|
+                    seen: &mut [Option<SeenLiteral>],
+                    mut tail: Option<&mut (Option<SeenPart>, u8)>|
          -> Option<(usize, usize)> {
             let mut i = blanks(i);
             if src.get(i) != Some(&b'[') {
@@ -113,6 +123,10 @@ impl Parser<'_, '_> {
             }
             i += 1;
             let mut count = 0;
+            // Where the first number ended, whether the tail was compared there, and what the
+            // remembered one gave (kept in a debug build to compare with the reading).
+            let (mut first_end, mut tried) = (0, false);
+            let mut taken: Option<(Option<(usize, usize)>, ListStarts)> = None;
             loop {
                 i = blanks(i);
                 let last = seen.get_mut(count);
@@ -139,37 +153,83 @@ impl Parser<'_, '_> {
                     *v = number.value();
                 }
                 count += 1;
+                if count == 1
+                    && let Some((memo, misses)) = tail.as_deref_mut()
+                {
+                    first_end = end;
+                    tried = *misses <= 2 || *misses % 16 == 0;
+                    if tried
+                        && let Some(m) = memo
+                        && m.at(src, end)
+                    {
+                        *misses = 0;
+                        let read = m.read(end, starts.get_mut(1..)?, &mut []);
+                        let read = read.map(|(n, after)| (n + 1, after));
+                        if !cfg!(debug_assertions) {
+                            return read;
+                        }
+                        let mut seen_starts = [0; MAX_EXTERNAL_AXES];
+                        let n = starts.len().min(MAX_EXTERNAL_AXES);
+                        seen_starts.get_mut(..n)?.copy_from_slice(starts.get(..n)?);
+                        taken = Some((read, seen_starts));
+                    }
+                }
                 i = blanks(end);
                 match src.get(i)? {
                     b',' => i += 1,
-                    b']' => return Some((count, i + 1)),
+                    b']' => {
+                        let read = Some((count, i + 1));
+                        if let Some((taken, seen_starts)) = taken {
+                            assert_eq!(taken, read);
+                            assert_eq!(seen_starts.get(..count), starts.get(..count));
+                        } else if let Some((memo, misses)) = tail {
+                            *misses = misses.wrapping_add(1);
+                            if tried {
+                                let more = starts.get(1..count)?;
+                                *memo = SeenPart::of(src, first_end, i + 1, more, &[]);
+                            }
+                        }
+                        return read;
+                    }
                     _ => return None,
                 }
             }
         };
+        let plain_list =
+            |i: usize,
+             starts: &mut [usize],
+             values: &mut [f64],
+             seen: &mut [Option<SeenLiteral>]| list(i, starts, values, seen, None);
         let comma = |i: usize| (src.get(blanks(i)) == Some(&b',')).then(|| blanks(i) + 1);
         let lit = &mut self.literal;
         let (trans, rest) = self.seen.split_at_mut(3);
         let (quaternion, rest) = rest.split_at_mut(4);
         let (quadrants, extax) = rest.split_at_mut(4);
-        let [q_part, cf_part] = &mut self.seen_parts;
+        let [q_part, cf_part, ex_tail] = &mut self.seen_parts;
         let read = (|| {
-            let (3, i) = list(start + 1, &mut lit.trans, &mut [], trans)? else {
+            let (3, i) = list(start + 1, &mut lit.trans, &mut [], trans, None)? else {
                 return None;
             };
             let (q_at, q) = (blanks(comma(i)?), &mut lit.quaternion);
             let (4, i) =
-                SeenPart::take_or_read(q_part, src, q_at, q, &mut lit.q, quaternion, &list)?
+                SeenPart::take_or_read(q_part, src, q_at, q, &mut lit.q, quaternion, &plain_list)?
             else {
                 return None;
             };
             let (cf_at, cf) = (blanks(comma(i)?), &mut lit.quadrants);
-            let (4, i) =
-                SeenPart::take_or_read(cf_part, src, cf_at, cf, &mut lit.cf, quadrants, &list)?
+            let (4, i) = SeenPart::take_or_read(
+                cf_part,
+                src,
+                cf_at,
+                cf,
+                &mut lit.cf,
+                quadrants,
+                &plain_list,
+            )?
             else {
                 return None;
             };
-            let (axes, i) = list(comma(i)?, &mut lit.extax, &mut [], extax)?;
+            let (axes, i) = list(comma(i)?, &mut lit.extax, &mut [], extax, Some(ex_tail))?;
             let i = blanks(i);
             (src.get(i) == Some(&b']') && src.get(blanks(i + 1)) == Some(&b';'))
                 .then_some((axes, i + 1))

@@ -200,36 +200,38 @@ impl SeenLiteral {
 }
 
 /// A part of a robtarget literal [`Parser::robtarget_literal`] read (the quaternion or the
-/// configuration, `[` to `]`): its text, where its numbers start in it, and their values.
+/// configuration, `[` to `]`, or the external axes after the first, to the `]`): its text,
+/// where its numbers start in it, and their values (as many as it was asked for).
 #[derive(Clone, Copy, Debug)]
 struct SeenPart {
     text: [u8; SeenPart::MAX_LEN],
     len: usize,
-    offsets: [u8; 4],
+    count: usize,
+    offsets: [u8; MAX_EXTERNAL_AXES],
     values: [f64; 4],
+    value_count: usize,
 }
 
 impl SeenPart {
     /// Longer parts are not remembered (four numbers of 15 digits are 67 bytes).
     const MAX_LEN: usize = 64;
 
-    /// The part `src[i..end]` whose four numbers start at `starts` and have `values`.
+    /// The part `src[i..end]` whose numbers start at `starts` and have `values`.
     fn of(src: &[u8], i: usize, end: usize, starts: &[usize], values: &[f64]) -> Option<SeenPart> {
         let bytes = src.get(i..end)?;
         let mut part = SeenPart {
             text: [0; SeenPart::MAX_LEN],
             len: bytes.len(),
-            offsets: [0; 4],
+            count: starts.len(),
+            offsets: [0; MAX_EXTERNAL_AXES],
             values: [0.0; 4],
+            value_count: values.len(),
         };
         part.text.get_mut(..bytes.len())?.copy_from_slice(bytes);
-        if starts.len() != 4 || values.len() != 4 {
-            return None;
-        }
-        for (o, &s) in part.offsets.iter_mut().zip(starts) {
+        for (o, &s) in part.offsets.get_mut(..starts.len())?.iter_mut().zip(starts) {
             *o = u8::try_from(s.checked_sub(i)?).ok()?;
         }
-        part.values.copy_from_slice(values);
+        part.values.get_mut(..values.len())?.copy_from_slice(values);
         Some(part)
     }
 
@@ -299,11 +301,13 @@ impl SeenPart {
     /// What reading the part at `i` gives, as [`SeenPart::at`] found it there: its numbers'
     /// starts and values into `starts` and `values`, the count and the index after the part.
     fn read(&self, i: usize, starts: &mut [usize], values: &mut [f64]) -> Option<(usize, usize)> {
-        for (s, &o) in starts.get_mut(..4)?.iter_mut().zip(&self.offsets) {
+        let offsets = self.offsets.get(..self.count)?;
+        for (s, &o) in starts.get_mut(..self.count)?.iter_mut().zip(offsets) {
             *s = i + usize::from(o);
         }
-        values.get_mut(..4)?.copy_from_slice(&self.values);
-        Some((4, i + self.len))
+        let n = self.value_count.min(values.len());
+        values.get_mut(..n)?.copy_from_slice(self.values.get(..n)?);
+        Some((self.count, i + self.len))
     }
 }
 
@@ -399,9 +403,9 @@ struct Parser<'a, 's> {
     literal: RobtargetLiteral,
     /// The literal it last read at each field.
     seen: [Option<SeenLiteral>; SEEN_FIELDS],
-    /// The quaternion and the configuration it last read, and how many times in a row each
-    /// was not the one before.
-    seen_parts: [(Option<SeenPart>, u8); 2],
+    /// The quaternion, the configuration and the external axes after the first it last read,
+    /// and how many times in a row each was not the one before.
+    seen_parts: [(Option<SeenPart>, u8); 3],
     /// What [`Parser::plain_args`] last read.
     plain: PlainArgs,
     sink: &'s mut StatementSink<'s>,
@@ -585,7 +589,7 @@ impl<'a, 's> Parser<'a, 's> {
             literal: RobtargetLiteral::EMPTY,
             plain: PlainArgs::EMPTY,
             seen: [None; SEEN_FIELDS],
-            seen_parts: [(None, 0); 2],
+            seen_parts: [(None, 0); 3],
             sink,
         };
         p.tok = p.next_significant();
