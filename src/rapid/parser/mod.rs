@@ -83,7 +83,7 @@ pub(crate) struct Statement<'e> {
 /// The most arguments [`PlainArgs`] holds; a call with more takes the arena's paths.
 pub(crate) const MAX_PLAIN_ARGS: usize = 16;
 
-/// A call's arguments as [`Parser::plain_args`] reads them when every one is a plain name,
+/// A call's arguments as [`Parser::plain_args_from`] reads them when every one is a plain name,
 /// `name:=name`, `\switch` or `\switch:=name` (`MoveL p10, v1000, z10, tGun\WObj:=wCar;`,
 /// most lines of a program): in a fixed array, not as expression nodes, which the extractor
 /// then walked back (building and reading a motion's eleven nodes was a tenth of `check`).
@@ -406,7 +406,7 @@ struct Parser<'a, 's> {
     /// The quaternion, the configuration and the external axes after the first it last read,
     /// and how many times in a row each was not the one before.
     seen_parts: [(Option<SeenPart>, u8); 3],
-    /// What [`Parser::plain_args`] last read.
+    /// What [`Parser::plain_args_from`] last read.
     plain: PlainArgs,
     sink: &'s mut StatementSink<'s>,
 }
@@ -751,7 +751,7 @@ impl<'a, 's> Parser<'a, 's> {
         self.tree.close(idx);
     }
 
-    /// Hands `stmt` to the sink; a call whose arguments [`Parser::plain_args`] read (its
+    /// Hands `stmt` to the sink; a call whose arguments [`Parser::plain_args_from`] read (its
     /// `args` is [`NONE`]) with them.
     fn emit(&mut self, stmt: Stmt, start: u32) {
         let plain = matches!(stmt, Stmt::Call { args: NONE, .. });

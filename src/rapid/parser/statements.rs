@@ -97,6 +97,24 @@ impl Parser<'_, '_> {
         if self.is_reserved(t) {
             return Err(self.error("a statement"));
         }
+        // `MoveL p10, v1000, z10, tGun\WObj:=wCar;`: a name, then a name, a switch or the
+        // `;`, is a call (not a label, an assignment or an access); its arguments are read
+        // from the bytes when they are plain names, with no token lexed (a call's first
+        // argument was lexed here only for the fast path to read it again).
+        if self.fast_paths && !t.keyword {
+            let after = blanks_end(self.src, t.end as usize);
+            if matches!(
+                self.src.get(after),
+                Some(b'a'..=b'z' | b'A'..=b'Z' | b'_' | b'\\' | b';')
+            ) && self.plain_args_from(after)
+            {
+                let call = Stmt::Call {
+                    name: t.span(),
+                    args: NONE,
+                };
+                return Ok((NodeKind::Call, call));
+            }
+        }
         // `label:` — a colon, not `:=`.
         if self.peek2().punct(self.src) == b':' {
             self.bump();
@@ -157,10 +175,10 @@ impl Parser<'_, '_> {
 
     /// `call_args = [ arg { [ "," ] arg } ] ";"` — a comma before a `\switch` is optional.
     ///
-    /// [`NONE`] when [`Parser::plain_args`] read them (into [`Parser::plain`], not the arena).
+    /// [`NONE`] when [`Parser::plain_args_from`] read them (into [`Parser::plain`], not the arena).
     pub(super) fn call_args(&mut self, start: u32) -> PResult<u32> {
         if self.fast_paths {
-            if self.plain_args() {
+            if self.plain_args_from(self.tok.start as usize) {
                 return Ok(NONE);
             }
             if let Some(args) = self.plain_call_args(start) {
@@ -190,7 +208,7 @@ impl Parser<'_, '_> {
     /// `name:=name`, `\switch` or `\switch:=name`: reads them as [`Parser::plain_call_args`]
     /// does, into [`Parser::plain`] instead of expression nodes, and ends after the `;`. On
     /// anything else (a function call in an argument too) it reads nothing and says `false`.
-    fn plain_args(&mut self) -> bool {
+    fn plain_args_from(&mut self, start: usize) -> bool {
         // The general path reads each argument one level deeper; past the limit it refuses.
         if self.depth > MAX_DEPTH {
             return false;
@@ -200,7 +218,7 @@ impl Parser<'_, '_> {
         let name = |i: usize| plain_name(src, i);
         // Each name is read once, and the blanks after it once: what follows decides what it
         // was (a label before `:=`, a value, or a function's name before `(`).
-        let mut i = self.tok.start as usize;
+        let mut i = start;
         let mut len = 0;
         loop {
             match src.get(i) {
@@ -657,6 +675,11 @@ mod tests {
         let result = result
             .map(|(kind, stmt)| match stmt {
                 Stmt::Call { name, args: NONE } => {
+                    // Read at the statement, the callee is no node either.
+                    if arena.nodes.is_empty() {
+                        let callee = arena.open(ExprKind::Ident, name.start as u32);
+                        arena.close(callee, name.end as u32);
+                    }
                     let args = plain_args_as_nodes(&mut arena, &p.plain, name.end, p.prev_end);
                     (kind, format!("{:?}", Stmt::Call { name, args }))
                 }
@@ -731,12 +754,19 @@ mod tests {
             Just(",,".to_owned()),
             Just(" : ".to_owned()),
         ];
+        // The callee and what parts it from the first argument (the statement-level fast path
+        // looks at the byte after the blanks).
+        let callee = prop_oneof![
+            6 => Just("MoveL "),
+            1 => proptest::sample::select(vec!["MoveL", "MoveL\r\n  ", "Stop ", "TO ", "p.x ", "a{1} "]),
+        ];
         (
+            callee,
             proptest::collection::vec((sep, arg), 0..6),
             prop_oneof![Just(";"), Just(" ;"), Just(""), Just(";;")],
         )
-            .prop_map(|(parts, end)| {
-                let mut s = "MoveL ".to_owned();
+            .prop_map(|(callee, parts, end)| {
+                let mut s = callee.to_owned();
                 for (k, (sep, arg)) in parts.iter().enumerate() {
                     if k > 0 || arg.starts_with('\\') {
                         s.push_str(sep);
@@ -789,7 +819,7 @@ mod tests {
         let mut sink = crate::syntax::NoSink;
         let mut p = Parser::new(src, &mut sink, TreeBuilder::with_capacity(4));
         p.bump();
-        assert!(p.plain_args());
+        assert!(p.plain_args_from(p.tok.start as usize));
         assert!(p.arena.nodes.is_empty());
         let texts: Vec<_> = p
             .plain
@@ -816,7 +846,7 @@ mod tests {
         let src = b"MoveL Offs(p10,0,0,10), v1000, z10, tGun;\nx";
         let mut p = Parser::new(src, &mut sink, TreeBuilder::with_capacity(4));
         p.bump();
-        assert!(!p.plain_args());
+        assert!(!p.plain_args_from(p.tok.start as usize));
         assert_eq!(p.tok.start, 6);
     }
 
