@@ -96,8 +96,13 @@ impl Parser<'_, '_> {
     /// general path reads the value; [`Parser::literal_read_again`] holds the two to the same
     /// end in every debug build.
     pub(super) fn robtarget_literal(&mut self) -> bool {
+        self.robtarget_literal_at(self.tok.start as usize)
+    }
+
+    /// [`Parser::robtarget_literal`] of the value whose `[` is at `start`, wherever the
+    /// parser stands (nothing is read on anything else).
+    pub(super) fn robtarget_literal_at(&mut self, start: usize) -> bool {
         let src = self.src;
-        let start = self.tok.start as usize;
         if src.get(start) != Some(&b'[') {
             return false;
         }

@@ -192,6 +192,11 @@ impl Parser<'_, '_> {
         if self.at_any(&[b"LOCAL", b"TASK"]) {
             self.bump();
         }
+        if self.fast_paths
+            && let Some(decl) = self.plain_robtarget_decl(module_scope, local)
+        {
+            return decl;
+        }
         let storage_tok = self.bump();
         let st = self.text(storage_tok);
         let storage = if st.eq_ignore_ascii_case(b"CONST") {
@@ -246,6 +251,59 @@ impl Parser<'_, '_> {
             local,
         };
         Ok((stmt, literal))
+    }
+
+    /// Fast path of [`Parser::data_decl_inner`] at its storage keyword, for a scalar
+    /// robtarget declared with a literal the fast path reads (`CONST robtarget p10:=[..];`,
+    /// most lines of a program): its type and name are read from the bytes, with no token
+    /// lexed (four tokens a declaration, each lexed to be compared and stepped over). `None`,
+    /// with nothing read, for anything else.
+    fn plain_robtarget_decl(
+        &mut self,
+        module_scope: bool,
+        local: bool,
+    ) -> Option<PResult<(Stmt, bool)>> {
+        let src = self.src;
+        let storage = match self.text(self.tok) {
+            t if t.eq_ignore_ascii_case(b"CONST") => Storage::Const,
+            t if t.eq_ignore_ascii_case(b"PERS") => Storage::Pers,
+            t if t.eq_ignore_ascii_case(b"VAR") => Storage::Var,
+            _ => return None,
+        };
+        let ty = blanks_end(src, self.tok.end as usize);
+        let ty_end = plain_name(src, ty)?;
+        if !src.get(ty..ty_end)?.eq_ignore_ascii_case(b"robtarget") {
+            return None;
+        }
+        let name = blanks_end(src, ty_end);
+        let name_end = plain_name(src, name)?;
+        let assign = blanks_end(src, name_end);
+        if src.get(assign..assign + 2) != Some(b":=") {
+            return None;
+        }
+        let value = blanks_end(src, assign + 2);
+        if !src.get(name..name_end)?.is_ascii() || !self.robtarget_literal_at(value) {
+            return None;
+        }
+        // The general path's reading of the value, to the same end, in every debug build (as
+        // `data_decl_inner` holds its own fast path).
+        #[cfg(debug_assertions)]
+        let init = Some(self.literal_read_again());
+        #[cfg(not(debug_assertions))]
+        let init = None;
+        if let Err(e) = self.expect_punct(b';', "`;` at the end of the declaration") {
+            return Some(Err(e));
+        }
+        let stmt = Stmt::Decl {
+            storage,
+            type_name: Span::new(ty, ty_end),
+            name: Span::new(name, name_end),
+            dims: 0,
+            init,
+            module_scope,
+            local,
+        };
+        Some(Ok((stmt, true)))
     }
 
     /// `record = [ "LOCAL" | "TASK" ] "RECORD" ident { type ident ";" } "ENDRECORD"`
