@@ -21,7 +21,7 @@ pub use crate::dialect::Language;
 
 mod list;
 pub(crate) use list::ReadAgainTarget;
-pub use list::{OrientationAndConfig, PositionList, TargetForLints};
+pub use list::{OrientationAndConfig, PositionList, Reading, TargetForLints};
 
 /// What a position literal is, by its declared or inferred data type: the type's name as its
 /// language writes it, and whether it is Cartesian. Each dialect defines its kinds
@@ -1035,6 +1035,14 @@ impl ParsedFile {
     /// Every position, in file order, decoded.
     pub fn positions(&self) -> impl ExactSizeIterator<Item = Position> + '_ {
         self.positions.iter(&self.source)
+    }
+
+    /// Every position, in file order, with only the fields `reading` names decoded.
+    pub fn positions_reading(
+        &self,
+        reading: Reading,
+    ) -> impl ExactSizeIterator<Item = Position> + '_ {
+        self.positions.iter_reading(&self.source, reading)
     }
 
     /// Position `i`, decoded.

@@ -3,7 +3,7 @@
 //! [`TargetRule`]: it says what it does at each step and nothing else.
 
 use crate::geometry::Pose;
-use crate::position::{FrameDecl, OffsetCall, ParsedFile, Position, Program};
+use crate::position::{FrameDecl, OffsetCall, ParsedFile, Position, Program, Reading};
 use crate::syntax::Edit;
 
 use super::edits::{ProgramEdits, TargetChange};
@@ -38,6 +38,12 @@ pub(crate) struct NewPose {
 pub(crate) trait TargetRule {
     /// What the rule needs from a target's work object (its pose, a mirror plane in it, …).
     type Frame;
+
+    /// The fields of each target the rule and the driver read: every one unless the rule says
+    /// it reads fewer, whose decoding is then left out.
+    fn reading(&self) -> Reading {
+        Reading::Whole
+    }
 
     /// A joint target: refused unless the rule changes joints.
     fn joint(&self, scope: Scope, p: &Position) -> Step {
@@ -102,7 +108,7 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
             .flatten()
             .map(|(s, _)| s.gimbal)
             .unwrap_or_default();
-        for (i, p) in file.positions().enumerate() {
+        for (i, p) in file.positions_reading(rule.reading()).enumerate() {
             let step = if p.kind.is_cartesian() {
                 cartesian(rule, scope, &p, splits.a_of(i))
             } else {
