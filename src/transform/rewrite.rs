@@ -110,14 +110,31 @@ pub(crate) fn reversible_pose_edits(
     // Room for a translation and a quaternion: grown from empty, the vector was allocated
     // twice a target.
     let mut edits = Vec::with_capacity(7);
+    let old = fields.pose();
+    push_reversible_pose_edits(&mut edits, fields, old, new, hint, undo, keep_a);
+    edits
+}
+
+/// [`reversible_pose_edits`] appended to `edits`, with `old`, the pose `fields` say
+/// ([`CartesianFields::pose`]), already read: the transform driver has read it, and hands
+/// one vector from target to target (reading the pose again, and a vector each, were 4 % of
+/// writing a target).
+pub(crate) fn push_reversible_pose_edits(
+    edits: &mut Vec<Edit>,
+    fields: &CartesianFields,
+    old: Option<Pose>,
+    new: &Pose,
+    hint: OrientationHint,
+    undo: Option<&Pose>,
+    keep_a: Option<f64>,
+) {
     // Absurd literals (1e300 mm) overflow the composition; a half-written target would be worse
     // than none, so such a pose changes nothing.
     let finite = new.translation.vector.iter().all(|v| v.is_finite())
         && new.rotation.coords.iter().all(|v| v.is_finite());
     if !finite {
-        return edits;
+        return;
     }
-    let old = fields.pose();
     // A round trip needs the whole pose: the inverse reads it back.
     let undo = undo.filter(|_| old.is_some());
     let t = new.translation.vector;
@@ -130,12 +147,12 @@ pub(crate) fn reversible_pose_edits(
         }),
         _ => plain(&fields.trans, [t.x, t.y, t.z], MM_DECIMALS),
     };
-    push_edits(&mut edits, &fields.trans, texts);
+    push_edits(edits, &fields.trans, texts);
     let Some(old) = old else {
-        return edits;
+        return;
     };
     if same_rotation(&old.rotation, &new.rotation) {
-        return edits;
+        return;
     }
     match &fields.orient {
         Some(Orientation::Quaternion(q)) => {
@@ -164,7 +181,7 @@ pub(crate) fn reversible_pose_edits(
                 }),
                 _ => plain(q, c, QUAT_DECIMALS),
             };
-            push_edits(&mut edits, q, texts);
+            push_edits(edits, q, texts);
         }
         Some(Orientation::Abc(abc)) => {
             let like = match hint {
@@ -199,11 +216,10 @@ pub(crate) fn reversible_pose_edits(
                 }),
                 _ => plain(abc, angles, DEG_DECIMALS),
             };
-            push_edits(&mut edits, abc, texts);
+            push_edits(edits, abc, texts);
         }
         None => {}
     }
-    edits
 }
 
 /// Whether a KUKA B is written at the gimbal lock (±90): the targets whose A a `correct`
