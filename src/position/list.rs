@@ -292,12 +292,17 @@ impl PositionList {
         src: &'a [u8],
         reading: Reading,
     ) -> impl ExactSizeIterator<Item = Position> + 'a {
+        (0..self.len()).map(move |i| self.decoded(i, src, reading))
+    }
+
+    /// Position `i` of [`iter_reading`](Self::iter_reading), for a loop over the indices: the
+    /// position comes straight to the caller, where through the iterator's adapters it was
+    /// copied three times (a position is some 400 bytes).
+    pub fn decoded(&self, i: usize, src: &[u8], reading: Reading) -> Position {
         // Every position pushed decodes (a proptest and, in debug builds, every push holds it):
         // the placeholder is never given, and it keeps the count and the indices exact.
-        (0..self.len()).map(move |i| {
-            self.get_reading(i, src, reading)
-                .unwrap_or_else(|| self.placeholder(i))
-        })
+        self.get_reading(i, src, reading)
+            .unwrap_or_else(|| self.placeholder(i))
     }
 
     /// A position that could not be decoded: never met (see [`PositionList::iter`]); it keeps
@@ -817,8 +822,9 @@ impl<'a> Reader<'a> {
         Some(Some(f))
     }
 
-    /// Steps over a field [`Reader::num`] would read, without reading its literal.
-    #[inline]
+    /// Steps over a field [`Reader::num`] would read, without reading its literal. Inlined
+    /// into each loop over the fields stepped over, as `num` is into those read.
+    #[inline(always)]
     fn skip_num(&mut self) -> Option<()> {
         // The one-byte offset of nearly every field, taken as `num` takes it.
         if let [READ_AGAIN, delta @ 0..0x80, rest @ ..] = self.bytes {

@@ -1037,14 +1037,6 @@ impl ParsedFile {
         self.positions.iter(&self.source)
     }
 
-    /// Every position, in file order, with only the fields `reading` names decoded.
-    pub fn positions_reading(
-        &self,
-        reading: Reading,
-    ) -> impl ExactSizeIterator<Item = Position> + '_ {
-        self.positions.iter_reading(&self.source, reading)
-    }
-
     /// Position `i`, decoded.
     pub fn position(&self, i: usize) -> Option<Position> {
         self.positions.get(i, &self.source)

@@ -110,7 +110,9 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
             .unwrap_or_default();
         // One vector for the edits of every target, emptied into the file's edits.
         let mut edits = Vec::new();
-        for (i, p) in file.positions_reading(rule.reading()).enumerate() {
+        let reading = rule.reading();
+        for i in 0..file.positions.len() {
+            let p = file.positions.decoded(i, &file.source, reading);
             edits.clear();
             let step = if p.kind.is_cartesian() {
                 cartesian(rule, scope, &p, splits.a_of(i), &mut edits)
