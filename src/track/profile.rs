@@ -653,7 +653,12 @@ impl Profile {
         // for all six, where each spline searched the knots again.
         let eval = |s: f64| {
             let i = self.splines[0].interval(s);
-            self.splines.each_ref().map(|sp| sp.value_in(i, s))
+            // By a loop, not `each_ref().map`: through its closure each value was a call.
+            let mut out = [0.0; 6];
+            for (o, sp) in out.iter_mut().zip(&self.splines) {
+                *o = sp.value_in(i, s);
+            }
+            out
         };
         if inside {
             return Ok(eval(skid.clamp(min, max)));

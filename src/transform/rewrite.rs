@@ -337,8 +337,11 @@ fn reversible<const N: usize>(
     let gives_back = |read: [f64; N]| {
         inverse(read).is_some_and(|z| (0..N).all(|i| z[i].is_finite() && rounded[i].same(z[i])))
     };
-    let first: [(Option<EditText>, f64); N] =
-        std::array::from_fn(|i| write_one(&rounded[i], exact[i]));
+    // By a loop, not `from_fn`: through its adapter's closure each field was a call more.
+    let mut first: [(Option<EditText>, f64); N] = [const { (None, 0.0) }; N];
+    for ((f, r), e) in first.iter_mut().zip(&rounded).zip(exact) {
+        *f = write_one(r, e);
+    }
     if gives_back(first.each_ref().map(|(_, v)| *v)) {
         return first.map(|(t, _)| t);
     }
