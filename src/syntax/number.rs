@@ -437,7 +437,9 @@ impl Rounded {
         self.lit.value
     }
 
-    /// [`NumLit::rewrite_read`] with the `min_decimals` the rounding was made for.
+    /// [`NumLit::rewrite_read`] with the `min_decimals` the rounding was made for; inlined, as
+    /// [`same`](Self::same), into the rewrite that makes it for every field it writes.
+    #[inline]
     pub fn rewrite_read(&self, new: f64) -> Option<(EditText, f64)> {
         self.lit
             .rewrite_at(new, self.places, self.own)

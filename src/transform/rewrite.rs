@@ -332,12 +332,15 @@ fn reversible<const N: usize>(
         return std::array::from_fn(|_| None);
     }
     // Each literal rounded at its places once: every choice is written and checked there.
-    let rounded = fields.map(|f| f.lit().rounded(house));
-    let places = rounded.map(|r| r.places());
+    // By a loop, not `array::map`: through its adapter's closure each field was a call more.
+    let mut rounded = [fields[0].lit().rounded(house); N];
+    for (r, f) in rounded.iter_mut().zip(fields).skip(1) {
+        *r = f.lit().rounded(house);
+    }
     let gives_back = |read: [f64; N]| {
         inverse(read).is_some_and(|z| (0..N).all(|i| z[i].is_finite() && rounded[i].same(z[i])))
     };
-    // By a loop, not `from_fn`: through its adapter's closure each field was a call more.
+    // By a loop, not `from_fn`, for the same reason.
     let mut first: [(Option<EditText>, f64); N] = [const { (None, 0.0) }; N];
     for ((f, r), e) in first.iter_mut().zip(&rounded).zip(exact) {
         *f = write_one(r, e);
@@ -348,7 +351,7 @@ fn reversible<const N: usize>(
     // Each field's choices: the plain rounding and the values one unit of its last written
     // place either side, nearest to the exact value first.
     let options: [Vec<(Option<EditText>, f64, f64)>; N] = std::array::from_fn(|i| {
-        let unit = 10f64.powi(-(places[i] as i32));
+        let unit = 10f64.powi(-(rounded[i].places() as i32));
         let mut o: Vec<_> = [0.0, -1.0, 1.0]
             .iter()
             .map(|k| {
