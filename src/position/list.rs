@@ -198,18 +198,24 @@ impl PositionList {
 
     /// Position `i`, decoded against `src` (the bytes it was pushed with).
     pub fn get(&self, i: usize, src: &[u8]) -> Option<Position> {
-        self.get_head(self.heads.get(i)?, src)
+        self.get_head(self.heads.get(i)?, src, Reading::Whole)
     }
 
-    fn get_head(&self, head: &Head, src: &[u8]) -> Option<Position> {
+    /// Position `i` with only the fields `reading` names decoded (see [`Reading`]).
+    pub fn get_reading(&self, i: usize, src: &[u8], reading: Reading) -> Option<Position> {
+        self.get_head(self.heads.get(i)?, src, reading)
+    }
+
+    #[inline]
+    fn get_head(&self, head: &Head, src: &[u8], reading: Reading) -> Option<Position> {
         let mut r = self.reader(head, src)?;
         let PackedHead {
             span,
             kind,
+            values_pass_lints,
             name,
             line,
             column,
-            ..
         } = r.head(&self.kinds)?;
         let name = match name {
             // Nearly every name is ASCII, which needs no UTF-8 check.
@@ -233,11 +239,34 @@ impl PositionList {
         for _ in 0..r.uint()? {
             joints.push(r.num()?);
         }
-        let config = r.config()?;
-        let mut extax = Axes::new();
-        for _ in 0..r.uint()? {
-            extax.push(r.num()?);
-        }
+        let (config, extax) = match reading {
+            Reading::Whole => {
+                let config = r.config()?;
+                let mut extax = Axes::new();
+                for _ in 0..r.uint()? {
+                    extax.push(r.num()?);
+                }
+                (config, extax)
+            }
+            Reading::Track { skid_axis } => {
+                let config = match values_pass_lints {
+                    true => r.skip_config()?,
+                    false => r.config()?,
+                };
+                let mut extax = Axes::new();
+                // The axes after the skid's are not read; those before it are stepped over.
+                for k in 0..r.uint()?.min(skid_axis as u64 + 1) {
+                    match k == skid_axis as u64 {
+                        true => extax.push(r.num()?),
+                        false => {
+                            r.skip_num()?;
+                            extax.push(None);
+                        }
+                    }
+                }
+                (config, extax)
+            }
+        };
         Some(Position {
             name,
             kind,
@@ -254,9 +283,26 @@ impl PositionList {
 
     /// Every position in order, decoded against `src`.
     pub fn iter<'a>(&'a self, src: &'a [u8]) -> impl ExactSizeIterator<Item = Position> + 'a {
+        self.iter_reading(src, Reading::Whole)
+    }
+
+    /// [`iter`](Self::iter), each position with only the fields `reading` names decoded.
+    pub fn iter_reading<'a>(
+        &'a self,
+        src: &'a [u8],
+        reading: Reading,
+    ) -> impl ExactSizeIterator<Item = Position> + 'a {
+        (0..self.len()).map(move |i| self.decoded(i, src, reading))
+    }
+
+    /// Position `i` of [`iter_reading`](Self::iter_reading), for a loop over the indices: the
+    /// position comes straight to the caller, where through the iterator's adapters it was
+    /// copied three times (a position is some 400 bytes).
+    pub fn decoded(&self, i: usize, src: &[u8], reading: Reading) -> Position {
         // Every position pushed decodes (a proptest and, in debug builds, every push holds it):
         // the placeholder is never given, and it keeps the count and the indices exact.
-        (0..self.len()).map(move |i| self.get(i, src).unwrap_or_else(|| self.placeholder(i)))
+        self.get_reading(i, src, reading)
+            .unwrap_or_else(|| self.placeholder(i))
     }
 
     /// A position that could not be decoded: never met (see [`PositionList::iter`]); it keeps
@@ -423,7 +469,10 @@ impl PositionList {
     pub fn retain(&mut self, src: &[u8], mut keep: impl FnMut(&Position) -> bool) {
         let mut kept = Vec::with_capacity(self.heads.len());
         for h in std::mem::take(&mut self.heads) {
-            if self.get_head(&h, src).is_some_and(|p| keep(&p)) {
+            if self
+                .get_head(&h, src, Reading::Whole)
+                .is_some_and(|p| keep(&p))
+            {
                 kept.push(h);
             }
         }
@@ -456,6 +505,30 @@ impl PositionList {
             cursor: 0,
         })
     }
+}
+
+/// Which fields a decoded position holds ([`PositionList::get_reading`]).
+///
+/// A target's fields are read again from the source literal by literal (most of decoding
+/// it), and a transform looks at few of them: a track correction without an arm reads the
+/// translation, the orientation and one external axis of a robtarget's 17 fields, and its
+/// configuration only to refuse an implausible one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Reading {
+    /// Every field.
+    #[default]
+    Whole,
+    /// The head, the usage, the Cartesian fields and the joints, as [`Reading::Whole`]
+    /// decodes them; of the external axes only `skid_axis` (those before it are absent, and
+    /// the list ends there: [`Position::skid`] of that axis is the whole position's); and
+    /// the configuration only where the lints' verdict packed with the position says its
+    /// values could be implausible, else [`Config::None`]. Either way the transforms' test of
+    /// implausible orientation and configuration values finds in it what it finds in the
+    /// whole position (a passing verdict means it finds nothing).
+    Track {
+        /// The external axis the skid is read from (0 = `eax_a` / `E1`).
+        skid_axis: usize,
+    },
 }
 
 /// What [`PositionList::orientation_and_config`] reads of a position.
@@ -749,8 +822,16 @@ impl<'a> Reader<'a> {
         Some(Some(f))
     }
 
-    /// Steps over a field [`Reader::num`] would read, without reading its literal.
+    /// Steps over a field [`Reader::num`] would read, without reading its literal. Inlined
+    /// into each loop over the fields stepped over, as `num` is into those read.
+    #[inline(always)]
     fn skip_num(&mut self) -> Option<()> {
+        // The one-byte offset of nearly every field, taken as `num` takes it.
+        if let [READ_AGAIN, delta @ 0..0x80, rest @ ..] = self.bytes {
+            self.bytes = rest;
+            self.moved_by(u64::from(*delta))?;
+            return Some(());
+        }
         match self.byte()? {
             ABSENT => {}
             READ_AGAIN => {
@@ -785,6 +866,24 @@ impl<'a> Reader<'a> {
             },
             _ => return None,
         })
+    }
+
+    /// Steps over what [`Reader::config`] reads, giving [`Config::None`].
+    fn skip_config(&mut self) -> Option<Config> {
+        match self.byte()? {
+            NO_CONFIG => {}
+            QUADRANTS => {
+                for _ in 0..4 {
+                    self.skip_num()?;
+                }
+            }
+            STATUS_TURN => {
+                self.bits()?;
+                self.bits()?;
+            }
+            _ => return None,
+        }
+        Some(Config::None)
     }
 
     fn nums<const N: usize>(&mut self) -> Option<[Option<NumField>; N]> {
@@ -977,7 +1076,33 @@ mod tests {
                     p.config.clone()
                 ))
             );
-            prop_assert_eq!(list.iter(&src).collect::<Vec<_>>(), vec![first, p]);
+            prop_assert_eq!(list.iter(&src).collect::<Vec<_>>(), vec![first, p.clone()]);
+            // A track's reading: the fields it names as the whole position has them, the
+            // rest left out as it says, and the same verdict of the refusal.
+            let orient = p.cartesian.as_ref().and_then(|c| c.orient.as_ref());
+            let passes = crate::report::values_pass_lints(orient, &p.config);
+            for skid_axis in 0..8 {
+                let got = list.get_reading(1, &src, Reading::Track { skid_axis }).unwrap();
+                let mut want = p.clone();
+                if passes {
+                    want.config = Config::None;
+                }
+                want.extax = p
+                    .extax
+                    .iter()
+                    .enumerate()
+                    .take(skid_axis + 1)
+                    .map(|(k, f)| if k == skid_axis { *f } else { None })
+                    .collect();
+                prop_assert_eq!(&got, &want);
+                prop_assert_eq!(got.skid(skid_axis), p.skid(skid_axis));
+                let implausible = |q: &Position| {
+                    let orient = q.cartesian.as_ref().and_then(|c| c.orient.as_ref());
+                    crate::transform::policy::implausible_values(orient, &q.config)
+                };
+                prop_assert_eq!(implausible(&got), implausible(&p));
+            }
+            prop_assert_eq!(list.get_reading(1, &src, Reading::Whole), Some(p));
         }
     }
 

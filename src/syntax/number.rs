@@ -437,7 +437,9 @@ impl Rounded {
         self.lit.value
     }
 
-    /// [`NumLit::rewrite_read`] with the `min_decimals` the rounding was made for.
+    /// [`NumLit::rewrite_read`] with the `min_decimals` the rounding was made for; inlined, as
+    /// [`same`](Self::same), into the rewrite that makes it for every field it writes.
+    #[inline]
     pub fn rewrite_read(&self, new: f64) -> Option<(EditText, f64)> {
         self.lit
             .rewrite_at(new, self.places, self.own)
@@ -445,6 +447,10 @@ impl Rounded {
     }
 
     /// [`same_at`]`(v, value, places)`: whether `v` reads as the literal's value at the places.
+    ///
+    /// Inlined into a rewrite's check of what the inverse gives back, which makes it for every
+    /// field it writes: through a call it cost half again what it does.
+    #[inline]
     pub fn same(&self, v: f64) -> bool {
         same_as_rounded(v, self.lit.value, self.own, self.places)
     }

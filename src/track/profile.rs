@@ -649,7 +649,17 @@ impl Profile {
         let inside = skid >= min - tol && skid <= max + tol;
         // By reference: cloning the six splines (their knot vectors) per target was most of the
         // cost of `correct` outside parsing.
-        let eval = |s: f64| self.splines.each_ref().map(|sp| sp.value(s));
+        // The six splines share their knots (`build_splines`): one search finds the interval
+        // for all six, where each spline searched the knots again.
+        let eval = |s: f64| {
+            let i = self.splines[0].interval(s);
+            // By a loop, not `each_ref().map`: through its closure each value was a call.
+            let mut out = [0.0; 6];
+            for (o, sp) in out.iter_mut().zip(&self.splines) {
+                *o = sp.value_in(i, s);
+            }
+            out
+        };
         if inside {
             return Ok(eval(skid.clamp(min, max)));
         }
@@ -808,6 +818,33 @@ mod tests {
             Extrapolate::Error,
         )
         .unwrap()
+    }
+
+    #[test]
+    fn one_interval_search_gives_each_splines_own_value() {
+        // Knots unevenly spaced, every component moving: the shared search against each
+        // spline's own, at the knots, between them, by the ends and past them (clamped), bit
+        // for bit.
+        let knots = (0..9)
+            .map(|i| {
+                let s = f64::from(i) * 1000.0 + f64::from(i * i) * 37.5;
+                let c = [1.0, -0.5, 0.25, 0.01, -0.02, 0.03].map(|a| a * (s / 700.0).sin());
+                Knot::from_components(s, c)
+            })
+            .collect();
+        let p = Profile::from_knots("t", knots, Extrapolate::Clamp).unwrap();
+        let (min, max) = p.skid_range();
+        let mut skids: Vec<f64> = p.splines()[0].knots().to_vec();
+        skids.extend((0..=400).map(|k| min + (max - min) * f64::from(k) / 400.0));
+        skids.extend([min + 1e-9, max - 1e-9, min - 5.0, max + 5.0]);
+        for s in skids {
+            let own = p.splines().each_ref().map(|sp| sp.value(s.clamp(min, max)));
+            assert_eq!(
+                p.deviation_components(s).unwrap().map(f64::to_bits),
+                own.map(f64::to_bits),
+                "{s}"
+            );
+        }
     }
 
     #[test]

@@ -152,7 +152,7 @@ impl CubicSpline {
     }
 
     /// Index of the interval holding `x` (the end intervals extend outwards).
-    fn interval(&self, x: f64) -> usize {
+    pub(crate) fn interval(&self, x: f64) -> usize {
         let last = self.x.len().saturating_sub(2);
         // partition_point: number of knots <= x.
         let k = self.x.partition_point(|&xi| xi <= x);
@@ -176,7 +176,14 @@ impl CubicSpline {
 
     /// `S(x)`; outside the knots the end cubic is continued (callers decide whether to allow it).
     pub fn value(&self, x: f64) -> f64 {
-        let (x0, h, y0, y1, m0, m1) = self.piece(self.interval(x));
+        self.value_in(self.interval(x), x)
+    }
+
+    /// [`value`](Self::value) with the interval `i` holding `x` ([`interval`](Self::interval))
+    /// found by the caller: splines over the same knots (a profile's six) share one search.
+    #[inline]
+    pub(crate) fn value_in(&self, i: usize, x: f64) -> f64 {
+        let (x0, h, y0, y1, m0, m1) = self.piece(i);
         let t = (x - x0) / h;
         let chord = y0 + (y1 - y0) * t;
         chord - h * h / 6.0 * t * (1.0 - t) * ((2.0 - t) * m0 + (1.0 + t) * m1)

@@ -3,13 +3,13 @@
 //! [`TargetRule`]: it says what it does at each step and nothing else.
 
 use crate::geometry::Pose;
-use crate::position::{FrameDecl, OffsetCall, ParsedFile, Position, Program};
+use crate::position::{FrameDecl, OffsetCall, ParsedFile, Position, Program, Reading};
 use crate::syntax::Edit;
 
 use super::edits::{ProgramEdits, TargetChange};
 use super::policy::{Why, common_refusal, implausible_result, joint_target};
 use super::refusal::{Refusal, RefusalKind};
-use super::rewrite::{OrientationHint, pose_change, reversible_pose_edits};
+use super::rewrite::{OrientationHint, pose_change, push_reversible_pose_edits};
 
 /// Where a rule is looking: the program (for frames declared in other files) and the file.
 #[derive(Clone, Copy)]
@@ -38,6 +38,12 @@ pub(crate) struct NewPose {
 pub(crate) trait TargetRule {
     /// What the rule needs from a target's work object (its pose, a mirror plane in it, …).
     type Frame;
+
+    /// The fields of each target the rule and the driver read: every one unless the rule says
+    /// it reads fewer, whose decoding is then left out.
+    fn reading(&self) -> Reading {
+        Reading::Whole
+    }
 
     /// A joint target: refused unless the rule changes joints.
     fn joint(&self, scope: Scope, p: &Position) -> Step {
@@ -102,15 +108,25 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
             .flatten()
             .map(|(s, _)| s.gimbal)
             .unwrap_or_default();
-        for (i, p) in file.positions().enumerate() {
+        // One vector for the edits of every target, emptied into the file's edits.
+        let mut edits = Vec::new();
+        let reading = rule.reading();
+        for i in 0..file.positions.len() {
+            let p = file.positions.decoded(i, &file.source, reading);
+            edits.clear();
             let step = if p.kind.is_cartesian() {
-                cartesian(rule, scope, &p, splits.a_of(i))
+                cartesian(rule, scope, &p, splits.a_of(i), &mut edits)
             } else {
-                rule.joint(scope, &p)
+                rule.joint(scope, &p).map(|step| {
+                    step.map(|(joint_edits, change)| {
+                        edits = joint_edits;
+                        change
+                    })
+                })
             };
             match step {
-                Ok(Some((edits, change))) if !edits.is_empty() => {
-                    fe.edits.extend(edits);
+                Ok(Some(change)) if !edits.is_empty() => {
+                    fe.edits.extend(edits.drain(..));
                     fe.changes.push(change);
                 }
                 Ok(_) => {}
@@ -132,8 +148,15 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
     out
 }
 
-/// One Cartesian target; `keep_a`: the A its file's stamp recorded for it at B = ±90°.
-fn cartesian<R: TargetRule>(rule: &R, scope: Scope, p: &Position, keep_a: Option<f64>) -> Step {
+/// One Cartesian target, its edits appended to `edits`; `keep_a`: the A its file's stamp
+/// recorded for it at B = ±90°.
+fn cartesian<R: TargetRule>(
+    rule: &R,
+    scope: Scope,
+    p: &Position,
+    keep_a: Option<f64>,
+    edits: &mut Vec<Edit>,
+) -> Result<Option<TargetChange>, Box<Refusal>> {
     let refuse = |why: Why| why.at(scope.file, p);
     if let Some(why) = rule.refusal(scope, p) {
         return Err(refuse(why));
@@ -155,19 +178,16 @@ fn cartesian<R: TargetRule>(rule: &R, scope: Scope, p: &Position, keep_a: Option
     if let Some(why) = implausible_result(p, &new, scope.file.language.dialect().vocabulary()) {
         return Err(refuse(why));
     }
-    let mut edits = reversible_pose_edits(fields, &new, hint, undo.as_ref(), keep_a);
+    push_reversible_pose_edits(edits, fields, Some(t), &new, hint, undo.as_ref(), keep_a);
     edits.extend(rule.more_edits(scope, p));
     let (mm, deg) = pose_change(&t, &new);
     let uncertainty_mm = rule.uncertainty(&frame, skid, &new);
-    Ok(Some((
-        edits,
-        TargetChange {
-            mm,
-            deg,
-            skid,
-            name: p.name.clone(),
-            line: p.line,
-            uncertainty_mm,
-        },
-    )))
+    Ok(Some(TargetChange {
+        mm,
+        deg,
+        skid,
+        name: p.name.clone(),
+        line: p.line,
+        uncertainty_mm,
+    }))
 }

@@ -1,6 +1,6 @@
 //! A new pose → edits of exactly the literal fields that change (docs/design.md §5 formatting).
 
-use nalgebra::{Translation3, UnitQuaternion};
+use nalgebra::{Point3, UnitQuaternion};
 
 use super::policy::quaternion_norm;
 use crate::geometry::{
@@ -20,6 +20,26 @@ pub(crate) const DEG_DECIMALS: usize = 4;
 /// file's quaternion is not normalised: a zero-deviation profile must leave a file
 /// byte-identical, and 1e-10 rad is far below any written precision.
 const SAME_ROTATION_RAD: f64 = 1e-10;
+
+/// Whether `a` and `b` are less than [`SAME_ROTATION_RAD`] apart:
+/// `angle_between(a, b) < SAME_ROTATION_RAD`, without the arc tangent where the answer is
+/// clear. The angle is `2·atan2(|v|, |w|)` of the rotation between them, and away from the
+/// bound by a factor of ten either way the ratio `|v| / |w|` decides it (the arc tangent and
+/// the roundings move the angle by a few units of its last place); squared, as no square
+/// root is needed. Two tests a target, each a call into libm.
+fn same_rotation(a: &UnitQuaternion<f64>, b: &UnitQuaternion<f64>) -> bool {
+    let delta = a.rotation_to(b);
+    let q = delta.quaternion();
+    let (v2, w2) = (q.imag().norm_squared(), q.w * q.w);
+    // 2·atan(x) for x = 1e-9 is 2e-9, 20 times the bound; for x = 1e-12, 2e-12.
+    if v2 > 1e-18 * w2 {
+        return false;
+    }
+    if v2 < 1e-24 * w2 {
+        return true;
+    }
+    delta.angle() < SAME_ROTATION_RAD
+}
 
 /// How to choose among equivalent orientation numbers.
 #[derive(Clone, Copy, Debug)]
@@ -90,34 +110,49 @@ pub(crate) fn reversible_pose_edits(
     // Room for a translation and a quaternion: grown from empty, the vector was allocated
     // twice a target.
     let mut edits = Vec::with_capacity(7);
+    let old = fields.pose();
+    push_reversible_pose_edits(&mut edits, fields, old, new, hint, undo, keep_a);
+    edits
+}
+
+/// [`reversible_pose_edits`] appended to `edits`, with `old`, the pose `fields` say
+/// ([`CartesianFields::pose`]), already read: the transform driver has read it, and hands
+/// one vector from target to target (reading the pose again, and a vector each, were 4 % of
+/// writing a target).
+pub(crate) fn push_reversible_pose_edits(
+    edits: &mut Vec<Edit>,
+    fields: &CartesianFields,
+    old: Option<Pose>,
+    new: &Pose,
+    hint: OrientationHint,
+    undo: Option<&Pose>,
+    keep_a: Option<f64>,
+) {
     // Absurd literals (1e300 mm) overflow the composition; a half-written target would be worse
     // than none, so such a pose changes nothing.
     let finite = new.translation.vector.iter().all(|v| v.is_finite())
         && new.rotation.coords.iter().all(|v| v.is_finite());
     if !finite {
-        return edits;
+        return;
     }
-    let old = fields.pose();
     // A round trip needs the whole pose: the inverse reads it back.
     let undo = undo.filter(|_| old.is_some());
     let t = new.translation.vector;
     let texts = match (undo, present(&fields.trans)) {
         (Some(undo), Some(trans)) => reversible(trans, [t.x, t.y, t.z], MM_DECIMALS, |w| {
-            let read = Pose::from_parts(
-                Translation3::new(w[0], w[1], w[2]),
-                UnitQuaternion::identity(),
-            );
-            let back = (undo * read).translation.vector;
+            // `(undo · Trans(w)).translation`, the same sums, without the product of the
+            // rotations.
+            let back = undo.transform_point(&Point3::new(w[0], w[1], w[2]));
             Some([back.x, back.y, back.z])
         }),
         _ => plain(&fields.trans, [t.x, t.y, t.z], MM_DECIMALS),
     };
-    push_edits(&mut edits, &fields.trans, texts);
+    push_edits(edits, &fields.trans, texts);
     let Some(old) = old else {
-        return edits;
+        return;
     };
-    if angle_between(&old.rotation, &new.rotation) < SAME_ROTATION_RAD {
-        return edits;
+    if same_rotation(&old.rotation, &new.rotation) {
+        return;
     }
     match &fields.orient {
         Some(Orientation::Quaternion(q)) => {
@@ -138,7 +173,7 @@ pub(crate) fn reversible_pose_edits(
                     // result with the sign nearest the written one, at the written norm.
                     let read = abb_quat(w)?;
                     let back = undo.rotation * read;
-                    if angle_between(&read, &back) < SAME_ROTATION_RAD {
+                    if same_rotation(&read, &back) {
                         return Some(w);
                     }
                     let s = scale(Some(w));
@@ -146,7 +181,7 @@ pub(crate) fn reversible_pose_edits(
                 }),
                 _ => plain(q, c, QUAT_DECIMALS),
             };
-            push_edits(&mut edits, q, texts);
+            push_edits(edits, q, texts);
         }
         Some(Orientation::Abc(abc)) => {
             let like = match hint {
@@ -165,7 +200,7 @@ pub(crate) fn reversible_pose_edits(
                 (Some(undo), Some(abc)) => reversible(abc, angles, DEG_DECIMALS, |w| {
                     let read = kuka_abc(w[0], w[1], w[2]);
                     let back = undo.rotation * read;
-                    if angle_between(&read, &back) < SAME_ROTATION_RAD {
+                    if same_rotation(&read, &back) {
                         return Some(w);
                     }
                     let z = kuka_abc_angles(&back, Some(w));
@@ -181,11 +216,10 @@ pub(crate) fn reversible_pose_edits(
                 }),
                 _ => plain(abc, angles, DEG_DECIMALS),
             };
-            push_edits(&mut edits, abc, texts);
+            push_edits(edits, abc, texts);
         }
         None => {}
     }
-    edits
 }
 
 /// Whether a KUKA B is written at the gimbal lock (±90): the targets whose A a `correct`
@@ -298,20 +332,26 @@ fn reversible<const N: usize>(
         return std::array::from_fn(|_| None);
     }
     // Each literal rounded at its places once: every choice is written and checked there.
-    let rounded = fields.map(|f| f.lit().rounded(house));
-    let places = rounded.map(|r| r.places());
+    // By a loop, not `array::map`: through its adapter's closure each field was a call more.
+    let mut rounded = [fields[0].lit().rounded(house); N];
+    for (r, f) in rounded.iter_mut().zip(fields).skip(1) {
+        *r = f.lit().rounded(house);
+    }
     let gives_back = |read: [f64; N]| {
         inverse(read).is_some_and(|z| (0..N).all(|i| z[i].is_finite() && rounded[i].same(z[i])))
     };
-    let first: [(Option<EditText>, f64); N] =
-        std::array::from_fn(|i| write_one(&rounded[i], exact[i]));
+    // By a loop, not `from_fn`, for the same reason.
+    let mut first: [(Option<EditText>, f64); N] = [const { (None, 0.0) }; N];
+    for ((f, r), e) in first.iter_mut().zip(&rounded).zip(exact) {
+        *f = write_one(r, e);
+    }
     if gives_back(first.each_ref().map(|(_, v)| *v)) {
         return first.map(|(t, _)| t);
     }
     // Each field's choices: the plain rounding and the values one unit of its last written
     // place either side, nearest to the exact value first.
     let options: [Vec<(Option<EditText>, f64, f64)>; N] = std::array::from_fn(|i| {
-        let unit = 10f64.powi(-(places[i] as i32));
+        let unit = 10f64.powi(-(rounded[i].places() as i32));
         let mut o: Vec<_> = [0.0, -1.0, 1.0]
             .iter()
             .map(|k| {
@@ -687,6 +727,55 @@ mod tests {
         };
         proptest::prop_assert!(within(&c[3..], &exact, 1.5), "{:?} {:?}", c, exact);
         Ok(())
+    }
+
+    proptest::proptest! {
+        /// The shortcut of `same_rotation` decides as the angle does, for rotations turned by
+        /// 1e-16 to 1e-4 rad (the bound is 1e-10), about any axis, and either sign.
+        #[test]
+        fn same_rotation_is_the_angle_test(
+            base in (-180.0..180.0f64, -90.0..90.0f64, -180.0..180.0f64),
+            axis in proptest::strategy::Strategy::prop_filter(
+                (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64),                "axis",
+                |a| a.0 * a.0 + a.1 * a.1 + a.2 * a.2 > 1e-3,
+            ),
+            exponent in -16.0..-4.0f64,
+            flip in proptest::bool::ANY,
+        ) {
+            let a = crate::geometry::kuka_abc(base.0, base.1, base.2);
+            let axis = nalgebra::Unit::new_normalize(nalgebra::Vector3::new(axis.0, axis.1, axis.2));
+            let turn = UnitQuaternion::from_axis_angle(&axis, 10f64.powf(exponent));
+            let mut b = turn * a;
+            if flip {
+                b = UnitQuaternion::new_unchecked(-b.into_inner());
+            }
+            for (x, y) in [(&a, &b), (&b, &a), (&a, &a)] {
+                proptest::prop_assert_eq!(
+                    same_rotation(x, y),
+                    angle_between(x, y) < SAME_ROTATION_RAD
+                );
+            }
+        }
+
+        /// The translation the inverse gives back, through `transform_point`, is that of the
+        /// product with a pure translation, bit for bit.
+        #[test]
+        fn a_point_moved_is_the_products_translation(
+            d in (-3.0..3.0f64, -3.0..3.0f64, -3.0..3.0f64, -0.05..0.05f64, -0.05..0.05f64, -0.05..0.05f64),
+            w in (-3000.0..3000.0f64, -3000.0..3000.0f64, -500.0..2000.0f64),
+        ) {
+            let undo = pose_xyz_deg(d.0, d.1, d.2, d.3, d.4, d.5);
+            let read = Pose::from_parts(
+                nalgebra::Translation3::new(w.0, w.1, w.2),
+                UnitQuaternion::identity(),
+            );
+            let product = (undo * read).translation.vector;
+            let moved = undo.transform_point(&Point3::new(w.0, w.1, w.2));
+            proptest::prop_assert_eq!(
+                [moved.x, moved.y, moved.z].map(f64::to_bits),
+                [product.x, product.y, product.z].map(f64::to_bits)
+            );
+        }
     }
 
     proptest::proptest! {

@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 use nalgebra::{Translation3, Vector3};
 
 use crate::geometry::Pose;
-use crate::position::{Position, Program, Skid};
+use crate::position::{Position, Program, Reading, Skid};
 use crate::track::{Profile, TrackError};
 
 use super::cell::Robot;
@@ -173,6 +173,19 @@ struct TrackRule<'s, 'a> {
 
 impl TargetRule for TrackRule<'_, '_> {
     type Frame = TrackFrame;
+
+    /// Without an arm a target's configuration and its external axes but the skid's are not
+    /// looked at, but for the refusal of implausible values, which the reading keeps: the 9
+    /// of a robtarget's 17 fields it leaves out were 38 % of decoding it (2 MB module:
+    /// 39.2 → 24.2 M instructions). The arm's checks read every field.
+    fn reading(&self) -> Reading {
+        match self.setup.arm {
+            Some(_) => Reading::Whole,
+            None => Reading::Track {
+                skid_axis: self.setup.skid_axis,
+            },
+        }
+    }
 
     fn joint(&self, scope: Scope, p: &Position) -> Step {
         let refuse = |why: Why| why.at(scope.file, p);
