@@ -1621,6 +1621,31 @@ mod precision_tests {
         }
     }
 
+    #[test]
+    fn digit_runs_read_eight_bytes_at_once_end_where_the_bytes_do() {
+        // Latin-1 bytes whose low seven bits are digits (`°` is 0xb0) or marks end a run and
+        // mark nothing.
+        let text = b"1234567890123456789.5\xb0\xb9 7\xae\xad 12345678-.";
+        for i in 0..text.len() {
+            let plain = i + text[i..].iter().take_while(|b| b.is_ascii_digit()).count();
+            assert_eq!(after_digits(text, i), plain, "at {i}");
+        }
+        let marks: Vec<usize> = (0..text.len())
+            .filter(|&i| matches!(text[i], b'-' | b'.'))
+            .collect();
+        let mut found = Vec::new();
+        for (k, block) in text.chunks(8).enumerate() {
+            let mut word = [0; 8];
+            word[..block.len()].copy_from_slice(block);
+            let mut m = bytes_in(u64::from_le_bytes(word), b'-', b'.' + 1);
+            while m != 0 {
+                found.push(8 * k + (m.trailing_zeros() / 8) as usize);
+                m &= m - 1;
+            }
+        }
+        assert_eq!(found, marks);
+    }
+
     proptest::proptest! {
         /// Searching for the marks a house literal has counts what the scan counts, from any
         /// place of the scan to any stop after it (or the end).
