@@ -75,15 +75,29 @@ impl NameKey<'_> {
 
     /// The name is `word` (any case).
     pub(crate) fn is(&self, word: &[u8]) -> bool {
-        self.bytes().eq(word.iter().map(u8::to_ascii_uppercase))
+        !self.differs_at_once(word) && self.bytes().eq(word.iter().map(u8::to_ascii_uppercase))
     }
 
     /// The name starts with `prefix` (any case).
     pub(crate) fn starts_with(&self, prefix: &[u8]) -> bool {
+        if self.differs_at_once(prefix) {
+            return false;
+        }
         let mut b = self.bytes();
         prefix
             .iter()
             .all(|&l| b.next() == Some(l.to_ascii_uppercase()))
+    }
+
+    /// Whether the name's first byte, not a blank (folding drops blanks), is another letter
+    /// than `word`'s: most names asked about (every argument of every call, against `tool0`
+    /// and a motion's prefixes) are told apart there, without folding either.
+    #[inline]
+    fn differs_at_once(&self, word: &[u8]) -> bool {
+        match (self.0.first(), word.first()) {
+            (Some(a), Some(b)) => !a.is_ascii_whitespace() && !a.eq_ignore_ascii_case(b),
+            _ => false,
+        }
     }
 
     /// `z10`, `v1000`: the prefix letter then digits only.
@@ -493,6 +507,40 @@ mod tests {
         let mut p = FirstLetters::new();
         p.insert("p10");
         assert!(p.may_start(b"P10") && p.may_start(b"p") && !p.may_start(b"v1000"));
+    }
+
+    #[test]
+    fn words_and_prefixes_are_compared_as_the_folded_bytes_compare() {
+        let folded = |b: &[u8]| -> Vec<u8> {
+            b.iter()
+                .filter(|c| !c.is_ascii_whitespace())
+                .map(u8::to_ascii_uppercase)
+                .collect()
+        };
+        let names: [&[u8]; 10] = [
+            b"",
+            b"tool0",
+            b"TOOL0",
+            b" tool0",
+            b"t ool0",
+            b"tGun",
+            b"MoveL",
+            b"\xc4tool",
+            b"\tmove",
+            b"m",
+        ];
+        let words: [&[u8]; 7] = [b"", b"tool0", b"move", b"m", b"t", b"\xe4tool", b" tool0"];
+        for n in names {
+            for w in words {
+                let (key, word) = (folded(n), w.to_ascii_uppercase());
+                assert_eq!(NameKey(n).is(w), key == word, "{n:?} is {w:?}");
+                assert_eq!(
+                    NameKey(n).starts_with(w),
+                    key.starts_with(&word),
+                    "{n:?} starts with {w:?}"
+                );
+            }
+        }
     }
 
     #[test]
