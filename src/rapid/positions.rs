@@ -14,7 +14,7 @@ use crate::position::{
     OffsetKind, Orientation, Position, PositionKind, PositionList, ReadAgainTarget, Usage,
 };
 use crate::resolve::DeclKind;
-use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, Span32, latin1};
+use crate::syntax::{Diagnostic, LineCursor, LineIndex, NumLit, Span, Span32, latin1};
 
 /// Instruction name prefixes that move the robot (or set up a move): their targets get the
 /// default work object `wobj0` when no `\WObj` is given.
@@ -129,6 +129,8 @@ pub struct Extractor<'l> {
     /// A number field of the position being built was not scanned by the numeric-aggregate
     /// path, so the list checks its fields (see [`Extractor::push`]).
     read_elsewhere: std::cell::Cell<bool>,
+    /// The line of the last statement or target placed: they come in file order.
+    line_cursor: LineCursor,
 }
 
 /// What [`Extractor::finish`] returns.
@@ -254,6 +256,7 @@ impl<'l> Extractor<'l> {
             current: None,
             exported: Vec::new(),
             read_elsewhere: std::cell::Cell::new(false),
+            line_cursor: LineCursor::default(),
         }
     }
 
@@ -491,7 +494,9 @@ impl<'l> Extractor<'l> {
 
     /// Packs robtarget `literal` declared as `name` (ASCII).
     fn push_literal(&mut self, src: &[u8], literal: &RobtargetLiteral, name: Span) {
-        let (line, column) = self.lines.line_col(literal.span.start);
+        let (line, column) = self
+            .lines
+            .line_col_from(&mut self.line_cursor, literal.span.start);
         self.positions.push_read_again(&ReadAgainTarget {
             span: literal.span,
             kind: PositionKind::Robtarget,
@@ -1225,7 +1230,11 @@ impl Extractor<'_> {
         };
         let (Some(name), Ok(line), Ok(args_start), Ok(refs_start), Ok(inline_start)) = (
             Span32::of(name),
-            u32::try_from(self.lines.line(span.start)),
+            u32::try_from(
+                self.lines
+                    .line_col_from(&mut self.line_cursor, span.start)
+                    .0,
+            ),
             u32::try_from(self.call_args.len()),
             u32::try_from(self.call_refs.len()),
             u32::try_from(self.call_inline.len()),

@@ -19,7 +19,7 @@ mod tree;
 
 pub use diagnostic::{Diagnostic, Excerpt, Severity, WINDOW, latin1, printable, window};
 pub use edit::{Edit, EditError, EditList, EditText, apply_edits};
-pub use line_index::LineIndex;
+pub use line_index::{LineCursor, LineIndex};
 pub(crate) use number::PackedLit;
 pub use number::{NumLit, Rounded, fixed, same_at};
 pub use span::Span;
