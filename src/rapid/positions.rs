@@ -847,12 +847,15 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
                     Some(frame_texts.get(sp.slice(src)))
                 }),
             };
-            let motion = MOTION_PREFIXES
-                .iter()
-                .any(|p| call.starts_with(p.as_bytes()));
+            // A motion without `\WObj` moves in `wobj0` (asked only then: most name theirs).
+            let motion = || {
+                MOTION_PREFIXES
+                    .iter()
+                    .any(|p| call.starts_with(p.as_bytes()))
+            };
             let wobj = match u.wobj {
                 Some(sp) => Some(frame_texts.get(trim_latin1(sp.span().slice(src)))),
-                None => (motion || tool.is_some()).then(|| wobj0.clone()),
+                None => (tool.is_some() || motion()).then(|| wobj0.clone()),
             };
             let stationary = wobj.as_ref().is_some_and(|w| w.robhold);
             binder.bind(
