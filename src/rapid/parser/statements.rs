@@ -214,34 +214,18 @@ impl Parser<'_, '_> {
             return false;
         }
         let src = self.src;
-        let blanks = |i: usize| blanks_end(src, i);
-        let name = |i: usize| plain_name(src, i);
-        // Each name is read once, and the blanks after it once: what follows decides what it
-        // was (a label before `:=`, a value, or a function's name before `(`).
         let mut i = start;
         let mut len = 0;
         loop {
             match src.get(i) {
                 Some(b';') => break,
-                Some(b',') if len > 0 => i = blanks(i + 1),
+                Some(b',') if len > 0 => i = blanks_end(src, i + 1),
                 Some(b'\\') => {}
                 _ if len == 0 => {}
                 _ => return false,
             }
-            let start = i;
-            let switch = src.get(i) == Some(&b'\\');
-            let at = if switch { blanks(i + 1) } else { i };
-            let Some(end) = name(at) else { return false };
-            let mut after = blanks(end);
-            let (label, value, end) = if src.get(after..after + 2) == Some(b":=") {
-                let v = blanks(after + 2);
-                let Some(v_end) = name(v) else { return false };
-                after = blanks(v_end);
-                (Span::new(at, end), Some(Span::new(v, v_end)), v_end)
-            } else if switch {
-                (Span::new(at, end), None, end)
-            } else {
-                (Span::new(at, at), Some(Span::new(at, end)), end)
+            let Some((arg, after)) = plain_arg(src, i) else {
+                return false;
             };
             if src.get(after) == Some(&b'(') {
                 return false;
@@ -249,12 +233,7 @@ impl Parser<'_, '_> {
             let Some(slot) = self.plain.args.get_mut(len) else {
                 return false;
             };
-            *slot = PlainArg {
-                span: Span::new(start, end),
-                label,
-                switch,
-                value,
-            };
+            *slot = arg;
             len += 1;
             i = after;
         }
@@ -275,74 +254,56 @@ impl Parser<'_, '_> {
             return None;
         }
         let src = self.src;
-        let blanks = |i: usize| blanks_end(src, i);
-        let name = |i: usize| plain_name(src, i);
-        let assign_after = |i: usize| -> Option<usize> {
-            let at = blanks(i);
-            (src.get(at..at + 2) == Some(b":=")).then(|| blanks(at + 2))
-        };
         let mark = self.arena.mark();
         let args = self.arena.open(ExprKind::Args, start);
         let mut last = NONE;
         let mut i = self.tok.start as usize;
         let mut first = true;
         let ok = loop {
-            i = blanks(i);
             match src.get(i) {
                 Some(b';') => break true,
-                Some(b',') if !first => i = blanks(i + 1),
+                Some(b',') if !first => i = blanks_end(src, i + 1),
                 Some(b'\\') => {}
                 _ if first => {}
                 _ => break false,
             }
             first = false;
-            let a = self.arena.open(ExprKind::Arg, i as u32);
-            let (label, value) = if src.get(i) == Some(&b'\\') {
-                let at = blanks(i + 1);
-                let Some(end) = name(at) else { break false };
-                (Some((at, end, true)), assign_after(end).ok_or(end))
-            } else {
-                let Some(end) = name(i) else { break false };
-                match assign_after(end) {
-                    Some(v) => (Some((i, end, false)), Ok(v)),
-                    None => (None, Ok(i)),
-                }
+            let Some((arg, after)) = plain_arg(src, i) else {
+                break false;
             };
-            if let Some((from, to, switch)) = label
+            let a = self.arena.open(ExprKind::Arg, arg.span.start as u32);
+            if arg.label.end > arg.label.start
                 && let Some(n) = self.arena.set_mut(a)
             {
-                n.switch = switch;
-                n.name_start = from as u32;
-                n.name_end = to as u32;
+                n.switch = arg.switch;
+                n.name_start = arg.label.start as u32;
+                n.name_end = arg.label.end as u32;
             }
-            let end = match value {
-                Ok(at) => {
-                    let Some(end) = name(at) else { break false };
-                    let v = match src.get(blanks(end)) {
-                        Some(b'(') => match self.plain_function_call(at, end, blanks(end)) {
-                            Some((v, close)) => {
-                                self.arena.link(a, NONE, v);
-                                self.arena.close(a, close as u32);
-                                self.arena.link(args, last, a);
-                                last = a;
-                                i = close;
-                                continue;
-                            }
-                            None => break false,
-                        },
-                        _ => self.arena.open(ExprKind::Ident, at as u32),
-                    };
-                    self.arena.close(v, end as u32);
-                    self.arena.link(a, NONE, v);
-                    end
+            match (arg.value, src.get(after)) {
+                (Some(f), Some(b'(')) => match self.plain_function_call(f.start, f.end, after) {
+                    Some((v, close)) => {
+                        self.arena.link(a, NONE, v);
+                        self.arena.close(a, close as u32);
+                        self.arena.link(args, last, a);
+                        last = a;
+                        i = blanks_end(src, close);
+                        continue;
+                    }
+                    None => break false,
+                },
+                // A switch without a value, then `(`.
+                (None, Some(b'(')) => break false,
+                (Some(v), _) => {
+                    let id = self.arena.open(ExprKind::Ident, v.start as u32);
+                    self.arena.close(id, v.end as u32);
+                    self.arena.link(a, NONE, id);
                 }
-                // A switch without a value.
-                Err(end) => end,
-            };
-            self.arena.close(a, end as u32);
+                (None, _) => {}
+            }
+            self.arena.close(a, arg.span.end as u32);
             self.arena.link(args, last, a);
             last = a;
-            i = end;
+            i = after;
         };
         if !ok {
             self.arena.truncate(mark);
@@ -650,6 +611,36 @@ impl Parser<'_, '_> {
         self.block_end(b"ENDTEST", opener);
         self.close(branch);
     }
+}
+
+/// One argument of a call's plain arguments at `i` ([`Parser::plain_args_from`],
+/// [`Parser::plain_call_args`]): a plain name, `name:=name`, `\\switch` or `\\switch:=name`,
+/// and the place after it and the blanks after it, where a `(` says its value names a
+/// function. Each name is read once, and the blanks after it once: what follows decides what
+/// it was (a label before `:=`, a value, or a function's name before `(`).
+#[inline(always)]
+fn plain_arg(src: &[u8], i: usize) -> Option<(PlainArg, usize)> {
+    let switch = src.get(i) == Some(&b'\\');
+    let at = if switch { blanks_end(src, i + 1) } else { i };
+    let end = plain_name(src, at)?;
+    let after = blanks_end(src, end);
+    let (label, value, end, after) = if src.get(after..after + 2) == Some(b":=") {
+        let v = blanks_end(src, after + 2);
+        let v_end = plain_name(src, v)?;
+        let value = Some(Span::new(v, v_end));
+        (Span::new(at, end), value, v_end, blanks_end(src, v_end))
+    } else if switch {
+        (Span::new(at, end), None, end, after)
+    } else {
+        (Span::new(at, at), Some(Span::new(at, end)), end, after)
+    };
+    let arg = PlainArg {
+        span: Span::new(i, end),
+        label,
+        switch,
+        value,
+    };
+    Some((arg, after))
 }
 
 #[cfg(test)]
