@@ -120,7 +120,7 @@ impl Parser<'_, '_> {
                     starts: &mut [usize],
                     values: &mut [f64],
                     seen: &mut [Option<SeenLiteral>],
-                    mut tail: Option<&mut (Option<SeenPart>, u8)>|
+                    mut tail: Option<&mut PartMemo>|
          -> Option<(usize, usize)> {
             let mut i = blanks(i);
             if src.get(i) != Some(&b'[') {
@@ -159,15 +159,15 @@ impl Parser<'_, '_> {
                 }
                 count += 1;
                 if count == 1
-                    && let Some((memo, misses)) = tail.as_deref_mut()
+                    && let Some(memo) = tail.as_deref_mut()
                 {
                     first_end = end;
-                    tried = *misses <= 2 || *misses % 16 == 0;
+                    tried = memo.tried();
                     if tried
-                        && let Some(m) = memo
+                        && let Some(m) = &memo.part
                         && m.at(src, end)
                     {
-                        *misses = 0;
+                        memo.misses = 0;
                         let read = m.read(end, starts.get_mut(1..)?, &mut []);
                         let read = read.map(|(n, after)| (n + 1, after));
                         if !cfg!(debug_assertions) {
@@ -187,12 +187,11 @@ impl Parser<'_, '_> {
                         if let Some((taken, seen_starts)) = taken {
                             assert_eq!(taken, read);
                             assert_eq!(seen_starts.get(..count), starts.get(..count));
-                        } else if let Some((memo, misses)) = tail {
-                            *misses = misses.wrapping_add(1);
-                            if tried {
-                                let more = starts.get(1..count)?;
-                                *memo = SeenPart::of(src, first_end, i + 1, more, &[]);
-                            }
+                        } else if let Some(memo) = tail {
+                            let more = || starts.get(1..count);
+                            memo.missed(tried, || {
+                                SeenPart::of(src, first_end, i + 1, more()?, &[])
+                            });
                         }
                         return read;
                     }

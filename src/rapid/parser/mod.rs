@@ -254,13 +254,11 @@ impl SeenPart {
     /// The part at `i` (past blanks) read by `list` (starts into `starts`, values into
     /// `values`, each literal into `seen`: its count and the index after it), or taken whole
     /// from `memo`, the last one read at its place, when it is the same text (a run of targets
-    /// with one orientation and configuration). While each part differs from the one before
-    /// (targets each with their own orientation), only one in 16 is compared and remembered:
-    /// copying every part's text cost more than the compares saved. Inlined: a call per part
-    /// was 50 instructions.
+    /// with one orientation and configuration), as [`PartMemo`] says when to compare. Inlined:
+    /// a call per part was 50 instructions.
     #[inline(always)]
     fn take_or_read(
-        (memo, misses): &mut (Option<SeenPart>, u8),
+        memo: &mut PartMemo,
         src: &[u8],
         i: usize,
         starts: &mut [usize],
@@ -273,9 +271,9 @@ impl SeenPart {
             &mut [Option<SeenLiteral>],
         ) -> Option<(usize, usize)>,
     ) -> Option<(usize, usize)> {
-        let tried = *misses <= 2 || *misses % 16 == 0;
+        let tried = memo.tried();
         if tried
-            && let Some(m) = memo
+            && let Some(m) = &memo.part
             && m.at(src, i)
         {
             let read = m.read(i, starts, values);
@@ -287,14 +285,13 @@ impl SeenPart {
                 let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(&v), bits(values));
             }
-            *misses = 0;
+            memo.misses = 0;
             return read;
         }
         let (count, end) = list(i, starts, values, seen)?;
-        *misses = misses.wrapping_add(1);
-        if tried {
-            *memo = SeenPart::of(src, i, end, starts.get(..count)?, values);
-        }
+        memo.missed(tried, || {
+            SeenPart::of(src, i, end, starts.get(..count)?, values)
+        });
         Some((count, end))
     }
 
@@ -308,6 +305,37 @@ impl SeenPart {
         let n = self.value_count.min(values.len());
         values.get_mut(..n)?.copy_from_slice(self.values.get(..n)?);
         Some((self.count, i + self.len))
+    }
+}
+
+/// The part last read at one place of a robtarget literal, and how many times in a row the
+/// part read there was not it. While each part differs from the one before (targets each with
+/// their own orientation), only one in 16 is compared and remembered: doing so for every one
+/// cost more than it saved.
+#[derive(Clone, Copy, Debug)]
+struct PartMemo {
+    part: Option<SeenPart>,
+    misses: u8,
+}
+
+impl PartMemo {
+    const EMPTY: PartMemo = PartMemo {
+        part: None,
+        misses: 0,
+    };
+
+    /// Whether the part read now is compared with the one remembered.
+    fn tried(&self) -> bool {
+        self.misses <= 2 || self.misses.is_multiple_of(16)
+    }
+
+    /// A part read in full, not taken from the memo; `tried` as [`PartMemo::tried`] said
+    /// before it was read: then `part` (what it was) is remembered.
+    fn missed(&mut self, tried: bool, part: impl FnOnce() -> Option<SeenPart>) {
+        self.misses = self.misses.wrapping_add(1);
+        if tried {
+            self.part = part();
+        }
     }
 }
 
@@ -405,7 +433,7 @@ struct Parser<'a, 's> {
     seen: [Option<SeenLiteral>; SEEN_FIELDS],
     /// The quaternion, the configuration and the external axes after the first it last read,
     /// and how many times in a row each was not the one before.
-    seen_parts: [(Option<SeenPart>, u8); 3],
+    seen_parts: [PartMemo; 3],
     /// What [`Parser::plain_args_from`] last read.
     plain: PlainArgs,
     sink: &'s mut StatementSink<'s>,
@@ -589,7 +617,7 @@ impl<'a, 's> Parser<'a, 's> {
             literal: RobtargetLiteral::EMPTY,
             plain: PlainArgs::EMPTY,
             seen: [None; SEEN_FIELDS],
-            seen_parts: [(None, 0); 3],
+            seen_parts: [PartMemo::EMPTY; 3],
             sink,
         };
         p.tok = p.next_significant();
