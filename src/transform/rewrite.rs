@@ -736,7 +736,8 @@ mod tests {
         fn same_rotation_is_the_angle_test(
             base in (-180.0..180.0f64, -90.0..90.0f64, -180.0..180.0f64),
             axis in proptest::strategy::Strategy::prop_filter(
-                (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64),                "axis",
+                (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64),
+                "axis",
                 |a| a.0 * a.0 + a.1 * a.1 + a.2 * a.2 > 1e-3,
             ),
             exponent in -16.0..-4.0f64,
