@@ -308,6 +308,12 @@ static IDENT_CONTINUE: [bool; 256] = {
     table
 };
 
+/// A byte that continues an identifier.
+#[inline(always)]
+pub(super) fn is_ident_continue(c: u8) -> bool {
+    IDENT_CONTINUE[c as usize]
+}
+
 /// `ident = letter { letter | digit | "_" }` (grammars/rapid.ebnf): the length of the
 /// identifier `rest` starts with (its first byte is a letter or `_`).
 pub(super) fn ident_len(rest: &[u8]) -> usize {

@@ -11,7 +11,7 @@ mod items;
 mod statements;
 
 use super::expr::{Arena, ExprKind, NONE};
-use super::lexer::{Lexer, Token, TokenKind, ident_len, is_keyword};
+use super::lexer::{Lexer, Token, TokenKind, ident_len, is_ident_continue, is_keyword};
 use super::tree::{NodeKind, Rapid, Tree};
 use crate::syntax::{Diagnostic, NumLit, Sink, Span, TreeBuilder};
 
@@ -89,18 +89,97 @@ pub(crate) const MAX_PLAIN_ARGS: usize = 16;
 /// then walked back (building and reading a motion's eleven nodes was a tenth of `check`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct PlainArgs {
-    pub args: [PlainArg; MAX_PLAIN_ARGS],
+    /// Each argument's span, label and value, as their starts and ends one after another: a
+    /// call read as the one before it ([`Parser::call_like_last`]) moves them in one loop
+    /// the compiler vectorises (field by field they were half of reading such a call).
+    offsets: [usize; OFFSETS_PER_ARG * MAX_PLAIN_ARGS],
+    /// Each argument written `\name`, and each given a value.
+    switch: [bool; MAX_PLAIN_ARGS],
+    valued: [bool; MAX_PLAIN_ARGS],
     pub len: usize,
 }
 
+/// A [`PlainArg`]'s span, label and value, start and end of each.
+const OFFSETS_PER_ARG: usize = 6;
+
 impl PlainArgs {
     const EMPTY: PlainArgs = PlainArgs {
-        args: [PlainArg::EMPTY; MAX_PLAIN_ARGS],
+        offsets: [0; OFFSETS_PER_ARG * MAX_PLAIN_ARGS],
+        switch: [false; MAX_PLAIN_ARGS],
+        valued: [false; MAX_PLAIN_ARGS],
         len: 0,
     };
 
-    pub(crate) fn iter(&self) -> impl Iterator<Item = &PlainArg> {
-        self.args.iter().take(self.len)
+    /// Puts `arg` as argument `k`; `false` past the most it holds.
+    fn set(&mut self, k: usize, arg: PlainArg) -> bool {
+        let at = k * OFFSETS_PER_ARG;
+        let (Some(offsets), Some(switch), Some(valued)) = (
+            self.offsets.get_mut(at..at + OFFSETS_PER_ARG),
+            self.switch.get_mut(k),
+            self.valued.get_mut(k),
+        ) else {
+            return false;
+        };
+        let value = arg.value.unwrap_or(Span { start: 0, end: 0 });
+        offsets.copy_from_slice(&[
+            arg.span.start,
+            arg.span.end,
+            arg.label.start,
+            arg.label.end,
+            value.start,
+            value.end,
+        ]);
+        (*switch, *valued) = (arg.switch, arg.value.is_some());
+        true
+    }
+
+    pub(crate) fn iter(&self) -> impl Iterator<Item = PlainArg> + '_ {
+        self.offsets
+            .chunks_exact(OFFSETS_PER_ARG)
+            .zip(self.switch.iter().zip(&self.valued))
+            .take(self.len)
+            .map(|(o, (&switch, &valued))| {
+                let span = |k: usize| Span {
+                    start: o.get(k).copied().unwrap_or_default(),
+                    end: o.get(k + 1).copied().unwrap_or_default(),
+                };
+                PlainArg {
+                    span: span(0),
+                    label: span(2),
+                    switch,
+                    value: valued.then(|| span(4)),
+                }
+            })
+    }
+
+    /// Moves every offset of the arguments by `shift`, and those at `pivot` or after by
+    /// `grown` more. Only the argument the pivot falls in compares its offsets with it: the
+    /// others move whole, in loops of additions alone.
+    fn move_offsets(&mut self, shift: usize, pivot: usize, grown: isize) {
+        let n = (self.len * OFFSETS_PER_ARG).min(self.offsets.len());
+        let Some(offsets) = self.offsets.get_mut(..n) else {
+            return;
+        };
+        // The first argument that ends at the pivot or after (its span's end is its last
+        // offset in the text).
+        let straddles = offsets
+            .chunks_exact(OFFSETS_PER_ARG)
+            .position(|o| o.get(1).is_some_and(|&end| end >= pivot))
+            .map_or(n, |k| k * OFFSETS_PER_ARG);
+        let (before, rest) = offsets.split_at_mut(straddles.min(n));
+        let (straddling, after) = rest.split_at_mut(OFFSETS_PER_ARG.min(rest.len()));
+        for at in before {
+            *at = at.wrapping_add(shift);
+        }
+        for at in straddling {
+            *at = at
+                .wrapping_add(shift)
+                .wrapping_add_signed(grown * isize::from(*at >= pivot));
+        }
+        let shift_and_grown = shift.wrapping_add_signed(grown);
+        for at in after {
+            *at = at.wrapping_add(shift_and_grown);
+        }
     }
 }
 
@@ -116,15 +195,6 @@ pub(crate) struct PlainArg {
     pub switch: bool,
     /// The name given as its value; `None` for a switch without one.
     pub value: Option<Span>,
-}
-
-impl PlainArg {
-    const EMPTY: PlainArg = PlainArg {
-        span: Span { start: 0, end: 0 },
-        label: Span { start: 0, end: 0 },
-        switch: false,
-        value: None,
-    };
 }
 
 /// More external axes than a controller has are left to the general path.
@@ -436,6 +506,9 @@ struct Parser<'a, 's> {
     seen_parts: [PartMemo; 3],
     /// What [`Parser::plain_args_from`] last read.
     plain: PlainArgs,
+    /// The call statement [`Parser::plain`] holds the arguments of, when it was read at its
+    /// statement's first byte: from its callee's start to after its `;`.
+    last_call: Option<Span>,
     sink: &'s mut StatementSink<'s>,
 }
 
@@ -590,6 +663,29 @@ fn plain_name(src: &[u8], i: usize) -> Option<usize> {
     (!is_keyword(rest.get(..len)?)).then_some(i + len)
 }
 
+/// How many bytes `a` and `b` begin with alike, compared eight at a time.
+fn common_prefix_len(a: &[u8], b: &[u8]) -> usize {
+    let n = a.len().min(b.len());
+    let mut i = 0;
+    while let (Some(x), Some(y)) = (
+        a.get(i..n).and_then(<[u8]>::first_chunk::<8>),
+        b.get(i..n).and_then(<[u8]>::first_chunk::<8>),
+    ) {
+        let differ = u64::from_le_bytes(*x) ^ u64::from_le_bytes(*y);
+        if differ != 0 {
+            return i + (differ.trailing_zeros() / 8) as usize;
+        }
+        i += 8;
+    }
+    i + a
+        .get(i..n)
+        .unwrap_or_default()
+        .iter()
+        .zip(b.get(i..n).unwrap_or_default())
+        .take_while(|(x, y)| x == y)
+        .count()
+}
+
 impl<'a, 's> Parser<'a, 's> {
     fn new(
         src: &'a [u8],
@@ -616,6 +712,7 @@ impl<'a, 's> Parser<'a, 's> {
             fast_paths: true,
             literal: RobtargetLiteral::EMPTY,
             plain: PlainArgs::EMPTY,
+            last_call: None,
             seen: [None; SEEN_FIELDS],
             seen_parts: [PartMemo::EMPTY; 3],
             sink,

@@ -106,8 +106,9 @@ impl Parser<'_, '_> {
             if matches!(
                 self.src.get(after),
                 Some(b'a'..=b'z' | b'A'..=b'Z' | b'_' | b'\\' | b';')
-            ) && self.plain_args_from(after)
+            ) && (self.call_like_last(t) || self.plain_args_from(after))
             {
+                self.last_call = Some(Span::new(t.start as usize, self.prev_end as usize));
                 let call = Stmt::Call {
                     name: t.span(),
                     args: NONE,
@@ -209,6 +210,8 @@ impl Parser<'_, '_> {
     /// does, into [`Parser::plain`] instead of expression nodes, and ends after the `;`. On
     /// anything else (a function call in an argument too) it reads nothing and says `false`.
     fn plain_args_from(&mut self, start: usize) -> bool {
+        // What [`Parser::plain`] holds is no longer the last call's (the caller says again).
+        self.last_call = None;
         // The general path reads each argument one level deeper; past the limit it refuses.
         if self.depth > MAX_DEPTH {
             return false;
@@ -230,15 +233,87 @@ impl Parser<'_, '_> {
             if src.get(after) == Some(&b'(') {
                 return false;
             }
-            let Some(slot) = self.plain.args.get_mut(len) else {
+            if !self.plain.set(len, arg) {
                 return false;
-            };
-            *slot = arg;
+            }
             len += 1;
             i = after;
         }
         self.plain.len = len;
         self.resume_at(i + 1);
+        true
+    }
+
+    /// The call statement at `t` when its bytes are those of the last call read at its
+    /// statement's first byte ([`Parser::last_call`]) with at most one name changed for another
+    /// (`MoveL p11, v1000, z10, tGun\WObj:=wCar;` after `MoveL p10, ...`: runs of motions alike
+    /// but for the target are most of a program): [`Parser::plain`] then holds its arguments,
+    /// the last call's moved to its place, and the parser goes on after its `;`, as
+    /// [`Parser::plain_args_from`] would leave it (a debug build reads the call that way too and
+    /// holds the two to each other). On any other difference it reads nothing and says `false`.
+    ///
+    /// Every run of identifier bytes in a call that path read is a whole name (the callee, a
+    /// label, a value), and the rest is blanks and punctuation; the name put in place of one is
+    /// a plain name too, so the call reads as the last one did, argument for argument.
+    fn call_like_last(&mut self, t: Token) -> bool {
+        // The general path reads each argument one level deeper; past the limit it refuses.
+        let Some(last) = self.last_call.filter(|_| self.depth <= MAX_DEPTH) else {
+            return false;
+        };
+        let src = self.src;
+        let now_start = t.start as usize;
+        let (Some(before), Some(now)) = (src.get(last.start..last.end), src.get(now_start..))
+        else {
+            return false;
+        };
+        let alike = common_prefix_len(before, now);
+        // Where the last call's bytes move by `grown` more than by the shift to the new start:
+        // after the name that differs (the end for a call written again as it was).
+        let (from, grown) = if alike == before.len() {
+            (before.len(), 0)
+        } else {
+            let name = before
+                .get(..alike)
+                .unwrap_or_default()
+                .iter()
+                .rposition(|&c| !is_ident_continue(c))
+                .map_or(0, |k| k + 1);
+            let old_end = match before.get(name..) {
+                Some(rest @ [b'a'..=b'z' | b'A'..=b'Z' | b'_', ..]) => name + ident_len(rest),
+                _ => return false,
+            };
+            let Some(new_end) = plain_name(src, now_start + name) else {
+                return false;
+            };
+            let new_end = new_end - now_start;
+            let rest = before.get(old_end..).unwrap_or_default();
+            if now.get(new_end..new_end + rest.len()) != Some(rest) {
+                return false;
+            }
+            (old_end, new_end as isize - old_end as isize)
+        };
+        #[cfg(debug_assertions)]
+        let read = {
+            let last_plain = self.plain;
+            let after = blanks_end(src, t.end as usize);
+            let read = self
+                .plain_args_from(after)
+                .then_some((self.plain, self.prev_end));
+            self.plain = last_plain;
+            read
+        };
+        // Offsets are far below `isize::MAX` (a source is at most `u32::MAX` bytes), so the
+        // wrapping arithmetic is exact.
+        let (shift, pivot) = (now_start.wrapping_sub(last.start), last.start + from);
+        self.plain.move_offsets(shift, pivot, grown);
+        let end = last.end.wrapping_add(shift).wrapping_add_signed(grown);
+        #[cfg(debug_assertions)]
+        assert_eq!(
+            read.map(|(plain, end)| (plain.iter().collect::<Vec<_>>(), end)),
+            Some((self.plain.iter().collect(), end as u32)),
+            "a call read as the one before"
+        );
+        self.resume_at(end);
         true
     }
 
@@ -661,6 +736,12 @@ mod tests {
         let mut sink = crate::syntax::NoSink;
         let mut p = Parser::new(src, &mut sink, TreeBuilder::with_capacity(4));
         p.fast_paths = fast;
+        read_next(&mut p)
+    }
+
+    /// [`read`] of the statement `p` stands at.
+    fn read_next(p: &mut Parser<'_, '_>) -> Read {
+        p.arena.clear();
         let result = p.simple_statement();
         let mut arena = p.arena.clone();
         let result = result
@@ -783,12 +864,161 @@ mod tests {
         .prop_map(str::to_owned)
     }
 
+    /// The second of two statements read after the first, with the first's arguments at hand
+    /// ([`Parser::call_like_last`]) and without, and whether the first was a call read at its
+    /// statement's first byte.
+    fn read_second(first: &str, second: &str) -> (Read, Read, bool) {
+        let src = format!("{first}\r\n  {second}\r\n  next");
+        let read = |like_last: bool| {
+            let mut sink = crate::syntax::NoSink;
+            let mut p = Parser::new(src.as_bytes(), &mut sink, TreeBuilder::with_capacity(4));
+            let _first = read_next(&mut p);
+            let was_call = p.last_call.is_some();
+            if !like_last {
+                p.last_call = None;
+            }
+            (read_next(&mut p), was_call)
+        };
+        let ((after, was_call), (alone, _)) = (read(true), read(false));
+        (after, alone, was_call)
+    }
+
+    /// A call, and another one: mostly the first with one of its names (the callee, a label,
+    /// a value) put in place of another, which may be no name (a keyword, a number, nothing,
+    /// a function's call).
+    fn like_calls() -> impl Strategy<Value = (String, String)> {
+        let new_name = proptest::sample::select(vec![
+            "p11",
+            "p1",
+            "v500",
+            "Tool",
+            "WObj",
+            "MoveJ",
+            "x",
+            "a_much_longer_name_12",
+            "Ñame",
+            "AND",
+            "TO",
+            "9x",
+            "",
+            "p1(",
+            "p1 ",
+            "a.b",
+        ]);
+        let first = call().prop_map(|c| c.trim_end_matches("\r\n  next").to_owned());
+        (
+            first,
+            any::<proptest::sample::Index>(),
+            new_name,
+            0..8u8,
+            call(),
+        )
+            .prop_map(|(first, which, new_name, other, other_call)| {
+                if other == 0 {
+                    let other_call = other_call.trim_end_matches("\r\n  next").to_owned();
+                    return (first, other_call);
+                }
+                let is_name = |b: u8| b.is_ascii_alphanumeric() || b == b'_' || b >= 0xC0;
+                let bytes = first.as_bytes();
+                let names: Vec<(usize, usize)> = (0..bytes.len())
+                    .filter(|&i| is_name(bytes[i]) && (i == 0 || !is_name(bytes[i - 1])))
+                    .map(|i| {
+                        (
+                            i,
+                            i + bytes[i..].iter().take_while(|&&b| is_name(b)).count(),
+                        )
+                    })
+                    .collect();
+                let second = match names.get(which.index(names.len().max(1))) {
+                    Some(&(start, end)) => {
+                        let mut s = bytes[..start].to_vec();
+                        s.extend_from_slice(new_name.as_bytes());
+                        s.extend_from_slice(&bytes[end..]);
+                        String::from_utf8_lossy(&s).into_owned()
+                    }
+                    None => first.clone(),
+                };
+                (first, second)
+            })
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig { cases: 1024, ..ProptestConfig::default() })]
 
         #[test]
         fn fast_call_args_path_builds_what_the_general_path_builds(c in call()) {
             prop_assert_eq!(read(c.as_bytes(), true), read(c.as_bytes(), false));
+        }
+
+        #[test]
+        fn a_call_like_the_one_before_reads_as_it_reads_alone((first, second) in like_calls()) {
+            let (after, alone, _) = read_second(&first, &second);
+            prop_assert_eq!(after, alone);
+        }
+    }
+
+    #[test]
+    fn a_call_like_the_one_before_takes_its_arguments() {
+        let first = "MoveL p10, v1000, z10, tGun\\WObj:=wCar;";
+        // Each is `first` with one name changed, or written again as it was.
+        let like = [
+            "MoveL p11, v1000, z10, tGun\\WObj:=wCar;",
+            "MoveL p1, v1000, z10, tGun\\WObj:=wCar;",
+            "MoveL p10000, v1000, z10, tGun\\WObj:=wCar;",
+            "MoveJ p10, v1000, z10, tGun\\WObj:=wCar;",
+            "MoveL p10, v1000, z10, tGun\\Tool:=wCar;",
+            "MoveL p10, v1000, z10, tGun\\WObj:=wTable;",
+            "MoveL p10, v1000, z10, tGun\\WObj:=wCar;",
+        ];
+        for second in like {
+            let mut sink = crate::syntax::NoSink;
+            let src = format!("{first}\n{second}\nx");
+            let mut p = Parser::new(src.as_bytes(), &mut sink, TreeBuilder::with_capacity(4));
+            assert!(read_next(&mut p).0.is_ok());
+            let t = p.tok;
+            assert!(p.call_like_last(t), "{second}");
+            let texts: Vec<_> = p
+                .plain
+                .iter()
+                .map(|a| a.span.slice(src.as_bytes()))
+                .collect();
+            let want: Vec<&[u8]> = second.as_bytes()[6..second.len() - 1]
+                .split(|&b| b == b',')
+                .flat_map(|a| a.strip_prefix(b" ").unwrap_or(a).split(|&b| b == b'\\'))
+                .collect();
+            let want: Vec<Vec<u8>> = want
+                .iter()
+                .enumerate()
+                .map(|(k, a)| {
+                    if k == 4 {
+                        [b"\\", *a].concat()
+                    } else {
+                        a.to_vec()
+                    }
+                })
+                .collect();
+            assert_eq!(texts, want, "{second}");
+            assert_eq!(p.tok.start as usize, src.len() - 1);
+        }
+        // Not alike: another blank, a keyword or a number for a name, another separator, a
+        // function called.
+        for second in [
+            "MoveL p10,  v1000, z10, tGun\\WObj:=wCar;",
+            "MoveL AND, v1000, z10, tGun\\WObj:=wCar;",
+            "MoveL 9x, v1000, z10, tGun\\WObj:=wCar;",
+            "MoveL p10, v1000, z10, tGun, \\WObj:=wCar;",
+            "MoveL p10(1), v1000, z10, tGun\\WObj:=wCar;",
+            "MoveL p10, v1000, z10;",
+        ] {
+            let (after, alone, was_call) = read_second(first, second);
+            assert!(was_call);
+            assert_eq!(after, alone, "{second}");
+            let mut sink = crate::syntax::NoSink;
+            let src = format!("{first}\n{second}\nx");
+            let mut p = Parser::new(src.as_bytes(), &mut sink, TreeBuilder::with_capacity(4));
+            assert!(read_next(&mut p).0.is_ok());
+            let t = p.tok;
+            assert!(!p.call_like_last(t), "{second}");
         }
     }
 
