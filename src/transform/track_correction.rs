@@ -169,6 +169,47 @@ struct TrackRule<'s, 'a> {
     setup: &'s TrackSetup<'a>,
     dir: Direction,
     work_objects: LastWorkObject,
+    corrections: LastCorrection,
+}
+
+/// The correction (and its undo) last worked out, with the skid and the work object it was
+/// for. A program's targets come in runs taught at one skid position in one work object (a
+/// station's welds), and the correction depends on those two alone: the splines, the pose
+/// and its five products are worked out once per run. Keyed by their bits, so that a
+/// correction is reused only for inputs it would be computed again from exactly.
+#[derive(Default)]
+struct LastCorrection(std::cell::Cell<Option<CorrectionFor>>);
+
+/// A correction and its undo, with the bits of the skid and of the work object's pose.
+type CorrectionFor = (u64, [u64; 7], (Pose, Option<Pose>));
+
+impl LastCorrection {
+    fn key(w: &Pose) -> [u64; 7] {
+        let (t, q) = (&w.translation.vector, &w.rotation.coords);
+        [t.x, t.y, t.z, q.x, q.y, q.z, q.w].map(f64::to_bits)
+    }
+
+    /// [`TrackSetup::correction_both_ways`] in `dir`, with its undo when `inverse`, for the
+    /// same `setup`, `dir` and `inverse` at every call.
+    fn get(
+        &self,
+        setup: &TrackSetup<'_>,
+        w: &Pose,
+        skid: f64,
+        dir: Direction,
+        inverse: bool,
+    ) -> Result<(Pose, Option<Pose>), TrackError> {
+        let (skid_bits, w_bits) = (skid.to_bits(), Self::key(w));
+        if let Some((s, k, both)) = self.0.get()
+            && s == skid_bits
+            && k == w_bits
+        {
+            return Ok(both);
+        }
+        let both = setup.correction_both_ways(w, skid, dir, inverse)?;
+        self.0.set(Some((skid_bits, w_bits, both)));
+        Ok(both)
+    }
 }
 
 impl TargetRule for TrackRule<'_, '_> {
@@ -282,8 +323,14 @@ impl TargetRule for TrackRule<'_, '_> {
         let skid = skid.unwrap_or_default();
         let w = &frame.w;
         let (correction, undo) = self
-            .setup
-            .correction_both_ways(w, skid, self.dir, self.dir == Direction::Correct)
+            .corrections
+            .get(
+                self.setup,
+                w,
+                skid,
+                self.dir,
+                self.dir == Direction::Correct,
+            )
             .map_err(|e| profile_refusal(&what, skid, e))?;
         let new = correction * t;
         if let (Some(arm), Some(tool)) = (&self.setup.arm, &frame.tool) {
@@ -318,6 +365,7 @@ pub fn track_correction(program: &Program, setup: &TrackSetup, dir: Direction) -
         setup,
         dir,
         work_objects: LastWorkObject::default(),
+        corrections: LastCorrection::default(),
     };
     apply_rule(program, &rule)
 }
@@ -407,6 +455,51 @@ mod tests {
             (moved.y - 1000.0 * 0.01f64.to_radians().sin()).abs() < 1e-9,
             "{moved}"
         );
+    }
+
+    #[test]
+    fn a_run_of_targets_at_one_skid_works_out_its_correction_once() {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let calls = AtomicUsize::new(0);
+        let wave = deformation((1.5, 0.02, 900.0));
+        let counted = |s: f64| {
+            calls.fetch_add(1, Ordering::Relaxed);
+            wave(s)
+        };
+        let mut s = setup(
+            &counted,
+            pose_xyz_deg(10.0, -1800.0, 5.0, 0.0, 0.0, 90.0),
+            Vector3::x(),
+        );
+        s.frames.insert(
+            "wobj_car".into(),
+            pose_xyz_deg(2000.0, 0.0, 600.0, 0.0, 0.0, 180.0),
+        );
+        // Runs at 100, 200 and 100 mm again; -0 and 0 are different inputs.
+        let skids = ["100", "100", "100.0", "200", "200", "100", "0", "-0"];
+        let lines: Vec<String> = skids
+            .iter()
+            .enumerate()
+            .map(|(k, skid)| {
+                format!(
+                    "[[{}.5,-310.25,845],[0.0436194,0.0,0.9990482,0.0],[0,-1,0,1],[{skid},9E9,9E9,9E9,9E9,9E9]]\n",
+                    1200 + k
+                )
+            })
+            .collect();
+        for dir in [Direction::Correct, Direction::Zero] {
+            calls.store(0, Ordering::Relaxed);
+            let all = text_after(&rapid(&lines.concat(), "wobj_car"), &s, dir);
+            assert_eq!(calls.load(Ordering::Relaxed), 5, "{dir:?}");
+            // Each target as the one target of a program (worked out from nothing) is written
+            // as in the run.
+            let alone: String = lines
+                .iter()
+                .map(|l| text_after(&rapid(l, "wobj_car"), &s, dir))
+                .collect();
+            assert_eq!(all, alone);
+            assert_ne!(all, lines.concat());
+        }
     }
 
     #[test]
