@@ -7,7 +7,7 @@
 //! further down the module.
 
 use super::expr::{Arena, ExprKind};
-use super::parser::{PlainArgs, RobtargetLiteral, Statement, Stmt};
+use super::parser::{MovedCall, PlainArgs, RobtargetLiteral, Statement, Stmt};
 use crate::names::{FirstLetters, NameKey, NameMap};
 use crate::position::{
     Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Name, NumField, OffsetCall,
@@ -131,6 +131,9 @@ pub struct Extractor<'l> {
     read_elsewhere: std::cell::Cell<bool>,
     /// The line of the last statement or target placed: they come in file order.
     line_cursor: LineCursor,
+    /// Where the call the last of [`Extractor::uses`] records starts, when it had plain
+    /// arguments (see [`Extractor::call_like_last`]).
+    last_plain_call: Option<usize>,
 }
 
 /// What [`Extractor::finish`] returns.
@@ -257,6 +260,7 @@ impl<'l> Extractor<'l> {
             exported: Vec::new(),
             read_elsewhere: std::cell::Cell::new(false),
             line_cursor: LineCursor::default(),
+            last_plain_call: None,
         }
     }
 
@@ -963,6 +967,7 @@ impl Extractor<'_> {
             span,
             literal,
             plain_args,
+            moved,
         } = statement;
         match *stmt {
             Stmt::Decl {
@@ -1022,7 +1027,15 @@ impl Extractor<'_> {
                 }
             }
             Stmt::Call { name, args } => {
-                self.statement_call(src, arena, name, args, plain_args, span)
+                if let Some(m) = moved
+                    && self.call_like_last(name, &m, span)
+                {
+                    #[cfg(debug_assertions)]
+                    self.assert_recorded_as_read(src, arena, name, args, plain_args, span);
+                    return;
+                }
+                self.statement_call(src, arena, name, args, plain_args, span);
+                self.last_plain_call = plain_args.is_some().then_some(span.start);
             }
             Stmt::Assign { target, value } => {
                 self.scan(src, arena, true);
@@ -1052,6 +1065,96 @@ impl Extractor<'_> {
                 self.scan(src, arena, true);
             }
         }
+    }
+
+    /// Records the call `name` at `span` from the call before, which it repeats with its
+    /// offsets moved as `m` says (the parser took its arguments from that call's, with no
+    /// label changed): the frame, the tool and the positional references are that call's,
+    /// moved. `false`, recording nothing, unless the last call recorded is that one.
+    fn call_like_last(&mut self, name: Span, m: &MovedCall, span: Span) -> bool {
+        let Some(last) = self
+            .uses
+            .last()
+            .copied()
+            .filter(|_| self.last_plain_call == Some(m.from))
+        else {
+            return false;
+        };
+        let moved = |s: Span32| {
+            let s = s.span();
+            Span32::of(Span::new(m.moved(s.start), m.moved(s.end)))
+        };
+        let (Some(name), Ok(line), Ok(args_start), Ok(refs_start), Ok(inline_start)) = (
+            Span32::of(name),
+            u32::try_from(
+                self.lines
+                    .line_col_from(&mut self.line_cursor, span.start)
+                    .0,
+            ),
+            u32::try_from(self.call_args.len()),
+            u32::try_from(self.call_refs.len()),
+            u32::try_from(self.call_inline.len()),
+        ) else {
+            return false;
+        };
+        let from = last.args_start as usize;
+        if from > self.call_args.len() {
+            return false;
+        }
+        self.call_args.extend_from_within(from..);
+        if let Some(args) = self.call_args.get_mut(args_start as usize..) {
+            for a in args {
+                *a = a.and_then(moved);
+            }
+        }
+        self.uses.push(CallUse {
+            name,
+            line,
+            routine: self.routine_of_call(),
+            wobj: last.wobj.and_then(moved),
+            tool: last.tool.and_then(moved),
+            args_start,
+            refs_start,
+            inline_start,
+        });
+        self.last_plain_call = Some(span.start);
+        true
+    }
+
+    /// Asserts that the call [`Extractor::call_like_last`] just recorded is what reading its
+    /// arguments records.
+    #[cfg(debug_assertions)]
+    fn assert_recorded_as_read(
+        &mut self,
+        src: &[u8],
+        arena: &Arena,
+        name: Span,
+        args: u32,
+        plain: Option<&PlainArgs>,
+        span: Span,
+    ) {
+        let (uses, n_args) = (self.uses.len(), self.call_args.len());
+        let of = |e: &Extractor<'_>, k: usize| {
+            let u = e.uses[k];
+            let end = e
+                .uses
+                .get(k + 1)
+                .map_or(e.call_args.len(), |n| n.args_start as usize);
+            let args = e.call_args[u.args_start as usize..end].to_vec();
+            format!("{:?}", (u.name, u.line, u.routine, u.wobj, u.tool, args))
+        };
+        let taken = of(self, uses - 1);
+        self.statement_call(src, arena, name, args, plain, span);
+        assert_eq!(taken, of(self, uses), "a call recorded as the one before");
+        self.uses.truncate(uses);
+        self.call_args.truncate(n_args);
+    }
+
+    /// The routine a call is recorded in, as [`CallUse::routine`] keeps it.
+    fn routine_of_call(&self) -> Option<std::num::NonZeroU32> {
+        self.current
+            .and_then(|r| u32::try_from(r + 1).ok())
+            .and_then(std::num::NonZeroU32::new)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -1250,10 +1353,7 @@ impl Extractor<'_> {
         let mut u = CallUse {
             name,
             line,
-            routine: self
-                .current
-                .and_then(|r| u32::try_from(r + 1).ok())
-                .and_then(std::num::NonZeroU32::new),
+            routine: self.routine_of_call(),
             wobj: None,
             tool: None,
             args_start,
@@ -1509,6 +1609,48 @@ mod tests {
         let p = fast.0[9].0.as_ref().unwrap();
         assert_eq!(p.label(), "p10");
         assert!(format!("{p:?}").contains("0.707108"), "{p:?}");
+    }
+
+    #[test]
+    fn a_run_of_motions_alike_is_recorded_as_each_reads() {
+        let src = b"MODULE M\r\n\
+            PERS tooldata tGun:=[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\r\n\
+            CONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[10,9E9,9E9,9E9,9E9,9E9]];\r\n\
+            CONST robtarget p2:=[[1,2,3],[1,0,0,0],[0,0,0,0],[20,9E9,9E9,9E9,9E9,9E9]];\r\n\
+            CONST robtarget p3:=[[1,2,3],[1,0,0,0],[0,0,0,0],[30,9E9,9E9,9E9,9E9,9E9]];\r\n\
+            CONST robtarget p44:=[[1,2,3],[1,0,0,0],[0,0,0,0],[40,9E9,9E9,9E9,9E9,9E9]];\r\n\
+            PROC main()\r\n\
+              MoveL p1, v1000, z10, tGun\\WObj:=wCar;\r\n\
+              MoveL p2, v1000, z10, tGun\\WObj:=wCar;\r\n\
+              MoveL p3, v1000, z10, tGun\\WObj:=wTable;\r\n\
+              MoveJ p3, v1000, z10, tGun\\WObj:=wTable;\r\n\
+              MoveL p44, v1000, z10, tGun\\WObj:=wTable;\r\n\
+              MoveL p44, v1000, z10, tool0\\WObj:=wTable;\r\n\
+              MoveL p44, v1000, z10, tool0\\Tool:=wTable;\r\n\
+              MoveL p1, v1000, z10, tGun\\WObj:=wCar;\r\n\
+            ENDPROC\r\n\
+            ENDMODULE\r\n";
+        let fast = extracted(src, true);
+        assert_eq!(fast, extracted(src, false));
+        // Each target's work objects and tools, as each call names them.
+        let usage: Vec<&str> = fast.0.iter().map(|(_, u)| u.as_str()).collect();
+        let names = |u: &str, want: &[&str]| want.iter().all(|w| u.contains(w));
+        assert!(
+            names(usage[0], &["wCar", "tGun", "8", "15"]),
+            "{}",
+            usage[0]
+        );
+        assert!(
+            names(usage[1], &["wCar", "9"]) && !usage[1].contains("wTable"),
+            "{}",
+            usage[1]
+        );
+        assert!(names(usage[2], &["wTable", "10", "11"]) && !usage[2].contains("wCar"));
+        assert!(
+            names(usage[3], &["wTable", "tGun", "12", "13", "14"]),
+            "{}",
+            usage[3]
+        );
     }
 
     #[test]

@@ -78,6 +78,31 @@ pub(crate) struct Statement<'e> {
     /// A [`Stmt::Call`]'s arguments, when each is a plain name (see [`PlainArgs`]): then they
     /// are not in the arena (the call's `args` is [`NONE`]).
     pub plain_args: Option<&'e PlainArgs>,
+    /// A call with [`Statement::plain_args`] that [`Parser::call_like_last`] took from the
+    /// call before with no label changed: how its offsets moved from that call's.
+    pub moved: Option<MovedCall>,
+}
+
+/// How a call's offsets lie against the call before it, which it repeats with at most one
+/// name (not a label) changed: every offset of that call moves by `shift`, those at `pivot`
+/// or after by `grown` more. Offsets are below `u32::MAX` (a source is no longer), so the
+/// wrapping arithmetic is exact.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct MovedCall {
+    /// Where the call before starts (its callee).
+    pub from: usize,
+    shift: usize,
+    pivot: usize,
+    grown: isize,
+}
+
+impl MovedCall {
+    /// Where the offset `at` of the call before lies in this one.
+    #[inline(always)]
+    pub(crate) fn moved(&self, at: usize) -> usize {
+        at.wrapping_add(self.shift)
+            .wrapping_add_signed(self.grown * isize::from(at >= self.pivot))
+    }
 }
 
 /// The most arguments [`PlainArgs`] holds; a call with more takes the arena's paths.
@@ -152,10 +177,9 @@ impl PlainArgs {
             })
     }
 
-    /// Moves every offset of the arguments by `shift`, and those at `pivot` or after by
-    /// `grown` more. Only the argument the pivot falls in compares its offsets with it: the
-    /// others move whole, in loops of additions alone.
-    fn move_offsets(&mut self, shift: usize, pivot: usize, grown: isize) {
+    /// Moves every offset of the arguments as `m` says. Only the argument its pivot falls in
+    /// compares its offsets with the pivot: the others move whole, in loops of additions alone.
+    fn move_offsets(&mut self, m: &MovedCall) {
         let n = (self.len * OFFSETS_PER_ARG).min(self.offsets.len());
         let Some(offsets) = self.offsets.get_mut(..n) else {
             return;
@@ -164,19 +188,17 @@ impl PlainArgs {
         // offset in the text).
         let straddles = offsets
             .chunks_exact(OFFSETS_PER_ARG)
-            .position(|o| o.get(1).is_some_and(|&end| end >= pivot))
+            .position(|o| o.get(1).is_some_and(|&end| end >= m.pivot))
             .map_or(n, |k| k * OFFSETS_PER_ARG);
         let (before, rest) = offsets.split_at_mut(straddles.min(n));
         let (straddling, after) = rest.split_at_mut(OFFSETS_PER_ARG.min(rest.len()));
         for at in before {
-            *at = at.wrapping_add(shift);
+            *at = at.wrapping_add(m.shift);
         }
         for at in straddling {
-            *at = at
-                .wrapping_add(shift)
-                .wrapping_add_signed(grown * isize::from(*at >= pivot));
+            *at = m.moved(*at);
         }
-        let shift_and_grown = shift.wrapping_add_signed(grown);
+        let shift_and_grown = m.shift.wrapping_add_signed(m.grown);
         for at in after {
             *at = at.wrapping_add(shift_and_grown);
         }
@@ -509,6 +531,9 @@ struct Parser<'a, 's> {
     /// The call statement [`Parser::plain`] holds the arguments of, when it was read at its
     /// statement's first byte: from its callee's start to after its `;`.
     last_call: Option<Span>,
+    /// How the call [`Parser::plain`] holds moved from the one before, when it took that
+    /// call's arguments and no label changed.
+    moved: Option<MovedCall>,
     sink: &'s mut StatementSink<'s>,
 }
 
@@ -713,6 +738,7 @@ impl<'a, 's> Parser<'a, 's> {
             literal: RobtargetLiteral::EMPTY,
             plain: PlainArgs::EMPTY,
             last_call: None,
+            moved: None,
             seen: [None; SEEN_FIELDS],
             seen_parts: [PartMemo::EMPTY; 3],
             sink,
@@ -887,6 +913,7 @@ impl<'a, 's> Parser<'a, 's> {
             span: Span::new(start as usize, self.prev_end as usize),
             literal: None,
             plain_args: plain.then_some(&self.plain),
+            moved: if plain { self.moved } else { None },
         });
     }
 
@@ -899,6 +926,7 @@ impl<'a, 's> Parser<'a, 's> {
             span: Span::new(start as usize, self.prev_end as usize),
             literal: literal.then_some(&self.literal),
             plain_args: None,
+            moved: None,
         });
     }
 

@@ -211,7 +211,7 @@ impl Parser<'_, '_> {
     /// anything else (a function call in an argument too) it reads nothing and says `false`.
     fn plain_args_from(&mut self, start: usize) -> bool {
         // What [`Parser::plain`] holds is no longer the last call's (the caller says again).
-        self.last_call = None;
+        (self.last_call, self.moved) = (None, None);
         // The general path reads each argument one level deeper; past the limit it refuses.
         if self.depth > MAX_DEPTH {
             return false;
@@ -302,11 +302,23 @@ impl Parser<'_, '_> {
             self.plain = last_plain;
             read
         };
-        // Offsets are far below `isize::MAX` (a source is at most `u32::MAX` bytes), so the
-        // wrapping arithmetic is exact.
-        let (shift, pivot) = (now_start.wrapping_sub(last.start), last.start + from);
-        self.plain.move_offsets(shift, pivot, grown);
-        let end = last.end.wrapping_add(shift).wrapping_add_signed(grown);
+        let m = MovedCall {
+            from: last.start,
+            shift: now_start.wrapping_sub(last.start),
+            pivot: last.start + from,
+            grown,
+        };
+        self.plain.move_offsets(&m);
+        let end = m.moved(last.end);
+        // A label changed (`\Tool:=` for `\WObj:=`) says something else of the call: what
+        // the extractor records for it is read again.
+        let changed_end = now_start + from.wrapping_add_signed(grown);
+        let label_changed = from < before.len()
+            && self
+                .plain
+                .iter()
+                .any(|a| a.label.end > a.label.start && a.label.end == changed_end);
+        self.moved = (!label_changed).then_some(m);
         #[cfg(debug_assertions)]
         assert_eq!(
             read.map(|(plain, end)| (plain.iter().collect::<Vec<_>>(), end)),
