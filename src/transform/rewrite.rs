@@ -311,6 +311,9 @@ fn push_edits<const N: usize>(
 }
 
 /// One field written for `v`: its text (`None`: kept) and the value the next run reads from it.
+/// Inlined into the rewrite, which makes it for every field: through a call its text and
+/// value were moved out and in again.
+#[inline]
 fn write_one(field: &Rounded, v: f64) -> (Option<EditText>, f64) {
     match field.rewrite_read(v) {
         // Our own output always parses; were it not to, the value read back is NaN, the check
