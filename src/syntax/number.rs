@@ -330,6 +330,11 @@ impl NumLit {
 
     /// [`rewrite_parts`](Self::rewrite_parts) at `places`, with `own`: the literal's value
     /// rounded there ([`Scaled::of`]).
+    ///
+    /// Inlined into its callers (a round-trip rewrite writes every field through
+    /// [`Rounded::rewrite_read`]): through a call, its text and value went back through
+    /// memory, and the registers it used were saved and restored each time.
+    #[inline]
     fn rewrite_at(
         &self,
         new: f64,
