@@ -311,8 +311,9 @@ fn push_edits<const N: usize>(
 }
 
 /// One field written for `v`: its text (`None`: kept) and the value the next run reads from it.
-/// Inlined into the rewrite, which makes it for every field: through a call its text and
-/// value were moved out and in again.
+/// Hinted for inlining: the writer (`NumLit::rewrite_at`) is inlined into it and the compiler
+/// keeps the two one call a field either way, but with the hint `correct` of the 2 MB bench
+/// module took 0.1 M instructions fewer.
 #[inline]
 fn write_one(field: &Rounded, v: f64) -> (Option<EditText>, f64) {
     match field.rewrite_read(v) {
