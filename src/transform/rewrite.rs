@@ -311,6 +311,10 @@ fn push_edits<const N: usize>(
 }
 
 /// One field written for `v`: its text (`None`: kept) and the value the next run reads from it.
+/// Hinted for inlining: the writer (`NumLit::rewrite_at`) is inlined into it and the compiler
+/// keeps the two one call a field either way, but with the hint `correct` of the 2 MB bench
+/// module took 0.1 M instructions fewer.
+#[inline]
 fn write_one(field: &Rounded, v: f64) -> (Option<EditText>, f64) {
     match field.rewrite_read(v) {
         // Our own output always parses; were it not to, the value read back is NaN, the check
@@ -332,10 +336,12 @@ fn reversible<const N: usize>(
         return std::array::from_fn(|_| None);
     }
     // Each literal rounded at its places once: every choice is written and checked there.
-    // By a loop, not `array::map`: through its adapter's closure each field was a call more.
+    // By a loop, not `array::map`: through its adapter's closure each field was a call more;
+    // and by index, as `zip(..).skip(1)` was a call into the adapter's `nth` (1.1 M
+    // instructions of correct on the 2 MB bench module).
     let mut rounded = [fields[0].lit().rounded(house); N];
-    for (r, f) in rounded.iter_mut().zip(fields).skip(1) {
-        *r = f.lit().rounded(house);
+    for i in 1..N {
+        rounded[i] = fields[i].lit().rounded(house);
     }
     let gives_back = |read: [f64; N]| {
         inverse(read).is_some_and(|z| (0..N).all(|i| z[i].is_finite() && rounded[i].same(z[i])))
