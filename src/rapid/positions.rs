@@ -1084,38 +1084,23 @@ impl Extractor<'_> {
             let s = s.span();
             Span32::of(Span::new(m.moved(s.start), m.moved(s.end)))
         };
-        let (Some(name), Ok(line), Ok(args_start), Ok(refs_start), Ok(inline_start)) = (
-            Span32::of(name),
-            u32::try_from(
-                self.lines
-                    .line_col_from(&mut self.line_cursor, span.start)
-                    .0,
-            ),
-            u32::try_from(self.call_args.len()),
-            u32::try_from(self.call_refs.len()),
-            u32::try_from(self.call_inline.len()),
-        ) else {
+        let from = last.args_start as usize;
+        let Some(u) = self
+            .call_head(name, span)
+            .filter(|_| from <= self.call_args.len())
+        else {
             return false;
         };
-        let from = last.args_start as usize;
-        if from > self.call_args.len() {
-            return false;
-        }
         self.call_args.extend_from_within(from..);
-        if let Some(args) = self.call_args.get_mut(args_start as usize..) {
+        if let Some(args) = self.call_args.get_mut(u.args_start as usize..) {
             for a in args {
                 *a = a.and_then(moved);
             }
         }
         self.uses.push(CallUse {
-            name,
-            line,
-            routine: self.routine_of_call(),
             wobj: last.wobj.and_then(moved),
             tool: last.tool.and_then(moved),
-            args_start,
-            refs_start,
-            inline_start,
+            ..u
         });
         self.last_plain_call = Some(span.start);
         true
@@ -1150,11 +1135,27 @@ impl Extractor<'_> {
         self.call_args.truncate(n_args);
     }
 
-    /// The routine a call is recorded in, as [`CallUse::routine`] keeps it.
-    fn routine_of_call(&self) -> Option<std::num::NonZeroU32> {
-        self.current
-            .and_then(|r| u32::try_from(r + 1).ok())
-            .and_then(std::num::NonZeroU32::new)
+    /// The record of the call `name` at `span` before its arguments are read: its line and
+    /// routine, and where its ranges of the shared lists start. `None` past 4 GiB: no input
+    /// is this large (see `Span32`).
+    fn call_head(&mut self, name: Span, span: Span) -> Option<CallUse> {
+        let line = self
+            .lines
+            .line_col_from(&mut self.line_cursor, span.start)
+            .0;
+        Some(CallUse {
+            name: Span32::of(name)?,
+            line: u32::try_from(line).ok()?,
+            routine: self
+                .current
+                .and_then(|r| u32::try_from(r + 1).ok())
+                .and_then(std::num::NonZeroU32::new),
+            wobj: None,
+            tool: None,
+            args_start: u32::try_from(self.call_args.len()).ok()?,
+            refs_start: u32::try_from(self.call_refs.len()).ok()?,
+            inline_start: u32::try_from(self.call_inline.len()).ok()?,
+        })
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -1334,32 +1335,11 @@ impl Extractor<'_> {
             Some(_) => (Vec::new(), Vec::new()),
             None => self.scan(src, arena, true),
         };
-        let (Some(name), Ok(line), Ok(args_start), Ok(refs_start), Ok(inline_start)) = (
-            Span32::of(name),
-            u32::try_from(
-                self.lines
-                    .line_col_from(&mut self.line_cursor, span.start)
-                    .0,
-            ),
-            u32::try_from(self.call_args.len()),
-            u32::try_from(self.call_refs.len()),
-            u32::try_from(self.call_inline.len()),
-        ) else {
-            // Past 4 GiB: no input is this large (see `Span32`).
+        let Some(mut u) = self.call_head(name, span) else {
             return;
         };
         self.call_refs.extend(via_offset);
         self.call_inline.extend(inline);
-        let mut u = CallUse {
-            name,
-            line,
-            routine: self.routine_of_call(),
-            wobj: None,
-            tool: None,
-            args_start,
-            refs_start,
-            inline_start,
-        };
         match plain {
             Some(plain) => {
                 for a in plain.iter() {
