@@ -33,6 +33,11 @@ impl Hasher for NameHasher {
         }
     }
 
+    /// As [`write`](Self::write) of its eight bytes (little-endian).
+    fn write_u64(&mut self, n: u64) {
+        self.0 = mix(self.0, n);
+    }
+
     fn write_u8(&mut self, b: u8) {
         self.0 = (self.0.rotate_left(5) ^ u64::from(b)).wrapping_mul(K);
     }
@@ -239,11 +244,23 @@ impl ShortKey {
     /// when they are one to eight bytes, none below 0x21 (no blank, nor a control character)
     /// nor, with `ascii`, beyond ASCII: upper-casing each then folds them. `None` otherwise.
     fn of(bytes: &[u8], ascii: bool) -> Option<ShortKey> {
-        if bytes.is_empty() || bytes.len() > 8 {
-            return None;
-        }
-        let word = bytes.iter().rev().fold(0, |w, &b| w << 8 | u64::from(b));
-        let mask = u64::MAX >> (64 - 8 * bytes.len());
+        let len = bytes.len();
+        // The bytes read in two reads that may overlap (their common bytes are alike, so
+        // or-ing them places each once), not one at a time: three places for one to three
+        // bytes (the first, middle and last), two halves of four bytes for four to eight.
+        let at = |i: usize| bytes.get(i).map_or(0, |&b| u64::from(b)) << (8 * i);
+        let half = |i: usize| {
+            let four = bytes
+                .get(i..i + 4)
+                .and_then(|b| <[u8; 4]>::try_from(b).ok());
+            four.map_or(0, |b| u64::from(u32::from_le_bytes(b))) << (8 * i)
+        };
+        let word = match len {
+            1..=3 => at(0) | at(len / 2) | at(len - 1),
+            4..=8 => half(0) | half(len - 4),
+            _ => return None,
+        };
+        let mask = u64::MAX >> (64 - 8 * len);
         // Bit 7 of a byte below 0x21 is set in the word less 0x21 each (a borrow reaches a
         // byte only from one below it that is itself below 0x21; a byte with bit 7 set
         // is none).
@@ -258,7 +275,7 @@ impl ShortKey {
         let lower = (heptets + 0x1F * LOW) & !(heptets + 0x05 * LOW) & !word & HIGH;
         Some(ShortKey {
             word: word - (lower >> 2),
-            len: bytes.len(),
+            len,
         })
     }
 
@@ -289,6 +306,7 @@ impl FirstLetters {
 
     /// [`insert`](Self::insert) of a name's UTF-8 bytes: an ASCII first character is its
     /// byte, any other is decoded.
+    #[inline]
     pub(crate) fn insert_utf8(&mut self, name: &[u8]) {
         match name.iter().find(|b| !b.is_ascii_whitespace()) {
             Some(&b) if b.is_ascii() => self.mark(b),
