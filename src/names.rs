@@ -224,6 +224,39 @@ fn fold_ascii_into<'k>(key: &'k mut [u8; RAW_KEY], raw: &[u8]) -> Option<&'k [u8
     plain.then_some(key)
 }
 
+/// One to eight bytes as a little-endian word, zero-padded, read in two reads that may
+/// overlap (their common bytes are alike, so or-ing them places each once), not one at a
+/// time: three places for one to three bytes (the first, middle and last), two halves of four
+/// bytes for four to eight. `None` for no bytes or more than eight.
+#[inline]
+fn short_word(bytes: &[u8]) -> Option<u64> {
+    let len = bytes.len();
+    let at = |i: usize| bytes.get(i).map_or(0, |&b| u64::from(b)) << (8 * i);
+    let half = |i: usize| {
+        let four = bytes
+            .get(i..i + 4)
+            .and_then(|b| <[u8; 4]>::try_from(b).ok());
+        four.map_or(0, |b| u64::from(u32::from_le_bytes(b))) << (8 * i)
+    };
+    match len {
+        1..=3 => Some(at(0) | at(len / 2) | at(len - 1)),
+        4..=8 => Some(half(0) | half(len - 4)),
+        _ => None,
+    }
+}
+
+/// Whether `a` and `b` are the same bytes: for eight bytes or fewer, as two words, where
+/// comparing slices is a call (`memcmp`) per compare of a call's tool or work object with the
+/// one before.
+#[inline]
+pub(crate) fn same_bytes(a: &[u8], b: &[u8]) -> bool {
+    a.len() == b.len()
+        && match (short_word(a), short_word(b)) {
+            (Some(x), Some(y)) => x == y,
+            _ => a == b,
+        }
+}
+
 /// A folded name of one to eight bytes, as the word [`NameHasher::write`] makes of it: its
 /// bytes little-endian, zero-padded. Nearly every name is that short (`p10`, `pArr{3}`), and
 /// folding and hashing it a word at a time is a few operations, where a byte at a time was
@@ -245,21 +278,7 @@ impl ShortKey {
     /// nor, with `ascii`, beyond ASCII: upper-casing each then folds them. `None` otherwise.
     fn of(bytes: &[u8], ascii: bool) -> Option<ShortKey> {
         let len = bytes.len();
-        // The bytes read in two reads that may overlap (their common bytes are alike, so
-        // or-ing them places each once), not one at a time: three places for one to three
-        // bytes (the first, middle and last), two halves of four bytes for four to eight.
-        let at = |i: usize| bytes.get(i).map_or(0, |&b| u64::from(b)) << (8 * i);
-        let half = |i: usize| {
-            let four = bytes
-                .get(i..i + 4)
-                .and_then(|b| <[u8; 4]>::try_from(b).ok());
-            four.map_or(0, |b| u64::from(u32::from_le_bytes(b))) << (8 * i)
-        };
-        let word = match len {
-            1..=3 => at(0) | at(len / 2) | at(len - 1),
-            4..=8 => half(0) | half(len - 4),
-            _ => return None,
-        };
+        let word = short_word(bytes)?;
         let mask = u64::MAX >> (64 - 8 * len);
         // Bit 7 of a byte below 0x21 is set in the word less 0x21 each (a borrow reaches a
         // byte only from one below it that is itself below 0x21; a byte with bit 7 set
@@ -778,6 +797,26 @@ mod tests {
                         }
                     }
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn same_bytes_is_slice_equality() {
+        let texts: Vec<Vec<u8>> = (0..=10usize)
+            .flat_map(|len| {
+                (0..len.max(1)).map(move |at| {
+                    let mut t: Vec<u8> = (0..len as u8).map(|b| b'a' + b).collect();
+                    if let Some(c) = t.get_mut(at) {
+                        *c = 0;
+                    }
+                    t
+                })
+            })
+            .collect();
+        for a in &texts {
+            for b in &texts {
+                assert_eq!(same_bytes(a, b), a == b, "{a:?} {b:?}");
             }
         }
     }

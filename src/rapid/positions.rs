@@ -8,7 +8,7 @@
 
 use super::expr::{Arena, ExprKind};
 use super::parser::{PlainArgs, RobtargetLiteral, Statement, Stmt};
-use crate::names::{NameKey, NameMap};
+use crate::names::{NameKey, NameMap, same_bytes};
 use crate::position::{
     Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Name, NumField, OffsetCall,
     OffsetKind, Orientation, Position, PositionKind, PositionList, ReadAgainTarget, Usage,
@@ -197,11 +197,8 @@ impl<'s, 'r> FrameTexts<'s, 'r> {
     /// The name written as `bytes` (its Latin-1 text).
     fn get(&mut self, bytes: &'s [u8]) -> FrameText {
         for (k, slot) in self.recent.iter().enumerate() {
-            // The first bytes first: the tool and the work object (`tGun`, `wCar`) are often
-            // as long, and comparing their bytes whole is a call.
             if let Some((b, t)) = slot
-                && b.first() == bytes.first()
-                && *b == bytes
+                && same_bytes(b, bytes)
             {
                 self.older = 1 - k;
                 return t.clone();
@@ -295,7 +292,7 @@ impl<'t, 's> ArgKinds<'t, 's> {
 
     fn declared(&self, n: NameKey<'s>, kind: DeclKind) -> bool {
         let found = match self.last.get() {
-            Some((bytes, found)) if bytes == n.0 => found,
+            Some((bytes, found)) if same_bytes(bytes, n.0) => found,
             _ => {
                 let found = self.type_of.get(&n).copied();
                 self.last.set(Some((n.0, found)));
