@@ -24,13 +24,18 @@ impl Hasher for NameHasher {
         let mut words = bytes.chunks_exact(8);
         for w in &mut words {
             let word = <[u8; 8]>::try_from(w).map_or(0, u64::from_le_bytes);
-            self.0 = (self.0.rotate_left(5) ^ word).wrapping_mul(K);
+            self.0 = mix(self.0, word);
         }
         let tail = words.remainder();
         if !tail.is_empty() {
             let word = tail.iter().rev().fold(0, |w, &b| w << 8 | u64::from(b));
-            self.0 = (self.0.rotate_left(5) ^ word).wrapping_mul(K);
+            self.0 = mix(self.0, word);
         }
+    }
+
+    /// As [`write`](Self::write) of its eight bytes (little-endian).
+    fn write_u64(&mut self, n: u64) {
+        self.0 = mix(self.0, n);
     }
 
     fn write_u8(&mut self, b: u8) {
@@ -53,11 +58,14 @@ impl Hasher for NameHasher {
     }
 }
 
+/// One step of [`NameHasher`]: a word into the state.
+#[inline(always)]
+fn mix(state: u64, word: u64) -> u64 {
+    (state.rotate_left(5) ^ word).wrapping_mul(K)
+}
+
 /// A map keyed by names, with [`NameHasher`].
 pub(crate) type NameMap<K, V> = HashMap<K, V, BuildHasherDefault<NameHasher>>;
-
-/// A set hashed as [`NameMap`] hashes its keys.
-pub(crate) type NameSet<K> = std::collections::HashSet<K, BuildHasherDefault<NameHasher>>;
 
 /// A name in the source, compared as the languages compare names. Borrows the source: no copy
 /// per declaration or use.
@@ -73,9 +81,16 @@ impl NameKey<'_> {
             .map(u8::to_ascii_uppercase)
     }
 
-    /// The name is `word` (any case).
+    /// The name is `word` (any case). A name without blanks folds to its bytes upper-cased:
+    /// its bytes are compared, lengths first (`tGun` is not `tool0`), not folded one by one.
     pub(crate) fn is(&self, word: &[u8]) -> bool {
-        !self.differs_at_once(word) && self.bytes().eq(word.iter().map(u8::to_ascii_uppercase))
+        if self.differs_at_once(word) {
+            return false;
+        }
+        if !self.0.iter().any(u8::is_ascii_whitespace) {
+            return self.0.eq_ignore_ascii_case(word);
+        }
+        self.bytes().eq(word.iter().map(u8::to_ascii_uppercase))
     }
 
     /// The name starts with `prefix` (any case).
@@ -114,10 +129,30 @@ impl NameKey<'_> {
 }
 
 impl std::hash::Hash for NameKey<'_> {
+    /// [`hash_of`] the folded bytes, written as one number: a word at a time for a short name
+    /// ([`ShortKey`]), else the folded bytes gathered into the words [`NameHasher::write`]
+    /// takes. Writing each folded byte was a fifth of finding a module's duplicate names.
     fn hash<H: Hasher>(&self, state: &mut H) {
-        for b in self.bytes() {
-            state.write_u8(b);
-        }
+        let hash = match ShortKey::of(self.0, false) {
+            Some(short) => short.hash(),
+            None => {
+                let mut h = NameHasher::default();
+                let (mut word, mut n) = (0u64, 0);
+                for b in self.bytes() {
+                    word |= u64::from(b) << (8 * n);
+                    n += 1;
+                    if n == 8 {
+                        h.0 = mix(h.0, word);
+                        (word, n) = (0, 0);
+                    }
+                }
+                if n > 0 {
+                    h.0 = mix(h.0, word);
+                }
+                h.finish()
+            }
+        };
+        state.write_u64(hash);
     }
 }
 
@@ -148,6 +183,19 @@ fn fold_str_into<'b>(buf: &'b mut String, name: &str) -> &'b str {
     buf
 }
 
+/// [`fold`] of a name's UTF-8 bytes into a reused buffer, byte by byte: only ASCII bytes
+/// change (or go), so every character's bytes stay whole, and pushing a byte is cheaper than
+/// pushing a character (which was most of indexing a module's target names).
+fn fold_utf8_into<'b>(buf: &'b mut Vec<u8>, name: &[u8]) -> &'b [u8] {
+    buf.clear();
+    buf.extend(
+        name.iter()
+            .filter(|b| !b.is_ascii_whitespace())
+            .map(u8::to_ascii_uppercase),
+    );
+    buf
+}
+
 /// [`fold`] of source bytes (Latin-1) into a reused buffer.
 pub(crate) fn fold_into<'b>(buf: &'b mut String, bytes: &[u8]) -> &'b str {
     buf.clear();
@@ -158,6 +206,102 @@ pub(crate) fn fold_into<'b>(buf: &'b mut String, bytes: &[u8]) -> &'b str {
             .map(|&b| (b as char).to_ascii_uppercase()),
     );
     buf
+}
+
+/// The longest reference [`NameIndex::exact_else_elements_raw`] folds on the stack.
+const RAW_KEY: usize = 32;
+
+/// [`fold`] of source bytes (Latin-1) that are ASCII without blanks, as nearly every reference
+/// is (`p10`, `pArr{3}`): each byte upper-cased, into `key`. `None` for any other bytes, or
+/// more than `key` holds.
+fn fold_ascii_into<'k>(key: &'k mut [u8; RAW_KEY], raw: &[u8]) -> Option<&'k [u8]> {
+    let key = key.get_mut(..raw.len())?;
+    let mut plain = true;
+    for (k, &b) in key.iter_mut().zip(raw) {
+        plain &= b.is_ascii() && !b.is_ascii_whitespace();
+        *k = b.to_ascii_uppercase();
+    }
+    plain.then_some(key)
+}
+
+/// One to eight bytes as a little-endian word, zero-padded, read in two reads that may
+/// overlap (their common bytes are alike, so or-ing them places each once), not one at a
+/// time: three places for one to three bytes (the first, middle and last), two halves of four
+/// bytes for four to eight. `None` for no bytes or more than eight.
+#[inline]
+fn short_word(bytes: &[u8]) -> Option<u64> {
+    let len = bytes.len();
+    let at = |i: usize| bytes.get(i).map_or(0, |&b| u64::from(b)) << (8 * i);
+    let half = |i: usize| {
+        let four = bytes
+            .get(i..i + 4)
+            .and_then(|b| <[u8; 4]>::try_from(b).ok());
+        four.map_or(0, |b| u64::from(u32::from_le_bytes(b))) << (8 * i)
+    };
+    match len {
+        1..=3 => Some(at(0) | at(len / 2) | at(len - 1)),
+        4..=8 => Some(half(0) | half(len - 4)),
+        _ => None,
+    }
+}
+
+/// Whether `a` and `b` are the same bytes: for eight bytes or fewer, as two words, where
+/// comparing slices is a call (`memcmp`) per compare of a call's tool or work object with the
+/// one before.
+#[inline]
+pub(crate) fn same_bytes(a: &[u8], b: &[u8]) -> bool {
+    a.len() == b.len()
+        && match (short_word(a), short_word(b)) {
+            (Some(x), Some(y)) => x == y,
+            _ => a == b,
+        }
+}
+
+/// A folded name of one to eight bytes, as the word [`NameHasher::write`] makes of it: its
+/// bytes little-endian, zero-padded. Nearly every name is that short (`p10`, `pArr{3}`), and
+/// folding and hashing it a word at a time is a few operations, where a byte at a time was
+/// most of looking a reference up and of indexing a declaration.
+#[derive(Clone, Copy)]
+struct ShortKey {
+    word: u64,
+    len: usize,
+}
+
+/// Each byte of a word 1; bit 7 of each byte; the other seven bits of each byte.
+const LOW: u64 = 0x0101_0101_0101_0101;
+const HIGH: u64 = 0x80 * LOW;
+const SEVEN: u64 = 0x7F * LOW;
+
+impl ShortKey {
+    /// The folded `bytes` (a name's UTF-8 bytes, or with `ascii` a source's Latin-1 bytes),
+    /// when they are one to eight bytes, none below 0x21 (no blank, nor a control character)
+    /// nor, with `ascii`, beyond ASCII: upper-casing each then folds them. `None` otherwise.
+    fn of(bytes: &[u8], ascii: bool) -> Option<ShortKey> {
+        let len = bytes.len();
+        let word = short_word(bytes)?;
+        let mask = u64::MAX >> (64 - 8 * len);
+        // Bit 7 of a byte below 0x21 is set in the word less 0x21 each (a borrow reaches a
+        // byte only from one below it that is itself below 0x21; a byte with bit 7 set
+        // is none).
+        let below = word.wrapping_sub(0x21 * LOW) & !word & HIGH & mask;
+        let beyond = word & HIGH;
+        if below != 0 || (ascii && beyond != 0) {
+            return None;
+        }
+        // A byte from `a` to `z` is one without bit 7 whose low seven bits set it when 0x1F
+        // is added but not when 0x05 is (no sum carries into the next byte).
+        let heptets = word & SEVEN;
+        let lower = (heptets + 0x1F * LOW) & !(heptets + 0x05 * LOW) & !word & HIGH;
+        Some(ShortKey {
+            word: word - (lower >> 2),
+            len,
+        })
+    }
+
+    /// [`hash_of`] the folded bytes: the one word [`NameHasher::write`] mixes.
+    fn hash(self) -> u64 {
+        NameHasher(mix(NameHasher::default().0, self.word)).finish()
+    }
 }
 
 /// The first characters of a set of names as [`fold`] compares them: a reference that starts
@@ -179,6 +323,17 @@ impl FirstLetters {
         }
     }
 
+    /// [`insert`](Self::insert) of a name's UTF-8 bytes: an ASCII first character is its
+    /// byte, any other is decoded.
+    #[inline]
+    pub(crate) fn insert_utf8(&mut self, name: &[u8]) {
+        match name.iter().find(|b| !b.is_ascii_whitespace()) {
+            Some(&b) if b.is_ascii() => self.mark(b),
+            Some(_) => self.insert(&String::from_utf8_lossy(name)),
+            None => self.empty = true,
+        }
+    }
+
     /// Adds the first character of `name` past blanks (folding drops them). A character
     /// beyond Latin-1 is no byte of a source: nothing is marked for it.
     pub(crate) fn insert(&mut self, name: &str) {
@@ -188,14 +343,6 @@ impl FirstLetters {
                     self.mark(b);
                 }
             }
-            None => self.empty = true,
-        }
-    }
-
-    /// [`insert`](Self::insert) of a name as source bytes (Latin-1).
-    pub(crate) fn insert_bytes(&mut self, name: &[u8]) {
-        match name.iter().find(|b| !b.is_ascii_whitespace()) {
-            Some(&b) => self.mark(b),
             None => self.empty = true,
         }
     }
@@ -234,7 +381,7 @@ pub(crate) struct NameIndex<T> {
 /// Collects a [`NameIndex`]'s declarations; [`NameIndexBuilder::build`] groups them.
 pub(crate) struct NameIndexBuilder<T> {
     open: u8,
-    buf: String,
+    buf: Vec<u8>,
     exact: Groups<T>,
     elements: Groups<T>,
     /// (group, declaration) of every insertion into `exact`, in order; likewise `in_arrays`.
@@ -244,8 +391,8 @@ pub(crate) struct NameIndexBuilder<T> {
 
 /// Distinct folded names, each with the declarations made under it (in insertion order).
 struct Groups<T> {
-    /// The folded names, one after another.
-    text: String,
+    /// The folded names' UTF-8 bytes, one after another.
+    text: Vec<u8>,
     /// Each name's range of `text`.
     names: Vec<(u32, u32)>,
     /// Name `k` as `k`, hashed by its text: the names are in `text`, so the table holds
@@ -264,7 +411,7 @@ fn hash_of(key: &[u8]) -> u64 {
 
 /// Name `k` of `text` and `names` (a free function: the table's closures borrow these two
 /// fields while the table itself is borrowed mutably).
-fn name_in<'t>(text: &'t str, names: &[(u32, u32)], k: u32) -> &'t str {
+fn name_in<'t>(text: &'t [u8], names: &[(u32, u32)], k: u32) -> &'t [u8] {
     names
         .get(k as usize)
         .and_then(|&(s, e)| text.get(s as usize..e as usize))
@@ -274,7 +421,7 @@ fn name_in<'t>(text: &'t str, names: &[(u32, u32)], k: u32) -> &'t str {
 impl<T: Copy> Groups<T> {
     fn with_capacity(n: usize) -> Groups<T> {
         Groups {
-            text: String::new(),
+            text: Vec::new(),
             names: Vec::with_capacity(n),
             table: HashTable::with_capacity(n),
             ends: Vec::new(),
@@ -283,21 +430,25 @@ impl<T: Copy> Groups<T> {
     }
 
     /// The group of `key`, added if new.
-    fn intern(&mut self, key: &str) -> u32 {
+    fn intern(&mut self, key: &[u8]) -> u32 {
+        self.intern_hashed(key, hash_of(key))
+    }
+
+    /// [`Groups::intern`] of `key` hashed as `hash`.
+    fn intern_hashed(&mut self, key: &[u8], hash: u64) -> u32 {
         let Groups {
             text, names, table, ..
         } = self;
-        let hash = hash_of(key.as_bytes());
         match table.entry(
             hash,
             |&k| name_in(text, names, k) == key,
-            |&k| hash_of(name_in(text, names, k).as_bytes()),
+            |&k| hash_of(name_in(text, names, k)),
         ) {
             Entry::Occupied(e) => *e.get(),
             Entry::Vacant(e) => {
                 let k = names.len() as u32;
                 let start = text.len() as u32;
-                text.push_str(key);
+                text.extend_from_slice(key);
                 names.push((start, text.len() as u32));
                 e.insert(k);
                 k
@@ -340,16 +491,16 @@ impl<T: Copy> Groups<T> {
         self.values = values;
     }
 
-    fn get(&self, key: &str) -> &[T] {
+    fn get(&self, key: &[u8]) -> &[T] {
         // Most programs declare no array: the empty table needs no hash.
         if self.names.is_empty() {
             return &[];
         }
-        self.get_hashed(key, hash_of(key.as_bytes()))
+        self.get_hashed(key, hash_of(key))
     }
 
     /// [`Groups::get`] of `key` hashed as `hash`.
-    fn get_hashed(&self, key: &str, hash: u64) -> &[T] {
+    fn get_hashed(&self, key: &[u8], hash: u64) -> &[T] {
         let Some(&k) = self
             .table
             .find(hash, |&k| name_in(&self.text, &self.names, k) == key)
@@ -373,13 +524,19 @@ fn before(key: &str, open: u8) -> Option<&str> {
     key.get(..at)
 }
 
+/// [`before`] of bytes.
+fn before_bytes(key: &[u8], open: u8) -> Option<&[u8]> {
+    let at = key.iter().position(|&b| b == open)?;
+    key.get(..at)
+}
+
 impl<T: Copy> NameIndex<T> {
     /// A builder for about `capacity` names, whose arrays open their index with `open` (an
     /// ASCII bracket).
     pub(crate) fn builder(open: char, capacity: usize) -> NameIndexBuilder<T> {
         NameIndexBuilder {
             open: open as u8,
-            buf: String::new(),
+            buf: Vec::new(),
             exact: Groups::with_capacity(capacity),
             elements: Groups::with_capacity(0),
             in_exact: Vec::with_capacity(capacity),
@@ -389,27 +546,51 @@ impl<T: Copy> NameIndex<T> {
 
     /// The declarations named exactly `key` (a [`fold`]ed name).
     pub(crate) fn exact(&self, key: &str) -> &[T] {
-        self.exact.get(key)
+        self.exact.get(key.as_bytes())
     }
 
     /// Every element of the array `key` (a [`fold`]ed name without index).
     pub(crate) fn elements(&self, key: &str) -> &[T] {
-        self.elements.get(key)
+        self.elements.get(key.as_bytes())
     }
 
     /// The declarations named exactly `key` (a [`fold`]ed name), else every element of the
     /// array it names or indexes: [`NameIndex::exact`], else [`NameIndex::elements`] of
     /// [`NameIndex::array_of`] `key` (or of `key`), a name without index hashed once for both.
     pub(crate) fn exact_else_elements(&self, key: &str) -> &[T] {
-        let hash = hash_of(key.as_bytes());
+        self.exact_else_elements_folded(key.as_bytes())
+    }
+
+    /// [`NameIndex::exact_else_elements`] of a folded name's bytes.
+    fn exact_else_elements_folded(&self, key: &[u8]) -> &[T] {
+        self.exact_else_elements_hashed(key, hash_of(key))
+    }
+
+    /// [`NameIndex::exact_else_elements_folded`] of `key` hashed as `hash`.
+    fn exact_else_elements_hashed(&self, key: &[u8], hash: u64) -> &[T] {
         let exact = self.exact.get_hashed(key, hash);
         if !exact.is_empty() || self.elements.names.is_empty() {
             return exact;
         }
-        match self.array_of(key) {
+        match before_bytes(key, self.open) {
             Some(array) => self.elements.get(array),
             None => self.elements.get_hashed(key, hash),
         }
+    }
+
+    /// [`NameIndex::exact_else_elements`] of the [`fold`] of source bytes `raw`, read as they
+    /// are: `None` when they do not fold byte by byte (a blank, a byte beyond ASCII), and the
+    /// caller folds them. A module's motions name 10,000 targets: folding each into a buffer
+    /// cost more than finding it.
+    pub(crate) fn exact_else_elements_raw(&self, raw: &[u8]) -> Option<&[T]> {
+        if let Some(short) = ShortKey::of(raw, true) {
+            let bytes = short.word.to_le_bytes();
+            let key = bytes.get(..short.len)?;
+            return Some(self.exact_else_elements_hashed(key, short.hash()));
+        }
+        let mut key = [0; RAW_KEY];
+        let key = fold_ascii_into(&mut key, raw)?;
+        Some(self.exact_else_elements_folded(key))
     }
 
     /// The array `key` indexes (`PARR` for `PARR{I}`), if it has an index.
@@ -421,6 +602,11 @@ impl<T: Copy> NameIndex<T> {
 impl<T: Copy> NameIndexBuilder<T> {
     /// Adds the declaration of `name` (as written) at `at`.
     pub(crate) fn insert(&mut self, name: &str, at: T) {
+        self.insert_utf8(name.as_bytes(), at);
+    }
+
+    /// [`insert`](Self::insert) of a name's UTF-8 bytes (as a position list keeps them).
+    pub(crate) fn insert_utf8(&mut self, name: &[u8], at: T) {
         let NameIndexBuilder {
             open,
             buf,
@@ -429,11 +615,19 @@ impl<T: Copy> NameIndexBuilder<T> {
             in_exact,
             in_arrays,
         } = self;
-        let key = fold_str_into(buf, name);
-        if let Some(array) = before(key, *open) {
+        let short = ShortKey::of(name, false);
+        let word = short.map_or([0; 8], |s| s.word.to_le_bytes());
+        let (key, hash) = match short.and_then(|s| word.get(..s.len).zip(Some(s.hash()))) {
+            Some(short) => short,
+            None => {
+                let key = fold_utf8_into(buf, name);
+                (key, hash_of(key))
+            }
+        };
+        if let Some(array) = before_bytes(key, *open) {
             in_arrays.push((elements.intern(array), at));
         }
-        in_exact.push((exact.intern(key), at));
+        in_exact.push((exact.intern_hashed(key, hash), at));
     }
 
     /// The index of everything inserted.
@@ -472,15 +666,9 @@ mod tests {
             for name in [name.clone(), format!(" {name}")] {
                 let mut letters = FirstLetters::new();
                 letters.insert(&name);
-                // The same name as a source's bytes, where it is Latin-1.
+                // The same name as its UTF-8 bytes.
                 let mut from_bytes = FirstLetters::new();
-                let latin1: Option<Vec<u8>> = name
-                    .chars()
-                    .map(|c| u8::try_from(u32::from(c)).ok())
-                    .collect();
-                if let Some(bytes) = &latin1 {
-                    from_bytes.insert_bytes(bytes);
-                }
+                from_bytes.insert_utf8(name.as_bytes());
                 let mut folded = String::new();
                 let key = fold_str_into(&mut folded, &name).to_owned();
                 for b in 0u8..=255 {
@@ -489,13 +677,11 @@ mod tests {
                         if fold_into(&mut buf, &raw) == key {
                             assert!(letters.may_start(&raw), "{name:?} {raw:?}");
                         }
-                        if latin1.is_some() {
-                            assert_eq!(
-                                from_bytes.may_start(&raw),
-                                letters.may_start(&raw),
-                                "{name:?} {raw:?}"
-                            );
-                        }
+                        assert_eq!(
+                            from_bytes.may_start(&raw),
+                            letters.may_start(&raw),
+                            "{name:?} {raw:?}"
+                        );
                     }
                 }
                 assert!(!letters.may_start(b"") && !letters.may_start(b"  "));
@@ -549,6 +735,21 @@ mod tests {
         assert_eq!(a, b);
         let h = BuildHasherDefault::<NameHasher>::default();
         assert_eq!(h.hash_one(a), h.hash_one(b));
+        // Short and long, with blanks or without: equal keys hash alike.
+        for (x, y) in [
+            (&b"tGun"[..], &b" TGUN\t"[..]),
+            (b"pApproach_10", b"PAPPROACH_10"),
+            (b"pApproach_10", b"p Approach_10"),
+            (b"p10abcde", b"P10ABCD E"),
+            (b"\xc4p", b"\xc4P"),
+        ] {
+            assert_eq!(NameKey(x), NameKey(y));
+            assert_eq!(
+                h.hash_one(NameKey(x)),
+                h.hash_one(NameKey(y)),
+                "{x:?} {y:?}"
+            );
+        }
         assert_ne!(a, NameKey(b"parr{3}"));
         assert!(NameKey(b"Tool0").is(b"tool0"));
         assert!(NameKey(b"SearchL").starts_with(b"search"));
@@ -556,15 +757,68 @@ mod tests {
         assert!(!NameKey(b"zone").numbered(b'z'));
         // A key's first letter, past blanks and in either case, is what FirstLetters keeps.
         let mut letters = FirstLetters::new();
-        letters.insert_bytes(a.0);
-        letters.insert_bytes(b" t");
+        letters.insert_utf8(a.0);
+        letters.insert_utf8(b" t");
         assert!(letters.may_start(b.0) && letters.may_start(b"T1") && !letters.may_start(b" "));
         let mut blank = FirstLetters::new();
-        blank.insert_bytes(b" ");
+        blank.insert_utf8(b" ");
         assert!(blank.may_start(b"") && !blank.may_start(b"t"));
         assert_eq!(fold("p[ 3 ]"), "P[3]");
         let mut buf = String::new();
         assert_eq!(fold_into(&mut buf, b"pArr{ 2 }"), "PARR{2}");
+    }
+
+    #[test]
+    fn short_keys_fold_and_hash_as_the_bytes_folded_one_by_one() {
+        // Every byte, in each place of names of one to nine bytes around it, both readings.
+        let fill = [b'p', b'A', b'{', b'9', b'z', b'_', b'~', b'@'];
+        for b in 0u8..=255 {
+            for len in 0..=9usize {
+                for at in 0..len.max(1) {
+                    let mut name: Vec<u8> = fill.iter().cycle().take(len).copied().collect();
+                    if let Some(c) = name.get_mut(at) {
+                        *c = b;
+                    }
+                    for ascii in [true, false] {
+                        let plain = name.iter().all(|&c| c > b' ' && (c.is_ascii() || !ascii));
+                        let short = ShortKey::of(&name, ascii);
+                        assert_eq!(short.is_some(), plain && (1..=8).contains(&len), "{name:?}");
+                        let Some(short) = short else { continue };
+                        let folded: Vec<u8> = name.iter().map(u8::to_ascii_uppercase).collect();
+                        let mut buf = Vec::new();
+                        assert_eq!(fold_utf8_into(&mut buf, &name), folded);
+                        assert_eq!(&short.word.to_le_bytes()[..short.len], &folded[..]);
+                        assert_eq!(short.hash(), hash_of(&folded), "{name:?}");
+                        if ascii {
+                            let mut key = [0; RAW_KEY];
+                            assert_eq!(fold_ascii_into(&mut key, &name), Some(&folded[..]));
+                            let mut text = String::new();
+                            assert_eq!(fold_into(&mut text, &name).as_bytes(), folded);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn same_bytes_is_slice_equality() {
+        let texts: Vec<Vec<u8>> = (0..=10usize)
+            .flat_map(|len| {
+                (0..len.max(1)).map(move |at| {
+                    let mut t: Vec<u8> = (0..len as u8).map(|b| b'a' + b).collect();
+                    if let Some(c) = t.get_mut(at) {
+                        *c = 0;
+                    }
+                    t
+                })
+            })
+            .collect();
+        for a in &texts {
+            for b in &texts {
+                assert_eq!(same_bytes(a, b), a == b, "{a:?} {b:?}");
+            }
+        }
     }
 
     #[test]
@@ -637,6 +891,30 @@ mod tests {
                     hits => hits,
                 };
                 assert_eq!(ix.exact_else_elements(key), general, "{key}");
+            }
+            // Source bytes read as they are, or folded where they do not fold byte by byte.
+            for raw in [
+                &b"p10"[..],
+                b"P10",
+                b" p10",
+                b"pArr{2}",
+                b"parr{ 2 }",
+                b"pArr{i}",
+                b"pArr",
+                b"q",
+                b"r{1}",
+                b"",
+                b"pArr{123456789012345678901234567890}",
+                b"p\xe410",
+            ] {
+                let mut buf = String::new();
+                let folded = ix.exact_else_elements(fold_into(&mut buf, raw));
+                let read = ix.exact_else_elements_raw(raw);
+                assert!(read.is_none_or(|r| r == folded), "{raw:?}");
+                let plain = raw
+                    .iter()
+                    .all(|&b| b.is_ascii() && !b.is_ascii_whitespace());
+                assert_eq!(read.is_some(), plain && raw.len() <= RAW_KEY, "{raw:?}");
             }
         }
         let mut b = NameIndex::builder('{', 0);

@@ -12,7 +12,7 @@
 //!
 //! [`Usage`]: crate::position::Usage
 
-use crate::names::{FirstLetters, NameIndex, NameKey, NameMap, NameSet, fold, fold_into};
+use crate::names::{FirstLetters, NameIndex, NameKey, NameMap, fold, fold_into};
 use crate::position::{FrameDecl, FrameName, RunTimeValue};
 use crate::syntax::Span;
 
@@ -172,8 +172,8 @@ pub(crate) struct Use<'a> {
     /// The frame is computed when the program runs: every target reached is, too.
     pub(crate) run_time: Option<RunTimeValue>,
     /// Positional arguments, in order, that are plain references (`None` for any other
-    /// expression), in the file's source.
-    pub(crate) args: &'a [Option<Span>],
+    /// expression), in the file's source (as a RAPID call record keeps them).
+    pub(crate) args: &'a [Option<crate::syntax::Span32>],
     /// Further references in the file's source (RAPID `Offs`/`RelTool` first arguments).
     pub(crate) refs: &'a [Span],
     /// Further references already [`fold`]ed (KRL: a motion's target and what it was copied
@@ -241,6 +241,47 @@ fn lookup(
             computed_index_array(naming, key).map_or(&[][..], |a| index.elements(a)),
         ),
     };
+    keep_seen(naming, exported, file, named, elements, out);
+}
+
+/// [`lookup`] of a reference written as `raw` in `file`'s source, read as it is where its
+/// bytes fold one by one (see [`NameIndex::exact_else_elements_raw`]), else [`fold`]ed into
+/// `buf`.
+fn lookup_raw(
+    naming: &Naming,
+    index: &NameIndex<Indexed>,
+    exported: &dyn Fn(TargetAt) -> bool,
+    file: usize,
+    raw: &[u8],
+    buf: &mut String,
+    out: &mut Vec<TargetAt>,
+) {
+    if naming.arrays == ArrayReach::WhenUndeclared
+        && let Some(named) = index.exact_else_elements_raw(raw)
+    {
+        return keep_seen(naming, exported, file, named, &[], out);
+    }
+    lookup(naming, index, exported, file, fold_into(buf, raw), out);
+}
+
+/// The declarations found, `named` then `elements`, that `file` sees, added to `out`.
+fn keep_seen(
+    naming: &Naming,
+    exported: &dyn Fn(TargetAt) -> bool,
+    file: usize,
+    named: &[Indexed],
+    elements: &[Indexed],
+    out: &mut Vec<TargetAt>,
+) {
+    // Nearly every reference names one declaration: seen if it is the file's own, else if
+    // exported (what the general filter below keeps of one hit).
+    if let ([(hm, hi)], []) = (named, elements) {
+        let h = (*hm as usize, *hi as usize);
+        if naming.scope == Scope::Program || h.0 == file || exported(h) {
+            out.push(h);
+        }
+        return;
+    }
     let hits = named
         .iter()
         .chain(elements)
@@ -354,15 +395,12 @@ pub(crate) struct Binder<'f, 'a> {
     targets: Vec<TargetAt>,
     params: Vec<ParamAt>,
     hits: Vec<TargetAt>,
-    /// References of each file, as written, that reach no target: a module's 10,000 motions
-    /// pass the same few speeds, zones and tools (`v1000, z10, tGun`), which are no target,
-    /// and folding and looking each up again was a third of the pass. The file's bytes are
-    /// hashed as they are, not folded.
-    misses: NameSet<(usize, &'a [u8])>,
     /// The routines of each name: (file, index, local), in file order and each file's order.
     /// A call's routine was found by scanning every routine of the program, per call:
     /// quadratic in a task of many routines calling each other (3,000 routines: 4 G
-    /// instructions).
+    /// instructions). Only names some routine of which takes parameters are kept: a call of
+    /// any other binds no argument to a parameter, as a call of no routine of the program,
+    /// so a program whose routines take no targets (most) looks no callee up.
     routines: NameMap<NameKey<'a>, Vec<(usize, usize, bool)>>,
     /// The first letters of the targets' names: a reference starting with none of them is
     /// not looked up.
@@ -383,9 +421,9 @@ impl<'f, 'a> Binder<'f, 'a> {
         let mut first_letters = FirstLetters::new();
         for (m, f) in files.iter().enumerate() {
             for i in 0..f.positions.len() {
-                if let (Some(n), Some(at)) = (f.positions.name(i), indexed((m, i))) {
-                    index.insert(n, at);
-                    first_letters.insert(n);
+                if let (Some(n), Some(at)) = (f.positions.name_bytes(i), indexed((m, i))) {
+                    index.insert_utf8(n, at);
+                    first_letters.insert_utf8(n);
                 }
             }
         }
@@ -399,6 +437,14 @@ impl<'f, 'a> Binder<'f, 'a> {
                     .push((m, r, routine.local));
             }
         }
+        routines.retain(|_, all| {
+            all.iter().any(|&(m, r, _)| {
+                files
+                    .get(m)
+                    .and_then(|f| f.routines.get(r))
+                    .is_some_and(|r| !r.params.is_empty())
+            })
+        });
         Binder {
             files,
             naming: *naming,
@@ -410,7 +456,6 @@ impl<'f, 'a> Binder<'f, 'a> {
             targets: Vec::new(),
             params: Vec::new(),
             hits: Vec::new(),
-            misses: Default::default(),
             routines,
             first_letters,
             last_callee: None,
@@ -437,7 +482,6 @@ impl<'f, 'a> Binder<'f, 'a> {
             targets,
             params,
             hits,
-            misses,
             routines,
             first_letters,
             last_callee,
@@ -491,11 +535,10 @@ impl<'f, 'a> Binder<'f, 'a> {
                     Some(p) => params.push(p),
                     None => lookup(naming, index, &exported, m, key, targets),
                 };
-            // `reach` of a reference written as `raw` in the file, folded only when it may
-            // reach something: a parameter, or a target `misses` does not know it misses.
+            // `reach` of a reference written as `raw` in the file, looked up only when it
+            // may reach something: a parameter, or a target whose name starts as it does.
             let reach_raw = |raw: &'a [u8],
                              buf: &mut String,
-                             misses: &mut NameSet<(usize, &'a [u8])>,
                              targets: &mut Vec<TargetAt>,
                              params: &mut Vec<ParamAt>| {
                 if !own_params.is_empty()
@@ -504,16 +547,11 @@ impl<'f, 'a> Binder<'f, 'a> {
                     params.push(p);
                     return;
                 }
-                if !first_letters.may_start(raw) || misses.contains(&(m, raw)) {
-                    return;
-                }
-                let before = targets.len();
-                lookup(naming, index, &exported, m, fold_into(buf, raw), targets);
-                if targets.len() == before {
-                    misses.insert((m, raw));
+                if first_letters.may_start(raw) {
+                    lookup_raw(naming, index, &exported, m, raw, buf, targets);
                 }
             };
-            let callee = u.callee.and_then(|c| {
+            let callee = u.callee.filter(|_| !routines.is_empty()).and_then(|c| {
                 let name = c.slice(src);
                 match *last_callee {
                     Some((lm, last, found)) if lm == m && last == name => found,
@@ -526,7 +564,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             });
             for (i, sp) in u.args.iter().enumerate() {
                 let Some(sp) = *sp else { continue };
-                let raw = sp.slice(src);
+                let raw = sp.span().slice(src);
                 match callee {
                     // An argument bound to a parameter of a routine of the program: used as
                     // that routine uses the parameter.
@@ -547,11 +585,13 @@ impl<'f, 'a> Binder<'f, 'a> {
                             }
                         }
                     }
-                    _ => reach_raw(raw, buf, misses, targets, params),
+                    // Asked here first: a motion's speed, zone and tool reach nothing.
+                    _ if own_params.is_empty() && !first_letters.may_start(raw) => {}
+                    _ => reach_raw(raw, buf, targets, params),
                 }
             }
             for &sp in u.refs {
-                reach_raw(sp.slice(src), buf, misses, targets, params);
+                reach_raw(sp.slice(src), buf, targets, params);
             }
             for &key in u.folded {
                 reach(key, targets, params);
@@ -636,8 +676,8 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
     let mut frames = NameIndex::builder(naming.open, 0);
     for (fi, f) in files.iter().enumerate() {
         for i in 0..f.positions.len() {
-            if let (Some(n), Some(at)) = (f.positions.name(i), indexed((fi, i))) {
-                targets.insert(n, at);
+            if let (Some(n), Some(at)) = (f.positions.name_bytes(i), indexed((fi, i))) {
+                targets.insert_utf8(n, at);
             }
         }
         for (i, d) in f.frames.iter().enumerate() {

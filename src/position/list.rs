@@ -347,9 +347,17 @@ impl PositionList {
         Some(self.head(i)?.0)
     }
 
-    /// The declared name of position `i` (`None` for an inline literal).
+    /// The declared name of position `i` (`None` for an inline literal). Read past the span
+    /// and kind without decoding them, and not on to the line and column: the usage pass
+    /// indexes every target by name, and the whole head was a quarter of building its index.
     pub fn name(&self, i: usize) -> Option<&str> {
-        self.head(i)?.2
+        std::str::from_utf8(self.name_bytes(i)?).ok()
+    }
+
+    /// [`PositionList::name`] as the bytes of its text, unchecked: what indexes the names
+    /// by their bytes need (checking each was a third of reading it).
+    pub(crate) fn name_bytes(&self, i: usize) -> Option<&[u8]> {
+        self.reader(self.heads.get(i)?, &[])?.name(&self.kinds)?
     }
 
     /// The head, orientation and configuration of position `i` as written, its other fields
@@ -773,6 +781,21 @@ impl<'a> Reader<'a> {
         })
     }
 
+    /// The name [`Reader::head`] reads, the span's two numbers stepped over (each ends at its
+    /// first byte below 0x80) and the kind checked as it checks it.
+    #[inline(always)]
+    fn name(&mut self, kinds: &[PositionKind]) -> Option<Option<&'a [u8]>> {
+        for _ in 0..2 {
+            let len = self.bytes.iter().position(|&b| b < 0x80)? + 1;
+            self.bytes = self.bytes.get(len..)?;
+        }
+        kinds.get(self.head_usize()? >> 1)?;
+        Some(match self.head_usize()? {
+            0 => None,
+            n => Some(self.bytes.get(..n - 1)?),
+        })
+    }
+
     /// [`Reader::uint`] with the LEB128 reading inlined, for the six numbers of a head, which
     /// every use of a position reads (`check`'s lints, binding, `correct`'s decoding): through
     /// a call each they were half of a head.
@@ -1062,6 +1085,9 @@ mod tests {
             prop_assert_eq!(list.get(0, &src), Some(first.clone()));
             prop_assert_eq!(list.get(1, &src), Some(p.clone()));
             prop_assert_eq!(list.head(1), Some((p.span, p.kind, p.name.as_deref())));
+            prop_assert_eq!(list.name(1), p.name.as_deref());
+            prop_assert_eq!(list.name_bytes(1), p.name.as_deref().map(str::as_bytes));
+            prop_assert_eq!(list.name(0), None);
             prop_assert_eq!(list.has_cartesian(1), p.cartesian.is_some());
             let read = list.orientation_and_config(1, &src).map(|t| {
                 (t.span, t.kind, t.name().map(str::to_owned), t.orient, t.config)

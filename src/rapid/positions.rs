@@ -8,7 +8,7 @@
 
 use super::expr::{Arena, ExprKind};
 use super::parser::{MovedCall, PlainArgs, RobtargetLiteral, Statement, Stmt};
-use crate::names::{FirstLetters, NameKey, NameMap};
+use crate::names::{NameKey, NameMap, same_bytes};
 use crate::position::{
     Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Name, NumField, OffsetCall,
     OffsetKind, Orientation, Position, PositionKind, PositionList, ReadAgainTarget, Usage,
@@ -201,7 +201,7 @@ impl<'s, 'r> FrameTexts<'s, 'r> {
     fn get(&mut self, bytes: &'s [u8]) -> FrameText {
         for (k, slot) in self.recent.iter().enumerate() {
             if let Some((b, t)) = slot
-                && *b == bytes
+                && same_bytes(b, bytes)
             {
                 self.older = 1 - k;
                 return t.clone();
@@ -227,6 +227,115 @@ impl<'s, 'r> FrameTexts<'s, 'r> {
         };
         self.known.insert(bytes, t.clone());
         t
+    }
+}
+
+/// What a call's arguments are declared as, for finding its tool: the task's declared
+/// tools, zones and speeds by name (see [`crate::resolve::declarations`]).
+struct ArgKinds<'t, 's> {
+    type_of: &'t NameMap<NameKey<'s>, DeclKind>,
+    /// By the first byte of a name past blanks (either case), the kinds it may be ([`TOOL`],
+    /// [`ZONE`], [`SPEED`]): those of the names in `type_of` that start with it, and of the
+    /// built-in names (`tool0`; `fine`, `z10`; `vmax`, `v1000`). A call's target (`p10`) is
+    /// no kind, and its speed and zone no tool: each is told by one load, where asking each
+    /// argument whether it is `tool0`, then a declared tool, was half of finding a tool.
+    may_be: [u8; 256],
+    /// The last argument looked up in `type_of`, as written, and its kind there: call after
+    /// call passes the same tool, which is then one compare of its bytes, not a hash.
+    last: std::cell::Cell<Option<(&'s [u8], Option<DeclKind>)>>,
+}
+
+/// The kinds of [`ArgKinds::may_be`].
+const TOOL: u8 = 1;
+const ZONE: u8 = 2;
+const SPEED: u8 = 4;
+
+impl<'t, 's> ArgKinds<'t, 's> {
+    fn new(type_of: &'t NameMap<NameKey<'s>, DeclKind>) -> ArgKinds<'t, 's> {
+        let mut may_be = [0; 256];
+        let mut mark = |b: u8, kind: u8| {
+            for b in [b.to_ascii_lowercase(), b.to_ascii_uppercase()] {
+                if let Some(m) = may_be.get_mut(usize::from(b)) {
+                    *m |= kind;
+                }
+            }
+        };
+        for (b, kind) in [(b't', TOOL), (b'f', ZONE), (b'z', ZONE), (b'v', SPEED)] {
+            mark(b, kind);
+        }
+        for (n, kind) in type_of {
+            let kind = match kind {
+                DeclKind::Tool => TOOL,
+                DeclKind::Zone => ZONE,
+                DeclKind::Speed => SPEED,
+                DeclKind::Other => 0,
+            };
+            // A name of blanks only is no byte's: `may_be` lets every such name through.
+            if let Some(&b) = n.0.iter().find(|b| !b.is_ascii_whitespace()) {
+                mark(b, kind);
+            }
+        }
+        ArgKinds {
+            type_of,
+            may_be,
+            last: std::cell::Cell::new(None),
+        }
+    }
+
+    /// Whether `n` may be of `kind` (one of [`TOOL`], [`ZONE`], [`SPEED`]), by its first byte.
+    fn may_be(&self, n: NameKey<'s>, kind: u8) -> bool {
+        match n.0.iter().find(|b| !b.is_ascii_whitespace()) {
+            Some(&b) => self
+                .may_be
+                .get(usize::from(b))
+                .is_some_and(|m| m & kind != 0),
+            None => true,
+        }
+    }
+
+    fn declared(&self, n: NameKey<'s>, kind: DeclKind) -> bool {
+        let found = match self.last.get() {
+            Some((bytes, found)) if same_bytes(bytes, n.0) => found,
+            _ => {
+                let found = self.type_of.get(&n).copied();
+                self.last.set(Some((n.0, found)));
+                found
+            }
+        };
+        found == Some(kind)
+    }
+
+    fn is_tool(&self, n: NameKey<'s>) -> bool {
+        self.may_be(n, TOOL) && (n.is(b"tool0") || self.declared(n, DeclKind::Tool))
+    }
+
+    fn is_zone(&self, n: NameKey<'s>) -> bool {
+        self.may_be(n, ZONE)
+            && (n.is(b"fine") || n.numbered(b'z') || self.declared(n, DeclKind::Zone))
+    }
+
+    fn is_speed(&self, n: NameKey<'s>) -> bool {
+        self.may_be(n, SPEED)
+            && (n.is(b"vmax") || n.numbered(b'v') || self.declared(n, DeclKind::Speed))
+    }
+
+    /// The positional argument (of `args`, in `src`) that gives call `call`'s tool: one of
+    /// the task's tools, else the argument after the zone (a search's after its speed, when
+    /// it has no zone).
+    fn tool_index(&self, call: &NameKey, args: &[Option<Span32>], src: &'s [u8]) -> Option<usize> {
+        let first = |is: &dyn Fn(NameKey<'s>) -> bool| {
+            args.iter()
+                .position(|a| a.is_some_and(|sp| is(NameKey(sp.span().slice(src)))))
+        };
+        if let Some(i) = first(&|n| self.is_tool(n)) {
+            return Some(i);
+        }
+        let after = first(&|n| self.is_zone(n)).or_else(|| {
+            call.starts_with(b"search")
+                .then(|| first(&|n| self.is_speed(n)))
+                .flatten()
+        })?;
+        Some(after + 1)
     }
 }
 
@@ -766,18 +875,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
             .with_hint("rename or remove one declaration; RAPID names are case-insensitive"),
         );
     }
-    // The first letters of the task's declared tools, zones and speeds: a call's targets
-    // (`p10`) and most of its other arguments start with a letter none of them does, and are
-    // not looked up (hashing each argument of 11,000 calls, folded, was 3 M instructions).
-    let mut first_letters = FirstLetters::new();
-    for n in type_of.keys() {
-        first_letters.insert_bytes(n.0);
-    }
-    let declared =
-        |n: &NameKey, kind: DeclKind| first_letters.may_start(n.0) && type_of.get(n) == Some(&kind);
-    let is_tool = |n: &NameKey| n.is(b"tool0") || declared(n, DeclKind::Tool);
-    let is_zone = |n: &NameKey| n.is(b"fine") || n.numbered(b'z') || declared(n, DeclKind::Zone);
-    let is_speed = |n: &NameKey| n.is(b"vmax") || n.numbered(b'v') || declared(n, DeclKind::Speed);
+    let kinds = ArgKinds::new(&type_of);
     let mut positions: Vec<PositionList> = Vec::with_capacity(modules.len());
     let mut calls: Vec<Calls> = Vec::with_capacity(modules.len());
     let mut rest = Vec::with_capacity(modules.len());
@@ -814,41 +912,15 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
     let mut binder = crate::resolve::Binder::new(&mut facts, &NAMING);
     let mut frame_texts = FrameTexts::new(&robhold);
     let wobj0 = frame_texts.get(b"wobj0");
-    // The positional argument that gives a call's tool: one of the task's tools, else the
-    // argument after the zone (a search's after its speed, when it has no zone).
-    let tool_index = |call: &NameKey, names: &[Option<NameKey>]| -> Option<usize> {
-        if let Some(i) = names.iter().position(|n| n.as_ref().is_some_and(is_tool)) {
-            return Some(i);
-        }
-        let after = names
-            .iter()
-            .position(|n| n.as_ref().is_some_and(is_zone))
-            .or_else(|| {
-                call.starts_with(b"search")
-                    .then(|| names.iter().position(|n| n.as_ref().is_some_and(is_speed)))
-                    .flatten()
-            })?;
-        Some(after + 1)
-    };
-    let mut names: Vec<Option<NameKey>> = Vec::new();
-    let mut positional: Vec<Option<Span>> = Vec::new();
     for (m, (module_calls, r)) in calls.iter().zip(&rest).enumerate() {
         let src = r.6;
         for (u, call_args, refs, inline) in module_calls.iter() {
             let call = NameKey(u.name.span().slice(src));
-            positional.clear();
-            positional.extend(call_args.iter().map(|a| a.map(Span32::span)));
-            names.clear();
-            names.extend(
-                positional
-                    .iter()
-                    .map(|p| p.map(|sp| NameKey(sp.slice(src)))),
-            );
             let tool = match u.tool {
                 Some(sp) => Some(frame_texts.get(trim_latin1(sp.span().slice(src)))),
-                None => tool_index(&call, &names).and_then(|i| {
-                    let sp = positional.get(i).copied().flatten()?;
-                    Some(frame_texts.get(sp.slice(src)))
+                None => kinds.tool_index(&call, call_args, src).and_then(|i| {
+                    let sp = call_args.get(i).copied().flatten()?;
+                    Some(frame_texts.get(sp.span().slice(src)))
                 }),
             };
             // A motion without `\WObj` moves in `wobj0` (asked only then: most name theirs).
@@ -872,7 +944,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
                     frame: wobj.map(|w| w.name),
                     tool: tool.map(|t| t.name),
                     run_time: None,
-                    args: &positional,
+                    args: call_args,
                     refs,
                     folded: &[],
                     targets: inline,
