@@ -154,6 +154,31 @@ impl<'a> Lexer<'a> {
         self.line_start = line_start;
     }
 
+    /// The identifier `text` at the place, as [`Lexer::next_token`] would lex it there, when
+    /// the source spells it there whole: `text` is an identifier lexed before (its
+    /// first byte a letter or `_`), and `keyword` what that token said of it. A statement
+    /// mostly starts as the one before it did (`MoveL`, `CONST`): one compare of its bytes
+    /// stands for the dispatch and the scan of the identifier. `None`, with nothing read,
+    /// otherwise (inside a header too, whose lines are read whole).
+    #[inline]
+    pub(crate) fn ident_again(&mut self, text: &[u8], keyword: bool) -> Option<Token> {
+        if self.in_header || text.is_empty() {
+            return None;
+        }
+        let rest = self.src.get(self.pos..)?;
+        let spelled = rest
+            .get(..text.len())
+            .is_some_and(|r| crate::names::same_bytes(r, text));
+        if !spelled || rest.get(text.len()).is_some_and(|&c| is_ident_continue(c)) {
+            return None;
+        }
+        // What `next_token` leaves: past the identifier, no longer at a line's start.
+        self.line_start = false;
+        let mut t = self.token(TokenKind::Ident, text.len());
+        t.keyword = keyword;
+        Some(t)
+    }
+
     fn token(&mut self, kind: TokenKind, len: usize) -> Token {
         let start = self.pos;
         self.pos = (start + len).min(self.src.len());
@@ -451,6 +476,43 @@ mod tests {
     }
 
     proptest::proptest! {
+        /// An identifier taken again is the token lexing gives there, and leaves the lexer as
+        /// lexing does; where the text is not the identifier there, nothing is read.
+        #[test]
+        fn an_identifier_taken_again_is_the_token_lexed(
+            text in proptest::sample::select(vec!["MoveL", "CONST", "p1", "IF", "_x"]),
+            after in proptest::sample::select(vec![
+                "", " p1;", "\r\n", "L p1;", "0", "_", "\u{c4}", ";", "(", "\\", "!c",
+            ]),
+            before in proptest::sample::select(vec!["", "  ", "x", "\r\n  ", "%%%\r\n"]),
+        ) {
+            let text_bytes = text.as_bytes();
+            let src: Vec<u8> = format!("{before}{text}{after}")
+                .chars()
+                .map(|c| c as u8)
+                .collect();
+            let mut lexed = Lexer::new(&src);
+            // Up to where the text is written, as the parser would have read it (past it
+            // when what comes before runs into it, as `x` does).
+            while lexed.pos < before.len() {
+                lexed.next_token();
+            }
+            let (mut again, at) = (lexed, lexed.pos);
+            let want = lexed.next_token();
+            let is_it = want.kind == TokenKind::Ident && want.text(&src) == text_bytes;
+            match again.ident_again(text_bytes, is_keyword(text_bytes)) {
+                Some(t) => {
+                    proptest::prop_assert!(is_it);
+                    proptest::prop_assert_eq!(t, want);
+                    proptest::prop_assert_eq!(again.next_token(), lexed.next_token());
+                }
+                None => {
+                    proptest::prop_assert!(!is_it || lexed.in_header);
+                    proptest::prop_assert_eq!(again.pos, at);
+                }
+            }
+        }
+
         /// The pair filter never turns a keyword away: `is_keyword` is a case-blind compare
         /// with every keyword, for names, keywords in any case, and keywords one byte off.
         #[test]

@@ -143,6 +143,7 @@ impl Parser<'_, '_> {
     /// `item = data_decl | routine | record | placeholder | opaque`
     pub(super) fn item(&mut self, module_scope: bool) {
         let start = self.tok.start;
+        self.first = self.tok;
         self.arena.clear();
         if self.tok.kind == TokenKind::Placeholder {
             self.bump();
@@ -290,9 +291,10 @@ impl Parser<'_, '_> {
         let init = Some(self.literal_read_again());
         #[cfg(not(debug_assertions))]
         let init = None;
-        if let Err(e) = self.expect_punct(b';', "`;` at the end of the declaration") {
-            return Some(Err(e));
+        if !self.at_punct(b';') {
+            return Some(Err(self.error("`;` at the end of the declaration")));
         }
+        self.bump_statement_end();
         let stmt = Stmt::Decl {
             storage,
             type_name: Span::new(ty, ty_end),

@@ -526,6 +526,9 @@ struct Parser<'a, 's> {
     /// The quaternion, the configuration and the external axes after the first it last read,
     /// and how many times in a row each was not the one before.
     seen_parts: [PartMemo; 3],
+    /// The first token of the statement or item being read (see
+    /// [`Parser::next_statement_start`]).
+    first: Token,
     /// What [`Parser::plain_args_from`] last read.
     plain: PlainArgs,
     /// The call statement [`Parser::plain`] holds the arguments of, when it was read at its
@@ -737,6 +740,12 @@ impl<'a, 's> Parser<'a, 's> {
             fast_paths: true,
             literal: RobtargetLiteral::EMPTY,
             plain: PlainArgs::EMPTY,
+            first: Token {
+                kind: TokenKind::Eof,
+                keyword: false,
+                start: 0,
+                end: 0,
+            },
             last_call: None,
             moved: None,
             seen: [None; SEEN_FIELDS],
@@ -759,6 +768,24 @@ impl<'a, 's> Parser<'a, 's> {
     }
 
     // ---- tokens -------------------------------------------------------------------------
+
+    /// [`Parser::next_significant`] for the token that starts a statement: first as the one
+    /// the statement before started with ([`Parser::first`]), else lexed.
+    fn next_statement_start(&mut self) -> Token {
+        self.lex.skip_blanks();
+        let first = self.first;
+        if first.kind == TokenKind::Ident
+            && let Some(t) = self.lex.ident_again(first.text(self.src), first.keyword)
+        {
+            debug_assert_eq!(t, {
+                let mut lex = self.lex;
+                lex.seek(t.start as usize);
+                lex.next_token()
+            });
+            return t;
+        }
+        self.next_significant()
+    }
 
     fn next_significant(&mut self) -> Token {
         loop {
@@ -885,6 +912,30 @@ impl<'a, 's> Parser<'a, 's> {
         self.peeked = None;
         self.prev_end = end as u32;
         self.tok = self.next_significant();
+    }
+
+    /// [`Parser::resume_at`] the end of a statement: the next token is lexed as
+    /// [`Parser::next_statement_start`] lexes it.
+    fn resume_at_statement_end(&mut self, end: usize) {
+        self.lex.seek(end);
+        self.peeked = None;
+        self.prev_end = end as u32;
+        self.tok = self.next_statement_start();
+    }
+
+    /// [`Parser::bump`] of a statement's last token (a `;` no error is reported of), the next
+    /// token lexed as [`Parser::next_statement_start`] lexes it.
+    fn bump_statement_end(&mut self) -> Token {
+        let t = self.tok;
+        self.prev_end = t.end;
+        self.tok = match self.peeked.take() {
+            Some((next, lex)) => {
+                self.lex = lex;
+                next
+            }
+            None => self.next_statement_start(),
+        };
+        t
     }
 
     // ---- tree building ------------------------------------------------------------------

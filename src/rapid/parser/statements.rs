@@ -25,6 +25,7 @@ impl Parser<'_, '_> {
     ///             | call | placeholder`
     pub(super) fn statement(&mut self) {
         let start = self.tok.start;
+        self.first = self.tok;
         self.arena.clear();
         if self.depth > MAX_DEPTH {
             let e = self.error("less deeply nested blocks");
@@ -240,7 +241,7 @@ impl Parser<'_, '_> {
             i = after;
         }
         self.plain.len = len;
-        self.resume_at(i + 1);
+        self.resume_at_statement_end(i + 1);
         true
     }
 
@@ -325,7 +326,7 @@ impl Parser<'_, '_> {
             Some((self.plain.iter().collect(), end as u32)),
             "a call read as the one before"
         );
-        self.resume_at(end);
+        self.resume_at_statement_end(end);
         true
     }
 
@@ -398,7 +399,7 @@ impl Parser<'_, '_> {
         }
         let end = i + 1;
         self.arena.close(args, end as u32);
-        self.resume_at(end);
+        self.resume_at_statement_end(end);
         Some(args)
     }
 
