@@ -811,15 +811,23 @@ impl<'a, 's> Parser<'a, 's> {
         }
         if t.kind != TokenKind::Eof {
             self.prev_end = t.end;
-            self.tok = match self.peeked.take() {
-                Some((next, lex)) => {
-                    self.lex = lex;
-                    next
-                }
-                None => self.next_significant(),
-            };
+            self.tok = self.next_after(false);
         }
         t
+    }
+
+    /// The token after the current one: the one lexed ahead, else lexed now, at a
+    /// `statement_end` as [`Parser::next_statement_start`] lexes it.
+    #[inline(always)]
+    fn next_after(&mut self, statement_end: bool) -> Token {
+        match self.peeked.take() {
+            Some((next, lex)) => {
+                self.lex = lex;
+                next
+            }
+            None if statement_end => self.next_statement_start(),
+            None => self.next_significant(),
+        }
     }
 
     /// The token after the current one (lexed once on a copy of the lexer, then kept).
@@ -928,13 +936,7 @@ impl<'a, 's> Parser<'a, 's> {
     fn bump_statement_end(&mut self) -> Token {
         let t = self.tok;
         self.prev_end = t.end;
-        self.tok = match self.peeked.take() {
-            Some((next, lex)) => {
-                self.lex = lex;
-                next
-            }
-            None => self.next_statement_start(),
-        };
+        self.tok = self.next_after(true);
         t
     }
 
