@@ -704,7 +704,7 @@ impl Alike {
             return None;
         }
         let (lo, lo_out) = (b_from.saturating_sub(1), a_from.saturating_sub(1));
-        let len = common_len(
+        let len = crate::syntax::common_len(
             original.get(lo..).unwrap_or(&[]),
             output.get(lo_out..).unwrap_or(&[]),
         );
@@ -753,27 +753,6 @@ impl Alike {
             _ => None,
         }
     }
-}
-
-/// How many bytes `a` and `b` start with alike: 16 at a time (most of a transformed file is
-/// the same on both sides, in stretches of tens of bytes between its changed numbers).
-fn common_len(a: &[u8], b: &[u8]) -> usize {
-    let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let (chunks_a, _) = a.as_chunks::<16>();
-    let (chunks_b, _) = b.as_chunks::<16>();
-    for (k, (x, y)) in chunks_a.iter().zip(chunks_b).enumerate() {
-        let diff = u128::from_le_bytes(*x) ^ u128::from_le_bytes(*y);
-        if diff != 0 {
-            return k * 16 + (diff.trailing_zeros() / 8) as usize;
-        }
-    }
-    let done = chunks_a.len() * 16;
-    done + a[done..]
-        .iter()
-        .zip(&b[done..])
-        .take_while(|(x, y)| x == y)
-        .count()
 }
 
 /// The place of house precision `p` in [`HOUSE_DECIMALS`], if it is one.

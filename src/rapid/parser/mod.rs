@@ -691,29 +691,6 @@ fn plain_name(src: &[u8], i: usize) -> Option<usize> {
     (!is_keyword(rest.get(..len)?)).then_some(i + len)
 }
 
-/// How many bytes `a` and `b` begin with alike, compared eight at a time.
-fn common_prefix_len(a: &[u8], b: &[u8]) -> usize {
-    let n = a.len().min(b.len());
-    let mut i = 0;
-    while let (Some(x), Some(y)) = (
-        a.get(i..n).and_then(<[u8]>::first_chunk::<8>),
-        b.get(i..n).and_then(<[u8]>::first_chunk::<8>),
-    ) {
-        let differ = u64::from_le_bytes(*x) ^ u64::from_le_bytes(*y);
-        if differ != 0 {
-            return i + (differ.trailing_zeros() / 8) as usize;
-        }
-        i += 8;
-    }
-    i + a
-        .get(i..n)
-        .unwrap_or_default()
-        .iter()
-        .zip(b.get(i..n).unwrap_or_default())
-        .take_while(|(x, y)| x == y)
-        .count()
-}
-
 impl<'a, 's> Parser<'a, 's> {
     fn new(
         src: &'a [u8],

@@ -267,7 +267,7 @@ impl Parser<'_, '_> {
         else {
             return false;
         };
-        let alike = common_prefix_len(before, now);
+        let alike = crate::syntax::common_len(before, now);
         // Where the last call's bytes move by `grown` more than by the shift to the new start:
         // after the name that differs (the end for a call written again as it was).
         let (from, grown) = if alike == before.len() {
