@@ -75,6 +75,14 @@ pub struct Token {
 }
 
 impl Token {
+    /// The empty end token at the source's start: what a parser holds before it lexes.
+    pub(crate) const NONE: Token = Token {
+        kind: TokenKind::Eof,
+        keyword: false,
+        start: 0,
+        end: 0,
+    };
+
     /// `start..end` as a [`crate::syntax::Span`].
     pub fn span(self) -> crate::syntax::Span {
         crate::syntax::Span::new(self.start as usize, self.end as usize)

@@ -700,12 +700,7 @@ impl<'a, 's> Parser<'a, 's> {
         let mut p = Parser {
             src,
             lex: Lexer::new(src),
-            tok: Token {
-                kind: TokenKind::Eof,
-                keyword: false,
-                start: 0,
-                end: 0,
-            },
+            tok: Token::NONE,
             peeked: None,
             prev_end: 0,
             tree,
@@ -717,12 +712,7 @@ impl<'a, 's> Parser<'a, 's> {
             fast_paths: true,
             literal: RobtargetLiteral::EMPTY,
             plain: PlainArgs::EMPTY,
-            first: Token {
-                kind: TokenKind::Eof,
-                keyword: false,
-                start: 0,
-                end: 0,
-            },
+            first: Token::NONE,
             last_call: None,
             moved: None,
             seen: [None; SEEN_FIELDS],
