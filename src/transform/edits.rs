@@ -287,24 +287,6 @@ impl FileResult {
     pub fn changed(&self) -> bool {
         self.original != self.output
     }
-
-    /// Largest translation (mm) and rotation (degrees) change of any target.
-    pub fn largest_change(&self) -> (f64, f64) {
-        self.changes
-            .iter()
-            .fold((0.0, 0.0), |(mm, deg), c| (mm.max(c.mm), deg.max(c.deg)))
-    }
-
-    /// The smallest and largest skid of the changed targets.
-    pub fn skid_range(&self) -> Option<(f64, f64)> {
-        self.changes
-            .iter()
-            .filter_map(|c| c.skid)
-            .fold(None, |acc, s| match acc {
-                None => Some((s, s)),
-                Some((lo, hi)) => Some((f64::min(lo, s), f64::max(hi, s))),
-            })
-    }
 }
 
 /// A program after a transform.
