@@ -585,7 +585,9 @@ impl<'f, 'a> Binder<'f, 'a> {
                             }
                         }
                     }
-                    // Asked here first: a motion's speed, zone and tool reach nothing.
+                    // What `reach_raw` would find nothing for (a motion's speed, zone and
+                    // tool), told before calling it: the closure is not inlined, and the call
+                    // per argument was 0.65 M of `check`'s 95 M.
                     _ if own_params.is_empty() && !first_letters.may_start(raw) => {}
                     _ => reach_raw(raw, buf, targets, params),
                 }
