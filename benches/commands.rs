@@ -144,6 +144,16 @@ struct Setup {
     options: LoadOptions,
 }
 
+impl Setup {
+    /// The options of the commands that write nothing, which map large inputs.
+    fn mapped(&self) -> LoadOptions {
+        LoadOptions {
+            map_inputs: true,
+            ..self.options.clone()
+        }
+    }
+}
+
 fn setup() -> &'static Setup {
     static SETUP: OnceLock<Setup> = OnceLock::new();
     SETUP.get_or_init(|| {
@@ -151,6 +161,7 @@ fn setup() -> &'static Setup {
         let profile = Profile::load(&cell.robots["r1"].profile).expect("r1 profile");
         let options = LoadOptions {
             krl_config_dat: cell.robots["r1"].config_dat.clone(),
+            map_inputs: false,
         };
         Setup {
             cell,
@@ -171,7 +182,7 @@ fn run(bencher: Bencher, case: Case, command: impl Fn(&Path, &Setup) -> usize + 
 #[divan::bench(args = cases(), sample_count = 3, sample_size = 1)]
 fn check(bencher: Bencher, case: Case) {
     run(bencher, case, |path, s| {
-        let p = load(path, &s.options).expect("program");
+        let p = load(path, &s.mapped()).expect("program");
         p.files.iter().map(|f| findings(f).len()).sum()
     });
 }
@@ -179,7 +190,7 @@ fn check(bencher: Bencher, case: Case) {
 #[divan::bench(args = cases(), sample_count = 3, sample_size = 1)]
 fn inspect_json(bencher: Bencher, case: Case) {
     run(bencher, case, |path, s| {
-        let p = load(path, &s.options).expect("program");
+        let p = load(path, &s.mapped()).expect("program");
         // What `inspect --format json` runs: the report written as it is built.
         let programs = [p];
         let doc = InspectJson {

@@ -35,6 +35,7 @@ fn fixture() -> Fixture {
     let r2 = Profile::load(&cell.robots["r2"].profile).expect("r2 profile");
     let options = LoadOptions {
         krl_config_dat: cell.robots["r1"].config_dat.clone(),
+        map_inputs: false,
     };
     Fixture {
         cell,

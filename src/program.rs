@@ -3,6 +3,7 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
+use crate::output::InputBytes;
 use crate::position::{Language, Program};
 use crate::syntax::looks_binary;
 
@@ -11,6 +12,9 @@ use crate::syntax::looks_binary;
 pub struct LoadOptions {
     /// A KUKA `$config.dat` whose `BASE_DATA`/`TOOL_DATA` resolve KRL bases and tools.
     pub krl_config_dat: Option<PathBuf>,
+    /// Map large inputs instead of reading them ([`crate::output::InputBytes`]). Only for runs
+    /// that write nothing: a mapped file changes if another process rewrites it in place.
+    pub map_inputs: bool,
 }
 
 /// Why a file could not be read as a program. Parse problems are not load errors: the parsers
@@ -86,14 +90,17 @@ fn known_extensions() -> String {
         .join(" or ")
 }
 
-/// Reads a file as bytes, refusing binary content.
-pub fn read_source(path: &Path) -> Result<Vec<u8>, LoadError> {
-    let bytes = crate::output::read_regular_file(path, crate::output::MAX_INPUT_BYTES).map_err(
-        |source| LoadError::Io {
-            path: path.to_owned(),
-            source,
-        },
-    )?;
+/// Reads (or, with [`LoadOptions::map_inputs`], maps) a file as bytes, refusing binary content.
+pub fn read_source(path: &Path, options: &LoadOptions) -> Result<InputBytes, LoadError> {
+    let bytes = crate::output::map_or_read_regular_file(
+        path,
+        crate::output::MAX_INPUT_BYTES,
+        options.map_inputs,
+    )
+    .map_err(|source| LoadError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
     if looks_binary(&bytes) {
         return Err(LoadError::NotText {
             path: path.to_owned(),
@@ -222,7 +229,7 @@ pub fn load_group(paths: &[PathBuf], options: &LoadOptions) -> Vec<Result<Progra
             out.push(dialect.load(p, options));
             continue;
         }
-        match read_source(p) {
+        match read_source(p, options) {
             Ok(_) => readable.push(p.clone()),
             Err(e) => out.push(Err(e)),
         }

@@ -203,6 +203,8 @@ pub(crate) fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
             (None, Some(r)) => r.config_dat.clone(),
             (c, _) => c.clone(),
         },
+        // `inspect` writes nothing.
+        map_inputs: true,
     };
     let batch = load_all(&args.files, &options)?;
     let inspect = InspectOptions {
@@ -272,6 +274,8 @@ pub(crate) fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
 pub(crate) fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
     let options = LoadOptions {
         krl_config_dat: args.config_dat.clone(),
+        // `check` writes nothing.
+        map_inputs: true,
     };
     let batch = load_all(&args.files, &options)?;
     let mut out = std::io::stdout().lock();

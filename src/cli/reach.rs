@@ -68,6 +68,8 @@ pub(crate) fn run(a: ReachArgs) -> anyhow::Result<Exit> {
     };
     let options = LoadOptions {
         krl_config_dat: robot.config_dat.clone(),
+        // `reach` writes nothing.
+        map_inputs: true,
     };
     let reach_options = ReachOptions {
         singularity_deg: a.singularity_deg,

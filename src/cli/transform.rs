@@ -552,6 +552,9 @@ fn load_profile(cell: &Cell, robot: &Robot) -> anyhow::Result<Profile> {
 fn load_options(robot: Option<&Robot>) -> LoadOptions {
     LoadOptions {
         krl_config_dat: robot.and_then(|r| r.config_dat.clone()),
+        // A transform's transaction compares each input on disk with the bytes it read; a
+        // mapped file would change with the disk and hide a concurrent edit.
+        map_inputs: false,
     }
 }
 

@@ -160,7 +160,7 @@ impl Dialect for Krl {
         let own_config = all.iter().any(|p| is_config_dat(p));
         let mut sources = Vec::with_capacity(all.len());
         for p in all {
-            let bytes = crate::program::read_source(&p)?;
+            let bytes = crate::program::read_source(&p, options)?;
             sources.push((p, bytes));
         }
         crate::krl::load_program_from_sources(sources, &tree_options(own_config, options))
@@ -248,6 +248,7 @@ fn tree_options(own_config: bool, options: &LoadOptions) -> LoadOptions {
     if own_config {
         LoadOptions {
             krl_config_dat: None,
+            ..options.clone()
         }
     } else {
         options.clone()

@@ -53,12 +53,12 @@ impl Dialect for Rapid {
         &["pgf"]
     }
 
-    fn load(&self, path: &Path, _options: &LoadOptions) -> Result<Program, LoadError> {
+    fn load(&self, path: &Path, options: &LoadOptions) -> Result<Program, LoadError> {
         let is_pgf = path
             .extension()
             .and_then(|e| e.to_str())
             .is_some_and(|e| e.eq_ignore_ascii_case("pgf"));
-        let source = read_source(path)?;
+        let source = read_source(path, options)?;
         // A `.pgf` is RobotStudio's XML list of modules; some tools write RAPID text under that
         // name instead, and that is read as a module.
         let xml = || {
@@ -82,6 +82,7 @@ impl Dialect for Rapid {
         files: Vec<(PathBuf, Vec<u8>)>,
         _options: &LoadOptions,
     ) -> Result<Program, LoadError> {
+        let files = files.into_iter().map(|(p, s)| (p, s.into())).collect();
         Ok(Program {
             files: crate::rapid::parse_task(files),
         })
@@ -114,11 +115,11 @@ impl Dialect for Rapid {
     fn load_together(
         &self,
         paths: &[PathBuf],
-        _options: &LoadOptions,
+        options: &LoadOptions,
     ) -> Result<Program, LoadError> {
         let mut files = Vec::with_capacity(paths.len());
         for p in paths {
-            files.push((p.clone(), read_source(p)?));
+            files.push((p.clone(), read_source(p, options)?));
         }
         Ok(Program {
             files: crate::rapid::parse_task(files),

@@ -2,14 +2,19 @@
 
 use std::path::Path;
 
+use crate::output::InputBytes;
 use crate::position::{FrameDecl, FrameKind, ParsedFile};
-use crate::program::{LoadError, read_source};
+use crate::program::{LoadError, LoadOptions, read_source};
 
+/// Read, not mapped: a `$config.dat` is small, and is read again for every program that uses it.
 pub(crate) fn parse_config(path: &Path) -> Result<ParsedFile, LoadError> {
-    Ok(parse_config_source(path, read_source(path)?))
+    Ok(parse_config_source(
+        path,
+        read_source(path, &LoadOptions::default())?,
+    ))
 }
 
-pub(crate) fn parse_config_source(path: &Path, source: Vec<u8>) -> ParsedFile {
+pub(crate) fn parse_config_source(path: &Path, source: impl Into<InputBytes>) -> ParsedFile {
     super::parse_file(path, source)
 }
 

@@ -37,14 +37,15 @@ pub use tree::{
     Aggregate, DeclVar, Expr, ExprKind, Field, Krl, Node, NodeKind, Stmt, StmtKind, Tree,
 };
 
+use crate::output::InputBytes;
 use crate::position::{Language, ParsedFile};
 use crate::syntax::LineIndex;
 
 /// Parses one KRL file on its own (no pair, no `$config.dat`). Never fails: what the grammar
 /// does not know is kept verbatim and reported in the file's diagnostics. Bases and tools are
 /// resolved from this file alone; [`load_program`] resolves them over the `.src`/`.dat` pair.
-pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
-    let (file, facts) = analyse(path, source);
+pub fn parse_file(path: &Path, source: impl Into<InputBytes>) -> ParsedFile {
+    let (file, facts) = analyse(path, source.into());
     let mut files = [file];
     let mut facts = [facts];
     resolve::resolve(&mut files, &mut facts);
@@ -53,7 +54,7 @@ pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
 }
 
 /// Parses a file and extracts what it holds, before resolution.
-fn analyse(path: &Path, source: Vec<u8>) -> (ParsedFile, positions::Facts) {
+fn analyse(path: &Path, source: InputBytes) -> (ParsedFile, positions::Facts) {
     let lines = LineIndex::new(&source);
     let mut extractor = positions::Extractor::new(&source, &lines);
     // The tree is not kept: only its round trip is needed here (checked as it is built), and

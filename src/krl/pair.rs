@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use super::{analyse, config_dat, resolve};
+use crate::output::InputBytes;
 use crate::position::Program;
 use crate::program::{LoadError, LoadOptions, read_source};
 
@@ -69,7 +70,7 @@ pub fn load_program(path: &Path, options: &LoadOptions) -> Result<Program, LoadE
     }
     let mut sources = Vec::with_capacity(paths.len());
     for p in paths {
-        let bytes = read_source(&p)?;
+        let bytes = read_source(&p, options)?;
         sources.push((p, bytes));
     }
     load_program_from_sources(sources, options)
@@ -85,8 +86,8 @@ pub fn load_program(path: &Path, options: &LoadOptions) -> Result<Program, LoadE
 ///
 /// Files keep their given order, except that a `.src` is placed before a `.dat` and a
 /// `$config.dat` last, as [`load_program`] orders them.
-pub fn load_program_from_sources(
-    files: Vec<(PathBuf, Vec<u8>)>,
+pub fn load_program_from_sources<S: Into<InputBytes>>(
+    files: Vec<(PathBuf, S)>,
     options: &LoadOptions,
 ) -> Result<Program, LoadError> {
     let is_config = |p: &Path| {
@@ -115,7 +116,7 @@ pub fn load_program_from_sources(
             continue;
         }
         configs += usize::from(config);
-        let (file, fact) = analyse(&path, bytes);
+        let (file, fact) = analyse(&path, bytes.into());
         program_files.push(file);
         facts.push(fact);
     }

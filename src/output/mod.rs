@@ -21,7 +21,10 @@ use crate::transform::ProgramResult;
 pub use backup::{backup_path, next_free_backup};
 pub use diff::unified_diff;
 pub use paths::{Destination, Roots, output_path, output_path_under};
-pub use read::{MAX_INPUT_BYTES, read_input, read_regular_file};
+pub use read::{
+    InputBytes, MAP_FROM_BYTES, MAX_INPUT_BYTES, map_or_read_regular_file, read_input,
+    read_regular_file,
+};
 pub use transaction::{FileWrite, Written, clean_stale, commit};
 
 /// Why the outputs of a run were not written. Nothing was changed on disk when one of these

@@ -11,6 +11,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use crate::geometry::{Pose, abb_quat, kuka_abc};
+use crate::output::InputBytes;
 use crate::syntax::{Diagnostic, LineIndex, NumLit, PackedLit, Span, Span32};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
@@ -1012,8 +1013,8 @@ pub struct ParsedFile {
     pub path: PathBuf,
     /// Its language (dialect).
     pub language: Language,
-    /// The bytes read; every span of the file points into them.
-    pub source: Vec<u8>,
+    /// The bytes read (or mapped); every span of the file points into them.
+    pub source: InputBytes,
     /// Line starts of `source`, for `line:column`.
     pub lines: LineIndex,
     /// Every position declared or written inline, in file order, packed

@@ -26,6 +26,7 @@ pub use parser::Parse;
 pub(crate) use parser::parse;
 pub use tree::{Node, NodeKind, Rapid, Tree};
 
+use crate::output::InputBytes;
 use crate::position::{Language, ParsedFile};
 use crate::syntax::{Diagnostic, LineIndex};
 
@@ -41,8 +42,8 @@ pub fn print(src: &[u8]) -> Vec<u8> {
 
 /// Parses one RAPID module. Never fails: what the grammar does not know is kept verbatim and
 /// reported in the file's diagnostics.
-pub fn parse_file(path: &Path, source: Vec<u8>) -> ParsedFile {
-    parse_task(vec![(path.to_owned(), source)])
+pub fn parse_file(path: &Path, source: impl Into<InputBytes>) -> ParsedFile {
+    parse_task(vec![(path.to_owned(), source.into())])
         .pop()
         .unwrap_or_else(|| unreachable_empty(path))
 }
@@ -52,7 +53,7 @@ fn unreachable_empty(path: &Path) -> ParsedFile {
         path: path.to_owned(),
         language: Language::Rapid,
         lines: LineIndex::new(b""),
-        source: Vec::new(),
+        source: InputBytes::default(),
         positions: crate::position::PositionList::new(),
         frames: Vec::new(),
         offsets: Vec::new(),
@@ -64,7 +65,7 @@ fn unreachable_empty(path: &Path) -> ParsedFile {
 
 /// Parses the modules of one task and resolves their usage together
 /// ([`positions::finish_task`]): one [`ParsedFile`] per module, in order.
-pub fn parse_task(files: Vec<(PathBuf, Vec<u8>)>) -> Vec<ParsedFile> {
+pub fn parse_task(files: Vec<(PathBuf, InputBytes)>) -> Vec<ParsedFile> {
     let lines: Vec<LineIndex> = files.iter().map(|(_, s)| LineIndex::new(s)).collect();
     // Per module: its round trip, parser diagnostics and opaque count. The tree itself is not
     // kept (its round trip is checked as it is built): it is not needed after, and on a large
@@ -77,7 +78,7 @@ pub fn parse_task(files: Vec<(PathBuf, Vec<u8>)>) -> Vec<ParsedFile> {
             extractor.statement(s)
         });
         parsed.push((p.round_trip, p.diagnostics, p.opaque));
-        extractors.push((extractor, source.as_slice()));
+        extractors.push((extractor, &source[..]));
     }
     let extracted = positions::finish_task(extractors);
     let mut out = Vec::with_capacity(files.len());

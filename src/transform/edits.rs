@@ -316,7 +316,7 @@ pub fn apply(program: &Program, edits: ProgramEdits) -> Result<ProgramResult, Ed
         fe.changes.shrink_to_fit();
         files.push(FileResult {
             path: file.path.clone(),
-            original: file.source.clone(),
+            original: file.source.to_vec(),
             output,
             refusals: fe.refusals,
             notes: fe.notes,
@@ -334,7 +334,7 @@ pub fn apply_owned(program: Program, edits: ProgramEdits) -> Result<ProgramResul
     let sources: Vec<(PathBuf, Vec<u8>)> = program
         .files
         .into_iter()
-        .map(|f| (f.path, f.source))
+        .map(|f| (f.path, f.source.into_vec()))
         .collect();
     let mut files = Vec::with_capacity(sources.len());
     for ((path, original), mut fe) in sources.into_iter().zip(edits.files) {

@@ -73,7 +73,7 @@ fn file(path: &str, language: Language, source: Vec<u8>, positions: Vec<Position
             language,
             lines: LineIndex::new(&source),
             positions: PositionList::packed(positions, &source),
-            source,
+            source: source.into(),
             frames: Vec::new(),
             offsets: Vec::new(),
             opaque: 0,

@@ -83,7 +83,7 @@ fn parse(path: &Path, source: Vec<u8>) -> ParsedFile {
         round_trip: true,
         lines,
         positions: trackfix::PositionList::packed(positions, &source),
-        source,
+        source: source.into(),
         frames: Vec::new(),
         offsets: Vec::new(),
         opaque: 0,
@@ -98,9 +98,9 @@ impl Dialect for Stub {
     fn extensions(&self) -> &'static [&'static str] {
         &["stubpos"]
     }
-    fn load(&self, path: &Path, _: &LoadOptions) -> Result<Program, LoadError> {
+    fn load(&self, path: &Path, options: &LoadOptions) -> Result<Program, LoadError> {
         Ok(Program {
-            files: vec![parse(path, read_source(path)?)],
+            files: vec![parse(path, read_source(path, options)?.into_vec())],
         })
     }
     fn reparse(

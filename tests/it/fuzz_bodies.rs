@@ -199,10 +199,10 @@ fn output_reads_again(program: &Program, result: &ProgramResult, what: &str) {
         let printed = match file.language.name() {
             "rapid" => trackfix::rapid::print(&file.source),
             "krl" => trackfix::krl::parse(&file.source).tree.print(&file.source),
-            _ => file.source.clone(),
+            _ => file.source.to_vec(),
         };
         assert!(
-            printed == file.source,
+            printed[..] == file.source[..],
             "`{what}` output does not print back"
         );
         if let Some(d) = file

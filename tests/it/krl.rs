@@ -44,6 +44,7 @@ fn parse_sample(name: &str) -> ParsedFile {
 fn load(name: &str, config: bool) -> Program {
     let options = LoadOptions {
         krl_config_dat: config.then(|| sample("$config.dat")),
+        map_inputs: false,
     };
     krl::load_program(&sample(name), &options).unwrap()
 }
@@ -796,6 +797,7 @@ fn collect_inputs_lists_a_pair_once_in_any_case() {
 fn program_from_sources_in_memory_matches_the_program_from_disk() {
     let options = LoadOptions {
         krl_config_dat: Some(sample("$config.dat")),
+        map_inputs: false,
     };
     for name in [
         "spot_line.src",
@@ -809,7 +811,7 @@ fn program_from_sources_in_memory_matches_the_program_from_disk() {
             .files
             .iter()
             .filter(|f| !f.path.ends_with("$config.dat"))
-            .map(|f| (f.path.clone(), f.source.clone()))
+            .map(|f| (f.path.clone(), f.source.to_vec()))
             .collect();
         sources.reverse();
         let in_memory = krl::load_program_from_sources(sources.clone(), &options).unwrap();

@@ -579,3 +579,87 @@ fn check_json_of_a_tree_is_one_document() {
         (Some(3), Some(3))
     );
 }
+
+/// A program loaded from mapped files is the program loaded from read ones: the same bytes,
+/// positions and diagnostics, RAPID and a KRL pair, a task of several modules among them. The
+/// files are over the size from which inputs are mapped, and the test asserts they were.
+#[test]
+fn a_mapped_program_is_the_read_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut module = String::from("MODULE Big\r\n");
+    let mut motions = String::from("MODULE Moves\r\n  PROC main()\r\n");
+    let mut n = 0;
+    while module.len() <= trackfix::output::MAP_FROM_BYTES as usize {
+        module.push_str(&format!(
+            "  PERS robtarget p{n}:=[[{}.5,-120,455],[0,0.7071068,0.7071068,0],[0,0,-1,0],[{},9E9,9E9,9E9,9E9,9E9]];\r\n",
+            n % 900,
+            n * 3
+        ));
+        motions.push_str(&format!("    MoveL p{n}, v100, z10, tool0;\r\n"));
+        n += 1;
+    }
+    module.push_str("ENDMODULE\r\n");
+    motions.push_str("  ENDPROC\r\nENDMODULE\r\n");
+    let task = dir.path().join("TASK1");
+    std::fs::create_dir_all(task.join("PROGMOD")).unwrap();
+    std::fs::write(task.join("PROGMOD/Big.mod"), &module).unwrap();
+    std::fs::write(task.join("PROGMOD/Moves.mod"), &motions).unwrap();
+    let mut src = String::from("DEF big( )\n");
+    let mut dat = String::from("DEFDAT big\n");
+    for i in 0..n {
+        src.push_str(&format!("  PTP XP{i}\n"));
+        dat.push_str(&format!(
+            "DECL E6POS XP{i}={{X {}.25,Y 20,Z 900,A 0,B 90,C 0,S 2,T 10,E1 {},E2 0,E3 0,E4 0,E5 0,E6 0}}\n",
+            i % 700,
+            i * 2
+        ));
+    }
+    src.push_str("END\n");
+    dat.push_str("ENDDAT\n");
+    std::fs::write(dir.path().join("big.src"), &src).unwrap();
+    std::fs::write(dir.path().join("big.dat"), &dat).unwrap();
+
+    let load = |map_inputs: bool| {
+        let options = LoadOptions {
+            map_inputs,
+            ..LoadOptions::default()
+        };
+        let groups = group_inputs(collect_inputs(&[dir.path().to_owned()]).unwrap());
+        assert_eq!(groups.len(), 2, "{groups:?}");
+        groups
+            .iter()
+            .flat_map(|g| load_group(g, &options))
+            .map(Result::unwrap)
+            .collect::<Vec<_>>()
+    };
+    let (read, mapped) = (load(false), load(true));
+    let files = |ps: &[Program]| ps.iter().flat_map(|p| p.files.iter()).count();
+    assert_eq!(files(&read), 4);
+    assert_eq!(files(&mapped), 4);
+    let mut targets = 0;
+    for (r, m) in read
+        .iter()
+        .flat_map(|p| &p.files)
+        .zip(mapped.iter().flat_map(|p| &p.files))
+    {
+        assert!(!r.source.is_mapped(), "{}", r.path.display());
+        let big = r.source.len() as u64 >= trackfix::output::MAP_FROM_BYTES;
+        assert_eq!(m.source.is_mapped(), big, "{}", m.path.display());
+        assert_eq!(r.path, m.path);
+        assert!(r.source[..] == m.source[..], "{}", r.path.display());
+        assert!(m.round_trip);
+        let (rp, mp): (Vec<Position>, Vec<Position>) =
+            (r.positions().collect(), m.positions().collect());
+        assert_eq!(rp, mp, "{}", r.path.display());
+        assert_eq!(r.diagnostics, m.diagnostics, "{}", r.path.display());
+        targets += rp.len();
+    }
+    // Every declaration and every motion to one (RAPID's motions name them, KRL's too).
+    assert!(targets >= 2 * n, "{targets} of {n}");
+    assert!(
+        mapped
+            .iter()
+            .flat_map(|p| &p.files)
+            .any(|f| f.source.is_mapped())
+    );
+}

@@ -428,6 +428,7 @@ fn sample_cell() -> Cell {
 fn load_with_cell(path: &Path, cell: &Cell, robot: &str) -> Program {
     let opts = LoadOptions {
         krl_config_dat: cell.robots[robot].config_dat.clone(),
+        map_inputs: false,
     };
     load(path, &opts).unwrap()
 }
