@@ -14,7 +14,7 @@ use super::{
     Axes, BitField, CartesianFields, Config, Name, NumField, Orientation, Position, PositionKind,
     Usage,
 };
-use crate::syntax::{Span, packed};
+use crate::syntax::{PackedLit, Span, packed};
 
 /// The positions of one file, in the order pushed (see the module).
 #[derive(Clone, Debug, Default)]
@@ -198,16 +198,22 @@ impl PositionList {
 
     /// Position `i`, decoded against `src` (the bytes it was pushed with).
     pub fn get(&self, i: usize, src: &[u8]) -> Option<Position> {
-        self.get_head(self.heads.get(i)?, src, Reading::Whole)
+        self.get_head(self.heads.get(i)?, src, Reading::Whole, None)
     }
 
     /// Position `i` with only the fields `reading` names decoded (see [`Reading`]).
     pub fn get_reading(&self, i: usize, src: &[u8], reading: Reading) -> Option<Position> {
-        self.get_head(self.heads.get(i)?, src, reading)
+        self.get_head(self.heads.get(i)?, src, reading, None)
     }
 
     #[inline]
-    fn get_head(&self, head: &Head, src: &[u8], reading: Reading) -> Option<Position> {
+    fn get_head(
+        &self,
+        head: &Head,
+        src: &[u8],
+        reading: Reading,
+        mut memo: Option<&mut DecodeMemo>,
+    ) -> Option<Position> {
         let mut r = self.reader(head, src)?;
         let PackedHead {
             span,
@@ -229,7 +235,10 @@ impl PositionList {
             NO_CARTESIAN => None,
             tag => {
                 let trans = r.nums::<3>()?;
-                let orient = r.orientation(tag)?;
+                let orient = match memo.as_deref_mut() {
+                    Some(m) => r.orientation_seen(tag, &mut m.orient)?,
+                    None => r.orientation(tag)?,
+                };
                 Some(CartesianFields { trans, orient })
             }
         };
@@ -241,23 +250,43 @@ impl PositionList {
         }
         let (config, extax) = match reading {
             Reading::Whole => {
-                let config = r.config()?;
+                let config = match memo.as_deref_mut() {
+                    Some(m) => r.config_seen(&mut m.config)?,
+                    None => r.config()?,
+                };
                 let mut extax = Axes::new();
-                for _ in 0..r.uint()? {
-                    extax.push(r.num()?);
+                for k in 0..r.uint()? {
+                    extax.push(
+                        match memo
+                            .as_deref_mut()
+                            .and_then(|m| m.extax.get_mut(k as usize))
+                        {
+                            Some(seen) => r.num_seen(seen)?,
+                            None => r.num()?,
+                        },
+                    );
                 }
                 (config, extax)
             }
             Reading::Track { skid_axis } => {
-                let config = match values_pass_lints {
-                    true => r.skip_config()?,
-                    false => r.config()?,
+                let config = match (values_pass_lints, memo.as_deref_mut()) {
+                    (true, _) => r.skip_config()?,
+                    (false, Some(m)) => r.config_seen(&mut m.config)?,
+                    (false, None) => r.config()?,
                 };
                 let mut extax = Axes::new();
                 // The axes after the skid's are not read; those before it are stepped over.
                 for k in 0..r.uint()?.min(skid_axis as u64 + 1) {
                     match k == skid_axis as u64 {
-                        true => extax.push(r.num()?),
+                        true => extax.push(
+                            match memo
+                                .as_deref_mut()
+                                .and_then(|m| m.extax.get_mut(k as usize))
+                            {
+                                Some(seen) => r.num_seen(seen)?,
+                                None => r.num()?,
+                            },
+                        ),
                         false => {
                             r.skip_num()?;
                             extax.push(None);
@@ -292,7 +321,8 @@ impl PositionList {
         src: &'a [u8],
         reading: Reading,
     ) -> impl ExactSizeIterator<Item = Position> + 'a {
-        (0..self.len()).map(move |i| self.decoded(i, src, reading))
+        let mut memo = DecodeMemo::default();
+        (0..self.len()).map(move |i| self.decoded_with(i, src, reading, &mut memo))
     }
 
     /// Position `i` of [`iter_reading`](Self::iter_reading), for a loop over the indices: the
@@ -302,6 +332,22 @@ impl PositionList {
         // Every position pushed decodes (a proptest and, in debug builds, every push holds it):
         // the placeholder is never given, and it keeps the count and the indices exact.
         self.get_reading(i, src, reading)
+            .unwrap_or_else(|| self.placeholder(i))
+    }
+
+    /// [`decoded`](Self::decoded), the orientation, configuration and external axes taken
+    /// from `memo` where their text is the text the position decoded before had there
+    /// (see [`DecodeMemo`]); the same position either way.
+    pub fn decoded_with(
+        &self,
+        i: usize,
+        src: &[u8],
+        reading: Reading,
+        memo: &mut DecodeMemo,
+    ) -> Position {
+        self.heads
+            .get(i)
+            .and_then(|h| self.get_head(h, src, reading, Some(memo)))
             .unwrap_or_else(|| self.placeholder(i))
     }
 
@@ -478,7 +524,7 @@ impl PositionList {
         let mut kept = Vec::with_capacity(self.heads.len());
         for h in std::mem::take(&mut self.heads) {
             if self
-                .get_head(&h, src, Reading::Whole)
+                .get_head(&h, src, Reading::Whole, None)
                 .is_some_and(|p| keep(&p))
             {
                 kept.push(h);
@@ -717,6 +763,63 @@ struct PackedHead<'a> {
     column: usize,
 }
 
+/// The literals decoded last at a position's orientation, configuration and external axes,
+/// for [`PositionList::decoded_with`]: a program's targets come in runs that share their
+/// orientation and configuration text, and their unused axes are all `9E+09`. A field whose
+/// text is the one seen at its place in the position before is that field again, moved:
+/// comparing 16 bytes is a fraction of reading the literal (`correct` read each target's
+/// quaternion again, 8.3 M of 238 M instructions on a 2 MB module). The translation is not
+/// kept: it is seldom the same twice.
+#[derive(Clone, Debug, Default)]
+pub struct DecodeMemo {
+    orient: [Option<SeenField>; 4],
+    config: [Option<SeenField>; 4],
+    extax: [Option<SeenField>; 6],
+}
+
+/// One literal's text and what it decoded to.
+#[derive(Clone, Copy, Debug)]
+struct SeenField {
+    /// The literal's bytes and the one after it, little-endian, and the mask of their length.
+    text: u128,
+    mask: u128,
+    value: f64,
+    packed: PackedLit,
+}
+
+impl SeenField {
+    /// `field` as `src` spells it, when its text and the byte after it are 16 bytes or fewer
+    /// (and 16 can be read there) and that byte is a `,` or `]`: a number's reading stops at
+    /// either without looking further, so the same bytes at another place read as the same
+    /// literal there. `None` otherwise (the field is then read each time).
+    fn of(src: &[u8], field: &NumField) -> Option<SeenField> {
+        let start = field.start as usize;
+        let len = field.packed.len();
+        let word = src.get(start..)?.first_chunk::<16>()?;
+        if len >= 16 || !matches!(word[len], b',' | b']') {
+            return None;
+        }
+        let mask = u128::MAX >> (8 * (15 - len));
+        Some(SeenField {
+            text: u128::from_le_bytes(*word) & mask,
+            mask,
+            value: field.value,
+            packed: field.packed,
+        })
+    }
+
+    /// The field at `start` of `src`, if the text there is this one.
+    #[inline(always)]
+    fn at(&self, src: &[u8], start: usize) -> Option<NumField> {
+        let word = src.get(start..)?.first_chunk::<16>()?;
+        (u128::from_le_bytes(*word) & self.mask == self.text).then_some(NumField {
+            value: self.value,
+            start: u32::try_from(start).ok()?,
+            packed: self.packed,
+        })
+    }
+}
+
 /// Reads one position's packed bytes back.
 struct Reader<'a> {
     bytes: &'a [u8],
@@ -867,6 +970,63 @@ impl<'a> Reader<'a> {
             _ => return None,
         }
         Some(())
+    }
+
+    /// [`Reader::num`], taken from `seen` when the literal's text is the one `seen` holds,
+    /// else read and kept there. Inlined as `num` is.
+    #[inline(always)]
+    fn num_seen(&mut self, seen: &mut Option<SeenField>) -> Option<Option<NumField>> {
+        if let [READ_AGAIN, delta @ 0..0x80, rest @ ..] = self.bytes {
+            self.bytes = rest;
+            let start = self.moved_by(u64::from(*delta))?;
+            if let Some(f) = seen.as_ref().and_then(|s| s.at(self.src, start)) {
+                debug_assert!(NumField::read_at(self.src, start) == Some(f));
+                return Some(Some(f));
+            }
+            let f = NumField::read_at(self.src, start)?;
+            *seen = SeenField::of(self.src, &f);
+            return Some(Some(f));
+        }
+        self.num()
+    }
+
+    /// [`Reader::nums`] through [`Reader::num_seen`], field `k` with `seen[k]`.
+    fn nums_seen<const N: usize>(
+        &mut self,
+        seen: &mut [Option<SeenField>; N],
+    ) -> Option<[Option<NumField>; N]> {
+        let mut out = [None; N];
+        for (o, s) in out.iter_mut().zip(seen) {
+            *o = self.num_seen(s)?;
+        }
+        Some(out)
+    }
+
+    /// [`Reader::orientation`] through [`Reader::num_seen`].
+    fn orientation_seen(
+        &mut self,
+        tag: u8,
+        seen: &mut [Option<SeenField>; 4],
+    ) -> Option<Option<Orientation>> {
+        Some(match tag {
+            NO_ORIENTATION => None,
+            QUATERNION => Some(Orientation::Quaternion(self.nums_seen(seen)?)),
+            ABC => Some(Orientation::Abc(
+                self.nums_seen(seen.first_chunk_mut::<3>()?)?,
+            )),
+            _ => return None,
+        })
+    }
+
+    /// [`Reader::config`] through [`Reader::num_seen`] (quadrants; a Status and Turn are read).
+    fn config_seen(&mut self, seen: &mut [Option<SeenField>; 4]) -> Option<Config> {
+        match self.bytes.first() {
+            Some(&QUADRANTS) => {
+                self.byte()?;
+                Some(Config::Quadrants(self.nums_seen(seen)?))
+            }
+            _ => self.config(),
+        }
     }
 
     /// The orientation after a Cartesian tag, its translation stepped over or read.
@@ -1247,5 +1407,81 @@ mod tests {
         );
         assert_eq!(list.name(0), Some("p10"));
         assert_eq!(list.span(0), Some(Span::new(0, 5)));
+    }
+
+    /// A source of literals from [`TEXTS`], each followed by a separator from `seps` (a
+    /// field is taken from the memo only after a `,` or `]`), and each literal's span.
+    fn separated(picks: &[(usize, usize)]) -> (Vec<u8>, Vec<Span>) {
+        const SEPS: &[&str] = &[",", "]", " ,", ",\n", "]]", ";"];
+        let mut src = b"[".to_vec();
+        let mut spans = Vec::new();
+        for &(t, sep) in picks {
+            let text = TEXTS[t % TEXTS.len()].as_bytes();
+            spans.push(Span::new(src.len(), src.len() + text.len()));
+            src.extend_from_slice(text);
+            src.extend_from_slice(SEPS[sep % SEPS.len()].as_bytes());
+        }
+        (src, spans)
+    }
+
+    proptest! {
+        /// Decoding a run of positions with a memo ([`PositionList::decoded_with`], and
+        /// [`PositionList::iter`]) gives each position as decoding it alone does, whole and
+        /// for a track, whatever the texts repeat: literals spelled alike at other places,
+        /// fields kept whole, other separators, quaternions, A B C and quadrants.
+        #[test]
+        fn a_memo_decodes_a_run_as_each_alone(
+            lits in proptest::collection::vec((0usize..TEXTS.len(), 0usize..6), 1..30),
+            targets in proptest::collection::vec(
+                (0u8..4, picks(7), 0u8..2, picks(4), proptest::collection::vec(
+                    proptest::option::weighted(0.9, (0usize..64, proptest::option::of(0usize..64))),
+                    0..8,
+                )),
+                1..12,
+            ),
+        ) {
+            let (src, spans) = separated(&lits);
+            let f = |p: &Pick| p.and_then(|(k, moved)| field(&src, &spans, k, moved));
+            let mut list = PositionList::new();
+            for (cart, fields, config, quads, extax) in &targets {
+                let all: Vec<Option<NumField>> = fields.iter().map(f).collect();
+                list.push(Position {
+                    name: None,
+                    kind: PositionKind::Robtarget,
+                    span: Span::new(0, src.len()),
+                    line: 1,
+                    column: 1,
+                    cartesian: (*cart > 0).then(|| CartesianFields {
+                        trans: [all[0], all[1], all[2]],
+                        orient: match cart {
+                            1 => None,
+                            2 => Some(Orientation::Quaternion([all[3], all[4], all[5], all[6]])),
+                            _ => Some(Orientation::Abc([all[3], all[4], all[5]])),
+                        },
+                    }),
+                    joints: Vec::new(),
+                    config: match config {
+                        0 => Config::None,
+                        _ => Config::Quadrants([f(&quads[0]), f(&quads[1]), f(&quads[2]), f(&quads[3])]),
+                    },
+                    extax: extax.iter().map(f).collect(),
+                    usage: Usage::default(),
+                }, &src);
+            }
+            let alone: Vec<Position> = (0..list.len()).map(|i| list.get(i, &src).unwrap()).collect();
+            prop_assert_eq!(list.iter(&src).collect::<Vec<_>>(), alone.clone());
+            let mut memo = DecodeMemo::default();
+            for (i, want) in alone.iter().enumerate() {
+                prop_assert_eq!(&list.decoded_with(i, &src, Reading::Whole, &mut memo), want);
+            }
+            for skid_axis in [0, 2, 7] {
+                let reading = Reading::Track { skid_axis };
+                // The memo left by the whole reading, then its own.
+                for i in 0..list.len() {
+                    let got = list.decoded_with(i, &src, reading, &mut memo);
+                    prop_assert_eq!(got, list.get_reading(i, &src, reading).unwrap());
+                }
+            }
+        }
     }
 }

@@ -22,7 +22,7 @@ pub use crate::dialect::Language;
 
 mod list;
 pub(crate) use list::ReadAgainTarget;
-pub use list::{OrientationAndConfig, PositionList, Reading, TargetForLints};
+pub use list::{DecodeMemo, OrientationAndConfig, PositionList, Reading, TargetForLints};
 
 /// What a position literal is, by its declared or inferred data type: the type's name as its
 /// language writes it, and whether it is Cartesian. Each dialect defines its kinds

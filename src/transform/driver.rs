@@ -111,8 +111,11 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
         // One vector for the edits of every target, emptied into the file's edits.
         let mut edits = Vec::new();
         let reading = rule.reading();
+        let mut memo = crate::position::DecodeMemo::default();
         for i in 0..file.positions.len() {
-            let p = file.positions.decoded(i, &file.source, reading);
+            let p = file
+                .positions
+                .decoded_with(i, &file.source, reading, &mut memo);
             edits.clear();
             let step = if p.kind.is_cartesian() {
                 cartesian(rule, scope, &p, splits.a_of(i), &mut edits)
