@@ -73,7 +73,7 @@ pub fn parse_task(files: Vec<(PathBuf, InputBytes)>) -> Vec<ParsedFile> {
     let mut parsed = Vec::with_capacity(files.len());
     let mut extractors = Vec::with_capacity(files.len());
     for ((_, source), lines) in files.iter().zip(&lines) {
-        let mut extractor = positions::Extractor::new(lines, source);
+        let mut extractor = positions::Extractor::new(lines);
         let p = parser::parse_streamed(source, &mut |s: parser::Statement<'_>| {
             extractor.statement(s)
         });
