@@ -122,13 +122,16 @@ pub fn map_or_read_regular_file(path: &Path, limit: u64, map: bool) -> std::io::
     let meta = file.metadata()?;
     check_kind(&meta)?;
     check_size(meta.len(), limit)?;
-    if meta.len() < MAP_FROM_BYTES {
-        let mut bytes = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0));
-        file.take(limit + 1).read_to_end(&mut bytes)?;
-        check_size(bytes.len() as u64, limit)?;
-        return Ok(InputBytes::from(bytes));
+    if meta.len() >= MAP_FROM_BYTES {
+        // A file system that cannot map (some network and FUSE mounts) is read instead.
+        if let Ok(m) = map_file(&file) {
+            return Ok(InputBytes(Held::Mapped(Arc::new(m))));
+        }
     }
-    map_file(&file).map(|m| InputBytes(Held::Mapped(Arc::new(m))))
+    let mut bytes = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0));
+    file.take(limit + 1).read_to_end(&mut bytes)?;
+    check_size(bytes.len() as u64, limit)?;
+    Ok(InputBytes::from(bytes))
 }
 
 #[allow(unsafe_code)]
