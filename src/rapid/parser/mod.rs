@@ -338,7 +338,7 @@ impl SeenPart {
             && let Some(m) = &memo.part
             && m.at(src, i)
         {
-            let (_, end) = m.read(i, starts, values)?;
+            let end = m.read_four(i, starts, values)?;
             #[cfg(debug_assertions)]
             {
                 let (mut s, mut v) = ([0; 4], [0.0; 4]);
@@ -367,6 +367,19 @@ impl SeenPart {
         let n = self.value_count.min(values.len());
         values.get_mut(..n)?.copy_from_slice(self.values.get(..n)?);
         Some((self.count, i + self.len))
+    }
+
+    /// [`SeenPart::read`] of a part of four numbers and their values (the quaternion or the
+    /// configuration), copied whole: a copy of as many as it holds was a call to memcpy. `None`
+    /// for any other part (which a part of four never is).
+    #[inline(always)]
+    fn read_four(&self, i: usize, starts: &mut [usize; 4], values: &mut [f64; 4]) -> Option<usize> {
+        if self.count != 4 || self.value_count != 4 {
+            return None;
+        }
+        *starts = self.offsets.first_chunk::<4>()?.map(|o| i + usize::from(o));
+        *values = self.values;
+        Some(i + self.len)
     }
 }
 
@@ -815,6 +828,25 @@ fn plain_name(src: &[u8], i: usize) -> Option<usize> {
     (!is_keyword(rest.get(..len)?)).then_some(i + len)
 }
 
+/// Whether the bytes at `at` of `src` are `word` (lower-case letters, at most 8) in any case,
+/// with 8 bytes to read there: compared as one word with the case bit set, where
+/// `eq_ignore_ascii_case` took 8 instructions a byte. (A byte with the bit set is a lower-case
+/// letter only if it was that letter in either case.)
+#[inline(always)]
+fn letters_at(src: &[u8], at: usize, word: &[u8]) -> bool {
+    let Some(there) = src.get(at..).and_then(|s| s.first_chunk::<8>()) else {
+        return false;
+    };
+    let mut lower = [0u8; 8];
+    for (l, &c) in lower.iter_mut().zip(word) {
+        *l = c;
+    }
+    let mask = u64::MAX
+        .checked_shr(8 * (8 - word.len().min(8)) as u32)
+        .unwrap_or(0);
+    (u64::from_le_bytes(*there) | 0x2020_2020_2020_2020) & mask == u64::from_le_bytes(lower) & mask
+}
+
 impl<'a, 's> Parser<'a, 's> {
     fn new(
         src: &'a [u8],
@@ -1220,5 +1252,23 @@ mod tests {
                 "src/rapid/parser/expressions.rs",
             ],
         );
+    }
+
+    /// `letters_at` is `eq_ignore_ascii_case` of the bytes there, for every byte value in
+    /// each place of the words it is asked about (and nothing where 8 bytes cannot be read).
+    #[test]
+    fn letters_compared_as_a_word_are_the_letters_compared_one_by_one() {
+        for word in [&b"const"[..], b"pers", b"var", b"robtarge"] {
+            for place in 0..word.len() {
+                for b in 0..=255u8 {
+                    let mut src = word.to_ascii_uppercase();
+                    src[place] = b;
+                    src.extend_from_slice(b"\xe4 robtarget");
+                    let by_bytes = src[..word.len()].eq_ignore_ascii_case(word);
+                    assert_eq!(super::letters_at(&src, 0, word), by_bytes, "{src:?}");
+                    assert!(!super::letters_at(&src[..7], 0, word));
+                }
+            }
+        }
     }
 }
