@@ -93,11 +93,16 @@ impl Parser<'_, '_> {
     /// general path reads the value; [`Parser::literal_read_again`] holds the two to the same
     /// end in every debug build.
     pub(super) fn robtarget_literal(&mut self) -> bool {
-        self.robtarget_literal_at(self.tok.start as usize)
+        let read = self.robtarget_literal_at(self.tok.start as usize);
+        if read {
+            self.resume_at(self.literal.span.end);
+        }
+        read
     }
 
     /// [`Parser::robtarget_literal`] of the value whose `[` is at `start`, wherever the
-    /// parser stands (nothing is read on anything else).
+    /// parser stands, and without moving it (nothing is read on anything else): a `;` follows
+    /// the literal past blanks.
     pub(super) fn robtarget_literal_at(&mut self, start: usize) -> bool {
         let src = self.src;
         if src.get(start) != Some(&b'[') {
@@ -123,7 +128,6 @@ impl Parser<'_, '_> {
         };
         lit.axes = axes;
         lit.span = Span::new(start, end);
-        self.resume_at(end);
         true
     }
 

@@ -304,16 +304,21 @@ impl Parser<'_, '_> {
         if !src.get(name..name_end)?.is_ascii() || !self.robtarget_literal_at(value) {
             return None;
         }
+        let end = self.literal.span.end;
         // The general path's reading of the value, to the same end, in every debug build (as
         // `data_decl_inner` holds its own fast path).
         #[cfg(debug_assertions)]
-        let init = Some(self.literal_read_again());
+        let init = {
+            self.resume_at(end);
+            Some(self.literal_read_again())
+        };
         #[cfg(not(debug_assertions))]
         let init = None;
-        if !self.at_punct(b';') {
-            return Some(Err(self.error("`;` at the end of the declaration")));
-        }
-        self.bump_statement_end();
+        // The `;` the literal was read up to ends the statement: the parser resumes after it,
+        // where lexing it as a token to step over was a tenth of the declaration's head.
+        let semicolon = blanks_end(src, end);
+        debug_assert_eq!(src.get(semicolon), Some(&b';'));
+        self.resume_at_statement_end(semicolon + 1);
         let stmt = Stmt::Decl {
             storage,
             type_name: Span::new(ty, ty_end),

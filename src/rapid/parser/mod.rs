@@ -933,21 +933,19 @@ impl<'a, 's> Parser<'a, 's> {
         }
         if t.kind != TokenKind::Eof {
             self.prev_end = t.end;
-            self.tok = self.next_after(false);
+            self.tok = self.next_after();
         }
         t
     }
 
-    /// The token after the current one: the one lexed ahead, else lexed now, at a
-    /// `statement_end` as [`Parser::next_statement_start`] lexes it.
+    /// The token after the current one: the one lexed ahead, else lexed now.
     #[inline(always)]
-    fn next_after(&mut self, statement_end: bool) -> Token {
+    fn next_after(&mut self) -> Token {
         match self.peeked.take() {
             Some((next, lex)) => {
                 self.lex = lex;
                 next
             }
-            None if statement_end => self.next_statement_start(),
             None => self.next_significant(),
         }
     }
@@ -1051,15 +1049,6 @@ impl<'a, 's> Parser<'a, 's> {
         self.peeked = None;
         self.prev_end = end as u32;
         self.tok = self.next_statement_start();
-    }
-
-    /// [`Parser::bump`] of a statement's last token (a `;` no error is reported of), the next
-    /// token lexed as [`Parser::next_statement_start`] lexes it.
-    fn bump_statement_end(&mut self) -> Token {
-        let t = self.tok;
-        self.prev_end = t.end;
-        self.tok = self.next_after(true);
-        t
     }
 
     // ---- tree building ------------------------------------------------------------------
