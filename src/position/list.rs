@@ -164,16 +164,8 @@ impl PositionList {
     pub(crate) fn push_read_again(&mut self, t: &ReadAgainTarget<'_>) {
         let body = self.bytes.len();
         let kind = self.kind_index(t.kind);
-        let mut w = Writer {
-            out: &mut self.bytes,
-            src: &[],
-            cursor: t.span.start,
-            check: false,
-        };
-        w.named(t.span, kind, t.values_pass_lints, t.name);
         let mut staged = [0; STAGED_ROOM];
-        let Some(len) = stage_read_again(&mut staged, t) else {
-            self.bytes.truncate(body);
+        let Some(len) = stage_read_again(&mut staged, kind, t) else {
             return self.push_read_again_by_writer(t);
         };
         self.bytes
@@ -185,8 +177,8 @@ impl PositionList {
     }
 
     /// [`push_read_again`](Self::push_read_again) through a [`Writer`], byte by byte: for a
-    /// target whose bytes after its name do not fit [`STAGED_ROOM`], and the reference the
-    /// tests hold the staged writing to.
+    /// target whose bytes do not fit [`STAGED_ROOM`], and the reference the tests hold the
+    /// staged writing to.
     fn push_read_again_by_writer(&mut self, t: &ReadAgainTarget<'_>) {
         let body = self.bytes.len();
         let kind = self.kind_index(t.kind);
@@ -669,13 +661,6 @@ impl Writer<'_> {
         line: usize,
         column: usize,
     ) {
-        self.named(span, kind, values_pass_lints, name);
-        self.uint(line as u64);
-        self.uint(column as u64);
-    }
-
-    /// The head up to its line: span, kind index with the lints' verdict, name's text.
-    fn named(&mut self, span: Span, kind: usize, values_pass_lints: bool, name: Option<&[u8]>) {
         self.uint(span.start as u64);
         // Signed: a span a dialect gives reversed comes back as it was given.
         self.int(span.end as i64 - span.start as i64);
@@ -689,6 +674,8 @@ impl Writer<'_> {
             }
             None => self.uint(0),
         }
+        self.uint(line as u64);
+        self.uint(column as u64);
     }
 
     /// Number fields read again at these starts, as [`Writer::num`] packs them unchecked.
@@ -743,20 +730,46 @@ impl Writer<'_> {
     }
 }
 
-/// Room for a robtarget's packed bytes after its name as [`stage_read_again`] writes them: its
-/// line and column, tags and counts, and two dozen fields of two bytes (a tag and an offset of
-/// one byte: the field before is a few bytes back), with some to spare. Small enough for its
-/// zeroing to be a few stores, where room for every field's longest offset was a call to
-/// memset.
-const STAGED_ROOM: usize = 96;
+/// Room for a robtarget's packed bytes as [`stage_read_again`] writes them: its head with a
+/// name of a few dozen bytes, tags and counts, and two dozen fields of two bytes (a tag and an
+/// offset of one byte: the field before is a few bytes back), with some to spare. Small enough
+/// for its zeroing to be a few stores, where room for every field's longest offset was a call
+/// to memset.
+const STAGED_ROOM: usize = 128;
 
-/// Writes the bytes of robtarget `t` after its name, as [`Writer`] writes them for
+/// Writes the bytes of robtarget `t` of kind index `kind`, as [`Writer`] writes them for
 /// [`PositionList::push_read_again_by_writer`], into `staged`, to be appended in one copy:
-/// pushed byte by byte, each of the two dozen fields' tag and offset checked the vector's
-/// room and stored its length again. Their length, or `None` when they do not fit.
+/// pushed byte by byte, each of the two dozen fields' tag and offset and each number of the
+/// head checked the vector's room and stored its length again. Their length, or `None` when
+/// they do not fit.
 #[inline(always)]
-fn stage_read_again(staged: &mut [u8; STAGED_ROOM], t: &ReadAgainTarget<'_>) -> Option<usize> {
-    let len = stage_uint(staged, 0, t.line as u64)?;
+fn stage_read_again(
+    staged: &mut [u8; STAGED_ROOM],
+    kind: usize,
+    t: &ReadAgainTarget<'_>,
+) -> Option<usize> {
+    let len = stage_uint(staged, 0, t.span.start as u64)?;
+    // Signed, as the writer writes it.
+    let reach = t.span.end as i64 - t.span.start as i64;
+    let len = stage_uint(staged, len, packed::zigzag(reach))?;
+    let len = stage_uint(
+        staged,
+        len,
+        (kind as u64) << 1 | u64::from(t.values_pass_lints),
+    )?;
+    let len = match t.name {
+        Some(name) => {
+            let mut len = stage_uint(staged, len, name.len() as u64 + 1)?;
+            // Byte by byte: a name is a few bytes, and a copy of its length a call to memcpy.
+            for &b in name {
+                *staged.get_mut(len)? = b;
+                len += 1;
+            }
+            len
+        }
+        None => stage_uint(staged, len, 0)?,
+    };
+    let len = stage_uint(staged, len, t.line as u64)?;
     let len = stage_uint(staged, len, t.column as u64)?;
     let len = stage_uint(staged, len, u64::from(QUATERNION))?;
     let mut cursor = t.span.start;
