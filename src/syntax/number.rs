@@ -1095,13 +1095,12 @@ fn word_at(bytes: &[u8], at: usize) -> Option<u64> {
 
 /// How many of the word's bytes are ASCII digits before the first that is not (8 if all are),
 /// in a few operations for the whole word: a byte is a digit when its `b'0'` offset is at most
-/// 9, which adding 0x76 to its low seven bits carries into the top bit (and no byte carries into
-/// the next).
+/// 9, which adding 0x76 carries into its top bit. A byte carries into the next only when its
+/// offset is 0x8a or more, no digit: what it changes lies past the first byte that is not one.
 #[inline(always)]
 fn digit_run(word: u64) -> u32 {
     let t = word ^ ZEROS;
-    let not_digit = ((t & 0x7f7f_7f7f_7f7f_7f7f).wrapping_add(0x7676_7676_7676_7676) | t)
-        & 0x8080_8080_8080_8080;
+    let not_digit = (t.wrapping_add(0x7676_7676_7676_7676) | t) & 0x8080_8080_8080_8080;
     not_digit.trailing_zeros() / 8
 }
 
@@ -1602,6 +1601,32 @@ mod tests {
             ));
         }
         Ok(true)
+    }
+
+    /// `digit_run` counts the digits a byte loop counts, and `digits_value` gives their value,
+    /// for every byte value after runs of every length, and after it bytes of every kind.
+    #[test]
+    fn a_word_s_digit_run_and_value_are_its_bytes_read_one_by_one() {
+        for run in 0..=8usize {
+            for b in 0..=255u8 {
+                for after in [0u8, b'9', 0xff, 0x8a, b'.'] {
+                    let mut bytes = [after; 8];
+                    for (k, d) in bytes.iter_mut().enumerate().take(run) {
+                        *d = b'0' + ((k * 7 + 3) % 10) as u8;
+                    }
+                    if run < 8 {
+                        bytes[run] = b;
+                    }
+                    let word = u64::from_le_bytes(bytes);
+                    let by_bytes = bytes.iter().take_while(|c| c.is_ascii_digit()).count();
+                    assert_eq!(digit_run(word) as usize, by_bytes, "{bytes:?}");
+                    let value = bytes[..by_bytes]
+                        .iter()
+                        .fold(0u64, |v, d| v * 10 + u64::from(d - b'0'));
+                    assert_eq!(digits_value(word, by_bytes as u32), value, "{bytes:?}");
+                }
+            }
+        }
     }
 
     #[test]
