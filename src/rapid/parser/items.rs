@@ -301,7 +301,9 @@ impl Parser<'_, '_> {
             return None;
         }
         let value = blanks_end(src, assign + 2);
-        if !src.get(name..name_end)?.is_ascii() || !self.robtarget_literal_at(value) {
+        // The name's bytes tested one by one: a name is a few bytes, and `is_ascii` was a call.
+        let ascii = src.get(name..name_end)?.iter().all(u8::is_ascii);
+        if !ascii || !self.robtarget_literal_at(value) {
             return None;
         }
         let end = self.literal.span.end;
