@@ -164,6 +164,24 @@ impl PositionList {
     pub(crate) fn push_read_again(&mut self, t: &ReadAgainTarget<'_>) {
         let body = self.bytes.len();
         let kind = self.kind_index(t.kind);
+        let mut staged = [0; STAGED_ROOM];
+        let Some(len) = stage_read_again(&mut staged, kind, t) else {
+            return self.push_read_again_by_writer(t);
+        };
+        self.bytes
+            .extend_from_slice(staged.get(..len).unwrap_or_default());
+        self.heads.push(Head {
+            usage: Usage::default(),
+            body,
+        });
+    }
+
+    /// [`push_read_again`](Self::push_read_again) through a [`Writer`], byte by byte: for a
+    /// target whose bytes do not fit [`STAGED_ROOM`], and the reference the tests hold the
+    /// staged writing to.
+    fn push_read_again_by_writer(&mut self, t: &ReadAgainTarget<'_>) {
+        let body = self.bytes.len();
+        let kind = self.kind_index(t.kind);
         let mut w = Writer {
             out: &mut self.bytes,
             src: &[],
@@ -187,7 +205,13 @@ impl PositionList {
     }
 
     fn kind_index(&mut self, kind: PositionKind) -> usize {
-        match self.kinds.iter().position(|&k| k == kind) {
+        // The same kind is mostly the same constant: its pointer is compared before the
+        // name, which is a call to memcmp.
+        match self
+            .kinds
+            .iter()
+            .position(|&k| std::ptr::eq(k.0, kind.0) || k == kind)
+        {
             Some(k) => k,
             None => {
                 self.kinds.push(kind);
@@ -752,6 +776,98 @@ impl Writer<'_> {
     }
 }
 
+/// Room for a robtarget's packed bytes as [`stage_read_again`] writes them: its head with a
+/// name of a few dozen bytes, tags and counts, and two dozen fields of two bytes (a tag and an
+/// offset of one byte: the field before is a few bytes back), with some to spare. Small enough
+/// for its zeroing to be a few stores, where room for every field's longest offset was a call
+/// to memset.
+const STAGED_ROOM: usize = 128;
+
+/// Writes the bytes of robtarget `t` of kind index `kind`, as [`Writer`] writes them for
+/// [`PositionList::push_read_again_by_writer`], into `staged`, to be appended in one copy:
+/// pushed byte by byte, each of the two dozen fields' tag and offset and each number of the
+/// head checked the vector's room and stored its length again. Their length, or `None` when
+/// they do not fit.
+#[inline(always)]
+fn stage_read_again(
+    staged: &mut [u8; STAGED_ROOM],
+    kind: usize,
+    t: &ReadAgainTarget<'_>,
+) -> Option<usize> {
+    let len = stage_uint(staged, 0, t.span.start as u64)?;
+    // Signed, as the writer writes it.
+    let reach = t.span.end as i64 - t.span.start as i64;
+    let len = stage_uint(staged, len, packed::zigzag(reach))?;
+    let len = stage_uint(
+        staged,
+        len,
+        (kind as u64) << 1 | u64::from(t.values_pass_lints),
+    )?;
+    let len = match t.name {
+        Some(name) => {
+            let mut len = stage_uint(staged, len, name.len() as u64 + 1)?;
+            // Byte by byte: a name is a few bytes, and a copy of its length a call to memcpy.
+            for &b in name {
+                *staged.get_mut(len)? = b;
+                len += 1;
+            }
+            len
+        }
+        None => stage_uint(staged, len, 0)?,
+    };
+    let len = stage_uint(staged, len, t.line as u64)?;
+    let len = stage_uint(staged, len, t.column as u64)?;
+    let len = stage_uint(staged, len, u64::from(QUATERNION))?;
+    let mut cursor = t.span.start;
+    let len = stage_fields(staged, len, &mut cursor, &t.trans)?;
+    let len = stage_fields(staged, len, &mut cursor, &t.quaternion)?;
+    // No joints.
+    let len = stage_uint(staged, len, 0)?;
+    let len = stage_uint(staged, len, u64::from(QUADRANTS))?;
+    let len = stage_fields(staged, len, &mut cursor, &t.quadrants)?;
+    let len = stage_uint(staged, len, t.extax.len() as u64)?;
+    stage_fields(staged, len, &mut cursor, t.extax)
+}
+
+/// `v` as [`packed::push_varint`] writes it, at `len` of `staged`: the length after it.
+#[inline(always)]
+fn stage_uint(staged: &mut [u8], mut len: usize, mut v: u64) -> Option<usize> {
+    while v >= 0x80 {
+        *staged.get_mut(len)? = (v as u8) | 0x80;
+        len += 1;
+        v >>= 7;
+    }
+    *staged.get_mut(len)? = v as u8;
+    Some(len + 1)
+}
+
+/// Number fields read again at `starts`, as [`Writer::read_again`] writes them, at `len` of
+/// `staged`: the length after them. An offset within 63 bytes either way (nearly every one)
+/// is written with its tag as one pair.
+#[inline(always)]
+fn stage_fields(
+    staged: &mut [u8],
+    mut len: usize,
+    cursor: &mut usize,
+    starts: &[usize],
+) -> Option<usize> {
+    for &at in starts {
+        let offset = packed::zigzag(at as i64 - *cursor as i64);
+        *cursor = at;
+        match staged.get_mut(len..len + 2) {
+            Some(pair) if offset < 0x80 => {
+                pair.copy_from_slice(&[READ_AGAIN, offset as u8]);
+                len += 2;
+            }
+            _ => {
+                let tagged = stage_uint(staged, len, u64::from(READ_AGAIN))?;
+                len = stage_uint(staged, tagged, offset)?;
+            }
+        }
+    }
+    Some(len)
+}
+
 /// What [`Reader::head`] reads: span, kind, the lints' verdict on the values, name's text,
 /// line and column.
 struct PackedHead<'a> {
@@ -1289,6 +1405,44 @@ mod tests {
                 prop_assert_eq!(implausible(&got), implausible(&p));
             }
             prop_assert_eq!(list.get_reading(1, &src, Reading::Whole), Some(p));
+        }
+    }
+
+    proptest! {
+        /// A robtarget's bytes staged on the stack are the bytes the writer writes one by
+        /// one: offsets of one byte and of more, either way, lines and columns of any width,
+        /// and more external axes than fit the room, one target after another.
+        #[test]
+        fn a_staged_target_is_written_as_the_writer_writes_it(
+            starts in prop_oneof![
+                proptest::collection::vec(0usize..160, 12..48),
+                proptest::collection::vec(0usize..1 << 34, 12..48),
+            ],
+            line in prop_oneof![0usize..200, any::<usize>()],
+            column in 0usize..1 << 20,
+            named in any::<bool>(),
+            pass in any::<bool>(),
+        ) {
+            let target = |k: usize| ReadAgainTarget {
+                span: Span::new(starts[0] + k, starts[1]),
+                kind: PositionKind::Robtarget,
+                name: named.then_some(b"p10".as_slice()),
+                line: line.wrapping_add(k),
+                column,
+                trans: [starts[0], starts[1], starts[2]],
+                quaternion: [starts[3], starts[4], starts[5], starts[6]],
+                quadrants: [starts[7], starts[8], starts[9], starts[10]],
+                extax: &starts[11..starts.len() - k],
+                values_pass_lints: pass,
+            };
+            let (mut staged, mut written) = (PositionList::new(), PositionList::new());
+            for k in 0..2 {
+                staged.push_read_again(&target(k));
+                written.push_read_again_by_writer(&target(k));
+            }
+            prop_assert_eq!(&staged.bytes, &written.bytes);
+            let bodies = |l: &PositionList| l.heads.iter().map(|h| h.body).collect::<Vec<_>>();
+            prop_assert_eq!(bodies(&staged), bodies(&written));
         }
     }
 

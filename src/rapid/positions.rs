@@ -1244,6 +1244,24 @@ impl Extractor<'_> {
     ) {
         {
             {
+                if let Some(literal) = literal {
+                    // A robtarget the parser's fast path read (which the arena's value, debug
+                    // builds only, must match): its type is none of those compared below, one
+                    // compare each.
+                    debug_assert!(type_name.slice(src).eq_ignore_ascii_case(b"robtarget"));
+                    self.symbols
+                        .extend(Span32::of(name).map(|name| crate::resolve::Declaration {
+                            name,
+                            kind: DeclKind::Other,
+                            file_scope: module_scope,
+                        }));
+                    self.push_literal(src, literal, name);
+                    #[cfg(debug_assertions)]
+                    if let Some(id) = init {
+                        self.assert_read_as_general(src, arena, id, name);
+                    }
+                    return;
+                }
                 let ty = type_name.slice(src);
                 let is = |t: &[u8]| ty.eq_ignore_ascii_case(t);
                 self.symbols
@@ -1274,16 +1292,6 @@ impl Extractor<'_> {
                 } else {
                     None
                 };
-                if let Some(literal) = literal {
-                    // Read by the parser's fast path, which the arena's value (debug builds
-                    // only) must match.
-                    self.push_literal(src, literal, name);
-                    #[cfg(debug_assertions)]
-                    if let Some(id) = init {
-                        self.assert_read_as_general(src, arena, id, name);
-                    }
-                    return;
-                }
                 if target_kind == Some(PositionKind::Robtarget)
                     && dims == 0
                     && init.is_some_and(|id| self.push_read_again(src, arena, id, name))

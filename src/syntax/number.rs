@@ -1062,6 +1062,150 @@ impl Plain {
     }
 }
 
+/// A literal of at most seven digits either side of its point, and an exponent of one or two
+/// digits, as [`ShortLit::read`] finds it: where it ends and what its value is made of, the
+/// value decoded only when asked for ([`ShortLit::value`]). A robtarget's translation and
+/// external axes are only located when a file is read (their values are read again from the
+/// source where a target is decoded), and its orientation and configuration mostly taken from
+/// the target before: decoding every value as it was read was a tenth of `check`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ShortLit {
+    /// The index after the literal, and the byte there.
+    pub end: usize,
+    pub next: u8,
+    /// The words the integer digits and the decimals start (only their first
+    /// `int_digits`/`decimals` bytes are the literal's).
+    int: u64,
+    int_digits: u32,
+    frac: u64,
+    decimals: u32,
+    /// The exponent less the decimals (-22 to 22).
+    power: i32,
+    negative: bool,
+}
+
+/// `b'0'` in every byte of a word.
+const ZEROS: u64 = 0x3030_3030_3030_3030;
+
+/// The eight bytes at `at`, little-endian (the first byte lowest); `None` past the end.
+#[inline(always)]
+fn word_at(bytes: &[u8], at: usize) -> Option<u64> {
+    Some(u64::from_le_bytes(*bytes.get(at..)?.first_chunk::<8>()?))
+}
+
+/// How many of the word's bytes are ASCII digits before the first that is not (8 if all are),
+/// in a few operations for the whole word: a byte is a digit when its `b'0'` offset is at most
+/// 9, which adding 0x76 carries into its top bit. A byte carries into the next only when its
+/// offset is 0x8a or more, no digit: what it changes lies past the first byte that is not one.
+#[inline(always)]
+fn digit_run(word: u64) -> u32 {
+    let t = word ^ ZEROS;
+    let not_digit = (t.wrapping_add(0x7676_7676_7676_7676) | t) & 0x8080_8080_8080_8080;
+    not_digit.trailing_zeros() / 8
+}
+
+/// The number the first `n` bytes of `word` (digits, `n` at most 8) spell: the digits moved
+/// to the word's top, below them zeros, and pairs, fours and eights of digits joined by three
+/// multiplications (Lemire's eight-digit parse).
+#[inline(always)]
+fn digits_value(word: u64, n: u32) -> u64 {
+    if n == 0 {
+        return 0;
+    }
+    let v = (word ^ ZEROS) << (8 * (8 - n.min(8)));
+    let v = v.wrapping_mul(10).wrapping_add(v >> 8);
+    let low = (v & 0x0000_00ff_0000_00ff).wrapping_mul(100 + (1_000_000 << 32));
+    let high = ((v >> 16) & 0x0000_00ff_0000_00ff).wrapping_mul(1 + (10_000 << 32));
+    low.wrapping_add(high) >> 32
+}
+
+/// Powers of ten up to 10^7, as integers: a short literal's integer digits are scaled by its
+/// decimals' count.
+const INT_POWERS: [u64; 8] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_000_000];
+
+impl ShortLit {
+    /// The literal at `bytes[i]` when it is short (see the type) and the bytes hold eight
+    /// past each of its digit runs' starts; `None` for anything else, which
+    /// [`NumLit::parse_prefix`] reads (or refuses). What it reads, `parse_prefix` reads to the
+    /// same end, with the same value, as a literal that packs ([`NumLit::pack`]): the short
+    /// literals are a part of [`Plain`]'s, found by words where `Plain` steps byte by byte.
+    #[inline(always)]
+    pub(crate) fn read(bytes: &[u8], i: usize) -> Option<ShortLit> {
+        let first = *bytes.get(i)?;
+        let negative = first == b'-';
+        let at = i + usize::from(negative || first == b'+');
+        let int = word_at(bytes, at)?;
+        let int_digits = digit_run(int);
+        if int_digits == 8 {
+            return None;
+        }
+        let mut end = at + int_digits as usize;
+        let mut next = (int >> (8 * int_digits)) as u8;
+        let (mut frac, mut decimals) = (0, 0);
+        if next == b'.' {
+            frac = word_at(bytes, end + 1)?;
+            decimals = digit_run(frac);
+            if decimals == 8 {
+                return None;
+            }
+            end += 1 + decimals as usize;
+            next = (frac >> (8 * decimals)) as u8;
+        }
+        if int_digits + decimals == 0 {
+            return None;
+        }
+        let mut power = -(decimals as i32);
+        if next | 0x20 == b'e' {
+            let mut k = end + 1;
+            let sign = *bytes.get(k)?;
+            let exp_negative = sign == b'-';
+            k += usize::from(exp_negative || sign == b'+');
+            // One digit or two; a third is the general path's.
+            let mut e = i32::from(digit(bytes, k)?);
+            k += 1;
+            if let Some(d) = digit(bytes, k) {
+                e = e * 10 + i32::from(d);
+                k += 1;
+                if digit(bytes, k).is_some() {
+                    return None;
+                }
+            }
+            power += if exp_negative { -e } else { e };
+            end = k;
+            next = *bytes.get(k)?;
+        }
+        if !(-22..=22).contains(&power) {
+            return None;
+        }
+        Some(ShortLit {
+            end,
+            next,
+            int,
+            int_digits,
+            frac,
+            decimals,
+            power,
+            negative,
+        })
+    }
+
+    /// The literal's value: what [`NumLit::parse_prefix`] gives it, bit for bit (the same
+    /// mantissa and the same one operation with the same power of ten as [`Plain::read`]).
+    #[inline(always)]
+    pub(crate) fn value(&self) -> f64 {
+        let scale = INT_POWERS.get(self.decimals as usize).copied().unwrap_or(0);
+        let mantissa = digits_value(self.int, self.int_digits) * scale
+            + digits_value(self.frac, self.decimals);
+        let m = mantissa as f64;
+        let value = match self.power {
+            0..=22 => m * EXACT_POWERS[self.power as usize],
+            -22..=-1 => m / EXACT_POWERS[(-self.power) as usize],
+            _ => f64::NAN,
+        };
+        if self.negative { -value } else { value }
+    }
+}
+
 /// The digit at `bytes[i]`, if there is one.
 #[inline(always)]
 fn digit(bytes: &[u8], i: usize) -> Option<u8> {
@@ -1090,7 +1234,9 @@ impl Mantissa {
     /// multiplies) cost more on a robot program: most of its literals have one digit (`0`,
     /// `-1`, `9E+09`), where a word's reading costs twice a byte's, and the longer ones
     /// (`-1520.30`, `0.707107`) no more than six or seven digits, which a word saved too little
-    /// on (`rcheck` 190.9 M by bytes, 194.2 M by words).
+    /// on (`rcheck` 190.9 M by bytes, 194.2 M by words). A robtarget's declaration reads
+    /// its literals by words all the same ([`ShortLit`]): there the value is mostly not
+    /// decoded, and no literal is built.
     #[inline(always)]
     fn read(bytes: &[u8], start: usize) -> Mantissa {
         let mut i = start;
@@ -1426,6 +1572,159 @@ mod tests {
             let by_lit = NumLit::parse_prefix(bytes)
                 .and_then(|(lit, len)| Some((lit.value.to_bits(), lit.pack(len)?)));
             proptest::prop_assert_eq!(packed, by_lit, "{}", whole);
+        }
+    }
+
+    /// What [`ShortLit::read`] stands in for: where it reads a literal at `i`, `parse_prefix`
+    /// reads one to the same end that packs, with the same value bit for bit, and the byte
+    /// after it is the one it gives. `Ok(true)` where it read one.
+    fn short_as_prefix(bytes: &[u8], i: usize) -> Result<bool, String> {
+        let Some(short) = ShortLit::read(bytes, i) else {
+            return Ok(false);
+        };
+        let text = String::from_utf8_lossy(bytes);
+        let (lit, len) = NumLit::parse_prefix(&bytes[i..])
+            .ok_or_else(|| format!("{text:?} at {i}: short, but no literal"))?;
+        if i + len != short.end || lit.pack(len).is_none() {
+            return Err(format!(
+                "{text:?} at {i}: {len} bytes, packs: {:?}",
+                lit.pack(len)
+            ));
+        }
+        if lit.value().to_bits() != short.value().to_bits()
+            || bytes.get(short.end) != Some(&short.next)
+        {
+            return Err(format!(
+                "{text:?} at {i}: {} / {}",
+                lit.value(),
+                short.value()
+            ));
+        }
+        Ok(true)
+    }
+
+    /// `digit_run` counts the digits a byte loop counts, and `digits_value` gives their value,
+    /// for every byte value after runs of every length, and after it bytes of every kind.
+    #[test]
+    fn a_word_s_digit_run_and_value_are_its_bytes_read_one_by_one() {
+        for run in 0..=8usize {
+            for b in 0..=255u8 {
+                for after in [0u8, b'9', 0xff, 0x8a, b'.'] {
+                    let mut bytes = [after; 8];
+                    for (k, d) in bytes.iter_mut().enumerate().take(run) {
+                        *d = b'0' + ((k * 7 + 3) % 10) as u8;
+                    }
+                    if run < 8 {
+                        bytes[run] = b;
+                    }
+                    let word = u64::from_le_bytes(bytes);
+                    let by_bytes = bytes.iter().take_while(|c| c.is_ascii_digit()).count();
+                    assert_eq!(digit_run(word) as usize, by_bytes, "{bytes:?}");
+                    let value = bytes[..by_bytes]
+                        .iter()
+                        .fold(0u64, |v, d| v * 10 + u64::from(d - b'0'));
+                    assert_eq!(digits_value(word, by_bytes as u32), value, "{bytes:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_common_literals_are_read_short_as_parse_prefix_reads_them() {
+        // What a robtarget holds, followed as in a program: if these were not read short, the
+        // proptest below would test little.
+        for text in [
+            "-1520.30",
+            "0.707107",
+            "0",
+            "-1",
+            "+12.5",
+            ".5",
+            "-.25",
+            "5.",
+            "9E+09",
+            "9E9",
+            "9e+9",
+            "9E09",
+            "2.69E-07",
+            "1.50E+2",
+            "0000000",
+            "-9999999.9999999",
+            "1E22",
+            "1e-15",
+        ] {
+            for tail in [",", "]", ",9E+09,9E+09]];"] {
+                let whole = format!("{text}{tail}        ");
+                assert_eq!(short_as_prefix(whole.as_bytes(), 0), Ok(true), "{whole}");
+            }
+        }
+        // Eight digits on a side, a third exponent digit, 10^±23, no digits, or fewer than
+        // eight bytes to read: for `parse_prefix` alone.
+        for text in [
+            "12345678",
+            "0.12345678",
+            "9e+009",
+            "9.0E+009",
+            "1E23",
+            "1e-23",
+            "1.5e-22",
+            ".",
+            "-",
+            "+-1",
+            "-.",
+            "1E",
+            "1E+",
+            "x1",
+        ] {
+            let whole = format!("{text},        ");
+            assert_eq!(short_as_prefix(whole.as_bytes(), 0), Ok(false), "{whole}");
+        }
+        assert_eq!(short_as_prefix(b"[1,2]", 1), Ok(false));
+        assert_eq!(short_as_prefix(b"1.5", 0), Ok(false));
+    }
+
+    #[test]
+    fn the_edges_read_short_as_parse_prefix_reads_them() {
+        for text in PLAIN_EDGES {
+            for tail in [
+                "",
+                ",",
+                "]",
+                "x",
+                ".5",
+                "e5",
+                "E+1",
+                ",        ",
+                "\u{e4}        ",
+            ] {
+                for lead in ["", "[", "\u{c4}"] {
+                    let whole = format!("{lead}{text}{tail}");
+                    assert!(
+                        short_as_prefix(whole.as_bytes(), lead.len()).is_ok(),
+                        "{whole}"
+                    );
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// Wherever [`ShortLit::read`] reads a literal, `parse_prefix` reads the same one, as
+        /// a literal that packs, with the same value: literals of every spelling, any text of
+        /// a literal's bytes, with what a program has around them and Latin-1 bytes.
+        #[test]
+        fn a_short_literal_is_the_literal_parse_prefix_reads(
+            lead in "[\\[,]?",
+            text in proptest::prop_oneof![
+                literal_text(),
+                "[-+]?[0-9]{0,9}(\\.[0-9]{0,9})?([eE][-+]?[0-9]{0,3})?",
+                "[-+0-9.eE]{0,20}",
+            ],
+            tail in "[ ,\\]a-dx;.eE0-9+\u{e4}-]{0,12}",
+        ) {
+            let whole = format!("{lead}{text}{tail}");
+            let read = short_as_prefix(whole.as_bytes(), lead.len());
+            proptest::prop_assert!(read.is_ok(), "{:?}", read);
         }
     }
 

@@ -3,9 +3,6 @@
 
 use super::*;
 
-/// The starts of a list's numbers (as many as a robtarget's external axes).
-type ListStarts = [usize; MAX_EXTERNAL_AXES];
-
 impl Parser<'_, '_> {
     /// Fast path of `aggregate` for the shape that makes up most of a robtarget file:
     /// brackets, commas, numbers with an attached sign, spaces and newlines — nothing else.
@@ -96,146 +93,34 @@ impl Parser<'_, '_> {
     /// general path reads the value; [`Parser::literal_read_again`] holds the two to the same
     /// end in every debug build.
     pub(super) fn robtarget_literal(&mut self) -> bool {
-        self.robtarget_literal_at(self.tok.start as usize)
+        let read = self.robtarget_literal_at(self.tok.start as usize);
+        if read {
+            self.resume_at(self.literal.span.end);
+        }
+        read
     }
 
     /// [`Parser::robtarget_literal`] of the value whose `[` is at `start`, wherever the
-    /// parser stands (nothing is read on anything else).
+    /// parser stands, and without moving it (nothing is read on anything else): a `;` follows
+    /// the literal past blanks.
     pub(super) fn robtarget_literal_at(&mut self, start: usize) -> bool {
         let src = self.src;
         if src.get(start) != Some(&b'[') {
             return false;
         }
-        let blanks = |i: usize| blanks_end(src, i);
-        // The bracketed list of numbers at `i`: each start into `starts`, as many values as
-        // `values` holds, each literal into `seen` (as far as it holds); how many there are
-        // and the index after the `]`.
-        //
-        // With `tail` (the external axes), what follows the first number is taken whole from
-        // the list read before when it is the same text (a track's position, then `9E+09`
-        // for each unused axis: alike in every target of a program), and remembered when not,
-        // as [`SeenPart::take_or_read`] takes a part. A debug build reads it all the same and
-        // holds the two to each other.
-        let list = |i: usize,
-                    starts: &mut [usize],
-                    values: &mut [f64],
-                    seen: &mut [Option<SeenLiteral>],
-                    mut tail: Option<&mut PartMemo>|
-         -> Option<(usize, usize)> {
-            let mut i = blanks(i);
-            if src.get(i) != Some(&b'[') {
-                return None;
-            }
-            i += 1;
-            let mut count = 0;
-            // Where the first number ended, whether the tail was compared there, and what the
-            // remembered one gave (kept in a debug build to compare with the reading).
-            let (mut first_end, mut tried) = (0, false);
-            let mut taken: Option<(Option<(usize, usize)>, ListStarts)> = None;
-            loop {
-                i = blanks(i);
-                let last = seen.get_mut(count);
-                let (number, len) = match last {
-                    Some(Some(s)) if s.at(src, i) && token_ends(src, i + s.len) => {
-                        debug_assert_eq!(
-                            format!("{:?}", NumLit::parse_prefix(&src[i..])),
-                            format!("{:?}", Some((s.number, s.len)))
-                        );
-                        (s.number, s.len)
-                    }
-                    _ => {
-                        let (number, len) = fast_number(src, i)?;
-                        number.pack(len)?;
-                        if let (Some(s), Some(now)) = (last, SeenLiteral::of(src, i, len, number)) {
-                            *s = Some(now);
-                        }
-                        (number, len)
-                    }
-                };
-                let end = i + len;
-                *starts.get_mut(count)? = i;
-                if let Some(v) = values.get_mut(count) {
-                    *v = number.value();
-                }
-                count += 1;
-                if count == 1
-                    && let Some(memo) = tail.as_deref_mut()
-                {
-                    first_end = end;
-                    tried = memo.tried();
-                    if tried
-                        && let Some(m) = &memo.part
-                        && m.at(src, end)
-                    {
-                        memo.misses = 0;
-                        let read = m.read(end, starts.get_mut(1..)?, &mut []);
-                        let read = read.map(|(n, after)| (n + 1, after));
-                        if !cfg!(debug_assertions) {
-                            return read;
-                        }
-                        let mut seen_starts = [0; MAX_EXTERNAL_AXES];
-                        let n = starts.len().min(MAX_EXTERNAL_AXES);
-                        seen_starts.get_mut(..n)?.copy_from_slice(starts.get(..n)?);
-                        taken = Some((read, seen_starts));
-                    }
-                }
-                i = blanks(end);
-                match src.get(i)? {
-                    b',' => i += 1,
-                    b']' => {
-                        let read = Some((count, i + 1));
-                        if let Some((taken, seen_starts)) = taken {
-                            assert_eq!(taken, read);
-                            assert_eq!(seen_starts.get(..count), starts.get(..count));
-                        } else if let Some(memo) = tail {
-                            let more = || starts.get(1..count);
-                            memo.missed(tried, || {
-                                SeenPart::of(src, first_end, i + 1, more()?, &[])
-                            });
-                        }
-                        return read;
-                    }
-                    _ => return None,
-                }
-            }
-        };
-        let plain_list =
-            |i: usize,
-             starts: &mut [usize],
-             values: &mut [f64],
-             seen: &mut [Option<SeenLiteral>]| list(i, starts, values, seen, None);
-        let comma = |i: usize| (src.get(blanks(i)) == Some(&b',')).then(|| blanks(i) + 1);
         let lit = &mut self.literal;
-        let (trans, rest) = self.seen.split_at_mut(3);
-        let (quaternion, rest) = rest.split_at_mut(4);
-        let (quadrants, extax) = rest.split_at_mut(4);
         let [q_part, cf_part, ex_tail] = &mut self.seen_parts;
         let read = (|| {
-            let (3, i) = list(start + 1, &mut lit.trans, &mut [], trans, None)? else {
-                return None;
-            };
-            let (q_at, q) = (blanks(comma(i)?), &mut lit.quaternion);
-            let (4, i) =
-                SeenPart::take_or_read(q_part, src, q_at, q, &mut lit.q, quaternion, &plain_list)?
-            else {
-                return None;
-            };
-            let (cf_at, cf) = (blanks(comma(i)?), &mut lit.quadrants);
-            let (4, i) = SeenPart::take_or_read(
-                cf_part,
-                src,
-                cf_at,
-                cf,
-                &mut lit.cf,
-                quadrants,
-                &plain_list,
-            )?
-            else {
-                return None;
-            };
-            let (axes, i) = list(comma(i)?, &mut lit.extax, &mut [], extax, Some(ex_tail))?;
-            let i = blanks(i);
-            (src.get(i) == Some(&b']') && src.get(blanks(i + 1)) == Some(&b';'))
+            let i = literal_numbers::<3, false>(src, start + 1, &mut lit.trans, &mut [0.0; 3])?;
+            let q_at = blanks_end(src, literal_comma(src, i)?);
+            let (q, values) = (&mut lit.quaternion, &mut lit.q);
+            let i = SeenPart::take_or_read(q_part, src, q_at, q, values)?;
+            let cf_at = blanks_end(src, literal_comma(src, i)?);
+            let (cf, values) = (&mut lit.quadrants, &mut lit.cf);
+            let i = SeenPart::take_or_read(cf_part, src, cf_at, cf, values)?;
+            let (axes, i) = literal_axes(src, literal_comma(src, i)?, &mut lit.extax, ex_tail)?;
+            let i = blanks_end(src, i);
+            (src.get(i) == Some(&b']') && src.get(blanks_end(src, i + 1)) == Some(&b';'))
                 .then_some((axes, i + 1))
         })();
         let Some((axes, end)) = read else {
@@ -243,7 +128,6 @@ impl Parser<'_, '_> {
         };
         lit.axes = axes;
         lit.span = Span::new(start, end);
-        self.resume_at(end);
         true
     }
 

@@ -151,6 +151,15 @@ impl Parser<'_, '_> {
             self.leaf(NodeKind::Placeholder, start);
             return;
         }
+        // Most items of a robtarget file are `CONST` declarations: their keyword is compared
+        // as a word first, not with `LOCAL`, `TASK` and `CONST` byte by byte.
+        if self.tok.keyword
+            && self.tok.end - self.tok.start == 5
+            && letters_at(self.src, start as usize, b"const")
+        {
+            self.data_decl(start, module_scope);
+            return;
+        }
         // The token after `LOCAL` or `TASK` says what is declared. Only then is it lexed
         // ahead: a declaration's head is mostly read by bytes, and the token lexed ahead of
         // every item was a fifth of reading a robtarget's head.
@@ -264,17 +273,27 @@ impl Parser<'_, '_> {
         local: bool,
     ) -> Option<PResult<(Stmt, bool)>> {
         let src = self.src;
-        let storage = match self.text(self.tok) {
-            t if t.eq_ignore_ascii_case(b"CONST") => Storage::Const,
-            t if t.eq_ignore_ascii_case(b"PERS") => Storage::Pers,
-            t if t.eq_ignore_ascii_case(b"VAR") => Storage::Var,
+        let (at, len) = (
+            self.tok.start as usize,
+            (self.tok.end - self.tok.start) as usize,
+        );
+        let storage = match len {
+            5 if letters_at(src, at, b"const") => Storage::Const,
+            4 if letters_at(src, at, b"pers") => Storage::Pers,
+            3 if letters_at(src, at, b"var") => Storage::Var,
             _ => return None,
         };
+        // The type is `robtarget` in any case and nothing more: the name `plain_name` reads
+        // there, compared as words (no keyword is such a name).
         let ty = blanks_end(src, self.tok.end as usize);
-        let ty_end = plain_name(src, ty)?;
-        if !src.get(ty..ty_end)?.eq_ignore_ascii_case(b"robtarget") {
+        let ty_end = ty + b"robtarget".len();
+        if !letters_at(src, ty, b"robtarge")
+            || src.get(ty_end - 1).map(|c| c | 0x20) != Some(b't')
+            || src.get(ty_end).is_some_and(|&c| is_ident_continue(c))
+        {
             return None;
         }
+        debug_assert_eq!(plain_name(src, ty), Some(ty_end));
         let name = blanks_end(src, ty_end);
         let name_end = plain_name(src, name)?;
         let assign = blanks_end(src, name_end);
@@ -282,19 +301,26 @@ impl Parser<'_, '_> {
             return None;
         }
         let value = blanks_end(src, assign + 2);
-        if !src.get(name..name_end)?.is_ascii() || !self.robtarget_literal_at(value) {
+        // The name's bytes tested one by one: a name is a few bytes, and `is_ascii` was a call.
+        let ascii = src.get(name..name_end)?.iter().all(u8::is_ascii);
+        if !ascii || !self.robtarget_literal_at(value) {
             return None;
         }
+        let end = self.literal.span.end;
         // The general path's reading of the value, to the same end, in every debug build (as
         // `data_decl_inner` holds its own fast path).
         #[cfg(debug_assertions)]
-        let init = Some(self.literal_read_again());
+        let init = {
+            self.resume_at(end);
+            Some(self.literal_read_again())
+        };
         #[cfg(not(debug_assertions))]
         let init = None;
-        if !self.at_punct(b';') {
-            return Some(Err(self.error("`;` at the end of the declaration")));
-        }
-        self.bump_statement_end();
+        // The `;` the literal was read up to ends the statement: the parser resumes after it,
+        // where lexing it as a token to step over was a tenth of the declaration's head.
+        let semicolon = blanks_end(src, end);
+        debug_assert_eq!(src.get(semicolon), Some(&b';'));
+        self.resume_at_statement_end(semicolon + 1);
         let stmt = Stmt::Decl {
             storage,
             type_name: Span::new(ty, ty_end),

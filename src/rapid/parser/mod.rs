@@ -13,7 +13,7 @@ mod statements;
 use super::expr::{Arena, ExprKind, NONE};
 use super::lexer::{Lexer, Token, TokenKind, ident_len, is_ident_continue, is_keyword};
 use super::tree::{NodeKind, Rapid, Tree};
-use crate::syntax::{Diagnostic, NumLit, Sink, Span, TreeBuilder};
+use crate::syntax::{Diagnostic, NumLit, ShortLit, Sink, Span, TreeBuilder};
 
 /// Nesting deeper than this (brackets, blocks) is reported instead of recursed into, so a
 /// hostile input cannot overflow the stack.
@@ -254,43 +254,6 @@ impl RobtargetLiteral {
     };
 }
 
-/// A literal [`Parser::robtarget_literal`] read at one place of a robtarget (a part's field):
-/// the next target's literal there is often the same text (`9E+09`, the orientation and
-/// configuration of a run of targets), and comparing up to 16 bytes is a fraction of reading
-/// and packing it again.
-#[derive(Clone, Copy, Debug)]
-struct SeenLiteral {
-    /// The text's bytes, little-endian, and the mask of its length.
-    text: u128,
-    mask: u128,
-    len: usize,
-    number: NumLit,
-}
-
-impl SeenLiteral {
-    /// The literal `number` (which packs) of the `len` bytes at `i` of `src`, when they are 16
-    /// or fewer and 16 bytes can be read there, as [`SeenLiteral::at`] reads them (the word is
-    /// masked, not copied: a copy of a variable length was a call to memcpy per literal).
-    fn of(src: &[u8], i: usize, len: usize, number: NumLit) -> Option<SeenLiteral> {
-        let word = src.get(i..)?.first_chunk::<16>()?;
-        let mask = u128::MAX.checked_shr(8 * 16usize.checked_sub(len)? as u32)?;
-        Some(SeenLiteral {
-            text: u128::from_le_bytes(*word) & mask,
-            mask,
-            len,
-            number,
-        })
-    }
-
-    /// Whether `src` holds this text at `i` (with 16 bytes to read there).
-    #[inline]
-    fn at(&self, src: &[u8], i: usize) -> bool {
-        src.get(i..)
-            .and_then(|rest| rest.first_chunk::<16>())
-            .is_some_and(|w| u128::from_le_bytes(*w) & self.mask == self.text)
-    }
-}
-
 /// A part of a robtarget literal [`Parser::robtarget_literal`] read (the quaternion or the
 /// configuration, `[` to `]`, or the external axes after the first, to the `]`): its text,
 /// where its numbers start in it, and their values (as many as it was asked for).
@@ -327,64 +290,71 @@ impl SeenPart {
         Some(part)
     }
 
-    /// Whether `src` holds this part's text at `i`. Its first 16 bytes are compared as a
-    /// masked word first: a part that differs mostly does there, and a slice compare is a
-    /// call.
+    /// Whether `src` holds this part's text at `i`: compared 16 bytes at a time, the last word
+    /// masked to the part's length (a slice compare was a call to memcmp per part), and where
+    /// the source ends sooner, as slices.
     #[inline]
     fn at(&self, src: &[u8], i: usize) -> bool {
-        let mask = u128::MAX
-            .checked_shr(8 * 16usize.saturating_sub(self.len) as u32)
-            .unwrap_or(0);
-        let word = |b: &[u8]| {
-            b.first_chunk::<16>()
-                .map(|w| u128::from_le_bytes(*w) & mask)
+        let Some(rest) = src.get(i..) else {
+            return false;
         };
-        src.get(i..).and_then(word) == word(&self.text)
-            && src.get(i..i + self.len) == self.text.get(..self.len)
+        let len = self.len;
+        let mut k = 0;
+        while k < len {
+            let word = |b: &[u8]| {
+                b.get(k..)?
+                    .first_chunk::<16>()
+                    .map(|w| u128::from_le_bytes(*w))
+            };
+            let (Some(there), Some(here)) = (word(rest), word(&self.text)) else {
+                return rest.get(k..len) == self.text.get(k..len);
+            };
+            let mask = u128::MAX
+                .checked_shr(8 * 16usize.saturating_sub(len - k) as u32)
+                .unwrap_or(0);
+            if (there ^ here) & mask != 0 {
+                return false;
+            }
+            k += 16;
+        }
+        true
     }
 
-    /// The part at `i` (past blanks) read by `list` (starts into `starts`, values into
-    /// `values`, each literal into `seen`: its count and the index after it), or taken whole
-    /// from `memo`, the last one read at its place, when it is the same text (a run of targets
-    /// with one orientation and configuration), as [`PartMemo`] says when to compare. Inlined:
-    /// a call per part was 50 instructions.
+    /// The quaternion or the configuration at `i` (past blanks) read by [`literal_numbers`]
+    /// (starts into `starts`, values into `values`: the index after it), or taken whole from
+    /// `memo`, the last one read at its place, when it is the same text (a run of targets with
+    /// one orientation and configuration), as [`PartMemo`] says when to compare. Inlined: a
+    /// call per part was 50 instructions.
     #[inline(always)]
     fn take_or_read(
         memo: &mut PartMemo,
         src: &[u8],
         i: usize,
-        starts: &mut [usize],
-        values: &mut [f64],
-        seen: &mut [Option<SeenLiteral>],
-        list: &impl Fn(
-            usize,
-            &mut [usize],
-            &mut [f64],
-            &mut [Option<SeenLiteral>],
-        ) -> Option<(usize, usize)>,
-    ) -> Option<(usize, usize)> {
+        starts: &mut [usize; 4],
+        values: &mut [f64; 4],
+    ) -> Option<usize> {
         let tried = memo.tried();
         if tried
             && let Some(m) = &memo.part
             && m.at(src, i)
         {
-            let read = m.read(i, starts, values);
+            let end = m.read_four(i, starts, values)?;
             #[cfg(debug_assertions)]
             {
-                let (mut s, mut v, mut l) = (starts.to_vec(), values.to_vec(), seen.to_vec());
-                assert_eq!(list(i, &mut s, &mut v, &mut l), read);
-                assert_eq!(s, starts);
-                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-                assert_eq!(bits(&v), bits(values));
+                let (mut s, mut v) = ([0; 4], [0.0; 4]);
+                assert_eq!(
+                    literal_numbers::<4, true>(src, i, &mut s, &mut v),
+                    Some(end)
+                );
+                assert_eq!(&s, starts);
+                assert_eq!(v.map(f64::to_bits), values.map(f64::to_bits));
             }
             memo.misses = 0;
-            return read;
+            return Some(end);
         }
-        let (count, end) = list(i, starts, values, seen)?;
-        memo.missed(tried, || {
-            SeenPart::of(src, i, end, starts.get(..count)?, values)
-        });
-        Some((count, end))
+        let end = literal_numbers::<4, true>(src, i, starts, values)?;
+        memo.missed(tried, || SeenPart::of(src, i, end, starts, values));
+        Some(end)
     }
 
     /// What reading the part at `i` gives, as [`SeenPart::at`] found it there: its numbers'
@@ -397,6 +367,19 @@ impl SeenPart {
         let n = self.value_count.min(values.len());
         values.get_mut(..n)?.copy_from_slice(self.values.get(..n)?);
         Some((self.count, i + self.len))
+    }
+
+    /// [`SeenPart::read`] of a part of four numbers and their values (the quaternion or the
+    /// configuration), copied whole: a copy of as many as it holds was a call to memcpy. `None`
+    /// for any other part (which a part of four never is).
+    #[inline(always)]
+    fn read_four(&self, i: usize, starts: &mut [usize; 4], values: &mut [f64; 4]) -> Option<usize> {
+        if self.count != 4 || self.value_count != 4 {
+            return None;
+        }
+        *starts = self.offsets.first_chunk::<4>()?.map(|o| i + usize::from(o));
+        *values = self.values;
+        Some(i + self.len)
     }
 }
 
@@ -430,10 +413,6 @@ impl PartMemo {
         }
     }
 }
-
-/// The fields of a robtarget literal [`Parser::robtarget_literal`] remembers a literal of:
-/// translation, quaternion, configuration and external axes.
-const SEEN_FIELDS: usize = 3 + 4 + 4 + MAX_EXTERNAL_AXES;
 
 /// What [`parse`] hands statements to: any `FnMut(Statement)` or [`crate::syntax::NoSink`].
 pub(crate) type StatementSink<'s> = dyn for<'e> Sink<Statement<'e>> + 's;
@@ -521,8 +500,6 @@ struct Parser<'a, 's> {
     /// What [`Parser::robtarget_literal`] last read (reused: it is most of a robtarget file's
     /// declarations).
     literal: RobtargetLiteral,
-    /// The literal it last read at each field.
-    seen: [Option<SeenLiteral>; SEEN_FIELDS],
     /// The quaternion, the configuration and the external axes after the first it last read,
     /// and how many times in a row each was not the one before.
     seen_parts: [PartMemo; 3],
@@ -679,6 +656,166 @@ fn fast_number(src: &[u8], i: usize) -> Option<(NumLit, usize)> {
     token_ends(src, i + len).then_some((number, len))
 }
 
+/// A number of a robtarget literal as [`literal_number`] reads it.
+#[derive(Clone, Copy, Debug)]
+struct LiteralNumber {
+    start: usize,
+    /// The index after it.
+    end: usize,
+    /// The first byte after it and the blanks there, and its index.
+    sep: u8,
+    sep_at: usize,
+    /// Its value, when it was asked for (else 0).
+    value: f64,
+}
+
+/// The number of a robtarget literal at `i`, past blanks: one [`fast_number`] reads and that
+/// packs ([`NumLit::pack`]), the declaration fast path's rule, with its value when `VALUE`.
+/// A short literal right before its `,` or `]` (nearly every one) is read by words
+/// ([`ShortLit`]), with no [`NumLit`] built and its value decoded only when asked for; any
+/// other is read by [`literal_number_read`], which every debug build holds the short reading
+/// to.
+#[inline(always)]
+fn literal_number<const VALUE: bool>(src: &[u8], i: usize) -> Option<LiteralNumber> {
+    let read = match ShortLit::read(src, i) {
+        Some(s) if matches!(s.next, b',' | b']') => LiteralNumber {
+            start: i,
+            end: s.end,
+            sep: s.next,
+            sep_at: s.end,
+            value: if VALUE { s.value() } else { 0.0 },
+        },
+        _ => return literal_number_read(src, i),
+    };
+    #[cfg(debug_assertions)]
+    {
+        let plain = literal_number_read(src, i).map(|n| (n.start, n.end, n.sep, n.sep_at));
+        assert_eq!(plain, Some((read.start, read.end, read.sep, read.sep_at)));
+        if VALUE {
+            let plain = literal_number_read(src, i).map(|n| n.value.to_bits());
+            assert_eq!(plain, Some(read.value.to_bits()));
+        }
+    }
+    Some(read)
+}
+
+/// [`literal_number`] of any number, through [`fast_number`]: blanks around it, more digits, a
+/// longer exponent. Apart, as the rarer case.
+#[inline(never)]
+fn literal_number_read(src: &[u8], i: usize) -> Option<LiteralNumber> {
+    let start = blanks_end(src, i);
+    let (number, len) = fast_number(src, start)?;
+    number.pack(len)?;
+    let end = start + len;
+    let sep_at = blanks_end(src, end);
+    Some(LiteralNumber {
+        start,
+        end,
+        sep: *src.get(sep_at)?,
+        sep_at,
+        value: number.value(),
+    })
+}
+
+/// The bracketed list of `N` numbers of a robtarget literal at `i` (blanks before it), each
+/// one [`literal_number`] reads: their starts into `starts` and, when `VALUES`, their values
+/// into `values`; the index after its `]`.
+#[inline(always)]
+fn literal_numbers<const N: usize, const VALUES: bool>(
+    src: &[u8],
+    i: usize,
+    starts: &mut [usize; N],
+    values: &mut [f64; N],
+) -> Option<usize> {
+    let i = blanks_end(src, i);
+    if src.get(i) != Some(&b'[') {
+        return None;
+    }
+    let mut i = i + 1;
+    for (k, (start, value)) in starts.iter_mut().zip(values.iter_mut()).enumerate() {
+        let n = literal_number::<VALUES>(src, i)?;
+        *start = n.start;
+        if VALUES {
+            *value = n.value;
+        }
+        if n.sep != if k + 1 == N { b']' } else { b',' } {
+            return None;
+        }
+        i = n.sep_at + 1;
+    }
+    Some(i)
+}
+
+/// The index after the `,` at `i` (past blanks) in a robtarget literal.
+#[inline(always)]
+fn literal_comma(src: &[u8], i: usize) -> Option<usize> {
+    let i = blanks_end(src, i);
+    (src.get(i) == Some(&b',')).then_some(i + 1)
+}
+
+/// The external axes of a robtarget literal at `i` (blanks before them): one to
+/// [`MAX_EXTERNAL_AXES`] numbers [`literal_number`] reads, their starts into `starts`; how
+/// many and the index after the `]`.
+///
+/// What follows the first number is taken whole from `tail`, the list read before, when it is
+/// the same text (a track's position, then `9E+09` for each unused axis: alike in every
+/// target of a program), and remembered when not, as [`SeenPart::take_or_read`] takes a part.
+/// A debug build reads it all the same and holds the two to each other.
+#[inline(always)]
+fn literal_axes(
+    src: &[u8],
+    i: usize,
+    starts: &mut [usize; MAX_EXTERNAL_AXES],
+    tail: &mut PartMemo,
+) -> Option<(usize, usize)> {
+    let i = blanks_end(src, i);
+    if src.get(i) != Some(&b'[') {
+        return None;
+    }
+    let first = literal_number::<false>(src, i + 1)?;
+    let (head, rest) = starts.split_first_mut()?;
+    *head = first.start;
+    let tried = tail.tried();
+    if tried
+        && let Some(m) = &tail.part
+        && m.at(src, first.end)
+    {
+        tail.misses = 0;
+        let (count, after) = m.read(first.end, rest, &mut [])?;
+        #[cfg(debug_assertions)]
+        {
+            let mut plain = [0; MAX_EXTERNAL_AXES - 1];
+            let read = literal_axes_after(src, first, &mut plain);
+            assert_eq!(read, Some((count + 1, after)));
+            assert_eq!(plain.get(..count), rest.get(..count));
+        }
+        return Some((count + 1, after));
+    }
+    let (count, after) = literal_axes_after(src, first, rest)?;
+    tail.missed(tried, || {
+        SeenPart::of(src, first.end, after, rest.get(..count - 1)?, &[])
+    });
+    Some((count, after))
+}
+
+/// The external axes after the first, `first`, of a robtarget literal: their starts into
+/// `rest`; how many the list holds, the first included, and the index after its `]`.
+#[inline(always)]
+fn literal_axes_after(
+    src: &[u8],
+    first: LiteralNumber,
+    rest: &mut [usize],
+) -> Option<(usize, usize)> {
+    let (mut count, mut last) = (1, first);
+    while last.sep == b',' {
+        let n = literal_number::<false>(src, last.sep_at + 1)?;
+        *rest.get_mut(count - 1)? = n.start;
+        count += 1;
+        last = n;
+    }
+    (last.sep == b']').then_some((count, last.sep_at + 1))
+}
+
 /// The end of the name a fast path reads at `i`: an identifier that is no keyword (a keyword
 /// may be an operator or end the statement, which the general path decides).
 #[inline]
@@ -689,6 +826,25 @@ fn plain_name(src: &[u8], i: usize) -> Option<usize> {
     }
     let len = ident_len(rest);
     (!is_keyword(rest.get(..len)?)).then_some(i + len)
+}
+
+/// Whether the bytes at `at` of `src` are `word` (lower-case letters, at most 8) in any case,
+/// with 8 bytes to read there: compared as one word with the case bit set, where
+/// `eq_ignore_ascii_case` took 8 instructions a byte. (A byte with the bit set is a lower-case
+/// letter only if it was that letter in either case.)
+#[inline(always)]
+fn letters_at(src: &[u8], at: usize, word: &[u8]) -> bool {
+    let Some(there) = src.get(at..).and_then(|s| s.first_chunk::<8>()) else {
+        return false;
+    };
+    let mut lower = [0u8; 8];
+    for (l, &c) in lower.iter_mut().zip(word) {
+        *l = c;
+    }
+    let mask = u64::MAX
+        .checked_shr(8 * (8 - word.len().min(8)) as u32)
+        .unwrap_or(0);
+    (u64::from_le_bytes(*there) | 0x2020_2020_2020_2020) & mask == u64::from_le_bytes(lower) & mask
 }
 
 impl<'a, 's> Parser<'a, 's> {
@@ -715,7 +871,6 @@ impl<'a, 's> Parser<'a, 's> {
             first: Token::NONE,
             last_call: None,
             moved: None,
-            seen: [None; SEEN_FIELDS],
             seen_parts: [PartMemo::EMPTY; 3],
             sink,
         };
@@ -778,21 +933,19 @@ impl<'a, 's> Parser<'a, 's> {
         }
         if t.kind != TokenKind::Eof {
             self.prev_end = t.end;
-            self.tok = self.next_after(false);
+            self.tok = self.next_after();
         }
         t
     }
 
-    /// The token after the current one: the one lexed ahead, else lexed now, at a
-    /// `statement_end` as [`Parser::next_statement_start`] lexes it.
+    /// The token after the current one: the one lexed ahead, else lexed now.
     #[inline(always)]
-    fn next_after(&mut self, statement_end: bool) -> Token {
+    fn next_after(&mut self) -> Token {
         match self.peeked.take() {
             Some((next, lex)) => {
                 self.lex = lex;
                 next
             }
-            None if statement_end => self.next_statement_start(),
             None => self.next_significant(),
         }
     }
@@ -896,15 +1049,6 @@ impl<'a, 's> Parser<'a, 's> {
         self.peeked = None;
         self.prev_end = end as u32;
         self.tok = self.next_statement_start();
-    }
-
-    /// [`Parser::bump`] of a statement's last token (a `;` no error is reported of), the next
-    /// token lexed as [`Parser::next_statement_start`] lexes it.
-    fn bump_statement_end(&mut self) -> Token {
-        let t = self.tok;
-        self.prev_end = t.end;
-        self.tok = self.next_after(true);
-        t
     }
 
     // ---- tree building ------------------------------------------------------------------
@@ -1097,5 +1241,23 @@ mod tests {
                 "src/rapid/parser/expressions.rs",
             ],
         );
+    }
+
+    /// `letters_at` is `eq_ignore_ascii_case` of the bytes there, for every byte value in
+    /// each place of the words it is asked about (and nothing where 8 bytes cannot be read).
+    #[test]
+    fn letters_compared_as_a_word_are_the_letters_compared_one_by_one() {
+        for word in [&b"const"[..], b"pers", b"var", b"robtarge"] {
+            for place in 0..word.len() {
+                for b in 0..=255u8 {
+                    let mut src = word.to_ascii_uppercase();
+                    src[place] = b;
+                    src.extend_from_slice(b"\xe4 robtarget");
+                    let by_bytes = src[..word.len()].eq_ignore_ascii_case(word);
+                    assert_eq!(super::letters_at(&src, 0, word), by_bytes, "{src:?}");
+                    assert!(!super::letters_at(&src[..7], 0, word));
+                }
+            }
+        }
     }
 }
