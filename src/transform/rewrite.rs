@@ -41,6 +41,16 @@ fn same_rotation(a: &UnitQuaternion<f64>, b: &UnitQuaternion<f64>) -> bool {
     delta.angle() < SAME_ROTATION_RAD
 }
 
+/// Whether `undo` turns clearly too far for [`same_rotation`]`(r, undo · r)` to hold for any
+/// `r`. The turn from `r` to `undo · r` is `undo` conjugated by `r`: its scalar part is
+/// `undo`'s and its vector part as long, up to roundings of a few units of 1e-16. At a ratio
+/// above 1e-8 that is ten times the ratio above which `same_rotation` says no without the arc
+/// tangent, so the test the inverse made for every written choice is made once a target.
+fn turns_clearly(undo: &UnitQuaternion<f64>) -> bool {
+    let q = undo.quaternion();
+    q.imag().norm_squared() > 1e-16 * (q.w * q.w)
+}
+
 /// How to choose among equivalent orientation numbers.
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum OrientationHint {
@@ -154,6 +164,7 @@ pub(crate) fn push_reversible_pose_edits(
     if same_rotation(&old.rotation, &new.rotation) {
         return;
     }
+    let undo_turns = undo.is_some_and(|u| turns_clearly(&u.rotation));
     match &fields.orient {
         Some(Orientation::Quaternion(q)) => {
             let like = match hint {
@@ -173,7 +184,8 @@ pub(crate) fn push_reversible_pose_edits(
                     // result with the sign nearest the written one, at the written norm.
                     let read = abb_quat(w)?;
                     let back = undo.rotation * read;
-                    if same_rotation(&read, &back) {
+                    debug_assert!(!(undo_turns && same_rotation(&read, &back)));
+                    if !undo_turns && same_rotation(&read, &back) {
                         return Some(w);
                     }
                     let s = scale(Some(w));
@@ -200,7 +212,8 @@ pub(crate) fn push_reversible_pose_edits(
                 (Some(undo), Some(abc)) => reversible(abc, angles, DEG_DECIMALS, |w| {
                     let read = kuka_abc(w[0], w[1], w[2]);
                     let back = undo.rotation * read;
-                    if same_rotation(&read, &back) {
+                    debug_assert!(!(undo_turns && same_rotation(&read, &back)));
+                    if !undo_turns && same_rotation(&read, &back) {
                         return Some(w);
                     }
                     let z = kuka_abc_angles(&back, Some(w));
@@ -761,6 +774,30 @@ mod tests {
                     same_rotation(x, y),
                     angle_between(x, y) < SAME_ROTATION_RAD
                 );
+            }
+        }
+
+        /// A turn `turns_clearly` takes moves every rotation beyond `same_rotation`, for turns
+        /// of 1e-16 to 1e-4 rad about any axis (the bound is 1e-10).
+        #[test]
+        fn a_clear_turn_is_never_the_same_rotation(
+            base in (-180.0..180.0f64, -90.0..90.0f64, -180.0..180.0f64),
+            axis in proptest::strategy::Strategy::prop_filter(
+                (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64),
+                "axis",
+                |a| a.0 * a.0 + a.1 * a.1 + a.2 * a.2 > 1e-3,
+            ),
+            exponent in -16.0..-4.0f64,
+            flip in proptest::bool::ANY,
+        ) {
+            let read = crate::geometry::kuka_abc(base.0, base.1, base.2);
+            let axis = nalgebra::Unit::new_normalize(nalgebra::Vector3::new(axis.0, axis.1, axis.2));
+            let mut undo = UnitQuaternion::from_axis_angle(&axis, 10f64.powf(exponent));
+            if flip {
+                undo = UnitQuaternion::new_unchecked(-undo.into_inner());
+            }
+            if turns_clearly(&undo) {
+                proptest::prop_assert!(!same_rotation(&read, &(undo * read)));
             }
         }
 
