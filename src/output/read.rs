@@ -13,6 +13,13 @@ pub const MAX_INPUT_BYTES: u64 = 512 * 1024 * 1024;
 /// `limit` bytes. Anything else is an [`std::io::ErrorKind::InvalidInput`] error that says what
 /// the path is, without opening it (opening a FIFO for reading blocks until a writer comes).
 pub fn read_regular_file(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    let (file, len) = open_regular(path, limit)?;
+    read_open(file, len, limit)
+}
+
+/// `path` opened if it is a regular file of at most `limit` bytes (see
+/// [`read_regular_file`]), with the length the open file has.
+fn open_regular(path: &Path, limit: u64) -> std::io::Result<(std::fs::File, u64)> {
     let meta = std::fs::metadata(path)?;
     check_kind(&meta)?;
     check_size(meta.len(), limit)?;
@@ -20,7 +27,12 @@ pub fn read_regular_file(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
     // The file may have been swapped or may grow between the check and the read.
     let meta = file.metadata()?;
     check_kind(&meta)?;
-    let mut bytes = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0));
+    Ok((file, meta.len()))
+}
+
+/// The bytes of an open file of about `len` bytes, refused beyond `limit`.
+fn read_open(file: std::fs::File, len: u64, limit: u64) -> std::io::Result<Vec<u8>> {
+    let mut bytes = Vec::with_capacity(usize::try_from(len).unwrap_or(0));
     file.take(limit + 1).read_to_end(&mut bytes)?;
     check_size(bytes.len() as u64, limit)?;
     Ok(bytes)
@@ -115,23 +127,15 @@ pub fn map_or_read_regular_file(path: &Path, limit: u64, map: bool) -> std::io::
     if !map {
         return read_regular_file(path, limit).map(InputBytes::from);
     }
-    let meta = std::fs::metadata(path)?;
-    check_kind(&meta)?;
-    check_size(meta.len(), limit)?;
-    let file = std::fs::File::open(path)?;
-    let meta = file.metadata()?;
-    check_kind(&meta)?;
-    check_size(meta.len(), limit)?;
-    if meta.len() >= MAP_FROM_BYTES {
+    let (file, len) = open_regular(path, limit)?;
+    check_size(len, limit)?;
+    if len >= MAP_FROM_BYTES {
         // A file system that cannot map (some network and FUSE mounts) is read instead.
         if let Ok(m) = map_file(&file) {
             return Ok(InputBytes(Held::Mapped(Arc::new(m))));
         }
     }
-    let mut bytes = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0));
-    file.take(limit + 1).read_to_end(&mut bytes)?;
-    check_size(bytes.len() as u64, limit)?;
-    Ok(InputBytes::from(bytes))
+    read_open(file, len, limit).map(InputBytes::from)
 }
 
 #[allow(unsafe_code)]

@@ -748,27 +748,38 @@ mod tests {
         Ok(())
     }
 
+    /// A rotation (A, B, C anywhere) and a turn of 1e-16 to 1e-4 rad about any axis, of
+    /// either sign.
+    fn small_turns()
+    -> impl proptest::strategy::Strategy<Value = (UnitQuaternion<f64>, UnitQuaternion<f64>)> {
+        use proptest::strategy::Strategy as _;
+        (
+            (-180.0..180.0f64, -90.0..90.0f64, -180.0..180.0f64),
+            (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64)
+                .prop_filter("axis", |a| a.0 * a.0 + a.1 * a.1 + a.2 * a.2 > 1e-3),
+            -16.0..-4.0f64,
+            proptest::bool::ANY,
+        )
+            .prop_map(|(base, axis, exponent, flip)| {
+                let at = crate::geometry::kuka_abc(base.0, base.1, base.2);
+                let axis =
+                    nalgebra::Unit::new_normalize(nalgebra::Vector3::new(axis.0, axis.1, axis.2));
+                let turn = UnitQuaternion::from_axis_angle(&axis, 10f64.powf(exponent));
+                let turn = match flip {
+                    true => UnitQuaternion::new_unchecked(-turn.into_inner()),
+                    false => turn,
+                };
+                (at, turn)
+            })
+    }
+
     proptest::proptest! {
         /// The shortcut of `same_rotation` decides as the angle does, for rotations turned by
         /// 1e-16 to 1e-4 rad (the bound is 1e-10), about any axis, and either sign.
         #[test]
-        fn same_rotation_is_the_angle_test(
-            base in (-180.0..180.0f64, -90.0..90.0f64, -180.0..180.0f64),
-            axis in proptest::strategy::Strategy::prop_filter(
-                (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64),
-                "axis",
-                |a| a.0 * a.0 + a.1 * a.1 + a.2 * a.2 > 1e-3,
-            ),
-            exponent in -16.0..-4.0f64,
-            flip in proptest::bool::ANY,
-        ) {
-            let a = crate::geometry::kuka_abc(base.0, base.1, base.2);
-            let axis = nalgebra::Unit::new_normalize(nalgebra::Vector3::new(axis.0, axis.1, axis.2));
-            let turn = UnitQuaternion::from_axis_angle(&axis, 10f64.powf(exponent));
-            let mut b = turn * a;
-            if flip {
-                b = UnitQuaternion::new_unchecked(-b.into_inner());
-            }
+        fn same_rotation_is_the_angle_test((a, turn) in small_turns()) {
+            // A turn's sign flipped flips the product's: both signs are met.
+            let b = turn * a;
             for (x, y) in [(&a, &b), (&b, &a), (&a, &a)] {
                 proptest::prop_assert_eq!(
                     same_rotation(x, y),
@@ -780,22 +791,7 @@ mod tests {
         /// A turn `turns_clearly` takes moves every rotation beyond `same_rotation`, for turns
         /// of 1e-16 to 1e-4 rad about any axis (the bound is 1e-10).
         #[test]
-        fn a_clear_turn_is_never_the_same_rotation(
-            base in (-180.0..180.0f64, -90.0..90.0f64, -180.0..180.0f64),
-            axis in proptest::strategy::Strategy::prop_filter(
-                (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64),
-                "axis",
-                |a| a.0 * a.0 + a.1 * a.1 + a.2 * a.2 > 1e-3,
-            ),
-            exponent in -16.0..-4.0f64,
-            flip in proptest::bool::ANY,
-        ) {
-            let read = crate::geometry::kuka_abc(base.0, base.1, base.2);
-            let axis = nalgebra::Unit::new_normalize(nalgebra::Vector3::new(axis.0, axis.1, axis.2));
-            let mut undo = UnitQuaternion::from_axis_angle(&axis, 10f64.powf(exponent));
-            if flip {
-                undo = UnitQuaternion::new_unchecked(-undo.into_inner());
-            }
+        fn a_clear_turn_is_never_the_same_rotation((read, undo) in small_turns()) {
             if turns_clearly(&undo) {
                 proptest::prop_assert!(!same_rotation(&read, &(undo * read)));
             }
