@@ -771,7 +771,7 @@ impl Name {
 
     /// The name's bytes: comparing names needs no UTF-8 check of the inline bytes (resolving a
     /// KRL program compares and looks up names by the hundred thousand).
-    fn as_bytes(&self) -> &[u8] {
+    pub(crate) fn as_bytes(&self) -> &[u8] {
         match &self.0 {
             NameRepr::Inline(len, bytes) => bytes.get(..*len as usize).unwrap_or_default(),
             NameRepr::Boxed(s) => s.as_bytes(),
