@@ -441,7 +441,7 @@ impl<T: Copy> Groups<T> {
         } = self;
         match table.entry(
             hash,
-            |&k| name_in(text, names, k) == key,
+            |&k| same_bytes(name_in(text, names, k), key),
             |&k| hash_of(name_in(text, names, k)),
         ) {
             Entry::Occupied(e) => *e.get(),
@@ -501,10 +501,9 @@ impl<T: Copy> Groups<T> {
 
     /// [`Groups::get`] of `key` hashed as `hash`.
     fn get_hashed(&self, key: &[u8], hash: u64) -> &[T] {
-        let Some(&k) = self
-            .table
-            .find(hash, |&k| name_in(&self.text, &self.names, k) == key)
-        else {
+        let Some(&k) = self.table.find(hash, |&k| {
+            same_bytes(name_in(&self.text, &self.names, k), key)
+        }) else {
             return &[];
         };
         let k = k as usize;

@@ -514,7 +514,9 @@ impl Usage {
         if let Some(w) = wobj {
             match &self.wobj {
                 None => self.wobj = Some(w.clone()),
-                Some(first) if first.eq_ignore_ascii_case(w) => {}
+                // The same handle is the same text: call after call names the frame its
+                // target was first used with, told by one compare of pointers.
+                Some(first) if Arc::ptr_eq(&first.0, &w.0) || first.eq_ignore_ascii_case(w) => {}
                 Some(_) => {
                     let rare = self.rare.get_or_insert_with(Box::default);
                     if !rare.other_wobjs.iter().any(|o| o.eq_ignore_ascii_case(w)) {
