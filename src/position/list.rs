@@ -280,15 +280,10 @@ impl PositionList {
                 };
                 let mut extax = Axes::new();
                 for k in 0..r.uint()? {
-                    extax.push(
-                        match memo
-                            .as_deref_mut()
-                            .and_then(|m| m.extax.get_mut(k as usize))
-                        {
-                            Some(seen) => r.num_seen(seen)?,
-                            None => r.num()?,
-                        },
-                    );
+                    extax.push(match DecodeMemo::axis(&mut memo, k) {
+                        Some(seen) => r.num_seen(seen)?,
+                        None => r.num()?,
+                    });
                 }
                 (config, extax)
             }
@@ -302,15 +297,10 @@ impl PositionList {
                 // The axes after the skid's are not read; those before it are stepped over.
                 for k in 0..r.uint()?.min(skid_axis as u64 + 1) {
                     match k == skid_axis as u64 {
-                        true => extax.push(
-                            match memo
-                                .as_deref_mut()
-                                .and_then(|m| m.extax.get_mut(k as usize))
-                            {
-                                Some(seen) => r.num_seen(seen)?,
-                                None => r.num()?,
-                            },
-                        ),
+                        true => extax.push(match DecodeMemo::axis(&mut memo, k) {
+                            Some(seen) => r.num_seen(seen)?,
+                            None => r.num()?,
+                        }),
                         false => {
                             r.skip_num()?;
                             extax.push(None);
@@ -351,17 +341,9 @@ impl PositionList {
 
     /// Position `i` of [`iter_reading`](Self::iter_reading), for a loop over the indices: the
     /// position comes straight to the caller, where through the iterator's adapters it was
-    /// copied three times (a position is some 400 bytes).
-    pub fn decoded(&self, i: usize, src: &[u8], reading: Reading) -> Position {
-        // Every position pushed decodes (a proptest and, in debug builds, every push holds it):
-        // the placeholder is never given, and it keeps the count and the indices exact.
-        self.get_reading(i, src, reading)
-            .unwrap_or_else(|| self.placeholder(i))
-    }
-
-    /// [`decoded`](Self::decoded), the orientation, configuration and external axes taken
-    /// from `memo` where their text is the text the position decoded before had there
-    /// (see [`DecodeMemo`]); the same position either way.
+    /// copied three times (a position is some 400 bytes). Its orientation, configuration and
+    /// external axes are taken from `memo` where their text is the text the position decoded
+    /// before had there (see [`DecodeMemo`]); the same position either way.
     pub fn decoded_with(
         &self,
         i: usize,
@@ -369,6 +351,8 @@ impl PositionList {
         reading: Reading,
         memo: &mut DecodeMemo,
     ) -> Position {
+        // Every position pushed decodes (a proptest and, in debug builds, every push holds it):
+        // the placeholder is never given, and it keeps the count and the indices exact.
         self.heads
             .get(i)
             .and_then(|h| self.get_head(h, src, reading, Some(memo)))
@@ -891,6 +875,16 @@ pub struct DecodeMemo {
     orient: [Option<SeenField>; 4],
     config: [Option<SeenField>; 4],
     extax: [Option<SeenField>; 6],
+}
+
+impl DecodeMemo {
+    /// External axis `k`'s slot of `memo`, if there is a memo and it keeps that axis.
+    fn axis<'m>(
+        memo: &'m mut Option<&mut DecodeMemo>,
+        k: u64,
+    ) -> Option<&'m mut Option<SeenField>> {
+        memo.as_deref_mut()?.extax.get_mut(usize::try_from(k).ok()?)
+    }
 }
 
 /// One literal's text and what it decoded to.
