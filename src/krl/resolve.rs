@@ -559,7 +559,7 @@ END\n";
         let usage: Vec<_> = f
             .positions
             .usages()
-            .map(|u| (u.wobj.as_deref(), u.tool.as_deref(), u.stationary_tool))
+            .map(|u| (u.wobj.as_deref(), u.tool.as_deref(), u.stationary_tool()))
             .collect();
         assert_eq!(
             usage,

@@ -32,6 +32,10 @@ struct Head {
     body: usize,
 }
 
+/// One head per target, 100,000 in a 20 MB module: a layout change that grows it fails the
+/// build.
+const _: () = assert!(std::mem::size_of::<Head>() <= 48);
+
 /// Slot tags of a number or bit field.
 const ABSENT: u8 = 0;
 const READ_AGAIN: u8 = 1;

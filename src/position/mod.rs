@@ -391,9 +391,11 @@ impl std::fmt::Display for FrameName {
 
 /// Where and how a target is used by the motion instructions that reference it.
 ///
-/// Forty-eight bytes (it was 96), one per target: the names are shared [`FrameName`]s, and
-/// what few targets have — a second work object, a reason their pose is only known at run
-/// time — is kept apart, behind one pointer ([`Usage::other_wobjs`], [`Usage::run_time`]).
+/// Forty bytes (it was 96), one per target: the names are shared [`FrameName`]s, and what few
+/// targets have — a second work object, a reason their pose is only known at run time, a
+/// stationary tool — is kept apart, behind one pointer ([`Usage::other_wobjs`],
+/// [`Usage::run_time`], [`Usage::stationary_tool`]). A flag of its own made it 48: the
+/// position list keeps a usage per target, and every page of it is one the kernel clears.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Usage {
     /// The RAPID work object, or the KRL base (`"BASE_DATA[3]"`), of the first use. `None` if
@@ -401,8 +403,6 @@ pub struct Usage {
     pub wobj: Option<FrameName>,
     /// The tool of the first use.
     pub tool: Option<FrameName>,
-    /// The target is a stationary-tool point (KRL `IPO_FRAME #TCP`, RAPID `robhold TRUE`).
-    pub stationary_tool: bool,
     /// 1-based lines of the instructions that use it.
     pub lines: Lines,
     /// Further work objects and the run-time reason, when there are any.
@@ -414,11 +414,12 @@ pub struct Usage {
 struct RareUsage {
     other_wobjs: Vec<FrameName>,
     run_time: Option<RunTimeValue>,
+    stationary_tool: bool,
 }
 
 /// A target's usage is kept for each of 100,000 targets: a layout change that grows it fails
 /// the build.
-const _: () = assert!(std::mem::size_of::<Usage>() <= 48);
+const _: () = assert!(std::mem::size_of::<Usage>() <= 40);
 
 /// Why a target's pose is only known when the program runs, so no offline transform can
 /// correct it.
@@ -472,6 +473,12 @@ impl Usage {
     pub fn work_objects(&self) -> impl Iterator<Item = &str> {
         let others = self.other_wobjs().iter().map(|w| &**w);
         self.wobj.as_deref().into_iter().chain(others)
+    }
+
+    /// The target is a stationary-tool point (KRL `IPO_FRAME #TCP`, RAPID `robhold TRUE`):
+    /// some use of it says so.
+    pub fn stationary_tool(&self) -> bool {
+        self.rare.as_ref().is_some_and(|r| r.stationary_tool)
     }
 
     /// Set when the target's pose is only known when the program runs: the first reason found.
@@ -528,7 +535,9 @@ impl Usage {
         if self.tool.is_none() {
             self.tool = tool.cloned();
         }
-        self.stationary_tool |= stationary;
+        if stationary {
+            self.rare.get_or_insert_with(Box::default).stationary_tool = true;
+        }
         // Lines of an input of at most 512 MiB fit 32 bits.
         let line = u32::try_from(line).unwrap_or(u32::MAX);
         if !self.lines.contains(&line) {
@@ -1102,7 +1111,7 @@ mod tests {
         assert_eq!(u.wobj.as_deref(), Some("wCar"));
         assert_eq!(u.tool.as_deref(), Some("tGun"));
         assert_eq!(u.other_wobjs(), ["wTable"]);
-        assert!(u.stationary_tool);
+        assert!(u.stationary_tool());
         assert_eq!(u.lines, [10, 12, 20]);
     }
 

@@ -6,10 +6,20 @@ use super::Span;
 ///
 /// A line ends at `\n`, `\r\n` or a bare `\r`: robot controllers and old editors write all three,
 /// sometimes in one file, and a diagnostic must point at the line a user sees in their editor.
+///
+/// The starts are `u32`: a 20 MB module has 220,000 lines, and every page of the index is a
+/// fresh one the kernel clears (0.9 MB less at `usize`'s half). No input reaches 4 GiB
+/// ([`MAX_INPUT_BYTES`](crate::output::MAX_INPUT_BYTES)); past it a start is clamped, so an
+/// offset there is placed on a wrong line, never a panic.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct LineIndex {
-    starts: Vec<usize>,
+    starts: Vec<u32>,
     len: usize,
+}
+
+/// `offset` as a stored line start (see [`LineIndex`]).
+fn narrow(offset: usize) -> u32 {
+    u32::try_from(offset).unwrap_or(u32::MAX)
 }
 
 /// Where [`LineIndex::line_col_from`] found the last offset asked: the line's index.
@@ -34,7 +44,7 @@ impl LineIndex {
             } else {
                 i + 1
             };
-            starts.push(end);
+            starts.push(narrow(end));
             at = end;
         }
         LineIndex {
@@ -51,11 +61,17 @@ impl LineIndex {
     /// 1-based line and 1-based byte column of `offset` (clamped to the source).
     pub fn line_col(&self, offset: usize) -> (usize, usize) {
         let offset = offset.min(self.len);
-        let line = match self.starts.binary_search(&offset) {
-            Ok(i) => i,
-            Err(i) => i - 1,
-        };
-        (line + 1, offset - self.starts[line] + 1)
+        // The first start is 0, so the partition point is at least 1.
+        let line = self
+            .starts
+            .partition_point(|&s| s as usize <= offset)
+            .saturating_sub(1);
+        (line + 1, offset - self.start(line) + 1)
+    }
+
+    /// Where line `line` (0-based) starts; 0 for one past the end.
+    fn start(&self, line: usize) -> usize {
+        self.starts.get(line).map_or(0, |&s| s as usize)
     }
 
     /// [`LineIndex::line_col`] found from `cursor`, the line of the offset asked before: a
@@ -64,13 +80,13 @@ impl LineIndex {
     pub fn line_col_from(&self, cursor: &mut LineCursor, offset: usize) -> (usize, usize) {
         let offset = offset.min(self.len);
         let mut line = cursor.0;
-        if self.starts.get(line).is_some_and(|&s| s <= offset) {
+        if self.starts.get(line).is_some_and(|&s| s as usize <= offset) {
             for _ in 0..4 {
                 match self.starts.get(line + 1) {
-                    Some(&next) if next <= offset => line += 1,
+                    Some(&next) if next as usize <= offset => line += 1,
                     _ => {
                         cursor.0 = line;
-                        return (line + 1, offset - self.starts[line] + 1);
+                        return (line + 1, offset - self.start(line) + 1);
                     }
                 }
             }
@@ -90,7 +106,8 @@ impl LineIndex {
         let Some(&start) = self.starts.get(line.wrapping_sub(1)) else {
             return Span::new(self.len, self.len);
         };
-        let mut end = self.starts.get(line).copied().unwrap_or(self.len);
+        let start = start as usize;
+        let mut end = self.starts.get(line).map_or(self.len, |&s| s as usize);
         while end > start && matches!(src.get(end - 1), Some(b'\n' | b'\r')) {
             end -= 1;
         }
@@ -118,12 +135,12 @@ mod tests {
     }
 
     /// The byte-at-a-time rule the index implements, written out independently.
-    fn starts_by_bytes(src: &[u8]) -> Vec<usize> {
+    fn starts_by_bytes(src: &[u8]) -> Vec<u32> {
         let mut starts = vec![0];
         let mut i = 0;
         while i < src.len() {
             if src[i] == b'\n' || (src[i] == b'\r' && src.get(i + 1) != Some(&b'\n')) {
-                starts.push(i + 1);
+                starts.push(i as u32 + 1);
             }
             i += 1;
         }

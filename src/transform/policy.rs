@@ -282,7 +282,7 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
             "check the value: it is no configuration or orientation a controller accepts",
         );
     }
-    if p.usage.stationary_tool {
+    if p.usage.stationary_tool() {
         return refuse(
             RefusalKind::StationaryTool,
             format!(

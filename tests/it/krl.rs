@@ -87,7 +87,7 @@ fn dump_position(src: &[u8], p: &Position) -> String {
         if !u.other_wobjs().is_empty() {
             s += &format!(" also={:?}", u.other_wobjs());
         }
-        if u.stationary_tool {
+        if u.stationary_tool() {
             s += " stationary-tool";
         }
     }
@@ -196,7 +196,7 @@ fn spot_line_has_160_points_on_the_track_resolved_through_fdat() {
     assert_eq!(p12.usage.wobj.as_deref(), Some("BASE_DATA[1]"));
     assert_eq!(p12.usage.tool.as_deref(), Some("TOOL_DATA[1]"));
     assert!(p12.usage.other_wobjs().is_empty());
-    assert!(!p12.usage.stationary_tool);
+    assert!(!p12.usage.stationary_tool());
     let src = &program.files[0];
     let line = src.lines.line(
         src.source
@@ -304,17 +304,17 @@ fn fdat_tcp_and_with_clauses_resolve() {
             .find(|p| p.name.as_deref() == Some(n))
             .unwrap()
     };
-    assert!(!by("XP1").usage.stationary_tool);
+    assert!(!by("XP1").usage.stationary_tool());
     assert_eq!(by("XP1").usage.wobj.as_deref(), Some("$WORLD"));
     for n in ["XP2", "XP3"] {
-        assert!(by(n).usage.stationary_tool, "{n}");
+        assert!(by(n).usage.stationary_tool(), "{n}");
         assert_eq!(by(n).usage.wobj.as_deref(), Some("BASE_DATA[4]"));
         assert_eq!(by(n).usage.tool.as_deref(), Some("TOOL_DATA[2]"));
     }
     // SPTP … WITH $BASE=SBASE(FP4.BASE_NO), $TOOL=STOOL2(FP4), $IPO_MODE=SIPO_MODE(…).
     assert_eq!(by("XP4").usage.wobj.as_deref(), Some("BASE_DATA[2]"));
     assert_eq!(by("XP4").usage.tool.as_deref(), Some("TOOL_DATA[1]"));
-    assert!(!by("XP4").usage.stationary_tool);
+    assert!(!by("XP4").usage.stationary_tool());
 }
 
 #[test]
@@ -825,7 +825,7 @@ fn program_from_sources_in_memory_matches_the_program_from_disk() {
                             pos.label(),
                             pos.usage.wobj,
                             pos.usage.tool,
-                            pos.usage.stationary_tool,
+                            pos.usage.stationary_tool(),
                             pos.usage.lines
                         )
                     }))

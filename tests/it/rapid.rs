@@ -112,7 +112,11 @@ fn dump(f: &ParsedFile) -> String {
             } else {
                 format!(" ALSO={}", u.other_wobjs().join("+"))
             },
-            if u.stationary_tool { " STATIONARY" } else { "" },
+            if u.stationary_tool() {
+                " STATIONARY"
+            } else {
+                ""
+            },
             u.lines
         );
     }
@@ -324,7 +328,7 @@ fn usage_two_wobjs_is_flagged_with_a_warning() {
 #[test]
 fn usage_stationary_tool_and_moving_wobj() {
     let f = load("stationary_tool.mod");
-    assert!(f.positions().all(|p| p.usage.stationary_tool));
+    assert!(f.positions().all(|p| p.usage.stationary_tool()));
     assert_eq!(frame(&f, "wNozzle").held_by_robot, Some(true));
     let m = load("moving_wobj.mod");
     let w = frame(&m, "wStn1");
@@ -336,7 +340,7 @@ fn usage_stationary_tool_and_moving_wobj() {
     assert_eq!(seam2.usage.wobj.as_deref(), Some("wStn1"));
     // ArcL: the tool is the declared tooldata, not the argument after the zone.
     assert_eq!(seam2.usage.tool.as_deref(), Some("tTorch"));
-    assert!(!seam2.usage.stationary_tool);
+    assert!(!seam2.usage.stationary_tool());
 }
 
 #[test]
@@ -943,7 +947,7 @@ fn frame_names_keep_the_first_spelling_and_compare_without_case() {
             u.wobj.as_deref().map(str::to_owned),
             u.tool.as_deref().map(str::to_owned),
             u.other_wobjs().len(),
-            u.stationary_tool,
+            u.stationary_tool(),
             u.lines.to_vec(),
         )
     };
