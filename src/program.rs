@@ -230,12 +230,12 @@ pub fn load_group(paths: &[PathBuf], options: &LoadOptions) -> Vec<Result<Progra
             continue;
         }
         match read_source(p, options) {
-            Ok(_) => readable.push(p.clone()),
+            Ok(bytes) => readable.push((p.clone(), bytes)),
             Err(e) => out.push(Err(e)),
         }
     }
     if !readable.is_empty() {
-        out.push(dialect.load_together(&readable, options));
+        out.push(dialect.load_together(readable, options));
     }
     out
 }

@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::kinematics::{ConfigValue, Joints, Kinematics};
+use crate::output::InputBytes;
 use crate::position::{Config, KindSpec, PositionKind, Program};
 use crate::program::{LoadError, LoadOptions};
 use crate::syntax::Edit;
@@ -146,24 +147,38 @@ impl Dialect for Krl {
     /// others.
     fn load_together(
         &self,
-        paths: &[PathBuf],
+        sources: Vec<(PathBuf, InputBytes)>,
         options: &LoadOptions,
     ) -> Result<Program, LoadError> {
         let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
+        // Each file given with its partner after it, once, in that order; a partner given too
+        // is taken from the bytes read, the others are read here.
         let mut all: Vec<PathBuf> = Vec::new();
-        for p in paths {
+        for (p, _) in &sources {
             all.push(p.clone());
             all.extend(crate::krl::partner_of(p));
         }
         let mut seen = std::collections::BTreeSet::new();
         all.retain(|p| seen.insert(same_file(p)));
+        let mut given: Vec<(PathBuf, Option<InputBytes>)> = sources
+            .into_iter()
+            .map(|(p, bytes)| (same_file(&p), Some(bytes)))
+            .collect();
         let own_config = all.iter().any(|p| is_config_dat(p));
-        let mut sources = Vec::with_capacity(all.len());
+        let mut read = Vec::with_capacity(all.len());
         for p in all {
-            let bytes = crate::program::read_source(&p, options)?;
-            sources.push((p, bytes));
+            let key = same_file(&p);
+            let bytes = match given
+                .iter_mut()
+                .find(|(g, _)| *g == key)
+                .and_then(|(_, b)| b.take())
+            {
+                Some(bytes) => bytes,
+                None => crate::program::read_source(&p, options)?,
+            };
+            read.push((p, bytes));
         }
-        crate::krl::load_program_from_sources(sources, &tree_options(own_config, options))
+        crate::krl::load_program_from_sources(read, &tree_options(own_config, options))
     }
 
     fn vocabulary(&self) -> &'static Vocabulary {
@@ -299,6 +314,33 @@ fn reads_as_u32(text: &[u8]) -> bool {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    #[test]
+    fn files_loaded_together_take_the_bytes_given_and_read_only_their_partners() {
+        let dir = tempfile::tempdir().unwrap();
+        let src = dir.path().join("a.src");
+        let dat = dir.path().join("a.dat");
+        // On disk the .src differs from the bytes given: the given ones are what load_group
+        // read, and they are parsed; the .dat, not given, is read from disk.
+        std::fs::write(&src, b"DEF a()\nEND\n").unwrap();
+        std::fs::write(
+            &dat,
+            b"DEFDAT a\nDECL E6POS XP1={X 1,Y 2,Z 3,A 0,B 0,C 0}\nENDDAT\n",
+        )
+        .unwrap();
+        let given: &[u8] = b"DEF a()\nPTP XP1\nEND\n";
+        let program = Krl
+            .load_together(
+                vec![(src.clone(), InputBytes::from(given.to_vec()))],
+                &LoadOptions::default(),
+            )
+            .unwrap();
+        let paths: Vec<&Path> = program.files.iter().map(|f| f.path.as_path()).collect();
+        assert_eq!(paths, [src.as_path(), dat.as_path()]);
+        assert_eq!(&*program.files[0].source, given);
+        let xp1 = program.files[1].positions().next().unwrap();
+        assert_eq!(&*xp1.usage.lines, &[2]);
+    }
 
     /// The check as it was written on the Latin-1 text, for comparison.
     fn on_text(literal: &[u8]) -> Option<String> {

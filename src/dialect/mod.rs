@@ -14,6 +14,7 @@ use std::path::{Path, PathBuf};
 use std::sync::RwLock;
 
 use crate::kinematics::{ConfigValue, Joints, Kinematics};
+use crate::output::InputBytes;
 use crate::position::{Config, Program};
 use crate::program::{LoadError, LoadOptions};
 use crate::syntax::Edit;
@@ -79,16 +80,19 @@ pub trait Dialect: Sync + 'static {
         false
     }
 
-    /// One program of several files of this language, resolved together. The default loads the
-    /// first (languages that group by [`Dialect::program_root`] override it).
+    /// One program of several files of this language, resolved together, from their bytes as
+    /// [`load_group`](crate::program::load_group) read them (each file is read once: a task of
+    /// many modules was read twice, once to find the unreadable ones and once to parse). The
+    /// default loads each file on its own (languages that group by [`Dialect::program_root`]
+    /// override it).
     fn load_together(
         &self,
-        paths: &[PathBuf],
+        sources: Vec<(PathBuf, InputBytes)>,
         options: &LoadOptions,
     ) -> Result<Program, LoadError> {
         let mut files = Vec::new();
-        for p in paths {
-            files.extend(self.load(p, options)?.files);
+        for (p, _) in sources {
+            files.extend(self.load(&p, options)?.files);
         }
         Ok(Program { files })
     }

@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::output::InputBytes;
 use crate::position::{Config, KindSpec, PositionKind, Program};
 use crate::program::{LoadError, LoadOptions, read_source};
 use crate::syntax::Edit;
@@ -114,15 +115,11 @@ impl Dialect for Rapid {
     /// The modules of one task, resolved together (task and global data seen across modules).
     fn load_together(
         &self,
-        paths: &[PathBuf],
-        options: &LoadOptions,
+        sources: Vec<(PathBuf, InputBytes)>,
+        _options: &LoadOptions,
     ) -> Result<Program, LoadError> {
-        let mut files = Vec::with_capacity(paths.len());
-        for p in paths {
-            files.push((p.clone(), read_source(p, options)?));
-        }
         Ok(Program {
-            files: crate::rapid::parse_task(files),
+            files: crate::rapid::parse_task(sources),
         })
     }
 
@@ -154,5 +151,39 @@ impl Dialect for Rapid {
                 integer_edit(f, -(v.round() as i64) - 1)
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn modules_loaded_together_are_parsed_from_the_bytes_given() {
+        // No file has these names: the modules' bytes are the ones load_group read, and
+        // loading them together reads nothing again.
+        let a: &[u8] = b"MODULE A\r\n  CONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\r\nENDMODULE\r\n";
+        let b: &[u8] =
+            b"MODULE B\nPROC main()\n  MoveL p1, v100, fine, tool0;\nENDPROC\nENDMODULE\n";
+        let sources = vec![
+            (
+                PathBuf::from("no-such-task/A.mod"),
+                InputBytes::from(a.to_vec()),
+            ),
+            (
+                PathBuf::from("no-such-task/B.mod"),
+                InputBytes::from(b.to_vec()),
+            ),
+        ];
+        let program = Rapid
+            .load_together(sources, &LoadOptions::default())
+            .unwrap();
+        let [fa, fb] = &program.files[..] else {
+            panic!("two modules, got {}", program.files.len());
+        };
+        assert_eq!((&*fa.source, &*fb.source), (a, b));
+        // Resolved as one task: the target of A is used by B's motion.
+        let p1 = fa.positions().next().unwrap();
+        assert_eq!(&*p1.usage.lines, &[3]);
     }
 }
