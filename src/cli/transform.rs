@@ -549,12 +549,15 @@ fn load_profile(cell: &Cell, robot: &Robot) -> anyhow::Result<Profile> {
     Ok(profile)
 }
 
-fn load_options(robot: Option<&Robot>) -> LoadOptions {
+/// How a transform loads `robot`'s programs. Inputs are mapped unless the run writes them in
+/// place: an in-place write's transaction compares each input on disk with the bytes it read,
+/// and a mapped file would change with the disk and hide a concurrent edit. A run that writes
+/// elsewhere (`-o`, `--out-dir`, `--diff`, `--check`) never writes an input (`output::plan`
+/// refuses to), so it reads its inputs as `check` does (docs/design.md §9, "Reading inputs").
+fn load_options(robot: Option<&Robot>, in_place: bool) -> LoadOptions {
     LoadOptions {
         krl_config_dat: robot.and_then(|r| r.config_dat.clone()),
-        // A transform's transaction compares each input on disk with the bytes it read; a
-        // mapped file would change with the disk and hide a concurrent edit.
-        map_inputs: false,
+        map_inputs: !in_place,
     }
 }
 
@@ -915,7 +918,7 @@ fn run_each(
     prov: &Provenance,
     transform: impl Fn(Program) -> anyhow::Result<ProgramResult>,
 ) -> anyhow::Result<Exit> {
-    let programs = load_programs(files, &load_options(robot))?;
+    let programs = load_programs(files, &load_options(robot, out.in_place))?;
     if let Some(exit) = refuse_syntax_errors(command, &programs)? {
         return Ok(exit);
     }
@@ -1199,7 +1202,7 @@ fn run_transfer_inner(mut a: TransferArgs) -> anyhow::Result<Exit> {
     };
     plan.from.default_wobj = a.default_wobj.clone();
     plan.to.default_wobj = a.default_wobj.clone();
-    let written = load_options(Some(to));
+    let written = load_options(Some(to), a.out.in_place);
     run_each(
         "transfer",
         &a.files,

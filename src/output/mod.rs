@@ -205,7 +205,7 @@ mod tests {
         ProgramResult {
             files: vec![FileResult {
                 path: PathBuf::from(path),
-                original: old.as_bytes().to_vec(),
+                original: old.as_bytes().to_vec().into(),
                 output: new.as_bytes().to_vec(),
                 refusals: Vec::new(),
                 notes: Vec::new(),

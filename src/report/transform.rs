@@ -159,7 +159,7 @@ mod tests {
     fn result(changes: Vec<TargetChange>) -> FileResult {
         FileResult {
             path: PathBuf::from("a.mod"),
-            original: b"x".to_vec(),
+            original: b"x".to_vec().into(),
             output: b"y".to_vec(),
             refusals: Vec::new(),
             notes: Vec::new(),

@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use crate::output::InputBytes;
 use crate::position::{Name, Program};
 use crate::syntax::packed::{Chunks, VARINT_MAX, put_varint, read_varint};
 use crate::syntax::{EditError, EditList};
@@ -272,8 +273,9 @@ impl ProgramEdits {
 pub struct FileResult {
     /// The file, as loaded.
     pub path: PathBuf,
-    /// Its bytes before the transform.
-    pub original: Vec<u8>,
+    /// Its bytes before the transform, as they were loaded: read, or mapped from a file the
+    /// run does not write (see `LoadOptions::map_inputs`).
+    pub original: InputBytes,
     /// Its bytes after: `original` with the edits spliced in, every other byte unchanged.
     pub output: Vec<u8>,
     /// The targets left unchanged, and why.
@@ -287,7 +289,7 @@ pub struct FileResult {
 impl FileResult {
     /// Whether the output differs from the original.
     pub fn changed(&self) -> bool {
-        self.original != self.output
+        *self.original != *self.output
     }
 }
 
@@ -318,7 +320,7 @@ pub fn apply(program: &Program, edits: ProgramEdits) -> Result<ProgramResult, Ed
         fe.changes.shrink_to_fit();
         files.push(FileResult {
             path: file.path.clone(),
-            original: file.source.to_vec(),
+            original: file.source.clone(),
             output,
             refusals: fe.refusals,
             notes: fe.notes,
@@ -333,10 +335,10 @@ pub fn apply(program: &Program, edits: ProgramEdits) -> Result<ProgramResult, Ed
 /// dropped before the first output is built. On a large program the model is several times the
 /// file, and with it alive the outputs and their copies (stamp, precision) set `correct`'s peak.
 pub fn apply_owned(program: Program, edits: ProgramEdits) -> Result<ProgramResult, EditError> {
-    let sources: Vec<(PathBuf, Vec<u8>)> = program
+    let sources: Vec<(PathBuf, InputBytes)> = program
         .files
         .into_iter()
-        .map(|f| (f.path, f.source.into_vec()))
+        .map(|f| (f.path, f.source))
         .collect();
     let mut files = Vec::with_capacity(sources.len());
     for ((path, original), mut fe) in sources.into_iter().zip(edits.files) {

@@ -104,7 +104,7 @@ mod tests {
     fn file(path: &str, text: &str) -> FileResult {
         FileResult {
             path: PathBuf::from(path),
-            original: text.as_bytes().to_vec(),
+            original: text.as_bytes().to_vec().into(),
             output: text.as_bytes().to_vec(),
             refusals: Vec::new(),
             notes: Vec::new(),
@@ -132,7 +132,7 @@ mod tests {
             b"&ACCESS RVP\nDEF side_b( )\n  PTP XP1\nEND\n"
         );
         assert_eq!(r.files[1].output, b"DEFDAT  side_b PUBLIC\nENDDAT\n");
-        assert_eq!(r.files[2].output, r.files[2].original);
+        assert_eq!(r.files[2].output[..], r.files[2].original[..]);
         let mut m = ProgramResult {
             files: vec![file("a.mod", "MODULE a\nENDMODULE\n")],
         };

@@ -195,7 +195,7 @@ fn combine(
         let output = restore_unmoved(a, b)?;
         files.push(FileResult {
             path: a.path.clone(),
-            original: a.source.to_vec(),
+            original: a.source.clone(),
             output,
             refusals,
             notes,

@@ -448,7 +448,7 @@ fn zero_deviation_profile_leaves_every_sample_byte_identical() {
             let result = apply(&program, track_correction(&program, &setup, dir)).unwrap();
             for f in &result.files {
                 assert!(
-                    f.output == f.original,
+                    f.output[..] == f.original[..],
                     "{} changed under {dir:?}",
                     f.path.display()
                 );
@@ -719,6 +719,60 @@ fn output_modes() {
     assert_eq!(code, 3);
     assert_eq!(std::fs::read(&input).unwrap(), now);
     assert!(!backup.exists());
+}
+
+/// A module of a megabyte and more is mapped when the run writes elsewhere and read when it
+/// writes in place (docs/design.md §9, "Reading inputs"): both write the same bytes, and the
+/// input written elsewhere is left as it was.
+#[test]
+fn a_large_module_corrects_alike_mapped_and_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut module = String::from("MODULE Big\r\n");
+    let mut moves = String::from("  PROC main()\r\n");
+    let mut i = 0;
+    while module.len() < 1_200_000 {
+        module.push_str(&format!(
+            "  CONST robtarget p{i}:=[[{}.5,-700.25,{}],[0.707107,0,0.707107,0],[0,0,-1,0],[{},9E+09,9E+09,9E+09,9E+09,9E+09]];\r\n",
+            1200 + i % 500,
+            250 + i % 40,
+            150 + i % 7000
+        ));
+        moves.push_str(&format!(
+            "    MoveL p{i}, v1000, z10, tool0\\WObj:=wobj_car;\r\n"
+        ));
+        i += 1;
+    }
+    module.push_str(
+        "  PERS wobjdata wobj_car:=[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\r\n",
+    );
+    module.push_str(&moves);
+    module.push_str("  ENDPROC\r\nENDMODULE\r\n");
+    assert!(module.len() as u64 >= trackfix::output::MAP_FROM_BYTES);
+    let input = dir.path().join("Big.mod");
+    let in_place = dir.path().join("in_place/Big.mod");
+    std::fs::create_dir(in_place.parent().unwrap()).unwrap();
+    std::fs::write(&input, &module).unwrap();
+    std::fs::write(&in_place, &module).unwrap();
+    let out_dir = dir.path().join("out");
+    let common = ["--cell", "samples/cell_rules.toml", "--robot", "r1"];
+    let run = |target: &Path, mode: &[&str]| {
+        let (code, _, err) =
+            trackfix(&[&["correct", target.to_str().unwrap()], mode, &common[..]].concat());
+        assert_eq!(code, 0, "{err}");
+        assert!(err.contains(&format!("{i} target(s) changed")), "{err}");
+    };
+    run(&input, &["--out-dir", out_dir.to_str().unwrap()]);
+    run(&in_place, &["--in-place", "--no-backup"]);
+    let (mapped, read) = (
+        std::fs::read(out_dir.join("Big.mod")).unwrap(),
+        std::fs::read(&in_place).unwrap(),
+    );
+    assert!(mapped != module.as_bytes());
+    assert!(
+        mapped == read,
+        "the mapped run wrote other bytes than the read one"
+    );
+    assert!(std::fs::read(&input).unwrap() == module.as_bytes());
 }
 
 // ---------------------------------------------------------------------------------------------
