@@ -498,24 +498,37 @@ pub fn strip_in_place(src: &mut Vec<u8>, dialect: &dyn crate::dialect::Dialect) 
     true
 }
 
-/// A number literal's place in a file: its byte span, decimals after the point, and its
-/// exponent (with where the mantissa ends).
+/// A number literal's place in a file: its byte span, decimals after the point, where the
+/// mantissa ends and the precision it resolves.
 #[derive(Clone, Copy, Debug)]
 struct NumberToken {
     start: usize,
     end: usize,
     /// Digits after the point (of the mantissa).
     decimals: u32,
-    /// The exponent's value (0 without one).
-    exponent: i32,
     /// Bytes of the exponent suffix (`E+2` → 3; 0 without one).
     exponent_len: u32,
+    /// [`NumberToken::precision`], worked out once as the literal is read: the carry tests it
+    /// up to three times a literal.
+    precision: i32,
 }
 
 impl NumberToken {
+    /// A literal of `decimals` and `exponent` (0 without one) with its suffix of
+    /// `exponent_len` bytes.
+    fn new(start: usize, end: usize, decimals: u32, exponent: i32, exponent_len: u32) -> Self {
+        NumberToken {
+            start,
+            end,
+            decimals,
+            exponent_len,
+            precision: (decimals as i32).saturating_sub(exponent),
+        }
+    }
+
     /// Decimal places the literal resolves: its decimals minus its exponent (`1.50123E+2` → 3).
     fn precision(&self) -> i32 {
-        (self.decimals as i32).saturating_sub(self.exponent)
+        self.precision
     }
 
     /// Whether it resolves exactly a house precision (the literals `widened=` lists).
@@ -594,6 +607,32 @@ fn after_digits(src: &[u8], mut i: usize) -> usize {
     i
 }
 
+/// The end and decimals of the literal at `start` when it has no exponent, its digits
+/// before the point are fewer than 8 and so are those after it (`1520.652,`, `0.000427]`): the
+/// non-digits of the word at the start and of the one after the point give both digit runs in
+/// a line, without [`after_digits`]'s loops and the tests between them. `None` for any other
+/// literal, and for bytes that are no literal (a word byte after the digits):
+/// [`NumberTokens::next`] reads those as it did.
+#[inline(always)]
+fn short_literal(src: &[u8], start: usize) -> Option<(usize, u32)> {
+    // The word at `at` and the place of its first non-digit, if it has one.
+    let digits = |at: usize| {
+        let word = *src.get(at..)?.first_chunk::<8>()?;
+        let others = !bytes_in(u64::from_le_bytes(word), b'0', b'9' + 1) & !LOW7;
+        (others != 0).then(|| (word, (others.trailing_zeros() / 8) as usize & 7))
+    };
+    let (word, n) = digits(start)?;
+    let (end, decimals, after) = match word[n] {
+        b'.' => {
+            let (word, d) = digits(start + n + 1)?;
+            (start + n + 1 + d, d as u32, word[d])
+        }
+        b => (start + n, 0, b),
+    };
+    // An exponent's `E` is a word byte: left to the byte-wise scan.
+    (!WORD[after as usize]).then_some((end, decimals))
+}
+
 impl NumberTokens {
     /// The next literal of `src` (the same bytes at and after the place as at the last step).
     #[inline(always)]
@@ -608,6 +647,7 @@ impl NumberTokens {
                 Some(s) if i <= s.start => s.start.min(src.len()),
                 _ => src.len(),
             };
+            let from = i;
             while i < limit && !word(src[i]) {
                 i += 1;
             }
@@ -623,7 +663,8 @@ impl NumberTokens {
             let b = src[i];
             let starts =
                 b.is_ascii_digit() || (b == b'.' && src.get(i + 1).is_some_and(u8::is_ascii_digit));
-            if !starts || (i > 0 && word(src[i - 1])) {
+            // The byte before is outside words where the loop above ran over it.
+            if !starts || (i == from && i > 0 && word(src[i - 1])) {
                 // Skip the rest of a word so `p10` gives no token (`b` is a word byte here).
                 while i < src.len() && word(src[i]) {
                     i += 1;
@@ -631,6 +672,10 @@ impl NumberTokens {
                 continue;
             }
             let start = i;
+            if let Some((end, decimals)) = short_literal(src, start) {
+                self.i = end;
+                return Some(NumberToken::new(start, end, decimals, 0, 0));
+            }
             i = after_digits(src, i);
             let mut decimals = 0;
             if src.get(i) == Some(&b'.') {
@@ -664,13 +709,8 @@ impl NumberTokens {
                 continue;
             }
             self.i = i;
-            return Some(NumberToken {
-                start,
-                end: i,
-                decimals: u32::try_from(decimals).unwrap_or(u32::MAX),
-                exponent,
-                exponent_len,
-            });
+            let decimals = u32::try_from(decimals).unwrap_or(u32::MAX);
+            return Some(NumberToken::new(start, i, decimals, exponent, exponent_len));
         }
         self.i = i;
         None
@@ -756,8 +796,18 @@ impl Alike {
 }
 
 /// The place of house precision `p` in [`HOUSE_DECIMALS`], if it is one.
+/// By table, one test for every literal's precision instead of one for each house precision.
 fn house_slot(p: i32) -> Option<usize> {
-    HOUSE_DECIMALS.iter().position(|&d| d as i32 == p)
+    const SLOTS: [Option<usize>; 8] = {
+        let mut slots = [None; 8];
+        let mut h = 0;
+        while h < HOUSE_DECIMALS.len() {
+            slots[HOUSE_DECIMALS[h]] = Some(h);
+            h += 1;
+        }
+        slots
+    };
+    SLOTS.get(usize::try_from(p).ok()?).copied().flatten()
 }
 
 /// What [`carry_precision`] made of a transform's output.
@@ -1030,7 +1080,11 @@ fn carry_unstamped(original: &[u8], output: Vec<u8>) -> CarriedPrecision {
             let entry = b.precision().min(a.precision());
             if entry != a.precision() {
                 let entry = entry.max(MIN_FIRST_PRECISION as i32) as i8;
-                lists[h].resize(count[h], HOUSE_DECIMALS[h] as i8);
+                // Most entries follow one another (every literal rewritten): only a run of
+                // unchanged ones since the last is filled in, and without a call otherwise.
+                if lists[h].len() < count[h] {
+                    lists[h].resize(count[h], HOUSE_DECIMALS[h] as i8);
+                }
                 lists[h].push(entry);
             }
             count[h] += 1;
@@ -1603,6 +1657,89 @@ mod precision_tests {
             let fast = carry_unstamped(&original, output.clone());
             proptest::prop_assert_eq!(&fast.output, &output);
             proptest::prop_assert_eq!(fast, carry(&original, output, &RAPID, false));
+        }
+    }
+
+    /// The scan of [`number_tokens`] byte by byte, without its words of digits and its
+    /// short-literal path: what they are held to. Each literal as (start, end, decimals,
+    /// precision, exponent bytes).
+    fn plain_tokens(src: &[u8]) -> Vec<(usize, usize, u32, i32, u32)> {
+        let word = |b: u8| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'$' | b'.' | b'#');
+        let digit = |i: usize| src.get(i).is_some_and(u8::is_ascii_digit);
+        let mut out = Vec::new();
+        let mut i = 0;
+        while i < src.len() {
+            if !word(src[i]) {
+                i += 1;
+                continue;
+            }
+            let starts = digit(i) || (src[i] == b'.' && digit(i + 1));
+            if !starts || (i > 0 && word(src[i - 1])) {
+                while i < src.len() && word(src[i]) {
+                    i += 1;
+                }
+                continue;
+            }
+            let start = i;
+            while digit(i) {
+                i += 1;
+            }
+            let mut decimals = 0;
+            if src.get(i) == Some(&b'.') {
+                i += 1;
+                while digit(i) {
+                    (i, decimals) = (i + 1, decimals + 1);
+                }
+            }
+            let (mut exponent, mut exponent_len) = (0i32, 0u32);
+            if matches!(src.get(i), Some(b'e' | b'E')) {
+                let mut j = i + 1;
+                let negative = src.get(j) == Some(&b'-');
+                if matches!(src.get(j), Some(b'+' | b'-')) {
+                    j += 1;
+                }
+                if digit(j) {
+                    let mut e = 0i32;
+                    while digit(j) {
+                        e = e
+                            .saturating_mul(10)
+                            .saturating_add(i32::from(src[j] - b'0'));
+                        j += 1;
+                    }
+                    exponent = if negative { -e } else { e };
+                    exponent_len = (j - i) as u32;
+                    i = j;
+                }
+            }
+            if src.get(i).is_some_and(|&b| word(b)) {
+                while i < src.len() && word(src[i]) {
+                    i += 1;
+                }
+                continue;
+            }
+            let precision = (decimals as i32).saturating_sub(exponent);
+            out.push((start, i, decimals, precision, exponent_len));
+        }
+        out
+    }
+
+    proptest::proptest! {
+        /// The scan reads the literals the byte-wise scan does, digit runs of any length
+        /// against the ends of the words it reads and of the file among them, exponents, words
+        /// that join digits to names and Latin-1 bytes whose low seven bits are digits or marks.
+        #[test]
+        fn the_scan_is_the_byte_wise_one(
+            bytes in proptest::collection::vec(
+                proptest::sample::select(b"0123456789000111..eE+-,;[ x_#\xb0\xb9\xae\xad".to_vec()),
+                0..120,
+            ),
+        ) {
+            let mut scan = number_tokens(None);
+            let mut found = Vec::new();
+            while let Some(t) = scan.next(&bytes) {
+                found.push((t.start, t.end, t.decimals, t.precision(), t.exponent_len));
+            }
+            proptest::prop_assert_eq!(found, plain_tokens(&bytes));
         }
     }
 
