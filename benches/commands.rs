@@ -162,6 +162,7 @@ fn setup() -> &'static Setup {
         let options = LoadOptions {
             krl_config_dat: cell.robots["r1"].config_dat.clone(),
             map_inputs: false,
+            ..LoadOptions::default()
         };
         Setup {
             cell,

@@ -36,6 +36,7 @@ fn fixture() -> Fixture {
     let options = LoadOptions {
         krl_config_dat: cell.robots["r1"].config_dat.clone(),
         map_inputs: false,
+        ..LoadOptions::default()
     };
     Fixture {
         cell,

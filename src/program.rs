@@ -13,8 +13,12 @@ pub struct LoadOptions {
     /// A KUKA `$config.dat` whose `BASE_DATA`/`TOOL_DATA` resolve KRL bases and tools.
     pub krl_config_dat: Option<PathBuf>,
     /// Map large inputs instead of reading them ([`crate::output::InputBytes`]). Only for runs
-    /// that write nothing: a mapped file changes if another process rewrites it in place.
+    /// that write no input: a mapped file changes if another process rewrites it in place.
     pub map_inputs: bool,
+    /// The [`krl_config_dat`](Self::krl_config_dat) once read and parsed, shared by these
+    /// options and their clones: every program of a KSS tree uses it, and it was read and
+    /// parsed again for each one. Build options with `..LoadOptions::default()`.
+    pub config_dat: crate::krl::ConfigDatOnce,
 }
 
 /// Why a file could not be read as a program. Parse problems are not load errors: the parsers

@@ -205,6 +205,7 @@ pub(crate) fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
         },
         // `inspect` writes nothing.
         map_inputs: true,
+        ..LoadOptions::default()
     };
     let batch = load_all(&args.files, &options)?;
     let inspect = InspectOptions {
@@ -276,6 +277,7 @@ pub(crate) fn run_check(args: CheckArgs) -> anyhow::Result<Exit> {
         krl_config_dat: args.config_dat.clone(),
         // `check` writes nothing.
         map_inputs: true,
+        ..LoadOptions::default()
     };
     let batch = load_all(&args.files, &options)?;
     let mut out = std::io::stdout().lock();

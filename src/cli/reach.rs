@@ -70,6 +70,7 @@ pub(crate) fn run(a: ReachArgs) -> anyhow::Result<Exit> {
         krl_config_dat: robot.config_dat.clone(),
         // `reach` writes nothing.
         map_inputs: true,
+        ..LoadOptions::default()
     };
     let reach_options = ReachOptions {
         singularity_deg: a.singularity_deg,

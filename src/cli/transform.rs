@@ -558,6 +558,7 @@ fn load_options(robot: Option<&Robot>, in_place: bool) -> LoadOptions {
     LoadOptions {
         krl_config_dat: robot.and_then(|r| r.config_dat.clone()),
         map_inputs: !in_place,
+        ..LoadOptions::default()
     }
 }
 

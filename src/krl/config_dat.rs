@@ -1,12 +1,35 @@
 //! `$config.dat`: the controller's `BASE_DATA[n]` and `TOOL_DATA[n]` frames.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
 
 use crate::output::InputBytes;
 use crate::position::{FrameDecl, FrameKind, ParsedFile};
 use crate::program::{LoadError, LoadOptions, read_source};
 
-/// Read, not mapped: a `$config.dat` is small, and is read again for every program that uses it.
+/// A `$config.dat` read and parsed once for every program of a run that uses it
+/// ([`LoadOptions`]' own; clones share it).
+#[derive(Clone, Debug, Default)]
+pub struct ConfigDatOnce(Arc<OnceLock<(PathBuf, ParsedFile)>>);
+
+impl ConfigDatOnce {
+    /// `path` parsed as [`parse_config`] parses it: the first time read, then a copy of that
+    /// reading. A reading of another path (options cloned with a different file) is not kept.
+    pub(crate) fn get(&self, path: &Path) -> Result<ParsedFile, LoadError> {
+        if let Some((kept, file)) = self.0.get()
+            && kept == path
+        {
+            return Ok(file.clone());
+        }
+        let file = parse_config(path)?;
+        if self.0.get().is_none() {
+            let _ = self.0.set((path.to_owned(), file.clone()));
+        }
+        Ok(file)
+    }
+}
+
+/// Read, not mapped: a `$config.dat` is small (and read once a run, [`ConfigDatOnce`]).
 pub(crate) fn parse_config(path: &Path) -> Result<ParsedFile, LoadError> {
     Ok(parse_config_source(
         path,

@@ -29,7 +29,7 @@ pub(crate) mod tree;
 
 use std::path::Path;
 
-pub use config_dat::{config_frames, load_config_dat};
+pub use config_dat::{ConfigDatOnce, config_frames, load_config_dat};
 pub use lexer::{Token, TokenKind, lex};
 pub use pair::{load_program, load_program_from_sources, partner_of};
 pub use parser::{MOTION_KEYWORDS, Parse, parse, parse_with};

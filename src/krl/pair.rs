@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{analyse, config_dat, resolve};
+use super::{analyse, resolve};
 use crate::output::InputBytes;
 use crate::position::Program;
 use crate::program::{LoadError, LoadOptions, read_source};
@@ -127,7 +127,7 @@ pub fn load_program_from_sources<S: Into<InputBytes>>(
         keep_used_points(file);
     }
     if let Some(cfg) = &options.krl_config_dat {
-        program_files.push(config_file(config_dat::parse_config(cfg)?));
+        program_files.push(config_file(options.config_dat.get(cfg)?));
     }
     Ok(Program {
         files: program_files,

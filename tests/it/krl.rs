@@ -45,6 +45,7 @@ fn load(name: &str, config: bool) -> Program {
     let options = LoadOptions {
         krl_config_dat: config.then(|| sample("$config.dat")),
         map_inputs: false,
+        ..LoadOptions::default()
     };
     krl::load_program(&sample(name), &options).unwrap()
 }
@@ -798,6 +799,7 @@ fn program_from_sources_in_memory_matches_the_program_from_disk() {
     let options = LoadOptions {
         krl_config_dat: Some(sample("$config.dat")),
         map_inputs: false,
+        ..LoadOptions::default()
     };
     for name in [
         "spot_line.src",
@@ -1002,4 +1004,46 @@ fn kss_backup_oddities_parse_cleanly() {
             Some("TOOL_DATA[2]".to_owned())
         )]
     );
+}
+
+/// A run reads the cell's `$config.dat` once for all its programs: the options (and their
+/// clones) keep the first reading, so a program loaded after the file changed on disk still
+/// gets the frames read first, and a program of its own options the new ones.
+#[test]
+fn the_cells_config_dat_is_read_once_for_every_program_of_a_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("$config.dat");
+    std::fs::copy(sample("$config.dat"), &config).unwrap();
+    for name in ["spot_line.src", "spot_line.dat", "pallet.src", "pallet.dat"] {
+        std::fs::copy(sample(name), dir.path().join(name)).unwrap();
+    }
+    let options = LoadOptions {
+        krl_config_dat: Some(config.clone()),
+        ..LoadOptions::default()
+    };
+    let frames = |p: &Program| {
+        let cfg = p.files.last().unwrap();
+        assert_eq!(cfg.path, config);
+        cfg.frames
+            .iter()
+            .map(|f| (f.name.clone(), f.pose()))
+            .collect::<Vec<_>>()
+    };
+    let first = krl::load_program(&dir.path().join("spot_line.src"), &options).unwrap();
+    let read_first = frames(&first);
+    assert!(read_first.len() >= 2, "{read_first:?}");
+    // The file is now one base only; the run's options, cloned or not, keep what they read.
+    std::fs::write(
+        &config,
+        "DEFDAT $CONFIG\nDECL GLOBAL FRAME BASE_DATA[32]\nBASE_DATA[1]={X 1,Y 2,Z 3,A 0,B 0,C 0}\nENDDAT\n",
+    )
+    .unwrap();
+    let later = krl::load_program(&dir.path().join("pallet.src"), &options.clone()).unwrap();
+    assert_eq!(frames(&later), read_first);
+    let fresh = LoadOptions {
+        krl_config_dat: Some(config.clone()),
+        ..LoadOptions::default()
+    };
+    let new_run = krl::load_program(&dir.path().join("pallet.src"), &fresh).unwrap();
+    assert_eq!(frames(&new_run).len(), 1);
 }

@@ -429,6 +429,7 @@ fn load_with_cell(path: &Path, cell: &Cell, robot: &str) -> Program {
     let opts = LoadOptions {
         krl_config_dat: cell.robots[robot].config_dat.clone(),
         map_inputs: false,
+        ..LoadOptions::default()
     };
     load(path, &opts).unwrap()
 }
