@@ -451,6 +451,21 @@ pub struct Rounded {
 }
 
 impl Rounded {
+    /// A rounding of no literal, to fill an array before each slot gets its own: filled by
+    /// copies of the first literal's, the array took as many stores again as the roundings.
+    pub const PLACEHOLDER: Rounded = Rounded {
+        lit: NumLit {
+            value: 0.0,
+            precision: 0,
+            exponent: None,
+            style: 0,
+            int_digits: 1,
+        },
+        places: 0,
+        own: None,
+        signed_units: f64::NAN,
+    };
+
     /// The places a rewrite writes ([`NumLit::places`]).
     pub fn places(&self) -> usize {
         self.places
