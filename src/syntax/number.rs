@@ -694,6 +694,9 @@ const POW10: [u64; 20] = {
 /// [`Scaled::by_float`]'s bound on the scaled value.
 const TWO_TO_40: f64 = (1u64 << 40) as f64;
 
+/// The `f64`s from 2^52 to 2^53 are the integers: [`Scaled::by_float`] rounds by adding it.
+const TWO_TO_52: f64 = (1u64 << 52) as f64;
+
 /// Powers of ten that are exact in an `f64`.
 const EXACT_POWERS: [f64; 23] = [
     1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
@@ -777,8 +780,8 @@ impl Scaled {
     /// the scaled value is 2^40 or more, or within 2^-12 of a half unit, which
     /// [`exactly`](Self::exactly) settles. Below 2^40 the product of the value and the exact
     /// power of ten is within 2^-13 of the exact product (one rounding, 2^-53 relative), so a
-    /// fraction further than that from one half rounds the same either way; the fraction is
-    /// exact (the truncation is within a factor 2 of the product). Every rewrite and
+    /// fraction further than that from one half rounds the same either way; the distance to
+    /// the nearest integer is exact. Every rewrite and
     /// comparison scales a value (three a written field), and the exact path's 128-bit
     /// arithmetic was most of their cost.
     #[inline]
@@ -788,13 +791,16 @@ impl Scaled {
         if x.partial_cmp(&TWO_TO_40) != Some(std::cmp::Ordering::Less) {
             return None;
         }
-        // Below 2^40 by `i64`: one instruction each way (a `u64` conversion is several).
-        let int = x as i64;
-        let fraction = x - int as f64;
-        if (fraction - 0.5).abs() <= 1.0 / 4096.0 {
+        // The nearest integer by adding 2^52, where a unit is 1: the sum rounds to it, its
+        // low bits are it, and taking 2^52 off again is exact; so is the distance to it (the
+        // two are within a factor 2 of each other, or the integer is 0), at most one half.
+        // A conversion to an integer and back, with the checks `as` makes for its saturation,
+        // was twice the instructions, and every written field scales two values.
+        let big = x + TWO_TO_52;
+        if (x - (big - TWO_TO_52)).abs() >= 0.5 - 1.0 / 4096.0 {
             return None;
         }
-        let units = int as u64 + u64::from(fraction > 0.5);
+        let units = big.to_bits() - TWO_TO_52.to_bits();
         Some(Scaled {
             negative: value.is_sign_negative() && units != 0,
             units: u128::from(units),
