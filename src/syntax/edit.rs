@@ -233,11 +233,10 @@ impl EditList {
             }
             _ => self.push_record(u64::from(delta), len, &edit.text),
         }
+        // One saturating sum, not two: the text's length and the span's are far from the
+        // bounds of an `isize`, and so is their difference.
         let removed = edit.end.saturating_sub(edit.start) as isize;
-        self.growth = self
-            .growth
-            .saturating_add(text.len() as isize)
-            .saturating_sub(removed);
+        self.growth = self.growth.saturating_add(text.len() as isize - removed);
         self.last = key;
         self.len += 1;
     }

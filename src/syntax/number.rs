@@ -451,6 +451,21 @@ pub struct Rounded {
 }
 
 impl Rounded {
+    /// A rounding of no literal, to fill an array before each slot gets its own: filled by
+    /// copies of the first literal's, the array took as many stores again as the roundings.
+    pub const PLACEHOLDER: Rounded = Rounded {
+        lit: NumLit {
+            value: 0.0,
+            precision: 0,
+            exponent: None,
+            style: 0,
+            int_digits: 1,
+        },
+        places: 0,
+        own: None,
+        signed_units: f64::NAN,
+    };
+
     /// The places a rewrite writes ([`NumLit::places`]).
     pub fn places(&self) -> usize {
         self.places
@@ -679,6 +694,9 @@ const POW10: [u64; 20] = {
 /// [`Scaled::by_float`]'s bound on the scaled value.
 const TWO_TO_40: f64 = (1u64 << 40) as f64;
 
+/// The `f64`s from 2^52 to 2^53 are the integers: [`Scaled::by_float`] rounds by adding it.
+const TWO_TO_52: f64 = (1u64 << 52) as f64;
+
 /// Powers of ten that are exact in an `f64`.
 const EXACT_POWERS: [f64; 23] = [
     1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
@@ -762,8 +780,8 @@ impl Scaled {
     /// the scaled value is 2^40 or more, or within 2^-12 of a half unit, which
     /// [`exactly`](Self::exactly) settles. Below 2^40 the product of the value and the exact
     /// power of ten is within 2^-13 of the exact product (one rounding, 2^-53 relative), so a
-    /// fraction further than that from one half rounds the same either way; the fraction is
-    /// exact (the truncation is within a factor 2 of the product). Every rewrite and
+    /// fraction further than that from one half rounds the same either way; the distance to
+    /// the nearest integer is exact. Every rewrite and
     /// comparison scales a value (three a written field), and the exact path's 128-bit
     /// arithmetic was most of their cost.
     #[inline]
@@ -773,13 +791,16 @@ impl Scaled {
         if x.partial_cmp(&TWO_TO_40) != Some(std::cmp::Ordering::Less) {
             return None;
         }
-        // Below 2^40 by `i64`: one instruction each way (a `u64` conversion is several).
-        let int = x as i64;
-        let fraction = x - int as f64;
-        if (fraction - 0.5).abs() <= 1.0 / 4096.0 {
+        // The nearest integer by adding 2^52, where a unit is 1: the sum rounds to it, its
+        // low bits are it, and taking 2^52 off again is exact; so is the distance to it (the
+        // two are within a factor 2 of each other, or the integer is 0), at most one half.
+        // A conversion to an integer and back, with the checks `as` makes for its saturation,
+        // was twice the instructions, and every written field scales two values.
+        let big = x + TWO_TO_52;
+        if (x - (big - TWO_TO_52)).abs() >= 0.5 - 1.0 / 4096.0 {
             return None;
         }
-        let units = int as u64 + u64::from(fraction > 0.5);
+        let units = big.to_bits() - TWO_TO_52.to_bits();
         Some(Scaled {
             negative: value.is_sign_negative() && units != 0,
             units: u128::from(units),
@@ -840,9 +861,22 @@ impl Scaled {
     /// from the last one back. `None` where the text is longer than an inline one or the
     /// units pass a `u64`. Nearly every written number is one of these (`-1520.873`), and the
     /// copies through the stack buffers, each a call, were most of the cost of writing it.
+    ///
+    /// A text of at most 7 digits and 1 to 7 decimals (every quaternion and coordinate below
+    /// 10 m a program writes at its places) is put together in one word ([`by_word`]), not
+    /// digit pair by digit pair: the division into the integer and the decimals, the count
+    /// of the integer digits, the two loops and their bounds checks were 120 of the 235
+    /// instructions a field of a corrected target took to write, by the word 80.
+    ///
+    /// [`by_word`]: Self::inline_by_word
     #[inline]
     fn inline_text(self, places: usize, style: u8) -> Option<EditText> {
         let units = u64::try_from(self.units).ok()?;
+        if units < POW10[8]
+            && let Some(text) = Scaled::inline_by_word(self.negative, units, places, style)
+        {
+            return Some(text);
+        }
         let scale = *POW10.get(places)?;
         let (int, frac) = (units / scale, units % scale);
         let signed = self.negative || style & PLUS != 0;
@@ -870,6 +904,41 @@ impl Scaled {
             bytes[0] = if self.negative { b'-' } else { b'+' };
         }
         EditText::inline_array(bytes, len)
+    }
+
+    /// [`inline_text`](Self::inline_text) for `units` below 10^8 whose digits, the point
+    /// left out, are at most 7 (with the integer `0` of a value below 1) and `places` 1 or
+    /// more, else `None`. The units' 8 digits are one word ([`ascii_digits`]); the ones
+    /// written are its last, from the first that is not a leading `0` or the integer digit
+    /// (none for `.512`, where the literal was written so); the point goes in between by two
+    /// shifts, and the sign before it all. Little-endian: a word's first byte is its lowest.
+    #[inline(always)]
+    fn inline_by_word(negative: bool, units: u64, places: usize, style: u8) -> Option<EditText> {
+        let digits = ascii_digits(units);
+        // How many digits the units have (0 for 0): the leading `0`s are the low bytes.
+        let significant = 8 - ((digits ^ ZEROS).trailing_zeros() / 8) as usize;
+        let int_len = if significant > places {
+            significant - places
+        } else {
+            usize::from(style & LEADING_POINT == 0)
+        };
+        let n = int_len + places;
+        if !(places >= 1 && n <= 7) {
+            return None;
+        }
+        // The last `n` digits moved to the front, then the decimals one byte on for the
+        // point: 8 bytes at most.
+        let written = digits >> (8 * (8 - n));
+        let int = written & ((1 << (8 * int_len)) - 1);
+        let body = int
+            | u64::from(b'.') << (8 * int_len)
+            | (written >> (8 * int_len)) << (8 * int_len + 8);
+        let signed = usize::from(negative || style & PLUS != 0);
+        let mut bytes = [0u8; INLINE];
+        bytes[0] = if negative { b'-' } else { b'+' };
+        // Over the sign when there is none.
+        bytes[signed..signed + 8].copy_from_slice(&body.to_le_bytes());
+        EditText::inline_array(bytes, signed + n + 1)
     }
 
     /// Digits before the point when the units are written with `places` decimals (at least 1).
@@ -973,6 +1042,19 @@ fn put_digits(bytes: &mut [u8], end: usize, mut v: u64, n: usize) {
     {
         *slot = b'0' + (v % 10) as u8;
     }
+}
+
+/// The 8 decimal digits of `n` (below 10^8, with leading zeros) as ASCII in one word, the
+/// first digit in its lowest byte, as they lie in memory: split into halves of 4 digits, 2
+/// and 1 by lanes of the word, each division by multiplying (exact below 10^4 and 100:
+/// `x · 10486 >> 20` is `x / 100`, `x · 103 >> 10` is `x / 10`; a test checks every lane).
+#[inline(always)]
+fn ascii_digits(n: u64) -> u64 {
+    let x = (n / 10_000) | ((n % 10_000) << 32);
+    let q = ((x * 10_486) >> 20) & 0x0000_007F_0000_007F;
+    let x = q | (x - q * 100) << 16;
+    let q = ((x * 103) >> 10) & 0x000F_000F_000F_000F;
+    (q | (x - q * 10) << 8) | ZEROS
 }
 
 /// Appends the decimal digits of `bytes` from `*i` on to `mantissa` (wrapping: the caller
@@ -1881,16 +1963,56 @@ mod tests {
         #[test]
         fn the_inline_text_is_the_digits_text(
             units in 0u64..100_000_000_000_000,
+            digits_off in 0usize..=14,
             negative in proptest::bool::ANY,
             places in 0usize..=12,
             style in proptest::sample::select(vec!["1.5", "+1.5", ".5", "+.5"]),
         ) {
+            // Of every length: a uniform draw is nearly always 13 or 14 digits long.
+            let units = units / POW10[digits_off];
             let lit = NumLit::parse(style.as_bytes()).unwrap();
             let a = Scaled { negative: negative && units != 0, units: u128::from(units) };
             let by_digits = lit.text_by_digits(a, places);
             match a.inline_text(places, lit.style) {
                 Some(inline) => proptest::prop_assert_eq!(inline, by_digits),
                 None => proptest::prop_assert!(by_digits.len() > INLINE, "{:?}", by_digits),
+            }
+        }
+    }
+
+    #[test]
+    fn the_digit_word_s_lanes_divide_exactly() {
+        assert!((0..10_000u64).all(|x| (x * 10_486) >> 20 == x / 100));
+        assert!((0..100u64).all(|x| (x * 103) >> 10 == x / 10));
+        for n in [
+            0, 1, 9, 10, 99, 100, 1234, 9999, 10_000, 12_345_678, 99_999_999,
+        ] {
+            let text = format!("{n:08}");
+            assert_eq!(ascii_digits(n).to_le_bytes(), text.as_bytes(), "{n}");
+        }
+    }
+
+    #[test]
+    fn the_inline_text_by_word_at_its_edges() {
+        for style in ["1.5", "+1.5", ".5", "+.5"] {
+            let lit = NumLit::parse(style.as_bytes()).unwrap();
+            for (places, &scale) in POW10.iter().enumerate().take(9).skip(1) {
+                for int in [0, 1, 9, 10, 99_999, 9_999_999, 99_999_999] {
+                    for frac in [0, 1, scale / 2, scale - 1] {
+                        for negative in [false, true] {
+                            let units = int * scale + frac;
+                            let a = Scaled {
+                                negative: negative && units != 0,
+                                units: u128::from(units),
+                            };
+                            let by_digits = lit.text_by_digits(a, places);
+                            match a.inline_text(places, lit.style) {
+                                Some(inline) => assert_eq!(inline, by_digits),
+                                None => assert!(by_digits.len() > INLINE, "{by_digits:?}"),
+                            }
+                        }
+                    }
+                }
             }
         }
     }

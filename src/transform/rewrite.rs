@@ -352,8 +352,8 @@ fn reversible<const N: usize>(
     // By a loop, not `array::map`: through its adapter's closure each field was a call more;
     // and by index, as `zip(..).skip(1)` was a call into the adapter's `nth` (1.1 M
     // instructions of correct on the 2 MB bench module).
-    let mut rounded = [fields[0].lit().rounded(house); N];
-    for i in 1..N {
+    let mut rounded = [Rounded::PLACEHOLDER; N];
+    for i in 0..N {
         rounded[i] = fields[i].lit().rounded(house);
     }
     let gives_back = |read: [f64; N]| {
