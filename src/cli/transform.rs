@@ -553,7 +553,7 @@ fn load_profile(cell: &Cell, robot: &Robot) -> anyhow::Result<Profile> {
 /// place: an in-place write's transaction compares each input on disk with the bytes it read,
 /// and a mapped file would change with the disk and hide a concurrent edit. A run that writes
 /// elsewhere (`-o`, `--out-dir`, `--diff`, `--check`) never writes an input (`output::plan`
-/// refuses to), so it reads its inputs as `check` does (docs/design.md §9, "Reading inputs").
+/// refuses to), so it maps its inputs as `check` does (docs/design.md §9, "Reading inputs").
 fn load_options(robot: Option<&Robot>, in_place: bool) -> LoadOptions {
     LoadOptions {
         krl_config_dat: robot.and_then(|r| r.config_dat.clone()),

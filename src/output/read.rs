@@ -45,10 +45,11 @@ fn read_open(file: std::fs::File, len: u64, limit: u64) -> std::io::Result<Vec<u
 /// took 15-20 ms of system time of a 100 ms `check`. A mapped file's pages come from the page
 /// cache, sixteen to a fault, and are neither cleared nor copied.
 ///
-/// A map is only taken for runs that write nothing ([`map_or_read_regular_file`]): a mapped
-/// file that another process rewrites in place changes under the run, which a report can
-/// live with (it is of the file as it was read, or as it became) but a rewrite, whose
-/// transaction compares the file on disk with the bytes it read, cannot.
+/// A map is only taken for runs that write no input ([`map_or_read_regular_file`]): a mapped
+/// file that another process rewrites in place changes under the run, which a report or a
+/// result written elsewhere can live with (it is of the file as it was read, or as it
+/// became) but an in-place rewrite, whose transaction compares the file on disk with the
+/// bytes it read before writing over it, cannot.
 #[derive(Clone)]
 pub struct InputBytes(Held);
 
@@ -122,7 +123,7 @@ impl Eq for InputBytes {}
 pub const MAP_FROM_BYTES: u64 = 1024 * 1024;
 
 /// [`read_regular_file`], except that a file of [`MAP_FROM_BYTES`] or more is mapped, not read,
-/// when `map` is set. For runs that write nothing (see [`InputBytes`]).
+/// when `map` is set. For runs that write no input (see [`InputBytes`]).
 pub fn map_or_read_regular_file(path: &Path, limit: u64, map: bool) -> std::io::Result<InputBytes> {
     if !map {
         return read_regular_file(path, limit).map(InputBytes::from);
@@ -142,7 +143,7 @@ pub fn map_or_read_regular_file(path: &Path, limit: u64, map: bool) -> std::io::
 fn map_file(file: &std::fs::File) -> std::io::Result<memmap2::Mmap> {
     // SAFETY: the map is read-only and private, and nothing in this process writes the file.
     // Another process may still change it while it is mapped: the bytes seen then are some
-    // mix of the old and the new (see `InputBytes` for why only runs that write nothing map),
+    // mix of the old and the new (see `InputBytes` for why only runs that write no input map),
     // and a file truncated under the map ends the run with SIGBUS, as it does ripgrep's. That
     // is the trade every mapping reader makes; no byte the run depends on is written through
     // the map.
