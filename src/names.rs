@@ -475,6 +475,8 @@ impl<T: Copy> Groups<T> {
     /// Places the declarations, grouped by name and in insertion order within a group (a
     /// counting sort: no comparison of names).
     fn fill(&mut self, inserted: Vec<(u32, T)>) {
+        self.text.shrink_to_fit();
+        self.names.shrink_to_fit();
         if inserted.len() == self.names.len() {
             // Each insertion made a name, numbered in the order inserted: the insertions are
             // the groups, in place (the vector is reused for the values). The counting sort's
@@ -487,8 +489,6 @@ impl<T: Copy> Groups<T> {
             );
             self.values = inserted.into_iter().map(|(_, at)| at).collect();
             self.one_each = true;
-            self.text.shrink_to_fit();
-            self.names.shrink_to_fit();
             return;
         }
         let mut ends = vec![0u32; self.names.len()];
@@ -502,9 +502,9 @@ impl<T: Copy> Groups<T> {
             total += *e;
             *e = total;
         }
-        // Filled from the back, so each group's values come out in insertion order.
+        // Filled from the back, so each group's values come out in insertion order. (No
+        // insertion is no name, which the case above took.)
         let Some(&(_, any)) = inserted.first() else {
-            self.ends = ends;
             return;
         };
         let mut values = vec![any; inserted.len()];
@@ -517,8 +517,6 @@ impl<T: Copy> Groups<T> {
                 }
             }
         }
-        self.text.shrink_to_fit();
-        self.names.shrink_to_fit();
         self.ends = ends;
         self.values = values;
     }

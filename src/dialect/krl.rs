@@ -151,26 +151,29 @@ impl Dialect for Krl {
         options: &LoadOptions,
     ) -> Result<Program, LoadError> {
         let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
-        // Each file given with its partner after it, once, in that order; a partner given too
-        // is taken from the bytes read, the others are read here.
-        let mut all: Vec<PathBuf> = Vec::new();
-        for (p, _) in &sources {
-            all.push(p.clone());
-            all.extend(crate::krl::partner_of(p));
+        // Each file given with its partner after it, once, in that order, each path with the
+        // file it names (found once); a partner given too is taken from the bytes read, the
+        // others are read here.
+        let mut all: Vec<(PathBuf, PathBuf)> = Vec::new();
+        let mut given: Vec<(PathBuf, Option<InputBytes>)> = Vec::with_capacity(sources.len());
+        for (p, bytes) in sources {
+            let partner = crate::krl::partner_of(&p);
+            let file = same_file(&p);
+            given.push((file.clone(), Some(bytes)));
+            all.push((p, file));
+            all.extend(partner.map(|q| {
+                let file = same_file(&q);
+                (q, file)
+            }));
         }
         let mut seen = std::collections::BTreeSet::new();
-        all.retain(|p| seen.insert(same_file(p)));
-        let mut given: Vec<(PathBuf, Option<InputBytes>)> = sources
-            .into_iter()
-            .map(|(p, bytes)| (same_file(&p), Some(bytes)))
-            .collect();
-        let own_config = all.iter().any(|p| is_config_dat(p));
+        all.retain(|(_, file)| seen.insert(file.clone()));
+        let own_config = all.iter().any(|(p, _)| is_config_dat(p));
         let mut read = Vec::with_capacity(all.len());
-        for p in all {
-            let key = same_file(&p);
+        for (p, file) in all {
             let bytes = match given
                 .iter_mut()
-                .find(|(g, _)| *g == key)
+                .find(|(g, _)| *g == file)
                 .and_then(|(_, b)| b.take())
             {
                 Some(bytes) => bytes,

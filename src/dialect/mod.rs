@@ -83,8 +83,8 @@ pub trait Dialect: Sync + 'static {
     /// One program of several files of this language, resolved together, from their bytes as
     /// [`load_group`](crate::program::load_group) read them (each file is read once: a task of
     /// many modules was read twice, once to find the unreadable ones and once to parse). The
-    /// default loads each file on its own (languages that group by [`Dialect::program_root`]
-    /// override it).
+    /// default loads each file on its own, through [`Dialect::load`], which reads it again
+    /// (languages that group by [`Dialect::program_root`] override it and use the bytes).
     fn load_together(
         &self,
         sources: Vec<(PathBuf, InputBytes)>,

@@ -13,15 +13,18 @@ use crate::program::{LoadError, LoadOptions, read_source};
 pub struct ConfigDatOnce(Arc<OnceLock<(PathBuf, ParsedFile)>>);
 
 impl ConfigDatOnce {
-    /// `path` parsed as [`parse_config`] parses it: the first time read, then a copy of that
-    /// reading. A reading of another path (options cloned with a different file) is not kept.
+    /// The cell's `$config.dat` at `path` as a program carries it: parsed as [`parse_config`]
+    /// parses it, with its frames only (its own positions, such as `XHOME`, are no program's).
+    /// The first time read, then a copy of that reading; a reading of another path (options
+    /// cloned with a different file) is not kept.
     pub(crate) fn get(&self, path: &Path) -> Result<ParsedFile, LoadError> {
         if let Some((kept, file)) = self.0.get()
             && kept == path
         {
             return Ok(file.clone());
         }
-        let file = parse_config(path)?;
+        let mut file = parse_config(path)?;
+        file.positions.clear();
         if self.0.get().is_none() {
             let _ = self.0.set((path.to_owned(), file.clone()));
         }

@@ -127,17 +127,11 @@ pub fn load_program_from_sources<S: Into<InputBytes>>(
         keep_used_points(file);
     }
     if let Some(cfg) = &options.krl_config_dat {
-        program_files.push(config_file(options.config_dat.get(cfg)?));
+        program_files.push(options.config_dat.get(cfg)?);
     }
     Ok(Program {
         files: program_files,
     })
-}
-
-/// A `$config.dat` in a program carries its frames only.
-fn config_file(mut file: crate::position::ParsedFile) -> crate::position::ParsedFile {
-    file.positions.clear();
-    file
 }
 
 /// Of a `$config.dat` resolved with a program, only the Cartesian points a motion of the program
