@@ -9,6 +9,9 @@ and a KUKA.Sim-style .src/.dat pair of about --krl-mb MB, then times, per input:
 
   grep -c robtarget (E6POS for KRL)     the plain text scan `check` is held against
   benches/regex_baseline.py             a regex rewrite of every robtarget (RAPID only)
+  examples/robtarget_scan.rs            the least a program does that reads every robtarget's
+                                        numbers (RAPID only; when built: `cargo build --release
+                                        --example robtarget_scan`)
   trackfix check / correct / inspect --format json   for every --bin given
 
 `correct` uses samples/cell.toml without robot r1's arm (see bench_cell), so it corrects and
@@ -124,6 +127,7 @@ def write_once(path: str, make) -> None:
         os.replace(path + ".part", path)
 
 
+SCAN = os.path.join(ROOT, "target", "release", "examples", "robtarget_scan")
 TIME = "/usr/bin/time" if os.path.exists("/usr/bin/time") else None
 
 
@@ -226,6 +230,10 @@ def main() -> None:
                 args.runs,
             )
             row(label, "regex_baseline.py", py_t, py_m, mb, "")
+        scan_t = None
+        if rapid and os.path.exists(SCAN):
+            scan_t, scan_m = measure([SCAN, path], args.runs)
+            row(label, "robtarget_scan", scan_t, scan_m, mb, f"{scan_t / grep_t:.1f}× grep")
         commands = {
             "check": lambda exe: [exe, "check", path],
             "inspect --format json": lambda exe: [exe, "inspect", "--format", "json", path],
@@ -235,7 +243,7 @@ def main() -> None:
             measured = measure_alternating([argv_of(exe) for _, exe in bins], args.runs, args.work)
             for (name, _), (t, m) in zip(bins, measured):
                 if cmd == "check":
-                    note = f"{t / grep_t:.1f}× grep"
+                    note = f"{t / grep_t:.1f}× grep" + (f", {t / scan_t:.1f}× robtarget_scan" if scan_t else "")
                 elif cmd == "correct" and py_t is not None:
                     note = f"{py_t / t:.1f}× faster than regex" if t < py_t else f"{t / py_t:.1f}× slower than regex"
                 else:

@@ -474,6 +474,17 @@ impl PositionList {
         })
     }
 
+    /// The literal's span of position `i` and the lints' verdict on its values
+    /// ([`crate::report::values_pass_lints`]), read without the rest of its head: what
+    /// `check`'s lints ask of every target before they look closer at the few that may find
+    /// something.
+    pub fn span_and_verdict(&self, i: usize) -> Option<(Span, bool)> {
+        let (span, _, verdict) = self
+            .reader(self.heads.get(i)?, &[])?
+            .span_and_kind(&self.kinds)?;
+        Some((span, verdict))
+    }
+
     /// Whether position `i` has Cartesian fields ([`Position::cartesian`] is `Some`).
     pub fn has_cartesian(&self, i: usize) -> bool {
         self.cartesian_tag(i).is_some_and(|tag| tag != NO_CARTESIAN)
@@ -974,12 +985,8 @@ impl<'a> Reader<'a> {
 
     /// The fields every position has, first.
     fn head(&mut self, kinds: &[PositionKind]) -> Option<PackedHead<'a>> {
-        let start = self.head_usize()?;
-        let end = i64::try_from(start).ok()? + packed::unzigzag(self.head_uint()?);
-        let span = Span::new(start, usize::try_from(end).ok()?);
-        self.cursor = start;
-        let kind_and_verdict = self.head_usize()?;
-        let kind = *kinds.get(kind_and_verdict >> 1)?;
+        let (span, kind, values_pass_lints) = self.span_and_kind(kinds)?;
+        self.cursor = span.start;
         let name = match self.head_usize()? {
             0 => None,
             n => {
@@ -991,11 +998,22 @@ impl<'a> Reader<'a> {
         Some(PackedHead {
             span,
             kind,
-            values_pass_lints: kind_and_verdict & 1 == 1,
+            values_pass_lints,
             name,
             line: self.head_usize()?,
             column: self.head_usize()?,
         })
+    }
+
+    /// The first three numbers of a head: the span, and the kind with the lints' verdict.
+    #[inline(always)]
+    fn span_and_kind(&mut self, kinds: &[PositionKind]) -> Option<(Span, PositionKind, bool)> {
+        let start = self.head_usize()?;
+        let end = i64::try_from(start).ok()? + packed::unzigzag(self.head_uint()?);
+        let span = Span::new(start, usize::try_from(end).ok()?);
+        let kind_and_verdict = self.head_usize()?;
+        let kind = *kinds.get(kind_and_verdict >> 1)?;
+        Some((span, kind, kind_and_verdict & 1 == 1))
     }
 
     /// The name [`Reader::head`] reads, the span's two numbers stepped over (each ends at its

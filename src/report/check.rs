@@ -62,13 +62,22 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
     }
     // Only the orientation and the configuration of each target are read (the lints look at
     // nothing else), only where the verdict kept with it says they could find something
-    // (`values_pass_lints`), and its name only for a finding.
+    // (`values_pass_lints`), and its name only for a finding. A target whose verdict passes,
+    // whose text the dialect finds nothing in and that is used with one work object at most
+    // has nothing to report: its head is read no further than its span and verdict.
     let list = &file.positions;
     for i in 0..list.len() {
+        let Some((span, verdict)) = list.span_and_verdict(i) else {
+            continue;
+        };
+        let in_text = crate::transform::policy::implausible_text(file, span);
+        let one_wobj = list.usage(i).is_none_or(|u| u.other_wobjs().is_empty());
+        if verdict && in_text.is_none() && one_wobj {
+            continue;
+        }
         let Some(target) = list.for_lints(i, &file.source) else {
             continue;
         };
-        let span = target.span;
         let label = || crate::position::label(target.name(), target.kind);
         #[cfg(debug_assertions)]
         if target.values.is_none() {
@@ -76,10 +85,12 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
             debug_assert!(t.is_some_and(|t| values_pass_lints(t.orient.as_ref(), &t.config)));
         }
         let problem = match &target.values {
-            None => crate::transform::policy::implausible_text(file, span),
+            None => in_text,
             Some((orient, config)) => {
                 out.extend(quaternion_finding(span, orient.as_ref(), label));
-                crate::transform::policy::implausible_fields(file, span, orient.as_ref(), config)
+                in_text.or_else(|| {
+                    crate::transform::policy::implausible_values(orient.as_ref(), config)
+                })
             }
         };
         if let Some(problem) = problem {
