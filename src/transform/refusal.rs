@@ -136,6 +136,20 @@ impl Refusal {
         }
     }
 
+    /// The same refusal of the same target, at `span` of `file`: where a chain of transforms
+    /// places a refusal one of its later steps made in a file of its own.
+    pub(crate) fn placed_in(&self, file: &ParsedFile, span: Span) -> Refusal {
+        Refusal::new(
+            file,
+            span,
+            self.target.clone(),
+            self.kind,
+            self.message.clone(),
+            self.hint.clone(),
+            self.remedy,
+        )
+    }
+
     /// The refusal as a located diagnostic at `severity` with `hint` (the renderer's words for
     /// what to do), rendered on `Display` with the refused line and a caret.
     pub fn located(&self, severity: Severity, hint: impl Into<String>) -> Located {

@@ -10,10 +10,11 @@ use std::path::PathBuf;
 
 use crate::position::{NumField, Orientation, ParsedFile, Position, Program};
 use crate::program::{LoadError, LoadOptions};
-use crate::syntax::{Edit, EditError, apply_edits};
+use crate::syntax::{Edit, EditError, Span, apply_edits};
 
 use super::edits::{FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
 use super::mirror::{MirrorSettings, Reflection, mirror, reflection_for};
+use super::refusal::Refusal;
 use super::rewrite::{DEG_DECIMALS, MM_DECIMALS, QUAT_DECIMALS, pose_change};
 use super::track_correction::{Direction, TrackSetup, track_correction};
 
@@ -110,8 +111,9 @@ pub fn transfer(
     for step in plan.steps() {
         let input = current.as_ref().unwrap_or(program);
         let result = apply(input, step.edits(input))?;
+        let refused = refused_targets(input, &result);
         let next = reparse(input, &result, options)?;
-        steps.push(result);
+        steps.push((result, refused));
         current = Some(next);
     }
     let last = current.as_ref().unwrap_or(program);
@@ -124,13 +126,49 @@ pub fn transfer(
     )
 }
 
+/// Per file of `input` and refusal of `result`'s file (in order), the index of the target the
+/// refusal is about: the position whose literal holds the refused span. `None` for a refusal
+/// of something else, an offset call say.
+fn refused_targets(input: &Program, result: &ProgramResult) -> Vec<Vec<Option<usize>>> {
+    input
+        .files
+        .iter()
+        .zip(&result.files)
+        .map(|(file, out)| {
+            if out.refusals.is_empty() {
+                return Vec::new();
+            }
+            // Literals do not overlap: the one that may hold a span is the last to start at
+            // or before it.
+            let mut spans: Vec<(Span, usize)> = (0..file.positions.len())
+                .filter_map(|i| Some((file.positions.span(i)?, i)))
+                .filter(|(sp, _)| sp.start < sp.end)
+                .collect();
+            spans.sort_unstable_by_key(|(sp, _)| sp.start);
+            out.refusals
+                .iter()
+                .map(|r| {
+                    let after = spans.partition_point(|(sp, _)| sp.start <= r.span.start);
+                    let (sp, i) = *spans.get(after.checked_sub(1)?)?;
+                    (r.span.end <= sp.end).then_some(i)
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// One result from a chain of steps: the first step's input, the last step's output, every
 /// distinct refusal, and each changed target's track correction: the change from start to end
 /// beyond the mirror itself (a mirror moves points by metres; the correction is what matters).
+///
+/// A target any step refused is written as it was at the start, and refused once, at its place
+/// in the first step's input: a step's refusal leaves the target as that step read it, and the
+/// steps after it would otherwise go on moving it, so that a target reported as left unchanged
+/// came out neither as written nor transferred.
 fn combine(
     start: &Program,
     end: &Program,
-    steps: &[ProgramResult],
+    steps: &[(ProgramResult, Vec<Vec<Option<usize>>>)],
     skid_axis: usize,
     mirror: Option<&MirrorSettings>,
 ) -> Result<ProgramResult, TransferError> {
@@ -144,18 +182,11 @@ fn combine(
                 after: b.positions.len(),
             });
         }
-        let mut seen = BTreeSet::new();
-        let refusals = steps
-            .iter()
-            .filter_map(|s| s.files.get(i))
-            .flat_map(|f| f.refusals.iter())
-            .filter(|r| seen.insert((r.line, r.target.clone(), r.kind)))
-            .cloned()
-            .collect();
+        let (refusals, kept) = chain_refusals(a, steps, i);
         let mut seen = BTreeSet::new();
         let notes = steps
             .iter()
-            .filter_map(|s| s.files.get(i))
+            .filter_map(|(s, _)| s.files.get(i))
             .flat_map(|f| f.notes.iter())
             .filter(|r| seen.insert((r.line, r.target.clone(), r.kind)))
             .cloned()
@@ -163,8 +194,11 @@ fn combine(
         let changes = a
             .positions()
             .zip(b.positions())
-            .filter(|(p, q)| p.span.slice(&a.source) != q.span.slice(&b.source))
-            .map(|(p, q)| {
+            .enumerate()
+            .filter(|(k, (p, q))| {
+                !kept.contains(k) && p.span.slice(&a.source) != q.span.slice(&b.source)
+            })
+            .map(|(_, (p, q))| {
                 let poses = p
                     .cartesian
                     .as_ref()
@@ -192,7 +226,7 @@ fn combine(
                 }
             })
             .collect();
-        let output = restore_unmoved(a, b)?;
+        let output = restore_unmoved(a, b, &kept)?;
         files.push(FileResult {
             path: a.path.clone(),
             original: a.source.clone(),
@@ -203,6 +237,43 @@ fn combine(
         });
     }
     Ok(ProgramResult { files })
+}
+
+/// The refusals of file `i` over a chain's steps, and the targets refused: one refusal per
+/// target (its first), placed in `start` (a later step's refusal points into that step's input,
+/// whose rewritten numbers moved it), then every other refusal once.
+fn chain_refusals(
+    start: &ParsedFile,
+    steps: &[(ProgramResult, Vec<Vec<Option<usize>>>)],
+    i: usize,
+) -> (Vec<Refusal>, BTreeSet<usize>) {
+    let mut kept = BTreeSet::new();
+    let mut seen = BTreeSet::new();
+    let mut refusals = Vec::new();
+    for (step, (result, targets)) in steps.iter().enumerate() {
+        let Some(file) = result.files.get(i) else {
+            continue;
+        };
+        let targets = targets.get(i).map_or(&[][..], Vec::as_slice);
+        for (k, r) in file.refusals.iter().enumerate() {
+            match targets.get(k).copied().flatten() {
+                Some(t) => {
+                    if kept.insert(t) {
+                        refusals.push(match (step, start.positions.span(t)) {
+                            (1.., Some(span)) => r.placed_in(start, span),
+                            _ => r.clone(),
+                        });
+                    }
+                }
+                None => {
+                    if seen.insert((r.line, r.target.clone(), r.kind)) {
+                        refusals.push(r.clone());
+                    }
+                }
+            }
+        }
+    }
+    (refusals, kept)
 }
 
 /// The translation, orientation and other literals of a target (the last: joints and external
@@ -258,9 +329,22 @@ const CHAIN_ROUNDING_UNITS: f64 = 1.5;
 /// `b.source`, except that a target the chain brings back to where it was written at the start
 /// (every coordinate, and the orientation as a rotation, within the rounding of the intermediate
 /// files) keeps its original text, and so do joint and external-axis values that came back: an
-/// identity transfer would otherwise rewrite `-1200` as `-1200.000`.
-fn restore_unmoved(a: &ParsedFile, b: &ParsedFile) -> Result<Vec<u8>, EditError> {
+/// identity transfer would otherwise rewrite `-1200` as `-1200.000`. The targets `kept` (some
+/// step refused them) keep their whole literal as written.
+fn restore_unmoved(
+    a: &ParsedFile,
+    b: &ParsedFile,
+    kept: &BTreeSet<usize>,
+) -> Result<Vec<u8>, EditError> {
     let mut edits = Vec::new();
+    for &t in kept {
+        if let (Some(p), Some(q)) = (a.positions.span(t), b.positions.span(t)) {
+            let old = p.slice(&a.source);
+            if old != q.slice(&b.source) {
+                edits.push(Edit::new(q, old.to_vec()));
+            }
+        }
+    }
     let mut keep = |f: &NumField, g: &NumField| {
         let old = f.span().slice(&a.source);
         if old != g.span().slice(&b.source) {
@@ -270,7 +354,10 @@ fn restore_unmoved(a: &ParsedFile, b: &ParsedFile) -> Result<Vec<u8>, EditError>
     let close = |f: &NumField, g: &NumField, house: i32| {
         (f.value() - g.value()).abs() <= CHAIN_ROUNDING_UNITS * unit(&[f, g], house) * (1.0 + 1e-9)
     };
-    for (p, q) in a.positions().zip(b.positions()) {
+    for (t, (p, q)) in a.positions().zip(b.positions()).enumerate() {
+        if kept.contains(&t) {
+            continue;
+        }
         let (x, y) = (target_literals(&p), target_literals(&q));
         if x.others.len() == y.others.len() {
             for (f, g) in x.others.iter().zip(&y.others) {
@@ -304,4 +391,103 @@ fn restore_unmoved(a: &ParsedFile, b: &ParsedFile) -> Result<Vec<u8>, EditError>
         }
     }
     apply_edits(&b.source, &edits)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Pose, pose_xyz_deg};
+    use crate::track::TrackError;
+    use crate::transform::refusal::RefusalKind;
+    use crate::transform::track_correction::Deviation;
+    use nalgebra::Vector3;
+    use std::collections::BTreeMap;
+    use std::path::Path;
+
+    /// Three targets taught at skids 1000, 6000 and 9000 mm, all moved to in `wobj0`.
+    const MODULE: &str = "MODULE m\n\
+        CONST robtarget pNear:=[[1200,0,800],[0,0,1,0],[0,0,0,0],[1000,9E9,9E9,9E9,9E9,9E9]];\n\
+        CONST robtarget pFar:=[[1200,0,800],[0,0,1,0],[0,0,0,0],[6000,9E9,9E9,9E9,9E9,9E9]];\n\
+        CONST robtarget pBeyond:=[[1200,0,800],[0,0,1,0],[0,0,0,0],[9000,9E9,9E9,9E9,9E9,9E9]];\n\
+        PROC main()\n\
+        MoveL pNear, v1000, z10, tool0\\WObj:=wobj0;\n\
+        MoveL pFar, v1000, z10, tool0\\WObj:=wobj0;\n\
+        MoveL pBeyond, v1000, z10, tool0\\WObj:=wobj0;\n\
+        ENDPROC\n\
+        ENDMODULE\n";
+
+    fn setup(deviation: &dyn Deviation) -> TrackSetup<'_> {
+        TrackSetup {
+            base0: Pose::identity(),
+            track_axis: Vector3::x(),
+            skid_axis: 0,
+            frames: BTreeMap::new(),
+            deviation,
+            default_wobj: None,
+            uncertainty: None,
+            arm: None,
+        }
+    }
+
+    fn literal<'a>(text: &'a str, name: &str) -> &'a str {
+        let at = text.find(&format!("{name}:=")).unwrap();
+        let line = &text[at..];
+        &line[..line.find(";\n").unwrap()]
+    }
+
+    /// A target the last step refuses (its skid is beyond robot B's profile) was moved by the
+    /// steps before: the chain writes it as it was written, and refuses it once, at its line;
+    /// one both steps refuse is refused once.
+    #[test]
+    fn a_target_one_step_refuses_is_written_as_it_was() {
+        let program = Program {
+            files: vec![crate::rapid::parse_file(
+                Path::new("m.mod"),
+                MODULE.as_bytes().to_vec(),
+            )],
+        };
+        // Robot A's track is measured up to skid 8000 and 2 mm low, robot B's up to 5000 and
+        // 0.5 mm high.
+        let measured = |max: f64, dz: f64| {
+            move |s: f64| match s > max {
+                true => Err(TrackError::OutOfRange {
+                    skid: s,
+                    min: 0.0,
+                    max,
+                }),
+                false => Ok(pose_xyz_deg(0.0, 0.0, dz, 0.0, 0.0, 0.0)),
+            }
+        };
+        let (from_dev, to_dev) = (measured(8000.0, -2.0), measured(5000.0, 0.5));
+        let plan = TransferPlan {
+            from: setup(&from_dev),
+            mirror: None,
+            to: setup(&to_dev),
+        };
+        let result = transfer(&program, &plan, &LoadOptions::default()).unwrap();
+        let file = &result.files[0];
+        let out = String::from_utf8(file.output.clone()).unwrap();
+        // pNear: zeroed with A (D_A, 2 mm down), then corrected with B (D_B⁻¹, 0.5 mm down).
+        assert_eq!(
+            literal(&out, "pNear"),
+            "pNear:=[[1200,0,797.500],[0,0,1,0],[0,0,0,0],[1000,9E9,9E9,9E9,9E9,9E9]]"
+        );
+        // pFar: zeroed, then refused by B: as written, not left at z 798.
+        assert_eq!(literal(&out, "pFar"), literal(MODULE, "pFar"));
+        assert_eq!(literal(&out, "pBeyond"), literal(MODULE, "pBeyond"));
+        let refused: Vec<_> = file
+            .refusals
+            .iter()
+            .map(|r| (r.target.as_str(), r.kind, r.line))
+            .collect();
+        assert_eq!(
+            refused,
+            [
+                ("pBeyond", RefusalKind::SkidOutOfRange, 4),
+                ("pFar", RefusalKind::SkidOutOfRange, 3),
+            ]
+        );
+        let changed: Vec<_> = file.changes.iter().map(|c| c.line).collect();
+        assert_eq!(changed, [2]);
+    }
 }
