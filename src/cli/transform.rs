@@ -232,7 +232,7 @@ impl Provenance {
 }
 
 /// Refuses (exit 3) a `correct` of a program already corrected for the robot and a `zero` of one
-/// never corrected for it, unless `--force`.
+/// with targets never corrected for it, unless `--force`.
 fn check_stamps(
     command: &str,
     programs: &[Program],
@@ -270,7 +270,9 @@ fn check_stamps(
                     printable(&s.text())
                 )?;
             }
-            (StampRule::Corrected, None) => {
+            // A program without targets has nothing for `correct` to have changed (so no
+            // stamp) and nothing for `zero` to change: a KSS tree's system files, say.
+            (StampRule::Corrected, None) if p.files.iter().any(|f| !f.positions.is_empty()) => {
                 refused += 1;
                 writeln!(
                     stderr,

@@ -1310,6 +1310,15 @@ fn provenance_stamp_blocks_double_correction() {
             .unwrap()
             .starts_with("; trackfix: correct robot=r1")
     );
+    // A program without targets needs no stamp: zero has nothing in it to change (a KSS
+    // tree's system files). Zeroed beside the corrected pair, it is written as it is.
+    let (plain, both) = (d("plain.src"), d("both"));
+    std::fs::write(&plain, "DEF plain( )\r\n  HALT\r\nEND\r\n").unwrap();
+    run_ok(&[&["zero", &k, &plain, "--out-dir", &both], &common[..]].concat());
+    assert_eq!(
+        std::fs::read(Path::new(&both).join("plain.src")).unwrap(),
+        std::fs::read(&plain).unwrap()
+    );
     // --no-stamp: the lines are the input's.
     let n = d("n.mod");
     run_ok(&[&["correct", sample, "-o", &n, "--no-stamp"], &common[..]].concat());
