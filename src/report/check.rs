@@ -113,7 +113,12 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
                 out.push(
                     Diagnostic::warning(
                         span,
-                        format!("`{}` is used with two {what}: {}", label(), all.join(", ")),
+                        format!(
+                            "`{}` is used with {} {what}: {}",
+                            label(),
+                            crate::transform::policy::frame_count(all.len()),
+                            all.join(", ")
+                        ),
                     )
                     .with_hint("a transform cannot move one target for two frames; declare one target per frame"),
                 );

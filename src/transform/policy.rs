@@ -292,18 +292,35 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
             "it moves with the work piece, not the track: correct it by hand",
         );
     }
-    if let Some(other) = p.usage.other_wobjs().first() {
+    if !p.usage.other_wobjs().is_empty() {
         let first = p.usage.wobj.as_deref().unwrap_or("?");
+        let others = p.usage.other_wobjs();
+        let mut named: Vec<String> = std::iter::once(first)
+            .chain(others.iter().map(|w| &**w))
+            .map(|w| format!("`{w}`"))
+            .collect();
+        let count = frame_count(named.len());
+        let last = named.pop().unwrap_or_default();
         return refuse(
             RefusalKind::TwoWorkObjects,
             format!(
-                "{what} is used with two {} (`{first}` and `{other}`)",
-                words.frames
+                "{what} is used with {count} {} ({} and {last})",
+                words.frames,
+                named.join(", ")
             ),
             &format!("split it into one target per {}", words.frame),
         );
     }
     None
+}
+
+/// How many work objects or bases a target is used with, as the messages say it: `two`, else
+/// the number.
+pub(crate) fn frame_count(n: usize) -> String {
+    match n {
+        2 => "two".to_owned(),
+        n => n.to_string(),
+    }
 }
 
 /// Written angles (degrees) beyond this are no orientation: a typo or `9E9` in the wrong field.
@@ -491,6 +508,28 @@ mod tests {
         for v in values {
             assert_eq!(plausible_cf(v), fract_test(v), "{v:e}");
         }
+    }
+
+    /// A target used with two work objects names both; with three, all three, and says three.
+    #[test]
+    fn a_target_used_with_several_work_objects_names_them_all() {
+        let program = rapid(
+            "[[1,2,3],[1,0,0,0],[0,0,0,0],[100,9E9,9E9,9E9,9E9,9E9]]\n",
+            "wA",
+        );
+        let file = &program.files[0];
+        let mut p = file.position(0).unwrap();
+        let message = |p: &Position| common_refusal(file, p).map(|w| w.message);
+        p.usage.record(Some("wB"), None, false, 2);
+        assert_eq!(
+            message(&p).as_deref(),
+            Some("robtarget `p1` is used with two work objects (`wA` and `wB`)")
+        );
+        p.usage.record(Some("wC"), None, false, 3);
+        assert_eq!(
+            message(&p).as_deref(),
+            Some("robtarget `p1` is used with 3 work objects (`wA`, `wB` and `wC`)")
+        );
     }
 
     /// A frame declaration `name` that a mechanical unit moves (`fixed`) or the robot holds.
