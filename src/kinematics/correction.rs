@@ -22,6 +22,22 @@ pub enum KinematicRefusal {
         /// Its `[min, max]`, degrees.
         limits: [f64; 2],
     },
+    /// The new pose is reached in the same branch only by turning axis 4 or axis 6 by more than
+    /// [`WRIST_TURN_LIMIT_DEG`]: the wrist is at (or near) its singularity, where the tiny tilt
+    /// a correction adds decides which way axis 4 points and axis 6 makes up for it.
+    WristTurn {
+        /// Axis 5 as written, degrees.
+        a5: f64,
+        /// How far axis 4 would turn, degrees.
+        a4_turn: f64,
+        /// How far axis 6 would turn, degrees.
+        a6_turn: f64,
+        /// The distance of the written joints from the wrist singularity, degrees
+        /// ([`Kinematics::wrist_singularity_deg`]).
+        from_singularity: f64,
+        /// The joints that reach the new pose.
+        after: Joints,
+    },
     /// The new pose needs another configuration (`before` is the written or original one).
     ConfigChange {
         /// The written (or original) configuration.
@@ -44,11 +60,47 @@ impl std::fmt::Display for KinematicRefusal {
                 "the transformed target needs axis {axis} = {value:.3}°, outside its limits [{}, {}]",
                 limits[0], limits[1]
             ),
+            KinematicRefusal::WristTurn { .. } => write!(f, "the target {}", self.wrist_text()),
             KinematicRefusal::ConfigChange { before, after } => write!(
                 f,
                 "the transformed target needs configuration {after} instead of {before}"
             ),
         }
+    }
+}
+
+impl KinematicRefusal {
+    /// The predicate of a [`KinematicRefusal::WristTurn`] for a target's name: `is at the wrist
+    /// singularity (A5 = 0.0°): reaching the transformed pose would turn A4 by 46.6° and A6 by
+    /// -46.7°`; empty for the other refusals.
+    pub fn wrist_text(&self) -> String {
+        let KinematicRefusal::WristTurn {
+            a5,
+            a4_turn,
+            a6_turn,
+            ..
+        } = self
+        else {
+            return String::new();
+        };
+        let turns = format!(
+            "reaching the transformed pose would turn A4 by {a4_turn:.1}° and A6 by {a6_turn:.1}°"
+        );
+        if self.at_wrist_singularity() {
+            format!("is at the wrist singularity (A5 = {a5:.1}°): {turns}")
+        } else {
+            format!("has A5 = {a5:.1}°: {turns}")
+        }
+    }
+}
+
+impl KinematicRefusal {
+    /// Whether this is a [`KinematicRefusal::WristTurn`] within a few degrees of the wrist
+    /// singularity: there the swing is the singularity's own; farther out (an axis 4 or 6
+    /// wrapped at the end of its range) it is not named after it.
+    pub fn at_wrist_singularity(&self) -> bool {
+        matches!(self, KinematicRefusal::WristTurn { from_singularity, .. }
+            if *from_singularity < WRIST_SINGULAR_DEG)
     }
 }
 
@@ -171,11 +223,30 @@ pub fn check_target(
     }
 }
 
+/// The most moving a joint target with the track may turn axis 4 or axis 6, degrees.
+///
+/// A track correction tilts the flange by hundredths of a degree and shifts it by a few mm,
+/// which turns the arm's axes by about a tenth of a degree; the wrist takes up that rotation
+/// with axes 4 and 6 turning by about `rotation / sin(A5)`: 0.15° at most over every sample
+/// joint target. At the singularity (A5 = 0, axes 4 and 6 aligned) the pose reached with a
+/// tiny tilt needs axis 4 to point along the tilt, whatever it was, and axis 6 to turn it
+/// back: tens of degrees (47° and 63° on the samples), a swing of the dress pack and of every
+/// motion after. 5° lies well between the two, and is exceeded by a real correction (≤ 0.1°
+/// of rotation) only within about 1° of the singularity, where the swing is no longer the
+/// correction's own.
+pub const WRIST_TURN_LIMIT_DEG: f64 = 5.0;
+
+/// Within this many degrees of the wrist singularity a refused turn is named after it (the
+/// distance the reach check warns within by default, `ReachOptions::singularity_deg`).
+const WRIST_SINGULAR_DEG: f64 = 5.0;
+
 /// A joint target moved with the track: `J'` with `FK(J') = C·FK(J)`, where `C` is the change
 /// in the robot base frame — `D(s)⁻¹` for `correct`, `D(s)` for `zero` (the Cartesian
 /// correction `B·D⁻¹·B⁻¹` seen from the base; no work object and no tool enter, and `B(s)`
 /// cancels). The solution is the one nearest to `J` in the same arm and wrist choice, turns of
-/// axes 4 and 6 kept.
+/// axes 4 and 6 kept; one that turns axis 4 or 6 by more than [`WRIST_TURN_LIMIT_DEG`] is
+/// refused ([`KinematicRefusal::WristTurn`]): at the wrist singularity the exact new pose is
+/// only reached by swinging the wrist, and nothing nearer reaches it.
 pub fn joint_target_correction(
     kin: &Kinematics,
     joints: &Joints,
@@ -183,6 +254,16 @@ pub fn joint_target_correction(
 ) -> Result<Joints, KinematicRefusal> {
     let target = change * kin.forward(joints);
     if let Some(j) = kin.nearest(&target, joints, true) {
+        let (a4_turn, a6_turn) = (j[3] - joints[3], j[5] - joints[5]);
+        if a4_turn.abs() > WRIST_TURN_LIMIT_DEG || a6_turn.abs() > WRIST_TURN_LIMIT_DEG {
+            return Err(KinematicRefusal::WristTurn {
+                a5: joints[4],
+                a4_turn,
+                a6_turn,
+                from_singularity: kin.wrist_singularity_deg(joints),
+                after: j,
+            });
+        }
         return Ok(j);
     }
     let check = check_target(kin, &kin.forward(joints), &target, None);
@@ -209,4 +290,129 @@ pub fn mirror_config_by_ik(
     let reference = mirrored_joints(original);
     let j = kin.nearest(mirrored_flange, &reference, false)?;
     Some((j, ConfigValue::of_joints(language, kin, &j)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::pose_xyz_deg;
+
+    /// A track correction in the robot base: 0.5 mm along x and a 0.02° tilt about x.
+    fn change() -> Pose {
+        pose_xyz_deg(0.5, 0.0, 0.0, 0.02, 0.0, 0.0)
+    }
+
+    fn arm() -> Kinematics {
+        super::super::model("abb_irb4600_40_255")
+            .expect("bundled")
+            .kinematics()
+    }
+
+    /// The position error of `j`'s flange from `target`, mm.
+    fn mm_from(kin: &Kinematics, j: &Joints, target: &Pose) -> f64 {
+        (kin.forward(j).translation.vector - target.translation.vector).norm()
+    }
+
+    /// At the singular wrist (A5 = 0) the corrected pose is reached only with axis 4 along
+    /// the correction's tilt and axis 6 turned back: refused, with the turns. A5 = 0 with A4/A6
+    /// split 30/−30 is the same pose as all zeros, so the same joints reach it; only the turns
+    /// differ (the written split is what would be lost).
+    #[test]
+    fn a_singular_wrist_is_refused_with_the_turns_it_would_need() {
+        let kin = arm();
+        let c = change();
+        let mut afters = Vec::new();
+        for j in [
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, 30.0, 0.0, -30.0],
+            [0.0, 0.0, 0.0, 10.0, 1e-6, -10.0],
+        ] {
+            let target = c * kin.forward(&j);
+            let err = joint_target_correction(&kin, &j, &c).expect_err("refused");
+            let KinematicRefusal::WristTurn {
+                a5,
+                a4_turn,
+                a6_turn,
+                from_singularity,
+                after,
+            } = err
+            else {
+                panic!("{err:?}");
+            };
+            assert_eq!(a5, j[4]);
+            assert!(from_singularity < 1e-5, "{from_singularity}");
+            assert!(err.at_wrist_singularity());
+            // The joints refused do reach the corrected pose exactly.
+            assert!(mm_from(&kin, &after, &target) < 1e-6, "{after:?}");
+            assert!((after[3] - j[3] - a4_turn).abs() < 1e-12);
+            assert!((after[5] - j[5] - a6_turn).abs() < 1e-12);
+            assert!(
+                a4_turn.abs() > WRIST_TURN_LIMIT_DEG && a6_turn.abs() > WRIST_TURN_LIMIT_DEG,
+                "{a4_turn} {a6_turn}"
+            );
+            // Axes 4 and 6 aligned: the flange's roll is A4 + A6 (every sign +1 on this arm),
+            // which the correction changes by a small fraction of a degree only, so the turns
+            // cancel.
+            assert!((a4_turn + a6_turn).abs() < 0.1, "{a4_turn} {a6_turn}");
+            // The arm axes and A5 move by the correction's own size.
+            for i in [0, 1, 2, 4] {
+                assert!((after[i] - j[i]).abs() < 0.1, "axis {}: {after:?}", i + 1);
+            }
+            afters.push(after);
+            let text = err.to_string();
+            assert!(
+                text.starts_with("the target is at the wrist singularity (A5 = 0.0°): reaching the transformed pose would turn A4 by "),
+                "{text}"
+            );
+        }
+        // The first two written poses are one pose (A4 + A6 = 0 at A5 = 0): one answer for
+        // both. The third is 1e-6° off it: its answer differs by the thousandths of a degree
+        // that tilt makes in the direction of axis 4.
+        for (a, tol) in [(&afters[1], 1e-6), (&afters[2], 0.01)] {
+            let close = a.iter().zip(&afters[0]).all(|(x, y)| (x - y).abs() < tol);
+            assert!(close, "{a:?} {:?}", afters[0]);
+        }
+    }
+
+    /// Away from the singularity the joint target is moved as before: FK(J') = C·FK(J) and
+    /// axes 4 and 6 turn by a tenth of a degree at most (about rotation / sin A5).
+    #[test]
+    fn a_bent_wrist_is_moved_with_small_turns_of_axes_4_and_6() {
+        let kin = arm();
+        let c = change();
+        for j in [
+            [0.0, -20.0, 30.0, 0.0, 80.0, 0.0],
+            [0.0, -20.0, 30.0, 15.0, 10.0, -15.0],
+            [30.0, 10.0, -20.0, -45.0, -30.0, 60.0],
+        ] {
+            let target = c * kin.forward(&j);
+            let jc = joint_target_correction(&kin, &j, &c).expect("moved");
+            assert!(mm_from(&kin, &jc, &target) < 1e-6, "{jc:?}");
+            assert!(
+                kin.forward(&jc).rotation.angle_to(&target.rotation) < 1e-9,
+                "{jc:?}"
+            );
+            for i in [3, 5] {
+                assert!((jc[i] - j[i]).abs() < 0.2, "axis {}: {jc:?}", i + 1);
+            }
+        }
+    }
+
+    /// A turn wrapped at the end of axis 4's range is refused too, but not named after the
+    /// singularity.
+    #[test]
+    fn a_far_turn_away_from_the_singularity_is_not_called_singular() {
+        let r = KinematicRefusal::WristTurn {
+            a5: 45.0,
+            a4_turn: -360.0,
+            a6_turn: 0.1,
+            from_singularity: 45.0,
+            after: [0.0; 6],
+        };
+        assert!(!r.at_wrist_singularity());
+        assert_eq!(
+            r.to_string(),
+            "the target has A5 = 45.0°: reaching the transformed pose would turn A4 by -360.0° and A6 by 0.1°"
+        );
+    }
 }

@@ -168,6 +168,23 @@ impl Arm {
         before: &Joints,
         why: &crate::kinematics::KinematicRefusal,
     ) -> Why {
+        if let crate::kinematics::KinematicRefusal::WristTurn { after, .. } = why {
+            return reach(
+                format!(
+                    "{} {}: joints before {}, after {}",
+                    describe(p),
+                    why.wrist_text(),
+                    fmt_joints(before),
+                    fmt_joints(after)
+                ),
+                if why.at_wrist_singularity() {
+                    "re-teach it with axis 5 a few degrees away from 0, or write it as a \
+                     Cartesian target (its configuration is then checked)"
+                } else {
+                    "re-teach it away from the ends of axes 4 and 6"
+                },
+            );
+        }
         reach(
             format!(
                 "{}: {why}: joints before {}, after none in the same branch",

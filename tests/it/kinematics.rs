@@ -1098,3 +1098,214 @@ fn inspect_with_a_robot_adds_reach_columns() {
     let (_, plain, _) = trackfix(&["inspect", "samples/rapid/spot_line.mod", "--format", "csv"]);
     assert!(plain.lines().next().unwrap().ends_with(",frame,tool"));
 }
+
+/// Runs `trackfix correct FILE --cell samples/cell.toml --robot ROBOT --out-dir DIR/out
+/// --no-stamp --format json` with `extra`: the exit code, the JSON report and the output text (if written).
+fn correct_json(file: &Path, robot: &str, extra: &[&str]) -> (i32, serde_json::Value, String) {
+    let dir = file.parent().unwrap().join("out");
+    let out = dir.join(file.file_name().unwrap());
+    let _ = std::fs::remove_dir_all(&dir);
+    let args = [
+        &[
+            "correct",
+            file.to_str().unwrap(),
+            "--cell",
+            "samples/cell.toml",
+            "--robot",
+            robot,
+            "--out-dir",
+            dir.to_str().unwrap(),
+            "--no-stamp",
+            "--format",
+            "json",
+        ][..],
+        extra,
+    ]
+    .concat();
+    let (code, stdout, err) = trackfix(&args);
+    let doc: serde_json::Value = serde_json::from_str(&stdout).unwrap_or_else(|e| {
+        panic!("{e}: {stdout}\n{err}");
+    });
+    (code, doc, std::fs::read_to_string(&out).unwrap_or_default())
+}
+
+/// The refusals of a JSON report as (target, line, kind, message).
+fn json_refusals(doc: &serde_json::Value) -> Vec<(String, u64, String, String)> {
+    doc["refusals"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            (
+                r["target"].as_str().unwrap().to_owned(),
+                r["line"].as_u64().unwrap(),
+                r["kind"].as_str().unwrap().to_owned(),
+                r["message"].as_str().unwrap().to_owned(),
+            )
+        })
+        .collect()
+}
+
+/// The turns of axes 4 and 6 a wrist-singularity message states, degrees.
+fn stated_turns(message: &str) -> (f64, f64) {
+    let after = |key: &str| -> f64 {
+        let rest = &message[message.find(key).unwrap() + key.len()..];
+        rest[..rest.find('°').unwrap()].parse().unwrap()
+    };
+    (after("turn A4 by "), after("and A6 by "))
+}
+
+/// The joints a reach message states after (`…, after [a1, …, a6]`).
+fn stated_after(message: &str) -> Joints {
+    let list = &message[message.rfind("after [").unwrap() + 7..];
+    let v: Vec<f64> = list[..list.find(']').unwrap()]
+        .split(", ")
+        .map(|a| a.parse().unwrap())
+        .collect();
+    [v[0], v[1], v[2], v[3], v[4], v[5]]
+}
+
+/// A RAPID joint target at the wrist singularity (A5 = 0), declared or inline, is refused by
+/// `correct` as a `reach` refusal naming it, its A5 and the turns of A4/A6 the corrected pose
+/// would need; `--keep reach` writes its literal unchanged while the bent-wrist joint target
+/// beside it is corrected.
+#[test]
+fn correct_refuses_a_rapid_joint_target_at_the_wrist_singularity() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("wrist.mod");
+    let src = "MODULE Wrist\n\
+        \x20 CONST jointtarget jHome:=[[0,0,0,0,0,0],[1000,9E9,9E9,9E9,9E9,9E9]];\n\
+        \x20 CONST jointtarget jBent:=[[0,-20,30,0,80,0],[1000,9E9,9E9,9E9,9E9,9E9]];\n\
+        \x20 PROC main()\n\
+        \x20   MoveAbsJ [[0,0,0,0,0,0],[1000,9E9,9E9,9E9,9E9,9E9]]\\NoEOffs,v1000,fine,tool0;\n\
+        \x20   MoveAbsJ jHome\\NoEOffs,v1000,fine,tool0;\n\
+        \x20   MoveAbsJ jBent\\NoEOffs,v1000,fine,tool0;\n\
+        \x20 ENDPROC\n\
+        ENDMODULE\n";
+    std::fs::write(&file, src).unwrap();
+    let (code, doc, written) = correct_json(&file, "r1", &[]);
+    assert_eq!(code, 3, "{doc}");
+    assert_eq!(written, "");
+    let refusals = json_refusals(&doc);
+    let names: Vec<_> = refusals
+        .iter()
+        .map(|(t, l, k, _)| (t.as_str(), *l, k.as_str()))
+        .collect();
+    assert_eq!(
+        names,
+        [("jHome", 2, "reach"), ("inline jointtarget", 5, "reach")]
+    );
+    let profile =
+        trackfix::track::Profile::load(&crate::support::root().join("samples/track/profile.toml"))
+            .unwrap();
+    let k = model("abb_irb4600_40_255").unwrap().kinematics();
+    let zero = [0.0; 6];
+    let d = profile.deviation(1000.0).unwrap();
+    for (name, _, _, message) in &refusals {
+        let head = if name == "jHome" {
+            "jointtarget `jHome`"
+        } else {
+            "inline jointtarget"
+        };
+        assert!(
+            message.starts_with(&format!(
+                "{head} is at the wrist singularity (A5 = 0.0°): reaching the transformed pose would turn A4 by "
+            )),
+            "{message}"
+        );
+        // The turns stated are those of the solution that reaches D⁻¹·FK(J) from J.
+        let (a4, a6) = stated_turns(message);
+        assert!(a4.abs() > 5.0 && a6.abs() > 5.0, "{message}");
+        assert!((a4 + a6).abs() < 0.2, "{message}");
+        // The joints it states after reach the corrected pose D⁻¹·FK(J) (the track's own
+        // deviation at the skid, 1000 mm) to their printed 0.0005°, and differ from J by the
+        // turns stated.
+        let after = stated_after(message);
+        let (dp, dr) = pose_error(&k.forward(&after), &(d.inverse() * k.forward(&zero)));
+        assert!(
+            dp < 0.05 && dr.to_degrees() < 0.002,
+            "{dp} mm {dr} rad: {message}"
+        );
+        assert!((after[3] - a4).abs() < 0.051 && (after[5] - a6).abs() < 0.051);
+    }
+    let (code, doc, written) = correct_json(&file, "r1", &["--keep", "reach"]);
+    assert_eq!(code, 4, "{doc}");
+    assert_eq!(json_refusals(&doc).len(), 2);
+    assert!(doc["refusals"][0]["kept"].as_bool().unwrap());
+    let line = |text: &str, n: usize| text.lines().nth(n - 1).unwrap().to_owned();
+    assert_eq!(line(&written, 2), line(src, 2));
+    assert_eq!(line(&written, 5), line(src, 5));
+    assert_ne!(line(&written, 3), line(src, 3));
+    let jc = joints_in(&parsed(&written), "jBent");
+    let jb = [0.0, -20.0, 30.0, 0.0, 80.0, 0.0];
+    assert!(
+        (jc[3] - jb[3]).abs() < 0.2 && (jc[5] - jb[5]).abs() < 0.2,
+        "{jc:?}"
+    );
+}
+
+/// The same for a KUKA `E6AXIS` (declared and inline `PTP`): KRL joint targets take the same
+/// path.
+#[test]
+fn correct_refuses_a_krl_joint_target_at_the_wrist_singularity() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("wrist.src");
+    let src = "DEF wrist( )\n\
+        \x20 DECL E6AXIS XHOME={A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0,E1 1000}\n\
+        \x20 DECL E6AXIS XBENT={A1 0,A2 -90,A3 90,A4 0,A5 45,A6 0,E1 1000}\n\
+        \x20 PTP XHOME\n\
+        \x20 PTP {A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0,E1 1000}\n\
+        \x20 PTP XBENT\n\
+        END\n";
+    std::fs::write(&file, src).unwrap();
+    let (code, doc, _) = correct_json(&file, "k1", &[]);
+    assert_eq!(code, 3, "{doc}");
+    let refusals = json_refusals(&doc);
+    let names: Vec<_> = refusals
+        .iter()
+        .map(|(t, l, k, _)| (t.as_str(), *l, k.as_str()))
+        .collect();
+    assert_eq!(
+        names,
+        [("XHOME", 2, "reach"), ("inline E6AXIS", 5, "reach")]
+    );
+    for (_, _, _, message) in &refusals {
+        assert!(
+            message.contains("is at the wrist singularity (A5 = 0.0°)"),
+            "{message}"
+        );
+        let (a4, a6) = stated_turns(message);
+        assert!(a4.abs() > 5.0 && (a4 + a6).abs() < 0.2, "{message}");
+    }
+    let (code, doc, written) = correct_json(&file, "k1", &["--keep", "reach"]);
+    assert_eq!(code, 4, "{doc}");
+    let line = |text: &str, n: usize| text.lines().nth(n - 1).unwrap().to_owned();
+    assert_eq!(line(&written, 2), line(src, 2));
+    assert_eq!(line(&written, 5), line(src, 5));
+    assert_ne!(line(&written, 3), line(src, 3), "{written}");
+}
+
+/// `mirror` with kinematics (with or without `--mirror-joints`) keeps a singular wrist's
+/// written A4/A6 split: the mirror image is exact, so IK finds `(−θ1, θ2, θ3, −θ4, θ5, −θ6)`
+/// and no swing arises there.
+#[test]
+fn mirror_keeps_the_axis_4_and_6_split_of_a_singular_wrist() {
+    use trackfix::transform::{MirrorArm, MirrorSettings, apply, mirror};
+    let cell = Cell::parse(Path::new("cell.toml"), CELL).unwrap();
+    let robot = cell.robot("r1").unwrap();
+    let program = parsed(
+        "MODULE M\n  CONST jointtarget jA:=[[0,0,0,30,0,-30],[500,9E9,9E9,9E9,9E9,9E9]];\n  CONST jointtarget jB:=[[0,0,0,0,0,0],[500,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveAbsJ jA,v100,fine,tool0;\n    MoveAbsJ jB,v100,fine,tool0;\n  ENDPROC\nENDMODULE\n",
+    );
+    for mirror_joints in [false, true] {
+        let settings = MirrorSettings {
+            mirror_joints,
+            arm: MirrorArm::of(robot, None),
+            ..MirrorSettings::default()
+        };
+        let result = apply(&program, mirror(&program, &settings)).unwrap();
+        assert!(result.refusals().next().is_none());
+        let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+        assert!(out.contains("jA:=[[0,0,0,-30,0,30],"), "{out}");
+        assert!(out.contains("jB:=[[0,0,0,0,0,0],"), "{out}");
+    }
+}
