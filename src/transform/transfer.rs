@@ -200,6 +200,7 @@ fn combine(
             refusals,
             notes,
             changes,
+            widened: None,
         });
     }
     Ok(ProgramResult { files })
