@@ -177,7 +177,28 @@ impl LockSplits {
     }
 
     /// The record of `file`: every Cartesian target with A, B, C literals whose B is ±90.
+    /// Only each target's A, B and C are decoded ([`PositionList::abc_fields`]); debug builds
+    /// hold the record to the one of decoding every target whole ([`LockSplits::of_decoded`]).
+    ///
+    /// [`PositionList::abc_fields`]: crate::position::PositionList::abc_fields
     pub fn of(file: &ParsedFile) -> LockSplits {
+        let mut out = Vec::new();
+        for i in 0..file.positions.len() {
+            let Some([Some(a), Some(b), Some(_)]) = file.positions.abc_fields(i, &file.source)
+            else {
+                continue;
+            };
+            if super::rewrite::written_at_lock(&b) && a.value().is_finite() {
+                out.push((i, crate::syntax::latin1(a.span().slice(&file.source))));
+            }
+        }
+        let splits = LockSplits(out);
+        debug_assert_eq!(splits, LockSplits::of_decoded(file));
+        splits
+    }
+
+    /// [`LockSplits::of`] from each target decoded whole: what it is held to.
+    fn of_decoded(file: &ParsedFile) -> LockSplits {
         use crate::position::Orientation;
         let mut out = Vec::new();
         // Only A, B, C targets are decoded: a RAPID module has none.
@@ -1552,6 +1573,38 @@ mod tests {
         let out = write(dat, &KRL, &s).unwrap();
         assert!(String::from_utf8_lossy(&out).contains(" gimbal=1:15.0,2:-12.5 version="));
         assert_eq!(find_in(&out, &KRL).unwrap().0, s);
+        // Only A, B and C decoded, the record of decoding every target whole, and each
+        // target's A, B and C as decoding it gives them: the samples, and targets on and off
+        // the lock among axis targets, frames, odd literals and a missing orientation.
+        let mixed = "DEFDAT b\n\
+                     DECL E6POS XP1={X 1,Y 2,Z 3,A 15.0,B 90,C 10,S 2,T 35,E1 0}\n\
+                     DECL E6POS XP2={X 1E4,Y -2,Z 3,A -7,B -90,C 1,S 2,T 35}\n\
+                     DECL POS XP3={X 1,Y 2,Z 3,A 15.0,B 90.00,C 1.5E+1}\n\
+                     DECL FRAME F4={X 0,Y 0,Z 0,A 9,B 90,C 1}\n\
+                     DECL E6AXIS XA={A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0}\n\
+                     DECL E6POS XP5={X 1,Y 2,Z 3,A 30,B 45,C 10,S 2,T 35,E1 0}\n\
+                     DECL E6POS XP6={X 1,Y 2,Z 3}\n\
+                     ENDDAT\n";
+        let mut files = vec![("mixed.dat".to_owned(), mixed.as_bytes().to_vec())];
+        for file in ["spot_line", "pallet", "glue_tcp", "two_bases"] {
+            let path = format!("{}/samples/krl/{file}.dat", env!("CARGO_MANIFEST_DIR"));
+            files.push((path.clone(), std::fs::read(&path).unwrap()));
+        }
+        let mut at_lock = 0;
+        for (path, bytes) in files {
+            let f = crate::krl::parse_file(std::path::Path::new(&path), bytes);
+            let splits = LockSplits::of(&f);
+            assert_eq!(splits, LockSplits::of_decoded(&f), "{path}");
+            at_lock += splits.0.len();
+            for i in 0..f.positions.len() {
+                let whole = f.position(i).and_then(|p| match p.cartesian?.orient? {
+                    crate::position::Orientation::Abc(abc) => Some(abc),
+                    _ => None,
+                });
+                assert_eq!(f.positions.abc_fields(i, &f.source), whole, "{path} {i}");
+            }
+        }
+        assert!(at_lock >= 2, "{at_lock}");
         // Malformed, out of target order or beyond the file's size: nothing is kept.
         for bad in ["1:x", "2:1,1:1", "1:inf", "1", "1:1,2:2,3:3"] {
             assert_eq!(
