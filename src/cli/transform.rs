@@ -314,7 +314,12 @@ fn stamp_results(
         let Some(d) = trackfix::dialect::dialect_of(&f.path) else {
             continue;
         };
-        let carried = stamp::carry_precision(&f.original, std::mem::take(&mut f.output), d);
+        let carried = stamp::carry_precision_known(
+            &f.original,
+            std::mem::take(&mut f.output),
+            d,
+            f.widened.take(),
+        );
         f.output = carried.output;
         if out.no_stamp {
             continue;

@@ -195,7 +195,13 @@ impl Dialect for Krl {
         // Only a field whose name is the one letter S or T is read: one that does not start
         // so is stepped over to the next separator without being trimmed or split (this runs
         // for every target of a `check`, whose fields are mostly `X 1200.5`).
-        for field in literal.split(|&b| matches!(b, b',' | b'{' | b'}')) {
+        let mut start = 0;
+        while start <= literal.len() {
+            // The fields `split` on the separators gives, the separators found eight bytes at
+            // a time: a byte test each was most of the check.
+            let end = next_separator(literal, start);
+            let field = literal.get(start..end).unwrap_or_default();
+            start = end + 1;
             let field = trim_latin1_start(field);
             let which = match field {
                 [b'S' | b's', b' ' | b'\t', ..] => "Status",
@@ -282,6 +288,34 @@ fn trim_latin1(bytes: &[u8]) -> &[u8] {
         .rposition(|b| !latin1_space(*b))
         .map_or(0, |e| e + 1);
     start.get(..end).unwrap_or(&[])
+}
+
+/// The place of the first `,`, `{` or `}` of `bytes` from `from` on, or the end: the words
+/// of eight bytes are tested at once (the lowest byte a word flags is exact, which is the one
+/// taken), the last few bytes one by one.
+#[inline(always)]
+fn next_separator(bytes: &[u8], from: usize) -> usize {
+    const ONES: u64 = u64::from_le_bytes([0x01; 8]);
+    const HIGH: u64 = u64::from_le_bytes([0x80; 8]);
+    let zero_in = |v: u64| v.wrapping_sub(ONES) & !v & HIGH;
+    let mut i = from;
+    while let Some(word) = bytes.get(i..).and_then(|b| b.first_chunk::<8>()) {
+        let x = u64::from_le_bytes(*word);
+        let found = zero_in(x ^ (ONES * u64::from(b',')))
+            | zero_in(x ^ (ONES * u64::from(b'{')))
+            | zero_in(x ^ (ONES * u64::from(b'}')));
+        if found != 0 {
+            return i + (found.trailing_zeros() / 8) as usize;
+        }
+        i += 8;
+    }
+    while let Some(&b) = bytes.get(i) {
+        if matches!(b, b',' | b'{' | b'}') {
+            return i;
+        }
+        i += 1;
+    }
+    bytes.len()
 }
 
 /// What `str::trim_start` leaves of the Latin-1 text `bytes`.
@@ -391,6 +425,22 @@ mod tests {
         ) {
             let literal = parts.concat();
             prop_assert_eq!(Krl.implausible_configuration(&literal), on_text(&literal));
+        }
+    }
+
+    proptest! {
+        /// The separators found by words are the first one a byte-by-byte search finds.
+        #[test]
+        fn next_separator_is_the_first_one(
+            bytes in proptest::collection::vec(prop_oneof![Just(b','), Just(b'{'), Just(b'}'), Just(b'+'), Just(b'-'), Just(0x2c ^ 0x80), Just(0xfb), Just(0x7d ^ 0x01), Just(0), any::<u8>()], 0..40),
+            from in 0usize..45,
+        ) {
+            let from = from.min(bytes.len());
+            let plain = bytes[from..]
+                .iter()
+                .position(|b| matches!(b, b',' | b'{' | b'}'))
+                .map_or(bytes.len(), |i| from + i);
+            prop_assert_eq!(next_separator(&bytes, from), plain);
         }
     }
 

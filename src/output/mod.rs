@@ -210,6 +210,7 @@ mod tests {
                 refusals: Vec::new(),
                 notes: Vec::new(),
                 changes: Default::default(),
+                widened: None,
             }],
         }
     }

@@ -495,6 +495,22 @@ impl PositionList {
         self.cartesian_tag(i) == Some(ABC)
     }
 
+    /// The A, B and C fields of position `i` when it writes its orientation so, decoded
+    /// against `src` without the rest of the position (its head, translation, configuration
+    /// and axes are stepped over): the stamp's record of the targets at the gimbal lock reads
+    /// every KUKA target's A and B, and decoding each whole was 5 % of a KRL `correct`.
+    pub fn abc_fields(&self, i: usize, src: &[u8]) -> Option<[Option<NumField>; 3]> {
+        let mut r = self.reader(self.heads.get(i)?, src)?;
+        r.head(&self.kinds)?;
+        if r.byte()? != ABC {
+            return None;
+        }
+        for _ in 0..3 {
+            r.skip_num()?;
+        }
+        r.nums::<3>()
+    }
+
     fn cartesian_tag(&self, i: usize) -> Option<u8> {
         let mut r = self.reader(self.heads.get(i)?, &[])?;
         r.head(&self.kinds)?;

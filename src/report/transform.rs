@@ -164,6 +164,7 @@ mod tests {
             refusals: Vec::new(),
             notes: Vec::new(),
             changes: changes.into_iter().collect(),
+            widened: None,
         }
     }
 

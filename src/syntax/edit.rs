@@ -308,13 +308,30 @@ impl EditList {
     /// `memcpy`, 5.7 M instructions of `correct` on the 2 MB bench module. See [`Out`]; the
     /// tests hold it to the splice by sorting, which copies each piece as it is.
     pub fn apply(self, src: &[u8]) -> Result<Vec<u8>, EditError> {
-        self.apply_by(src, true)
+        self.apply_by(src, true, |_, _, _| {})
+    }
+
+    /// [`apply`](Self::apply), handing `seen` each edit as it is spliced in, in the order of
+    /// the output (by span; an identical duplicate left out): its span in `src`, its text and,
+    /// where the list has them, 16 bytes that start with the text.
+    /// What a caller learns of the output from the edits is learnt without reading it again.
+    pub fn apply_seen(
+        self,
+        src: &[u8],
+        seen: impl FnMut(Span, &[u8], Option<&[u8; 16]>),
+    ) -> Result<Vec<u8>, EditError> {
+        self.apply_by(src, true, seen)
     }
 
     /// [`apply`](Self::apply); with `straight`, the edits of a list of one run are read
     /// straight from the log's chunks ([`splice_run`](Self::splice_run)), else through the
     /// merge: what the tests compare the straight reading with.
-    fn apply_by(mut self, src: &[u8], straight: bool) -> Result<Vec<u8>, EditError> {
+    fn apply_by<S: FnMut(Span, &[u8], Option<&[u8; 16]>)>(
+        mut self,
+        src: &[u8],
+        straight: bool,
+        seen: S,
+    ) -> Result<Vec<u8>, EditError> {
         let size = src.len().saturating_add_signed(self.growth);
         let mut splice = Splice {
             out: Out {
@@ -323,6 +340,7 @@ impl EditList {
             },
             pos: 0,
             prev: None,
+            seen,
         };
         match self.runs[..] {
             [run] if straight => self.splice_run(run, src, &mut splice)?,
@@ -355,7 +373,12 @@ impl EditList {
     /// duplicate of the edit before is left out, a record that does not read back ends the
     /// run, and each chunk is freed once the run has read past it and the last edit given
     /// does not lie in it.
-    fn splice_run(&mut self, run: Run, src: &[u8], splice: &mut Splice) -> Result<(), EditError> {
+    fn splice_run<S: FnMut(Span, &[u8], Option<&[u8; 16]>)>(
+        &mut self,
+        run: Run,
+        src: &[u8],
+        splice: &mut Splice<S>,
+    ) -> Result<(), EditError> {
         let mut place = run.place;
         let mut left = run.count;
         let mut prev_start = 0;
@@ -544,13 +567,15 @@ fn decode(bytes: &[u8], prev_start: u32) -> Option<(u32, u32, usize, usize)> {
 
 /// [`EditList::apply`]'s splice so far: the output, the place in the source after the last
 /// edit, and that edit's span.
-struct Splice {
+struct Splice<S> {
     out: Out,
     pos: usize,
     prev: Option<Span>,
+    /// Told of each edit spliced in (see [`EditList::apply_seen`]).
+    seen: S,
 }
 
-impl Splice {
+impl<S: FnMut(Span, &[u8], Option<&[u8; 16]>)> Splice<S> {
     /// Splices in the edit of `span` writing `text` (`window`: 16 bytes that start with it,
     /// where the log has them), after the source up to it; an edit out of bounds or
     /// overlapping the one before is the error.
@@ -576,6 +601,7 @@ impl Splice {
         self.out.put(text, window);
         self.pos = span.end;
         self.prev = Some(span);
+        (self.seen)(span, text, window);
         Ok(())
     }
 }
@@ -910,7 +936,7 @@ mod tests {
             let list: EditList = edits.iter().cloned().collect();
             proptest::prop_assert_eq!(list.len(), edits.len());
             proptest::prop_assert_eq!(list.iter().collect::<Vec<_>>(), edits.clone());
-            let merged = list.clone().apply_by(&src, false);
+            let merged = list.clone().apply_by(&src, false, |_, _, _| {});
             let packed = list.apply(&src);
             proptest::prop_assert_eq!(&packed, &splice_by_sorting(&src, &edits));
             proptest::prop_assert_eq!(&packed, &merged);
@@ -991,7 +1017,7 @@ mod tests {
         assert_eq!(list.runs.len(), 1);
         assert!(list.log.chunks_len() > 10, "the edits fit in few chunks");
         let want = splice_by_sorting(&src, &edits);
-        assert_eq!(list.clone().apply_by(&src, false), want);
+        assert_eq!(list.clone().apply_by(&src, false, |_, _, _| {}), want);
         assert_eq!(list.apply(&src), want);
         // The same span again with another text: an overlap, reported with the edit before.
         let mut clash = edits[..9].to_vec();
@@ -1000,7 +1026,7 @@ mod tests {
         assert_eq!(list.runs.len(), 1);
         let want = splice_by_sorting(&src, &clash);
         assert!(matches!(want, Err(EditError::Overlap { .. })));
-        assert_eq!(list.clone().apply_by(&src, false), want);
+        assert_eq!(list.clone().apply_by(&src, false, |_, _, _| {}), want);
         assert_eq!(list.apply(&src), want);
     }
 

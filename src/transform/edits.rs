@@ -284,6 +284,11 @@ pub struct FileResult {
     pub notes: Vec<Refusal>,
     /// One entry per target whose text changed.
     pub changes: Changes,
+    /// The precision record of `output` as the edits that made it gave it
+    /// ([`EditCarry`](super::stamp::EditCarry)), for
+    /// [`carry_precision_known`](super::stamp::carry_precision_known): `None` where it is not
+    /// known, and to be set so by whatever changes `output` after.
+    pub widened: Option<super::stamp::Widened>,
 }
 
 impl FileResult {
@@ -325,6 +330,7 @@ pub fn apply(program: &Program, edits: ProgramEdits) -> Result<ProgramResult, Ed
             refusals: fe.refusals,
             notes: fe.notes,
             changes: fe.changes,
+            widened: None,
         });
     }
     Ok(ProgramResult { files })
@@ -342,10 +348,17 @@ pub fn apply_owned(program: Program, edits: ProgramEdits) -> Result<ProgramResul
         .collect();
     let mut files = Vec::with_capacity(sources.len());
     for ((path, original), mut fe) in sources.into_iter().zip(edits.files) {
-        let output = fe.edits.apply(&original)?;
+        // The precision record is worked out as the edits go in: the stamp's carry then need
+        // not scan the output.
+        let mut carry = super::stamp::EditCarry::new();
+        let src: &[u8] = &original;
+        let output = fe.edits.apply_seen(src, |span, text, window| {
+            carry.edit(src, span, text, window)
+        })?;
         // Kept with the result to the end of the run.
         fe.changes.shrink_to_fit();
         files.push(FileResult {
+            widened: carry.finish(src),
             path,
             original,
             output,

@@ -87,6 +87,8 @@ pub fn rename_program(
         out.extend_from_slice(new_stem.as_bytes());
         out.extend_from_slice(&f.output[h.name.end..]);
         f.output = out;
+        // The edits' precision record no longer describes the output.
+        f.widened = None;
         renamed.push(Renamed {
             path: f.path.clone(),
             from,
@@ -109,6 +111,7 @@ mod tests {
             refusals: Vec::new(),
             notes: Vec::new(),
             changes: Default::default(),
+            widened: None,
         }
     }
 

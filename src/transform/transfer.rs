@@ -234,6 +234,7 @@ fn combine(
             refusals,
             notes,
             changes,
+            widened: None,
         });
     }
     Ok(ProgramResult { files })
