@@ -5,7 +5,7 @@
 //! `transfer` equals `zero; mirror; correct` byte for byte. Nothing is written between the steps:
 //! RAPID re-parses the bytes, a KRL pair goes through `krl::load_program_from_sources`.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
 use crate::position::{NumField, Orientation, ParsedFile, Position, Program};
@@ -14,7 +14,7 @@ use crate::syntax::{Edit, EditError, Span, apply_edits};
 
 use super::edits::{FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
 use super::mirror::{MirrorSettings, Reflection, mirror, reflection_for};
-use super::refusal::Refusal;
+use super::refusal::{Refusal, RefusalKind};
 use super::rewrite::{DEG_DECIMALS, MM_DECIMALS, QUAT_DECIMALS, pose_change};
 use super::track_correction::{Direction, TrackSetup, track_correction};
 
@@ -196,7 +196,7 @@ fn combine(
             .zip(b.positions())
             .enumerate()
             .filter(|(k, (p, q))| {
-                !kept.contains(k) && p.span.slice(&a.source) != q.span.slice(&b.source)
+                !kept.contains_key(k) && p.span.slice(&a.source) != q.span.slice(&b.source)
             })
             .map(|(_, (p, q))| {
                 let poses = p
@@ -240,15 +240,16 @@ fn combine(
     Ok(ProgramResult { files })
 }
 
-/// The refusals of file `i` over a chain's steps, and the targets refused: one refusal per
-/// target (its first), placed in `start` (a later step's refusal points into that step's input,
-/// whose rewritten numbers moved it), then every other refusal once.
+/// The refusals of file `i` over a chain's steps, and the targets refused with the kind of
+/// their first refusal: one refusal per target (that one), placed in `start` (a later step's
+/// refusal points into that step's input, whose rewritten numbers moved it), then every other
+/// refusal once.
 fn chain_refusals(
     start: &ParsedFile,
     steps: &[(ProgramResult, Vec<Vec<Option<usize>>>)],
     i: usize,
-) -> (Vec<Refusal>, BTreeSet<usize>) {
-    let mut kept = BTreeSet::new();
+) -> (Vec<Refusal>, BTreeMap<usize, RefusalKind>) {
+    let mut kept = BTreeMap::new();
     let mut seen = BTreeSet::new();
     let mut refusals = Vec::new();
     for (step, (result, targets)) in steps.iter().enumerate() {
@@ -259,7 +260,8 @@ fn chain_refusals(
         for (k, r) in file.refusals.iter().enumerate() {
             match targets.get(k).copied().flatten() {
                 Some(t) => {
-                    if kept.insert(t) {
+                    if let std::collections::btree_map::Entry::Vacant(e) = kept.entry(t) {
+                        e.insert(r.kind);
                         refusals.push(match (step, start.positions.span(t)) {
                             (1.., Some(span)) => r.placed_in(start, span),
                             _ => r.clone(),
@@ -331,18 +333,44 @@ const CHAIN_ROUNDING_UNITS: f64 = 1.5;
 /// (every coordinate, and the orientation as a rotation, within the rounding of the intermediate
 /// files) keeps its original text, and so do joint and external-axis values that came back: an
 /// identity transfer would otherwise rewrite `-1200` as `-1200.000`. The targets `kept` (some
-/// step refused them) keep their whole literal as written.
+/// step refused them) keep their whole literal as written, and their offset calls' numbers.
 fn restore_unmoved(
     a: &ParsedFile,
     b: &ParsedFile,
-    kept: &BTreeSet<usize>,
+    kept: &BTreeMap<usize, RefusalKind>,
 ) -> Result<Vec<u8>, EditError> {
     let mut edits = Vec::new();
-    for &t in kept {
+    for &t in kept.keys() {
         if let (Some(p), Some(q)) = (a.positions.span(t), b.positions.span(t)) {
             let old = p.slice(&a.source);
             if old != q.slice(&b.source) {
                 edits.push(Edit::new(q, old.to_vec()));
+            }
+        }
+    }
+    // An `Offs`/`RelTool` offset of a kept target keeps its numbers too: the steps move an
+    // offset call apart from its target, and a kept point with a mirrored offset is neither.
+    // Not one of a target computed at run time: the offset then applies to the pose robot B
+    // computes, and moves with the transform as the offsets of a target with no literal do.
+    let kept_names: Vec<String> = kept
+        .iter()
+        .filter(|(_, kind)| !kind.is_runtime_data())
+        .filter_map(|(&t, _)| a.positions.name(t))
+        .map(str::to_ascii_lowercase)
+        .collect();
+    if !kept_names.is_empty() && a.offsets.len() == b.offsets.len() {
+        for (c, d) in a.offsets.iter().zip(&b.offsets) {
+            if !kept_names.contains(&c.target.trim().to_ascii_lowercase()) {
+                continue;
+            }
+            let (from, to) = (c.delta.iter().chain(&c.rot), d.delta.iter().chain(&d.rot));
+            for (f, g) in from.zip(to) {
+                if let (Some(f), Some(g)) = (f, g) {
+                    let old = f.span().slice(&a.source);
+                    if old != g.span().slice(&b.source) {
+                        edits.push(Edit::new(g.span(), old.to_vec()));
+                    }
+                }
             }
         }
     }
@@ -356,7 +384,7 @@ fn restore_unmoved(
         (f.value() - g.value()).abs() <= CHAIN_ROUNDING_UNITS * unit(&[f, g], house) * (1.0 + 1e-9)
     };
     for (t, (p, q)) in a.positions().zip(b.positions()).enumerate() {
-        if kept.contains(&t) {
+        if kept.contains_key(&t) {
             continue;
         }
         let (x, y) = (target_literals(&p), target_literals(&q));
@@ -399,10 +427,8 @@ mod tests {
     use super::*;
     use crate::geometry::{Pose, pose_xyz_deg};
     use crate::track::TrackError;
-    use crate::transform::refusal::RefusalKind;
     use crate::transform::track_correction::Deviation;
     use nalgebra::Vector3;
-    use std::collections::BTreeMap;
     use std::path::Path;
 
     /// Three targets taught at skids 1000, 6000 and 9000 mm, all moved to in `wobj0`.
@@ -490,5 +516,46 @@ mod tests {
         );
         let changed: Vec<_> = file.changes.iter().map(|c| c.line).collect();
         assert_eq!(changed, [2]);
+    }
+
+    /// The offsets of a kept target stay as written with it: the mirror turns the `Offs`
+    /// offset of a target robot B then refuses.
+    #[test]
+    fn a_kept_targets_offsets_are_written_as_they_were() {
+        let module = "MODULE m\n\
+            CONST robtarget pFar:=[[1200,0,800],[0,0,1,0],[0,0,0,0],[6000,9E9,9E9,9E9,9E9,9E9]];\n\
+            PROC main()\n\
+            MoveL Offs(pFar,0,100,0), v1000, z10, tool0\\WObj:=wobj0;\n\
+            MoveL pFar, v1000, z10, tool0\\WObj:=wobj0;\n\
+            ENDPROC\n\
+            ENDMODULE\n";
+        let program = Program {
+            files: vec![crate::rapid::parse_file(
+                Path::new("m.mod"),
+                module.as_bytes().to_vec(),
+            )],
+        };
+        let from_dev = |_s: f64| Ok(Pose::identity());
+        let to_dev = |s: f64| {
+            Err(TrackError::OutOfRange {
+                skid: s,
+                min: 0.0,
+                max: 5000.0,
+            })
+        };
+        let plan = TransferPlan {
+            from: setup(&from_dev),
+            mirror: Some(MirrorSettings::default()),
+            to: setup(&to_dev),
+        };
+        let mirrored = apply(&program, plan.steps()[1].edits(&program)).unwrap();
+        let mirrored = String::from_utf8(mirrored.files[0].output.clone()).unwrap();
+        assert!(mirrored.contains("Offs(pFar,0,-100,0)"), "{mirrored}");
+        let result = transfer(&program, &plan, &LoadOptions::default()).unwrap();
+        assert_eq!(
+            String::from_utf8(result.files[0].output.clone()).unwrap(),
+            module
+        );
+        assert_eq!(result.files[0].refusals.len(), 1);
     }
 }
