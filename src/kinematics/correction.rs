@@ -92,9 +92,7 @@ impl KinematicRefusal {
             format!("has A5 = {a5:.1}°: {turns}")
         }
     }
-}
 
-impl KinematicRefusal {
     /// Whether this is a [`KinematicRefusal::WristTurn`] within a few degrees of the wrist
     /// singularity: there the swing is the singularity's own; farther out (an axis 4 or 6
     /// wrapped at the end of its range) it is not named after it.
