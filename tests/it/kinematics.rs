@@ -1146,6 +1146,14 @@ fn json_refusals(doc: &serde_json::Value) -> Vec<(String, u64, String, String)> 
         .collect()
 }
 
+/// Each refusal of [`json_refusals`] without its message.
+fn targets_lines_kinds(refusals: &[(String, u64, String, String)]) -> Vec<(&str, u64, &str)> {
+    refusals
+        .iter()
+        .map(|(t, l, k, _)| (t.as_str(), *l, k.as_str()))
+        .collect()
+}
+
 /// The turns of axes 4 and 6 a wrist-singularity message states, degrees.
 fn stated_turns(message: &str) -> (f64, f64) {
     let after = |key: &str| -> f64 {
@@ -1187,10 +1195,7 @@ fn correct_refuses_a_rapid_joint_target_at_the_wrist_singularity() {
     assert_eq!(code, 3, "{doc}");
     assert_eq!(written, "");
     let refusals = json_refusals(&doc);
-    let names: Vec<_> = refusals
-        .iter()
-        .map(|(t, l, k, _)| (t.as_str(), *l, k.as_str()))
-        .collect();
+    let names = targets_lines_kinds(&refusals);
     assert_eq!(
         names,
         [("jHome", 2, "reach"), ("inline jointtarget", 5, "reach")]
@@ -1261,10 +1266,7 @@ fn correct_refuses_a_krl_joint_target_at_the_wrist_singularity() {
     let (code, doc, _) = correct_json(&file, "k1", &[]);
     assert_eq!(code, 3, "{doc}");
     let refusals = json_refusals(&doc);
-    let names: Vec<_> = refusals
-        .iter()
-        .map(|(t, l, k, _)| (t.as_str(), *l, k.as_str()))
-        .collect();
+    let names = targets_lines_kinds(&refusals);
     assert_eq!(
         names,
         [("XHOME", 2, "reach"), ("inline E6AXIS", 5, "reach")]
