@@ -967,6 +967,27 @@ mod tests {
         }
     }
 
+    /// A target the mirror refuses keeps its `Offs` offset as written with it; the offset of a
+    /// target it mirrors is mirrored.
+    #[test]
+    fn a_refused_targets_offset_is_left_as_written() {
+        let text = "MODULE m\n\
+            VAR robtarget pX:=[[xOff,0,100],[0,1,0,0],[0,0,0,0],[2500,9E9,9E9,9E9,9E9,9E9]];\n\
+            CONST robtarget pY:=[[200,50,100],[0,1,0,0],[0,0,0,0],[2500,9E9,9E9,9E9,9E9,9E9]];\n\
+            PROC main()\n\
+            MoveL Offs(pX,0,100,0), v1000, z10, tool0\\WObj:=wobj0;\n\
+            MoveL Offs(pY,0,100,0), v1000, z10, tool0\\WObj:=wobj0;\n\
+            ENDPROC\n\
+            ENDMODULE\n";
+        let p = parse(text);
+        let edits = mirror(&p, &MirrorSettings::default());
+        let refused: Vec<_> = edits.refusals().map(|r| r.target.clone()).collect();
+        assert_eq!(refused, ["pX"]);
+        let out = mirrored_text(&p, &MirrorSettings::default());
+        assert!(out.contains("Offs(pX,0,100,0)"), "{out}");
+        assert!(out.contains("Offs(pY,0,-100,0)"), "{out}");
+    }
+
     /// Mirroring the frames: the work object and the tool mirror so that the world pose of the TCP
     /// is the mirror image of the original in world (`Sa·W·T·Sb`), offsets follow Sa / Sb and
     /// mirroring joints negates axes 1, 4, 6.
