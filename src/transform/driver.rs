@@ -120,12 +120,17 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
             let step = if p.kind.is_cartesian() {
                 cartesian(rule, scope, &p, splits.a_of(i), &mut edits)
             } else {
-                rule.joint(scope, &p).map(|step| {
-                    step.map(|(joint_edits, change)| {
-                        edits = joint_edits;
-                        change
-                    })
-                })
+                match (rule.joint(scope, &p), super::policy::run_time(&p)) {
+                    // A joint target the rule would move, but whose value the program computes
+                    // when it runs (`jPark := CalcJointT(…)`): refused as a Cartesian one is.
+                    (Ok(Some(_)), Some(why)) => Err(why.at(file, &p)),
+                    (step, _) => step.map(|step| {
+                        step.map(|(joint_edits, change)| {
+                            edits = joint_edits;
+                            change
+                        })
+                    }),
+                }
             };
             match step {
                 Ok(Some(change)) if !edits.is_empty() => {

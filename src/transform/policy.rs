@@ -221,6 +221,22 @@ impl std::fmt::Display for Described<'_> {
     }
 }
 
+/// The refusal of a target whose value the program computes when it runs (`p10 := CRobT()`,
+/// `jPark := CalcJointT(…)`), or that is used with a frame computed then: what a transform
+/// writes into its literal would not be what the robot moves to.
+pub(crate) fn run_time(p: &Position) -> Option<Why> {
+    let why = p.usage.run_time()?;
+    Some(Why::new(
+        RefusalKind::RuntimeData,
+        format!(
+            "{} {}: not correctable offline",
+            describe(p),
+            why.describe()
+        ),
+        "correct the program's computation of it by hand, or teach the target",
+    ))
+}
+
 /// The refusal of every transform for a joint target it does not change.
 pub(crate) fn joint_target(p: &Position) -> Why {
     Why::new(
@@ -246,12 +262,8 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
             "teach the target (or leave the slot unused)",
         );
     }
-    if let Some(why) = p.usage.run_time() {
-        return refuse(
-            RefusalKind::RuntimeData,
-            format!("{what} {}: not correctable offline", why.describe()),
-            "correct the program's computation of it by hand, or teach the target",
-        );
+    if let Some(why) = run_time(p) {
+        return Some(why);
     }
     if p.cartesian.as_ref().and_then(|c| c.pose()).is_none() {
         return refuse(

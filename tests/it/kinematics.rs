@@ -1173,6 +1173,46 @@ fn stated_after(message: &str) -> Joints {
     [v[0], v[1], v[2], v[3], v[4], v[5]]
 }
 
+/// A joint target the program computes when it runs (`jRun := CJointT()`) is refused as
+/// runtime data, as a Cartesian one is, not moved with the track: its literal is not what the
+/// robot moves to. The joint target beside it is corrected; `--keep runtime-data` writes the
+/// computed one's literal unchanged.
+#[test]
+fn correct_refuses_a_joint_target_computed_at_run_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("run.mod");
+    let src = "MODULE Run\n\
+        \x20 VAR jointtarget jRun:=[[0,-20,30,0,80,0],[1000,9E9,9E9,9E9,9E9,9E9]];\n\
+        \x20 CONST jointtarget jBent:=[[0,-20,30,0,80,0],[1000,9E9,9E9,9E9,9E9,9E9]];\n\
+        \x20 PROC main()\n\
+        \x20   jRun := CJointT();\n\
+        \x20   MoveAbsJ jRun\\NoEOffs,v1000,fine,tool0;\n\
+        \x20   MoveAbsJ jBent\\NoEOffs,v1000,fine,tool0;\n\
+        \x20 ENDPROC\n\
+        ENDMODULE\n";
+    std::fs::write(&file, src).unwrap();
+    let (code, doc, written) = correct_json(&file, "r1", &[]);
+    assert_eq!(code, 3, "{doc}");
+    assert_eq!(written, "");
+    let refusals = json_refusals(&doc);
+    assert_eq!(
+        targets_lines_kinds(&refusals),
+        [("jRun", 2, "runtime-data")]
+    );
+    assert!(
+        refusals[0]
+            .3
+            .contains("is given a computed value at run time (line 5)"),
+        "{}",
+        refusals[0].3
+    );
+    let (code, doc, written) = correct_json(&file, "r1", &["--keep", "runtime-data"]);
+    assert_eq!(code, 4, "{doc}");
+    let line = |text: &str, n: usize| text.lines().nth(n - 1).unwrap().to_owned();
+    assert_eq!(line(&written, 2), line(src, 2));
+    assert_ne!(line(&written, 3), line(src, 3));
+}
+
 /// A RAPID joint target at the wrist singularity (A5 = 0), declared or inline, is refused by
 /// `correct` as a `reach` refusal naming it, its A5 and the turns of A4/A6 the corrected pose
 /// would need; `--keep reach` writes its literal unchanged while the bent-wrist joint target
