@@ -144,21 +144,17 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
             }
         }
     }
-    // An offset call of a target left as written stays as written with it: a point as written
-    // with a mirrored offset is neither. Not one of a target computed at run time, whose offset
-    // applies to the pose the robot computes and moves as the offsets of a target without a
-    // literal do. Targets are named across the program: an offset may be in another module.
-    let kept: std::collections::HashSet<String> = out
-        .files
-        .iter()
-        .flat_map(|fe| &fe.refusals)
-        .filter(|r| !r.kind.is_runtime_data())
-        .map(|r| r.target.to_ascii_lowercase())
-        .collect();
+    // An offset call of a target left as written stays as written with it.
+    let kept = super::policy::KeptTargets::of(
+        out.files
+            .iter()
+            .flat_map(|fe| &fe.refusals)
+            .map(|r| (r.target.as_str(), r.kind)),
+    );
     for (file, fe) in program.files.iter().zip(out.files.iter_mut()) {
         let scope = Scope { program, file };
         for call in &file.offsets {
-            if kept.contains(&call.target.trim().to_ascii_lowercase()) {
+            if kept.offsets(call) {
                 continue;
             }
             match rule.offset(scope, call) {

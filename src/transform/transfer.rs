@@ -14,6 +14,7 @@ use crate::syntax::{Edit, EditError, Span, apply_edits};
 
 use super::edits::{FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
 use super::mirror::{MirrorSettings, Reflection, mirror, reflection_for};
+use super::policy::KeptTargets;
 use super::refusal::{Refusal, RefusalKind};
 use super::rewrite::{DEG_DECIMALS, MM_DECIMALS, QUAT_DECIMALS, pose_change};
 use super::track_correction::{Direction, TrackSetup, track_correction};
@@ -173,7 +174,7 @@ fn combine(
     mirror: Option<&MirrorSettings>,
 ) -> Result<ProgramResult, TransferError> {
     let own = mirror.map(Reflection::new);
-    let mut files = Vec::new();
+    let mut refused = Vec::with_capacity(start.files.len());
     for (i, (a, b)) in start.files.iter().zip(&end.files).enumerate() {
         if a.positions.len() != b.positions.len() {
             return Err(TransferError::Drift {
@@ -182,7 +183,18 @@ fn combine(
                 after: b.positions.len(),
             });
         }
-        let (refusals, kept) = chain_refusals(a, steps, i);
+        refused.push(chain_refusals(a, steps, i));
+    }
+    // The targets kept in any file, whose offset calls in every file stay as written.
+    let kept_offsets =
+        KeptTargets::of(start.files.iter().zip(&refused).flat_map(|(a, (_, kept))| {
+            kept.iter()
+                .filter_map(|(&t, &kind)| Some((a.positions.name(t)?, kind)))
+        }));
+    let mut files = Vec::new();
+    for (i, ((a, b), (refusals, kept))) in
+        start.files.iter().zip(&end.files).zip(refused).enumerate()
+    {
         let mut seen = BTreeSet::new();
         let notes = steps
             .iter()
@@ -226,7 +238,7 @@ fn combine(
                 }
             })
             .collect();
-        let output = restore_unmoved(a, b, &kept)?;
+        let output = restore_unmoved(a, b, &kept, &kept_offsets)?;
         files.push(FileResult {
             path: a.path.clone(),
             original: a.source.clone(),
@@ -333,11 +345,13 @@ const CHAIN_ROUNDING_UNITS: f64 = 1.5;
 /// (every coordinate, and the orientation as a rotation, within the rounding of the intermediate
 /// files) keeps its original text, and so do joint and external-axis values that came back: an
 /// identity transfer would otherwise rewrite `-1200` as `-1200.000`. The targets `kept` (some
-/// step refused them) keep their whole literal as written, and their offset calls' numbers.
+/// step refused them) keep their whole literal as written, and the offset calls of the
+/// program's `kept_offsets` their numbers (the steps move an offset call apart from its target).
 fn restore_unmoved(
     a: &ParsedFile,
     b: &ParsedFile,
     kept: &BTreeMap<usize, RefusalKind>,
+    kept_offsets: &KeptTargets,
 ) -> Result<Vec<u8>, EditError> {
     let mut edits = Vec::new();
     for &t in kept.keys() {
@@ -348,38 +362,24 @@ fn restore_unmoved(
             }
         }
     }
-    // An `Offs`/`RelTool` offset of a kept target keeps its numbers too: the steps move an
-    // offset call apart from its target, and a kept point with a mirrored offset is neither.
-    // Not one of a target computed at run time: the offset then applies to the pose robot B
-    // computes, and moves with the transform as the offsets of a target with no literal do.
-    let kept_names: Vec<String> = kept
-        .iter()
-        .filter(|(_, kind)| !kind.is_runtime_data())
-        .filter_map(|(&t, _)| a.positions.name(t))
-        .map(str::to_ascii_lowercase)
-        .collect();
-    if !kept_names.is_empty() && a.offsets.len() == b.offsets.len() {
-        for (c, d) in a.offsets.iter().zip(&b.offsets) {
-            if !kept_names.contains(&c.target.trim().to_ascii_lowercase()) {
-                continue;
-            }
-            let (from, to) = (c.delta.iter().chain(&c.rot), d.delta.iter().chain(&d.rot));
-            for (f, g) in from.zip(to) {
-                if let (Some(f), Some(g)) = (f, g) {
-                    let old = f.span().slice(&a.source);
-                    if old != g.span().slice(&b.source) {
-                        edits.push(Edit::new(g.span(), old.to_vec()));
-                    }
-                }
-            }
-        }
-    }
     let mut keep = |f: &NumField, g: &NumField| {
         let old = f.span().slice(&a.source);
         if old != g.span().slice(&b.source) {
             edits.push(Edit::new(g.span(), old.to_vec()));
         }
     };
+    if a.offsets.len() == b.offsets.len() {
+        for (c, d) in a.offsets.iter().zip(&b.offsets) {
+            if kept_offsets.offsets(c) {
+                let (from, to) = (c.delta.iter().chain(&c.rot), d.delta.iter().chain(&d.rot));
+                for (f, g) in from.zip(to) {
+                    if let (Some(f), Some(g)) = (f, g) {
+                        keep(f, g);
+                    }
+                }
+            }
+        }
+    }
     let close = |f: &NumField, g: &NumField, house: i32| {
         (f.value() - g.value()).abs() <= CHAIN_ROUNDING_UNITS * unit(&[f, g], house) * (1.0 + 1e-9)
     };
@@ -557,5 +557,48 @@ mod tests {
             module
         );
         assert_eq!(result.files[0].refusals.len(), 1);
+    }
+
+    /// So do they in another module of the task than the target's.
+    #[test]
+    fn a_kept_targets_offsets_in_another_module_are_written_as_they_were() {
+        let data = "MODULE Data\n\
+            CONST robtarget pFar:=[[1200,0,800],[0,0,1,0],[0,0,0,0],[6000,9E9,9E9,9E9,9E9,9E9]];\n\
+            ENDMODULE\n";
+        let main = "MODULE Main\n\
+            PROC main()\n\
+            MoveL Offs(pFar,0,100,0), v1000, z10, tool0\\WObj:=wobj0;\n\
+            MoveL pFar, v1000, z10, tool0\\WObj:=wobj0;\n\
+            ENDPROC\n\
+            ENDMODULE\n";
+        let program = Program {
+            files: crate::rapid::parse_task(vec![
+                ("Data.mod".into(), data.as_bytes().to_vec().into()),
+                ("Main.mod".into(), main.as_bytes().to_vec().into()),
+            ]),
+        };
+        let from_dev = |_s: f64| Ok(Pose::identity());
+        let to_dev = |s: f64| {
+            Err(TrackError::OutOfRange {
+                skid: s,
+                min: 0.0,
+                max: 5000.0,
+            })
+        };
+        let plan = TransferPlan {
+            from: setup(&from_dev),
+            mirror: Some(MirrorSettings::default()),
+            to: setup(&to_dev),
+        };
+        let mirrored = apply(&program, plan.steps()[1].edits(&program)).unwrap();
+        let mirrored = String::from_utf8(mirrored.files[1].output.clone()).unwrap();
+        assert!(mirrored.contains("Offs(pFar,0,-100,0)"), "{mirrored}");
+        let result = transfer(&program, &plan, &LoadOptions::default()).unwrap();
+        let outputs: Vec<_> = result
+            .files
+            .iter()
+            .map(|f| String::from_utf8(f.output.clone()).unwrap())
+            .collect();
+        assert_eq!(outputs, [data, main]);
     }
 }
