@@ -456,6 +456,18 @@ mod tests {
         }
     }
 
+    /// A track measured from skid 0 up to `max` mm (beyond: out of range), `dz` mm high.
+    fn measured(max: f64, dz: f64) -> impl Fn(f64) -> Result<Pose, TrackError> + Sync {
+        move |s: f64| match s > max {
+            true => Err(TrackError::OutOfRange {
+                skid: s,
+                min: 0.0,
+                max,
+            }),
+            false => Ok(pose_xyz_deg(0.0, 0.0, dz, 0.0, 0.0, 0.0)),
+        }
+    }
+
     fn literal<'a>(text: &'a str, name: &str) -> &'a str {
         let at = text.find(&format!("{name}:=")).unwrap();
         let line = &text[at..];
@@ -475,16 +487,6 @@ mod tests {
         };
         // Robot A's track is measured up to skid 8000 and 2 mm low, robot B's up to 5000 and
         // 0.5 mm high.
-        let measured = |max: f64, dz: f64| {
-            move |s: f64| match s > max {
-                true => Err(TrackError::OutOfRange {
-                    skid: s,
-                    min: 0.0,
-                    max,
-                }),
-                false => Ok(pose_xyz_deg(0.0, 0.0, dz, 0.0, 0.0, 0.0)),
-            }
-        };
         let (from_dev, to_dev) = (measured(8000.0, -2.0), measured(5000.0, 0.5));
         let plan = TransferPlan {
             from: setup(&from_dev),
@@ -535,14 +537,8 @@ mod tests {
                 module.as_bytes().to_vec(),
             )],
         };
-        let from_dev = |_s: f64| Ok(Pose::identity());
-        let to_dev = |s: f64| {
-            Err(TrackError::OutOfRange {
-                skid: s,
-                min: 0.0,
-                max: 5000.0,
-            })
-        };
+        // Robot A's track is straight, robot B's measured up to skid 5000.
+        let (from_dev, to_dev) = (measured(f64::INFINITY, 0.0), measured(5000.0, 0.0));
         let plan = TransferPlan {
             from: setup(&from_dev),
             mirror: Some(MirrorSettings::default()),
@@ -577,14 +573,8 @@ mod tests {
                 ("Main.mod".into(), main.as_bytes().to_vec().into()),
             ]),
         };
-        let from_dev = |_s: f64| Ok(Pose::identity());
-        let to_dev = |s: f64| {
-            Err(TrackError::OutOfRange {
-                skid: s,
-                min: 0.0,
-                max: 5000.0,
-            })
-        };
+        // Robot A's track is straight, robot B's measured up to skid 5000.
+        let (from_dev, to_dev) = (measured(f64::INFINITY, 0.0), measured(5000.0, 0.0));
         let plan = TransferPlan {
             from: setup(&from_dev),
             mirror: Some(MirrorSettings::default()),
