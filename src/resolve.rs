@@ -631,6 +631,15 @@ impl<'f, 'a> Binder<'f, 'a> {
         })
     }
 
+    /// Applies `mark` to the usage of every target the use last bound reached directly.
+    pub(crate) fn mark_reached(&mut self, mut mark: impl FnMut(&mut crate::position::Usage)) {
+        for &(m, i) in &self.targets {
+            if let Some(u) = self.files.get_mut(m).and_then(|f| f.positions.usage_mut(i)) {
+                mark(u);
+            }
+        }
+    }
+
     /// Records, in every target passed to a routine parameter, every use reachable from that
     /// parameter, with the line of the call that passes the target.
     pub(crate) fn finish(self) {

@@ -415,6 +415,7 @@ struct RareUsage {
     other_wobjs: Vec<FrameName>,
     run_time: Option<RunTimeValue>,
     stationary_tool: bool,
+    zone: Option<ZoneArgument>,
 }
 
 /// A target's usage is kept for each of 100,000 targets: a layout change that grows it fails
@@ -441,6 +442,32 @@ pub enum RunTimeValue {
         /// 1-based line of the assignment.
         line: usize,
     },
+}
+
+/// A joint target a world-zone instruction takes as a tolerance or as limits, not as a
+/// position the robot moves to (RAPID `WZHomeJointDef`'s `DeltaJointVal`, `WZLimJointDef`'s
+/// `LowJointVal` and `HighJointVal`): moving it as a position gives the zone nonsense.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ZoneArgument {
+    /// The instruction, as the language spells it (`WZHomeJointDef`).
+    pub instruction: &'static str,
+    /// The parameter the target is given for (`DeltaJointVal`).
+    pub parameter: &'static str,
+    /// What the zone makes of its values.
+    pub role: ZoneRole,
+    /// 1-based line of the instruction.
+    pub line: usize,
+}
+
+/// What a world zone makes of a joint target's values ([`ZoneArgument`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ZoneRole {
+    /// Half-widths around a middle position, each axis's own and non-negative: the same for
+    /// the track corrected and for the mirrored robot.
+    Tolerance,
+    /// One end of the joint ranges: a mirrored robot's zone has other ends (axis 1 negated
+    /// swaps low and high), which no transform of one target gives.
+    Limit,
 }
 
 impl RunTimeValue {
@@ -491,6 +518,19 @@ impl Usage {
         let rare = self.rare.get_or_insert_with(Box::default);
         if rare.run_time.is_none() {
             rare.run_time = Some(why);
+        }
+    }
+
+    /// Set when a world zone takes the target as a tolerance or as limits: the first found.
+    pub fn zone_argument(&self) -> Option<&ZoneArgument> {
+        self.rare.as_ref()?.zone.as_ref()
+    }
+
+    /// Marks the target as a world zone's tolerance or limits, keeping the first found.
+    pub fn set_zone_argument(&mut self, zone: ZoneArgument) {
+        let rare = self.rare.get_or_insert_with(Box::default);
+        if rare.zone.is_none() {
+            rare.zone = Some(zone);
         }
     }
 

@@ -12,9 +12,90 @@ use crate::names::{NameKey, NameMap, same_bytes};
 use crate::position::{
     Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Name, NumField, OffsetCall,
     OffsetKind, Orientation, Position, PositionKind, PositionList, ReadAgainTarget, Usage,
+    ZoneArgument, ZoneRole,
 };
 use crate::resolve::DeclKind;
 use crate::syntax::{Diagnostic, LineCursor, LineIndex, NumLit, Span, Span32, latin1};
+
+/// RAPID's world-zone instructions that take joint targets as other than positions, and
+/// which: by positional argument (the `\Inside`/`\Outside` switch not counted), with the
+/// parameter's name (`WZHomeJointDef [\Inside]|[\Outside] Shape MiddleJointVal
+/// DeltaJointVal`; `WZLimJointDef [\Inside]|[\Outside] Shape LowJointVal HighJointVal`).
+const WORLD_ZONE_JOINT_ARGUMENTS: [WorldZone; 2] = [
+    (
+        "WZHomeJointDef",
+        &[(2, "DeltaJointVal", ZoneRole::Tolerance)],
+    ),
+    (
+        "WZLimJointDef",
+        &[
+            (1, "LowJointVal", ZoneRole::Limit),
+            (2, "HighJointVal", ZoneRole::Limit),
+        ],
+    ),
+];
+
+/// A world-zone instruction and its arguments that are not positions.
+type WorldZone = (&'static str, &'static [(usize, &'static str, ZoneRole)]);
+
+/// The world-zone instruction `callee` names, if it is one of [`WORLD_ZONE_JOINT_ARGUMENTS`]
+/// (names compared without case). Asked of every call: one compare of its first two letters
+/// answers most.
+fn world_zone_arguments(callee: &[u8]) -> Option<WorldZone> {
+    if !callee.get(..2)?.eq_ignore_ascii_case(b"wz") {
+        return None;
+    }
+    WORLD_ZONE_JOINT_ARGUMENTS
+        .into_iter()
+        .find(|(name, _)| callee.eq_ignore_ascii_case(name.as_bytes()))
+}
+
+/// Binds `call` of module `m`, a world-zone instruction: its arguments that are no positions
+/// apart, each target they reach marked as its [`ZoneArgument`], the rest as any call's.
+fn bind_world_zone(
+    binder: &mut crate::resolve::Binder<'_, '_>,
+    m: usize,
+    call: &crate::resolve::Use<'_>,
+    (instruction, arguments): WorldZone,
+) {
+    let mut rest = call.args.to_vec();
+    for &(k, ..) in arguments {
+        if let Some(a) = rest.get_mut(k) {
+            *a = None;
+        }
+    }
+    binder.bind(
+        m,
+        &crate::resolve::Use {
+            args: &rest,
+            ..call.clone()
+        },
+    );
+    for &(k, parameter, role) in arguments {
+        let Some(arg) = call.args.get(k).copied().flatten() else {
+            continue;
+        };
+        // Not bound to a routine's parameter: the instruction is the controller's.
+        binder.bind(
+            m,
+            &crate::resolve::Use {
+                callee: None,
+                args: &[Some(arg)],
+                refs: &[],
+                targets: &[],
+                ..call.clone()
+            },
+        );
+        binder.mark_reached(|usage| {
+            usage.set_zone_argument(ZoneArgument {
+                instruction,
+                parameter,
+                role,
+                line: call.line,
+            });
+        });
+    }
+}
 
 /// Instruction name prefixes that move the robot (or set up a move): their targets get the
 /// default work object `wobj0` when no `\WObj` is given.
@@ -934,22 +1015,23 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
                 None => (tool.is_some() || motion()).then(|| wobj0.clone()),
             };
             let stationary = wobj.as_ref().is_some_and(|w| w.robhold);
-            binder.bind(
-                m,
-                &crate::resolve::Use {
-                    line: u.line as usize,
-                    routine: u.routine.map(|r| r.get() as usize - 1),
-                    callee: Some(u.name.span()),
-                    stationary,
-                    frame: wobj.map(|w| w.name),
-                    tool: tool.map(|t| t.name),
-                    run_time: None,
-                    args: call_args,
-                    refs,
-                    folded: &[],
-                    targets: inline,
-                },
-            );
+            let call_use = crate::resolve::Use {
+                line: u.line as usize,
+                routine: u.routine.map(|r| r.get() as usize - 1),
+                callee: Some(u.name.span()),
+                stationary,
+                frame: wobj.map(|w| w.name),
+                tool: tool.map(|t| t.name),
+                run_time: None,
+                args: call_args,
+                refs,
+                folded: &[],
+                targets: inline,
+            };
+            match world_zone_arguments(call.0) {
+                None => binder.bind(m, &call_use),
+                Some(zone) => bind_world_zone(&mut binder, m, &call_use, zone),
+            }
         }
     }
     binder.finish();

@@ -8,7 +8,7 @@ use crate::syntax::Edit;
 
 use super::edits::{ProgramEdits, TargetChange};
 use super::policy::{Why, common_refusal, implausible_result, joint_target};
-use super::refusal::{Refusal, RefusalKind};
+use super::refusal::Refusal;
 use super::rewrite::{OrientationHint, pose_change, push_reversible_pose_edits};
 
 /// Where a rule is looking: the program (for frames declared in other files) and the file.
@@ -70,6 +70,13 @@ pub(crate) trait TargetRule {
         t: &Pose,
     ) -> Result<NewPose, Why>;
 
+    /// Whether the robot's joint ranges stay what they were: a world zone's joint limits
+    /// written for the robot then hold as written. Not for a mirror, whose robot turns axis 1
+    /// the other way.
+    fn keeps_joint_ranges(&self) -> bool {
+        true
+    }
+
     /// Whether the rule writes KUKA targets at B = ±90° with the split a `correct` recorded in
     /// the file's stamp (`zero`, the inverse of `correct`; docs/design.md §5, round trip).
     fn keeps_lock_splits(&self) -> bool {
@@ -119,6 +126,8 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
             edits.clear();
             let step = if p.kind.is_cartesian() {
                 cartesian(rule, scope, &p, splits.a_of(i), &mut edits)
+            } else if let Some(zone) = p.usage.zone_argument() {
+                Err(super::policy::world_zone(zone, &p, rule.keeps_joint_ranges()).at(file, &p))
             } else {
                 match (rule.joint(scope, &p), super::policy::run_time(&p)) {
                     // A joint target the rule would move, but whose value the program computes
@@ -138,8 +147,9 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
                     fe.changes.push(change);
                 }
                 Ok(_) => {}
-                // An unset array slot is not a target: worth a note, never a refusal.
-                Err(r) if r.kind == RefusalKind::ZeroQuaternion => fe.notes.push(*r),
+                // An unset array slot, a world zone's tolerance: not targets, worth a note,
+                // never a refusal.
+                Err(r) if r.kind.is_note() => fe.notes.push(*r),
                 Err(r) => fe.refusals.push(*r),
             }
         }

@@ -300,6 +300,10 @@ struct MirrorRule<'s> {
 impl TargetRule for MirrorRule<'_> {
     type Frame = Reflection;
 
+    fn keeps_joint_ranges(&self) -> bool {
+        false
+    }
+
     fn joint(&self, scope: Scope, p: &Position) -> Step {
         // With the arm's kinematics the mirror image is computed, not guessed: no need to ask.
         if !self.settings.mirror_joints && self.settings.arm.is_none() {

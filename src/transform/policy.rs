@@ -262,6 +262,49 @@ impl KeptTargets {
     }
 }
 
+/// What every transform says of a joint target a world zone takes as a tolerance (a note: its
+/// half-widths are right for the corrected track and the mirrored robot alike) or as limits
+/// (a note where the robot's joint ranges stay, `keeps_joint_ranges`; a refusal for a mirror,
+/// whose robot's zone has other ends, which no transform of one target gives).
+pub(crate) fn world_zone(
+    zone: &crate::position::ZoneArgument,
+    p: &Position,
+    keeps_joint_ranges: bool,
+) -> Why {
+    let crate::position::ZoneArgument {
+        instruction,
+        parameter,
+        line,
+        ..
+    } = zone;
+    match zone.role {
+        crate::position::ZoneRole::Tolerance => Why::new(
+            RefusalKind::WorldZoneArgument,
+            format!(
+                "{} is the `{parameter}` of `{instruction}` on line {line}: a tolerance, not a position; left as written",
+                describe(p)
+            ),
+            "nothing to do: a tolerance holds for every robot and track",
+        ),
+        crate::position::ZoneRole::Limit if keeps_joint_ranges => Why::new(
+            RefusalKind::WorldZoneArgument,
+            format!(
+                "{} is the `{parameter}` of `{instruction}` on line {line}: joint limits, not a position; left as written",
+                describe(p)
+            ),
+            "nothing to do: the robot's joint ranges are what they were",
+        ),
+        crate::position::ZoneRole::Limit => Why::new(
+            RefusalKind::WorldZoneLimits,
+            format!(
+                "{} is the `{parameter}` of `{instruction}` on line {line}: joint limits, not a position",
+                describe(p)
+            ),
+            "set the world zone's limits for this robot by hand (mirrored: axis 1's low and high negated and swapped)",
+        ),
+    }
+}
+
 /// The refusal of every transform for a joint target it does not change.
 pub(crate) fn joint_target(p: &Position) -> Why {
     Why::new(

@@ -51,6 +51,14 @@ pub enum RefusalKind {
     /// not a target: reported as a note, never a refusal (so nothing to keep).
     #[value(skip)]
     ZeroQuaternion,
+    /// A joint target a world zone takes as its joint limits (RAPID `WZLimJointDef`): not a
+    /// position, and the mirrored robot's limits are not a transform of it.
+    WorldZoneLimits,
+    /// A joint target a world zone takes as a tolerance (RAPID `WZHomeJointDef`'s
+    /// `DeltaJointVal`), or as joint limits where the robot's joint ranges stay: not a
+    /// position, right as written; reported as a note, never a refusal (so nothing to keep).
+    #[value(skip)]
+    WorldZoneArgument,
     /// With the robot's kinematics: the target is out of reach, outside the joint limits or in
     /// another configuration than written, before or after the transform; a joint target whose
     /// move would turn axis 4 or 6 by more than 5° (at the wrist singularity); or its tool is
@@ -76,6 +84,14 @@ impl RefusalKind {
     /// would fix. (An unset `[0,0,0,0]` slot is a note, not a refusal.)
     pub fn is_runtime_data(self) -> bool {
         matches!(self, RefusalKind::RuntimeData)
+    }
+
+    /// Said of something that is no target, as a note: never a refusal, nothing to keep.
+    pub fn is_note(self) -> bool {
+        matches!(
+            self,
+            RefusalKind::ZeroQuaternion | RefusalKind::WorldZoneArgument
+        )
     }
 }
 

@@ -19,3 +19,4 @@ mod rust_version;
 mod support;
 mod track;
 mod transform;
+mod world_zones;

@@ -1,0 +1,181 @@
+//! World zones: the joint targets RAPID's world-zone instructions take as a tolerance or as
+//! joint limits are not positions, and no transform moves them as if they were.
+
+use std::path::Path;
+
+use trackfix::position::{ParsedFile, ZoneArgument, ZoneRole};
+use trackfix::rapid;
+
+use crate::support::trackfix;
+
+/// A zone module: a home zone (middle and tolerance), a joint-limit zone, arguments by name
+/// and in another case, and a joint target the zones do not take.
+const ZONES: &str = "MODULE Zones\r\n\
+  CONST jointtarget jHome:=[[10,-20,30,0,45,0],[4250,9E9,9E9,9E9,9E9,9E9]];\r\n\
+  CONST jointtarget jDelta:=[[2,2,2,2,2,2],[5,9E9,9E9,9E9,9E9,9E9]];\r\n\
+  CONST jointtarget jLow:=[[-90,-60,-60,-180,-100,-360],[0,9E9,9E9,9E9,9E9,9E9]];\r\n\
+  CONST jointtarget jHigh:=[[30,60,60,180,100,360],[6000,9E9,9E9,9E9,9E9,9E9]];\r\n\
+  CONST jointtarget jTol:=[[1,1,1,1,1,1],[2,9E9,9E9,9E9,9E9,9E9]];\r\n\
+  CONST jointtarget jPark:=[[0,-30,30,0,90,0],[4000,9E9,9E9,9E9,9E9,9E9]];\r\n\
+  VAR shapedata shHome;\r\n\
+  VAR shapedata shPark;\r\n\
+  VAR shapedata shLim;\r\n\
+  PROC zones()\r\n\
+    WZHomeJointDef \\Inside, shHome, jHome, jDelta;\r\n\
+    wzhomejointdef \\Inside, shPark, MiddleJointVal:=jPark, DeltaJointVal:=jTol;\r\n\
+    WZLimJointDef \\Outside, shLim, jLow, jHigh;\r\n\
+    MoveAbsJ jHome, v1000, fine, tool0;\r\n\
+  ENDPROC\r\n\
+ENDMODULE\r\n";
+
+fn zone_of(f: &ParsedFile, name: &str) -> Option<ZoneArgument> {
+    f.positions()
+        .find(|p| p.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no target {name}"))
+        .usage
+        .zone_argument()
+        .cloned()
+}
+
+#[test]
+fn the_tolerance_and_limits_of_a_world_zone_are_marked_its_middle_is_not() {
+    let f = rapid::parse_file(Path::new("zones.mod"), ZONES.as_bytes().to_vec());
+    let want = |instruction, parameter, role, line| ZoneArgument {
+        instruction,
+        parameter,
+        role,
+        line,
+    };
+    assert_eq!(
+        zone_of(&f, "jDelta"),
+        Some(want(
+            "WZHomeJointDef",
+            "DeltaJointVal",
+            ZoneRole::Tolerance,
+            12
+        ))
+    );
+    assert_eq!(
+        zone_of(&f, "jTol"),
+        Some(want(
+            "WZHomeJointDef",
+            "DeltaJointVal",
+            ZoneRole::Tolerance,
+            13
+        ))
+    );
+    assert_eq!(
+        zone_of(&f, "jLow"),
+        Some(want("WZLimJointDef", "LowJointVal", ZoneRole::Limit, 14))
+    );
+    assert_eq!(
+        zone_of(&f, "jHigh"),
+        Some(want("WZLimJointDef", "HighJointVal", ZoneRole::Limit, 14))
+    );
+    // The middle of a home zone is a position, as a motion's target is.
+    assert_eq!(zone_of(&f, "jHome"), None);
+    assert_eq!(zone_of(&f, "jPark"), None);
+    // Each zone argument is still used, on its instruction's line.
+    let lines = |name: &str| {
+        f.positions()
+            .find(|p| p.name.as_deref() == Some(name))
+            .unwrap()
+            .usage
+            .lines
+            .to_vec()
+    };
+    assert_eq!(lines("jDelta"), [12]);
+    assert_eq!(lines("jHigh"), [14]);
+    assert_eq!(lines("jHome"), [12, 15]);
+}
+
+/// The line of `text` that declares `name`.
+fn declaration<'a>(text: &'a str, name: &str) -> &'a str {
+    text.lines()
+        .find(|l| l.contains(&format!(" {name}:=")))
+        .unwrap_or_else(|| panic!("no {name} in {text}"))
+}
+
+fn zones_file(dir: &Path) -> String {
+    let path = dir.join("zones.mod");
+    std::fs::write(&path, ZONES).unwrap();
+    path.to_str().unwrap().to_owned()
+}
+
+#[test]
+fn correct_leaves_the_tolerance_and_limits_as_written_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = zones_file(dir.path());
+    let out = dir.path().join("out.mod");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        &input,
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    for name in ["jDelta", "jTol", "jLow", "jHigh"] {
+        assert_eq!(declaration(&text, name), declaration(ZONES, name), "{text}");
+    }
+    // The middles are positions: corrected with the arm's kinematics.
+    assert_ne!(declaration(&text, "jHome"), declaration(ZONES, "jHome"));
+    assert!(
+        err.contains("`jDelta` is the `DeltaJointVal` of `WZHomeJointDef` on line 12: a tolerance"),
+        "{err}"
+    );
+    assert!(
+        err.contains("`jLow` is the `LowJointVal` of `WZLimJointDef` on line 14: joint limits, not a position; left as written"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_mirror_refuses_joint_limits_by_name_and_keeps_the_tolerance() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = zones_file(dir.path());
+    let out = dir.path().join("out.mod");
+    let args = |keep: bool| {
+        let mut a = vec![
+            "transfer".to_owned(),
+            input.clone(),
+            "--cell".into(),
+            "samples/cell.toml".into(),
+            "--from".into(),
+            "r1".into(),
+            "--to".into(),
+            "r2".into(),
+            "--mirror".into(),
+            "-o".into(),
+            out.to_str().unwrap().into(),
+        ];
+        if keep {
+            a.extend(["--keep".into(), "world-zone-limits".into()]);
+        }
+        a
+    };
+    let refused = args(false);
+    let (code, _, err) = trackfix(&refused.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 3, "{err}");
+    assert!(!out.exists());
+    for name in ["jLow", "jHigh"] {
+        assert!(
+            err.contains(&format!("`{name}` is the `")) && err.contains("[world-zone-limits]"),
+            "{err}"
+        );
+    }
+    let kept = args(true);
+    let (code, _, err) = trackfix(&kept.iter().map(String::as_str).collect::<Vec<_>>());
+    // Left as written on request: a partial result, told by its exit code.
+    assert_eq!(code, 4, "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    for name in ["jDelta", "jTol", "jLow", "jHigh"] {
+        assert_eq!(declaration(&text, name), declaration(ZONES, name), "{text}");
+    }
+    // The home zone's middle is the mirrored robot's: axis 1 turned the other way.
+    assert!(declaration(&text, "jHome").contains("[[-10."), "{text}");
+}
