@@ -111,6 +111,10 @@ pub(crate) struct Facts {
     pub declared: HashMap<Name, PositionKind>,
     /// Values computed at run time given to declared names (`XP1 = $POS_ACT`, `P[I] = …`).
     pub assignments: Vec<crate::resolve::Assignment>,
+    /// Names written after a geometric operator `:` (`SLOT` and `XPLACE_REL` of
+    /// `FPALLET:SLOT:XPLACE_REL`), upper case, with their lines: offsets in the frame before
+    /// them, not positions.
+    pub offsets: Vec<(Name, usize)>,
 }
 
 /// A declared name as motions reference it: upper case, without blanks (`p[ 3 ]` → `P[3]`).
@@ -545,6 +549,7 @@ impl<'a> Extractor<'a> {
                 }
             }
             StmtKind::Assign { target, value } => {
+                offset_operands(src, lines, value, &mut out.facts.offsets);
                 assignment(src, lines, &self.declared, target, value, out);
             }
             StmtKind::Call(call) => {
@@ -589,6 +594,7 @@ impl<'a> Extractor<'a> {
                 // empty reserves four, and the motions' lists are kept until resolution.
                 let mut refs = Vec::with_capacity(targets.len());
                 for t in targets {
+                    offset_operands(src, lines, t, &mut out.facts.offsets);
                     if !target_refs(src, lines, t, &mut refs, &mut out.positions) {
                         self.diagnostics.push(
                             Diagnostic::warning(
@@ -786,6 +792,40 @@ fn assignment(
                 out.facts.inferred.push(true);
             }
         }
+    }
+}
+
+/// The names `e` writes after a geometric operator `:`, anywhere in it (a name in brackets
+/// included), into `out` with their lines: `B` and `C` of `A:B:C`, `B` of `F(A:B)`; not `A`,
+/// the frame the offsets are taken in.
+fn offset_operands(src: &[u8], lines: &LineIndex, e: &Expr, out: &mut Vec<(Name, usize)>) {
+    match &e.kind {
+        ExprKind::Binary(left, op, right) => {
+            offset_operands(src, lines, left, out);
+            if op.slice(src) == b":" {
+                let mut operand = &**right;
+                while let ExprKind::Paren(inner) = &operand.kind {
+                    operand = inner;
+                }
+                if matches!(operand.kind, ExprKind::Name | ExprKind::Index(..)) {
+                    out.push((
+                        upper_name(src, operand.span),
+                        lines.line(operand.span.start),
+                    ));
+                    return;
+                }
+            }
+            offset_operands(src, lines, right, out);
+        }
+        ExprKind::Paren(inner) | ExprKind::Unary(_, inner) | ExprKind::Member(inner, _) => {
+            offset_operands(src, lines, inner, out);
+        }
+        ExprKind::Call(_, args) | ExprKind::Index(_, args) => {
+            for a in args.iter().flatten() {
+                offset_operands(src, lines, a, out);
+            }
+        }
+        _ => {}
     }
 }
 

@@ -470,12 +470,46 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         }
         file.diagnostics.sort_by_key(|d| d.span.start);
     }
+    mark_offsets(files, facts);
     let mut shared: Vec<crate::resolve::FileFacts<'_>> = files
         .iter_mut()
         .zip(facts.iter())
         .map(|(file, fact)| shared_facts(file, &fact.assignments).0)
         .collect();
     crate::resolve::mark_run_time(&mut shared, &NAMING);
+}
+
+/// Marks every position of the program written after a geometric operator `:` anywhere in it
+/// ([`Facts::offsets`]) as such an offset, with the first line it is so written on. Only the
+/// mark: a frame used as nothing but an offset stays no target, as it was before the mark.
+fn mark_offsets(files: &mut [ParsedFile], facts: &[Facts]) {
+    let mut first: HashMap<&str, usize> = HashMap::default();
+    for (name, line) in facts.iter().flat_map(|f| &f.offsets) {
+        first.entry(name.as_str()).or_insert(*line);
+    }
+    if first.is_empty() {
+        return;
+    }
+    for file in files.iter_mut() {
+        for i in 0..file.positions.len() {
+            let Some(line) = file
+                .positions
+                .name(i)
+                .and_then(|n| first.get(name_key(n).as_str()))
+                .copied()
+            else {
+                continue;
+            };
+            if let Some(u) = file.positions.usage_mut(i) {
+                u.set_non_position(crate::position::NonPosition {
+                    instruction: ":",
+                    parameter: "right operand",
+                    role: crate::position::NonPositionRole::Offset,
+                    line,
+                });
+            }
+        }
+    }
 }
 
 /// A file as the shared pass sees it, and its line index: KRL has no routine parameters the

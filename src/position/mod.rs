@@ -415,7 +415,7 @@ struct RareUsage {
     other_wobjs: Vec<FrameName>,
     run_time: Option<RunTimeValue>,
     stationary_tool: bool,
-    zone: Option<ZoneArgument>,
+    zone: Option<NonPosition>,
 }
 
 /// A target's usage is kept for each of 100,000 targets: a layout change that grows it fails
@@ -444,30 +444,36 @@ pub enum RunTimeValue {
     },
 }
 
-/// A joint target a world-zone instruction takes as a tolerance or as limits, not as a
-/// position the robot moves to (RAPID `WZHomeJointDef`'s `DeltaJointVal`, `WZLimJointDef`'s
-/// `LowJointVal` and `HighJointVal`): moving it as a position gives the zone nonsense.
+/// A target the program uses as other than a position the robot moves to: a joint target a
+/// world-zone instruction takes as a tolerance or as limits (RAPID `WZHomeJointDef`'s
+/// `DeltaJointVal`, `WZLimJointDef`'s `LowJointVal` and `HighJointVal`), a KRL position added
+/// to a frame with the geometric operator `:` (`FPALLET:SLOT:XPLACE_REL`). Moved as a position,
+/// it would give the zone or the composed frame nonsense.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ZoneArgument {
-    /// The instruction, as the language spells it (`WZHomeJointDef`).
+pub struct NonPosition {
+    /// What uses it, as the language spells it (`WZHomeJointDef`, `:`).
     pub instruction: &'static str,
-    /// The parameter the target is given for (`DeltaJointVal`).
+    /// As what (`DeltaJointVal`; `right operand` of `:`).
     pub parameter: &'static str,
-    /// What the zone makes of its values.
-    pub role: ZoneRole,
-    /// 1-based line of the instruction.
+    /// What its values are.
+    pub role: NonPositionRole,
+    /// 1-based line of the use.
     pub line: usize,
 }
 
-/// What a world zone makes of a joint target's values ([`ZoneArgument`]).
+/// What a [`NonPosition`]'s values are.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ZoneRole {
+pub enum NonPositionRole {
     /// Half-widths around a middle position, each axis's own and non-negative: the same for
     /// the track corrected and for the mirrored robot.
     Tolerance,
     /// One end of the joint ranges: a mirrored robot's zone has other ends (axis 1 negated
     /// swaps low and high), which no transform of one target gives.
     Limit,
+    /// An offset in the frame of what stands before the `:`: a correction of that frame moves
+    /// the composed one with it, and a mirror reflects the offset in its own frame, which no
+    /// transform of a target gives.
+    Offset,
 }
 
 impl RunTimeValue {
@@ -521,13 +527,13 @@ impl Usage {
         }
     }
 
-    /// Set when a world zone takes the target as a tolerance or as limits: the first found.
-    pub fn zone_argument(&self) -> Option<&ZoneArgument> {
+    /// Set when the program uses the target as other than a position: the first use found.
+    pub fn non_position(&self) -> Option<&NonPosition> {
         self.rare.as_ref()?.zone.as_ref()
     }
 
-    /// Marks the target as a world zone's tolerance or limits, keeping the first found.
-    pub fn set_zone_argument(&mut self, zone: ZoneArgument) {
+    /// Marks the target as used as other than a position, keeping the first use found.
+    pub fn set_non_position(&mut self, zone: NonPosition) {
         let rare = self.rare.get_or_insert_with(Box::default);
         if rare.zone.is_none() {
             rare.zone = Some(zone);

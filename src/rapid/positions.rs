@@ -10,9 +10,9 @@ use super::expr::{Arena, ExprKind};
 use super::parser::{MovedCall, PlainArgs, RobtargetLiteral, Statement, Stmt};
 use crate::names::{NameKey, NameMap, same_bytes};
 use crate::position::{
-    Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Name, NumField, OffsetCall,
-    OffsetKind, Orientation, Position, PositionKind, PositionList, ReadAgainTarget, Usage,
-    ZoneArgument, ZoneRole,
+    Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Name, NonPosition,
+    NonPositionRole, NumField, OffsetCall, OffsetKind, Orientation, Position, PositionKind,
+    PositionList, ReadAgainTarget, Usage,
 };
 use crate::resolve::DeclKind;
 use crate::syntax::{Diagnostic, LineCursor, LineIndex, NumLit, Span, Span32, latin1};
@@ -24,24 +24,27 @@ use crate::syntax::{Diagnostic, LineCursor, LineIndex, NumLit, Span, Span32, lat
 const WORLD_ZONE_JOINT_ARGUMENTS: [WorldZone; 2] = [
     (
         "WZHomeJointDef",
-        &[(2, "DeltaJointVal", ZoneRole::Tolerance)],
+        &[(2, "DeltaJointVal", NonPositionRole::Tolerance)],
     ),
     (
         "WZLimJointDef",
         &[
-            (1, "LowJointVal", ZoneRole::Limit),
-            (2, "HighJointVal", ZoneRole::Limit),
+            (1, "LowJointVal", NonPositionRole::Limit),
+            (2, "HighJointVal", NonPositionRole::Limit),
         ],
     ),
 ];
 
 /// A world-zone instruction and its arguments that are not positions.
-type WorldZone = (&'static str, &'static [(usize, &'static str, ZoneRole)]);
+type WorldZone = (
+    &'static str,
+    &'static [(usize, &'static str, NonPositionRole)],
+);
 
 /// The world-zone instruction `callee` names, if it is one of [`WORLD_ZONE_JOINT_ARGUMENTS`]
 /// (names compared without case). Asked of every call: one compare of its first two letters
 /// answers most.
-fn world_zone_arguments(callee: &[u8]) -> Option<WorldZone> {
+fn world_non_positions(callee: &[u8]) -> Option<WorldZone> {
     if !callee.get(..2)?.eq_ignore_ascii_case(b"wz") {
         return None;
     }
@@ -51,7 +54,7 @@ fn world_zone_arguments(callee: &[u8]) -> Option<WorldZone> {
 }
 
 /// Binds `call` of module `m`, a world-zone instruction: its arguments that are no positions
-/// apart, each target they reach marked as its [`ZoneArgument`], the rest as any call's.
+/// apart, each target they reach marked as its [`NonPosition`], the rest as any call's.
 fn bind_world_zone(
     binder: &mut crate::resolve::Binder<'_, '_>,
     m: usize,
@@ -87,7 +90,7 @@ fn bind_world_zone(
             },
         );
         binder.mark_reached(|usage| {
-            usage.set_zone_argument(ZoneArgument {
+            usage.set_non_position(NonPosition {
                 instruction,
                 parameter,
                 role,
@@ -1028,7 +1031,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
                 folded: &[],
                 targets: inline,
             };
-            match world_zone_arguments(call.0) {
+            match world_non_positions(call.0) {
                 None => binder.bind(m, &call_use),
                 Some(zone) => bind_world_zone(&mut binder, m, &call_use, zone),
             }

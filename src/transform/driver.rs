@@ -3,7 +3,9 @@
 //! [`TargetRule`]: it says what it does at each step and nothing else.
 
 use crate::geometry::Pose;
-use crate::position::{FrameDecl, OffsetCall, ParsedFile, Position, Program, Reading};
+use crate::position::{
+    FrameDecl, NonPositionRole, OffsetCall, ParsedFile, Position, Program, Reading,
+};
 use crate::syntax::Edit;
 
 use super::edits::{ProgramEdits, TargetChange};
@@ -70,10 +72,11 @@ pub(crate) trait TargetRule {
         t: &Pose,
     ) -> Result<NewPose, Why>;
 
-    /// Whether the robot's joint ranges stay what they were: a world zone's joint limits
-    /// written for the robot then hold as written. Not for a mirror, whose robot turns axis 1
-    /// the other way.
-    fn keeps_joint_ranges(&self) -> bool {
+    /// Whether what the program uses as `role` stays right as written under the rule (see
+    /// [`NonPositionRole`]): so under the track rules, which move the robot's base and keep its
+    /// joint ranges; not a mirror's joint limits or offsets.
+    fn keeps(&self, role: NonPositionRole) -> bool {
+        let _ = role;
         true
     }
 
@@ -124,10 +127,10 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
                 .positions
                 .decoded_with(i, &file.source, reading, &mut memo);
             edits.clear();
-            let step = if p.kind.is_cartesian() {
+            let step = if let Some(np) = p.usage.non_position() {
+                Err(super::policy::non_position(np, &p, rule.keeps(np.role)).at(file, &p))
+            } else if p.kind.is_cartesian() {
                 cartesian(rule, scope, &p, splits.a_of(i), &mut edits)
-            } else if let Some(zone) = p.usage.zone_argument() {
-                Err(super::policy::world_zone(zone, &p, rule.keeps_joint_ranges()).at(file, &p))
             } else {
                 match (rule.joint(scope, &p), super::policy::run_time(&p)) {
                     // A joint target the rule would move, but whose value the program computes

@@ -13,8 +13,8 @@ use nalgebra::{Quaternion, Translation3, UnitQuaternion, Vector3};
 
 use crate::geometry::Pose;
 use crate::position::{
-    CartesianFields, FrameDecl, FrameKind, NumField, OffsetCall, OffsetKind, ParsedFile, Position,
-    Program, Skid,
+    CartesianFields, FrameDecl, FrameKind, NonPositionRole, NumField, OffsetCall, OffsetKind,
+    ParsedFile, Position, Program, Skid,
 };
 use crate::syntax::Edit;
 
@@ -300,8 +300,8 @@ struct MirrorRule<'s> {
 impl TargetRule for MirrorRule<'_> {
     type Frame = Reflection;
 
-    fn keeps_joint_ranges(&self) -> bool {
-        false
+    fn keeps(&self, role: NonPositionRole) -> bool {
+        role == NonPositionRole::Tolerance
     }
 
     fn joint(&self, scope: Scope, p: &Position) -> Step {

@@ -262,47 +262,54 @@ impl KeptTargets {
     }
 }
 
-/// What every transform says of a joint target a world zone takes as a tolerance (a note: its
-/// half-widths are right for the corrected track and the mirrored robot alike) or as limits
-/// (a note where the robot's joint ranges stay, `keeps_joint_ranges`; a refusal for a mirror,
-/// whose robot's zone has other ends, which no transform of one target gives).
-pub(crate) fn world_zone(
-    zone: &crate::position::ZoneArgument,
-    p: &Position,
-    keeps_joint_ranges: bool,
-) -> Why {
-    let crate::position::ZoneArgument {
+/// What every transform says of a target the program uses as other than a position
+/// ([`NonPosition`](crate::position::NonPosition)): a note where it stays right as written under
+/// the rule (`keeps`: a tolerance always; joint limits and offsets under the track rules,
+/// which keep the joint ranges and move a composed frame with the frame before its `:`), else
+/// a refusal (a mirror's joint limits and offsets, which no transform of one target gives).
+pub(crate) fn non_position(np: &crate::position::NonPosition, p: &Position, keeps: bool) -> Why {
+    use crate::position::NonPositionRole::{Limit, Offset, Tolerance};
+    let crate::position::NonPosition {
         instruction,
         parameter,
         line,
-        ..
-    } = zone;
-    match zone.role {
-        crate::position::ZoneRole::Tolerance => Why::new(
-            RefusalKind::WorldZoneArgument,
-            format!(
-                "{} is the `{parameter}` of `{instruction}` on line {line}: a tolerance, not a position; left as written",
-                describe(p)
-            ),
-            "nothing to do: a tolerance holds for every robot and track",
+        role,
+    } = np;
+    let what = describe(p);
+    let used = match role {
+        Offset => format!("{what} is the {parameter} of `{instruction}` on line {line}"),
+        Tolerance | Limit => {
+            format!("{what} is the `{parameter}` of `{instruction}` on line {line}")
+        }
+    };
+    let is = match role {
+        Tolerance => "a tolerance",
+        Limit => "joint limits",
+        Offset => "an offset in the frame before it",
+    };
+    if keeps {
+        let hint = match role {
+            Tolerance => "nothing to do: a tolerance holds for every robot and track",
+            Limit => "nothing to do: the robot's joint ranges are what they were",
+            Offset => "nothing to do: the composed frame moves with the frame before the `:`",
+        };
+        return Why::new(
+            RefusalKind::NotAPosition,
+            format!("{used}: {is}, not a position; left as written"),
+            hint,
+        );
+    }
+    let (kind, hint) = match role {
+        Offset => (
+            RefusalKind::ComposedOffset,
+            "mirror the offset by hand, in its own frame, or teach the composed point",
         ),
-        crate::position::ZoneRole::Limit if keeps_joint_ranges => Why::new(
-            RefusalKind::WorldZoneArgument,
-            format!(
-                "{} is the `{parameter}` of `{instruction}` on line {line}: joint limits, not a position; left as written",
-                describe(p)
-            ),
-            "nothing to do: the robot's joint ranges are what they were",
-        ),
-        crate::position::ZoneRole::Limit => Why::new(
+        Tolerance | Limit => (
             RefusalKind::WorldZoneLimits,
-            format!(
-                "{} is the `{parameter}` of `{instruction}` on line {line}: joint limits, not a position",
-                describe(p)
-            ),
             "set the world zone's limits for this robot by hand (mirrored: axis 1's low and high negated and swapped)",
         ),
-    }
+    };
+    Why::new(kind, format!("{used}: {is}, not a position"), hint)
 }
 
 /// The refusal of every transform for a joint target it does not change.

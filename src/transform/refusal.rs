@@ -54,11 +54,16 @@ pub enum RefusalKind {
     /// A joint target a world zone takes as its joint limits (RAPID `WZLimJointDef`): not a
     /// position, and the mirrored robot's limits are not a transform of it.
     WorldZoneLimits,
-    /// A joint target a world zone takes as a tolerance (RAPID `WZHomeJointDef`'s
-    /// `DeltaJointVal`), or as joint limits where the robot's joint ranges stay: not a
-    /// position, right as written; reported as a note, never a refusal (so nothing to keep).
+    /// A mirror of a position the program adds to a frame with KRL's geometric operator `:`
+    /// (`FPALLET:SLOT:XPLACE_REL`): an offset in the frame before it, whose mirror image is the
+    /// offset reflected in that frame, not a transform of a target.
+    ComposedOffset,
+    /// A target the program uses as other than a position, right as written under the
+    /// transform: a world zone's tolerance (RAPID `WZHomeJointDef`'s `DeltaJointVal`), its
+    /// joint limits where the robot's joint ranges stay, a KRL offset after `:` under a track
+    /// correction. Reported as a note, never a refusal (so nothing to keep).
     #[value(skip)]
-    WorldZoneArgument,
+    NotAPosition,
     /// With the robot's kinematics: the target is out of reach, outside the joint limits or in
     /// another configuration than written, before or after the transform; a joint target whose
     /// move would turn axis 4 or 6 by more than 5° (at the wrist singularity); or its tool is
@@ -90,7 +95,7 @@ impl RefusalKind {
     pub fn is_note(self) -> bool {
         matches!(
             self,
-            RefusalKind::ZeroQuaternion | RefusalKind::WorldZoneArgument
+            RefusalKind::ZeroQuaternion | RefusalKind::NotAPosition
         )
     }
 }

@@ -1,10 +1,11 @@
-//! World zones: the joint targets RAPID's world-zone instructions take as a tolerance or as
-//! joint limits are not positions, and no transform moves them as if they were.
+//! Targets a program uses as other than positions — the joint targets RAPID's world-zone
+//! instructions take as a tolerance or as joint limits, the KRL positions added to a frame
+//! with the geometric operator `:` — are marked, and no transform moves them as positions.
 
 use std::path::Path;
 
-use trackfix::position::{ParsedFile, ZoneArgument, ZoneRole};
-use trackfix::rapid;
+use trackfix::position::{NonPosition, NonPositionRole, ParsedFile};
+use trackfix::{krl, rapid};
 
 use crate::support::trackfix;
 
@@ -28,53 +29,63 @@ const ZONES: &str = "MODULE Zones\r\n\
   ENDPROC\r\n\
 ENDMODULE\r\n";
 
-fn zone_of(f: &ParsedFile, name: &str) -> Option<ZoneArgument> {
+fn non_position_of(f: &ParsedFile, name: &str) -> Option<NonPosition> {
     f.positions()
         .find(|p| p.name.as_deref() == Some(name))
         .unwrap_or_else(|| panic!("no target {name}"))
         .usage
-        .zone_argument()
+        .non_position()
         .cloned()
 }
 
 #[test]
 fn the_tolerance_and_limits_of_a_world_zone_are_marked_its_middle_is_not() {
     let f = rapid::parse_file(Path::new("zones.mod"), ZONES.as_bytes().to_vec());
-    let want = |instruction, parameter, role, line| ZoneArgument {
+    let want = |instruction, parameter, role, line| NonPosition {
         instruction,
         parameter,
         role,
         line,
     };
     assert_eq!(
-        zone_of(&f, "jDelta"),
+        non_position_of(&f, "jDelta"),
         Some(want(
             "WZHomeJointDef",
             "DeltaJointVal",
-            ZoneRole::Tolerance,
+            NonPositionRole::Tolerance,
             12
         ))
     );
     assert_eq!(
-        zone_of(&f, "jTol"),
+        non_position_of(&f, "jTol"),
         Some(want(
             "WZHomeJointDef",
             "DeltaJointVal",
-            ZoneRole::Tolerance,
+            NonPositionRole::Tolerance,
             13
         ))
     );
     assert_eq!(
-        zone_of(&f, "jLow"),
-        Some(want("WZLimJointDef", "LowJointVal", ZoneRole::Limit, 14))
+        non_position_of(&f, "jLow"),
+        Some(want(
+            "WZLimJointDef",
+            "LowJointVal",
+            NonPositionRole::Limit,
+            14
+        ))
     );
     assert_eq!(
-        zone_of(&f, "jHigh"),
-        Some(want("WZLimJointDef", "HighJointVal", ZoneRole::Limit, 14))
+        non_position_of(&f, "jHigh"),
+        Some(want(
+            "WZLimJointDef",
+            "HighJointVal",
+            NonPositionRole::Limit,
+            14
+        ))
     );
     // The middle of a home zone is a position, as a motion's target is.
-    assert_eq!(zone_of(&f, "jHome"), None);
-    assert_eq!(zone_of(&f, "jPark"), None);
+    assert_eq!(non_position_of(&f, "jHome"), None);
+    assert_eq!(non_position_of(&f, "jPark"), None);
     // Each zone argument is still used, on its instruction's line.
     let lines = |name: &str| {
         f.positions()
@@ -178,4 +189,45 @@ fn a_mirror_refuses_joint_limits_by_name_and_keeps_the_tolerance() {
     }
     // The home zone's middle is the mirrored robot's: axis 1 turned the other way.
     assert!(declaration(&text, "jHome").contains("[[-10."), "{text}");
+}
+
+#[test]
+fn krl_names_after_a_geometric_operator_are_offsets_the_frame_before_is_not() {
+    let src = "DEF comp( )\n\
+  DECL E6POS XP1={X 1,Y 2,Z 3,A 0,B 0,C 0,S 2,T 2,E1 100}\n\
+  DECL E6POS XOFF={X 0,Y 0,Z 50,A 0,B 0,C 0,S 2,T 2,E1 0}\n\
+  DECL E6POS XA={X 1,Y 2,Z 3,A 0,B 0,C 0,S 2,T 2,E1 100}\n\
+  DECL E6POS XB={X 0,Y 0,Z 9,A 0,B 0,C 0,S 2,T 2,E1 0}\n\
+  DECL E6POS XC={X 0,Y 0,Z 7,A 0,B 0,C 0,S 2,T 2,E1 0}\n\
+  DECL E6POS XD={X 0,Y 0,Z 5,A 0,B 0,C 0,S 2,T 2,E1 0}\n\
+  DECL E6POS XE={X 0,Y 0,Z 5,A 0,B 0,C 0,S 2,T 2,E1 0}\n\
+  DECL E6POS XPLAIN={X 4,Y 5,Z 6,A 0,B 0,C 0,S 2,T 2,E1 100}\n\
+  DECL E6POS XPT\n\
+  BAS(#BASE,1)\n\
+  LIN XP1:XOFF\n\
+  LIN (XA:(XB)):xc\n\
+  XPT = INV_POS(XA):XD\n\
+  XPT = XPLAIN\n\
+  LIN XPLAIN\n\
+  IF XE.Z > 0 THEN\n\
+  ENDIF\n\
+END\n";
+    let f = krl::parse_file(Path::new("comp.src"), src.as_bytes().to_vec());
+    let offset = |line| {
+        Some(NonPosition {
+            instruction: ":",
+            parameter: "right operand",
+            role: NonPositionRole::Offset,
+            line,
+        })
+    };
+    assert_eq!(non_position_of(&f, "XOFF"), offset(12));
+    assert_eq!(non_position_of(&f, "XB"), offset(13));
+    // Written in lower case: names compare without case.
+    assert_eq!(non_position_of(&f, "XC"), offset(13));
+    assert_eq!(non_position_of(&f, "XD"), offset(14));
+    // The frames the offsets are taken in, a target moved to, one only read: no offsets.
+    for name in ["XP1", "XA", "XPLAIN", "XE"] {
+        assert_eq!(non_position_of(&f, name), None, "{name}");
+    }
 }
