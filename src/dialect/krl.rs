@@ -188,6 +188,39 @@ impl Dialect for Krl {
         &VOCABULARY
     }
 
+    fn pose_fields_left_out(&self, literal: &[u8]) -> Option<String> {
+        const POSE: [u8; 6] = *b"XYZABC";
+        let inner = trim_latin1(literal);
+        let inner = inner
+            .strip_prefix(b"{")
+            .and_then(|i| i.strip_suffix(b"}"))
+            .unwrap_or(inner);
+        let mut written = [false; 6];
+        let mut start = 0;
+        while start <= inner.len() {
+            let end = next_separator(inner, start);
+            let field = trim_latin1_start(inner.get(start..end).unwrap_or_default());
+            start = end + 1;
+            if let [letter, b' ' | b'\t', ..] = field
+                && let Some(k) = POSE.iter().position(|p| p.eq_ignore_ascii_case(letter))
+                && let Some(w) = written.get_mut(k)
+            {
+                *w = true;
+            }
+        }
+        // A literal of no pose field (joints, a frame's base data) is no partial pose.
+        if written.iter().all(|&w| !w) || written.iter().all(|&w| w) {
+            return None;
+        }
+        let left: Vec<String> = POSE
+            .iter()
+            .zip(written)
+            .filter(|(_, w)| !w)
+            .map(|(&p, _)| char::from(p).to_string())
+            .collect();
+        Some(left.join(", "))
+    }
+
     fn implausible_configuration(&self, literal: &[u8]) -> Option<String> {
         // `{X …, S 6, T 'B010101', …}`: Status and Turn are small integers or binary strings.
         // Read on the bytes (every position of a check passes here): a byte is one character
@@ -426,6 +459,20 @@ mod tests {
             let literal = parts.concat();
             prop_assert_eq!(Krl.implausible_configuration(&literal), on_text(&literal));
         }
+    }
+
+    #[test]
+    fn pose_fields_left_out_are_named_in_order() {
+        let left = |t: &str| Krl.pose_fields_left_out(t.as_bytes());
+        assert_eq!(left("{Z 500}").as_deref(), Some("X, Y, A, B, C"));
+        assert_eq!(left("{ x 5,\ty 6 ,C 0}").as_deref(), Some("Z, A, B"));
+        assert_eq!(left("{X 1,Y 2,Z 3,A 0,B 0,C 0,S 2,T 35,E1 100}"), None);
+        // Fields that are no pose: joints, a configuration alone, external axes.
+        assert_eq!(left("{A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0}"), None);
+        assert_eq!(left("{S 2,T 35}"), None);
+        assert_eq!(left("{E1 100}"), None);
+        // A name that only starts with a pose letter is no pose field.
+        assert_eq!(left("{XX 1,Z 2}").as_deref(), Some("X, Y, A, B, C"));
     }
 
     proptest! {

@@ -113,6 +113,13 @@ pub trait Dialect: Sync + 'static {
         None
     }
 
+    /// The pose fields a target's literal text leaves out, which the controller takes from
+    /// where the robot is when the motion runs (KRL `LIN {Z 500}`), in words; `None` where it
+    /// writes them all, or writes no pose.
+    fn pose_fields_left_out(&self, _literal: &[u8]) -> Option<String> {
+        None
+    }
+
     /// Whether a program's main routine must carry its file's name (KRL `DEF spot_line(` in
     /// `spot_line.src`): a program written under a new name then gets its header renamed.
     fn names_follow_file(&self) -> bool {

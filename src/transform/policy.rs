@@ -341,6 +341,28 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
         return Some(why);
     }
     if p.cartesian.as_ref().and_then(|c| c.pose()).is_none() {
+        let literal = p.span.slice(&file.source);
+        // An inline target's fields left out are the robot's when the motion runs; a declared
+        // one's, whatever the variable held before (nothing a file says).
+        match file.language.dialect().pose_fields_left_out(literal) {
+            Some(left_out) if p.name.is_none() => {
+                return refuse(
+                    RefusalKind::RuntimeData,
+                    format!(
+                        "{what} leaves out {left_out}: the controller takes them from where the robot is when the motion runs, so the target is only known then"
+                    ),
+                    "write every field of the target, or check this motion by hand",
+                );
+            }
+            Some(left_out) => {
+                return refuse(
+                    RefusalKind::Expression,
+                    format!("{what} leaves out {left_out}: its pose is not known whole"),
+                    "write every field of the target",
+                );
+            }
+            None => {}
+        }
         return refuse(
             RefusalKind::Expression,
             format!("{what} has a position or orientation field that is not a number"),

@@ -143,3 +143,38 @@ fn a_transform_refuses_runtime_data_by_name_and_counts_it_apart() {
     assert!(out.is_empty(), "nothing changes: {out}");
     assert!(err.contains("[runtime-data]"), "{err}");
 }
+
+#[test]
+fn a_krl_target_that_leaves_out_pose_fields_is_refused_for_what_it_leaves_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path().join("part.src");
+    std::fs::write(
+        &src,
+        "DEF part( )\n  DECL E6POS XHALF={X 1,Y 2,Z 3,E1 4200}\n  BAS(#INITMOV,0)\n  BAS(#TOOL,2)\n  BAS(#BASE,3)\n  LIN {Z 500}\n  LIN XHALF\nEND\n",
+    )
+    .unwrap();
+    let (code, _, err) = crate::support::trackfix(&[
+        "correct",
+        src.to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "k1",
+        "--diff",
+    ]);
+    assert_eq!(code, 3, "{err}");
+    // Inline: the fields left out are the robot's when the motion runs.
+    assert!(
+        err.contains("part.src:6:7: error: inline E6POS leaves out X, Y, A, B, C: the controller takes them from where the robot is when the motion runs"),
+        "{err}"
+    );
+    assert!(err.contains("leave it as written [runtime-data]"), "{err}");
+    // Declared: whatever the variable held before.
+    assert!(
+        err.contains(
+            "part.src:2:20: error: E6POS `XHALF` leaves out A, B, C: its pose is not known whole"
+        ),
+        "{err}"
+    );
+    assert!(err.contains("leave it as written [expression]"), "{err}");
+}
