@@ -22,7 +22,8 @@ pub enum Exit {
     Usage = 2,
     /// 3: a transform was refused.
     Refused = 3,
-    /// 4: a transform wrote its output but kept refused targets as written (`--keep`).
+    /// 4: a transform wrote its output (or showed it with `--diff`) but kept refused targets
+    /// as written (`--keep`).
     Kept = 4,
 }
 

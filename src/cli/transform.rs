@@ -751,7 +751,9 @@ fn finish_outputs(
         for f in results.iter().flat_map(|r| &r.files) {
             write!(stdout, "{}", unified_diff(&f.path, &f.original, &f.output))?;
         }
-        return Ok(Exit::Ok);
+        // The diff is the output: one that keeps refused targets as written is partial, as a
+        // written file would be.
+        return Ok(written_exit(results));
     }
     if out.check {
         let mut any = false;
