@@ -13,7 +13,7 @@
 //! [`Usage`]: crate::position::Usage
 
 use crate::names::{FirstLetters, NameIndex, NameKey, NameMap, fold, fold_into};
-use crate::position::{FrameDecl, FrameName, RunTimeValue};
+use crate::position::{FrameDecl, FrameName, RunTimeValue, UseLine};
 use crate::syntax::Span;
 
 /// How many calls deep a routine's effects on its callers are followed (a target passed on
@@ -185,6 +185,9 @@ pub(crate) struct Use<'a> {
 
 /// One file of a program as this pass sees it.
 pub(crate) struct FileFacts<'a> {
+    /// The file's name, as a message on a target of another file names it
+    /// ([`UseLine::file_name`](crate::position::UseLine::file_name)).
+    pub(crate) name: std::sync::Arc<str>,
     /// The bytes every span of the file's facts points into.
     pub(crate) src: &'a [u8],
     /// Its targets (their usage is recorded here).
@@ -356,20 +359,31 @@ impl MovesWith {
     }
 }
 
-/// Records one use at `line` with `frame`, `tool`, `stationary` and `run_time` in target `at`.
-fn record(
-    files: &mut [FileFacts<'_>],
-    (m, i): TargetAt,
-    frame: Option<&FrameName>,
-    tool: Option<&FrameName>,
+/// What one use records in each target it reaches, borrowed from the use.
+struct Recorded<'u> {
+    frame: Option<&'u FrameName>,
+    tool: Option<&'u FrameName>,
     stationary: bool,
-    run_time: Option<&RunTimeValue>,
+    run_time: Option<&'u RunTimeValue>,
+    /// 1-based line of the use.
     line: usize,
-) {
+}
+
+/// Records use `u`, in file `from`, in target `at`; the run-time value's line is named with
+/// file `from` when the target is another file's.
+fn record(files: &mut [FileFacts<'_>], from: usize, (m, i): TargetAt, u: &Recorded<'_>) {
+    let elsewhere = match u.run_time {
+        Some(_) if from != m => files.get(from).map(|f| f.name.clone()),
+        _ => None,
+    };
     if let Some(usage) = files.get_mut(m).and_then(|f| f.positions.usage_mut(i)) {
-        usage.record_shared(frame, tool, stationary, line);
-        if let Some(why) = run_time {
-            usage.set_run_time(why.clone());
+        usage.record_shared(u.frame, u.tool, u.stationary, u.line);
+        if let Some(why) = u.run_time {
+            let mut why = why.clone();
+            if elsewhere.is_some() {
+                why.at_mut().file = elsewhere;
+            }
+            usage.set_run_time(why);
         }
     }
 }
@@ -604,16 +618,15 @@ impl<'f, 'a> Binder<'f, 'a> {
         }
         targets.sort_unstable();
         targets.dedup();
+        let recorded = Recorded {
+            frame: u.frame.as_ref(),
+            tool: u.tool.as_ref(),
+            stationary: u.stationary,
+            run_time: u.run_time.as_ref(),
+            line: u.line,
+        };
         for &t in targets.iter() {
-            record(
-                files,
-                t,
-                u.frame.as_ref(),
-                u.tool.as_ref(),
-                u.stationary,
-                u.run_time.as_ref(),
-                u.line,
-            );
+            record(files, m, t, &recorded);
         }
         for &p in params.iter() {
             param_uses.entry(p).or_default().push(MovesWith::of(u));
@@ -631,11 +644,17 @@ impl<'f, 'a> Binder<'f, 'a> {
         })
     }
 
-    /// Applies `mark` to the usage of every target the use last bound reached directly.
-    pub(crate) fn mark_reached(&mut self, mut mark: impl FnMut(&mut crate::position::Usage)) {
+    /// Applies `mark` to the usage of every target the use last bound (in file `from`) reached
+    /// directly, with the name of file `from` when the target is another file's.
+    pub(crate) fn mark_reached(
+        &mut self,
+        from: usize,
+        mut mark: impl FnMut(Option<&std::sync::Arc<str>>, &mut crate::position::Usage),
+    ) {
+        let from_name = self.files.get(from).map(|f| f.name.clone());
         for &(m, i) in &self.targets {
             if let Some(u) = self.files.get_mut(m).and_then(|f| f.positions.usage_mut(i)) {
-                mark(u);
+                mark(from_name.as_ref().filter(|_| m != from), u);
             }
         }
     }
@@ -652,15 +671,16 @@ impl<'f, 'a> Binder<'f, 'a> {
         } = self;
         for (t, to, line) in bindings {
             for w in uses_through_parameters(to, &param_uses, &param_edges) {
-                record(
-                    files,
-                    t,
-                    w.frame.as_ref(),
-                    w.tool.as_ref(),
-                    w.stationary,
-                    w.run_time.as_ref(),
+                let recorded = Recorded {
+                    frame: w.frame.as_ref(),
+                    tool: w.tool.as_ref(),
+                    stationary: w.stationary,
+                    run_time: w.run_time.as_ref(),
                     line,
-                );
+                };
+                // As the target's own file: a run-time value comes only with a KRL use,
+                // and KRL passes no targets to parameters.
+                record(files, t.0, t, &recorded);
             }
         }
     }
@@ -699,43 +719,52 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
     }
     let (targets, frames): (NameIndex<Indexed>, NameIndex<Indexed>) =
         (targets.build(), frames.build());
+    // (target's file, its index, the assignment's line and file).
     let mut assigned_targets = Vec::new();
-    // Folded frame name → (name as declared, line of the first assignment).
-    let mut assigned_frames: crate::names::NameMap<String, (String, usize)> = Default::default();
+    // Folded frame name → (name as declared, line and file of the first assignment).
+    let mut assigned_frames: crate::names::NameMap<String, (String, usize, usize)> =
+        Default::default();
     for (fi, f) in files.iter().enumerate() {
         for a in f.assignments {
             let key = fold(&a.name);
             hits.clear();
             lookup(&naming, &targets, &seen, fi, &key, &mut hits);
-            assigned_targets.extend(hits.iter().map(|&(tf, ti)| (tf, ti, a.line)));
+            assigned_targets.extend(hits.iter().map(|&(tf, ti)| (tf, ti, a.line, fi)));
             hits.clear();
             lookup(&naming, &frames, &seen, fi, &key, &mut hits);
             for &(df, di) in &hits {
                 if let Some(d) = files.get(df).and_then(|f| f.frames.get(di)) {
                     assigned_frames
                         .entry(fold(&d.name))
-                        .or_insert_with(|| (d.name.clone(), a.line));
+                        .or_insert_with(|| (d.name.clone(), a.line, fi));
                 }
             }
         }
     }
-    for (tf, ti, line) in assigned_targets {
+    let names: Vec<std::sync::Arc<str>> = files.iter().map(|f| f.name.clone()).collect();
+    let at = |line: usize, from: usize, target: usize| match names.get(from) {
+        Some(name) => UseLine::of(line, from, target, name),
+        None => UseLine::new(line),
+    };
+    for (tf, ti, line, fi) in assigned_targets {
         if let Some(usage) = files.get_mut(tf).and_then(|f| f.positions.usage_mut(ti)) {
-            usage.set_run_time(RunTimeValue::Target { line });
+            usage.set_run_time(RunTimeValue::Target {
+                at: at(line, fi, tf),
+            });
         }
     }
     if assigned_frames.is_empty() {
         return;
     }
-    for f in files.iter_mut() {
+    for (tf, f) in files.iter_mut().enumerate() {
         for usage in f.positions.usages_mut() {
             let frame = usage
                 .work_objects()
                 .find_map(|w| assigned_frames.get(&fold(w)));
-            if let Some((name, line)) = frame {
+            if let Some((name, line, fi)) = frame {
                 let why = RunTimeValue::Frame {
                     name: Some(name.clone()),
-                    line: *line,
+                    at: at(*line, *fi, tf),
                 };
                 usage.set_run_time(why);
             }

@@ -4,8 +4,9 @@
 //! ([`crate::resolve`]), which fills each position's [`Usage`](crate::position::Usage).
 
 use super::positions::{BranchEvent, Event, Facts, Fdat, FrameRef, Ref, Setting, name_key};
-use crate::position::{Config, FrameName, Name, ParsedFile, PositionKind, RunTimeValue};
+use crate::position::{Config, FrameName, Name, ParsedFile, PositionKind, RunTimeValue, UseLine};
 use crate::syntax::Diagnostic;
+use std::sync::Arc;
 
 pub(crate) use crate::names::NameMap as HashMap;
 
@@ -417,7 +418,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                                 (Some(FrameRef::RunTime(at)), Some(l)) => {
                                     Some(RunTimeValue::Frame {
                                         name: None,
-                                        line: l.line(at.start),
+                                        at: UseLine::new(l.line(at.start)),
                                     })
                                 }
                                 _ => None,
@@ -483,16 +484,20 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
 /// ([`Facts::offsets`]) as such an offset, with the first line it is so written on. Only the
 /// mark: a frame used as nothing but an offset stays no target, as it was before the mark.
 fn mark_offsets(files: &mut [ParsedFile], facts: &[Facts]) {
-    let mut first: HashMap<&str, usize> = HashMap::default();
-    for (name, line) in facts.iter().flat_map(|f| &f.offsets) {
-        first.entry(name.as_str()).or_insert(*line);
+    // Name → (line, the file it is written in: `facts` are the files' in order).
+    let mut first: HashMap<&str, (usize, usize)> = HashMap::default();
+    for (fi, f) in facts.iter().enumerate() {
+        for (name, line) in &f.offsets {
+            first.entry(name.as_str()).or_insert((*line, fi));
+        }
     }
     if first.is_empty() {
         return;
     }
-    for file in files.iter_mut() {
+    let names: Vec<Arc<str>> = files.iter().map(|f| UseLine::file_name(&f.path)).collect();
+    for (tf, file) in files.iter_mut().enumerate() {
         for i in 0..file.positions.len() {
-            let Some(line) = file
+            let Some((line, fi)) = file
                 .positions
                 .name(i)
                 .and_then(|n| first.get(name_key(n).as_str()))
@@ -500,14 +505,15 @@ fn mark_offsets(files: &mut [ParsedFile], facts: &[Facts]) {
             else {
                 continue;
             };
-            if let Some(u) = file.positions.usage_mut(i) {
-                u.set_non_position(crate::position::NonPosition {
-                    instruction: ":",
-                    parameter: "right operand",
-                    role: crate::position::NonPositionRole::Offset,
-                    line,
-                });
-            }
+            let (Some(u), Some(from)) = (file.positions.usage_mut(i), names.get(fi)) else {
+                continue;
+            };
+            u.set_non_position(crate::position::NonPosition {
+                instruction: ":",
+                parameter: "right operand",
+                role: crate::position::NonPositionRole::Offset,
+                at: UseLine::of(line, fi, tf, from),
+            });
         }
     }
 }
@@ -520,6 +526,7 @@ fn shared_facts<'a>(
     assignments: &'a [crate::resolve::Assignment],
 ) -> (crate::resolve::FileFacts<'a>, &'a crate::syntax::LineIndex) {
     let facts = crate::resolve::FileFacts {
+        name: UseLine::file_name(&file.path),
         src: &file.source,
         positions: &mut file.positions,
         exported: None,

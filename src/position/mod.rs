@@ -430,8 +430,8 @@ pub enum RunTimeValue {
     /// `P[I] = $POS_ACT`) at `line`; for an array element written through a computed index,
     /// every element of the array.
     Target {
-        /// 1-based line of the assignment.
-        line: usize,
+        /// Where the assignment is.
+        at: UseLine,
     },
     /// The work object or base of a motion that uses the target is computed when the program
     /// runs (`wobj1.uframe := …`, `$BASE = EK(…)`).
@@ -439,9 +439,58 @@ pub enum RunTimeValue {
         /// The frame's name, when it has one (`wobj1`); `None` for an expression that selects
         /// the base (`$BASE = BASE_DATA[I]`).
         name: Option<String>,
-        /// 1-based line of the assignment.
-        line: usize,
+        /// Where the assignment is.
+        at: UseLine,
     },
+}
+
+/// The line of a use, and the file it is in when that is not the used target's own (a KRL
+/// `.dat` target used in its `.src`, a RAPID target of one module used in another): a
+/// message on the target names a line of another file only together with that file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UseLine {
+    /// 1-based line of the use.
+    pub line: usize,
+    /// The name of the file the use is in, when it is not the target's own.
+    pub file: Option<std::sync::Arc<str>>,
+}
+
+impl UseLine {
+    /// Line `line` of the target's own file.
+    pub fn new(line: usize) -> UseLine {
+        UseLine { line, file: None }
+    }
+
+    /// Line `line` of the file named `use_file` (as [`UseLine::file_name`] gives it): of
+    /// another file when `use_file_index` is not `target_file_index`.
+    pub(crate) fn of(
+        line: usize,
+        use_file_index: usize,
+        target_file_index: usize,
+        use_file: &std::sync::Arc<str>,
+    ) -> UseLine {
+        UseLine {
+            line,
+            file: (use_file_index != target_file_index).then(|| use_file.clone()),
+        }
+    }
+
+    /// How messages name the file at `path`: its file name, as it is listed in its folder.
+    pub fn file_name(path: &std::path::Path) -> std::sync::Arc<str> {
+        path.file_name()
+            .unwrap_or(path.as_os_str())
+            .to_string_lossy()
+            .into()
+    }
+}
+
+impl std::fmt::Display for UseLine {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.file {
+            None => write!(f, "line {}", self.line),
+            Some(file) => write!(f, "line {} of {file}", self.line),
+        }
+    }
 }
 
 /// A target the program uses as other than a position the robot moves to: a joint target a
@@ -457,8 +506,8 @@ pub struct NonPosition {
     pub parameter: &'static str,
     /// What its values are.
     pub role: NonPositionRole,
-    /// 1-based line of the use.
-    pub line: usize,
+    /// Where the use is.
+    pub at: UseLine,
 }
 
 /// What a [`NonPosition`]'s values are.
@@ -477,18 +526,30 @@ pub enum NonPositionRole {
 }
 
 impl RunTimeValue {
+    /// Where the assignment is.
+    pub fn at(&self) -> &UseLine {
+        match self {
+            RunTimeValue::Target { at } | RunTimeValue::Frame { at, .. } => at,
+        }
+    }
+
+    pub(crate) fn at_mut(&mut self) -> &mut UseLine {
+        match self {
+            RunTimeValue::Target { at } | RunTimeValue::Frame { at, .. } => at,
+        }
+    }
+
     /// Why, in words, after the target's description.
     pub fn describe(&self) -> String {
         match self {
-            RunTimeValue::Target { line } => {
-                format!("is given a computed value at run time (line {line})")
+            RunTimeValue::Target { at } => {
+                format!("is given a computed value at run time ({at})")
             }
-            RunTimeValue::Frame {
-                name: Some(n),
-                line,
-            } => format!("is used with `{n}`, which is computed at run time (line {line})"),
-            RunTimeValue::Frame { name: None, line } => {
-                format!("is used with a base computed at run time (line {line})")
+            RunTimeValue::Frame { name: Some(n), at } => {
+                format!("is used with `{n}`, which is computed at run time ({at})")
+            }
+            RunTimeValue::Frame { name: None, at } => {
+                format!("is used with a base computed at run time ({at})")
             }
         }
     }

@@ -72,13 +72,17 @@ pub fn parse_task(files: Vec<(PathBuf, InputBytes)>) -> Vec<ParsedFile> {
     // module it is 0.4 times the file at the moment memory peaks.
     let mut parsed = Vec::with_capacity(files.len());
     let mut extractors = Vec::with_capacity(files.len());
-    for ((_, source), lines) in files.iter().zip(&lines) {
+    for ((path, source), lines) in files.iter().zip(&lines) {
         let mut extractor = positions::Extractor::new(lines);
         let p = parser::parse_streamed(source, &mut |s: parser::Statement<'_>| {
             extractor.statement(s)
         });
         parsed.push((p.round_trip, p.diagnostics, p.opaque));
-        extractors.push((extractor, &source[..]));
+        extractors.push((
+            extractor,
+            &source[..],
+            crate::position::UseLine::file_name(path),
+        ));
     }
     let extracted = positions::finish_task(extractors);
     let mut out = Vec::with_capacity(files.len());

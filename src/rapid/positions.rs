@@ -12,10 +12,11 @@ use crate::names::{NameKey, NameMap, same_bytes};
 use crate::position::{
     Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Name, NonPosition,
     NonPositionRole, NumField, OffsetCall, OffsetKind, Orientation, Position, PositionKind,
-    PositionList, ReadAgainTarget, Usage,
+    PositionList, ReadAgainTarget, Usage, UseLine,
 };
 use crate::resolve::DeclKind;
 use crate::syntax::{Diagnostic, LineCursor, LineIndex, NumLit, Span, Span32, latin1};
+use std::sync::Arc;
 
 /// RAPID's world-zone instructions that take joint targets as other than positions, and
 /// which: by positional argument (the `\Inside`/`\Outside` switch not counted), with the
@@ -89,12 +90,15 @@ fn bind_world_zone(
                 ..call.clone()
             },
         );
-        binder.mark_reached(|usage| {
+        binder.mark_reached(m, |elsewhere, usage| {
             usage.set_non_position(NonPosition {
                 instruction,
                 parameter,
                 role,
-                line: call.line,
+                at: UseLine {
+                    line: call.line,
+                    file: elsewhere.cloned(),
+                },
             });
         });
     }
@@ -906,12 +910,15 @@ impl<'l> Extractor<'l> {
 
     /// Resolves usage and lints of one module on its own; consumes the extractor.
     pub fn finish(self, src: &[u8]) -> Extracted {
-        finish_task(vec![(self, src)]).pop().unwrap_or(Extracted {
-            positions: PositionList::new(),
-            frames: Vec::new(),
-            offsets: Vec::new(),
-            diagnostics: Vec::new(),
-        })
+        // One module: no use is in another file, so its name is never shown.
+        finish_task(vec![(self, src, Arc::from(""))])
+            .pop()
+            .unwrap_or(Extracted {
+                positions: PositionList::new(),
+                frames: Vec::new(),
+                offsets: Vec::new(),
+                diagnostics: Vec::new(),
+            })
     }
 }
 
@@ -937,14 +944,18 @@ fn is_literal(src: &[u8], arena: &Arena, id: u32) -> bool {
 /// (a call's work object `\WObj:=` or `wobj0`, its tool `\Tool:=` or the argument after the
 /// zone, a stationary tool from the work object's `robhold`), and reports the names declared
 /// twice in a module. Returns one [`Extracted`] per module, in order.
-pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
+pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extracted> {
     let mut diagnostics: Vec<Vec<Diagnostic>> = vec![Vec::new(); modules.len()];
     let mut buf = String::new();
     // The types of all names in the task; duplicate module-scope names, per module.
-    let (type_of, twice) =
-        crate::resolve::declarations(modules.iter().map(|(x, src)| (*src, x.symbols.as_slice())));
+    let (type_of, twice) = crate::resolve::declarations(
+        modules
+            .iter()
+            .map(|(x, src, _)| (*src, x.symbols.as_slice())),
+    );
     for t in twice {
-        let (Some((x, src)), Some(d)) = (modules.get(t.file), diagnostics.get_mut(t.file)) else {
+        let (Some((x, src, _)), Some(d)) = (modules.get(t.file), diagnostics.get_mut(t.file))
+        else {
             continue;
         };
         let line = x.lines.line(t.first.start);
@@ -963,7 +974,9 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
     let mut positions: Vec<PositionList> = Vec::with_capacity(modules.len());
     let mut calls: Vec<Calls> = Vec::with_capacity(modules.len());
     let mut rest = Vec::with_capacity(modules.len());
-    for (x, src) in modules {
+    let mut names = Vec::with_capacity(modules.len());
+    for (x, src, name) in modules {
+        names.push(name);
         calls.push(Calls {
             uses: x.uses,
             args: x.call_args,
@@ -984,7 +997,9 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8])>) -> Vec<Extracted> {
     let mut facts: Vec<crate::resolve::FileFacts<'_>> = positions
         .iter_mut()
         .zip(&rest)
-        .map(|(ps, r)| crate::resolve::FileFacts {
+        .zip(names)
+        .map(|((ps, r), name)| crate::resolve::FileFacts {
+            name,
             src: r.6,
             positions: ps,
             exported: Some(&r.5),
@@ -1598,7 +1613,7 @@ mod tests {
         } else {
             crate::rapid::parser::parse_streamed_plain(src, &mut sink)
         };
-        let out = finish_task(vec![(x, src)]).remove(0);
+        let out = finish_task(vec![(x, src, Arc::from("test.mod"))]).remove(0);
         let targets = (0..out.positions.len())
             .map(|i| {
                 let usage = format!("{:?}", out.positions.usage(i));

@@ -272,15 +272,13 @@ pub(crate) fn non_position(np: &crate::position::NonPosition, p: &Position, keep
     let crate::position::NonPosition {
         instruction,
         parameter,
-        line,
+        at,
         role,
     } = np;
     let what = describe(p);
     let used = match role {
-        Offset => format!("{what} is the {parameter} of `{instruction}` on line {line}"),
-        Tolerance | Limit => {
-            format!("{what} is the `{parameter}` of `{instruction}` on line {line}")
-        }
+        Offset => format!("{what} is the {parameter} of `{instruction}` on {at}"),
+        Tolerance | Limit => format!("{what} is the `{parameter}` of `{instruction}` on {at}"),
     };
     let is = match role {
         Tolerance => "a tolerance",

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use trackfix::position::{NonPosition, NonPositionRole, ParsedFile};
+use trackfix::position::{NonPosition, NonPositionRole, ParsedFile, UseLine};
 use trackfix::{krl, rapid};
 
 use crate::support::trackfix;
@@ -45,7 +45,7 @@ fn the_tolerance_and_limits_of_a_world_zone_are_marked_its_middle_is_not() {
         instruction,
         parameter,
         role,
-        line,
+        at: UseLine::new(line),
     };
     assert_eq!(
         non_position_of(&f, "jDelta"),
@@ -218,7 +218,7 @@ END\n";
             instruction: ":",
             parameter: "right operand",
             role: NonPositionRole::Offset,
-            line,
+            at: UseLine::new(line),
         })
     };
     assert_eq!(non_position_of(&f, "XOFF"), offset(12));

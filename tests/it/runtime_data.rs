@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use trackfix::position::{ParsedFile, RunTimeValue};
+use trackfix::position::{ParsedFile, RunTimeValue, UseLine};
 use trackfix::{krl, rapid};
 
 fn run_time(f: &ParsedFile, name: &str) -> Option<RunTimeValue> {
@@ -47,7 +47,7 @@ fn rapid_targets_and_work_objects_computed_at_run_time_are_marked_literal_ones_a
         run_time(&f, "pOnCalc"),
         Some(RunTimeValue::Frame {
             name: Some("wCalc".into()),
-            line: 11
+            at: UseLine::new(11)
         })
     );
     // A literal value is known offline: the warning it always had, no refusal.
@@ -56,13 +56,17 @@ fn rapid_targets_and_work_objects_computed_at_run_time_are_marked_literal_ones_a
     for n in ["pBuf{1}", "pBuf{2}"] {
         assert_eq!(
             run_time(&f, n),
-            Some(RunTimeValue::Target { line: 13 }),
+            Some(RunTimeValue::Target {
+                at: UseLine::new(13)
+            }),
             "{n}"
         );
     }
     assert_eq!(
         run_time(&f, "pHere"),
-        Some(RunTimeValue::Target { line: 14 })
+        Some(RunTimeValue::Target {
+            at: UseLine::new(14)
+        })
     );
 }
 
@@ -89,15 +93,20 @@ END\n";
         run_time(&f, "XB"),
         Some(RunTimeValue::Frame {
             name: None,
-            line: 8
+            at: UseLine::new(8)
         })
     );
-    assert_eq!(run_time(&f, "XC"), Some(RunTimeValue::Target { line: 11 }));
+    assert_eq!(
+        run_time(&f, "XC"),
+        Some(RunTimeValue::Target {
+            at: UseLine::new(11)
+        })
+    );
     assert_eq!(
         run_time(&f, "XD"),
         Some(RunTimeValue::Frame {
             name: None,
-            line: 13
+            at: UseLine::new(13)
         })
     );
 }
@@ -177,4 +186,129 @@ fn a_krl_target_that_leaves_out_pose_fields_is_refused_for_what_it_leaves_out() 
         "{err}"
     );
     assert!(err.contains("leave it as written [expression]"), "{err}");
+}
+
+/// Messages on a target name the line of a use in another file together with that file: a
+/// `.dat` point assigned, used with a computed base or added as an offset in its `.src`.
+#[test]
+fn a_use_in_the_other_file_of_a_pair_is_named_with_its_file() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("cell.dat"),
+        "DEFDAT cell\n\
+  DECL E6POS XA={X 1,Y 2,Z 3,A 0,B 0,C 0,E1 500}\n\
+  DECL E6POS XB={X 1,Y 2,Z 3,A 0,B 0,C 0,E1 500}\n\
+  DECL E6POS XOFF={X 0,Y 0,Z 9,A 0,B 0,C 0,E1 0}\n\
+ENDDAT\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("cell.src"),
+        "DEF cell( )\n\
+  DECL E6POS XHERE={X 1,Y 2,Z 3,A 0,B 0,C 0,E1 500}\n\
+  BAS(#BASE,2)\n\
+  XA=$POS_ACT\n\
+  LIN XA\n\
+  XHERE=$POS_ACT\n\
+  LIN XHERE\n\
+  $BASE=BASE_DATA[NBASE]\n\
+  LIN XB:XOFF\n\
+END\n",
+    )
+    .unwrap();
+    let program = krl::load_program(
+        &dir.path().join("cell.src"),
+        &trackfix::program::LoadOptions::default(),
+    )
+    .unwrap();
+    let dat = program
+        .files
+        .iter()
+        .find(|f| f.path.ends_with("cell.dat"))
+        .unwrap();
+    let src = program
+        .files
+        .iter()
+        .find(|f| f.path.ends_with("cell.src"))
+        .unwrap();
+    let in_src = |line| UseLine {
+        line,
+        file: Some("cell.src".into()),
+    };
+    assert_eq!(
+        run_time(dat, "XA"),
+        Some(RunTimeValue::Target { at: in_src(4) })
+    );
+    assert_eq!(
+        run_time(dat, "XB"),
+        Some(RunTimeValue::Frame {
+            name: None,
+            at: in_src(8)
+        })
+    );
+    // A use in the target's own file: its line alone.
+    assert_eq!(
+        run_time(src, "XHERE"),
+        Some(RunTimeValue::Target {
+            at: UseLine::new(6)
+        })
+    );
+    let offset = dat
+        .positions()
+        .find(|p| p.name.as_deref() == Some("XOFF"))
+        .and_then(|p| p.usage.non_position().cloned())
+        .unwrap();
+    assert_eq!(offset.at, in_src(9));
+    assert_eq!(offset.at.to_string(), "line 9 of cell.src");
+    assert_eq!(UseLine::new(7).to_string(), "line 7");
+}
+
+/// The same in a RAPID task: a target of one module used in another with a work object that
+/// module computes, and a world zone's tolerance declared in one module and taken in another.
+#[test]
+fn a_use_in_another_module_of_a_task_is_named_with_its_module() {
+    let dir = tempfile::tempdir().unwrap();
+    let progmod = dir.path().join("TASK1").join("PROGMOD");
+    std::fs::create_dir_all(&progmod).unwrap();
+    std::fs::write(
+        progmod.join("A.mod"),
+        "MODULE A\n\
+  PERS wobjdata wCalc:=[FALSE,TRUE,\"\",[[1000,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n\
+  PROC main()\n\
+    wCalc.uframe:=[[0,0,0],OrientZYX(nAngle,0,0)];\n\
+    MoveL pB,v100,fine,tool0\\WObj:=wCalc;\n\
+    WZHomeJointDef \\Inside, shHome, jMid, jTol;\n\
+  ENDPROC\nENDMODULE\n",
+    )
+    .unwrap();
+    std::fs::write(
+        progmod.join("B.mod"),
+        format!(
+            "MODULE B\n\
+  PERS robtarget pB:={T};\n\
+  CONST jointtarget jMid:=[[10,-20,30,0,45,0],[4250,9E9,9E9,9E9,9E9,9E9]];\n\
+  CONST jointtarget jTol:=[[2,2,2,2,2,2],[5,9E9,9E9,9E9,9E9,9E9]];\n\
+  VAR shapedata shHome;\nENDMODULE\n"
+        ),
+    )
+    .unwrap();
+    let task = dir.path().join("TASK1");
+    let (code, _, err) = crate::support::trackfix(&[
+        "correct",
+        task.to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--diff",
+    ]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("B.mod:2:20: error: robtarget `pB` is used with `wCalc`, which is computed at run time (line 4 of A.mod)"),
+        "{err}"
+    );
+    assert!(
+        err.contains("B.mod:4:25: note: jointtarget `jTol` is the `DeltaJointVal` of `WZHomeJointDef` on line 6 of A.mod"),
+        "{err}"
+    );
 }
