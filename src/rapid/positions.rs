@@ -194,7 +194,7 @@ pub struct Extractor<'l> {
     offsets: Vec<OffsetCall>,
     /// Every name declared, routines included (spans into the source: no copy per
     /// declaration).
-    symbols: Vec<crate::resolve::Declaration>,
+    declared: crate::resolve::Declared,
     uses: Vec<CallUse>,
     /// The calls' positional arguments, call after call (see [`CallUse`]); `None` for an
     /// argument that is not a plain reference.
@@ -445,7 +445,7 @@ impl<'l> Extractor<'l> {
             positions: PositionList::new(),
             frames: Vec::new(),
             offsets: Vec::new(),
-            symbols: Vec::new(),
+            declared: crate::resolve::Declared::default(),
             uses: Vec::new(),
             call_args: Vec::new(),
             call_refs: Vec::new(),
@@ -948,11 +948,8 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     let mut diagnostics: Vec<Vec<Diagnostic>> = vec![Vec::new(); modules.len()];
     let mut buf = String::new();
     // The types of all names in the task; duplicate module-scope names, per module.
-    let (type_of, twice) = crate::resolve::declarations(
-        modules
-            .iter()
-            .map(|(x, src, _)| (*src, x.symbols.as_slice())),
-    );
+    let (type_of, twice) =
+        crate::resolve::declarations(modules.iter().map(|(x, src, _)| (*src, &x.declared)));
     for t in twice {
         let (Some((x, src, _)), Some(d)) = (modules.get(t.file), diagnostics.get_mut(t.file))
         else {
@@ -1171,12 +1168,9 @@ impl Extractor<'_> {
             }
             Stmt::Routine { name, local } => {
                 // Past 4 GiB a name has no 32-bit span: no input is this large (see `Span32`).
-                self.symbols
-                    .extend(Span32::of(name).map(|name| crate::resolve::Declaration {
-                        name,
-                        kind: DeclKind::Other,
-                        file_scope: true,
-                    }));
+                if let Some(n) = Span32::of(name) {
+                    self.declared.declare(src, n, DeclKind::Other, true);
+                }
                 self.current = Some(self.routines.len());
                 self.routines.push(crate::resolve::Routine {
                     name,
@@ -1349,12 +1343,9 @@ impl Extractor<'_> {
                     // builds only, must match): its type is none of those compared below, one
                     // compare each.
                     debug_assert!(type_name.slice(src).eq_ignore_ascii_case(b"robtarget"));
-                    self.symbols
-                        .extend(Span32::of(name).map(|name| crate::resolve::Declaration {
-                            name,
-                            kind: DeclKind::Other,
-                            file_scope: module_scope,
-                        }));
+                    if let Some(n) = Span32::of(name) {
+                        self.declared.declare(src, n, DeclKind::Other, module_scope);
+                    }
                     self.push_literal(src, literal, name);
                     #[cfg(debug_assertions)]
                     if let Some(id) = init {
@@ -1364,20 +1355,18 @@ impl Extractor<'_> {
                 }
                 let ty = type_name.slice(src);
                 let is = |t: &[u8]| ty.eq_ignore_ascii_case(t);
-                self.symbols
-                    .extend(Span32::of(name).map(|name| crate::resolve::Declaration {
-                        name,
-                        kind: if is(b"tooldata") {
-                            DeclKind::Tool
-                        } else if is(b"zonedata") {
-                            DeclKind::Zone
-                        } else if is(b"speeddata") {
-                            DeclKind::Speed
-                        } else {
-                            DeclKind::Other
-                        },
-                        file_scope: module_scope,
-                    }));
+                let kind = if is(b"tooldata") {
+                    DeclKind::Tool
+                } else if is(b"zonedata") {
+                    DeclKind::Zone
+                } else if is(b"speeddata") {
+                    DeclKind::Speed
+                } else {
+                    DeclKind::Other
+                };
+                if let Some(n) = Span32::of(name) {
+                    self.declared.declare(src, n, kind, module_scope);
+                }
                 let target_kind = if is(b"robtarget") {
                     Some(PositionKind::Robtarget)
                 } else if is(b"jointtarget") {
