@@ -30,8 +30,6 @@ pub(crate) struct Naming {
     pub(crate) close: char,
     /// When a reference reaches every element of an array.
     pub(crate) arrays: ArrayReach,
-    /// Which files' declarations a reference sees.
-    pub(crate) scope: Scope,
 }
 
 /// When a reference reaches every element of an array.
@@ -43,16 +41,6 @@ pub(crate) enum ArrayReach {
     /// A name reaches its declaration, and an index that is not a literal (`P[I]`, `P[I+1,2]`)
     /// every element of the array as well (KRL).
     WhenIndexComputed,
-}
-
-/// Which files' declarations a reference sees.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Scope {
-    /// The file's own declarations hide the other files'; of those, only the exported ones are
-    /// seen (RAPID: routine and `LOCAL` data is private to its module).
-    OwnFileFirst,
-    /// Every declaration of the program (the two files of a KRL `.src`/`.dat` pair).
-    Program,
 }
 
 /// What a declared name is, as far as finding a motion's arguments goes.
@@ -203,6 +191,12 @@ pub(crate) struct FileFacts<'a> {
     /// The file's name, as a message on a target of another file names it
     /// ([`UseLine::file_name`](crate::position::UseLine::file_name)).
     pub(crate) name: std::sync::Arc<str>,
+    /// The module the file belongs to, an index shared by its files: a reference sees the
+    /// declarations of its own module first, and of the others' only the exported ones
+    /// (RAPID: a module is a file, its routine and `LOCAL` data private to it; KRL: a module
+    /// is a `.src` and its `.dat`, and only what is declared `GLOBAL` and `$config.dat`'s is
+    /// seen from elsewhere).
+    pub(crate) module: usize,
     /// The bytes every span of the file's facts points into.
     pub(crate) src: &'a [u8],
     /// Its targets (their usage is recorded here).
@@ -248,7 +242,7 @@ fn lookup(
     naming: &Naming,
     index: &NameIndex<Indexed>,
     exported: &dyn Fn(TargetAt) -> bool,
-    file: usize,
+    (file, modules): (usize, &[usize]),
     key: &str,
     out: &mut Vec<TargetAt>,
 ) {
@@ -259,7 +253,7 @@ fn lookup(
             computed_index_array(naming, key).map_or(&[][..], |a| index.elements(a)),
         ),
     };
-    keep_seen(naming, exported, file, named, elements, out);
+    keep_seen(exported, (file, modules), named, elements, out);
 }
 
 /// [`lookup`] of a reference written as `raw` in `file`'s source, read as it is where its
@@ -269,7 +263,7 @@ fn lookup_raw(
     naming: &Naming,
     index: &NameIndex<Indexed>,
     exported: &dyn Fn(TargetAt) -> bool,
-    file: usize,
+    (file, modules): (usize, &[usize]),
     raw: &[u8],
     buf: &mut String,
     out: &mut Vec<TargetAt>,
@@ -277,25 +271,36 @@ fn lookup_raw(
     if naming.arrays == ArrayReach::WhenUndeclared
         && let Some(named) = index.exact_else_elements_raw(raw)
     {
-        return keep_seen(naming, exported, file, named, &[], out);
+        return keep_seen(exported, (file, modules), named, &[], out);
     }
-    lookup(naming, index, exported, file, fold_into(buf, raw), out);
+    lookup(
+        naming,
+        index,
+        exported,
+        (file, modules),
+        fold_into(buf, raw),
+        out,
+    );
 }
 
 /// The declarations found, `named` then `elements`, that `file` sees, added to `out`.
+/// `modules` gives each file's module (files of one module see each other's declarations as
+/// their own: a KRL `.src` and its `.dat`); a file past its end is a module of its own.
 fn keep_seen(
-    naming: &Naming,
     exported: &dyn Fn(TargetAt) -> bool,
-    file: usize,
+    (file, modules): (usize, &[usize]),
     named: &[Indexed],
     elements: &[Indexed],
     out: &mut Vec<TargetAt>,
 ) {
-    // Nearly every reference names one declaration: seen if it is the file's own, else if
+    let module = |f: usize| modules.get(f).copied().unwrap_or(f);
+    let own_module = module(file);
+    let own = |h: TargetAt| h.0 == file || module(h.0) == own_module;
+    // Nearly every reference names one declaration: seen if it is the module's own, else if
     // exported (what the general filter below keeps of one hit).
     if let ([(hm, hi)], []) = (named, elements) {
         let h = (*hm as usize, *hi as usize);
-        if naming.scope == Scope::Program || h.0 == file || exported(h) {
+        if own(h) || exported(h) {
             out.push(h);
         }
         return;
@@ -304,13 +309,8 @@ fn keep_seen(
         .iter()
         .chain(elements)
         .map(|&(m, i)| (m as usize, i as usize));
-    match naming.scope {
-        Scope::Program => out.extend(hits),
-        Scope::OwnFileFirst => {
-            let own = hits.clone().any(|h| h.0 == file);
-            out.extend(hits.filter(|&h| if own { h.0 == file } else { exported(h) }));
-        }
-    }
+    let any_own = hits.clone().any(own);
+    out.extend(hits.filter(|&h| if any_own { own(h) } else { exported(h) }));
 }
 
 /// The uses reached from routine parameter `from`: its own uses, then those of every parameter
@@ -415,6 +415,8 @@ fn record(files: &mut [FileFacts<'_>], from: usize, (m, i): TargetAt, u: &Record
 /// other files' that are not local.
 pub(crate) struct Binder<'f, 'a> {
     files: &'f mut [FileFacts<'a>],
+    /// Each file's [`FileFacts::module`].
+    modules: Vec<usize>,
     naming: Naming,
     index: NameIndex<Indexed>,
     param_uses: std::collections::HashMap<ParamAt, Vec<MovesWith>>,
@@ -474,8 +476,10 @@ impl<'f, 'a> Binder<'f, 'a> {
                     .is_some_and(|r| !r.params.is_empty())
             })
         });
+        let modules = files.iter().map(|f| f.module).collect();
         Binder {
             files,
+            modules,
             naming: *naming,
             index,
             param_uses: Default::default(),
@@ -502,6 +506,7 @@ impl<'f, 'a> Binder<'f, 'a> {
     pub(crate) fn bind(&mut self, m: usize, u: &Use<'_>) {
         let Binder {
             files,
+            modules,
             naming,
             index,
             param_uses,
@@ -562,7 +567,7 @@ impl<'f, 'a> Binder<'f, 'a> {
                     key,
                 ) {
                     Some(p) => params.push(p),
-                    None => lookup(naming, index, &exported, m, key, targets),
+                    None => lookup(naming, index, &exported, (m, modules), key, targets),
                 };
             // `reach` of a reference written as `raw` in the file, looked up only when it
             // may reach something: a parameter, or a target whose name starts as it does.
@@ -577,7 +582,7 @@ impl<'f, 'a> Binder<'f, 'a> {
                     return;
                 }
                 if first_letters.may_start(raw) {
-                    lookup_raw(naming, index, &exported, m, raw, buf, targets);
+                    lookup_raw(naming, index, &exported, (m, modules), raw, buf, targets);
                 }
             };
             let callee = u.callee.filter(|_| !routines.is_empty()).and_then(|c| {
@@ -609,7 +614,7 @@ impl<'f, 'a> Binder<'f, 'a> {
                             Some(p) => param_edges.entry(p).or_default().push(to),
                             None => {
                                 hits.clear();
-                                lookup(naming, index, &exported, m, key, hits);
+                                lookup(naming, index, &exported, (m, modules), key, hits);
                                 bindings.extend(hits.iter().map(|&t| (t, to, u.line)));
                             }
                         }
@@ -713,10 +718,10 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
     }
     let naming = Naming {
         arrays: ArrayReach::WhenUndeclared,
-        scope: Scope::OwnFileFirst,
         ..*naming
     };
     let seen = |_: TargetAt| true;
+    let modules: Vec<usize> = files.iter().map(|f| f.module).collect();
     let mut hits = Vec::new();
     let mut targets = NameIndex::builder(naming.open, 0);
     let mut frames = NameIndex::builder(naming.open, 0);
@@ -743,10 +748,10 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
         for a in f.assignments {
             let key = fold(&a.name);
             hits.clear();
-            lookup(&naming, &targets, &seen, fi, &key, &mut hits);
+            lookup(&naming, &targets, &seen, (fi, &modules), &key, &mut hits);
             assigned_targets.extend(hits.iter().map(|&(tf, ti)| (tf, ti, a.line, fi)));
             hits.clear();
-            lookup(&naming, &frames, &seen, fi, &key, &mut hits);
+            lookup(&naming, &frames, &seen, (fi, &modules), &key, &mut hits);
             for &(df, di) in &hits {
                 if let Some(d) = files.get(df).and_then(|f| f.frames.get(di)) {
                     assigned_frames
@@ -837,19 +842,31 @@ mod tests {
             open: '{',
             close: '}',
             arrays: ArrayReach::WhenUndeclared,
-            scope: Scope::OwnFileFirst,
         };
         let krl = Naming {
             open: '[',
             close: ']',
             arrays: ArrayReach::WhenIndexComputed,
-            scope: Scope::Program,
         };
+        let reach_in =
+            |naming: &Naming, exported: &dyn Fn(TargetAt) -> bool, file, modules: &[usize], key| {
+                let mut out = Vec::new();
+                lookup(
+                    naming,
+                    &index(naming.open),
+                    exported,
+                    (file, modules),
+                    key,
+                    &mut out,
+                );
+                out
+            };
+        // Each file a module of its own (RAPID).
         let reach = |naming: &Naming, exported: &dyn Fn(TargetAt) -> bool, file, key| {
-            let mut out = Vec::new();
-            lookup(naming, &index(naming.open), exported, file, key, &mut out);
-            out
+            reach_in(naming, exported, file, &[], key)
         };
+        // Files 0 and 1 one module (a KRL `.src` and its `.dat`), file 2 another.
+        let pair = [0, 0, 2];
         let all = |_: TargetAt| true;
         let only_y = |t: TargetAt| t == (1, 1);
         // RAPID: the whole array, an element chosen at run time, an undeclared element.
@@ -863,10 +880,20 @@ mod tests {
         assert_eq!(reach(&rapid, &only_y, 2, "X"), Vec::<TargetAt>::new());
         assert_eq!(reach(&rapid, &only_y, 2, "Y"), [(1, 1)]);
         // KRL: a literal index is that element only, a computed one every element; the whole
-        // array is no declaration; every file's `X` is seen.
-        assert_eq!(reach(&krl, &all, 0, "P[9]"), Vec::<TargetAt>::new());
-        assert_eq!(reach(&krl, &all, 0, "P[I+1]"), [(0, 0), (0, 1)]);
-        assert_eq!(reach(&krl, &all, 0, "P"), Vec::<TargetAt>::new());
-        assert_eq!(reach(&krl, &all, 0, "X"), [(0, 2), (1, 0)]);
+        // array is no declaration; both files of the module see each other's `X`, another
+        // module only an exported one.
+        assert_eq!(
+            reach_in(&krl, &all, 0, &pair, "P[9]"),
+            Vec::<TargetAt>::new()
+        );
+        assert_eq!(reach_in(&krl, &all, 0, &pair, "P[I+1]"), [(0, 0), (0, 1)]);
+        assert_eq!(reach_in(&krl, &all, 0, &pair, "P"), Vec::<TargetAt>::new());
+        assert_eq!(reach_in(&krl, &all, 0, &pair, "X"), [(0, 2), (1, 0)]);
+        assert_eq!(reach_in(&krl, &all, 1, &pair, "X"), [(0, 2), (1, 0)]);
+        assert_eq!(
+            reach_in(&krl, &only_y, 2, &pair, "X"),
+            Vec::<TargetAt>::new()
+        );
+        assert_eq!(reach_in(&krl, &only_y, 2, &pair, "Y"), [(1, 1)]);
     }
 }

@@ -172,6 +172,8 @@ pub(super) fn decl_line(src: &[u8], start: usize, fields: &mut Vec<Field>) -> Op
                 dims: Vec::new(),
                 init: Some(init),
             }],
+            // `DECL GLOBAL` is left to the general path (`reserved_after_decl`).
+            global: false,
         },
         span: Span::new(decl_at, close + 1),
         end,

@@ -115,6 +115,11 @@ pub(crate) struct Facts {
     /// `FPALLET:SLOT:XPLACE_REL`), upper case, with their lines: offsets in the frame before
     /// them, not positions.
     pub offsets: Vec<(Name, usize)>,
+    /// Names this file declares `GLOBAL` (upper case): seen from every module of the program.
+    pub globals: Vec<Name>,
+    /// Routines other modules may call (upper case): the file's first `DEF` (the module's own,
+    /// named as the file) and every `GLOBAL DEF`; another `DEF` is the module's alone.
+    pub public_routines: Vec<String>,
 }
 
 /// A declared name as motions reference it: upper case, without blanks (`p[ 3 ]` → `P[3]`).
@@ -476,6 +481,8 @@ pub(crate) struct Extractor<'a> {
     src: &'a [u8],
     lines: &'a LineIndex,
     declared: HashMap<Name, PositionKind>,
+    /// A `DEF` was read: the next is not the module's own routine.
+    seen_def: bool,
     out: Extracted,
     /// Notes about what is deliberately not a target (relative motions, computed targets).
     pub diagnostics: Vec<Diagnostic>,
@@ -487,6 +494,7 @@ impl<'a> Extractor<'a> {
             src,
             lines,
             declared: HashMap::default(),
+            seen_def: false,
             out: Extracted {
                 positions: PositionList::new(),
                 frames: Vec::new(),
@@ -509,14 +517,26 @@ impl<'a> Extractor<'a> {
         let (src, lines) = (self.src, self.lines);
         let out = &mut self.out;
         match &stmt.kind {
-            StmtKind::Routine { keyword, name } => {
+            StmtKind::Routine {
+                keyword,
+                name,
+                global,
+            } => {
                 if !upper(src, *keyword).starts_with("DEFDAT") {
-                    out.facts
-                        .events
-                        .push(Event::Reset(name.map(|n| upper(src, n))));
+                    let name = name.map(|n| upper(src, n));
+                    let first = !self.seen_def;
+                    self.seen_def = true;
+                    if let Some(n) = name.as_ref().filter(|_| first || *global) {
+                        out.facts.public_routines.push(n.clone());
+                    }
+                    out.facts.events.push(Event::Reset(name));
                 }
             }
-            StmtKind::Decl { type_name, vars } => {
+            StmtKind::Decl {
+                type_name,
+                vars,
+                global,
+            } => {
                 let positional = ["E6POS", "POS", "FRAME", "E6AXIS", "AXIS"]
                     .into_iter()
                     .find(|t| is_word(src, *type_name, t.as_bytes()))
@@ -525,6 +545,9 @@ impl<'a> Extractor<'a> {
                 for v in vars {
                     if let Some(kind) = positional {
                         self.declared.insert(upper_name(src, v.name), kind);
+                        if *global {
+                            out.facts.globals.push(upper_name(src, v.name));
+                        }
                     }
                     let Some(init) = &v.init else { continue };
                     let ExprKind::Aggregate(agg) = &init.kind else {

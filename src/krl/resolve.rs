@@ -16,7 +16,6 @@ const NAMING: crate::resolve::Naming = crate::resolve::Naming {
     open: '[',
     close: ']',
     arrays: crate::resolve::ArrayReach::WhenIndexComputed,
-    scope: crate::resolve::Scope::Program,
 };
 
 /// The name trackfix gives a base: `BASE_DATA[n]`, `$WORLD` for base 0.
@@ -187,22 +186,33 @@ use crate::resolve::CALL_DEPTH;
 /// `$BASE=BASE_DATA[2]` sets the base of the motions after its call), found by following each
 /// routine's program order from an unknown entry; calls inside are followed by repeating this
 /// up to [`CALL_DEPTH`] times (a cycle settles or stops there).
-fn routine_exits(facts: &[Facts], fdats: &HashMap<Name, Fdat>) -> HashMap<String, Exit> {
-    let mut exits: HashMap<String, Exit> = HashMap::default();
+fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modules) -> Exits {
+    let mut exits = Exits::default();
+    for (fi, f) in facts.iter().enumerate() {
+        for name in &f.public_routines {
+            exits.public.entry(name.clone()).or_insert(modules.of(fi));
+        }
+    }
+    let no_fdats = HashMap::default();
     for _ in 0..CALL_DEPTH {
-        let mut next: HashMap<String, Exit> = HashMap::default();
-        for f in facts {
+        let mut next: std::collections::HashMap<(usize, String), Exit> = Default::default();
+        for (fi, f) in facts.iter().enumerate() {
+            let module = modules.of(fi);
+            let fdats = fdats.get(module).unwrap_or(&no_fdats);
             let mut current: Option<&str> = None;
             let mut state = State::default();
             let mut forks: Vec<Fork> = Vec::new();
-            let close = |name: Option<&str>, state: &State, next: &mut HashMap<String, Exit>| {
-                if let Some(n) = name {
-                    next.entry(n.to_owned()).or_insert(Exit {
-                        base: state.base.clone(),
-                        tool: state.tool.clone(),
-                    });
-                }
-            };
+            let close =
+                |name: Option<&str>,
+                 state: &State,
+                 next: &mut std::collections::HashMap<(usize, String), Exit>| {
+                    if let Some(n) = name {
+                        next.entry((module, n.to_owned())).or_insert(Exit {
+                            base: state.base.clone(),
+                            tool: state.tool.clone(),
+                        });
+                    }
+                };
             for ev in &f.events {
                 match ev {
                     Event::Reset(name) => {
@@ -212,7 +222,7 @@ fn routine_exits(facts: &[Facts], fdats: &HashMap<Name, Fdat>) -> HashMap<String
                         forks.clear();
                     }
                     Event::Call(name) => {
-                        if let Some(exit) = exits.get(name) {
+                        if let Some(exit) = exits.of(module, name) {
                             exit.apply_to(&mut state);
                         }
                     }
@@ -223,12 +233,149 @@ fn routine_exits(facts: &[Facts], fdats: &HashMap<Name, Fdat>) -> HashMap<String
             }
             close(current, &state, &mut next);
         }
-        if next == exits {
+        if next == exits.by_routine {
             break;
         }
-        exits = next;
+        exits.by_routine = next;
     }
     exits
+}
+
+/// The [`Exit`] of every routine, by module and name, and the modules whose routines of a
+/// name other modules call.
+#[derive(Default)]
+struct Exits {
+    by_routine: std::collections::HashMap<(usize, String), Exit>,
+    /// A routine name other modules may call → the module it is in (the first that has it).
+    public: std::collections::HashMap<String, usize>,
+}
+
+impl Exits {
+    /// What a call of `name` from `module` leaves set: the module's own routine of that name,
+    /// else a public one of another module (KRL calls a `DEF` of another module only when it
+    /// is that module's own or `GLOBAL`).
+    fn of(&self, module: usize, name: &str) -> Option<&Exit> {
+        self.by_routine.get(&(module, name.to_owned())).or_else(|| {
+            let &m = self.public.get(name)?;
+            self.by_routine.get(&(m, name.to_owned()))
+        })
+    }
+}
+
+/// Which files of a program are one module: a `.src` and the `.dat` of the same name in the
+/// same folder. A `$config.dat` is a module of its own whose declarations every module sees;
+/// of another module, a module sees only what is declared `GLOBAL`.
+struct Modules {
+    /// Each file's module.
+    of: Vec<usize>,
+    /// Per file: a `$config.dat`.
+    global: Vec<bool>,
+    /// How many modules.
+    count: usize,
+}
+
+impl Modules {
+    fn new(files: &[ParsedFile]) -> Modules {
+        let mut ids: std::collections::HashMap<(Option<&std::path::Path>, String), usize> =
+            Default::default();
+        let mut of = Vec::with_capacity(files.len());
+        let mut global = Vec::with_capacity(files.len());
+        let mut count = 0;
+        for f in files {
+            let name = f
+                .path
+                .file_name()
+                .map(|n| n.to_string_lossy().to_ascii_lowercase())
+                .unwrap_or_default();
+            let is_config = name == "$config.dat";
+            let stem = f
+                .path
+                .file_stem()
+                .map(|n| n.to_string_lossy().to_ascii_lowercase())
+                .unwrap_or_default();
+            let id = if is_config {
+                count += 1;
+                count - 1
+            } else {
+                *ids.entry((f.path.parent(), stem)).or_insert_with(|| {
+                    count += 1;
+                    count - 1
+                })
+            };
+            of.push(id);
+            global.push(is_config);
+        }
+        Modules { of, global, count }
+    }
+
+    fn of(&self, file: usize) -> usize {
+        self.of.get(file).copied().unwrap_or(file)
+    }
+
+    fn is_global(&self, file: usize) -> bool {
+        self.global.get(file).copied().unwrap_or(false)
+    }
+
+    /// Per module, what its files give (moved, not copied), then what the global files give
+    /// that the module lacks (copied: a `$config.dat` is small beside the programs).
+    fn gathered<V: Clone>(&self, per_file: Vec<HashMap<Name, V>>) -> Vec<HashMap<Name, V>> {
+        let mut out: Vec<HashMap<Name, V>> = (0..self.count).map(|_| HashMap::default()).collect();
+        let mut globals: Vec<(Name, V)> = Vec::new();
+        for (fi, own) in per_file.into_iter().enumerate() {
+            if self.is_global(fi) {
+                globals.extend(own.iter().map(|(k, v)| (k.clone(), v.clone())));
+            }
+            let Some(all) = out.get_mut(self.of(fi)) else {
+                continue;
+            };
+            if all.is_empty() {
+                *all = own;
+            } else {
+                for (k, v) in own {
+                    all.entry(k).or_insert(v);
+                }
+            }
+        }
+        if !globals.is_empty() {
+            for all in &mut out {
+                for (k, v) in &globals {
+                    all.entry(k.clone()).or_insert_with(|| v.clone());
+                }
+            }
+        }
+        out
+    }
+
+    /// Per file, which of its positions other modules see (`None`: all, a `$config.dat`'s):
+    /// those declared `GLOBAL`.
+    fn exported(&self, files: &[ParsedFile], facts: &[Facts]) -> Vec<Option<Vec<bool>>> {
+        files
+            .iter()
+            .zip(facts)
+            .enumerate()
+            .map(|(fi, (f, fact))| {
+                if self.is_global(fi) {
+                    return None;
+                }
+                let n = f.positions.len();
+                if fact.globals.is_empty() {
+                    return Some(vec![false; n]);
+                }
+                let globals: std::collections::HashSet<&str> =
+                    fact.globals.iter().map(Name::as_str).collect();
+                Some(
+                    (0..n)
+                        .map(|i| {
+                            f.positions.name(i).is_some_and(|name| {
+                                let key = name_key(name);
+                                globals.contains(key.split('[').next().unwrap_or_default())
+                            })
+                        })
+                        .collect(),
+                )
+            })
+            .collect()
+    }
 }
 
 /// Program order at `IF`/`SWITCH`: fork, switch branch, or join.
@@ -261,30 +408,20 @@ fn branch(state: &mut State, forks: &mut Vec<Fork>, b: BranchEvent) {
     }
 }
 
-/// The files' maps as one: the first whole, then each later file's names the map lacks (the
-/// first file that has a name gives its entry). The maps are moved, not copied: a copy of
-/// every `FDAT` and declared name was 10 MB of `check`'s peak on a 34 MB pair.
-fn moved_together<V>(maps: impl Iterator<Item = HashMap<Name, V>>) -> HashMap<Name, V> {
-    let mut all: HashMap<Name, V> = HashMap::default();
-    for own in maps {
-        if all.is_empty() {
-            all = own;
-        } else {
-            for (k, v) in own {
-                all.entry(k).or_insert(v);
-            }
-        }
-    }
-    all
-}
-
 /// Resolves base, tool and IPO mode of every motion of a program (files in the same order as
 /// `facts`) by following program order, hands each motion to the shared usage pass
 /// ([`crate::resolve::Binder`]) to fill the [`Usage`](crate::position::Usage) of the positions
 /// it uses, promotes used `FRAME`s and candidate aggregates to positions, and reports motions
 /// whose base stays unknown.
 pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
-    let fdats = moved_together(facts.iter_mut().map(|f| std::mem::take(&mut f.fdats)));
+    let modules = Modules::new(files);
+    // A module's own `FDAT`s, then `$config.dat`'s: `FP1` is in nearly every data list.
+    let fdats = modules.gathered(
+        facts
+            .iter_mut()
+            .map(|f| std::mem::take(&mut f.fdats))
+            .collect(),
+    );
     // Candidates that are positions whether or not a motion uses them.
     let mut kept: Vec<Vec<bool>> = facts
         .iter()
@@ -292,9 +429,15 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         .collect();
     // `XP1={…}` in the `.src` of a point the `.dat` declares (`DECL POS XP1`): the declaration
     // gives the kind, and a non-FRAME declared point is a position whether or not it moves.
-    let declared: HashMap<Name, PositionKind> =
-        moved_together(facts.iter_mut().map(|f| std::mem::take(&mut f.declared)));
-    for (fact, kept) in facts.iter_mut().zip(kept.iter_mut()) {
+    let declared = modules.gathered(
+        facts
+            .iter_mut()
+            .map(|f| std::mem::take(&mut f.declared))
+            .collect(),
+    );
+    let no_declared = HashMap::default();
+    for (fi, (fact, kept)) in facts.iter_mut().zip(kept.iter_mut()).enumerate() {
+        let declared = declared.get(modules.of(fi)).unwrap_or(&no_declared);
         let Facts {
             candidates,
             inferred,
@@ -316,7 +459,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             }
         }
     }
-    let exits = routine_exits(facts, &fdats);
+    let exits = routine_exits(facts, &fdats, &modules);
     let events: Vec<Vec<Event>> = facts
         .iter_mut()
         .map(|f| std::mem::take(&mut f.events))
@@ -331,9 +474,15 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     // Per file, the motions to warn about: a Cartesian target and no base.
     let mut unresolved: Vec<Vec<crate::syntax::Span>> = vec![Vec::new(); files.len()];
     {
-        let (mut bound, lines): (Vec<_>, Vec<_>) =
-            files.iter_mut().map(|f| shared_facts(f, &[])).unzip();
+        let exported = modules.exported(files, facts);
+        let (mut bound, lines): (Vec<_>, Vec<_>) = files
+            .iter_mut()
+            .zip(&exported)
+            .enumerate()
+            .map(|(fi, (f, e))| shared_facts(f, &[], modules.of(fi), e.as_deref()))
+            .unzip();
         let mut binder = crate::resolve::Binder::new(&mut bound, &NAMING);
+        let no_fdats = HashMap::default();
         let mut labels = FrameLabels::default();
         for (fi, events) in events.into_iter().enumerate() {
             // The targets and names of a motion, buffers reused from motion to motion.
@@ -344,6 +493,8 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             let mut state = State::default();
             let mut aliases: HashMap<&str, &str> = HashMap::default();
             let mut forks: Vec<Fork> = Vec::new();
+            let module = modules.of(fi);
+            let fdats = fdats.get(module).unwrap_or(&no_fdats);
             for ev in &events {
                 match ev {
                     Event::Reset(_) => {
@@ -352,7 +503,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                         forks.clear();
                     }
                     Event::Call(name) => {
-                        if let Some(exit) = exits.get(name) {
+                        if let Some(exit) = exits.of(module, name) {
                             exit.apply_to(&mut state);
                         }
                     }
@@ -360,7 +511,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                     Event::Alias { name, source } => {
                         aliases.insert(name.as_str(), source.as_str());
                     }
-                    Event::Set(s) => state.apply(s, &fdats),
+                    Event::Set(s) => state.apply(s, fdats),
                     Event::Motion {
                         span,
                         line,
@@ -369,7 +520,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                     } => {
                         let mut local = state.clone();
                         for s in with {
-                            local.apply(s, &fdats);
+                            local.apply(s, fdats);
                         }
                         targets.clear();
                         folded.clear();
@@ -471,11 +622,17 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         }
         file.diagnostics.sort_by_key(|d| d.span.start);
     }
-    mark_offsets(files, facts);
+    // The positions are in their final order now (candidates promoted, sorted).
+    let exported = modules.exported(files, facts);
+    mark_offsets(files, facts, &modules, &exported);
     let mut shared: Vec<crate::resolve::FileFacts<'_>> = files
         .iter_mut()
         .zip(facts.iter())
-        .map(|(file, fact)| shared_facts(file, &fact.assignments).0)
+        .zip(&exported)
+        .enumerate()
+        .map(|(fi, ((file, fact), e))| {
+            shared_facts(file, &fact.assignments, modules.of(fi), e.as_deref()).0
+        })
         .collect();
     crate::resolve::mark_run_time(&mut shared, &NAMING);
 }
@@ -483,12 +640,22 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
 /// Marks every position of the program written after a geometric operator `:` anywhere in it
 /// ([`Facts::offsets`]) as such an offset, with the first line it is so written on. Only the
 /// mark: a frame used as nothing but an offset stays no target, as it was before the mark.
-fn mark_offsets(files: &mut [ParsedFile], facts: &[Facts]) {
-    // Name → (line, the file it is written in: `facts` are the files' in order).
-    let mut first: HashMap<&str, (usize, usize)> = HashMap::default();
+fn mark_offsets(
+    files: &mut [ParsedFile],
+    facts: &[Facts],
+    modules: &Modules,
+    exported: &[Option<Vec<bool>>],
+) {
+    // (module, name) → (line, the file it is written in: `facts` are the files' in order);
+    // name → the first of those in any module, for what other modules see.
+    let mut first: std::collections::HashMap<(usize, &str), (usize, usize)> = Default::default();
+    let mut anywhere: HashMap<&str, (usize, usize)> = HashMap::default();
     for (fi, f) in facts.iter().enumerate() {
         for (name, line) in &f.offsets {
-            first.entry(name.as_str()).or_insert((*line, fi));
+            first
+                .entry((modules.of(fi), name.as_str()))
+                .or_insert((*line, fi));
+            anywhere.entry(name.as_str()).or_insert((*line, fi));
         }
     }
     if first.is_empty() {
@@ -496,13 +663,23 @@ fn mark_offsets(files: &mut [ParsedFile], facts: &[Facts]) {
     }
     let names: Vec<Arc<str>> = files.iter().map(|f| UseLine::file_name(&f.path)).collect();
     for (tf, file) in files.iter_mut().enumerate() {
+        let module = modules.of(tf);
+        let seen = exported.get(tf);
         for i in 0..file.positions.len() {
-            let Some((line, fi)) = file
-                .positions
-                .name(i)
-                .and_then(|n| first.get(name_key(n).as_str()))
-                .copied()
-            else {
+            let Some(key) = file.positions.name(i).map(name_key) else {
+                continue;
+            };
+            // The offset written in the target's own module, else (a target other modules see)
+            // in any.
+            let own = first.get(&(module, key.as_str()));
+            let other = || {
+                let seen = seen.is_some_and(|e| {
+                    e.as_ref()
+                        .is_none_or(|e| e.get(i).copied().unwrap_or(false))
+                });
+                anywhere.get(key.as_str()).filter(|_| seen)
+            };
+            let Some(&(line, fi)) = own.or_else(other) else {
                 continue;
             };
             let (Some(u), Some(from)) = (file.positions.usage_mut(i), names.get(fi)) else {
@@ -520,16 +697,20 @@ fn mark_offsets(files: &mut [ParsedFile], facts: &[Facts]) {
 
 /// A file as the shared pass sees it, and its line index: KRL has no routine parameters the
 /// pass follows (a subroutine's effect is the base and tool it leaves set, found in program
-/// order), and every declaration of the pair is seen from both files.
+/// order); every declaration of its module is seen from both files of the module, and of the
+/// others' only those `exported` says (see [`Modules`]).
 fn shared_facts<'a>(
     file: &'a mut ParsedFile,
     assignments: &'a [crate::resolve::Assignment],
+    module: usize,
+    exported: Option<&'a [bool]>,
 ) -> (crate::resolve::FileFacts<'a>, &'a crate::syntax::LineIndex) {
     let facts = crate::resolve::FileFacts {
         name: UseLine::file_name(&file.path),
+        module,
         src: &file.source,
         positions: &mut file.positions,
-        exported: None,
+        exported,
         frames: &file.frames,
         routines: &[],
         assignments,

@@ -135,6 +135,8 @@ pub enum StmtKind {
         keyword: Span,
         /// The routine's name, when the line has one.
         name: Option<Span>,
+        /// Written `GLOBAL`: callable from every module.
+        global: bool,
     },
     /// `DECL type a = …, b`.
     Decl {
@@ -142,6 +144,8 @@ pub enum StmtKind {
         type_name: Span,
         /// The variables declared, in order.
         vars: Vec<DeclVar>,
+        /// Written `GLOBAL` (before or after `DECL`): seen from every module.
+        global: bool,
     },
     /// `target = value`.
     Assign {
@@ -164,6 +168,17 @@ pub enum StmtKind {
         /// `WITH name = value` assignments, in order.
         with: Vec<(Expr, Expr)>,
     },
+}
+
+impl StmtKind {
+    /// The statement with `GLOBAL` recorded when `global` (a routine or a declaration; any
+    /// other statement as it is).
+    pub(crate) fn made_global(mut self, global: bool) -> StmtKind {
+        if let StmtKind::Routine { global: g, .. } | StmtKind::Decl { global: g, .. } = &mut self {
+            *g |= global;
+        }
+        self
+    }
 }
 
 /// One statement trackfix reads: where it is in the tree and what it says. What

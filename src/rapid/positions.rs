@@ -118,7 +118,6 @@ const NAMING: crate::resolve::Naming = crate::resolve::Naming {
     open: '{',
     close: '}',
     arrays: crate::resolve::ArrayReach::WhenUndeclared,
-    scope: crate::resolve::Scope::OwnFileFirst,
 };
 
 /// A procedure call, kept until every declaration has been read: the frame and tool it moves
@@ -995,8 +994,11 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         .iter_mut()
         .zip(&rest)
         .zip(names)
-        .map(|((ps, r), name)| crate::resolve::FileFacts {
+        .enumerate()
+        .map(|(m, ((ps, r), name))| crate::resolve::FileFacts {
             name,
+            // A RAPID module is one file.
+            module: m,
             src: r.6,
             positions: ps,
             exported: Some(&r.5),

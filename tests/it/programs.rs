@@ -663,3 +663,125 @@ fn a_mapped_program_is_the_read_one() {
             .any(|f| f.source.is_mapped())
     );
 }
+
+/// A point of a KSS tree's module as it is seen: by name (`XP1`, `FP1` and `setfr` are in
+/// nearly every module), the module's own `.dat` and routines first, of another module only
+/// what it declares `GLOBAL` (or its own first `DEF`), and `$config.dat`'s everywhere unless
+/// the module declares the name itself.
+#[test]
+fn a_kss_tree_module_sees_its_own_names_and_only_the_global_ones_of_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let r1 = dir.path().join("KRC").join("R1");
+    let program = r1.join("Program");
+    std::fs::create_dir_all(&program).unwrap();
+    std::fs::create_dir_all(r1.join("System")).unwrap();
+    std::fs::write(
+        r1.join("System").join("$config.dat"),
+        "DEFDAT $CONFIG\n\
+DECL BASIS_SUGG_T LAST_BASIS={POINT1[] \"BASE\"}\n\
+DECL E6POS XSHARED={X 500.0,Y -700.0,Z 900.0,A 0.0,B 90.0,C 0.0,S 2,T 10,E1 1500.0}\n\
+ENDDAT\n",
+    )
+    .unwrap();
+    let point = |name: &str, x: f64| {
+        format!(
+            "DECL E6POS {name}={{X {x:.1},Y -800.0,Z 800.0,A 0.0,B 90.0,C 0.0,S 2,T 10,E1 1500.0}}\n"
+        )
+    };
+    let files = [
+        // alpha declares XP1 and FP1 (base 1) and never moves to XP1.
+        (
+            "alpha.src",
+            "DEF alpha( )\n  FDAT_ACT=FP1\n  LIN XOWN\nEND\n".to_owned(),
+        ),
+        (
+            "alpha.dat",
+            format!(
+                "DEFDAT alpha\n{}{}DECL FDAT FP1={{TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE}}\nENDDAT\n",
+                point("XP1", 100.0),
+                point("XOWN", 150.0)
+            ),
+        ),
+        // beta has its own XP1, FP1 (base 2) and setfr (base 2); it moves to delta's global
+        // point, not to delta's local one, and to its own XSHARED, not $config.dat's.
+        (
+            "beta.src",
+            "DEF beta( )\n  FDAT_ACT=FP1\n  LIN XP1\n  setfr( )\n  LIN XGLOBAL\n  LIN XLOCAL\n  LIN XSHARED\nEND\nDEF setfr( )\n  $BASE=BASE_DATA[2]\n  $TOOL=TOOL_DATA[1]\nEND\n".to_owned(),
+        ),
+        (
+            "beta.dat",
+            format!(
+                "DEFDAT beta\n{}{}DECL FDAT FP1={{TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE}}\nENDDAT\n",
+                point("XP1", 200.0),
+                point("XSHARED", 250.0)
+            ),
+        ),
+        // gamma calls a setfr of its own (base 1) and delta's global one (base 3).
+        (
+            "gamma.src",
+            "DEF gamma( )\n  setfr( )\n  LIN XG1\n  setglobal( )\n  LIN XG3\nEND\nDEF setfr( )\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\nEND\n".to_owned(),
+        ),
+        (
+            "gamma.dat",
+            format!(
+                "DEFDAT gamma\n{}{}ENDDAT\n",
+                point("XG1", 300.0),
+                point("XG3", 350.0)
+            ),
+        ),
+        (
+            "delta.src",
+            "DEF delta( )\nEND\nGLOBAL DEF setglobal( )\n  $BASE=BASE_DATA[3]\n  $TOOL=TOOL_DATA[1]\nEND\n".to_owned(),
+        ),
+        (
+            "delta.dat",
+            format!(
+                "DEFDAT delta PUBLIC\nGLOBAL {}{}ENDDAT\n",
+                point("XGLOBAL", 400.0),
+                point("XLOCAL", 450.0)
+            ),
+        ),
+    ];
+    for (name, text) in &files {
+        std::fs::write(program.join(name), text).unwrap();
+    }
+    let all = programs(&dir.path().join("KRC"));
+    assert_eq!(all.len(), 1, "one robot tree, one program");
+    let of = |file: &str, name: &str| {
+        all[0]
+            .files
+            .iter()
+            .filter(|f| f.path.file_name().is_some_and(|n| n == file))
+            .flat_map(|f| f.positions())
+            .find(|p| p.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("no {name} in {file}"))
+    };
+    let bases = |file: &str, name: &str| -> Vec<String> {
+        of(file, name)
+            .usage
+            .work_objects()
+            .map(str::to_owned)
+            .collect()
+    };
+    // Each module's XP1 with its own FDAT; alpha's, which no motion of alpha uses, unused.
+    assert_eq!(bases("alpha.dat", "XP1"), Vec::<String>::new());
+    assert_eq!(bases("alpha.dat", "XOWN"), ["BASE_DATA[1]"]);
+    assert_eq!(bases("beta.dat", "XP1"), ["BASE_DATA[2]"]);
+    // Each module's own setfr; delta's GLOBAL DEF from gamma.
+    assert_eq!(bases("gamma.dat", "XG1"), ["BASE_DATA[1]"]);
+    assert_eq!(bases("gamma.dat", "XG3"), ["BASE_DATA[3]"]);
+    // delta's GLOBAL point is seen from beta, its local one is not.
+    assert_eq!(bases("delta.dat", "XGLOBAL"), ["BASE_DATA[2]"]);
+    assert_eq!(bases("delta.dat", "XLOCAL"), Vec::<String>::new());
+    // beta's own XSHARED hides $config.dat's.
+    assert_eq!(bases("beta.dat", "XSHARED"), ["BASE_DATA[2]"]);
+    assert!(
+        all[0]
+            .files
+            .iter()
+            .filter(|f| f.path.ends_with("$config.dat"))
+            .flat_map(|f| f.positions())
+            .all(|p| p.name.as_deref() != Some("XSHARED")),
+        "$config.dat's XSHARED is used by no motion: not the program's"
+    );
+}

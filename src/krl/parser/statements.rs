@@ -61,7 +61,9 @@ impl LineParser<'_, '_> {
         };
         let word = Word::of(head.text(self.src));
         let result: Result<(NodeKind, Option<StmtKind>), PErr> = match word.bytes() {
-            b"DEF" | b"DEFFCT" | b"DEFDAT" => self.routine(&mut c, word.as_str(), head.span()),
+            b"DEF" | b"DEFFCT" | b"DEFDAT" => self
+                .routine(&mut c, word.as_str(), head.span())
+                .map(|(node, k)| (node, k.map(|k| k.made_global(global)))),
             b"END" | b"ENDFCT" | b"ENDDAT" if !global => {
                 let w = word.as_str();
                 c.pos += 1;
@@ -72,7 +74,9 @@ impl LineParser<'_, '_> {
             }
             b"DECL" => {
                 c.pos += 1;
+                let mut global = global;
                 while c.is_kw("GLOBAL") || c.is_kw("CONST") {
+                    global |= c.is_kw("GLOBAL");
                     c.pos += 1;
                 }
                 if c.is_kw("INTERRUPT") {
@@ -80,14 +84,14 @@ impl LineParser<'_, '_> {
                 } else if c.is_kw("STRUC") || c.is_kw("ENUM") || c.is_kw("SIGNAL") {
                     Ok((NodeKind::Declaration, None))
                 } else {
-                    decl(&mut c).map(|k| (NodeKind::Declaration, Some(k)))
+                    decl(&mut c).map(|k| (NodeKind::Declaration, Some(k.made_global(global))))
                 }
             }
             b"INTERRUPT" | b"TRIGGER" => Ok((NodeKind::Simple, None)),
             _ if word.is_in(DECL_KEYWORDS) => Ok((NodeKind::Declaration, None)),
             // `GLOBAL INT x = 10`: a predefined type may omit `DECL` after `GLOBAL` too.
             _ if global && word.is_in(PREDEFINED_TYPES) => {
-                decl(&mut c).map(|k| (NodeKind::Declaration, Some(k)))
+                decl(&mut c).map(|k| (NodeKind::Declaration, Some(k.made_global(true))))
             }
             _ if global => Err(PErr {
                 span: head.span(),
@@ -201,6 +205,7 @@ impl LineParser<'_, '_> {
             Some(StmtKind::Routine {
                 keyword,
                 name: Some(name),
+                global: false,
             }),
         ))
     }
@@ -341,7 +346,11 @@ fn decl(c: &mut Cursor<'_>) -> PResult<StmtKind> {
         }
     }
     c.expect_end("the declaration")?;
-    Ok(StmtKind::Decl { type_name, vars })
+    Ok(StmtKind::Decl {
+        type_name,
+        vars,
+        global: false,
+    })
 }
 
 /// Rule `motion`: `KEYWORD target`, `CIRC aux, target [, CA angle]`, then approximation
