@@ -442,6 +442,15 @@ pub enum RunTimeValue {
         /// Where the assignment is.
         at: UseLine,
     },
+    /// The program offsets the external axes (RAPID `EOffsSet`, `EOffsOn`): a motion moves
+    /// the track to the written position plus an offset known only when it runs, so the skid
+    /// the correction depends on is not the one written.
+    AxesOffset {
+        /// The instruction, as the language spells it.
+        instruction: &'static str,
+        /// Where it is.
+        at: UseLine,
+    },
 }
 
 /// The line of a use, and the file it is in when that is not the used target's own (a KRL
@@ -529,13 +538,17 @@ impl RunTimeValue {
     /// Where the assignment is.
     pub fn at(&self) -> &UseLine {
         match self {
-            RunTimeValue::Target { at } | RunTimeValue::Frame { at, .. } => at,
+            RunTimeValue::Target { at }
+            | RunTimeValue::Frame { at, .. }
+            | RunTimeValue::AxesOffset { at, .. } => at,
         }
     }
 
     pub(crate) fn at_mut(&mut self) -> &mut UseLine {
         match self {
-            RunTimeValue::Target { at } | RunTimeValue::Frame { at, .. } => at,
+            RunTimeValue::Target { at }
+            | RunTimeValue::Frame { at, .. }
+            | RunTimeValue::AxesOffset { at, .. } => at,
         }
     }
 
@@ -551,6 +564,9 @@ impl RunTimeValue {
             RunTimeValue::Frame { name: None, at } => {
                 format!("is used with a base computed at run time ({at})")
             }
+            RunTimeValue::AxesOffset { instruction, at } => format!(
+                "is moved to by a program that offsets the external axes (`{instruction}`, {at}): its skid when it runs is not the one written"
+            ),
         }
     }
 }

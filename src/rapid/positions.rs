@@ -12,7 +12,7 @@ use crate::names::{NameKey, NameMap, same_bytes};
 use crate::position::{
     Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Name, NonPosition,
     NonPositionRole, NumField, OffsetCall, OffsetKind, Orientation, Position, PositionKind,
-    PositionList, ReadAgainTarget, Usage, UseLine,
+    PositionList, ReadAgainTarget, RunTimeValue, Usage, UseLine,
 };
 use crate::resolve::DeclKind;
 use crate::syntax::{Diagnostic, LineCursor, LineIndex, NumLit, Span, Span32, latin1};
@@ -102,6 +102,64 @@ fn bind_world_zone(
             });
         });
     }
+}
+
+/// RAPID's instructions that offset the external axes by a value the program gives when it
+/// runs (`EOffsSet eax_offset;`, `EOffsOn \ExeP:=p, p;`); `EOffsOff` ends it.
+const AXES_OFFSET: [&str; 2] = ["EOffsSet", "EOffsOn"];
+
+/// Marks every target a motion of the task uses as moved with the external axes offset, the
+/// first such instruction (`instruction` on `line` of module `from`) named: the program does
+/// not say in which order its routines run, so any motion may run while the offset holds. A
+/// target whose every use is a motion of its own module that ignores the offset
+/// (`unaffected`: module and line of each `MoveAbsJ …\NoEOffs`) is not marked.
+fn mark_axes_offset(
+    facts: &mut [crate::resolve::FileFacts<'_>],
+    (from, line, instruction): (usize, usize, &'static str),
+    unaffected: &std::collections::HashSet<(usize, u32)>,
+) {
+    let Some(name) = facts.get(from).map(|f| f.name.clone()) else {
+        return;
+    };
+    for (m, f) in facts.iter_mut().enumerate() {
+        for usage in f.positions.usages_mut() {
+            let ignores = usage.lines.iter().all(|&l| unaffected.contains(&(m, l)));
+            if !usage.lines.is_empty() && !ignores {
+                usage.set_run_time(RunTimeValue::AxesOffset {
+                    instruction,
+                    at: UseLine::of(line, from, m, &name),
+                });
+            }
+        }
+    }
+}
+
+/// The text of the statement whose callee ends at `from`, to its `;` (or at most 4 KiB).
+fn statement_text(src: &[u8], from: usize) -> &[u8] {
+    let rest = src.get(from..).unwrap_or_default();
+    let rest = rest.get(..rest.len().min(4096)).unwrap_or(rest);
+    rest.split(|&b| b == b';').next().unwrap_or_default()
+}
+
+fn contains_ignoring_case(text: &[u8], word: &[u8]) -> bool {
+    text.windows(word.len())
+        .any(|w| w.eq_ignore_ascii_case(word))
+}
+
+/// Whether the argument of `EOffsSet` (the statement's text after its name) is a literal that
+/// offsets no axis: every value 0, or 9E9 (an axis not there).
+fn offsets_nothing(args: &[u8]) -> bool {
+    let text = crate::syntax::latin1(args);
+    let inner = text.trim();
+    let Some(inner) = inner.strip_prefix('[').and_then(|t| t.strip_suffix(']')) else {
+        return false;
+    };
+    let values: Vec<&str> = inner.split(',').map(str::trim).collect();
+    values.len() == 6
+        && values.iter().all(|v| {
+            v.parse::<f64>()
+                .is_ok_and(|x| x == 0.0 || x >= crate::position::NOT_CONNECTED)
+        })
 }
 
 /// Instruction name prefixes that move the robot (or set up a move): their targets get the
@@ -1010,10 +1068,27 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     let mut binder = crate::resolve::Binder::new(&mut facts, &NAMING);
     let mut frame_texts = FrameTexts::new(&robhold);
     let wobj0 = frame_texts.get(b"wobj0");
+    // The first instruction that offsets the external axes: (module, line, its name).
+    let mut axes_offset: Option<(usize, usize, &'static str)> = None;
+    // (module, line) of the motions that ignore the offset (`MoveAbsJ …\NoEOffs`).
+    let mut no_axes_offset: std::collections::HashSet<(usize, u32)> = Default::default();
     for (m, (module_calls, r)) in calls.iter().zip(&rest).enumerate() {
         let src = r.6;
         for (u, call_args, refs, inline) in module_calls.iter() {
             let call = NameKey(u.name.span().slice(src));
+            if let Some(&name) = AXES_OFFSET
+                .iter()
+                .find(|n| call.0.eq_ignore_ascii_case(n.as_bytes()))
+            {
+                let text = statement_text(src, u.name.span().end);
+                if axes_offset.is_none() && !offsets_nothing(text) {
+                    axes_offset = Some((m, u.line as usize, name));
+                }
+            } else if call.0.eq_ignore_ascii_case(b"MoveAbsJ")
+                && contains_ignoring_case(statement_text(src, u.name.span().end), b"\\NoEOffs")
+            {
+                no_axes_offset.insert((m, u.line));
+            }
             let tool = match u.tool {
                 Some(sp) => Some(frame_texts.get(trim_latin1(sp.span().slice(src)))),
                 None => kinds.tool_index(&call, call_args, src).and_then(|i| {
@@ -1053,6 +1128,9 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     }
     binder.finish();
     crate::resolve::mark_run_time(&mut facts, &NAMING);
+    if let Some((from, line, instruction)) = axes_offset {
+        mark_axes_offset(&mut facts, (from, line, instruction), &no_axes_offset);
+    }
     drop(facts);
     let all_frames: Vec<&FrameDecl> = rest.iter().flat_map(|r| &r.0).collect();
     let mut assigned_notes: Vec<Vec<Diagnostic>> = Vec::new();

@@ -312,3 +312,84 @@ fn a_use_in_another_module_of_a_task_is_named_with_its_module() {
         "{err}"
     );
 }
+
+/// A program that offsets the external axes (`EOffsSet`) moves the track to the written
+/// position plus an offset known only when it runs: every target its motions use is refused
+/// as runtime data, the instruction and its line named; one no motion uses is not marked.
+#[test]
+fn a_program_that_offsets_the_external_axes_has_its_targets_refused_by_name() {
+    let src = format!(
+        "MODULE eo\n\
+  CONST extjoint eShift:=[2000,9E9,9E9,9E9,9E9,9E9];\n\
+  CONST robtarget pa:={T};\n\
+  CONST robtarget pIdle:={T};\n\
+  CONST jointtarget jHome:=[[0,0,0,0,90,0],[1500,9E9,9E9,9E9,9E9,9E9]];\n\
+  PROC main()\n\
+    MoveAbsJ jHome,v200,fine,tool0;\n\
+    eoffsset eShift;\n\
+    MoveL pa,v200,fine,tool0;\n\
+    EOffsOff;\n\
+  ENDPROC\nENDMODULE\n"
+    );
+    let f = rapid::parse_file(Path::new("eo.mod"), src.into_bytes());
+    let why = RunTimeValue::AxesOffset {
+        instruction: "EOffsSet",
+        at: UseLine::new(8),
+    };
+    let offset = Some(why.clone());
+    // Before the instruction in the routine too: which runs first is not the program's text.
+    assert_eq!(run_time(&f, "pa"), offset);
+    assert_eq!(run_time(&f, "jHome"), offset);
+    assert_eq!(run_time(&f, "pIdle"), None);
+    assert_eq!(
+        why.describe(),
+        "is moved to by a program that offsets the external axes (`EOffsSet`, line 8): its skid when it runs is not the one written"
+    );
+}
+
+/// What the offset does not reach: a `MoveAbsJ …\NoEOffs` moves the axes to the values
+/// written, and `EOffsSet` of a literal of zeros (and 9E9 for an axis not there) offsets
+/// nothing.
+#[test]
+fn motions_that_ignore_the_axes_offset_and_an_offset_of_zeros_are_not_marked() {
+    let module = |offset: &str| {
+        format!(
+            "MODULE eo\n\
+  CONST robtarget pa:={T};\n\
+  CONST jointtarget jPark:=[[0,0,0,0,90,0],[1500,9E9,9E9,9E9,9E9,9E9]];\n\
+  CONST jointtarget jBoth:=[[0,0,0,0,90,0],[1500,9E9,9E9,9E9,9E9,9E9]];\n\
+  PROC main()\n\
+    {offset}\n\
+    MoveAbsJ jPark\\NoEOffs,v200,fine,tool0;\n\
+    MoveAbsJ jBoth\\NoEOffs,v200,fine,tool0;\n\
+    MoveAbsJ jBoth,v200,fine,tool0;\n\
+    MoveL pa,v200,fine,tool0;\n\
+  ENDPROC\nENDMODULE\n"
+        )
+    };
+    let f = rapid::parse_file(
+        Path::new("eo.mod"),
+        module("EOffsOn \\ExeP:=pa, pa;").into_bytes(),
+    );
+    let offset = Some(RunTimeValue::AxesOffset {
+        instruction: "EOffsOn",
+        at: UseLine::new(6),
+    });
+    assert_eq!(run_time(&f, "jPark"), None);
+    assert_eq!(run_time(&f, "jBoth"), offset);
+    assert_eq!(run_time(&f, "pa"), offset);
+    for zeros in [
+        "EOffsSet [0,0,0,0,0,0];",
+        "EOffsSet [ 0, 9E9, 9E+09, 9e9, 0.0, 9E9 ];",
+    ] {
+        let f = rapid::parse_file(Path::new("eo.mod"), module(zeros).into_bytes());
+        for name in ["jPark", "jBoth", "pa"] {
+            assert_eq!(run_time(&f, name), None, "{zeros} {name}");
+        }
+    }
+    let f = rapid::parse_file(
+        Path::new("eo.mod"),
+        module("EOffsSet [0,100,0,0,0,0];").into_bytes(),
+    );
+    assert!(run_time(&f, "pa").is_some());
+}
