@@ -505,7 +505,8 @@ impl std::fmt::Display for UseLine {
 /// A target the program uses as other than a position the robot moves to: a joint target a
 /// world-zone instruction takes as a tolerance or as limits (RAPID `WZHomeJointDef`'s
 /// `DeltaJointVal`, `WZLimJointDef`'s `LowJointVal` and `HighJointVal`), a KRL position added
-/// to a frame with the geometric operator `:` (`FPALLET:SLOT:XPLACE_REL`). Moved as a position,
+/// to a frame with the geometric operator `:` (`FPALLET:SLOT:XPLACE_REL`), a target a search
+/// writes the position it finds into (`SearchL`'s `SearchPoint`). Moved as a position,
 /// it would give the zone or the composed frame nonsense.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct NonPosition {
@@ -532,6 +533,10 @@ pub enum NonPositionRole {
     /// the composed one with it, and a mirror reflects the offset in its own frame, which no
     /// transform of a target gives.
     Offset,
+    /// Written by the instruction with the position it finds (RAPID `SearchL`'s
+    /// `SearchPoint`): what it holds when the program runs is measured, whatever its
+    /// declaration says, so no transform has anything to change in it.
+    Found,
 }
 
 impl RunTimeValue {

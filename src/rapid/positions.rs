@@ -18,11 +18,21 @@ use crate::resolve::DeclKind;
 use crate::syntax::{Diagnostic, LineCursor, LineIndex, NumLit, Span, Span32, latin1};
 use std::sync::Arc;
 
-/// RAPID's world-zone instructions that take joint targets as other than positions, and
-/// which: by positional argument (the `\Inside`/`\Outside` switch not counted), with the
-/// parameter's name (`WZHomeJointDef [\Inside]|[\Outside] Shape MiddleJointVal
-/// DeltaJointVal`; `WZLimJointDef [\Inside]|[\Outside] Shape LowJointVal HighJointVal`).
-const WORLD_ZONE_JOINT_ARGUMENTS: [WorldZone; 2] = [
+/// RAPID instructions that take targets as other than positions, and which: by positional
+/// argument (switches not counted), with the parameter's name. The world zones take joint
+/// targets as a tolerance or as limits (`WZHomeJointDef [\Inside]|[\Outside] Shape
+/// MiddleJointVal DeltaJointVal`; `WZLimJointDef [\Inside]|[\Outside] Shape LowJointVal
+/// HighJointVal`). The searches `SearchL [\Stop]… Signal [\Flanks]… SearchPoint ToPoint …`
+/// (`SearchC`: `… SearchPoint CirPoint ToPoint …`, `SearchExtJ`: `… SearchJointPos
+/// ToJointPos …`) write the position where the signal came into the search point, an `INOUT`
+/// argument: what the program later moves to there is measured, not taught.
+const NON_POSITION_ARGUMENTS: [NonPositionArguments; 5] = [
+    ("SearchL", &[(1, "SearchPoint", NonPositionRole::Found)]),
+    ("SearchC", &[(1, "SearchPoint", NonPositionRole::Found)]),
+    (
+        "SearchExtJ",
+        &[(1, "SearchJointPos", NonPositionRole::Found)],
+    ),
     (
         "WZHomeJointDef",
         &[(2, "DeltaJointVal", NonPositionRole::Tolerance)],
@@ -36,31 +46,31 @@ const WORLD_ZONE_JOINT_ARGUMENTS: [WorldZone; 2] = [
     ),
 ];
 
-/// A world-zone instruction and its arguments that are not positions.
-type WorldZone = (
+/// An instruction and its arguments that are not positions.
+type NonPositionArguments = (
     &'static str,
     &'static [(usize, &'static str, NonPositionRole)],
 );
 
-/// The world-zone instruction `callee` names, if it is one of [`WORLD_ZONE_JOINT_ARGUMENTS`]
-/// (names compared without case). Asked of every call: one compare of its first two letters
-/// answers most.
-fn world_non_positions(callee: &[u8]) -> Option<WorldZone> {
-    if !callee.get(..2)?.eq_ignore_ascii_case(b"wz") {
+/// The instruction `callee` names, if it is one of [`NON_POSITION_ARGUMENTS`] (names compared
+/// without case). Asked of every call: one compare of its first two letters answers most.
+fn non_position_arguments(callee: &[u8]) -> Option<NonPositionArguments> {
+    let two = callee.get(..2)?;
+    if !two.eq_ignore_ascii_case(b"wz") && !two.eq_ignore_ascii_case(b"se") {
         return None;
     }
-    WORLD_ZONE_JOINT_ARGUMENTS
+    NON_POSITION_ARGUMENTS
         .into_iter()
         .find(|(name, _)| callee.eq_ignore_ascii_case(name.as_bytes()))
 }
 
-/// Binds `call` of module `m`, a world-zone instruction: its arguments that are no positions
+/// Binds `call` of module `m`, one of [`NON_POSITION_ARGUMENTS`]: its arguments that are no positions
 /// apart, each target they reach marked as its [`NonPosition`], the rest as any call's.
-fn bind_world_zone(
+fn bind_non_positions(
     binder: &mut crate::resolve::Binder<'_, '_>,
     m: usize,
     call: &crate::resolve::Use<'_>,
-    (instruction, arguments): WorldZone,
+    (instruction, arguments): NonPositionArguments,
 ) {
     let mut rest = call.args.to_vec();
     for &(k, ..) in arguments {
@@ -1120,9 +1130,9 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                 folded: &[],
                 targets: inline,
             };
-            match world_non_positions(call.0) {
+            match non_position_arguments(call.0) {
                 None => binder.bind(m, &call_use),
-                Some(zone) => bind_world_zone(&mut binder, m, &call_use, zone),
+                Some(zone) => bind_non_positions(&mut binder, m, &call_use, zone),
             }
         }
     }

@@ -301,7 +301,7 @@ impl TargetRule for MirrorRule<'_> {
     type Frame = Reflection;
 
     fn keeps(&self, role: NonPositionRole) -> bool {
-        role == NonPositionRole::Tolerance
+        matches!(role, NonPositionRole::Tolerance | NonPositionRole::Found)
     }
 
     fn joint(&self, scope: Scope, p: &Position) -> Step {

@@ -268,7 +268,7 @@ impl KeptTargets {
 /// which keep the joint ranges and move a composed frame with the frame before its `:`), else
 /// a refusal (a mirror's joint limits and offsets, which no transform of one target gives).
 pub(crate) fn non_position(np: &crate::position::NonPosition, p: &Position, keeps: bool) -> Why {
-    use crate::position::NonPositionRole::{Limit, Offset, Tolerance};
+    use crate::position::NonPositionRole::{Found, Limit, Offset, Tolerance};
     let crate::position::NonPosition {
         instruction,
         parameter,
@@ -278,18 +278,22 @@ pub(crate) fn non_position(np: &crate::position::NonPosition, p: &Position, keep
     let what = describe(p);
     let used = match role {
         Offset => format!("{what} is the {parameter} of `{instruction}` on {at}"),
-        Tolerance | Limit => format!("{what} is the `{parameter}` of `{instruction}` on {at}"),
+        Tolerance | Limit | Found => {
+            format!("{what} is the `{parameter}` of `{instruction}` on {at}")
+        }
     };
     let is = match role {
         Tolerance => "a tolerance",
         Limit => "joint limits",
         Offset => "an offset in the frame before it",
+        Found => "written by the search with the position it finds",
     };
     if keeps {
         let hint = match role {
             Tolerance => "nothing to do: a tolerance holds for every robot and track",
             Limit => "nothing to do: the robot's joint ranges are what they were",
             Offset => "nothing to do: the composed frame moves with the frame before the `:`",
+            Found => "nothing to do: a motion to it after the search goes where the search found",
         };
         return Why::new(
             RefusalKind::NotAPosition,
@@ -302,7 +306,7 @@ pub(crate) fn non_position(np: &crate::position::NonPosition, p: &Position, keep
             RefusalKind::ComposedOffset,
             "mirror the offset by hand, in its own frame, or teach the composed point",
         ),
-        Tolerance | Limit => (
+        Tolerance | Limit | Found => (
             RefusalKind::WorldZoneLimits,
             "set the world zone's limits for this robot by hand (mirrored: axis 1's low and high negated and swapped)",
         ),

@@ -341,3 +341,57 @@ fn a_diff_that_keeps_refused_targets_exits_as_a_partial_result() {
         "{err}"
     );
 }
+
+/// A search writes the position it finds into its search point: what a motion to it later
+/// reaches is measured, so every transform leaves it as written with a note (the mirror too),
+/// and corrects the search's end point like any target.
+#[test]
+fn a_search_point_is_left_as_written_and_its_end_point_moves() {
+    let target =
+        "[[812.5,-120,455],[0,0.707107,0.707107,0],[-1,-1,1,0],[1500,9E9,9E9,9E9,9E9,9E9]]";
+    let module = format!(
+        "MODULE s\n\
+  PERS tooldata tGun:=[TRUE,[[12.5,-3.2,412.8],[0.965926,0,0.258819,0]],[48.5,[0,0,180],[1,0,0,0],0.9,1.1,0.6]];\n\
+  TASK PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1520.3,-1850.75,612.4],[1,0,0,0]],[[150,0,0],[1,0,0,0]]];\n\
+  PERS robtarget pHit:={target};\n\
+  CONST robtarget pTo:={target};\n\
+  PROC main()\n\
+    searchl \\Stop, diTouch, pHit, pTo, v100, tGun\\WObj:=wCar;\n\
+    MoveL pHit, v100, fine, tGun\\WObj:=wCar;\n\
+  ENDPROC\n\
+ENDMODULE\n"
+    );
+    let f = rapid::parse_file(Path::new("s.mod"), module.clone().into_bytes());
+    assert_eq!(
+        non_position_of(&f, "pHit"),
+        Some(NonPosition {
+            instruction: "SearchL",
+            parameter: "SearchPoint",
+            role: NonPositionRole::Found,
+            at: UseLine::new(7),
+        })
+    );
+    assert_eq!(non_position_of(&f, "pTo"), None);
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("s.mod");
+    std::fs::write(&input, &module).unwrap();
+    let out = dir.path().join("out.mod");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        input.to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(declaration(&text, "pHit"), declaration(&module, "pHit"));
+    assert_ne!(declaration(&text, "pTo"), declaration(&module, "pTo"));
+    assert!(
+        err.contains("robtarget `pHit` is the `SearchPoint` of `SearchL` on line 7: written by the search with the position it finds, not a position; left as written"),
+        "{err}"
+    );
+}
