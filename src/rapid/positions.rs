@@ -144,6 +144,70 @@ fn mark_axes_offset(
     }
 }
 
+/// Gives each target literal assigned to a name (`pv := [[…]];`, `literals`: per module, the
+/// name's span and the literal's index) the usage of the declaration the name reaches: the
+/// module's own, else the first another module exports. The motions that move to `pv` move to
+/// whichever value it holds, so the literal is corrected with their work object and tool, as
+/// the declaration is; a name that reaches no declaration leaves the literal unused.
+fn share_assigned_usage(
+    facts: &mut [crate::resolve::FileFacts<'_>],
+    literals: &[Vec<(Span, usize)>],
+) {
+    if literals.iter().all(Vec::is_empty) {
+        return;
+    }
+    let key = |bytes: &[u8]| crate::names::fold(&latin1(bytes));
+    // The names assigned, then every declaration of them (module, index), in program order.
+    let mut declared: NameMap<String, Vec<(usize, usize)>> = NameMap::default();
+    for (m, list) in literals.iter().enumerate() {
+        let Some(f) = facts.get(m) else { continue };
+        for &(name, _) in list {
+            declared.entry(key(name.slice(f.src))).or_default();
+        }
+    }
+    for (m, f) in facts.iter().enumerate() {
+        for i in 0..f.positions.len() {
+            if let Some(found) = f
+                .positions
+                .name_bytes(i)
+                .and_then(|n| declared.get_mut(&key(n)))
+            {
+                found.push((m, i));
+            }
+        }
+    }
+    for (m, list) in literals.iter().enumerate() {
+        for &(name, literal) in list {
+            let Some(f) = facts.get(m) else { continue };
+            let Some(all) = declared.get(&key(name.slice(f.src))) else {
+                continue;
+            };
+            let exported = |(dm, di): (usize, usize)| {
+                facts.get(dm).is_some_and(|d| {
+                    d.exported
+                        .is_none_or(|e| e.get(di).copied().unwrap_or(false))
+                })
+            };
+            let Some(&(dm, di)) = all
+                .iter()
+                .find(|&&(dm, _)| dm == m)
+                .or_else(|| all.iter().find(|&&at| exported(at)))
+            else {
+                continue;
+            };
+            let usage = facts.get(dm).and_then(|d| d.positions.usage(di)).cloned();
+            if let (Some(usage), Some(to)) = (
+                usage,
+                facts
+                    .get_mut(m)
+                    .and_then(|f| f.positions.usage_mut(literal)),
+            ) {
+                *to = usage;
+            }
+        }
+    }
+}
+
 /// The text of the statement whose callee ends at `from`, to its `;` (or at most 4 KiB).
 fn statement_text(src: &[u8], from: usize) -> &[u8] {
     let rest = src.get(from..).unwrap_or_default();
@@ -273,6 +337,10 @@ pub struct Extractor<'l> {
     /// Whole-value assignments `name := [...]` of literal aggregates (a frame given a new
     /// value that is known offline).
     assigned: Vec<Span>,
+    /// Of those, the ones whose literal is a target (`pv := [[700,-100,400],…];`): the name
+    /// assigned and the literal's index in `positions`. The literal is a value of the name,
+    /// used by the motions that use it.
+    assigned_literals: Vec<(Span, usize)>,
     /// Assignments of values computed at run time (`p := CRobT()`, `wobj.uframe := …`).
     computed: Vec<crate::resolve::Assignment>,
     routines: Vec<crate::resolve::Routine>,
@@ -518,6 +586,7 @@ impl<'l> Extractor<'l> {
             call_refs: Vec::new(),
             call_inline: Vec::new(),
             assigned: Vec::new(),
+            assigned_literals: Vec::new(),
             computed: Vec::new(),
             routines: Vec::new(),
             current: None,
@@ -1039,8 +1108,10 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     let mut calls: Vec<Calls> = Vec::with_capacity(modules.len());
     let mut rest = Vec::with_capacity(modules.len());
     let mut names = Vec::with_capacity(modules.len());
+    let mut assigned_literals = Vec::with_capacity(modules.len());
     for (x, src, name) in modules {
         names.push(name);
+        assigned_literals.push(x.assigned_literals);
         calls.push(Calls {
             uses: x.uses,
             args: x.call_args,
@@ -1141,6 +1212,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     if let Some((from, line, instruction)) = axes_offset {
         mark_axes_offset(&mut facts, (from, line, instruction), &no_axes_offset);
     }
+    share_assigned_usage(&mut facts, &assigned_literals);
     drop(facts);
     let all_frames: Vec<&FrameDecl> = rest.iter().flat_map(|r| &r.0).collect();
     let mut assigned_notes: Vec<Vec<Diagnostic>> = Vec::new();
@@ -1294,19 +1366,24 @@ impl Extractor<'_> {
                 self.last_plain_call = plain_args.is_some().then_some(span.start);
             }
             Stmt::Assign { target, value } => {
+                let before = self.positions.len();
                 self.scan(src, arena, true);
                 let literal = is_literal(src, arena, value);
                 let whole = target
                     .slice(src)
                     .iter()
                     .all(|b| b.is_ascii_alphanumeric() || *b == b'_');
-                if whole
-                    && literal
-                    && arena
-                        .get(value)
-                        .is_some_and(|v| v.kind == ExprKind::Aggregate)
-                {
+                let aggregate = arena.get(value).filter(|v| v.kind == ExprKind::Aggregate);
+                if whole && literal && aggregate.is_some() {
                     self.assigned.push(target);
+                    // The whole value one target literal: a value of the name.
+                    let spans = (before..self.positions.len()).map(|i| self.positions.span(i));
+                    if let (Some(v), [Some(only)]) =
+                        (aggregate, spans.collect::<Vec<_>>().as_slice())
+                        && *only == v.span()
+                    {
+                        self.assigned_literals.push((target, before));
+                    }
                 } else if !literal || !whole {
                     // `p10.trans.z := 20` changes part of the value: run time as well.
                     let text = text_of(src, target);

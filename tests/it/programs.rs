@@ -785,3 +785,38 @@ ENDDAT\n",
         "$config.dat's XSHARED is used by no motion: not the program's"
     );
 }
+
+/// A target literal assigned to a name (`pv := [[…]];` in a routine) is a value of that name:
+/// the motions that move to `pv` move to it, so it is used as the declaration is (its work
+/// object and tool, the motions' lines), where it was "not used by any motion". A literal
+/// assigned to a name no target is declared by stays unused.
+#[test]
+fn a_target_literal_assigned_to_a_name_is_used_as_the_name_is() {
+    let (_dir, task) = task(&[(
+        "PROGMOD/assign.mod",
+        format!(
+            "MODULE assign\n\
+  TASK PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1520.3,-1850.75,612.4],[1,0,0,0]],[[150,0,0],[1,0,0,0]]];\n\
+  VAR robtarget pv:={TARGET};\n\
+  VAR num n:=0;\n\
+  PROC main()\n\
+    pv:=[[700,-100,400],[0,0.707107,0.707107,0],[0,0,-2,0],[2500,9E9,9E9,9E9,9E9,9E9]];\n\
+    pOther:=[[600,-100,400],[0,0.707107,0.707107,0],[0,0,-2,0],[2500,9E9,9E9,9E9,9E9,9E9]];\n\
+    MoveL pv,v200,fine,tool0\\WObj:=wCar;\n\
+  ENDPROC\nENDMODULE\n"
+        ),
+    )]);
+    let all = programs(&task);
+    let inline: Vec<Position> = all[0]
+        .files
+        .iter()
+        .flat_map(|f| f.positions())
+        .filter(|p| p.name.is_none())
+        .collect();
+    assert_eq!(inline.len(), 2);
+    let declared = target(&all[0], "pv");
+    assert_eq!(declared.usage.work_objects().collect::<Vec<_>>(), ["wCar"]);
+    assert_eq!(inline[0].usage, declared.usage);
+    assert_eq!(&*inline[0].usage.lines, [8]);
+    assert!(inline[1].usage.lines.is_empty(), "{:?}", inline[1].usage);
+}
