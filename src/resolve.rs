@@ -357,6 +357,8 @@ pub(crate) struct Assignment {
 /// What a use gives the targets it reaches: the frame and tool it moves with.
 #[derive(Clone, Debug)]
 struct MovesWith {
+    /// The file the use is in.
+    from: usize,
     frame: Option<FrameName>,
     tool: Option<FrameName>,
     stationary: bool,
@@ -364,8 +366,9 @@ struct MovesWith {
 }
 
 impl MovesWith {
-    fn of(u: &Use<'_>) -> MovesWith {
+    fn of(from: usize, u: &Use<'_>) -> MovesWith {
         MovesWith {
+            from,
             frame: u.frame.clone(),
             tool: u.tool.clone(),
             stationary: u.stationary,
@@ -649,7 +652,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             record(files, m, t, &recorded);
         }
         for &p in params.iter() {
-            param_uses.entry(p).or_default().push(MovesWith::of(u));
+            param_uses.entry(p).or_default().push(MovesWith::of(m, u));
         }
     }
 
@@ -698,9 +701,7 @@ impl<'f, 'a> Binder<'f, 'a> {
                     run_time: w.run_time.as_ref(),
                     line,
                 };
-                // As the target's own file: a run-time value comes only with a KRL use,
-                // and KRL passes no targets to parameters.
-                record(files, t.0, t, &recorded);
+                record(files, w.from, t, &recorded);
             }
         }
     }

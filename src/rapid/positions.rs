@@ -341,6 +341,10 @@ pub struct Extractor<'l> {
     /// assigned and the literal's index in `positions`. The literal is a value of the name,
     /// used by the motions that use it.
     assigned_literals: Vec<(Span, usize)>,
+    /// Computed values given to a parameter of the routine they are written in (`pOut :=
+    /// CRobT();` in `PROC Remember(INOUT robtarget pOut)`): the routine, the parameter's name
+    /// as written, the line. The target a call passes there is what the program computes.
+    param_assignments: Vec<(usize, Span32, usize)>,
     /// Assignments of values computed at run time (`p := CRobT()`, `wobj.uframe := …`).
     computed: Vec<crate::resolve::Assignment>,
     routines: Vec<crate::resolve::Routine>,
@@ -587,6 +591,7 @@ impl<'l> Extractor<'l> {
             call_inline: Vec::new(),
             assigned: Vec::new(),
             assigned_literals: Vec::new(),
+            param_assignments: Vec::new(),
             computed: Vec::new(),
             routines: Vec::new(),
             current: None,
@@ -1109,9 +1114,11 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     let mut rest = Vec::with_capacity(modules.len());
     let mut names = Vec::with_capacity(modules.len());
     let mut assigned_literals = Vec::with_capacity(modules.len());
+    let mut param_assignments = Vec::with_capacity(modules.len());
     for (x, src, name) in modules {
         names.push(name);
         assigned_literals.push(x.assigned_literals);
+        param_assignments.push(x.param_assignments);
         calls.push(Calls {
             uses: x.uses,
             args: x.call_args,
@@ -1205,6 +1212,24 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                 None => binder.bind(m, &call_use),
                 Some(zone) => bind_non_positions(&mut binder, m, &call_use, zone),
             }
+        }
+    }
+    // A computed value given to a parameter: a use of it with that value, which the binder
+    // hands on to the targets the routine's calls pass there.
+    for (m, list) in param_assignments.iter().enumerate() {
+        for &(routine, param, line) in list {
+            binder.bind(
+                m,
+                &crate::resolve::Use {
+                    line,
+                    routine: Some(routine),
+                    run_time: Some(RunTimeValue::Target {
+                        at: UseLine::new(line),
+                    }),
+                    args: &[Some(param)],
+                    ..Default::default()
+                },
+            );
         }
     }
     binder.finish();
@@ -1388,10 +1413,22 @@ impl Extractor<'_> {
                     // `p10.trans.z := 20` changes part of the value: run time as well.
                     let text = text_of(src, target);
                     let name = text.split('.').next().unwrap_or_default().trim();
-                    self.computed.push(crate::resolve::Assignment {
-                        name: name.to_owned(),
-                        line: self.lines.line(span.start),
+                    let line = self.lines.line(span.start);
+                    let param = self.current.and_then(|r| {
+                        let params = &self.routines.get(r)?.params;
+                        let p = params
+                            .iter()
+                            .find(|p| NameKey(p.slice(src)) == NameKey(name.as_bytes()))?;
+                        Some((r, Span32::of(*p)?))
                     });
+                    match param {
+                        // The routine's own parameter hides module data of its name.
+                        Some((r, p)) => self.param_assignments.push((r, p, line)),
+                        None => self.computed.push(crate::resolve::Assignment {
+                            name: name.to_owned(),
+                            line,
+                        }),
+                    }
                 }
             }
             Stmt::Other => {

@@ -393,3 +393,37 @@ fn motions_that_ignore_the_axes_offset_and_an_offset_of_zeros_are_not_marked() {
     );
     assert!(run_time(&f, "pa").is_some());
 }
+
+/// A routine that gives its parameter a computed value (`pOut := CRobT(…)` in `PROC
+/// Remember(INOUT robtarget pOut)`) computes the target a call passes there, followed through
+/// routines as any use of a parameter; one that only moves to its parameter computes nothing.
+#[test]
+fn a_target_a_routine_computes_through_its_parameter_is_marked() {
+    let src = format!(
+        "MODULE io\n\
+  PERS robtarget pTaught:={T};\n\
+  PERS robtarget pPassed:={T};\n\
+  PERS robtarget pMoved:={T};\n\
+  PROC main()\n\
+    Remember pTaught;\n\
+    Relay pPassed;\n\
+    GoTo pMoved;\n\
+  ENDPROC\n\
+  PROC Remember(INOUT robtarget pOut)\n\
+    pOut:=CRobT(\\Tool:=tool0);\n\
+  ENDPROC\n\
+  PROC Relay(INOUT robtarget pOn)\n\
+    Remember pOn;\n\
+  ENDPROC\n\
+  PROC GoTo(robtarget pTo)\n\
+    MoveL pTo,v200,fine,tool0;\n\
+  ENDPROC\nENDMODULE\n"
+    );
+    let f = rapid::parse_file(Path::new("io.mod"), src.into_bytes());
+    let computed = Some(RunTimeValue::Target {
+        at: UseLine::new(11),
+    });
+    assert_eq!(run_time(&f, "pTaught"), computed);
+    assert_eq!(run_time(&f, "pPassed"), computed);
+    assert_eq!(run_time(&f, "pMoved"), None);
+}
