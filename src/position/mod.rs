@@ -451,6 +451,14 @@ pub enum RunTimeValue {
         /// Where it is.
         at: UseLine,
     },
+    /// The program displaces its motions (RAPID `PDispSet`, `PDispOn`): a motion reaches the
+    /// target in its work object moved by a frame known only when it runs.
+    ProgramDisplacement {
+        /// The instruction, as the language spells it.
+        instruction: &'static str,
+        /// Where it is.
+        at: UseLine,
+    },
 }
 
 /// The line of a use, and the file it is in when that is not the used target's own (a KRL
@@ -545,7 +553,8 @@ impl RunTimeValue {
         match self {
             RunTimeValue::Target { at }
             | RunTimeValue::Frame { at, .. }
-            | RunTimeValue::AxesOffset { at, .. } => at,
+            | RunTimeValue::AxesOffset { at, .. }
+            | RunTimeValue::ProgramDisplacement { at, .. } => at,
         }
     }
 
@@ -553,7 +562,8 @@ impl RunTimeValue {
         match self {
             RunTimeValue::Target { at }
             | RunTimeValue::Frame { at, .. }
-            | RunTimeValue::AxesOffset { at, .. } => at,
+            | RunTimeValue::AxesOffset { at, .. }
+            | RunTimeValue::ProgramDisplacement { at, .. } => at,
         }
     }
 
@@ -571,6 +581,9 @@ impl RunTimeValue {
             }
             RunTimeValue::AxesOffset { instruction, at } => format!(
                 "is moved to by a program that offsets the external axes (`{instruction}`, {at}): its skid when it runs is not the one written"
+            ),
+            RunTimeValue::ProgramDisplacement { instruction, at } => format!(
+                "is moved to by a program that displaces its motions (`{instruction}`, {at}): the frame it is reached in is not its work object's"
             ),
         }
     }

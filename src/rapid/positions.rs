@@ -114,18 +114,68 @@ fn bind_non_positions(
     }
 }
 
-/// RAPID's instructions that offset the external axes by a value the program gives when it
-/// runs (`EOffsSet eax_offset;`, `EOffsOn \ExeP:=p, p;`); `EOffsOff` ends it.
-const AXES_OFFSET: [&str; 2] = ["EOffsSet", "EOffsOn"];
+/// RAPID's instructions that move the motions after them by a value the program gives when it
+/// runs: the external axes' offset (`EOffsSet eax_offset;`, `EOffsOn \ExeP:=p, p;`, ended by
+/// `EOffsOff`) and the program displacement (`PDispSet disp_frame;`, `PDispOn \ExeP:=p, p,
+/// tool;`, ended by `PDispOff`).
+const DISPLACING: [(&str, Displacement); 4] = [
+    ("EOffsSet", Displacement::Axes),
+    ("EOffsOn", Displacement::Axes),
+    ("PDispSet", Displacement::Program),
+    ("PDispOn", Displacement::Program),
+];
 
-/// Marks every target a motion of the task uses as moved with the external axes offset, the
+/// What a [`DISPLACING`] instruction moves.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Displacement {
+    /// The external axes: the track stands at the written position plus the offset.
+    Axes,
+    /// The program: every Cartesian motion is reached in the work object displaced.
+    Program,
+}
+
+impl Displacement {
+    /// Whether the instruction's argument (the statement's text after its name) is a literal
+    /// that moves nothing: an axes offset of 0 (or 9E9, an axis not there) for every axis, a
+    /// displacement of `[[0,0,0],[1,0,0,0]]`.
+    fn moves_nothing(self, args: &[u8]) -> bool {
+        let text = crate::syntax::latin1(args);
+        let values: Option<Vec<f64>> = text
+            .trim()
+            .split(',')
+            .map(|v| v.trim_matches(|c: char| c == '[' || c == ']' || c.is_whitespace()))
+            .map(|v| v.parse::<f64>().ok())
+            .collect();
+        let Some(values) = values else {
+            return false;
+        };
+        match self {
+            Displacement::Axes => {
+                values.len() == 6
+                    && values
+                        .iter()
+                        .all(|&x| x == 0.0 || x >= crate::position::NOT_CONNECTED)
+            }
+            Displacement::Program => values == [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+        }
+    }
+
+    fn why(self, instruction: &'static str, at: UseLine) -> RunTimeValue {
+        match self {
+            Displacement::Axes => RunTimeValue::AxesOffset { instruction, at },
+            Displacement::Program => RunTimeValue::ProgramDisplacement { instruction, at },
+        }
+    }
+}
+
+/// Marks every target a motion of the task uses as moved with the displacement `what`, the
 /// first such instruction (`instruction` on `line` of module `from`) named: the program does
-/// not say in which order its routines run, so any motion may run while the offset holds. A
-/// target whose every use is a motion of its own module that ignores the offset
-/// (`unaffected`: module and line of each `MoveAbsJ …\NoEOffs`) is not marked.
-fn mark_axes_offset(
+/// not say in which order its routines run, so any motion may run while it holds. A target
+/// whose every use is a motion of its own module that ignores it (`unaffected`: module and
+/// line of each such `MoveAbsJ`) is not marked.
+fn mark_displaced(
     facts: &mut [crate::resolve::FileFacts<'_>],
-    (from, line, instruction): (usize, usize, &'static str),
+    (what, from, line, instruction): (Displacement, usize, usize, &'static str),
     unaffected: &std::collections::HashSet<(usize, u32)>,
 ) {
     let Some(name) = facts.get(from).map(|f| f.name.clone()) else {
@@ -135,10 +185,7 @@ fn mark_axes_offset(
         for usage in f.positions.usages_mut() {
             let ignores = usage.lines.iter().all(|&l| unaffected.contains(&(m, l)));
             if !usage.lines.is_empty() && !ignores {
-                usage.set_run_time(RunTimeValue::AxesOffset {
-                    instruction,
-                    at: UseLine::of(line, from, m, &name),
-                });
+                usage.set_run_time(what.why(instruction, UseLine::of(line, from, m, &name)));
             }
         }
     }
@@ -218,22 +265,6 @@ fn statement_text(src: &[u8], from: usize) -> &[u8] {
 fn contains_ignoring_case(text: &[u8], word: &[u8]) -> bool {
     text.windows(word.len())
         .any(|w| w.eq_ignore_ascii_case(word))
-}
-
-/// Whether the argument of `EOffsSet` (the statement's text after its name) is a literal that
-/// offsets no axis: every value 0, or 9E9 (an axis not there).
-fn offsets_nothing(args: &[u8]) -> bool {
-    let text = crate::syntax::latin1(args);
-    let inner = text.trim();
-    let Some(inner) = inner.strip_prefix('[').and_then(|t| t.strip_suffix(']')) else {
-        return false;
-    };
-    let values: Vec<&str> = inner.split(',').map(str::trim).collect();
-    values.len() == 6
-        && values.iter().all(|v| {
-            v.parse::<f64>()
-                .is_ok_and(|x| x == 0.0 || x >= crate::position::NOT_CONNECTED)
-        })
 }
 
 /// Instruction name prefixes that move the robot (or set up a move): their targets get the
@@ -1156,26 +1187,29 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     let mut binder = crate::resolve::Binder::new(&mut facts, &NAMING);
     let mut frame_texts = FrameTexts::new(&robhold);
     let wobj0 = frame_texts.get(b"wobj0");
-    // The first instruction that offsets the external axes: (module, line, its name).
-    let mut axes_offset: Option<(usize, usize, &'static str)> = None;
-    // (module, line) of the motions that ignore the offset (`MoveAbsJ …\NoEOffs`).
+    // The first instruction of each displacement: (what, module, line, its name).
+    let mut displaced: Vec<(Displacement, usize, usize, &'static str)> = Vec::new();
+    // (module, line) of the motions that ignore the axes offset (`MoveAbsJ …\NoEOffs`), and
+    // of those that ignore the program displacement (every `MoveAbsJ`).
     let mut no_axes_offset: std::collections::HashSet<(usize, u32)> = Default::default();
+    let mut joint_moves: std::collections::HashSet<(usize, u32)> = Default::default();
     for (m, (module_calls, r)) in calls.iter().zip(&rest).enumerate() {
         let src = r.6;
         for (u, call_args, refs, inline) in module_calls.iter() {
             let call = NameKey(u.name.span().slice(src));
-            if let Some(&name) = AXES_OFFSET
+            if let Some(&(name, what)) = DISPLACING
                 .iter()
-                .find(|n| call.0.eq_ignore_ascii_case(n.as_bytes()))
+                .find(|(n, _)| call.0.eq_ignore_ascii_case(n.as_bytes()))
             {
                 let text = statement_text(src, u.name.span().end);
-                if axes_offset.is_none() && !offsets_nothing(text) {
-                    axes_offset = Some((m, u.line as usize, name));
+                if !displaced.iter().any(|d| d.0 == what) && !what.moves_nothing(text) {
+                    displaced.push((what, m, u.line as usize, name));
                 }
-            } else if call.0.eq_ignore_ascii_case(b"MoveAbsJ")
-                && contains_ignoring_case(statement_text(src, u.name.span().end), b"\\NoEOffs")
-            {
-                no_axes_offset.insert((m, u.line));
+            } else if call.0.eq_ignore_ascii_case(b"MoveAbsJ") {
+                joint_moves.insert((m, u.line));
+                if contains_ignoring_case(statement_text(src, u.name.span().end), b"\\NoEOffs") {
+                    no_axes_offset.insert((m, u.line));
+                }
             }
             let tool = match u.tool {
                 Some(sp) => Some(frame_texts.get(trim_latin1(sp.span().slice(src)))),
@@ -1234,8 +1268,12 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     }
     binder.finish();
     crate::resolve::mark_run_time(&mut facts, &NAMING);
-    if let Some((from, line, instruction)) = axes_offset {
-        mark_axes_offset(&mut facts, (from, line, instruction), &no_axes_offset);
+    for d in displaced {
+        let unaffected = match d.0 {
+            Displacement::Axes => &no_axes_offset,
+            Displacement::Program => &joint_moves,
+        };
+        mark_displaced(&mut facts, d, unaffected);
     }
     share_assigned_usage(&mut facts, &assigned_literals);
     drop(facts);

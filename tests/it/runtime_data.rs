@@ -427,3 +427,48 @@ fn a_target_a_routine_computes_through_its_parameter_is_marked() {
     assert_eq!(run_time(&f, "pPassed"), computed);
     assert_eq!(run_time(&f, "pMoved"), None);
 }
+
+/// A program displacement (`PDispOn`, `PDispSet`) moves the frame every Cartesian motion is
+/// reached in: their targets are refused as runtime data; a joint target reached by
+/// `MoveAbsJ`, which no displacement moves, is not, and a displacement of the identity moves
+/// nothing.
+#[test]
+fn a_program_displacement_marks_the_cartesian_targets_it_moves() {
+    let module = |disp: &str| {
+        format!(
+            "MODULE pd\n\
+  CONST robtarget pa:={T};\n\
+  CONST jointtarget jHome:=[[0,0,0,0,90,0],[1500,9E9,9E9,9E9,9E9,9E9]];\n\
+  PROC main()\n\
+    {disp}\n\
+    MoveL pa,v200,fine,tool0;\n\
+    MoveAbsJ jHome,v200,fine,tool0;\n\
+    PDispOff;\n\
+  ENDPROC\nENDMODULE\n"
+        )
+    };
+    let f = rapid::parse_file(
+        Path::new("pd.mod"),
+        module("PDispOn \\ExeP:=pa, pa, tool0;").into_bytes(),
+    );
+    let why = RunTimeValue::ProgramDisplacement {
+        instruction: "PDispOn",
+        at: UseLine::new(5),
+    };
+    assert_eq!(run_time(&f, "pa"), Some(why.clone()));
+    assert_eq!(run_time(&f, "jHome"), None);
+    assert_eq!(
+        why.describe(),
+        "is moved to by a program that displaces its motions (`PDispOn`, line 5): the frame it is reached in is not its work object's"
+    );
+    let f = rapid::parse_file(
+        Path::new("pd.mod"),
+        module("PDispSet [[0,0,0],[1,0,0,0]];").into_bytes(),
+    );
+    assert_eq!(run_time(&f, "pa"), None);
+    let f = rapid::parse_file(
+        Path::new("pd.mod"),
+        module("PDispSet [[0,0,50],[1,0,0,0]];").into_bytes(),
+    );
+    assert!(run_time(&f, "pa").is_some());
+}
