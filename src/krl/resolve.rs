@@ -11,7 +11,8 @@ use std::sync::Arc;
 pub(crate) use crate::names::NameMap as HashMap;
 
 /// How KRL references reach declarations: a name its declaration, an element chosen at run
-/// time (`P[I]`) every element of the array as well, in either file of the pair.
+/// time (`P[I]`) every element of the array as well; in the module's own files first (the
+/// pair), else what other modules export ([`Modules`]).
 const NAMING: crate::resolve::Naming = crate::resolve::Naming {
     open: '[',
     close: ']',
