@@ -852,10 +852,13 @@ fn offset_operands(src: &[u8], lines: &LineIndex, e: &Expr, out: &mut Vec<(Name,
     }
 }
 
-/// The targets of a motion: names, inline literals, and the frame a composition of names is
-/// taken in ([`composed_base`]). Returns false when a target is built otherwise (another
-/// expression, an inline offset after `:`), whose operands are not targets: those are left
-/// out and reported by the caller.
+/// The targets of a motion: names and inline literals. Returns false when a target is built
+/// with the geometric operator `:` (or another expression), whose operands are offsets and
+/// frames rather than targets: those are left out and reported by the caller. Not even the
+/// frame before the `:` is the motion's target: KSS gives the result the type of the operand
+/// after it, and with it, as far as trackfix knows, that operand's Status, Turn and external
+/// axes (none for a `POS`), so the skid a correction of the frame would need is not known to
+/// be the one it is written with.
 fn target_refs(
     src: &[u8],
     lines: &LineIndex,
@@ -879,41 +882,8 @@ fn target_refs(
             true
         }
         ExprKind::Paren(inner) => target_refs(src, lines, inner, refs, positions),
-        ExprKind::Binary(..) => match composed_base(src, e) {
-            Some(base) => {
-                refs.push(Ref::Named(upper_name(src, base.span)));
-                true
-            }
-            None => false,
-        },
         _ => false,
     }
-}
-
-/// The frame a composed target is taken in, `A` of `A:B:C`, when every operand of its
-/// geometric operators is a name (brackets around one allowed): the motion goes to `A` with
-/// the offsets `B` and `C` applied in `A`'s own frame, so `A` moves as the target and the
-/// offsets, marked by [`offset_operands`], stay as written. `None` for any other operand (an
-/// inline offset such as `A:{Z 100}`, a call, a bracketed composition `A:(B:C)`), whose parts
-/// no rule names.
-fn composed_base<'e>(src: &[u8], e: &'e Expr) -> Option<&'e Expr> {
-    let unwrapped = |mut e: &'e Expr| {
-        while let ExprKind::Paren(inner) = &e.kind {
-            e = inner;
-        }
-        e
-    };
-    let mut e = unwrapped(e);
-    let mut composed = false;
-    while let ExprKind::Binary(left, op, right) = &e.kind {
-        let named = matches!(unwrapped(right).kind, ExprKind::Name | ExprKind::Index(..));
-        if op.slice(src) != b":" || !named {
-            return None;
-        }
-        composed = true;
-        e = unwrapped(left);
-    }
-    (composed && matches!(e.kind, ExprKind::Name | ExprKind::Index(..))).then_some(e)
 }
 
 #[cfg(test)]

@@ -230,21 +230,18 @@ END\n";
     for name in ["XP1", "XA", "XPLAIN", "XE"] {
         assert_eq!(non_position_of(&f, name), None, "{name}");
     }
-    // The frame before the `:` of a motion is its target, used on the motion's line; the
-    // offsets and the frame of an assignment are not used.
+    // Nor is any operand of a composed motion a use: the motion is reported instead.
     let lines_of = |name: &str| {
         f.positions()
             .find(|p| p.name.as_deref() == Some(name))
             .map(|p| p.usage.lines.to_vec())
     };
-    assert_eq!(lines_of("XP1"), Some(vec![12]));
-    assert_eq!(lines_of("XA"), Some(vec![13]));
-    assert_eq!(lines_of("XPLAIN"), Some(vec![16]));
-    for name in ["XOFF", "XB", "XC", "XD"] {
+    for name in ["XP1", "XA", "XOFF", "XB", "XC", "XD"] {
         assert_eq!(lines_of(name), Some(vec![]), "{name}");
     }
+    assert_eq!(lines_of("XPLAIN"), Some(vec![16]));
     assert!(
-        !f.diagnostics
+        f.diagnostics
             .iter()
             .any(|d| d.message.contains("computed target")),
         "{:?}",
@@ -252,75 +249,21 @@ END\n";
     );
 }
 
-/// A KUKA program whose motions compose a frame with offsets: by names, and with an inline
-/// offset, whose parts no rule names.
-const COMPOSED: &str = "DEF comp( )\n\
+/// A KUKA program with one target a motion moves to and one no motion uses.
+const PARTLY_USED: &str = "DEF part( )\n\
   DECL E6POS XP1={X 592.548,Y -746.673,Z 974.380,A -178.9394,B 15.8711,C 177.3993,S 6,T 50,E1 150.000}\n\
-  DECL E6POS XOFF={X 0,Y 0,Z 50,A 0,B 0,C 0,S 2,T 2,E1 0}\n\
   DECL E6POS XP2={X 592.548,Y -746.673,Z 974.380,A -178.9394,B 15.8711,C 177.3993,S 6,T 50,E1 150.000}\n\
   BAS(#INITMOV,0)\n\
   BAS(#TOOL,1)\n\
   BAS(#BASE,1)\n\
-  LIN XP1:XOFF\n\
-  LIN XP2:{X 0,Y 0,Z 50,A 0,B 0,C 0}\n\
+  LIN XP1\n\
 END\n";
-
-#[test]
-fn correct_moves_the_frame_before_the_geometric_operator_and_keeps_its_offset() {
-    let dir = tempfile::tempdir().unwrap();
-    let src = dir.path().join("comp.src");
-    std::fs::write(&src, COMPOSED).unwrap();
-    let out = dir.path().join("out.src");
-    let run = |keep: bool| {
-        let mut args = vec![
-            "correct",
-            src.to_str().unwrap(),
-            "--cell",
-            "samples/cell.toml",
-            "--robot",
-            "k1",
-            "-o",
-            out.to_str().unwrap(),
-        ];
-        if keep {
-            args.extend(["--keep", "unresolved-work-object"]);
-        }
-        trackfix(&args)
-    };
-    // XP2, composed with an inline offset, is reached by no motion a rule can follow: its
-    // base is unknown, so it is refused; XP1 is not.
-    let (code, _, err) = run(false);
-    assert_eq!(code, 3, "{err}");
-    assert!(!out.exists());
-    assert!(
-        err.contains("comp.src:4:16: error: E6POS `XP2` is not used by any motion"),
-        "{err}"
-    );
-    assert!(!err.contains("`XP1`"), "{err}");
-    assert!(
-        err.contains("E6POS `XOFF` is the right operand of `:` on line 8: an offset in the frame before it, not a position; left as written"),
-        "{err}"
-    );
-    let (code, _, err) = run(true);
-    assert_eq!(code, 4, "{err}");
-    let text = std::fs::read_to_string(&out).unwrap();
-    let decl = |t: &str, name: &str| {
-        t.lines()
-            .find(|l| l.contains(&format!("E6POS {name}=")))
-            .unwrap_or_else(|| panic!("no {name} in {t}"))
-            .to_owned()
-    };
-    // XP1 corrected (base 1, tool 1); its offset and the unresolved XP2 as written.
-    assert_ne!(decl(&text, "XP1"), decl(COMPOSED, "XP1"), "{text}");
-    assert_eq!(decl(&text, "XOFF"), decl(COMPOSED, "XOFF"), "{text}");
-    assert_eq!(decl(&text, "XP2"), decl(COMPOSED, "XP2"), "{text}");
-}
 
 #[test]
 fn a_diff_that_keeps_refused_targets_exits_as_a_partial_result() {
     let dir = tempfile::tempdir().unwrap();
-    let src = dir.path().join("comp.src");
-    std::fs::write(&src, COMPOSED).unwrap();
+    let src = dir.path().join("part.src");
+    std::fs::write(&src, PARTLY_USED).unwrap();
     let (code, diff, err) = trackfix(&[
         "correct",
         src.to_str().unwrap(),
@@ -335,7 +278,7 @@ fn a_diff_that_keeps_refused_targets_exits_as_a_partial_result() {
     // The diff shows XP1 corrected and nothing else; XP2 kept, as the warning says.
     assert_eq!(code, 4, "{err}");
     assert!(diff.contains("+DECL E6POS XP1="), "{diff}");
-    assert!(!diff.contains("XP2"), "{diff}");
+    assert!(!diff.contains("+DECL E6POS XP2"), "{diff}");
     assert!(
         err.contains("warning: E6POS `XP2` is not used by any motion"),
         "{err}"

@@ -213,6 +213,7 @@ ENDDAT\n",
   LIN XHERE\n\
   $BASE=BASE_DATA[NBASE]\n\
   LIN XB:XOFF\n\
+  LIN XB\n\
 END\n",
     )
     .unwrap();
