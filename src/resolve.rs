@@ -211,6 +211,14 @@ pub(crate) struct FileFacts<'a> {
     pub(crate) assignments: &'a [Assignment],
 }
 
+impl FileFacts<'_> {
+    /// Whether other files see target `i` (`exported` `None`: every target is seen).
+    pub(crate) fn exports(&self, i: usize) -> bool {
+        self.exported
+            .is_none_or(|e| e.get(i).copied().unwrap_or(false))
+    }
+}
+
 /// Where a target is: (file, index into its positions).
 type TargetAt = (usize, usize);
 
@@ -533,12 +541,7 @@ impl<'f, 'a> Binder<'f, 'a> {
                 return;
             };
             let src = f.src;
-            let exported = |(m, i): TargetAt| {
-                files.get(m).is_some_and(|f| {
-                    f.exported
-                        .is_none_or(|e| e.get(i).copied().unwrap_or(false))
-                })
-            };
+            let exported = |(m, i): TargetAt| files.get(m).is_some_and(|f| f.exports(i));
             // Routines by name: the file's own first, else those of the program that are not
             // local (the first file that has one).
             let routine_of = |name: NameKey<'a>| -> Option<(usize, usize)> {

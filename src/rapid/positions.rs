@@ -203,13 +203,17 @@ fn share_assigned_usage(
     if literals.iter().all(Vec::is_empty) {
         return;
     }
-    let key = |bytes: &[u8]| crate::names::fold(&latin1(bytes));
+    // Names folded into one buffer: every position's name is compared, and a string each was
+    // an allocation per target of the task.
+    let mut buf = String::new();
     // The names assigned, then every declaration of them (module, index), in program order.
     let mut declared: NameMap<String, Vec<(usize, usize)>> = NameMap::default();
     for (m, list) in literals.iter().enumerate() {
         let Some(f) = facts.get(m) else { continue };
         for &(name, _) in list {
-            declared.entry(key(name.slice(f.src))).or_default();
+            declared
+                .entry(crate::names::fold_into(&mut buf, name.slice(f.src)).to_owned())
+                .or_default();
         }
     }
     for (m, f) in facts.iter().enumerate() {
@@ -217,7 +221,7 @@ fn share_assigned_usage(
             if let Some(found) = f
                 .positions
                 .name_bytes(i)
-                .and_then(|n| declared.get_mut(&key(n)))
+                .and_then(|n| declared.get_mut(crate::names::fold_into(&mut buf, n)))
             {
                 found.push((m, i));
             }
@@ -226,15 +230,11 @@ fn share_assigned_usage(
     for (m, list) in literals.iter().enumerate() {
         for &(name, literal) in list {
             let Some(f) = facts.get(m) else { continue };
-            let Some(all) = declared.get(&key(name.slice(f.src))) else {
+            let Some(all) = declared.get(crate::names::fold_into(&mut buf, name.slice(f.src)))
+            else {
                 continue;
             };
-            let exported = |(dm, di): (usize, usize)| {
-                facts.get(dm).is_some_and(|d| {
-                    d.exported
-                        .is_none_or(|e| e.get(di).copied().unwrap_or(false))
-                })
-            };
+            let exported = |(dm, di): (usize, usize)| facts.get(dm).is_some_and(|d| d.exports(di));
             let Some(&(dm, di)) = all
                 .iter()
                 .find(|&&(dm, _)| dm == m)
