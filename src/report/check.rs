@@ -10,27 +10,6 @@ use crate::syntax::{Diagnostic, Severity, Span};
 /// decimals give about 1e-6; RobotStudio's own output stays well inside 1e-4.
 pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-4;
 
-/// The offset of the first control byte of `src`. Each 64-byte block is tested without a
-/// branch per byte, which the compiler vectorises: a byte-by-byte search was 6 % of `check`.
-fn first_control_byte(src: &[u8]) -> Option<usize> {
-    use crate::syntax::is_control_byte;
-    let blocks = src.chunks_exact(64);
-    let tail = blocks.remainder();
-    let mut base = 0;
-    for block in blocks {
-        if block.iter().fold(false, |any, &b| any | is_control_byte(b)) {
-            return block
-                .iter()
-                .position(|&b| is_control_byte(b))
-                .map(|i| base + i);
-        }
-        base += 64;
-    }
-    tail.iter()
-        .position(|&b| is_control_byte(b))
-        .map(|i| base + i)
-}
-
 /// Everything `check` says about a file: the parser's diagnostics, a failed round trip, and the
 /// lints of the model (non-normalised quaternions, a target used with two work objects).
 /// Sorted by position.
@@ -43,7 +22,7 @@ pub fn lints(file: &ParsedFile) -> Vec<Diagnostic> {
         );
     }
     out.extend(round_trip_error(file));
-    if let Some(at) = first_control_byte(&file.source) {
+    if let Some(at) = file.lines.first_control_byte() {
         let n = file
             .source
             .iter()
@@ -287,10 +266,39 @@ impl fmt::Display for CheckSummary {
 
 #[cfg(test)]
 mod tests {
-    use super::first_control_byte;
     use crate::position::{Config, Orientation};
-    use crate::syntax::is_control_byte;
-    use proptest::prelude::*;
+
+    /// The lint names the first control byte, where it is, and how many the file holds: the
+    /// first as the index's pass noted it, a word boundary (8 bytes) away from the line start
+    /// or not, in RAPID and KRL alike.
+    #[test]
+    fn a_control_byte_is_reported_at_the_first_with_the_count() {
+        for pad in 0..10 {
+            let spaces = " ".repeat(pad);
+            let rapid = format!("MODULE m\r\n{spaces}! a\x1bb\x07\r\nENDMODULE\r\n");
+            let krl = format!("DEF m()\r\n{spaces};a\x1bb\x07\r\nEND\r\n");
+            let files = [
+                crate::rapid::parse_file(std::path::Path::new("m.mod"), rapid.into_bytes()),
+                crate::krl::parse_file(std::path::Path::new("m.src"), krl.into_bytes()),
+            ];
+            for file in files {
+                let at = file.source.iter().position(|&b| b == 0x1b).unwrap();
+                let found: Vec<_> = super::lints(&file)
+                    .into_iter()
+                    .filter(|d| d.message.starts_with("control character"))
+                    .collect();
+                assert_eq!(found.len(), 1, "{pad}");
+                assert_eq!(found[0].span, crate::syntax::Span::new(at, at + 1), "{pad}");
+                assert!(
+                    found[0]
+                        .message
+                        .contains("0x1b in the text (2 in the file)"),
+                    "{}",
+                    found[0].message
+                );
+            }
+        }
+    }
 
     /// The verdict kept with each packed target says "pass" exactly where the lints of a file
     /// holding only that target find nothing in its values: a target that passes is never
@@ -338,28 +346,5 @@ mod tests {
                 .any(|d| d.message.contains("`p`"));
             assert_eq!(found, !passes, "{q} {cf}");
         }
-    }
-
-    proptest! {
-        /// The block search finds what the byte-by-byte search finds, wherever the byte lies
-        /// relative to the 64-byte blocks (mostly printable text, a control byte now and then).
-        #[test]
-        fn block_search_equals_byte_search(
-            text in proptest::collection::vec(
-                prop_oneof![9 => 0x20u8..0x7f, 1 => any::<u8>()], 0..300),
-        ) {
-            let expected = text.iter().position(|&b| is_control_byte(b));
-            prop_assert_eq!(first_control_byte(&text), expected);
-        }
-    }
-
-    #[test]
-    fn a_control_byte_in_the_tail_or_a_later_block_is_found_at_its_offset() {
-        let mut text = vec![b'a'; 200];
-        assert_eq!(first_control_byte(&text), None);
-        text[199] = 0x1b;
-        assert_eq!(first_control_byte(&text), Some(199));
-        text[64] = 0x05;
-        assert_eq!(first_control_byte(&text), Some(64));
     }
 }

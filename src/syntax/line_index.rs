@@ -11,10 +11,15 @@ use super::Span;
 /// fresh one the kernel clears (0.9 MB less at `usize`'s half). No input reaches 4 GiB
 /// ([`MAX_INPUT_BYTES`](crate::output::MAX_INPUT_BYTES)); past it a start is clamped, so an
 /// offset there is placed on a wrong line, never a panic.
+///
+/// The pass that finds the line ends also notes the first control byte
+/// ([`is_control_byte`](super::is_control_byte)): both look for the bytes below 0x20, and
+/// `check`'s lint for control bytes then reads no byte of a large file a second time.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct LineIndex {
     starts: Vec<u32>,
     len: usize,
+    first_control: Option<u32>,
 }
 
 /// `offset` as a stored line start (see [`LineIndex`]).
@@ -22,35 +27,73 @@ fn narrow(offset: usize) -> u32 {
     u32::try_from(offset).unwrap_or(u32::MAX)
 }
 
+const LOW7: u64 = 0x7f7f_7f7f_7f7f_7f7f;
+const HIGH: u64 = 0x8080_8080_8080_8080;
+
+/// The high bit of each byte of word `x` that is below 0x20 or is 0x7f, and no other bit.
+/// Each byte's sum stays below 0x100, so no carry reaches the next byte: the answer is exact
+/// for every byte, not only the first.
+fn low_or_del(x: u64) -> u64 {
+    // A byte below 0x80 reaches 0x80 when 0x60 is added iff it is at least 0x20.
+    let below = !((x & LOW7).wrapping_add(0x6060_6060_6060_6060) | x) & HIGH;
+    // 0x7f is the byte that 0x7f turns to 0.
+    let y = x ^ LOW7;
+    let del = !((y & LOW7).wrapping_add(LOW7) | y) & HIGH;
+    below | del
+}
+
 /// Where [`LineIndex::line_col_from`] found the last offset asked: the line's index.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LineCursor(usize);
 
 impl LineIndex {
-    /// Indexes the line starts of `src` (LF, CRLF and lone CR each end a line).
+    /// Indexes the line starts of `src` (LF, CRLF and lone CR each end a line), and notes its
+    /// first control byte.
     pub fn new(src: &[u8]) -> LineIndex {
-        let mut starts = vec![0];
-        // memchr2 scans a word at a time; a byte loop spent ~9 instructions per byte here. A
-        // `\r\n` is one terminator and is stepped over whole: a search per byte of it cost
-        // as much again in a CRLF file, where the lines are short.
-        let mut at = 0;
-        while let Some(found) = src
-            .get(at..)
-            .and_then(|rest| memchr::memchr2(b'\n', b'\r', rest))
-        {
-            let i = at + found;
-            let end = if src[i] == b'\r' && src.get(i + 1) == Some(&b'\n') {
-                i + 2
-            } else {
-                i + 1
-            };
-            starts.push(narrow(end));
-            at = end;
+        // Eight bytes at a time: a word's bytes below 0x20 or equal to 0x7f are found with a
+        // few integer operations ([`low_or_del`]), and only those are looked at, a line end or
+        // two in most words. Two passes (memchr2 per line, then a block scan for control
+        // bytes after the parse) read a 20 MB module twice from memory.
+        let mut starts = Vec::with_capacity(src.len() / 64 + 1);
+        starts.push(0);
+        let mut first_control = None;
+        let mut visit = |at: usize, b: u8| match b {
+            b'\n' => starts.push(narrow(at + 1)),
+            // A `\r\n` is one terminator: the `\n` ends the line.
+            b'\r' if src.get(at + 1) != Some(&b'\n') => starts.push(narrow(at + 1)),
+            _ if first_control.is_none() && super::is_control_byte(b) => {
+                first_control = Some(narrow(at));
+            }
+            _ => {}
+        };
+        let words = src.chunks_exact(8);
+        let tail = words.remainder();
+        let mut base = 0;
+        for word in words {
+            let mut low = low_or_del(u64::from_le_bytes(word.try_into().unwrap_or_default()));
+            while low != 0 {
+                let k = (low.trailing_zeros() / 8) as usize;
+                low &= low - 1;
+                visit(base + k, word.get(k).copied().unwrap_or_default());
+            }
+            base += 8;
+        }
+        for (k, &b) in tail.iter().enumerate() {
+            if b < 0x20 || b == 0x7f {
+                visit(base + k, b);
+            }
         }
         LineIndex {
             starts,
             len: src.len(),
+            first_control,
         }
+    }
+
+    /// Offset of the first control byte of the source
+    /// ([`is_control_byte`](super::is_control_byte)), if any.
+    pub fn first_control_byte(&self) -> Option<usize> {
+        self.first_control.map(|at| at as usize)
     }
 
     /// Number of lines (a final newline opens an empty last line).
@@ -120,6 +163,25 @@ mod tests {
     use super::*;
 
     #[test]
+    fn every_byte_in_every_place_of_a_word() {
+        for b in 0..=255u8 {
+            for k in 0..8 {
+                // The other bytes are each of a few neighbours of the thresholds.
+                for fill in [0x00u8, 0x1f, 0x20, 0x7e, 0x7f, 0x80, 0xff] {
+                    let mut w = [fill; 8];
+                    w[k] = b;
+                    let mask = low_or_del(u64::from_le_bytes(w));
+                    for (j, &c) in w.iter().enumerate() {
+                        let flagged = mask >> (8 * j + 7) & 1 == 1;
+                        assert_eq!(flagged, c < 0x20 || c == 0x7f, "{w:02x?} byte {j}");
+                    }
+                    assert_eq!(mask & !HIGH, 0);
+                }
+            }
+        }
+    }
+
+    #[test]
     fn mixed_terminators() {
         let src = b"a\r\nbb\rccc\nd";
         let idx = LineIndex::new(src);
@@ -164,6 +226,24 @@ mod tests {
             for o in offsets {
                 proptest::prop_assert_eq!(idx.line_col_from(&mut cursor, o), idx.line_col(o));
             }
+        }
+
+        #[test]
+        fn first_control_byte_is_the_first_a_byte_scan_finds(
+            src in proptest::collection::vec(
+                proptest::sample::select(vec![
+                    b'a', b'\r', b'\n', b'\t', 0x00, 0x0C, 0x1A, 0x1B, 0x1F, 0x20, 0x7E, 0x7F,
+                    0x80, 0x9F, 0xA0, 0xFF,
+                ]), 0..200),
+            pad in 0usize..9,
+        ) {
+            // Spaces before it move the bytes across the words' boundaries.
+            let mut text = vec![b' '; pad];
+            text.extend(&src);
+            let expected = text.iter().position(|&b| crate::syntax::is_control_byte(b));
+            let idx = LineIndex::new(&text);
+            proptest::prop_assert_eq!(idx.first_control_byte(), expected);
+            proptest::prop_assert_eq!(idx.starts, starts_by_bytes(&text));
         }
 
         #[test]
