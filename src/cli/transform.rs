@@ -570,9 +570,15 @@ fn load_options(robot: Option<&Robot>, in_place: bool) -> LoadOptions {
 }
 
 /// A `$config.dat` is loaded for its bases; it is written only if a transform changed it
-/// (`--mirror-frames`, a global point), never copied along — unless a target of it was
-/// refused: the refusal must be reported and counted like any other.
-fn drop_untouched_config(results: &mut [ProgramResult], config_dat: Option<&Path>) {
+/// (`--mirror-frames`, a global point), or a target of it was refused (the refusal must be
+/// reported and counted like any other), or it is `copied_along`: a robot tree's own
+/// `$config.dat` written to `--out-dir` with the tree's program files, changed or not, so that
+/// the output tree is a whole program, and a later run on it reads the same bases.
+fn drop_untouched_config(
+    results: &mut [ProgramResult],
+    config_dat: Option<&Path>,
+    copied_along: &impl Fn(&Path) -> bool,
+) {
     // A robot tree's own `$config.dat` is part of its program on the same terms.
     let is_config = |p: &Path| {
         config_dat == Some(p)
@@ -581,8 +587,14 @@ fn drop_untouched_config(results: &mut [ProgramResult], config_dat: Option<&Path
                 .is_some_and(|n| n.eq_ignore_ascii_case("$config.dat"))
     };
     for r in results {
+        // Named alone, a `$config.dat` is no program to write.
+        let with_programs = r.files.iter().any(|f| !is_config(&f.path));
         r.files.retain(|f| {
-            f.changed() || !f.refusals.is_empty() || !f.notes.is_empty() || !is_config(&f.path)
+            f.changed()
+                || !f.refusals.is_empty()
+                || !f.notes.is_empty()
+                || !is_config(&f.path)
+                || (with_programs && copied_along(&f.path))
         });
     }
 }
@@ -967,9 +979,18 @@ fn run_each(
     }
     bar.finish_and_clear();
     stamp_results(&lock_splits, &mut results, prov, out);
-    drop_untouched_config(&mut results, robot.and_then(|r| r.config_dat.as_deref()));
+    // A file the run was given, or found in a folder it was given (not a cell's `config_dat`
+    // from elsewhere), goes to `--out-dir` with the others.
+    let roots = Roots::from_inputs(files);
+    let copied_along =
+        |p: &Path| out.out_dir.is_some() && (files.iter().any(|f| f == p) || roots.holds(p));
+    drop_untouched_config(
+        &mut results,
+        robot.and_then(|r| r.config_dat.as_deref()),
+        &copied_along,
+    );
     for cfg in other_configs {
-        drop_untouched_config(&mut results, *cfg);
+        drop_untouched_config(&mut results, *cfg, &copied_along);
     }
     let renames = rename_for_output(&mut results, out)?;
     let exit = finish(command, &results, &renames, out, files);

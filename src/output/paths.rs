@@ -32,12 +32,25 @@ impl Roots {
 
     /// `input` relative to the deepest root that holds it, or its file name.
     pub fn relative(&self, input: &Path) -> PathBuf {
+        match self.within(input) {
+            Some(rel) if rel.file_name().is_some() && is_plain_relative(&rel) => rel,
+            _ => PathBuf::from(input.file_name().unwrap_or_default()),
+        }
+    }
+
+    /// Whether a root holds `input` (a file found in a folder the run was given).
+    pub fn holds(&self, input: &Path) -> bool {
+        self.within(input).is_some()
+    }
+
+    /// `input` relative to the deepest root that holds it, if one does.
+    fn within(&self, input: &Path) -> Option<PathBuf> {
         let lexical = self
             .0
             .iter()
             .filter_map(|r| input.strip_prefix(r).ok())
             .min_by_key(|rel| rel.components().count());
-        let rel = lexical.map(Path::to_owned).or_else(|| {
+        lexical.map(Path::to_owned).or_else(|| {
             // Spelled differently (`./a` and `a`, a `$config.dat` named by the cell file).
             let input = input.canonicalize().ok()?;
             self.0
@@ -45,11 +58,7 @@ impl Roots {
                 .filter_map(|r| r.canonicalize().ok())
                 .filter_map(|r| input.strip_prefix(&r).ok().map(Path::to_owned))
                 .min_by_key(|rel| rel.components().count())
-        });
-        match rel {
-            Some(rel) if rel.file_name().is_some() && is_plain_relative(&rel) => rel,
-            _ => PathBuf::from(input.file_name().unwrap_or_default()),
-        }
+        })
     }
 }
 

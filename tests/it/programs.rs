@@ -313,12 +313,27 @@ fn kss_tree_resolves_across_files_and_subroutines() {
     assert_eq!(names, ["XGLOBAL"], "only the used Cartesian global point");
 }
 
-/// `$config.dat` is written only when something in it changed: a tree whose program moves to
-/// none of its points gets no `$config.dat` in the output; one that does gets it corrected.
+/// A tree's own `$config.dat` goes to `--out-dir` with the tree's program files: as it was when
+/// the program moves to none of its points, corrected when it does, so a later run on the output
+/// tree reads the same bases. Programs named by their files (no folder given) are written flat,
+/// without it; a `$config.dat` named alone is no program and nothing is written.
 #[test]
-fn config_dat_is_written_only_when_changed() {
+fn config_dat_goes_to_the_out_dir_with_its_tree() {
     let cell = root().join("samples/cell_rules.toml");
-    for (uses_global, expect_config) in [(false, false), (true, true)] {
+    let correct = |inputs: &[&Path], out: &Path| {
+        let mut args = vec!["correct"];
+        args.extend(inputs.iter().map(|p| p.to_str().unwrap()));
+        args.extend([
+            "--cell",
+            cell.to_str().unwrap(),
+            "--robot",
+            "r1",
+            "--out-dir",
+            out.to_str().unwrap(),
+        ]);
+        trackfix(&args)
+    };
+    for uses_global in [false, true] {
         let src = if uses_global {
             "DEF m( )\n  BAS (#BASE,1 )\n  LIN XP1\n  LIN XGLOBAL\nEND\n"
         } else {
@@ -331,30 +346,63 @@ fn config_dat_is_written_only_when_changed() {
             ("System/$config.dat", CONFIG),
         ]);
         let out = dir.path().join("out");
-        let (code, _, err) = trackfix(&[
-            "correct",
-            r1.to_str().unwrap(),
-            "--cell",
-            cell.to_str().unwrap(),
-            "--robot",
-            "r1",
-            "--out-dir",
-            out.to_str().unwrap(),
-        ]);
+        let (code, _, err) = correct(&[&r1], &out);
         assert_eq!(code, 0, "{err}");
-        let written = out.join("System/$config.dat");
-        assert_eq!(written.exists(), expect_config, "uses_global={uses_global}");
         assert_ne!(
             std::fs::read_to_string(out.join("Program/m.dat")).unwrap(),
             dat
         );
-        if expect_config {
-            let text = std::fs::read_to_string(written).unwrap();
+        let text = std::fs::read_to_string(out.join("System/$config.dat")).unwrap();
+        if uses_global {
             assert!(!text.contains("XGLOBAL={X 150.0,"), "{text}");
             assert!(
                 text.contains("XUNUSED={X 1.0,Y 2.0,Z 3.0,"),
                 "untouched: {text}"
             );
+            assert!(err.contains("$config.dat: 1 target(s) changed"), "{err}");
+        } else {
+            assert_eq!(text, CONFIG, "copied as it was");
+            assert!(err.contains("$config.dat: unchanged"), "{err}");
+        }
+        // The output tree corrects nothing again in a way the input did not: its bases are
+        // the same (zero gives the input back).
+        let back = dir.path().join("back");
+        let (code, _, err) = trackfix(&[
+            "zero",
+            out.to_str().unwrap(),
+            "--cell",
+            cell.to_str().unwrap(),
+            "--robot",
+            "r1",
+            "--out-dir",
+            back.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        assert_eq!(
+            std::fs::read_to_string(back.join("System/$config.dat")).unwrap(),
+            CONFIG
+        );
+
+        if !uses_global {
+            // The program's files named: written flat, the tree's `$config.dat` read for its
+            // bases only.
+            let flat = dir.path().join("flat");
+            let (m_src, m_dat) = (r1.join("Program/m.src"), r1.join("Program/m.dat"));
+            let (code, _, err) = correct(&[&m_src, &m_dat], &flat);
+            assert_eq!(code, 0, "{err}");
+            let mut names: Vec<_> = std::fs::read_dir(&flat)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().into_string().unwrap())
+                .collect();
+            names.sort();
+            assert_eq!(names, ["m.dat", "m.src"]);
+            // Named alone: nothing to write.
+            let alone = dir.path().join("alone");
+            let config = r1.join("System/$config.dat");
+            let (code, _, err) = correct(&[&config], &alone);
+            assert_eq!(code, 2, "{err}");
+            assert!(err.contains("holds no program"), "{err}");
+            assert!(!alone.exists());
         }
     }
 }
