@@ -29,17 +29,18 @@ fn narrow(offset: usize) -> u32 {
 
 const LOW7: u64 = 0x7f7f_7f7f_7f7f_7f7f;
 const HIGH: u64 = 0x8080_8080_8080_8080;
+const ONES: u64 = 0x0101_0101_0101_0101;
 
-/// The high bit of each byte of word `x` that is below 0x20 or is 0x7f, and no other bit.
-/// Each byte's sum stays below 0x100, so no carry reaches the next byte: the answer is exact
-/// for every byte, not only the first.
-fn low_or_del(x: u64) -> u64 {
-    // A byte below 0x80 reaches 0x80 when 0x60 is added iff it is at least 0x20.
-    let below = !((x & LOW7).wrapping_add(0x6060_6060_6060_6060) | x) & HIGH;
-    // 0x7f is the byte that 0x7f turns to 0.
-    let y = x ^ LOW7;
-    let del = !((y & LOW7).wrapping_add(LOW7) | y) & HIGH;
-    below | del
+/// The high bit of each byte of word `x` that may end a line or be a control byte: every byte
+/// below 0x20 and 0x7f, and besides them 0x80-0x9f and 0xff, which the caller passes over
+/// (they are rare in a program, and letting them through saves four operations a word). Each
+/// byte's sums stay below 0x100, so no carry reaches the next byte: the answer is exact for
+/// every byte, not only the first.
+fn line_end_or_control(x: u64) -> u64 {
+    // `(b + 1) & 0x7f` is below 0x21 exactly for those bytes; adding 0x5f brings it to 0x80
+    // exactly when it is not.
+    let next = ((x & LOW7).wrapping_add(ONES)) & LOW7;
+    !next.wrapping_add(0x5f5f_5f5f_5f5f_5f5f) & HIGH
 }
 
 /// Where [`LineIndex::line_col_from`] found the last offset asked: the line's index.
@@ -51,9 +52,9 @@ impl LineIndex {
     /// first control byte.
     pub fn new(src: &[u8]) -> LineIndex {
         // Eight bytes at a time: a word's bytes below 0x20 or equal to 0x7f are found with a
-        // few integer operations ([`low_or_del`]), and only those are looked at, a line end or
-        // two in most words. Two passes (memchr2 per line, then a block scan for control
-        // bytes after the parse) read a 20 MB module twice from memory.
+        // few integer operations ([`line_end_or_control`]), and only those are looked at, a
+        // line end or two every few words. One pass for both: a control-byte scan of its own,
+        // after the parse, read a large file from memory a second time.
         let mut starts = Vec::with_capacity(src.len() / 64 + 1);
         starts.push(0);
         let mut first_control = None;
@@ -66,17 +67,29 @@ impl LineIndex {
             }
             _ => {}
         };
-        let words = src.chunks_exact(8);
-        let tail = words.remainder();
+        // Four words at a time: most 32-byte blocks of a program hold no such byte at all.
+        let blocks = src.chunks_exact(32);
+        let tail = blocks.remainder();
         let mut base = 0;
-        for word in words {
-            let mut low = low_or_del(u64::from_le_bytes(word.try_into().unwrap_or_default()));
-            while low != 0 {
-                let k = (low.trailing_zeros() / 8) as usize;
-                low &= low - 1;
-                visit(base + k, word.get(k).copied().unwrap_or_default());
+        for block in blocks {
+            let word = |i: usize| {
+                let bytes = block.get(i * 8..i * 8 + 8).unwrap_or_default();
+                line_end_or_control(u64::from_le_bytes(bytes.try_into().unwrap_or_default()))
+            };
+            let found = [word(0), word(1), word(2), word(3)];
+            if found.iter().all(|&m| m == 0) {
+                base += 32;
+                continue;
             }
-            base += 8;
+            for (i, &m) in found.iter().enumerate() {
+                let mut m = m;
+                while m != 0 {
+                    let k = i * 8 + (m.trailing_zeros() / 8) as usize;
+                    m &= m - 1;
+                    visit(base + k, block.get(k).copied().unwrap_or_default());
+                }
+            }
+            base += 32;
         }
         for (k, &b) in tail.iter().enumerate() {
             if b < 0x20 || b == 0x7f {
@@ -164,16 +177,17 @@ mod tests {
 
     #[test]
     fn every_byte_in_every_place_of_a_word() {
+        let flagged = |c: u8| c < 0x20 || c == 0x7f || (0x80..=0x9f).contains(&c) || c == 0xff;
         for b in 0..=255u8 {
             for k in 0..8 {
                 // The other bytes are each of a few neighbours of the thresholds.
-                for fill in [0x00u8, 0x1f, 0x20, 0x7e, 0x7f, 0x80, 0xff] {
+                for fill in [0x00u8, 0x1f, 0x20, 0x7e, 0x7f, 0x80, 0x9f, 0xa0, 0xfe, 0xff] {
                     let mut w = [fill; 8];
                     w[k] = b;
-                    let mask = low_or_del(u64::from_le_bytes(w));
+                    let mask = line_end_or_control(u64::from_le_bytes(w));
                     for (j, &c) in w.iter().enumerate() {
-                        let flagged = mask >> (8 * j + 7) & 1 == 1;
-                        assert_eq!(flagged, c < 0x20 || c == 0x7f, "{w:02x?} byte {j}");
+                        let set = mask >> (8 * j + 7) & 1 == 1;
+                        assert_eq!(set, flagged(c), "{w:02x?} byte {j}");
                     }
                     assert_eq!(mask & !HIGH, 0);
                 }
@@ -235,9 +249,9 @@ mod tests {
                     b'a', b'\r', b'\n', b'\t', 0x00, 0x0C, 0x1A, 0x1B, 0x1F, 0x20, 0x7E, 0x7F,
                     0x80, 0x9F, 0xA0, 0xFF,
                 ]), 0..200),
-            pad in 0usize..9,
+            pad in 0usize..33,
         ) {
-            // Spaces before it move the bytes across the words' boundaries.
+            // Spaces before it move the bytes across the words' and blocks' boundaries.
             let mut text = vec![b' '; pad];
             text.extend(&src);
             let expected = text.iter().position(|&b| crate::syntax::is_control_byte(b));
