@@ -23,7 +23,7 @@ use super::driver::{NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
 use super::kinematic_policy::fmt_joints;
 use super::kinematic_policy::{Arm, config_edits};
-use super::policy::{Why, common_refusal, describe, work_object_of};
+use super::policy::{Why, common_refusal, describe, wobj_of, words_of, work_object_of};
 use super::refusal::{Refusal, RefusalKind, Remedy};
 use super::rewrite::{
     DEG_DECIMALS, MM_DECIMALS, OrientationHint, QUAT_DECIMALS, number_edit, pose_edits,
@@ -167,6 +167,18 @@ impl Reflection {
             point: frame.translation.vector,
             normal: frame.rotation * unit(settings.plane.normal_axis()),
             tool_axis: unit(settings.tool_flip.index()),
+        }
+    }
+
+    /// `Lₙ`: the reflection in the plane through the origin with this one's normal (its
+    /// components read in whatever frame it acts in). Mirroring the frames mirrors a work object
+    /// or base as `A·F·Lₙ` ([`Reflection::frame`], `A` this reflection); what is given in that
+    /// frame then reflects in `Lₙ`, and the chain `A·F·Lₙ·Lₙ·X` is the mirror image `A·F·X`.
+    /// (For a plane through the origin, `Lₙ` is the reflection itself.)
+    pub fn through_origin(&self) -> Reflection {
+        Reflection {
+            point: Vector3::zeros(),
+            ..*self
         }
     }
 
@@ -516,11 +528,34 @@ pub(crate) fn reflection_for(
     settings: &MirrorSettings,
     own: &Reflection,
 ) -> Result<Reflection, Why> {
+    // With `--mirror-frames` a declared work object mirrors too (`mirror_frame`), as
+    // `A·W·Lₙ`: the target then reflects in `Lₙ`, so that `W'·T' = A·W·Lₙ·Lₙ·T·Sb = A·W·T·Sb`.
+    // In `W⁻¹·P`, or in an `A` off the origin, it would be mirrored a second time.
+    let declared = |default| settings.mirror_frames && declares_work_object_of(program, p, default);
     let Some(world) = &settings.world else {
-        return Ok(*own);
+        return Ok(if declared(None) {
+            own.through_origin()
+        } else {
+            *own
+        });
     };
     let w = work_object_of(program, p, &world.frames, world.default_wobj.as_deref())?;
+    if declared(world.default_wobj.as_deref()) {
+        return Ok(Reflection::about(&world.frame, settings).through_origin());
+    }
     Ok(Reflection::about(&(w.inverse() * world.frame), settings))
+}
+
+/// Whether the program declares the work object (base) target `p` is used in: mirroring the frames
+/// then mirrors that declaration.
+fn declares_work_object_of(program: &Program, p: &Position, default: Option<&str>) -> bool {
+    let Ok(name) = wobj_of(p, default, words_of(program)) else {
+        return false;
+    };
+    program.files.iter().flat_map(|f| &f.frames).any(|d| {
+        matches!(d.kind, FrameKind::WorkObject | FrameKind::Base)
+            && d.name.eq_ignore_ascii_case(&name)
+    })
 }
 
 /// The declared target an `Offs` offsets: `p10` in `Offs(p10, …)`, `pBed` in
@@ -787,16 +822,14 @@ fn mirror_frame(d: &FrameDecl, settings: &MirrorSettings, own: &Reflection) -> V
     let mut edits = Vec::new();
     match d.kind {
         FrameKind::WorkObject | FrameKind::Base => {
-            // A plane in world reflects the user frame (in world) about itself and the
-            // object frame (in the user frame) about the plane seen from the user frame.
-            let uframe = d.frame.as_ref().and_then(|f| f.pose());
-            let (for_uframe, for_oframe) = match (&settings.world, uframe) {
-                (Some(w), Some(u)) => (
-                    Reflection::about(&w.frame, settings),
-                    Reflection::about(&(u.inverse() * w.frame), settings),
-                ),
-                _ => (*own, *own),
+            // The user frame (in world) reflects in the plane, `A·U·Lₙ`, and the object frame
+            // (in the user frame) in `Lₙ`, `Lₙ·O·Lₙ`, so that the targets in it reflect in
+            // `Lₙ` as well (`reflection_for`).
+            let for_uframe = match &settings.world {
+                Some(w) => Reflection::about(&w.frame, settings),
+                None => *own,
             };
+            let for_oframe = for_uframe.through_origin();
             for (fields, refl) in [(&d.frame, for_uframe), (&d.oframe, for_oframe)] {
                 let Some(fields) = fields else { continue };
                 if let Some(f) = fields.pose() {
@@ -1048,6 +1081,94 @@ mod tests {
         );
         assert!(text.contains("jHome:=[[-10,-20,30,-40,50,60]"), "{text}");
         assert!(text.contains("[-1,0,-3,1],[2500,"), "{text}");
+    }
+
+    /// `frame_in = "world"`, frames mirrored (`mirror_frames`): the work object (a turned user frame, an
+    /// object frame moved and turned in it) mirrors, and the chain `uframe'·oframe'·T'` is the
+    /// world mirror image of `uframe·oframe·T`, once: `S·U·O·T·Sb`, `S` the plane in world
+    /// (turned and off the origin here) and `Sb` the tool flip, both built in the test as 4×4
+    /// matrices. An `Offs` in that work object follows; a target in world mirrors in world.
+    #[test]
+    fn world_plane_with_frames_mirrors_the_chain_once() {
+        let text = "MODULE m\n  PERS wobjdata wS:=[FALSE,TRUE,\"\",[[1000,-1000,50],[0.965926,0,0,0.258819]],[[120,-80,30],[0.996195,0.087156,0,0]]];\n  CONST robtarget p1:=[[10,20,30],[0,0.707107,0.707107,0],[0,0,0,0],[1500,9E9,9E9,9E9,9E9,9E9]];\n  CONST robtarget pW:=[[900,-1200,400],[0,1,0,0],[0,0,0,0],[1500,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL p1, v100, z10, tool0\\WObj:=wS;\n    MoveL Offs(p1,5,-7,9), v100, z10, tool0\\WObj:=wS;\n    MoveL pW, v100, z10, tool0;\n  ENDPROC\nENDMODULE\n";
+        let p0 = parse(text);
+        let plane = pose_xyz_deg(40.0, -1850.75, 10.0, 3.0, -2.0, 25.0);
+        let in_world = MirrorSettings {
+            mirror_frames: true,
+            world: Some(WorldPlane {
+                frame: plane,
+                frames: BTreeMap::new(),
+                default_wobj: None,
+            }),
+            ..MirrorSettings::default()
+        };
+        // The plane in the work object, off its origin: the frames mirror in that plane read in
+        // world, and what is in them with it.
+        let in_wobj = MirrorSettings {
+            mirror_frames: true,
+            frame: plane,
+            ..MirrorSettings::default()
+        };
+        for s in [in_world, in_wobj] {
+            chain_mirrors_once(&p0, text, &plane, &s);
+        }
+    }
+
+    fn chain_mirrors_once(p0: &Program, text: &str, plane: &Pose, s: &MirrorSettings) {
+        use nalgebra::{Matrix4, Vector4};
+        let edits = mirror(p0, s);
+        assert!(edits.refusals().next().is_none());
+        let out = String::from_utf8(apply(p0, edits).unwrap().files[0].output.clone()).unwrap();
+        let p1 = parse(&out);
+        // The reflection in the plane through `plane`'s origin with normal `plane`'s y (xz
+        // plane), and the tool flip in the tool's y.
+        let n = plane.rotation * Vector3::y();
+        let o = plane.translation.vector;
+        let mut world = Matrix4::identity();
+        let linear = nalgebra::Matrix3::identity() - 2.0 * n * n.transpose();
+        world.fixed_view_mut::<3, 3>(0, 0).copy_from(&linear);
+        world
+            .fixed_view_mut::<3, 1>(0, 3)
+            .copy_from(&(2.0 * o.dot(&n) * n));
+        let flip = Matrix4::from_diagonal(&Vector4::new(1.0, -1.0, 1.0, 1.0));
+        let m = |p: &Pose| p.to_homogeneous();
+        let pos = |prog: &Program, name: &str| {
+            prog.files[0]
+                .positions()
+                .find(|p| p.name.as_deref() == Some(name))
+                .unwrap()
+                .cartesian
+                .as_ref()
+                .unwrap()
+                .pose()
+                .unwrap()
+        };
+        let wobj = |prog: &Program| prog.files[0].frames[0].pose().unwrap();
+        let close = |got: Matrix4<f64>, want: Matrix4<f64>| {
+            let dt = (got.fixed_view::<3, 1>(0, 3) - want.fixed_view::<3, 1>(0, 3)).norm();
+            let dr = (got.fixed_view::<3, 3>(0, 0) - want.fixed_view::<3, 3>(0, 0)).norm();
+            (dt, dr)
+        };
+        // Both written at six decimals in the quaternions, three in millimetres.
+        let (dt, dr) = close(
+            m(&wobj(&p1)) * m(&pos(&p1, "p1")),
+            world * m(&wobj(p0)) * m(&pos(p0, "p1")) * flip,
+        );
+        assert!(dt < 2e-3 && dr < 2e-5, "{dt} {dr}\n{out}");
+        let (dt, dr) = close(m(&pos(&p1, "pW")), world * m(&pos(p0, "pW")) * flip);
+        assert!(dt < 2e-3 && dr < 2e-5, "{dt} {dr}\n{out}");
+        // The offset is a free vector in the work object: in world, `W·d` mirrors to `W'·d'`.
+        let offs = |text: &str| -> Vector3<f64> {
+            let at = text.find("Offs(p1,").unwrap() + "Offs(p1,".len();
+            let v: Vec<f64> = text[at..text[at..].find(')').unwrap() + at]
+                .split(',')
+                .map(|x| x.trim().parse().unwrap())
+                .collect();
+            Vector3::new(v[0], v[1], v[2])
+        };
+        let (w0, w1) = (wobj(p0), wobj(&p1));
+        let want = linear * (w0.rotation * offs(text));
+        assert!((w1.rotation * offs(&out) - want).norm() < 1e-3, "{out}");
     }
 
     /// `frame_in = "world"`: a target in a work object and a target in world mirror about the

@@ -146,7 +146,7 @@ pub(crate) fn wobj_of(
 
 /// The words of `program`'s language (an empty program has none: RAPID's, as the cell file's
 /// `wobj` key).
-fn words_of(program: &Program) -> &'static Vocabulary {
+pub(crate) fn words_of(program: &Program) -> &'static Vocabulary {
     program
         .language()
         .unwrap_or(crate::position::Language::Rapid)

@@ -1825,6 +1825,58 @@ fn mirror_frames_mirrors_the_tool_load_centre_of_gravity() {
     drop(dir);
 }
 
+/// `--mirror-frames` with the cell's plane in world (y = -1850.75, the samples' `[mirror]`): a
+/// KSS base mirrors in world and the point in it locally, so the chain reaches the world mirror
+/// image once. `BASE_DATA[1]` at y -1480 goes to -2221.5, `XP1` at y 20 in it to -20: the point,
+/// at world y -1460, reaches -2241.5 = 2·(-1850.75) + 1460. (The point was mirrored in world as
+/// well, to y -741.5, and reached -2963: its image 721.5 mm off.)
+#[test]
+fn mirror_frames_with_a_world_plane_mirrors_base_and_point_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let r1 = dir.path().join("KRC/R1");
+    let files = [
+        (
+            "System/$config.dat",
+            "DEFDAT $CONFIG PUBLIC\nDECL GLOBAL FRAME BASE_DATA[32]\nBASE_DATA[1]={X 2150.0,Y -1480.0,Z 720.0,A 0.0,B 0.0,C 0.0}\nENDDAT\n",
+        ),
+        (
+            "Program/m.src",
+            "DEF m( )\n  BAS (#BASE,1 )\n  LIN XP1\nEND\n",
+        ),
+        (
+            "Program/m.dat",
+            "DEFDAT m PUBLIC\nDECL E6POS XP1={X 10.0,Y 20.0,Z 30.0,A 0.0,B 0.0,C 0.0,S 6,T 27,E1 1500.0}\nENDDAT\n",
+        ),
+    ];
+    for (path, text) in files {
+        let p = r1.join(path);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, text).unwrap();
+    }
+    let out = dir.path().join("out");
+    let (code, _, err) = trackfix(&[
+        "mirror",
+        r1.to_str().unwrap(),
+        "--cell",
+        "samples/cell_rules.toml",
+        "--mirror-frames",
+        "--no-stamp",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let config = std::fs::read_to_string(out.join("System/$config.dat")).unwrap();
+    assert!(
+        config.contains("BASE_DATA[1]={X 2150.0,Y -2221.500,Z 720.0,A 0.0,B 0.0,C 0.0}"),
+        "{config}"
+    );
+    let dat = std::fs::read_to_string(out.join("Program/m.dat")).unwrap();
+    assert!(
+        dat.contains("XP1={X 10.0,Y -20.000,Z 30.0,A 0.0,B 0.0,C 0.0,"),
+        "{dat}"
+    );
+}
+
 /// The README's main command on the sample, with the cell's kinematics: no target refused (the
 /// joint target jHome moves through FK/IK with the tracks), and `correct`'s diff of jHome.
 #[test]
