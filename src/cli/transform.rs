@@ -210,6 +210,10 @@ enum StampRule {
     NotCorrected,
     /// `zero`: some file must be stamped as corrected for the robot.
     Corrected,
+    /// `mirror`: no file may be corrected for any robot. Its image would carry that robot's
+    /// track deviation, mirrored, and its stamp would no longer say so: a later `correct` for
+    /// the other robot would add that robot's on top.
+    NotCorrectedForAny,
 }
 
 impl Provenance {
@@ -231,22 +235,49 @@ impl Provenance {
     }
 }
 
-/// Refuses (exit 3) a `correct` of a program already corrected for the robot and a `zero` of one
-/// with targets never corrected for it, unless `--force`.
+/// Refuses (exit 3) a `correct` of a program already corrected for the robot, a `zero` of one
+/// with targets never corrected for it and a `mirror` of one corrected for any robot, unless
+/// `--force`.
 fn check_stamps(
     command: &str,
     programs: &[Program],
     prov: &Provenance,
     out: &OutputArgs,
 ) -> anyhow::Result<Option<Exit>> {
-    let Some(robot) = prov.stamp.robot.as_deref() else {
-        return Ok(None);
-    };
     if out.force || prov.rule == StampRule::Any {
         return Ok(None);
     }
     let mut stderr = std::io::stderr().lock();
     let mut refused = 0;
+    if prov.rule == StampRule::NotCorrectedForAny {
+        for p in programs {
+            let corrected: Vec<_> = p
+                .files
+                .iter()
+                .filter_map(|f| Some((f, stamp::find(f)?)))
+                .filter_map(|(f, (s, span))| {
+                    let robot = s.robot.clone().filter(|r| s.corrected_for(r))?;
+                    Some((f, s, span, robot))
+                })
+                .collect();
+            refused += usize::from(!corrected.is_empty());
+            for (f, s, span, robot) in corrected {
+                let (line, _) = f.lines.line_col(span.start);
+                // The name is the file's text: shown escaped, as the stamp is.
+                let robot = printable(&robot);
+                writeln!(
+                    stderr,
+                    "error: {}:{line}: corrected for robot `{robot}` ({}): its mirror image would carry that track's deviation, mirrored, to the other robot\n  = help: mirror the original (or `zero` this one first), or `transfer --from {robot} --to OTHER --mirror`, which takes the deviation out first; pass --force if the stamp is wrong",
+                    printable(&f.path.display().to_string()),
+                    printable(&s.text())
+                )?;
+            }
+        }
+        return refused_by_stamps(command, refused, &mut stderr);
+    }
+    let Some(robot) = prov.stamp.robot.as_deref() else {
+        return Ok(None);
+    };
     for p in programs {
         let stamps: Vec<_> = p
             .files
@@ -283,6 +314,15 @@ fn check_stamps(
             _ => {}
         }
     }
+    refused_by_stamps(command, refused, &mut stderr)
+}
+
+/// The run's end when its stamps refused `refused` programs (or files): nothing is written.
+fn refused_by_stamps(
+    command: &str,
+    refused: usize,
+    stderr: &mut impl Write,
+) -> anyhow::Result<Option<Exit>> {
     if refused == 0 {
         return Ok(None);
     }
@@ -1172,7 +1212,7 @@ fn run_mirror_inner(mut a: MirrorArgs) -> anyhow::Result<Exit> {
         robot,
         TransformStep::Mirror(&settings),
         &a.out,
-        &Provenance::new("mirror", robot, None, StampRule::Any),
+        &Provenance::new("mirror", robot, None, StampRule::NotCorrectedForAny),
     )
 }
 

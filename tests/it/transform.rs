@@ -1269,6 +1269,44 @@ fn provenance_stamp_blocks_double_correction() {
     assert!(err.contains("already corrected for robot `r1`"), "{err}");
     assert!(!Path::new(&cc).exists());
     run_ok(&[&["correct", &c, "-o", &cc, "--force"], &common[..]].concat());
+    // A mirror of the corrected file is refused: its image would carry r1's deviation,
+    // mirrored, under a `mirror` stamp that no longer says so, and a `correct` for r2 would
+    // add r2's. The original mirrors; with --force the corrected one does too.
+    let m = d("m.mod");
+    let mirror = |input: &str, force: bool| {
+        let mut args = vec![
+            "mirror",
+            input,
+            "--cell",
+            "samples/cell_rules.toml",
+            "-o",
+            &m,
+        ];
+        args.extend(["--keep", "joint-target"]);
+        if force {
+            args.push("--force");
+        }
+        trackfix(&args)
+    };
+    let (code, _, err) = mirror(&c, false);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains(&format!(
+            "{c}:{}: corrected for robot `r1` (trackfix: correct robot=r1",
+            header + 2
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains("transfer --from r1 --to OTHER --mirror"),
+        "{err}"
+    );
+    assert!(!Path::new(&m).exists());
+    let (code, _, err) = mirror(sample, false);
+    assert!(code == 0 || code == 4, "{err}");
+    std::fs::remove_file(&m).unwrap();
+    let (code, _, err) = mirror(&c, true);
+    assert!(code == 0 || code == 4, "{err}");
     // zero of the unstamped sample is refused; of the corrected file it goes.
     let (code, _, err) = trackfix(&[&["zero", sample, "-o", &z], &common[..]].concat());
     assert_eq!(code, 3, "{err}");
