@@ -209,6 +209,9 @@ pub(crate) struct FileFacts<'a> {
     pub(crate) routines: &'a [Routine],
     /// Its run-time assignments.
     pub(crate) assignments: &'a [Assignment],
+    /// Its copies of one name's value into another, `(copy, source)` as written (RAPID
+    /// `pv := p10;`, `buf{1} := p10;`): a use of the copy is a use of what the source reaches.
+    pub(crate) copies: &'a [(Span, Span)],
 }
 
 impl FileFacts<'_> {
@@ -246,6 +249,71 @@ fn computed_index_array<'k>(naming: &Naming, key: &'k str) -> Option<&'k str> {
 
 /// Where a folded reference in `file` points among `index`'s names, added to `out`
 /// (`exported` says whether a target is seen outside its file).
+/// What each module's copies reach: the targets the source of each copy reaches from its file,
+/// by (module, folded name of the copy).
+fn copies_reached(
+    files: &[FileFacts<'_>],
+    naming: &Naming,
+    index: &NameIndex<Indexed>,
+    modules: &[usize],
+) -> std::collections::HashMap<(usize, String), Vec<TargetAt>> {
+    let mut out: std::collections::HashMap<(usize, String), Vec<TargetAt>> = Default::default();
+    let exported = |(m, i): TargetAt| files.get(m).is_some_and(|f| f.exports(i));
+    let mut buf = String::new();
+    for (m, f) in files.iter().enumerate() {
+        for &(copy, source) in f.copies {
+            let mut reached = Vec::new();
+            let key = fold_into(&mut buf, source.slice(f.src));
+            lookup(naming, index, &exported, (m, modules), key, &mut reached);
+            if reached.is_empty() {
+                continue;
+            }
+            let module = modules.get(m).copied().unwrap_or(m);
+            let copy = fold_into(&mut buf, copy.slice(f.src)).to_owned();
+            out.entry((module, copy)).or_default().extend(reached);
+        }
+    }
+    out
+}
+
+/// Adds to `targets` what the copies of `module` reach for a reference written as `key`
+/// (folded): a copy of that name, or, where `key` indexes an array by something other than a
+/// number (`buf{i}`), every copy into an element of it.
+fn copied_reach(
+    copies: &std::collections::HashMap<(usize, String), Vec<TargetAt>>,
+    module: usize,
+    naming: &Naming,
+    key: &str,
+    targets: &mut Vec<TargetAt>,
+) {
+    if let Some(t) = copies.get(&(module, key.to_owned())) {
+        targets.extend(t);
+        return;
+    }
+    // The whole array (`buf`, not itself a copy), or an element chosen at run time.
+    let array = match key.split_once(naming.open) {
+        None => key,
+        Some((array, index)) => {
+            let numbers = index
+                .trim_end_matches(naming.close)
+                .bytes()
+                .all(|b| b.is_ascii_digit() || b == b',' || b == b' ');
+            if numbers {
+                return;
+            }
+            array.trim_end()
+        }
+    };
+    for ((m, name), t) in copies {
+        let element_of = name
+            .split_once(naming.open)
+            .is_some_and(|(a, _)| a.trim_end() == array);
+        if *m == module && element_of {
+            targets.extend(t);
+        }
+    }
+}
+
 fn lookup(
     naming: &Naming,
     index: &NameIndex<Indexed>,
@@ -450,6 +518,11 @@ pub(crate) struct Binder<'f, 'a> {
     /// The callee last looked up (file, name as written) and what it found: a module's motions
     /// call the same instruction one after another.
     last_callee: Option<LastCallee<'a>>,
+    /// What the copies of each module reach ([`FileFacts::copies`]), by (module, folded name of
+    /// the copy); a reference of that module to the copy, or to any element of it through a
+    /// computed index, reaches these too. Empty in nearly every program: then no reference
+    /// is looked up in it.
+    copies: std::collections::HashMap<(usize, String), Vec<TargetAt>>,
 }
 
 /// A callee's name as written in a file, and the routine it names there (file, index), if any.
@@ -487,7 +560,8 @@ impl<'f, 'a> Binder<'f, 'a> {
                     .is_some_and(|r| !r.params.is_empty())
             })
         });
-        let modules = files.iter().map(|f| f.module).collect();
+        let modules: Vec<usize> = files.iter().map(|f| f.module).collect();
+        let copies = copies_reached(files, naming, &index, &modules);
         Binder {
             files,
             modules,
@@ -503,6 +577,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             routines,
             first_letters,
             last_callee: None,
+            copies,
         }
     }
 
@@ -530,6 +605,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             routines,
             first_letters,
             last_callee,
+            copies,
         } = self;
         let naming = &*naming;
         targets.clear();
@@ -637,6 +713,27 @@ impl<'f, 'a> Binder<'f, 'a> {
             }
             for &key in u.folded {
                 reach(key, targets, params);
+            }
+            if !copies.is_empty() {
+                let module = modules.get(m).copied().unwrap_or(m);
+                let written = u
+                    .args
+                    .iter()
+                    .flatten()
+                    .map(|a| a.span())
+                    .chain(u.refs.iter().copied());
+                for sp in written {
+                    copied_reach(
+                        copies,
+                        module,
+                        naming,
+                        fold_into(buf, sp.slice(src)),
+                        targets,
+                    );
+                }
+                for &key in u.folded {
+                    copied_reach(copies, module, naming, key, targets);
+                }
             }
         }
         if targets.is_empty() && params.is_empty() {

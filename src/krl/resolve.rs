@@ -715,6 +715,8 @@ fn shared_facts<'a>(
         frames: &file.frames,
         routines: &[],
         assignments,
+        // KRL copies are followed in program order by the base pass (`Event::Alias`).
+        copies: &[],
     };
     (facts, &file.lines)
 }

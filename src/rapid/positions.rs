@@ -376,6 +376,9 @@ pub struct Extractor<'l> {
     /// CRobT();` in `PROC Remember(INOUT robtarget pOut)`): the routine, the parameter's name
     /// as written, the line. The target a call passes there is what the program computes.
     param_assignments: Vec<(usize, Span32, usize)>,
+    /// Copies of one name's value into another (`pv := p10;`, `buf{1} := p10;`): the copy, the
+    /// source. A motion to the copy moves to the source's value.
+    copies: Vec<(Span, Span)>,
     /// Assignments of values computed at run time (`p := CRobT()`, `wobj.uframe := …`).
     computed: Vec<crate::resolve::Assignment>,
     routines: Vec<crate::resolve::Routine>,
@@ -623,6 +626,7 @@ impl<'l> Extractor<'l> {
             assigned: Vec::new(),
             assigned_literals: Vec::new(),
             param_assignments: Vec::new(),
+            copies: Vec::new(),
             computed: Vec::new(),
             routines: Vec::new(),
             current: None,
@@ -1096,6 +1100,21 @@ impl<'l> Extractor<'l> {
 
 /// Whether expression `id` is a literal known offline: numbers, strings, `TRUE`/`FALSE` and
 /// aggregates of them (no name, call or operator).
+/// Whether the text at `span` names a value whole: a name, or an element of an array
+/// (`p10`, `buf{i}`), not a part of one (`p10.trans`) nor a computed value.
+fn is_reference(src: &[u8], span: Span) -> bool {
+    let text = span.slice(src);
+    let name = text
+        .iter()
+        .position(|b| !(b.is_ascii_alphanumeric() || *b == b'_'))
+        .unwrap_or(text.len());
+    let rest = text.get(name..).unwrap_or_default();
+    name > 0
+        && text.first().is_some_and(|b| !b.is_ascii_digit())
+        && (rest.is_empty() || (rest.first() == Some(&b'{') && rest.last() == Some(&b'}')))
+        && !rest.contains(&b'.')
+}
+
 fn is_literal(src: &[u8], arena: &Arena, id: u32) -> bool {
     let Some(n) = arena.get(id) else {
         return false;
@@ -1158,7 +1177,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         });
         positions.push(x.positions);
         rest.push((
-            x.frames, x.offsets, x.assigned, x.computed, x.routines, x.exported, src,
+            x.frames, x.offsets, x.assigned, x.computed, x.routines, x.exported, src, x.copies,
         ));
     }
     let robhold: NameMap<NameKey, bool> = rest
@@ -1182,6 +1201,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
             frames: &r.0,
             routines: &r.4,
             assignments: &r.3,
+            copies: &r.7,
         })
         .collect();
     let mut binder = crate::resolve::Binder::new(&mut facts, &NAMING);
@@ -1279,7 +1299,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     drop(facts);
     let all_frames: Vec<&FrameDecl> = rest.iter().flat_map(|r| &r.0).collect();
     let mut assigned_notes: Vec<Vec<Diagnostic>> = Vec::new();
-    for (_, _, assigned, _, _, _, src) in &rest {
+    for (_, _, assigned, _, _, _, src, _) in &rest {
         let mut notes = Vec::new();
         // A frame given a whole new value in a routine: the declaration may not be what runs.
         for &sp in assigned {
@@ -1308,7 +1328,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     }
     drop(all_frames);
     let mut out = Vec::with_capacity(rest.len());
-    for (m, ((frames, offsets, .., src), ps)) in rest.into_iter().zip(positions).enumerate() {
+    for (m, ((frames, offsets, .., src, _), ps)) in rest.into_iter().zip(positions).enumerate() {
         let mut d = diagnostics
             .get_mut(m)
             .map(std::mem::take)
@@ -1448,6 +1468,15 @@ impl Extractor<'_> {
                         self.assigned_literals.push((target, before));
                     }
                 } else if !literal || !whole {
+                    // A name's value copied whole into another (`pv := p10;`, `buf{1} :=
+                    // p10;`): a motion to the copy moves to the source.
+                    if let Some(v) = arena.get(value)
+                        && is_reference(src, target)
+                        && is_reference(src, v.span())
+                        && matches!(v.kind, ExprKind::Ident | ExprKind::Access)
+                    {
+                        self.copies.push((target, v.span()));
+                    }
                     // `p10.trans.z := 20` changes part of the value: run time as well.
                     let text = text_of(src, target);
                     let name = text.split('.').next().unwrap_or_default().trim();

@@ -105,6 +105,44 @@ fn local_data_stays_in_its_module() {
     assert_eq!(target(&ps[0], "pG").usage.wobj.as_deref(), Some("wB"));
 }
 
+/// A copy of a target's value (`pv := p1;`, `buf{1} := p2;`) is used as the copy is: a motion
+/// to `pv` in `wA` is a use of `p1` in `wA`, so `p1`, also moved to in `wB`, has both work
+/// objects; an element chosen at run time (`buf{i}`) reaches every copy into the array, one
+/// chosen by a number only its own; a copy made in another module of the task counts there.
+/// The copy itself is computed at run time and is no target of its own.
+#[test]
+fn a_copy_of_a_target_is_used_as_the_copy_is() {
+    let data = format!(
+        "MODULE D\n  CONST robtarget p1:={TARGET};\n  CONST robtarget p2:={TARGET};\n  CONST robtarget p3:={TARGET};\n  CONST robtarget p4:={TARGET};\n  VAR robtarget pv;\n  VAR robtarget buf{{3}};\nENDMODULE\n"
+    );
+    let main = "MODULE M\n  PROC r()\n    VAR num i := 2;\n    pv := p1;\n    buf{1} := p2;\n    buf{2} := p3;\n    buf{3} := p4;\n    MoveL pv,v1,fine,tool0\\WObj:=wA;\n    MoveL p1,v1,fine,tool0\\WObj:=wB;\n    MoveL buf{i},v1,fine,tool0\\WObj:=wC;\n    MoveL buf{3},v1,fine,tool0\\WObj:=wD;\n  ENDPROC\nENDMODULE\n"
+        .to_owned();
+    let (_dir, task) = task(&[("PROGMOD/D.mod", data), ("PROGMOD/M.mod", main)]);
+    let ps = programs(&task);
+    assert_eq!(ps.len(), 1);
+    let wobjs = |name: &str| -> Vec<String> {
+        let mut all: Vec<String> = target(&ps[0], name)
+            .usage
+            .work_objects()
+            .map(str::to_owned)
+            .collect();
+        all.sort();
+        all
+    };
+    assert_eq!(wobjs("p1"), ["wA", "wB"]);
+    assert_eq!(wobjs("p2"), ["wC"]);
+    assert_eq!(wobjs("p3"), ["wC"]);
+    assert_eq!(wobjs("p4"), ["wC", "wD"]);
+    assert!(
+        ps[0]
+            .files
+            .iter()
+            .flat_map(|f| f.positions())
+            .all(|p| p.name.as_deref() != Some("pv")),
+        "a VAR without a value is no target"
+    );
+}
+
 /// A target passed to a routine's parameter is used as the routine's motions use it: directly,
 /// through `Offs`/`RelTool`, and passed on to a further routine; recursion ends; two paths with
 /// different work objects leave both on the target (refused by name as before).
