@@ -379,6 +379,9 @@ pub struct Extractor<'l> {
     /// Copies of one name's value into another (`pv := p10;`, `buf{1} := p10;`): the copy, the
     /// source. A motion to the copy moves to the source's value.
     copies: Vec<(Span, Span)>,
+    /// Target literals whose parts do not have the sizes of their type (`[[1,2,3,4],…]` for a
+    /// robtarget): errors, so the file is not transformed (the controller does not load it).
+    misshapen: Vec<Diagnostic>,
     /// Assignments of values computed at run time (`p := CRobT()`, `wobj.uframe := …`).
     computed: Vec<crate::resolve::Assignment>,
     routines: Vec<crate::resolve::Routine>,
@@ -627,6 +630,7 @@ impl<'l> Extractor<'l> {
             assigned_literals: Vec::new(),
             param_assignments: Vec::new(),
             copies: Vec::new(),
+            misshapen: Vec::new(),
             computed: Vec::new(),
             routines: Vec::new(),
             current: None,
@@ -743,6 +747,59 @@ impl<'l> Extractor<'l> {
         }
     }
 
+    /// What is wrong with the shape of the `kind` literal at `id`, if anything: the number of its
+    /// parts, or of the values of a part written as a literal (a part written as a name or an
+    /// expression, `rdkExtJoints`, is read at run time and has any shape).
+    fn shape_problem(arena: &Arena, id: u32, kind: PositionKind) -> Option<String> {
+        let parts: &[(usize, &str)] = match kind {
+            PositionKind::Robtarget => &[
+                (3, "its position [x,y,z]"),
+                (4, "its orientation [q1,q2,q3,q4]"),
+                (4, "its configuration [cf1,cf4,cf6,cfx]"),
+                (6, "its external axes [eax_a,…,eax_f]"),
+            ],
+            PositionKind::Jointtarget => &[
+                (6, "its robot axes [rax_1,…,rax_6]"),
+                (6, "its external axes [eax_a,…,eax_f]"),
+            ],
+            _ => return None,
+        };
+        let count = arena.children(id).count();
+        if count != parts.len() {
+            return Some(format!(
+                "it has {count} parts where a {} has {}",
+                kind.as_str(),
+                parts.len()
+            ));
+        }
+        arena
+            .children(id)
+            .zip(parts)
+            .find_map(|(part, &(want, what))| {
+                let got = Self::agg_len(arena, part).filter(|&n| n != want)?;
+                let values = if got == 1 { "value" } else { "values" };
+                Some(format!(
+                    "{what} has {got} {values} where a {} takes {want}",
+                    kind.as_str()
+                ))
+            })
+    }
+
+    /// Notes an error for the `kind` literal at `id` (named `name`, or inline) when its shape is
+    /// not its type's ([`Extractor::shape_problem`]).
+    fn check_shape(&mut self, arena: &Arena, id: u32, kind: PositionKind, name: Option<&str>) {
+        let (Some(problem), Some(n)) = (Self::shape_problem(arena, id, kind), arena.get(id)) else {
+            return;
+        };
+        let what = match name {
+            Some(name) => format!("{} `{name}`", kind.as_str()),
+            None => format!("inline {}", kind.as_str()),
+        };
+        self.misshapen.push(
+            Diagnostic::error(n.span(), format!("{what}: {problem}")).with_hint(MISSHAPEN_HINT),
+        );
+    }
+
     fn position(
         &self,
         src: &[u8],
@@ -839,7 +896,9 @@ impl<'l> Extractor<'l> {
         };
         let mut literal = RobtargetLiteral::EMPTY;
         let mut parts = arena.children(id);
-        let (Some(3), Some(4), Some(4), Some(axes), None) = (
+        // Six external axes, as the type has: any other count is read (and reported) by the
+        // general path.
+        let (Some(3), Some(4), Some(4), Some(axes @ 6), None) = (
             starts(parts.next(), &mut literal.trans),
             starts(parts.next(), &mut literal.quaternion),
             starts(parts.next(), &mut literal.quadrants),
@@ -1010,6 +1069,7 @@ impl<'l> Extractor<'l> {
                     if let Some(kind) = Self::literal_kind(arena, i)
                         && let Some(p) = self.position(src, arena, i, kind, None)
                     {
+                        self.check_shape(arena, i, kind, None);
                         added.push(self.positions.len());
                         self.push(p, src);
                         skip_until = n.subtree_end;
@@ -1100,6 +1160,9 @@ impl<'l> Extractor<'l> {
 
 /// Whether expression `id` is a literal known offline: numbers, strings, `TRUE`/`FALSE` and
 /// aggregates of them (no name, call or operator).
+/// The hint of an error about a target literal's shape ([`Extractor::check_shape`]).
+const MISSHAPEN_HINT: &str = "the controller does not load the module: write the value with the parts of its type; trackfix transforms no file with an error";
+
 /// Whether the text at `span` names a value whole: a name, or an element of an array
 /// (`p10`, `buf{i}`), not a part of one (`p10.trans`) nor a computed value.
 fn is_reference(src: &[u8], span: Span) -> bool {
@@ -1165,7 +1228,10 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     let mut names = Vec::with_capacity(modules.len());
     let mut assigned_literals = Vec::with_capacity(modules.len());
     let mut param_assignments = Vec::with_capacity(modules.len());
-    for (x, src, name) in modules {
+    for (m, (x, src, name)) in modules.into_iter().enumerate() {
+        if let Some(d) = diagnostics.get_mut(m) {
+            d.extend(x.misshapen);
+        }
         names.push(name);
         assigned_literals.push(x.assigned_literals);
         param_assignments.push(x.param_assignments);
@@ -1617,6 +1683,21 @@ impl Extractor<'_> {
                     if let Some(n) = Span32::of(name) {
                         self.declared.declare(src, n, DeclKind::Other, module_scope);
                     }
+                    if literal.axes != 6 {
+                        // The fast path reads the three other parts at their sizes only.
+                        self.misshapen.push(
+                            Diagnostic::error(
+                                literal.span,
+                                format!(
+                                    "robtarget `{}`: its external axes [eax_a,…,eax_f] has {} value{} where a robtarget takes 6",
+                                    text_of(src, name),
+                                    literal.axes,
+                                    if literal.axes == 1 { "" } else { "s" }
+                                ),
+                            )
+                            .with_hint(MISSHAPEN_HINT),
+                        );
+                    }
                     self.push_literal(src, literal, name);
                     #[cfg(debug_assertions)]
                     if let Some(id) = init {
@@ -1678,6 +1759,7 @@ impl Extractor<'_> {
                             (true, Some(n)) => n,
                             _ => format!("{}{suffix}", text_of(src, name)),
                         };
+                        self.check_shape(arena, *id, kind, Some(&full));
                         if let Some(p) = self.position(src, arena, *id, kind, Some(full)) {
                             self.push(p, src);
                         }
@@ -1733,6 +1815,7 @@ impl Extractor<'_> {
                                 continue;
                             };
                             let full = format!("{name_text}{suffix}.{}", text_of(src, field));
+                            self.check_shape(arena, part, kind, Some(&full));
                             if let Some(p) = self.position(src, arena, part, kind, Some(full)) {
                                 self.push(p, src);
                             }

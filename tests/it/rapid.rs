@@ -325,6 +325,66 @@ fn usage_two_wobjs_is_flagged_with_a_warning() {
     assert_eq!(f.lines.line_col(warn.span.start), (7, 28));
 }
 
+/// A target literal whose parts are not its type's sizes is an error at the literal (the
+/// controller does not load the module), whichever path reads it: the parser's fast path (six
+/// external axes expected), the general one, an element of an array, an inline target, a
+/// jointtarget. A literal part written as a name (`eaxNone`) has any shape. A correct file has
+/// none of these.
+#[test]
+fn misshapen_target_literals_are_errors() {
+    let text = "MODULE m\n  CONST robtarget pShort:=[[1,2,3],[1,0,0,0],[0,0,0,0],[1500]];\n  CONST robtarget pPos:=[[1,2,3,4],[1,0,0,0],[0,0,0,0],[1500,9E9,9E9,9E9,9E9,9E9]];\n  CONST robtarget pParts:=[[1,2,3],[1,0,0,0],[0,0,0,0]];\n  CONST robtarget pArr{2}:=[[[1,2,3],[1,0,0,0],[0,0,0,0],[1500,9E9,9E9,9E9,9E9,9E9]],[[1,2,3],[1,0,0],[0,0,0,0],[1500,9E9,9E9,9E9,9E9,9E9]]];\n  CONST jointtarget jBad:=[[0,0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n  CONST robtarget pName:=[[1,2,3],[1,0,0,0],[0,0,0,0],eaxNone];\n  CONST robtarget pGood:=[[1,2,3],[1,0,0,0],[0,0,0,0],[1500,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[1500,9E9]],v100,z10,tool0;\n  ENDPROC\nENDMODULE\n";
+    let f = rapid::parse_file(Path::new("m.mod"), text.as_bytes().to_vec());
+    let errors: Vec<(usize, usize, String)> = f
+        .diagnostics
+        .iter()
+        .filter(|d| d.severity == Severity::Error)
+        .map(|d| {
+            let (l, c) = f.lines.line_col(d.span.start);
+            (l, c, d.message.clone())
+        })
+        .collect();
+    let want = [
+        (
+            2,
+            27,
+            "robtarget `pShort`: its external axes [eax_a,…,eax_f] has 1 value where a robtarget takes 6",
+        ),
+        (
+            3,
+            25,
+            "robtarget `pPos`: its position [x,y,z] has 4 values where a robtarget takes 3",
+        ),
+        (
+            4,
+            27,
+            "robtarget `pParts`: it has 3 parts where a robtarget has 4",
+        ),
+        (
+            5,
+            86,
+            "robtarget `pArr{2}`: its orientation [q1,q2,q3,q4] has 3 values where a robtarget takes 4",
+        ),
+        (
+            6,
+            27,
+            "jointtarget `jBad`: its robot axes [rax_1,…,rax_6] has 5 values where a jointtarget takes 6",
+        ),
+        (
+            10,
+            11,
+            "inline robtarget: its external axes [eax_a,…,eax_f] has 2 values where a robtarget takes 6",
+        ),
+    ];
+    let got: Vec<(usize, usize, &str)> = errors
+        .iter()
+        .map(|(l, c, m)| (*l, *c, m.as_str()))
+        .collect();
+    assert_eq!(got, want);
+    let good = "MODULE m\n  CONST robtarget p:=[[1,2,3],[1,0,0,0],[0,0,0,0],[1500,9E9,9E9,9E9,9E9,9E9]];\nENDMODULE\n";
+    let f = rapid::parse_file(Path::new("m.mod"), good.as_bytes().to_vec());
+    assert!(f.diagnostics.iter().all(|d| d.severity != Severity::Error));
+}
+
 #[test]
 fn usage_stationary_tool_and_moving_wobj() {
     let f = load("stationary_tool.mod");
