@@ -49,6 +49,7 @@ const VOCABULARY: Vocabulary = Vocabulary {
     tool_kind: "tool",
     stationary_tool: "IPO_FRAME #TCP",
     world_frames: &["base_data[0]", "$nullframe", "$world"],
+    frame_of_a_motion: "set the base before each motion to it (BAS(#BASE,n), $BASE = BASE_DATA[n] or the point's FDAT), the same on every path",
 };
 
 fn extension(p: &Path) -> Option<String> {

@@ -38,6 +38,9 @@ pub struct Vocabulary {
     pub stationary_tool: &'static str,
     /// Frame names that mean world when the program does not declare them (lower case).
     pub world_frames: &'static [&'static str],
+    /// How a program names the frame of a motion on every path to it, for a target whose
+    /// frame is not known: `\WObj:=` in the instruction (RAPID), a base set before it (KRL).
+    pub frame_of_a_motion: &'static str,
 }
 
 /// One robot language.

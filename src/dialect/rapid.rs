@@ -38,6 +38,7 @@ const VOCABULARY: Vocabulary = Vocabulary {
     tool_kind: "tooldata",
     stationary_tool: "robhold TRUE",
     world_frames: &["wobj0"],
+    frame_of_a_motion: "name the work object in each motion to it (\\WObj:=…), the same on every path",
 };
 
 impl Dialect for Rapid {

@@ -111,7 +111,9 @@ pub(crate) fn resolve_frame(
         None => Err(Why::new(
             RefusalKind::UnresolvedWorkObject,
             format!("{frame} `{name}` is not declared in the program"),
-            format!("add `{name}` under [robot.NAME.wobj] in the cell file"),
+            format!(
+                "if `{name}` is one fixed frame, give it under [robot.NAME.wobj] in the cell file; a routine's parameter or a {frame} chosen at run time is not: write each motion with the {frame} it runs in"
+            ),
         )),
     }
 }
@@ -139,7 +141,7 @@ pub(crate) fn wobj_of(
         (None, false) => Err(Why::new(
             RefusalKind::UnresolvedWorkObject,
             format!("{what} is used with a {frame} that cannot be resolved"),
-            format!("name the {frame} explicitly in the motion instruction"),
+            words.frame_of_a_motion,
         )),
     }
 }

@@ -31,6 +31,7 @@ const VOCABULARY: Vocabulary = Vocabulary {
     tool_kind: "tool",
     stationary_tool: "fixed tool",
     world_frames: &["world"],
+    frame_of_a_motion: "name the frame in each motion to it",
 };
 
 fn fields(src: &[u8], line: Span) -> Vec<NumField> {

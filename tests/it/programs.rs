@@ -105,6 +105,40 @@ fn local_data_stays_in_its_module() {
     assert_eq!(target(&ps[0], "pG").usage.wobj.as_deref(), Some("wB"));
 }
 
+/// A target whose frame is set on one path only is refused, and the help says how the
+/// program's language sets a frame: a base before the motion (KRL), `\WObj:=` in it (RAPID).
+#[test]
+fn an_unresolved_frame_is_explained_in_the_programs_language() {
+    let cell = root().join("samples/cell_rules.toml");
+    let src = "DEF m( )\n  INT I\n  IF I == 1 THEN\n    BAS (#BASE,1 )\n  ENDIF\n  LIN XP1\nEND\n";
+    let dat = format!("DEFDAT m PUBLIC\nDECL E6POS XP1={P1}\nENDDAT\n");
+    let (dir, r1) = kss(&[
+        ("Program/m.src", src),
+        ("Program/m.dat", &dat),
+        ("System/$config.dat", CONFIG),
+    ]);
+    let out = dir.path().join("out");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        r1.to_str().unwrap(),
+        "--cell",
+        cell.to_str().unwrap(),
+        "--robot",
+        "r1",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("E6POS `XP1` is used with a base that cannot be resolved"),
+        "{err}"
+    );
+    assert!(
+        err.contains("help: set the base before each motion to it (BAS(#BASE,n), $BASE = BASE_DATA[n] or the point's FDAT), the same on every path"),
+        "{err}"
+    );
+}
+
 /// A copy of a target's value (`pv := p1;`, `buf{1} := p2;`) is used as the copy is: a motion
 /// to `pv` in `wA` is a use of `p1` in `wA`, so `p1`, also moved to in `wB`, has both work
 /// objects; an element chosen at run time (`buf{i}`) reaches every copy into the array, one
