@@ -12,7 +12,7 @@ use crate::position::{
     Axes, BitField, CartesianFields, Config, FrameDecl, FrameKind, Name, NumField, Orientation,
     Position, PositionKind, PositionList, Usage,
 };
-use crate::syntax::{Diagnostic, LineIndex, NumLit, Span};
+use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, Span32};
 
 /// A base or tool as a motion sees it.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -120,6 +120,151 @@ pub(crate) struct Facts {
     /// Routines other modules may call (upper case): the file's first `DEF` (the module's own,
     /// named as the file) and every `GLOBAL DEF`; another `DEF` is the module's alone.
     pub public_routines: Vec<String>,
+    /// The routines that take parameters, in file order.
+    pub routines: Vec<ParamRoutine>,
+    /// Call statements that pass a plain reference (`Remember(XP5)`): what a routine writes
+    /// into an `:OUT` parameter it writes into the caller's variable.
+    pub calls: Vec<ParamCall>,
+    /// Values computed at run time given to a parameter not written `:IN` of the routine they
+    /// are written in (`pOut = $POS_ACT`, `pOut.X = 5` in `DEF Remember(pOut:OUT)`): the
+    /// routine (index into `routines`), the parameter's name in its `DEF` line, the line.
+    pub param_assignments: Vec<(usize, Span32, usize)>,
+}
+
+/// A `DEF`/`DEFFCT` that takes parameters (`DEF Remember(pOut:OUT, nTry:IN)`).
+#[derive(Clone, Debug)]
+pub(crate) struct ParamRoutine {
+    /// Its name.
+    pub name: Span,
+    /// Callable from other modules: the file's first `DEF` or a `GLOBAL` one.
+    pub public: bool,
+    /// Its parameters, in the order a call's arguments bind to them.
+    pub params: Vec<Param>,
+}
+
+/// One parameter of a routine.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Param {
+    /// Its name, without the `[]` of an array.
+    pub name: Span,
+    /// Written `:IN`: the routine gets a copy, and what it assigns to it the caller never
+    /// sees. Any other (`:OUT`, or no direction) is taken as the caller's variable itself: a
+    /// target it may overwrite is refused rather than corrected.
+    pub by_value: bool,
+}
+
+/// A call statement with the plain references it passes (`None` for any other argument).
+#[derive(Clone, Debug)]
+pub(crate) struct ParamCall {
+    /// The routine it is written in, when that takes parameters (index into
+    /// [`Facts::routines`]).
+    pub routine: Option<usize>,
+    /// The routine it calls, by name.
+    pub callee: Span,
+    /// 1-based line.
+    pub line: usize,
+    /// Its arguments in order: the span of each that is a plain reference (`XP5`, `P[I]`).
+    pub args: Vec<Option<Span32>>,
+}
+
+/// Records routine `name` (its `DEF` line ending at `end`) in `routines` when it takes
+/// parameters, and returns its index there. Kept out of [`Extractor::statement`], which stays
+/// small enough to be inlined into the parser's sink.
+#[inline(never)]
+fn param_routine(
+    src: &[u8],
+    name: Span,
+    end: usize,
+    public: bool,
+    routines: &mut Vec<ParamRoutine>,
+) -> Option<usize> {
+    let params = def_params(src, name, end);
+    if params.is_empty() {
+        return None;
+    }
+    routines.push(ParamRoutine {
+        name,
+        public,
+        params,
+    });
+    Some(routines.len() - 1)
+}
+
+/// Records a call of `callee` with `args`, written in `routine` at offset `start`, in `calls`
+/// when it passes a plain reference. Out of line as [`param_routine`].
+#[inline(never)]
+fn param_call(
+    callee: Span,
+    args: &[Option<Expr>],
+    (routine, lines, start): (Option<usize>, &LineIndex, usize),
+    calls: &mut Vec<ParamCall>,
+) {
+    let refs = || {
+        args.iter().map(|a| {
+            a.as_ref()
+                .filter(|a| matches!(a.kind, ExprKind::Name | ExprKind::Index(..)))
+                .and_then(|a| Span32::of(a.span))
+        })
+    };
+    if refs().any(|a| a.is_some()) {
+        calls.push(ParamCall {
+            routine,
+            callee,
+            line: lines.line(start),
+            args: refs().collect(),
+        });
+    }
+}
+
+/// The parameters of a `DEF` line, read from the tokens after the routine's name (the parser
+/// keeps them as written): `(pOut:OUT, P[]:IN)`. Empty when it has none or the list is not
+/// that shape.
+fn def_params(src: &[u8], name: Span, end: usize) -> Vec<Param> {
+    let Some(rest) = src.get(name.end..end.max(name.end)) else {
+        return Vec::new();
+    };
+    let mut tokens = super::lexer::Lexer::new(rest)
+        .filter(|t| !t.kind.is_trivia())
+        .map(|t| {
+            (
+                t,
+                Span::new(name.end + t.start as usize, name.end + t.end as usize),
+            )
+        });
+    let punct = |t: &super::lexer::Token, p: &[u8]| {
+        t.kind == super::lexer::TokenKind::Punct && t.text(rest) == p
+    };
+    match tokens.next() {
+        Some((t, _)) if punct(&t, b"(") => {}
+        _ => return Vec::new(),
+    }
+    let mut params = Vec::new();
+    // The current parameter: its name, then whether `:IN` followed.
+    let mut current: Option<Param> = None;
+    let mut after_colon = false;
+    for (t, span) in tokens {
+        if punct(&t, b",") || punct(&t, b")") {
+            params.extend(current.take());
+            after_colon = false;
+            if punct(&t, b")") {
+                break;
+            }
+        } else if punct(&t, b":") {
+            after_colon = true;
+        } else if t.kind == super::lexer::TokenKind::Ident {
+            match &mut current {
+                None => {
+                    current = Some(Param {
+                        name: span,
+                        by_value: false,
+                    });
+                }
+                Some(p) if after_colon => p.by_value = t.text(rest).eq_ignore_ascii_case(b"IN"),
+                Some(_) => {}
+            }
+        }
+    }
+    params
 }
 
 /// A declared name as motions reference it: upper case, without blanks (`p[ 3 ]` → `P[3]`).
@@ -483,6 +628,10 @@ pub(crate) struct Extractor<'a> {
     declared: HashMap<Name, PositionKind>,
     /// A `DEF` was read: the next is not the module's own routine.
     seen_def: bool,
+    /// The routines that take parameters, moved into [`Facts::routines`] at the end.
+    routines: Vec<ParamRoutine>,
+    /// The routine being read, when it takes parameters (index into `routines`).
+    current: Option<usize>,
     out: Extracted,
     /// Notes about what is deliberately not a target (relative motions, computed targets).
     pub diagnostics: Vec<Diagnostic>,
@@ -495,6 +644,8 @@ impl<'a> Extractor<'a> {
             lines,
             declared: HashMap::default(),
             seen_def: false,
+            routines: Vec::new(),
+            current: None,
             out: Extracted {
                 positions: PositionList::new(),
                 frames: Vec::new(),
@@ -506,6 +657,7 @@ impl<'a> Extractor<'a> {
 
     pub(crate) fn finish(mut self) -> (Extracted, Vec<Diagnostic>) {
         self.out.facts.declared = self.declared;
+        self.out.facts.routines = self.routines;
         (self.out, self.diagnostics)
     }
 
@@ -522,10 +674,20 @@ impl<'a> Extractor<'a> {
                 name,
                 global,
             } => {
+                self.current = None;
                 if !upper(src, *keyword).starts_with("DEFDAT") {
-                    let name = name.map(|n| upper(src, n));
                     let first = !self.seen_def;
                     self.seen_def = true;
+                    if let Some(n) = *name {
+                        self.current = param_routine(
+                            src,
+                            n,
+                            stmt.span.end,
+                            first || *global,
+                            &mut self.routines,
+                        );
+                    }
+                    let name = name.map(|n| upper(src, n));
                     if let Some(n) = name.as_ref().filter(|_| first || *global) {
                         out.facts.public_routines.push(n.clone());
                     }
@@ -573,16 +735,23 @@ impl<'a> Extractor<'a> {
             }
             StmtKind::Assign { target, value } => {
                 offset_operands(src, lines, value, &mut out.facts.offsets);
-                assignment(src, lines, &self.declared, target, value, out);
+                let routine = self
+                    .current
+                    .and_then(|r| Some((r, self.routines.get(r)?.params.as_slice())));
+                assignment(src, lines, &self.declared, routine, target, value, out);
             }
             StmtKind::Call(call) => {
                 if let Some(s) = bas_call(src, call) {
                     out.facts.events.push(Event::Set(s));
-                } else if let ExprKind::Call(name, _) = &call.kind {
+                } else if let ExprKind::Call(callee, args) = &call.kind {
                     // KUKA's own `BAS` is read by `bas_call`; its other modes set no frame.
-                    let name = upper(src, name.span);
+                    let name = upper(src, callee.span);
                     if name != "BAS" {
                         out.facts.events.push(Event::Call(name));
+                        if !args.is_empty() {
+                            let at = (self.current, lines, stmt.span.start);
+                            param_call(callee.span, args, at, &mut out.facts.calls);
+                        }
                     }
                 }
             }
@@ -710,10 +879,55 @@ fn setting(src: &[u8], target: &Expr, value: &Expr) -> Option<Setting> {
     }
 }
 
+/// Records that `target` is given a value computed at run time, in `routine` (when that takes
+/// parameters: its index and its parameters); a system variable (`$BASE`) is not data of the
+/// program. Out of line: rare, and [`assignment`] is inlined into the statement loop.
+#[inline(never)]
+fn computed_assignment(
+    src: &[u8],
+    lines: &LineIndex,
+    routine: Option<(usize, &[Param])>,
+    target: &Expr,
+    out: &mut Extracted,
+) {
+    let written = upper(src, target.span);
+    let name = written.split('.').next().unwrap_or_default();
+    if name.starts_with('$') {
+        return;
+    }
+    let line = lines.line(target.span.start);
+    // The routine's own parameter hides module data of its name.
+    let array = name.split_once('[').map_or(name, |(a, _)| a);
+    let key = crate::names::NameKey(array.as_bytes());
+    let param = routine.and_then(|(r, params)| {
+        Some((
+            r,
+            params
+                .iter()
+                .find(|p| crate::names::NameKey(p.name.slice(src)) == key)?,
+        ))
+    });
+    match param {
+        // A copy: the caller's variable keeps its value.
+        Some((_, p)) if p.by_value => {}
+        Some((r, p)) => out
+            .facts
+            .param_assignments
+            .extend(Span32::of(p.name).map(|at| (r, at, line))),
+        None => out.facts.assignments.push(crate::resolve::Assignment {
+            name: name.to_owned(),
+            line,
+        }),
+    }
+}
+
+/// An assignment statement. `routine` is the routine it is written in, when that takes
+/// parameters: its index and its parameters.
 fn assignment(
     src: &[u8],
     lines: &LineIndex,
     declared: &HashMap<Name, PositionKind>,
+    routine: Option<(usize, &[Param])>,
     target: &Expr,
     value: &Expr,
     out: &mut Extracted,
@@ -723,15 +937,8 @@ fn assignment(
             out.facts.events.push(Event::Set(s));
             return;
         }
-        let written = upper(src, target.span);
-        let name = written.split('.').next().unwrap_or_default();
-        if !name.starts_with('$')
-            && (computed_at_run_time(src, value) || computed_at_run_time(src, target))
-        {
-            out.facts.assignments.push(crate::resolve::Assignment {
-                name: name.to_owned(),
-                line: lines.line(target.span.start),
-            });
+        if computed_at_run_time(src, value) || computed_at_run_time(src, target) {
+            computed_assignment(src, lines, routine, target, out);
         }
         if matches!(target.kind, ExprKind::Name | ExprKind::Index(..))
             && matches!(value.kind, ExprKind::Name | ExprKind::Index(..))
@@ -926,6 +1133,36 @@ mod tests {
                 assert_eq!(upper_is(text, span, w), copy == *w, "{text:?} vs {w}");
             }
         }
+    }
+
+    #[test]
+    fn def_line_parameters_and_their_direction() {
+        let params = |line: &str, name: &str| {
+            let src = line.as_bytes();
+            let start = line.find(name).unwrap();
+            def_params(src, Span::new(start, start + name.len()), src.len())
+                .into_iter()
+                .map(|p| (crate::syntax::latin1(p.name.slice(src)), p.by_value))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(
+            params(
+                "GLOBAL DEF Remember(pOut:OUT, P[ ]:in,nTry, x : IN ) ; not : IN",
+                "Remember"
+            ),
+            [
+                ("pOut".to_owned(), false),
+                ("P".to_owned(), true),
+                ("nTry".to_owned(), false),
+                ("x".to_owned(), true),
+            ]
+        );
+        assert_eq!(
+            params("DEFFCT REAL half(X:IN)", "half"),
+            [("X".to_owned(), true)]
+        );
+        assert!(params("DEF a( )", "a").is_empty());
+        assert!(params("DEF b", "b").is_empty());
     }
 
     #[test]

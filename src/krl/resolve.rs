@@ -480,7 +480,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             .iter_mut()
             .zip(&exported)
             .enumerate()
-            .map(|(fi, (f, e))| shared_facts(f, &[], modules.of(fi), e.as_deref()))
+            .map(|(fi, (f, e))| shared_facts(f, &[], &[], modules.of(fi), e.as_deref()))
             .unzip();
         let mut binder = crate::resolve::Binder::new(&mut bound, &NAMING);
         let no_fdats = HashMap::default();
@@ -626,16 +626,124 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     // The positions are in their final order now (candidates promoted, sorted).
     let exported = modules.exported(files, facts);
     mark_offsets(files, facts, &modules, &exported);
+    // The routines, for the binder: only when a routine gives a parameter a computed value.
+    let follow = facts.iter().any(|f| !f.param_assignments.is_empty());
+    let routines: Vec<Vec<crate::resolve::Routine>> = if follow {
+        facts
+            .iter()
+            .map(|f| {
+                f.routines
+                    .iter()
+                    .map(|r| crate::resolve::Routine {
+                        name: r.name,
+                        local: !r.public,
+                        params: r.params.iter().map(|p| p.name).collect(),
+                    })
+                    .collect()
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
     let mut shared: Vec<crate::resolve::FileFacts<'_>> = files
         .iter_mut()
         .zip(facts.iter())
         .zip(&exported)
         .enumerate()
         .map(|(fi, ((file, fact), e))| {
-            shared_facts(file, &fact.assignments, modules.of(fi), e.as_deref()).0
+            let routines = routines.get(fi).map_or(&[][..], Vec::as_slice);
+            shared_facts(
+                file,
+                &fact.assignments,
+                routines,
+                modules.of(fi),
+                e.as_deref(),
+            )
+            .0
         })
         .collect();
+    if follow {
+        computed_through_parameters(&mut shared, facts);
+    }
     crate::resolve::mark_run_time(&mut shared, &NAMING);
+}
+
+/// Marks the targets a call passes to an `:OUT` parameter that its routine gives a computed
+/// value (`pOut = $POS_ACT` in `DEF Remember(pOut:OUT)`, `Remember(XP5)`), directly or by
+/// passing it on to another routine's `:OUT` parameter, as computed at run time, the
+/// assignment's line named. The binder follows it as a use of the parameter carrying the value.
+/// Bound after the candidates are promoted, as the assignments of computed values are marked:
+/// a `FRAME` no motion uses stays no target. Only what binds to an `:OUT` parameter of a routine
+/// of the program is handed over: a reference the binder binds to no parameter would be a use
+/// of its own, and an `:IN` parameter is a copy, which the caller's variable does not follow.
+/// Nothing being bound to an `:IN` parameter, what a routine passes on from one reaches no
+/// target either.
+fn computed_through_parameters(shared: &mut [crate::resolve::FileFacts<'_>], facts: &[Facts]) {
+    use crate::names::NameKey;
+    let srcs: Vec<&[u8]> = shared.iter().map(|f| f.src).collect();
+    // The routines of each name as the binder finds a callee: (file, index, public).
+    let mut by_name: HashMap<NameKey<'_>, Vec<(usize, usize, bool)>> = HashMap::default();
+    for (fi, (f, src)) in facts.iter().zip(&srcs).enumerate() {
+        for (ri, r) in f.routines.iter().enumerate() {
+            by_name
+                .entry(NameKey(r.name.slice(src)))
+                .or_default()
+                .push((fi, ri, r.public));
+        }
+    }
+    // The file's own routine first, else one of another file that is not local to it.
+    let callee = |fi: usize, name: &[u8]| -> Option<&super::positions::ParamRoutine> {
+        let all = by_name.get(&NameKey(name))?;
+        let &(cf, cr, _) = all
+            .iter()
+            .find(|&&(f, ..)| f == fi)
+            .or_else(|| all.iter().find(|&&(f, _, public)| f != fi && public))?;
+        facts.get(cf)?.routines.get(cr)
+    };
+    let mut binder = crate::resolve::Binder::new(shared, &NAMING);
+    let mut args: Vec<Option<crate::syntax::Span32>> = Vec::new();
+    for (fi, (f, src)) in facts.iter().zip(&srcs).enumerate() {
+        for call in &f.calls {
+            let Some(to) = callee(fi, call.callee.slice(src)) else {
+                continue;
+            };
+            args.clear();
+            args.extend(
+                call.args
+                    .iter()
+                    .enumerate()
+                    .map(|(i, a)| a.filter(|_| to.params.get(i).is_some_and(|p| !p.by_value))),
+            );
+            if args.iter().all(Option::is_none) {
+                continue;
+            }
+            binder.bind(
+                fi,
+                &crate::resolve::Use {
+                    line: call.line,
+                    routine: call.routine,
+                    callee: Some(call.callee),
+                    args: &args,
+                    ..Default::default()
+                },
+            );
+        }
+        for &(routine, param, line) in &f.param_assignments {
+            binder.bind(
+                fi,
+                &crate::resolve::Use {
+                    line,
+                    routine: Some(routine),
+                    run_time: Some(RunTimeValue::Target {
+                        at: UseLine::new(line),
+                    }),
+                    args: &[Some(param)],
+                    ..Default::default()
+                },
+            );
+        }
+    }
+    binder.finish();
 }
 
 /// Marks every position of the program written after a geometric operator `:` anywhere in it
@@ -696,13 +804,16 @@ fn mark_offsets(
     }
 }
 
-/// A file as the shared pass sees it, and its line index: KRL has no routine parameters the
-/// pass follows (a subroutine's effect is the base and tool it leaves set, found in program
-/// order); every declaration of its module is seen from both files of the module, and of the
-/// others' only those `exported` says (see [`Modules`]).
+/// A file as the shared pass sees it, and its line index. Its motions are bound without
+/// routines: a subroutine's effect on its callers' motions is the base and tool it leaves set,
+/// found in program order; `routines` are given only to follow what a routine writes into an
+/// `:OUT` parameter ([`computed_through_parameters`]). Every declaration of its module is seen
+/// from both files of the module, and of the others' only those `exported` says (see
+/// [`Modules`]).
 fn shared_facts<'a>(
     file: &'a mut ParsedFile,
     assignments: &'a [crate::resolve::Assignment],
+    routines: &'a [crate::resolve::Routine],
     module: usize,
     exported: Option<&'a [bool]>,
 ) -> (crate::resolve::FileFacts<'a>, &'a crate::syntax::LineIndex) {
@@ -713,7 +824,7 @@ fn shared_facts<'a>(
         positions: &mut file.positions,
         exported,
         frames: &file.frames,
-        routines: &[],
+        routines,
         assignments,
         // KRL copies are followed in program order by the base pass (`Event::Alias`).
         copies: &[],

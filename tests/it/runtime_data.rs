@@ -473,3 +473,179 @@ fn a_program_displacement_marks_the_cartesian_targets_it_moves() {
     );
     assert!(run_time(&f, "pa").is_some());
 }
+
+/// A KRL point taught in the `.dat` with the track at 1500 mm, as `DECL E6POS {name}={…}`.
+fn krl_point(name: &str) -> String {
+    format!(
+        "DECL E6POS {name}={{X 410.0,Y -95.0,Z 230.0,A 180.0,B 0.0,C 180.0,S 6,T 27,E1 1500.0,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}}\n"
+    )
+}
+
+/// Writes `cell.src` and a `cell.dat` declaring `points` into `dir`; returns the `.src`.
+fn krl_pair(dir: &Path, src: &str, points: &[&str]) -> std::path::PathBuf {
+    let dat: String = points.iter().map(|p| krl_point(p)).collect();
+    std::fs::write(dir.join("cell.dat"), format!("DEFDAT cell\n{dat}ENDDAT\n")).unwrap();
+    std::fs::write(dir.join("cell.src"), src).unwrap();
+    dir.join("cell.src")
+}
+
+/// The KRL form of the routine that computes the point its caller passes: `pOut = $POS_ACT` in
+/// `DEF Remember(pOut:OUT)` writes into the caller's `XP5` (an `:OUT` parameter is the caller's
+/// variable), so `XP5` is refused as runtime data, the assignment's line and file named, and
+/// kept byte for byte when the refusal is kept; so is a point passed on through another
+/// routine's `:OUT` parameter, and one whose component the routine sets (`p.X = 5`). A point
+/// the program only moves to is corrected.
+#[test]
+fn a_krl_point_a_routine_computes_through_its_out_parameter_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = krl_pair(
+        dir.path(),
+        "DEF cell( )\n\
+  BAS(#INITMOV,0)\n\
+  BAS(#BASE,1)\n\
+  BAS(#TOOL,1)\n\
+  LIN XP5\n\
+  LIN XP6\n\
+  LIN XP7\n\
+  LIN XP8\n\
+  Remember(XP5)\n\
+  Relay(XP6)\n\
+  Nudge(XP7)\n\
+END\n\
+\n\
+DEF Remember(pOut:OUT)\n\
+  DECL E6POS pOut\n\
+  pOut = $POS_ACT\n\
+END\n\
+\n\
+DEF Relay(pOn:OUT)\n\
+  DECL E6POS pOn\n\
+  Remember(pOn)\n\
+END\n\
+\n\
+DEF Nudge(p:OUT)\n\
+  DECL E6POS p\n\
+  p.X = 5\n\
+END\n",
+        &["XP5", "XP6", "XP7", "XP8"],
+    );
+    let program = krl::load_program(&src, &trackfix::program::LoadOptions::default()).unwrap();
+    let dat = program
+        .files
+        .iter()
+        .find(|f| f.path.ends_with("cell.dat"))
+        .unwrap();
+    let in_src = |line| {
+        Some(RunTimeValue::Target {
+            at: UseLine {
+                line,
+                file: Some("cell.src".into()),
+            },
+        })
+    };
+    assert_eq!(run_time(dat, "XP5"), in_src(16));
+    assert_eq!(run_time(dat, "XP6"), in_src(16));
+    assert_eq!(run_time(dat, "XP7"), in_src(26));
+    assert_eq!(run_time(dat, "XP8"), None);
+
+    let src = src.to_str().unwrap();
+    let args = [
+        "correct",
+        src,
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "k1",
+    ];
+    let (code, _, err) = crate::support::trackfix(&args);
+    assert_eq!(code, 3, "{err}");
+    for (name, at, line) in [("XP5", 2, 16), ("XP6", 3, 16), ("XP7", 4, 26)] {
+        assert!(
+            err.contains(&format!(
+                "cell.dat:{at}:16: error: E6POS `{name}` is given a computed value at run time (line {line} of cell.src): not correctable offline"
+            )),
+            "{name}: {err}"
+        );
+    }
+    assert!(err.contains("[runtime-data]"), "{err}");
+    assert!(
+        err.contains(
+            "note: 3 of the 3 refused target(s) computed at run time: not correctable offline"
+        ),
+        "{err}"
+    );
+
+    let out = dir.path().join("out");
+    let mut kept = args.to_vec();
+    kept.extend(["--keep", "runtime-data", "--out-dir", out.to_str().unwrap()]);
+    let (code, _, err) = crate::support::trackfix(&kept);
+    assert_eq!(code, 4, "{err}");
+    let written = std::fs::read_to_string(out.join("cell.dat")).unwrap();
+    for name in ["XP5", "XP6", "XP7"] {
+        assert!(written.contains(&krl_point(name)), "{name}: {written}");
+    }
+    assert!(!written.contains(&krl_point("XP8")), "{written}");
+}
+
+/// An `:IN` parameter is a copy: a routine that gives it a computed value, or passes it on to
+/// a routine that does, leaves the caller's point as taught, and a module point of the
+/// parameter's name is not the parameter. Those points are corrected.
+#[test]
+fn a_krl_in_parameter_given_a_computed_value_leaves_the_callers_point_taught() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = krl_pair(
+        dir.path(),
+        "DEF cell( )\n\
+  BAS(#INITMOV,0)\n\
+  BAS(#BASE,1)\n\
+  BAS(#TOOL,1)\n\
+  LIN XP3\n\
+  LIN XP4\n\
+  LIN PIN\n\
+  Copy(XP3)\n\
+  CopyOn(XP4)\n\
+END\n\
+\n\
+DEF Copy(pIn:IN)\n\
+  DECL E6POS pIn\n\
+  pIn = $POS_ACT\n\
+END\n\
+\n\
+DEF CopyOn(pIn:IN)\n\
+  DECL E6POS pIn\n\
+  Remember(pIn)\n\
+END\n\
+\n\
+DEF Remember(pOut:OUT)\n\
+  DECL E6POS pOut\n\
+  pOut = $POS_ACT\n\
+END\n",
+        &["XP3", "XP4", "PIN"],
+    );
+    let program = krl::load_program(&src, &trackfix::program::LoadOptions::default()).unwrap();
+    let dat = program
+        .files
+        .iter()
+        .find(|f| f.path.ends_with("cell.dat"))
+        .unwrap();
+    for name in ["XP3", "XP4", "PIN"] {
+        assert_eq!(run_time(dat, name), None, "{name}");
+    }
+    let out = dir.path().join("out");
+    let (code, _, err) = crate::support::trackfix(&[
+        "correct",
+        src.to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "k1",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("cell.dat: 3 target(s) changed"), "{err}");
+    let written = std::fs::read_to_string(out.join("cell.dat")).unwrap();
+    for name in ["XP3", "XP4", "PIN"] {
+        assert!(!written.contains(&krl_point(name)), "{name}: {written}");
+    }
+}
