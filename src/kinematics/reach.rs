@@ -10,7 +10,7 @@
 use std::collections::BTreeMap;
 
 use crate::geometry::Pose;
-use crate::position::{FrameKind, Position, Program, Skid};
+use crate::position::{FrameKind, ParsedFile, Position, Program, Skid};
 use crate::track::TrackError;
 use crate::transform::Robot;
 use crate::transform::policy::{describe, resolve_frame, wobj_of};
@@ -134,15 +134,24 @@ fn is_flange(name: &str) -> bool {
 /// declaration (RAPID `tooldata` `tframe`, KRL `TOOL_DATA[n]`), else the flange for `tool0`.
 pub fn resolve_tool(
     program: &Program,
+    own: Option<&ParsedFile>,
     overrides: &BTreeMap<String, Pose>,
     name: &str,
 ) -> Result<Pose, String> {
     if let Some(p) = overrides.get(&name.to_ascii_lowercase()) {
         return Ok(*p);
     }
-    let decl = program
-        .files
-        .iter()
+    // The declaration of `own`, the target's file, first: two RAPID modules may each declare
+    // a `LOCAL` tool of one name.
+    let declared_in = |f: &'_ ParsedFile| -> bool {
+        f.frames
+            .iter()
+            .any(|d| d.kind == FrameKind::Tool && d.name.eq_ignore_ascii_case(name))
+    };
+    let decl = own
+        .filter(|f| declared_in(f))
+        .into_iter()
+        .chain(&program.files)
         .flat_map(|f| &f.frames)
         .find(|d| d.kind == FrameKind::Tool && d.name.eq_ignore_ascii_case(name));
     match decl {
@@ -180,7 +189,7 @@ pub fn reach_program(
                 .map(|p| {
                     let r = TargetReach::new(&p);
                     if p.kind.is_cartesian() {
-                        cartesian(program, file.language, &p, robot, &setup, kin, options, r)
+                        cartesian(program, file, &p, robot, &setup, kin, options, r)
                     } else {
                         joint_target(&p, kin, options, r)
                     }
@@ -247,7 +256,7 @@ fn joint_target(
 #[allow(clippy::too_many_arguments)]
 fn cartesian(
     program: &Program,
-    language: crate::position::Language,
+    file: &ParsedFile,
     p: &Position,
     robot: &Robot,
     setup: &TrackSetup,
@@ -261,19 +270,20 @@ fn cartesian(
     };
     let written = ConfigValue::written(&p.config);
     r.config_written = written.map(|c| c.to_string());
+    let language = file.language;
     let words = language.dialect().vocabulary();
     let wobj = match wobj_of(p, options.default_wobj.as_deref(), words) {
         Ok(w) => w,
         Err(why) => return r.not_checked(why.message),
     };
-    let w = match resolve_frame(program, &robot.frames, &wobj) {
+    let w = match resolve_frame(program, Some(file), &robot.frames, &wobj) {
         Ok(w) => w,
         Err(why) => return r.not_checked(why.message),
     };
     let Some(tool_name) = p.usage.tool.as_deref() else {
         return r.not_checked(format!("tool not resolved: {what} is not used with a tool"));
     };
-    let tool = match resolve_tool(program, &robot.tools, tool_name) {
+    let tool = match resolve_tool(program, Some(file), &robot.tools, tool_name) {
         Ok(t) => t,
         Err(msg) => return r.not_checked(msg),
     };

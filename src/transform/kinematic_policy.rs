@@ -16,7 +16,7 @@ use std::collections::BTreeMap;
 use crate::geometry::Pose;
 use crate::kinematics::reach::resolve_tool;
 use crate::kinematics::{ConfigValue, Joints, Kinematics, check_target, select};
-use crate::position::{Config, Position, Program};
+use crate::position::{Config, ParsedFile, Position, Program};
 use crate::syntax::Edit;
 
 use super::cell::Robot;
@@ -42,8 +42,13 @@ impl Arm {
         })
     }
 
-    /// The tool `p` is used with, on the flange.
-    pub(crate) fn tool(&self, program: &Program, p: &Position) -> Result<Pose, Why> {
+    /// The tool `p` (a target of file `own`) is used with, on the flange.
+    pub(crate) fn tool(
+        &self,
+        program: &Program,
+        own: &ParsedFile,
+        p: &Position,
+    ) -> Result<Pose, Why> {
         let what = describe(p);
         let Some(name) = p.usage.tool.as_deref() else {
             return Err(reach(
@@ -51,7 +56,7 @@ impl Arm {
                 "use it in a motion instruction, or give the robot no kinematics",
             ));
         };
-        resolve_tool(program, &self.tools, name).map_err(|msg| {
+        resolve_tool(program, Some(own), &self.tools, name).map_err(|msg| {
             reach(
                 format!("{what}: its joints cannot be checked: {msg}"),
                 "give the tool under [robot.NAME.tool] in the cell file",

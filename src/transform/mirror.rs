@@ -374,7 +374,7 @@ impl TargetRule for MirrorRule<'_> {
     }
 
     fn frame(&self, scope: Scope, p: &Position) -> Result<Reflection, Why> {
-        reflection_for(scope.program, p, self.settings, &self.own)
+        reflection_for(scope.program, Some(scope.file), p, self.settings, &self.own)
     }
 
     fn new_pose(
@@ -446,8 +446,14 @@ impl MirrorRule<'_> {
                 ));
             }
         };
-        let w = work_object_of(scope.program, p, &m.frames, m.default_wobj.as_deref())?;
-        let tool = m.arm.tool(scope.program, p)?;
+        let w = work_object_of(
+            scope.program,
+            Some(scope.file),
+            p,
+            &m.frames,
+            m.default_wobj.as_deref(),
+        )?;
+        let tool = m.arm.tool(scope.program, scope.file, p)?;
         let flange = m.base_at(skid).inverse() * w * t * tool.inverse();
         let language = scope.file.language;
         let before = m.arm.joints_before(p, &flange, language)?;
@@ -524,6 +530,7 @@ pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
 /// target's work object.
 pub(crate) fn reflection_for(
     program: &Program,
+    own_file: Option<&ParsedFile>,
     p: &Position,
     settings: &MirrorSettings,
     own: &Reflection,
@@ -539,7 +546,13 @@ pub(crate) fn reflection_for(
             *own
         });
     };
-    let w = work_object_of(program, p, &world.frames, world.default_wobj.as_deref())?;
+    let w = work_object_of(
+        program,
+        own_file,
+        p,
+        &world.frames,
+        world.default_wobj.as_deref(),
+    )?;
     if declared(world.default_wobj.as_deref()) {
         return Ok(Reflection::about(&world.frame, settings).through_origin());
     }
@@ -560,7 +573,7 @@ fn declares_work_object_of(program: &Program, p: &Position, default: Option<&str
 
 /// The declared target an `Offs` offsets: `p10` in `Offs(p10, …)`, `pBed` in
 /// `Offs(RelTool(pBed, …), …)`, `pGrid` in `Offs(pGrid{r,c}, …)`; every array element of it.
-fn offset_targets(program: &Program, text: &str) -> Vec<Position> {
+fn offset_targets<'p>(program: &'p Program, text: &str) -> Vec<(&'p ParsedFile, Position)> {
     let inner = text.rsplit('(').next().unwrap_or(text).trim_start();
     let base: String = inner
         .chars()
@@ -583,7 +596,7 @@ fn offset_targets(program: &Program, text: &str) -> Vec<Position> {
             };
             (0..f.positions.len())
                 .filter(named)
-                .filter_map(|i| f.position(i))
+                .filter_map(move |i| Some((f, f.position(i)?)))
         })
         .collect()
 }
@@ -605,7 +618,7 @@ fn mirror_offset(
                 let targets = offset_targets(program, &call.target);
                 let reflections: Vec<_> = targets
                     .iter()
-                    .map(|p| reflection_for(program, p, settings, own))
+                    .map(|(f, p)| reflection_for(program, Some(f), p, settings, own))
                     .collect();
                 let resolved = match reflections.first() {
                     None => Err(Why::new(

@@ -59,9 +59,11 @@ fn is_world(name: &str) -> bool {
 }
 
 /// The work object / base `name` in world: the cell's override, else the program's
-/// declaration, else world for `wobj0`.
+/// declaration (that of `own`, the file of the target, first: two RAPID modules may each declare
+/// a `LOCAL` work object of one name), else world for `wobj0`.
 pub(crate) fn resolve_frame(
     program: &Program,
+    own: Option<&ParsedFile>,
     overrides: &BTreeMap<String, Pose>,
     name: &str,
 ) -> Result<Pose, Why> {
@@ -69,7 +71,10 @@ pub(crate) fn resolve_frame(
     if let Some(p) = overrides.get(&lower) {
         return Ok(*p);
     }
-    let decl = program.files.iter().find_map(|f| {
+    fn declared_in<'f>(
+        f: &'f ParsedFile,
+        name: &str,
+    ) -> Option<(&'f crate::position::FrameDecl, crate::position::Language)> {
         f.frames
             .iter()
             .find(|d| {
@@ -77,7 +82,10 @@ pub(crate) fn resolve_frame(
                     && d.name.eq_ignore_ascii_case(name)
             })
             .map(|d| (d, f.language))
-    });
+    }
+    let decl = own
+        .and_then(|f| declared_in(f, name))
+        .or_else(|| program.files.iter().find_map(|f| declared_in(f, name)));
     // The words of the language that declares the frame, else of the program's.
     let words = decl.map_or_else(|| words_of(program), |(_, l)| l.dialect().vocabulary());
     let frame = words.frame;
@@ -156,15 +164,17 @@ pub(crate) fn words_of(program: &Program) -> &'static Vocabulary {
         .vocabulary()
 }
 
-/// The pose in world of the work object `p` is used with (`frames` override the program's).
+/// The pose in world of the work object `p` (a target of file `own`) is used with (`frames`
+/// override the program's).
 pub(crate) fn work_object_of(
     program: &Program,
+    own: Option<&ParsedFile>,
     p: &Position,
     frames: &BTreeMap<String, Pose>,
     default: Option<&str>,
 ) -> Result<Pose, Why> {
     let name = wobj_of(p, default, words_of(program))?;
-    resolve_frame(program, frames, &name).map_err(|why| Why {
+    resolve_frame(program, own, frames, &name).map_err(|why| Why {
         message: format!("{}: {}", describe(p), why.message),
         ..why
     })
@@ -177,27 +187,32 @@ pub(crate) fn work_object_of(
 /// rule keeps for its whole run; a name that does not resolve is resolved again each time (the
 /// refusal names the target).
 #[derive(Default)]
-pub(crate) struct LastWorkObject(std::cell::RefCell<Option<(FrameName, Pose)>>);
+pub(crate) struct LastWorkObject(std::cell::RefCell<Option<(FrameName, usize, Pose)>>);
 
 impl LastWorkObject {
-    /// [`work_object_of`], for the same `program`, `frames` and `default` at every call.
+    /// [`work_object_of`], for the same `program`, `frames` and `default` at every call. A name
+    /// is resolved again in another file (its own declaration comes first).
     pub(crate) fn work_object_of(
         &self,
         program: &Program,
+        own: &ParsedFile,
         p: &Position,
         frames: &BTreeMap<String, Pose>,
         default: Option<&str>,
     ) -> Result<Pose, Why> {
         let Some(name) = &p.usage.wobj else {
-            return work_object_of(program, p, frames, default);
+            return work_object_of(program, Some(own), p, frames, default);
         };
-        if let Some((last, pose)) = &*self.0.borrow()
+        // The file by its address: the program holds it for the whole run.
+        let file = std::ptr::from_ref(own) as usize;
+        if let Some((last, in_file, pose)) = &*self.0.borrow()
             && last == name
+            && *in_file == file
         {
             return Ok(*pose);
         }
-        let pose = work_object_of(program, p, frames, default)?;
-        *self.0.borrow_mut() = Some((name.clone(), pose));
+        let pose = work_object_of(program, Some(own), p, frames, default)?;
+        *self.0.borrow_mut() = Some((name.clone(), file, pose));
         Ok(pose)
     }
 }
@@ -665,7 +680,7 @@ mod tests {
     }
 
     fn refusal(program: &Program, name: &str) -> String {
-        match resolve_frame(program, &BTreeMap::new(), name) {
+        match resolve_frame(program, None, &BTreeMap::new(), name) {
             Err(why) => why.message,
             Ok(_) => panic!("`{name}` resolved"),
         }
@@ -706,8 +721,9 @@ mod tests {
         let last = LastWorkObject::default();
         let mut resolved = Vec::new();
         for p in program.files[0].positions() {
-            let alone = work_object_of(&program, &p, &frames, None);
-            assert_eq!(last.work_object_of(&program, &p, &frames, None), alone);
+            let own = &program.files[0];
+            let alone = work_object_of(&program, Some(own), &p, &frames, None);
+            assert_eq!(last.work_object_of(&program, own, &p, &frames, None), alone);
             resolved.push(alone.is_ok());
         }
         assert_eq!(resolved, [true, true, true, true, true, false, false, true]);

@@ -291,12 +291,13 @@ impl TargetRule for TrackRule<'_, '_> {
     fn frame(&self, scope: Scope, p: &Position) -> Result<TrackFrame, Why> {
         let w = self.work_objects.work_object_of(
             scope.program,
+            scope.file,
             p,
             &self.setup.frames,
             self.setup.default_wobj.as_deref(),
         )?;
         let tool = match &self.setup.arm {
-            Some(arm) => Some(arm.tool(scope.program, p)?),
+            Some(arm) => Some(arm.tool(scope.program, scope.file, p)?),
             None => None,
         };
         Ok(TrackFrame {

@@ -216,7 +216,7 @@ fn combine(
                     .as_ref()
                     .and_then(|c| c.pose())
                     .map(|x| match (mirror, &own) {
-                        (Some(m), Some(own)) => match reflection_for(start, &p, m, own) {
+                        (Some(m), Some(own)) => match reflection_for(start, Some(a), &p, m, own) {
                             Ok(r) => r.target(&x).0,
                             Err(_) => x,
                         },

@@ -177,6 +177,53 @@ fn a_copy_of_a_target_is_used_as_the_copy_is() {
     );
 }
 
+/// Two modules of a task may each declare a `LOCAL` work object (and tool) of one name: a target
+/// is transformed with its own module's, as when that module is corrected on its own, where
+/// every module's targets took the first module's frame.
+#[test]
+fn a_local_work_object_is_the_one_of_the_targets_module() {
+    let module = |name: &str, uframe: &str, target: &str| {
+        format!(
+            "MODULE {name}\n  LOCAL PERS wobjdata wX:=[FALSE,TRUE,\"\",[{uframe}],[[0,0,0],[1,0,0,0]]];\n  CONST robtarget {target}:=[[10,20,30],[0,1,0,0],[0,0,0,0],[1500,9E9,9E9,9E9,9E9,9E9]];\n  PROC r{name}()\n    MoveL {target},v100,fine,tool0\\WObj:=wX;\n  ENDPROC\nENDMODULE\n"
+        )
+    };
+    let a = module("A", "[1000,0,0],[1,0,0,0]", "pa");
+    let b = module("B", "[3000,-500,0],[0.707107,0,0,0.707107]", "pb");
+    let (dir, task) = task(&[("PROGMOD/A.mod", a), ("PROGMOD/B.mod", b.clone())]);
+    let cell = root().join("samples/cell_rules.toml");
+    let correct = |input: &Path, out: &Path| {
+        let (code, _, err) = trackfix(&[
+            "correct",
+            input.to_str().unwrap(),
+            "--cell",
+            cell.to_str().unwrap(),
+            "--robot",
+            "r1",
+            "--no-stamp",
+            "--out-dir",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{err}");
+    };
+    let together = dir.path().join("together");
+    correct(&task, &together);
+    let alone_in = dir.path().join("B.mod");
+    std::fs::write(&alone_in, &b).unwrap();
+    let alone = dir.path().join("alone");
+    correct(&alone_in, &alone);
+    let line = |text: String, name: &str| {
+        text.lines()
+            .find(|l| l.contains(&format!("robtarget {name}:=")))
+            .unwrap()
+            .to_owned()
+    };
+    let read = |p: PathBuf| std::fs::read_to_string(p).unwrap();
+    let pb = line(read(together.join("PROGMOD/B.mod")), "pb");
+    assert_eq!(pb, line(read(alone.join("B.mod")), "pb"));
+    let pa = line(read(together.join("PROGMOD/A.mod")), "pa");
+    assert_ne!(pa.replace("pa:=", ""), pb.replace("pb:=", ""), "{pa}\n{pb}");
+}
+
 /// A target passed to a routine's parameter is used as the routine's motions use it: directly,
 /// through `Offs`/`RelTool`, and passed on to a further routine; recursion ends; two paths with
 /// different work objects leave both on the target (refused by name as before).
