@@ -269,9 +269,20 @@ impl TargetRule for TrackRule<'_, '_> {
             Skid::At(s) => Ok(Some(s)),
             Skid::NotConnected => {
                 let axis = axis();
+                // As written: `9E+09`, or a value beyond it that reads the same.
+                let written = p
+                    .extax
+                    .get(self.setup.skid_axis)
+                    .and_then(Option::as_ref)
+                    .map_or_else(
+                        || "9E9".to_owned(),
+                        |f| crate::syntax::latin1(f.span().slice(&scope.file.source)),
+                    );
                 Err(Why::new(
                     RefusalKind::SkidNotConnected,
-                    format!("{what} has {axis} = 9E9 (not connected): no skid position"),
+                    format!(
+                        "{what} has {axis} = {written}, which reads as not connected (9E9 or beyond): no skid position"
+                    ),
                     format!(
                         "write the skid position into {axis}, or set `skid` for this robot in the cell file"
                     ),
