@@ -1271,6 +1271,22 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         })
         .collect();
     let mut binder = crate::resolve::Binder::new(&mut facts, &NAMING);
+    // Two modules may each declare a `LOCAL` work object of one name, one holding the tool and
+    // the other not: such a module's motions see its own (a map of their own, in the rare
+    // task that has one).
+    let own_robhold: Vec<Option<NameMap<NameKey, bool>>> = rest
+        .iter()
+        .map(|r| {
+            let own: Vec<(NameKey, bool)> =
+                r.0.iter()
+                    .filter(|f| f.kind == FrameKind::WorkObject)
+                    .filter_map(|f| Some((NameKey(f.name.as_bytes()), f.held_by_robot?)))
+                    .collect();
+            own.iter()
+                .any(|(k, v)| robhold.get(k) != Some(v))
+                .then(|| robhold.clone().into_iter().chain(own).collect())
+        })
+        .collect();
     let mut frame_texts = FrameTexts::new(&robhold);
     let wobj0 = frame_texts.get(b"wobj0");
     // The first instruction of each displacement: (what, module, line, its name).
@@ -1281,6 +1297,11 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     let mut joint_moves: std::collections::HashSet<(usize, u32)> = Default::default();
     for (m, (module_calls, r)) in calls.iter().zip(&rest).enumerate() {
         let src = r.6;
+        let mut own_texts = own_robhold
+            .get(m)
+            .and_then(Option::as_ref)
+            .map(FrameTexts::new);
+        let frame_texts = own_texts.as_mut().unwrap_or(&mut frame_texts);
         for (u, call_args, refs, inline) in module_calls.iter() {
             let call = NameKey(u.name.span().slice(src));
             if let Some(&(name, what)) = DISPLACING

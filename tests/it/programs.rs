@@ -189,7 +189,7 @@ fn a_local_work_object_is_the_one_of_the_targets_module() {
     };
     let a = module("A", "[1000,0,0],[1,0,0,0]", "pa");
     let b = module("B", "[3000,-500,0],[0.707107,0,0,0.707107]", "pb");
-    let (dir, task) = task(&[("PROGMOD/A.mod", a), ("PROGMOD/B.mod", b.clone())]);
+    let (dir, both) = task(&[("PROGMOD/A.mod", a), ("PROGMOD/B.mod", b.clone())]);
     let cell = root().join("samples/cell_rules.toml");
     let correct = |input: &Path, out: &Path| {
         let (code, _, err) = trackfix(&[
@@ -206,7 +206,7 @@ fn a_local_work_object_is_the_one_of_the_targets_module() {
         assert_eq!(code, 0, "{err}");
     };
     let together = dir.path().join("together");
-    correct(&task, &together);
+    correct(&both, &together);
     let alone_in = dir.path().join("B.mod");
     std::fs::write(&alone_in, &b).unwrap();
     let alone = dir.path().join("alone");
@@ -222,6 +222,29 @@ fn a_local_work_object_is_the_one_of_the_targets_module() {
     assert_eq!(pb, line(read(alone.join("B.mod")), "pb"));
     let pa = line(read(together.join("PROGMOD/A.mod")), "pa");
     assert_ne!(pa.replace("pa:=", ""), pb.replace("pb:=", ""), "{pa}\n{pb}");
+
+    // B's `wX` holds the tool (robhold TRUE), A's does not: B's target is refused as a
+    // stationary-tool point, A's corrected as before (B, read last, decided for both).
+    let held = b.replace("[FALSE,TRUE,", "[TRUE,TRUE,");
+    let a = module("A", "[1000,0,0],[1,0,0,0]", "pa");
+    let (held_dir, held_task) = task(&[("PROGMOD/A.mod", a), ("PROGMOD/B.mod", held)]);
+    let out = held_dir.path().join("out");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        held_task.to_str().unwrap(),
+        "--cell",
+        cell.to_str().unwrap(),
+        "--robot",
+        "r1",
+        "--no-stamp",
+        "--keep",
+        "stationary-tool",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 4, "{err}");
+    assert!(err.contains("`pb`") && !err.contains("`pa`"), "{err}");
+    assert_eq!(line(read(out.join("PROGMOD/A.mod")), "pa"), pa);
 }
 
 /// A target passed to a routine's parameter is used as the routine's motions use it: directly,
