@@ -1077,6 +1077,12 @@ impl<'l> Extractor<'l> {
                 }
                 ExprKind::Call => {
                     let name = n.name_span().slice(src);
+                    if name.eq_ignore_ascii_case(b"CalcJointT") {
+                        // The joints that reach the target in the work object given: a use of
+                        // the target there, as a motion to it is.
+                        self.expression_call_use(src, arena, i);
+                        continue;
+                    }
                     let kind = if name.eq_ignore_ascii_case(b"Offs") {
                         OffsetKind::Offs
                     } else if name.eq_ignore_ascii_case(b"RelTool") {
@@ -1907,6 +1913,30 @@ impl Extractor<'_> {
             }
         }
         self.uses.push(u);
+    }
+
+    /// Records the function call at `id` of the arena (`CalcJointT(p10, tGun \WObj:=wCar)`) as a
+    /// use, as a call statement of its arguments is recorded.
+    fn expression_call_use(&mut self, src: &[u8], arena: &Arena, id: u32) {
+        let Some(n) = arena.get(id) else { return };
+        let Some(mut u) = self.call_head(n.name_span(), n.span()) else {
+            return;
+        };
+        for a in arena.children(id) {
+            let Some(arg) = arena.get(a) else { continue };
+            let value = arena
+                .get(arg.first)
+                .filter(|_| arg.first != super::expr::NONE);
+            let value = value.map(|v| {
+                let name = matches!(v.kind, ExprKind::Ident | ExprKind::Access);
+                (v.span(), name)
+            });
+            self.call_arg(&mut u, src, arg.switch, arg.name_span(), value);
+        }
+        self.uses.push(u);
+        // The last use is no longer the last call statement's, which a call read like it
+        // copies.
+        self.last_plain_call = None;
     }
 
     /// Records one argument of call `u`: written `\label` (`switch`) or `label:=` (a label

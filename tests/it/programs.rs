@@ -247,6 +247,32 @@ fn a_local_work_object_is_the_one_of_the_targets_module() {
     assert_eq!(line(read(out.join("PROGMOD/A.mod")), "pa"), pa);
 }
 
+/// `CalcJointT(p, tool \WObj:=w)` reaches `p` in `w` (the joints a `MoveAbsJ` then moves to),
+/// in an assignment or as an argument: a use of `p` there, as a motion to it is. Motions alike
+/// around it keep their own work objects (the call read like the one before is not confused
+/// with it).
+#[test]
+fn calc_joint_t_is_a_use_of_its_target_in_its_work_object() {
+    let module = format!(
+        "MODULE M\n  CONST robtarget p1:={TARGET};\n  CONST robtarget p2:={TARGET};\n  CONST robtarget p3:={TARGET};\n  CONST robtarget p4:={TARGET};\n  VAR jointtarget jt;\n  PROC r()\n    MoveL p2,v1,fine,tool0\\WObj:=wC;\n    jt := CalcJointT(p1, tool0 \\WObj:=wA);\n    MoveL p3,v1,fine,tool0\\WObj:=wC;\n    MoveAbsJ CalcJointT(p4, tool0 \\WObj:=wD), v1, fine, tool0;\n    MoveAbsJ jt, v1, fine, tool0;\n    MoveL p1,v1,fine,tool0\\WObj:=wB;\n  ENDPROC\nENDMODULE\n"
+    );
+    let (_dir, task) = task(&[("PROGMOD/M.mod", module)]);
+    let ps = programs(&task);
+    let wobjs = |name: &str| -> Vec<String> {
+        let mut all: Vec<String> = target(&ps[0], name)
+            .usage
+            .work_objects()
+            .map(str::to_owned)
+            .collect();
+        all.sort();
+        all
+    };
+    assert_eq!(wobjs("p1"), ["wA", "wB"]);
+    assert_eq!(wobjs("p2"), ["wC"]);
+    assert_eq!(wobjs("p3"), ["wC"]);
+    assert_eq!(wobjs("p4"), ["wD"]);
+}
+
 /// A target passed to a routine's parameter is used as the routine's motions use it: directly,
 /// through `Offs`/`RelTool`, and passed on to a further routine; recursion ends; two paths with
 /// different work objects leave both on the target (refused by name as before).
