@@ -6,7 +6,7 @@
 //! object and tool). Usage is resolved at the end, because RAPID lets a routine use data declared
 //! further down the module.
 
-use super::expr::{Arena, ExprKind};
+use super::expr::{Arena, ExprKind, ExprNode};
 use super::parser::{MovedCall, PlainArgs, RobtargetLiteral, Statement, Stmt};
 use crate::names::{NameKey, NameMap, same_bytes};
 use crate::position::{
@@ -1593,7 +1593,41 @@ impl Extractor<'_> {
             }
             Stmt::Other => {
                 self.scan(src, arena, true);
+                self.returned_copy(src, span);
             }
+        }
+    }
+
+    /// `RETURN p10;` in a function: a call of the function, `MoveL getP(), …`, moves to what
+    /// `p10` reaches, a copy of it under the function's name.
+    fn returned_copy(&mut self, src: &[u8], span: Span) {
+        let text = span.slice(src);
+        let keyword = b"RETURN";
+        let Some(head) = text.get(..keyword.len()) else {
+            return;
+        };
+        if !head.eq_ignore_ascii_case(keyword) {
+            return;
+        }
+        let Some(routine) = self.current.and_then(|r| self.routines.get(r)) else {
+            return;
+        };
+        let mut start = span.start + keyword.len();
+        let mut end = span.end;
+        while start < end && src.get(start).is_some_and(u8::is_ascii_whitespace) {
+            start += 1;
+        }
+        while end > start
+            && src
+                .get(end - 1)
+                .is_some_and(|b| b.is_ascii_whitespace() || *b == b';')
+        {
+            end -= 1;
+        }
+        let value = Span::new(start, end);
+        // `RETURN` followed by a name, not `RETURNS` nor `RETURN;`.
+        if start > span.start + keyword.len() && is_reference(src, value) {
+            self.copies.push((routine.name, value));
         }
     }
 
@@ -1904,6 +1938,17 @@ impl Extractor<'_> {
                     } else {
                         arena.get(arg.first)
                     };
+                    let returned = |v: &&ExprNode| {
+                        let callee = v.name_span().slice(src);
+                        v.kind == ExprKind::Call
+                            && !callee.eq_ignore_ascii_case(b"Offs")
+                            && !callee.eq_ignore_ascii_case(b"RelTool")
+                    };
+                    if let Some(v) = value.filter(returned).filter(|_| !arg.switch) {
+                        // `MoveL getP(), …`: what the function returns, if it returns a copy
+                        // of a target (`Extractor::returned_copy`).
+                        self.call_refs.push(v.name_span());
+                    }
                     let value = value.map(|v| {
                         let name = matches!(v.kind, ExprKind::Ident | ExprKind::Access);
                         (v.span(), name)

@@ -139,7 +139,8 @@ fn an_unresolved_frame_is_explained_in_the_programs_language() {
     );
 }
 
-/// A copy of a target's value (`pv := p1;`, `buf{1} := p2;`) is used as the copy is: a motion
+/// A copy of a target's value (`pv := p1;`, `buf{1} := p2;`, `RETURN p5;` in a function) is
+/// used as the copy is: a motion
 /// to `pv` in `wA` is a use of `p1` in `wA`, so `p1`, also moved to in `wB`, has both work
 /// objects; an element chosen at run time (`buf{i}`) reaches every copy into the array, one
 /// chosen by a number only its own; a copy made in another module of the task counts there.
@@ -147,9 +148,9 @@ fn an_unresolved_frame_is_explained_in_the_programs_language() {
 #[test]
 fn a_copy_of_a_target_is_used_as_the_copy_is() {
     let data = format!(
-        "MODULE D\n  CONST robtarget p1:={TARGET};\n  CONST robtarget p2:={TARGET};\n  CONST robtarget p3:={TARGET};\n  CONST robtarget p4:={TARGET};\n  VAR robtarget pv;\n  VAR robtarget buf{{3}};\nENDMODULE\n"
+        "MODULE D\n  CONST robtarget p1:={TARGET};\n  CONST robtarget p2:={TARGET};\n  CONST robtarget p3:={TARGET};\n  CONST robtarget p4:={TARGET};\n  CONST robtarget p5:={TARGET};\n  VAR robtarget pv;\n  VAR robtarget buf{{3}};\nENDMODULE\n"
     );
-    let main = "MODULE M\n  PROC r()\n    VAR num i := 2;\n    pv := p1;\n    buf{1} := p2;\n    buf{2} := p3;\n    buf{3} := p4;\n    MoveL pv,v1,fine,tool0\\WObj:=wA;\n    MoveL p1,v1,fine,tool0\\WObj:=wB;\n    MoveL buf{i},v1,fine,tool0\\WObj:=wC;\n    MoveL buf{3},v1,fine,tool0\\WObj:=wD;\n  ENDPROC\nENDMODULE\n"
+    let main = "MODULE M\n  FUNC robtarget nextOne()\n    RETURN p5;\n  ENDFUNC\n  PROC r()\n    VAR num i := 2;\n    pv := p1;\n    buf{1} := p2;\n    buf{2} := p3;\n    buf{3} := p4;\n    MoveL pv,v1,fine,tool0\\WObj:=wA;\n    MoveL p1,v1,fine,tool0\\WObj:=wB;\n    MoveL buf{i},v1,fine,tool0\\WObj:=wC;\n    MoveL buf{3},v1,fine,tool0\\WObj:=wD;\n    MoveL nextOne(),v1,fine,tool0\\WObj:=wE;\n    MoveL Offs(p5,0,0,10),v1,fine,tool0\\WObj:=wF;\n  ENDPROC\nENDMODULE\n"
         .to_owned();
     let (_dir, task) = task(&[("PROGMOD/D.mod", data), ("PROGMOD/M.mod", main)]);
     let ps = programs(&task);
@@ -167,6 +168,8 @@ fn a_copy_of_a_target_is_used_as_the_copy_is() {
     assert_eq!(wobjs("p2"), ["wC"]);
     assert_eq!(wobjs("p3"), ["wC"]);
     assert_eq!(wobjs("p4"), ["wC", "wD"]);
+    // A function that returns a target: a call of it as a motion's target is a use.
+    assert_eq!(wobjs("p5"), ["wE", "wF"]);
     assert!(
         ps[0]
             .files
