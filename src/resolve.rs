@@ -184,6 +184,9 @@ pub(crate) struct Use<'a> {
     pub(crate) folded: &'a [&'a str],
     /// Targets of the same file reached directly (inline literals), by index.
     pub(crate) targets: &'a [usize],
+    /// The use writes what it names (a search's found position): a copy of a target
+    /// ([`FileFacts::copies`]) is written, not the target it was copied from.
+    pub(crate) writes: bool,
 }
 
 /// One file of a program as this pass sees it.
@@ -714,7 +717,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             for &key in u.folded {
                 reach(key, targets, params);
             }
-            if !copies.is_empty() {
+            if !copies.is_empty() && !u.writes {
                 let module = modules.get(m).copied().unwrap_or(m);
                 let written = u
                     .args

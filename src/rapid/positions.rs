@@ -97,6 +97,7 @@ fn bind_non_positions(
                 args: &[Some(arg)],
                 refs: &[],
                 targets: &[],
+                writes: role == NonPositionRole::Found,
                 ..call.clone()
             },
         );
@@ -1354,6 +1355,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                 refs,
                 folded: &[],
                 targets: inline,
+                writes: false,
             };
             match non_position_arguments(call.0) {
                 None => binder.bind(m, &call_use),

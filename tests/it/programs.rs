@@ -148,9 +148,9 @@ fn an_unresolved_frame_is_explained_in_the_programs_language() {
 #[test]
 fn a_copy_of_a_target_is_used_as_the_copy_is() {
     let data = format!(
-        "MODULE D\n  CONST robtarget p1:={TARGET};\n  CONST robtarget p2:={TARGET};\n  CONST robtarget p3:={TARGET};\n  CONST robtarget p4:={TARGET};\n  CONST robtarget p5:={TARGET};\n  VAR robtarget pv;\n  VAR robtarget buf{{3}};\nENDMODULE\n"
+        "MODULE D\n  CONST robtarget p1:={TARGET};\n  CONST robtarget p2:={TARGET};\n  CONST robtarget p3:={TARGET};\n  CONST robtarget p4:={TARGET};\n  CONST robtarget p5:={TARGET};\n  CONST jointtarget jTaught:=[[0,0,0,0,30,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n  CONST jointtarget jEnd:=[[10,0,0,0,30,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n  VAR jointtarget jFound;\n  VAR robtarget pv;\n  VAR robtarget buf{{3}};\nENDMODULE\n"
     );
-    let main = "MODULE M\n  FUNC robtarget nextOne()\n    RETURN p5;\n  ENDFUNC\n  PROC r()\n    VAR num i := 2;\n    pv := p1;\n    buf{1} := p2;\n    buf{2} := p3;\n    buf{3} := p4;\n    MoveL pv,v1,fine,tool0\\WObj:=wA;\n    MoveL p1,v1,fine,tool0\\WObj:=wB;\n    MoveL buf{i},v1,fine,tool0\\WObj:=wC;\n    MoveL buf{3},v1,fine,tool0\\WObj:=wD;\n    MoveL nextOne(),v1,fine,tool0\\WObj:=wE;\n    MoveL Offs(p5,0,0,10),v1,fine,tool0\\WObj:=wF;\n  ENDPROC\nENDMODULE\n"
+    let main = "MODULE M\n  FUNC robtarget nextOne()\n    RETURN p5;\n  ENDFUNC\n  PROC r()\n    VAR num i := 2;\n    pv := p1;\n    buf{1} := p2;\n    buf{2} := p3;\n    buf{3} := p4;\n    MoveL pv,v1,fine,tool0\\WObj:=wA;\n    MoveL p1,v1,fine,tool0\\WObj:=wB;\n    MoveL buf{i},v1,fine,tool0\\WObj:=wC;\n    MoveL buf{3},v1,fine,tool0\\WObj:=wD;\n    MoveL nextOne(),v1,fine,tool0\\WObj:=wE;\n    MoveL Offs(p5,0,0,10),v1,fine,tool0\\WObj:=wF;\n    jFound := jTaught;\n    SearchExtJ di1, jFound, jEnd, v100;\n  ENDPROC\nENDMODULE\n"
         .to_owned();
     let (_dir, task) = task(&[("PROGMOD/D.mod", data), ("PROGMOD/M.mod", main)]);
     let ps = programs(&task);
@@ -170,6 +170,8 @@ fn a_copy_of_a_target_is_used_as_the_copy_is() {
     assert_eq!(wobjs("p4"), ["wC", "wD"]);
     // A function that returns a target: a call of it as a motion's target is a use.
     assert_eq!(wobjs("p5"), ["wE", "wF"]);
+    // The search writes its found position into the copy, not into what was copied to it.
+    assert!(target(&ps[0], "jTaught").usage.non_position().is_none());
     assert!(
         ps[0]
             .files
