@@ -759,6 +759,31 @@ impl<'f, 'a> Binder<'f, 'a> {
         }
     }
 
+    /// Binds a computed value given to parameter `param` (its name in file `m`'s source) of
+    /// routine `routine` on `line` (RAPID `pOut := CRobT();`, KRL `pOut = $POS_ACT`): a use of
+    /// the parameter with that value, which [`Binder::finish`] hands on to the targets the
+    /// routine's calls pass there.
+    pub(crate) fn bind_computed_parameter(
+        &mut self,
+        m: usize,
+        routine: usize,
+        param: crate::syntax::Span32,
+        line: usize,
+    ) {
+        self.bind(
+            m,
+            &Use {
+                line,
+                routine: Some(routine),
+                run_time: Some(RunTimeValue::Target {
+                    at: UseLine::new(line),
+                }),
+                args: &[Some(param)],
+                ..Default::default()
+            },
+        );
+    }
+
     /// Whether the use last bound reached a Cartesian target directly (a joint target moves
     /// the same whatever the frame). Asked only by a language that warns about it: reading
     /// each target's fields for the answer was a tenth of binding a RAPID motion.

@@ -729,18 +729,7 @@ fn computed_through_parameters(shared: &mut [crate::resolve::FileFacts<'_>], fac
             );
         }
         for &(routine, param, line) in &f.param_assignments {
-            binder.bind(
-                fi,
-                &crate::resolve::Use {
-                    line,
-                    routine: Some(routine),
-                    run_time: Some(RunTimeValue::Target {
-                        at: UseLine::new(line),
-                    }),
-                    args: &[Some(param)],
-                    ..Default::default()
-                },
-            );
+            binder.bind_computed_parameter(fi, routine, param, line);
         }
     }
     binder.finish();

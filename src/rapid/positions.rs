@@ -1367,18 +1367,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     // hands on to the targets the routine's calls pass there.
     for (m, list) in param_assignments.iter().enumerate() {
         for &(routine, param, line) in list {
-            binder.bind(
-                m,
-                &crate::resolve::Use {
-                    line,
-                    routine: Some(routine),
-                    run_time: Some(RunTimeValue::Target {
-                        at: UseLine::new(line),
-                    }),
-                    args: &[Some(param)],
-                    ..Default::default()
-                },
-            );
+            binder.bind_computed_parameter(m, routine, param, line);
         }
     }
     binder.finish();

@@ -41,6 +41,17 @@ fn target(program: &Program, name: &str) -> Position {
         .unwrap_or_else(|| panic!("no target {name}"))
 }
 
+/// The work objects target `name` of `program` is used with, sorted.
+fn work_objects(program: &Program, name: &str) -> Vec<String> {
+    let mut all: Vec<String> = target(program, name)
+        .usage
+        .work_objects()
+        .map(str::to_owned)
+        .collect();
+    all.sort();
+    all
+}
+
 /// The new user's case: data in one module, the motion in another, the work object declared in
 /// the data module: one program, the target used with `wCar`, and `correct` moves it.
 #[test]
@@ -155,15 +166,7 @@ fn a_copy_of_a_target_is_used_as_the_copy_is() {
     let (_dir, task) = task(&[("PROGMOD/D.mod", data), ("PROGMOD/M.mod", main)]);
     let ps = programs(&task);
     assert_eq!(ps.len(), 1);
-    let wobjs = |name: &str| -> Vec<String> {
-        let mut all: Vec<String> = target(&ps[0], name)
-            .usage
-            .work_objects()
-            .map(str::to_owned)
-            .collect();
-        all.sort();
-        all
-    };
+    let wobjs = |name: &str| work_objects(&ps[0], name);
     assert_eq!(wobjs("p1"), ["wA", "wB"]);
     assert_eq!(wobjs("p2"), ["wC"]);
     assert_eq!(wobjs("p3"), ["wC"]);
@@ -263,15 +266,7 @@ fn calc_joint_t_is_a_use_of_its_target_in_its_work_object() {
     );
     let (_dir, task) = task(&[("PROGMOD/M.mod", module)]);
     let ps = programs(&task);
-    let wobjs = |name: &str| -> Vec<String> {
-        let mut all: Vec<String> = target(&ps[0], name)
-            .usage
-            .work_objects()
-            .map(str::to_owned)
-            .collect();
-        all.sort();
-        all
-    };
+    let wobjs = |name: &str| work_objects(&ps[0], name);
     assert_eq!(wobjs("p1"), ["wA", "wB"]);
     assert_eq!(wobjs("p2"), ["wC"]);
     assert_eq!(wobjs("p3"), ["wC"]);
