@@ -111,6 +111,10 @@ pub(crate) struct Facts {
     pub declared: HashMap<Name, PositionKind>,
     /// Values computed at run time given to declared names (`XP1 = $POS_ACT`, `P[I] = …`).
     pub assignments: Vec<crate::resolve::Assignment>,
+    /// Bases and tools given a value when the program runs (`BASE_DATA[1] = BASE_DATA[2]`,
+    /// `TOOL_DATA[1].Z = 300`): tool (true) or base, its number (`None`: an index computed at
+    /// run time, any of them), the line.
+    pub data_assignments: Vec<(bool, Option<u32>, usize)>,
     /// Names written after a geometric operator `:` (`SLOT` and `XPLACE_REL` of
     /// `FPALLET:SLOT:XPLACE_REL`), upper case, with their lines: offsets in the frame before
     /// them, not positions.
@@ -628,6 +632,8 @@ pub(crate) struct Extractor<'a> {
     declared: HashMap<Name, PositionKind>,
     /// A `DEF` was read: the next is not the module's own routine.
     seen_def: bool,
+    /// The statements are a routine's (`DEF`/`DEFFCT`), not a data list's (`DEFDAT`).
+    in_routine: bool,
     /// The routines that take parameters, moved into [`Facts::routines`] at the end.
     routines: Vec<ParamRoutine>,
     /// The routine being read, when it takes parameters (index into `routines`).
@@ -644,6 +650,7 @@ impl<'a> Extractor<'a> {
             lines,
             declared: HashMap::default(),
             seen_def: false,
+            in_routine: false,
             routines: Vec::new(),
             current: None,
             out: Extracted {
@@ -675,7 +682,8 @@ impl<'a> Extractor<'a> {
                 global,
             } => {
                 self.current = None;
-                if !upper(src, *keyword).starts_with("DEFDAT") {
+                self.in_routine = !upper(src, *keyword).starts_with("DEFDAT");
+                if self.in_routine {
                     let first = !self.seen_def;
                     self.seen_def = true;
                     if let Some(n) = *name {
@@ -738,7 +746,8 @@ impl<'a> Extractor<'a> {
                 let routine = self
                     .current
                     .and_then(|r| Some((r, self.routines.get(r)?.params.as_slice())));
-                assignment(src, lines, &self.declared, routine, target, value, out);
+                let at = (self.in_routine, routine);
+                assignment(src, lines, &self.declared, at, target, value, out);
             }
             StmtKind::Call(call) => {
                 if let Some(s) = bas_call(src, call) {
@@ -896,8 +905,18 @@ fn computed_assignment(
         return;
     }
     let line = lines.line(target.span.start);
-    // The routine's own parameter hides module data of its name.
     let array = name.split_once('[').map_or(name, |(a, _)| a);
+    if let Some(tool) = match array {
+        "BASE_DATA" => Some(false),
+        "TOOL_DATA" => Some(true),
+        _ => None,
+    } {
+        let index = name.get(array.len() + 1..name.len().saturating_sub(1));
+        let number = index.and_then(|i| i.parse().ok());
+        out.facts.data_assignments.push((tool, number, line));
+        return;
+    }
+    // The routine's own parameter hides module data of its name.
     let key = crate::names::NameKey(array.as_bytes());
     let param = routine.and_then(|(r, params)| {
         Some((
@@ -921,13 +940,14 @@ fn computed_assignment(
     }
 }
 
-/// An assignment statement. `routine` is the routine it is written in, when that takes
-/// parameters: its index and its parameters.
+/// An assignment statement, written in a `DEF`/`DEFFCT` (`in_routine`) or a data list.
+/// `routine` is the routine it is written in, when that takes parameters: its index and its
+/// parameters.
 fn assignment(
     src: &[u8],
     lines: &LineIndex,
     declared: &HashMap<Name, PositionKind>,
-    routine: Option<(usize, &[Param])>,
+    (in_routine, routine): (bool, Option<(usize, &[Param])>),
     target: &Expr,
     value: &Expr,
     out: &mut Extracted,
@@ -937,7 +957,12 @@ fn assignment(
             out.facts.events.push(Event::Set(s));
             return;
         }
-        if computed_at_run_time(src, value) || computed_at_run_time(src, target) {
+        // A whole base or tool (`BASE_DATA[1] = BASE_DATA[2]`) is the controller's to change
+        // as its components are: `BAS(#BASE,1)` after it reads the new value.
+        if computed_at_run_time(src, value)
+            || computed_at_run_time(src, target)
+            || data_element(src, target).is_some()
+        {
             computed_assignment(src, lines, routine, target, out);
         }
         if matches!(target.kind, ExprKind::Name | ExprKind::Index(..))
@@ -967,6 +992,11 @@ fn assignment(
         };
         let d = frame_decl(src, lines, format!("{prefix}[{n}]"), kind, value, agg);
         out.frames.push(d);
+        // In a data list it is the frame's value; in a routine it overwrites that value when
+        // the program runs.
+        if in_routine {
+            computed_assignment(src, lines, routine, target, out);
+        }
         return;
     }
     let target_name = upper(src, target.span);

@@ -666,6 +666,58 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         computed_through_parameters(&mut shared, facts);
     }
     crate::resolve::mark_run_time(&mut shared, &NAMING);
+    drop(shared);
+    mark_assigned_data(files, facts);
+}
+
+/// Marks every target moved to with a base or tool the program assigns when it runs
+/// (`BASE_DATA[1] = BASE_DATA[2]`, `TOOL_DATA[1] = {…}` in a `DEF`, `TOOL_DATA[1].Z = 300`;
+/// `BASE_DATA[I] = …` may be any of them) as used with a frame computed at run time, the first
+/// such assignment's line and file named: `BAS(#BASE,1)` reads the value the element has then,
+/// not the one `$config.dat` gives it. Flow-insensitive, as every computed assignment; and by
+/// number, whether or not `$config.dat` declares the element.
+fn mark_assigned_data(files: &mut [ParsedFile], facts: &[Facts]) {
+    // (tool, number: `None` for any, line, file) of the first assignment of each.
+    let mut assigned: Vec<(bool, Option<u32>, usize, usize)> = Vec::new();
+    for (fi, f) in facts.iter().enumerate() {
+        for &(tool, n, line) in &f.data_assignments {
+            if !assigned.iter().any(|a| (a.0, a.1) == (tool, n)) {
+                assigned.push((tool, n, line, fi));
+            }
+        }
+    }
+    if assigned.is_empty() {
+        return;
+    }
+    let data = |name: &str, tool: bool| -> Option<Option<u32>> {
+        let index = name.strip_prefix(if tool { "TOOL_DATA[" } else { "BASE_DATA[" })?;
+        Some(index.strip_suffix(']')?.parse().ok())
+    };
+    let names: Vec<Arc<str>> = files.iter().map(|f| UseLine::file_name(&f.path)).collect();
+    for (tf, file) in files.iter_mut().enumerate() {
+        for usage in file.positions.usages_mut() {
+            if usage.run_time().is_some() {
+                continue;
+            }
+            let frames = usage.work_objects().map(|w| (w, false));
+            let used = frames.chain(usage.tool.as_deref().map(|t| (t, true)));
+            let found = used.into_iter().find_map(|(name, tool)| {
+                let n = data(name, tool)?;
+                let &(.., line, fi) = assigned
+                    .iter()
+                    .find(|&&(t, m, ..)| t == tool && (m == n || m.is_none()))?;
+                Some((name.to_owned(), (line, fi)))
+            });
+            if let Some((name, (line, fi))) = found
+                && let Some(from) = names.get(fi)
+            {
+                usage.set_run_time(RunTimeValue::Frame {
+                    name: Some(name),
+                    at: UseLine::of(line, fi, tf, from),
+                });
+            }
+        }
+    }
 }
 
 /// Marks the targets a call passes to an `:OUT` parameter that its routine gives a computed
