@@ -63,6 +63,16 @@ pub(crate) enum Event {
     /// Program order forks (`IF`, `SWITCH`), switches branch (`ELSE`, `CASE`, `DEFAULT`) or
     /// joins (`ENDIF`, `ENDSWITCH`).
     Branch(BranchEvent),
+    /// A loop opens: its kind, and the index of its [`Event::EndLoop`] in the same list (0
+    /// while it is not closed, as after a block left open: then followed once).
+    Loop {
+        kind: LoopKind,
+        end: usize,
+    },
+    /// The end of a loop's body: program order goes back to its top.
+    EndLoop,
+    /// `EXIT`: program order leaves the innermost loop.
+    Exit,
     /// `XPICK = XP3`: until reassigned, a motion to `XPICK` moves to (a copy of) `XP3`, so
     /// `XP3` is used with that motion's base and tool.
     Alias {
@@ -86,6 +96,19 @@ pub(crate) enum BranchEvent {
     Case,
     EndIf,
     EndSwitch,
+}
+
+/// Where a loop tests whether to go round again, which says what program order after it joins.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum LoopKind {
+    /// `FOR`: at the top (its bounds may give no pass at all).
+    For,
+    /// `WHILE`: at the top.
+    While,
+    /// `LOOP`: never; only `EXIT` leaves it.
+    Loop,
+    /// `REPEAT … UNTIL`: at the bottom, after at least one pass.
+    Repeat,
 }
 
 /// `DECL FDAT FP1={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE,…}`.
@@ -634,6 +657,8 @@ pub(crate) struct Extractor<'a> {
     seen_def: bool,
     /// The statements are a routine's (`DEF`/`DEFFCT`), not a data list's (`DEFDAT`).
     in_routine: bool,
+    /// The loops open at this statement: the index of each one's [`Event::Loop`].
+    loops: Vec<usize>,
     /// The routines that take parameters, moved into [`Facts::routines`] at the end.
     routines: Vec<ParamRoutine>,
     /// The routine being read, when it takes parameters (index into `routines`).
@@ -651,6 +676,7 @@ impl<'a> Extractor<'a> {
             declared: HashMap::default(),
             seen_def: false,
             in_routine: false,
+            loops: Vec::new(),
             routines: Vec::new(),
             current: None,
             out: Extracted {
@@ -700,6 +726,7 @@ impl<'a> Extractor<'a> {
                         out.facts.public_routines.push(n.clone());
                     }
                     out.facts.events.push(Event::Reset(name));
+                    self.loops.clear();
                 }
             }
             StmtKind::Decl {
@@ -771,7 +798,8 @@ impl<'a> Extractor<'a> {
                     "ELSE" | "DEFAULT" => BranchEvent::Otherwise,
                     "CASE" => BranchEvent::Case,
                     "ENDIF" => BranchEvent::EndIf,
-                    _ => BranchEvent::EndSwitch,
+                    "ENDSWITCH" => BranchEvent::EndSwitch,
+                    word => return loop_event(word, &mut self.loops, &mut out.facts.events),
                 };
                 out.facts.events.push(Event::Branch(ev));
             }
@@ -822,6 +850,36 @@ impl<'a> Extractor<'a> {
             }
         }
     }
+}
+
+/// A loop's opening (`FOR`, `WHILE`, `LOOP`, `REPEAT`) or closing keyword (`word`, upper
+/// case), or `EXIT`, as an event: a closing one gives its opening one the index of its
+/// [`Event::EndLoop`]. Out of line: loops are rare beside motions.
+#[inline(never)]
+fn loop_event(word: &str, open: &mut Vec<usize>, events: &mut Vec<Event>) {
+    let kind = match word {
+        "FOR" => LoopKind::For,
+        "WHILE" => LoopKind::While,
+        "LOOP" => LoopKind::Loop,
+        "REPEAT" => LoopKind::Repeat,
+        "EXIT" => {
+            events.push(Event::Exit);
+            return;
+        }
+        _ => {
+            // The parser hands a closing keyword only when a block it closes is open.
+            if let Some(start) = open.pop() {
+                let end = events.len();
+                if let Some(Event::Loop { end: e, .. }) = events.get_mut(start) {
+                    *e = end;
+                }
+                events.push(Event::EndLoop);
+            }
+            return;
+        }
+    };
+    open.push(events.len());
+    events.push(Event::Loop { kind, end: 0 });
 }
 
 fn fdat(src: &[u8], agg: &Aggregate) -> Fdat {
