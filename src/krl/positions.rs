@@ -792,16 +792,7 @@ impl<'a> Extractor<'a> {
                 }
             }
             StmtKind::Branch(keyword) => {
-                let ev = match upper_short(src, *keyword, &mut [0; 16]) {
-                    "IF" => BranchEvent::If,
-                    "SWITCH" => BranchEvent::Switch,
-                    "ELSE" | "DEFAULT" => BranchEvent::Otherwise,
-                    "CASE" => BranchEvent::Case,
-                    "ENDIF" => BranchEvent::EndIf,
-                    "ENDSWITCH" => BranchEvent::EndSwitch,
-                    word => return loop_event(word, &mut self.loops, &mut out.facts.events),
-                };
-                out.facts.events.push(Event::Branch(ev));
+                branch_event(src, *keyword, &mut self.loops, &mut out.facts.events);
             }
             StmtKind::Motion {
                 keyword,
@@ -852,10 +843,25 @@ impl<'a> Extractor<'a> {
     }
 }
 
+/// The event of a block keyword (`IF`, `ENDSWITCH`, `FOR`, `EXIT`, …). Out of line, as
+/// [`param_routine`]: [`Extractor::statement`] stays small enough to be inlined.
+#[inline(never)]
+fn branch_event(src: &[u8], keyword: Span, loops: &mut Vec<usize>, events: &mut Vec<Event>) {
+    let ev = match upper_short(src, keyword, &mut [0; 16]) {
+        "IF" => BranchEvent::If,
+        "SWITCH" => BranchEvent::Switch,
+        "ELSE" | "DEFAULT" => BranchEvent::Otherwise,
+        "CASE" => BranchEvent::Case,
+        "ENDIF" => BranchEvent::EndIf,
+        "ENDSWITCH" => BranchEvent::EndSwitch,
+        word => return loop_event(word, loops, events),
+    };
+    events.push(Event::Branch(ev));
+}
+
 /// A loop's opening (`FOR`, `WHILE`, `LOOP`, `REPEAT`) or closing keyword (`word`, upper
 /// case), or `EXIT`, as an event: a closing one gives its opening one the index of its
-/// [`Event::EndLoop`]. Out of line: loops are rare beside motions.
-#[inline(never)]
+/// [`Event::EndLoop`].
 fn loop_event(word: &str, open: &mut Vec<usize>, events: &mut Vec<Event>) {
     let kind = match word {
         "FOR" => LoopKind::For,
