@@ -63,6 +63,16 @@ pub(crate) enum Event {
     /// Program order forks (`IF`, `SWITCH`), switches branch (`ELSE`, `CASE`, `DEFAULT`) or
     /// joins (`ENDIF`, `ENDSWITCH`).
     Branch(BranchEvent),
+    /// A loop opens: its kind, and the index of its [`Event::EndLoop`] in the same list (0
+    /// while it is not closed, as after a block left open: then followed once).
+    Loop {
+        kind: LoopKind,
+        end: usize,
+    },
+    /// The end of a loop's body: program order goes back to its top.
+    EndLoop,
+    /// `EXIT`: program order leaves the innermost loop.
+    Exit,
     /// `XPICK = XP3`: until reassigned, a motion to `XPICK` moves to (a copy of) `XP3`, so
     /// `XP3` is used with that motion's base and tool.
     Alias {
@@ -88,6 +98,19 @@ pub(crate) enum BranchEvent {
     EndSwitch,
 }
 
+/// Where a loop tests whether to go round again, which says what program order after it joins.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum LoopKind {
+    /// `FOR`: at the top (its bounds may give no pass at all).
+    For,
+    /// `WHILE`: at the top.
+    While,
+    /// `LOOP`: never; only `EXIT` leaves it.
+    Loop,
+    /// `REPEAT … UNTIL`: at the bottom, after at least one pass.
+    Repeat,
+}
+
 /// `DECL FDAT FP1={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE,…}`.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub(crate) struct Fdat {
@@ -111,6 +134,10 @@ pub(crate) struct Facts {
     pub declared: HashMap<Name, PositionKind>,
     /// Values computed at run time given to declared names (`XP1 = $POS_ACT`, `P[I] = …`).
     pub assignments: Vec<crate::resolve::Assignment>,
+    /// Bases and tools given a value when the program runs (`BASE_DATA[1] = BASE_DATA[2]`,
+    /// `TOOL_DATA[1].Z = 300`): tool (true) or base, its number (`None`: an index computed at
+    /// run time, any of them), the line.
+    pub data_assignments: Vec<(bool, Option<u32>, usize)>,
     /// Names written after a geometric operator `:` (`SLOT` and `XPLACE_REL` of
     /// `FPALLET:SLOT:XPLACE_REL`), upper case, with their lines: offsets in the frame before
     /// them, not positions.
@@ -628,6 +655,10 @@ pub(crate) struct Extractor<'a> {
     declared: HashMap<Name, PositionKind>,
     /// A `DEF` was read: the next is not the module's own routine.
     seen_def: bool,
+    /// The statements are a routine's (`DEF`/`DEFFCT`), not a data list's (`DEFDAT`).
+    in_routine: bool,
+    /// The loops open at this statement: the index of each one's [`Event::Loop`].
+    loops: Vec<usize>,
     /// The routines that take parameters, moved into [`Facts::routines`] at the end.
     routines: Vec<ParamRoutine>,
     /// The routine being read, when it takes parameters (index into `routines`).
@@ -644,6 +675,8 @@ impl<'a> Extractor<'a> {
             lines,
             declared: HashMap::default(),
             seen_def: false,
+            in_routine: false,
+            loops: Vec::new(),
             routines: Vec::new(),
             current: None,
             out: Extracted {
@@ -675,7 +708,8 @@ impl<'a> Extractor<'a> {
                 global,
             } => {
                 self.current = None;
-                if !upper(src, *keyword).starts_with("DEFDAT") {
+                self.in_routine = !upper(src, *keyword).starts_with("DEFDAT");
+                if self.in_routine {
                     let first = !self.seen_def;
                     self.seen_def = true;
                     if let Some(n) = *name {
@@ -692,6 +726,7 @@ impl<'a> Extractor<'a> {
                         out.facts.public_routines.push(n.clone());
                     }
                     out.facts.events.push(Event::Reset(name));
+                    self.loops.clear();
                 }
             }
             StmtKind::Decl {
@@ -738,7 +773,8 @@ impl<'a> Extractor<'a> {
                 let routine = self
                     .current
                     .and_then(|r| Some((r, self.routines.get(r)?.params.as_slice())));
-                assignment(src, lines, &self.declared, routine, target, value, out);
+                let at = (self.in_routine, routine);
+                assignment(src, lines, &self.declared, at, target, value, out);
             }
             StmtKind::Call(call) => {
                 if let Some(s) = bas_call(src, call) {
@@ -756,15 +792,7 @@ impl<'a> Extractor<'a> {
                 }
             }
             StmtKind::Branch(keyword) => {
-                let ev = match upper_short(src, *keyword, &mut [0; 16]) {
-                    "IF" => BranchEvent::If,
-                    "SWITCH" => BranchEvent::Switch,
-                    "ELSE" | "DEFAULT" => BranchEvent::Otherwise,
-                    "CASE" => BranchEvent::Case,
-                    "ENDIF" => BranchEvent::EndIf,
-                    _ => BranchEvent::EndSwitch,
-                };
-                out.facts.events.push(Event::Branch(ev));
+                branch_event(src, *keyword, &mut self.loops, &mut out.facts.events);
             }
             StmtKind::Motion {
                 keyword,
@@ -813,6 +841,51 @@ impl<'a> Extractor<'a> {
             }
         }
     }
+}
+
+/// The event of a block keyword (`IF`, `ENDSWITCH`, `FOR`, `EXIT`, …). Out of line, as
+/// [`param_routine`]: [`Extractor::statement`] stays small enough to be inlined.
+#[inline(never)]
+fn branch_event(src: &[u8], keyword: Span, loops: &mut Vec<usize>, events: &mut Vec<Event>) {
+    let ev = match upper_short(src, keyword, &mut [0; 16]) {
+        "IF" => BranchEvent::If,
+        "SWITCH" => BranchEvent::Switch,
+        "ELSE" | "DEFAULT" => BranchEvent::Otherwise,
+        "CASE" => BranchEvent::Case,
+        "ENDIF" => BranchEvent::EndIf,
+        "ENDSWITCH" => BranchEvent::EndSwitch,
+        word => return loop_event(word, loops, events),
+    };
+    events.push(Event::Branch(ev));
+}
+
+/// A loop's opening (`FOR`, `WHILE`, `LOOP`, `REPEAT`) or closing keyword (`word`, upper
+/// case), or `EXIT`, as an event: a closing one gives its opening one the index of its
+/// [`Event::EndLoop`].
+fn loop_event(word: &str, open: &mut Vec<usize>, events: &mut Vec<Event>) {
+    let kind = match word {
+        "FOR" => LoopKind::For,
+        "WHILE" => LoopKind::While,
+        "LOOP" => LoopKind::Loop,
+        "REPEAT" => LoopKind::Repeat,
+        "EXIT" => {
+            events.push(Event::Exit);
+            return;
+        }
+        _ => {
+            // The parser hands a closing keyword only when a block it closes is open.
+            if let Some(start) = open.pop() {
+                let end = events.len();
+                if let Some(Event::Loop { end: e, .. }) = events.get_mut(start) {
+                    *e = end;
+                }
+                events.push(Event::EndLoop);
+            }
+            return;
+        }
+    };
+    open.push(events.len());
+    events.push(Event::Loop { kind, end: 0 });
 }
 
 fn fdat(src: &[u8], agg: &Aggregate) -> Fdat {
@@ -896,8 +969,18 @@ fn computed_assignment(
         return;
     }
     let line = lines.line(target.span.start);
-    // The routine's own parameter hides module data of its name.
     let array = name.split_once('[').map_or(name, |(a, _)| a);
+    if let Some(tool) = match array {
+        "BASE_DATA" => Some(false),
+        "TOOL_DATA" => Some(true),
+        _ => None,
+    } {
+        let index = name.get(array.len() + 1..name.len().saturating_sub(1));
+        let number = index.and_then(|i| i.parse().ok());
+        out.facts.data_assignments.push((tool, number, line));
+        return;
+    }
+    // The routine's own parameter hides module data of its name.
     let key = crate::names::NameKey(array.as_bytes());
     let param = routine.and_then(|(r, params)| {
         Some((
@@ -921,13 +1004,14 @@ fn computed_assignment(
     }
 }
 
-/// An assignment statement. `routine` is the routine it is written in, when that takes
-/// parameters: its index and its parameters.
+/// An assignment statement, written in a `DEF`/`DEFFCT` (`in_routine`) or a data list.
+/// `routine` is the routine it is written in, when that takes parameters: its index and its
+/// parameters.
 fn assignment(
     src: &[u8],
     lines: &LineIndex,
     declared: &HashMap<Name, PositionKind>,
-    routine: Option<(usize, &[Param])>,
+    (in_routine, routine): (bool, Option<(usize, &[Param])>),
     target: &Expr,
     value: &Expr,
     out: &mut Extracted,
@@ -937,7 +1021,12 @@ fn assignment(
             out.facts.events.push(Event::Set(s));
             return;
         }
-        if computed_at_run_time(src, value) || computed_at_run_time(src, target) {
+        // A whole base or tool (`BASE_DATA[1] = BASE_DATA[2]`) is the controller's to change
+        // as its components are: `BAS(#BASE,1)` after it reads the new value.
+        if computed_at_run_time(src, value)
+            || computed_at_run_time(src, target)
+            || data_element(src, target).is_some()
+        {
             computed_assignment(src, lines, routine, target, out);
         }
         if matches!(target.kind, ExprKind::Name | ExprKind::Index(..))
@@ -967,6 +1056,11 @@ fn assignment(
         };
         let d = frame_decl(src, lines, format!("{prefix}[{n}]"), kind, value, agg);
         out.frames.push(d);
+        // In a data list it is the frame's value; in a routine it overwrites that value when
+        // the program runs.
+        if in_routine {
+            computed_assignment(src, lines, routine, target, out);
+        }
         return;
     }
     let target_name = upper(src, target.span);

@@ -3,7 +3,9 @@
 //! (its target, what that was copied from) goes with its base and tool to the shared usage pass
 //! ([`crate::resolve`]), which fills each position's [`Usage`](crate::position::Usage).
 
-use super::positions::{BranchEvent, Event, Facts, Fdat, FrameRef, Ref, Setting, name_key};
+use super::positions::{
+    BranchEvent, Event, Facts, Fdat, FrameRef, LoopKind, Ref, Setting, name_key,
+};
 use crate::position::{Config, FrameName, Name, ParsedFile, PositionKind, RunTimeValue, UseLine};
 use crate::syntax::Diagnostic;
 use std::sync::Arc;
@@ -110,21 +112,131 @@ impl Fork {
         if !self.exhaustive {
             self.outcomes.push(self.entry.clone());
         }
-        let Some(first) = self.outcomes.first().cloned() else {
-            return self.entry;
-        };
-        let agree = |f: fn(&State) -> &Option<FrameRef>| {
-            if self.outcomes.iter().all(|o| f(o) == f(&first)) {
-                f(&first).clone()
-            } else {
-                Some(FrameRef::Unknown)
-            }
-        };
-        State {
-            base: agree(|s| &s.base),
-            tool: agree(|s| &s.tool),
-            tcp: self.outcomes.iter().any(|o| o.tcp),
+        join(&self.outcomes).unwrap_or(self.entry)
+    }
+}
+
+/// What every state of `states` agrees on: a base or tool that differs between them is
+/// unknown, and #TCP in any counts. `None` for no state.
+fn join(states: &[State]) -> Option<State> {
+    let first = states.first()?;
+    let agree = |f: fn(&State) -> &Option<FrameRef>| {
+        if states.iter().all(|o| f(o) == f(first)) {
+            f(first).clone()
+        } else {
+            Some(FrameRef::Unknown)
         }
+    };
+    Some(State {
+        base: agree(|s| &s.base),
+        tool: agree(|s| &s.tool),
+        tcp: states.iter().any(|o| o.tcp),
+    })
+}
+
+/// How many states a loop's top is followed from before the rest are joined into one.
+const LOOP_STATES: usize = 8;
+
+/// An open loop while following program order.
+struct Loop {
+    kind: LoopKind,
+    /// The index of its first event and of its [`Event::EndLoop`].
+    start: usize,
+    end: usize,
+    /// How many `IF`/`SWITCH` were open at its top.
+    forks: usize,
+    /// Every state its body has been followed from, the first the one before the loop.
+    tops: Vec<State>,
+    /// The states at the end of its body, and at each `EXIT`.
+    ends: Vec<State>,
+    exits: Vec<State>,
+}
+
+/// Program order within a routine: the state, the open `IF`/`SWITCH` and the open loops. A
+/// loop's body is followed again from each state its end leaves that its top has not been
+/// followed from (so a base set late in the body holds for the motions before it on the next
+/// pass: such a motion is used with both), until no new one comes; after the loop, the state
+/// is the join of those it may leave with.
+#[derive(Default)]
+struct Flow {
+    state: State,
+    forks: Vec<Fork>,
+    loops: Vec<Loop>,
+}
+
+impl Flow {
+    fn reset(&mut self) {
+        self.state = State::default();
+        self.forks.clear();
+        self.loops.clear();
+    }
+
+    /// Follows control event `ev`, the `i`th; returns the index of the event that follows it.
+    fn control(&mut self, i: usize, ev: &Event) -> usize {
+        match ev {
+            Event::Branch(b) => branch(&mut self.state, &mut self.forks, *b),
+            Event::Loop { kind, end } if *end > i => self.loops.push(Loop {
+                kind: *kind,
+                start: i + 1,
+                end: *end,
+                forks: self.forks.len(),
+                tops: vec![self.state.clone()],
+                ends: Vec::new(),
+                exits: Vec::new(),
+            }),
+            Event::Exit => {
+                if let Some(l) = self.loops.last_mut() {
+                    l.exits.push(self.state.clone());
+                }
+            }
+            Event::EndLoop => return self.end_of_body(i),
+            _ => {}
+        }
+        i + 1
+    }
+
+    /// The end of a loop's body at event `i`: back to its top from a new state, or on after it.
+    fn end_of_body(&mut self, i: usize) -> usize {
+        let Some(l) = self.loops.last_mut().filter(|l| l.end == i) else {
+            return i + 1;
+        };
+        // Blocks left open inside are joined on the way out.
+        while self.forks.len() > l.forks {
+            if let Some(f) = self.forks.pop() {
+                self.state = f.join(std::mem::take(&mut self.state));
+            }
+        }
+        let end = self.state.clone();
+        if !l.ends.contains(&end) {
+            l.ends.push(end.clone());
+        }
+        if !l.tops.contains(&end) && l.tops.len() <= LOOP_STATES {
+            let next = if l.tops.len() < LOOP_STATES {
+                end
+            } else {
+                // Too many to follow one by one: a last pass from what they all agree on.
+                let mut all = l.tops.clone();
+                all.push(end);
+                join(&all).unwrap_or_default()
+            };
+            l.tops.push(next.clone());
+            self.state = next;
+            return l.start;
+        }
+        let Some(l) = self.loops.pop() else {
+            return i + 1;
+        };
+        // The states the loop may be left with: at its test, and at each `EXIT`.
+        let mut out = match l.kind {
+            LoopKind::For | LoopKind::While => l.tops,
+            LoopKind::Repeat => l.ends,
+            LoopKind::Loop => Vec::new(),
+        };
+        out.extend(l.exits);
+        if let Some(after) = join(&out) {
+            self.state = after;
+        }
+        i + 1
     }
 }
 
@@ -201,8 +313,7 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
             let module = modules.of(fi);
             let fdats = fdats.get(module).unwrap_or(&no_fdats);
             let mut current: Option<&str> = None;
-            let mut state = State::default();
-            let mut forks: Vec<Fork> = Vec::new();
+            let mut flow = Flow::default();
             let close =
                 |name: Option<&str>,
                  state: &State,
@@ -214,25 +325,29 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                         });
                     }
                 };
-            for ev in &f.events {
+            let mut i = 0;
+            while let Some(ev) = f.events.get(i) {
                 match ev {
                     Event::Reset(name) => {
-                        close(current, &state, &mut next);
+                        close(current, &flow.state, &mut next);
                         current = name.as_deref();
-                        state = State::default();
-                        forks.clear();
+                        flow.reset();
                     }
                     Event::Call(name) => {
                         if let Some(exit) = exits.of(module, name) {
-                            exit.apply_to(&mut state);
+                            exit.apply_to(&mut flow.state);
                         }
                     }
-                    Event::Branch(b) => branch(&mut state, &mut forks, *b),
-                    Event::Set(s) => state.apply(s, fdats),
+                    Event::Set(s) => flow.state.apply(s, fdats),
+                    Event::Branch(_) | Event::Loop { .. } | Event::EndLoop | Event::Exit => {
+                        i = flow.control(i, ev);
+                        continue;
+                    }
                     Event::Alias { .. } | Event::Motion { .. } => {}
                 }
+                i += 1;
             }
-            close(current, &state, &mut next);
+            close(current, &flow.state, &mut next);
         }
         if next == exits.by_routine {
             break;
@@ -491,35 +606,37 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             let mut folded: Vec<&str> = Vec::new();
             let own = counts.get(fi).copied().unwrap_or_default();
             let mut inline_at: Option<HashMap<crate::syntax::Span, usize>> = None;
-            let mut state = State::default();
+            let mut flow = Flow::default();
             let mut aliases: HashMap<&str, &str> = HashMap::default();
-            let mut forks: Vec<Fork> = Vec::new();
             let module = modules.of(fi);
             let fdats = fdats.get(module).unwrap_or(&no_fdats);
-            for ev in &events {
+            let mut i = 0;
+            while let Some(ev) = events.get(i) {
+                i += 1;
                 match ev {
                     Event::Reset(_) => {
-                        state = State::default();
+                        flow.reset();
                         aliases.clear();
-                        forks.clear();
                     }
                     Event::Call(name) => {
                         if let Some(exit) = exits.of(module, name) {
-                            exit.apply_to(&mut state);
+                            exit.apply_to(&mut flow.state);
                         }
                     }
-                    Event::Branch(b) => branch(&mut state, &mut forks, *b),
+                    Event::Branch(_) | Event::Loop { .. } | Event::EndLoop | Event::Exit => {
+                        i = flow.control(i - 1, ev);
+                    }
                     Event::Alias { name, source } => {
                         aliases.insert(name.as_str(), source.as_str());
                     }
-                    Event::Set(s) => state.apply(s, fdats),
+                    Event::Set(s) => flow.state.apply(s, fdats),
                     Event::Motion {
                         span,
                         line,
                         refs,
                         with,
                     } => {
-                        let mut local = state.clone();
+                        let mut local = flow.state.clone();
                         for s in with {
                             local.apply(s, fdats);
                         }
@@ -596,6 +713,11 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         binder.finish();
     }
     for (fi, file) in files.iter_mut().enumerate() {
+        // A motion in a loop followed from several states is warned about once.
+        if let Some(w) = unresolved.get_mut(fi) {
+            w.sort_by_key(|s| s.start);
+            w.dedup();
+        }
         for &span in unresolved.get(fi).into_iter().flatten() {
             file.diagnostics.push(
                 Diagnostic::warning(span, "the base of this motion is not resolved").with_hint(
@@ -666,6 +788,58 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         computed_through_parameters(&mut shared, facts);
     }
     crate::resolve::mark_run_time(&mut shared, &NAMING);
+    drop(shared);
+    mark_assigned_data(files, facts);
+}
+
+/// Marks every target moved to with a base or tool the program assigns when it runs
+/// (`BASE_DATA[1] = BASE_DATA[2]`, `TOOL_DATA[1] = {…}` in a `DEF`, `TOOL_DATA[1].Z = 300`;
+/// `BASE_DATA[I] = …` may be any of them) as used with a frame computed at run time, the first
+/// such assignment's line and file named: `BAS(#BASE,1)` reads the value the element has then,
+/// not the one `$config.dat` gives it. Flow-insensitive, as every computed assignment; and by
+/// number, whether or not `$config.dat` declares the element.
+fn mark_assigned_data(files: &mut [ParsedFile], facts: &[Facts]) {
+    // (tool, number: `None` for any, line, file) of the first assignment of each.
+    let mut assigned: Vec<(bool, Option<u32>, usize, usize)> = Vec::new();
+    for (fi, f) in facts.iter().enumerate() {
+        for &(tool, n, line) in &f.data_assignments {
+            if !assigned.iter().any(|a| (a.0, a.1) == (tool, n)) {
+                assigned.push((tool, n, line, fi));
+            }
+        }
+    }
+    if assigned.is_empty() {
+        return;
+    }
+    let data = |name: &str, tool: bool| -> Option<Option<u32>> {
+        let index = name.strip_prefix(if tool { "TOOL_DATA[" } else { "BASE_DATA[" })?;
+        Some(index.strip_suffix(']')?.parse().ok())
+    };
+    let names: Vec<Arc<str>> = files.iter().map(|f| UseLine::file_name(&f.path)).collect();
+    for (tf, file) in files.iter_mut().enumerate() {
+        for usage in file.positions.usages_mut() {
+            if usage.run_time().is_some() {
+                continue;
+            }
+            let frames = usage.work_objects().map(|w| (w, false));
+            let used = frames.chain(usage.tool.as_deref().map(|t| (t, true)));
+            let found = used.into_iter().find_map(|(name, tool)| {
+                let n = data(name, tool)?;
+                let &(.., line, fi) = assigned
+                    .iter()
+                    .find(|&&(t, m, ..)| t == tool && (m == n || m.is_none()))?;
+                Some((name.to_owned(), (line, fi)))
+            });
+            if let Some((name, (line, fi))) = found
+                && let Some(from) = names.get(fi)
+            {
+                usage.set_run_time(RunTimeValue::Frame {
+                    name: Some(name),
+                    at: UseLine::of(line, fi, tf, from),
+                });
+            }
+        }
+    }
 }
 
 /// Marks the targets a call passes to an `:OUT` parameter that its routine gives a computed

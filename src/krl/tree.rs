@@ -156,8 +156,10 @@ pub enum StmtKind {
     },
     /// A subroutine call statement (`BAS(#INITMOV, 0)`): the call expression.
     Call(Expr),
-    /// `IF`, `ELSE`, `ENDIF`, `SWITCH`, `CASE`, `DEFAULT`, `ENDSWITCH` (the keyword): where
-    /// program order forks and joins, for following the base and tool.
+    /// `IF`, `ELSE`, `ENDIF`, `SWITCH`, `CASE`, `DEFAULT`, `ENDSWITCH`, a loop's opening and
+    /// closing keyword (`FOR`…`ENDFOR`, `WHILE`, `LOOP`, `REPEAT`…`UNTIL`) and `EXIT` (the
+    /// keyword): where program order forks, joins and goes round, for following the base and
+    /// tool.
     Branch(Span),
     /// `keyword target` / `keyword aux, target`, then approximation and `WITH` assignments.
     Motion {

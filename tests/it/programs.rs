@@ -1036,3 +1036,89 @@ fn a_target_literal_assigned_to_a_name_is_used_as_the_name_is() {
     assert_eq!(&*inline[0].usage.lines, [8]);
     assert!(inline[1].usage.lines.is_empty(), "{:?}", inline[1].usage);
 }
+
+/// A loop's body is followed again from the state its end leaves: a base set late in the body
+/// holds for the motions before it on the next pass, so `XP1` is used with both bases and
+/// refused; after the loop the base is what every way out agrees on (a `WHILE` or `FOR` may
+/// run no pass, a `REPEAT` runs one, a `LOOP` is left at its `EXIT`s). A body that sets
+/// nothing keeps the one base, and its points are corrected.
+#[test]
+fn a_base_set_late_in_a_loop_holds_at_its_top() {
+    let dat = format!("DEFDAT a1 PUBLIC\nDECL E6POS XP1={P1}\nDECL E6POS XP2={P1}\nENDDAT\n");
+    let cell = root().join("samples/cell_rules.toml");
+    let run = |body: &str| {
+        let src = format!(
+            "DEF a1( )\n  INT I\n  BAS (#INITMOV,0 )\n  BAS (#TOOL,1 )\n  BAS (#BASE,1 )\n{body}END\n"
+        );
+        let (dir, r1) = kss(&[
+            ("Program/a1.src", &src),
+            ("Program/a1.dat", &dat),
+            ("System/$config.dat", CONFIG),
+        ]);
+        let ps = programs(&r1);
+        let u = |n: &str| {
+            let u = target(&ps[0], n).usage.clone();
+            let mut all: Vec<String> = u.work_objects().map(str::to_owned).collect();
+            all.sort();
+            all
+        };
+        let bases = (u("XP1"), u("XP2"));
+        let (code, out, err) = trackfix(&[
+            "correct",
+            r1.to_str().unwrap(),
+            "--cell",
+            cell.to_str().unwrap(),
+            "--robot",
+            "r1",
+            "--diff",
+        ]);
+        drop(dir);
+        (bases, code, out, err)
+    };
+    let two = || vec!["BASE_DATA[1]".to_owned(), "BASE_DATA[2]".to_owned()];
+    let one = |n: u32| vec![format!("BASE_DATA[{n}]")];
+    for (body, xp1, xp2) in [
+        (
+            "  FOR I = 1 TO 3\n    LIN XP1\n    BAS (#BASE,2 )\n    LIN XP2\n  ENDFOR\n",
+            two(),
+            one(2),
+        ),
+        (
+            "  WHILE $IN[1]\n    LIN XP1\n    BAS (#BASE,2 )\n  ENDWHILE\n  LIN XP2\n",
+            two(),
+            vec![],
+        ),
+        (
+            "  REPEAT\n    LIN XP1\n    BAS (#BASE,2 )\n  UNTIL $IN[1]\n  LIN XP2\n",
+            two(),
+            one(2),
+        ),
+        (
+            "  LOOP\n    LIN XP1\n    IF $IN[1] THEN\n      EXIT\n    ENDIF\n    BAS (#BASE,2 )\n  ENDLOOP\n  LIN XP2\n",
+            two(),
+            vec![],
+        ),
+        (
+            "  FOR I = 1 TO 3\n    WHILE $IN[2]\n      LIN XP2\n    ENDWHILE\n    LIN XP1\n    BAS (#BASE,2 )\n  ENDFOR\n",
+            two(),
+            two(),
+        ),
+    ] {
+        let ((b1, b2), code, out, err) = run(body);
+        assert_eq!((&b1, &b2), (&xp1, &xp2), "{body}");
+        assert_eq!(code, 3, "{body}: {err}");
+        assert!(out.is_empty(), "{body}: {out}");
+        assert!(
+            err.contains(
+                "a1.dat:2:16: error: E6POS `XP1` is used with two bases (`BASE_DATA[1]` and `BASE_DATA[2]`)"
+            ),
+            "{body}: {err}"
+        );
+    }
+    let ((b1, b2), code, out, err) = run(
+        "  FOR I = 1 TO 3\n    LIN XP1\n    WHILE $IN[1]\n      LIN XP2\n    ENDWHILE\n  ENDFOR\n",
+    );
+    assert_eq!((b1, b2), (one(1), one(1)));
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("+DECL E6POS XP1={X 410.745,"), "{out}");
+}

@@ -649,3 +649,95 @@ END\n",
         assert!(!written.contains(&krl_point(name)), "{name}: {written}");
     }
 }
+
+/// A KSS tree `KRC/R1` in a new folder: `$config.dat` with bases 1 and 2 and tool 1, and the
+/// program `a1` whose `.src` is `src`, moving to `XP1` and `XP2`; returns the folder and the tree.
+fn kss_a1(src: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let r1 = dir.path().join("KRC/R1");
+    std::fs::create_dir_all(r1.join("System")).unwrap();
+    std::fs::create_dir_all(r1.join("Program")).unwrap();
+    std::fs::write(
+        r1.join("System/$config.dat"),
+        "DEFDAT $CONFIG PUBLIC\n\
+DECL GLOBAL FRAME TOOL_DATA[16]\n\
+TOOL_DATA[1]={X 0.0,Y 0.0,Z 245.0,A 0.0,B 0.0,C 0.0}\n\
+DECL GLOBAL FRAME BASE_DATA[32]\n\
+BASE_DATA[1]={X 2150.0,Y -1480.0,Z 720.0,A 0.0,B 0.0,C 0.0}\n\
+BASE_DATA[2]={X 1000.0,Y 500.0,Z 0.0,A 90.0,B 0.0,C 0.0}\n\
+ENDDAT\n",
+    )
+    .unwrap();
+    let dat = format!(
+        "DEFDAT  a1 PUBLIC\n{}{}ENDDAT\n",
+        krl_point("XP1"),
+        krl_point("XP2")
+    );
+    std::fs::write(r1.join("Program/a1.dat"), dat).unwrap();
+    std::fs::write(r1.join("Program/a1.src"), src).unwrap();
+    (dir, r1)
+}
+
+/// `BAS(#BASE,1)` reads `BASE_DATA[1]` as it is when it runs: a program that overwrites the
+/// whole element (a copy of another, a literal, a tool alike) has the targets moved to with it
+/// refused as runtime data, the assignment's line and file named, nothing written, as one that
+/// sets a component; `BASE_DATA[3] = …` leaves base 1 alone, and a program that assigns none is
+/// corrected.
+#[test]
+fn a_krl_base_or_tool_the_program_overwrites_refuses_its_targets() {
+    let program = |assign: &str| {
+        format!(
+            "DEF a1( )\n  BAS (#INITMOV,0 )\n  BAS (#TOOL,1 )\n{assign}  BAS (#BASE,1 )\n  LIN XP1\n  LIN XP2\nEND\n"
+        )
+    };
+    let correct = |r1: &Path| {
+        crate::support::trackfix(&[
+            "correct",
+            r1.to_str().unwrap(),
+            "--cell",
+            "samples/cell_rules.toml",
+            "--robot",
+            "r1",
+            "--diff",
+        ])
+    };
+    for (assign, frame) in [
+        ("  BASE_DATA[1] = BASE_DATA[2]\n", "BASE_DATA[1]"),
+        (
+            "  BASE_DATA[1] = {X 1000.0,Y 500.0,Z 0.0,A 90.0,B 0.0,C 0.0}\n",
+            "BASE_DATA[1]",
+        ),
+        ("  TOOL_DATA[1] = {X 0.0,Y 0.0,Z 300.0}\n", "TOOL_DATA[1]"),
+        ("  BASE_DATA[1].X = 2000.0\n", "BASE_DATA[1]"),
+    ] {
+        let (_dir, r1) = kss_a1(&program(assign));
+        let before = std::fs::read(r1.join("Program/a1.dat")).unwrap();
+        let (code, out, err) = correct(&r1);
+        assert_eq!(code, 3, "{assign}: {err}");
+        assert!(out.is_empty(), "{assign}: {out}");
+        for (name, line) in [("XP1", 2), ("XP2", 3)] {
+            assert!(
+                err.contains(&format!(
+                    "a1.dat:{line}:16: error: E6POS `{name}` is used with `{frame}`, which is computed at run time (line 4 of a1.src): not correctable offline"
+                )),
+                "{assign}: {err}"
+            );
+        }
+        assert!(
+            err.contains(
+                "note: 2 of the 2 refused target(s) computed at run time: not correctable offline"
+            ),
+            "{assign}: {err}"
+        );
+        assert_eq!(std::fs::read(r1.join("Program/a1.dat")).unwrap(), before);
+    }
+    for assign in ["", "  BASE_DATA[3] = BASE_DATA[2]\n"] {
+        let (_dir, r1) = kss_a1(&program(assign));
+        let (code, out, err) = correct(&r1);
+        assert_eq!(code, 0, "{assign}: {err}");
+        assert!(
+            out.contains("+DECL E6POS XP1={X 410.745,Y -93.483,Z 228.198,"),
+            "{assign}: {out}"
+        );
+    }
+}

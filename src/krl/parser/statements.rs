@@ -99,6 +99,8 @@ impl LineParser<'_, '_> {
                 hint: "`GLOBAL` only qualifies DEF, DEFFCT, DECL, STRUC, ENUM, SIGNAL and INTERRUPT",
             }),
             _ if word.is_in(MOTION_KEYWORDS) => motion(&mut c).map(|k| (NodeKind::Motion, Some(k))),
+            // `EXIT` leaves the innermost loop: program order goes on after it.
+            b"EXIT" => Ok((NodeKind::Simple, Some(StmtKind::Branch(head.span())))),
             _ if word.is_in(SIMPLE_KEYWORDS) => Ok((NodeKind::Simple, None)),
             b"IF" => {
                 let has_then = sig.last().is_some_and(|t| is_kw(self.src, Some(t), "THEN"));
@@ -118,8 +120,12 @@ impl LineParser<'_, '_> {
                 if let Some(k) = static_kw(w) {
                     self.push_open(k, head.span(), NodeKind::Block);
                 }
-                let branch = (w == "SWITCH").then(|| StmtKind::Branch(head.span()));
-                Ok((NodeKind::BlockOpen, branch))
+                // A spline block is one motion, not a change of program order.
+                let branch = !w.ends_with("SPLINE");
+                Ok((
+                    NodeKind::BlockOpen,
+                    branch.then(|| StmtKind::Branch(head.span())),
+                ))
             }
             b"ELSE" | b"CASE" | b"DEFAULT" => {
                 let w = word.as_str();
@@ -139,8 +145,7 @@ impl LineParser<'_, '_> {
                 let w = word.as_str();
                 let matched = self.stack.iter().any(|o| closer_of(o.keyword) == w);
                 self.close(w, head.span());
-                let branch = (matched && (w == "ENDIF" || w == "ENDSWITCH"))
-                    .then(|| StmtKind::Branch(head.span()));
+                let branch = (matched && w != "ENDSPLINE").then(|| StmtKind::Branch(head.span()));
                 Ok((NodeKind::BlockClose, branch))
             }
             _ => self.other(&mut c, head, stmt_span),
