@@ -700,11 +700,17 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                         // not this program's business, nor is one to a joint target only (it
                         // moves the same whatever the base).
                         binder.bind(fi, &u);
-                        if u.frame.is_none()
-                            && binder.reached_cartesian()
-                            && let Some(w) = unresolved.get_mut(fi)
-                        {
-                            w.push(*span);
+                        if u.frame.is_none() && binder.reached_cartesian() {
+                            // Whatever base its other motions use, the point's is not known
+                            // (a base computed at run time is refused as such).
+                            if u.run_time.is_none() {
+                                binder.mark_reached(fi, |_, usage| {
+                                    usage.mark_unresolved_frame(*line);
+                                });
+                            }
+                            if let Some(w) = unresolved.get_mut(fi) {
+                                w.push(*span);
+                            }
                         }
                     }
                 }

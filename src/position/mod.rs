@@ -416,6 +416,9 @@ struct RareUsage {
     run_time: Option<RunTimeValue>,
     stationary_tool: bool,
     zone: Option<NonPosition>,
+    /// The first line of a motion to the target whose frame is not known (a KRL base set on
+    /// one path only).
+    unresolved_frame: Option<u32>,
 }
 
 /// A target's usage is kept for each of 100,000 targets: a layout change that grows it fails
@@ -625,6 +628,20 @@ impl Usage {
     /// Set when the program uses the target as other than a position: the first use found.
     pub fn non_position(&self) -> Option<&NonPosition> {
         self.rare.as_ref()?.zone.as_ref()
+    }
+
+    /// The first line of a motion to the target whose work object (base) is not known, if any:
+    /// whatever the others use, the target's frame is then not known either.
+    pub fn unresolved_frame(&self) -> Option<usize> {
+        self.rare.as_ref()?.unresolved_frame.map(|l| l as usize)
+    }
+
+    /// Records a motion to the target at `line` whose work object (base) is not known.
+    pub fn mark_unresolved_frame(&mut self, line: usize) {
+        let rare = self.rare.get_or_insert_with(Box::default);
+        if rare.unresolved_frame.is_none() {
+            rare.unresolved_frame = Some(u32::try_from(line).unwrap_or(u32::MAX));
+        }
     }
 
     /// Marks the target as used as other than a position, keeping the first use found.

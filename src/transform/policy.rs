@@ -135,6 +135,13 @@ pub(crate) fn wobj_of(
 ) -> Result<String, Why> {
     let what = describe(p);
     let frame = words.frame;
+    if let Some(line) = p.usage.unresolved_frame() {
+        return Err(Why::new(
+            RefusalKind::UnresolvedWorkObject,
+            format!("{what} is moved to on line {line} with a {frame} that cannot be resolved"),
+            words.frame_of_a_motion,
+        ));
+    }
     match (&p.usage.wobj, p.usage.lines.is_empty()) {
         (Some(w), _) => Ok(w.to_string()),
         (None, true) => match default {

@@ -121,7 +121,23 @@ fn local_data_stays_in_its_module() {
 #[test]
 fn an_unresolved_frame_is_explained_in_the_programs_language() {
     let cell = root().join("samples/cell_rules.toml");
-    let src = "DEF m( )\n  INT I\n  IF I == 1 THEN\n    BAS (#BASE,1 )\n  ENDIF\n  LIN XP1\nEND\n";
+    // Set on one path only; and known for one motion, set on one path only before another:
+    // whatever the first motion's base, the point's is not known.
+    for (src, line) in [
+        (
+            "DEF m( )\n  INT I\n  IF I == 1 THEN\n    BAS (#BASE,1 )\n  ENDIF\n  LIN XP1\nEND\n",
+            6,
+        ),
+        (
+            "DEF m( )\n  INT I\n  BAS (#BASE,1 )\n  LIN XP1\n  IF I == 1 THEN\n    BAS (#BASE,2 )\n  ENDIF\n  LIN XP1\nEND\n",
+            8,
+        ),
+    ] {
+        unresolved_frame_is_refused(&cell, src, line);
+    }
+}
+
+fn unresolved_frame_is_refused(cell: &Path, src: &str, line: usize) {
     let dat = format!("DEFDAT m PUBLIC\nDECL E6POS XP1={P1}\nENDDAT\n");
     let (dir, r1) = kss(&[
         ("Program/m.src", src),
@@ -141,7 +157,9 @@ fn an_unresolved_frame_is_explained_in_the_programs_language() {
     ]);
     assert_eq!(code, 3, "{err}");
     assert!(
-        err.contains("E6POS `XP1` is used with a base that cannot be resolved"),
+        err.contains(&format!(
+            "E6POS `XP1` is moved to on line {line} with a base that cannot be resolved"
+        )),
         "{err}"
     );
     assert!(
