@@ -520,6 +520,106 @@ struct Fields {
     joints_written: bool,
     /// A number field is not what `NumField::read_at` reads at its start (see `num_field`).
     read_elsewhere: bool,
+    /// The fields written, by [`field_index`]; `odd` when one is written twice or is none of
+    /// them: what [`field_problem`] then reports for a declared position.
+    seen: u32,
+    odd: bool,
+}
+
+impl Fields {
+    /// Notes field `k` (of [`field_index`]) as written.
+    fn saw(&mut self, k: u32) {
+        let bit = 1 << k;
+        self.odd |= self.seen & bit != 0;
+        self.seen |= bit;
+    }
+}
+
+/// The place of a position's field among `X Y Z A B C S T` (0-7), `E1`-`E6` (8-13) and
+/// `A1`-`A6` (14-19), compared without case; `None` for any other name.
+fn field_index(name: &[u8]) -> Option<u32> {
+    match name {
+        [c] => Some(match c.to_ascii_uppercase() {
+            b'X' => 0,
+            b'Y' => 1,
+            b'Z' => 2,
+            b'A' => 3,
+            b'B' => 4,
+            b'C' => 5,
+            b'S' => 6,
+            b'T' => 7,
+            _ => return None,
+        }),
+        [c, d @ b'1'..=b'6'] => {
+            let k = u32::from(d - b'1');
+            match c.to_ascii_uppercase() {
+                b'E' => Some(8 + k),
+                b'A' => Some(14 + k),
+                _ => None,
+            }
+        }
+        _ => None,
+    }
+}
+
+/// The fields a `kind` position has, by [`field_index`]: E6POS X..T and E1-E6, POS X..T, FRAME
+/// X..C, E6AXIS A1-A6 and E1-E6, AXIS A1-A6 (none for another kind).
+fn allowed_fields(kind: PositionKind) -> u32 {
+    match kind {
+        PositionKind::E6Pos => 0x3fff,
+        PositionKind::Pos => 0xff,
+        PositionKind::Frame => 0x3f,
+        PositionKind::E6Axis => 0xf_ff00,
+        PositionKind::Axis => 0xf_c000,
+        _ => 0,
+    }
+}
+
+/// An error for the first field of the `kind` aggregate declared as `name` that its type does
+/// not have, or that is given twice: KSS does not load such a file, and a transform would
+/// rewrite one of the two values and leave the other. Out of line: the statement handler it
+/// is called from is inlined into the parser's sink.
+#[inline(never)]
+fn field_problem(
+    src: &[u8],
+    agg: &Aggregate,
+    kind: PositionKind,
+    name: &str,
+) -> Option<Diagnostic> {
+    let allowed = allowed_fields(kind);
+    let fields = match kind {
+        PositionKind::E6Pos => "X, Y, Z, A, B, C, S, T, E1-E6",
+        PositionKind::Pos => "X, Y, Z, A, B, C, S, T",
+        PositionKind::Frame => "X, Y, Z, A, B, C",
+        PositionKind::E6Axis => "A1-A6, E1-E6",
+        PositionKind::Axis => "A1-A6",
+        _ => return None,
+    };
+    let mut seen = 0u32;
+    for field in &agg.fields {
+        let bit = field_index(field.name.slice(src))
+            .map(|k| 1u32 << k)
+            .filter(|b| allowed & b != 0);
+        let twice = match bit {
+            Some(b) if seen & b == 0 => {
+                seen |= b;
+                continue;
+            }
+            Some(_) => true,
+            None => false,
+        };
+        let written = crate::syntax::latin1(field.name.slice(src));
+        let problem = if twice {
+            format!("{} `{name}` gives field `{written}` twice", kind.as_str())
+        } else {
+            format!("{} `{name}` has no field `{written}`", kind.as_str())
+        };
+        return Some(Diagnostic::error(field.name, problem).with_hint(format!(
+            "the controller does not load the file: write each of {}'s fields ({fields}) at most once; trackfix transforms no file with an error",
+            kind.as_str()
+        )));
+    }
+    None
 }
 
 fn read_fields(src: &[u8], agg: &Aggregate) -> Fields {
@@ -538,30 +638,40 @@ fn read_fields(src: &[u8], agg: &Aggregate) -> Fields {
                 if let Some(slot) = f.xyz.get_mut(usize::from(upper0 - b'X')) {
                     *slot = num_field(src, v, &mut f.read_elsewhere);
                 }
+                f.saw(u32::from(upper0 - b'X'));
                 f.cartesian_written = true;
             }
             (1, b'A' | b'B' | b'C', _) => {
                 if let Some(slot) = f.abc.get_mut(usize::from(upper0 - b'A')) {
                     *slot = num_field(src, v, &mut f.read_elsewhere);
                 }
+                f.saw(3 + u32::from(upper0 - b'A'));
                 f.abc_written = true;
                 f.cartesian_written = true;
             }
-            (1, b'S', _) => f.s = bit_field(src, v),
-            (1, b'T', _) => f.t = bit_field(src, v),
+            (1, b'S', _) => {
+                f.s = bit_field(src, v);
+                f.saw(6);
+            }
+            (1, b'T', _) => {
+                f.t = bit_field(src, v);
+                f.saw(7);
+            }
             (2, b'A', Some(i)) => {
                 if let Some(slot) = f.axes.get_mut(i) {
                     *slot = num_field(src, v, &mut f.read_elsewhere);
                 }
+                f.saw(14 + i as u32);
                 f.joints_written = true;
             }
             (2, b'E', Some(i)) => {
                 if let Some(slot) = f.ext.get_mut(i) {
                     *slot = num_field(src, v, &mut f.read_elsewhere);
                 }
+                f.saw(8 + i as u32);
                 f.ext_written = f.ext_written.max(i + 1);
             }
-            _ => {}
+            _ => f.odd = true,
         }
     }
     f
@@ -757,6 +867,12 @@ impl<'a> Extractor<'a> {
                     } else if let Some(kind) = positional {
                         let name = name_text(v.name.slice(src));
                         let f = read_fields(src, agg);
+                        // Told from the fields read, in the rare case only.
+                        if (f.odd || f.seen & !allowed_fields(kind) != 0)
+                            && let Some(d) = field_problem(src, agg, kind, &name)
+                        {
+                            self.diagnostics.push(d);
+                        }
                         let read_elsewhere = f.read_elsewhere;
                         let p = build_position(lines, init.span, kind, Some(name), f);
                         if kind == PositionKind::Frame {

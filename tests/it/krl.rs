@@ -1047,3 +1047,30 @@ fn the_cells_config_dat_is_read_once_for_every_program_of_a_run() {
     let new_run = krl::load_program(&dir.path().join("pallet.src"), &fresh).unwrap();
     assert_eq!(frames(&new_run).len(), 1);
 }
+
+/// A declared position that gives a field twice, or a field its type lacks, is an error at the
+/// field (KSS does not load the file): the transforms then refuse the file. Case does not
+/// matter (`a1` is `A1`); a partial aggregate in any order is fine.
+#[test]
+fn a_field_given_twice_or_unknown_is_an_error() {
+    let dat = "DEFDAT m PUBLIC\nDECL E6POS XP1={X 410.0,Y -95.0,Z 230.0,A 180.0,B 0.0,C 180.0,S 6,T 27,E1 1500.0,X 500.0}\nDECL E6POS XP2={X 410.0,Y -95.0,Q 7.0}\nDECL E6AXIS XJ={A1 0.0,A2 -90.0,E1 5.0,a1 3.0}\nDECL FRAME F1={x 1,y 2,z 3,a 0,b 0,c 0}\nDECL POS P1={X 1,Y 2,E1 3}\nDECL E6POS XP3={E1 1500.0,T 2,X 1.0}\nENDDAT\n";
+    let f = krl::parse_file(Path::new("m.dat"), dat.as_bytes().to_vec());
+    let errors: Vec<(usize, usize, &str)> = f
+        .diagnostics
+        .iter()
+        .filter(|d| d.severity == Severity::Error)
+        .map(|d| {
+            let (l, c) = f.lines.line_col(d.span.start);
+            (l, c, d.message.as_str())
+        })
+        .collect();
+    assert_eq!(
+        errors,
+        [
+            (2, 82, "E6POS `XP1` gives field `X` twice"),
+            (3, 33, "E6POS `XP2` has no field `Q`"),
+            (4, 40, "E6AXIS `XJ` gives field `a1` twice"),
+            (6, 22, "POS `P1` has no field `E1`"),
+        ]
+    );
+}
