@@ -250,8 +250,6 @@ fn computed_index_array<'k>(naming: &Naming, key: &'k str) -> Option<&'k str> {
     (!literal).then_some(array)
 }
 
-/// Where a folded reference in `file` points among `index`'s names, added to `out`
-/// (`exported` says whether a target is seen outside its file).
 /// What each module's copies reach: the targets the source of each copy reaches from its file,
 /// by (module, folded name of the copy).
 fn copies_reached(
@@ -294,29 +292,26 @@ fn copied_reach(
         return;
     }
     // The whole array (`buf`, not itself a copy), or an element chosen at run time.
-    let array = match key.split_once(naming.open) {
-        None => key,
-        Some((array, index)) => {
-            let numbers = index
-                .trim_end_matches(naming.close)
-                .bytes()
-                .all(|b| b.is_ascii_digit() || b == b',' || b == b' ');
-            if numbers {
-                return;
-            }
-            array.trim_end()
+    let array = if key.contains(naming.open) {
+        match computed_index_array(naming, key) {
+            Some(array) => array,
+            None => return,
         }
+    } else {
+        key
     };
     for ((m, name), t) in copies {
         let element_of = name
             .split_once(naming.open)
-            .is_some_and(|(a, _)| a.trim_end() == array);
+            .is_some_and(|(a, _)| a == array);
         if *m == module && element_of {
             targets.extend(t);
         }
     }
 }
 
+/// Where a folded reference in `file` points among `index`'s names, added to `out`
+/// (`exported` says whether a target is seen outside its file).
 fn lookup(
     naming: &Naming,
     index: &NameIndex<Indexed>,

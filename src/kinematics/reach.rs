@@ -132,9 +132,9 @@ fn is_flange(name: &str) -> bool {
 
 /// The tool `name` on the flange: the cell's `[robot.NAME.tool]` entry, else the program's
 /// declaration (RAPID `tooldata` `tframe`, KRL `TOOL_DATA[n]`), else the flange for `tool0`.
-pub fn resolve_tool(
-    program: &Program,
-    own: Option<&ParsedFile>,
+pub fn resolve_tool<'a>(
+    program: &'a Program,
+    own: Option<&'a ParsedFile>,
     overrides: &BTreeMap<String, Pose>,
     name: &str,
 ) -> Result<Pose, String> {
@@ -143,17 +143,14 @@ pub fn resolve_tool(
     }
     // The declaration of `own`, the target's file, first: two RAPID modules may each declare
     // a `LOCAL` tool of one name.
-    let declared_in = |f: &'_ ParsedFile| -> bool {
+    let declared_in = |f: &'a ParsedFile| {
         f.frames
             .iter()
-            .any(|d| d.kind == FrameKind::Tool && d.name.eq_ignore_ascii_case(name))
+            .find(|d| d.kind == FrameKind::Tool && d.name.eq_ignore_ascii_case(name))
     };
     let decl = own
-        .filter(|f| declared_in(f))
-        .into_iter()
-        .chain(&program.files)
-        .flat_map(|f| &f.frames)
-        .find(|d| d.kind == FrameKind::Tool && d.name.eq_ignore_ascii_case(name));
+        .and_then(declared_in)
+        .or_else(|| program.files.iter().find_map(declared_in));
     match decl {
         Some(d) if d.held_by_robot == Some(false) => Err(format!(
             "tool `{name}` is stationary (robhold FALSE): the robot holds the work piece"

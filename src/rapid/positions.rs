@@ -1924,11 +1924,7 @@ impl Extractor<'_> {
             None => {
                 for a in arena.children(args) {
                     let Some(arg) = arena.get(a) else { continue };
-                    let value = if arg.first == super::expr::NONE {
-                        None
-                    } else {
-                        arena.get(arg.first)
-                    };
+                    let value = arena.arg_value(a).and_then(|v| arena.get(v));
                     let returned = |v: &&ExprNode| {
                         let callee = v.name_span().slice(src);
                         v.kind == ExprKind::Call
@@ -1940,11 +1936,7 @@ impl Extractor<'_> {
                         // of a target (`Extractor::returned_copy`).
                         self.call_refs.push(v.name_span());
                     }
-                    let value = value.map(|v| {
-                        let name = matches!(v.kind, ExprKind::Ident | ExprKind::Access);
-                        (v.span(), name)
-                    });
-                    self.call_arg(&mut u, src, arg.switch, arg.name_span(), value);
+                    self.arena_arg(&mut u, src, arg, value);
                 }
             }
         }
@@ -1960,19 +1952,22 @@ impl Extractor<'_> {
         };
         for a in arena.children(id) {
             let Some(arg) = arena.get(a) else { continue };
-            let value = arena
-                .get(arg.first)
-                .filter(|_| arg.first != super::expr::NONE);
-            let value = value.map(|v| {
-                let name = matches!(v.kind, ExprKind::Ident | ExprKind::Access);
-                (v.span(), name)
-            });
-            self.call_arg(&mut u, src, arg.switch, arg.name_span(), value);
+            let value = arena.arg_value(a).and_then(|v| arena.get(v));
+            self.arena_arg(&mut u, src, arg, value);
         }
         self.uses.push(u);
         // The last use is no longer the last call statement's, which a call read like it
         // copies.
         self.last_plain_call = None;
+    }
+
+    /// [`Extractor::call_arg`] of argument node `arg` of the arena, its value `value`.
+    fn arena_arg(&mut self, u: &mut CallUse, src: &[u8], arg: &ExprNode, value: Option<&ExprNode>) {
+        let value = value.map(|v| {
+            let name = matches!(v.kind, ExprKind::Ident | ExprKind::Access);
+            (v.span(), name)
+        });
+        self.call_arg(u, src, arg.switch, arg.name_span(), value);
     }
 
     /// Records one argument of call `u`: written `\label` (`switch`) or `label:=` (a label

@@ -1008,6 +1008,18 @@ mod tests {
 
     const MODULE: &str = "MODULE m\n  PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1500,-400,600],[0.996195,0,0,0.087156]],[[100,20,0],[0.999848,0,0.017452,0]]];\n  PERS tooldata tGun:=[TRUE,[[12.5,-3.2,412.8],[0.965926,0,0.258819,0]],[48.5,[0,0,180],[1,0,0,0],0.9,1.1,0.6]];\n  CONST robtarget p1:=[[310.5,-120.25,80],[0.183013,0.683013,0.683013,-0.183013],[0,-1,2,1],[2500,9E9,9E9,9E9,9E9,9E9]];\n  CONST jointtarget jHome:=[[10,-20,30,40,50,-60],[2500,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveAbsJ jHome, v1000, fine, tGun;\n    MoveL Offs(p1,10,-20.5,30), v1000, fine, tGun\\WObj:=wCar;\n    MoveL RelTool(p1,5,6,-7\\Rx:=1\\Ry:=2\\Rz:=3), v1000, fine, tGun\\WObj:=wCar;\n  ENDPROC\nENDMODULE\n";
 
+    /// The pose target `name` of `f` is written with.
+    fn pose_of(f: &ParsedFile, name: &str) -> Pose {
+        f.positions()
+            .find(|p| p.name.as_deref() == Some(name))
+            .unwrap()
+            .cartesian
+            .as_ref()
+            .unwrap()
+            .pose()
+            .unwrap()
+    }
+
     fn parse(text: &str) -> Program {
         Program {
             files: vec![crate::rapid::parse_file(
@@ -1065,16 +1077,7 @@ mod tests {
         };
         let wobj = |f: &ParsedFile| frame(f, "wCar");
         let tool = |f: &ParsedFile| frame(f, "tGun");
-        let target = |f: &ParsedFile| {
-            f.positions()
-                .find(|p| p.name.as_deref() == Some("p1"))
-                .unwrap()
-                .cartesian
-                .as_ref()
-                .unwrap()
-                .pose()
-                .unwrap()
-        };
+        let target = |f: &ParsedFile| pose_of(f, "p1");
         let refl = Reflection::new(&s);
         let (want, _) = refl.target(&(wobj(f0) * target(f0)));
         let got = wobj(f1) * target(f1);
@@ -1145,17 +1148,7 @@ mod tests {
             .copy_from(&(2.0 * o.dot(&n) * n));
         let flip = Matrix4::from_diagonal(&Vector4::new(1.0, -1.0, 1.0, 1.0));
         let m = |p: &Pose| p.to_homogeneous();
-        let pos = |prog: &Program, name: &str| {
-            prog.files[0]
-                .positions()
-                .find(|p| p.name.as_deref() == Some(name))
-                .unwrap()
-                .cartesian
-                .as_ref()
-                .unwrap()
-                .pose()
-                .unwrap()
-        };
+        let pos = |prog: &Program, name: &str| pose_of(&prog.files[0], name);
         let wobj = |prog: &Program| prog.files[0].frames[0].pose().unwrap();
         let close = |got: Matrix4<f64>, want: Matrix4<f64>| {
             let dt = (got.fixed_view::<3, 1>(0, 3) - want.fixed_view::<3, 1>(0, 3)).norm();
@@ -1204,19 +1197,9 @@ mod tests {
         let out = String::from_utf8(apply(&p0, edits).unwrap().files[0].output.clone()).unwrap();
         let p1 = parse(&out);
         let w = p1.files[0].frames[0].pose().unwrap();
-        let pos = |f: &ParsedFile, n: &str| {
-            f.positions()
-                .find(|p| p.name.as_deref() == Some(n))
-                .unwrap()
-                .cartesian
-                .as_ref()
-                .unwrap()
-                .pose()
-                .unwrap()
-        };
         let world = Reflection::about(&plane, &s);
-        let (want_car, _) = world.target(&(w * pos(&p0.files[0], "pCar")));
-        let got_car = w * pos(&p1.files[0], "pCar");
+        let (want_car, _) = world.target(&(w * pose_of(&p0.files[0], "pCar")));
+        let got_car = w * pose_of(&p1.files[0], "pCar");
         assert!(
             (want_car.translation.vector - got_car.translation.vector).norm() < 2e-3,
             "{out}"
@@ -1225,7 +1208,7 @@ mod tests {
             want_car.rotation.angle_to(&got_car.rotation) < 1e-5,
             "{out}"
         );
-        let got_world = pos(&p1.files[0], "pWorld").translation.vector;
+        let got_world = pose_of(&p1.files[0], "pWorld").translation.vector;
         assert!(
             (got_world - Vector3::new(1600.0, -2150.75, 650.0)).norm() < 1e-9,
             "{out}"
