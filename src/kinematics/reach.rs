@@ -250,6 +250,9 @@ fn joint_target(
     }
 }
 
+/// The reach of Cartesian target `p` with its first tool; another tool it is used with that
+/// does not reach it as the first does adds its verdict (the worse one is the target's) and
+/// says why, naming the tool: the joints depend on the tool.
 #[allow(clippy::too_many_arguments)]
 fn cartesian(
     program: &Program,
@@ -259,6 +262,48 @@ fn cartesian(
     setup: &TrackSetup,
     kin: &Kinematics,
     options: &ReachOptions,
+    r: TargetReach,
+) -> TargetReach {
+    let mut tools = p.usage.tools();
+    let Some(first) = tools.next() else {
+        return r.not_checked(format!(
+            "tool not resolved: {} is not used with a tool",
+            describe(p)
+        ));
+    };
+    let mut r = cartesian_with(program, file, p, robot, setup, kin, options, first, r);
+    for name in tools {
+        let other = TargetReach::new(p);
+        let other = cartesian_with(program, file, p, robot, setup, kin, options, name, other);
+        if other.status == ReachStatus::Ok {
+            continue;
+        }
+        let why = match other.warnings.as_slice() {
+            [] => other.status.as_str().to_owned(),
+            w => w.join("; "),
+        };
+        r.warnings.push(format!("with tool `{name}`: {why}"));
+        if r.status == ReachStatus::Ok {
+            r.status = other.status;
+        }
+        if other.reachable == Some(false) {
+            r.reachable = Some(false);
+        }
+    }
+    r
+}
+
+/// [`cartesian`] with the tool named `tool_name`.
+#[allow(clippy::too_many_arguments)]
+fn cartesian_with(
+    program: &Program,
+    file: &ParsedFile,
+    p: &Position,
+    robot: &Robot,
+    setup: &TrackSetup,
+    kin: &Kinematics,
+    options: &ReachOptions,
+    tool_name: &str,
     mut r: TargetReach,
 ) -> TargetReach {
     let what = describe(p);
@@ -276,9 +321,6 @@ fn cartesian(
     let w = match resolve_frame(program, Some(file), &robot.frames, &wobj) {
         Ok(w) => w,
         Err(why) => return r.not_checked(why.message),
-    };
-    let Some(tool_name) = p.usage.tool.as_deref() else {
-        return r.not_checked(format!("tool not resolved: {what} is not used with a tool"));
     };
     let tool = match resolve_tool(program, Some(file), &robot.tools, tool_name) {
         Ok(t) => t,

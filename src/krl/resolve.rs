@@ -828,7 +828,7 @@ fn mark_assigned_data(files: &mut [ParsedFile], facts: &[Facts]) {
                 continue;
             }
             let frames = usage.work_objects().map(|w| (w, false));
-            let used = frames.chain(usage.tool.as_deref().map(|t| (t, true)));
+            let used = frames.chain(usage.tools().map(|t| (t, true)));
             let found = used.into_iter().find_map(|(name, tool)| {
                 let n = data(name, tool)?;
                 let &(.., line, fi) = assigned

@@ -413,6 +413,7 @@ pub struct Usage {
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 struct RareUsage {
     other_wobjs: Vec<FrameName>,
+    other_tools: Vec<FrameName>,
     run_time: Option<RunTimeValue>,
     stationary_tool: bool,
     zone: Option<NonPosition>,
@@ -606,6 +607,19 @@ impl Usage {
         self.wobj.as_deref().into_iter().chain(others)
     }
 
+    /// Further distinct tools the target is used with: its joints, reach and configuration
+    /// depend on the tool, so each is checked, and a transform that writes a configuration
+    /// needs them to agree.
+    pub fn other_tools(&self) -> &[FrameName] {
+        self.rare.as_ref().map_or(&[], |r| &r.other_tools)
+    }
+
+    /// Every tool the target is used with: the first use's, then the others.
+    pub fn tools(&self) -> impl Iterator<Item = &str> {
+        let others = self.other_tools().iter().map(|t| &**t);
+        self.tool.as_deref().into_iter().chain(others)
+    }
+
     /// The target is a stationary-tool point (KRL `IPO_FRAME #TCP`, RAPID `robhold TRUE`):
     /// some use of it says so.
     pub fn stationary_tool(&self) -> bool {
@@ -654,7 +668,8 @@ impl Usage {
 
     /// Records one use by a motion at `line` with work object (or base) `wobj` and `tool`.
     /// The first work object stays the target's; another (names compared as the languages
-    /// compare them, case-insensitively) is added to `other_wobjs`. The first tool stays.
+    /// compare them, case-insensitively) is added to `other_wobjs`; tools likewise, to
+    /// `other_tools`.
     pub fn record(
         &mut self,
         wobj: Option<&str>,
@@ -663,7 +678,7 @@ impl Usage {
         line: usize,
     ) {
         let wobj = wobj.map(FrameName::from);
-        let tool = tool.filter(|_| self.tool.is_none()).map(FrameName::from);
+        let tool = tool.map(FrameName::from);
         self.record_shared(wobj.as_ref(), tool.as_ref(), stationary, line);
     }
 
@@ -690,8 +705,17 @@ impl Usage {
                 }
             }
         }
-        if self.tool.is_none() {
-            self.tool = tool.cloned();
+        if let Some(t) = tool {
+            match &self.tool {
+                None => self.tool = Some(t.clone()),
+                Some(first) if Arc::ptr_eq(&first.0, &t.0) || first.eq_ignore_ascii_case(t) => {}
+                Some(_) => {
+                    let rare = self.rare.get_or_insert_with(Box::default);
+                    if !rare.other_tools.iter().any(|o| o.eq_ignore_ascii_case(t)) {
+                        rare.other_tools.push(t.clone());
+                    }
+                }
+            }
         }
         if stationary {
             self.rare.get_or_insert_with(Box::default).stationary_tool = true;
@@ -1260,15 +1284,18 @@ mod tests {
     use proptest::strategy::Strategy as _;
 
     #[test]
-    fn a_use_records_the_first_frame_and_tool_and_every_other_frame_once() {
+    fn a_use_records_the_first_frame_and_tool_and_every_other_one_once() {
         let mut u = Usage::default();
         u.record(Some("wCar"), Some("tGun"), false, 10);
         u.record(Some("WCAR"), Some("tOther"), false, 12);
         u.record(Some("wTable"), None, true, 12);
-        u.record(Some("wtable"), None, false, 20);
+        u.record(Some("wtable"), Some("TGUN"), false, 20);
+        u.record(Some("wCar"), Some("tother"), false, 20);
         assert_eq!(u.wobj.as_deref(), Some("wCar"));
         assert_eq!(u.tool.as_deref(), Some("tGun"));
         assert_eq!(u.other_wobjs(), ["wTable"]);
+        assert_eq!(u.other_tools(), ["tOther"]);
+        assert_eq!(u.tools().collect::<Vec<_>>(), ["tGun", "tOther"]);
         assert!(u.stationary_tool());
         assert_eq!(u.lines, [10, 12, 20]);
     }

@@ -42,26 +42,33 @@ impl Arm {
         })
     }
 
-    /// The tool `p` (a target of file `own`) is used with, on the flange.
-    pub(crate) fn tool(
+    /// Every tool `p` (a target of file `own`) is used with, on the flange, in the order of
+    /// [`Usage::tools`](crate::position::Usage::tools). A target's joints depend on the tool,
+    /// so a check that holds with one says nothing of another.
+    pub(crate) fn tools(
         &self,
         program: &Program,
         own: &ParsedFile,
         p: &Position,
-    ) -> Result<Pose, Why> {
+    ) -> Result<Vec<Pose>, Why> {
         let what = describe(p);
-        let Some(name) = p.usage.tool.as_deref() else {
+        let mut tools = Vec::with_capacity(1);
+        for name in p.usage.tools() {
+            let pose = resolve_tool(program, Some(own), &self.tools, name).map_err(|msg| {
+                reach(
+                    format!("{what}: its joints cannot be checked: {msg}"),
+                    "give the tool under [robot.NAME.tool] in the cell file",
+                )
+            })?;
+            tools.push(pose);
+        }
+        if tools.is_empty() {
             return Err(reach(
                 format!("{what} is not used with a tool: its joints cannot be checked"),
                 "use it in a motion instruction, or give the robot no kinematics",
             ));
-        };
-        resolve_tool(program, Some(own), &self.tools, name).map_err(|msg| {
-            reach(
-                format!("{what}: its joints cannot be checked: {msg}"),
-                "give the tool under [robot.NAME.tool] in the cell file",
-            )
-        })
+        }
+        Ok(tools)
     }
 
     /// The joints the written configuration selects for `flange` (in the robot base), or why
@@ -199,6 +206,15 @@ impl Arm {
             "the transform would move the robot through another posture: re-teach the target",
         )
     }
+}
+
+/// `why`, naming the tool it holds with when `p` is used with more than one (a message that
+/// names none is about every tool).
+pub(crate) fn with_tool(mut why: Why, p: &Position, tool: &str) -> Why {
+    if !p.usage.other_tools().is_empty() {
+        why.message = format!("{} (with tool `{tool}`)", why.message);
+    }
+    why
 }
 
 /// A [`RefusalKind::Reach`] refusal.

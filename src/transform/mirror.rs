@@ -22,7 +22,7 @@ use super::cell::{Axis, ConfigRule, Plane};
 use super::driver::{NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
 use super::kinematic_policy::fmt_joints;
-use super::kinematic_policy::{Arm, config_edits};
+use super::kinematic_policy::{Arm, config_edits, with_tool};
 use super::policy::{Why, common_refusal, describe, wobj_of, words_of, work_object_of};
 use super::refusal::{Refusal, RefusalKind, Remedy};
 use super::rewrite::{
@@ -453,34 +453,60 @@ impl MirrorRule<'_> {
             &m.frames,
             m.default_wobj.as_deref(),
         )?;
-        let tool = m.arm.tool(scope.program, scope.file, p)?;
-        let flange = m.base_at(skid).inverse() * w * t * tool.inverse();
+        let tools = m.arm.tools(scope.program, scope.file, p)?;
         let language = scope.file.language;
-        let before = m.arm.joints_before(p, &flange, language)?;
         let kin = &m.arm.kinematics;
-        let Some((_, solved)) =
-            mirror_config_by_ik(kin, &mirrored_flange(&flange), &before, language)
-        else {
-            return Err(Why::new(
-                RefusalKind::Reach,
-                format!(
-                    "{what}: its mirror image is out of reach within the limits: joints before {}, after none",
-                    fmt_joints(&before)
-                ),
-                "check the mirror plane and the mirror-image robot's cell",
-            ));
-        };
-        // KUKA programs may write only one of Status and Turn: keep to what is written.
-        Ok(written.map(|w| match (w, solved) {
-            (
-                ConfigValue::StatusTurn { status, turn },
-                ConfigValue::StatusTurn { status: s, turn: t },
-            ) => ConfigValue::StatusTurn {
-                status: status.and(s),
-                turn: turn.and(t),
-            },
-            (_, solved) => solved,
-        }))
+        // Each tool puts the flange elsewhere, so each gives the mirror image its own
+        // configuration; the one target holds one.
+        let mut found: Option<(&str, ConfigValue)> = None;
+        for (tool, name) in tools.iter().zip(p.usage.tools()) {
+            let flange = m.base_at(skid).inverse() * w * t * tool.inverse();
+            let before = m
+                .arm
+                .joints_before(p, &flange, language)
+                .map_err(|why| with_tool(why, p, name))?;
+            let Some((_, solved)) =
+                mirror_config_by_ik(kin, &mirrored_flange(&flange), &before, language)
+            else {
+                return Err(with_tool(
+                    Why::new(
+                        RefusalKind::Reach,
+                        format!(
+                            "{what}: its mirror image is out of reach within the limits: joints before {}, after none",
+                            fmt_joints(&before)
+                        ),
+                        "check the mirror plane and the mirror-image robot's cell",
+                    ),
+                    p,
+                    name,
+                ));
+            };
+            // KUKA programs may write only one of Status and Turn: keep to what is written.
+            let kept = match (&written, solved) {
+                (
+                    Some(ConfigValue::StatusTurn { status, turn }),
+                    ConfigValue::StatusTurn { status: s, turn: t },
+                ) => ConfigValue::StatusTurn {
+                    status: status.and(s),
+                    turn: turn.and(t),
+                },
+                (_, solved) => solved,
+            };
+            match &found {
+                None => found = Some((name, kept)),
+                Some((first, c)) if *c != kept && written.is_some() => {
+                    return Err(Why::new(
+                        RefusalKind::Reach,
+                        format!(
+                            "{what} is used with tools `{first}` and `{name}`, whose mirror images take configurations {c} and {kept}: one target cannot hold both"
+                        ),
+                        "use a target for each tool",
+                    ));
+                }
+                Some(_) => {}
+            }
+        }
+        Ok(written.and(found.map(|(_, c)| c)))
     }
 }
 

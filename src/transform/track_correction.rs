@@ -17,7 +17,7 @@ use crate::track::{Profile, TrackError};
 use super::cell::Robot;
 use super::driver::{NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
-use super::kinematic_policy::{Arm, joint_edits};
+use super::kinematic_policy::{Arm, joint_edits, with_tool};
 use super::policy::{LastWorkObject, Why, describe, joint_target};
 use super::refusal::RefusalKind;
 use super::rewrite::{OrientationHint, pose_change};
@@ -160,7 +160,9 @@ fn profile_refusal(what: &impl std::fmt::Display, skid: f64, e: TrackError) -> W
 /// A target's work object in world, and its tool on the flange when the arm is checked.
 struct TrackFrame {
     w: Pose,
-    tool: Option<Pose>,
+    /// With the arm's kinematics, every tool the target is used with (the order of
+    /// `Usage::tools`); none without.
+    tools: Vec<Pose>,
     language: crate::position::Language,
 }
 
@@ -307,13 +309,13 @@ impl TargetRule for TrackRule<'_, '_> {
             &self.setup.frames,
             self.setup.default_wobj.as_deref(),
         )?;
-        let tool = match &self.setup.arm {
-            Some(arm) => Some(arm.tool(scope.program, scope.file, p)?),
-            None => None,
+        let tools = match &self.setup.arm {
+            Some(arm) => arm.tools(scope.program, scope.file, p)?,
+            None => Vec::new(),
         };
         Ok(TrackFrame {
             w,
-            tool,
+            tools,
             language: scope.file.language,
         })
     }
@@ -345,11 +347,14 @@ impl TargetRule for TrackRule<'_, '_> {
             )
             .map_err(|e| profile_refusal(&what, skid, e))?;
         let new = correction * t;
-        if let (Some(arm), Some(tool)) = (&self.setup.arm, &frame.tool) {
+        if let Some(arm) = &self.setup.arm {
             // The flange in the base the controller computes: F = B(s)⁻¹·W·T·TOOL⁻¹.
             let to_base = self.setup.base_at(skid).inverse() * w;
-            let flange = |t: &Pose| to_base * t * tool.inverse();
-            arm.check(p, &flange(t), &flange(&new), frame.language)?;
+            for (tool, name) in frame.tools.iter().zip(p.usage.tools()) {
+                let flange = |t: &Pose| to_base * t * tool.inverse();
+                arm.check(p, &flange(t), &flange(&new), frame.language)
+                    .map_err(|why| with_tool(why, p, name))?;
+            }
         }
         Ok(NewPose {
             pose: new,

@@ -1042,6 +1042,97 @@ fn mirror_with_kinematics_mirrors_joints_and_configurations_by_ik() {
     }
 }
 
+/// A target's joints depend on the tool it is moved with: one used with two tools is checked
+/// with each. `pBoth` reaches with `tGun` and is 3 m out of reach with `tFar`: `reach` gives
+/// the worse verdict and names the tool, and `correct` and `mirror` refuse it, naming the tool,
+/// where the first tool's check alone passed it. `pSame` is used with `tGun` and `tGun2`, the
+/// same tool under another name: corrected, not refused.
+#[test]
+fn a_target_used_with_two_tools_is_checked_with_each() {
+    use trackfix::transform::{
+        Direction, MirrorArm, MirrorSettings, RefusalKind, TrackSetup, apply, mirror,
+        track_correction,
+    };
+    let cell_text = format!(
+        "{CELL}tfar = {{ x = 3000, y = 0, z = 200, rx = 0, ry = 0, rz = 0 }}\n\
+         tgun2 = {{ x = 0, y = 0, z = 200, rx = 0, ry = 0, rz = 0 }}\n"
+    );
+    let cell = Cell::parse(Path::new("cell.toml"), &cell_text).unwrap();
+    let robot = cell.robot("r1").unwrap();
+    let k = robot.kinematics.clone().unwrap();
+    let tool = robot.tools["tgun"];
+    let skid = 500.0;
+    let b = pose_xyz_deg(skid, -1000.0, 0.0, 0.0, 0.0, 90.0);
+    let good = [10.0, 20.0, -10.0, 30.0, 40.0, -50.0];
+    let target = b * k.forward(&good) * tool;
+    let cf = abb::config_of(&k, &good);
+    let mut src = String::from("MODULE M\n");
+    src += &robtarget("pBoth", &target, cf, skid);
+    src += &robtarget("pSame", &target, cf, skid);
+    src += "  PROC main()\n    MoveL pBoth,v100,fine,tGun;\n    MoveL pSame,v100,fine,tGun;\n    \
+            MoveL pBoth,v100,fine,tFar;\n    MoveL pSame,v100,fine,tGun2;\n  ENDPROC\nENDMODULE\n";
+    let program = parsed(&src);
+
+    let files = reach_program(&program, robot, &k, &ReachOptions::default());
+    let by = |n: &str| files[0].targets.iter().find(|x| x.name == n).unwrap();
+    let both = by("pBoth");
+    assert_eq!(both.status, ReachStatus::Unreachable, "{both:?}");
+    assert_eq!(both.reachable, Some(false));
+    // The row's joints are the first tool's.
+    assert!(joints_close(&both.joints.unwrap(), &good, 1e-4), "{both:?}");
+    assert!(
+        both.warnings
+            .iter()
+            .any(|w| w.starts_with("with tool `tFar`: out of reach")),
+        "{both:?}"
+    );
+    let same = by("pSame");
+    assert_eq!(same.status, ReachStatus::Ok, "{same:?}");
+    assert!(same.warnings.is_empty(), "{same:?}");
+
+    let d = deviation();
+    let dev = move |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(d) };
+    let setup = TrackSetup::new(robot, &dev);
+    let result = apply(
+        &program,
+        track_correction(&program, &setup, Direction::Correct),
+    )
+    .unwrap();
+    let refusals: Vec<_> = result.refusals().collect();
+    assert_eq!(refusals.len(), 1, "{refusals:?}");
+    assert_eq!(
+        (refusals[0].target.as_str(), refusals[0].kind),
+        ("pBoth", RefusalKind::Reach)
+    );
+    assert!(
+        refusals[0].message.contains("out of reach as written")
+            && refusals[0].message.ends_with("(with tool `tFar`)"),
+        "{}",
+        refusals[0].message
+    );
+    let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+    let line = |text: &str, n: &str| text.lines().find(|l| l.contains(n)).unwrap().to_owned();
+    assert_eq!(line(&src, "pBoth:="), line(&out, "pBoth:="));
+    assert_ne!(line(&src, "pSame:="), line(&out, "pSame:="));
+
+    let with_arm = MirrorSettings {
+        arm: MirrorArm::of(robot, None),
+        ..MirrorSettings::default()
+    };
+    let mirrored = apply(&program, mirror(&program, &with_arm)).unwrap();
+    let refused: Vec<_> = mirrored
+        .refusals()
+        .map(|r| {
+            (
+                r.target.as_str(),
+                r.kind,
+                r.message.ends_with("(with tool `tFar`)"),
+            )
+        })
+        .collect();
+    assert_eq!(refused, [("pBoth", RefusalKind::Reach, true)]);
+}
+
 /// `inspect --cell --robot` adds the reach verdict and the solved joints (table, csv, json); the
 /// joint target's joints are its own.
 #[test]
