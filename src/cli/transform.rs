@@ -770,7 +770,7 @@ fn finish_outputs(
     if runtime > 0 && out.format != ReportFormat::Json && !out.verbosity.quiet {
         writeln!(
             stderr,
-            "note: {runtime} of the {} refused target(s) computed at run time: not correctable offline",
+            "note: {runtime} of the {} refused target(s) depend on values the program sets when it runs: not correctable offline",
             refused.len()
         )?;
     }

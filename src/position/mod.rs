@@ -446,6 +446,16 @@ pub enum RunTimeValue {
         /// Where the assignment is.
         at: UseLine,
     },
+    /// The program gives the work object or tool (KRL base or tool data) a motion uses a whole
+    /// value other than its declaration (`wobj1 := [FALSE,TRUE,"",[[2100,…]],…];`,
+    /// `BASE_DATA[1] = {X 100, …}`): known offline, but which of the two a motion runs with
+    /// depends on the program's flow.
+    FrameAssigned {
+        /// The frame's name as declared (`wobj1`, `BASE_DATA[1]`).
+        name: String,
+        /// Where the assignment is.
+        at: UseLine,
+    },
     /// The program offsets the external axes (RAPID `EOffsSet`, `EOffsOn`): a motion moves
     /// the track to the written position plus an offset known only when it runs, so the skid
     /// the correction depends on is not the one written.
@@ -557,6 +567,7 @@ impl RunTimeValue {
         match self {
             RunTimeValue::Target { at }
             | RunTimeValue::Frame { at, .. }
+            | RunTimeValue::FrameAssigned { at, .. }
             | RunTimeValue::AxesOffset { at, .. }
             | RunTimeValue::ProgramDisplacement { at, .. } => at,
         }
@@ -566,6 +577,7 @@ impl RunTimeValue {
         match self {
             RunTimeValue::Target { at }
             | RunTimeValue::Frame { at, .. }
+            | RunTimeValue::FrameAssigned { at, .. }
             | RunTimeValue::AxesOffset { at, .. }
             | RunTimeValue::ProgramDisplacement { at, .. } => at,
         }
@@ -583,12 +595,27 @@ impl RunTimeValue {
             RunTimeValue::Frame { name: None, at } => {
                 format!("is used with a base computed at run time ({at})")
             }
+            RunTimeValue::FrameAssigned { name, at } => format!(
+                "is used with `{name}`, which the program gives another value than its declaration ({at})"
+            ),
             RunTimeValue::AxesOffset { instruction, at } => format!(
                 "is moved to by a program that offsets the external axes (`{instruction}`, {at}): its skid when it runs is not the one written"
             ),
             RunTimeValue::ProgramDisplacement { instruction, at } => format!(
                 "is moved to by a program that displaces its motions (`{instruction}`, {at}): the frame it is reached in is not its work object's"
             ),
+        }
+    }
+}
+
+impl RunTimeValue {
+    /// What to do about it, in words.
+    pub fn hint(&self) -> &'static str {
+        match self {
+            RunTimeValue::FrameAssigned { .. } => {
+                "declare the frame with the value the program gives it, so that one value holds"
+            }
+            _ => "correct the program's computation of it by hand, or teach the target",
         }
     }
 }

@@ -341,6 +341,36 @@ impl Calls {
     }
 }
 
+/// A whole literal value given to a name in a routine (`wobj1 := [FALSE,TRUE,"",…];`), read
+/// as a work object and as a tool: which it is shows when the name's declaration is found.
+struct AssignedValue {
+    name: Span,
+    as_wobj: FrameDecl,
+    as_tool: FrameDecl,
+}
+
+impl AssignedValue {
+    /// The value read as a frame of `decl`'s kind.
+    fn as_kind_of(&self, decl: &FrameDecl) -> &FrameDecl {
+        match decl.kind {
+            FrameKind::Tool => &self.as_tool,
+            _ => &self.as_wobj,
+        }
+    }
+}
+
+/// Whether a frame's assigned value `b` is its declaration `a` (what trackfix reads of them:
+/// who holds it, whether it is fixed and by what unit moved, and its pose, to 1e-9 mm and rad:
+/// `2100` and `2100.000000` are one value).
+fn same_frame(a: &FrameDecl, b: &FrameDecl) -> bool {
+    let close = |x: crate::geometry::Pose, y: crate::geometry::Pose| {
+        (x.translation.vector - y.translation.vector).norm() < 1e-9
+            && x.rotation.angle_to(&y.rotation) < 1e-9
+    };
+    (a.held_by_robot, a.fixed, &a.moved_by) == (b.held_by_robot, b.fixed, &b.moved_by)
+        && matches!((a.pose(), b.pose()), (Some(x), Some(y)) if close(x, y))
+}
+
 /// A `RECORD` declared in the module: its name and components (type, name).
 #[derive(Clone, Debug)]
 struct RecordDecl {
@@ -368,7 +398,7 @@ pub struct Extractor<'l> {
     call_inline: Vec<usize>,
     /// Whole-value assignments `name := [...]` of literal aggregates (a frame given a new
     /// value that is known offline).
-    assigned: Vec<Span>,
+    assigned: Vec<AssignedValue>,
     /// Of those, the ones whose literal is a target (`pv := [[700,-100,400],…];`): the name
     /// assigned and the literal's index in `positions`. The literal is a value of the name,
     /// used by the motions that use it.
@@ -1259,6 +1289,8 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         .filter(|f| f.kind == FrameKind::WorkObject)
         .filter_map(|f| Some((NameKey(f.name.as_bytes()), f.held_by_robot?)))
         .collect();
+    // The modules' file names, for a message on one module's target about another's line.
+    let module_names: Vec<Arc<str>> = names.clone();
     let mut facts: Vec<crate::resolve::FileFacts<'_>> = positions
         .iter_mut()
         .zip(&rest)
@@ -1381,36 +1413,128 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     }
     share_assigned_usage(&mut facts, &assigned_literals);
     drop(facts);
-    let all_frames: Vec<&FrameDecl> = rest.iter().flat_map(|r| &r.0).collect();
-    let mut assigned_notes: Vec<Vec<Diagnostic>> = Vec::new();
-    for (_, _, assigned, _, _, _, src, _) in &rest {
-        let mut notes = Vec::new();
-        // A frame given a whole new value in a routine: the declaration may not be what runs.
-        for &sp in assigned {
-            let k = key_into(&mut buf, src, sp);
-            let Some(f) = all_frames.iter().find(|f| f.name.eq_ignore_ascii_case(k)) else {
-                continue;
-            };
-            let what = match f.kind {
-                FrameKind::Tool => "tool",
-                _ => "work object",
-            };
-            notes.push(
-                Diagnostic::warning(
-                    sp,
+    // A frame given a whole value in a routine (docs/design.md, "Frames the program assigns").
+    // Each assignment: (the frame's module and index, the assignment's module and index).
+    let mut given: Vec<((usize, usize), (usize, usize))> = Vec::new();
+    for (m, r) in rest.iter().enumerate() {
+        for (k, a) in r.2.iter().enumerate() {
+            let key = key_into(&mut buf, r.6, a.name);
+            // The assigning module's own frame first, as a motion's frame resolves.
+            let own = r.0.iter().position(|f| f.name.eq_ignore_ascii_case(key));
+            let found = own.map(|i| (m, i)).or_else(|| {
+                rest.iter().enumerate().find_map(|(fm, fr)| {
+                    let i = fr.0.iter().position(|f| f.name.eq_ignore_ascii_case(key))?;
+                    Some((fm, i))
+                })
+            });
+            if let Some(at) = found {
+                given.push((at, (m, k)));
+            }
+        }
+    }
+    let mut assigned_notes: Vec<Vec<Diagnostic>> = vec![Vec::new(); rest.len()];
+    // (frame, kind, module, line) of each frame whose value the flow decides.
+    let mut reassigned: Vec<(String, FrameKind, usize, usize)> = Vec::new();
+    // (module, index, the value) of each frame the program gives one other value.
+    let mut replaced: Vec<(usize, usize, FrameDecl)> = Vec::new();
+    let mut frames_seen: Vec<(usize, usize)> = Vec::new();
+    for &(at, _) in &given {
+        if frames_seen.contains(&at) {
+            continue;
+        }
+        frames_seen.push(at);
+        let Some(f) = rest.get(at.0).and_then(|r| r.0.get(at.1)) else {
+            continue;
+        };
+        let all: Vec<(usize, &AssignedValue)> = given
+            .iter()
+            .filter(|g| g.0 == at)
+            .filter_map(|&(_, (m, k))| Some((m, rest.get(m)?.2.get(k)?)))
+            .collect();
+        let values: Vec<(usize, &AssignedValue)> = all
+            .iter()
+            .copied()
+            .filter(|(_, a)| !same_frame(f, a.as_kind_of(f)))
+            .collect();
+        let Some(&(first_m, first)) = values.first() else {
+            continue;
+        };
+        let what = match f.kind {
+            FrameKind::Tool => "tool",
+            _ => "work object",
+        };
+        let value = first.as_kind_of(f);
+        // One other value, given in the frame's own module, with numbers: the value the
+        // motions run with once the program has set it (a generated program sets its frames
+        // before it moves; a `PERS` keeps the last value given), so the targets are
+        // transformed with it, and a mirror of the frame is written into the assignment.
+        let one = all.iter().all(|&(m, a)| {
+            m == at.0 && same_frame(value, a.as_kind_of(f)) && value.pose().is_some()
+        });
+        for &(m, a) in &values {
+            let (message, hint) = if one {
+                (
                     format!(
-                        "{what} `{}` is given a new value here; trackfix uses its declaration on line {}",
+                        "{what} `{}` is given another value here than its declaration on line {}: trackfix uses this value, which the program sets before it moves (a motion that runs before it moves with the declared one)",
                         f.name, f.line
                     ),
+                    "declare the frame with the value the program gives it, so that one value holds",
                 )
-                .with_hint(
-                    "declare the frame with the value the program runs with, or give it in the cell file",
-                ),
-            );
+            } else {
+                (
+                    format!(
+                        "{what} `{}` is given another value here than its declaration on line {}, {}: the targets moved with it are left as written",
+                        f.name,
+                        f.line,
+                        if all.iter().any(|&(m, _)| m != at.0) {
+                            "by a module that does not declare it"
+                        } else if value.pose().is_none() {
+                            "with fields that are not numbers"
+                        } else {
+                            "and other values elsewhere"
+                        }
+                    ),
+                    "give the frame one value: declare it with the value the program gives it",
+                )
+            };
+            if let Some(notes) = assigned_notes.get_mut(m) {
+                notes.push(Diagnostic::warning(a.name, message).with_hint(hint));
+            }
         }
-        assigned_notes.push(notes);
+        if one {
+            replaced.push((
+                at.0,
+                at.1,
+                FrameDecl {
+                    name: f.name.clone(),
+                    ..value.clone()
+                },
+            ));
+        } else {
+            reassigned.push((f.name.clone(), f.kind, first_m, first.as_wobj.line));
+        }
     }
-    drop(all_frames);
+    for (m, i, value) in replaced {
+        if let Some(f) = rest.get_mut(m).and_then(|r| r.0.get_mut(i)) {
+            *f = value;
+        }
+    }
+    for (tm, ps) in positions.iter_mut().enumerate() {
+        for usage in ps.usages_mut() {
+            let used = |&&(ref name, kind, ..): &&(String, FrameKind, usize, usize)| match kind {
+                FrameKind::Tool => usage.tools().any(|t| t.eq_ignore_ascii_case(name)),
+                _ => usage.work_objects().any(|w| w.eq_ignore_ascii_case(name)),
+            };
+            if let Some((name, _, m, line)) = reassigned.iter().find(used)
+                && let Some(from) = module_names.get(*m)
+            {
+                usage.set_run_time(RunTimeValue::FrameAssigned {
+                    name: name.clone(),
+                    at: crate::position::UseLine::of(*line, *m, tm, from),
+                });
+            }
+        }
+    }
     let mut out = Vec::with_capacity(rest.len());
     for (m, ((frames, offsets, .., src, _), ps)) in rest.into_iter().zip(positions).enumerate() {
         let mut d = diagnostics
@@ -1542,7 +1666,13 @@ impl Extractor<'_> {
                     .all(|b| b.is_ascii_alphanumeric() || *b == b'_');
                 let aggregate = arena.get(value).filter(|v| v.kind == ExprKind::Aggregate);
                 if whole && literal && aggregate.is_some() {
-                    self.assigned.push(target);
+                    let read =
+                        |kind| self.frame(src, arena, Some(value), kind, String::new(), span);
+                    self.assigned.push(AssignedValue {
+                        name: target,
+                        as_wobj: read(FrameKind::WorkObject),
+                        as_tool: read(FrameKind::Tool),
+                    });
                     // The whole value one target literal: a value of the name.
                     let spans = (before..self.positions.len()).map(|i| self.positions.span(i));
                     if let (Some(v), [Some(only)]) =

@@ -257,7 +257,7 @@ pub(crate) fn run_time(p: &Position) -> Option<Why> {
             describe(p),
             why.describe()
         ),
-        "correct the program's computation of it by hand, or teach the target",
+        why.hint(),
     ))
 }
 

@@ -50,7 +50,7 @@ fn rapid_targets_and_work_objects_computed_at_run_time_are_marked_literal_ones_a
             at: UseLine::new(11)
         })
     );
-    // A literal value is known offline: the warning it always had, no refusal.
+    // One literal value is known offline: the frame takes it, with a warning, no refusal.
     assert_eq!(run_time(&f, "pOnLit"), None);
     // Written through a computed index: any element may be the one the program fills.
     for n in ["pBuf{1}", "pBuf{2}"] {
@@ -141,7 +141,7 @@ fn a_transform_refuses_runtime_data_by_name_and_counts_it_apart() {
     assert!(err.contains("--keep runtime-data"), "{err}");
     assert!(
         err.contains(
-            "note: 1 of the 1 refused target(s) computed at run time: not correctable offline"
+            "note: 1 of the 1 refused target(s) depend on values the program sets when it runs: not correctable offline"
         ),
         "{err}"
     );
@@ -570,7 +570,7 @@ END\n",
     assert!(err.contains("[runtime-data]"), "{err}");
     assert!(
         err.contains(
-            "note: 3 of the 3 refused target(s) computed at run time: not correctable offline"
+            "note: 3 of the 3 refused target(s) depend on values the program sets when it runs: not correctable offline"
         ),
         "{err}"
     );
@@ -725,7 +725,7 @@ fn a_krl_base_or_tool_the_program_overwrites_refuses_its_targets() {
         }
         assert!(
             err.contains(
-                "note: 2 of the 2 refused target(s) computed at run time: not correctable offline"
+                "note: 2 of the 2 refused target(s) depend on values the program sets when it runs: not correctable offline"
             ),
             "{assign}: {err}"
         );
@@ -738,6 +738,135 @@ fn a_krl_base_or_tool_the_program_overwrites_refuses_its_targets() {
         assert!(
             out.contains("+DECL E6POS XP1={X 410.745,Y -93.483,Z 228.198,"),
             "{assign}: {out}"
+        );
+    }
+}
+
+/// A frame the program gives a whole literal value other than its declaration (the way
+/// generated programs set their work objects before they move): with one such value, given
+/// in the module that declares the frame, the targets are corrected in that value — byte for
+/// byte as if the declaration held it — and the assignment is warned about; with two values
+/// the flow decides, and the targets are refused by name. An assignment of the declared value
+/// (written with other digits) changes nothing and is not reported.
+#[test]
+fn a_frame_the_program_gives_one_other_value_is_used_two_values_are_refused() {
+    use trackfix::geometry::{Pose, pose_xyz_deg};
+    use trackfix::position::Program;
+    use trackfix::transform::{Cell, Direction, RefusalKind, TrackSetup, apply, track_correction};
+    let cell = Cell::parse(
+        Path::new("cell.toml"),
+        "[robot.r1]\nprofile = \"track/profile.toml\"\n\
+         base = { x = 0, y = -1000, z = 0, rx = 0, ry = 0, rz = 90 }\n\
+         track_axis = [1, 0, 0]\nskid = \"eax_a\"\n",
+    )
+    .unwrap();
+    let robot = cell.robot("r1").unwrap();
+    // A deviation that turns: a work object placed elsewhere gives another correction.
+    let d = pose_xyz_deg(0.3, -0.2, 0.5, 0.02, -0.03, 0.05);
+    let dev = move |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(d) };
+    let setup = TrackSetup::new(robot, &dev);
+    let zero = "[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]";
+    let v =
+        "[FALSE,TRUE,\"\",[[2100,-1350,480],[0.965925826,0,0,0.258819045]],[[10,20,0],[1,0,0,0]]]";
+    let v_digits = "[FALSE,TRUE,\"\",[[2100.000,-1350.000,480.000],[0.965925826,0,0,0.258819045]],[[10.0,20.0,0],[1,0,0,0]]]";
+    let v2 = "[FALSE,TRUE,\"\",[[2200,-1350,480],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]";
+    let module = |decl: &str, main: &str, other: &str| {
+        format!(
+            "MODULE M\n  PERS wobjdata wCar:={decl};\n  CONST robtarget p10:=[[-1702.5,-320,225],[0,0.707107,0.707107,0],[-1,0,-1,0],[400,9E9,9E9,9E9,9E9,9E9]];\n  \
+             PROC main()\n{main}    MoveL p10,v100,fine,tool0\\WObj:=wCar;\n  ENDPROC\n  PROC other()\n{other}  ENDPROC\nENDMODULE\n"
+        )
+    };
+    let assign = |value: &str| format!("    wCar:={value};\n");
+    let correct = |src: &str| {
+        let program = Program {
+            files: vec![rapid::parse_file(
+                Path::new("m.mod"),
+                src.as_bytes().to_vec(),
+            )],
+        };
+        let result = apply(
+            &program,
+            track_correction(&program, &setup, Direction::Correct),
+        )
+        .unwrap();
+        let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+        let p10 = out
+            .lines()
+            .find(|l| l.contains("p10:="))
+            .unwrap()
+            .to_owned();
+        let refused: Vec<(String, RefusalKind, String)> = result
+            .refusals()
+            .map(|r| (r.target.clone(), r.kind, r.message.clone()))
+            .collect();
+        let warnings: Vec<String> = program.files[0]
+            .diagnostics
+            .iter()
+            .map(|d| d.message.clone())
+            .collect();
+        (p10, refused, warnings)
+    };
+
+    let (declared, refused, warnings) = correct(&module(v, "", ""));
+    assert!(
+        refused.is_empty() && warnings.is_empty(),
+        "{refused:?} {warnings:?}"
+    );
+    let (in_zero, ..) = correct(&module(zero, "", ""));
+    assert_ne!(
+        declared, in_zero,
+        "the work object's value must matter here"
+    );
+
+    let (assigned, refused, warnings) = correct(&module(zero, &assign(v), ""));
+    assert_eq!(assigned, declared);
+    assert!(refused.is_empty(), "{refused:?}");
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(
+        warnings[0].starts_with(
+            "work object `wCar` is given another value here than its declaration on line 2: trackfix uses this value"
+        ),
+        "{}",
+        warnings[0]
+    );
+
+    let (same, refused, warnings) = correct(&module(v, &assign(v_digits), ""));
+    assert_eq!(same, declared);
+    assert!(
+        refused.is_empty() && warnings.is_empty(),
+        "{refused:?} {warnings:?}"
+    );
+
+    for (main, other, line) in [
+        (assign(v), assign(v2), 5),
+        // The declared value given back elsewhere is a second value as well.
+        (assign(v), assign(zero), 5),
+    ] {
+        let src = module(zero, &main, &other);
+        let (kept, refused, warnings) = correct(&src);
+        let f = rapid::parse_file(Path::new("m.mod"), src.clone().into_bytes());
+        assert_eq!(
+            run_time(&f, "p10"),
+            Some(RunTimeValue::FrameAssigned {
+                name: "wCar".into(),
+                at: UseLine::new(line)
+            })
+        );
+        assert_eq!(kept, src.lines().find(|l| l.contains("p10:=")).unwrap());
+        assert_eq!(refused.len(), 1, "{refused:?}");
+        assert_eq!(refused[0].1, RefusalKind::RuntimeData);
+        assert!(
+            refused[0].2.contains(
+                "is used with `wCar`, which the program gives another value than its declaration (line 5)"
+            ),
+            "{}",
+            refused[0].2
+        );
+        assert!(
+            warnings
+                .iter()
+                .all(|w| w.contains("the targets moved with it are left as written")),
+            "{warnings:?}"
         );
     }
 }
