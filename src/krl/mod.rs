@@ -85,6 +85,7 @@ fn analyse(path: &Path, source: InputBytes) -> (ParsedFile, positions::Facts) {
         source,
         positions: extracted.positions,
         frames: extracted.frames,
+        frame_values: Vec::new(),
         offsets: Vec::new(),
         opaque: parse.opaque,
         diagnostics,

@@ -1242,6 +1242,11 @@ pub struct ParsedFile {
     pub positions: PositionList,
     /// The work objects, tools and bases declared.
     pub frames: Vec<FrameDecl>,
+    /// Whole values the program gives a frame in a routine that are the frame's own value (its
+    /// declaration's, or that of the one assignment that stands for it in `frames`): a
+    /// transform that rewrites the frames rewrites these too, or the program would set the old
+    /// value again when it runs.
+    pub frame_values: Vec<FrameDecl>,
     /// The `Offs`/`RelTool` calls with numeric offsets.
     pub offsets: Vec<OffsetCall>,
     /// Constructs the grammar does not know, kept verbatim.

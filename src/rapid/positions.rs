@@ -437,6 +437,10 @@ pub struct Extracted {
     pub positions: PositionList,
     /// The work object, tool and base declarations.
     pub frames: Vec<FrameDecl>,
+    /// Assignments of a frame's own value (see [`ParsedFile::frame_values`]).
+    ///
+    /// [`ParsedFile::frame_values`]: crate::position::ParsedFile::frame_values
+    pub frame_values: Vec<FrameDecl>,
     /// The `Offs`/`RelTool` calls, for the offset rules.
     pub offsets: Vec<OffsetCall>,
     /// What was deliberately not read as a target, and why.
@@ -1189,6 +1193,7 @@ impl<'l> Extractor<'l> {
             .unwrap_or(Extracted {
                 positions: PositionList::new(),
                 frames: Vec::new(),
+                frame_values: Vec::new(),
                 offsets: Vec::new(),
                 diagnostics: Vec::new(),
             })
@@ -1437,6 +1442,8 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     let mut reassigned: Vec<(String, FrameKind, usize, usize)> = Vec::new();
     // (module, index, the value) of each frame the program gives one other value.
     let mut replaced: Vec<(usize, usize, FrameDecl)> = Vec::new();
+    // (module, the value) of each assignment of a frame's own value.
+    let mut own_values: Vec<(usize, FrameDecl)> = Vec::new();
     let mut frames_seen: Vec<(usize, usize)> = Vec::new();
     for &(at, _) in &given {
         if frames_seen.contains(&at) {
@@ -1456,7 +1463,17 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
             .copied()
             .filter(|(_, a)| !same_frame(f, a.as_kind_of(f)))
             .collect();
+        // Each assignment as a frame of its module, named as the frame is.
+        let as_frame = |&(m, a): &(usize, &AssignedValue)| {
+            let value = FrameDecl {
+                name: f.name.clone(),
+                ..a.as_kind_of(f).clone()
+            };
+            (m, value)
+        };
         let Some(&(first_m, first)) = values.first() else {
+            // Every value given is the declaration's: rewritten with it.
+            own_values.extend(all.iter().map(as_frame));
             continue;
         };
         let what = match f.kind {
@@ -1502,14 +1519,12 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
             }
         }
         if one {
-            replaced.push((
-                at.0,
-                at.1,
-                FrameDecl {
-                    name: f.name.clone(),
-                    ..value.clone()
-                },
-            ));
+            // The first stands for the frame; the others give its value again.
+            let mut each = all.iter().map(as_frame);
+            if let Some((_, value)) = each.next() {
+                replaced.push((at.0, at.1, value));
+            }
+            own_values.extend(each);
         } else {
             reassigned.push((f.name.clone(), f.kind, first_m, first.as_wobj.line));
         }
@@ -1570,9 +1585,15 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                 ),
             );
         }
+        let frame_values = own_values
+            .iter()
+            .filter(|(vm, _)| *vm == m)
+            .map(|(_, v)| v.clone())
+            .collect();
         out.push(Extracted {
             positions: ps,
             frames,
+            frame_values,
             offsets,
             diagnostics: d,
         });

@@ -175,7 +175,7 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
                 Err(r) => fe.refusals.push(*r),
             }
         }
-        for decl in &file.frames {
+        for decl in file.frames.iter().chain(&file.frame_values) {
             fe.edits.extend(rule.declaration(scope, decl));
         }
     }

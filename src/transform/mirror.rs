@@ -1076,6 +1076,69 @@ mod tests {
         assert!(out.contains("Offs(pY,0,-100,0)"), "{out}");
     }
 
+    /// A frame the program gives its own value again in a routine is mirrored there too, or
+    /// the routine would set the old value again when it runs: after the mirror every
+    /// assignment still gives its frame's (mirrored) value. With the declaration at the origin
+    /// and two assignments of one other value, the first stands for the frame and both are
+    /// mirrored alike.
+    #[test]
+    fn frames_the_program_assigns_are_mirrored_where_they_are_assigned() {
+        let wobj =
+            "[FALSE,TRUE,\"\",[[1500,-400,600],[0.996195,0,0,0.087156]],[[100,20,0],[1,0,0,0]]]";
+        let wobj_digits = "[FALSE,TRUE,\"\",[[1500.00,-400.00,600.0],[0.996195,0,0,0.087156]],[[100,20,0],[1,0,0,0]]]";
+        let tool = "[TRUE,[[12.5,-3.2,412.8],[0.965926,0,0.258819,0]],[48.5,[0,0,180],[1,0,0,0],0.9,1.1,0.6]]";
+        let zero = "[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]";
+        let s = MirrorSettings {
+            mirror_frames: true,
+            ..MirrorSettings::default()
+        };
+        let refl = Reflection::new(&s);
+        for (decl, first, second, own) in [(wobj, wobj_digits, wobj, 2), (zero, wobj, wobj, 1)] {
+            let text = format!(
+                "MODULE m\n  PERS wobjdata wCar:={decl};\n  PERS tooldata tGun:={tool};\n  \
+                 CONST robtarget p1:=[[310.5,-120.25,80],[0.183013,0.683013,0.683013,-0.183013],[0,-1,2,1],[2500,9E9,9E9,9E9,9E9,9E9]];\n  \
+                 PROC main()\n    wCar:={first};\n    tGun:={tool};\n    MoveL p1, v1000, fine, tGun\\WObj:=wCar;\n  ENDPROC\n  \
+                 PROC other()\n    wCar:={second};\n  ENDPROC\nENDMODULE\n"
+            );
+            let p0 = parse(&text);
+            assert_eq!(p0.files[0].frame_values.len(), own + 1, "{text}");
+            let edits = mirror(&p0, &s);
+            assert!(edits.refusals().next().is_none());
+            let out = apply(&p0, edits).unwrap();
+            let mirrored = String::from_utf8(out.files[0].output.clone()).unwrap();
+            let p1 = parse(&mirrored);
+            let (f0, f1) = (&p0.files[0], &p1.files[0]);
+            // Every assignment gives its frame's value still: none is a second value.
+            assert!(
+                f1.diagnostics
+                    .iter()
+                    .all(|d| !d.message.contains("left as written")),
+                "{:?}\n{mirrored}",
+                f1.diagnostics
+            );
+            assert_eq!(f1.frame_values.len(), own + 1, "{mirrored}");
+            let frame = |f: &ParsedFile, name: &str| {
+                f.frames
+                    .iter()
+                    .find(|d| d.name == name)
+                    .unwrap()
+                    .pose()
+                    .unwrap()
+            };
+            let (want, _) = refl.frame(&frame(f0, "wCar"));
+            let got = frame(f1, "wCar");
+            assert!(
+                (want.translation.vector - got.translation.vector).norm() < 1e-3
+                    && want.rotation.angle_to(&got.rotation) < 1e-5,
+                "{want:?} {got:?}\n{mirrored}"
+            );
+            for v in &f1.frame_values {
+                let (a, b) = (v.pose().unwrap(), frame(f1, &v.name));
+                assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
+            }
+        }
+    }
+
     /// Mirroring the frames: the work object and the tool mirror so that the world pose of the TCP
     /// is the mirror image of the original in world (`Sa·W·T·Sb`), offsets follow Sa / Sb and
     /// mirroring joints negates axes 1, 4, 6.

@@ -75,6 +75,7 @@ fn file(path: &str, language: Language, source: Vec<u8>, positions: Vec<Position
             positions: PositionList::packed(positions, &source),
             source: source.into(),
             frames: Vec::new(),
+            frame_values: Vec::new(),
             offsets: Vec::new(),
             opaque: 0,
             diagnostics: Vec::new(),

@@ -86,6 +86,7 @@ fn parse(path: &Path, source: Vec<u8>) -> ParsedFile {
         positions: trackfix::PositionList::packed(positions, &source),
         source: source.into(),
         frames: Vec::new(),
+        frame_values: Vec::new(),
         offsets: Vec::new(),
         opaque: 0,
         diagnostics: Vec::new(),
