@@ -35,10 +35,14 @@ pub(crate) enum Setting {
     Tool(FrameRef),
     /// `$IPO_MODE = #TCP` (true) or `#BASE`.
     Tcp(bool),
-    /// `FDAT_ACT = FP1`: base, tool and IPO mode of that FDAT.
+    /// `FDAT_ACT = FP1`: stages base, tool and IPO mode of that FDAT for [`Setting::ApplyFdat`].
     Fdat(Name),
     /// `FDAT_ACT = {TOOL_NO 1, BASE_NO 2, IPO_FRAME #BASE}` written inline.
     FdatValue(Fdat),
+    /// `BAS(#PTP_PARAMS, …)`, `BAS(#CP_PARAMS, …)`, `BAS(#FRAMES)`: KSS's `BAS.SRC` sets
+    /// `$BASE`, `$TOOL` and `$IPO_MODE` from what `FDAT_ACT` holds then (an inline form's fold
+    /// runs it right after `FDAT_ACT = …`; until it runs, the frames in effect stay).
+    ApplyFdat,
     BaseOfFdat(String),
     ToolOfFdat(String),
     TcpOfFdat(String),
@@ -1018,7 +1022,8 @@ fn fdat(src: &[u8], agg: &Aggregate) -> Fdat {
     f
 }
 
-/// `BAS(#BASE, n)` / `BAS(#TOOL, n)`.
+/// `BAS(#BASE, n)` / `BAS(#TOOL, n)`, and the calls that apply `FDAT_ACT`
+/// ([`Setting::ApplyFdat`]; `BAS(#FRAMES)` takes no value).
 fn bas_call(src: &[u8], call: &Expr) -> Option<Setting> {
     let ExprKind::Call(name, args) = &call.kind else {
         return None;
@@ -1026,13 +1031,16 @@ fn bas_call(src: &[u8], call: &Expr) -> Option<Setting> {
     if !upper_is(src, name.span, "BAS") {
         return None;
     }
-    let [Some(which), Some(n)] = args.as_slice() else {
-        return None;
+    let (which, n) = match args.as_slice() {
+        [Some(which)] => (which, None),
+        [Some(which), n] => (which, n.as_ref()),
+        _ => return None,
     };
-    let r = integer(src, n).map_or(FrameRef::RunTime(n.span), FrameRef::Data);
+    let r = || n.map(|n| integer(src, n).map_or(FrameRef::RunTime(n.span), FrameRef::Data));
     match upper_short(src, which.span, &mut [0; 16]) {
-        "#BASE" => Some(Setting::Base(r)),
-        "#TOOL" => Some(Setting::Tool(r)),
+        "#BASE" => r().map(Setting::Base),
+        "#TOOL" => r().map(Setting::Tool),
+        "#PTP_PARAMS" | "#CP_PARAMS" | "#FRAMES" => Some(Setting::ApplyFdat),
         _ => None,
     }
 }
