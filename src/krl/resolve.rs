@@ -4,7 +4,8 @@
 //! ([`crate::resolve`]), which fills each position's [`Usage`](crate::position::Usage).
 
 use super::positions::{
-    BranchEvent, Event, Facts, Fdat, FrameRef, LoopKind, Ref, Setting, name_key,
+    BranchEvent, Event, Facts, Fdat, FrameRef, LoopKind, Ref, Setting, guessed_field_problem,
+    name_key,
 };
 use crate::position::{Config, FrameName, Name, ParsedFile, PositionKind, RunTimeValue, UseLine};
 use crate::syntax::Diagnostic;
@@ -592,7 +593,8 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         .map(|f| vec![false; f.candidates.len()])
         .collect();
     // `XP1={…}` in the `.src` of a point the `.dat` declares (`DECL POS XP1`): the declaration
-    // gives the kind, and a non-FRAME declared point is a position whether or not it moves.
+    // gives the kind, and the fields the aggregate may give; a non-FRAME declared point is a
+    // position whether or not it moves.
     let declared = modules.gathered(
         facts
             .iter_mut()
@@ -600,20 +602,24 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             .collect(),
     );
     let no_declared = HashMap::default();
-    for (fi, (fact, kept)) in facts.iter_mut().zip(kept.iter_mut()).enumerate() {
+    let pairs = files.iter_mut().zip(facts.iter_mut()).zip(kept.iter_mut());
+    for (fi, ((file, fact), kept)) in pairs.enumerate() {
         let declared = declared.get(modules.of(fi)).unwrap_or(&no_declared);
         let Facts {
             candidates,
             inferred,
             ..
         } = fact;
-        for ((p, &guessed), k) in candidates.iter_mut().zip(inferred.iter()).zip(kept) {
-            let Some(name) = p.name.as_deref().filter(|_| guessed) else {
+        for ((p, guessed), k) in candidates.iter_mut().zip(inferred.iter()).zip(kept) {
+            let (Some(name), Some(fields)) = (p.name.as_deref(), guessed) else {
                 continue;
             };
             let key = name_key(name);
             let base = key.split('[').next().unwrap_or_default();
-            if let Some(&kind) = declared.get(base) {
+            let kind = declared.get(base).copied();
+            file.diagnostics
+                .extend(guessed_field_problem(&file.source, fields, kind, name));
+            if let Some(kind) = kind {
                 p.kind = kind;
                 if kind == PositionKind::Frame {
                     p.config = Config::None;

@@ -1223,3 +1223,76 @@ fn krl_fdat_act_takes_effect_at_the_next_bas_call() {
         ]
     );
 }
+
+/// The errors of `file`, each with its line and column.
+fn located_errors(file: &ParsedFile) -> Vec<(usize, usize, String)> {
+    file.diagnostics
+        .iter()
+        .filter(|d| d.severity == Severity::Error)
+        .map(|d| {
+            let (l, c) = file.lines.line_col(d.span.start);
+            (l, c, d.message.clone())
+        })
+        .collect()
+}
+
+/// An aggregate written in a `.src`, assigned or inline in a motion, is held to the fields of its
+/// type as a declaration is: a field given twice, or one its type lacks, is an error at the
+/// field. The type of an assignment is the declared type of the name (in the pair's `.dat` as in
+/// the `.src`); a motion's inline target is a position; where the type is not known only a field
+/// given twice is. A partial aggregate is fine.
+#[test]
+fn krl_aggregates_in_a_src_are_held_to_their_fields() {
+    let src = "DEF m( )\n  DECL POS PL\n  XP1 = {X 1, X 2, Y 0}\n  LIN {X 10, X 20, Y 0}\n  PTP {A1 0, A2 5, a1 3}\n  LIN {POS: X 1, E1 2}\n  PL = {X 1, Y 2, E1 3}\n  XQ = {X 1, Q 2}\n  XU = {X 1, Q 2}\n  XV = {Y 1, y 2}\n  XP2 = {X 10}\n  LIN {X 10}\n  XJ = {A1 1, X 2}\n  P[2] = {Z 1, Z 2}\nEND\n";
+    let dat = "DEFDAT m\nDECL E6POS XP1={X 1,Y 2,Z 3,A 0,B 0,C 0}\nDECL E6POS XP2={X 1,Y 2,Z 3,A 0,B 0,C 0}\nDECL E6POS XQ\nDECL E6AXIS XJ\nDECL E6POS P[3]\nENDDAT\n";
+    let program = krl::load_program_from_sources(
+        vec![
+            (PathBuf::from("m.src"), src.as_bytes().to_vec()),
+            (PathBuf::from("m.dat"), dat.as_bytes().to_vec()),
+        ],
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let e = |l: usize, c: usize, m: &str| (l, c, m.to_owned());
+    assert_eq!(
+        located_errors(&program.files[0]),
+        [
+            e(3, 15, "E6POS `XP1` gives field `X` twice"),
+            e(4, 14, "inline E6POS gives field `X` twice"),
+            e(5, 20, "inline E6AXIS gives field `a1` twice"),
+            e(6, 18, "inline POS has no field `E1`"),
+            e(7, 19, "POS `PL` has no field `E1`"),
+            e(8, 14, "E6POS `XQ` has no field `Q`"),
+            e(10, 14, "`XV` gives field `y` twice"),
+            e(13, 15, "E6AXIS `XJ` has no field `X`"),
+            e(14, 16, "E6POS `P[2]` gives field `Z` twice"),
+        ]
+    );
+    assert!(located_errors(&program.files[1]).is_empty());
+    // Every one is an error the transforms refuse the file for, with the hint check shows.
+    let file = &program.files[0];
+    let refused = trackfix::report::errors(file);
+    assert_eq!(refused.len(), 9);
+    assert!(
+        refused.iter().all(|d| d
+            .hint
+            .as_deref()
+            .is_some_and(|h| h.starts_with("the controller does not load the file"))),
+        "{refused:?}"
+    );
+    // The `.src` alone: the names the `.dat` declares are of no known type, so only a field
+    // given twice is an error there.
+    let alone = krl::parse_file(Path::new("m.src"), src.as_bytes().to_vec());
+    assert_eq!(
+        located_errors(&alone),
+        [
+            e(3, 15, "`XP1` gives field `X` twice"),
+            e(4, 14, "inline E6POS gives field `X` twice"),
+            e(5, 20, "inline E6AXIS gives field `a1` twice"),
+            e(6, 18, "inline POS has no field `E1`"),
+            e(7, 19, "POS `PL` has no field `E1`"),
+            e(10, 14, "`XV` gives field `y` twice"),
+            e(14, 16, "`P[2]` gives field `Z` twice"),
+        ]
+    );
+}
