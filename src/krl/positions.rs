@@ -35,10 +35,14 @@ pub(crate) enum Setting {
     Tool(FrameRef),
     /// `$IPO_MODE = #TCP` (true) or `#BASE`.
     Tcp(bool),
-    /// `FDAT_ACT = FP1`: base, tool and IPO mode of that FDAT.
+    /// `FDAT_ACT = FP1`: stages base, tool and IPO mode of that FDAT for [`Setting::ApplyFdat`].
     Fdat(Name),
     /// `FDAT_ACT = {TOOL_NO 1, BASE_NO 2, IPO_FRAME #BASE}` written inline.
     FdatValue(Fdat),
+    /// `BAS(#PTP_PARAMS, …)`, `BAS(#CP_PARAMS, …)`, `BAS(#FRAMES)`: KSS's `BAS.SRC` sets
+    /// `$BASE`, `$TOOL` and `$IPO_MODE` from what `FDAT_ACT` holds then (an inline form's fold
+    /// runs it right after `FDAT_ACT = …`; until it runs, the frames in effect stay).
+    ApplyFdat,
     BaseOfFdat(String),
     ToolOfFdat(String),
     TcpOfFdat(String),
@@ -127,9 +131,11 @@ pub(crate) struct Facts {
     /// Declared `FRAME`s and aggregates assigned to names of unknown type: positions only when
     /// a motion uses them.
     pub candidates: Vec<Position>,
-    /// Per candidate: its kind was guessed from its fields because this file does not declare
-    /// the name (the other file of the pair may).
-    pub inferred: Vec<bool>,
+    /// Per candidate: `Some` when its kind was guessed from its fields because this file does
+    /// not declare the name (the other file of the pair may), holding the names of its fields
+    /// in written order, to be held to the type of that declaration once it is known
+    /// ([`guessed_field_problem`]).
+    pub inferred: Vec<Option<Box<[Span32]>>>,
     /// Positional types this file declares, by upper-case name.
     pub declared: HashMap<Name, PositionKind>,
     /// Values computed at run time given to declared names (`XP1 = $POS_ACT`, `P[I] = …`).
@@ -521,7 +527,7 @@ struct Fields {
     /// A number field is not what `NumField::read_at` reads at its start (see `num_field`).
     read_elsewhere: bool,
     /// The fields written, by [`field_index`]; `odd` when one is written twice or is none of
-    /// them: what [`field_problem`] then reports for a declared position.
+    /// them: what [`field_problem`] then reports ([`aggregate_problem`]).
     seen: u32,
     odd: bool,
 }
@@ -575,51 +581,105 @@ fn allowed_fields(kind: PositionKind) -> u32 {
     }
 }
 
-/// An error for the first field of the `kind` aggregate declared as `name` that its type does
-/// not have, or that is given twice: KSS does not load such a file, and a transform would
-/// rewrite one of the two values and leave the other. Out of line: the statement handler it
-/// is called from is inlined into the parser's sink.
+/// Every field [`field_index`] knows: what an aggregate of a type not known may give.
+const ANY_FIELD: u32 = 0xf_ffff;
+
+/// An error for the first of `names` (an aggregate's field names, in written order) that a
+/// `kind` position does not have, or that is given twice: KSS does not load such a file, and a
+/// transform would rewrite one of the two values and leave the other. `kind` is `None` for a
+/// type not known (a name no declaration of the program types), which may have any field, so
+/// only a field given twice is wrong there. `name` is what the aggregate is the value of (`None`:
+/// written inline in a motion). Out of line: the statement handler it is called from is inlined
+/// into the parser's sink.
 #[inline(never)]
 fn field_problem(
     src: &[u8],
-    agg: &Aggregate,
-    kind: PositionKind,
-    name: &str,
+    names: impl Iterator<Item = Span> + Clone,
+    kind: Option<PositionKind>,
+    name: Option<&str>,
 ) -> Option<Diagnostic> {
-    let allowed = allowed_fields(kind);
     let fields = match kind {
-        PositionKind::E6Pos => "X, Y, Z, A, B, C, S, T, E1-E6",
-        PositionKind::Pos => "X, Y, Z, A, B, C, S, T",
-        PositionKind::Frame => "X, Y, Z, A, B, C",
-        PositionKind::E6Axis => "A1-A6, E1-E6",
-        PositionKind::Axis => "A1-A6",
-        _ => return None,
+        None => "",
+        Some(PositionKind::E6Pos) => "X, Y, Z, A, B, C, S, T, E1-E6",
+        Some(PositionKind::Pos) => "X, Y, Z, A, B, C, S, T",
+        Some(PositionKind::Frame) => "X, Y, Z, A, B, C",
+        Some(PositionKind::E6Axis) => "A1-A6, E1-E6",
+        Some(PositionKind::Axis) => "A1-A6",
+        Some(_) => return None,
     };
+    let allowed = kind.map_or(ANY_FIELD, allowed_fields);
     let mut seen = 0u32;
-    for field in &agg.fields {
-        let bit = field_index(field.name.slice(src))
+    for (i, at) in names.clone().enumerate() {
+        let text = at.slice(src);
+        let bit = field_index(text)
             .map(|k| 1u32 << k)
             .filter(|b| allowed & b != 0);
-        let twice = match bit {
-            Some(b) if seen & b == 0 => {
+        let twice = match (bit, kind) {
+            (Some(b), _) if seen & b == 0 => {
                 seen |= b;
                 continue;
             }
-            Some(_) => true,
-            None => false,
+            (Some(_), _) => true,
+            // No position's field, in a type that may have it: wrong only when given again.
+            (None, None) => {
+                let again = |n: Span| n.slice(src).eq_ignore_ascii_case(text);
+                if !names.clone().take(i).any(again) {
+                    continue;
+                }
+                true
+            }
+            (None, Some(_)) => false,
         };
-        let written = crate::syntax::latin1(field.name.slice(src));
+        let written = crate::syntax::latin1(text);
+        let what = match (kind, name) {
+            (Some(k), Some(n)) => format!("{} `{n}`", k.as_str()),
+            (Some(k), None) => format!("inline {}", k.as_str()),
+            (None, Some(n)) => format!("`{n}`"),
+            (None, None) => "inline aggregate".to_owned(),
+        };
         let problem = if twice {
-            format!("{} `{name}` gives field `{written}` twice", kind.as_str())
+            format!("{what} gives field `{written}` twice")
         } else {
-            format!("{} `{name}` has no field `{written}`", kind.as_str())
+            format!("{what} has no field `{written}`")
         };
-        return Some(Diagnostic::error(field.name, problem).with_hint(format!(
-            "the controller does not load the file: write each of {}'s fields ({fields}) at most once; trackfix transforms no file with an error",
-            kind.as_str()
-        )));
+        let hint = match kind {
+            Some(k) => format!(
+                "the controller does not load the file: write each of {}'s fields ({fields}) at most once; trackfix transforms no file with an error",
+                k.as_str()
+            ),
+            None => "the controller does not load the file: write each field at most once; trackfix transforms no file with an error".to_owned(),
+        };
+        return Some(Diagnostic::error(at, problem).with_hint(hint));
     }
     None
+}
+
+/// The [`field_problem`] of aggregate `agg`, whose fields `f` read: told from `f` in the usual
+/// case, where no field is odd, without a second look at the fields.
+fn aggregate_problem(
+    src: &[u8],
+    agg: &Aggregate,
+    f: &Fields,
+    kind: Option<PositionKind>,
+    name: Option<&str>,
+) -> Option<Diagnostic> {
+    let allowed = kind.map_or(ANY_FIELD, allowed_fields);
+    if !f.odd && f.seen & !allowed == 0 {
+        return None;
+    }
+    field_problem(src, agg.fields.iter().map(|x| x.name), kind, name)
+}
+
+/// The [`field_problem`] of a candidate assigned to `name` whose kind was guessed
+/// ([`Facts::inferred`]: `fields` its field names), once the type a declaration of the program
+/// gives the name is known (`None`: none does).
+pub(crate) fn guessed_field_problem(
+    src: &[u8],
+    fields: &[Span32],
+    kind: Option<PositionKind>,
+    name: &str,
+) -> Option<Diagnostic> {
+    field_problem(src, fields.iter().map(|s| s.span()), kind, Some(name))
 }
 
 fn read_fields(src: &[u8], agg: &Aggregate) -> Fields {
@@ -867,17 +927,18 @@ impl<'a> Extractor<'a> {
                     } else if let Some(kind) = positional {
                         let name = name_text(v.name.slice(src));
                         let f = read_fields(src, agg);
-                        // Told from the fields read, in the rare case only.
-                        if (f.odd || f.seen & !allowed_fields(kind) != 0)
-                            && let Some(d) = field_problem(src, agg, kind, &name)
-                        {
-                            self.diagnostics.push(d);
-                        }
+                        self.diagnostics.extend(aggregate_problem(
+                            src,
+                            agg,
+                            &f,
+                            Some(kind),
+                            Some(&name),
+                        ));
                         let read_elsewhere = f.read_elsewhere;
                         let p = build_position(lines, init.span, kind, Some(name), f);
                         if kind == PositionKind::Frame {
                             out.facts.candidates.push(p);
-                            out.facts.inferred.push(false);
+                            out.facts.inferred.push(None);
                         } else {
                             out.positions.push_checking(p, src, read_elsewhere);
                         }
@@ -890,7 +951,8 @@ impl<'a> Extractor<'a> {
                     .current
                     .and_then(|r| Some((r, self.routines.get(r)?.params.as_slice())));
                 let at = (self.in_routine, routine);
-                assignment(src, lines, &self.declared, at, target, value, out);
+                let problem = assignment(src, lines, &self.declared, at, target, value, out);
+                self.diagnostics.extend(problem);
             }
             StmtKind::Call(call) => {
                 if let Some(s) = bas_call(src, call) {
@@ -931,7 +993,8 @@ impl<'a> Extractor<'a> {
                 let mut refs = Vec::with_capacity(targets.len());
                 for t in targets {
                     offset_operands(src, lines, t, &mut out.facts.offsets);
-                    if !target_refs(src, lines, t, &mut refs, &mut out.positions) {
+                    let notes = &mut self.diagnostics;
+                    if !target_refs(src, lines, t, &mut refs, &mut out.positions, notes) {
                         self.diagnostics.push(
                             Diagnostic::warning(
                                 t.span,
@@ -1018,7 +1081,8 @@ fn fdat(src: &[u8], agg: &Aggregate) -> Fdat {
     f
 }
 
-/// `BAS(#BASE, n)` / `BAS(#TOOL, n)`.
+/// `BAS(#BASE, n)` / `BAS(#TOOL, n)`, and the calls that apply `FDAT_ACT`
+/// ([`Setting::ApplyFdat`]; `BAS(#FRAMES)` takes no value).
 fn bas_call(src: &[u8], call: &Expr) -> Option<Setting> {
     let ExprKind::Call(name, args) = &call.kind else {
         return None;
@@ -1026,13 +1090,16 @@ fn bas_call(src: &[u8], call: &Expr) -> Option<Setting> {
     if !upper_is(src, name.span, "BAS") {
         return None;
     }
-    let [Some(which), Some(n)] = args.as_slice() else {
-        return None;
+    let (which, n) = match args.as_slice() {
+        [Some(which)] => (which, None),
+        [Some(which), n] => (which, n.as_ref()),
+        _ => return None,
     };
-    let r = integer(src, n).map_or(FrameRef::RunTime(n.span), FrameRef::Data);
+    let r = || n.map(|n| integer(src, n).map_or(FrameRef::RunTime(n.span), FrameRef::Data));
     match upper_short(src, which.span, &mut [0; 16]) {
-        "#BASE" => Some(Setting::Base(r)),
-        "#TOOL" => Some(Setting::Tool(r)),
+        "#BASE" => r().map(Setting::Base),
+        "#TOOL" => r().map(Setting::Tool),
+        "#PTP_PARAMS" | "#CP_PARAMS" | "#FRAMES" => Some(Setting::ApplyFdat),
         _ => None,
     }
 }
@@ -1122,7 +1189,8 @@ fn computed_assignment(
 
 /// An assignment statement, written in a `DEF`/`DEFFCT` (`in_routine`) or a data list.
 /// `routine` is the routine it is written in, when that takes parameters: its index and its
-/// parameters.
+/// parameters. Returns the error of an aggregate it assigns to a position that gives a field
+/// twice or one the position's type lacks ([`field_problem`]).
 fn assignment(
     src: &[u8],
     lines: &LineIndex,
@@ -1131,11 +1199,11 @@ fn assignment(
     target: &Expr,
     value: &Expr,
     out: &mut Extracted,
-) {
+) -> Option<Diagnostic> {
     let ExprKind::Aggregate(agg) = &value.kind else {
         if let Some(s) = setting(src, target, value) {
             out.facts.events.push(Event::Set(s));
-            return;
+            return None;
         }
         // A whole base or tool (`BASE_DATA[1] = BASE_DATA[2]`) is the controller's to change
         // as its components are: `BAS(#BASE,1)` after it reads the new value.
@@ -1156,13 +1224,13 @@ fn assignment(
                 });
             }
         }
-        return;
+        return None;
     };
     if upper_is(src, target.span, "FDAT_ACT") {
         if let Some(s) = setting(src, target, value) {
             out.facts.events.push(Event::Set(s));
         }
-        return;
+        return None;
     }
     if let Some((kind, n)) = data_element(src, target) {
         let prefix = if kind == FrameKind::Base {
@@ -1177,7 +1245,7 @@ fn assignment(
         if in_routine {
             computed_assignment(src, lines, routine, target, out);
         }
-        return;
+        return None;
     }
     let target_name = upper(src, target.span);
     if target_name == "$BASE" || target_name == "$TOOL" {
@@ -1198,41 +1266,44 @@ fn assignment(
             } else {
                 Setting::Tool(r)
             }));
-        return;
+        return None;
     }
-    let Some(base) = base_name(src, target) else {
-        return;
-    };
+    let base = base_name(src, target)?;
     if base.starts_with('$') {
-        return;
+        return None;
     }
     let f = read_fields(src, agg);
-    let name = Some(name_text(target.span.slice(src)));
-    match declared.get(base.as_str()).copied() {
+    let name = name_text(target.span.slice(src));
+    let kind = declared.get(base.as_str()).copied();
+    let problem = kind.and_then(|k| aggregate_problem(src, agg, &f, Some(k), Some(&name)));
+    match kind {
         Some(PositionKind::Frame) => {
             out.facts.candidates.push(build_position(
                 lines,
                 value.span,
                 PositionKind::Frame,
-                name,
+                Some(name),
                 f,
             ));
-            out.facts.inferred.push(false);
+            out.facts.inferred.push(None);
         }
         Some(kind) => {
             let read_elsewhere = f.read_elsewhere;
-            let p = build_position(lines, value.span, kind, name, f);
+            let p = build_position(lines, value.span, kind, Some(name), f);
             out.positions.push_checking(p, src, read_elsewhere);
         }
         None => {
             if let Some(kind) = inferred_kind(src, agg, &f) {
+                // Checked once the pair's declarations are known: the `.dat` may type the name.
+                let fields = agg.fields.iter().filter_map(|x| Span32::of(x.name));
+                out.facts.inferred.push(Some(fields.collect()));
                 out.facts
                     .candidates
-                    .push(build_position(lines, value.span, kind, name, f));
-                out.facts.inferred.push(true);
+                    .push(build_position(lines, value.span, kind, Some(name), f));
             }
         }
     }
+    problem
 }
 
 /// The names `e` writes after a geometric operator `:`, anywhere in it (a name in brackets
@@ -1275,13 +1346,15 @@ fn offset_operands(src: &[u8], lines: &LineIndex, e: &Expr, out: &mut Vec<(Name,
 /// frame before the `:` is the motion's target: KSS gives the result the type of the operand
 /// after it, and with it, as far as trackfix knows, that operand's Status, Turn and external
 /// axes (none for a `POS`), so the skid a correction of the frame would need is not known to
-/// be the one it is written with.
+/// be the one it is written with. An inline literal that gives a field twice, or one its
+/// type lacks, is an error in `notes`.
 fn target_refs(
     src: &[u8],
     lines: &LineIndex,
     e: &Expr,
     refs: &mut Vec<Ref>,
     positions: &mut PositionList,
+    notes: &mut Vec<Diagnostic>,
 ) -> bool {
     match &e.kind {
         ExprKind::Name | ExprKind::Index(..) => {
@@ -1291,6 +1364,9 @@ fn target_refs(
         ExprKind::Aggregate(agg) => {
             let f = read_fields(src, agg);
             if let Some(kind) = inferred_kind(src, agg, &f) {
+                // A motion's target is a position: its type is the one its fields (or its own
+                // `{E6POS: …}`) say.
+                notes.extend(aggregate_problem(src, agg, &f, Some(kind), None));
                 let read_elsewhere = f.read_elsewhere;
                 let p = build_position(lines, e.span, kind, None, f);
                 positions.push_checking(p, src, read_elsewhere);
@@ -1298,7 +1374,7 @@ fn target_refs(
             }
             true
         }
-        ExprKind::Paren(inner) => target_refs(src, lines, inner, refs, positions),
+        ExprKind::Paren(inner) => target_refs(src, lines, inner, refs, positions, notes),
         _ => false,
     }
 }

@@ -4,7 +4,8 @@
 //! ([`crate::resolve`]), which fills each position's [`Usage`](crate::position::Usage).
 
 use super::positions::{
-    BranchEvent, Event, Facts, Fdat, FrameRef, LoopKind, Ref, Setting, name_key,
+    BranchEvent, Event, Facts, Fdat, FrameRef, LoopKind, Ref, Setting, guessed_field_problem,
+    name_key,
 };
 use crate::position::{Config, FrameName, Name, ParsedFile, PositionKind, RunTimeValue, UseLine};
 use crate::syntax::Diagnostic;
@@ -80,6 +81,18 @@ struct State {
     base: Option<FrameRef>,
     tool: Option<FrameRef>,
     tcp: bool,
+    /// What `FDAT_ACT` holds, which only a `BAS` call that applies it puts into effect
+    /// ([`Setting::ApplyFdat`]). `None`: nothing staged on this path since the routine's entry,
+    /// so it holds what it held then.
+    staged: Option<Staged>,
+}
+
+/// The frame data `FDAT_ACT` holds: the base, tool and IPO mode a `BAS` call applies.
+#[derive(Clone, PartialEq)]
+struct Staged {
+    base: FrameRef,
+    tool: FrameRef,
+    tcp: bool,
 }
 
 /// An open `IF`/`SWITCH` while following program order.
@@ -131,6 +144,28 @@ fn join(states: &[State]) -> Option<State> {
         base: agree(|s| &s.base),
         tool: agree(|s| &s.tool),
         tcp: states.iter().any(|o| o.tcp),
+        staged: join_staged(states),
+    })
+}
+
+/// What `FDAT_ACT` holds after paths that staged `states`' values: the one they agree on, else
+/// a base or tool that differs between them (or that a path left as at the routine's entry) is
+/// unknown, and #TCP in any counts.
+fn join_staged(states: &[State]) -> Option<Staged> {
+    let first = states.first()?.staged.as_ref();
+    if states.iter().all(|o| o.staged.as_ref() == first) {
+        return first.cloned();
+    }
+    let agree = |f: fn(&Staged) -> &FrameRef| match first.map(f) {
+        Some(r) if states.iter().all(|o| o.staged.as_ref().map(f) == Some(r)) => r.clone(),
+        _ => FrameRef::Unknown,
+    };
+    Some(Staged {
+        base: agree(|s| &s.base),
+        tool: agree(|s| &s.tool),
+        tcp: states
+            .iter()
+            .any(|o| o.staged.as_ref().is_some_and(|s| s.tcp)),
     })
 }
 
@@ -243,21 +278,30 @@ impl Flow {
 impl State {
     fn apply(&mut self, s: &Setting, fdats: &HashMap<Name, Fdat>) {
         let data = |n: Option<u32>| n.map_or(FrameRef::Unknown, FrameRef::Data);
+        let staged = |f: Option<&Fdat>| Staged {
+            base: data(f.and_then(|f| f.base)),
+            tool: data(f.and_then(|f| f.tool)),
+            tcp: f.and_then(|f| f.tcp).unwrap_or(false),
+        };
         match s {
             Setting::Base(r) => self.base = Some(r.clone()),
             Setting::Tool(r) => self.tool = Some(r.clone()),
             Setting::Tcp(t) => self.tcp = *t,
-            Setting::FdatValue(f) => {
-                self.base = Some(data(f.base));
-                self.tool = Some(data(f.tool));
-                self.tcp = f.tcp.unwrap_or(false);
-            }
-            Setting::Fdat(name) => {
-                let f = fdats.get(name.as_str());
-                self.base = Some(data(f.and_then(|f| f.base)));
-                self.tool = Some(data(f.and_then(|f| f.tool)));
-                self.tcp = f.and_then(|f| f.tcp).unwrap_or(false);
-            }
+            Setting::FdatValue(f) => self.staged = Some(staged(Some(f))),
+            Setting::Fdat(name) => self.staged = Some(staged(fdats.get(name.as_str()))),
+            Setting::ApplyFdat => match &self.staged {
+                Some(f) => {
+                    self.base = Some(f.base.clone());
+                    self.tool = Some(f.tool.clone());
+                    self.tcp = f.tcp;
+                }
+                // What `FDAT_ACT` held when the routine was entered (staged by a caller, or by a
+                // program run before): not known here.
+                None => {
+                    self.base = Some(FrameRef::Unknown);
+                    self.tool = Some(FrameRef::Unknown);
+                }
+            },
             Setting::BaseOfFdat(name) => {
                 self.base = Some(data(fdats.get(name.as_str()).and_then(|f| f.base)));
             }
@@ -274,12 +318,13 @@ impl State {
     }
 }
 
-/// What a routine leaves set when it returns: the base and tool it sets on every path (`None`:
-/// left as the caller had it).
+/// What a routine leaves set when it returns: the base and tool it sets, and what it leaves
+/// staged in `FDAT_ACT`, on every path (`None`: left as the caller had it).
 #[derive(Clone, Default, PartialEq)]
 struct Exit {
     base: Option<FrameRef>,
     tool: Option<FrameRef>,
+    staged: Option<Staged>,
 }
 
 impl Exit {
@@ -289,6 +334,9 @@ impl Exit {
         }
         if let Some(t) = &self.tool {
             state.tool = Some(t.clone());
+        }
+        if let Some(f) = &self.staged {
+            state.staged = Some(f.clone());
         }
     }
 }
@@ -322,6 +370,7 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                         next.entry((module, n.to_owned())).or_insert(Exit {
                             base: state.base.clone(),
                             tool: state.tool.clone(),
+                            staged: state.staged.clone(),
                         });
                     }
                 };
@@ -544,7 +593,8 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         .map(|f| vec![false; f.candidates.len()])
         .collect();
     // `XP1={…}` in the `.src` of a point the `.dat` declares (`DECL POS XP1`): the declaration
-    // gives the kind, and a non-FRAME declared point is a position whether or not it moves.
+    // gives the kind, and the fields the aggregate may give; a non-FRAME declared point is a
+    // position whether or not it moves.
     let declared = modules.gathered(
         facts
             .iter_mut()
@@ -552,20 +602,24 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
             .collect(),
     );
     let no_declared = HashMap::default();
-    for (fi, (fact, kept)) in facts.iter_mut().zip(kept.iter_mut()).enumerate() {
+    let pairs = files.iter_mut().zip(facts.iter_mut()).zip(kept.iter_mut());
+    for (fi, ((file, fact), kept)) in pairs.enumerate() {
         let declared = declared.get(modules.of(fi)).unwrap_or(&no_declared);
         let Facts {
             candidates,
             inferred,
             ..
         } = fact;
-        for ((p, &guessed), k) in candidates.iter_mut().zip(inferred.iter()).zip(kept) {
-            let Some(name) = p.name.as_deref().filter(|_| guessed) else {
+        for ((p, guessed), k) in candidates.iter_mut().zip(inferred.iter()).zip(kept) {
+            let (Some(name), Some(fields)) = (p.name.as_deref(), guessed) else {
                 continue;
             };
             let key = name_key(name);
             let base = key.split('[').next().unwrap_or_default();
-            if let Some(&kind) = declared.get(base) {
+            let kind = declared.get(base).copied();
+            file.diagnostics
+                .extend(guessed_field_problem(&file.source, fields, kind, name));
+            if let Some(kind) = kind {
                 p.kind = kind;
                 if kind == PositionKind::Frame {
                     p.config = Config::None;
@@ -727,7 +781,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         for &span in unresolved.get(fi).into_iter().flatten() {
             file.diagnostics.push(
                 Diagnostic::warning(span, "the base of this motion is not resolved").with_hint(
-                    "set FDAT_ACT, $BASE=BASE_DATA[n] or BAS(#BASE,n) before it in the same DEF",
+                    "set $BASE=BASE_DATA[n] or BAS(#BASE,n), or FDAT_ACT then BAS(#PTP_PARAMS,…) or BAS(#CP_PARAMS,…), before it in the same DEF",
                 ),
             );
         }

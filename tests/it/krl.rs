@@ -1074,3 +1074,225 @@ fn a_field_given_twice_or_unknown_is_an_error() {
         ]
     );
 }
+
+/// The base, tool and stationary-tool mode of each named point of a program, by name.
+fn frames_by_name(program: &Program) -> Vec<(String, Option<String>, Vec<String>, bool)> {
+    program
+        .files
+        .iter()
+        .flat_map(|f| f.positions())
+        .filter_map(|p| {
+            Some((
+                p.name.as_deref()?.to_owned(),
+                p.usage.wobj.as_deref().map(str::to_owned),
+                p.usage
+                    .other_wobjs()
+                    .iter()
+                    .map(|w| w.to_string())
+                    .collect(),
+                p.usage.stationary_tool(),
+            ))
+        })
+        .collect()
+}
+
+/// `FDAT_ACT = …` only stages frame data: KSS applies its base, tool and IPO mode when
+/// `BAS(#PTP_PARAMS, …)`, `BAS(#CP_PARAMS, …)` or `BAS(#FRAMES)` runs (what an inline form does
+/// right after it). A motion between the two moves with what was in effect before; what a
+/// routine stages is applied by a `BAS` call after it; stagings that disagree between branches
+/// leave the base unknown; a `BAS` with nothing staged before it applies what `FDAT_ACT` held on
+/// entry, which is not known.
+#[test]
+fn krl_fdat_act_takes_effect_at_the_next_bas_call() {
+    let src = "DEF fdat( )\n\
+        \x20 $BASE=BASE_DATA[1]\n\
+        \x20 $TOOL=TOOL_DATA[1]\n\
+        \x20 FDAT_ACT=FP2\n\
+        \x20 LIN XA\n\
+        \x20 BAS(#CP_PARAMS,2)\n\
+        \x20 LIN XB\n\
+        \x20 FDAT_ACT={TOOL_NO 5,BASE_NO 6,IPO_FRAME #TCP}\n\
+        \x20 PTP XC\n\
+        \x20 BAS (#FRAMES )\n\
+        \x20 PTP XD\n\
+        \x20 stage( )\n\
+        \x20 LIN XE\n\
+        \x20 BAS(#PTP_PARAMS,100)\n\
+        \x20 PTP XF\n\
+        \x20 FDAT_ACT=FP2\n\
+        \x20 IF $IN[1] THEN\n\
+        \x20   FDAT_ACT=FP7\n\
+        \x20 ENDIF\n\
+        \x20 BAS(#CP_PARAMS,2)\n\
+        \x20 LIN XG\n\
+        END\n\
+        DEF stage( )\n\
+        \x20 FDAT_ACT=FP7\n\
+        END\n\
+        DEF staged_in_a_loop( )\n\
+        \x20 FDAT_ACT=FP2\n\
+        \x20 BAS(#CP_PARAMS,2)\n\
+        \x20 LOOP\n\
+        \x20   LIN XH\n\
+        \x20   FDAT_ACT=FP7\n\
+        \x20 ENDLOOP\n\
+        END\n\
+        DEF applied_in_a_loop( )\n\
+        \x20 FDAT_ACT=FP2\n\
+        \x20 FOR I=1 TO 2\n\
+        \x20   BAS(#CP_PARAMS,2)\n\
+        \x20   LIN XI\n\
+        \x20   FDAT_ACT=FP7\n\
+        \x20 ENDFOR\n\
+        END\n\
+        DEF nothing_staged( )\n\
+        \x20 $BASE=BASE_DATA[1]\n\
+        \x20 BAS(#PTP_PARAMS,100)\n\
+        \x20 PTP XJ\n\
+        END\n";
+    let mut dat = String::from("DEFDAT fdat\n");
+    for n in ["XA", "XB", "XC", "XD", "XE", "XF", "XG", "XH", "XI", "XJ"] {
+        dat += &format!("DECL E6POS {n}={{X 1,Y 2,Z 3,A 0,B 0,C 0,E1 100}}\n");
+    }
+    dat += "DECL FDAT FP2={TOOL_NO 3,BASE_NO 2,IPO_FRAME #BASE}\n\
+        DECL FDAT FP7={TOOL_NO 3,BASE_NO 7,IPO_FRAME #BASE}\nENDDAT\n";
+    let program = krl::load_program_from_sources(
+        vec![
+            (PathBuf::from("fdat.src"), src.as_bytes().to_vec()),
+            (PathBuf::from("fdat.dat"), dat.into_bytes()),
+        ],
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let base = |n: u32| Some(format!("BASE_DATA[{n}]"));
+    let at = |name: &str, wobj: Option<String>, others: &[&str], tcp: bool| {
+        (
+            name.to_owned(),
+            wobj,
+            others.iter().map(|o| (*o).to_owned()).collect::<Vec<_>>(),
+            tcp,
+        )
+    };
+    assert_eq!(
+        frames_by_name(&program),
+        [
+            at("XA", base(1), &[], false),
+            at("XB", base(2), &[], false),
+            at("XC", base(2), &[], false),
+            at("XD", base(6), &[], true),
+            at("XE", base(6), &[], true),
+            at("XF", base(7), &[], false),
+            at("XG", None, &[], false),
+            at("XH", base(2), &[], false),
+            at("XI", base(2), &["BASE_DATA[7]"], false),
+            at("XJ", None, &[], false),
+        ]
+    );
+    let tools: Vec<_> = program.files[1]
+        .positions()
+        .map(|p| p.usage.tool.as_deref().map(str::to_owned))
+        .collect();
+    let tool = |n: u32| Some(format!("TOOL_DATA[{n}]"));
+    assert_eq!(
+        tools,
+        [
+            tool(1),
+            tool(3),
+            tool(3),
+            tool(5),
+            tool(5),
+            tool(3),
+            tool(3),
+            tool(3),
+            tool(3),
+            None
+        ]
+    );
+    // The motions whose base stays unknown are the ones warned about.
+    let src_file = &program.files[0];
+    let warned: Vec<_> = src_file
+        .diagnostics
+        .iter()
+        .map(|d| (src_file.lines.line(d.span.start), d.message.as_str()))
+        .collect();
+    assert_eq!(
+        warned,
+        [
+            (21, "the base of this motion is not resolved"),
+            (45, "the base of this motion is not resolved"),
+        ]
+    );
+}
+
+/// The errors of `file`, each with its line and column.
+fn located_errors(file: &ParsedFile) -> Vec<(usize, usize, String)> {
+    file.diagnostics
+        .iter()
+        .filter(|d| d.severity == Severity::Error)
+        .map(|d| {
+            let (l, c) = file.lines.line_col(d.span.start);
+            (l, c, d.message.clone())
+        })
+        .collect()
+}
+
+/// An aggregate written in a `.src`, assigned or inline in a motion, is held to the fields of its
+/// type as a declaration is: a field given twice, or one its type lacks, is an error at the
+/// field. The type of an assignment is the declared type of the name (in the pair's `.dat` as in
+/// the `.src`); a motion's inline target is a position; where the type is not known only a field
+/// given twice is. A partial aggregate is fine.
+#[test]
+fn krl_aggregates_in_a_src_are_held_to_their_fields() {
+    let src = "DEF m( )\n  DECL POS PL\n  XP1 = {X 1, X 2, Y 0}\n  LIN {X 10, X 20, Y 0}\n  PTP {A1 0, A2 5, a1 3}\n  LIN {POS: X 1, E1 2}\n  PL = {X 1, Y 2, E1 3}\n  XQ = {X 1, Q 2}\n  XU = {X 1, Q 2}\n  XV = {Y 1, y 2}\n  XP2 = {X 10}\n  LIN {X 10}\n  XJ = {A1 1, X 2}\n  P[2] = {Z 1, Z 2}\nEND\n";
+    let dat = "DEFDAT m\nDECL E6POS XP1={X 1,Y 2,Z 3,A 0,B 0,C 0}\nDECL E6POS XP2={X 1,Y 2,Z 3,A 0,B 0,C 0}\nDECL E6POS XQ\nDECL E6AXIS XJ\nDECL E6POS P[3]\nENDDAT\n";
+    let program = krl::load_program_from_sources(
+        vec![
+            (PathBuf::from("m.src"), src.as_bytes().to_vec()),
+            (PathBuf::from("m.dat"), dat.as_bytes().to_vec()),
+        ],
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let e = |l: usize, c: usize, m: &str| (l, c, m.to_owned());
+    assert_eq!(
+        located_errors(&program.files[0]),
+        [
+            e(3, 15, "E6POS `XP1` gives field `X` twice"),
+            e(4, 14, "inline E6POS gives field `X` twice"),
+            e(5, 20, "inline E6AXIS gives field `a1` twice"),
+            e(6, 18, "inline POS has no field `E1`"),
+            e(7, 19, "POS `PL` has no field `E1`"),
+            e(8, 14, "E6POS `XQ` has no field `Q`"),
+            e(10, 14, "`XV` gives field `y` twice"),
+            e(13, 15, "E6AXIS `XJ` has no field `X`"),
+            e(14, 16, "E6POS `P[2]` gives field `Z` twice"),
+        ]
+    );
+    assert!(located_errors(&program.files[1]).is_empty());
+    // Every one is an error the transforms refuse the file for, with the hint check shows.
+    let file = &program.files[0];
+    let refused = trackfix::report::errors(file);
+    assert_eq!(refused.len(), 9);
+    assert!(
+        refused.iter().all(|d| d
+            .hint
+            .as_deref()
+            .is_some_and(|h| h.starts_with("the controller does not load the file"))),
+        "{refused:?}"
+    );
+    // The `.src` alone: the names the `.dat` declares are of no known type, so only a field
+    // given twice is an error there.
+    let alone = krl::parse_file(Path::new("m.src"), src.as_bytes().to_vec());
+    assert_eq!(
+        located_errors(&alone),
+        [
+            e(3, 15, "`XP1` gives field `X` twice"),
+            e(4, 14, "inline E6POS gives field `X` twice"),
+            e(5, 20, "inline E6AXIS gives field `a1` twice"),
+            e(6, 18, "inline POS has no field `E1`"),
+            e(7, 19, "POS `PL` has no field `E1`"),
+            e(10, 14, "`XV` gives field `y` twice"),
+            e(14, 16, "`P[2]` gives field `Z` twice"),
+        ]
+    );
+}

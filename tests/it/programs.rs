@@ -926,7 +926,7 @@ ENDDAT\n",
         // alpha declares XP1 and FP1 (base 1) and never moves to XP1.
         (
             "alpha.src",
-            "DEF alpha( )\n  FDAT_ACT=FP1\n  LIN XOWN\nEND\n".to_owned(),
+            "DEF alpha( )\n  FDAT_ACT=FP1\n  BAS(#CP_PARAMS,2)\n  LIN XOWN\nEND\n".to_owned(),
         ),
         (
             "alpha.dat",
@@ -940,7 +940,7 @@ ENDDAT\n",
         // point, not to delta's local one, and to its own XSHARED, not $config.dat's.
         (
             "beta.src",
-            "DEF beta( )\n  FDAT_ACT=FP1\n  LIN XP1\n  setfr( )\n  LIN XGLOBAL\n  LIN XLOCAL\n  LIN XSHARED\nEND\nDEF setfr( )\n  $BASE=BASE_DATA[2]\n  $TOOL=TOOL_DATA[1]\nEND\n".to_owned(),
+            "DEF beta( )\n  FDAT_ACT=FP1\n  BAS(#CP_PARAMS,2)\n  LIN XP1\n  setfr( )\n  LIN XGLOBAL\n  LIN XLOCAL\n  LIN XSHARED\nEND\nDEF setfr( )\n  $BASE=BASE_DATA[2]\n  $TOOL=TOOL_DATA[1]\nEND\n".to_owned(),
         ),
         (
             "beta.dat",

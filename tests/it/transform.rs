@@ -1173,6 +1173,44 @@ fn a_file_with_syntax_errors_is_not_transformed() {
     }
 }
 
+/// A KRL aggregate in a `.src` that gives a field twice is an error `check` locates, with its
+/// hint, and a file the transforms refuse: exit 2, nothing written (before, `correct` rewrote
+/// one of the two X's and exited 0).
+#[test]
+fn a_krl_aggregate_giving_a_field_twice_is_not_transformed() {
+    let src = "DEF twice( )\n  BAS(#BASE,1)\n  LIN {X 10, Y 20, Z 30, A 0, B 90, C 0, E1 500, X 40}\nEND\n";
+    let (dir, input) = scratch_with("twice.src", src);
+    let (code, out, _) = trackfix(&["check", input.to_str().unwrap()]);
+    assert_eq!(code, 1, "{out}");
+    assert!(
+        out.contains("twice.src:3:50: error: inline E6POS gives field `X` twice"),
+        "{out}"
+    );
+    assert!(
+        out.contains("the controller does not load the file"),
+        "{out}"
+    );
+    let output = dir.path().join("out.src");
+    let (code, _, err) = trackfix(&[
+        "correct",
+        input.to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--skip-unsupported",
+        "-o",
+        output.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("twice.src:3:50: error: "), "{err}");
+    assert!(
+        err.contains("is never transformed: nothing written"),
+        "{err}"
+    );
+    assert_eq!(listing(dir.path()), ["twice.src"]);
+}
+
 /// `--keep KIND` keeps only that kind; other refusals still stop the run; a run that wrote
 /// output with targets kept exits 4 (`--skip-unsupported` is every kind).
 #[test]
