@@ -141,9 +141,8 @@ pub(crate) struct Facts {
     /// Values computed at run time given to declared names (`XP1 = $POS_ACT`, `P[I] = …`).
     pub assignments: Vec<crate::resolve::Assignment>,
     /// Bases and tools given a value when the program runs (`BASE_DATA[1] = BASE_DATA[2]`,
-    /// `TOOL_DATA[1].Z = 300`): tool (true) or base, its number (`None`: an index computed at
-    /// run time, any of them), the line.
-    pub data_assignments: Vec<(bool, Option<u32>, usize)>,
+    /// `TOOL_DATA[1].Z = 300`, `BASE_DATA[1] = {X 100, …}` in a `DEF`).
+    pub data_assignments: Vec<DataAssignment>,
     /// Names written after a geometric operator `:` (`SLOT` and `XPLACE_REL` of
     /// `FPALLET:SLOT:XPLACE_REL`), upper case, with their lines: offsets in the frame before
     /// them, not positions.
@@ -816,6 +815,19 @@ fn frame_decl(
     }
 }
 
+/// A value the program gives a base or tool of `$config.dat` when it runs.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DataAssignment {
+    /// A tool (`TOOL_DATA`), else a base.
+    pub tool: bool,
+    /// Its number; `None` for an index computed at run time (any of them).
+    pub number: Option<u32>,
+    /// 1-based line of the assignment.
+    pub line: usize,
+    /// A whole literal value (`BASE_DATA[1] = {X 100, …}`): its index in the file's frames.
+    pub literal: Option<usize>,
+}
+
 /// Reads positions, frames and resolution facts from a file's statements, one at a time and in
 /// source order (KRL declares before use, so a declared type is known when its assignments
 /// come).
@@ -1160,7 +1172,12 @@ fn computed_assignment(
     } {
         let index = name.get(array.len() + 1..name.len().saturating_sub(1));
         let number = index.and_then(|i| i.parse().ok());
-        out.facts.data_assignments.push((tool, number, line));
+        out.facts.data_assignments.push(DataAssignment {
+            tool,
+            number,
+            line,
+            literal: None,
+        });
         return;
     }
     // The routine's own parameter hides module data of its name.
@@ -1239,12 +1256,17 @@ fn assignment(
             "TOOL_DATA"
         };
         let d = frame_decl(src, lines, format!("{prefix}[{n}]"), kind, value, agg);
-        out.frames.push(d);
         // In a data list it is the frame's value; in a routine it overwrites that value when
         // the program runs.
         if in_routine {
-            computed_assignment(src, lines, routine, target, out);
+            out.facts.data_assignments.push(DataAssignment {
+                tool: kind == FrameKind::Tool,
+                number: Some(n),
+                line: lines.line(target.span.start),
+                literal: Some(out.frames.len()),
+            });
         }
+        out.frames.push(d);
         return None;
     }
     let target_name = upper(src, target.span);

@@ -853,18 +853,44 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
 }
 
 /// Marks every target moved to with a base or tool the program assigns when it runs
-/// (`BASE_DATA[1] = BASE_DATA[2]`, `TOOL_DATA[1] = {…}` in a `DEF`, `TOOL_DATA[1].Z = 300`;
-/// `BASE_DATA[I] = …` may be any of them) as used with a frame computed at run time, the first
-/// such assignment's line and file named: `BAS(#BASE,1)` reads the value the element has then,
-/// not the one `$config.dat` gives it. Flow-insensitive, as every computed assignment; and by
-/// number, whether or not `$config.dat` declares the element.
+/// (`BASE_DATA[1] = BASE_DATA[2]`, `TOOL_DATA[1].Z = 300`; `BASE_DATA[I] = …` may be any of
+/// them) as used with a frame computed at run time, the first such assignment's line and file
+/// named: `BAS(#BASE,1)` reads the value the element has then, not the one `$config.dat` gives
+/// it. Flow-insensitive, as every computed assignment; and by number, whether or not
+/// `$config.dat` declares the element. A whole literal value (`TOOL_DATA[1] = {X 0, …}` in a
+/// `DEF`) is known offline: one that is the declaration's changes nothing, and another marks
+/// the targets as given a frame of two values (docs/design.md, "Frames the program assigns":
+/// the value is given in another file than the declaring `$config.dat`, so which one a motion
+/// runs with depends on the flow).
 fn mark_assigned_data(files: &mut [ParsedFile], facts: &[Facts]) {
-    // (tool, number: `None` for any, line, file) of the first assignment of each.
-    let mut assigned: Vec<(bool, Option<u32>, usize, usize)> = Vec::new();
-    for (fi, f) in facts.iter().enumerate() {
-        for &(tool, n, line) in &f.data_assignments {
-            if !assigned.iter().any(|a| (a.0, a.1) == (tool, n)) {
-                assigned.push((tool, n, line, fi));
+    if facts.iter().all(|f| f.data_assignments.is_empty()) {
+        return;
+    }
+    let prefix = |tool: bool| if tool { "TOOL_DATA" } else { "BASE_DATA" };
+    // The declarations: frames no routine assigns.
+    let declaration = |tool: bool, n: u32| {
+        let name = format!("{}[{n}]", prefix(tool));
+        files.iter().zip(facts).find_map(|(f, x)| {
+            f.frames.iter().enumerate().find_map(|(i, d)| {
+                let assigned = x.data_assignments.iter().any(|a| a.literal == Some(i));
+                (!assigned && d.name.eq_ignore_ascii_case(&name)).then_some(d)
+            })
+        })
+    };
+    // (tool, number: `None` for any, line, file, a literal value) of the first assignment of
+    // each that does not give the declared value.
+    let mut assigned: Vec<(bool, Option<u32>, usize, usize, bool)> = Vec::new();
+    for (fi, (f, x)) in files.iter().zip(facts).enumerate() {
+        for a in &x.data_assignments {
+            let value = a.literal.and_then(|i| f.frames.get(i));
+            let declared = a.number.and_then(|n| declaration(a.tool, n));
+            if let (Some(v), Some(d)) = (value, declared)
+                && d.same_value(v)
+            {
+                continue;
+            }
+            if !assigned.iter().any(|b| (b.0, b.1) == (a.tool, a.number)) {
+                assigned.push((a.tool, a.number, a.line, fi, value.is_some()));
             }
         }
     }
@@ -872,7 +898,7 @@ fn mark_assigned_data(files: &mut [ParsedFile], facts: &[Facts]) {
         return;
     }
     let data = |name: &str, tool: bool| -> Option<Option<u32>> {
-        let index = name.strip_prefix(if tool { "TOOL_DATA[" } else { "BASE_DATA[" })?;
+        let index = name.strip_prefix(prefix(tool))?.strip_prefix('[')?;
         Some(index.strip_suffix(']')?.parse().ok())
     };
     let names: Vec<Arc<str>> = files.iter().map(|f| UseLine::file_name(&f.path)).collect();
@@ -885,17 +911,22 @@ fn mark_assigned_data(files: &mut [ParsedFile], facts: &[Facts]) {
             let used = frames.chain(usage.tools().map(|t| (t, true)));
             let found = used.into_iter().find_map(|(name, tool)| {
                 let n = data(name, tool)?;
-                let &(.., line, fi) = assigned
+                let &(.., line, fi, literal) = assigned
                     .iter()
                     .find(|&&(t, m, ..)| t == tool && (m == n || m.is_none()))?;
-                Some((name.to_owned(), (line, fi)))
+                Some((name.to_owned(), (line, fi, literal)))
             });
-            if let Some((name, (line, fi))) = found
+            if let Some((name, (line, fi, literal))) = found
                 && let Some(from) = names.get(fi)
             {
-                usage.set_run_time(RunTimeValue::Frame {
-                    name: Some(name),
-                    at: UseLine::of(line, fi, tf, from),
+                let at = UseLine::of(line, fi, tf, from);
+                usage.set_run_time(if literal {
+                    RunTimeValue::FrameAssigned { name, at }
+                } else {
+                    RunTimeValue::Frame {
+                        name: Some(name),
+                        at,
+                    }
                 });
             }
         }

@@ -1186,6 +1186,20 @@ pub struct FrameDecl {
 }
 
 impl FrameDecl {
+    /// Whether `other` (a value the program assigns the frame) is this frame's value, in what
+    /// trackfix reads of a frame: who holds it, whether it is fixed and by what unit moved, and
+    /// its pose, to 1e-9 mm and rad (`2100` and `2100.000` are one value). A value with a field
+    /// that is not a number is no frame's.
+    pub fn same_value(&self, other: &FrameDecl) -> bool {
+        let close = |x: Pose, y: Pose| {
+            (x.translation.vector - y.translation.vector).norm() < 1e-9
+                && x.rotation.angle_to(&y.rotation) < 1e-9
+        };
+        (self.held_by_robot, self.fixed, &self.moved_by)
+            == (other.held_by_robot, other.fixed, &other.moved_by)
+            && matches!((self.pose(), other.pose()), (Some(x), Some(y)) if close(x, y))
+    }
+
     /// The frame in world (work objects: `uframe · oframe`), if every field is numeric.
     pub fn pose(&self) -> Option<Pose> {
         let frame = self.frame.as_ref()?.pose()?;

@@ -359,18 +359,6 @@ impl AssignedValue {
     }
 }
 
-/// Whether a frame's assigned value `b` is its declaration `a` (what trackfix reads of them:
-/// who holds it, whether it is fixed and by what unit moved, and its pose, to 1e-9 mm and rad:
-/// `2100` and `2100.000000` are one value).
-fn same_frame(a: &FrameDecl, b: &FrameDecl) -> bool {
-    let close = |x: crate::geometry::Pose, y: crate::geometry::Pose| {
-        (x.translation.vector - y.translation.vector).norm() < 1e-9
-            && x.rotation.angle_to(&y.rotation) < 1e-9
-    };
-    (a.held_by_robot, a.fixed, &a.moved_by) == (b.held_by_robot, b.fixed, &b.moved_by)
-        && matches!((a.pose(), b.pose()), (Some(x), Some(y)) if close(x, y))
-}
-
 /// A `RECORD` declared in the module: its name and components (type, name).
 #[derive(Clone, Debug)]
 struct RecordDecl {
@@ -1461,7 +1449,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         let values: Vec<(usize, &AssignedValue)> = all
             .iter()
             .copied()
-            .filter(|(_, a)| !same_frame(f, a.as_kind_of(f)))
+            .filter(|(_, a)| !f.same_value(a.as_kind_of(f)))
             .collect();
         // Each assignment as a frame of its module, named as the frame is.
         let as_frame = |&(m, a): &(usize, &AssignedValue)| {
@@ -1486,7 +1474,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         // before it moves; a `PERS` keeps the last value given), so the targets are
         // transformed with it, and a mirror of the frame is written into the assignment.
         let one = all.iter().all(|&(m, a)| {
-            m == at.0 && same_frame(value, a.as_kind_of(f)) && value.pose().is_some()
+            m == at.0 && value.same_value(a.as_kind_of(f)) && value.pose().is_some()
         });
         for &(m, a) in &values {
             let (message, hint) = if one {

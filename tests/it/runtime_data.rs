@@ -679,10 +679,11 @@ ENDDAT\n",
 }
 
 /// `BAS(#BASE,1)` reads `BASE_DATA[1]` as it is when it runs: a program that overwrites the
-/// whole element (a copy of another, a literal, a tool alike) has the targets moved to with it
-/// refused as runtime data, the assignment's line and file named, nothing written, as one that
-/// sets a component; `BASE_DATA[3] = …` leaves base 1 alone, and a program that assigns none is
-/// corrected.
+/// whole element (a copy of another, a literal of another value, a tool alike) has the targets
+/// moved to with it refused as runtime data, the assignment's line and file named, nothing
+/// written, as one that sets a component; `BASE_DATA[3] = …` leaves base 1 alone, and a program
+/// that assigns none, or gives base 1 the value `$config.dat` declares (in other digits), is
+/// corrected alike.
 #[test]
 fn a_krl_base_or_tool_the_program_overwrites_refuses_its_targets() {
     let program = |assign: &str| {
@@ -701,14 +702,21 @@ fn a_krl_base_or_tool_the_program_overwrites_refuses_its_targets() {
             "--diff",
         ])
     };
-    for (assign, frame) in [
-        ("  BASE_DATA[1] = BASE_DATA[2]\n", "BASE_DATA[1]"),
+    let computed = "which is computed at run time";
+    let literal = "which the program gives another value than its declaration";
+    for (assign, frame, why) in [
+        ("  BASE_DATA[1] = BASE_DATA[2]\n", "BASE_DATA[1]", computed),
         (
             "  BASE_DATA[1] = {X 1000.0,Y 500.0,Z 0.0,A 90.0,B 0.0,C 0.0}\n",
             "BASE_DATA[1]",
+            literal,
         ),
-        ("  TOOL_DATA[1] = {X 0.0,Y 0.0,Z 300.0}\n", "TOOL_DATA[1]"),
-        ("  BASE_DATA[1].X = 2000.0\n", "BASE_DATA[1]"),
+        (
+            "  TOOL_DATA[1] = {X 0.0,Y 0.0,Z 300.0}\n",
+            "TOOL_DATA[1]",
+            literal,
+        ),
+        ("  BASE_DATA[1].X = 2000.0\n", "BASE_DATA[1]", computed),
     ] {
         let (_dir, r1) = kss_a1(&program(assign));
         let before = std::fs::read(r1.join("Program/a1.dat")).unwrap();
@@ -718,7 +726,7 @@ fn a_krl_base_or_tool_the_program_overwrites_refuses_its_targets() {
         for (name, line) in [("XP1", 2), ("XP2", 3)] {
             assert!(
                 err.contains(&format!(
-                    "a1.dat:{line}:16: error: E6POS `{name}` is used with `{frame}`, which is computed at run time (line 4 of a1.src): not correctable offline"
+                    "a1.dat:{line}:16: error: E6POS `{name}` is used with `{frame}`, {why} (line 4 of a1.src): not correctable offline"
                 )),
                 "{assign}: {err}"
             );
@@ -731,7 +739,11 @@ fn a_krl_base_or_tool_the_program_overwrites_refuses_its_targets() {
         );
         assert_eq!(std::fs::read(r1.join("Program/a1.dat")).unwrap(), before);
     }
-    for assign in ["", "  BASE_DATA[3] = BASE_DATA[2]\n"] {
+    for assign in [
+        "",
+        "  BASE_DATA[3] = BASE_DATA[2]\n",
+        "  BASE_DATA[1] = {X 2150,Y -1480.000,Z 720,A 0,B 0.0,C 0}\n",
+    ] {
         let (_dir, r1) = kss_a1(&program(assign));
         let (code, out, err) = correct(&r1);
         assert_eq!(code, 0, "{assign}: {err}");
