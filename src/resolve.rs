@@ -790,6 +790,11 @@ impl<'f, 'a> Binder<'f, 'a> {
         })
     }
 
+    /// The targets the use last bound reached directly: (file, index).
+    pub(crate) fn reached(&self) -> &[TargetAt] {
+        &self.targets
+    }
+
     /// Applies `mark` to the usage of every target the use last bound (in file `from`) reached
     /// directly, with the name of file `from` when the target is another file's.
     pub(crate) fn mark_reached(

@@ -143,14 +143,9 @@ pub fn resolve_tool<'a>(
     }
     // The declaration of `own`, the target's file, first: two RAPID modules may each declare
     // a `LOCAL` tool of one name.
-    let declared_in = |f: &'a ParsedFile| {
-        f.frames
-            .iter()
-            .find(|d| d.kind == FrameKind::Tool && d.name.eq_ignore_ascii_case(name))
-    };
-    let decl = own
-        .and_then(declared_in)
-        .or_else(|| program.files.iter().find_map(declared_in));
+    let decl = program
+        .frame_seen_from(own, name, |k| k == FrameKind::Tool)
+        .map(|(_, d)| d);
     match decl {
         Some(d) if d.held_by_robot == Some(false) => Err(format!(
             "tool `{name}` is stationary (robhold FALSE): the robot holds the work piece"

@@ -9,8 +9,8 @@
 use super::resolve::HashMap;
 use super::tree::{Aggregate, Expr, ExprKind, Stmt, StmtKind};
 use crate::position::{
-    Axes, BitField, CartesianFields, Config, FrameDecl, FrameKind, Name, NumField, Orientation,
-    Position, PositionKind, PositionList, Usage,
+    Axes, BitField, CartesianFields, Config, FrameDecl, FrameKind, FrameScope, FrameStorage, Name,
+    NumField, Orientation, Position, PositionKind, PositionList, Usage,
 };
 use crate::syntax::{Diagnostic, LineIndex, NumLit, Span, Span32};
 
@@ -812,6 +812,8 @@ fn frame_decl(
             orient: f.abc_written.then_some(Orientation::Abc(f.abc)),
         }),
         oframe: None,
+        scope: FrameScope::Program,
+        storage: FrameStorage::Persistent,
     }
 }
 

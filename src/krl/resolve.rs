@@ -7,7 +7,9 @@ use super::positions::{
     BranchEvent, Event, Facts, Fdat, FrameRef, LoopKind, Ref, Setting, guessed_field_problem,
     name_key,
 };
-use crate::position::{Config, FrameName, Name, ParsedFile, PositionKind, RunTimeValue, UseLine};
+use crate::position::{
+    Config, FrameName, Name, ParsedFile, PositionKind, RunTimeValue, UnresolvedFrame, UseLine,
+};
 use crate::syntax::Diagnostic;
 use std::sync::Arc;
 
@@ -758,8 +760,14 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                             // Whatever base its other motions use, the point's is not known
                             // (a base computed at run time is refused as such).
                             if u.run_time.is_none() {
-                                binder.mark_reached(fi, |_, usage| {
-                                    usage.mark_unresolved_frame(*line);
+                                binder.mark_reached(fi, |elsewhere, usage| {
+                                    usage.mark_unresolved_frame(UnresolvedFrame {
+                                        at: UseLine {
+                                            line: *line,
+                                            file: elsewhere.cloned(),
+                                        },
+                                        shadowed: None,
+                                    });
                                 });
                             }
                             if let Some(w) = unresolved.get_mut(fi) {

@@ -417,9 +417,9 @@ struct RareUsage {
     run_time: Option<RunTimeValue>,
     stationary_tool: bool,
     zone: Option<NonPosition>,
-    /// The first line of a motion to the target whose frame is not known (a KRL base set on
-    /// one path only).
-    unresolved_frame: Option<u32>,
+    /// The first motion to the target whose frame is not known (a KRL base set on one path
+    /// only, a RAPID frame its module sees another declaration of than the target's).
+    unresolved_frame: Option<UnresolvedFrame>,
 }
 
 /// A target's usage is kept for each of 100,000 targets: a layout change that grows it fails
@@ -473,6 +473,17 @@ pub enum RunTimeValue {
         /// Where it is.
         at: UseLine,
     },
+}
+
+/// A motion to a target with a work object (base) trackfix cannot tell.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UnresolvedFrame {
+    /// Where the motion is.
+    pub at: UseLine,
+    /// The frame it names, when it names one that means another declaration there than where
+    /// the target is declared (a RAPID `LOCAL` frame, or one a routine declares for itself);
+    /// `None` for a base set on some paths only.
+    pub shadowed: Option<String>,
 }
 
 /// The line of a use, and the file it is in when that is not the used target's own (a KRL
@@ -673,15 +684,15 @@ impl Usage {
 
     /// The first line of a motion to the target whose work object (base) is not known, if any:
     /// whatever the others use, the target's frame is then not known either.
-    pub fn unresolved_frame(&self) -> Option<usize> {
-        self.rare.as_ref()?.unresolved_frame.map(|l| l as usize)
+    pub fn unresolved_frame(&self) -> Option<&UnresolvedFrame> {
+        self.rare.as_ref()?.unresolved_frame.as_ref()
     }
 
-    /// Records a motion to the target at `line` whose work object (base) is not known.
-    pub fn mark_unresolved_frame(&mut self, line: usize) {
+    /// Records a motion to the target whose work object (base) is not known.
+    pub fn mark_unresolved_frame(&mut self, why: UnresolvedFrame) {
         let rare = self.rare.get_or_insert_with(Box::default);
         if rare.unresolved_frame.is_none() {
-            rare.unresolved_frame = Some(u32::try_from(line).unwrap_or(u32::MAX));
+            rare.unresolved_frame = Some(why);
         }
     }
 
@@ -1183,6 +1194,37 @@ pub struct FrameDecl {
     pub frame: Option<CartesianFields>,
     /// RAPID wobj `oframe` (object frame in the user frame).
     pub oframe: Option<CartesianFields>,
+    /// Where its name is seen.
+    pub scope: FrameScope,
+    /// How the program keeps its value.
+    pub storage: FrameStorage,
+}
+
+/// Where a declared frame's name is seen, as a motion looks it up: its own module's
+/// declaration first (a routine's own, for a motion in that routine), then one the whole
+/// program sees.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FrameScope {
+    /// Every module (RAPID module data not `LOCAL`, KRL `$config.dat`).
+    #[default]
+    Program,
+    /// Its module only (RAPID `LOCAL`).
+    Module,
+    /// The routine it is declared in only, by its index among the module's routines.
+    Routine(usize),
+}
+
+/// How the program keeps a frame's value.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FrameStorage {
+    /// Never given another (RAPID `CONST`): the controller rejects an assignment.
+    Constant,
+    /// Starts from its declaration whenever the program starts (RAPID `VAR`).
+    Variable,
+    /// Keeps the last value the program gave it, written back to its declaration (RAPID
+    /// `PERS`, a KRL data list's).
+    #[default]
+    Persistent,
 }
 
 impl FrameDecl {
@@ -1305,6 +1347,31 @@ impl Program {
     /// The dialect of the program's first file (every file of a program shares one).
     pub fn language(&self) -> Option<Language> {
         self.files.first().map(|f| f.language)
+    }
+
+    /// The frame `name` (of a kind `kind` accepts) means for a target of file `own`, as a
+    /// motion of that file's module looks it up: the file's own declaration (not one a routine
+    /// makes for itself), else one every module sees (not `LOCAL`), with the file declaring
+    /// it. Where a motion of another module sees another declaration, the usage pass has said
+    /// so (`Usage::unresolved_frame`).
+    pub fn frame_seen_from<'p>(
+        &'p self,
+        own: Option<&'p ParsedFile>,
+        name: &str,
+        kind: impl Fn(FrameKind) -> bool,
+    ) -> Option<(&'p ParsedFile, &'p FrameDecl)> {
+        let in_file = |f: &'p ParsedFile, seen: &dyn Fn(FrameScope) -> bool| {
+            f.frames
+                .iter()
+                .find(|d| kind(d.kind) && seen(d.scope) && d.name.eq_ignore_ascii_case(name))
+                .map(|d| (f, d))
+        };
+        own.and_then(|f| in_file(f, &|s| !matches!(s, FrameScope::Routine(_))))
+            .or_else(|| {
+                self.files
+                    .iter()
+                    .find_map(|f| in_file(f, &|s| s == FrameScope::Program))
+            })
     }
 }
 

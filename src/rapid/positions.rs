@@ -7,12 +7,12 @@
 //! further down the module.
 
 use super::expr::{Arena, ExprKind, ExprNode};
-use super::parser::{MovedCall, PlainArgs, RobtargetLiteral, Statement, Stmt};
+use super::parser::{MovedCall, PlainArgs, RobtargetLiteral, Statement, Stmt, Storage};
 use crate::names::{NameKey, NameMap, same_bytes};
 use crate::position::{
-    Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, Name, NonPosition,
-    NonPositionRole, NumField, OffsetCall, OffsetKind, Orientation, Position, PositionKind,
-    PositionList, ReadAgainTarget, RunTimeValue, Usage, UseLine,
+    Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, FrameScope, FrameStorage, Name,
+    NonPosition, NonPositionRole, NumField, OffsetCall, OffsetKind, Orientation, Position,
+    PositionKind, PositionList, ReadAgainTarget, RunTimeValue, Usage, UseLine,
 };
 use crate::resolve::DeclKind;
 use crate::syntax::{Diagnostic, LineCursor, LineIndex, NumLit, Span, Span32, latin1};
@@ -359,6 +359,137 @@ impl AssignedValue {
     }
 }
 
+/// Which declaration a frame's name means where it is used, by the rule a motion looks it up
+/// with: the routine's own, else its module's, else one every module sees (not `LOCAL`).
+/// Built only when some name could mean two (declared twice in the task, or in a routine):
+/// otherwise empty, and nothing is asked of it.
+struct FrameScopes {
+    /// Per module, its frames' folded names with their scopes.
+    modules: Vec<Vec<(String, FrameScope)>>,
+}
+
+/// The declaration a frame's name means.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Bound {
+    module: usize,
+    index: usize,
+    /// A routine's own frame: a transform, which looks frames up by name, never finds it.
+    routine: bool,
+}
+
+impl FrameScopes {
+    fn new<'f>(modules: impl Iterator<Item = &'f [FrameDecl]>) -> FrameScopes {
+        let modules: Vec<Vec<(String, FrameScope)>> = modules
+            .map(|frames| {
+                frames
+                    .iter()
+                    .map(|f| (f.name.to_ascii_lowercase(), f.scope))
+                    .collect()
+            })
+            .collect();
+        let mut seen = std::collections::HashSet::new();
+        let twice = modules
+            .iter()
+            .flatten()
+            .any(|(n, s)| matches!(s, FrameScope::Routine(_)) || !seen.insert(n.as_str()));
+        FrameScopes {
+            modules: if twice { modules } else { Vec::new() },
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.modules.is_empty()
+    }
+
+    /// The declaration `name` means in routine `routine` of module `m` (`None`: outside any
+    /// routine, as a target's own module sees it).
+    fn seen_from(&self, m: usize, routine: Option<usize>, name: &str) -> Option<Bound> {
+        let named = |(_, (n, _)): &(usize, &(String, FrameScope))| n.eq_ignore_ascii_case(name);
+        let own = self.modules.get(m)?;
+        let in_routine = routine.and_then(|r| {
+            own.iter()
+                .enumerate()
+                .filter(named)
+                .find(|(_, (_, s))| *s == FrameScope::Routine(r))
+        });
+        if let Some((index, _)) = in_routine {
+            return Some(Bound {
+                module: m,
+                index,
+                routine: true,
+            });
+        }
+        let module_level =
+            |(_, (_, s)): &(usize, &(String, FrameScope))| !matches!(s, FrameScope::Routine(_));
+        if let Some((index, _)) = own.iter().enumerate().filter(named).find(module_level) {
+            return Some(Bound {
+                module: m,
+                index,
+                routine: false,
+            });
+        }
+        self.modules.iter().enumerate().find_map(|(k, frames)| {
+            let (index, _) = frames
+                .iter()
+                .enumerate()
+                .filter(named)
+                .find(|(_, (_, s))| *s == FrameScope::Program)?;
+            Some(Bound {
+                module: k,
+                index,
+                routine: false,
+            })
+        })
+    }
+}
+
+/// The frames a call (in module `m`, to `callee`, with positional arguments `args`) passes to
+/// parameters its routine gives a value (`PROC setw(INOUT wobjdata wx) wx := …`, `setw w1;`):
+/// each frame's name as written, the routine's module and the assignment's line.
+fn frames_written_through(
+    routines: &[(&[u8], &[crate::resolve::Routine])],
+    writes: &[Vec<(usize, Span32, usize)>],
+    (m, callee, args): (usize, &[u8], &[Option<Span32>]),
+    scopes: &FrameScopes,
+) -> Vec<(String, usize, usize)> {
+    let called = |k: usize, own: bool| {
+        let (src, list) = routines.get(k)?;
+        let r = list
+            .iter()
+            .position(|r| (own || !r.local) && r.name.slice(src).eq_ignore_ascii_case(callee))?;
+        Some((k, r))
+    };
+    let Some((k, r)) =
+        called(m, true).or_else(|| (0..routines.len()).find_map(|k| called(k, false)))
+    else {
+        return Vec::new();
+    };
+    let (Some((src, list)), Some(caller)) = (routines.get(k), routines.get(m)) else {
+        return Vec::new();
+    };
+    let Some(routine) = list.get(r) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for &(wr, param, line) in writes.get(k).into_iter().flatten() {
+        if wr != r {
+            continue;
+        }
+        let position = routine
+            .params
+            .iter()
+            .position(|p| p.slice(src).eq_ignore_ascii_case(param.span().slice(src)));
+        let Some(arg) = position.and_then(|i| args.get(i).copied().flatten()) else {
+            continue;
+        };
+        let name = latin1(trim_latin1(arg.span().slice(caller.0)));
+        if scopes.is_empty() || scopes.seen_from(m, None, &name).is_some() {
+            out.push((name, k, line));
+        }
+    }
+    out
+}
+
 /// A `RECORD` declared in the module: its name and components (type, name).
 #[derive(Clone, Debug)]
 struct RecordDecl {
@@ -385,8 +516,11 @@ pub struct Extractor<'l> {
     /// The calls' inline literals, call after call.
     call_inline: Vec<usize>,
     /// Whole-value assignments `name := [...]` of literal aggregates (a frame given a new
-    /// value that is known offline).
+    /// value that is known offline) to module data (not to a routine's parameter or own data).
     assigned: Vec<AssignedValue>,
+    /// Assignments of any value, whole or in part, to a routine's parameter: (routine,
+    /// parameter, line). A frame a call passes there is given a value when the program runs.
+    param_writes: Vec<(usize, Span32, usize)>,
     /// Of those, the ones whose literal is a target (`pv := [[700,-100,400],…];`): the name
     /// assigned and the literal's index in `positions`. The literal is a value of the name,
     /// used by the motions that use it.
@@ -650,6 +784,7 @@ impl<'l> Extractor<'l> {
             call_refs: Vec::new(),
             call_inline: Vec::new(),
             assigned: Vec::new(),
+            param_writes: Vec::new(),
             assigned_literals: Vec::new(),
             param_assignments: Vec::new(),
             copies: Vec::new(),
@@ -1054,6 +1189,8 @@ impl<'l> Extractor<'l> {
             moved_by: None,
             frame: None,
             oframe: None,
+            scope: FrameScope::Program,
+            storage: FrameStorage::Persistent,
         };
         let Some(agg) = agg else {
             return f;
@@ -1258,6 +1395,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     let mut names = Vec::with_capacity(modules.len());
     let mut assigned_literals = Vec::with_capacity(modules.len());
     let mut param_assignments = Vec::with_capacity(modules.len());
+    let mut param_writes = Vec::with_capacity(modules.len());
     for (m, (x, src, name)) in modules.into_iter().enumerate() {
         if let Some(d) = diagnostics.get_mut(m) {
             d.extend(x.misshapen);
@@ -1265,6 +1403,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         names.push(name);
         assigned_literals.push(x.assigned_literals);
         param_assignments.push(x.param_assignments);
+        param_writes.push(x.param_writes);
         calls.push(Calls {
             uses: x.uses,
             args: x.call_args,
@@ -1321,6 +1460,16 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         .collect();
     let mut frame_texts = FrameTexts::new(&robhold);
     let wobj0 = frame_texts.get(b"wobj0");
+    let scopes = FrameScopes::new(rest.iter().map(|r| r.0.as_slice()));
+    let routine_lists: Vec<(&[u8], &[crate::resolve::Routine])> =
+        rest.iter().map(|r| (r.6, r.4.as_slice())).collect();
+    // (module, target, line, the motion's module) of each target a motion reaches with a frame
+    // its name means another declaration of for the target's module (a `LOCAL` or a routine's
+    // own frame).
+    let mut unresolved: Vec<(usize, usize, usize, usize, String)> = Vec::new();
+    // (frame, module, line) of each frame a call passes to a routine's parameter that the
+    // routine gives a value.
+    let mut written_through_parameters: Vec<(String, usize, usize)> = Vec::new();
     // The first instruction of each displacement: (what, module, line, its name).
     let mut displaced: Vec<(Displacement, usize, usize, &'static str)> = Vec::new();
     // (module, line) of the motions that ignore the axes offset (`MoveAbsJ …\NoEOffs`), and
@@ -1386,6 +1535,28 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                 None => binder.bind(m, &call_use),
                 Some(zone) => bind_non_positions(&mut binder, m, &call_use, zone),
             }
+            if !scopes.is_empty() {
+                let routine = call_use.routine;
+                for name in [&call_use.frame, &call_use.tool].into_iter().flatten() {
+                    let Some(bound) = scopes.seen_from(m, routine, name) else {
+                        continue;
+                    };
+                    for &(tm, i) in binder.reached() {
+                        if bound.routine || scopes.seen_from(tm, None, name) != Some(bound) {
+                            unresolved.push((tm, i, call_use.line, m, name.to_string()));
+                        }
+                    }
+                }
+            }
+            if param_writes.iter().any(|w| !w.is_empty()) {
+                let callee = u.name.span().slice(src);
+                written_through_parameters.extend(frames_written_through(
+                    &routine_lists,
+                    &param_writes,
+                    (m, callee, call_args),
+                    &scopes,
+                ));
+            }
         }
     }
     // A computed value given to a parameter: a use of it with that value, which the binder
@@ -1412,11 +1583,16 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     for (m, r) in rest.iter().enumerate() {
         for (k, a) in r.2.iter().enumerate() {
             let key = key_into(&mut buf, r.6, a.name);
-            // The assigning module's own frame first, as a motion's frame resolves.
-            let own = r.0.iter().position(|f| f.name.eq_ignore_ascii_case(key));
+            // The assigning module's own frame first, as a motion's frame resolves, else one
+            // every module sees.
+            let own = r.0.iter().position(|f| {
+                !matches!(f.scope, FrameScope::Routine(_)) && f.name.eq_ignore_ascii_case(key)
+            });
             let found = own.map(|i| (m, i)).or_else(|| {
                 rest.iter().enumerate().find_map(|(fm, fr)| {
-                    let i = fr.0.iter().position(|f| f.name.eq_ignore_ascii_case(key))?;
+                    let i = fr.0.iter().position(|f| {
+                        f.scope == FrameScope::Program && f.name.eq_ignore_ascii_case(key)
+                    })?;
                     Some((fm, i))
                 })
             });
@@ -1469,13 +1645,33 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
             _ => "work object",
         };
         let value = first.as_kind_of(f);
-        // One other value, given in the frame's own module, with numbers: the value the
-        // motions run with once the program has set it (a generated program sets its frames
-        // before it moves; a `PERS` keeps the last value given), so the targets are
-        // transformed with it, and a mirror of the frame is written into the assignment.
-        let one = all.iter().all(|&(m, a)| {
-            m == at.0 && value.same_value(a.as_kind_of(f)) && value.pose().is_some()
-        });
+        if f.storage == crate::position::FrameStorage::Constant {
+            for &(m, a) in &values {
+                if let Some(notes) = assigned_notes.get_mut(m) {
+                    notes.push(
+                        Diagnostic::error(
+                            a.name,
+                            format!(
+                                "{what} `{}` is a CONST (line {}): the controller does not let a program give it a value",
+                                f.name, f.line
+                            ),
+                        )
+                        .with_hint("declare it PERS (or VAR), or remove the assignment"),
+                    );
+                }
+            }
+            continue;
+        }
+        // One other value, given in the frame's own module, with numbers, to a PERS: the value
+        // the motions run with once the program has set it (a generated program sets its
+        // frames before it moves; a `PERS` keeps the last value given, where a `VAR` starts
+        // from its declaration whenever the program starts), so the targets are transformed
+        // with it, and a mirror of the frame is written into the assignment.
+        let persistent = f.storage == crate::position::FrameStorage::Persistent;
+        let one = persistent
+            && all.iter().all(|&(m, a)| {
+                m == at.0 && value.same_value(a.as_kind_of(f)) && value.pose().is_some()
+            });
         for &(m, a) in &values {
             let (message, hint) = if one {
                 (
@@ -1491,7 +1687,9 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                         "{what} `{}` is given another value here than its declaration on line {}, {}: the targets moved with it are left as written",
                         f.name,
                         f.line,
-                        if all.iter().any(|&(m, _)| m != at.0) {
+                        if !persistent {
+                            "a VAR, which starts from its declaration whenever the program starts"
+                        } else if all.iter().any(|&(m, _)| m != at.0) {
                             "by a module that does not declare it"
                         } else if value.pose().is_none() {
                             "with fields that are not numbers"
@@ -1522,7 +1720,19 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
             *f = value;
         }
     }
-    for (tm, ps) in positions.iter_mut().enumerate() {
+    for (tm, i, line, m, frame) in unresolved {
+        if let (Some(u), Some(from)) = (
+            positions.get_mut(tm).and_then(|ps| ps.usage_mut(i)),
+            module_names.get(m),
+        ) {
+            u.mark_unresolved_frame(crate::position::UnresolvedFrame {
+                at: crate::position::UseLine::of(line, m, tm, from),
+                shadowed: Some(frame),
+            });
+        }
+    }
+    let marked = !reassigned.is_empty() || !written_through_parameters.is_empty();
+    for (tm, ps) in positions.iter_mut().enumerate().filter(|_| marked) {
         for usage in ps.usages_mut() {
             let used = |&&(ref name, kind, ..): &&(String, FrameKind, usize, usize)| match kind {
                 FrameKind::Tool => usage.tools().any(|t| t.eq_ignore_ascii_case(name)),
@@ -1533,6 +1743,21 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
             {
                 usage.set_run_time(RunTimeValue::FrameAssigned {
                     name: name.clone(),
+                    at: crate::position::UseLine::of(*line, *m, tm, from),
+                });
+            }
+            // A frame a routine's parameter gives a value: computed when the program runs.
+            let passed = written_through_parameters.iter().find(|(name, ..)| {
+                usage
+                    .work_objects()
+                    .chain(usage.tools())
+                    .any(|w| w.eq_ignore_ascii_case(name))
+            });
+            if let Some((name, m, line)) = passed
+                && let Some(from) = module_names.get(*m)
+            {
+                usage.set_run_time(RunTimeValue::Frame {
+                    name: Some(name.clone()),
                     at: crate::position::UseLine::of(*line, *m, tm, from),
                 });
             }
@@ -1602,18 +1827,19 @@ impl Extractor<'_> {
         } = statement;
         match *stmt {
             Stmt::Decl {
+                storage,
                 type_name,
                 name,
                 dims,
                 init,
                 module_scope,
                 local,
-                ..
             } => {
                 if module_scope {
                     self.current = None;
                 }
                 let before = self.positions.len();
+                let frames_before = self.frames.len();
                 self.statement_decl(
                     src,
                     arena,
@@ -1627,6 +1853,20 @@ impl Extractor<'_> {
                 let exported = module_scope && !local;
                 self.exported.resize(before, false);
                 self.exported.resize(self.positions.len(), exported);
+                let scope = match (module_scope, self.current) {
+                    (false, Some(r)) => FrameScope::Routine(r),
+                    _ if local => FrameScope::Module,
+                    _ => FrameScope::Program,
+                };
+                let storage = match storage {
+                    Storage::Const => FrameStorage::Constant,
+                    Storage::Var => FrameStorage::Variable,
+                    Storage::Pers | Storage::Alias => FrameStorage::Persistent,
+                };
+                for f in self.frames.get_mut(frames_before..).into_iter().flatten() {
+                    f.scope = scope;
+                    f.storage = storage;
+                }
             }
             Stmt::Routine { name, local } => {
                 // Past 4 GiB a name has no 32-bit span: no input is this large (see `Span32`).
@@ -1674,14 +1914,34 @@ impl Extractor<'_> {
                     .iter()
                     .all(|b| b.is_ascii_alphanumeric() || *b == b'_');
                 let aggregate = arena.get(value).filter(|v| v.kind == ExprKind::Aggregate);
+                // The routine's own parameter or data of the name hides module data of it: an
+                // assignment to a parameter gives the caller's argument its value.
+                let text = text_of(src, target);
+                let head = text.split(['.', '{']).next().unwrap_or_default().trim();
+                let key = NameKey(head.as_bytes());
+                let own_param = self.current.and_then(|r| {
+                    let params = &self.routines.get(r)?.params;
+                    let p = params.iter().find(|p| NameKey(p.slice(src)) == key)?;
+                    Some((r, Span32::of(*p)?))
+                });
+                let routine_data = self.current.is_some_and(|r| {
+                    self.frames.iter().any(|f| {
+                        f.scope == FrameScope::Routine(r) && NameKey(f.name.as_bytes()) == key
+                    })
+                });
+                if let Some((r, p)) = own_param {
+                    self.param_writes.push((r, p, self.lines.line(span.start)));
+                }
                 if whole && literal && aggregate.is_some() {
-                    let read =
-                        |kind| self.frame(src, arena, Some(value), kind, String::new(), span);
-                    self.assigned.push(AssignedValue {
-                        name: target,
-                        as_wobj: read(FrameKind::WorkObject),
-                        as_tool: read(FrameKind::Tool),
-                    });
+                    if own_param.is_none() && !routine_data {
+                        let read =
+                            |kind| self.frame(src, arena, Some(value), kind, String::new(), span);
+                        self.assigned.push(AssignedValue {
+                            name: target,
+                            as_wobj: read(FrameKind::WorkObject),
+                            as_tool: read(FrameKind::Tool),
+                        });
+                    }
                     // The whole value one target literal: a value of the name.
                     let spans = (before..self.positions.len()).map(|i| self.positions.span(i));
                     if let (Some(v), [Some(only)]) =

@@ -71,21 +71,11 @@ pub(crate) fn resolve_frame(
     if let Some(p) = overrides.get(&lower) {
         return Ok(*p);
     }
-    fn declared_in<'f>(
-        f: &'f ParsedFile,
-        name: &str,
-    ) -> Option<(&'f crate::position::FrameDecl, crate::position::Language)> {
-        f.frames
-            .iter()
-            .find(|d| {
-                matches!(d.kind, FrameKind::WorkObject | FrameKind::Base)
-                    && d.name.eq_ignore_ascii_case(name)
-            })
-            .map(|d| (d, f.language))
-    }
-    let decl = own
-        .and_then(|f| declared_in(f, name))
-        .or_else(|| program.files.iter().find_map(|f| declared_in(f, name)));
+    let decl = program
+        .frame_seen_from(own, name, |k| {
+            matches!(k, FrameKind::WorkObject | FrameKind::Base)
+        })
+        .map(|(f, d)| (d, f.language));
     // The words of the language that declares the frame, else of the program's.
     let words = decl.map_or_else(|| words_of(program), |(_, l)| l.dialect().vocabulary());
     let frame = words.frame;
@@ -135,12 +125,24 @@ pub(crate) fn wobj_of(
 ) -> Result<String, Why> {
     let what = describe(p);
     let frame = words.frame;
-    if let Some(line) = p.usage.unresolved_frame() {
-        return Err(Why::new(
-            RefusalKind::UnresolvedWorkObject,
-            format!("{what} is moved to on line {line} with a {frame} that cannot be resolved"),
-            words.frame_of_a_motion,
-        ));
+    if let Some(u) = p.usage.unresolved_frame() {
+        let at = &u.at;
+        return Err(match &u.shadowed {
+            None => Why::new(
+                RefusalKind::UnresolvedWorkObject,
+                format!("{what} is moved to on {at} with a {frame} that cannot be resolved"),
+                words.frame_of_a_motion,
+            ),
+            Some(name) => Why::new(
+                RefusalKind::UnresolvedWorkObject,
+                format!(
+                    "{what} is moved to on {at} with `{name}`, which means another declaration there than where the target is declared (a LOCAL one, or a routine's own)"
+                ),
+                format!(
+                    "give the {frame}s of one name one declaration the motions and targets both see"
+                ),
+            ),
+        });
     }
     match (&p.usage.wobj, p.usage.lines.is_empty()) {
         (Some(w), _) => Ok(w.to_string()),
@@ -679,6 +681,8 @@ mod tests {
             moved_by: None,
             frame: None,
             oframe: None,
+            scope: Default::default(),
+            storage: Default::default(),
         };
         if let Some(f) = program.files.first_mut() {
             f.frames.push(decl);

@@ -158,7 +158,7 @@ fn unresolved_frame_is_refused(cell: &Path, src: &str, line: usize) {
     assert_eq!(code, 3, "{err}");
     assert!(
         err.contains(&format!(
-            "E6POS `XP1` is moved to on line {line} with a base that cannot be resolved"
+            "E6POS `XP1` is moved to on line {line} of m.src with a base that cannot be resolved"
         )),
         "{err}"
     );

@@ -882,3 +882,211 @@ fn a_frame_the_program_gives_one_other_value_is_used_two_values_are_refused() {
         );
     }
 }
+
+/// `correct` of a RAPID task (modules named and written) with a deviation that turns, by the
+/// library: the line declaring `p1` in each output module that has one, and the refusals as
+/// (target, kind, message).
+fn correct_task(
+    modules: &[(&str, String)],
+) -> (
+    Vec<String>,
+    Vec<(String, trackfix::transform::RefusalKind, String)>,
+) {
+    use trackfix::geometry::{Pose, pose_xyz_deg};
+    use trackfix::position::Program;
+    use trackfix::transform::{Cell, Direction, TrackSetup, apply, track_correction};
+    let cell = Cell::parse(
+        Path::new("cell.toml"),
+        "[robot.r1]\nprofile = \"track/profile.toml\"\n\
+         base = { x = 0, y = -1000, z = 0, rx = 0, ry = 0, rz = 90 }\n\
+         track_axis = [1, 0, 0]\nskid = \"eax_a\"\n",
+    )
+    .unwrap();
+    let robot = cell.robot("r1").unwrap();
+    let d = pose_xyz_deg(0.3, -0.2, 0.5, 0.02, -0.03, 0.05);
+    let dev = move |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(d) };
+    let setup = TrackSetup::new(robot, &dev);
+    let program = Program {
+        files: rapid::parse_task(
+            modules
+                .iter()
+                .map(|(n, t)| (std::path::PathBuf::from(n), t.as_bytes().to_vec().into()))
+                .collect(),
+        ),
+    };
+    let result = apply(
+        &program,
+        track_correction(&program, &setup, Direction::Correct),
+    )
+    .unwrap();
+    let p1 = result
+        .files
+        .iter()
+        .filter_map(|f| {
+            let out = String::from_utf8(f.output.clone()).unwrap();
+            Some(out.lines().find(|l| l.contains("p1:="))?.to_owned())
+        })
+        .collect();
+    let refused = result
+        .refusals()
+        .map(|r| (r.target.clone(), r.kind, r.message.clone()))
+        .collect();
+    (p1, refused)
+}
+
+const P1: &str = "  CONST robtarget p1:=[[-1702.5,-320,225],[0,0.707107,0.707107,0],[-1,0,-1,0],[400,9E9,9E9,9E9,9E9,9E9]];\n";
+const W_ORIGIN: &str = "[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]";
+const W_AWAY: &str =
+    "[FALSE,TRUE,\"\",[[2100,-1350,480],[0.965925826,0,0,0.258819045]],[[10,20,0],[1,0,0,0]]]";
+
+/// A frame name means, where a motion uses it, the routine's own declaration, else its
+/// module's, else one not `LOCAL` of another module: a routine's parameter or own data of the
+/// frame's name, assigned, leaves the module's frame alone; a frame a call passes to a
+/// parameter its routine assigns is given a value when the program runs; a `VAR` frame given
+/// another value starts from its declaration whenever the program starts, so both values hold
+/// at times; a `CONST` one cannot be assigned.
+#[test]
+fn a_frames_assignments_are_read_where_its_name_means_the_frame() {
+    use trackfix::transform::RefusalKind;
+    let module = |decl: &str, body: &str| {
+        format!(
+            "MODULE M\n  {decl}\n{P1}{body}  PROC main()\n    MoveL p1,v100,fine,tool0\\WObj:=w1;\n  ENDPROC\nENDMODULE\n"
+        )
+    };
+    let pers = |v: &str| format!("PERS wobjdata w1:={v};");
+    let (at_origin, refused) = correct_task(&[("m.mod", module(&pers(W_ORIGIN), ""))]);
+    assert!(refused.is_empty(), "{refused:?}");
+    let (away, _) = correct_task(&[("m.mod", module(&pers(W_AWAY), ""))]);
+    assert_ne!(at_origin, away);
+    // A parameter named `w1`, and a routine's own `w1`, assigned: the module's `w1` is as
+    // declared.
+    for body in [
+        format!("  PROC setw(INOUT wobjdata w1)\n    w1:={W_AWAY};\n  ENDPROC\n"),
+        format!("  PROC other()\n    VAR wobjdata w1:={W_ORIGIN};\n    w1:={W_AWAY};\n  ENDPROC\n"),
+    ] {
+        let (p1, refused) = correct_task(&[("m.mod", module(&pers(W_ORIGIN), &body))]);
+        assert!(refused.is_empty(), "{body}{refused:?}");
+        assert_eq!(p1, at_origin, "{body}");
+    }
+    // `setw w1;` passes the frame to a parameter `setw` assigns, whole or in part.
+    for write in [format!("wx:={W_AWAY}"), "wx.uframe.trans.x:=100".to_owned()] {
+        let body = format!(
+            "  PROC setw(INOUT wobjdata wx)\n    {write};\n  ENDPROC\n  PROC first()\n    setw w1;\n  ENDPROC\n"
+        );
+        let (_, refused) = correct_task(&[("m.mod", module(&pers(W_ORIGIN), &body))]);
+        assert_eq!(refused.len(), 1, "{body}{refused:?}");
+        assert_eq!(
+            (refused[0].1, refused[0].2.as_str()),
+            (
+                RefusalKind::RuntimeData,
+                "robtarget `p1` is used with `w1`, which is computed at run time (line 5): not correctable offline"
+            )
+        );
+    }
+    // A VAR given another value: refused, where a PERS takes the value.
+    let assign = format!("  PROC first()\n    w1:={W_AWAY};\n  ENDPROC\n");
+    let (p1, refused) = correct_task(&[("m.mod", module(&pers(W_ORIGIN), &assign))]);
+    assert!(refused.is_empty(), "{refused:?}");
+    assert_eq!(p1, away);
+    let var = format!("VAR wobjdata w1:={W_ORIGIN};");
+    let (_, refused) = correct_task(&[("m.mod", module(&var, &assign))]);
+    assert_eq!(refused.len(), 1, "{refused:?}");
+    assert!(
+        refused[0]
+            .2
+            .contains("which the program gives another value than its declaration (line 5)"),
+        "{refused:?}"
+    );
+    let f = rapid::parse_file(Path::new("m.mod"), module(&var, &assign).into_bytes());
+    assert!(
+        f.diagnostics.iter().any(|d| d
+            .message
+            .contains("a VAR, which starts from its declaration whenever the program starts")),
+        "{:?}",
+        f.diagnostics
+    );
+    // A CONST cannot be assigned: an error at the assignment, as the controller gives.
+    let f = rapid::parse_file(
+        Path::new("m.mod"),
+        module(&format!("CONST wobjdata w1:={W_ORIGIN};"), &assign).into_bytes(),
+    );
+    let errors: Vec<_> = f
+        .diagnostics
+        .iter()
+        .filter(|d| d.severity == trackfix::syntax::Severity::Error)
+        .map(|d| (f.lines.line(d.span.start), d.message.as_str()))
+        .collect();
+    assert_eq!(
+        errors,
+        [(
+            5,
+            "work object `w1` is a CONST (line 2): the controller does not let a program give it a value"
+        )]
+    );
+}
+
+/// A `LOCAL` frame is its module's alone, and a routine's own frame its routine's: a target
+/// declared where such a frame shadows the name the motion's module means is refused by name,
+/// and a target whose module declares no frame of the name takes the one every module sees,
+/// whatever the order of the files.
+#[test]
+fn local_and_routine_frames_are_seen_only_where_they_are_declared() {
+    use trackfix::transform::RefusalKind;
+    let motion = "  PROC main()\n    MoveL p1,v100,fine,tool0\\WObj:=w1;\n  ENDPROC\n";
+    let global =
+        |v: &str, body: &str| format!("MODULE B\n  PERS wobjdata w1:={v};\n{body}ENDMODULE\n");
+    let (seen, refused) = correct_task(&[
+        ("m.mod", format!("MODULE M\n{P1}ENDMODULE\n")),
+        ("b.mod", global(W_ORIGIN, motion)),
+    ]);
+    assert!(refused.is_empty(), "{refused:?}");
+    let local = format!("MODULE L\n  LOCAL PERS wobjdata w1:={W_AWAY};\nENDMODULE\n");
+    for order in [[0, 1, 2], [1, 2, 0], [2, 0, 1]] {
+        let modules = [
+            ("l.mod", local.clone()),
+            ("m.mod", format!("MODULE M\n{P1}ENDMODULE\n")),
+            ("b.mod", global(W_ORIGIN, motion)),
+        ];
+        let task: Vec<_> = order.iter().map(|&i| modules[i].clone()).collect();
+        let (p1, refused) = correct_task(&task);
+        assert!(refused.is_empty(), "{order:?}: {refused:?}");
+        assert_eq!(p1, seen, "{order:?}");
+    }
+    // The target beside a LOCAL `w1`, moved to from a module that means the global one.
+    let (_, refused) = correct_task(&[
+        (
+            "m.mod",
+            format!("MODULE M\n  LOCAL PERS wobjdata w1:={W_AWAY};\n{P1}ENDMODULE\n"),
+        ),
+        ("b.mod", global(W_ORIGIN, motion)),
+    ]);
+    assert_eq!(refused.len(), 1, "{refused:?}");
+    assert_eq!(refused[0].1, RefusalKind::UnresolvedWorkObject);
+    assert_eq!(
+        refused[0].2,
+        "robtarget `p1` is moved to on line 4 of b.mod with `w1`, which means another declaration there than where the target is declared (a LOCAL one, or a routine's own)"
+    );
+    // A routine's own `w1`: its motion is refused; another routine's motion means the module's.
+    let own = format!(
+        "MODULE M\n  PERS wobjdata w1:={W_ORIGIN};\n{P1}  PROC main()\n    VAR wobjdata w1:={W_AWAY};\n    MoveL p1,v100,fine,tool0\\WObj:=w1;\n  ENDPROC\nENDMODULE\n"
+    );
+    let (_, refused) = correct_task(&[("m.mod", own.clone())]);
+    assert_eq!(refused.len(), 1, "{refused:?}");
+    assert!(
+        refused[0].2.contains("is moved to on line 6 with `w1`"),
+        "{refused:?}"
+    );
+    let other = own
+        .replace("PROC main()\n    VAR", "PROC other()\n    VAR")
+        .replace(
+            "    MoveL p1,v100,fine,tool0\\WObj:=w1;\n  ENDPROC\nENDMODULE\n",
+            &format!("  ENDPROC\n{motion}ENDMODULE\n"),
+        );
+    let (p1, refused) = correct_task(&[("m.mod", other.clone())]);
+    assert!(refused.is_empty(), "{other}{refused:?}");
+    let (plain, _) = correct_task(&[(
+        "m.mod",
+        format!("MODULE M\n  PERS wobjdata w1:={W_ORIGIN};\n{P1}{motion}ENDMODULE\n"),
+    )]);
+    assert_eq!(p1, plain);
+}

@@ -34,8 +34,6 @@ pub(crate) enum Storage {
 pub(crate) enum Stmt {
     /// A data declaration. `module_scope` is false inside routines.
     Decl {
-        // Nothing reads the storage class yet; it is part of what the statement is.
-        #[allow(dead_code)]
         storage: Storage,
         type_name: Span,
         name: Span,
