@@ -1470,6 +1470,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     // (frame, module, line) of each frame a call passes to a routine's parameter that the
     // routine gives a value.
     let mut written_through_parameters: Vec<(String, usize, usize)> = Vec::new();
+    let any_param_writes = param_writes.iter().any(|w| !w.is_empty());
     // The first instruction of each displacement: (what, module, line, its name).
     let mut displaced: Vec<(Displacement, usize, usize, &'static str)> = Vec::new();
     // (module, line) of the motions that ignore the axes offset (`MoveAbsJ …\NoEOffs`), and
@@ -1548,7 +1549,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                     }
                 }
             }
-            if param_writes.iter().any(|w| !w.is_empty()) {
+            if any_param_writes {
                 let callee = u.name.span().slice(src);
                 written_through_parameters.extend(frames_written_through(
                     &routine_lists,
