@@ -843,6 +843,9 @@ pub(crate) struct Extractor<'a> {
     in_routine: bool,
     /// The loops open at this statement: the index of each one's [`Event::Loop`].
     loops: Vec<usize>,
+    /// The `WITH` settings of the spline block open at this statement: they hold for each
+    /// motion in it.
+    block_with: Vec<Setting>,
     /// The routines that take parameters, moved into [`Facts::routines`] at the end.
     routines: Vec<ParamRoutine>,
     /// The routine being read, when it takes parameters (index into `routines`).
@@ -861,6 +864,7 @@ impl<'a> Extractor<'a> {
             seen_def: false,
             in_routine: false,
             loops: Vec::new(),
+            block_with: Vec::new(),
             routines: Vec::new(),
             current: None,
             out: Extracted {
@@ -986,6 +990,13 @@ impl<'a> Extractor<'a> {
             StmtKind::Branch(keyword) => {
                 branch_event(src, *keyword, &mut self.loops, &mut out.facts.events);
             }
+            StmtKind::SplineBlock { with } => {
+                self.block_with = with
+                    .iter()
+                    .filter_map(|(l, r)| setting(src, l, r))
+                    .collect();
+            }
+            StmtKind::EndSpline => self.block_with.clear(),
             StmtKind::Motion {
                 keyword,
                 targets,
@@ -1021,9 +1032,12 @@ impl<'a> Extractor<'a> {
                         );
                     }
                 }
-                let with = with
+                // The spline block's settings first: the motion's own are written after them.
+                let with = self
+                    .block_with
                     .iter()
-                    .filter_map(|(l, r)| setting(src, l, r))
+                    .cloned()
+                    .chain(with.iter().filter_map(|(l, r)| setting(src, l, r)))
                     .collect();
                 out.facts.events.push(Event::Motion {
                     span: stmt.span,

@@ -1142,6 +1142,30 @@ END\n";
         assert_eq!(u.lines, [7]);
     }
 
+    /// A spline block's `WITH $BASE`/`$TOOL` hold for each motion in the block, after the
+    /// settings before it, and end with the block; a motion's own `WITH` is read after the
+    /// block's.
+    #[test]
+    fn a_spline_blocks_settings_hold_for_its_motions() {
+        let src = b"DEF s()\n  DECL E6POS XA={X 1,Y 2,Z 3}\n  DECL E6POS XB={X 1,Y 2,Z 3}\n  DECL E6POS XC={X 1,Y 2,Z 3}\n  DECL E6POS XD={X 1,Y 2,Z 3}\n  $TOOL=TOOL_DATA[1]\n  $BASE=BASE_DATA[2]\n  SPLINE WITH $BASE = BASE_DATA[1], $TOOL = TOOL_DATA[3]\n    SPL XA\n    SLIN XB WITH $BASE = BASE_DATA[4]\n  ENDSPLINE\n  PTP_SPLINE\n    SPTP XC\n  ENDSPLINE\n  LIN XD\nEND\n";
+        let f = crate::krl::parse_file(Path::new("s.src"), src.to_vec());
+        assert!(f.diagnostics.is_empty(), "{:?}", f.diagnostics);
+        let usage: Vec<_> = f
+            .positions
+            .usages()
+            .map(|u| (u.wobj.as_deref(), u.tool.as_deref()))
+            .collect();
+        assert_eq!(
+            usage,
+            [
+                (Some("BASE_DATA[1]"), Some("TOOL_DATA[3]")),
+                (Some("BASE_DATA[4]"), Some("TOOL_DATA[3]")),
+                (Some("BASE_DATA[2]"), Some("TOOL_DATA[1]")),
+                (Some("BASE_DATA[2]"), Some("TOOL_DATA[1]")),
+            ]
+        );
+    }
+
     #[test]
     fn inline_frames_and_inline_fdat_resolve() {
         let src = b"DEF r()\n  $BASE = {FRAME: X 100, Y 0, Z 0, A 0, B 0, C 0}\n  $TOOL = {FRAME: X 0, Y 0, Z 200, A 0, B 0, C 0}\n  LIN {X 10, Y 20, Z 30, A 0, B 90, C 0, E1 500} C_DIS\n  FDAT_ACT= {TOOL_NO 11, BASE_NO 1, IPO_FRAME #TCP}\n  BAS(#PTP_PARAMS,100)\n  PTP {X 1,Y 2,Z 3}\n  $BASE = EK(MACHINE_DEF[2].ROOT, MACHINE_DEF[2].MECH_TYPE, BASE_DATA[1])\n  LIN {X 5}\nEND\n";

@@ -161,6 +161,14 @@ pub enum StmtKind {
     /// keyword): where program order forks, joins and goes round, for following the base and
     /// tool.
     Branch(Span),
+    /// `SPLINE` or `PTP_SPLINE` opening a spline block, with its `WITH` assignments, which hold
+    /// for every motion in the block.
+    SplineBlock {
+        /// `WITH name = value` assignments, in order.
+        with: Vec<(Expr, Expr)>,
+    },
+    /// `ENDSPLINE` closing a spline block.
+    EndSpline,
     /// `keyword target` / `keyword aux, target`, then approximation and `WITH` assignments.
     Motion {
         /// `PTP`, `LIN`, `CIRC`, … (one of [`crate::krl::MOTION_KEYWORDS`]).

@@ -120,12 +120,20 @@ impl LineParser<'_, '_> {
                 if let Some(k) = static_kw(w) {
                     self.push_open(k, head.span(), NodeKind::Block);
                 }
-                // A spline block is one motion, not a change of program order.
-                let branch = !w.ends_with("SPLINE");
-                Ok((
-                    NodeKind::BlockOpen,
-                    branch.then(|| StmtKind::Branch(head.span())),
-                ))
+                // A spline block is one motion, not a change of program order; its `WITH`
+                // settings hold for every motion in it.
+                if w.ends_with("SPLINE") {
+                    c.pos += 1;
+                    let with = if c.is_kw("WITH") {
+                        c.pos += 1;
+                        with_list(&mut c)
+                    } else {
+                        Ok(Vec::new())
+                    };
+                    with.map(|with| (NodeKind::BlockOpen, Some(StmtKind::SplineBlock { with })))
+                } else {
+                    Ok((NodeKind::BlockOpen, Some(StmtKind::Branch(head.span()))))
+                }
             }
             b"ELSE" | b"CASE" | b"DEFAULT" => {
                 let w = word.as_str();
@@ -145,8 +153,12 @@ impl LineParser<'_, '_> {
                 let w = word.as_str();
                 let matched = self.stack.iter().any(|o| closer_of(o.keyword) == w);
                 self.close(w, head.span());
-                let branch = (matched && w != "ENDSPLINE").then(|| StmtKind::Branch(head.span()));
-                Ok((NodeKind::BlockClose, branch))
+                let stmt = match (matched, w == "ENDSPLINE") {
+                    (true, true) => Some(StmtKind::EndSpline),
+                    (true, false) => Some(StmtKind::Branch(head.span())),
+                    (false, _) => None,
+                };
+                Ok((NodeKind::BlockClose, stmt))
             }
             _ => self.other(&mut c, head, stmt_span),
         };
@@ -358,6 +370,22 @@ fn decl(c: &mut Cursor<'_>) -> PResult<StmtKind> {
     })
 }
 
+/// Rule `with`: the assignments after `WITH`, up to the end of the list.
+fn with_list(c: &mut Cursor<'_>) -> PResult<Vec<(Expr, Expr)>> {
+    let mut with = Vec::new();
+    loop {
+        let lhs = c.postfix()?;
+        c.expect_punct(b"=", "write `WITH $VAR = value, …`")?;
+        let rhs = c.expr()?;
+        with.push((lhs, rhs));
+        if c.is_punct(b",") {
+            c.pos += 1;
+        } else {
+            return Ok(with);
+        }
+    }
+}
+
 /// Rule `motion`: `KEYWORD target`, `CIRC aux, target [, CA angle]`, then approximation
 /// (`C_DIS` …), enums (`#TOOL`) and `WITH` assignments; rules `motion_kw`, `circ_rest`,
 /// `approximation` and `with`.
@@ -392,17 +420,7 @@ fn motion(c: &mut Cursor<'_>) -> PResult<StmtKind> {
             c.pos += 1;
         } else if t.kind == TokenKind::Ident && word.is("WITH") {
             c.pos += 1;
-            loop {
-                let lhs = c.postfix()?;
-                c.expect_punct(b"=", "write `WITH $VAR = value, …`")?;
-                let rhs = c.expr()?;
-                with.push((lhs, rhs));
-                if c.is_punct(b",") {
-                    c.pos += 1;
-                } else {
-                    break;
-                }
-            }
+            with.extend(with_list(c)?);
         } else {
             return c.err(
                 format!("unexpected {} in a motion statement", c.found()),
