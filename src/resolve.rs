@@ -754,6 +754,24 @@ impl<'f, 'a> Binder<'f, 'a> {
         }
     }
 
+    /// The targets a reference written as `raw` in file `m` names, as a motion of that file
+    /// reaches them (its module's own, else those other modules see; every element of an
+    /// array indexed by a computed value), added to `out`. A routine's parameter of that name
+    /// is the caller's to look past.
+    pub(crate) fn targets_named(&mut self, m: usize, raw: &[u8], out: &mut Vec<TargetAt>) {
+        let Binder {
+            files,
+            modules,
+            naming,
+            index,
+            buf,
+            ..
+        } = self;
+        let files: &[FileFacts<'a>] = files;
+        let exported = |(m, i): TargetAt| files.get(m).is_some_and(|f| f.exports(i));
+        lookup_raw(naming, index, &exported, (m, modules), raw, buf, out);
+    }
+
     /// Binds a computed value given to parameter `param` (its name in file `m`'s source) of
     /// routine `routine` on `line` (RAPID `pOut := CRobT();`, KRL `pOut = $POS_ACT`): a use of
     /// the parameter with that value, which [`Binder::finish`] hands on to the targets the

@@ -1280,6 +1280,12 @@ pub struct OffsetCall {
     /// The rotations that are written as an expression (`\Rz:=angle`), not a number: an
     /// absent rotation is zero, an expression is unknown offline.
     pub rot_expression: [bool; 3],
+    /// The declared targets the offset is taken from, as (file of the program, index in its
+    /// positions): those the first argument's reference names where the call is written
+    /// (`p10` in `Offs(p10, …)`, `pBed` in `Offs(RelTool(pBed, …), …)`, every element of
+    /// `pGrid` in `Offs(pGrid{r,c}, …)`), as a motion there would reach them. Empty for a
+    /// routine's parameter or a computed value.
+    pub bases: Vec<(usize, usize)>,
 }
 
 /// One parsed source file and everything trackfix understands in it.

@@ -504,6 +504,10 @@ pub struct Extractor<'l> {
     positions: PositionList,
     frames: Vec<FrameDecl>,
     offsets: Vec<OffsetCall>,
+    /// Per offset call: the routine it is written in and the reference its offset is taken
+    /// from (see [`offset_reference`]), for the usage pass to resolve into
+    /// [`OffsetCall::bases`].
+    offset_refs: Vec<(Option<usize>, Option<Span>)>,
     /// Every name declared, routines included (spans into the source: no copy per
     /// declaration).
     declared: crate::resolve::Declared,
@@ -778,6 +782,7 @@ impl<'l> Extractor<'l> {
             positions: PositionList::new(),
             frames: Vec::new(),
             offsets: Vec::new(),
+            offset_refs: Vec::new(),
             declared: crate::resolve::Declared::default(),
             uses: Vec::new(),
             call_args: Vec::new(),
@@ -1294,6 +1299,8 @@ impl<'l> Extractor<'l> {
                     let delta =
                         [1, 2, 3].map(|k| positional.get(k).and_then(|&v| self.num(src, arena, v)));
                     let span = n.span();
+                    self.offset_refs
+                        .push((self.current, offset_reference(arena, positional.first())));
                     self.offsets.push(OffsetCall {
                         kind,
                         span,
@@ -1302,6 +1309,7 @@ impl<'l> Extractor<'l> {
                         delta,
                         rot,
                         rot_expression,
+                        bases: Vec::new(),
                     });
                 }
                 _ => {}
@@ -1322,6 +1330,28 @@ impl<'l> Extractor<'l> {
                 offsets: Vec::new(),
                 diagnostics: Vec::new(),
             })
+    }
+}
+
+/// The reference an `Offs`/`RelTool` call's offset is taken from, given the call's first
+/// argument: the argument when it is a name (`p10`, `pGrid{r,c}`), else the first argument of
+/// the call written there (`Offs(RelTool(pBed, …), …)`), and so on in; `None` for anything
+/// else (an expression the program computes).
+fn offset_reference(arena: &Arena, first: Option<&u32>) -> Option<Span> {
+    let mut at = *first?;
+    loop {
+        let n = arena.get(at)?;
+        match n.kind {
+            ExprKind::Ident | ExprKind::Access => return Some(n.span()),
+            // A child's index is past its parent's: the walk ends.
+            ExprKind::Call => {
+                at = arena
+                    .children(at)
+                    .filter(|&a| arena.get(a).is_some_and(|arg| !arg.switch))
+                    .find_map(|a| arena.arg_value(a))?;
+            }
+            _ => return None,
+        }
     }
 }
 
@@ -1396,6 +1426,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     let mut assigned_literals = Vec::with_capacity(modules.len());
     let mut param_assignments = Vec::with_capacity(modules.len());
     let mut param_writes = Vec::with_capacity(modules.len());
+    let mut offset_refs = Vec::with_capacity(modules.len());
     for (m, (x, src, name)) in modules.into_iter().enumerate() {
         if let Some(d) = diagnostics.get_mut(m) {
             d.extend(x.misshapen);
@@ -1404,6 +1435,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         assigned_literals.push(x.assigned_literals);
         param_assignments.push(x.param_assignments);
         param_writes.push(x.param_writes);
+        offset_refs.push(x.offset_refs);
         calls.push(Calls {
             uses: x.uses,
             args: x.call_args,
@@ -1442,6 +1474,33 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         })
         .collect();
     let mut binder = crate::resolve::Binder::new(&mut facts, &NAMING);
+    // Each offset call's bases: the targets its reference names where the call is written. A
+    // routine's parameter names none offline.
+    let mut offset_bases: Vec<Vec<Vec<(usize, usize)>>> = Vec::with_capacity(rest.len());
+    for (m, (refs, r)) in offset_refs.iter().zip(&rest).enumerate() {
+        let (src, routines) = (r.6, &r.4);
+        let mut bases = Vec::with_capacity(refs.len());
+        for &(routine, reference) in refs {
+            let mut found = Vec::new();
+            if let Some(raw) = reference.map(|sp| sp.slice(src)) {
+                let name = raw
+                    .split(|&b| b == b'{')
+                    .next()
+                    .unwrap_or(raw)
+                    .trim_ascii_end();
+                let a_parameter = routine.and_then(|rt| routines.get(rt)).is_some_and(|rt| {
+                    rt.params
+                        .iter()
+                        .any(|p| NameKey(p.slice(src)) == NameKey(name))
+                });
+                if !a_parameter {
+                    binder.targets_named(m, raw, &mut found);
+                }
+            }
+            bases.push(found);
+        }
+        offset_bases.push(bases);
+    }
     // Two modules may each declare a `LOCAL` work object of one name, one holding the tool and
     // the other not: such a module's motions see its own (a map of their own, in the rare
     // task that has one).
@@ -1765,7 +1824,15 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         }
     }
     let mut out = Vec::with_capacity(rest.len());
-    for (m, ((frames, offsets, .., src, _), ps)) in rest.into_iter().zip(positions).enumerate() {
+    for (m, (((frames, mut offsets, .., src, _), ps), bases)) in rest
+        .into_iter()
+        .zip(positions)
+        .zip(offset_bases)
+        .enumerate()
+    {
+        for (call, bases) in offsets.iter_mut().zip(bases) {
+            call.bases = bases;
+        }
         let mut d = diagnostics
             .get_mut(m)
             .map(std::mem::take)

@@ -23,7 +23,9 @@ use super::driver::{NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
 use super::kinematic_policy::fmt_joints;
 use super::kinematic_policy::{Arm, config_edits, with_tool};
-use super::policy::{Why, common_refusal, describe, wobj_of, words_of, work_object_of};
+use super::policy::{
+    Why, common_refusal, describe, offset_bases, wobj_of, words_of, work_object_of,
+};
 use super::refusal::{Refusal, RefusalKind, Remedy};
 use super::rewrite::{
     DEG_DECIMALS, MM_DECIMALS, OrientationHint, QUAT_DECIMALS, number_edit, pose_edits,
@@ -597,36 +599,6 @@ fn declares_work_object_of(program: &Program, p: &Position, default: Option<&str
     })
 }
 
-/// The declared target an `Offs` offsets: `p10` in `Offs(p10, …)`, `pBed` in
-/// `Offs(RelTool(pBed, …), …)`, `pGrid` in `Offs(pGrid{r,c}, …)`; every array element of it.
-fn offset_targets<'p>(program: &'p Program, text: &str) -> Vec<(&'p ParsedFile, Position)> {
-    let inner = text.rsplit('(').next().unwrap_or(text).trim_start();
-    let base: String = inner
-        .chars()
-        .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
-        .collect();
-    if base.is_empty() {
-        return Vec::new();
-    }
-    let element = format!("{base}{{");
-    program
-        .files
-        .iter()
-        .flat_map(|f| {
-            let named = |i: &usize| {
-                f.positions.name(*i).is_some_and(|n| {
-                    n.eq_ignore_ascii_case(&base)
-                        || n.get(..element.len())
-                            .is_some_and(|h| h.eq_ignore_ascii_case(&element))
-                })
-            };
-            (0..f.positions.len())
-                .filter(named)
-                .filter_map(move |i| Some((f, f.position(i)?)))
-        })
-        .collect()
-}
-
 /// The edits of one `Offs`/`RelTool` call: its offsets reflected, or why not.
 fn mirror_offset(
     scope: Scope,
@@ -641,7 +613,7 @@ fn mirror_offset(
         // that target's work object decides the plane.
         let refl = match (&settings.world, call.kind) {
             (Some(_), OffsetKind::Offs) => {
-                let targets = offset_targets(program, &call.target);
+                let targets = offset_bases(program, call, crate::position::Reading::Whole);
                 let reflections: Vec<_> = targets
                     .iter()
                     .map(|(f, p)| reflection_for(program, Some(f), p, settings, own))

@@ -625,6 +625,30 @@ fn shown(v: f64) -> String {
     }
 }
 
+/// The declared targets `call` offsets ([`OffsetCall::bases`]), decoded as `reading` says,
+/// with their files.
+///
+/// [`OffsetCall::bases`]: crate::position::OffsetCall::bases
+pub(crate) fn offset_bases<'p>(
+    program: &'p Program,
+    call: &crate::position::OffsetCall,
+    reading: crate::position::Reading,
+) -> Vec<(&'p ParsedFile, Position)> {
+    let mut memo = crate::position::DecodeMemo::default();
+    call.bases
+        .iter()
+        .filter_map(|&(fi, i)| {
+            let f = program.files.get(fi)?;
+            (i < f.positions.len()).then(|| {
+                (
+                    f,
+                    f.positions.decoded_with(i, &f.source, reading, &mut memo),
+                )
+            })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -22,6 +22,10 @@ pub enum RefusalKind {
     /// The target is used with two different work objects / bases.
     #[value(alias = "two-wobjs")]
     TwoWorkObjects,
+    /// An `Offs` offset of an array's elements through a computed index (`Offs(pGrid{r,c},
+    /// 0,0,100)`) whose elements the transform moves by different turns: one written offset
+    /// cannot follow each.
+    SharedOffset,
     /// The work object is moved by a mechanical unit (`ufprog FALSE`).
     MovingWorkObject,
     /// Stationary tool (`robhold TRUE`, KRL `IPO_FRAME #TCP`).

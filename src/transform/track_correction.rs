@@ -18,9 +18,13 @@ use super::cell::Robot;
 use super::driver::{NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
 use super::kinematic_policy::{Arm, joint_edits, with_tool};
-use super::policy::{LastWorkObject, Why, describe, joint_target};
+use super::policy::{LastWorkObject, Why, describe, joint_target, offset_bases};
+use super::refusal::Refusal;
 use super::refusal::RefusalKind;
+use super::rewrite::{MM_DECIMALS, number_edit};
 use super::rewrite::{OrientationHint, pose_change};
+use crate::position::{NumField, OffsetCall, OffsetKind};
+use crate::syntax::Edit;
 
 /// `D(s)`: anything that gives the track's deviation at a skid (a [`Profile`], or a test's
 /// closed form).
@@ -365,6 +369,96 @@ impl TargetRule for TrackRule<'_, '_> {
 
     fn keeps_lock_splits(&self) -> bool {
         self.dir == Direction::Zero
+    }
+
+    /// An `Offs` offset is a vector in the work object: the corrected target `G·T` offset by
+    /// `d` is `G·(d + T)`, the target offset by `R_G·d`, so the offset turns with the
+    /// correction's rotation. A `RelTool` offset is in the tool frame, which moves with the
+    /// target: it stays. A target left as written keeps its offsets (the driver does not ask
+    /// then), and so does one the rule cannot place, which is refused with the target.
+    fn offset(&self, scope: Scope, call: &OffsetCall) -> Result<Vec<Edit>, Box<Refusal>> {
+        if call.kind != OffsetKind::Offs {
+            return Ok(Vec::new());
+        }
+        let refuse = |kind, message: String, hint: &str| {
+            Err(Box::new(Refusal::new(
+                scope.file,
+                call.span,
+                call.target.clone(),
+                kind,
+                message,
+                hint.to_owned(),
+                None,
+            )))
+        };
+        let mut written: Option<Vec<Edit>> = None;
+        for (file, p) in offset_bases(scope.program, call, self.reading()) {
+            let at = Scope {
+                program: scope.program,
+                file,
+            };
+            let w = self.work_objects.work_object_of(
+                scope.program,
+                file,
+                &p,
+                &self.setup.frames,
+                self.setup.default_wobj.as_deref(),
+            );
+            let (Ok(Some(skid)), Ok(w)) = (self.skid(at, &p), w) else {
+                continue;
+            };
+            // (Asked as `new_pose` asks, whose cache this is.)
+            let inverse = self.dir == Direction::Correct;
+            let Ok((g, _)) = self
+                .corrections
+                .get(self.setup, &w, skid, self.dir, inverse)
+            else {
+                continue;
+            };
+            let d = call
+                .delta
+                .each_ref()
+                .map(|f| f.as_ref().map(NumField::value));
+            let turned = g.rotation.angle() != 0.0;
+            if turned && d.iter().any(Option::is_none) {
+                return refuse(
+                    RefusalKind::Expression,
+                    format!(
+                        "Offs({}, …) has an offset that is not a number, which the correction turns by {:.4}°",
+                        call.target,
+                        g.rotation.angle().to_degrees()
+                    ),
+                    "write the object-frame offsets as numbers",
+                );
+            }
+            let v = g.rotation
+                * Vector3::new(
+                    d[0].unwrap_or_default(),
+                    d[1].unwrap_or_default(),
+                    d[2].unwrap_or_default(),
+                );
+            let edits: Vec<Edit> = call
+                .delta
+                .iter()
+                .zip([v.x, v.y, v.z])
+                .filter_map(|(f, n)| number_edit(f, n, MM_DECIMALS))
+                .collect();
+            match &written {
+                None => written = Some(edits),
+                Some(first) if *first == edits => {}
+                Some(_) => {
+                    return refuse(
+                        RefusalKind::SharedOffset,
+                        format!(
+                            "the elements of `{}` are corrected by different turns: one Offs offset cannot follow each",
+                            call.target
+                        ),
+                        "write the offset point of each element as a target of its own",
+                    );
+                }
+            }
+        }
+        Ok(written.unwrap_or_default())
     }
 
     fn uncertainty(&self, frame: &TrackFrame, skid: Option<f64>, new: &Pose) -> Option<f64> {

@@ -368,21 +368,32 @@ fn restore_unmoved(
             edits.push(Edit::new(g.span(), old.to_vec()));
         }
     };
+    let close = |f: &NumField, g: &NumField, house: i32| {
+        (f.value() - g.value()).abs() <= CHAIN_ROUNDING_UNITS * unit(&[f, g], house) * (1.0 + 1e-9)
+    };
     if a.offsets.len() == b.offsets.len() {
         for (c, d) in a.offsets.iter().zip(&b.offsets) {
-            if kept_offsets.offsets(c) {
-                let (from, to) = (c.delta.iter().chain(&c.rot), d.delta.iter().chain(&d.rot));
-                for (f, g) in from.zip(to) {
-                    if let (Some(f), Some(g)) = (f, g) {
-                        keep(f, g);
-                    }
+            // An offset the steps turned and turned back (`correct` turns an `Offs` offset
+            // with its target) keeps its text, as a target that came back does; a kept
+            // target's offset call keeps its rotations too.
+            let back = c.delta.iter().zip(&d.delta).all(|pair| match pair {
+                (Some(f), Some(g)) => close(f, g, MM_DECIMALS as i32),
+                (None, None) => true,
+                _ => false,
+            });
+            let pairs = c.delta.iter().zip(&d.delta);
+            let rotations = c.rot.iter().zip(&d.rot);
+            let kept = kept_offsets.offsets(c);
+            let restored = pairs
+                .filter(|_| kept || back)
+                .chain(rotations.filter(|_| kept));
+            for (f, g) in restored {
+                if let (Some(f), Some(g)) = (f, g) {
+                    keep(f, g);
                 }
             }
         }
     }
-    let close = |f: &NumField, g: &NumField, house: i32| {
-        (f.value() - g.value()).abs() <= CHAIN_ROUNDING_UNITS * unit(&[f, g], house) * (1.0 + 1e-9)
-    };
     for (t, (p, q)) in a.positions().zip(b.positions()).enumerate() {
         if kept.contains_key(&t) {
             continue;

@@ -2147,3 +2147,150 @@ fn correct_then_zero_stamped_gives_back_the_bytes() {
     );
     assert!(lost_points <= 1, "{lost_points}");
 }
+
+/// `correct` turns an `Offs` offset with its target: the corrected target is `G·T` (in the
+/// work object), and the point `Offs(T, d)` corrected is `G·(T + d)` = `Offs(G·T, R_G·d)`. The
+/// test reads `G` back from the written target (its pose after over before) and holds the
+/// written offset to `R_G·d` within the written precision; `RelTool`'s offset, in the tool
+/// frame, stays; `zero` brings the offset back.
+#[test]
+fn correct_turns_an_offs_offset_with_its_target() {
+    use trackfix::geometry::pose_xyz_deg;
+    let cell = Cell::parse(
+        Path::new("cell.toml"),
+        "[robot.r1]\nprofile = \"track/profile.toml\"\n\
+         base = { x = 0, y = -1000, z = 0, rx = 0, ry = 0, rz = 90 }\n\
+         track_axis = [1, 0, 0]\nskid = \"eax_a\"\n",
+    )
+    .unwrap();
+    let robot = cell.robot("r1").unwrap();
+    let d = pose_xyz_deg(0.3, -0.2, 0.5, 0.2, -0.3, 0.5);
+    let dev = move |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(d) };
+    let setup = TrackSetup::new(robot, &dev);
+    let src = "MODULE M\n  PERS wobjdata w1:=[FALSE,TRUE,\"\",[[2100,-1350,480],[0.965925826,0,0,0.258819045]],[[0,0,0],[1,0,0,0]]];\n  \
+        CONST robtarget p1:=[[-1702.5,-320,225],[0,0.707107,0.707107,0],[-1,0,-1,0],[400,9E9,9E9,9E9,9E9,9E9]];\n  \
+        PROC main()\n    MoveL Offs(p1,10,20,300),v100,fine,tool0\\WObj:=w1;\n    \
+        MoveL RelTool(p1,10,20,300),v100,fine,tool0\\WObj:=w1;\n    MoveL p1,v100,fine,tool0\\WObj:=w1;\n  ENDPROC\nENDMODULE\n";
+    let parse = |text: &str| Program {
+        files: vec![trackfix::rapid::parse_file(
+            Path::new("m.mod"),
+            text.as_bytes().to_vec(),
+        )],
+    };
+    let run = |p: &Program, dir: Direction| {
+        let r = apply(p, track_correction(p, &setup, dir)).unwrap();
+        assert!(r.refusals().next().is_none());
+        String::from_utf8(r.files[0].output.clone()).unwrap()
+    };
+    let before = parse(src);
+    let corrected = run(&before, Direction::Correct);
+    let after = parse(&corrected);
+    let pose = |p: &Program| {
+        p.files[0]
+            .positions()
+            .find(|t| t.name.as_deref() == Some("p1"))
+            .unwrap()
+            .cartesian
+            .unwrap()
+            .pose()
+            .unwrap()
+    };
+    let g = pose(&after) * pose(&before).inverse();
+    assert!(g.rotation.angle().to_degrees() > 0.3, "{g:?}");
+    let offsets = |p: &Program| -> Vec<[f64; 3]> {
+        p.files[0]
+            .offsets
+            .iter()
+            .map(|c| c.delta.each_ref().map(|f| f.as_ref().unwrap().value()))
+            .collect()
+    };
+    let want = g.rotation * nalgebra::Vector3::new(10.0, 20.0, 300.0);
+    let got = offsets(&after);
+    // Three decimals written, and G read back from a target written to 3 and 6 decimals.
+    for (k, w) in [want.x, want.y, want.z].iter().enumerate() {
+        assert!(
+            (got[0][k] - w).abs() < 2e-3,
+            "{got:?} {want:?}\n{corrected}"
+        );
+    }
+    let moved =
+        (nalgebra::Vector3::from(got[0]) - nalgebra::Vector3::new(10.0, 20.0, 300.0)).norm();
+    assert!(moved > 1.0, "the offset turned: {got:?}");
+    assert_eq!(got[1], [10.0, 20.0, 300.0], "RelTool's stays");
+    // `zero` gives the offset back (the stamp, which the command line writes, gives its text
+    // back too: `correct_then_zero_stamped_gives_back_the_bytes`).
+    let zeroed = run(&after, Direction::Zero);
+    assert_eq!(offsets(&parse(&zeroed))[0], [10.0, 20.0, 300.0], "{zeroed}");
+}
+
+/// An `Offs`/`RelTool` call's bases are the targets its reference names where it is written,
+/// as a motion there reaches them: a module's own `LOCAL` target before another module's of the
+/// same name, another module's exported one, every element of an array indexed by a computed
+/// value, the target inside a nested call; a routine's parameter names none (its targets are
+/// the callers').
+#[test]
+fn an_offset_calls_bases_are_the_targets_its_reference_means_there() {
+    let t = |x: u32| format!("[[{x},0,500],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]");
+    let a = format!(
+        "MODULE A\n  LOCAL CONST robtarget p1:={};\n  PROC a()\n    \
+         MoveL Offs(p1,0,0,10),v100,fine,tool0;\n    \
+         MoveL Offs(RelTool(p2,0,0,5),0,0,10),v100,fine,tool0;\n  ENDPROC\n  \
+         PROC b(robtarget p2)\n    MoveL Offs(p2,0,0,5),v100,fine,tool0;\n  ENDPROC\nENDMODULE\n",
+        t(1)
+    );
+    let b = format!(
+        "MODULE B\n  LOCAL CONST robtarget p1:={};\n  CONST robtarget p2:={};\n  \
+         CONST robtarget pGrid{{2}}:=[{},{}];\n  PROC c()\n    \
+         MoveL Offs(p1,0,0,10),v100,fine,tool0;\n    \
+         FOR i FROM 1 TO 2 DO\n      MoveL Offs(pGrid{{i}},0,0,10),v100,fine,tool0;\n    ENDFOR\n  \
+         ENDPROC\nENDMODULE\n",
+        t(2),
+        t(3),
+        t(4),
+        t(5)
+    );
+    let files = trackfix::rapid::parse_task(vec![
+        ("A.mod".into(), a.into_bytes().into()),
+        ("B.mod".into(), b.into_bytes().into()),
+    ]);
+    // (file, index) of the target whose x is `x`: each literal above has its own.
+    let at = |x: f64| -> (usize, usize) {
+        files
+            .iter()
+            .enumerate()
+            .find_map(|(fi, f)| {
+                f.positions()
+                    .position(|p| {
+                        p.cartesian
+                            .as_ref()
+                            .and_then(|c| c.trans[0].as_ref().map(|n| n.value()))
+                            == Some(x)
+                    })
+                    .map(|i| (fi, i))
+            })
+            .unwrap()
+    };
+    let bases = |fi: usize| -> Vec<(String, Vec<(usize, usize)>)> {
+        files[fi]
+            .offsets
+            .iter()
+            .map(|c| (c.target.clone(), c.bases.clone()))
+            .collect()
+    };
+    assert_eq!(
+        bases(0),
+        vec![
+            ("p1".to_owned(), vec![at(1.0)]),
+            ("RelTool(p2,0,0,5)".to_owned(), vec![at(3.0)]),
+            ("p2".to_owned(), vec![at(3.0)]),
+            ("p2".to_owned(), vec![]),
+        ]
+    );
+    assert_eq!(
+        bases(1),
+        vec![
+            ("p1".to_owned(), vec![at(2.0)]),
+            ("pGrid{i}".to_owned(), vec![at(4.0), at(5.0)]),
+        ]
+    );
+}
