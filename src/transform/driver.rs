@@ -110,7 +110,9 @@ pub(crate) trait TargetRule {
 /// Runs `rule` over every target, offset call and frame declaration of `program`.
 pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramEdits {
     let mut out = ProgramEdits::for_program(program);
-    for (file, fe) in program.files.iter().zip(out.files.iter_mut()) {
+    // The targets left as written, by (file, index), whose offset calls stay as written.
+    let mut refused = Vec::new();
+    for (fi, (file, fe)) in program.files.iter().zip(out.files.iter_mut()).enumerate() {
         let scope = Scope { program, file };
         let splits = rule
             .keeps_lock_splits()
@@ -153,17 +155,15 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
                 // An unset array slot, a world zone's tolerance: not targets, worth a note,
                 // never a refusal.
                 Err(r) if r.kind.is_note() => fe.notes.push(*r),
-                Err(r) => fe.refusals.push(*r),
+                Err(r) => {
+                    refused.push(((fi, i), r.kind));
+                    fe.refusals.push(*r);
+                }
             }
         }
     }
     // An offset call of a target left as written stays as written with it.
-    let kept = super::policy::KeptTargets::of(
-        out.files
-            .iter()
-            .flat_map(|fe| &fe.refusals)
-            .map(|r| (r.target.as_str(), r.kind)),
-    );
+    let kept = super::policy::KeptTargets::of(refused);
     for (file, fe) in program.files.iter().zip(out.files.iter_mut()) {
         let scope = Scope { program, file };
         for call in &file.offsets {

@@ -264,27 +264,29 @@ pub(crate) fn run_time(p: &Position) -> Option<Why> {
 }
 
 /// The targets of a program left as written whose `Offs`/`RelTool` calls stay as written with
-/// them (names compared as the languages compare them, without case): a point as written with a
-/// mirrored offset is neither. Not a target computed at run time, whose offset applies to the
-/// pose the robot computes and moves as the offsets of a target without a literal do. Named
-/// across the program: an offset may be in another module than its target.
-pub(crate) struct KeptTargets(std::collections::HashSet<String>);
+/// them: a point as written with a mirrored offset is neither. Not a target computed at run
+/// time, whose offset applies to the pose the robot computes and moves as the offsets of a
+/// target without a literal do. By (file, index): a call's bases are resolved where it is
+/// written ([`OffsetCall::bases`]), in any module.
+///
+/// [`OffsetCall::bases`]: crate::position::OffsetCall::bases
+pub(crate) struct KeptTargets(std::collections::HashSet<(usize, usize)>);
 
 impl KeptTargets {
-    /// The targets refused as `(name, kind)`.
-    pub(crate) fn of<'a>(refused: impl IntoIterator<Item = (&'a str, RefusalKind)>) -> Self {
+    /// The targets refused, as ((file, index), kind).
+    pub(crate) fn of(refused: impl IntoIterator<Item = ((usize, usize), RefusalKind)>) -> Self {
         KeptTargets(
             refused
                 .into_iter()
                 .filter(|(_, kind)| !kind.is_runtime_data())
-                .map(|(name, _)| name.to_ascii_lowercase())
+                .map(|(at, _)| at)
                 .collect(),
         )
     }
 
     /// Whether `call` offsets one of the targets.
     pub(crate) fn offsets(&self, call: &crate::position::OffsetCall) -> bool {
-        !self.0.is_empty() && self.0.contains(&call.target.trim().to_ascii_lowercase())
+        !self.0.is_empty() && call.bases.iter().any(|b| self.0.contains(b))
     }
 }
 

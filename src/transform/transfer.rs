@@ -186,11 +186,12 @@ fn combine(
         refused.push(chain_refusals(a, steps, i));
     }
     // The targets kept in any file, whose offset calls in every file stay as written.
-    let kept_offsets =
-        KeptTargets::of(start.files.iter().zip(&refused).flat_map(|(a, (_, kept))| {
-            kept.iter()
-                .filter_map(|(&t, &kind)| Some((a.positions.name(t)?, kind)))
-        }));
+    let kept_offsets = KeptTargets::of(
+        refused
+            .iter()
+            .enumerate()
+            .flat_map(|(fi, (_, kept))| kept.iter().map(move |(&t, &kind)| ((fi, t), kind))),
+    );
     let mut files = Vec::new();
     for (i, ((a, b), (refusals, kept))) in
         start.files.iter().zip(&end.files).zip(refused).enumerate()
@@ -532,13 +533,14 @@ mod tests {
     }
 
     /// The offsets of a kept target stay as written with it: the mirror turns the `Offs`
-    /// offset of a target robot B then refuses.
+    /// offset of a target robot B then refuses (taken directly or through a `RelTool`).
     #[test]
     fn a_kept_targets_offsets_are_written_as_they_were() {
         let module = "MODULE m\n\
             CONST robtarget pFar:=[[1200,0,800],[0,0,1,0],[0,0,0,0],[6000,9E9,9E9,9E9,9E9,9E9]];\n\
             PROC main()\n\
             MoveL Offs(pFar,0,100,0), v1000, z10, tool0\\WObj:=wobj0;\n\
+            MoveL Offs(RelTool(pFar,0,0,10),0,100,0), v1000, z10, tool0\\WObj:=wobj0;\n\
             MoveL pFar, v1000, z10, tool0\\WObj:=wobj0;\n\
             ENDPROC\n\
             ENDMODULE\n";
@@ -558,6 +560,10 @@ mod tests {
         let mirrored = apply(&program, plan.steps()[1].edits(&program)).unwrap();
         let mirrored = String::from_utf8(mirrored.files[0].output.clone()).unwrap();
         assert!(mirrored.contains("Offs(pFar,0,-100,0)"), "{mirrored}");
+        assert!(
+            mirrored.contains("Offs(RelTool(pFar,0,0,10),0,-100,0)"),
+            "{mirrored}"
+        );
         let result = transfer(&program, &plan, &LoadOptions::default()).unwrap();
         assert_eq!(
             String::from_utf8(result.files[0].output.clone()).unwrap(),
