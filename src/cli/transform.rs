@@ -984,6 +984,9 @@ fn run_each(
     if let Some(exit) = refuse_syntax_errors(command, &programs)? {
         return Ok(exit);
     }
+    if !out.verbosity.quiet {
+        show_readings(&programs)?;
+    }
     if let Some(exit) = check_stamps(command, &programs, prov, out)? {
         return Ok(exit);
     }
@@ -1062,6 +1065,20 @@ fn refuse_syntax_errors(command: &str, programs: &[Program]) -> anyhow::Result<O
         bad.join(", ")
     )?;
     Ok(Some(Exit::Usage))
+}
+
+/// Shows the warnings that say what the transforms take the programs to mean where it is not
+/// what is written ([`Diagnostic::shapes_transforms`]): the result depends on them.
+///
+/// [`Diagnostic::shapes_transforms`]: trackfix::syntax::Diagnostic::shapes_transforms
+fn show_readings(programs: &[Program]) -> anyhow::Result<()> {
+    let mut stderr = std::io::stderr().lock();
+    for file in programs.iter().flat_map(|p| &p.files) {
+        for d in file.diagnostics.iter().filter(|d| d.shapes_transforms) {
+            writeln!(stderr, "{}", file.render(d).trim_end())?;
+        }
+    }
+    Ok(())
 }
 
 /// [`run_each`] for one transform step.

@@ -1761,7 +1761,8 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                 )
             };
             if let Some(notes) = assigned_notes.get_mut(m) {
-                notes.push(Diagnostic::warning(a.name, message).with_hint(hint));
+                let d = Diagnostic::warning(a.name, message).with_hint(hint);
+                notes.push(if one { d.shaping_transforms() } else { d });
             }
         }
         if one {

@@ -39,6 +39,11 @@ pub struct Diagnostic {
     pub message: String,
     /// What to do about it (rendered as `= help: …`).
     pub hint: Option<String>,
+    /// Whether it says what a transform takes the program to mean where that is not what is
+    /// written (a frame's declaration stands for the value the program gives it): the
+    /// transforms show it with their results, not only `check`.
+    #[serde(skip)]
+    pub shapes_transforms: bool,
 }
 
 impl Diagnostic {
@@ -49,6 +54,7 @@ impl Diagnostic {
             span,
             message: message.into(),
             hint: None,
+            shapes_transforms: false,
         }
     }
 
@@ -70,6 +76,12 @@ impl Diagnostic {
     /// The same diagnostic with `hint` as what to do.
     pub fn with_hint(mut self, hint: impl Into<String>) -> Diagnostic {
         self.hint = Some(hint.into());
+        self
+    }
+
+    /// Marks it as one the transforms show ([`Diagnostic::shapes_transforms`]).
+    pub fn shaping_transforms(mut self) -> Diagnostic {
+        self.shapes_transforms = true;
         self
     }
 
