@@ -6,6 +6,8 @@ use std::path::Path;
 use trackfix::position::{ParsedFile, RunTimeValue, UseLine};
 use trackfix::{krl, rapid};
 
+use crate::support::with_constant_deviation;
+
 fn run_time(f: &ParsedFile, name: &str) -> Option<RunTimeValue> {
     f.positions()
         .find(|p| p.name.as_deref() == Some(name))
@@ -762,125 +764,116 @@ fn a_krl_base_or_tool_the_program_overwrites_refuses_its_targets() {
 /// (written with other digits) changes nothing and is not reported.
 #[test]
 fn a_frame_the_program_gives_one_other_value_is_used_two_values_are_refused() {
-    use trackfix::geometry::{Pose, pose_xyz_deg};
+    use trackfix::geometry::pose_xyz_deg;
     use trackfix::position::Program;
-    use trackfix::transform::{Cell, Direction, RefusalKind, TrackSetup, apply, track_correction};
-    let cell = Cell::parse(
-        Path::new("cell.toml"),
-        "[robot.r1]\nprofile = \"track/profile.toml\"\n\
-         base = { x = 0, y = -1000, z = 0, rx = 0, ry = 0, rz = 90 }\n\
-         track_axis = [1, 0, 0]\nskid = \"eax_a\"\n",
-    )
-    .unwrap();
-    let robot = cell.robot("r1").unwrap();
+    use trackfix::transform::{Direction, RefusalKind, apply, track_correction};
     // A deviation that turns: a work object placed elsewhere gives another correction.
     let d = pose_xyz_deg(0.3, -0.2, 0.5, 0.02, -0.03, 0.05);
-    let dev = move |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(d) };
-    let setup = TrackSetup::new(robot, &dev);
-    let zero = "[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]";
-    let v =
-        "[FALSE,TRUE,\"\",[[2100,-1350,480],[0.965925826,0,0,0.258819045]],[[10,20,0],[1,0,0,0]]]";
-    let v_digits = "[FALSE,TRUE,\"\",[[2100.000,-1350.000,480.000],[0.965925826,0,0,0.258819045]],[[10.0,20.0,0],[1,0,0,0]]]";
-    let v2 = "[FALSE,TRUE,\"\",[[2200,-1350,480],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]";
-    let module = |decl: &str, main: &str, other: &str| {
-        format!(
-            "MODULE M\n  PERS wobjdata wCar:={decl};\n  CONST robtarget p10:=[[-1702.5,-320,225],[0,0.707107,0.707107,0],[-1,0,-1,0],[400,9E9,9E9,9E9,9E9,9E9]];\n  \
-             PROC main()\n{main}    MoveL p10,v100,fine,tool0\\WObj:=wCar;\n  ENDPROC\n  PROC other()\n{other}  ENDPROC\nENDMODULE\n"
-        )
-    };
-    let assign = |value: &str| format!("    wCar:={value};\n");
-    let correct = |src: &str| {
-        let program = Program {
-            files: vec![rapid::parse_file(
-                Path::new("m.mod"),
-                src.as_bytes().to_vec(),
-            )],
+    with_constant_deviation(d, |setup| {
+        let zero = "[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]";
+        let v = "[FALSE,TRUE,\"\",[[2100,-1350,480],[0.965925826,0,0,0.258819045]],[[10,20,0],[1,0,0,0]]]";
+        let v_digits = "[FALSE,TRUE,\"\",[[2100.000,-1350.000,480.000],[0.965925826,0,0,0.258819045]],[[10.0,20.0,0],[1,0,0,0]]]";
+        let v2 = "[FALSE,TRUE,\"\",[[2200,-1350,480],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]";
+        let module = |decl: &str, main: &str, other: &str| {
+            format!(
+                "MODULE M\n  PERS wobjdata wCar:={decl};\n  CONST robtarget p10:=[[-1702.5,-320,225],[0,0.707107,0.707107,0],[-1,0,-1,0],[400,9E9,9E9,9E9,9E9,9E9]];\n  \
+                 PROC main()\n{main}    MoveL p10,v100,fine,tool0\\WObj:=wCar;\n  ENDPROC\n  PROC other()\n{other}  ENDPROC\nENDMODULE\n"
+            )
         };
-        let result = apply(
-            &program,
-            track_correction(&program, &setup, Direction::Correct),
-        )
-        .unwrap();
-        let out = String::from_utf8(result.files[0].output.clone()).unwrap();
-        let p10 = out
-            .lines()
-            .find(|l| l.contains("p10:="))
-            .unwrap()
-            .to_owned();
-        let refused: Vec<(String, RefusalKind, String)> = result
-            .refusals()
-            .map(|r| (r.target.clone(), r.kind, r.message.clone()))
-            .collect();
-        let warnings: Vec<String> = program.files[0]
-            .diagnostics
-            .iter()
-            .map(|d| d.message.clone())
-            .collect();
-        (p10, refused, warnings)
-    };
+        let assign = |value: &str| format!("    wCar:={value};\n");
+        let correct = |src: &str| {
+            let program = Program {
+                files: vec![rapid::parse_file(
+                    Path::new("m.mod"),
+                    src.as_bytes().to_vec(),
+                )],
+            };
+            let result = apply(
+                &program,
+                track_correction(&program, setup, Direction::Correct),
+            )
+            .unwrap();
+            let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+            let p10 = out
+                .lines()
+                .find(|l| l.contains("p10:="))
+                .unwrap()
+                .to_owned();
+            let refused: Vec<(String, RefusalKind, String)> = result
+                .refusals()
+                .map(|r| (r.target.clone(), r.kind, r.message.clone()))
+                .collect();
+            let warnings: Vec<String> = program.files[0]
+                .diagnostics
+                .iter()
+                .map(|d| d.message.clone())
+                .collect();
+            (p10, refused, warnings)
+        };
 
-    let (declared, refused, warnings) = correct(&module(v, "", ""));
-    assert!(
-        refused.is_empty() && warnings.is_empty(),
-        "{refused:?} {warnings:?}"
-    );
-    let (in_zero, ..) = correct(&module(zero, "", ""));
-    assert_ne!(
-        declared, in_zero,
-        "the work object's value must matter here"
-    );
-
-    let (assigned, refused, warnings) = correct(&module(zero, &assign(v), ""));
-    assert_eq!(assigned, declared);
-    assert!(refused.is_empty(), "{refused:?}");
-    assert_eq!(warnings.len(), 1, "{warnings:?}");
-    assert!(
-        warnings[0].starts_with(
-            "work object `wCar` is given another value here than its declaration on line 2: trackfix uses this value"
-        ),
-        "{}",
-        warnings[0]
-    );
-
-    let (same, refused, warnings) = correct(&module(v, &assign(v_digits), ""));
-    assert_eq!(same, declared);
-    assert!(
-        refused.is_empty() && warnings.is_empty(),
-        "{refused:?} {warnings:?}"
-    );
-
-    for (main, other, line) in [
-        (assign(v), assign(v2), 5),
-        // The declared value given back elsewhere is a second value as well.
-        (assign(v), assign(zero), 5),
-    ] {
-        let src = module(zero, &main, &other);
-        let (kept, refused, warnings) = correct(&src);
-        let f = rapid::parse_file(Path::new("m.mod"), src.clone().into_bytes());
-        assert_eq!(
-            run_time(&f, "p10"),
-            Some(RunTimeValue::FrameAssigned {
-                name: "wCar".into(),
-                at: UseLine::new(line)
-            })
-        );
-        assert_eq!(kept, src.lines().find(|l| l.contains("p10:=")).unwrap());
-        assert_eq!(refused.len(), 1, "{refused:?}");
-        assert_eq!(refused[0].1, RefusalKind::RuntimeData);
+        let (declared, refused, warnings) = correct(&module(v, "", ""));
         assert!(
-            refused[0].2.contains(
-                "is used with `wCar`, which the program gives another value than its declaration (line 5)"
+            refused.is_empty() && warnings.is_empty(),
+            "{refused:?} {warnings:?}"
+        );
+        let (in_zero, ..) = correct(&module(zero, "", ""));
+        assert_ne!(
+            declared, in_zero,
+            "the work object's value must matter here"
+        );
+
+        let (assigned, refused, warnings) = correct(&module(zero, &assign(v), ""));
+        assert_eq!(assigned, declared);
+        assert!(refused.is_empty(), "{refused:?}");
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        assert!(
+            warnings[0].starts_with(
+                "work object `wCar` is given another value here than its declaration on line 2: trackfix uses this value"
             ),
             "{}",
-            refused[0].2
+            warnings[0]
         );
+
+        let (same, refused, warnings) = correct(&module(v, &assign(v_digits), ""));
+        assert_eq!(same, declared);
         assert!(
-            warnings
-                .iter()
-                .all(|w| w.contains("the targets moved with it are left as written")),
-            "{warnings:?}"
+            refused.is_empty() && warnings.is_empty(),
+            "{refused:?} {warnings:?}"
         );
-    }
+
+        for (main, other, line) in [
+            (assign(v), assign(v2), 5),
+            // The declared value given back elsewhere is a second value as well.
+            (assign(v), assign(zero), 5),
+        ] {
+            let src = module(zero, &main, &other);
+            let (kept, refused, warnings) = correct(&src);
+            let f = rapid::parse_file(Path::new("m.mod"), src.clone().into_bytes());
+            assert_eq!(
+                run_time(&f, "p10"),
+                Some(RunTimeValue::FrameAssigned {
+                    name: "wCar".into(),
+                    at: UseLine::new(line)
+                })
+            );
+            assert_eq!(kept, src.lines().find(|l| l.contains("p10:=")).unwrap());
+            assert_eq!(refused.len(), 1, "{refused:?}");
+            assert_eq!(refused[0].1, RefusalKind::RuntimeData);
+            assert!(
+                refused[0].2.contains(
+                    "is used with `wCar`, which the program gives another value than its declaration (line 5)"
+                ),
+                "{}",
+                refused[0].2
+            );
+            assert!(
+                warnings
+                    .iter()
+                    .all(|w| w.contains("the targets moved with it are left as written")),
+                "{warnings:?}"
+            );
+        }
+    })
 }
 
 /// `correct` of a RAPID task (modules named and written) with a deviation that turns, by the
@@ -892,46 +885,38 @@ fn correct_task(
     Vec<String>,
     Vec<(String, trackfix::transform::RefusalKind, String)>,
 ) {
-    use trackfix::geometry::{Pose, pose_xyz_deg};
+    use trackfix::geometry::pose_xyz_deg;
     use trackfix::position::Program;
-    use trackfix::transform::{Cell, Direction, TrackSetup, apply, track_correction};
-    let cell = Cell::parse(
-        Path::new("cell.toml"),
-        "[robot.r1]\nprofile = \"track/profile.toml\"\n\
-         base = { x = 0, y = -1000, z = 0, rx = 0, ry = 0, rz = 90 }\n\
-         track_axis = [1, 0, 0]\nskid = \"eax_a\"\n",
-    )
-    .unwrap();
-    let robot = cell.robot("r1").unwrap();
+    use trackfix::transform::{Direction, apply, track_correction};
     let d = pose_xyz_deg(0.3, -0.2, 0.5, 0.02, -0.03, 0.05);
-    let dev = move |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(d) };
-    let setup = TrackSetup::new(robot, &dev);
-    let program = Program {
-        files: rapid::parse_task(
-            modules
-                .iter()
-                .map(|(n, t)| (std::path::PathBuf::from(n), t.as_bytes().to_vec().into()))
-                .collect(),
-        ),
-    };
-    let result = apply(
-        &program,
-        track_correction(&program, &setup, Direction::Correct),
-    )
-    .unwrap();
-    let p1 = result
-        .files
-        .iter()
-        .filter_map(|f| {
-            let out = String::from_utf8(f.output.clone()).unwrap();
-            Some(out.lines().find(|l| l.contains("p1:="))?.to_owned())
-        })
-        .collect();
-    let refused = result
-        .refusals()
-        .map(|r| (r.target.clone(), r.kind, r.message.clone()))
-        .collect();
-    (p1, refused)
+    with_constant_deviation(d, |setup| {
+        let program = Program {
+            files: rapid::parse_task(
+                modules
+                    .iter()
+                    .map(|(n, t)| (std::path::PathBuf::from(n), t.as_bytes().to_vec().into()))
+                    .collect(),
+            ),
+        };
+        let result = apply(
+            &program,
+            track_correction(&program, setup, Direction::Correct),
+        )
+        .unwrap();
+        let p1 = result
+            .files
+            .iter()
+            .filter_map(|f| {
+                let out = String::from_utf8(f.output.clone()).unwrap();
+                Some(out.lines().find(|l| l.contains("p1:="))?.to_owned())
+            })
+            .collect();
+        let refused = result
+            .refusals()
+            .map(|r| (r.target.clone(), r.kind, r.message.clone()))
+            .collect();
+        (p1, refused)
+    })
 }
 
 const P1: &str = "  CONST robtarget p1:=[[-1702.5,-320,225],[0,0.707107,0.707107,0],[-1,0,-1,0],[400,9E9,9E9,9E9,9E9,9E9]];\n";

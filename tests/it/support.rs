@@ -68,3 +68,23 @@ pub(crate) fn texts(src: &[u8], fs: &[Option<NumField>]) -> String {
         .collect::<Vec<_>>()
         .join(",")
 }
+
+/// Runs `f` with the track setup of robot `r1` of a one-robot cell (track along world x, base at
+/// y = -1000 turned 90° about z, skid in `eax_a`, no kinematics) whose track deviates by `d` at
+/// every skid: a correction of known size for tests of what a transform does with it.
+pub(crate) fn with_constant_deviation<R>(
+    d: trackfix::geometry::Pose,
+    f: impl FnOnce(&trackfix::transform::TrackSetup) -> R,
+) -> R {
+    let cell = trackfix::transform::Cell::parse(
+        Path::new("cell.toml"),
+        "[robot.r1]\nprofile = \"track/profile.toml\"\n\
+         base = { x = 0, y = -1000, z = 0, rx = 0, ry = 0, rz = 90 }\n\
+         track_axis = [1, 0, 0]\nskid = \"eax_a\"\n",
+    )
+    .expect("the cell parses");
+    let robot = cell.robot("r1").expect("the cell has r1");
+    let dev =
+        move |_s: f64| -> Result<trackfix::geometry::Pose, trackfix::track::TrackError> { Ok(d) };
+    f(&trackfix::transform::TrackSetup::new(robot, &dev))
+}

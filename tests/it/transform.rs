@@ -18,7 +18,7 @@ use trackfix::track::simulate::{
 use trackfix::track::{Extrapolate, Knot, Profile};
 use trackfix::transform::{Cell, Direction, TrackSetup, apply, track_correction};
 
-use crate::support::{root, trackfix};
+use crate::support::{root, trackfix, with_constant_deviation};
 
 /// Every program among the samples (a KRL pair once, by its .src or lone file).
 fn sample_programs() -> Vec<String> {
@@ -2156,71 +2156,63 @@ fn correct_then_zero_stamped_gives_back_the_bytes() {
 #[test]
 fn correct_turns_an_offs_offset_with_its_target() {
     use trackfix::geometry::pose_xyz_deg;
-    let cell = Cell::parse(
-        Path::new("cell.toml"),
-        "[robot.r1]\nprofile = \"track/profile.toml\"\n\
-         base = { x = 0, y = -1000, z = 0, rx = 0, ry = 0, rz = 90 }\n\
-         track_axis = [1, 0, 0]\nskid = \"eax_a\"\n",
-    )
-    .unwrap();
-    let robot = cell.robot("r1").unwrap();
     let d = pose_xyz_deg(0.3, -0.2, 0.5, 0.2, -0.3, 0.5);
-    let dev = move |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(d) };
-    let setup = TrackSetup::new(robot, &dev);
-    let src = "MODULE M\n  PERS wobjdata w1:=[FALSE,TRUE,\"\",[[2100,-1350,480],[0.965925826,0,0,0.258819045]],[[0,0,0],[1,0,0,0]]];\n  \
-        CONST robtarget p1:=[[-1702.5,-320,225],[0,0.707107,0.707107,0],[-1,0,-1,0],[400,9E9,9E9,9E9,9E9,9E9]];\n  \
-        PROC main()\n    MoveL Offs(p1,10,20,300),v100,fine,tool0\\WObj:=w1;\n    \
-        MoveL RelTool(p1,10,20,300),v100,fine,tool0\\WObj:=w1;\n    MoveL p1,v100,fine,tool0\\WObj:=w1;\n  ENDPROC\nENDMODULE\n";
-    let parse = |text: &str| Program {
-        files: vec![trackfix::rapid::parse_file(
-            Path::new("m.mod"),
-            text.as_bytes().to_vec(),
-        )],
-    };
-    let run = |p: &Program, dir: Direction| {
-        let r = apply(p, track_correction(p, &setup, dir)).unwrap();
-        assert!(r.refusals().next().is_none());
-        String::from_utf8(r.files[0].output.clone()).unwrap()
-    };
-    let before = parse(src);
-    let corrected = run(&before, Direction::Correct);
-    let after = parse(&corrected);
-    let pose = |p: &Program| {
-        p.files[0]
-            .positions()
-            .find(|t| t.name.as_deref() == Some("p1"))
-            .unwrap()
-            .cartesian
-            .unwrap()
-            .pose()
-            .unwrap()
-    };
-    let g = pose(&after) * pose(&before).inverse();
-    assert!(g.rotation.angle().to_degrees() > 0.3, "{g:?}");
-    let offsets = |p: &Program| -> Vec<[f64; 3]> {
-        p.files[0]
-            .offsets
-            .iter()
-            .map(|c| c.delta.each_ref().map(|f| f.as_ref().unwrap().value()))
-            .collect()
-    };
-    let want = g.rotation * nalgebra::Vector3::new(10.0, 20.0, 300.0);
-    let got = offsets(&after);
-    // Three decimals written, and G read back from a target written to 3 and 6 decimals.
-    for (k, w) in [want.x, want.y, want.z].iter().enumerate() {
-        assert!(
-            (got[0][k] - w).abs() < 2e-3,
-            "{got:?} {want:?}\n{corrected}"
-        );
-    }
-    let moved =
-        (nalgebra::Vector3::from(got[0]) - nalgebra::Vector3::new(10.0, 20.0, 300.0)).norm();
-    assert!(moved > 1.0, "the offset turned: {got:?}");
-    assert_eq!(got[1], [10.0, 20.0, 300.0], "RelTool's stays");
-    // `zero` gives the offset back (the stamp, which the command line writes, gives its text
-    // back too: `correct_then_zero_stamped_gives_back_the_bytes`).
-    let zeroed = run(&after, Direction::Zero);
-    assert_eq!(offsets(&parse(&zeroed))[0], [10.0, 20.0, 300.0], "{zeroed}");
+    with_constant_deviation(d, |setup| {
+        let src = "MODULE M\n  PERS wobjdata w1:=[FALSE,TRUE,\"\",[[2100,-1350,480],[0.965925826,0,0,0.258819045]],[[0,0,0],[1,0,0,0]]];\n  \
+            CONST robtarget p1:=[[-1702.5,-320,225],[0,0.707107,0.707107,0],[-1,0,-1,0],[400,9E9,9E9,9E9,9E9,9E9]];\n  \
+            PROC main()\n    MoveL Offs(p1,10,20,300),v100,fine,tool0\\WObj:=w1;\n    \
+            MoveL RelTool(p1,10,20,300),v100,fine,tool0\\WObj:=w1;\n    MoveL p1,v100,fine,tool0\\WObj:=w1;\n  ENDPROC\nENDMODULE\n";
+        let parse = |text: &str| Program {
+            files: vec![trackfix::rapid::parse_file(
+                Path::new("m.mod"),
+                text.as_bytes().to_vec(),
+            )],
+        };
+        let run = |p: &Program, dir: Direction| {
+            let r = apply(p, track_correction(p, setup, dir)).unwrap();
+            assert!(r.refusals().next().is_none());
+            String::from_utf8(r.files[0].output.clone()).unwrap()
+        };
+        let before = parse(src);
+        let corrected = run(&before, Direction::Correct);
+        let after = parse(&corrected);
+        let pose = |p: &Program| {
+            p.files[0]
+                .positions()
+                .find(|t| t.name.as_deref() == Some("p1"))
+                .unwrap()
+                .cartesian
+                .unwrap()
+                .pose()
+                .unwrap()
+        };
+        let g = pose(&after) * pose(&before).inverse();
+        assert!(g.rotation.angle().to_degrees() > 0.3, "{g:?}");
+        let offsets = |p: &Program| -> Vec<[f64; 3]> {
+            p.files[0]
+                .offsets
+                .iter()
+                .map(|c| c.delta.each_ref().map(|f| f.as_ref().unwrap().value()))
+                .collect()
+        };
+        let want = g.rotation * nalgebra::Vector3::new(10.0, 20.0, 300.0);
+        let got = offsets(&after);
+        // Three decimals written, and G read back from a target written to 3 and 6 decimals.
+        for (k, w) in [want.x, want.y, want.z].iter().enumerate() {
+            assert!(
+                (got[0][k] - w).abs() < 2e-3,
+                "{got:?} {want:?}\n{corrected}"
+            );
+        }
+        let moved =
+            (nalgebra::Vector3::from(got[0]) - nalgebra::Vector3::new(10.0, 20.0, 300.0)).norm();
+        assert!(moved > 1.0, "the offset turned: {got:?}");
+        assert_eq!(got[1], [10.0, 20.0, 300.0], "RelTool's stays");
+        // `zero` gives the offset back (the stamp, which the command line writes, gives its text
+        // back too: `correct_then_zero_stamped_gives_back_the_bytes`).
+        let zeroed = run(&after, Direction::Zero);
+        assert_eq!(offsets(&parse(&zeroed))[0], [10.0, 20.0, 300.0], "{zeroed}");
+    })
 }
 
 /// An `Offs`/`RelTool` call's bases are the targets its reference names where it is written,
