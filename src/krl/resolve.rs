@@ -813,6 +813,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         }
         file.diagnostics.sort_by_key(|d| d.span.start);
     }
+    frames_of_unused_points(files, &fdats, &modules);
     // The positions are in their final order now (candidates promoted, sorted).
     let exported = modules.exported(files, facts);
     mark_offsets(files, facts, &modules, &exported);
@@ -858,6 +859,82 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     crate::resolve::mark_run_time(&mut shared, &NAMING);
     drop(shared);
     mark_assigned_data(files, facts);
+}
+
+/// A Cartesian point no motion uses takes the base and tool of its inline form's `FDAT`
+/// (`FP1` for `XP1`, found as a motion's `FDAT_ACT = FP1` finds it): the frames it was taught
+/// in, which the motion the inline form writes moves to it with (docs/design.md, "Points no
+/// motion uses"). Without them its base is unknown and the transforms refuse it. One note per
+/// file names them: what the transforms do with them rests on it.
+fn frames_of_unused_points(
+    files: &mut [ParsedFile],
+    fdats: &[HashMap<Name, Fdat>],
+    modules: &Modules,
+) {
+    let mut labels = FrameLabels::default();
+    let data = |n: Option<u32>| n.map_or(FrameRef::Unknown, FrameRef::Data);
+    for (fi, file) in files.iter_mut().enumerate() {
+        let Some(fdats) = fdats.get(modules.of(fi)).filter(|f| !f.is_empty()) else {
+            continue;
+        };
+        let mut taken: Vec<(String, String, crate::syntax::Span)> = Vec::new();
+        for i in 0..file.positions.len() {
+            let unused = file
+                .positions
+                .usage(i)
+                .is_some_and(|u| u.lines.is_empty() && u.wobj.is_none());
+            if !unused || !file.positions.has_cartesian(i) {
+                continue;
+            }
+            let Some(name) = file.positions.name(i) else {
+                continue;
+            };
+            // The inline form's names: `X` and `F` before the point's own.
+            let Some(own) = name
+                .strip_prefix(['X', 'x'])
+                .filter(|n| !n.is_empty() && !n.contains('['))
+            else {
+                continue;
+            };
+            let key = format!("F{}", own.to_ascii_uppercase());
+            let Some(f) = fdats.get(key.as_str()) else {
+                continue;
+            };
+            let Some(base) = labels.get(&data(f.base), false) else {
+                continue;
+            };
+            let tool = labels.get(&data(f.tool), true);
+            let (name, span) = (name.to_owned(), file.positions.span(i));
+            if let Some(u) = file.positions.usage_mut(i) {
+                u.record_frames(Some(&base), tool.as_ref(), f.tcp.unwrap_or(false));
+                taken.push((name, key, span.unwrap_or_default()));
+            }
+        }
+        let Some((first, first_fdat, span)) = taken.first() else {
+            continue;
+        };
+        let message = match taken.len() {
+            1 => format!(
+                "`{first}` is used by no motion: trackfix takes it in the base and tool of its FDAT `{first_fdat}`"
+            ),
+            n => format!(
+                "{n} points no motion uses ({}{}) are taken in the bases and tools of their FDATs (`{first_fdat}`, …)",
+                taken
+                    .iter()
+                    .take(4)
+                    .map(|(n, ..)| format!("`{n}`"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                if n > 4 { ", …" } else { "" }
+            ),
+        };
+        file.diagnostics.push(
+            Diagnostic::new(crate::syntax::Severity::Note, *span, message)
+                .with_hint("the frames their inline forms would move to them with; delete the points no program moves to")
+                .shaping_transforms(),
+        );
+        file.diagnostics.sort_by_key(|d| d.span.start);
+    }
 }
 
 /// Marks every target moved to with a base or tool the program assigns when it runs

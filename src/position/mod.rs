@@ -729,6 +729,24 @@ impl Usage {
         stationary: bool,
         line: usize,
     ) {
+        self.record_frames(wobj, tool, stationary);
+        // Lines of an input of at most 512 MiB fit 32 bits.
+        let line = u32::try_from(line).unwrap_or(u32::MAX);
+        if !self.lines.contains(&line) {
+            self.lines.push(line);
+        }
+    }
+
+    /// Records the frames a target is used with, as [`Usage::record_shared`] does, without a
+    /// line: for a target no motion uses whose frames the program states otherwise (a KRL
+    /// point's inline-form `FDAT`).
+    #[inline]
+    pub fn record_frames(
+        &mut self,
+        wobj: Option<&FrameName>,
+        tool: Option<&FrameName>,
+        stationary: bool,
+    ) {
         if let Some(w) = wobj {
             match &self.wobj {
                 None => self.wobj = Some(w.clone()),
@@ -757,11 +775,6 @@ impl Usage {
         }
         if stationary {
             self.rare.get_or_insert_with(Box::default).stationary_tool = true;
-        }
-        // Lines of an input of at most 512 MiB fit 32 bits.
-        let line = u32::try_from(line).unwrap_or(u32::MAX);
-        if !self.lines.contains(&line) {
-            self.lines.push(line);
         }
     }
 }

@@ -90,5 +90,7 @@ fn fuzz_checks_hold_on_every_file_as_bytes() {
     }
     assert!(pairs >= 7, "only {pairs} KRL regression pairs");
     assert!(clean >= 41, "only {clean} files read cleanly");
-    assert!(total.corrected > 450 && total.mirrored > 1000, "{total:?}");
+    // (A KRL point no motion uses is taken in its FDAT's base, which a file read alone often
+    // does not declare: such points are refused, where the default work object took them.)
+    assert!(total.corrected > 300 && total.mirrored > 1000, "{total:?}");
 }

@@ -1296,3 +1296,83 @@ fn krl_aggregates_in_a_src_are_held_to_their_fields() {
         ]
     );
 }
+
+/// A point no motion uses is taken in the base and tool of its inline form's FDAT (`FP9` for
+/// `XP9`): `correct` writes it byte for byte as it writes the same point a motion moves to after
+/// `FDAT_ACT=FP9`, and a note on the data list says so. A point without an FDAT stays refused:
+/// its base is unknown.
+#[test]
+fn a_point_no_motion_uses_is_taken_in_its_fdats_frames() {
+    use trackfix::transform::{Direction, RefusalKind, apply, track_correction};
+    let dat = "DEFDAT cell\n\
+        DECL E6POS XP9={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        DECL FDAT FP9={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE}\n\
+        DECL E6POS XLOOSE={X 410.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        ENDDAT\n";
+    let options = LoadOptions {
+        krl_config_dat: Some(sample("$config.dat")),
+        map_inputs: false,
+        ..LoadOptions::default()
+    };
+    let load = |src: &str| {
+        krl::load_program_from_sources(
+            vec![
+                (PathBuf::from("cell.src"), src.as_bytes().to_vec()),
+                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
+            ],
+            &options,
+        )
+        .unwrap()
+    };
+    let moved = load("DEF cell( )\n  FDAT_ACT=FP9\n  BAS(#CP_PARAMS,2)\n  LIN XP9\nEND\n");
+    let unused = load("DEF cell( )\nEND\n");
+    let dat_of = |p: &Program| {
+        p.files
+            .iter()
+            .position(|f| f.path.ends_with("cell.dat"))
+            .unwrap()
+    };
+    let point = |p: &Program, name: &str| {
+        p.files[dat_of(p)]
+            .positions()
+            .find(|t| t.name.as_deref() == Some(name))
+            .unwrap()
+    };
+    let (a, b) = (point(&moved, "XP9"), point(&unused, "XP9"));
+    assert_eq!(a.usage.wobj.as_deref(), Some("BASE_DATA[2]"));
+    assert_eq!(b.usage.wobj.as_deref(), Some("BASE_DATA[2]"));
+    assert_eq!(b.usage.tool.as_deref(), Some("TOOL_DATA[1]"));
+    assert!(b.usage.lines.is_empty() && !a.usage.lines.is_empty());
+    assert_eq!(point(&unused, "XLOOSE").usage.wobj, None);
+    let notes: Vec<_> = unused.files[dat_of(&unused)]
+        .diagnostics
+        .iter()
+        .filter(|d| d.shapes_transforms)
+        .collect();
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert_eq!(notes[0].severity, Severity::Note);
+    assert!(
+        notes[0].message.contains("`XP9`") && notes[0].message.contains("`FP9`"),
+        "{}",
+        notes[0].message
+    );
+    crate::support::with_constant_deviation(
+        trackfix::geometry::pose_xyz_deg(0.3, -0.2, 0.5, 0.02, -0.03, 0.05),
+        |setup| {
+            let run =
+                |p: &Program| apply(p, track_correction(p, setup, Direction::Correct)).unwrap();
+            let line = |r: &trackfix::transform::ProgramResult, p: &Program| {
+                let out = String::from_utf8(r.files[dat_of(p)].output.clone()).unwrap();
+                out.lines().find(|l| l.contains("XP9=")).unwrap().to_owned()
+            };
+            let (ra, rb) = (run(&moved), run(&unused));
+            assert_eq!(line(&rb, &unused), line(&ra, &moved));
+            assert!(!dat.contains(&line(&rb, &unused)), "XP9 is corrected");
+            let refused: Vec<_> = rb.refusals().map(|r| (r.target.clone(), r.kind)).collect();
+            assert_eq!(
+                refused,
+                [("XLOOSE".to_owned(), RefusalKind::UnresolvedWorkObject)]
+            );
+        },
+    );
+}

@@ -997,8 +997,10 @@ ENDDAT\n",
             .map(str::to_owned)
             .collect()
     };
-    // Each module's XP1 with its own FDAT; alpha's, which no motion of alpha uses, unused.
-    assert_eq!(bases("alpha.dat", "XP1"), Vec::<String>::new());
+    // Each module's XP1 with its own FDAT; alpha's, which no motion uses (beta's motion to
+    // XP1 moves to beta's), in the base of alpha's FP1, its inline form's.
+    assert_eq!(bases("alpha.dat", "XP1"), ["BASE_DATA[1]"]);
+    assert!(of("alpha.dat", "XP1").usage.lines.is_empty());
     assert_eq!(bases("alpha.dat", "XOWN"), ["BASE_DATA[1]"]);
     assert_eq!(bases("beta.dat", "XP1"), ["BASE_DATA[2]"]);
     // Each module's own setfr; delta's GLOBAL DEF from gamma.
