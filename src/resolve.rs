@@ -772,6 +772,41 @@ impl<'f, 'a> Binder<'f, 'a> {
         lookup_raw(naming, index, &exported, (m, modules), raw, buf, out);
     }
 
+    /// The targets the calls bound so far pass to parameter `k` of routine `routine` of file
+    /// `m`: directly, or through a parameter of the caller passed on (followed [`CALL_DEPTH`]
+    /// calls back), added to `out`. What a reference to the parameter inside the routine may
+    /// stand for.
+    pub(crate) fn targets_bound_to(&self, (m, routine, k): ParamAt, out: &mut Vec<TargetAt>) {
+        let mut params: Vec<ParamAt> = vec![(m, routine, k)];
+        let mut from = 0;
+        for _ in 0..CALL_DEPTH {
+            let next: Vec<ParamAt> = self
+                .param_edges
+                .iter()
+                .filter(|(p, tos)| {
+                    !params.contains(p)
+                        && tos
+                            .iter()
+                            .any(|t| params.get(from..).is_some_and(|new| new.contains(t)))
+                })
+                .map(|(&p, _)| p)
+                .collect();
+            if next.is_empty() {
+                break;
+            }
+            from = params.len();
+            params.extend(next);
+        }
+        out.extend(
+            self.bindings
+                .iter()
+                .filter(|(_, to, _)| params.contains(to))
+                .map(|&(t, ..)| t),
+        );
+        out.sort_unstable();
+        out.dedup();
+    }
+
     /// Binds a computed value given to parameter `param` (its name in file `m`'s source) of
     /// routine `routine` on `line` (RAPID `pOut := CRobT();`, KRL `pOut = $POS_ACT`): a use of
     /// the parameter with that value, which [`Binder::finish`] hands on to the targets the

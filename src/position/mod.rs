@@ -1296,8 +1296,8 @@ pub struct OffsetCall {
     /// The declared targets the offset is taken from, as (file of the program, index in its
     /// positions): those the first argument's reference names where the call is written
     /// (`p10` in `Offs(p10, …)`, `pBed` in `Offs(RelTool(pBed, …), …)`, every element of
-    /// `pGrid` in `Offs(pGrid{r,c}, …)`), as a motion there would reach them. Empty for a
-    /// routine's parameter or a computed value.
+    /// `pGrid` in `Offs(pGrid{r,c}, …)`), as a motion there would reach them; for a routine's
+    /// parameter, the targets the calls pass there. Empty for a computed value.
     pub bases: Vec<(usize, usize)>,
 }
 

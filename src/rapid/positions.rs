@@ -1474,33 +1474,6 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         })
         .collect();
     let mut binder = crate::resolve::Binder::new(&mut facts, &NAMING);
-    // Each offset call's bases: the targets its reference names where the call is written. A
-    // routine's parameter names none offline.
-    let mut offset_bases: Vec<Vec<Vec<(usize, usize)>>> = Vec::with_capacity(rest.len());
-    for (m, (refs, r)) in offset_refs.iter().zip(&rest).enumerate() {
-        let (src, routines) = (r.6, &r.4);
-        let mut bases = Vec::with_capacity(refs.len());
-        for &(routine, reference) in refs {
-            let mut found = Vec::new();
-            if let Some(raw) = reference.map(|sp| sp.slice(src)) {
-                let name = raw
-                    .split(|&b| b == b'{')
-                    .next()
-                    .unwrap_or(raw)
-                    .trim_ascii_end();
-                let a_parameter = routine.and_then(|rt| routines.get(rt)).is_some_and(|rt| {
-                    rt.params
-                        .iter()
-                        .any(|p| NameKey(p.slice(src)) == NameKey(name))
-                });
-                if !a_parameter {
-                    binder.targets_named(m, raw, &mut found);
-                }
-            }
-            bases.push(found);
-        }
-        offset_bases.push(bases);
-    }
     // Two modules may each declare a `LOCAL` work object of one name, one holding the tool and
     // the other not: such a module's motions see its own (a map of their own, in the rare
     // task that has one).
@@ -1618,6 +1591,37 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                 ));
             }
         }
+    }
+    // Each offset call's bases: the targets its reference names where the call is written, or,
+    // for a parameter of its routine, those the calls pass there.
+    let mut offset_bases: Vec<Vec<Vec<(usize, usize)>>> = Vec::with_capacity(rest.len());
+    for (m, (refs, r)) in offset_refs.iter().zip(&rest).enumerate() {
+        let (src, routines) = (r.6, &r.4);
+        let mut bases = Vec::with_capacity(refs.len());
+        for &(routine, reference) in refs {
+            let mut found = Vec::new();
+            if let Some(raw) = reference.map(|sp| sp.slice(src)) {
+                let name = raw
+                    .split(|&b| b == b'{')
+                    .next()
+                    .unwrap_or(raw)
+                    .trim_ascii_end();
+                let parameter = routine.and_then(|rt| {
+                    let k = routines
+                        .get(rt)?
+                        .params
+                        .iter()
+                        .position(|p| NameKey(p.slice(src)) == NameKey(name))?;
+                    Some((m, rt, k))
+                });
+                match parameter {
+                    Some(at) => binder.targets_bound_to(at, &mut found),
+                    None => binder.targets_named(m, raw, &mut found),
+                }
+            }
+            bases.push(found);
+        }
+        offset_bases.push(bases);
     }
     // A computed value given to a parameter: a use of it with that value, which the binder
     // hands on to the targets the routine's calls pass there.

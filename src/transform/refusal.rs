@@ -22,9 +22,9 @@ pub enum RefusalKind {
     /// The target is used with two different work objects / bases.
     #[value(alias = "two-wobjs")]
     TwoWorkObjects,
-    /// An `Offs` offset of an array's elements through a computed index (`Offs(pGrid{r,c},
-    /// 0,0,100)`) whose elements the transform moves by different turns: one written offset
-    /// cannot follow each.
+    /// An `Offs` offset that stands for several targets (an array's elements through a computed
+    /// index, a routine's parameter) whose corrections turn it apart: one written offset cannot
+    /// follow each.
     SharedOffset,
     /// The work object is moved by a mechanical unit (`ufprog FALSE`).
     MovingWorkObject,

@@ -391,7 +391,8 @@ impl TargetRule for TrackRule<'_, '_> {
                 None,
             )))
         };
-        let mut written: Option<Vec<Edit>> = None;
+        // The offset each base turns it to.
+        let mut turned_to: Vec<Vector3<f64>> = Vec::new();
         for (file, p) in offset_bases(scope.program, call, self.reading()) {
             let at = Scope {
                 program: scope.program,
@@ -431,34 +432,43 @@ impl TargetRule for TrackRule<'_, '_> {
                     "write the object-frame offsets as numbers",
                 );
             }
-            let v = g.rotation
-                * Vector3::new(
-                    d[0].unwrap_or_default(),
-                    d[1].unwrap_or_default(),
-                    d[2].unwrap_or_default(),
-                );
-            let edits: Vec<Edit> = call
-                .delta
-                .iter()
-                .zip([v.x, v.y, v.z])
-                .filter_map(|(f, n)| number_edit(f, n, MM_DECIMALS))
-                .collect();
-            match &written {
-                None => written = Some(edits),
-                Some(first) if *first == edits => {}
-                Some(_) => {
-                    return refuse(
-                        RefusalKind::SharedOffset,
-                        format!(
-                            "the elements of `{}` are corrected by different turns: one Offs offset cannot follow each",
-                            call.target
-                        ),
-                        "write the offset point of each element as a target of its own",
-                    );
-                }
-            }
+            turned_to.push(
+                g.rotation
+                    * Vector3::new(
+                        d[0].unwrap_or_default(),
+                        d[1].unwrap_or_default(),
+                        d[2].unwrap_or_default(),
+                    ),
+            );
         }
-        Ok(written.unwrap_or_default())
+        let Some(&first) = turned_to.first() else {
+            return Ok(Vec::new());
+        };
+        // The bases of an array element through a computed index, or of a routine's parameter,
+        // are several targets: one written offset follows them all when their turns agree
+        // within the written precision, and is written at the middle of the range.
+        let (lo, hi) = turned_to
+            .iter()
+            .fold((first, first), |(lo, hi), v| (lo.inf(v), hi.sup(v)));
+        let spread = (hi - lo).max();
+        if spread > 10f64.powi(-(MM_DECIMALS as i32)) {
+            return refuse(
+                RefusalKind::SharedOffset,
+                format!(
+                    "the {} targets `{}` stands for are corrected by different turns, which move its offset apart by up to {spread:.3} mm: one Offs offset cannot follow each",
+                    turned_to.len(),
+                    call.target
+                ),
+                "write the offset point of each as a target of its own",
+            );
+        }
+        let v = (lo + hi) / 2.0;
+        Ok(call
+            .delta
+            .iter()
+            .zip([v.x, v.y, v.z])
+            .filter_map(|(f, n)| number_edit(f, n, MM_DECIMALS))
+            .collect())
     }
 
     fn uncertainty(&self, frame: &TrackFrame, skid: Option<f64>, new: &Pose) -> Option<f64> {

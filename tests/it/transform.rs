@@ -2160,8 +2160,11 @@ fn correct_turns_an_offs_offset_with_its_target() {
     with_constant_deviation(d, |setup| {
         let src = "MODULE M\n  PERS wobjdata w1:=[FALSE,TRUE,\"\",[[2100,-1350,480],[0.965925826,0,0,0.258819045]],[[0,0,0],[1,0,0,0]]];\n  \
             CONST robtarget p1:=[[-1702.5,-320,225],[0,0.707107,0.707107,0],[-1,0,-1,0],[400,9E9,9E9,9E9,9E9,9E9]];\n  \
+            CONST robtarget p3:=[[-1102.5,-320,225],[0,0.707107,0.707107,0],[-1,0,-1,0],[1000,9E9,9E9,9E9,9E9,9E9]];\n  \
             PROC main()\n    MoveL Offs(p1,10,20,300),v100,fine,tool0\\WObj:=w1;\n    \
-            MoveL RelTool(p1,10,20,300),v100,fine,tool0\\WObj:=w1;\n    MoveL p1,v100,fine,tool0\\WObj:=w1;\n  ENDPROC\nENDMODULE\n";
+            MoveL RelTool(p1,10,20,300),v100,fine,tool0\\WObj:=w1;\n    MoveL p1,v100,fine,tool0\\WObj:=w1;\n    \
+            Weld p1;\n    Weld p3;\n  ENDPROC\n  \
+            PROC Weld(robtarget p)\n    MoveL Offs(p,10,20,300),v100,fine,tool0\\WObj:=w1;\n  ENDPROC\nENDMODULE\n";
         let parse = |text: &str| Program {
             files: vec![trackfix::rapid::parse_file(
                 Path::new("m.mod"),
@@ -2208,6 +2211,9 @@ fn correct_turns_an_offs_offset_with_its_target() {
             (nalgebra::Vector3::from(got[0]) - nalgebra::Vector3::new(10.0, 20.0, 300.0)).norm();
         assert!(moved > 1.0, "the offset turned: {got:?}");
         assert_eq!(got[1], [10.0, 20.0, 300.0], "RelTool's stays");
+        // `Weld`'s offset stands for p1 and p3, at two skids of a track whose deviation does
+        // not turn along it: both turn it alike, and it is written as for p1 alone.
+        assert_eq!(got[2], got[0], "{corrected}");
         // `zero` gives the offset back (the stamp, which the command line writes, gives its text
         // back too: `correct_then_zero_stamped_gives_back_the_bytes`).
         let zeroed = run(&after, Direction::Zero);
@@ -2218,15 +2224,15 @@ fn correct_turns_an_offs_offset_with_its_target() {
 /// An `Offs`/`RelTool` call's bases are the targets its reference names where it is written,
 /// as a motion there reaches them: a module's own `LOCAL` target before another module's of the
 /// same name, another module's exported one, every element of an array indexed by a computed
-/// value, the target inside a nested call; a routine's parameter names none (its targets are
-/// the callers').
+/// value, the target inside a nested call; a routine's parameter stands for the targets the
+/// calls pass there.
 #[test]
 fn an_offset_calls_bases_are_the_targets_its_reference_means_there() {
     let t = |x: u32| format!("[[{x},0,500],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]");
     let a = format!(
         "MODULE A\n  LOCAL CONST robtarget p1:={};\n  PROC a()\n    \
          MoveL Offs(p1,0,0,10),v100,fine,tool0;\n    \
-         MoveL Offs(RelTool(p2,0,0,5),0,0,10),v100,fine,tool0;\n  ENDPROC\n  \
+         MoveL Offs(RelTool(p2,0,0,5),0,0,10),v100,fine,tool0;\n    b p1;\n  ENDPROC\n  \
          PROC b(robtarget p2)\n    MoveL Offs(p2,0,0,5),v100,fine,tool0;\n  ENDPROC\nENDMODULE\n",
         t(1)
     );
@@ -2275,7 +2281,7 @@ fn an_offset_calls_bases_are_the_targets_its_reference_means_there() {
             ("p1".to_owned(), vec![at(1.0)]),
             ("RelTool(p2,0,0,5)".to_owned(), vec![at(3.0)]),
             ("p2".to_owned(), vec![at(3.0)]),
-            ("p2".to_owned(), vec![]),
+            ("p2".to_owned(), vec![at(1.0)]),
         ]
     );
     assert_eq!(
