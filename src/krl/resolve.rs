@@ -1173,8 +1173,16 @@ fn shared_facts<'a>(
 
 #[cfg(test)]
 mod tests {
-    use crate::position::FrameKind;
+    use crate::position::{FrameKind, ParsedFile};
     use std::path::Path;
+
+    /// Each position's base and tool, as resolved.
+    fn bases_and_tools(f: &ParsedFile) -> Vec<(Option<&str>, Option<&str>)> {
+        f.positions
+            .usages()
+            .map(|u| (u.wobj.as_deref(), u.tool.as_deref()))
+            .collect()
+    }
 
     #[test]
     fn branches_that_disagree_leave_the_base_unresolved() {
@@ -1187,11 +1195,7 @@ mod tests {
   SWITCH N\n  CASE 1\n    $BASE=BASE_DATA[4]\n  DEFAULT\n    BAS(#BASE,4)\n  ENDSWITCH\n  LIN XD\n\
 END\n";
         let f = crate::krl::parse_file(Path::new("b.src"), src.to_vec());
-        let usage: Vec<_> = f
-            .positions
-            .usages()
-            .map(|u| (u.wobj.as_deref(), u.tool.as_deref()))
-            .collect();
+        let usage = bases_and_tools(&f);
         assert_eq!(
             usage,
             [
@@ -1227,11 +1231,7 @@ END\n";
         let src = b"DEF s()\n  DECL E6POS XA={X 1,Y 2,Z 3}\n  DECL E6POS XB={X 1,Y 2,Z 3}\n  DECL E6POS XC={X 1,Y 2,Z 3}\n  DECL E6POS XD={X 1,Y 2,Z 3}\n  $TOOL=TOOL_DATA[1]\n  $BASE=BASE_DATA[2]\n  SPLINE WITH $BASE = BASE_DATA[1], $TOOL = TOOL_DATA[3]\n    SPL XA\n    SLIN XB WITH $BASE = BASE_DATA[4]\n  ENDSPLINE\n  PTP_SPLINE\n    SPTP XC\n  ENDSPLINE\n  LIN XD\nEND\n";
         let f = crate::krl::parse_file(Path::new("s.src"), src.to_vec());
         assert!(f.diagnostics.is_empty(), "{:?}", f.diagnostics);
-        let usage: Vec<_> = f
-            .positions
-            .usages()
-            .map(|u| (u.wobj.as_deref(), u.tool.as_deref()))
-            .collect();
+        let usage = bases_and_tools(&f);
         assert_eq!(
             usage,
             [

@@ -1007,6 +1007,16 @@ mod tests {
     const MODULE: &str = "MODULE m\n  PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1500,-400,600],[0.996195,0,0,0.087156]],[[100,20,0],[0.999848,0,0.017452,0]]];\n  PERS tooldata tGun:=[TRUE,[[12.5,-3.2,412.8],[0.965926,0,0.258819,0]],[48.5,[0,0,180],[1,0,0,0],0.9,1.1,0.6]];\n  CONST robtarget p1:=[[310.5,-120.25,80],[0.183013,0.683013,0.683013,-0.183013],[0,-1,2,1],[2500,9E9,9E9,9E9,9E9,9E9]];\n  CONST jointtarget jHome:=[[10,-20,30,40,50,-60],[2500,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveAbsJ jHome, v1000, fine, tGun;\n    MoveL Offs(p1,10,-20.5,30), v1000, fine, tGun\\WObj:=wCar;\n    MoveL RelTool(p1,5,6,-7\\Rx:=1\\Ry:=2\\Rz:=3), v1000, fine, tGun\\WObj:=wCar;\n  ENDPROC\nENDMODULE\n";
 
     /// The pose target `name` of `f` is written with.
+    /// The pose of the frame `name` declares in `f`.
+    fn frame(f: &ParsedFile, name: &str) -> Pose {
+        f.frames
+            .iter()
+            .find(|d| d.name == name)
+            .unwrap()
+            .pose()
+            .unwrap()
+    }
+
     fn pose_of(f: &ParsedFile, name: &str) -> Pose {
         f.positions()
             .find(|p| p.name.as_deref() == Some(name))
@@ -1089,14 +1099,6 @@ mod tests {
                 f1.diagnostics
             );
             assert_eq!(f1.frame_values.len(), own + 1, "{mirrored}");
-            let frame = |f: &ParsedFile, name: &str| {
-                f.frames
-                    .iter()
-                    .find(|d| d.name == name)
-                    .unwrap()
-                    .pose()
-                    .unwrap()
-            };
             let (want, _) = refl.frame(&frame(f0, "wCar"));
             let got = frame(f1, "wCar");
             assert!(
@@ -1128,14 +1130,6 @@ mod tests {
         let text = String::from_utf8(out.files[0].output.clone()).unwrap();
         let p1 = parse(&text);
         let (f0, f1) = (&p0.files[0], &p1.files[0]);
-        let frame = |f: &ParsedFile, name: &str| {
-            f.frames
-                .iter()
-                .find(|d| d.name == name)
-                .unwrap()
-                .pose()
-                .unwrap()
-        };
         let wobj = |f: &ParsedFile| frame(f, "wCar");
         let tool = |f: &ParsedFile| frame(f, "tGun");
         let target = |f: &ParsedFile| pose_of(f, "p1");
