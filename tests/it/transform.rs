@@ -2233,13 +2233,14 @@ fn an_offset_calls_bases_are_the_targets_its_reference_means_there() {
         "MODULE A\n  LOCAL CONST robtarget p1:={};\n  PROC a()\n    \
          MoveL Offs(p1,0,0,10),v100,fine,tool0;\n    \
          MoveL Offs(RelTool(p2,0,0,5),0,0,10),v100,fine,tool0;\n    b p1;\n  ENDPROC\n  \
-         PROC b(robtarget p2)\n    MoveL Offs(p2,0,0,5),v100,fine,tool0;\n  ENDPROC\nENDMODULE\n",
+         PROC b(robtarget p2)\n    MoveL Offs(p2,0,0,5),v100,fine,tool0;\n  ENDPROC\n  \
+         PROC relay(robtarget q)\n    b q;\n  ENDPROC\nENDMODULE\n",
         t(1)
     );
     let b = format!(
         "MODULE B\n  LOCAL CONST robtarget p1:={};\n  CONST robtarget p2:={};\n  \
          CONST robtarget pGrid{{2}}:=[{},{}];\n  PROC c()\n    \
-         MoveL Offs(p1,0,0,10),v100,fine,tool0;\n    \
+         MoveL Offs(p1,0,0,10),v100,fine,tool0;\n    relay p2;\n    \
          FOR i FROM 1 TO 2 DO\n      MoveL Offs(pGrid{{i}},0,0,10),v100,fine,tool0;\n    ENDFOR\n  \
          ENDPROC\nENDMODULE\n",
         t(2),
@@ -2281,7 +2282,8 @@ fn an_offset_calls_bases_are_the_targets_its_reference_means_there() {
             ("p1".to_owned(), vec![at(1.0)]),
             ("RelTool(p2,0,0,5)".to_owned(), vec![at(3.0)]),
             ("p2".to_owned(), vec![at(3.0)]),
-            ("p2".to_owned(), vec![at(1.0)]),
+            // `b p1` in `a`, and B's `relay p2` on through `relay`'s `b q`.
+            ("p2".to_owned(), vec![at(1.0), at(3.0)]),
         ]
     );
     assert_eq!(
