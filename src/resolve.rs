@@ -756,7 +756,7 @@ impl<'f, 'a> Binder<'f, 'a> {
 
     /// The targets a reference written as `raw` in file `m` names, as a motion of that file
     /// reaches them (its module's own, else those other modules see; every element of an
-    /// array indexed by a computed value), added to `out`. A routine's parameter of that name
+    /// array indexed by a computed value; what a copy of that name copies), added to `out`. A routine's parameter of that name
     /// is the caller's to look past.
     pub(crate) fn targets_named(&mut self, m: usize, raw: &[u8], out: &mut Vec<TargetAt>) {
         let Binder {
@@ -765,11 +765,17 @@ impl<'f, 'a> Binder<'f, 'a> {
             naming,
             index,
             buf,
+            copies,
             ..
         } = self;
         let files: &[FileFacts<'a>] = files;
         let exported = |(m, i): TargetAt| files.get(m).is_some_and(|f| f.exports(i));
         lookup_raw(naming, index, &exported, (m, modules), raw, buf, out);
+        // A copy (`pv := p10;`, a function's `RETURN p10;`) reaches what it copies.
+        if !copies.is_empty() {
+            let module = modules.get(m).copied().unwrap_or(m);
+            copied_reach(copies, module, naming, fold_into(buf, raw), out);
+        }
     }
 
     /// The targets the calls bound so far pass to parameter `k` of routine `routine` of file

@@ -813,7 +813,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
         }
         file.diagnostics.sort_by_key(|d| d.span.start);
     }
-    frames_of_unused_points(files, &fdats, &modules);
+    frames_of_unused_points(files, facts, &fdats, &modules);
     // The positions are in their final order now (candidates promoted, sorted).
     let exported = modules.exported(files, facts);
     mark_offsets(files, facts, &modules, &exported);
@@ -861,23 +861,27 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     mark_assigned_data(files, facts);
 }
 
-/// A Cartesian point no motion uses takes the base and tool of its inline form's `FDAT`
-/// (`FP1` for `XP1`, found as a motion's `FDAT_ACT = FP1` finds it): the frames it was taught
-/// in, which the motion the inline form writes moves to it with (docs/design.md, "Points no
-/// motion uses"). Without them its base is unknown and the transforms refuse it. One note per
-/// file names them: what the transforms do with them rests on it.
+/// A Cartesian point the program never names again takes the base and tool of its inline
+/// form's `FDAT` (`FP1` for `XP1`, found as a motion's `FDAT_ACT = FP1` finds it): the frames it
+/// was taught in, which the motion the inline form writes moves to it with (docs/design.md,
+/// "Points no motion uses"). Without them its base is unknown and the transforms refuse it. A
+/// point named anywhere but its declaration (passed to a subroutine, copied, read, or only in a
+/// comment) is not taken: a motion trackfix does not follow may reach it. One note per file
+/// names them: what the transforms do with them rests on it.
 fn frames_of_unused_points(
     files: &mut [ParsedFile],
+    facts: &[Facts],
     fdats: &[HashMap<Name, Fdat>],
     modules: &Modules,
 ) {
-    let mut labels = FrameLabels::default();
-    let data = |n: Option<u32>| n.map_or(FrameRef::Unknown, FrameRef::Data);
-    for (fi, file) in files.iter_mut().enumerate() {
+    // (file, index, the point's name upper-cased, its FDAT's name): the points no motion
+    // uses that have an FDAT of their name.
+    let mut candidates: Vec<(usize, usize, String, String)> = Vec::new();
+    let exported = modules.exported(files, facts);
+    for (fi, file) in files.iter().enumerate() {
         let Some(fdats) = fdats.get(modules.of(fi)).filter(|f| !f.is_empty()) else {
             continue;
         };
-        let mut taken: Vec<(String, String, crate::syntax::Span)> = Vec::new();
         for i in 0..file.positions.len() {
             let unused = file
                 .positions
@@ -897,28 +901,68 @@ fn frames_of_unused_points(
                 continue;
             };
             let key = format!("F{}", own.to_ascii_uppercase());
-            let Some(f) = fdats.get(key.as_str()) else {
-                continue;
-            };
-            let Some(base) = labels.get(&data(f.base), false) else {
-                continue;
-            };
-            let tool = labels.get(&data(f.tool), true);
-            let (name, span) = (name.to_owned(), file.positions.span(i));
-            if let Some(u) = file.positions.usage_mut(i) {
-                u.record_frames(Some(&base), tool.as_ref(), f.tcp.unwrap_or(false));
-                taken.push((name, key, span.unwrap_or_default()));
+            if fdats.contains_key(key.as_str()) {
+                candidates.push((fi, i, name.to_ascii_uppercase(), key));
             }
         }
+    }
+    if candidates.is_empty() {
+        return;
+    }
+    // Per file, how often it names each.
+    let mentions: Vec<HashMap<&str, usize>> = files
+        .iter()
+        .map(|f| word_counts(&f.source, candidates.iter().map(|c| c.2.as_str())))
+        .collect();
+    let mut labels = FrameLabels::default();
+    let data = |n: Option<u32>| n.map_or(FrameRef::Unknown, FrameRef::Data);
+    // Per file: (point, FDAT, span) of each point taken.
+    let mut taken: Vec<Vec<(String, String, crate::syntax::Span)>> = vec![Vec::new(); files.len()];
+    for (fi, i, name, key) in &candidates {
+        let (fi, i) = (*fi, *i);
+        // Named where it is seen: its module's files, and every file for a global point.
+        let global = exported
+            .get(fi)
+            .is_none_or(|e| e.as_ref().is_none_or(|e| e.get(i).copied().unwrap_or(true)));
+        let named: usize = mentions
+            .iter()
+            .enumerate()
+            .filter(|&(fj, _)| global || modules.of(fj) == modules.of(fi))
+            .filter_map(|(_, m)| m.get(name.as_str()))
+            .sum();
+        // Its declaration is the one mention a point no one names has.
+        if named > 1 {
+            continue;
+        }
+        let (Some(file), Some(f)) = (
+            files.get_mut(fi),
+            fdats.get(modules.of(fi)).and_then(|f| f.get(key.as_str())),
+        ) else {
+            continue;
+        };
+        let Some(base) = labels.get(&data(f.base), false) else {
+            continue;
+        };
+        let tool = labels.get(&data(f.tool), true);
+        let (label, span) = (
+            file.positions.name(i).unwrap_or_default().to_owned(),
+            file.positions.span(i),
+        );
+        if let (Some(u), Some(list)) = (file.positions.usage_mut(i), taken.get_mut(fi)) {
+            u.record_frames(Some(&base), tool.as_ref(), f.tcp.unwrap_or(false));
+            list.push((label, key.clone(), span.unwrap_or_default()));
+        }
+    }
+    for (file, taken) in files.iter_mut().zip(taken) {
         let Some((first, first_fdat, span)) = taken.first() else {
             continue;
         };
         let message = match taken.len() {
             1 => format!(
-                "`{first}` is used by no motion: trackfix takes it in the base and tool of its FDAT `{first_fdat}`"
+                "`{first}` is named by no motion nor any other statement: trackfix takes it in the base and tool of its FDAT `{first_fdat}`"
             ),
             n => format!(
-                "{n} points no motion uses ({}{}) are taken in the bases and tools of their FDATs (`{first_fdat}`, …)",
+                "{n} points named by no motion nor any other statement ({}{}) are taken in the bases and tools of their FDATs (`{first_fdat}`, …)",
                 taken
                     .iter()
                     .take(4)
@@ -935,6 +979,40 @@ fn frames_of_unused_points(
         );
         file.diagnostics.sort_by_key(|d| d.span.start);
     }
+}
+
+/// How often each of `names` (upper-case) stands as a word (a KRL name: letters, digits, `_`,
+/// `$`) in `src`, compared without case; comments and strings count too.
+fn word_counts<'n>(src: &[u8], names: impl Iterator<Item = &'n str>) -> HashMap<&'n str, usize> {
+    let mut counts: HashMap<&'n str, usize> = names.map(|n| (n, 0)).collect();
+    let longest = counts.keys().map(|n| n.len()).max().unwrap_or(0);
+    let is_word = |b: u8| b.is_ascii_alphanumeric() || b == b'_' || b == b'$';
+    let mut word = String::new();
+    let mut k = 0;
+    while k < src.len() {
+        if !src.get(k).copied().is_some_and(is_word) {
+            k += 1;
+            continue;
+        }
+        let start = k;
+        while src.get(k).copied().is_some_and(is_word) {
+            k += 1;
+        }
+        if k - start > longest {
+            continue;
+        }
+        word.clear();
+        word.extend(
+            src.get(start..k)
+                .unwrap_or_default()
+                .iter()
+                .map(|b| char::from(b.to_ascii_uppercase())),
+        );
+        if let Some(c) = counts.get_mut(word.as_str()) {
+            *c += 1;
+        }
+    }
+    counts
 }
 
 /// Marks every target moved to with a base or tool the program assigns when it runs

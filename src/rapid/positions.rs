@@ -1335,8 +1335,9 @@ impl<'l> Extractor<'l> {
 
 /// The reference an `Offs`/`RelTool` call's offset is taken from, given the call's first
 /// argument: the argument when it is a name (`p10`, `pGrid{r,c}`), else the first argument of
-/// the call written there (`Offs(RelTool(pBed, …), …)`), and so on in; `None` for anything
-/// else (an expression the program computes).
+/// the call written there (`Offs(RelTool(pBed, …), …)`), and so on in; a function called
+/// without one (`Offs(getP(), …)`) by its name, which reaches what the function returns; `None`
+/// for anything else (an expression the program computes).
 fn offset_reference(arena: &Arena, first: Option<&u32>) -> Option<Span> {
     let mut at = *first?;
     loop {
@@ -1345,10 +1346,14 @@ fn offset_reference(arena: &Arena, first: Option<&u32>) -> Option<Span> {
             ExprKind::Ident | ExprKind::Access => return Some(n.span()),
             // A child's index is past its parent's: the walk ends.
             ExprKind::Call => {
-                at = arena
+                match arena
                     .children(at)
                     .filter(|&a| arena.get(a).is_some_and(|arg| !arg.switch))
-                    .find_map(|a| arena.arg_value(a))?;
+                    .find_map(|a| arena.arg_value(a))
+                {
+                    Some(first) => at = first,
+                    None => return Some(n.name_span()),
+                }
             }
             _ => return None,
         }
@@ -1532,13 +1537,28 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                     no_axes_offset.insert((m, u.line));
                 }
             }
+            // A frame or tool named by a parameter of the motion's routine is the caller's: no
+            // declaration of that name is it (the motion's targets are refused as used with
+            // a frame that cannot be resolved).
+            let params = u
+                .routine
+                .and_then(|rt| r.4.get(rt.get() as usize - 1))
+                .map_or(&[][..], |rt| rt.params.as_slice());
+            let a_parameter = |text: &[u8]| {
+                !params.is_empty()
+                    && params
+                        .iter()
+                        .any(|p| NameKey(p.slice(src)) == NameKey(text))
+            };
             let tool = match u.tool {
-                Some(sp) => Some(frame_texts.get(trim_latin1(sp.span().slice(src)))),
+                Some(sp) => Some(trim_latin1(sp.span().slice(src))),
                 None => kinds.tool_index(&call, call_args, src).and_then(|i| {
                     let sp = call_args.get(i).copied().flatten()?;
-                    Some(frame_texts.get(sp.span().slice(src)))
+                    Some(sp.span().slice(src))
                 }),
             };
+            let tool_named = tool.is_some();
+            let tool = tool.filter(|t| !a_parameter(t)).map(|t| frame_texts.get(t));
             // A motion without `\WObj` moves in `wobj0` (asked only then: most name theirs).
             let motion = || {
                 MOTION_PREFIXES
@@ -1546,8 +1566,10 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                     .any(|p| call.starts_with(p.as_bytes()))
             };
             let wobj = match u.wobj {
-                Some(sp) => Some(frame_texts.get(trim_latin1(sp.span().slice(src)))),
-                None => (tool.is_some() || motion()).then(|| wobj0.clone()),
+                Some(sp) => Some(trim_latin1(sp.span().slice(src)))
+                    .filter(|w| !a_parameter(w))
+                    .map(|w| frame_texts.get(w)),
+                None => (tool_named || motion()).then(|| wobj0.clone()),
             };
             let stationary = wobj.as_ref().is_some_and(|w| w.robhold);
             let call_use = crate::resolve::Use {

@@ -35,6 +35,9 @@ pub struct FileSummary {
     /// Targets whose correction is smaller than its own expanded uncertainty, by name (or
     /// `line N`): the correction is within the doubt of the measurement.
     pub below_uncertainty: Vec<String>,
+    /// The output differs from the input: with no target changed, offsets or frames were
+    /// rewritten.
+    pub edited: bool,
 }
 
 impl FileSummary {
@@ -80,6 +83,7 @@ impl FileSummary {
             is_move,
             largest_uncertainty_mm,
             below_uncertainty,
+            edited: file.changed(),
         }
     }
 }
@@ -105,7 +109,12 @@ impl fmt::Display for FileSummary {
             n => format!(", {n} refused (left unchanged)"),
         };
         if self.changed == 0 {
-            return write!(f, "{}: unchanged{refused}{target}", self.path.display());
+            let what = if self.edited {
+                "no target changed, offsets or frames rewritten"
+            } else {
+                "unchanged"
+            };
+            return write!(f, "{}: {what}{refused}{target}", self.path.display());
         }
         let skid = match self.skid_range {
             Some((lo, hi)) => format!(", skid {}…{} mm", mm(lo), mm(hi)),
@@ -142,12 +151,12 @@ impl fmt::Display for FileSummary {
 
 /// The line a dry run (nothing written) prints for a file that would change.
 pub fn would_change(file: &FileResult) -> Option<String> {
-    file.changed().then(|| {
-        format!(
-            "{}: {} target(s) would change",
-            file.path.display(),
-            file.changes.len()
-        )
+    file.changed().then(|| match file.changes.len() {
+        0 => format!(
+            "{}: no target would change, offsets or frames would",
+            file.path.display()
+        ),
+        n => format!("{}: {n} target(s) would change", file.path.display()),
     })
 }
 
@@ -191,10 +200,23 @@ mod tests {
         );
         let moved = FileSummary::new(&f, true).to_string();
         assert!(moved.contains("largest move 1.500 mm"), "{moved}");
+        let mut same = result(Vec::new());
+        same.output = same.original.to_vec();
         assert_eq!(
-            FileSummary::new(&result(Vec::new()), false).to_string(),
+            FileSummary::new(&same, false).to_string(),
             "a.mod: unchanged"
         );
+        // Offsets or frames rewritten, no target: not "unchanged".
+        let other = result(Vec::new());
+        assert_eq!(
+            FileSummary::new(&other, false).to_string(),
+            "a.mod: no target changed, offsets or frames rewritten"
+        );
+        assert_eq!(
+            would_change(&other).as_deref(),
+            Some("a.mod: no target would change, offsets or frames would")
+        );
+        assert_eq!(would_change(&same), None);
         assert_eq!(
             would_change(&f).as_deref(),
             Some("a.mod: 2 target(s) would change")

@@ -167,8 +167,14 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
     for (file, fe) in program.files.iter().zip(out.files.iter_mut()) {
         let scope = Scope { program, file };
         for call in &file.offsets {
-            if kept.offsets(call) {
-                continue;
+            match kept.kept_bases(call) {
+                0 => {}
+                n if n == call.bases.len() => continue,
+                n => {
+                    fe.refusals
+                        .push(super::policy::partly_kept_offset(file, call, n));
+                    continue;
+                }
             }
             match rule.offset(scope, call) {
                 Ok(edits) => fe.edits.extend(edits),

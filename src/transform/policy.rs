@@ -288,6 +288,37 @@ impl KeptTargets {
     pub(crate) fn offsets(&self, call: &crate::position::OffsetCall) -> bool {
         !self.0.is_empty() && call.bases.iter().any(|b| self.0.contains(b))
     }
+
+    /// How many of the targets `call` stands for are kept.
+    pub(crate) fn kept_bases(&self, call: &crate::position::OffsetCall) -> usize {
+        if self.0.is_empty() {
+            return 0;
+        }
+        call.bases.iter().filter(|b| self.0.contains(b)).count()
+    }
+}
+
+/// The refusal of an offset call that stands for targets some of which are left as written and
+/// some moved: kept, it is right for the first; moved, for the others.
+pub(crate) fn partly_kept_offset(
+    file: &ParsedFile,
+    call: &crate::position::OffsetCall,
+    kept: usize,
+) -> Refusal {
+    Refusal::new(
+        file,
+        call.span,
+        call.target.clone(),
+        RefusalKind::SharedOffset,
+        format!(
+            "`{}` stands for {} targets, {kept} of them left as written and the others moved: one offset cannot follow both",
+            call.target,
+            call.bases.len()
+        ),
+        "write the offset point of each as a target of its own, or fix the targets left as written"
+            .to_owned(),
+        None,
+    )
 }
 
 /// What every transform says of a target the program uses as other than a position

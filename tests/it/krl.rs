@@ -1308,6 +1308,8 @@ fn a_point_no_motion_uses_is_taken_in_its_fdats_frames() {
         DECL E6POS XP9={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
         DECL FDAT FP9={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE}\n\
         DECL E6POS XLOOSE={X 410.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        DECL E6POS XP8={X 420.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        DECL FDAT FP8={TOOL_NO 1,BASE_NO 3,IPO_FRAME #BASE}\n\
         ENDDAT\n";
     let options = LoadOptions {
         krl_config_dat: Some(sample("$config.dat")),
@@ -1344,6 +1346,18 @@ fn a_point_no_motion_uses_is_taken_in_its_fdats_frames() {
     assert_eq!(b.usage.tool.as_deref(), Some("TOOL_DATA[1]"));
     assert!(b.usage.lines.is_empty() && !a.usage.lines.is_empty());
     assert_eq!(point(&unused, "XLOOSE").usage.wobj, None);
+    // A point passed to a subroutine, which trackfix does not follow, or only named in a
+    // comment, is named by the program: not taken in its FDAT's frames.
+    let passed = load(
+        "DEF cell( )\n  MYMOVE(xp8)\nEND\nDEF MYMOVE(PT:IN)\n  DECL E6POS PT\n  LIN PT\nEND\n",
+    );
+    assert_eq!(point(&passed, "XP8").usage.wobj, None);
+    let commented = load("DEF cell( )\n  ; LIN XP9 was here\nEND\n");
+    assert_eq!(point(&commented, "XP9").usage.wobj, None);
+    assert_eq!(
+        point(&commented, "XP8").usage.wobj.as_deref(),
+        Some("BASE_DATA[3]")
+    );
     let notes: Vec<_> = unused.files[dat_of(&unused)]
         .diagnostics
         .iter()

@@ -2163,8 +2163,9 @@ fn correct_turns_an_offs_offset_with_its_target() {
             CONST robtarget p3:=[[-1102.5,-320,225],[0,0.707107,0.707107,0],[-1,0,-1,0],[1000,9E9,9E9,9E9,9E9,9E9]];\n  \
             PROC main()\n    MoveL Offs(p1,10,20,300),v100,fine,tool0\\WObj:=w1;\n    \
             MoveL RelTool(p1,10,20,300),v100,fine,tool0\\WObj:=w1;\n    MoveL p1,v100,fine,tool0\\WObj:=w1;\n    \
-            Weld p1;\n    Weld p3;\n  ENDPROC\n  \
-            PROC Weld(robtarget p)\n    MoveL Offs(p,10,20,300),v100,fine,tool0\\WObj:=w1;\n  ENDPROC\nENDMODULE\n";
+            Weld p1;\n    Weld p3;\n    MoveL Offs(getP(),10,20,300),v100,fine,tool0\\WObj:=w1;\n  ENDPROC\n  \
+            PROC Weld(robtarget p)\n    MoveL Offs(p,10,20,300),v100,fine,tool0\\WObj:=w1;\n  ENDPROC\n  \
+            FUNC robtarget getP()\n    RETURN p1;\n  ENDFUNC\nENDMODULE\n";
         let parse = |text: &str| Program {
             files: vec![trackfix::rapid::parse_file(
                 Path::new("m.mod"),
@@ -2211,9 +2212,11 @@ fn correct_turns_an_offs_offset_with_its_target() {
             (nalgebra::Vector3::from(got[0]) - nalgebra::Vector3::new(10.0, 20.0, 300.0)).norm();
         assert!(moved > 1.0, "the offset turned: {got:?}");
         assert_eq!(got[1], [10.0, 20.0, 300.0], "RelTool's stays");
+        // The offset of what `getP()` returns, `p1`, turns as p1's.
+        assert_eq!(got[2], got[0], "{corrected}");
         // `Weld`'s offset stands for p1 and p3, at two skids of a track whose deviation does
         // not turn along it: both turn it alike, and it is written as for p1 alone.
-        assert_eq!(got[2], got[0], "{corrected}");
+        assert_eq!(got[3], got[0], "{corrected}");
         // `zero` gives the offset back (the stamp, which the command line writes, gives its text
         // back too: `correct_then_zero_stamped_gives_back_the_bytes`).
         let zeroed = run(&after, Direction::Zero);
@@ -2293,4 +2296,65 @@ fn an_offset_calls_bases_are_the_targets_its_reference_means_there() {
             ("pGrid{i}".to_owned(), vec![at(4.0), at(5.0)]),
         ]
     );
+}
+
+/// An offset that stands for targets some of which are left as written and some moved follows
+/// neither: it is refused by name (kept as written, it is wrong for the moved one). A work
+/// object named by a routine's parameter is the caller's, not the module's frame of that name:
+/// the targets moved with it are refused, where they were corrected in the module's frame.
+#[test]
+fn a_partly_kept_offset_and_a_parameter_work_object_are_refused() {
+    use trackfix::geometry::pose_xyz_deg;
+    use trackfix::transform::RefusalKind;
+    let w = "[FALSE,TRUE,\"\",[[2100,-1350,480],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]";
+    let t =
+        |skid: &str| format!("[[500,200,300],[0,0,1,0],[0,0,0,0],[{skid},9E9,9E9,9E9,9E9,9E9]]");
+    let partly = format!(
+        "MODULE M\n  PERS wobjdata w1:={w};\n  CONST robtarget pa:={};\n  CONST robtarget pc:={};\n  \
+         PROC main()\n    Weld pa;\n    Weld pc;\n  ENDPROC\n  \
+         PROC Weld(robtarget p)\n    MoveL Offs(p,0,30,50),v100,fine,tool0\\WObj:=w1;\n    \
+         MoveL p,v100,fine,tool0\\WObj:=w1;\n  ENDPROC\nENDMODULE\n",
+        t("9E9"),
+        t("3000")
+    );
+    let by_parameter = format!(
+        "MODULE M\n  PERS wobjdata w1:={w};\n  PERS wobjdata wo:={w};\n  CONST robtarget pa:={};\n  \
+         PROC main()\n    WeldW pa, w1;\n  ENDPROC\n  \
+         PROC WeldW(robtarget p, PERS wobjdata wo)\n    MoveL p,v100,fine,tool0\\WObj:=wo;\n  ENDPROC\nENDMODULE\n",
+        t("3000")
+    );
+    let d = pose_xyz_deg(0.3, -0.2, 0.5, 0.2, -0.3, 0.5);
+    with_constant_deviation(d, |setup| {
+        let refused = |src: &str| -> Vec<(String, RefusalKind, String)> {
+            let p = Program {
+                files: vec![trackfix::rapid::parse_file(
+                    Path::new("m.mod"),
+                    src.as_bytes().to_vec(),
+                )],
+            };
+            apply(&p, track_correction(&p, setup, Direction::Correct))
+                .unwrap()
+                .refusals()
+                .map(|r| (r.target.clone(), r.kind, r.message.clone()))
+                .collect()
+        };
+        let got = refused(&partly);
+        let kinds: Vec<_> = got.iter().map(|(t, k, _)| (t.as_str(), *k)).collect();
+        assert_eq!(
+            kinds,
+            [
+                ("pa", RefusalKind::SkidNotConnected),
+                ("p", RefusalKind::SharedOffset)
+            ],
+            "{got:?}"
+        );
+        assert!(got[1].2.contains("1 of them left as written"), "{got:?}");
+        let got = refused(&by_parameter);
+        let kinds: Vec<_> = got.iter().map(|(t, k, _)| (t.as_str(), *k)).collect();
+        assert_eq!(
+            kinds,
+            [("pa", RefusalKind::UnresolvedWorkObject)],
+            "{got:?}"
+        );
+    })
 }
