@@ -204,12 +204,16 @@ fn combine(
             .filter(|r| seen.insert((r.line, r.target.clone(), r.kind)))
             .cloned()
             .collect();
+        let (output, came_back) = restore_unmoved(a, b, &kept, &kept_offsets)?;
+        // A target the chain brought back, written again as it was, did not change.
         let changes = a
             .positions()
             .zip(b.positions())
             .enumerate()
             .filter(|(k, (p, q))| {
-                !kept.contains_key(k) && p.span.slice(&a.source) != q.span.slice(&b.source)
+                !kept.contains_key(k)
+                    && !came_back.contains(k)
+                    && p.span.slice(&a.source) != q.span.slice(&b.source)
             })
             .map(|(_, (p, q))| {
                 let poses = p
@@ -239,7 +243,7 @@ fn combine(
                 }
             })
             .collect();
-        let output = restore_unmoved(a, b, &kept, &kept_offsets)?;
+
         files.push(FileResult {
             path: a.path.clone(),
             original: a.source.clone(),
@@ -353,7 +357,7 @@ fn restore_unmoved(
     b: &ParsedFile,
     kept: &BTreeMap<usize, RefusalKind>,
     kept_offsets: &KeptTargets,
-) -> Result<Vec<u8>, EditError> {
+) -> Result<(Vec<u8>, BTreeSet<usize>), EditError> {
     let mut edits = Vec::new();
     for &t in kept.keys() {
         if let (Some(p), Some(q)) = (a.positions.span(t), b.positions.span(t)) {
@@ -363,7 +367,7 @@ fn restore_unmoved(
             }
         }
     }
-    let mut keep = |f: &NumField, g: &NumField| {
+    let keep = |edits: &mut Vec<Edit>, f: &NumField, g: &NumField| {
         let old = f.span().slice(&a.source);
         if old != g.span().slice(&b.source) {
             edits.push(Edit::new(g.span(), old.to_vec()));
@@ -390,48 +394,83 @@ fn restore_unmoved(
                 .chain(rotations.filter(|_| kept));
             for (f, g) in restored {
                 if let (Some(f), Some(g)) = (f, g) {
-                    keep(f, g);
+                    keep(&mut edits, f, g);
                 }
             }
         }
     }
+    let mut came_back = BTreeSet::new();
     for (t, (p, q)) in a.positions().zip(b.positions()).enumerate() {
         if kept.contains_key(&t) {
             continue;
         }
-        let (x, y) = (target_literals(&p), target_literals(&q));
-        if x.others.len() == y.others.len() {
-            for (f, g) in x.others.iter().zip(&y.others) {
-                if close(f, g, MM_DECIMALS as i32) {
-                    keep(f, g);
-                }
-            }
-        }
-        if x.trans.len() != y.trans.len() || x.orient.len() != y.orient.len() {
-            continue;
-        }
-        let trans_back = x
-            .trans
+        let from = edits.len();
+        restore_target(&p, &q, &close, &keep, &mut edits);
+        // The literal as it is written now, its restored fields put back.
+        let own: Vec<Edit> = edits
+            .get(from..)
+            .unwrap_or_default()
             .iter()
-            .zip(&y.trans)
-            .all(|(f, g)| close(f, g, MM_DECIMALS as i32));
-        let rot = |t: &Position| t.cartesian.as_ref().and_then(|c| c.rotation());
-        let orient_back = match (rot(&p), rot(&q)) {
-            (Some(r), Some(s)) => r.angle_to(&s) <= CHAIN_ROUNDING_UNITS * x.orient_unit_rad,
-            _ => x.orient.is_empty(),
-        };
-        if trans_back && orient_back {
-            for (f, g) in x
-                .trans
-                .iter()
-                .zip(&y.trans)
-                .chain(x.orient.iter().zip(&y.orient))
-            {
-                keep(f, g);
+            .map(|e| {
+                let sp = e.span();
+                Edit::new(
+                    Span::new(
+                        sp.start.saturating_sub(q.span.start),
+                        sp.end.saturating_sub(q.span.start),
+                    ),
+                    e.text.to_vec(),
+                )
+            })
+            .collect();
+        if apply_edits(q.span.slice(&b.source), &own)
+            .is_ok_and(|now| now == p.span.slice(&a.source))
+        {
+            came_back.insert(t);
+        }
+    }
+    Ok((apply_edits(&b.source, &edits)?, came_back))
+}
+
+/// The restoring edits of one target `q` (as the chain wrote it) against `p` (as written at
+/// the start): see [`restore_unmoved`].
+fn restore_target(
+    p: &Position,
+    q: &Position,
+    close: &dyn Fn(&NumField, &NumField, i32) -> bool,
+    keep: &dyn Fn(&mut Vec<Edit>, &NumField, &NumField),
+    edits: &mut Vec<Edit>,
+) {
+    let (x, y) = (target_literals(p), target_literals(q));
+    if x.others.len() == y.others.len() {
+        for (f, g) in x.others.iter().zip(&y.others) {
+            if close(f, g, MM_DECIMALS as i32) {
+                keep(edits, f, g);
             }
         }
     }
-    apply_edits(&b.source, &edits)
+    if x.trans.len() != y.trans.len() || x.orient.len() != y.orient.len() {
+        return;
+    }
+    let trans_back = x
+        .trans
+        .iter()
+        .zip(&y.trans)
+        .all(|(f, g)| close(f, g, MM_DECIMALS as i32));
+    let rot = |t: &Position| t.cartesian.as_ref().and_then(|c| c.rotation());
+    let orient_back = match (rot(p), rot(q)) {
+        (Some(r), Some(s)) => r.angle_to(&s) <= CHAIN_ROUNDING_UNITS * x.orient_unit_rad,
+        _ => x.orient.is_empty(),
+    };
+    if trans_back && orient_back {
+        for (f, g) in x
+            .trans
+            .iter()
+            .zip(&y.trans)
+            .chain(x.orient.iter().zip(&y.orient))
+        {
+            keep(edits, f, g);
+        }
+    }
 }
 
 #[cfg(test)]

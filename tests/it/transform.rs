@@ -1436,6 +1436,23 @@ fn identity_is_byte_identical_for_every_sample() {
         checked += 1;
     }
     assert!(checked >= 20, "{checked}");
+    // Nor does it say a target changed: the change records are of the text written.
+    let out_dir = dir.path().join("identity");
+    let (code, _, err) = trackfix(&[
+        "transfer",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        "samples/cell.toml",
+        "--from",
+        "r1",
+        "--to",
+        "r1",
+        "--no-stamp",
+        "--out-dir",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("spot_line.mod: unchanged →"), "{err}");
     // correct → zero through files, every sample: the lines the correction did not touch are the
     // input's bytes, and every target's numbers come back within the written precision.
     let cell = sample_cell();
