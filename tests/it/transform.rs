@@ -1405,6 +1405,23 @@ fn provenance_stamp_blocks_double_correction() {
     assert_eq!(plain.lines().count(), original.lines().count());
 }
 
+/// `trackfix transfer samples/rapid/spot_line.mod --cell samples/cell.toml --from r1 --to TO`
+/// with `more` arguments.
+fn transfer_spot_line(to: &str, more: &[&str]) -> (i32, String, String) {
+    let mut args = vec![
+        "transfer",
+        "samples/rapid/spot_line.mod",
+        "--cell",
+        "samples/cell.toml",
+        "--from",
+        "r1",
+        "--to",
+        to,
+    ];
+    args.extend_from_slice(more);
+    trackfix(&args)
+}
+
 /// Identity is byte-identical: `transfer --from r1 --to r1` gives every sample back byte for byte
 /// (before: 226 lines of spot_line.mod rewritten, `-1200` → `-1200.000`); `correct` then `zero`
 /// through files gives back every number within its written precision and every byte outside
@@ -1438,19 +1455,10 @@ fn identity_is_byte_identical_for_every_sample() {
     assert!(checked >= 20, "{checked}");
     // Nor does it say a target changed: the change records are of the text written.
     let out_dir = dir.path().join("identity");
-    let (code, _, err) = trackfix(&[
-        "transfer",
-        "samples/rapid/spot_line.mod",
-        "--cell",
-        "samples/cell.toml",
-        "--from",
+    let (code, _, err) = transfer_spot_line(
         "r1",
-        "--to",
-        "r1",
-        "--no-stamp",
-        "--out-dir",
-        out_dir.to_str().unwrap(),
-    ]);
+        &["--no-stamp", "--out-dir", out_dir.to_str().unwrap()],
+    );
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("spot_line.mod: unchanged →"), "{err}");
     // correct → zero through files, every sample: the lines the correction did not touch are the
@@ -1977,19 +1985,7 @@ fn readme_main_command_with_kinematics() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
     let out = out.to_str().unwrap();
-    let (code, _, err) = trackfix(&[
-        "transfer",
-        "samples/rapid/spot_line.mod",
-        "--cell",
-        "samples/cell.toml",
-        "--from",
-        "r1",
-        "--to",
-        "r2",
-        "--mirror",
-        "--out-dir",
-        out,
-    ]);
+    let (code, _, err) = transfer_spot_line("r2", &["--mirror", "--out-dir", out]);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("227 target(s) changed"), "{err}");
     let (code, diff, err) = trackfix(&[
