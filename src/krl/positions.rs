@@ -1136,6 +1136,15 @@ fn bas_call(src: &[u8], call: &Expr) -> Option<Setting> {
 /// Aggregate values of `$BASE`/`$TOOL` are handled by [`assignment`], which names them.
 fn setting(src: &[u8], target: &Expr, value: &Expr) -> Option<Setting> {
     let fdat_of = || fdat_argument(src, value);
+    // `$BASE.X = 100`: a component changed when the program runs makes the frame one it
+    // computes.
+    if let ExprKind::Member(whole, _) = &target.kind {
+        return match upper_short(src, whole.span, &mut [0; 16]) {
+            "$BASE" => Some(Setting::Base(FrameRef::RunTime(target.span))),
+            "$TOOL" => Some(Setting::Tool(FrameRef::RunTime(target.span))),
+            _ => None,
+        };
+    }
     match upper_short(src, target.span, &mut [0; 16]) {
         "$BASE" => Some(match &value.kind {
             ExprKind::Call(..) => fdat_of()

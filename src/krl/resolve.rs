@@ -1301,6 +1301,20 @@ END\n";
         assert_eq!(u.lines, [7]);
     }
 
+    /// A component of `$BASE` or `$TOOL` changed in the routine (`$BASE.X=100`) makes the
+    /// frame one the program computes: the points moved with it are not correctable offline.
+    #[test]
+    fn a_changed_component_of_base_or_tool_is_computed() {
+        let src = b"DEF c()\n  DECL E6POS XA={X 1,Y 2,Z 3}\n  DECL E6POS XB={X 1,Y 2,Z 3}\n  $TOOL=TOOL_DATA[1]\n  $BASE=BASE_DATA[2]\n  LIN XA\n  $BASE.X=100\n  LIN XB\nEND\n";
+        let f = crate::krl::parse_file(Path::new("c.src"), src.to_vec());
+        let computed: Vec<bool> = f
+            .positions
+            .usages()
+            .map(|u| matches!(u.run_time(), Some(crate::position::RunTimeValue::Frame { .. })))
+            .collect();
+        assert_eq!(computed, [false, true]);
+    }
+
     /// A spline block's `WITH $BASE`/`$TOOL` hold for each motion in the block, after the
     /// settings before it, and end with the block; a motion's own `WITH` is read after the
     /// block's.
