@@ -1310,7 +1310,12 @@ END\n";
         let computed: Vec<bool> = f
             .positions
             .usages()
-            .map(|u| matches!(u.run_time(), Some(crate::position::RunTimeValue::Frame { .. })))
+            .map(|u| {
+                matches!(
+                    u.run_time(),
+                    Some(crate::position::RunTimeValue::Frame { .. })
+                )
+            })
             .collect();
         assert_eq!(computed, [false, true]);
     }

@@ -1666,6 +1666,9 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     // A frame given a whole value in a routine (docs/design.md, "Frames the program assigns").
     // Each assignment: (the frame's module and index, the assignment's module and index).
     let mut given: Vec<((usize, usize), (usize, usize))> = Vec::new();
+    // (element, kind, module, line) of each frame an assignment to its whole array gives a
+    // value.
+    let mut whole_arrays: Vec<(String, FrameKind, usize, usize)> = Vec::new();
     for (m, r) in rest.iter().enumerate() {
         for (k, a) in r.2.iter().enumerate() {
             let key = key_into(&mut buf, r.6, a.name);
@@ -1684,12 +1687,38 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
             });
             if let Some(at) = found {
                 given.push((at, (m, k)));
+                continue;
+            }
+            // A whole array of frames given a value (`wArr := [w1, w2];`): which element holds
+            // what depends on the literal's shape and the flow; its elements' motions are
+            // refused as given a value (an element's own assignment is read as above).
+            let element = |f: &FrameDecl| {
+                f.name.len() > key.len()
+                    && f.name.as_bytes().get(key.len()) == Some(&b'{')
+                    && f.name
+                        .get(..key.len())
+                        .is_some_and(|n| n.eq_ignore_ascii_case(key))
+            };
+            let elements: Vec<&FrameDecl> =
+                r.0.iter()
+                    .filter(|f| !matches!(f.scope, FrameScope::Routine(_)) && element(f))
+                    .collect();
+            let elements = if elements.is_empty() {
+                rest.iter()
+                    .flat_map(|fr| &fr.0)
+                    .filter(|f| f.scope == FrameScope::Program && element(f))
+                    .collect()
+            } else {
+                elements
+            };
+            for f in elements {
+                whole_arrays.push((f.name.clone(), f.kind, m, a.as_wobj.line));
             }
         }
     }
     let mut assigned_notes: Vec<Vec<Diagnostic>> = vec![Vec::new(); rest.len()];
     // (frame, kind, module, line) of each frame whose value the flow decides.
-    let mut reassigned: Vec<(String, FrameKind, usize, usize)> = Vec::new();
+    let mut reassigned: Vec<(String, FrameKind, usize, usize)> = whole_arrays;
     // (module, index, the value) of each frame the program gives one other value.
     let mut replaced: Vec<(usize, usize, FrameDecl)> = Vec::new();
     // (module, the value) of each assignment of a frame's own value.

@@ -1075,3 +1075,32 @@ fn local_and_routine_frames_are_seen_only_where_they_are_declared() {
     )]);
     assert_eq!(p1, plain);
 }
+
+/// A whole array of work objects given a value in a routine (`wArr := [w_away, w_origin];`):
+/// the targets moved with its elements are refused by name as given another value, where they
+/// were corrected in the declared elements. One element given a value is read as a frame is.
+#[test]
+fn a_whole_array_of_frames_given_a_value_refuses_its_elements_targets() {
+    use trackfix::transform::RefusalKind;
+    let module = |body: &str| {
+        format!(
+            "MODULE M\n  PERS wobjdata wArr{{2}}:=[{W_ORIGIN},{W_AWAY}];\n{P1}  PROC main()\n{body}    MoveL p1,v100,fine,tool0\\WObj:=wArr{{1}};\n  ENDPROC\nENDMODULE\n"
+        )
+    };
+    let (_, refused) = correct_task(&[("m.mod", module(""))]);
+    assert!(refused.is_empty(), "{refused:?}");
+    let (_, refused) = correct_task(&[(
+        "m.mod",
+        module(&format!("    wArr := [{W_AWAY},{W_ORIGIN}];\n")),
+    )]);
+    assert_eq!(refused.len(), 1, "{refused:?}");
+    assert_eq!(refused[0].0, "p1");
+    assert_eq!(refused[0].1, RefusalKind::RuntimeData);
+    assert!(
+        refused[0]
+            .2
+            .contains("`wArr{1}`, which the program gives another value"),
+        "{}",
+        refused[0].2
+    );
+}
