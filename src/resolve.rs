@@ -150,6 +150,8 @@ pub(crate) struct Routine {
     pub(crate) local: bool,
     /// Its required parameters' names, in the order a call's positional arguments bind to them.
     pub(crate) params: Vec<Span>,
+    /// Its optional parameters' names (RAPID `\\wo`), which no positional argument binds.
+    pub(crate) optional: Vec<Span>,
 }
 
 /// An instruction that uses targets: a motion (or a call that passes targets on) with the frame

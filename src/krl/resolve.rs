@@ -829,6 +829,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
                         name: r.name,
                         local: !r.public,
                         params: r.params.iter().map(|p| p.name).collect(),
+                        optional: Vec::new(),
                     })
                     .collect()
             })

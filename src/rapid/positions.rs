@@ -1540,15 +1540,14 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
             // A frame or tool named by a parameter of the motion's routine is the caller's: no
             // declaration of that name is it (the motion's targets are refused as used with
             // a frame that cannot be resolved).
-            let params = u
-                .routine
-                .and_then(|rt| r.4.get(rt.get() as usize - 1))
-                .map_or(&[][..], |rt| rt.params.as_slice());
+            let routine = u.routine.and_then(|rt| r.4.get(rt.get() as usize - 1));
             let a_parameter = |text: &[u8]| {
-                !params.is_empty()
-                    && params
+                routine.is_some_and(|rt| {
+                    rt.params
                         .iter()
+                        .chain(&rt.optional)
                         .any(|p| NameKey(p.slice(src)) == NameKey(text))
+                })
             };
             let tool = match u.tool {
                 Some(sp) => Some(trim_latin1(sp.span().slice(src))),
@@ -2002,11 +2001,16 @@ impl Extractor<'_> {
                     name,
                     local,
                     params: Vec::new(),
+                    optional: Vec::new(),
                 });
             }
-            Stmt::Param { name } => {
+            Stmt::Param { name, optional } => {
                 if let Some(r) = self.current.and_then(|r| self.routines.get_mut(r)) {
-                    r.params.push(name);
+                    if optional {
+                        r.optional.push(name);
+                    } else {
+                        r.params.push(name);
+                    }
                 }
             }
             Stmt::Record { name } => self.records.push(RecordDecl {

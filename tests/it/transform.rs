@@ -2362,12 +2362,27 @@ fn a_partly_kept_offset_and_a_parameter_work_object_are_refused() {
             "{got:?}"
         );
         assert!(got[1].2.contains("1 of them left as written"), "{got:?}");
-        let got = refused(&by_parameter);
-        let kinds: Vec<_> = got.iter().map(|(t, k, _)| (t.as_str(), *k)).collect();
-        assert_eq!(
-            kinds,
-            [("pa", RefusalKind::UnresolvedWorkObject)],
-            "{got:?}"
-        );
+        // Required, optional, or one of optional alternatives.
+        for head in [
+            "robtarget p, PERS wobjdata wo",
+            "robtarget p, \\PERS wobjdata wo",
+            "robtarget p, \\PERS wobjdata w2 | PERS wobjdata wo",
+        ] {
+            let call = if head.contains('\\') {
+                "WeldW pa \\wo:=w1;"
+            } else {
+                "WeldW pa, w1;"
+            };
+            let program = by_parameter
+                .replace("robtarget p, PERS wobjdata wo", head)
+                .replace("WeldW pa, w1;", call);
+            let got = refused(&program);
+            let kinds: Vec<_> = got.iter().map(|(t, k, _)| (t.as_str(), *k)).collect();
+            assert_eq!(
+                kinds,
+                [("pa", RefusalKind::UnresolvedWorkObject)],
+                "{head}: {got:?}"
+            );
+        }
     })
 }

@@ -407,7 +407,7 @@ impl Parser<'_, '_> {
             b"TRAP" => b"ENDTRAP",
             _ => b"ENDPROC",
         };
-        let head: PResult<(Span, Vec<(Span, Span)>)> = (|| {
+        let head: PResult<(Span, RoutineParams)> = (|| {
             if kind == b"FUNC" {
                 self.expect_ident("the return type after FUNC")?;
             }
@@ -415,17 +415,32 @@ impl Parser<'_, '_> {
             let params = if kind != b"TRAP" {
                 self.params()?
             } else {
-                Vec::new()
+                RoutineParams::default()
             };
             Ok((name.span(), params))
         })();
         match head {
-            Ok((name, params)) => {
+            Ok((name, RoutineParams { required, optional })) => {
                 self.leaf(NodeKind::RoutineHead, start);
                 self.arena.clear();
                 self.emit(Stmt::Routine { name, local }, start);
-                for (_, name) in params {
-                    self.emit(Stmt::Param { name }, start);
+                for (_, name) in required {
+                    self.emit(
+                        Stmt::Param {
+                            name,
+                            optional: false,
+                        },
+                        start,
+                    );
+                }
+                for name in optional {
+                    self.emit(
+                        Stmt::Param {
+                            name,
+                            optional: true,
+                        },
+                        start,
+                    );
                 }
             }
             Err(e) => self.recover(start, e),
@@ -483,10 +498,12 @@ impl Parser<'_, '_> {
     /// read as a balanced parenthesis group (the positions never depend on parameters).
     /// The parameter list; returns the required parameters (`type name`, in order: the
     /// positional arguments of a call), skipping optional `\name` ones and `VAR`/`PERS`/`INOUT`.
-    pub(super) fn params(&mut self) -> PResult<Vec<(Span, Span)>> {
+    pub(super) fn params(&mut self) -> PResult<RoutineParams> {
         self.expect_punct(b'(', "`(` before the parameter list")?;
         let mut depth = 1u32;
         let mut required = Vec::new();
+        // The optional parameters' names, alternatives (`\a | b`) each.
+        let mut optional_names = Vec::new();
         let mut words: Vec<Span> = Vec::new();
         let mut optional = false;
         let mut first = true;
@@ -516,8 +533,12 @@ impl Parser<'_, '_> {
                 depth += 1;
             } else if c == b')' || (c == b',' && depth == 1) {
                 if depth == 1 {
-                    if let (false, [ty, name, ..]) = (optional, words.as_slice()) {
-                        required.push((*ty, *name));
+                    match (optional, words.as_slice()) {
+                        (false, [ty, name, ..]) => required.push((*ty, *name)),
+                        (true, words) => {
+                            optional_names.extend(words.chunks(2).filter_map(|c| c.get(1)));
+                        }
+                        _ => {}
                     }
                     words.clear();
                     optional = false;
@@ -526,10 +547,21 @@ impl Parser<'_, '_> {
                 if c == b')' {
                     depth -= 1;
                     if depth == 0 {
-                        return Ok(required);
+                        return Ok(RoutineParams {
+                            required,
+                            optional: optional_names,
+                        });
                     }
                 }
             }
         }
     }
+}
+
+/// A routine's parameter list as the head gives it: the required parameters (type, name), in
+/// order, and the optional ones' names (each alternative of `\\a | b`).
+#[derive(Default)]
+pub(super) struct RoutineParams {
+    required: Vec<(Span, Span)>,
+    optional: Vec<Span>,
 }

@@ -46,8 +46,9 @@ pub(crate) enum Stmt {
     /// `PROC`/`FUNC`/`TRAP` head (its name is a module-scope symbol); its required parameters
     /// follow as [`Stmt::Param`].
     Routine { name: Span, local: bool },
-    /// A required parameter of the routine just read, in order: its name (of `type name`).
-    Param { name: Span },
+    /// A parameter of the routine just read: its name (of `type name`); the required ones in
+    /// order, then the optional ones (`\\switch`, `\\num a | num b`: each alternative).
+    Param { name: Span, optional: bool },
     /// `RECORD name` (the components follow as [`Stmt::RecordField`]).
     Record { name: Span },
     /// `type name;` inside a `RECORD`.
