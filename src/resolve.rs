@@ -968,8 +968,11 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
     }
     for (tf, f) in files.iter_mut().enumerate() {
         for usage in f.positions.usages_mut() {
+            // The tool too: the joints a target is reached with, and so its reach and
+            // configuration, depend on it.
             let frame = usage
                 .work_objects()
+                .chain(usage.tools())
                 .find_map(|w| assigned_frames.get(&fold(w)));
             if let Some((name, line, fi)) = frame {
                 let why = RunTimeValue::Frame {

@@ -2088,9 +2088,17 @@ impl Extractor<'_> {
                     {
                         self.copies.push((target, v.span()));
                     }
-                    // `p10.trans.z := 20` changes part of the value: run time as well.
+                    // `p10.trans.z := 20` changes part of the value: run time as well; a
+                    // tool's load (`tGrip.tload := loadPart;`, `.tload.mass`) places nothing.
                     let text = text_of(src, target);
-                    let name = text.split('.').next().unwrap_or_default().trim();
+                    let mut path = text.split('.');
+                    let name = path.next().unwrap_or_default().trim();
+                    if path
+                        .next()
+                        .is_some_and(|c| c.trim().eq_ignore_ascii_case("tload"))
+                    {
+                        return;
+                    }
                     let line = self.lines.line(span.start);
                     let param = self.current.and_then(|r| {
                         let params = &self.routines.get(r)?.params;

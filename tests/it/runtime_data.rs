@@ -1104,3 +1104,27 @@ fn a_whole_array_of_frames_given_a_value_refuses_its_elements_targets() {
         refused[0].2
     );
 }
+
+/// A tool the program gives a computed value (`tG := tOther;`, `tG.tframe.trans.z := 300;`)
+/// refuses the targets moved with it, as a work object does: their joints, reach and
+/// configuration depend on it. Its load (`tG.tload := load1;`) places nothing: no finding.
+#[test]
+fn a_tool_given_a_computed_value_refuses_its_targets_but_not_its_load() {
+    use trackfix::transform::RefusalKind;
+    let tool = "[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]]";
+    let module = |body: &str| {
+        format!(
+            "MODULE M\n  PERS wobjdata w1:={W_ORIGIN};\n  PERS tooldata tG:={tool};\n  PERS tooldata tOther:={tool};\n  PERS loaddata load1:=[2,[0,0,1],[1,0,0,0],0,0,0];\n{P1}  PROC main()\n{body}    MoveL p1,v100,fine,tG\\WObj:=w1;\n  ENDPROC\nENDMODULE\n"
+        )
+    };
+    for body in ["", "    tG.tload := load1;\n", "    tG.tload.mass := 3;\n"] {
+        let (_, refused) = correct_task(&[("m.mod", module(body))]);
+        assert!(refused.is_empty(), "{body}: {refused:?}");
+    }
+    for body in ["    tG := tOther;\n", "    tG.tframe.trans.z := 300;\n"] {
+        let (_, refused) = correct_task(&[("m.mod", module(body))]);
+        assert_eq!(refused.len(), 1, "{body}: {refused:?}");
+        assert_eq!(refused[0].1, RefusalKind::RuntimeData, "{body}");
+        assert!(refused[0].2.contains("`tG`"), "{}", refused[0].2);
+    }
+}
