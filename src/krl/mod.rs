@@ -48,7 +48,7 @@ pub fn parse_file(path: &Path, source: impl Into<InputBytes>) -> ParsedFile {
     let (file, facts) = analyse(path, source.into());
     let mut files = [file];
     let mut facts = [facts];
-    resolve::resolve(&mut files, &mut facts);
+    resolve::resolve(&mut files, &mut facts, &[]);
     let [file] = files;
     file
 }

@@ -121,14 +121,20 @@ pub fn load_program_from_sources<S: Into<InputBytes>>(
         facts.push(fact);
     }
     // A `$config.dat` among the files is resolved with them: its global points (`DECL E6POS
-    // XPICK={…}`) carry the usage of the motions that move to them.
-    resolve::resolve(&mut program_files, &mut facts);
+    // XPICK={…}`) carry the usage of the motions that move to them. The cell's gives the
+    // declared values of the bases and tools the program assigns.
+    let cell_config = match &options.krl_config_dat {
+        Some(cfg) => Some(options.config_dat.get(cfg)?),
+        None => None,
+    };
+    let declared = cell_config
+        .as_ref()
+        .map_or(&[][..], |c| c.frames.as_slice());
+    resolve::resolve(&mut program_files, &mut facts, declared);
     for file in program_files.iter_mut().rev().take(configs) {
         keep_used_points(file);
     }
-    if let Some(cfg) = &options.krl_config_dat {
-        program_files.push(options.config_dat.get(cfg)?);
-    }
+    program_files.extend(cell_config);
     Ok(Program {
         files: program_files,
     })

@@ -8,7 +8,8 @@ use super::positions::{
     name_key,
 };
 use crate::position::{
-    Config, FrameName, Name, ParsedFile, PositionKind, RunTimeValue, UnresolvedFrame, UseLine,
+    Config, FrameDecl, FrameName, Name, ParsedFile, PositionKind, RunTimeValue, UnresolvedFrame,
+    UseLine,
 };
 use crate::syntax::Diagnostic;
 use std::sync::Arc;
@@ -580,7 +581,9 @@ fn branch(state: &mut State, forks: &mut Vec<Fork>, b: BranchEvent) {
 /// ([`crate::resolve::Binder`]) to fill the [`Usage`](crate::position::Usage) of the positions
 /// it uses, promotes used `FRAME`s and candidate aggregates to positions, and reports motions
 /// whose base stays unknown.
-pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
+/// `config_frames`: frames declared outside `files` (the cell's `$config.dat`), whose values
+/// an assignment in the program may repeat.
+pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_frames: &[FrameDecl]) {
     let modules = Modules::new(files);
     // A module's own `FDAT`s, then `$config.dat`'s: `FP1` is in nearly every data list.
     let fdats = modules.gathered(
@@ -859,7 +862,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts]) {
     }
     crate::resolve::mark_run_time(&mut shared, &NAMING);
     drop(shared);
-    mark_assigned_data(files, facts);
+    mark_assigned_data(files, facts, config_frames);
 }
 
 /// A Cartesian point the program never names again takes the base and tool of its inline
@@ -1026,7 +1029,7 @@ fn word_counts<'n>(src: &[u8], names: impl Iterator<Item = &'n str>) -> HashMap<
 /// the targets as given a frame of two values (docs/design.md, "Frames the program assigns":
 /// the value is given in another file than the declaring `$config.dat`, so which one a motion
 /// runs with depends on the flow).
-fn mark_assigned_data(files: &mut [ParsedFile], facts: &[Facts]) {
+fn mark_assigned_data(files: &mut [ParsedFile], facts: &[Facts], elsewhere: &[FrameDecl]) {
     if facts.iter().all(|f| f.data_assignments.is_empty()) {
         return;
     }
@@ -1034,12 +1037,20 @@ fn mark_assigned_data(files: &mut [ParsedFile], facts: &[Facts]) {
     // The declarations: frames no routine assigns.
     let declaration = |tool: bool, n: u32| {
         let name = format!("{}[{n}]", prefix(tool));
-        files.iter().zip(facts).find_map(|(f, x)| {
-            f.frames.iter().enumerate().find_map(|(i, d)| {
-                let assigned = x.data_assignments.iter().any(|a| a.literal == Some(i));
-                (!assigned && d.name.eq_ignore_ascii_case(&name)).then_some(d)
+        files
+            .iter()
+            .zip(facts)
+            .find_map(|(f, x)| {
+                f.frames.iter().enumerate().find_map(|(i, d)| {
+                    let assigned = x.data_assignments.iter().any(|a| a.literal == Some(i));
+                    (!assigned && d.name.eq_ignore_ascii_case(&name)).then_some(d)
+                })
             })
-        })
+            .or_else(|| {
+                elsewhere
+                    .iter()
+                    .find(|d| d.name.eq_ignore_ascii_case(&name))
+            })
     };
     // (tool, number: `None` for any, line, file, a literal value) of the first assignment of
     // each that does not give the declared value.

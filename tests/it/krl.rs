@@ -1390,3 +1390,51 @@ fn a_point_no_motion_uses_is_taken_in_its_fdats_frames() {
         },
     );
 }
+
+/// A `BASE_DATA[n]` a routine gives the value the cell's `$config.dat` declares changes nothing,
+/// as one the tree's own `$config.dat` declares does; another value makes its points given a
+/// frame of two values.
+#[test]
+fn an_assignment_of_the_cells_config_value_changes_nothing() {
+    let options = LoadOptions {
+        krl_config_dat: Some(sample("$config.dat")),
+        map_inputs: false,
+        ..LoadOptions::default()
+    };
+    let program = |value: &str| {
+        let src = format!(
+            "DEF a( )\n  $TOOL=TOOL_DATA[1]\n  BASE_DATA[3]={value}\n  $BASE=BASE_DATA[3]\n  LIN XP1\nEND\n"
+        );
+        let dat = "DEFDAT a\nDECL E6POS XP1={X 420.0,Y 10.0,Z 150.0,A 0.0,B 90.0,C 0.0,S 2,T 2,E1 1500.0}\nENDDAT\n";
+        krl::load_program_from_sources(
+            vec![
+                (PathBuf::from("a.src"), src.into_bytes()),
+                (PathBuf::from("a.dat"), dat.as_bytes().to_vec()),
+            ],
+            &options,
+        )
+        .unwrap()
+    };
+    let run_time = |p: &Program| {
+        p.files
+            .iter()
+            .flat_map(|f| f.positions())
+            .find(|t| t.name.as_deref() == Some("XP1"))
+            .unwrap()
+            .usage
+            .run_time()
+            .cloned()
+    };
+    // samples/krl/$config.dat: BASE_DATA[3]={X 6200.5,Y 1350.25,Z 0.0,A -90.0,B 0.0,C 0.0}.
+    let same = program("{X 6200.5,Y 1350.25,Z 0.0,A -90.0,B 0.0,C 0.0}");
+    assert_eq!(run_time(&same), None);
+    let other = program("{X 6300.5,Y 1350.25,Z 0.0,A -90.0,B 0.0,C 0.0}");
+    assert!(
+        matches!(
+            run_time(&other),
+            Some(trackfix::position::RunTimeValue::FrameAssigned { .. })
+        ),
+        "{:?}",
+        run_time(&other)
+    );
+}
