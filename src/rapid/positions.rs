@@ -1782,7 +1782,11 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         // from its declaration whenever the program starts), so the targets are transformed
         // with it, and a mirror of the frame is written into the assignment.
         let persistent = f.storage == crate::position::FrameStorage::Persistent;
+        // Whether the robot holds the tool was read from the declaration when the motions were
+        // bound: a value that changes it is not taken.
+        let same_holder = value.held_by_robot == f.held_by_robot;
         let one = persistent
+            && same_holder
             && all.iter().all(|&(m, a)| {
                 m == at.0 && value.same_value(a.as_kind_of(f)) && value.pose().is_some()
             });
@@ -1807,6 +1811,8 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                             "by a module that does not declare it"
                         } else if value.pose().is_none() {
                             "with fields that are not numbers"
+                        } else if !same_holder {
+                            "one that changes whether the robot holds the tool (robhold)"
                         } else {
                             "and other values elsewhere"
                         }

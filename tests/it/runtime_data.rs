@@ -1128,3 +1128,21 @@ fn a_tool_given_a_computed_value_refuses_its_targets_but_not_its_load() {
         assert!(refused[0].2.contains("`tG`"), "{}", refused[0].2);
     }
 }
+
+/// A PERS work object given one other literal value that changes whether the robot holds the
+/// tool (`robhold`) is not taken at that value: the motions were bound as the declaration
+/// says, so the targets are refused as given another value (before: corrected in the assigned
+/// pose yet refused as stationary-tool points).
+#[test]
+fn an_assignment_that_changes_robhold_is_not_taken() {
+    use trackfix::transform::RefusalKind;
+    let held = W_ORIGIN.replacen("FALSE", "TRUE", 1);
+    let (_, refused) = correct_task(&[(
+        "m.mod",
+        format!(
+            "MODULE M\n  PERS wobjdata w1:={held};\n{P1}  PROC main()\n    w1 := {W_AWAY};\n    MoveL p1,v100,fine,tool0\\WObj:=w1;\n  ENDPROC\nENDMODULE\n"
+        ),
+    )]);
+    assert_eq!(refused.len(), 1, "{refused:?}");
+    assert_eq!(refused[0].1, RefusalKind::RuntimeData, "{refused:?}");
+}
