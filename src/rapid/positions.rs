@@ -1718,6 +1718,42 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     let mut assigned_notes: Vec<Vec<Diagnostic>> = vec![Vec::new(); rest.len()];
     // (frame, kind, module, line) of each frame whose value the flow decides.
     let mut reassigned: Vec<(String, FrameKind, usize, usize)> = whole_arrays;
+    // A frame declared in two modules of the task for every module to see, with two values:
+    // one object at run time (a `PERS` keeps the value of the module loaded first; a
+    // `CONST` or `VAR` twice does not load), so which value the motions run with is not in
+    // the text.
+    for (m, r) in rest.iter().enumerate() {
+        for f in r.0.iter().filter(|f| f.scope == FrameScope::Program) {
+            let first = rest.iter().enumerate().take(m).find_map(|(fm, fr)| {
+                let d = fr.0.iter().find(|d| {
+                    d.scope == FrameScope::Program
+                        && d.kind == f.kind
+                        && d.name.eq_ignore_ascii_case(&f.name)
+                })?;
+                Some((fm, d))
+            });
+            let Some((fm, d)) = first.filter(|(_, d)| !d.same_value(f)) else {
+                continue;
+            };
+            let (Some(notes), Some(there)) = (assigned_notes.get_mut(m), module_names.get(fm))
+            else {
+                continue;
+            };
+            notes.push(
+                Diagnostic::warning(
+                    f.span,
+                    format!(
+                        "`{}` is declared here and in {there} (line {}) with another value: the task has one `{}`, whose value the text does not decide",
+                        f.name, d.line, f.name
+                    ),
+                )
+                .with_hint("declare it in one module, or give both declarations one value")
+                // The refusal of its targets names this declaration: say why there too.
+                .shaping_transforms(),
+            );
+            reassigned.push((f.name.clone(), f.kind, m, f.line));
+        }
+    }
     // (module, index, the value) of each frame the program gives one other value.
     let mut replaced: Vec<(usize, usize, FrameDecl)> = Vec::new();
     // (module, the value) of each assignment of a frame's own value.

@@ -1146,3 +1146,35 @@ fn an_assignment_that_changes_robhold_is_not_taken() {
     assert_eq!(refused.len(), 1, "{refused:?}");
     assert_eq!(refused[0].1, RefusalKind::RuntimeData, "{refused:?}");
 }
+
+/// A work object declared for every module to see in two modules with two values is one object
+/// at run time, of a value the text does not decide: the targets moved with it are refused, and
+/// the second declaration is warned about. Two declarations of one value are one frame.
+#[test]
+fn a_frame_declared_in_two_modules_with_two_values_refuses_its_targets() {
+    use trackfix::transform::RefusalKind;
+    let motion = "  PROC main()\n    MoveL p1,v100,fine,tool0\\WObj:=w1;\n  ENDPROC\n";
+    let other = |v: &str| format!("MODULE B\n  PERS wobjdata w1:={v};\nENDMODULE\n");
+    let first = format!("MODULE M\n  PERS wobjdata w1:={W_ORIGIN};\n{P1}{motion}ENDMODULE\n");
+    let (_, refused) = correct_task(&[("m.mod", first.clone()), ("b.mod", other(W_ORIGIN))]);
+    assert!(refused.is_empty(), "{refused:?}");
+    let (_, refused) = correct_task(&[("m.mod", first), ("b.mod", other(W_AWAY))]);
+    assert_eq!(refused.len(), 1, "{refused:?}");
+    assert_eq!(refused[0].1, RefusalKind::RuntimeData, "{refused:?}");
+    let files = rapid::parse_task(vec![
+        (
+            "m.mod".into(),
+            format!("MODULE M\n  PERS wobjdata w1:={W_ORIGIN};\nENDMODULE\n")
+                .into_bytes()
+                .into(),
+        ),
+        ("b.mod".into(), other(W_AWAY).into_bytes().into()),
+    ]);
+    let warned: Vec<_> = files[1]
+        .diagnostics
+        .iter()
+        .filter(|d| d.message.contains("is declared here and in m.mod"))
+        .collect();
+    assert_eq!(warned.len(), 1, "{:?}", files[1].diagnostics);
+    assert!(warned[0].shapes_transforms);
+}
