@@ -106,14 +106,38 @@ pub(crate) fn resolve_frame(
             )
         }),
         None if is_world(name) => Ok(Pose::identity()),
-        None => Err(Why::new(
-            RefusalKind::UnresolvedWorkObject,
-            format!("{frame} `{name}` is not declared in the program"),
-            format!(
-                "if `{name}` is one fixed frame, give it under [robot.NAME.wobj] in the cell file; a routine's parameter or a {frame} chosen at run time is not: write each motion with the {frame} it runs in"
+        // Declared, but where the target's file does not see it (`LOCAL` in another module).
+        None => Err(match hidden_declaration(program, name) {
+            Some(file) => Why::new(
+                RefusalKind::UnresolvedWorkObject,
+                format!(
+                    "{frame} `{name}` is declared LOCAL in {}, which the target's module does not see",
+                    file.path.display()
+                ),
+                format!(
+                    "declare `{name}` where the target's module sees it (without LOCAL), or give it under [robot.NAME.wobj] in the cell file"
+                ),
             ),
-        )),
+            None => Why::new(
+                RefusalKind::UnresolvedWorkObject,
+                format!("{frame} `{name}` is not declared in the program"),
+                format!(
+                    "if `{name}` is one fixed frame, give it under [robot.NAME.wobj] in the cell file; a routine's parameter or a {frame} chosen at run time is not: write each motion with the {frame} it runs in"
+                ),
+            ),
+        }),
     }
+}
+
+/// The file that declares work object `name` `LOCAL` to itself, if one does.
+fn hidden_declaration<'p>(program: &'p Program, name: &str) -> Option<&'p ParsedFile> {
+    program.files.iter().find(|f| {
+        f.frames.iter().any(|d| {
+            d.scope == crate::position::FrameScope::Module
+                && matches!(d.kind, FrameKind::WorkObject | FrameKind::Base)
+                && d.name.eq_ignore_ascii_case(name)
+        })
+    })
 }
 
 /// The work object (or KRL base) a target is used with: its first use, else `default` for a

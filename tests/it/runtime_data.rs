@@ -1178,3 +1178,24 @@ fn a_frame_declared_in_two_modules_with_two_values_refuses_its_targets() {
     assert_eq!(warned.len(), 1, "{:?}", files[1].diagnostics);
     assert!(warned[0].shapes_transforms);
 }
+
+/// A target moved to with a work object that only a `LOCAL` declaration in another module gives
+/// is refused with that said, not as undeclared.
+#[test]
+fn a_local_frame_the_targets_module_does_not_see_is_named() {
+    let (_, refused) = correct_task(&[
+        ("m.mod", format!("MODULE M\n{P1}ENDMODULE\n")),
+        (
+            "b.mod",
+            format!(
+                "MODULE B\n  LOCAL PERS wobjdata w1:={W_AWAY};\n  PROC main()\n    MoveL p1,v100,fine,tool0\\WObj:=w1;\n  ENDPROC\nENDMODULE\n"
+            ),
+        ),
+    ]);
+    assert_eq!(refused.len(), 1, "{refused:?}");
+    assert!(
+        refused[0].2.contains("`w1` is declared LOCAL in b.mod"),
+        "{}",
+        refused[0].2
+    );
+}
