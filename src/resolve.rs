@@ -154,6 +154,26 @@ pub(crate) struct Routine {
     pub(crate) optional: Vec<Span>,
 }
 
+impl Routine {
+    /// The index among its required parameters of the one named `name` (its declaration's
+    /// spans point into `src`).
+    #[inline]
+    pub(crate) fn required_named(&self, src: &[u8], name: &[u8]) -> Option<usize> {
+        self.params
+            .iter()
+            .position(|p| NameKey(p.slice(src)) == NameKey(name))
+    }
+
+    /// Whether `name` is one of its parameters, required or optional.
+    #[inline]
+    pub(crate) fn has_parameter(&self, src: &[u8], name: &[u8]) -> bool {
+        self.params
+            .iter()
+            .chain(&self.optional)
+            .any(|p| NameKey(p.slice(src)) == NameKey(name))
+    }
+}
+
 /// An instruction that uses targets: a motion (or a call that passes targets on) with the frame
 /// and tool it moves with. It borrows what it references: a language builds one as it goes and
 /// hands it to [`Binder::bind`].
@@ -758,8 +778,8 @@ impl<'f, 'a> Binder<'f, 'a> {
 
     /// The targets a reference written as `raw` in file `m` names, as a motion of that file
     /// reaches them (its module's own, else those other modules see; every element of an
-    /// array indexed by a computed value; what a copy of that name copies), added to `out`. A routine's parameter of that name
-    /// is the caller's to look past.
+    /// array indexed by a computed value; what a copy of that name copies), added to `out`.
+    /// A routine's parameter of that name is the caller's to look past.
     pub(crate) fn targets_named(&mut self, m: usize, raw: &[u8], out: &mut Vec<TargetAt>) {
         let Binder {
             files,

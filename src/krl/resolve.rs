@@ -816,9 +816,9 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
         }
         file.diagnostics.sort_by_key(|d| d.span.start);
     }
-    frames_of_unused_points(files, facts, &fdats, &modules);
     // The positions are in their final order now (candidates promoted, sorted).
     let exported = modules.exported(files, facts);
+    frames_of_unused_points(files, &exported, &fdats, &modules);
     mark_offsets(files, facts, &modules, &exported);
     // The routines, for the binder: only when a routine gives a parameter a computed value.
     let follow = facts.iter().any(|f| !f.param_assignments.is_empty());
@@ -871,17 +871,17 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
 /// "Points no motion uses"). Without them its base is unknown and the transforms refuse it. A
 /// point named anywhere but its declaration (passed to a subroutine, copied, read, or only in a
 /// comment) is not taken: a motion trackfix does not follow may reach it. One note per file
-/// names them: what the transforms do with them rests on it.
+/// names them: what the transforms do with them rests on it. `exported`: per file, which
+/// positions other modules see ([`Modules::exported`]; `None`: all).
 fn frames_of_unused_points(
     files: &mut [ParsedFile],
-    facts: &[Facts],
+    exported: &[Option<Vec<bool>>],
     fdats: &[HashMap<Name, Fdat>],
     modules: &Modules,
 ) {
     // (file, index, the point's name upper-cased, its FDAT's name): the points no motion
     // uses that have an FDAT of their name.
     let mut candidates: Vec<(usize, usize, String, String)> = Vec::new();
-    let exported = modules.exported(files, facts);
     for (fi, file) in files.iter().enumerate() {
         let Some(fdats) = fdats.get(modules.of(fi)).filter(|f| !f.is_empty()) else {
             continue;
@@ -1029,7 +1029,7 @@ fn word_counts<'n>(src: &[u8], names: impl Iterator<Item = &'n str>) -> HashMap<
 /// the targets as given a frame of two values (docs/design.md, "Frames the program assigns":
 /// the value is given in another file than the declaring `$config.dat`, so which one a motion
 /// runs with depends on the flow).
-fn mark_assigned_data(files: &mut [ParsedFile], facts: &[Facts], elsewhere: &[FrameDecl]) {
+fn mark_assigned_data(files: &mut [ParsedFile], facts: &[Facts], config_frames: &[FrameDecl]) {
     if facts.iter().all(|f| f.data_assignments.is_empty()) {
         return;
     }
@@ -1047,7 +1047,7 @@ fn mark_assigned_data(files: &mut [ParsedFile], facts: &[Facts], elsewhere: &[Fr
                 })
             })
             .or_else(|| {
-                elsewhere
+                config_frames
                     .iter()
                     .find(|d| d.name.eq_ignore_ascii_case(&name))
             })

@@ -1541,14 +1541,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
             // declaration of that name is it (the motion's targets are refused as used with
             // a frame that cannot be resolved).
             let routine = u.routine.and_then(|rt| r.4.get(rt.get() as usize - 1));
-            let a_parameter = |text: &[u8]| {
-                routine.is_some_and(|rt| {
-                    rt.params
-                        .iter()
-                        .chain(&rt.optional)
-                        .any(|p| NameKey(p.slice(src)) == NameKey(text))
-                })
-            };
+            let a_parameter = |text: &[u8]| routine.is_some_and(|rt| rt.has_parameter(src, text));
             let tool = match u.tool {
                 Some(sp) => Some(trim_latin1(sp.span().slice(src))),
                 None => kinds.tool_index(&call, call_args, src).and_then(|i| {
@@ -1628,11 +1621,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                     .unwrap_or(raw)
                     .trim_ascii_end();
                 let parameter = routine.and_then(|rt| {
-                    let k = routines
-                        .get(rt)?
-                        .params
-                        .iter()
-                        .position(|p| NameKey(p.slice(src)) == NameKey(name))?;
+                    let k = routines.get(rt)?.required_named(src, name)?;
                     Some((m, rt, k))
                 });
                 match parameter {
@@ -1671,20 +1660,25 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     for (m, r) in rest.iter().enumerate() {
         for (k, a) in r.2.iter().enumerate() {
             let key = key_into(&mut buf, r.6, a.name);
-            // The assigning module's own frame first, as a motion's frame resolves, else one
-            // every module sees.
-            let own = r.0.iter().position(|f| {
-                !matches!(f.scope, FrameScope::Routine(_)) && f.name.eq_ignore_ascii_case(key)
-            });
-            let found = own.map(|i| (m, i)).or_else(|| {
-                rest.iter().enumerate().find_map(|(fm, fr)| {
-                    let i = fr.0.iter().position(|f| {
-                        f.scope == FrameScope::Program && f.name.eq_ignore_ascii_case(key)
-                    })?;
-                    Some((fm, i))
-                })
-            });
-            if let Some(at) = found {
+            // The frames matching `named` the assigning module sees: its own first, as a
+            // motion's frame resolves, else those every module sees.
+            let seen = |named: &dyn Fn(&FrameDecl) -> bool| -> Vec<(usize, usize)> {
+                let own = |f: &FrameDecl| !matches!(f.scope, FrameScope::Routine(_));
+                let every = |f: &FrameDecl| f.scope == FrameScope::Program;
+                let matching = |fm: usize, fr: &[FrameDecl], scope: &dyn Fn(&FrameDecl) -> bool| {
+                    let hits = fr.iter().enumerate().filter(|(_, f)| scope(f) && named(f));
+                    hits.map(|(i, _)| (fm, i)).collect::<Vec<_>>()
+                };
+                let mine = matching(m, &r.0, &own);
+                if !mine.is_empty() {
+                    return mine;
+                }
+                rest.iter()
+                    .enumerate()
+                    .flat_map(|(fm, fr)| matching(fm, &fr.0, &every))
+                    .collect()
+            };
+            if let Some(&at) = seen(&|f| f.name.eq_ignore_ascii_case(key)).first() {
                 given.push((at, (m, k)));
                 continue;
             }
@@ -1698,18 +1692,9 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                         .get(..key.len())
                         .is_some_and(|n| n.eq_ignore_ascii_case(key))
             };
-            let elements: Vec<&FrameDecl> =
-                r.0.iter()
-                    .filter(|f| !matches!(f.scope, FrameScope::Routine(_)) && element(f))
-                    .collect();
-            let elements = if elements.is_empty() {
-                rest.iter()
-                    .flat_map(|fr| &fr.0)
-                    .filter(|f| f.scope == FrameScope::Program && element(f))
-                    .collect()
-            } else {
-                elements
-            };
+            let elements = seen(&element)
+                .into_iter()
+                .filter_map(|(fm, i)| rest.get(fm)?.0.get(i));
             for f in elements {
                 whole_arrays.push((f.name.clone(), f.kind, m, a.as_wobj.line));
             }
@@ -1722,7 +1707,8 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     // one object at run time (a `PERS` keeps the value of the module loaded first; a
     // `CONST` or `VAR` twice does not load), so which value the motions run with is not in
     // the text.
-    for (m, r) in rest.iter().enumerate() {
+    // (Only when some frame name is declared twice in the task: `scopes` is built then.)
+    for (m, r) in rest.iter().enumerate().filter(|_| !scopes.is_empty()) {
         for f in r.0.iter().filter(|f| f.scope == FrameScope::Program) {
             let first = rest.iter().enumerate().take(m).find_map(|(fm, fr)| {
                 let d = fr.0.iter().find(|d| {
@@ -2090,8 +2076,8 @@ impl Extractor<'_> {
                 let head = text.split(['.', '{']).next().unwrap_or_default().trim();
                 let key = NameKey(head.as_bytes());
                 let own_param = self.current.and_then(|r| {
-                    let params = &self.routines.get(r)?.params;
-                    let p = params.iter().find(|p| NameKey(p.slice(src)) == key)?;
+                    let routine = self.routines.get(r)?;
+                    let p = routine.params.get(routine.required_named(src, key.0)?)?;
                     Some((r, Span32::of(*p)?))
                 });
                 let routine_data = self.current.is_some_and(|r| {
@@ -2143,10 +2129,10 @@ impl Extractor<'_> {
                     }
                     let line = self.lines.line(span.start);
                     let param = self.current.and_then(|r| {
-                        let params = &self.routines.get(r)?.params;
-                        let p = params
-                            .iter()
-                            .find(|p| NameKey(p.slice(src)) == NameKey(name.as_bytes()))?;
+                        let routine = self.routines.get(r)?;
+                        let p = routine
+                            .params
+                            .get(routine.required_named(src, name.as_bytes())?)?;
                         Some((r, Span32::of(*p)?))
                     });
                     match param {

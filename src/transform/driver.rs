@@ -171,8 +171,8 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
                 0 => {}
                 n if n == call.bases.len() => continue,
                 n => {
-                    fe.refusals
-                        .push(super::policy::partly_kept_offset(file, call, n));
+                    let why = super::policy::partly_kept_offset(call, n);
+                    fe.refusals.push(*why.at_call(file, call));
                     continue;
                 }
             }

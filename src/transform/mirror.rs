@@ -654,15 +654,8 @@ fn mirror_offset(
                 match resolved {
                     Ok(r) => r,
                     Err(why) => {
-                        return Err(Box::new(Refusal::new(
-                            file,
-                            call.span,
-                            call.target.clone(),
-                            why.kind,
-                            format!("Offs({}, …): {}", call.target, why.message),
-                            why.hint,
-                            why.remedy,
-                        )));
+                        let message = format!("Offs({}, …): {}", call.target, why.message);
+                        return Err(Why { message, ..why }.at_call(file, call));
                     }
                 }
             }
@@ -710,15 +703,7 @@ fn mirror_offset(
             (None, false) => None,
         };
         if let Some((message, hint)) = why {
-            return Err(Box::new(Refusal::new(
-                file,
-                call.span,
-                call.target.clone(),
-                RefusalKind::Expression,
-                message,
-                hint,
-                None,
-            )));
+            return Err(Why::new(RefusalKind::Expression, message, hint).at_call(file, call));
         }
         let d = call.delta.map(|f| f.map_or(0.0, |f| f.value()));
         let v = Vector3::new(d[0], d[1], d[2]);

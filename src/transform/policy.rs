@@ -38,6 +38,23 @@ impl Why {
         self
     }
 
+    /// The refusal of offset call `call` in `file` for this reason.
+    pub(crate) fn at_call(
+        self,
+        file: &ParsedFile,
+        call: &crate::position::OffsetCall,
+    ) -> Box<Refusal> {
+        Box::new(Refusal::new(
+            file,
+            call.span,
+            call.target.clone(),
+            self.kind,
+            self.message,
+            self.hint,
+            self.remedy,
+        ))
+    }
+
     /// The refusal of `p` in `file` for this reason.
     pub(crate) fn at(self, file: &ParsedFile, p: &Position) -> Box<Refusal> {
         Box::new(Refusal::new(
@@ -310,7 +327,7 @@ impl KeptTargets {
 
     /// Whether `call` offsets one of the targets.
     pub(crate) fn offsets(&self, call: &crate::position::OffsetCall) -> bool {
-        !self.0.is_empty() && call.bases.iter().any(|b| self.0.contains(b))
+        self.kept_bases(call) > 0
     }
 
     /// How many of the targets `call` stands for are kept.
@@ -322,26 +339,17 @@ impl KeptTargets {
     }
 }
 
-/// The refusal of an offset call that stands for targets some of which are left as written and
-/// some moved: kept, it is right for the first; moved, for the others.
-pub(crate) fn partly_kept_offset(
-    file: &ParsedFile,
-    call: &crate::position::OffsetCall,
-    kept: usize,
-) -> Refusal {
-    Refusal::new(
-        file,
-        call.span,
-        call.target.clone(),
+/// Why an offset call that stands for targets some of which are left as written (`kept` of
+/// them) and some moved is refused: kept, it is right for the first; moved, for the others.
+pub(crate) fn partly_kept_offset(call: &crate::position::OffsetCall, kept: usize) -> Why {
+    Why::new(
         RefusalKind::SharedOffset,
         format!(
             "`{}` stands for {} targets, {kept} of them left as written and the others moved: one offset cannot follow both",
             call.target,
             call.bases.len()
         ),
-        "write the offset point of each as a target of its own, or fix the targets left as written"
-            .to_owned(),
-        None,
+        "write the offset point of each as a target of its own, or fix the targets left as written",
     )
 }
 

@@ -381,16 +381,14 @@ impl TargetRule for TrackRule<'_, '_> {
             return Ok(Vec::new());
         }
         let refuse = |kind, message: String, hint: &str| {
-            Err(Box::new(Refusal::new(
-                scope.file,
-                call.span,
-                call.target.clone(),
-                kind,
-                message,
-                hint.to_owned(),
-                None,
-            )))
+            Err(Why::new(kind, message, hint).at_call(scope.file, call))
         };
+        let d = call
+            .delta
+            .each_ref()
+            .map(|f| f.as_ref().map(NumField::value));
+        // (Asked as `new_pose` asks, whose cache this is.)
+        let inverse = self.dir == Direction::Correct;
         // The offset each base turns it to.
         let mut turned_to: Vec<Vector3<f64>> = Vec::new();
         for (file, p) in offset_bases(scope.program, call, self.reading()) {
@@ -408,18 +406,12 @@ impl TargetRule for TrackRule<'_, '_> {
             let (Ok(Some(skid)), Ok(w)) = (self.skid(at, &p), w) else {
                 continue;
             };
-            // (Asked as `new_pose` asks, whose cache this is.)
-            let inverse = self.dir == Direction::Correct;
             let Ok((g, _)) = self
                 .corrections
                 .get(self.setup, &w, skid, self.dir, inverse)
             else {
                 continue;
             };
-            let d = call
-                .delta
-                .each_ref()
-                .map(|f| f.as_ref().map(NumField::value));
             let turned = g.rotation.angle() != 0.0;
             if turned && d.iter().any(Option::is_none) {
                 return refuse(

@@ -243,7 +243,6 @@ fn combine(
                 }
             })
             .collect();
-
         files.push(FileResult {
             path: a.path.clone(),
             original: a.source.clone(),

@@ -36,6 +36,15 @@ fn all_samples() -> Vec<PathBuf> {
     v
 }
 
+/// Load options with the samples' `$config.dat` as the cell's, inputs read (not mapped).
+fn with_sample_config() -> LoadOptions {
+    LoadOptions {
+        krl_config_dat: Some(sample("$config.dat")),
+        map_inputs: false,
+        ..LoadOptions::default()
+    }
+}
+
 fn parse_sample(name: &str) -> ParsedFile {
     let path = sample(name);
     krl::parse_file(&path, std::fs::read(&path).unwrap())
@@ -796,11 +805,7 @@ fn collect_inputs_lists_a_pair_once_in_any_case() {
 
 #[test]
 fn program_from_sources_in_memory_matches_the_program_from_disk() {
-    let options = LoadOptions {
-        krl_config_dat: Some(sample("$config.dat")),
-        map_inputs: false,
-        ..LoadOptions::default()
-    };
+    let options = with_sample_config();
     for name in [
         "spot_line.src",
         "glue_tcp.dat",
@@ -1311,11 +1316,7 @@ fn a_point_no_motion_uses_is_taken_in_its_fdats_frames() {
         DECL E6POS XP8={X 420.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
         DECL FDAT FP8={TOOL_NO 1,BASE_NO 3,IPO_FRAME #BASE}\n\
         ENDDAT\n";
-    let options = LoadOptions {
-        krl_config_dat: Some(sample("$config.dat")),
-        map_inputs: false,
-        ..LoadOptions::default()
-    };
+    let options = with_sample_config();
     let load = |src: &str| {
         krl::load_program_from_sources(
             vec![
@@ -1396,11 +1397,7 @@ fn a_point_no_motion_uses_is_taken_in_its_fdats_frames() {
 /// frame of two values.
 #[test]
 fn an_assignment_of_the_cells_config_value_changes_nothing() {
-    let options = LoadOptions {
-        krl_config_dat: Some(sample("$config.dat")),
-        map_inputs: false,
-        ..LoadOptions::default()
-    };
+    let options = with_sample_config();
     let program = |value: &str| {
         let src = format!(
             "DEF a( )\n  $TOOL=TOOL_DATA[1]\n  BASE_DATA[3]={value}\n  $BASE=BASE_DATA[3]\n  LIN XP1\nEND\n"
