@@ -196,6 +196,9 @@ pub(crate) struct Use<'a> {
     pub(crate) stationary: bool,
     /// The frame is computed when the program runs: every target reached is, too.
     pub(crate) run_time: Option<RunTimeValue>,
+    /// The frame or tool is a parameter of the use's routine, whatever each caller passes:
+    /// every target reached is used with one trackfix cannot tell.
+    pub(crate) passed: Option<std::sync::Arc<PassedFrames>>,
     /// Positional arguments, in order, that are plain references (`None` for any other
     /// expression), in the file's source (as a RAPID call record keeps them).
     pub(crate) args: &'a [Option<crate::syntax::Span32>],
@@ -448,6 +451,18 @@ pub(crate) struct Assignment {
     pub(crate) name: String,
     /// 1-based line of the assignment.
     pub(crate) line: usize,
+    /// The value is written out (`wArr{2} := [FALSE, …];`, `w.uframe.trans.x := 5;`): the
+    /// program gives the name another value, which it does not compute.
+    pub(crate) literal: bool,
+}
+
+/// The parameters of its routine a use names as its frame and tool.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct PassedFrames {
+    /// The frame parameter, as written.
+    pub(crate) frame: Option<String>,
+    /// The tool parameter, as written.
+    pub(crate) tool: Option<String>,
 }
 
 /// What a use gives the targets it reaches: the frame and tool it moves with.
@@ -459,6 +474,7 @@ struct MovesWith {
     tool: Option<FrameName>,
     stationary: bool,
     run_time: Option<RunTimeValue>,
+    passed: Option<std::sync::Arc<PassedFrames>>,
 }
 
 impl MovesWith {
@@ -469,6 +485,7 @@ impl MovesWith {
             tool: u.tool.clone(),
             stationary: u.stationary,
             run_time: u.run_time.clone(),
+            passed: u.passed.clone(),
         }
     }
 }
@@ -479,6 +496,7 @@ struct Recorded<'u> {
     tool: Option<&'u FrameName>,
     stationary: bool,
     run_time: Option<&'u RunTimeValue>,
+    passed: Option<&'u PassedFrames>,
     /// 1-based line of the use.
     line: usize,
 }
@@ -486,12 +504,28 @@ struct Recorded<'u> {
 /// Records use `u`, in file `from`, in target `at`; the run-time value's line is named with
 /// file `from` when the target is another file's.
 fn record(files: &mut [FileFacts<'_>], from: usize, (m, i): TargetAt, u: &Recorded<'_>) {
-    let elsewhere = match u.run_time {
-        Some(_) if from != m => files.get(from).map(|f| f.name.clone()),
+    let elsewhere = match (u.run_time, u.passed) {
+        (None, None) => None,
+        _ if from != m => files.get(from).map(|f| f.name.clone()),
         _ => None,
     };
     if let Some(usage) = files.get_mut(m).and_then(|f| f.positions.usage_mut(i)) {
         usage.record_shared(u.frame, u.tool, u.stationary, u.line);
+        if let Some(passed) = u.passed {
+            let why = |name: &String| crate::position::UnresolvedFrame {
+                at: UseLine {
+                    line: u.line,
+                    file: elsewhere.clone(),
+                },
+                cause: crate::position::UnresolvedCause::Parameter(name.clone()),
+            };
+            if let Some(w) = &passed.frame {
+                usage.mark_unresolved_frame(why(w));
+            }
+            if let Some(t) = &passed.tool {
+                usage.mark_unresolved_tool(why(t));
+            }
+        }
         if let Some(why) = u.run_time {
             let mut why = why.clone();
             if elsewhere.is_some() {
@@ -766,6 +800,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             tool: u.tool.as_ref(),
             stationary: u.stationary,
             run_time: u.run_time.as_ref(),
+            passed: u.passed.as_deref(),
             line: u.line,
         };
         for &t in targets.iter() {
@@ -908,6 +943,7 @@ impl<'f, 'a> Binder<'f, 'a> {
                     tool: w.tool.as_ref(),
                     stationary: w.stationary,
                     run_time: w.run_time.as_ref(),
+                    passed: w.passed.as_deref(),
                     line,
                 };
                 record(files, w.from, t, &recorded);
@@ -951,8 +987,9 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
         (targets.build(), frames.build());
     // (target's file, its index, the assignment's line and file).
     let mut assigned_targets = Vec::new();
-    // Folded frame name → (name as declared, line and file of the first assignment).
-    let mut assigned_frames: crate::names::NameMap<String, (String, usize, usize)> =
+    // Folded frame name → (name as declared, line and file of the first assignment, whether
+    // that assignment writes its value out).
+    let mut assigned_frames: crate::names::NameMap<String, (String, usize, usize, bool)> =
         Default::default();
     for (fi, f) in files.iter().enumerate() {
         for a in f.assignments {
@@ -966,7 +1003,7 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
                 if let Some(d) = files.get(df).and_then(|f| f.frames.get(di)) {
                     assigned_frames
                         .entry(fold(&d.name))
-                        .or_insert_with(|| (d.name.clone(), a.line, fi));
+                        .or_insert_with(|| (d.name.clone(), a.line, fi, a.literal));
                 }
             }
         }
@@ -994,12 +1031,16 @@ pub(crate) fn mark_run_time(files: &mut [FileFacts<'_>], naming: &Naming) {
                 .work_objects()
                 .chain(usage.tools())
                 .find_map(|w| assigned_frames.get(&fold(w)));
-            if let Some((name, line, fi)) = frame {
-                let why = RunTimeValue::Frame {
-                    name: Some(name.clone()),
-                    at: at(*line, *fi, tf),
-                };
-                usage.set_run_time(why);
+            if let Some((name, line, fi, literal)) = frame {
+                let (name, at) = (name.clone(), at(*line, *fi, tf));
+                usage.set_run_time(if *literal {
+                    RunTimeValue::FrameAssigned { name, at }
+                } else {
+                    RunTimeValue::Frame {
+                        name: Some(name),
+                        at,
+                    }
+                });
             }
         }
     }

@@ -1225,6 +1225,7 @@ fn computed_assignment(
         None => out.facts.assignments.push(crate::resolve::Assignment {
             name: name.to_owned(),
             line,
+            literal: false,
         }),
     }
 }

@@ -8,7 +8,7 @@ use super::positions::{
     name_key,
 };
 use crate::position::{
-    Config, FrameDecl, FrameName, Name, ParsedFile, PositionKind, RunTimeValue, UnresolvedFrame,
+    Config, FrameDecl, FrameName, Name, ParsedFile, PositionKind, RunTimeValue, UnresolvedCause, UnresolvedFrame,
     UseLine,
 };
 use crate::syntax::Diagnostic;
@@ -769,7 +769,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                                             line: *line,
                                             file: elsewhere.cloned(),
                                         },
-                                        shadowed: None,
+                                        cause: UnresolvedCause::SomePaths,
                                     });
                                 });
                             }

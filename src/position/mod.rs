@@ -420,6 +420,8 @@ struct RareUsage {
     /// The first motion to the target whose frame is not known (a KRL base set on one path
     /// only, a RAPID frame its module sees another declaration of than the target's).
     unresolved_frame: Option<UnresolvedFrame>,
+    /// The first motion to the target with a tool its routine is passed.
+    unresolved_tool: Option<UnresolvedFrame>,
 }
 
 /// A target's usage is kept for each of 100,000 targets: a layout change that grows it fails
@@ -480,10 +482,20 @@ pub enum RunTimeValue {
 pub struct UnresolvedFrame {
     /// Where the motion is.
     pub at: UseLine,
-    /// The frame it names, when it names one that means another declaration there than where
-    /// the target is declared (a RAPID `LOCAL` frame, or one a routine declares for itself);
-    /// `None` for a base set on some paths only.
-    pub shadowed: Option<String>,
+    /// Why the frame is not known there.
+    pub cause: UnresolvedCause,
+}
+
+/// Why the frame (or tool) of a motion is not known.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum UnresolvedCause {
+    /// A KRL base set on some paths only.
+    SomePaths,
+    /// The motion names a frame that means another declaration there than where the target
+    /// is declared (a RAPID `LOCAL` frame, or one a routine declares for itself).
+    Shadowed(String),
+    /// The motion names a parameter of its routine: the frame is whatever each caller passes.
+    Parameter(String),
 }
 
 /// The line of a use, and the file it is in when that is not the used target's own (a KRL
@@ -693,6 +705,20 @@ impl Usage {
         let rare = self.rare.get_or_insert_with(Box::default);
         if rare.unresolved_frame.is_none() {
             rare.unresolved_frame = Some(why);
+        }
+    }
+
+    /// The first motion to the target with a tool that is not known (a RAPID routine's tool
+    /// parameter): the target's joints depend on it.
+    pub fn unresolved_tool(&self) -> Option<&UnresolvedFrame> {
+        self.rare.as_ref()?.unresolved_tool.as_ref()
+    }
+
+    /// Records a motion to the target whose tool is not known.
+    pub fn mark_unresolved_tool(&mut self, why: UnresolvedFrame) {
+        let rare = self.rare.get_or_insert_with(Box::default);
+        if rare.unresolved_tool.is_none() {
+            rare.unresolved_tool = Some(why);
         }
     }
 

@@ -12,7 +12,7 @@ use crate::names::{NameKey, NameMap, same_bytes};
 use crate::position::{
     Axes, CartesianFields, Config, FrameDecl, FrameKind, FrameName, FrameScope, FrameStorage, Name,
     NonPosition, NonPositionRole, NumField, OffsetCall, OffsetKind, Orientation, Position,
-    PositionKind, PositionList, ReadAgainTarget, RunTimeValue, Usage, UseLine,
+    PositionKind, PositionList, ReadAgainTarget, RunTimeValue, UnresolvedCause, Usage, UseLine,
 };
 use crate::resolve::DeclKind;
 use crate::syntax::{Diagnostic, LineCursor, LineIndex, NumLit, Span, Span32, latin1};
@@ -1550,6 +1550,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                 }),
             };
             let tool_named = tool.is_some();
+            let tool_parameter = tool.filter(|t| a_parameter(t));
             let tool = tool.filter(|t| !a_parameter(t)).map(|t| frame_texts.get(t));
             // A motion without `\WObj` moves in `wobj0` (asked only then: most name theirs).
             let motion = || {
@@ -1557,6 +1558,10 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                     .iter()
                     .any(|p| call.starts_with(p.as_bytes()))
             };
+            let wobj_parameter = u
+                .wobj
+                .map(|sp| trim_latin1(sp.span().slice(src)))
+                .filter(|w| a_parameter(w));
             let wobj = match u.wobj {
                 Some(sp) => Some(trim_latin1(sp.span().slice(src)))
                     .filter(|w| !a_parameter(w))
@@ -1572,6 +1577,13 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                 frame: wobj.map(|w| w.name),
                 tool: tool.map(|t| t.name),
                 run_time: None,
+                passed: (wobj_parameter.is_some() || tool_parameter.is_some()).then(|| {
+                    let text = |t: &[u8]| String::from_utf8_lossy(t).into_owned();
+                    std::sync::Arc::new(crate::resolve::PassedFrames {
+                        frame: wobj_parameter.map(text),
+                        tool: tool_parameter.map(text),
+                    })
+                }),
                 args: call_args,
                 refs,
                 folded: &[],
@@ -1870,7 +1882,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         ) {
             u.mark_unresolved_frame(crate::position::UnresolvedFrame {
                 at: crate::position::UseLine::of(line, m, tm, from),
-                shadowed: Some(frame),
+                cause: UnresolvedCause::Shadowed(frame),
             });
         }
     }
@@ -2141,6 +2153,7 @@ impl Extractor<'_> {
                         None => self.computed.push(crate::resolve::Assignment {
                             name: name.to_owned(),
                             line,
+                            literal,
                         }),
                     }
                 }

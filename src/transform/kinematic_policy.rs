@@ -52,6 +52,20 @@ impl Arm {
         p: &Position,
     ) -> Result<Vec<Pose>, Why> {
         let what = describe(p);
+        if let Some(u) = p.usage.unresolved_tool() {
+            let name = match &u.cause {
+                crate::position::UnresolvedCause::Parameter(n)
+                | crate::position::UnresolvedCause::Shadowed(n) => n.as_str(),
+                crate::position::UnresolvedCause::SomePaths => "a tool",
+            };
+            return Err(reach(
+                format!(
+                    "{what} is moved to on {} with `{name}`, a parameter of the routine: the tool is whichever one each caller passes, so its joints cannot be checked",
+                    u.at
+                ),
+                "name the tool in the motion itself, or give the robot no kinematics",
+            ));
+        }
         let mut tools = Vec::with_capacity(1);
         for name in p.usage.tools() {
             let pose = resolve_tool(program, Some(own), &self.tools, name).map_err(|msg| {

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use crate::dialect::Vocabulary;
 use crate::geometry::Pose;
-use crate::position::{FrameKind, FrameName, ParsedFile, Position, Program};
+use crate::position::{FrameKind, FrameName, ParsedFile, Position, Program, UnresolvedCause};
 
 use super::refusal::{Refusal, RefusalKind, Remedy};
 
@@ -168,13 +168,20 @@ pub(crate) fn wobj_of(
     let frame = words.frame;
     if let Some(u) = p.usage.unresolved_frame() {
         let at = &u.at;
-        return Err(match &u.shadowed {
-            None => Why::new(
+        return Err(match &u.cause {
+            UnresolvedCause::SomePaths => Why::new(
                 RefusalKind::UnresolvedWorkObject,
                 format!("{what} is moved to on {at} with a {frame} that cannot be resolved"),
                 words.frame_of_a_motion,
             ),
-            Some(name) => Why::new(
+            UnresolvedCause::Parameter(name) => Why::new(
+                RefusalKind::UnresolvedWorkObject,
+                format!(
+                    "{what} is moved to on {at} with `{name}`, a parameter of the routine: the {frame} is whichever one each caller passes"
+                ),
+                format!("name the {frame} in the motion itself"),
+            ),
+            UnresolvedCause::Shadowed(name) => Why::new(
                 RefusalKind::UnresolvedWorkObject,
                 format!(
                     "{what} is moved to on {at} with `{name}`, which means another declaration there than where the target is declared (a LOCAL one, or a routine's own)"

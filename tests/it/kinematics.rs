@@ -1442,3 +1442,40 @@ fn mirror_keeps_the_axis_4_and_6_split_of_a_singular_wrist() {
         assert!(out.contains("jB:=[[0,0,0,0,0,0],"), "{out}");
     }
 }
+
+/// A target a routine moves to with its tool parameter (`PROC Weld(robtarget p, PERS
+/// tooldata t)`) is reached with whichever tool each caller passes: its joints cannot be
+/// checked, and it is refused as such by name and line, not as "not used with a tool". The
+/// target moved to with the declared tool beside it is corrected.
+#[test]
+fn correct_refuses_a_target_moved_with_a_tool_parameter_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("param.mod");
+    let src = "MODULE Param\n\
+        \x20 PERS tooldata tGun1:=[TRUE,[[12.5,-3.2,412.8],[0.965926,0,0.258819,0]],[48.5,[0,0,180],[1,0,0,0],0.9,1.1,0.6]];\n\
+        \x20 TASK PERS wobjdata wobj_car:=[FALSE,TRUE,\"\",[[1520.3,-1850.75,612.4],[1,0,0,0]],[[150,0,0],[0.999962,0,0,0.008727]]];\n\
+        \x20 CONST robtarget Sp001:=[[-1499.39,-722.85,251.51],[0.001394,-0.982620,-0.185474,-0.007385],[-1,0,-2,0],[150.0,9E+09,9E+09,9E+09,9E+09,9E+09]];\n\
+        \x20 CONST robtarget Sp002:=[[-1442.86,-646.25,295.65],[0.003079,0.983580,0.179657,-0.016858],[-1,0,-2,0],[185.8,9E+09,9E+09,9E+09,9E+09,9E+09]];\n\
+        \x20 PROC Weld(robtarget p, PERS tooldata t)\n\
+        \x20   MoveL p, v100, fine, t\\WObj:=wobj_car;\n\
+        \x20 ENDPROC\n\
+        \x20 PROC main()\n\
+        \x20   Weld Sp001, tGun1;\n\
+        \x20   MoveL Sp002, v100, fine, tGun1\\WObj:=wobj_car;\n\
+        \x20 ENDPROC\n\
+        ENDMODULE\n";
+    std::fs::write(&file, src).unwrap();
+    let (code, doc, _) = correct_json(&file, "r1", &[]);
+    assert_eq!(code, 3, "{doc}");
+    let refusals = json_refusals(&doc);
+    assert_eq!(targets_lines_kinds(&refusals), [("Sp001", 4, "reach")]);
+    assert_eq!(
+        refusals[0].3,
+        "robtarget `Sp001` is moved to on line 10 with `t`, a parameter of the routine: the tool is whichever one each caller passes, so its joints cannot be checked"
+    );
+    let (code, doc, written) = correct_json(&file, "r1", &["--keep", "reach"]);
+    assert_eq!(code, 4, "{doc}");
+    let line = |text: &str, n: usize| text.lines().nth(n - 1).unwrap().to_owned();
+    assert_eq!(line(&written, 4), line(src, 4));
+    assert_ne!(line(&written, 5), line(src, 5));
+}

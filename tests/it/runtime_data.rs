@@ -968,6 +968,26 @@ fn a_frames_assignments_are_read_where_its_name_means_the_frame() {
             )
         );
     }
+    // A written-out value of an element or a component is given, not computed.
+    let array = format!("PERS wobjdata wA{{2}}:=[{W_ORIGIN},{W_ORIGIN}];");
+    for (write, frame) in [
+        (format!("wA{{2}}:={W_AWAY}"), "wA{2}"),
+        ("w1.uframe.trans.x:=100".to_owned(), "w1"),
+    ] {
+        let decl = if frame == "w1" { pers(W_ORIGIN) } else { array.clone() };
+        let body = format!("  PROC first()\n    {write};\n  ENDPROC\n");
+        let (_, refused) = correct_task(&[(
+            "m.mod",
+            module(&decl, &body).replace("WObj:=w1", &format!("WObj:={frame}")),
+        )]);
+        assert_eq!(refused.len(), 1, "{write}: {refused:?}");
+        assert_eq!(
+            refused[0].2,
+            format!(
+                "robtarget `p1` is used with `{frame}`, which the program gives another value than its declaration (line 5): not correctable offline"
+            )
+        );
+    }
     // A VAR given another value: refused, where a PERS takes the value.
     let assign = format!("  PROC first()\n    w1:={W_AWAY};\n  ENDPROC\n");
     let (p1, refused) = correct_task(&[("m.mod", module(&pers(W_ORIGIN), &assign))]);

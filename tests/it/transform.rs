@@ -2383,6 +2383,13 @@ fn a_partly_kept_offset_and_a_parameter_work_object_are_refused() {
                 [("pa", RefusalKind::UnresolvedWorkObject)],
                 "{head}: {got:?}"
             );
+            // Named as the parameter it is, on the line of the call that passes the target.
+            assert!(
+                got[0]
+                    .2
+                    .contains("on line 6 with `wo`, a parameter of the routine"),
+                "{head}: {got:?}"
+            );
         }
     })
 }
