@@ -138,7 +138,7 @@ pub fn resolve_tool<'a>(
     overrides: &BTreeMap<String, Pose>,
     name: &str,
 ) -> Result<Pose, String> {
-    if let Some(p) = overrides.get(&name.to_ascii_lowercase()) {
+    if let Some(p) = overrides.get(&crate::transform::cell::frame_key(name)) {
         return Ok(*p);
     }
     // The declaration of `own`, the target's file, first: two RAPID modules may each declare

@@ -284,6 +284,23 @@ pub struct Cell {
     text: String,
 }
 
+/// The key a frame or tool is found by in a cell's `[robot.NAME.wobj]` and `[robot.NAME.tool]`
+/// tables: the name case-folded, an array element's index as its number (`"BASE_DATA[ 01 ]"`
+/// → `"base_data[1]"`, `"wArr{ 2 }"` → `"warr{2}"`), which is how the programs' resolvers
+/// name the element whatever its spelling.
+pub fn frame_key(name: &str) -> String {
+    let lower = name.trim().to_ascii_lowercase();
+    for (open, close) in [('[', ']'), ('{', '}')] {
+        if let Some((array, rest)) = lower.split_once(open)
+            && let Some(index) = rest.strip_suffix(close)
+            && let Ok(n) = index.trim().parse::<u32>()
+        {
+            return format!("{}{open}{n}{close}", array.trim_end());
+        }
+    }
+    lower
+}
+
 /// `"eax_a"`…`"eax_f"` or `"E1"`…`"E6"` (any case) → 0…5.
 pub fn skid_axis_index(name: &str) -> Option<usize> {
     let lower = name.trim().to_ascii_lowercase();
@@ -362,7 +379,7 @@ impl Cell {
             let frames = r
                 .wobj
                 .iter()
-                .map(|(k, f)| (k.to_ascii_lowercase(), f.pose()))
+                .map(|(k, f)| (frame_key(k), f.pose()))
                 .collect();
             let kinematics = match &r.kinematics {
                 Some(k) => Some(
@@ -375,7 +392,7 @@ impl Cell {
             let tools = r
                 .tool
                 .iter()
-                .map(|(k, f)| (k.to_ascii_lowercase(), f.pose()))
+                .map(|(k, f)| (frame_key(k), f.pose()))
                 .collect();
             robots.insert(
                 name.clone(),
@@ -463,6 +480,23 @@ skid_map = [1.0, 5.0]
         match Cell::parse(Path::new("cell.toml"), text) {
             Err(e) => e.to_string(),
             Ok(_) => "parsed".to_owned(),
+        }
+    }
+
+    #[test]
+    fn frame_keys_fold_case_and_an_elements_index() {
+        for (name, key) in [
+            ("wobj_car", "wobj_car"),
+            (" WObj_Car ", "wobj_car"),
+            ("BASE_DATA[1]", "base_data[1]"),
+            ("base_data[ 01 ]", "base_data[1]"),
+            ("BASE_DATA [12]", "base_data[12]"),
+            ("wArr{ 2 }", "warr{2}"),
+            // Not a number: as written, folded.
+            ("BASE_DATA[I]", "base_data[i]"),
+            ("BASE_DATA[-1]", "base_data[-1]"),
+        ] {
+            assert_eq!(frame_key(name), key, "{name}");
         }
     }
 

@@ -84,10 +84,6 @@ pub(crate) fn resolve_frame(
     overrides: &BTreeMap<String, Pose>,
     name: &str,
 ) -> Result<Pose, Why> {
-    let lower = name.to_ascii_lowercase();
-    if let Some(p) = overrides.get(&lower) {
-        return Ok(*p);
-    }
     let decl = program
         .frame_seen_from(own, name, |k| {
             matches!(k, FrameKind::WorkObject | FrameKind::Base)
@@ -96,8 +92,9 @@ pub(crate) fn resolve_frame(
     // The words of the language that declares the frame, else of the program's.
     let words = decl.map_or_else(|| words_of(program), |(_, l)| l.dialect().vocabulary());
     let frame = words.frame;
-    match decl.map(|(d, _)| d) {
-        Some(d) if d.fixed == Some(false) => Err(Why::new(
+    let overridden = overrides.get(&super::cell::frame_key(name)).copied();
+    match (decl.map(|(d, _)| d), overridden) {
+        (Some(d), _) if d.fixed == Some(false) => Err(Why::new(
             RefusalKind::MovingWorkObject,
             format!(
                 "{frame} `{name}` is moved by a mechanical unit ({})",
@@ -105,7 +102,7 @@ pub(crate) fn resolve_frame(
             ),
             "its position depends on that unit, not on the track: correct such targets by hand",
         )),
-        Some(d) if d.held_by_robot == Some(true) => Err(Why::new(
+        (Some(d), _) if d.held_by_robot == Some(true) => Err(Why::new(
             RefusalKind::StationaryTool,
             format!(
                 "{frame} `{name}` is held by the robot ({}: stationary tool)",
@@ -113,7 +110,10 @@ pub(crate) fn resolve_frame(
             ),
             "a stationary-tool target moves with the work piece, not the track: correct it by hand",
         )),
-        Some(d) => d.pose().ok_or_else(|| {
+        // The cell's identified frame stands for the declared one, which still says whether
+        // the frame moves with another unit or is held by the robot.
+        (_, Some(p)) => Ok(p),
+        (Some(d), None) => d.pose().ok_or_else(|| {
             Why::new(
                 RefusalKind::UnresolvedWorkObject,
                 format!("{frame} `{name}` has fields that are not numbers"),
@@ -122,9 +122,9 @@ pub(crate) fn resolve_frame(
                 ),
             )
         }),
-        None if is_world(name) => Ok(Pose::identity()),
+        (None, None) if is_world(name) => Ok(Pose::identity()),
         // Declared, but where the target's file does not see it (`LOCAL` in another module).
-        None => Err(match hidden_declaration(program, name) {
+        (None, None) => Err(match hidden_declaration(program, name) {
             Some(file) => Why::new(
                 RefusalKind::UnresolvedWorkObject,
                 format!(

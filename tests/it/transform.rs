@@ -2393,3 +2393,55 @@ fn a_partly_kept_offset_and_a_parameter_work_object_are_refused() {
         }
     })
 }
+
+/// The cell's identified frame stands for the program's declaration, which still says whether
+/// the frame moves with another unit: a work object on a positioner, given under
+/// `[robot.NAME.wobj]`, is refused as moving, not corrected in the identified pose. A KRL base
+/// given as `"BASE_DATA[ 01 ]"` is the program's `BASE_DATA[1]`, as the program's own spellings
+/// of the element are.
+#[test]
+fn a_cells_frame_keeps_its_declarations_unit_and_is_found_by_its_element() {
+    use trackfix::transform::RefusalKind;
+    let path = root().join("samples/cell_rules.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let with = |lines: &str| {
+        let text = text.replacen("[robot.r1.wobj]\n", &format!("[robot.r1.wobj]\n{lines}"), 1);
+        Cell::parse(&path, &text.replace("\"BASE_DATA[1]\" = { x = -440.0", "old = { x = -440.0"))
+            .unwrap()
+    };
+    let d = trackfix::geometry::pose_xyz_deg(0.3, -0.2, 0.5, 0.02, -0.03, 0.05);
+    let profile = move |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(d) };
+    // The positioner's work object, identified: still moving.
+    let cell = with("wStn1 = { x = 1000, y = -1000, z = 500, rx = 0, ry = 0, rz = 0 }\n");
+    let program = load_with_cell(&root().join("samples/rapid/moving_wobj.mod"), &cell, "r1");
+    let setup = TrackSetup::new(&cell.robots["r1"], &profile);
+    let result = apply(&program, track_correction(&program, &setup, Direction::Correct)).unwrap();
+    let moving: Vec<_> = result
+        .refusals()
+        .filter(|r| r.kind == RefusalKind::MovingWorkObject)
+        .map(|r| r.target.clone())
+        .collect();
+    assert_eq!(moving, ["pSeam1", "pSeam2"]);
+    // The same base, keyed three ways: one result, the identified base's.
+    let krl = root().join("samples/krl/two_bases.src");
+    let mut outputs = Vec::new();
+    for key in ["\"BASE_DATA[1]\"", "\"base_data[ 1 ]\"", "\"BASE_DATA[01]\""] {
+        let cell = with(&format!(
+            "{key} = {{ x = -300.0, y = -1850.75, z = 612.4, rx = 0.0, ry = 0.0, rz = 0.0 }}\n"
+        ));
+            let program = load_with_cell(&krl, &cell, "r1");
+        let setup = TrackSetup::new(&cell.robots["r1"], &profile);
+        let result =
+            apply(&program, track_correction(&program, &setup, Direction::Correct)).unwrap();
+        outputs.push(result.files.iter().map(|f| f.output.clone()).collect::<Vec<_>>());
+    }
+    assert_eq!(outputs[0], outputs[1]);
+    assert_eq!(outputs[0], outputs[2]);
+    // And not the config's BASE_DATA[1].
+    let cell = with("");
+    let program = load_with_cell(&krl, &cell, "r1");
+    let setup = TrackSetup::new(&cell.robots["r1"], &profile);
+    let result = apply(&program, track_correction(&program, &setup, Direction::Correct)).unwrap();
+    let declared: Vec<_> = result.files.iter().map(|f| f.output.clone()).collect();
+    assert_ne!(outputs[0], declared);
+}
