@@ -6,6 +6,7 @@ pub(crate) mod inspect;
 pub(crate) mod messages;
 pub(crate) mod reach;
 pub(crate) mod report;
+pub(crate) mod signals;
 pub(crate) mod track;
 pub(crate) mod transform;
 

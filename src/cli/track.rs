@@ -582,7 +582,7 @@ fn write_cell_nominal(cell: &Path, robot: &str, fit: &TrackFit) -> anyhow::Resul
     let r = loaded.robot(robot)?;
     check_cell_nominal(&r.base0, &r.track_axis, &fit.profile)
         .with_context(|| format!("{}: the written nominal", cell.display()))?;
-    write_file(cell, &new)?;
+    trackfix::output::replace_file(cell, new.as_bytes())?;
     let [x, y, z, rx, ry, rz] = pose_to_xyz_deg(&fit.base_at_zero);
     let u = fit.direction;
     Ok(format!(

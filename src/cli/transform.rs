@@ -671,9 +671,29 @@ fn finish(
     out: &OutputArgs,
     inputs: &[PathBuf],
 ) -> anyhow::Result<Exit> {
+    // The report's path is checked before anything is written: it must not name an input,
+    // the cell or an output, and a report that cannot be written must not follow outputs
+    // that are.
+    if let Some(path) = &out.report {
+        let planned = match destination(out) {
+            Some(dest) if !out.diff && !out.check => {
+                output::plan(results, &dest, &Roots::from_inputs(inputs))
+                    .map(|w| w.into_iter().map(|w| w.path).collect())
+                    .unwrap_or_default()
+            }
+            _ => Vec::new(),
+        };
+        output::check_apart_from(path, &planned)?;
+    }
+    let _held = super::signals::StopSignalsHeld::new();
     let exit = finish_outputs(command, results, renames, out, inputs)?;
     if let Some(path) = &out.report {
-        write_run_report(path, command, results, out, exit)?;
+        write_run_report(path, command, results, out, exit).with_context(|| match exit {
+            Exit::Ok | Exit::Kept if !out.diff && !out.check => {
+                "the outputs are written, but not the run report"
+            }
+            _ => "the run report is not written",
+        })?;
     }
     Ok(exit)
 }
@@ -853,6 +873,20 @@ fn rename_for_output(
     Ok(renames)
 }
 
+/// Where `out` says the results go: a file, a folder or in place (`None` for standard output
+/// or when it names none).
+fn destination(out: &OutputArgs) -> Option<Destination> {
+    if let Some(o) = &out.output {
+        (o.as_os_str() != "-").then(|| Destination::File(o.clone()))
+    } else if let Some(d) = &out.out_dir {
+        Some(Destination::Dir(d.clone()))
+    } else {
+        out.in_place.then_some(Destination::InPlace {
+            backup: !out.no_backup,
+        })
+    }
+}
+
 /// Writes the results (one transaction, `trackfix::output`) and lists every file written.
 fn write_outputs(
     command: &str,
@@ -874,23 +908,16 @@ fn write_outputs(
                 .join(", ")
         );
     }
-    let dest = if let Some(o) = &out.output {
-        if o.as_os_str() == "-" {
-            let bytes = output::stream_output(results)?;
-            let mut stdout = std::io::stdout().lock();
-            stdout.write_all(bytes)?;
-            stdout.flush()?;
-            // The output is complete: a summary that cannot be shown changes nothing.
-            let _ = summarize(command, results, &[], out, &mut stderr);
-            return Ok(written_exit(results));
-        }
-        Destination::File(o.clone())
-    } else if let Some(d) = &out.out_dir {
-        Destination::Dir(d.clone())
-    } else if out.in_place {
-        Destination::InPlace {
-            backup: !out.no_backup,
-        }
+    let dest = if out.output.as_ref().is_some_and(|o| o.as_os_str() == "-") {
+        let bytes = output::stream_output(results)?;
+        let mut stdout = std::io::stdout().lock();
+        stdout.write_all(bytes)?;
+        stdout.flush()?;
+        // The output is complete: a summary that cannot be shown changes nothing.
+        let _ = summarize(command, results, &[], out, &mut stderr);
+        return Ok(written_exit(results));
+    } else if let Some(dest) = destination(out) {
+        dest
     } else {
         bail!(
             "say where to write: -o FILE (- for standard output), --out-dir DIR or --in-place (or preview with --diff, --check)"

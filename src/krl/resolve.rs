@@ -8,8 +8,8 @@ use super::positions::{
     name_key,
 };
 use crate::position::{
-    Config, FrameDecl, FrameName, Name, ParsedFile, PositionKind, RunTimeValue, UnresolvedCause, UnresolvedFrame,
-    UseLine,
+    Config, FrameDecl, FrameName, Name, ParsedFile, PositionKind, RunTimeValue, UnresolvedCause,
+    UnresolvedFrame, UseLine,
 };
 use crate::syntax::Diagnostic;
 use std::sync::Arc;

@@ -27,6 +27,29 @@ pub use read::{
 };
 pub use transaction::{FileWrite, Written, clean_stale, commit};
 
+/// The files the process has read (through [`read_regular_file`] and its kin) or written
+/// (through [`commit`]), by [`paths::identity`]: a file written besides a run's outputs never
+/// replaces one of them. A process is one run.
+mod run_files {
+    use std::collections::BTreeSet;
+    use std::path::{Path, PathBuf};
+    use std::sync::Mutex;
+
+    static TOUCHED: Mutex<BTreeSet<PathBuf>> = Mutex::new(BTreeSet::new());
+
+    pub(super) fn note(path: &Path) {
+        let id = super::paths::identity(path);
+        if let Ok(mut t) = TOUCHED.lock() {
+            t.insert(id);
+        }
+    }
+
+    pub(super) fn touched(path: &Path) -> bool {
+        let id = super::paths::identity(path);
+        TOUCHED.lock().is_ok_and(|t| t.contains(&id))
+    }
+}
+
 /// Why the outputs of a run were not written. Nothing was changed on disk when one of these
 /// is returned, except as [`OutputError::RollbackFailed`] says.
 #[derive(Debug, thiserror::Error)]
@@ -36,6 +59,12 @@ pub enum OutputError {
     #[error("{}: refusing to overwrite an input file; write it in place instead", path.display())]
     WouldOverwriteInput {
         /// The input named as an output.
+        path: PathBuf,
+    },
+    /// A file a run writes besides its outputs names one of its inputs or outputs.
+    #[error("{}: refusing to write there: this run reads or writes that file; name another", path.display())]
+    ReadOrWritten {
+        /// The path named.
         path: PathBuf,
     },
     /// One output file for several programs.
@@ -184,8 +213,57 @@ pub fn stream_output(programs: &[ProgramResult]) -> Result<&[u8], OutputError> {
 }
 
 /// Writes `bytes` to `path` alone, as a transaction of one file (profiles, frame tables,
-/// plots): a temporary beside it and a rename, the old file's mode kept, a symlink followed.
+/// plots, run reports): a temporary beside it and a rename, the old file's mode kept, a
+/// symlink followed. A file the process has read or written is refused
+/// ([`OutputError::ReadOrWritten`]): a derived file never replaces its own input or an output
+/// of the same run.
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    check_apart(path)?;
+    replace_file(path, bytes)
+}
+
+/// Whether [`write_file`] may write `path`, asked before a run commits anything else: not a
+/// file the process has read or written, nor one of `planned` (the run's own outputs), nor a
+/// folder, and in a folder that exists.
+pub fn check_apart_from(path: &Path, planned: &[PathBuf]) -> Result<(), OutputError> {
+    check_apart(path)?;
+    let id = paths::identity(path);
+    if planned.iter().any(|p| paths::identity(p) == id) {
+        return Err(OutputError::ReadOrWritten {
+            path: path.to_owned(),
+        });
+    }
+    if std::fs::metadata(path).is_ok_and(|m| m.is_dir()) {
+        return Err(OutputError::NotAFile {
+            path: path.to_owned(),
+            what: "a directory",
+        });
+    }
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !std::fs::metadata(parent).is_ok_and(|m| m.is_dir()) {
+        return Err(OutputError::Io {
+            path: path.to_owned(),
+            error: std::io::Error::new(std::io::ErrorKind::NotFound, "its folder does not exist"),
+        });
+    }
+    Ok(())
+}
+
+fn check_apart(path: &Path) -> Result<(), OutputError> {
+    if run_files::touched(path) {
+        return Err(OutputError::ReadOrWritten {
+            path: path.to_owned(),
+        });
+    }
+    Ok(())
+}
+
+/// [`write_file`] for a file the run means to update in place (a cell file given the fitted
+/// nominal), which it has read.
+pub fn replace_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     commit(&[FileWrite {
         input: path.to_owned(),
         path: path.to_owned(),

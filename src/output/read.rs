@@ -27,6 +27,7 @@ fn open_regular(path: &Path, limit: u64) -> std::io::Result<(std::fs::File, u64)
     // The file may have been swapped or may grow between the check and the read.
     let meta = file.metadata()?;
     check_kind(&meta)?;
+    super::run_files::note(path);
     Ok((file, meta.len()))
 }
 

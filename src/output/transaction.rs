@@ -317,7 +317,11 @@ fn missing_dirs(path: &Path) -> Vec<PathBuf> {
 
 /// Commits `writes` on the real file system.
 pub fn commit(writes: &[FileWrite<'_>]) -> Result<Vec<Written>, OutputError> {
-    commit_with(&RealFs, writes)
+    let written = commit_with(&RealFs, writes)?;
+    for w in writes {
+        super::run_files::note(&w.path);
+    }
+    Ok(written)
 }
 
 /// Commits `writes` through `fs`: all of them, or (on any failure) none, with everything

@@ -522,3 +522,72 @@ fn a_failed_out_dir_run_leaves_no_folder_it_created() {
     assert_eq!(code, 2, "{err}");
     assert_eq!(listing(&out), [".b.mod.trackfix-lock"]);
 }
+
+/// Ctrl-C (SIGINT) or SIGTERM while a batch is written in place stops nothing half-way: the
+/// signal waits until the transaction has committed or been undone. Sent as soon as the first
+/// temporary or lock file appears, it leaves either every module as it was, with no backup, or
+/// every module corrected with its backup, and no temporary or lock file either way.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_stop_signal_during_an_in_place_batch_leaves_all_or_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let batch = dir.path().join("batch");
+    std::fs::create_dir(&batch).unwrap();
+    let src = std::fs::read_to_string("samples/rapid/bom.mod").unwrap();
+    const MODULES: usize = 400;
+    for i in 0..MODULES {
+        let text = src.replacen("MODULE WithBom", &format!("MODULE m{i}"), 1);
+        std::fs::write(batch.join(format!("m{i}.mod")), text).unwrap();
+    }
+    let original = listing(&batch);
+    let mut signalled = 0;
+    for signal in ["-INT", "-TERM", "-INT", "-TERM"] {
+        let mut child = spawn(&[])
+            .args([
+                "correct",
+                batch.to_str().unwrap(),
+                "--cell",
+                CELL,
+                "--robot",
+                "r1",
+                "--skip-unsupported",
+                "--in-place",
+                "--force",
+            ])
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let sent = loop {
+            let writing = listing(&batch)
+                .iter()
+                .any(|n| n.contains(".trackfix-tmp-") || n.contains(".trackfix-lock"));
+            if writing {
+                let pid = child.id().to_string();
+                let kill = Command::new("kill").args([signal, &pid]).status().unwrap();
+                assert!(kill.success());
+                break true;
+            }
+            if child.try_wait().unwrap().is_some() {
+                break false;
+            }
+        };
+        child.wait().unwrap();
+        signalled += usize::from(sent);
+        let names = listing(&batch);
+        assert!(
+            !names
+                .iter()
+                .any(|n| n.contains(".trackfix-tmp-") || n.contains(".trackfix-lock")),
+            "{signal}: left {names:?}"
+        );
+        let backups = names.iter().filter(|n| n.contains(".orig")).count();
+        assert!(
+            backups == 0 || backups % MODULES == 0,
+            "{signal}: {backups} backups of {MODULES} modules"
+        );
+        if backups == 0 {
+            assert_eq!(names, original, "{signal}");
+        }
+    }
+    assert!(signalled > 0, "no run was seen writing");
+}

@@ -907,3 +907,85 @@ fn run_report_hashes_the_renamed_files_that_were_written() {
         );
     }
 }
+
+/// A run report, and every other file a command writes besides its outputs, never replaces a
+/// file the run reads or writes: the program, the cell, the run's own output, a command's own
+/// measurements. It is refused before anything is written (exit 2, every file as it was), as
+/// is a report in a folder that does not exist.
+#[test]
+fn a_written_file_never_replaces_what_the_run_reads_or_writes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let program = dir.join("spot_line.mod");
+    let cell = dir.join("cell.toml");
+    std::fs::copy("samples/rapid/spot_line.mod", &program).unwrap();
+    let cell_text = std::fs::read_to_string("samples/cell_rules.toml")
+        .unwrap()
+        .replace(
+            "\"track/",
+            &format!("\"{}/samples/track/", root().display()),
+        )
+        .replace("\"krl/", &format!("\"{}/samples/krl/", root().display()));
+    std::fs::write(&cell, &cell_text).unwrap();
+    let out = dir.join("out.mod");
+    let snapshot = || {
+        let mut files: Vec<_> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| {
+                let p = e.unwrap().path();
+                (p.clone(), std::fs::read(&p).unwrap_or_default())
+            })
+            .collect();
+        files.sort();
+        files
+    };
+    let before = snapshot();
+    let path = |p: &Path| p.to_str().unwrap().to_owned();
+    for (report, extra) in [
+        (path(&program), vec!["-o".to_owned(), path(&out)]),
+        (path(&out), vec!["-o".to_owned(), path(&out)]),
+        (path(&cell), vec!["-o".to_owned(), path(&out)]),
+        (path(&program), vec!["--diff".to_owned()]),
+        (path(&program), vec!["--in-place".to_owned()]),
+        (
+            path(&dir.join("no/such/run.html")),
+            vec!["-o".to_owned(), path(&out)],
+        ),
+        (path(dir), vec!["-o".to_owned(), path(&out)]),
+    ] {
+        let mut args = vec![
+            "correct".to_owned(),
+            path(&program),
+            "--cell".to_owned(),
+            path(&cell),
+            "--robot".to_owned(),
+            "r1".to_owned(),
+            "--skip-unsupported".to_owned(),
+            "--report".to_owned(),
+            report.clone(),
+        ];
+        args.extend(extra.iter().cloned());
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (code, _, err) = trackfix(&args);
+        assert_eq!(code, 2, "{report} {extra:?}: {err}");
+        assert!(err.contains(&format!("{report}: ")), "{err}");
+        assert_eq!(snapshot(), before, "{report} {extra:?}: {err}");
+    }
+    // Another command's output over its own input.
+    let measurements = dir.join("m.csv");
+    std::fs::copy("samples/track/measurements.csv", &measurements).unwrap();
+    let m = path(&measurements);
+    let kept = std::fs::read(&measurements).unwrap();
+    for args in [
+        vec!["track", "identify", &m, "-o", &m],
+        vec!["report", "--measurements", &m, "-o", &m],
+    ] {
+        let (code, _, err) = trackfix(&args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(
+            err.contains("refusing to write there: this run reads or writes that file"),
+            "{err}"
+        );
+        assert_eq!(std::fs::read(&measurements).unwrap(), kept, "{args:?}");
+    }
+}

@@ -974,7 +974,11 @@ fn a_frames_assignments_are_read_where_its_name_means_the_frame() {
         (format!("wA{{2}}:={W_AWAY}"), "wA{2}"),
         ("w1.uframe.trans.x:=100".to_owned(), "w1"),
     ] {
-        let decl = if frame == "w1" { pers(W_ORIGIN) } else { array.clone() };
+        let decl = if frame == "w1" {
+            pers(W_ORIGIN)
+        } else {
+            array.clone()
+        };
         let body = format!("  PROC first()\n    {write};\n  ENDPROC\n");
         let (_, refused) = correct_task(&[(
             "m.mod",

@@ -2406,8 +2406,11 @@ fn a_cells_frame_keeps_its_declarations_unit_and_is_found_by_its_element() {
     let text = std::fs::read_to_string(&path).unwrap();
     let with = |lines: &str| {
         let text = text.replacen("[robot.r1.wobj]\n", &format!("[robot.r1.wobj]\n{lines}"), 1);
-        Cell::parse(&path, &text.replace("\"BASE_DATA[1]\" = { x = -440.0", "old = { x = -440.0"))
-            .unwrap()
+        Cell::parse(
+            &path,
+            &text.replace("\"BASE_DATA[1]\" = { x = -440.0", "old = { x = -440.0"),
+        )
+        .unwrap()
     };
     let d = trackfix::geometry::pose_xyz_deg(0.3, -0.2, 0.5, 0.02, -0.03, 0.05);
     let profile = move |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(d) };
@@ -2415,7 +2418,11 @@ fn a_cells_frame_keeps_its_declarations_unit_and_is_found_by_its_element() {
     let cell = with("wStn1 = { x = 1000, y = -1000, z = 500, rx = 0, ry = 0, rz = 0 }\n");
     let program = load_with_cell(&root().join("samples/rapid/moving_wobj.mod"), &cell, "r1");
     let setup = TrackSetup::new(&cell.robots["r1"], &profile);
-    let result = apply(&program, track_correction(&program, &setup, Direction::Correct)).unwrap();
+    let result = apply(
+        &program,
+        track_correction(&program, &setup, Direction::Correct),
+    )
+    .unwrap();
     let moving: Vec<_> = result
         .refusals()
         .filter(|r| r.kind == RefusalKind::MovingWorkObject)
@@ -2425,15 +2432,28 @@ fn a_cells_frame_keeps_its_declarations_unit_and_is_found_by_its_element() {
     // The same base, keyed three ways: one result, the identified base's.
     let krl = root().join("samples/krl/two_bases.src");
     let mut outputs = Vec::new();
-    for key in ["\"BASE_DATA[1]\"", "\"base_data[ 1 ]\"", "\"BASE_DATA[01]\""] {
+    for key in [
+        "\"BASE_DATA[1]\"",
+        "\"base_data[ 1 ]\"",
+        "\"BASE_DATA[01]\"",
+    ] {
         let cell = with(&format!(
             "{key} = {{ x = -300.0, y = -1850.75, z = 612.4, rx = 0.0, ry = 0.0, rz = 0.0 }}\n"
         ));
-            let program = load_with_cell(&krl, &cell, "r1");
+        let program = load_with_cell(&krl, &cell, "r1");
         let setup = TrackSetup::new(&cell.robots["r1"], &profile);
-        let result =
-            apply(&program, track_correction(&program, &setup, Direction::Correct)).unwrap();
-        outputs.push(result.files.iter().map(|f| f.output.clone()).collect::<Vec<_>>());
+        let result = apply(
+            &program,
+            track_correction(&program, &setup, Direction::Correct),
+        )
+        .unwrap();
+        outputs.push(
+            result
+                .files
+                .iter()
+                .map(|f| f.output.clone())
+                .collect::<Vec<_>>(),
+        );
     }
     assert_eq!(outputs[0], outputs[1]);
     assert_eq!(outputs[0], outputs[2]);
@@ -2441,7 +2461,11 @@ fn a_cells_frame_keeps_its_declarations_unit_and_is_found_by_its_element() {
     let cell = with("");
     let program = load_with_cell(&krl, &cell, "r1");
     let setup = TrackSetup::new(&cell.robots["r1"], &profile);
-    let result = apply(&program, track_correction(&program, &setup, Direction::Correct)).unwrap();
+    let result = apply(
+        &program,
+        track_correction(&program, &setup, Direction::Correct),
+    )
+    .unwrap();
     let declared: Vec<_> = result.files.iter().map(|f| f.output.clone()).collect();
     assert_ne!(outputs[0], declared);
 }
