@@ -144,9 +144,10 @@ pub(crate) struct Facts {
     /// `TOOL_DATA[1].Z = 300`, `BASE_DATA[1] = {X 100, …}` in a `DEF`).
     pub data_assignments: Vec<DataAssignment>,
     /// Names written after a geometric operator `:` (`SLOT` and `XPLACE_REL` of
-    /// `FPALLET:SLOT:XPLACE_REL`), upper case, with their lines: offsets in the frame before
-    /// them, not positions.
-    pub offsets: Vec<(Name, usize)>,
+    /// `FPALLET:SLOT:XPLACE_REL`), and the targets of relative motions (`LIN_REL XSTEP`),
+    /// upper case, with their lines and how they are used: offsets in another frame, not
+    /// positions.
+    pub offsets: Vec<(Name, usize, OffsetUse)>,
     /// Names this file declares `GLOBAL` (upper case): seen from every module of the program.
     pub globals: Vec<Name>,
     /// Routines other modules may call (upper case): the file's first `DEF` (the module's own,
@@ -1003,7 +1004,29 @@ impl<'a> Extractor<'a> {
                 with,
             } => {
                 let line = lines.line(stmt.span.start);
-                if upper_short(src, *keyword, &mut [0; 16]).ends_with("_REL") {
+                let mut buf = [0; 16];
+                let word = upper_short(src, *keyword, &mut buf);
+                if word.ends_with("_REL") {
+                    // A point named as the motion's target is a displacement from wherever
+                    // the robot is, in the base or tool frame: an offset, not a position.
+                    let instruction = crate::krl::MOTION_KEYWORDS
+                        .iter()
+                        .find(|k| **k == word)
+                        .copied()
+                        .unwrap_or("_REL");
+                    for t in targets {
+                        let mut operand = t;
+                        while let ExprKind::Paren(inner) = &operand.kind {
+                            operand = inner;
+                        }
+                        if matches!(operand.kind, ExprKind::Name | ExprKind::Index(..)) {
+                            out.facts.offsets.push((
+                                upper_name(src, operand.span),
+                                line,
+                                (instruction, "relative target"),
+                            ));
+                        }
+                    }
                     self.diagnostics.push(
                         Diagnostic::note(
                             stmt.span,
@@ -1354,10 +1377,21 @@ fn assignment(
     problem
 }
 
+/// How a name is used as an offset: (the instruction or operator, the operand it is).
+pub(crate) type OffsetUse = (&'static str, &'static str);
+
+/// The right operand of a geometric operator `:`.
+const FRAME_OFFSET: OffsetUse = (":", "right operand");
+
 /// The names `e` writes after a geometric operator `:`, anywhere in it (a name in brackets
 /// included), into `out` with their lines: `B` and `C` of `A:B:C`, `B` of `F(A:B)`; not `A`,
 /// the frame the offsets are taken in.
-fn offset_operands(src: &[u8], lines: &LineIndex, e: &Expr, out: &mut Vec<(Name, usize)>) {
+fn offset_operands(
+    src: &[u8],
+    lines: &LineIndex,
+    e: &Expr,
+    out: &mut Vec<(Name, usize, OffsetUse)>,
+) {
     match &e.kind {
         ExprKind::Binary(left, op, right) => {
             offset_operands(src, lines, left, out);
@@ -1370,6 +1404,7 @@ fn offset_operands(src: &[u8], lines: &LineIndex, e: &Expr, out: &mut Vec<(Name,
                     out.push((
                         upper_name(src, operand.span),
                         lines.line(operand.span.start),
+                        FRAME_OFFSET,
                     ));
                     return;
                 }

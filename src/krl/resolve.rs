@@ -1184,16 +1184,17 @@ fn mark_offsets(
     modules: &Modules,
     exported: &[Option<Vec<bool>>],
 ) {
-    // (module, name) → (line, the file it is written in: `facts` are the files' in order);
-    // name → the first of those in any module, for what other modules see.
-    let mut first: std::collections::HashMap<(usize, &str), (usize, usize)> = Default::default();
-    let mut anywhere: HashMap<&str, (usize, usize)> = HashMap::default();
+    // (module, name) → (line, the file it is written in: `facts` are the files' in order, the
+    // use); name → the first of those in any module, for what other modules see.
+    type First = (usize, usize, crate::krl::positions::OffsetUse);
+    let mut first: std::collections::HashMap<(usize, &str), First> = Default::default();
+    let mut anywhere: HashMap<&str, First> = HashMap::default();
     for (fi, f) in facts.iter().enumerate() {
-        for (name, line) in &f.offsets {
+        for (name, line, what) in &f.offsets {
             first
                 .entry((modules.of(fi), name.as_str()))
-                .or_insert((*line, fi));
-            anywhere.entry(name.as_str()).or_insert((*line, fi));
+                .or_insert((*line, fi, *what));
+            anywhere.entry(name.as_str()).or_insert((*line, fi, *what));
         }
     }
     if first.is_empty() {
@@ -1217,15 +1218,15 @@ fn mark_offsets(
                 });
                 anywhere.get(key.as_str()).filter(|_| seen)
             };
-            let Some(&(line, fi)) = own.or_else(other) else {
+            let Some(&(line, fi, (instruction, parameter))) = own.or_else(other) else {
                 continue;
             };
             let (Some(u), Some(from)) = (file.positions.usage_mut(i), names.get(fi)) else {
                 continue;
             };
             u.set_non_position(crate::position::NonPosition {
-                instruction: ":",
-                parameter: "right operand",
+                instruction,
+                parameter,
                 role: crate::position::NonPositionRole::Offset,
                 at: UseLine::of(line, fi, tf, from),
             });

@@ -374,6 +374,20 @@ pub(crate) fn non_position(np: &crate::position::NonPosition, p: &Position, keep
         role,
     } = np;
     let what = describe(p);
+    // Moved to as well: one value cannot be both corrected as a position and kept as an
+    // offset (nor mirrored as both).
+    if *role == Offset
+        && let Some(&line) = p.usage.lines.first()
+    {
+        return Why::new(
+            RefusalKind::ComposedOffset,
+            format!(
+                "{what} is moved to by a motion (line {line}) and is also the {parameter} of `{instruction}` on {at}: one value cannot be both a position and an offset"
+            ),
+            "declare a point of its own for each of the two uses",
+        );
+    }
+    let relative = *parameter == "relative target";
     let used = match role {
         Offset => format!("{what} is the {parameter} of `{instruction}` on {at}"),
         Tolerance | Limit | Found => {
@@ -383,6 +397,7 @@ pub(crate) fn non_position(np: &crate::position::NonPosition, p: &Position, keep
     let is = match role {
         Tolerance => "a tolerance",
         Limit => "joint limits",
+        Offset if relative => "a displacement from wherever the robot is",
         Offset => "an offset in the frame before it",
         Found => "written by the search with the position it finds",
     };
@@ -390,6 +405,9 @@ pub(crate) fn non_position(np: &crate::position::NonPosition, p: &Position, keep
         let hint = match role {
             Tolerance => "nothing to do: a tolerance holds for every robot and track",
             Limit => "nothing to do: the robot's joint ranges are what they were",
+            Offset if relative => {
+                "check the motion by hand: a displacement in the base frame turns with the base's correction, one in the tool frame (#TOOL) does not"
+            }
             Offset => "nothing to do: the composed frame moves with the frame before the `:`",
             Found => "nothing to do: a motion to it after the search goes where the search found",
         };

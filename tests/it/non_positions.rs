@@ -249,6 +249,68 @@ END\n";
     );
 }
 
+/// The target of a relative motion (`LIN_REL XSTEP`) is a displacement from wherever the
+/// robot is: an offset, left as written with a note, never corrected as a position (nor, with
+/// `--default-wobj`, as one no motion uses). A point moved to as well as moved by is both, which
+/// no one value can be: refused by name.
+#[test]
+fn krl_relative_motion_targets_are_offsets_and_one_also_moved_to_is_refused() {
+    let program = |extra: &str| {
+        format!(
+            "DEF rel( )\n\
+  DECL E6POS XA={{X 1,Y 2,Z 3,A 0,B 0,C 0,S 2,T 2,E1 100}}\n\
+  DECL E6POS XSTEP={{X 0,Y 0,Z 50,A 0,B 0,C 0,E1 0}}\n\
+  BAS(#BASE,1)\n\
+  LIN XA\n\
+  LIN_REL XSTEP\n\
+  PTP_REL (XSTEP) #TOOL\n\
+{extra}END\n"
+        )
+    };
+    let f = krl::parse_file(Path::new("rel.src"), program("").into_bytes());
+    assert_eq!(
+        non_position_of(&f, "XSTEP"),
+        Some(NonPosition {
+            instruction: "LIN_REL",
+            parameter: "relative target",
+            role: NonPositionRole::Offset,
+            at: UseLine::new(6),
+        })
+    );
+    assert_eq!(non_position_of(&f, "XA"), None);
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path().join("rel.src");
+    let correct = |text: &str| {
+        std::fs::write(&src, text).unwrap();
+        trackfix(&[
+            "correct",
+            src.to_str().unwrap(),
+            "--cell",
+            "samples/cell_rules.toml",
+            "--robot",
+            "r1",
+            "--default-wobj",
+            "BASE_DATA[1]",
+            "--diff",
+        ])
+    };
+    let (code, diff, err) = correct(&program(""));
+    assert_eq!(code, 0, "{err}");
+    assert!(diff.contains("+DECL E6POS XA="), "{diff}");
+    assert!(!diff.contains("+DECL E6POS XSTEP"), "{diff}");
+    assert!(
+        err.contains("E6POS `XSTEP` is the relative target of `LIN_REL` on line 6: a displacement from wherever the robot is, not a position; left as written"),
+        "{err}"
+    );
+    let (code, diff, err) = correct(&program("  LIN_REL XA\n"));
+    assert_eq!(code, 3, "{err}");
+    assert!(diff.is_empty(), "{diff}");
+    assert!(
+        err.contains("E6POS `XA` is moved to by a motion (line 5) and is also the relative target of `LIN_REL` on line 8: one value cannot be both a position and an offset"),
+        "{err}"
+    );
+}
+
 /// A KUKA program with one target a motion moves to and one no motion uses.
 const PARTLY_USED: &str = "DEF part( )\n\
   DECL E6POS XP1={X 592.548,Y -746.673,Z 974.380,A -178.9394,B 15.8711,C 177.3993,S 6,T 50,E1 150.000}\n\
