@@ -835,6 +835,22 @@ impl<'f, 'a> Binder<'f, 'a> {
         }
     }
 
+    /// Applies `mark` to the usage of each of `targets`, with the name of file `from` when the
+    /// target is another file's.
+    pub(crate) fn mark(
+        &mut self,
+        from: usize,
+        targets: &[TargetAt],
+        mut mark: impl FnMut(Option<&std::sync::Arc<str>>, &mut crate::position::Usage),
+    ) {
+        let from_name = self.files.get(from).map(|f| f.name.clone());
+        for &(m, i) in targets {
+            if let Some(u) = self.files.get_mut(m).and_then(|f| f.positions.usage_mut(i)) {
+                mark(from_name.as_ref().filter(|_| m != from), u);
+            }
+        }
+    }
+
     /// The targets the calls bound so far pass to parameter `k` of routine `routine` of file
     /// `m`: directly, or through a parameter of the caller passed on (followed [`CALL_DEPTH`]
     /// calls back), added to `out`. What a reference to the parameter inside the routine may
@@ -916,14 +932,11 @@ impl<'f, 'a> Binder<'f, 'a> {
     pub(crate) fn mark_reached(
         &mut self,
         from: usize,
-        mut mark: impl FnMut(Option<&std::sync::Arc<str>>, &mut crate::position::Usage),
+        mark: impl FnMut(Option<&std::sync::Arc<str>>, &mut crate::position::Usage),
     ) {
-        let from_name = self.files.get(from).map(|f| f.name.clone());
-        for &(m, i) in &self.targets {
-            if let Some(u) = self.files.get_mut(m).and_then(|f| f.positions.usage_mut(i)) {
-                mark(from_name.as_ref().filter(|_| m != from), u);
-            }
-        }
+        let targets = std::mem::take(&mut self.targets);
+        self.mark(from, &targets, mark);
+        self.targets = targets;
     }
 
     /// Records, in every target passed to a routine parameter, every use reachable from that

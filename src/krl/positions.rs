@@ -173,6 +173,9 @@ pub(crate) struct ParamRoutine {
     pub public: bool,
     /// Its parameters, in the order a call's arguments bind to them.
     pub params: Vec<Param>,
+    /// Whether a motion of the routine moves to each parameter (in order): a target passed
+    /// there is moved in a base trackfix does not follow.
+    pub moved: Vec<bool>,
 }
 
 /// One parameter of a routine.
@@ -218,6 +221,7 @@ fn param_routine(
     routines.push(ParamRoutine {
         name,
         public,
+        moved: vec![false; params.len()],
         params,
     });
     Some(routines.len() - 1)
@@ -1055,6 +1059,9 @@ impl<'a> Extractor<'a> {
                         );
                     }
                 }
+                if let Some(r) = self.current.and_then(|r| self.routines.get_mut(r)) {
+                    moved_parameters(src, r, &refs);
+                }
                 // The spline block's settings first: the motion's own are written after them.
                 let with = self
                     .block_with
@@ -1069,6 +1076,19 @@ impl<'a> Extractor<'a> {
                     with,
                 });
             }
+        }
+    }
+}
+
+/// Marks the parameters of routine `r` that `refs`, a motion's targets, name as moved.
+#[inline(never)]
+fn moved_parameters(src: &[u8], r: &mut ParamRoutine, refs: &[Ref]) {
+    for name in refs.iter().filter_map(|t| match t {
+        Ref::Named(n) => Some(n.split('[').next().unwrap_or(n)),
+        Ref::Inline(_) => None,
+    }) {
+        for (p, moved) in r.params.iter().zip(r.moved.iter_mut()) {
+            *moved |= p.name.slice(src).eq_ignore_ascii_case(name.as_bytes());
         }
     }
 }

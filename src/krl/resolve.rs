@@ -820,8 +820,11 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
     let exported = modules.exported(files, facts);
     frames_of_unused_points(files, &exported, &fdats, &modules);
     mark_offsets(files, facts, &modules, &exported);
-    // The routines, for the binder: only when a routine gives a parameter a computed value.
-    let follow = facts.iter().any(|f| !f.param_assignments.is_empty());
+    // The routines, for the binder: only when a routine gives a parameter a computed value,
+    // or a call passes a name to a routine of the program.
+    let follow = facts.iter().any(|f| !f.param_assignments.is_empty())
+        || (facts.iter().any(|f| !f.calls.is_empty())
+            && facts.iter().any(|f| !f.routines.is_empty()));
     let routines: Vec<Vec<crate::resolve::Routine>> = if follow {
         facts
             .iter()
@@ -1132,21 +1135,108 @@ fn computed_through_parameters(shared: &mut [crate::resolve::FileFacts<'_>], fac
         }
     }
     // The file's own routine first, else one of another file that is not local to it.
-    let callee = |fi: usize, name: &[u8]| -> Option<&super::positions::ParamRoutine> {
+    let callee_at = |fi: usize, name: &[u8]| -> Option<(usize, usize)> {
         let all = by_name.get(&NameKey(name))?;
         let &(cf, cr, _) = all
             .iter()
             .find(|&&(f, ..)| f == fi)
             .or_else(|| all.iter().find(|&&(f, _, public)| f != fi && public))?;
+        Some((cf, cr))
+    };
+    let callee = |fi: usize, name: &[u8]| -> Option<&super::positions::ParamRoutine> {
+        let (cf, cr) = callee_at(fi, name)?;
         facts.get(cf)?.routines.get(cr)
     };
+    // Each routine's parameters a motion moves to, there or in a routine it passes them on
+    // to (to a fixed point: each round marks one more at least, or ends).
+    let mut moved: Vec<Vec<Vec<bool>>> = facts
+        .iter()
+        .map(|f| f.routines.iter().map(|r| r.moved.clone()).collect())
+        .collect();
+    let own_param = |fi: usize, r: usize, text: &[u8]| -> Option<usize> {
+        let key = NameKey(
+            text.split(|&b| b == b'[')
+                .next()
+                .unwrap_or(text)
+                .trim_ascii(),
+        );
+        let src = srcs.get(fi)?;
+        facts
+            .get(fi)?
+            .routines
+            .get(r)?
+            .params
+            .iter()
+            .position(|p| NameKey(p.name.slice(src)) == key)
+    };
+    loop {
+        let mut changed = false;
+        for (fi, (f, src)) in facts.iter().zip(&srcs).enumerate() {
+            for call in &f.calls {
+                let (Some(r), Some((cf, cr))) =
+                    (call.routine, callee_at(fi, call.callee.slice(src)))
+                else {
+                    continue;
+                };
+                for (i, a) in call.args.iter().enumerate() {
+                    let Some(k) = a.and_then(|a| own_param(fi, r, a.span().slice(src))) else {
+                        continue;
+                    };
+                    let passes_to_moved = moved
+                        .get(cf)
+                        .and_then(|m| m.get(cr))
+                        .is_some_and(|m| m.get(i).copied().unwrap_or(false));
+                    if let Some(slot) = moved.get_mut(fi).and_then(|m| m.get_mut(r)?.get_mut(k))
+                        && passes_to_moved
+                        && !*slot
+                    {
+                        *slot = true;
+                        changed = true;
+                    }
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
     let mut binder = crate::resolve::Binder::new(shared, &NAMING);
     let mut args: Vec<Option<crate::syntax::Span32>> = Vec::new();
+    let mut passed = Vec::new();
     for (fi, (f, src)) in facts.iter().zip(&srcs).enumerate() {
         for call in &f.calls {
             let Some(to) = callee(fi, call.callee.slice(src)) else {
                 continue;
             };
+            // Every target passed to a routine of the program that moves to it: its motions
+            // are not followed (a routine's effect on its callers is only the base and tool it
+            // leaves set), so the base it is moved in there is not known. An argument that is
+            // the calling routine's own parameter is the caller's caller's, marked where that
+            // passes it.
+            let moves =
+                callee_at(fi, call.callee.slice(src)).and_then(|(cf, cr)| moved.get(cf)?.get(cr));
+            passed.clear();
+            for (i, a) in call.args.iter().enumerate() {
+                let Some(a) = a else { continue };
+                let text = a.span().slice(src);
+                let own = call.routine.and_then(|r| own_param(fi, r, text));
+                if own.is_some() || !moves.is_some_and(|m| m.get(i).copied().unwrap_or(false)) {
+                    continue;
+                }
+                binder.targets_named(fi, text, &mut passed);
+            }
+            if !passed.is_empty() {
+                let routine = String::from_utf8_lossy(call.callee.slice(src)).into_owned();
+                binder.mark(fi, &passed, |elsewhere, usage| {
+                    usage.mark_unresolved_frame(UnresolvedFrame {
+                        at: UseLine {
+                            line: call.line,
+                            file: elsewhere.cloned(),
+                        },
+                        cause: UnresolvedCause::PassedTo(routine.clone()),
+                    });
+                });
+            }
             args.clear();
             args.extend(
                 call.args

@@ -496,6 +496,9 @@ pub enum UnresolvedCause {
     Shadowed(String),
     /// The motion names a parameter of its routine: the frame is whatever each caller passes.
     Parameter(String),
+    /// The target is passed to a routine of the program (KRL), whose motions trackfix does
+    /// not follow: the base they move in is not known.
+    PassedTo(String),
 }
 
 /// The line of a use, and the file it is in when that is not the used target's own (a KRL

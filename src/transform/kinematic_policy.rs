@@ -55,6 +55,7 @@ impl Arm {
         if let Some(u) = p.usage.unresolved_tool() {
             let name = match &u.cause {
                 crate::position::UnresolvedCause::Parameter(n)
+                | crate::position::UnresolvedCause::PassedTo(n)
                 | crate::position::UnresolvedCause::Shadowed(n) => n.as_str(),
                 crate::position::UnresolvedCause::SomePaths => "a tool",
             };

@@ -181,6 +181,15 @@ pub(crate) fn wobj_of(
                 ),
                 format!("name the {frame} in the motion itself"),
             ),
+            UnresolvedCause::PassedTo(routine) => Why::new(
+                RefusalKind::UnresolvedWorkObject,
+                format!(
+                    "{what} is passed to `{routine}` on {at}, whose motions trackfix does not follow: the {frame} they move in is not known"
+                ),
+                format!(
+                    "move to it where it is declared, with the {frame} set there, or correct it by hand"
+                ),
+            ),
             UnresolvedCause::Shadowed(name) => Why::new(
                 RefusalKind::UnresolvedWorkObject,
                 format!(

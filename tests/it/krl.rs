@@ -1353,6 +1353,43 @@ fn a_point_no_motion_uses_is_taken_in_its_fdats_frames() {
         "DEF cell( )\n  MYMOVE(xp8)\nEND\nDEF MYMOVE(PT:IN)\n  DECL E6POS PT\n  LIN PT\nEND\n",
     );
     assert_eq!(point(&passed, "XP8").usage.wobj, None);
+    // Passed to a routine whose motions are not followed, the point's base there is not
+    // known, whether or not a motion of the caller moves to it as well (in a base it sets).
+    let also_moved = load(
+        "DEF cell( )\n  $BASE=BASE_DATA[2]\n  LIN XP8\n  MYMOVE(XP8)\nEND\n\
+         DEF MYMOVE(PT:IN)\n  DECL E6POS PT\n  $BASE=BASE_DATA[3]\n  LIN PT\nEND\n",
+    );
+    for (p, line) in [(&passed, 2), (&also_moved, 4)] {
+        assert_eq!(
+            point(p, "XP8").usage.unresolved_frame(),
+            Some(&trackfix::position::UnresolvedFrame {
+                at: trackfix::position::UseLine {
+                    line,
+                    file: Some("cell.src".into()),
+                },
+                cause: trackfix::position::UnresolvedCause::PassedTo("MYMOVE".into()),
+            })
+        );
+    }
+    assert_eq!(point(&also_moved, "XP9").usage.unresolved_frame(), None);
+    // Passed on to the routine that moves to it: the same; to one that does not move to it:
+    // nothing to follow.
+    let relayed = load(
+        "DEF cell( )\n  RELAY(XP8)\n  LOOK(XP9)\nEND\n\
+         DEF RELAY(Q:IN)\n  DECL E6POS Q\n  MYMOVE(Q)\nEND\n\
+         DEF LOOK(Q:IN)\n  DECL E6POS Q\n  Q.X = 1\nEND\n\
+         DEF MYMOVE(PT:IN)\n  DECL E6POS PT\n  LIN PT\nEND\n",
+    );
+    assert_eq!(
+        point(&relayed, "XP8")
+            .usage
+            .unresolved_frame()
+            .map(|u| &u.cause),
+        Some(&trackfix::position::UnresolvedCause::PassedTo(
+            "RELAY".into()
+        ))
+    );
+    assert_eq!(point(&relayed, "XP9").usage.unresolved_frame(), None);
     let commented = load("DEF cell( )\n  ; LIN XP9 was here\nEND\n");
     assert_eq!(point(&commented, "XP9").usage.wobj, None);
     assert_eq!(
