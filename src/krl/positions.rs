@@ -77,6 +77,9 @@ pub(crate) enum Event {
     EndLoop,
     /// `EXIT`: program order leaves the innermost loop.
     Exit,
+    /// A label: a `GOTO` may arrive there with any base and tool (trackfix does not follow
+    /// jumps), so from there on they are unknown until set again.
+    Label,
     /// `XPICK = XP3`: until reassigned, a motion to `XPICK` moves to (a copy of) `XP3`, so
     /// `XP3` is used with that motion's base and tool.
     Alias {
@@ -128,6 +131,9 @@ pub(crate) struct Fdat {
 pub(crate) struct Facts {
     pub events: Vec<Event>,
     pub fdats: HashMap<Name, Fdat>,
+    /// Names a routine assigns, whole or a component (`FP1.BASE_NO = 2`, `FP1 = FP2`), upper
+    /// case: an `FDAT` among them does not hold its declared value when a motion applies it.
+    pub written_in_routines: Vec<Name>,
     /// Declared `FRAME`s and aggregates assigned to names of unknown type: positions only when
     /// a motion uses them.
     pub candidates: Vec<Position>,
@@ -1002,6 +1008,7 @@ impl<'a> Extractor<'a> {
                     .collect();
             }
             StmtKind::EndSpline => self.block_with.clear(),
+            StmtKind::Label => out.facts.events.push(Event::Label),
             StmtKind::Motion {
                 keyword,
                 targets,
@@ -1185,6 +1192,8 @@ fn setting(src: &[u8], target: &Expr, value: &Expr) -> Option<Setting> {
         return match upper_short(src, whole.span, &mut [0; 16]) {
             "$BASE" => Some(Setting::Base(FrameRef::RunTime(target.span))),
             "$TOOL" => Some(Setting::Tool(FrameRef::RunTime(target.span))),
+            // `FDAT_ACT.BASE_NO = 2`: what the next `BAS` applies is no longer a known FDAT.
+            "FDAT_ACT" => Some(Setting::FdatValue(Fdat::default())),
             _ => None,
         };
     }
@@ -1209,7 +1218,8 @@ fn setting(src: &[u8], target: &Expr, value: &Expr) -> Option<Setting> {
         "FDAT_ACT" => match &value.kind {
             ExprKind::Name => Some(Setting::Fdat(upper_name(src, value.span))),
             ExprKind::Aggregate(agg) => Some(Setting::FdatValue(fdat(src, agg))),
-            _ => None,
+            // Computed (`FDAT_ACT = PICK(I)`, `FDAT_ACT = FTAB[I]`): no known FDAT.
+            _ => Some(Setting::FdatValue(Fdat::default())),
         },
         _ => None,
     }
@@ -1273,6 +1283,22 @@ fn computed_assignment(
     }
 }
 
+/// The name an assignment to `target` writes (`FP1` of `FP1.BASE_NO`), upper case, into
+/// `out`; a system variable's (`$BASE`) is not data of the program.
+#[inline(never)]
+fn written_name(src: &[u8], target: &Expr, out: &mut Vec<Name>) {
+    let mut whole = target;
+    while let ExprKind::Member(inner, _) = &whole.kind {
+        whole = inner;
+    }
+    if matches!(whole.kind, ExprKind::Name) {
+        let name = upper_name(src, whole.span);
+        if !name.starts_with('$') && !out.contains(&name) {
+            out.push(name);
+        }
+    }
+}
+
 /// An assignment statement, written in a `DEF`/`DEFFCT` (`in_routine`) or a data list.
 /// `routine` is the routine it is written in, when that takes parameters: its index and its
 /// parameters. Returns the error of an aggregate it assigns to a position that gives a field
@@ -1286,6 +1312,9 @@ fn assignment(
     value: &Expr,
     out: &mut Extracted,
 ) -> Option<Diagnostic> {
+    if in_routine {
+        written_name(src, target, &mut out.facts.written_in_routines);
+    }
     let ExprKind::Aggregate(agg) = &value.kind else {
         if let Some(s) = setting(src, target, value) {
             out.facts.events.push(Event::Set(s));

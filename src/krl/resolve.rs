@@ -228,6 +228,10 @@ impl Flow {
                 }
             }
             Event::EndLoop => return self.end_of_body(i),
+            Event::Label => {
+                self.state.base = Some(FrameRef::Unknown);
+                self.state.tool = Some(FrameRef::Unknown);
+            }
             _ => {}
         }
         i + 1
@@ -391,7 +395,11 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                         }
                     }
                     Event::Set(s) => flow.state.apply(s, fdats),
-                    Event::Branch(_) | Event::Loop { .. } | Event::EndLoop | Event::Exit => {
+                    Event::Branch(_)
+                    | Event::Loop { .. }
+                    | Event::EndLoop
+                    | Event::Exit
+                    | Event::Label => {
                         i = flow.control(i, ev);
                         continue;
                     }
@@ -586,12 +594,22 @@ fn branch(state: &mut State, forks: &mut Vec<Fork>, b: BranchEvent) {
 pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_frames: &[FrameDecl]) {
     let modules = Modules::new(files);
     // A module's own `FDAT`s, then `$config.dat`'s: `FP1` is in nearly every data list.
-    let fdats = modules.gathered(
-        facts
-            .iter_mut()
-            .map(|f| std::mem::take(&mut f.fdats))
-            .collect(),
-    );
+    // An FDAT a routine assigns anywhere in the program holds, when a motion applies it, a
+    // value trackfix does not follow: it is left out, so the base and tool it sets are unknown.
+    let mut own_fdats: Vec<HashMap<Name, Fdat>> = facts
+        .iter_mut()
+        .map(|f| std::mem::take(&mut f.fdats))
+        .collect();
+    if facts.iter().any(|f| !f.written_in_routines.is_empty()) {
+        let written: std::collections::HashSet<&str> = facts
+            .iter()
+            .flat_map(|f| f.written_in_routines.iter().map(|n| n.as_str()))
+            .collect();
+        for f in &mut own_fdats {
+            f.retain(|name, _| !written.contains(name.as_str()));
+        }
+    }
+    let fdats = modules.gathered(own_fdats);
     // Candidates that are positions whether or not a motion uses them.
     let mut kept: Vec<Vec<bool>> = facts
         .iter()
@@ -682,7 +700,11 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                             exit.apply_to(&mut flow.state);
                         }
                     }
-                    Event::Branch(_) | Event::Loop { .. } | Event::EndLoop | Event::Exit => {
+                    Event::Branch(_)
+                    | Event::Loop { .. }
+                    | Event::EndLoop
+                    | Event::Exit
+                    | Event::Label => {
                         i = flow.control(i - 1, ev);
                     }
                     Event::Alias { name, source } => {

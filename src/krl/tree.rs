@@ -169,6 +169,8 @@ pub enum StmtKind {
     },
     /// `ENDSPLINE` closing a spline block.
     EndSpline,
+    /// `NAME:`, a label a `GOTO` jumps to: program order may arrive there from anywhere.
+    Label,
     /// `keyword target` / `keyword aux, target`, then approximation and `WITH` assignments.
     Motion {
         /// `PTP`, `LIN`, `CIRC`, … (one of [`crate::krl::MOTION_KEYWORDS`]).

@@ -1472,3 +1472,94 @@ fn an_assignment_of_the_cells_config_value_changes_nothing() {
         run_time(&other)
     );
 }
+
+/// An FDAT the program changes when it runs (`FDAT_ACT.BASE_NO=2`, `FP1.BASE_NO=2`, `FP1=FP2`,
+/// `FDAT_ACT` given a computed value) no longer says which base the next `BAS(#CP_PARAMS,…)`
+/// applies: the point moved to after it is refused as moved with a base that cannot be
+/// resolved, where it was corrected in the declared FDAT's base. Unchanged, it is taken.
+#[test]
+fn an_fdat_the_program_changes_leaves_the_base_it_applies_unknown() {
+    let dat = "DEFDAT cell\n\
+        DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        DECL FDAT FP1={TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE}\n\
+        DECL FDAT FP2={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE}\n\
+        ENDDAT\n";
+    let options = with_sample_config();
+    let base_of = |change: &str| {
+        let src = format!(
+            "DEF cell( )\n  {change}\n  BAS(#CP_PARAMS,2)\n  LIN XP1\nEND\nDEFFCT FDAT PICK( )\n  RETURN FP2\nENDFCT\n"
+        );
+        let p = krl::load_program_from_sources(
+            vec![
+                (PathBuf::from("cell.src"), src.into_bytes()),
+                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
+            ],
+            &options,
+        )
+        .unwrap();
+        let point = p
+            .files
+            .iter()
+            .flat_map(|f| f.positions())
+            .find(|t| t.name.as_deref() == Some("XP1"))
+            .unwrap();
+        (
+            point.usage.wobj.as_deref().map(str::to_owned),
+            point.usage.unresolved_frame().is_some(),
+        )
+    };
+    assert_eq!(
+        base_of("FDAT_ACT=FP1"),
+        (Some("BASE_DATA[1]".to_owned()), false)
+    );
+    for change in [
+        "FDAT_ACT=FP1\n  FDAT_ACT.BASE_NO=2",
+        "FP1.BASE_NO=2\n  FDAT_ACT=FP1",
+        "FP1=FP2\n  FDAT_ACT=FP1",
+        "FDAT_ACT=PICK()",
+        "FDAT_ACT=FP1\n  FDAT_ACT.IPO_FRAME=#TCP",
+    ] {
+        assert_eq!(base_of(change), (None, true), "{change}");
+    }
+}
+
+/// trackfix does not follow `GOTO`: at a label the base may be whatever the jump brought, so a
+/// point moved to after a label, before the base is set again, is refused as moved with a base
+/// that cannot be resolved (forward: `GOTO SKIP` over `$BASE=BASE_DATA[2]`; backward: a loop
+/// made of a label and a jump back). Set again after the label, the base is known.
+#[test]
+fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
+    let dat = "DEFDAT cell\n\
+        DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        ENDDAT\n";
+    let options = with_sample_config();
+    let base_of = |body: &str| {
+        let p = krl::load_program_from_sources(
+            vec![
+                (
+                    PathBuf::from("cell.src"),
+                    format!("DEF cell( )\n{body}END\n").into_bytes(),
+                ),
+                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
+            ],
+            &options,
+        )
+        .unwrap();
+        let point = p
+            .files
+            .iter()
+            .flat_map(|f| f.positions())
+            .find(|t| t.name.as_deref() == Some("XP1"))
+            .unwrap();
+        (
+            point.usage.wobj.as_deref().map(str::to_owned),
+            point.usage.unresolved_frame().map(|u| u.at.line),
+        )
+    };
+    let forward = "  $BASE=BASE_DATA[1]\n  GOTO SKIP\n  $BASE=BASE_DATA[2]\n  SKIP:\n  LIN XP1\n";
+    assert_eq!(base_of(forward), (None, Some(6)));
+    let backward = "  $BASE=BASE_DATA[1]\n  TOP:\n  LIN XP1\n  $BASE=BASE_DATA[2]\n  IF $IN[1] THEN\n    GOTO TOP\n  ENDIF\n";
+    assert_eq!(base_of(backward), (None, Some(4)));
+    let set_again = "  GOTO SKIP\n  SKIP:\n  $BASE=BASE_DATA[2]\n  LIN XP1\n";
+    assert_eq!(base_of(set_again), (Some("BASE_DATA[2]".to_owned()), None));
+}

@@ -276,7 +276,7 @@ impl LineParser<'_, '_> {
             return Ok((self.unknown(stmt_span, what), None));
         }
         if is_punct(src, next, b":") && c.peek_at(2).is_none() {
-            return Ok((NodeKind::Label, None));
+            return Ok((NodeKind::Label, Some(StmtKind::Label)));
         }
         if next.is_some_and(|t| t.kind == TokenKind::Ident) {
             let ty = Word::of(head.text(src));
