@@ -259,13 +259,16 @@ fn flip_or_value_edit(field: &Option<NumField>, new: f64, min_decimals: usize) -
 fn skid_edits(file: &ParsedFile, p: &Position, settings: &MirrorSettings) -> Vec<Edit> {
     let (scale, offset) = settings.skid_map;
     let from = settings.skid_axis;
-    let Skid::At(s) = p.skid(from) else {
-        return Vec::new();
-    };
     let Some(field) = p.extax.get(from) else {
         return Vec::new();
     };
-    let mapped = number_edit(field, scale * s + offset, MM_DECIMALS);
+    // A skid not connected (`9E9`) maps to itself; it still changes places below, and the
+    // other axis's value with it: the mirror-image robot reads its skid from the other axis.
+    let mapped = match p.skid(from) {
+        Skid::At(s) => number_edit(field, scale * s + offset, MM_DECIMALS),
+        Skid::NotConnected => None,
+        Skid::Missing => return Vec::new(),
+    };
     let to = match settings.skid_axis_to {
         Some(to) if to != from => to,
         _ => return mapped.into_iter().collect(),
@@ -900,6 +903,12 @@ mod tests {
             text.ends_with("[9E9,1750.500,9E9,9E9,9E9,9E9]]\n"),
             "{text}"
         );
+        // A skid not connected changes places too: the other axis's value (a positioner's)
+        // must not become the mirror-image robot's skid.
+        let loose = "[[100,0,300],[1,0,0,0],[0,0,0,0],[9E+09,100,9E9,9E9,9E9,9E9]]\n";
+        let text = mirrored_text(&rapid(loose, "wobj0"), &mapped);
+        assert!(text.ends_with("[100,9E+09,9E9,9E9,9E9,9E9]]\n"), "{text}");
+        assert_eq!(mirrored_text(&rapid(&text, "wobj0"), &back), loose);
     }
 
     #[test]
