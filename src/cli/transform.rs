@@ -821,7 +821,7 @@ fn finish_outputs(
     if out.diff {
         let mut stdout = std::io::stdout().lock();
         for f in results.iter().flat_map(|r| &r.files) {
-            write!(stdout, "{}", unified_diff(&f.path, &f.original, &f.output))?;
+            stdout.write_all(&unified_diff(&f.path, &f.original, &f.output))?;
         }
         // The diff is the output: one that keeps refused targets as written is partial, as a
         // written file would be.

@@ -14,13 +14,11 @@
 //! The output is the format `similar` writes (`--- a/…`, `+++ b/…`, hunks with one line of
 //! context), so diffs read as before.
 
-use std::fmt::Write as _;
 use std::hash::{Hash as _, Hasher as _};
+use std::io::Write as _;
 use std::path::Path;
 
 use similar::{Algorithm, DiffOp, capture_diff_deadline, group_diff_ops};
-
-use crate::syntax::latin1;
 
 /// Lines of unchanged context around each change.
 const CONTEXT: usize = 1;
@@ -33,34 +31,10 @@ const MAX_BLOCK: usize = 4000;
 /// added, such as a stamp), for the search beyond [`MAX_BLOCK`].
 const MAX_SHIFT: usize = 8;
 
-/// Lines as `similar` splits them: after `\n`, `\r\n` or a lone `\r`.
+/// Lines as `diff` and `patch` split them: after each `\n` (a `\r\n` line keeps its `\r`, and
+/// a lone `\r` is part of its line, so that the diff applies with `patch`).
 fn lines(text: &[u8]) -> Vec<&[u8]> {
-    let mut out = Vec::new();
-    let mut start = 0;
-    let mut i = 0;
-    while i < text.len() {
-        match text[i] {
-            b'\n' => {
-                out.push(&text[start..=i]);
-                start = i + 1;
-            }
-            b'\r' if text.get(i + 1) == Some(&b'\n') => {
-                out.push(&text[start..=i + 1]);
-                i += 1;
-                start = i + 1;
-            }
-            b'\r' => {
-                out.push(&text[start..=i]);
-                start = i + 1;
-            }
-            _ => {}
-        }
-        i += 1;
-    }
-    if start < text.len() {
-        out.push(&text[start..]);
-    }
-    out
+    text.split_inclusive(|&b| b == b'\n').collect()
 }
 
 fn hash(line: &[u8]) -> u64 {
@@ -256,17 +230,17 @@ pub(crate) fn line_ops<'a>(
     (a.lines, b.lines, ops)
 }
 
-/// A unified diff of one file (empty if unchanged). Bytes are shown as Latin-1 so that a
-/// Windows-125x comment never breaks the diff.
-pub fn unified_diff(path: &Path, old: &[u8], new: &[u8]) -> String {
+/// A unified diff of one file (empty if unchanged), as `diff -u` writes it: the lines' bytes as
+/// they are in the files (a Latin-1 comment, a BOM, a UTF-8 name), so that `patch` applies it.
+pub fn unified_diff(path: &Path, old: &[u8], new: &[u8]) -> Vec<u8> {
     if old == new {
-        return String::new();
+        return Vec::new();
     }
     let a = Side::new(old);
     let b = Side::new(new);
     let name = path.display().to_string();
     let name = name.trim_start_matches('/');
-    let mut out = String::new();
+    let mut out = Vec::new();
     for (n, group) in group_diff_ops(ops(&a, &b), CONTEXT).iter().enumerate() {
         if n == 0 {
             let _ = writeln!(out, "--- a/{name}\n+++ b/{name}");
@@ -281,12 +255,12 @@ pub fn unified_diff(path: &Path, old: &[u8], new: &[u8]) -> String {
         for op in group {
             let (old_lines, new_lines) = (op.old_range(), op.new_range());
             match op {
-                DiffOp::Equal { .. } => line_block(&mut out, ' ', &a.lines[old_lines]),
-                DiffOp::Delete { .. } => line_block(&mut out, '-', &a.lines[old_lines]),
-                DiffOp::Insert { .. } => line_block(&mut out, '+', &b.lines[new_lines]),
+                DiffOp::Equal { .. } => line_block(&mut out, b' ', &a.lines[old_lines]),
+                DiffOp::Delete { .. } => line_block(&mut out, b'-', &a.lines[old_lines]),
+                DiffOp::Insert { .. } => line_block(&mut out, b'+', &b.lines[new_lines]),
                 DiffOp::Replace { .. } => {
-                    line_block(&mut out, '-', &a.lines[old_lines]);
-                    line_block(&mut out, '+', &b.lines[new_lines]);
+                    line_block(&mut out, b'-', &a.lines[old_lines]);
+                    line_block(&mut out, b'+', &b.lines[new_lines]);
                 }
             }
         }
@@ -294,12 +268,12 @@ pub fn unified_diff(path: &Path, old: &[u8], new: &[u8]) -> String {
     out
 }
 
-fn line_block(out: &mut String, tag: char, lines: &[&[u8]]) {
+fn line_block(out: &mut Vec<u8>, tag: u8, lines: &[&[u8]]) {
     for line in lines {
         out.push(tag);
-        out.push_str(&latin1(line));
-        if !line.ends_with(b"\n") && !line.ends_with(b"\r") {
-            out.push_str("\n\\ No newline at end of file\n");
+        out.extend_from_slice(line);
+        if !line.ends_with(b"\n") {
+            out.extend_from_slice(b"\n\\ No newline at end of file\n");
         }
     }
 }
@@ -322,7 +296,13 @@ impl std::fmt::Display for Range {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::syntax::latin1;
     use proptest::prelude::*;
+
+    /// The diff as text, each byte one Latin-1 letter (as the reference reads the files).
+    fn diff_text(path: &Path, old: &[u8], new: &[u8]) -> String {
+        latin1(&unified_diff(path, old, new))
+    }
 
     /// The whole-file diff of `similar`, which this one must reproduce.
     fn reference(path: &Path, old: &[u8], new: &[u8]) -> String {
@@ -340,7 +320,7 @@ mod tests {
 
     #[test]
     fn shows_only_changed_lines() {
-        let d = unified_diff(Path::new("m.mod"), b"a\nb\nc\nd\n", b"a\nB\nc\nd\n");
+        let d = diff_text(Path::new("m.mod"), b"a\nb\nc\nd\n", b"a\nB\nc\nd\n");
         assert_eq!(
             d,
             "--- a/m.mod\n+++ b/m.mod\n@@ -1,3 +1,3 @@\n a\n-b\n+B\n c\n"
@@ -358,7 +338,7 @@ mod tests {
         ] {
             let p = Path::new("m.mod");
             assert_eq!(
-                unified_diff(p, old, new),
+                diff_text(p, old, new),
                 reference(p, old, new),
                 "{old:?} → {new:?}"
             );
@@ -378,7 +358,7 @@ mod tests {
             })
             .collect();
         let t = std::time::Instant::now();
-        let d = unified_diff(Path::new("big.mod"), old.as_bytes(), new.as_bytes());
+        let d = diff_text(Path::new("big.mod"), old.as_bytes(), new.as_bytes());
         assert!(t.elapsed().as_secs_f64() < 20.0, "{:?}", t.elapsed());
         assert_eq!(d.matches("\n@@ ").count(), 4000);
     }
@@ -417,7 +397,7 @@ mod tests {
             .chain(["ENDMODULE\n".to_owned()])
             .collect();
         assert_eq!(rebuilt(old.as_bytes(), new.as_bytes()), new.as_bytes());
-        let d = unified_diff(Path::new("m.mod"), old.as_bytes(), new.as_bytes());
+        let d = diff_text(Path::new("m.mod"), old.as_bytes(), new.as_bytes());
         assert_eq!(
             d.lines()
                 .filter(|l| l.starts_with('-') && !l.starts_with("---"))
@@ -464,7 +444,7 @@ mod tests {
             };
             let (old, new) = (join(&old), join(&new));
             let p = Path::new("m.mod");
-            prop_assert_eq!(unified_diff(p, old.as_bytes(), new.as_bytes()), reference(p, old.as_bytes(), new.as_bytes()));
+            prop_assert_eq!(diff_text(p, old.as_bytes(), new.as_bytes()), reference(p, old.as_bytes(), new.as_bytes()));
         }
     }
 }

@@ -591,3 +591,123 @@ fn a_stop_signal_during_an_in_place_batch_leaves_all_or_nothing() {
     }
     assert!(signalled > 0, "no run was seen writing");
 }
+
+/// Applies a unified diff of one file to `old`, as `patch` does: the hunks' removed and context
+/// lines must be `old`'s at the line numbers the hunk gives, each line split after `\n`.
+fn apply_unified_diff(old: &[u8], diff: &[u8]) -> Vec<u8> {
+    let old_lines: Vec<&[u8]> = old.split_inclusive(|&b| b == b'\n').collect();
+    let diff_lines: Vec<&[u8]> = diff.split_inclusive(|&b| b == b'\n').collect();
+    let mut out: Vec<u8> = Vec::new();
+    let mut next = 0; // the next old line not yet copied
+    let mut d = 2; // past `---` and `+++`
+    while d < diff_lines.len() {
+        let header = std::str::from_utf8(diff_lines[d]).unwrap();
+        assert!(header.starts_with("@@ -"), "{header}");
+        let start: usize = header[4..]
+            .split([',', ' '])
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        // `-0,0`: insertion before the first line.
+        let first = start.saturating_sub(1);
+        let len_zero = header[4..].split(' ').next().unwrap().ends_with(",0");
+        let first = if len_zero { start } else { first };
+        while next < first {
+            out.extend_from_slice(old_lines[next]);
+            next += 1;
+        }
+        d += 1;
+        let mut last: Option<(u8, usize)> = None; // the last line written: (tag, out length before it)
+        while d < diff_lines.len() && !diff_lines[d].starts_with(b"@@") {
+            let line = diff_lines[d];
+            if line.starts_with(b"\\ No newline") {
+                // The line before has no `\n` of its own.
+                if let Some((tag, _)) = last
+                    && tag != b'-'
+                {
+                    assert_eq!(out.pop(), Some(b'\n'));
+                }
+                d += 1;
+                continue;
+            }
+            let (tag, body) = (line[0], &line[1..]);
+            match tag {
+                b' ' | b'-' => {
+                    let expect = old_lines[next];
+                    let body_trimmed = body.strip_suffix(b"\n").unwrap_or(body);
+                    assert_eq!(
+                        expect.strip_suffix(b"\n").unwrap_or(expect),
+                        body_trimmed,
+                        "context or removed line {} differs",
+                        next + 1
+                    );
+                    if tag == b' ' {
+                        out.extend_from_slice(body);
+                    }
+                    next += 1;
+                }
+                b'+' => out.extend_from_slice(body),
+                _ => panic!("bad diff line {line:?}"),
+            }
+            last = Some((tag, out.len()));
+            d += 1;
+        }
+    }
+    while next < old_lines.len() {
+        out.extend_from_slice(old_lines[next]);
+        next += 1;
+    }
+    out
+}
+
+/// `--diff` writes the files' own bytes (a BOM, a Latin-1 comment, CRLF, a bare CR, no final
+/// line end): applied as `patch` applies it, it gives the file `-o` writes, byte for byte.
+#[test]
+fn a_diff_applies_to_the_input_and_gives_the_output() {
+    let body = "  ! Schwei\u{df}punkt\n  CONST robtarget p1:=[[300,-50,620],[0.5,0.5,0.5,0.5],[0,0,1,0],[6400,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL p1,v100,fine,tool0;\n  ENDPROC\n";
+    let latin1 = |s: &str| s.chars().map(|c| c as u8).collect::<Vec<u8>>();
+    let cases: Vec<(&str, Vec<u8>)> = vec![
+        (
+            "latin1.mod",
+            latin1(&format!("MODULE L1\n{body}ENDMODULE\n")),
+        ),
+        (
+            "bom.mod",
+            [
+                &b"\xef\xbb\xbf"[..],
+                format!("MODULE L2\n{body}ENDMODULE\n").as_bytes(),
+            ]
+            .concat(),
+        ),
+        (
+            "crlf.mod",
+            latin1(&format!("MODULE L3\n{body}ENDMODULE").replace('\n', "\r\n")),
+        ),
+        (
+            "cr.mod",
+            latin1(&format!("MODULE L4\n{body}ENDMODULE\n").replace('\n', "\r")),
+        ),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes) in cases {
+        let input = dir.path().join(name);
+        std::fs::write(&input, &bytes).unwrap();
+        let out = dir.path().join(format!("out-{name}"));
+        let base = [
+            "correct",
+            input.to_str().unwrap(),
+            "--cell",
+            CELL,
+            "--robot",
+            "r1",
+            "--no-stamp",
+        ];
+        let (code, _, err) = trackfix(&[&base[..], &["-o", out.to_str().unwrap()]].concat());
+        assert_eq!(code, 0, "{name}: {err}");
+        let written = std::fs::read(&out).unwrap();
+        assert_ne!(written, bytes, "{name}");
+        let diff = crate::support::run(&[&base[..], &["--diff"]].concat()).stdout;
+        assert_eq!(apply_unified_diff(&bytes, &diff), written, "{name}");
+    }
+}
