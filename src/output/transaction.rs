@@ -223,6 +223,18 @@ struct Target<'a> {
 }
 
 fn io_err(path: &Path, error: std::io::Error) -> OutputError {
+    // The lock and the temporary are hidden siblings with a suffix: a name the file system
+    // takes may be too long for them.
+    let error = if error.kind() == std::io::ErrorKind::InvalidFilename {
+        std::io::Error::new(
+            error.kind(),
+            format!(
+                "{error}: trackfix writes `.NAME{TEMP_MARK}PID` and `.NAME{LOCK_MARK}` beside the file, which need about 30 bytes more than its name; shorten the name"
+            ),
+        )
+    } else {
+        error
+    };
     OutputError::Io {
         path: path.to_owned(),
         error,
@@ -490,8 +502,11 @@ fn lock(fs: &dyn Filesystem, t: &Target<'_>, journal: &mut Journal) -> Result<()
             pid: lock_holder(&lock),
         }),
         Err(e) => {
-            // A partly written lock is ours to remove.
-            journal.locks.push(lock);
+            // A partly written lock is ours to remove; one never created (a read-only folder,
+            // a name too long) is nothing to undo.
+            if std::fs::symlink_metadata(&lock).is_ok() {
+                journal.locks.push(lock);
+            }
             Err(io_err(&t.write.path, e))
         }
     }
@@ -517,7 +532,10 @@ fn write_backup(
             // Taken (a backup of an earlier run, or anything else): never overwritten.
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
             Err(e) => {
-                journal.backups.push(candidate.clone());
+                // Partly written, ours to remove; never created, nothing to undo.
+                if std::fs::symlink_metadata(&candidate).is_ok() {
+                    journal.backups.push(candidate.clone());
+                }
                 return Err(io_err(&candidate, e));
             }
         }

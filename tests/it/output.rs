@@ -711,3 +711,25 @@ fn a_diff_applies_to_the_input_and_gives_the_output() {
         assert_eq!(apply_unified_diff(&bytes, &diff), written, "{name}");
     }
 }
+
+/// A file whose name leaves no room for the lock and temporary beside it (a legal name of 246
+/// bytes) is refused with what to do, nothing written, and no false word of a failed undo: a
+/// lock never created is nothing to remove.
+#[cfg(unix)]
+#[test]
+fn a_name_too_long_for_the_lock_is_refused_with_what_to_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = format!("{}.mod", "a".repeat(242));
+    let path = dir.path().join(&name);
+    std::fs::copy("samples/rapid/bom.mod", &path).unwrap();
+    let before = listing(dir.path());
+    let (code, _, err) = correct(&[path.to_str().unwrap(), "--in-place"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("shorten the name; nothing written"), "{err}");
+    assert!(!err.contains("undoing the run failed"), "{err}");
+    assert_eq!(listing(dir.path()), before);
+    assert_eq!(
+        std::fs::read(&path).unwrap(),
+        std::fs::read("samples/rapid/bom.mod").unwrap()
+    );
+}
