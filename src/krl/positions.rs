@@ -1043,7 +1043,8 @@ impl<'a> Extractor<'a> {
                             stmt.span,
                             "relative motion: its offset is not a target and is left unchanged",
                         )
-                        .with_hint("check this motion by hand after a transform"),
+                        .with_hint("check this motion by hand after a transform")
+                        .shaping_transforms(),
                     );
                     return;
                 }
@@ -1062,7 +1063,9 @@ impl<'a> Extractor<'a> {
                             )
                             .with_hint(
                                 "trackfix cannot transform a composed frame; check this motion by hand",
-                            ),
+                            )
+                            // A transform leaves the motion as it is: its output says so.
+                            .shaping_transforms(),
                         );
                     }
                 }
