@@ -496,6 +496,11 @@ pub(crate) struct MirrorArgs {
     /// The robot whose work objects place a world mirror plane (`frame_in = "world"`).
     #[arg(long, requires = "cell")]
     pub robot: Option<String>,
+    /// The mirror-image robot of the cell, when the image is for it: with a world plane, the
+    /// image is written in the work objects as its [robot.NAME.wobj] entries place them (as
+    /// `transfer --mirror` does).
+    #[arg(long = "to", value_name = "ROBOT", requires = "robot")]
+    pub to_robot: Option<String>,
     /// Work object (or KRL base) of declared targets no motion uses (world mirror plane only).
     #[arg(long, value_name = "NAME")]
     pub default_wobj: Option<String>,
@@ -1181,6 +1186,7 @@ fn mirror_settings(
     let world = (table.frame_in == FrameIn::World).then(|| WorldPlane {
         frame: table.frame.unwrap_or(d.frame),
         frames: robot.map(|r| r.frames.clone()).unwrap_or_default(),
+        frames_to: None,
         default_wobj: default_wobj.map(str::to_owned),
     });
     MirrorSettings {
@@ -1236,7 +1242,7 @@ fn run_mirror_inner(mut a: MirrorArgs) -> anyhow::Result<Exit> {
         };
         let _ = writeln!(std::io::stderr(), "note: mirror: plane {plane} of {frames}");
     }
-    let settings = MirrorSettings {
+    let mut settings = MirrorSettings {
         skid_axis_to: a
             .skid_to
             .as_deref()
@@ -1250,6 +1256,9 @@ fn run_mirror_inner(mut a: MirrorArgs) -> anyhow::Result<Exit> {
             a.default_wobj.as_deref(),
         )
     };
+    if let (Some(c), Some(name)) = (&cell, &a.to_robot) {
+        writes_image_for(&mut settings, c.robot(name)?);
+    }
     run_step(
         "mirror",
         &a.files,
@@ -1258,6 +1267,14 @@ fn run_mirror_inner(mut a: MirrorArgs) -> anyhow::Result<Exit> {
         &a.out,
         &Provenance::new("mirror", robot, None, StampRule::NotCorrectedForAny),
     )
+}
+
+/// A mirror whose image is for robot `to`: with a plane in world, the image is written in the
+/// work objects as `to`'s cell entries place them.
+fn writes_image_for(settings: &mut MirrorSettings, to: &Robot) {
+    if let Some(world) = &mut settings.world {
+        world.frames_to = Some(to.frames.clone());
+    }
 }
 
 /// A mirror needs a plane: from `--plane` or the cell's `[mirror]` table, never a silent
@@ -1303,15 +1320,19 @@ fn run_transfer_inner(mut a: TransferArgs) -> anyhow::Result<Exit> {
     }
     let mut plan = TransferPlan {
         from: TrackSetup::new(from, &from_profile),
-        mirror: a.mirror.then(|| MirrorSettings {
-            skid_axis_to: Some(to.skid_axis),
-            ..mirror_settings(
-                Some(&cell),
-                &a.mirror_options,
-                from.skid_axis,
-                Some(from),
-                a.default_wobj.as_deref(),
-            )
+        mirror: a.mirror.then(|| {
+            let mut settings = MirrorSettings {
+                skid_axis_to: Some(to.skid_axis),
+                ..mirror_settings(
+                    Some(&cell),
+                    &a.mirror_options,
+                    from.skid_axis,
+                    Some(from),
+                    a.default_wobj.as_deref(),
+                )
+            };
+            writes_image_for(&mut settings, to);
+            settings
         }),
         to: TrackSetup::new(to, &to_profile),
     };

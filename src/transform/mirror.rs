@@ -119,6 +119,10 @@ pub struct WorldPlane {
     pub frame: Pose,
     /// Work objects / bases overriding the program's (lower-case name → pose in world).
     pub frames: BTreeMap<String, Pose>,
+    /// The mirror-image robot's own overrides, when it is another robot of the cell
+    /// (`transfer`): the mirrored point in world, `A·W·T·Sb`, is written in the work object as
+    /// that robot places it, `T' = W_to⁻¹·A·W·T·Sb`.
+    pub frames_to: Option<BTreeMap<String, Pose>>,
     /// The work object of declared targets no motion uses.
     pub default_wobj: Option<String>,
 }
@@ -149,12 +153,16 @@ fn unit(i: usize) -> Vector3<f64> {
     v
 }
 
-/// The geometry of one mirror: the plane (point and unit normal) and the tool axis.
+/// The geometry of one mirror: the plane (point and unit normal) and the tool axis, and the
+/// move from the work object as this robot places it to the same work object as the
+/// mirror-image robot places it (identity but for a plane in world between two robots whose
+/// cell entries place the work object a little differently).
 #[derive(Clone, Copy, Debug)]
 pub struct Reflection {
     point: Vector3<f64>,
     normal: Vector3<f64>,
     tool_axis: Vector3<f64>,
+    after: Pose,
 }
 
 impl Reflection {
@@ -169,7 +177,24 @@ impl Reflection {
             point: frame.translation.vector,
             normal: frame.rotation * unit(settings.plane.normal_axis()),
             tool_axis: unit(settings.tool_flip.index()),
+            after: Pose::identity(),
         }
+    }
+
+    /// The same mirror, its result then moved by `c` (`W_to⁻¹·W_from`): `T' = c·M·Sa·M⁻¹·T·Sb`.
+    pub fn then(self, c: Pose) -> Reflection {
+        Reflection { after: c, ..self }
+    }
+
+    /// Whether its result is moved after the reflection ([`Reflection::then`]).
+    fn moves_after(&self) -> bool {
+        self.after.translation.vector != Vector3::zeros() || self.after.rotation.angle() != 0.0
+    }
+
+    /// An `Offs` offset (a vector in the work object) mirrored: reflected, then turned as the
+    /// work object is between the two robots.
+    fn offset(&self, v: &Vector3<f64>) -> Vector3<f64> {
+        self.after.rotation * self.vector(v)
     }
 
     /// `Lₙ`: the reflection in the plane through the origin with this one's normal (its
@@ -206,9 +231,17 @@ impl Reflection {
 
     /// `T' = M·Sa·M⁻¹·T·Sb`, with the quaternion the analytic formula gives (sign included).
     pub fn target(&self, t: &Pose) -> (Pose, [f64; 4]) {
-        pose_with_quat(
+        let (p, q) = (
             self.point(&t.translation.vector),
             self.rotation(&t.rotation, self.tool_axis),
+        );
+        if !self.moves_after() {
+            return pose_with_quat(p, q);
+        }
+        let c = &self.after;
+        pose_with_quat(
+            c.rotation * p + c.translation.vector,
+            c.rotation.quaternion() * q,
         )
     }
 
@@ -587,7 +620,12 @@ pub(crate) fn reflection_for(
     if declared(world.default_wobj.as_deref()) {
         return Ok(Reflection::about(&world.frame, settings).through_origin());
     }
-    Ok(Reflection::about(&(w.inverse() * world.frame), settings))
+    let reflection = Reflection::about(&(w.inverse() * world.frame), settings);
+    let Some(to) = &world.frames_to else {
+        return Ok(reflection);
+    };
+    let w_to = work_object_of(program, own_file, p, to, world.default_wobj.as_deref())?;
+    Ok(reflection.then(w_to.inverse() * w))
 }
 
 /// Whether the program declares the work object (base) target `p` is used in: mirroring the frames
@@ -637,6 +675,10 @@ fn mirror_offset(
                             Ok(r) => {
                                 (r.normal - first.normal).norm() < 1e-12
                                     && (r.point - first.point).norm() < 1e-9
+                                    && (r.after.inverse() * first.after).rotation.angle() < 1e-12
+                                    && (r.after.translation.vector - first.after.translation.vector)
+                                        .norm()
+                                        < 1e-9
                             }
                             Err(_) => false,
                         });
@@ -683,11 +725,13 @@ fn mirror_offset(
                 call.kind == OffsetKind::RelTool && **expression && **n == 0.0
             })
             .map(|((switch, _), _)| switch);
+        // Turned after the reflection, every component of an `Offs` offset changes.
+        let turned = call.kind == OffsetKind::Offs && refl.after.rotation.angle() != 0.0;
         let offset_blocked = call
             .delta
             .iter()
             .zip(axis.iter())
-            .any(|(f, n)| f.is_none() && n.abs() > 1e-12);
+            .any(|(f, n)| f.is_none() && (turned || n.abs() > 1e-12));
         let why = match (rot_switch, offset_blocked) {
             (Some(switch), _) => Some((
                 format!(
@@ -711,7 +755,7 @@ fn mirror_offset(
         let d = call.delta.map(|f| f.map_or(0.0, |f| f.value()));
         let v = Vector3::new(d[0], d[1], d[2]);
         let new = match call.kind {
-            OffsetKind::Offs => refl.vector(&v),
+            OffsetKind::Offs => refl.offset(&v),
             OffsetKind::RelTool => refl.tool_vector(&v),
         };
         for (f, n) in call.delta.iter().zip([new.x, new.y, new.z]) {
@@ -1163,6 +1207,7 @@ mod tests {
             world: Some(WorldPlane {
                 frame: plane,
                 frames: BTreeMap::new(),
+                frames_to: None,
                 default_wobj: None,
             }),
             ..MirrorSettings::default()
@@ -1237,6 +1282,7 @@ mod tests {
             world: Some(WorldPlane {
                 frame: plane,
                 frames: BTreeMap::new(),
+                frames_to: None,
                 default_wobj: None,
             }),
             ..MirrorSettings::default()

@@ -519,8 +519,41 @@ fn round_trips_through_files() {
             &m2,
             "--skip-unsupported",
         ]);
+        // transfer to the mirror-image robot and back, with the sample cell's world plane and
+        // each robot's own entries for the car's work object (0.34 mm and 0.012° apart): the
+        // mirror image is written in the work object as the other robot places it, so the way
+        // back lands on the original (it was 3.2 mm off when both ways used the sending
+        // robot's entry).
+        let (t1, t2) = (d(&format!("t1.{ext}")), d(&format!("t2.{ext}")));
+        let to_and_back = [
+            ["--from", "r1", "--to", "r2", "-o", &t1],
+            ["--from", "r2", "--to", "r1", "-o", &t2],
+        ];
+        let pair = if ext == "mod" {
+            ("r1", "r2")
+        } else {
+            ("k1", "k2")
+        };
+        for (step, input) in to_and_back.iter().zip([sample, t1.as_str()]) {
+            let step: Vec<&str> = step
+                .iter()
+                .map(|a| match *a {
+                    "r1" => pair.0,
+                    "r2" => pair.1,
+                    a => a,
+                })
+                .collect();
+            run_ok(
+                &[
+                    &["transfer", input, "--cell", "samples/cell.toml", "--mirror"][..],
+                    &step,
+                    &["--skip-unsupported", "--force"],
+                ]
+                .concat(),
+            );
+        }
         let original = poses(&load_with_cell(&root().join(sample), &cell, "r1"));
-        for back in [&z, &m2] {
+        for back in [&z, &m2, &t2] {
             let again = poses(&load_with_cell(Path::new(back), &cell, "r1"));
             assert_eq!(original.len(), again.len());
             assert!(original.len() > 100);
@@ -617,7 +650,13 @@ fn transfer_equals_zero_mirror_correct() {
         );
         // The cell's mirror plane is in world: the mirror resolves work objects like transfer
         // does, with --from's cell entries.
-        run_ok(&[&["mirror", &z, "--robot", "r1", "-o", &m], &common[..]].concat());
+        run_ok(
+            &[
+                &["mirror", &z, "--robot", "r1", "--to", "r2", "-o", &m],
+                &common[..],
+            ]
+            .concat(),
+        );
         run_ok(&[&["correct", &m, "--robot", "r2", "-o", &c], &common[..]].concat());
         let chained = std::fs::read(&c).unwrap();
         let transferred = std::fs::read(Path::new(&out).join(format!("{stem}.{ext}"))).unwrap();
