@@ -1290,16 +1290,22 @@ fn computed_assignment(
 /// `out`; a system variable's (`$BASE`) is not data of the program.
 #[inline(never)]
 fn written_name(src: &[u8], target: &Expr, out: &mut Vec<Name>) {
+    if let Some(name) = whole_name(src, target)
+        && !out.contains(&name)
+    {
+        out.push(name);
+    }
+}
+
+/// The data name an assignment to `target` gives a value (`XC` of `XC.X`), upper case; `None`
+/// for a system variable (`$BASE`) or an array element.
+fn whole_name(src: &[u8], target: &Expr) -> Option<Name> {
     let mut whole = target;
     while let ExprKind::Member(inner, _) = &whole.kind {
         whole = inner;
     }
-    if matches!(whole.kind, ExprKind::Name) {
-        let name = upper_name(src, whole.span);
-        if !name.starts_with('$') && !out.contains(&name) {
-            out.push(name);
-        }
-    }
+    let name = matches!(whole.kind, ExprKind::Name).then(|| upper_name(src, whole.span))?;
+    (!name.starts_with('$')).then_some(name)
 }
 
 /// An assignment statement, written in a `DEF`/`DEFFCT` (`in_routine`) or a data list.
@@ -1317,6 +1323,20 @@ fn assignment(
 ) -> Option<Diagnostic> {
     if in_routine {
         written_name(src, target, &mut out.facts.written_in_routines);
+        // A copy (`XC = XA`) is made an alias below; another whole value given to the name
+        // (`XC = $POS_ACT`) ends the copy: a motion to it then moves to that value, and says
+        // nothing of the target it was copied from. A component changed (`XC.Z = XC.Z +
+        // 100`, an approach point) keeps it: the motion is still taught in that target's base.
+        let copy = matches!(value.kind, ExprKind::Name | ExprKind::Index(..));
+        if !copy
+            && matches!(target.kind, ExprKind::Name)
+            && let Some(name) = whole_name(src, target)
+        {
+            out.facts.events.push(Event::Alias {
+                name: name.clone(),
+                source: name,
+            });
+        }
     }
     let ExprKind::Aggregate(agg) = &value.kind else {
         if let Some(s) = setting(src, target, value) {

@@ -1563,3 +1563,46 @@ fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
     let set_again = "  GOTO SKIP\n  SKIP:\n  $BASE=BASE_DATA[2]\n  LIN XP1\n";
     assert_eq!(base_of(set_again), (Some("BASE_DATA[2]".to_owned()), None));
 }
+
+/// A copy (`XC=XP1`) moves to what it copies until the program gives it another whole value
+/// (`XC=$POS_ACT`): from then on a motion to it is not a motion to `XP1`, which is no longer
+/// taken as used there, in whatever base that motion moves (it was corrected in it). A
+/// component changed (`XC.X=XC.X+10`, an approach point) keeps the copy: the motion still
+/// tells the base `XP1` is taught in.
+#[test]
+fn a_copy_given_another_value_no_longer_reaches_its_source() {
+    let dat = "DEFDAT cell\n\
+        DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        ENDDAT\n";
+    let options = with_sample_config();
+    let lines_of_xp1 = |body: &str| {
+        let src = format!("DEF cell( )\n  DECL E6POS XC\n  $BASE=BASE_DATA[1]\n{body}END\n");
+        let p = krl::load_program_from_sources(
+            vec![
+                (PathBuf::from("cell.src"), src.into_bytes()),
+                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
+            ],
+            &options,
+        )
+        .unwrap();
+        p.files
+            .iter()
+            .flat_map(|f| f.positions())
+            .find(|t| t.name.as_deref() == Some("XP1"))
+            .unwrap()
+            .usage
+            .lines
+            .to_vec()
+    };
+    assert_eq!(lines_of_xp1("  XC=XP1\n  LIN XC\n"), [5]);
+    assert_eq!(lines_of_xp1("  XC=XP1\n  XC.X=XC.X+10\n  LIN XC\n"), [6]);
+    assert_eq!(
+        lines_of_xp1("  XC=XP1\n  XC=$POS_ACT\n  LIN XC\n"),
+        Vec::<u32>::new()
+    );
+    // Copied again: reached again.
+    assert_eq!(
+        lines_of_xp1("  XC=XP1\n  XC=$POS_ACT\n  XC=XP1\n  LIN XC\n"),
+        [7]
+    );
+}
