@@ -131,6 +131,10 @@ pub(crate) struct Fdat {
 pub(crate) struct Facts {
     pub events: Vec<Event>,
     pub fdats: HashMap<Name, Fdat>,
+    /// Routines the program runs where trackfix does not follow them, upper case: its
+    /// functions (`DEFFCT`, called inside expressions) and the routines of its interrupts and
+    /// triggers (`… DO SETB()`). One that changes the base or tool leaves every motion's unknown.
+    pub unfollowed: Vec<String>,
     /// Names a routine assigns, whole or a component (`FP1.BASE_NO = 2`, `FP1 = FP2`), upper
     /// case: an `FDAT` among them does not hold its declared value when a motion applies it.
     pub written_in_routines: Vec<Name>,
@@ -924,6 +928,9 @@ impl<'a> Extractor<'a> {
                     if let Some(n) = name.as_ref().filter(|_| first || *global) {
                         out.facts.public_routines.push(n.clone());
                     }
+                    if let Some(n) = name.as_ref().filter(|_| upper_is(src, *keyword, "DEFFCT")) {
+                        out.facts.unfollowed.push(n.clone());
+                    }
                     out.facts.events.push(Event::Reset(name));
                     self.loops.clear();
                 }
@@ -1009,6 +1016,11 @@ impl<'a> Extractor<'a> {
             }
             StmtKind::EndSpline => self.block_with.clear(),
             StmtKind::Label => out.facts.events.push(Event::Label),
+            StmtKind::Handler => {
+                if let Some(name) = handler_routine(stmt.span.slice(src)) {
+                    out.facts.unfollowed.push(name);
+                }
+            }
             StmtKind::Motion {
                 keyword,
                 targets,
@@ -1295,6 +1307,18 @@ fn written_name(src: &[u8], target: &Expr, out: &mut Vec<Name>) {
     {
         out.push(name);
     }
+}
+
+/// The routine an `INTERRUPT DECL … DO NAME(…)` or `TRIGGER … DO NAME(…)` statement runs,
+/// upper case: the name after the word `DO`.
+fn handler_routine(text: &[u8]) -> Option<String> {
+    let words: Vec<&[u8]> = text
+        .split(|b| !(b.is_ascii_alphanumeric() || matches!(b, b'_' | b'$' | b'#')))
+        .filter(|w| !w.is_empty())
+        .collect();
+    let at = words.iter().position(|w| w.eq_ignore_ascii_case(b"DO"))?;
+    let name = words.get(at + 1)?;
+    Some(String::from_utf8_lossy(name).to_ascii_uppercase())
 }
 
 /// The data name an assignment to `target` gives a value (`XC` of `XC.X`), upper case; `None`

@@ -653,6 +653,15 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
         }
     }
     let exits = routine_exits(facts, &fdats, &modules);
+    // A routine run where trackfix does not follow it (a function, an interrupt's or a
+    // trigger's) that leaves the base or tool changed: the first, by name.
+    let unfollowed: Option<String> = facts.iter().enumerate().find_map(|(fi, f)| {
+        f.unfollowed.iter().find_map(|name| {
+            let exit = exits.of(modules.of(fi), name)?;
+            (exit.base.is_some() || exit.tool.is_some() || exit.staged.is_some())
+                .then(|| name.clone())
+        })
+    });
     let events: Vec<Vec<Event>> = facts
         .iter_mut()
         .map(|f| std::mem::take(&mut f.events))
@@ -781,6 +790,20 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                         // not this program's business, nor is one to a joint target only (it
                         // moves the same whatever the base).
                         binder.bind(fi, &u);
+                        if let Some(routine) = &unfollowed
+                            && u.run_time.is_none()
+                            && binder.reached_cartesian()
+                        {
+                            binder.mark_reached(fi, |elsewhere, usage| {
+                                usage.mark_unresolved_frame(UnresolvedFrame {
+                                    at: UseLine {
+                                        line: *line,
+                                        file: elsewhere.cloned(),
+                                    },
+                                    cause: UnresolvedCause::ChangedBy(routine.clone()),
+                                });
+                            });
+                        }
                         if u.frame.is_none() && binder.reached_cartesian() {
                             // Whatever base its other motions use, the point's is not known
                             // (a base computed at run time is refused as such).

@@ -171,6 +171,9 @@ pub enum StmtKind {
     EndSpline,
     /// `NAME:`, a label a `GOTO` jumps to: program order may arrive there from anywhere.
     Label,
+    /// `INTERRUPT DECL … DO routine(…)` or `TRIGGER WHEN … DO routine(…)`: a routine run when
+    /// an event happens, wherever the program then is.
+    Handler,
     /// `keyword target` / `keyword aux, target`, then approximation and `WITH` assignments.
     Motion {
         /// `PTP`, `LIN`, `CIRC`, … (one of [`crate::krl::MOTION_KEYWORDS`]).

@@ -499,6 +499,9 @@ pub enum UnresolvedCause {
     /// The target is passed to a routine of the program (KRL), whose motions trackfix does
     /// not follow: the base they move in is not known.
     PassedTo(String),
+    /// A routine the program runs where trackfix does not follow it (KRL: a function, called
+    /// inside an expression; an interrupt's or a trigger's) changes the base or tool.
+    ChangedBy(String),
 }
 
 /// The line of a use, and the file it is in when that is not the used target's own (a KRL

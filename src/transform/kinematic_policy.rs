@@ -56,6 +56,7 @@ impl Arm {
             let name = match &u.cause {
                 crate::position::UnresolvedCause::Parameter(n)
                 | crate::position::UnresolvedCause::PassedTo(n)
+                | crate::position::UnresolvedCause::ChangedBy(n)
                 | crate::position::UnresolvedCause::Shadowed(n) => n.as_str(),
                 crate::position::UnresolvedCause::SomePaths => "a tool",
             };

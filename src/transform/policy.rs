@@ -190,6 +190,15 @@ pub(crate) fn wobj_of(
                     "move to it where it is declared, with the {frame} set there, or correct it by hand"
                 ),
             ),
+            UnresolvedCause::ChangedBy(routine) => Why::new(
+                RefusalKind::UnresolvedWorkObject,
+                format!(
+                    "{what} is moved to on {at}, and `{routine}` changes the {frame} when it runs (a function, or the routine of an interrupt or trigger), which trackfix does not follow"
+                ),
+                format!(
+                    "set the {frame} in the routines that move, not in `{routine}`, or correct the targets by hand"
+                ),
+            ),
             UnresolvedCause::Shadowed(name) => Why::new(
                 RefusalKind::UnresolvedWorkObject,
                 format!(

@@ -1606,3 +1606,52 @@ fn a_copy_given_another_value_no_longer_reaches_its_source() {
         [7]
     );
 }
+
+/// A routine the program runs where trackfix does not follow it — a function (`DEFFCT`, called
+/// inside an expression such as `IF PREP() THEN`), or the routine of an interrupt or trigger
+/// (`… DO SETB()`) — that changes the base leaves every motion's base unknown: its points are
+/// refused naming the routine, where they were corrected in the base set before. One that
+/// changes no frame changes nothing.
+#[test]
+fn a_function_or_interrupt_that_changes_the_base_leaves_it_unknown() {
+    let dat = "DEFDAT cell\n\
+        DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        ENDDAT\n";
+    let options = with_sample_config();
+    let cause_of = |src: &str| {
+        let p = krl::load_program_from_sources(
+            vec![
+                (PathBuf::from("cell.src"), src.as_bytes().to_vec()),
+                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
+            ],
+            &options,
+        )
+        .unwrap();
+        p.files
+            .iter()
+            .flat_map(|f| f.positions())
+            .find(|t| t.name.as_deref() == Some("XP1"))
+            .unwrap()
+            .usage
+            .unresolved_frame()
+            .map(|u| u.cause.clone())
+    };
+    let changed = |name: &str| {
+        Some(trackfix::position::UnresolvedCause::ChangedBy(
+            name.to_owned(),
+        ))
+    };
+    let function = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  IF PREP() THEN\n  ENDIF\n  LIN XP1\nEND\n\
+                    DEFFCT BOOL PREP( )\n  $BASE=BASE_DATA[2]\n  RETURN TRUE\nENDFCT\n";
+    assert_eq!(cause_of(function), changed("PREP"));
+    let interrupt = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  INTERRUPT DECL 3 WHEN $IN[7] DO SETB()\n  \
+                     INTERRUPT ON 3\n  LIN XP1\nEND\nDEF SETB( )\n  BAS(#BASE,2)\nEND\n";
+    assert_eq!(cause_of(interrupt), changed("SETB"));
+    let trigger = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  TRIGGER WHEN DISTANCE=1 DELAY=0 DO setb() PRIO=-1\n  \
+                   LIN XP1\nEND\nDEF SETB( )\n  $BASE=BASE_DATA[2]\nEND\n";
+    assert_eq!(cause_of(trigger), changed("SETB"));
+    let harmless = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  INTERRUPT DECL 3 WHEN $IN[7] DO STOPIT()\n  \
+                    IF OK() THEN\n  ENDIF\n  LIN XP1\nEND\nDEF STOPIT( )\n  BRAKE\nEND\n\
+                    DEFFCT BOOL OK( )\n  RETURN TRUE\nENDFCT\n";
+    assert_eq!(cause_of(harmless), None);
+}

@@ -80,14 +80,14 @@ impl LineParser<'_, '_> {
                     c.pos += 1;
                 }
                 if c.is_kw("INTERRUPT") {
-                    Ok((NodeKind::Simple, None))
+                    Ok((NodeKind::Simple, Some(StmtKind::Handler)))
                 } else if c.is_kw("STRUC") || c.is_kw("ENUM") || c.is_kw("SIGNAL") {
                     Ok((NodeKind::Declaration, None))
                 } else {
                     decl(&mut c).map(|k| (NodeKind::Declaration, Some(k.made_global(global))))
                 }
             }
-            b"INTERRUPT" | b"TRIGGER" => Ok((NodeKind::Simple, None)),
+            b"INTERRUPT" | b"TRIGGER" => Ok((NodeKind::Simple, Some(StmtKind::Handler))),
             _ if word.is_in(DECL_KEYWORDS) => Ok((NodeKind::Declaration, None)),
             // `GLOBAL INT x = 10`: a predefined type may omit `DECL` after `GLOBAL` too.
             _ if global && word.is_in(PREDEFINED_TYPES) => {
