@@ -900,7 +900,7 @@ impl<'a> Extractor<'a> {
     // Inlined into the parser's sink, which calls it once a statement: as a call of its own
     // (as the build's partition sometimes made it) it cost 1.7 M instructions more on the
     // 3 MB pair, its statement copied through memory.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn statement(&mut self, stmt: &Stmt) {
         let (src, lines) = (self.src, self.lines);
         let out = &mut self.out;
@@ -928,9 +928,7 @@ impl<'a> Extractor<'a> {
                     if let Some(n) = name.as_ref().filter(|_| first || *global) {
                         out.facts.public_routines.push(n.clone());
                     }
-                    if let Some(n) = name.as_ref().filter(|_| upper_is(src, *keyword, "DEFFCT")) {
-                        out.facts.unfollowed.push(n.clone());
-                    }
+                    function_routine(src, *keyword, name.as_ref(), out);
                     out.facts.events.push(Event::Reset(name));
                     self.loops.clear();
                 }
@@ -1027,29 +1025,8 @@ impl<'a> Extractor<'a> {
                 with,
             } => {
                 let line = lines.line(stmt.span.start);
-                let mut buf = [0; 16];
-                let word = upper_short(src, *keyword, &mut buf);
-                if word.ends_with("_REL") {
-                    // A point named as the motion's target is a displacement from wherever
-                    // the robot is, in the base or tool frame: an offset, not a position.
-                    let instruction = crate::krl::MOTION_KEYWORDS
-                        .iter()
-                        .find(|k| **k == word)
-                        .copied()
-                        .unwrap_or("_REL");
-                    for t in targets {
-                        let mut operand = t;
-                        while let ExprKind::Paren(inner) = &operand.kind {
-                            operand = inner;
-                        }
-                        if matches!(operand.kind, ExprKind::Name | ExprKind::Index(..)) {
-                            out.facts.offsets.push((
-                                upper_name(src, operand.span),
-                                line,
-                                (instruction, "relative target"),
-                            ));
-                        }
-                    }
+                if upper_short(src, *keyword, &mut [0; 16]).ends_with("_REL") {
+                    relative_motion(src, (*keyword, stmt.span, line), targets, out);
                     self.diagnostics.push(
                         Diagnostic::note(
                             stmt.span,
@@ -1098,6 +1075,47 @@ impl<'a> Extractor<'a> {
                     with,
                 });
             }
+        }
+    }
+}
+
+/// Records routine `name` as a function (`DEFFCT`, called inside expressions, which trackfix
+/// does not follow: [`Facts::unfollowed`]) when `keyword` says it is one. Out of line, as
+/// [`param_routine`].
+#[inline(never)]
+fn function_routine(src: &[u8], keyword: Span, name: Option<&String>, out: &mut Extracted) {
+    if let Some(n) = name.filter(|_| upper_is(src, keyword, "DEFFCT")) {
+        out.facts.unfollowed.push(n.clone());
+    }
+}
+
+/// Records the named targets of relative motion `keyword` (`LIN_REL XSTEP`) on `line` as
+/// offsets: a displacement from wherever the robot is, in the base or tool frame, not a
+/// position. Out of line, as [`param_routine`].
+#[inline(never)]
+fn relative_motion(
+    src: &[u8],
+    (keyword, _, line): (Span, Span, usize),
+    targets: &[Expr],
+    out: &mut Extracted,
+) {
+    let word = upper(src, keyword);
+    let instruction = crate::krl::MOTION_KEYWORDS
+        .iter()
+        .find(|k| **k == word)
+        .copied()
+        .unwrap_or("_REL");
+    for t in targets {
+        let mut operand = t;
+        while let ExprKind::Paren(inner) = &operand.kind {
+            operand = inner;
+        }
+        if matches!(operand.kind, ExprKind::Name | ExprKind::Index(..)) {
+            out.facts.offsets.push((
+                upper_name(src, operand.span),
+                line,
+                (instruction, "relative target"),
+            ));
         }
     }
 }
@@ -1300,12 +1318,49 @@ fn computed_assignment(
 
 /// The name an assignment to `target` writes (`FP1` of `FP1.BASE_NO`), upper case, into
 /// `out`; a system variable's (`$BASE`) is not data of the program.
-#[inline(never)]
 fn written_name(src: &[u8], target: &Expr, out: &mut Vec<Name>) {
-    if let Some(name) = whole_name(src, target)
-        && !out.contains(&name)
+    // The list is only looked into: repeats further apart cost a little memory, not a
+    // search per assignment.
+    let Some(span) = whole_span(target) else {
+        return;
+    };
+    let text = span.slice(src).trim_ascii();
+    // KSS's active motion data (`LDAT_ACT = LCPDAT1`, `PDAT_ACT = …` before each motion of a
+    // taught program) are no FDATs the program declares (`FDAT_ACT` is read as a setting), and
+    // the same name again right after (`P.X = …`, `P.Y = …`) is kept once.
+    let active = text.len() > 4
+        && text
+            .get(text.len() - 4..)
+            .is_some_and(|t| t.eq_ignore_ascii_case(b"_ACT"));
+    if active
+        || text.first() == Some(&b'$')
+        || out
+            .last()
+            .is_some_and(|last| last.as_bytes().eq_ignore_ascii_case(text))
     {
-        out.push(name);
+        return;
+    }
+    out.push(upper_name(src, span));
+}
+
+/// Records what an assignment in a routine writes: the name, whole or a component
+/// ([`Facts::written_in_routines`]), and the end of a copy. A copy (`XC = XA`) is made an
+/// alias by [`assignment`]; another whole value given to the name (`XC = $POS_ACT`) ends it: a
+/// motion to it then moves to that value, and says nothing of the target it was copied from.
+/// A component changed (`XC.Z = XC.Z + 100`, an approach point) keeps it: the motion is still
+/// taught in that target's base. Out of line, as [`param_routine`].
+#[inline(never)]
+fn written_in_routine(src: &[u8], target: &Expr, value: &Expr, out: &mut Extracted) {
+    written_name(src, target, &mut out.facts.written_in_routines);
+    let copy = matches!(value.kind, ExprKind::Name | ExprKind::Index(..));
+    if !copy
+        && matches!(target.kind, ExprKind::Name)
+        && let Some(name) = whole_name(src, target)
+    {
+        out.facts.events.push(Event::Alias {
+            name: name.clone(),
+            source: name,
+        });
     }
 }
 
@@ -1324,12 +1379,19 @@ fn handler_routine(text: &[u8]) -> Option<String> {
 /// The data name an assignment to `target` gives a value (`XC` of `XC.X`), upper case; `None`
 /// for a system variable (`$BASE`) or an array element.
 fn whole_name(src: &[u8], target: &Expr) -> Option<Name> {
+    let whole = whole_span(target)?;
+    let text = whole.slice(src).trim_ascii();
+    (text.first() != Some(&b'$')).then(|| upper_name(src, whole))
+}
+
+/// The span of the data name an assignment to `target` gives a value (`XC` of `XC.X`); `None`
+/// for a system variable (`$BASE`) or an array element. Read without a copy of the text.
+fn whole_span(target: &Expr) -> Option<Span> {
     let mut whole = target;
     while let ExprKind::Member(inner, _) = &whole.kind {
         whole = inner;
     }
-    let name = matches!(whole.kind, ExprKind::Name).then(|| upper_name(src, whole.span))?;
-    (!name.starts_with('$')).then_some(name)
+    matches!(whole.kind, ExprKind::Name).then_some(whole.span)
 }
 
 /// An assignment statement, written in a `DEF`/`DEFFCT` (`in_routine`) or a data list.
@@ -1346,21 +1408,7 @@ fn assignment(
     out: &mut Extracted,
 ) -> Option<Diagnostic> {
     if in_routine {
-        written_name(src, target, &mut out.facts.written_in_routines);
-        // A copy (`XC = XA`) is made an alias below; another whole value given to the name
-        // (`XC = $POS_ACT`) ends the copy: a motion to it then moves to that value, and says
-        // nothing of the target it was copied from. A component changed (`XC.Z = XC.Z +
-        // 100`, an approach point) keeps it: the motion is still taught in that target's base.
-        let copy = matches!(value.kind, ExprKind::Name | ExprKind::Index(..));
-        if !copy
-            && matches!(target.kind, ExprKind::Name)
-            && let Some(name) = whole_name(src, target)
-        {
-            out.facts.events.push(Event::Alias {
-                name: name.clone(),
-                source: name,
-            });
-        }
+        written_in_routine(src, target, value, out);
     }
     let ExprKind::Aggregate(agg) = &value.kind else {
         if let Some(s) = setting(src, target, value) {

@@ -1550,22 +1550,29 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                 }),
             };
             let tool_named = tool.is_some();
-            let tool_parameter = tool.filter(|t| a_parameter(t));
-            let tool = tool.filter(|t| !a_parameter(t)).map(|t| frame_texts.get(t));
+            // (Each asked once: a motion's routine is asked for every motion.)
+            let (tool, tool_parameter) = match tool {
+                Some(t) if a_parameter(t) => (None, Some(t)),
+                t => (t, None),
+            };
+            let tool = tool.map(|t| frame_texts.get(t));
             // A motion without `\WObj` moves in `wobj0` (asked only then: most name theirs).
             let motion = || {
                 MOTION_PREFIXES
                     .iter()
                     .any(|p| call.starts_with(p.as_bytes()))
             };
-            let wobj_parameter = u
-                .wobj
-                .map(|sp| trim_latin1(sp.span().slice(src)))
-                .filter(|w| a_parameter(w));
+            let mut wobj_parameter = None;
             let wobj = match u.wobj {
-                Some(sp) => Some(trim_latin1(sp.span().slice(src)))
-                    .filter(|w| !a_parameter(w))
-                    .map(|w| frame_texts.get(w)),
+                Some(sp) => {
+                    let w = trim_latin1(sp.span().slice(src));
+                    if a_parameter(w) {
+                        wobj_parameter = Some(w);
+                        None
+                    } else {
+                        Some(frame_texts.get(w))
+                    }
+                }
                 None => (tool_named || motion()).then(|| wobj0.clone()),
             };
             let stationary = wobj.as_ref().is_some_and(|w| w.robhold);
