@@ -551,14 +551,21 @@ fn parse_skid_map(s: &str) -> Result<(f64, f64), String> {
     }
 }
 
-fn load_programs(files: &[PathBuf], options: &LoadOptions) -> anyhow::Result<Vec<Program>> {
+/// The programs among `files`; a file skipped (not a text module) is noted unless `quiet`.
+fn load_programs(
+    files: &[PathBuf],
+    options: &LoadOptions,
+    quiet: bool,
+) -> anyhow::Result<Vec<Program>> {
     let mut programs = Vec::new();
     for group in collect_programs(files)? {
         for loaded in load_group(&group, options) {
             match loaded {
                 Ok(p) => programs.push(p),
                 Err(e) if e.is_skip() => {
-                    let _ = writeln!(std::io::stderr(), "note: {e}");
+                    if !quiet {
+                        let _ = writeln!(std::io::stderr(), "note: {e}");
+                    }
                 }
                 Err(e) => return Err(e.into()),
             }
@@ -676,6 +683,11 @@ fn finish(
     out: &OutputArgs,
     inputs: &[PathBuf],
 ) -> anyhow::Result<Exit> {
+    if out.no_backup && !out.in_place {
+        bail!(
+            "--no-backup is for --in-place, which replaces the inputs; -o and --out-dir never touch them"
+        );
+    }
     // The report's path is checked before anything is written: it must not name an input,
     // the cell or an output, and a report that cannot be written must not follow outputs
     // that are.
@@ -1012,7 +1024,11 @@ fn run_each(
     prov: &Provenance,
     transform: impl Fn(Program) -> anyhow::Result<ProgramResult>,
 ) -> anyhow::Result<Exit> {
-    let programs = load_programs(files, &load_options(robot, out.in_place))?;
+    let programs = load_programs(
+        files,
+        &load_options(robot, out.in_place),
+        out.verbosity.quiet,
+    )?;
     if let Some(exit) = refuse_syntax_errors(command, &programs)? {
         return Ok(exit);
     }

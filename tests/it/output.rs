@@ -733,3 +733,32 @@ fn a_name_too_long_for_the_lock_is_refused_with_what_to_do() {
         std::fs::read("samples/rapid/bom.mod").unwrap()
     );
 }
+
+/// `--no-backup` is for `--in-place`: with `-o` or `--out-dir` it is a usage error (exit 2,
+/// nothing written), not silently ignored; `-q` keeps a skipped file's note to itself.
+#[test]
+fn no_backup_outside_in_place_is_refused_and_quiet_is_quiet() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let (code, _, err) = correct(&[
+        "samples/rapid/bom.mod",
+        "--no-backup",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--no-backup is for --in-place"), "{err}");
+    assert!(!out.exists());
+    let batch = dir.path().join("batch");
+    std::fs::create_dir(&batch).unwrap();
+    std::fs::copy("samples/rapid/bom.mod", batch.join("bom.mod")).unwrap();
+    std::fs::write(batch.join("blob.mod"), b"\x00\x01\x02binary\xff").unwrap();
+    let o = dir.path().join("o");
+    let args = [batch.to_str().unwrap(), "--out-dir", o.to_str().unwrap()];
+    let (code, _, err) = correct(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("blob.mod: not a text module"), "{err}");
+    let (code, _, err) = correct(&[&args[..], &["-q", "--force"]].concat());
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(err, "");
+}
