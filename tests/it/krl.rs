@@ -1473,6 +1473,30 @@ fn an_assignment_of_the_cells_config_value_changes_nothing() {
     );
 }
 
+/// The usage of point `XP1` of `dat` in the program of `cell.src` (`src`) and `cell.dat`,
+/// loaded with the sample config.
+fn usage_of_xp1(src: &str, dat: &str) -> trackfix::position::Usage {
+    let p = krl::load_program_from_sources(
+        vec![
+            (PathBuf::from("cell.src"), src.as_bytes().to_vec()),
+            (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
+        ],
+        &with_sample_config(),
+    )
+    .unwrap();
+    p.files
+        .iter()
+        .flat_map(|f| f.positions())
+        .find(|t| t.name.as_deref() == Some("XP1"))
+        .unwrap()
+        .usage
+}
+
+/// A data list with the one point `XP1` in it.
+const DAT_XP1: &str = "DEFDAT cell\n\
+    DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+    ENDDAT\n";
+
 /// An FDAT the program changes when it runs (`FDAT_ACT.BASE_NO=2`, `FP1.BASE_NO=2`, `FP1=FP2`,
 /// `FDAT_ACT` given a computed value) no longer says which base the next `BAS(#CP_PARAMS,…)`
 /// applies: the point moved to after it is refused as moved with a base that cannot be
@@ -1484,28 +1508,14 @@ fn an_fdat_the_program_changes_leaves_the_base_it_applies_unknown() {
         DECL FDAT FP1={TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE}\n\
         DECL FDAT FP2={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE}\n\
         ENDDAT\n";
-    let options = with_sample_config();
     let base_of = |change: &str| {
         let src = format!(
             "DEF cell( )\n  {change}\n  BAS(#CP_PARAMS,2)\n  LIN XP1\nEND\nDEFFCT FDAT PICK( )\n  RETURN FP2\nENDFCT\n"
         );
-        let p = krl::load_program_from_sources(
-            vec![
-                (PathBuf::from("cell.src"), src.into_bytes()),
-                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
-            ],
-            &options,
-        )
-        .unwrap();
-        let point = p
-            .files
-            .iter()
-            .flat_map(|f| f.positions())
-            .find(|t| t.name.as_deref() == Some("XP1"))
-            .unwrap();
+        let usage = usage_of_xp1(&src, dat);
         (
-            point.usage.wobj.as_deref().map(str::to_owned),
-            point.usage.unresolved_frame().is_some(),
+            usage.wobj.as_deref().map(str::to_owned),
+            usage.unresolved_frame().is_some(),
         )
     };
     assert_eq!(
@@ -1529,31 +1539,11 @@ fn an_fdat_the_program_changes_leaves_the_base_it_applies_unknown() {
 /// made of a label and a jump back). Set again after the label, the base is known.
 #[test]
 fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
-    let dat = "DEFDAT cell\n\
-        DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
-        ENDDAT\n";
-    let options = with_sample_config();
     let base_of = |body: &str| {
-        let p = krl::load_program_from_sources(
-            vec![
-                (
-                    PathBuf::from("cell.src"),
-                    format!("DEF cell( )\n{body}END\n").into_bytes(),
-                ),
-                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
-            ],
-            &options,
-        )
-        .unwrap();
-        let point = p
-            .files
-            .iter()
-            .flat_map(|f| f.positions())
-            .find(|t| t.name.as_deref() == Some("XP1"))
-            .unwrap();
+        let usage = usage_of_xp1(&format!("DEF cell( )\n{body}END\n"), DAT_XP1);
         (
-            point.usage.wobj.as_deref().map(str::to_owned),
-            point.usage.unresolved_frame().map(|u| u.at.line),
+            usage.wobj.as_deref().map(str::to_owned),
+            usage.unresolved_frame().map(|u| u.at.line),
         )
     };
     let forward = "  $BASE=BASE_DATA[1]\n  GOTO SKIP\n  $BASE=BASE_DATA[2]\n  SKIP:\n  LIN XP1\n";
@@ -1571,28 +1561,9 @@ fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
 /// tells the base `XP1` is taught in.
 #[test]
 fn a_copy_given_another_value_no_longer_reaches_its_source() {
-    let dat = "DEFDAT cell\n\
-        DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
-        ENDDAT\n";
-    let options = with_sample_config();
     let lines_of_xp1 = |body: &str| {
         let src = format!("DEF cell( )\n  DECL E6POS XC\n  $BASE=BASE_DATA[1]\n{body}END\n");
-        let p = krl::load_program_from_sources(
-            vec![
-                (PathBuf::from("cell.src"), src.into_bytes()),
-                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
-            ],
-            &options,
-        )
-        .unwrap();
-        p.files
-            .iter()
-            .flat_map(|f| f.positions())
-            .find(|t| t.name.as_deref() == Some("XP1"))
-            .unwrap()
-            .usage
-            .lines
-            .to_vec()
+        usage_of_xp1(&src, DAT_XP1).lines.to_vec()
     };
     assert_eq!(lines_of_xp1("  XC=XP1\n  LIN XC\n"), [5]);
     assert_eq!(lines_of_xp1("  XC=XP1\n  XC.X=XC.X+10\n  LIN XC\n"), [6]);
@@ -1614,25 +1585,8 @@ fn a_copy_given_another_value_no_longer_reaches_its_source() {
 /// changes no frame changes nothing.
 #[test]
 fn a_function_or_interrupt_that_changes_the_base_leaves_it_unknown() {
-    let dat = "DEFDAT cell\n\
-        DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
-        ENDDAT\n";
-    let options = with_sample_config();
     let cause_of = |src: &str| {
-        let p = krl::load_program_from_sources(
-            vec![
-                (PathBuf::from("cell.src"), src.as_bytes().to_vec()),
-                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
-            ],
-            &options,
-        )
-        .unwrap();
-        p.files
-            .iter()
-            .flat_map(|f| f.positions())
-            .find(|t| t.name.as_deref() == Some("XP1"))
-            .unwrap()
-            .usage
+        usage_of_xp1(src, DAT_XP1)
             .unresolved_frame()
             .map(|u| u.cause.clone())
     };

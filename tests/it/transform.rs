@@ -2470,41 +2470,30 @@ fn a_cells_frame_keeps_its_declarations_unit_and_is_found_by_its_element() {
     assert_eq!(moving, ["pSeam1", "pSeam2"]);
     // The same base, keyed three ways: one result, the identified base's.
     let krl = root().join("samples/krl/two_bases.src");
-    let mut outputs = Vec::new();
-    for key in [
-        "\"BASE_DATA[1]\"",
-        "\"base_data[ 1 ]\"",
-        "\"BASE_DATA[01]\"",
-    ] {
-        let cell = with(&format!(
-            "{key} = {{ x = -300.0, y = -1850.75, z = 612.4, rx = 0.0, ry = 0.0, rz = 0.0 }}\n"
-        ));
-        let program = load_with_cell(&krl, &cell, "r1");
+    let corrected = |cell: &Cell| -> Vec<Vec<u8>> {
+        let program = load_with_cell(&krl, cell, "r1");
         let setup = TrackSetup::new(&cell.robots["r1"], &profile);
         let result = apply(
             &program,
             track_correction(&program, &setup, Direction::Correct),
         )
         .unwrap();
-        outputs.push(
-            result
-                .files
-                .iter()
-                .map(|f| f.output.clone())
-                .collect::<Vec<_>>(),
-        );
-    }
+        result.files.iter().map(|f| f.output.clone()).collect()
+    };
+    let outputs: Vec<_> = [
+        "\"BASE_DATA[1]\"",
+        "\"base_data[ 1 ]\"",
+        "\"BASE_DATA[01]\"",
+    ]
+    .iter()
+    .map(|key| {
+        corrected(&with(&format!(
+            "{key} = {{ x = -300.0, y = -1850.75, z = 612.4, rx = 0.0, ry = 0.0, rz = 0.0 }}\n"
+        )))
+    })
+    .collect();
     assert_eq!(outputs[0], outputs[1]);
     assert_eq!(outputs[0], outputs[2]);
     // And not the config's BASE_DATA[1].
-    let cell = with("");
-    let program = load_with_cell(&krl, &cell, "r1");
-    let setup = TrackSetup::new(&cell.robots["r1"], &profile);
-    let result = apply(
-        &program,
-        track_correction(&program, &setup, Direction::Correct),
-    )
-    .unwrap();
-    let declared: Vec<_> = result.files.iter().map(|f| f.output.clone()).collect();
-    assert_ne!(outputs[0], declared);
+    assert_ne!(outputs[0], corrected(&with("")));
 }
