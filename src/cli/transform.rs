@@ -695,7 +695,18 @@ fn finish(
         let planned = match destination(out) {
             Some(dest) if !out.diff && !out.check => {
                 output::plan(results, &dest, &Roots::from_inputs(inputs))
-                    .map(|w| w.into_iter().map(|w| w.path).collect())
+                    .map(|writes| {
+                        // A backup the run will make is its output too.
+                        let backups = writes
+                            .iter()
+                            .filter(|w| w.backup)
+                            .map(|w| output::next_free_backup(&w.path));
+                        writes
+                            .iter()
+                            .map(|w| w.path.clone())
+                            .chain(backups)
+                            .collect()
+                    })
                     .unwrap_or_default()
             }
             _ => Vec::new(),

@@ -1226,7 +1226,7 @@ fn setting(src: &[u8], target: &Expr, value: &Expr) -> Option<Setting> {
             "$BASE" => Some(Setting::Base(FrameRef::RunTime(target.span))),
             "$TOOL" => Some(Setting::Tool(FrameRef::RunTime(target.span))),
             // `FDAT_ACT.BASE_NO = 2`: what the next `BAS` applies is no longer a known FDAT.
-            "FDAT_ACT" => Some(Setting::FdatValue(Fdat::default())),
+            "FDAT_ACT" if places_frames(src, target) => Some(Setting::FdatValue(Fdat::default())),
             _ => None,
         };
     }
@@ -1351,7 +1351,9 @@ fn written_name(src: &[u8], target: &Expr, out: &mut Vec<Name>) {
 /// taught in that target's base. Out of line, as [`param_routine`].
 #[inline(never)]
 fn written_in_routine(src: &[u8], target: &Expr, value: &Expr, out: &mut Extracted) {
-    written_name(src, target, &mut out.facts.written_in_routines);
+    if places_frames(src, target) {
+        written_name(src, target, &mut out.facts.written_in_routines);
+    }
     let copy = matches!(value.kind, ExprKind::Name | ExprKind::Index(..));
     if !copy
         && matches!(target.kind, ExprKind::Name)
@@ -1361,6 +1363,20 @@ fn written_in_routine(src: &[u8], target: &Expr, value: &Expr, out: &mut Extract
             name: name.clone(),
             source: name,
         });
+    }
+}
+
+/// Whether an assignment to `target` may change which base, tool or IPO mode an FDAT applies:
+/// a whole value, or its `BASE_NO`, `TOOL_NO` or `IPO_FRAME` (`FP1.TQ_STATE = TRUE` does not).
+fn places_frames(src: &[u8], target: &Expr) -> bool {
+    match &target.kind {
+        ExprKind::Member(_, field) => {
+            let field = field.slice(src).trim_ascii();
+            [&b"BASE_NO"[..], b"TOOL_NO", b"IPO_FRAME"]
+                .iter()
+                .any(|f| field.eq_ignore_ascii_case(f))
+        }
+        _ => true,
     }
 }
 

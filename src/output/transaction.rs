@@ -330,8 +330,11 @@ fn missing_dirs(path: &Path) -> Vec<PathBuf> {
 /// Commits `writes` on the real file system.
 pub fn commit(writes: &[FileWrite<'_>]) -> Result<Vec<Written>, OutputError> {
     let written = commit_with(&RealFs, writes)?;
-    for w in writes {
+    for w in &written {
         super::run_files::note(&w.path);
+        if let Some(b) = &w.backup {
+            super::run_files::note(b);
+        }
     }
     Ok(written)
 }

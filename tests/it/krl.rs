@@ -1500,7 +1500,8 @@ const DAT_XP1: &str = "DEFDAT cell\n\
 /// An FDAT the program changes when it runs (`FDAT_ACT.BASE_NO=2`, `FP1.BASE_NO=2`, `FP1=FP2`,
 /// `FDAT_ACT` given a computed value) no longer says which base the next `BAS(#CP_PARAMS,…)`
 /// applies: the point moved to after it is refused as moved with a base that cannot be
-/// resolved, where it was corrected in the declared FDAT's base. Unchanged, it is taken.
+/// resolved, where it was corrected in the declared FDAT's base. Unchanged, or changed in a
+/// field that places nothing (`TQ_STATE`), it is taken.
 #[test]
 fn an_fdat_the_program_changes_leaves_the_base_it_applies_unknown() {
     let dat = "DEFDAT cell\n\
@@ -1518,10 +1519,18 @@ fn an_fdat_the_program_changes_leaves_the_base_it_applies_unknown() {
             usage.unresolved_frame().is_some(),
         )
     };
-    assert_eq!(
-        base_of("FDAT_ACT=FP1"),
-        (Some("BASE_DATA[1]".to_owned()), false)
-    );
+    // Unchanged, or changed in a field that places nothing.
+    for change in [
+        "FDAT_ACT=FP1",
+        "FP1.TQ_STATE=TRUE\n  FDAT_ACT=FP1",
+        "FDAT_ACT=FP1\n  FDAT_ACT.TQ_STATE=TRUE",
+    ] {
+        assert_eq!(
+            base_of(change),
+            (Some("BASE_DATA[1]".to_owned()), false),
+            "{change}"
+        );
+    }
     for change in [
         "FDAT_ACT=FP1\n  FDAT_ACT.BASE_NO=2",
         "FP1.BASE_NO=2\n  FDAT_ACT=FP1",

@@ -947,6 +947,11 @@ fn a_written_file_never_replaces_what_the_run_reads_or_writes() {
         (path(&cell), vec!["-o".to_owned(), path(&out)]),
         (path(&program), vec!["--diff".to_owned()]),
         (path(&program), vec!["--in-place".to_owned()]),
+        // The backup the run would make.
+        (
+            format!("{}.orig", path(&program)),
+            vec!["--in-place".to_owned()],
+        ),
         (
             path(&dir.join("no/such/run.html")),
             vec!["-o".to_owned(), path(&out)],
