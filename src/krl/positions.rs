@@ -77,9 +77,12 @@ pub(crate) enum Event {
     EndLoop,
     /// `EXIT`: program order leaves the innermost loop.
     Exit,
-    /// A label: a `GOTO` may arrive there with any base and tool (trackfix does not follow
-    /// jumps), so from there on they are unknown until set again.
-    Label,
+    /// A label: when a `GOTO` of its routine names it (`jumped`), program order may arrive
+    /// there with any base and tool (trackfix does not follow jumps), so from there on they are
+    /// unknown until set again; a label no jump names changes nothing.
+    Label {
+        jumped: bool,
+    },
     /// `XPICK = XP3`: until reassigned, a motion to `XPICK` moves to (a copy of) `XP3`, so
     /// `XP3` is used with that motion's base and tool.
     Alias {
@@ -183,9 +186,24 @@ pub(crate) struct ParamRoutine {
     pub public: bool,
     /// Its parameters, in the order a call's arguments bind to them.
     pub params: Vec<Param>,
-    /// Whether a motion of the routine moves to each parameter (in order): a target passed
-    /// there is moved in a base trackfix does not follow.
+    /// Whether a motion of the routine moves to each parameter (in order), named as its target
+    /// or anywhere in a composed one (`LIN P:{Z 10}`): a target passed there is moved in a base
+    /// trackfix does not follow.
     pub moved: Vec<bool>,
+    /// Whether the routine writes each parameter's value into something else (`Q = P`), which
+    /// a motion of it may move to.
+    pub copied: Vec<bool>,
+    /// Whether the routine has a motion at all.
+    pub moves: bool,
+}
+
+impl ParamRoutine {
+    /// Whether a target passed to parameter `k` may be moved to by this routine (not yet
+    /// through the routines it calls).
+    pub(crate) fn may_move(&self, k: usize) -> bool {
+        self.moved.get(k).copied().unwrap_or(false)
+            || (self.moves && self.copied.get(k).copied().unwrap_or(false))
+    }
 }
 
 /// One parameter of a routine.
@@ -232,6 +250,8 @@ fn param_routine(
         name,
         public,
         moved: vec![false; params.len()],
+        copied: vec![false; params.len()],
+        moves: false,
         params,
     });
     Some(routines.len() - 1)
@@ -858,6 +878,10 @@ pub(crate) struct Extractor<'a> {
     in_routine: bool,
     /// The loops open at this statement: the index of each one's [`Event::Loop`].
     loops: Vec<usize>,
+    /// The routine's labels (their event's index and name, upper case) and the names its
+    /// `GOTO`s jump to: a label is [`Event::Label`]`{ jumped }` once the routine has been read.
+    labels: Vec<(usize, String)>,
+    gotos: Vec<String>,
     /// The `WITH` settings of the spline block open at this statement: they hold for each
     /// motion in it.
     block_with: Vec<Setting>,
@@ -879,6 +903,8 @@ impl<'a> Extractor<'a> {
             seen_def: false,
             in_routine: false,
             loops: Vec::new(),
+            labels: Vec::new(),
+            gotos: Vec::new(),
             block_with: Vec::new(),
             routines: Vec::new(),
             current: None,
@@ -892,9 +918,22 @@ impl<'a> Extractor<'a> {
     }
 
     pub(crate) fn finish(mut self) -> (Extracted, Vec<Diagnostic>) {
+        self.close_labels();
         self.out.facts.declared = self.declared;
         self.out.facts.routines = self.routines;
         (self.out, self.diagnostics)
+    }
+
+    /// Marks the labels of the routine just read that one of its `GOTO`s names (KRL jumps stay
+    /// inside their routine). Out of line: once a routine.
+    #[inline(never)]
+    fn close_labels(&mut self) {
+        for (at, name) in self.labels.drain(..) {
+            if let Some(Event::Label { jumped }) = self.out.facts.events.get_mut(at) {
+                *jumped = self.gotos.contains(&name);
+            }
+        }
+        self.gotos.clear();
     }
 
     // Inlined into the parser's sink, which calls it once a statement: as a call of its own
@@ -903,6 +942,11 @@ impl<'a> Extractor<'a> {
     #[inline(always)]
     pub(crate) fn statement(&mut self, stmt: &Stmt) {
         let (src, lines) = (self.src, self.lines);
+        if matches!(stmt.kind, StmtKind::Routine { .. })
+            && !(self.labels.is_empty() && self.gotos.is_empty())
+        {
+            self.close_labels();
+        }
         let out = &mut self.out;
         match &stmt.kind {
             StmtKind::Routine {
@@ -987,6 +1031,9 @@ impl<'a> Extractor<'a> {
                 let at = (self.in_routine, routine);
                 let problem = assignment(src, lines, &self.declared, at, target, value, out);
                 self.diagnostics.extend(problem);
+                if let Some(r) = self.current.and_then(|r| self.routines.get_mut(r)) {
+                    copied_parameters(src, r, value);
+                }
             }
             StmtKind::Call(call) => {
                 if let Some(s) = bas_call(src, call) {
@@ -1013,7 +1060,25 @@ impl<'a> Extractor<'a> {
                     .collect();
             }
             StmtKind::EndSpline => self.block_with.clear(),
-            StmtKind::Label => out.facts.events.push(Event::Label),
+            StmtKind::Label => {
+                let text = stmt.span.slice(src);
+                let name = text.split(|&b| b == b':').next().unwrap_or(text);
+                self.labels.push((
+                    out.facts.events.len(),
+                    String::from_utf8_lossy(name.trim_ascii()).to_ascii_uppercase(),
+                ));
+                out.facts.events.push(Event::Label { jumped: false });
+            }
+            StmtKind::Goto => {
+                let text = stmt.span.slice(src);
+                let target = text.get(4..).unwrap_or_default().trim_ascii();
+                let target = target
+                    .split(|b| b.is_ascii_whitespace() || *b == b';')
+                    .next()
+                    .unwrap_or(target);
+                self.gotos
+                    .push(String::from_utf8_lossy(target).to_ascii_uppercase());
+            }
             StmtKind::Handler => {
                 if let Some(name) = handler_routine(stmt.span.slice(src)) {
                     out.facts.unfollowed.push(name);
@@ -1059,7 +1124,7 @@ impl<'a> Extractor<'a> {
                     }
                 }
                 if let Some(r) = self.current.and_then(|r| self.routines.get_mut(r)) {
-                    moved_parameters(src, r, &refs);
+                    moved_parameters(src, r, targets);
                 }
                 // The spline block's settings first: the motion's own are written after them.
                 let with = self
@@ -1120,16 +1185,45 @@ fn relative_motion(
     }
 }
 
-/// Marks the parameters of routine `r` that `refs`, a motion's targets, name as moved.
+/// Marks the parameters of routine `r` that `targets`, a motion's, name anywhere as moved, and
+/// the routine as one that moves.
 #[inline(never)]
-fn moved_parameters(src: &[u8], r: &mut ParamRoutine, refs: &[Ref]) {
-    for name in refs.iter().filter_map(|t| match t {
-        Ref::Named(n) => Some(n.split('[').next().unwrap_or(n)),
-        Ref::Inline(_) => None,
-    }) {
-        for (p, moved) in r.params.iter().zip(r.moved.iter_mut()) {
-            *moved |= p.name.slice(src).eq_ignore_ascii_case(name.as_bytes());
+fn moved_parameters(src: &[u8], r: &mut ParamRoutine, targets: &[Expr]) {
+    r.moves = true;
+    for t in targets {
+        mark_named(src, t, &r.params, &mut r.moved);
+    }
+}
+
+/// Marks the parameters of routine `r` whose value `value`, assigned to something, reads.
+#[inline(never)]
+fn copied_parameters(src: &[u8], r: &mut ParamRoutine, value: &Expr) {
+    mark_named(src, value, &r.params, &mut r.copied);
+}
+
+/// Sets `marks[k]` for each parameter `params[k]` that a name anywhere in `e` is.
+fn mark_named(src: &[u8], e: &Expr, params: &[Param], marks: &mut [bool]) {
+    match &e.kind {
+        ExprKind::Name => {
+            let name = e.span.slice(src).trim_ascii();
+            for (p, m) in params.iter().zip(marks.iter_mut()) {
+                *m |= p.name.slice(src).eq_ignore_ascii_case(name);
+            }
         }
+        ExprKind::Index(base, args) | ExprKind::Call(base, args) => {
+            mark_named(src, base, params, marks);
+            for a in args.iter().flatten() {
+                mark_named(src, a, params, marks);
+            }
+        }
+        ExprKind::Member(inner, _) | ExprKind::Unary(_, inner) | ExprKind::Paren(inner) => {
+            mark_named(src, inner, params, marks);
+        }
+        ExprKind::Binary(l, _, r) => {
+            mark_named(src, l, params, marks);
+            mark_named(src, r, params, marks);
+        }
+        _ => {}
     }
 }
 

@@ -228,7 +228,7 @@ impl Flow {
                 }
             }
             Event::EndLoop => return self.end_of_body(i),
-            Event::Label => {
+            Event::Label { jumped: true } => {
                 self.state.base = Some(FrameRef::Unknown);
                 self.state.tool = Some(FrameRef::Unknown);
             }
@@ -399,7 +399,7 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                     | Event::Loop { .. }
                     | Event::EndLoop
                     | Event::Exit
-                    | Event::Label => {
+                    | Event::Label { .. } => {
                         i = flow.control(i, ev);
                         continue;
                     }
@@ -713,7 +713,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                     | Event::Loop { .. }
                     | Event::EndLoop
                     | Event::Exit
-                    | Event::Label => {
+                    | Event::Label { .. } => {
                         i = flow.control(i - 1, ev);
                     }
                     Event::Alias { name, source } => {
@@ -1196,7 +1196,12 @@ fn computed_through_parameters(shared: &mut [crate::resolve::FileFacts<'_>], fac
     // to (to a fixed point: each round marks one more at least, or ends).
     let mut moved: Vec<Vec<Vec<bool>>> = facts
         .iter()
-        .map(|f| f.routines.iter().map(|r| r.moved.clone()).collect())
+        .map(|f| {
+            f.routines
+                .iter()
+                .map(|r| (0..r.params.len()).map(|k| r.may_move(k)).collect())
+                .collect()
+        })
         .collect();
     let own_param = |fi: usize, r: usize, text: &[u8]| -> Option<usize> {
         let key = NameKey(

@@ -171,6 +171,8 @@ pub enum StmtKind {
     EndSpline,
     /// `NAME:`, a label a `GOTO` jumps to: program order may arrive there from anywhere.
     Label,
+    /// `GOTO NAME`.
+    Goto,
     /// `INTERRUPT DECL … DO routine(…)` or `TRIGGER WHEN … DO routine(…)`: a routine run when
     /// an event happens, wherever the program then is.
     Handler,

@@ -1390,6 +1390,33 @@ fn a_point_no_motion_uses_is_taken_in_its_fdats_frames() {
         ))
     );
     assert_eq!(point(&relayed, "XP9").usage.unresolved_frame(), None);
+    // Moved to through a copy the routine makes, or in a composed target: the same; copied by
+    // a routine that moves nothing: nothing to follow.
+    let moved_otherwise = load(
+        "DEF cell( )\n  MYCOPY(XP8)\n  MYCOMP(XP9)\n  KEEP(XLOOSE)\nEND\n\
+         DEF MYCOPY(P:IN)\n  DECL E6POS P,Q\n  Q=P\n  LIN Q\nEND\n\
+         DEF MYCOMP(P:IN)\n  DECL E6POS P\n  LIN P:{X 0,Y 0,Z 10,A 0,B 0,C 0}\nEND\n\
+         DEF KEEP(P:IN)\n  DECL E6POS P,Q\n  Q=P\nEND\n",
+    );
+    let passed_to = |name: &str| {
+        point(&moved_otherwise, name)
+            .usage
+            .unresolved_frame()
+            .map(|u| u.cause.clone())
+    };
+    assert_eq!(
+        passed_to("XP8"),
+        Some(trackfix::position::UnresolvedCause::PassedTo(
+            "MYCOPY".into()
+        ))
+    );
+    assert_eq!(
+        passed_to("XP9"),
+        Some(trackfix::position::UnresolvedCause::PassedTo(
+            "MYCOMP".into()
+        ))
+    );
+    assert_eq!(passed_to("XLOOSE"), None);
     let commented = load("DEF cell( )\n  ; LIN XP9 was here\nEND\n");
     assert_eq!(point(&commented, "XP9").usage.wobj, None);
     assert_eq!(
@@ -1545,7 +1572,8 @@ fn an_fdat_the_program_changes_leaves_the_base_it_applies_unknown() {
 /// trackfix does not follow `GOTO`: at a label the base may be whatever the jump brought, so a
 /// point moved to after a label, before the base is set again, is refused as moved with a base
 /// that cannot be resolved (forward: `GOTO SKIP` over `$BASE=BASE_DATA[2]`; backward: a loop
-/// made of a label and a jump back). Set again after the label, the base is known.
+/// made of a label and a jump back). Set again after the label, the base is known; a label no
+/// `GOTO` of its routine names changes nothing.
 #[test]
 fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
     let base_of = |body: &str| {
@@ -1559,6 +1587,11 @@ fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
     assert_eq!(base_of(forward), (None, Some(6)));
     let backward = "  $BASE=BASE_DATA[1]\n  TOP:\n  LIN XP1\n  $BASE=BASE_DATA[2]\n  IF $IN[1] THEN\n    GOTO TOP\n  ENDIF\n";
     assert_eq!(base_of(backward), (None, Some(4)));
+    // A label no jump of its routine names changes nothing.
+    let unused = "  $BASE=BASE_DATA[1]\n  SKIP:\n  LIN XP1\n";
+    assert_eq!(base_of(unused), (Some("BASE_DATA[1]".to_owned()), None));
+    let elsewhere = format!("{unused}END\nDEF other( )\n  GOTO SKIP\n  SKIP:\n");
+    assert_eq!(base_of(&elsewhere), (Some("BASE_DATA[1]".to_owned()), None));
     let set_again = "  GOTO SKIP\n  SKIP:\n  $BASE=BASE_DATA[2]\n  LIN XP1\n";
     assert_eq!(base_of(set_again), (Some("BASE_DATA[2]".to_owned()), None));
 }
