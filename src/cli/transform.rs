@@ -1284,7 +1284,7 @@ fn run_mirror_inner(mut a: MirrorArgs) -> anyhow::Result<Exit> {
         )
     };
     if let (Some(c), Some(name)) = (&cell, &a.to_robot) {
-        writes_image_for(&mut settings, c.robot(name)?);
+        writes_image_for(&mut settings, robot, c.robot(name)?)?;
     }
     run_step(
         "mirror",
@@ -1296,12 +1296,36 @@ fn run_mirror_inner(mut a: MirrorArgs) -> anyhow::Result<Exit> {
     )
 }
 
-/// A mirror whose image is for robot `to`: with a plane in world, the image is written in the
-/// work objects as `to`'s cell entries place them.
-fn writes_image_for(settings: &mut MirrorSettings, to: &Robot) {
-    if let Some(world) = &mut settings.world {
-        world.frames_to = Some(to.frames.clone());
+/// A mirror whose image is for robot `to` (the program being `from`'s): with a plane in world,
+/// the image is written in the work objects as `to` places them — its cell entries, then the
+/// bases of its own `$config.dat` when the cell gives it another one than `from`'s.
+fn writes_image_for(
+    settings: &mut MirrorSettings,
+    from: Option<&Robot>,
+    to: &Robot,
+) -> anyhow::Result<()> {
+    let Some(world) = &mut settings.world else {
+        return Ok(());
+    };
+    let mut frames = to.frames.clone();
+    if let Some(config) = &to.config_dat
+        && from.and_then(|f| f.config_dat.as_ref()) != Some(config)
+    {
+        let bases = trackfix::krl::load_config_dat(config)
+            .with_context(|| format!("{}: the bases of robot `{}`", config.display(), to.name))?;
+        for b in bases
+            .iter()
+            .filter(|b| b.kind == trackfix::position::FrameKind::Base)
+        {
+            if let Some(pose) = b.pose() {
+                frames
+                    .entry(trackfix::transform::cell::frame_key(&b.name))
+                    .or_insert(pose);
+            }
+        }
     }
+    world.frames_to = Some(frames);
+    Ok(())
 }
 
 /// A mirror needs a plane: from `--plane` or the cell's `[mirror]` table, never a silent
@@ -1347,7 +1371,7 @@ fn run_transfer_inner(mut a: TransferArgs) -> anyhow::Result<Exit> {
     }
     let mut plan = TransferPlan {
         from: TrackSetup::new(from, &from_profile),
-        mirror: a.mirror.then(|| {
+        mirror: if a.mirror {
             let mut settings = MirrorSettings {
                 skid_axis_to: Some(to.skid_axis),
                 ..mirror_settings(
@@ -1358,9 +1382,11 @@ fn run_transfer_inner(mut a: TransferArgs) -> anyhow::Result<Exit> {
                     a.default_wobj.as_deref(),
                 )
             };
-            writes_image_for(&mut settings, to);
-            settings
-        }),
+            writes_image_for(&mut settings, Some(from), to)?;
+            Some(settings)
+        } else {
+            None
+        },
         to: TrackSetup::new(to, &to_profile),
     };
     plan.from.default_wobj = a.default_wobj.clone();

@@ -2497,3 +2497,75 @@ fn a_cells_frame_keeps_its_declarations_unit_and_is_found_by_its_element() {
     // And not the config's BASE_DATA[1].
     assert_ne!(outputs[0], corrected(&with("")));
 }
+
+/// `mirror --robot k1 --to k2` with a plane in world, for KUKA robots whose cell gives each its
+/// own `$config.dat`: the image is written in k2's `BASE_DATA[1]`, not k1's. Worked by hand:
+/// `XP1` in k1's base `(1000, -1850.75, 600)` is the world point `(1100, -2150.75, 800)`; its
+/// image in the plane `y = -1850.75` is `(1100, -1550.75, 800)`; in k2's base, at
+/// `(1030, -1820, 590)` turned 4° about z, that is `(70, 269.25, 210)` turned by -4°, with
+/// `A = -10° - 4°`.
+#[test]
+fn a_mirror_for_another_kuka_robot_is_written_in_its_own_config_base() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let config = |base: &str| {
+        format!(
+            "DEFDAT  $CONFIG\nDECL GLOBAL FRAME TOOL_DATA[16]\nTOOL_DATA[1]={{X 0.0,Y 0.0,Z 200.0,A 0.0,B 0.0,C 0.0}}\nDECL GLOBAL FRAME BASE_DATA[32]\nBASE_DATA[1]={{{base}}}\nENDDAT\n"
+        )
+    };
+    std::fs::write(
+        d.join("cfgA.dat"),
+        config("X 1000.0,Y -1850.75,Z 600.0,A 0.0,B 0.0,C 0.0"),
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("cfgB.dat"),
+        config("X 1030.0,Y -1820.0,Z 590.0,A 4.0,B 0.0,C 0.0"),
+    )
+    .unwrap();
+    let profile = root().join("samples/track/profile.toml");
+    let robot = |name: &str, y: f64, rz: f64, cfg: &str| {
+        format!(
+            "[robot.{name}]\nprofile = \"{}\"\nbase = {{ x = 0.0, y = {y}, z = 0.0, rx = 0.0, ry = 0.0, rz = {rz} }}\ntrack_axis = [1.0, 0.0, 0.0]\nskid = \"E1\"\nconfig_dat = \"{cfg}\"\n\n",
+            profile.display()
+        )
+    };
+    let cell = format!(
+        "{}{}[mirror]\nplane = \"xz\"\nframe = {{ x = 0.0, y = -1850.75, z = 0.0, rx = 0.0, ry = 0.0, rz = 0.0 }}\nframe_in = \"world\"\ntool_flip = \"y\"\nconfig = \"keep\"\n",
+        robot("k1", -3500.0, 90.0, "cfgA.dat"),
+        robot("k2", -200.0, -90.0, "cfgB.dat")
+    );
+    std::fs::write(d.join("kc.toml"), cell).unwrap();
+    std::fs::write(
+        d.join("km.src"),
+        "DEF km( )\n  $TOOL=TOOL_DATA[1]\n  $BASE=BASE_DATA[1]\n  LIN XP1\nEND\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("km.dat"),
+        "DEFDAT km\nDECL E6POS XP1={X 100.0,Y -300.0,Z 200.0,A 10.0,B 20.0,C 30.0,S 2,T 2,E1 500.0}\nENDDAT\n",
+    )
+    .unwrap();
+    let out = d.join("out");
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let (code, _, err) = trackfix(&[
+        "mirror",
+        &s(&d.join("km.src")),
+        "--cell",
+        &s(&d.join("kc.toml")),
+        "--robot",
+        "k1",
+        "--to",
+        "k2",
+        "--out-dir",
+        &s(&out),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (sin, cos) = 4f64.to_radians().sin_cos();
+    let (x, y) = (70.0 * cos + 269.25 * sin, -70.0 * sin + 269.25 * cos);
+    let written = std::fs::read_to_string(out.join("km.dat")).unwrap();
+    let expected = format!(
+        "DECL E6POS XP1={{X {x:.3},Y {y:.3},Z 210.000,A -14.0000,B 20.0,C -30.0000,S 2,T 2,E1 500.0}}"
+    );
+    assert!(written.contains(&expected), "{expected}\n{written}");
+}
