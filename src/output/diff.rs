@@ -243,7 +243,10 @@ pub fn unified_diff(path: &Path, old: &[u8], new: &[u8]) -> Vec<u8> {
     let mut out = Vec::new();
     for (n, group) in group_diff_ops(ops(&a, &b), CONTEXT).iter().enumerate() {
         if n == 0 {
-            let _ = writeln!(out, "--- a/{name}\n+++ b/{name}");
+            // A name with a blank ends with a tab, as `diff` and `git` end it, so that `patch`
+            // reads it whole.
+            let end = if name.contains([' ', '\t']) { "\t" } else { "" };
+            let _ = writeln!(out, "--- a/{name}{end}\n+++ b/{name}{end}");
         }
         let (first, last) = (group[0], group[group.len() - 1]);
         let _ = writeln!(
@@ -316,6 +319,17 @@ mod tests {
             .context_radius(1)
             .header(&format!("a/{name}"), &format!("b/{name}"))
             .to_string()
+    }
+
+    #[test]
+    fn a_name_with_a_blank_ends_with_a_tab() {
+        let d = diff_text(Path::new("b dir/m.mod"), b"a\n", b"b\n");
+        assert!(
+            d.starts_with("--- a/b dir/m.mod\t\n+++ b/b dir/m.mod\t\n"),
+            "{d}"
+        );
+        let d = diff_text(Path::new("m.mod"), b"a\n", b"b\n");
+        assert!(d.starts_with("--- a/m.mod\n+++ b/m.mod\n"), "{d}");
     }
 
     #[test]
