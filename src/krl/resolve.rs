@@ -666,6 +666,24 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
         .iter_mut()
         .map(|f| std::mem::take(&mut f.events))
         .collect();
+    // Each file's copies (`XC = XP1`: name → source), wherever they are: a copy passed to a
+    // routine passes what it may hold. Only asked when a call passes names to a routine.
+    let passes =
+        facts.iter().any(|f| !f.calls.is_empty()) && facts.iter().any(|f| !f.routines.is_empty());
+    let copies: Vec<Vec<(String, String)>> = events
+        .iter()
+        .map(|evs| {
+            evs.iter()
+                .filter(|_| passes)
+                .filter_map(|e| match e {
+                    Event::Alias { name, source } if name != source => {
+                        Some((name.to_string(), source.to_string()))
+                    }
+                    _ => None,
+                })
+                .collect()
+        })
+        .collect();
     // The candidates go after each file's positions while the motions are bound: a motion may
     // use them.
     let counts: Vec<usize> = files.iter().map(|f| f.positions.len()).collect();
@@ -906,7 +924,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
         })
         .collect();
     if follow {
-        computed_through_parameters(&mut shared, facts);
+        computed_through_parameters(&mut shared, facts, &copies);
     }
     crate::resolve::mark_run_time(&mut shared, &NAMING);
     drop(shared);
@@ -1166,7 +1184,11 @@ fn mark_assigned_data(files: &mut [ParsedFile], facts: &[Facts], config_frames: 
 /// of its own, and an `:IN` parameter is a copy, which the caller's variable does not follow.
 /// Nothing being bound to an `:IN` parameter, what a routine passes on from one reaches no
 /// target either.
-fn computed_through_parameters(shared: &mut [crate::resolve::FileFacts<'_>], facts: &[Facts]) {
+fn computed_through_parameters(
+    shared: &mut [crate::resolve::FileFacts<'_>],
+    facts: &[Facts],
+    copies: &[Vec<(String, String)>],
+) {
     use crate::names::NameKey;
     let srcs: Vec<&[u8]> = shared.iter().map(|f| f.src).collect();
     // The routines of each name as the binder finds a callee: (file, index, public).
@@ -1274,6 +1296,24 @@ fn computed_through_parameters(shared: &mut [crate::resolve::FileFacts<'_>], fac
                     continue;
                 }
                 binder.targets_named(fi, text, &mut passed);
+                // And what a copy of that name may hold (`XC = XP1; MOVEIT(XC)`), followed a
+                // few copies back.
+                let file_copies = copies.get(fi).map_or(&[][..], Vec::as_slice);
+                if !file_copies.is_empty() {
+                    let mut names =
+                        vec![String::from_utf8_lossy(text.trim_ascii()).to_ascii_uppercase()];
+                    let mut from = 0;
+                    while from < names.len() && names.len() < 16 {
+                        let name = names[from].clone();
+                        from += 1;
+                        for (_, source) in file_copies.iter().filter(|(n, _)| *n == name) {
+                            if !names.contains(source) {
+                                binder.targets_named(fi, source.as_bytes(), &mut passed);
+                                names.push(source.clone());
+                            }
+                        }
+                    }
+                }
             }
             if !passed.is_empty() {
                 let routine = String::from_utf8_lossy(call.callee.slice(src)).into_owned();

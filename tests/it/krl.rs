@@ -1417,6 +1417,23 @@ fn a_point_no_motion_uses_is_taken_in_its_fdats_frames() {
         ))
     );
     assert_eq!(passed_to("XLOOSE"), None);
+    // A copy passed, or an array element holding one: what it may hold is passed.
+    let copied = load(
+        "DEF cell( )\n  XC=XP8\n  MOVEIT(XC)\n  XARR[1]=XP9\n  MOVEIT(XARR[1])\nEND\n\
+         DEF MOVEIT(PT:IN)\n  DECL E6POS PT\n  LIN PT\nEND\n",
+    );
+    for name in ["XP8", "XP9"] {
+        assert_eq!(
+            point(&copied, name)
+                .usage
+                .unresolved_frame()
+                .map(|u| u.cause.clone()),
+            Some(trackfix::position::UnresolvedCause::PassedTo(
+                "MOVEIT".into()
+            )),
+            "{name}"
+        );
+    }
     let commented = load("DEF cell( )\n  ; LIN XP9 was here\nEND\n");
     assert_eq!(point(&commented, "XP9").usage.wobj, None);
     assert_eq!(
