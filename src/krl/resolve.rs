@@ -350,6 +350,45 @@ impl Exit {
 
 use crate::resolve::CALL_DEPTH;
 
+/// The names the calls pass to a parameter (not `:IN`) that its routine writes (`SETF(FP1)`
+/// with `F.BASE_NO = 2` in `DEF SETF(F:OUT)`), upper case: written as the parameter is.
+fn written_through_parameters(files: &[ParsedFile], facts: &[Facts]) -> Vec<String> {
+    let mut out = Vec::new();
+    for (fi, f) in facts.iter().enumerate() {
+        let Some(src) = files.get(fi).map(|f| &f.source[..]) else {
+            continue;
+        };
+        for call in &f.calls {
+            let callee = call.callee.slice(src);
+            let routine = facts.iter().zip(files).find_map(|(g, file)| {
+                let r = g
+                    .routines
+                    .iter()
+                    .find(|r| r.name.slice(&file.source).eq_ignore_ascii_case(callee))?;
+                Some((g, r, &file.source[..]))
+            });
+            let Some((g, r, rsrc)) = routine else {
+                continue;
+            };
+            for (arg, param) in call.args.iter().zip(&r.params) {
+                let (Some(arg), false) = (arg, param.by_value) else {
+                    continue;
+                };
+                let name = param.name.slice(rsrc);
+                if g.written_in_routines
+                    .iter()
+                    .any(|w| w.as_bytes().eq_ignore_ascii_case(name))
+                {
+                    let text = arg.span().slice(src);
+                    let whole = text.split(|&b| b == b'[').next().unwrap_or(text);
+                    out.push(String::from_utf8_lossy(whole.trim_ascii()).to_ascii_uppercase());
+                }
+            }
+        }
+    }
+    out
+}
+
 /// The [`Exit`] of every routine of the program (a subroutine that runs `BAS(#BASE,2)` or
 /// `$BASE=BASE_DATA[2]` sets the base of the motions after its call), found by following each
 /// routine's program order from an unknown entry; calls inside are followed by repeating this
@@ -601,10 +640,11 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
         .map(|f| std::mem::take(&mut f.fdats))
         .collect();
     if facts.iter().any(|f| !f.written_in_routines.is_empty()) {
-        let written: std::collections::HashSet<&str> = facts
+        let mut written: std::collections::HashSet<String> = facts
             .iter()
-            .flat_map(|f| f.written_in_routines.iter().map(|n| n.as_str()))
+            .flat_map(|f| f.written_in_routines.iter().map(|n| n.to_string()))
             .collect();
+        written.extend(written_through_parameters(files, facts));
         for f in &mut own_fdats {
             f.retain(|name, _| !written.contains(name.as_str()));
         }

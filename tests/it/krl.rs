@@ -1555,7 +1555,8 @@ fn an_fdat_the_program_changes_leaves_the_base_it_applies_unknown() {
         ENDDAT\n";
     let base_of = |change: &str| {
         let src = format!(
-            "DEF cell( )\n  {change}\n  BAS(#CP_PARAMS,2)\n  LIN XP1\nEND\nDEFFCT FDAT PICK( )\n  RETURN FP2\nENDFCT\n"
+            "DEF cell( )\n  {change}\n  BAS(#CP_PARAMS,2)\n  LIN XP1\nEND\nDEFFCT FDAT PICK( )\n  RETURN FP2\nENDFCT\n\
+             DEF SETF(F:OUT)\n  DECL FDAT F\n  F.BASE_NO=2\nEND\n"
         );
         let usage = usage_of_xp1(&src, dat);
         (
@@ -1580,6 +1581,7 @@ fn an_fdat_the_program_changes_leaves_the_base_it_applies_unknown() {
         "FP1.BASE_NO=2\n  FDAT_ACT=FP1",
         "FP1=FP2\n  FDAT_ACT=FP1",
         "FDAT_ACT=PICK()",
+        "SETF(FP1)\n  FDAT_ACT=FP1",
         "FDAT_ACT=FP1\n  FDAT_ACT.IPO_FRAME=#TCP",
     ] {
         assert_eq!(base_of(change), (None, true), "{change}");
