@@ -695,13 +695,35 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
     let exits = routine_exits(facts, &fdats, &modules);
     // A routine run where trackfix does not follow it (a function, an interrupt's or a
     // trigger's) that leaves the base or tool changed: the first, by name.
-    let unfollowed: Option<String> = facts.iter().enumerate().find_map(|(fi, f)| {
-        f.unfollowed.iter().find_map(|name| {
-            let exit = exits.of(modules.of(fi), name)?;
-            (exit.base.is_some() || exit.tool.is_some() || exit.staged.is_some())
-                .then(|| name.clone())
+    let changing: Vec<&str> = facts
+        .iter()
+        .enumerate()
+        .flat_map(|(fi, f)| {
+            let module = modules.of(fi);
+            let exits = &exits;
+            f.unfollowed.iter().filter_map(move |name| {
+                let exit = exits.of(module, name)?;
+                (exit.base.is_some() || exit.tool.is_some() || exit.staged.is_some())
+                    .then_some(name.as_str())
+            })
         })
-    });
+        .collect();
+    // Named somewhere besides its own `DEF`/`DEFFCT` line (a call, an interrupt's `DO`): one
+    // nothing names never runs.
+    let unfollowed: Option<String> = if changing.is_empty() {
+        None
+    } else {
+        let mut named: HashMap<&str, usize> = HashMap::default();
+        for f in files.iter() {
+            for (name, n) in word_counts(&f.source, changing.iter().copied()) {
+                *named.entry(name).or_default() += n;
+            }
+        }
+        changing
+            .iter()
+            .find(|name| named.get(*name).copied().unwrap_or(0) > 1)
+            .map(|name| name.to_string())
+    };
     let events: Vec<Vec<Event>> = facts
         .iter_mut()
         .map(|f| std::mem::take(&mut f.events))

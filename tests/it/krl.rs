@@ -1643,7 +1643,7 @@ fn a_copy_given_another_value_no_longer_reaches_its_source() {
 /// inside an expression such as `IF PREP() THEN`), or the routine of an interrupt or trigger
 /// (`… DO SETB()`) — that changes the base leaves every motion's base unknown: its points are
 /// refused naming the routine, where they were corrected in the base set before. One that
-/// changes no frame changes nothing.
+/// changes no frame, or a function nothing calls, changes nothing.
 #[test]
 fn a_function_or_interrupt_that_changes_the_base_leaves_it_unknown() {
     let cause_of = |src: &str| {
@@ -1669,4 +1669,8 @@ fn a_function_or_interrupt_that_changes_the_base_leaves_it_unknown() {
                     IF OK() THEN\n  ENDIF\n  LIN XP1\nEND\nDEF STOPIT( )\n  BRAKE\nEND\n\
                     DEFFCT BOOL OK( )\n  RETURN TRUE\nENDFCT\n";
     assert_eq!(cause_of(harmless), None);
+    // A function nothing calls never runs.
+    let uncalled = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  LIN XP1\nEND\n\
+                    DEFFCT BOOL PREP( )\n  $BASE=BASE_DATA[2]\n  RETURN TRUE\nENDFCT\n";
+    assert_eq!(cause_of(uncalled), None);
 }
