@@ -1091,7 +1091,7 @@ impl<'a> Extractor<'a> {
             } => {
                 let line = lines.line(stmt.span.start);
                 if upper_short(src, *keyword, &mut [0; 16]).ends_with("_REL") {
-                    relative_motion(src, (*keyword, stmt.span, line), targets, out);
+                    relative_motion(src, *keyword, line, targets, out);
                     self.diagnostics.push(
                         Diagnostic::note(
                             stmt.span,
@@ -1158,12 +1158,7 @@ fn function_routine(src: &[u8], keyword: Span, name: Option<&String>, out: &mut 
 /// offsets: a displacement from wherever the robot is, in the base or tool frame, not a
 /// position. Out of line, as [`param_routine`].
 #[inline(never)]
-fn relative_motion(
-    src: &[u8],
-    (keyword, _, line): (Span, Span, usize),
-    targets: &[Expr],
-    out: &mut Extracted,
-) {
+fn relative_motion(src: &[u8], keyword: Span, line: usize, targets: &[Expr], out: &mut Extracted) {
     let word = upper(src, keyword);
     let instruction = crate::krl::MOTION_KEYWORDS
         .iter()
@@ -1171,10 +1166,7 @@ fn relative_motion(
         .copied()
         .unwrap_or("_REL");
     for t in targets {
-        let mut operand = t;
-        while let ExprKind::Paren(inner) = &operand.kind {
-            operand = inner;
-        }
+        let operand = unparenthesized(t);
         if matches!(operand.kind, ExprKind::Name | ExprKind::Index(..)) {
             out.facts.offsets.push((
                 upper_name(src, operand.span),
@@ -1631,6 +1623,14 @@ fn assignment(
     problem
 }
 
+/// `e` without the brackets around it: `XB` of `((XB))`.
+fn unparenthesized(mut e: &Expr) -> &Expr {
+    while let ExprKind::Paren(inner) = &e.kind {
+        e = inner;
+    }
+    e
+}
+
 /// How a name is used as an offset: (the instruction or operator, the operand it is).
 pub(crate) type OffsetUse = (&'static str, &'static str);
 
@@ -1650,10 +1650,7 @@ fn offset_operands(
         ExprKind::Binary(left, op, right) => {
             offset_operands(src, lines, left, out);
             if op.slice(src) == b":" {
-                let mut operand = &**right;
-                while let ExprKind::Paren(inner) = &operand.kind {
-                    operand = inner;
-                }
+                let operand = unparenthesized(right);
                 if matches!(operand.kind, ExprKind::Name | ExprKind::Index(..)) {
                     out.push((
                         upper_name(src, operand.span),

@@ -728,24 +728,28 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
         .iter_mut()
         .map(|f| std::mem::take(&mut f.events))
         .collect();
-    // Each file's copies (`XC = XP1`: name → source), wherever they are: a copy passed to a
-    // routine passes what it may hold. Only asked when a call passes names to a routine.
+    // A call passes names to a routine of the program that takes parameters.
     let passes =
         facts.iter().any(|f| !f.calls.is_empty()) && facts.iter().any(|f| !f.routines.is_empty());
-    let copies: Vec<Vec<(String, String)>> = events
-        .iter()
-        .map(|evs| {
-            evs.iter()
-                .filter(|_| passes)
-                .filter_map(|e| match e {
-                    Event::Alias { name, source } if name != source => {
-                        Some((name.to_string(), source.to_string()))
-                    }
-                    _ => None,
-                })
-                .collect()
-        })
-        .collect();
+    // Each file's copies (`XC = XP1`: name → source), wherever they are: a copy passed to a
+    // routine passes what it may hold. Only asked when a call passes names.
+    let copies: Vec<Vec<(String, String)>> = if passes {
+        events
+            .iter()
+            .map(|evs| {
+                evs.iter()
+                    .filter_map(|e| match e {
+                        Event::Alias { name, source } if name != source => {
+                            Some((name.to_string(), source.to_string()))
+                        }
+                        _ => None,
+                    })
+                    .collect()
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
     // The candidates go after each file's positions while the motions are bound: a motion may
     // use them.
     let counts: Vec<usize> = files.iter().map(|f| f.positions.len()).collect();
@@ -947,9 +951,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
     mark_offsets(files, facts, &modules, &exported);
     // The routines, for the binder: only when a routine gives a parameter a computed value,
     // or a call passes a name to a routine of the program.
-    let follow = facts.iter().any(|f| !f.param_assignments.is_empty())
-        || (facts.iter().any(|f| !f.calls.is_empty())
-            && facts.iter().any(|f| !f.routines.is_empty()));
+    let follow = passes || facts.iter().any(|f| !f.param_assignments.is_empty());
     let routines: Vec<Vec<crate::resolve::Routine>> = if follow {
         facts
             .iter()
@@ -1272,10 +1274,6 @@ fn computed_through_parameters(
             .or_else(|| all.iter().find(|&&(f, _, public)| f != fi && public))?;
         Some((cf, cr))
     };
-    let callee = |fi: usize, name: &[u8]| -> Option<&super::positions::ParamRoutine> {
-        let (cf, cr) = callee_at(fi, name)?;
-        facts.get(cf)?.routines.get(cr)
-    };
     // Each routine's parameters a motion moves to, there or in a routine it passes them on
     // to (to a fixed point: each round marks one more at least, or ends).
     let mut moved: Vec<Vec<Vec<bool>>> = facts
@@ -1339,7 +1337,10 @@ fn computed_through_parameters(
     let mut passed = Vec::new();
     for (fi, (f, src)) in facts.iter().zip(&srcs).enumerate() {
         for call in &f.calls {
-            let Some(to) = callee(fi, call.callee.slice(src)) else {
+            let Some((cf, cr)) = callee_at(fi, call.callee.slice(src)) else {
+                continue;
+            };
+            let Some(to) = facts.get(cf).and_then(|f| f.routines.get(cr)) else {
                 continue;
             };
             // Every target passed to a routine of the program that moves to it: its motions
@@ -1347,8 +1348,7 @@ fn computed_through_parameters(
             // leaves set), so the base it is moved in there is not known. An argument that is
             // the calling routine's own parameter is the caller's caller's, marked where that
             // passes it.
-            let moves =
-                callee_at(fi, call.callee.slice(src)).and_then(|(cf, cr)| moved.get(cf)?.get(cr));
+            let moves = moved.get(cf).and_then(|m| m.get(cr));
             passed.clear();
             for (i, a) in call.args.iter().enumerate() {
                 let Some(a) = a else { continue };

@@ -53,12 +53,10 @@ impl Arm {
     ) -> Result<Vec<Pose>, Why> {
         let what = describe(p);
         if let Some(u) = p.usage.unresolved_tool() {
+            // (A tool is only ever unknown as a routine's parameter.)
             let name = match &u.cause {
-                crate::position::UnresolvedCause::Parameter(n)
-                | crate::position::UnresolvedCause::PassedTo(n)
-                | crate::position::UnresolvedCause::ChangedBy(n)
-                | crate::position::UnresolvedCause::Shadowed(n) => n.as_str(),
-                crate::position::UnresolvedCause::SomePaths => "a tool",
+                crate::position::UnresolvedCause::Parameter(n) => n.as_str(),
+                _ => "a tool",
             };
             return Err(reach(
                 format!(

@@ -1493,16 +1493,7 @@ fn an_assignment_of_the_cells_config_value_changes_nothing() {
         )
         .unwrap()
     };
-    let run_time = |p: &Program| {
-        p.files
-            .iter()
-            .flat_map(|f| f.positions())
-            .find(|t| t.name.as_deref() == Some("XP1"))
-            .unwrap()
-            .usage
-            .run_time()
-            .cloned()
-    };
+    let run_time = |p: &Program| xp1_of(p).usage.run_time().cloned();
     // samples/krl/$config.dat: BASE_DATA[3]={X 6200.5,Y 1350.25,Z 0.0,A -90.0,B 0.0,C 0.0}.
     let same = program("{X 6200.5,Y 1350.25,Z 0.0,A -90.0,B 0.0,C 0.0}");
     assert_eq!(run_time(&same), None);
@@ -1517,6 +1508,15 @@ fn an_assignment_of_the_cells_config_value_changes_nothing() {
     );
 }
 
+/// Point `XP1` of program `p`.
+fn xp1_of(p: &Program) -> trackfix::position::Position {
+    p.files
+        .iter()
+        .flat_map(|f| f.positions())
+        .find(|t| t.name.as_deref() == Some("XP1"))
+        .unwrap()
+}
+
 /// The usage of point `XP1` of `dat` in the program of `cell.src` (`src`) and `cell.dat`,
 /// loaded with the sample config.
 fn usage_of_xp1(src: &str, dat: &str) -> trackfix::position::Usage {
@@ -1528,12 +1528,7 @@ fn usage_of_xp1(src: &str, dat: &str) -> trackfix::position::Usage {
         &with_sample_config(),
     )
     .unwrap();
-    p.files
-        .iter()
-        .flat_map(|f| f.positions())
-        .find(|t| t.name.as_deref() == Some("XP1"))
-        .unwrap()
-        .usage
+    xp1_of(&p).usage
 }
 
 /// A data list with the one point `XP1` in it.
