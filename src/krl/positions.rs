@@ -84,10 +84,13 @@ pub(crate) enum Event {
         jumped: bool,
     },
     /// `XPICK = XP3`: until reassigned, a motion to `XPICK` moves to (a copy of) `XP3`, so
-    /// `XP3` is used with that motion's base and tool.
+    /// `XP3` is used with that motion's base and tool. A function's value (`XC = MID(XP3,
+    /// XP4)`) is an alias of each name its arguments give: the first replaces what the name
+    /// held, each further one is `joined` to it.
     Alias {
         name: Name,
         source: Name,
+        joined: bool,
     },
     Motion {
         span: Span,
@@ -175,6 +178,24 @@ pub(crate) struct Facts {
     /// are written in (`pOut = $POS_ACT`, `pOut.X = 5` in `DEF Remember(pOut:OUT)`): the
     /// routine (index into `routines`), the parameter's name in its `DEF` line, the line.
     pub param_assignments: Vec<(usize, Span32, usize)>,
+    /// Names whose value a routine hands back to its callers: written into a parameter not
+    /// `:IN` (`P = XP1` in `DEF SETC(P:OUT)`) or returned by a function (`RETURN XP1`). A
+    /// caller's motion to what it gets moves to that value in a base trackfix does not tie to
+    /// the name.
+    pub handed_back: Vec<HandedBack>,
+}
+
+/// A value a routine hands back to its callers ([`Facts::handed_back`]).
+#[derive(Clone, Debug)]
+pub(crate) struct HandedBack {
+    /// The name whose value it is, upper case.
+    pub source: Name,
+    /// 1-based line of the assignment or `RETURN`.
+    pub line: usize,
+    /// The routine's name.
+    pub routine: Span,
+    /// The parameter written, or `None` for a function's `RETURN`.
+    pub param: Option<Span>,
 }
 
 /// A `DEF`/`DEFFCT` that takes parameters (`DEF Remember(pOut:OUT, nTry:IN)`).
@@ -889,6 +910,8 @@ pub(crate) struct Extractor<'a> {
     routines: Vec<ParamRoutine>,
     /// The routine being read, when it takes parameters (index into `routines`).
     current: Option<usize>,
+    /// The function (`DEFFCT`) being read: its name.
+    function: Option<Span>,
     out: Extracted,
     /// Notes about what is deliberately not a target (relative motions, computed targets).
     pub diagnostics: Vec<Diagnostic>,
@@ -908,6 +931,7 @@ impl<'a> Extractor<'a> {
             block_with: Vec::new(),
             routines: Vec::new(),
             current: None,
+            function: None,
             out: Extracted {
                 positions: PositionList::new(),
                 frames: Vec::new(),
@@ -968,11 +992,13 @@ impl<'a> Extractor<'a> {
                             &mut self.routines,
                         );
                     }
+                    let span = *name;
                     let name = name.map(|n| upper(src, n));
                     if let Some(n) = name.as_ref().filter(|_| first || *global) {
                         out.facts.public_routines.push(n.clone());
                     }
-                    function_routine(src, *keyword, name.as_ref(), out);
+                    self.function =
+                        span.filter(|_| function_routine(src, *keyword, name.as_ref(), out));
                     out.facts.events.push(Event::Reset(name));
                     self.loops.clear();
                 }
@@ -1034,6 +1060,13 @@ impl<'a> Extractor<'a> {
                 if let Some(r) = self.current.and_then(|r| self.routines.get_mut(r)) {
                     copied_parameters(src, r, value);
                 }
+                if self.in_routine && matches!(value.kind, ExprKind::Call(..) | ExprKind::Paren(..))
+                {
+                    function_value(value, (self.current, lines, stmt.span.start), out);
+                }
+                if let Some(r) = self.current.and_then(|r| self.routines.get(r)) {
+                    handed_back(src, lines, r, target, value, out);
+                }
             }
             StmtKind::Call(call) => {
                 if let Some(s) = bas_call(src, call) {
@@ -1078,6 +1111,11 @@ impl<'a> Extractor<'a> {
                     .unwrap_or(target);
                 self.gotos
                     .push(String::from_utf8_lossy(target).to_ascii_uppercase());
+            }
+            StmtKind::Return => {
+                if let Some(f) = self.function {
+                    returned(src, lines, f, stmt.span, out);
+                }
             }
             StmtKind::Handler => {
                 if let Some(name) = handler_routine(stmt.span.slice(src)) {
@@ -1148,10 +1186,122 @@ impl<'a> Extractor<'a> {
 /// does not follow: [`Facts::unfollowed`]) when `keyword` says it is one. Out of line, as
 /// [`param_routine`].
 #[inline(never)]
-fn function_routine(src: &[u8], keyword: Span, name: Option<&String>, out: &mut Extracted) {
-    if let Some(n) = name.filter(|_| upper_is(src, keyword, "DEFFCT")) {
+fn function_routine(src: &[u8], keyword: Span, name: Option<&String>, out: &mut Extracted) -> bool {
+    let function = upper_is(src, keyword, "DEFFCT");
+    if let Some(n) = name.filter(|_| function) {
         out.facts.unfollowed.push(n.clone());
     }
+    function
+}
+
+/// Records a function call that is the value of an assignment (`XC = GETPT(XP1)`) as a call
+/// with the plain references it passes: a function of the program that moves to a parameter,
+/// or writes one, does to what is passed there what a routine does. Out of line, as
+/// [`param_routine`].
+#[inline(never)]
+fn function_value(value: &Expr, at: (Option<usize>, &LineIndex, usize), out: &mut Extracted) {
+    if let ExprKind::Call(callee, args) = &unparenthesized(value).kind
+        && !args.is_empty()
+    {
+        param_call(callee.span, args, at, &mut out.facts.calls);
+    }
+}
+
+/// The names a function's value may hold, upper case, into `out`: the arguments of the call
+/// `e` that are plain references (`XP1` of `GETPT(XP1)`), and those of a call given as an
+/// argument (`F(G(XP1))`). Nothing when `e` is no call.
+fn function_arguments(src: &[u8], e: &Expr, out: &mut Vec<Name>) {
+    if let ExprKind::Call(_, args) = &unparenthesized(e).kind {
+        for a in args.iter().flatten() {
+            let a = unparenthesized(a);
+            match a.kind {
+                ExprKind::Name | ExprKind::Index(..) => out.push(upper_name(src, a.span)),
+                ExprKind::Call(..) => function_arguments(src, a, out),
+                _ => {}
+            }
+        }
+    }
+}
+
+/// Records the names whose value an assignment in routine `r` writes into one of its
+/// parameters not written `:IN` (`P = XP1`, `P = GETPT(XP1)`): the caller's variable then
+/// holds it ([`Facts::handed_back`]). A parameter given another parameter's value hands back
+/// nothing of the routine's own. Out of line, as [`param_routine`].
+#[inline(never)]
+fn handed_back(
+    src: &[u8],
+    lines: &LineIndex,
+    r: &ParamRoutine,
+    target: &Expr,
+    value: &Expr,
+    out: &mut Extracted,
+) {
+    use crate::names::NameKey;
+    let whole = match &target.kind {
+        ExprKind::Name => target,
+        ExprKind::Index(base, _) => base,
+        _ => return,
+    };
+    let key = NameKey(whole.span.slice(src).trim_ascii());
+    let is_param = |name: &[u8]| {
+        let name = name.split(|&b| b == b'[').next().unwrap_or(name);
+        r.params
+            .iter()
+            .find(|p| NameKey(p.name.slice(src)) == NameKey(name))
+    };
+    let Some(param) = is_param(key.0).filter(|p| !p.by_value) else {
+        return;
+    };
+    let mut sources = Vec::new();
+    let v = unparenthesized(value);
+    if matches!(v.kind, ExprKind::Name | ExprKind::Index(..)) {
+        sources.push(upper_name(src, v.span));
+    } else {
+        function_arguments(src, v, &mut sources);
+    }
+    let line = lines.line(target.span.start);
+    for source in sources {
+        if is_param(source.as_bytes()).is_none() {
+            out.facts.handed_back.push(HandedBack {
+                source,
+                line,
+                routine: r.name,
+                param: Some(param.name),
+            });
+        }
+    }
+}
+
+/// Records the name a function's `RETURN` statement (`stmt`) gives as its value, when that is
+/// a plain reference (`RETURN XP1`): the caller's expression gets it ([`Facts::handed_back`]).
+/// Out of line, as [`param_routine`].
+#[inline(never)]
+fn returned(src: &[u8], lines: &LineIndex, function: Span, stmt: Span, out: &mut Extracted) {
+    let text = stmt.slice(src);
+    let value = text.get(6..).unwrap_or_default();
+    let value = value
+        .split(|&b| b == b';')
+        .next()
+        .unwrap_or(value)
+        .trim_ascii();
+    let name_end = value
+        .iter()
+        .position(|b| !(b.is_ascii_alphanumeric() || matches!(b, b'_' | b'$') || *b >= 0x80))
+        .unwrap_or(value.len());
+    let (name, rest) = value.split_at(name_end);
+    let plain = !name.is_empty()
+        && !name[0].is_ascii_digit()
+        && (rest.is_empty() || (rest.first() == Some(&b'[') && rest.last() == Some(&b']')));
+    if !plain {
+        return;
+    }
+    let start = stmt.start + (value.as_ptr() as usize - text.as_ptr() as usize);
+    out.facts.handed_back.push(HandedBack {
+        source: upper_name(src, Span::new(start, start + value.len())),
+        line: lines.line(stmt.start),
+        routine: function,
+        param: None,
+    });
 }
 
 /// Records the named targets of relative motion `keyword` (`LIN_REL XSTEP`) on `line` as
@@ -1445,10 +1595,26 @@ fn written_in_routine(src: &[u8], target: &Expr, value: &Expr, out: &mut Extract
         && matches!(target.kind, ExprKind::Name)
         && let Some(name) = whole_name(src, target)
     {
-        out.facts.events.push(Event::Alias {
-            name: name.clone(),
-            source: name,
-        });
+        let mut sources = Vec::new();
+        function_arguments(src, value, &mut sources);
+        let ended = sources.is_empty();
+        // `XC = SHIFT(XC)`: what the name held, it may still hold.
+        let mut joined = sources.contains(&name);
+        for source in sources.into_iter().filter(|s| *s != name) {
+            out.facts.events.push(Event::Alias {
+                name: name.clone(),
+                source,
+                joined,
+            });
+            joined = true;
+        }
+        if ended {
+            out.facts.events.push(Event::Alias {
+                name: name.clone(),
+                source: name,
+                joined: false,
+            });
+        }
     }
 }
 
@@ -1533,6 +1699,7 @@ fn assignment(
                 out.facts.events.push(Event::Alias {
                     name,
                     source: upper_name(src, value.span),
+                    joined: false,
                 });
             }
         }

@@ -739,7 +739,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
             .map(|evs| {
                 evs.iter()
                     .filter_map(|e| match e {
-                        Event::Alias { name, source } if name != source => {
+                        Event::Alias { name, source, .. } if name != source => {
                             Some((name.to_string(), source.to_string()))
                         }
                         _ => None,
@@ -778,6 +778,8 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
             let mut inline_at: Option<HashMap<crate::syntax::Span, usize>> = None;
             let mut flow = Flow::default();
             let mut aliases: HashMap<&str, &str> = HashMap::default();
+            // The further names a function's value may hold (`XC = MID(XP3, XP4)`: `XP4`).
+            let mut joined: HashMap<&str, Vec<&str>> = HashMap::default();
             let module = modules.of(fi);
             let fdats = fdats.get(module).unwrap_or(&no_fdats);
             let mut i = 0;
@@ -787,6 +789,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                     Event::Reset(_) => {
                         flow.reset();
                         aliases.clear();
+                        joined.clear();
                     }
                     Event::Call(name) => {
                         if let Some(exit) = exits.of(module, name) {
@@ -800,8 +803,21 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                     | Event::Label { .. } => {
                         i = flow.control(i - 1, ev);
                     }
-                    Event::Alias { name, source } => {
+                    Event::Alias {
+                        name,
+                        source,
+                        joined: false,
+                    } => {
                         aliases.insert(name.as_str(), source.as_str());
+                        if !joined.is_empty() {
+                            joined.remove(name.as_str());
+                        }
+                    }
+                    Event::Alias { name, source, .. } => {
+                        joined
+                            .entry(name.as_str())
+                            .or_default()
+                            .push(source.as_str());
                     }
                     Event::Set(s) => flow.state.apply(s, fdats),
                     Event::Motion {
@@ -837,16 +853,21 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                                     targets.extend(at.get(s).copied());
                                 }
                                 Ref::Named(n) => {
-                                    // The name itself, then what it was last copied from.
+                                    // The name itself, then what it was last copied from
+                                    // (and the further arguments of a function it was
+                                    // given), eight names at most.
                                     let start = folded.len();
                                     folded.push(n.as_str());
-                                    while folded.len() - start < 8 {
-                                        let chain = folded.get(start..).unwrap_or_default();
-                                        match chain.last().and_then(|c| aliases.get(c)) {
-                                            Some(&next) if !chain.contains(&next) => {
+                                    let mut at = start;
+                                    while at < folded.len() && folded.len() - start < 8 {
+                                        let name = folded.get(at).copied().unwrap_or_default();
+                                        at += 1;
+                                        let more = joined.get(name).map_or(&[][..], Vec::as_slice);
+                                        for &next in aliases.get(name).into_iter().chain(more) {
+                                            let chain = folded.get(start..).unwrap_or_default();
+                                            if !chain.contains(&next) && folded.len() - start < 8 {
                                                 folded.push(next);
                                             }
-                                            _ => break,
                                         }
                                     }
                                 }
@@ -951,7 +972,10 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
     mark_offsets(files, facts, &modules, &exported);
     // The routines, for the binder: only when a routine gives a parameter a computed value,
     // or a call passes a name to a routine of the program.
-    let follow = passes || facts.iter().any(|f| !f.param_assignments.is_empty());
+    let follow = passes
+        || facts
+            .iter()
+            .any(|f| !f.param_assignments.is_empty() || !f.handed_back.is_empty());
     let routines: Vec<Vec<crate::resolve::Routine>> = if follow {
         facts
             .iter()
@@ -1412,6 +1436,32 @@ fn computed_through_parameters(
         }
         for &(routine, param, line) in &f.param_assignments {
             binder.bind_computed_parameter(fi, routine, param, line);
+        }
+        // A value a routine hands back (`P = XP1` into an `:OUT` parameter, `RETURN XP1`):
+        // the motions its callers make to what they get are not tied to the name.
+        for h in &f.handed_back {
+            passed.clear();
+            binder.targets_named(fi, h.source.as_bytes(), &mut passed);
+            if passed.is_empty() {
+                continue;
+            }
+            let routine = String::from_utf8_lossy(h.routine.slice(src));
+            let how = match h.param {
+                Some(p) => format!(
+                    "written into `{}`, a parameter of `{routine}`",
+                    String::from_utf8_lossy(p.slice(src))
+                ),
+                None => format!("returned by `{routine}`"),
+            };
+            binder.mark(fi, &passed, |elsewhere, usage| {
+                usage.mark_unresolved_frame(UnresolvedFrame {
+                    at: UseLine {
+                        line: h.line,
+                        file: elsewhere.cloned(),
+                    },
+                    cause: UnresolvedCause::HandedBack(how.clone()),
+                });
+            });
         }
     }
     binder.finish();

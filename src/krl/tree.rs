@@ -173,6 +173,8 @@ pub enum StmtKind {
     Label,
     /// `GOTO NAME`.
     Goto,
+    /// `RETURN` or `RETURN value`: a function's value leaves it.
+    Return,
     /// `INTERRUPT DECL … DO routine(…)` or `TRIGGER WHEN … DO routine(…)`: a routine run when
     /// an event happens, wherever the program then is.
     Handler,

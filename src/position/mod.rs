@@ -502,6 +502,10 @@ pub enum UnresolvedCause {
     /// A routine the program runs where trackfix does not follow it (KRL: a function, called
     /// inside an expression; an interrupt's or a trigger's) changes the base or tool.
     ChangedBy(String),
+    /// A routine hands the target's value back to its callers (KRL: written into a parameter
+    /// not `:IN`, or returned by a function): how, in words (``returned by `GETPT` ``). The
+    /// motions that move to what the callers get are not tied to the target.
+    HandedBack(String),
 }
 
 /// The line of a use, and the file it is in when that is not the used target's own (a KRL

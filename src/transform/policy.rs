@@ -199,6 +199,15 @@ pub(crate) fn wobj_of(
                     "set the {frame} in the routines that move, not in `{routine}`, or correct the targets by hand"
                 ),
             ),
+            UnresolvedCause::HandedBack(how) => Why::new(
+                RefusalKind::UnresolvedWorkObject,
+                format!(
+                    "{what} is {how} on {at}: trackfix does not follow the value to the motions that move to it, so the {frame} they move in is not known"
+                ),
+                format!(
+                    "move to it where it is declared, with the {frame} set there, or correct it by hand"
+                ),
+            ),
             UnresolvedCause::Shadowed(name) => Why::new(
                 RefusalKind::UnresolvedWorkObject,
                 format!(

@@ -1634,6 +1634,92 @@ fn a_copy_given_another_value_no_longer_reaches_its_source() {
     );
 }
 
+/// A function's value moves where its arguments' targets are (`XC=GETPT(XP1)`, `XC=MID(XP2,
+/// XP1)`): a motion to it is a motion to each, in that motion's base, as a copy is; before, the
+/// point was corrected in the base of its own motion while the robot moved to it in another.
+/// A value a routine hands back — written into a parameter not `:IN` (`P=XP1` in
+/// `DEF SETC(P:OUT)`) or returned by a function (`RETURN XP1`) — reaches motions trackfix does
+/// not tie to the point: it is refused, naming the routine. A function that moves to its
+/// parameter is followed as a routine is.
+#[test]
+fn a_value_a_function_or_parameter_hands_back_reaches_its_motions() {
+    use trackfix::position::UnresolvedCause;
+    let usage = |body: &str, routines: &str| {
+        let src = format!(
+            "DEF cell( )\n  DECL E6POS XC\n  $BASE=BASE_DATA[1]\n  LIN XP1\n{body}END\n{routines}"
+        );
+        usage_of_xp1(&src, DAT_XP1)
+    };
+    let getpt = "DEFFCT E6POS GETPT(P:IN)\n  DECL E6POS P\n  P.Z=P.Z+100\n  RETURN P\nENDFCT\n";
+    // Moved in the same base through the function's value: used on both lines.
+    let same = usage("  XC=GETPT(XP1)\n  LIN XC\n", getpt);
+    assert_eq!(same.lines, [4, 6]);
+    assert_eq!(same.wobj.as_deref(), Some("BASE_DATA[1]"));
+    assert_eq!(same.unresolved_frame(), None);
+    // In another base: two bases, no longer one.
+    let other = usage("  XC=GETPT(XP1)\n  $BASE=BASE_DATA[2]\n  LIN XC\n", getpt);
+    assert_eq!(other.lines, [4, 7]);
+    assert_eq!(other.wobj.as_deref(), Some("BASE_DATA[1]"));
+    assert_eq!(other.other_wobjs(), ["BASE_DATA[2]"]);
+    // A later argument of the function, and one inside a call given as an argument.
+    let mid = "DEFFCT E6POS MID(A:IN,B:IN)\n  DECL E6POS A,B\n  RETURN A\nENDFCT\n";
+    let later = usage(
+        "  XC=MID(XC,(MID(XAUX,XP1)))\n  $BASE=BASE_DATA[2]\n  LIN XC\n",
+        mid,
+    );
+    assert_eq!(later.lines, [4, 7]);
+    // A function of the name's own value keeps what it held.
+    let shifted = usage(
+        "  XC=XP1\n  XC=GETPT(XC)\n  $BASE=BASE_DATA[2]\n  LIN XC\n",
+        getpt,
+    );
+    assert_eq!(shifted.lines, [4, 8]);
+    // Another whole value given after it ends it, as for a copy.
+    let ended = usage(
+        "  XC=GETPT(XP1)\n  XC=$POS_ACT\n  $BASE=BASE_DATA[2]\n  LIN XC\n",
+        getpt,
+    );
+    assert_eq!(ended.lines, [4]);
+    let cause =
+        |u: &trackfix::position::Usage| u.unresolved_frame().map(|u| (u.at.line, u.cause.clone()));
+    // Written into an `:OUT` parameter (directly or as a function's argument), or returned.
+    let out = usage(
+        "  SETC(XC)\n  $BASE=BASE_DATA[2]\n  LIN XC\n",
+        "DEF SETC(P:OUT)\n  DECL E6POS P\n  P=GETPT(XP1)\nEND\n",
+    );
+    assert_eq!(
+        cause(&out),
+        Some((
+            11,
+            UnresolvedCause::HandedBack("written into `P`, a parameter of `SETC`".into())
+        ))
+    );
+    let returned = usage(
+        "  XC=GETA()\n  LIN XC\n",
+        "DEFFCT E6POS GETA( )\n  RETURN xp1 ; the taught one\nENDFCT\n",
+    );
+    assert_eq!(
+        cause(&returned),
+        Some((9, UnresolvedCause::HandedBack("returned by `GETA`".into())))
+    );
+    // Into an `:IN` parameter, or a parameter's own value handed on: nothing leaves.
+    let kept = usage(
+        "  SETC(XC)\n  LIN XC\n",
+        "DEF SETC(P:IN, Q:OUT)\n  DECL E6POS P,Q\n  P=XP1\n  Q=P\nEND\n",
+    );
+    assert_eq!(cause(&kept), None);
+    assert_eq!(kept.lines, [4]);
+    // A function that moves to its parameter.
+    let moves = usage(
+        "  XC=GOTHERE(XP1)\n",
+        "DEFFCT E6POS GOTHERE(P:IN)\n  DECL E6POS P\n  LIN P\n  RETURN P\nENDFCT\n",
+    );
+    assert_eq!(
+        cause(&moves),
+        Some((5, UnresolvedCause::PassedTo("GOTHERE".into())))
+    );
+}
+
 /// A routine the program runs where trackfix does not follow it — a function (`DEFFCT`, called
 /// inside an expression such as `IF PREP() THEN`), or the routine of an interrupt or trigger
 /// (`… DO SETB()`) — that changes the base leaves every motion's base unknown: its points are

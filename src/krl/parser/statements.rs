@@ -102,6 +102,7 @@ impl LineParser<'_, '_> {
             // `EXIT` leaves the innermost loop: program order goes on after it.
             b"EXIT" => Ok((NodeKind::Simple, Some(StmtKind::Branch(head.span())))),
             b"GOTO" => Ok((NodeKind::Simple, Some(StmtKind::Goto))),
+            b"RETURN" => Ok((NodeKind::Simple, Some(StmtKind::Return))),
             _ if word.is_in(SIMPLE_KEYWORDS) => Ok((NodeKind::Simple, None)),
             b"IF" => {
                 let has_then = sig.last().is_some_and(|t| is_kw(self.src, Some(t), "THEN"));
