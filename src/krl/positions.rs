@@ -77,11 +77,13 @@ pub(crate) enum Event {
     EndLoop,
     /// `EXIT`: program order leaves the innermost loop.
     Exit,
-    /// A label: when a `GOTO` of its routine names it (`jumped`), program order may arrive
-    /// there with any base and tool (trackfix does not follow jumps), so from there on they are
-    /// unknown until set again; a label no jump names changes nothing.
+    /// A label, with where the `GOTO`s of its routine that name it are (`jumps`: the index the
+    /// next event has at each). A jump may arrive with another base and tool than program order
+    /// brings, so from there on they are unknown until set again, unless every jump is one that
+    /// cannot (a retry jumping back over nothing that changes them: `jumps_keep_state` in
+    /// resolution); a label no jump names changes nothing.
     Label {
-        jumped: bool,
+        jumps: Vec<usize>,
     },
     /// `XPICK = XP3`: until reassigned, a motion to `XPICK` moves to (a copy of) `XP3`, so
     /// `XP3` is used with that motion's base and tool. A function's value (`XC = MID(XP3,
@@ -900,9 +902,10 @@ pub(crate) struct Extractor<'a> {
     /// The loops open at this statement: the index of each one's [`Event::Loop`].
     loops: Vec<usize>,
     /// The routine's labels (their event's index and name, upper case) and the names its
-    /// `GOTO`s jump to: a label is [`Event::Label`]`{ jumped }` once the routine has been read.
+    /// `GOTO`s jump to (with the index the next event has there): a label's
+    /// [`Event::Label`]`{ jumps }` are filled in once the routine has been read.
     labels: Vec<(usize, String)>,
-    gotos: Vec<String>,
+    gotos: Vec<(String, usize)>,
     /// The `WITH` settings of the spline block open at this statement: they hold for each
     /// motion in it.
     block_with: Vec<Setting>,
@@ -953,8 +956,13 @@ impl<'a> Extractor<'a> {
     #[inline(never)]
     fn close_labels(&mut self) {
         for (at, name) in self.labels.drain(..) {
-            if let Some(Event::Label { jumped }) = self.out.facts.events.get_mut(at) {
-                *jumped = self.gotos.contains(&name);
+            if let Some(Event::Label { jumps }) = self.out.facts.events.get_mut(at) {
+                jumps.extend(
+                    self.gotos
+                        .iter()
+                        .filter(|(to, _)| *to == name)
+                        .map(|&(_, from)| from),
+                );
             }
         }
         self.gotos.clear();
@@ -1100,7 +1108,7 @@ impl<'a> Extractor<'a> {
                     out.facts.events.len(),
                     String::from_utf8_lossy(name.trim_ascii()).to_ascii_uppercase(),
                 ));
-                out.facts.events.push(Event::Label { jumped: false });
+                out.facts.events.push(Event::Label { jumps: Vec::new() });
             }
             StmtKind::Goto => {
                 let text = stmt.span.slice(src);
@@ -1109,8 +1117,10 @@ impl<'a> Extractor<'a> {
                     .split(|b| b.is_ascii_whitespace() || *b == b';')
                     .next()
                     .unwrap_or(target);
-                self.gotos
-                    .push(String::from_utf8_lossy(target).to_ascii_uppercase());
+                self.gotos.push((
+                    String::from_utf8_lossy(target).to_ascii_uppercase(),
+                    out.facts.events.len(),
+                ));
             }
             StmtKind::Return => {
                 if let Some(f) = self.function {

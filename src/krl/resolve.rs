@@ -209,8 +209,16 @@ impl Flow {
         self.loops.clear();
     }
 
-    /// Follows control event `ev`, the `i`th; returns the index of the event that follows it.
-    fn control(&mut self, i: usize, ev: &Event) -> usize {
+    /// Follows control event `ev`, the `i`th of `events`; returns the index of the event that
+    /// follows it. `changes`: whether a call of the named routine changes the base, tool or
+    /// staged FDAT.
+    fn control(
+        &mut self,
+        i: usize,
+        ev: &Event,
+        events: &[Event],
+        changes: &dyn Fn(&str) -> bool,
+    ) -> usize {
         match ev {
             Event::Branch(b) => branch(&mut self.state, &mut self.forks, *b),
             Event::Loop { kind, end } if *end > i => self.loops.push(Loop {
@@ -228,9 +236,17 @@ impl Flow {
                 }
             }
             Event::EndLoop => return self.end_of_body(i),
-            Event::Label { jumped: true } => {
+            Event::Label { jumps }
+                if !jumps.is_empty() && !jumps_keep_state(events, i, jumps, changes) =>
+            {
                 self.state.base = Some(FrameRef::Unknown);
                 self.state.tool = Some(FrameRef::Unknown);
+                // And what `FDAT_ACT` holds: a jump may skip or repeat an `FDAT_ACT = …`.
+                self.state.staged = Some(Staged {
+                    base: FrameRef::Unknown,
+                    tool: FrameRef::Unknown,
+                    tcp: self.state.staged.as_ref().is_some_and(|s| s.tcp),
+                });
             }
             _ => {}
         }
@@ -280,6 +296,53 @@ impl Flow {
         }
         i + 1
     }
+}
+
+/// Whether the label at event `at` is reached by its `GOTO`s (`jumps`: the index the next event
+/// has at each) only with the state program order brings there: each jumps back, and the events
+/// between the label and it change no base, tool or staged FDAT (no setting, no call of a
+/// routine that `changes` them, no other label a jump reaches), close or continue no block
+/// opened before the label, and leave no loop open (a retry: `TOP: … IF NOT OK THEN GOTO TOP
+/// ENDIF`). On every path from the label to such a jump the state stays the label's own, so
+/// joining it there changes nothing. A jump forward, over a change, or from inside a loop whose
+/// body goes on past it (round which the state may change) may arrive with another.
+fn jumps_keep_state(
+    events: &[Event],
+    at: usize,
+    jumps: &[usize],
+    changes: &dyn Fn(&str) -> bool,
+) -> bool {
+    jumps.iter().all(|&to| {
+        let Some(between) = events.get(at + 1..to).filter(|_| to > at) else {
+            return false;
+        };
+        let (mut blocks, mut loops) = (0usize, 0usize);
+        let kept = between.iter().all(|ev| match ev {
+            Event::Set(_) | Event::Reset(_) => false,
+            Event::Call(name) => !changes(name),
+            Event::Label { jumps } => jumps.is_empty(),
+            Event::Alias { .. } | Event::Motion { .. } => true,
+            Event::Branch(BranchEvent::If | BranchEvent::Switch) => {
+                blocks += 1;
+                true
+            }
+            Event::Branch(BranchEvent::Otherwise | BranchEvent::Case) => blocks > 0,
+            Event::Branch(BranchEvent::EndIf | BranchEvent::EndSwitch) => {
+                blocks = blocks.wrapping_sub(1);
+                blocks != usize::MAX
+            }
+            Event::Loop { .. } => {
+                loops += 1;
+                true
+            }
+            Event::EndLoop => {
+                loops = loops.wrapping_sub(1);
+                loops != usize::MAX
+            }
+            Event::Exit => loops > 0,
+        });
+        kept && loops == 0
+    })
 }
 
 impl State {
@@ -335,6 +398,11 @@ struct Exit {
 }
 
 impl Exit {
+    /// Whether the routine leaves the base, tool or staged FDAT changed.
+    fn changes(&self) -> bool {
+        self.base.is_some() || self.tool.is_some() || self.staged.is_some()
+    }
+
     fn apply_to(&self, state: &mut State) {
         if let Some(b) = &self.base {
             state.base = Some(b.clone());
@@ -439,7 +507,9 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                     | Event::EndLoop
                     | Event::Exit
                     | Event::Label { .. } => {
-                        i = flow.control(i, ev);
+                        let changes =
+                            |name: &str| exits.of(module, name).is_some_and(Exit::changes);
+                        i = flow.control(i, ev, &f.events, &changes);
                         continue;
                     }
                     Event::Alias { .. } | Event::Motion { .. } => {}
@@ -703,8 +773,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
             let exits = &exits;
             f.unfollowed.iter().filter_map(move |name| {
                 let exit = exits.of(module, name)?;
-                (exit.base.is_some() || exit.tool.is_some() || exit.staged.is_some())
-                    .then_some(name.as_str())
+                exit.changes().then_some(name.as_str())
             })
         })
         .collect();
@@ -801,7 +870,9 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                     | Event::EndLoop
                     | Event::Exit
                     | Event::Label { .. } => {
-                        i = flow.control(i - 1, ev);
+                        let changes =
+                            |name: &str| exits.of(module, name).is_some_and(Exit::changes);
+                        i = flow.control(i - 1, ev, &events, &changes);
                     }
                     Event::Alias {
                         name,

@@ -1608,6 +1608,46 @@ fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
     assert_eq!(base_of(&elsewhere), (Some("BASE_DATA[1]".to_owned()), None));
     let set_again = "  GOTO SKIP\n  SKIP:\n  $BASE=BASE_DATA[2]\n  LIN XP1\n";
     assert_eq!(base_of(set_again), (Some("BASE_DATA[2]".to_owned()), None));
+    // A retry: jumping back over nothing that changes the base arrives with the label's own,
+    // from inside blocks the jump's range opens (and a loop it closes), past a call of a
+    // routine that sets no frame.
+    let retry = "  $BASE=BASE_DATA[1]\n  TOP:\n  LIN XP1\n  FOR I=1 TO 2\n    WAIT SEC 1\n  ENDFOR\n  \
+                 GRIP()\n  IF $IN[1] THEN\n    SWITCH N\n    CASE 1\n      GOTO TOP\n    ENDSWITCH\n  ENDIF\n\
+                 END\nDEF GRIP( )\n  $OUT[1]=TRUE\n";
+    assert_eq!(base_of(retry), (Some("BASE_DATA[1]".to_owned()), None));
+    // Over a change of the base, a call of a routine that sets one, from a loop whose body goes
+    // on past the jump, or out of a block opened before the label: the base is not known.
+    for jump in [
+        "  $BASE=BASE_DATA[1]\n  TOP:\n  LIN XP1\n  $BASE=BASE_DATA[1]\n  GOTO TOP\n",
+        "  $BASE=BASE_DATA[1]\n  TOP:\n  LIN XP1\n  SETB()\n  GOTO TOP\nEND\nDEF SETB( )\n  BAS(#BASE,2)\n",
+        "  $BASE=BASE_DATA[1]\n  TOP:\n  LOOP\n    LIN XP1\n    IF $IN[1] THEN\n      GOTO TOP\n    ENDIF\n    \
+         $BASE=BASE_DATA[2]\n  ENDLOOP\n",
+        "  $BASE=BASE_DATA[1]\n  IF $IN[2] THEN\n    $BASE=BASE_DATA[2]\n    TOP:\n    LIN XP1\n  ENDIF\n  \
+         GOTO TOP\n",
+    ] {
+        assert!(base_of(jump).1.is_some(), "{jump}");
+    }
+    // An FDAT staged before a jump forward over another: the one a `BAS` applies after the
+    // label is not known.
+    let fdats = DAT_XP1.replace(
+        "ENDDAT",
+        "DECL FDAT FP1={TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE}\n\
+         DECL FDAT FP2={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE}\nENDDAT",
+    );
+    let staged = |body: &str| {
+        let usage = usage_of_xp1(&format!("DEF cell( )\n{body}END\n"), &fdats);
+        (
+            usage.wobj.as_deref().map(str::to_owned),
+            usage.unresolved_frame().is_some(),
+        )
+    };
+    let skipped =
+        "  FDAT_ACT=FP1\n  GOTO SKIP\n  FDAT_ACT=FP2\n  SKIP:\n  BAS(#CP_PARAMS,2)\n  LIN XP1\n";
+    assert_eq!(staged(skipped), (None, true));
+    assert_eq!(
+        staged(&skipped.replace("GOTO SKIP", "; no jump")),
+        (Some("BASE_DATA[2]".to_owned()), false)
+    );
 }
 
 /// A copy (`XC=XP1`) moves to what it copies until the program gives it another whole value
