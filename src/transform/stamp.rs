@@ -1159,7 +1159,11 @@ fn carry(
             }
             None => b.precision(),
         };
-        let unchanged = same.is_some() || original[b.start..b.end] == output[a.start..a.end];
+        // A literal whose sign alone the transform flipped (`mirror`) was rewritten too: the
+        // scan's literal starts after its sign.
+        let unchanged = same.is_some()
+            || (original[b.start..b.end] == output[a.start..a.end]
+                && negated(original, b.start) == negated(&output, a.start));
         // The written text as a head of the new mantissa and the exponent: how many bytes
         // of the literal are dropped before its exponent (none: written as it is).
         let mut cut = 0;
@@ -1229,6 +1233,11 @@ fn carry(
         }
     }
     CarriedPrecision { output, widened }
+}
+
+/// Whether the literal at `start` is written with a minus sign right before it.
+fn negated(src: &[u8], start: usize) -> bool {
+    start.checked_sub(1).and_then(|i| src.get(i)) == Some(&b'-')
 }
 
 /// [`carry`] for an original without a stamp (the usual input of `correct`), whose output

@@ -582,6 +582,40 @@ fn round_trips_through_files() {
     }
 }
 
+/// A value whose sign alone `mirror` flips (`-450` → `450.000`, `0.5` → `-0.500000`) is widened
+/// to the house decimals and recorded so in the stamp; mirrored back, it is written as it was
+/// first written (before, the scan, whose literal starts after its sign, took it for one the
+/// transform had not rewritten, and it stayed widened).
+#[test]
+fn mirror_twice_gives_back_a_sign_flip_as_first_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |s: &str| dir.path().join(s).to_str().unwrap().to_owned();
+    let target = "  CONST robtarget p10:=[[1200,-450,800],[0.5,0.5,0.5,0.5],[0,0,0,0],[1500,9E9,9E9,9E9,9E9,9E9]];\n";
+    let module = format!(
+        "MODULE M\n{target}  PROC main()\n    MoveL p10,v100,fine,tool0\\WObj:=wobj0;\n  ENDPROC\nENDMODULE\n"
+    );
+    std::fs::write(d("m.mod"), &module).unwrap();
+    let mirror =
+        |from: &str, to: &str| run_ok(&["mirror", &d(from), "--plane", "xz", "-o", &d(to)]);
+    mirror("m.mod", "m1.mod");
+    let once = std::fs::read_to_string(d("m1.mod")).unwrap();
+    assert!(
+        once.contains("[[1200,450.000,800],[0.5,-0.500000,0.5,-0.500000]"),
+        "{once}"
+    );
+    mirror("m1.mod", "m2.mod");
+    let twice = std::fs::read_to_string(d("m2.mod")).unwrap();
+    assert!(twice.contains(target), "{twice}");
+    assert!(
+        twice
+            .lines()
+            .nth(1)
+            .unwrap()
+            .starts_with("! trackfix: mirror version="),
+        "{twice}"
+    );
+}
+
 /// A file's text with the name of its KRL `DEF`/`DEFDAT` header blanked: a program written
 /// under another file name carries that name there.
 fn unnamed(bytes: &[u8]) -> String {
