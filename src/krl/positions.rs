@@ -1289,11 +1289,14 @@ fn handed_back(
 fn returned(src: &[u8], lines: &LineIndex, function: Span, stmt: Span, out: &mut Extracted) {
     let text = stmt.slice(src);
     let value = text.get(6..).unwrap_or_default();
-    let value = value
+    let mut value = value
         .split(|&b| b == b';')
         .next()
         .unwrap_or(value)
         .trim_ascii();
+    while let Some(inner) = value.strip_prefix(b"(").and_then(|v| v.strip_suffix(b")")) {
+        value = inner.trim_ascii();
+    }
     let name_end = value
         .iter()
         .position(|b| !(b.is_ascii_alphanumeric() || matches!(b, b'_' | b'$') || *b >= 0x80))

@@ -1736,7 +1736,7 @@ fn a_value_a_function_or_parameter_hands_back_reaches_its_motions() {
     );
     let returned = usage(
         "  XC=GETA()\n  LIN XC\n",
-        "DEFFCT E6POS GETA( )\n  RETURN xp1 ; the taught one\nENDFCT\n",
+        "DEFFCT E6POS GETA( )\n  RETURN ( xp1 ) ; the taught one\nENDFCT\n",
     );
     assert_eq!(
         cause(&returned),
