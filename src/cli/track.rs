@@ -19,7 +19,7 @@ use trackfix::track::identify::{
 use trackfix::track::nominal::{FitOptions, TrackFit, fit_track};
 use trackfix::track::plot::{profile_svg, spectrum_svg};
 use trackfix::track::point_export::{ColumnMap, points_csv, read_point_export};
-use trackfix::track::spectrum::{TUKEY_ALPHA, scan_from_table, scan_spectrum};
+use trackfix::track::spectrum::{PADDING, TUKEY_ALPHA, scan_from_table, scan_spectrum};
 use trackfix::track::uncertainty::{ProfileUncertainty, Sigma, knot_uncertainties};
 use trackfix::track::{
     Extrapolate, Gear, Knot, LocatedError, MeasuredIn, Profile, Reference, TrackError,
@@ -973,21 +973,14 @@ fn run_spectrum(a: &SpectrumArgs) -> anyhow::Result<String> {
     );
     let _ = writeln!(
         s,
-        "straight-line fit removed; Tukey window (alpha {TUKEY_ALPHA}); frequency resolution {:.6} /mm, Nyquist {:.6} /mm",
-        spec.frequency.get(1).copied().unwrap_or(0.0),
+        "straight-line fit removed; Tukey window (alpha {TUKEY_ALPHA}); frequency resolution {:.6} /mm, read {PADDING}× finer; Nyquist {:.6} /mm",
+        spec.resolution(),
         spec.nyquist()
     );
     let _ = writeln!(s, "\nlargest peaks:");
     let _ = writeln!(s, "    f [1/mm]  wavelength [mm]  amplitude [mm]");
     let amp = &spec.amplitude;
-    let mut peaks: Vec<usize> = (1..amp.len())
-        .filter(|&k| {
-            let a = amp[k];
-            a >= amp[k - 1] && amp.get(k + 1).is_none_or(|n| a > *n)
-        })
-        .collect();
-    peaks.sort_by(|&x, &y| amp[y].total_cmp(&amp[x]));
-    for &k in peaks.iter().take(6) {
+    for &k in spec.peaks().iter().take(6) {
         let f = spec.frequency[k];
         let _ = writeln!(s, "  {f:>10.6} {:>16.1} {:>15.4}", 1.0 / f, amp[k]);
     }

@@ -15,7 +15,7 @@ use crate::track::frames_csv::{SamplingFrame, frames_csv};
 use crate::track::identify::{Identification, OUTLIER_FACTOR, identify};
 use crate::track::nominal::{FitOptions, TrackFit, fit_track};
 use crate::track::simulate::MeasurementRow;
-use crate::track::spectrum::{Spectrum, TUKEY_ALPHA};
+use crate::track::spectrum::{PADDING, Spectrum, TUKEY_ALPHA};
 use crate::track::{Profile, TrackError};
 
 /// The six deviation components, in profile order.
@@ -785,22 +785,11 @@ fn bounds_section(p: &Profile) -> Section {
 }
 
 /// Indices of local maxima of the amplitude, largest first.
-fn peaks(amp: &[f64]) -> Vec<usize> {
-    let mut peaks: Vec<usize> = (1..amp.len())
-        .filter(|&k| {
-            let a = amp[k];
-            a >= amp[k - 1] && amp.get(k + 1).is_none_or(|n| a > *n)
-        })
-        .collect();
-    peaks.sort_by(|&x, &y| amp[y].total_cmp(&amp[x]));
-    peaks
-}
-
 fn spectrum_section(spec: &Spectrum) -> Section {
     let mut sec = Section::new("spectrum", headings::SPECTRUM);
     let nyquist = spec.nyquist();
     sec.para(&format!(
-        "{} samples, spacing {:.3} mm{}; straight-line fit removed; Tukey window (alpha {TUKEY_ALPHA}); frequency resolution {:.6} /mm, Nyquist {:.6} /mm.",
+        "{} samples, spacing {:.3} mm{}; straight-line fit removed; Tukey window (alpha {TUKEY_ALPHA}); frequency resolution {:.6} /mm, read {PADDING}× finer; Nyquist {:.6} /mm.",
         spec.samples,
         spec.spacing_mm,
         if spec.resampled {
@@ -808,7 +797,7 @@ fn spectrum_section(spec: &Spectrum) -> Section {
         } else {
             ""
         },
-        spec.frequency.get(1).copied().unwrap_or(0.0),
+        spec.resolution(),
         nyquist
     ));
     match (spec.highest, spec.recommended_spacing_mm()) {
@@ -887,7 +876,8 @@ fn spectrum_section(spec: &Spectrum) -> Section {
         "Dashed: the threshold; vertical line: the highest frequency above it, which sets the spacing.",
     );
     sec.sub("Largest peaks");
-    let rows: Vec<Row> = peaks(&spec.amplitude)
+    let rows: Vec<Row> = spec
+        .peaks()
         .iter()
         .take(6)
         .filter_map(|&k| {
@@ -946,12 +936,6 @@ mod tests {
         assert_eq!(interpolate(&k, &v, 5.0), 2.0);
         assert_eq!(interpolate(&k, &v, 15.0), 2.5);
         assert_eq!(interpolate(&k, &v, 25.0), 2.0);
-    }
-
-    #[test]
-    fn peaks_are_local_maxima_largest_first() {
-        let amp = [5.0, 1.0, 3.0, 2.0, 4.0, 0.5, 0.6];
-        assert_eq!(peaks(&amp), vec![4, 2, 6]);
     }
 
     #[test]
