@@ -494,7 +494,11 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
             "knot uncertainties from the identification noise: {note}"
         );
     }
-    let _ = writeln!(s, "\nenter in the controller (measurement frame = world):");
+    let _ = writeln!(
+        s,
+        "\nenter in the controller (measurement frame: {}):",
+        trackfix::html_report::figures::frame_name(fit.profile.measured_in())
+    );
     let _ = writeln!(
         s,
         "  gear factor: the skid moves {:.6} mm per commanded mm ({:+.3} mm over {} mm)",
@@ -597,22 +601,11 @@ fn write_cell_nominal(cell: &Path, robot: &str, fit: &TrackFit) -> anyhow::Resul
 /// The controller parameter that holds the gear ratio, which way it changes, and its new value
 /// for `--current-gear` (trackfix::track::gear).
 fn gear_advice(s: &mut String, g: f64, current: Option<&str>) -> anyhow::Result<()> {
-    let _ = writeln!(
-        s,
-        "    the controllers store motor turns per travel, which must be divided by {g:.6} (it grows when the skid travels short):"
-    );
-    let _ = writeln!(
-        s,
-        "      ABB: the track's Transmission Gear Ratio (topic Motion, type Transmission; transm_joint in MOC.cfg): new = current / {g:.6}"
-    );
-    let _ = writeln!(
-        s,
-        "      KUKA: $RAT_MOT_AX[7] = {{N n,D d}} in $machine.dat ([7] = E1, [6+k] = Ek): new N/D = current N/D / {g:.6}"
-    );
-    let _ = writeln!(
-        s,
-        "      (a travel per motor turn, the gear factor of docs/design.md §3, thesis eq. 4.4, grows the other way: new = {g:.6} x current)"
-    );
+    let [convention, abb, kuka, travel] = gear::advice(g);
+    let _ = writeln!(s, "    {convention}");
+    for line in [abb, kuka, travel] {
+        let _ = writeln!(s, "      {line}");
+    }
     let Some(text) = current else {
         return Ok(());
     };

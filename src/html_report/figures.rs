@@ -6,7 +6,20 @@ use nalgebra::Vector3;
 use crate::geometry::{Pose, abb_pose_literal, kuka_frame_literal, pose_to_xyz_deg};
 use crate::track::frames_csv::clean;
 use crate::track::nominal::TrackFit;
-use crate::track::{Gear, Profile};
+use crate::track::{Gear, MeasuredIn, Profile};
+
+/// How the controller figures name the frame they are in: the profile's `measured_in`. A base
+/// and direction in the tracker's frame must be taken into the cell's world before they are
+/// entered.
+pub fn frame_name(m: Option<MeasuredIn>) -> &'static str {
+    match m {
+        Some(MeasuredIn::World) => "world",
+        Some(MeasuredIn::Tracker) => {
+            "the tracker's; take the base and direction into the cell's world before entering them"
+        }
+        None => "not stated in the profile",
+    }
+}
 
 /// The controller set-up of a fitted track.
 #[derive(Clone, Debug, PartialEq)]
@@ -23,6 +36,8 @@ pub struct ControllerFigures {
     pub direction_in_base: Vector3<f64>,
     /// `N(0)`: the base frame at skid 0, in the measurement frame.
     pub base_at_zero: Pose,
+    /// The frame the measurements were taken in, as the profile states it.
+    pub measured_in: Option<MeasuredIn>,
 }
 
 impl ControllerFigures {
@@ -35,6 +50,7 @@ impl ControllerFigures {
             direction: fit.direction,
             direction_in_base: fit.direction_in_base(),
             base_at_zero: fit.base_at_zero,
+            measured_in: fit.profile.measured_in(),
         }
     }
 
@@ -50,6 +66,7 @@ impl ControllerFigures {
             direction: Vector3::from(n.direction),
             direction_in_base: n.axis_in_base(),
             base_at_zero,
+            measured_in: p.measured_in(),
         }
     }
 
@@ -66,9 +83,9 @@ impl ControllerFigures {
 
     /// What to do with the gear factor, for this profile's gear setting.
     pub fn new_gear_text(&self) -> String {
+        let [convention, abb, kuka, travel] = crate::track::gear::advice(self.gear_factor);
         format!(
-            "new gear factor = {:.6} x current gear factor (docs/design.md §3; thesis eq. 4.4); {}",
-            self.gear_factor,
+            "{convention} {abb}; {kuka} {travel}; {}",
             match self.gear {
                 Gear::AsIs => "this profile keeps the drift instead (gear as-is)",
                 Gear::Recalibrated => "this profile assumes you enter it (gear recalibrated)",

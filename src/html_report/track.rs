@@ -371,16 +371,21 @@ pub fn knot_uncertainty_in(profile_toml: &str) -> Option<Vec<[f64; 6]>> {
 }
 
 fn controller_section(p: &Profile, fit: Option<&TrackFit>) -> Section {
-    let f = match fit {
+    let mut f = match fit {
         Some(fit) => ControllerFigures::from_fit(fit),
         None => ControllerFigures::from_profile(p),
     };
+    // A fit from the measurements states no frame; the profile given with them may.
+    f.measured_in = f.measured_in.or(p.measured_in());
     let mut sec = Section::new("controller", headings::CONTROLLER);
-    sec.para("Measurement frame = world. The same figures track fit prints.");
+    sec.para(&format!(
+        "Measurement frame: {}. The same figures track fit prints.",
+        super::figures::frame_name(f.measured_in)
+    ));
     sec.raw(&definitions(&[
         ("gear factor", f.gear_text()),
         ("", f.new_gear_text()),
-        ("track direction (world)", f.direction_text()),
+        ("track direction (measurement frame)", f.direction_text()),
         (
             "track direction (base at skid 0)",
             f.direction_in_base_text(),

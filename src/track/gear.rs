@@ -8,6 +8,27 @@
 //! for a linear axis per 1000 mm; `i = 7` for the first external axis E1) are motor turns per
 //! travel. For them `new = old / g`: a skid that travels short (`g < 1`) needs a larger ratio.
 
+/// What to do with measured gear factor `g` in each controller, in words: one line for the
+/// convention, one for ABB, one for KUKA, one for a travel per motor turn (the thesis's). The
+/// one text `track fit` prints and the report shows: a bare "new = g × current" reads as an
+/// instruction for the controllers' ratio, which it inverts.
+pub fn advice(g: f64) -> [String; 4] {
+    [
+        format!(
+            "the controllers store motor turns per travel, which must be divided by {g:.6} (it grows when the skid travels short):"
+        ),
+        format!(
+            "ABB: the track's Transmission Gear Ratio (topic Motion, type Transmission; transm_joint in MOC.cfg): new = current / {g:.6}"
+        ),
+        format!(
+            "KUKA: $RAT_MOT_AX[7] = {{N n,D d}} in $machine.dat ([7] = E1, [6+k] = Ek): new N/D = current N/D / {g:.6}"
+        ),
+        format!(
+            "(a travel per motor turn, the gear factor of docs/design.md §3, thesis eq. 4.4, grows the other way: new = {g:.6} x current)"
+        ),
+    ]
+}
+
 /// The new motor-to-travel ratio (ABB's Transmission Gear Ratio, or KUKA's `N/D`) for the
 /// current one and the measured gear factor.
 pub fn new_motor_ratio(current: f64, gear_factor: f64) -> f64 {

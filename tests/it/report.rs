@@ -290,8 +290,22 @@ fn controller_figures_equal_track_fit() {
     let tmp = tempfile::tempdir().unwrap();
     let profile = tmp.path().join("profile.toml");
     let p = profile.display().to_string();
-    let (code, fit_out, err) = trackfix(&["track", "fit", "samples/track/frames.csv", "-o", &p]);
+    let (code, fit_out, err) = trackfix(&[
+        "track",
+        "fit",
+        "samples/track/frames.csv",
+        "-o",
+        &p,
+        "--measured-in",
+        "tracker",
+    ]);
     assert_eq!(code, 0, "{err}");
+    // The frame the figures are in is the profile's, on both sides (it was always "world").
+    let tracker = "the tracker's; take the base and direction into the cell's world";
+    assert!(
+        fit_out.contains(&format!("(measurement frame: {tracker}")),
+        "{fit_out}"
+    );
     let line_with = |needle: &str| -> String {
         fit_out
             .lines()
@@ -327,13 +341,21 @@ fn controller_figures_equal_track_fit() {
             ("ABB (pose)", abb),
             ("KUKA (FRAME)", kuka),
             ("base frame at skid 0", base),
-            ("track direction (world)", world),
+            ("track direction (measurement frame)", world),
             ("track direction (base at skid 0)", in_base),
         ] {
             let dt = format!("<dt>{what}</dt><dd>{want}</dd>");
             assert!(html.contains(&dt), "missing {dt}");
         }
     }
+    let html = std::fs::read_to_string(tmp.path().join("p.html")).unwrap();
+    assert!(
+        html.contains(&format!(
+            "Measurement frame: {}",
+            tracker.replace('\'', "&#39;")
+        )),
+        "{html}"
+    );
 }
 
 /// Every report the samples give, for the self-containment and browser tests.
