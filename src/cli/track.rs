@@ -467,6 +467,9 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         fit.profile = fit.profile.with_knot_uncertainties(&u)?;
     }
     let p = &fit.profile;
+    for w in p.sampling_warnings() {
+        let _ = writeln!(std::io::stderr(), "warning: {}: {w}", a.frames.display());
+    }
     p.save(&a.output)?;
     let cell_note = match (&a.cell, &a.robot) {
         (Some(cell), Some(robot)) => Some(write_cell_nominal(cell, robot, &fit)?),
@@ -667,7 +670,11 @@ fn deviation_cells(c: &[f64; 6], mm_width: usize, deg_width: usize, sep: &str) -
 
 fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
     let p = Profile::load(&a.profile)?;
-    for w in p.consistency_warnings() {
+    for w in p
+        .consistency_warnings()
+        .into_iter()
+        .chain(p.sampling_warnings())
+    {
         let _ = writeln!(std::io::stderr(), "warning: {}: {w}", a.profile.display());
     }
     if let Some(path) = &a.plot {
@@ -794,7 +801,12 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
                 s,
                 "      skid    dx [mm]    dy [mm]    dz [mm]     rx [deg]     ry [deg]     rz [deg]"
             );
+            // A row outside the measured skids is extrapolated (the profile allows it): marked,
+            // since nothing there was measured and its u only carries the end slope's noise.
+            let outside = |skid: f64| skid < s0 || skid > s1;
             for (skid, c, u, t) in &rows {
+                let mark = if outside(*skid) { "*" } else { "" };
+                let skid = format!("{skid}{mark}");
                 let _ = writeln!(s, "{skid:>10} {}", deviation_cells(c, 10, 12, " "));
                 if let Some(u) = u {
                     let _ = writeln!(s, "{:>10} {}", "u (k=1)", deviation_cells(u, 10, 12, " "));
@@ -811,6 +823,13 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
                 let _ = writeln!(
                     s,
                     "u: standard uncertainty of D(s) from the knots' identification noise and the interpolation between knots"
+                );
+            }
+            if rows.iter().any(|r| outside(r.0)) {
+                let _ = writeln!(
+                    s,
+                    "*: outside the measured skids {s0} .. {s1} mm: extrapolated ({}), not measured; u there does not cover what the track does beyond its ends",
+                    enum_name(p.extrapolate())
                 );
             }
             if let Some(r) = &tcp {

@@ -598,7 +598,11 @@ fn load_profile(cell: &Cell, robot: &Robot) -> anyhow::Result<Profile> {
             robot.profile.display()
         )
     })?;
-    for w in profile.consistency_warnings() {
+    for w in profile
+        .consistency_warnings()
+        .into_iter()
+        .chain(profile.sampling_warnings())
+    {
         let _ = writeln!(
             std::io::stderr(),
             "warning: {}: {w}",

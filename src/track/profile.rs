@@ -181,6 +181,14 @@ pub enum MeasuredIn {
     Tracker,
 }
 
+/// Fewest knots whose spline can show the track's shape between them ([`Profile::sampling_warnings`]):
+/// with three, it bends at most once over the whole track.
+pub const FEW_KNOTS: usize = 4;
+
+/// The widest knot spacing the uncertainty between knots was calibrated for (500-1333 mm,
+/// docs/design.md §14), rounded up: wider, [`Profile::sampling_warnings`] says what it misses.
+pub const WIDE_KNOT_GAP_MM: f64 = 2000.0;
+
 /// The controller's straight track `N(s) = (R_N, origin + s·step)` in the measurement frame.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -581,6 +589,31 @@ impl Profile {
     /// may be edited by hand).
     pub fn data_sha256(&self) -> String {
         data_sha256(&self.file)
+    }
+
+    /// What the profile's sampling cannot show: fewer than [`FEW_KNOTS`] knots, or knots more
+    /// than [`WIDE_KNOT_GAP_MM`] apart. Between such knots the spline is nearly a straight line
+    /// whatever the track does there, and the uncertainty between knots (a leave-one-out
+    /// estimate, `track::uncertainty`) sees nothing it missed: a sag or waviness there is in
+    /// neither the deviation nor its `u`.
+    pub fn sampling_warnings(&self) -> Vec<String> {
+        let skids: Vec<f64> = self.file.knot.iter().map(|k| k.skid).collect();
+        let gap = skids.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
+        let n = skids.len();
+        let mut out = Vec::new();
+        if n < FEW_KNOTS {
+            out.push(format!(
+                "profile `{}`: {n} knots: the deviation between them is not measured (a sag or waviness there shows neither in D(s) nor in its uncertainty); measure at least every {WIDE_KNOT_GAP_MM} mm, or as densely as a scan's spectrum recommends",
+                self.file.name
+            ));
+        } else if gap > WIDE_KNOT_GAP_MM {
+            out.push(format!(
+                "profile `{}`: knots up to {gap:.0} mm apart: a waviness shorter than {:.0} mm between them shows neither in D(s) nor in its uncertainty; measure at least every {WIDE_KNOT_GAP_MM} mm, or as densely as a scan's spectrum recommends",
+                self.file.name,
+                2.0 * gap
+            ));
+        }
+        out
     }
 
     /// Where the file disagrees with itself: its `[stats]` are not those of its knots, or the

@@ -1088,3 +1088,55 @@ fn tracker_export_is_imported_with_a_map() {
     ]);
     assert!(!e.contains("daemon") && !e.contains("root:"), "{e}");
 }
+
+/// A profile sampled too sparsely to show the track between its knots says so wherever it is
+/// used (`track fit`, `track show`, the transforms): fewer than four knots, or knots more than
+/// 2000 mm apart. Before, two knots 8 m apart gave "straightness 0.0000 mm" and a `u` that
+/// claimed to cover the interpolation, 130 u from a 1.2 mm sag. Rows of `track show` beyond the
+/// measured skids are marked as extrapolated.
+#[test]
+fn sparse_knots_and_extrapolated_rows_are_said() {
+    let text = std::fs::read_to_string(root().join("samples/track/frames.csv")).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let fit = |name: &str, skids: &[&str], extra: &[&str]| {
+        let frames = tmp.path().join(format!("{name}.csv"));
+        let kept: Vec<&str> = text
+            .lines()
+            .enumerate()
+            .filter(|(i, l)| *i == 0 || skids.contains(&l.split(',').next().unwrap()))
+            .map(|(_, l)| l)
+            .collect();
+        std::fs::write(&frames, kept.join("\n") + "\n").unwrap();
+        let out = tmp.path().join(format!("{name}.toml"));
+        let (f, o) = (frames.display().to_string(), out.display().to_string());
+        let mut args = vec!["track", "fit", f.as_str(), "-o", o.as_str()];
+        args.extend(extra);
+        let (code, _, err) = trackfix(&args);
+        assert_eq!(code, 0, "{err}");
+        (o, err)
+    };
+    let (three, err) = fit("three", &["0", "4000", "8000"], &[]);
+    assert!(
+        err.contains("3 knots: the deviation between them is not measured"),
+        "{err}"
+    );
+    let (_, err) = fit("wide", &["0", "2500", "5000", "6000", "8000"], &[]);
+    assert!(err.contains("knots up to 2500 mm apart"), "{err}");
+    let every_1000: Vec<String> = (0..=8).map(|k| (k * 1000).to_string()).collect();
+    let every_1000: Vec<&str> = every_1000.iter().map(String::as_str).collect();
+    let (dense, err) = fit("dense", &every_1000, &["--extrapolate", "linear"]);
+    assert!(!err.contains("warning"), "{err}");
+    let (code, _, err) = trackfix(&["track", "show", &three, "--at", "2000"]);
+    assert_eq!(code, 0);
+    assert!(err.contains("3 knots"), "{err}");
+    let (code, out, _) = trackfix(&["track", "show", &dense, "--at", "4000", "--at", "9000"]);
+    assert_eq!(code, 0);
+    assert!(
+        out.contains("\n      4000 ") && out.contains("\n     9000* "),
+        "{out}"
+    );
+    assert!(
+        out.contains("*: outside the measured skids 0 .. 8000 mm: extrapolated (linear)"),
+        "{out}"
+    );
+}
