@@ -185,6 +185,10 @@ pub enum MeasuredIn {
 /// with three, it bends at most once over the whole track.
 pub const FEW_KNOTS: usize = 4;
 
+/// The shortest skid range a profile is taken to measure a track over without a word: a
+/// linear track travels metres, so a shorter one was most likely written in metres.
+pub const SHORT_TRACK_MM: f64 = 100.0;
+
 /// The widest knot spacing the uncertainty between knots was calibrated for (500-1333 mm,
 /// docs/design.md §14), rounded up: wider, [`Profile::sampling_warnings`] says what it misses.
 pub const WIDE_KNOT_GAP_MM: f64 = 2000.0;
@@ -592,7 +596,8 @@ impl Profile {
     }
 
     /// What the profile's sampling cannot show: fewer than [`FEW_KNOTS`] knots, or knots more
-    /// than [`WIDE_KNOT_GAP_MM`] apart. Between such knots the spline is nearly a straight line
+    /// than [`WIDE_KNOT_GAP_MM`] apart; and skids over less than [`SHORT_TRACK_MM`], most likely
+    /// written in metres. Between such knots the spline is nearly a straight line
     /// whatever the track does there, and the uncertainty between knots (a leave-one-out
     /// estimate, `track::uncertainty`) sees nothing it missed: a sag or waviness there is in
     /// neither the deviation nor its `u`.
@@ -601,6 +606,13 @@ impl Profile {
         let gap = skids.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
         let n = skids.len();
         let mut out = Vec::new();
+        let (s0, s1) = self.skid_range();
+        if n >= 2 && s1 - s0 < SHORT_TRACK_MM {
+            out.push(format!(
+                "profile `{}`: its skids span {s0} .. {s1} mm, shorter than {SHORT_TRACK_MM} mm: skids are read in mm (were they written in metres?)",
+                self.file.name
+            ));
+        }
         if n < FEW_KNOTS {
             out.push(format!(
                 "profile `{}`: {n} knots: the deviation between them is not measured (a sag or waviness there shows neither in D(s) nor in its uncertainty); measure at least every {WIDE_KNOT_GAP_MM} mm, or as densely as a scan's spectrum recommends",

@@ -1120,6 +1120,36 @@ fn sparse_knots_and_extrapolated_rows_are_said() {
         err.contains("3 knots: the deviation between them is not measured"),
         "{err}"
     );
+    // Skids and positions written in metres: the whole track 8 mm long.
+    let metres: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == 0 {
+                return format!("{l}\n");
+            }
+            let cells: Vec<String> = l
+                .split(',')
+                .enumerate()
+                .map(|(c, v)| match c {
+                    0..=3 => (v.parse::<f64>().unwrap() / 1000.0).to_string(),
+                    _ => v.to_owned(),
+                })
+                .collect();
+            cells.join(",") + "\n"
+        })
+        .collect();
+    let in_metres = tmp.path().join("metres.csv");
+    std::fs::write(&in_metres, metres).unwrap();
+    let out = tmp.path().join("metres.toml");
+    let (_, _, err) = trackfix(&[
+        "track",
+        "fit",
+        in_metres.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(err.contains("its skids span 0 .. 8 mm"), "{err}");
     let (_, err) = fit("wide", &["0", "2500", "5000", "6000", "8000"], &[]);
     assert!(err.contains("knots up to 2500 mm apart"), "{err}");
     let every_1000: Vec<String> = (0..=8).map(|k| (k * 1000).to_string()).collect();
