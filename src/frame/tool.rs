@@ -110,6 +110,11 @@ pub struct ToolFit {
     pub u_point: [f64; 3],
 }
 
+/// The most the TCP's standard uncertainty may be, per unit of the flange positions' noise, for
+/// [`fit_tool`] to give it: beyond, the orientations are refused as too alike (0.02 mm of noise
+/// would leave the TCP 10 mm uncertain).
+pub const MAX_NOISE_GAIN: f64 = 500.0;
+
 /// Least squares for `(t, P)` from flange poses; `sigma` is the noise of a flange position per
 /// axis, else estimated with `3n - 6` degrees of freedom.
 pub fn fit_tool(poses: &[Pose], sigma: Option<f64>) -> Result<ToolFit, FrameError> {
@@ -132,6 +137,13 @@ pub fn fit_tool(poses: &[Pose], sigma: Option<f64>) -> Result<ToolFit, FrameErro
     let ata = a.transpose() * &a;
     let inv =
         invert_spd(&ata).ok_or_else(|| FrameError::from(Underdetermined::OrientationsAlike))?;
+    // Orientations that differ, but too little: the TCP's standard uncertainty per unit of
+    // noise. Nine poses tilted by ±30° give about 1; a few tenths of a degree give tens of
+    // thousands, and a TCP hundreds of mm off with a u to match.
+    let gain = (0..3).map(|i| inv[(i, i)]).fold(0.0, f64::max).sqrt();
+    if gain > MAX_NOISE_GAIN {
+        return Err(Underdetermined::OrientationsAlike.into());
+    }
     let x = &inv * (a.transpose() * &b);
     let tcp = Vector3::new(x[0], x[1], x[2]);
     let point = Point3::new(x[3], x[4], x[5]);
@@ -181,6 +193,41 @@ mod tests {
             "{e:?}"
         );
         assert!(e.to_string().contains("two different axes"), "{e}");
+    }
+
+    /// Turned about one axis with the tool tilted by nearly the same angle each time (a cone of
+    /// 3°, wobbling by a hundredth of a degree), the orientations fix the TCP along the turning
+    /// axis in theory only: refused as too alike, where such poses gave z 178 mm below the
+    /// flange for a TCP 215 mm above it, with u 485 mm. Tilted by angles that differ by 20°
+    /// they fix it.
+    #[test]
+    fn orientations_on_a_narrow_cone_do_not_fix_the_tcp() {
+        let tcp = Vector3::new(12.5, -3.2, 215.0);
+        let point = Vector3::new(1400.0, 200.0, 600.0);
+        let poses = |wobble: f64| -> Vec<Pose> {
+            (0..8)
+                .map(|k| {
+                    let (rx, ry) = (
+                        3.0 + wobble * (k % 2) as f64,
+                        wobble * ((k % 3) as f64 - 1.0),
+                    );
+                    let r = pose_xyz_deg(0.0, 0.0, 0.0, rx, ry, 45.0 * k as f64).rotation;
+                    // Noise of a few hundredths of a mm, as a tracker gives.
+                    let noise = Vector3::new(0.02, -0.015, 0.01) * (k as f64 - 3.5) / 3.5;
+                    Pose::from_parts((point - r * tcp + noise).into(), r)
+                })
+                .collect()
+        };
+        let e = fit_tool(&poses(0.01), None).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                FrameError::Underdetermined(Underdetermined::OrientationsAlike)
+            ),
+            "{e:?}"
+        );
+        let fit = fit_tool(&poses(20.0), None).unwrap();
+        assert!((fit.tcp - tcp).norm() < 0.1, "{:?}", fit.tcp);
     }
 
     #[test]
