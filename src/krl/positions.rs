@@ -75,10 +75,12 @@ pub(crate) enum Event {
     },
     /// The end of a loop's body: program order goes back to its top.
     EndLoop,
+    /// `GOTO`: program order does not go on past it (it goes on at the label).
+    Goto,
     /// `EXIT`: program order leaves the innermost loop.
     Exit,
-    /// A label, with where the `GOTO`s of its routine that name it are (`jumps`: the index the
-    /// next event has at each). A jump may arrive with another base and tool than program order
+    /// A label, with where the `GOTO`s of its routine that name it are (`jumps`: the index of
+    /// each one's [`Event::Goto`]). A jump may arrive with another base and tool than program order
     /// brings, so from there on they are unknown until set again, unless every jump is one that
     /// cannot (a retry jumping back over nothing that changes them: `jumps_keep_state` in
     /// resolution); a label no jump names changes nothing.
@@ -1160,6 +1162,7 @@ impl<'a> Extractor<'a> {
                     String::from_utf8_lossy(target).to_ascii_uppercase(),
                     out.facts.events.len(),
                 ));
+                out.facts.events.push(Event::Goto);
             }
             StmtKind::Return => {
                 if let Some(f) = self.function {

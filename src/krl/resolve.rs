@@ -92,6 +92,9 @@ struct State<'e> {
     staged: Option<Staged>,
     /// What the names copied into may hold on this path.
     aliases: Aliases<'e>,
+    /// The path has left by a `GOTO`: a join does not take it (the jump goes on at its label,
+    /// which makes what it arrives with unknown).
+    dead: bool,
 }
 
 impl<'e> State<'e> {
@@ -104,6 +107,7 @@ impl<'e> State<'e> {
             tcp: self.tcp,
             staged: self.staged.clone(),
             aliases: Aliases::default(),
+            dead: false,
         }
     }
 }
@@ -275,6 +279,15 @@ impl<'e> Fork<'e> {
 /// What every state of `states` agrees on: a base or tool that differs between them is
 /// unknown, and #TCP in any counts. `None` for no state.
 fn join<'e>(states: &[State<'e>]) -> Option<State<'e>> {
+    if states.iter().any(|s| s.dead) {
+        // Out of line in effect: only a block a `GOTO` leaves gets here.
+        let live: Vec<State<'e>> = states.iter().filter(|s| !s.dead).cloned().collect();
+        return if live.is_empty() {
+            states.first().cloned()
+        } else {
+            join(&live)
+        };
+    }
     let first = states.first()?;
     let agree = |f: for<'s> fn(&'s State<'e>) -> &'s Option<FrameRef>| {
         if states.iter().all(|o| f(o) == f(first)) {
@@ -289,6 +302,7 @@ fn join<'e>(states: &[State<'e>]) -> Option<State<'e>> {
         tcp: states.iter().any(|o| o.tcp),
         staged: join_staged(states),
         aliases: Aliases::join(states.iter().map(|s| &s.aliases)),
+        dead: false,
     })
 }
 
@@ -420,7 +434,7 @@ struct Flow<'e> {
     loops: Vec<Loop<'e>>,
 }
 
-impl Flow<'_> {
+impl<'e> Flow<'e> {
     fn reset(&mut self) {
         self.state = State::default();
         self.forks.clear();
@@ -434,7 +448,7 @@ impl Flow<'_> {
         &mut self,
         i: usize,
         ev: &Event,
-        events: &[Event],
+        events: &'e [Event],
         changes: &dyn Fn(&str) -> bool,
     ) -> usize {
         match ev {
@@ -451,12 +465,20 @@ impl Flow<'_> {
             Event::Exit => {
                 if let Some(l) = self.loops.last_mut() {
                     l.exits.push(self.state.clone());
+                    // The rest of the body is not followed on this path.
+                    self.state.dead = true;
                 }
             }
             Event::EndLoop => return self.end_of_body(i),
-            Event::Label { jumps }
-                if !jumps.is_empty() && !jumps_keep_state(events, i, jumps, changes) =>
-            {
+            Event::Goto => self.state.dead = true,
+            Event::Label { jumps } if !jumps.is_empty() => {
+                // A jump arrives with what the names copied into held where it was made: any
+                // copy of the routine, joined (rare: a label a `GOTO` names).
+                self.state.aliases.absorb(&routine_copies(events, i));
+                if jumps_keep_state(events, i, jumps, changes) {
+                    return i + 1;
+                }
+                self.state.dead = false;
                 self.state.base = Some(FrameRef::Unknown);
                 self.state.tool = Some(FrameRef::Unknown);
                 // And what `FDAT_ACT` holds: a jump may skip or repeat an `FDAT_ACT = …`.
@@ -483,10 +505,11 @@ impl Flow<'_> {
             }
         }
         let end = self.state.clone();
-        if !l.ends.contains(&end) {
+        // A body every path of which leaves by a `GOTO` comes round with nothing.
+        if !end.dead && !l.ends.contains(&end) {
             l.ends.push(end.clone());
         }
-        if !l.tops.contains(&end) && l.tops.len() <= LOOP_STATES {
+        if !end.dead && !l.tops.contains(&end) && l.tops.len() <= LOOP_STATES {
             let next = if l.tops.len() < LOOP_STATES {
                 end
             } else {
@@ -516,6 +539,29 @@ impl Flow<'_> {
     }
 }
 
+/// Every copy of the routine event `at` is in, joined (what a name may hold wherever a jump to
+/// a label there is made).
+fn routine_copies(events: &[Event], at: usize) -> Aliases<'_> {
+    let is_reset = |e: &&Event| matches!(e, Event::Reset(_));
+    let before = events.get(..at).unwrap_or_default();
+    let start = before.len() - before.iter().rev().take_while(|e| !is_reset(e)).count();
+    let mut out = Aliases::default();
+    for ev in events
+        .get(start..)
+        .unwrap_or_default()
+        .iter()
+        .take_while(|e| {
+            // The routine's own events: up to the next `DEF`.
+            !is_reset(e)
+        })
+    {
+        if let Event::Alias { name, source, .. } = ev {
+            out.copy(name, source, true);
+        }
+    }
+    out
+}
+
 /// Whether the label at event `at` is reached by its `GOTO`s (`jumps`: the index the next event
 /// has at each) only with the state program order brings there: each jumps back, and the events
 /// between the label and it change no base, tool or staged FDAT (no setting, no call of a
@@ -539,7 +585,7 @@ fn jumps_keep_state(
             Event::Set(_) | Event::Reset(_) => false,
             Event::Call(name) => !changes(name),
             Event::Label { jumps } => jumps.is_empty(),
-            Event::Alias { .. } | Event::Motion { .. } => true,
+            Event::Alias { .. } | Event::Motion { .. } | Event::Goto => true,
             Event::Branch(BranchEvent::If | BranchEvent::Switch) => {
                 blocks += 1;
                 true
@@ -724,7 +770,8 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                     | Event::Loop { .. }
                     | Event::EndLoop
                     | Event::Exit
-                    | Event::Label { .. } => {
+                    | Event::Label { .. }
+                    | Event::Goto => {
                         let changes =
                             |name: &str| exits.of(module, name).is_some_and(Exit::changes);
                         i = flow.control(i, ev, &f.events, &changes);
@@ -1102,7 +1149,8 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                     | Event::Loop { .. }
                     | Event::EndLoop
                     | Event::Exit
-                    | Event::Label { .. } => {
+                    | Event::Label { .. }
+                    | Event::Goto => {
                         let changes =
                             |name: &str| exits.of(module, name).is_some_and(Exit::changes);
                         i = flow.control(i - 1, ev, &events, &changes);

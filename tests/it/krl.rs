@@ -2027,3 +2027,42 @@ fn a_value_handed_back_through_a_local_copy_is_refused() {
         ))
     );
 }
+
+/// A `GOTO` leaves its path: at `ENDIF` the join takes only the paths that reach it (a branch
+/// that sets another base and jumps away no longer makes the base after the block unknown, and
+/// refuses nothing), and an `EXIT` leaves the rest of the loop's body. A label a jump reaches
+/// gets what any copy of its routine may have put into a name: a retry jumping back over a
+/// copy (`TOP: LIN XC … XC=XP1 … GOTO TOP`) moves to `XP1` in the base at the label; before,
+/// the motion to `XC` reached only what program order brought, and `XP1` was corrected in its
+/// own motion's base.
+#[test]
+fn a_goto_ends_its_path_and_a_jumped_label_gets_the_routines_copies() {
+    let bases = |body: &str| {
+        let src = format!(
+            "DEF cell( )\n  DECL E6POS XC\n  DECL INT N\n  $BASE=BASE_DATA[1]\n{body}END\n"
+        );
+        bases_of_xp1(&src, DAT_XP1)
+    };
+    let one = (Some("BASE_DATA[1]".to_owned()), Vec::new());
+    assert_eq!(
+        bases(
+            "  IF $IN[1] THEN\n    $BASE=BASE_DATA[2]\n    GOTO SKIP\n  ENDIF\n  LIN XP1\n  SKIP:\n"
+        ),
+        one
+    );
+    assert_eq!(
+        bases(
+            "  LOOP\n    IF $IN[1] THEN\n      $BASE=BASE_DATA[2]\n      EXIT\n    ENDIF\n    LIN XP1\n  ENDLOOP\n"
+        ),
+        one
+    );
+    assert_eq!(
+        bases(
+            "  XC=XP2\n  LIN XP1\n  $BASE=BASE_DATA[2]\n  TOP:\n  LIN XC\n  XC=XP1\n  IF $IN[1] THEN\n    GOTO TOP\n  ENDIF\n"
+        ),
+        (
+            Some("BASE_DATA[1]".to_owned()),
+            vec!["BASE_DATA[2]".to_owned()]
+        )
+    );
+}
