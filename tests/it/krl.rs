@@ -2066,3 +2066,49 @@ fn a_goto_ends_its_path_and_a_jumped_label_gets_the_routines_copies() {
         )
     );
 }
+
+/// KRL modules named together from one folder are one program, as a KSS tree's `Program`
+/// folder is: another module's motion to a `GLOBAL` point is one to that point, and a point used
+/// with two bases that way is refused. Before, each pair was a program of its own and the point
+/// was corrected in its own module's base while the other module moved to it in another. Files
+/// from two folders stay programs of their own.
+#[test]
+fn krl_modules_named_together_from_one_folder_are_one_program() {
+    use trackfix::program::{LoadOptions, collect_programs, load_group};
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let main = write(
+        "main.src",
+        "DEF main( )\n  $BASE=BASE_DATA[1]\n  LIN XG\n  mod2()\nEND\n",
+    );
+    write(
+        "main.dat",
+        "DEFDAT main PUBLIC\nDECL GLOBAL E6POS XG={X 100.0,Y 200.0,Z 300.0,A 0.0,B 0.0,C 0.0,S 2,T 2,E1 500.0}\nENDDAT\n",
+    );
+    let mod2 = write(
+        "mod2.src",
+        "DEF mod2( )\n  $BASE=BASE_DATA[2]\n  LIN XG\nEND\n",
+    );
+    write("mod2.dat", "DEFDAT mod2\nENDDAT\n");
+    let other = write("other/mod2.src", "DEF mod2( )\nEND\n");
+    let groups = collect_programs(&[main.clone(), mod2.clone(), other]).unwrap();
+    assert_eq!(groups.len(), 2, "{groups:?}");
+    let program = load_group(&groups[0], &LoadOptions::default())
+        .into_iter()
+        .next()
+        .unwrap()
+        .unwrap();
+    let xg = program
+        .files
+        .iter()
+        .flat_map(|f| (0..f.positions.len()).filter_map(|i| f.position(i)))
+        .find(|p| p.name.as_deref() == Some("XG"))
+        .unwrap();
+    assert_eq!(xg.usage.wobj.as_deref(), Some("BASE_DATA[1]"));
+    assert_eq!(xg.usage.other_wobjs(), ["BASE_DATA[2]"]);
+}
