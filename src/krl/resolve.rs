@@ -432,6 +432,9 @@ struct Flow<'e> {
     state: State<'e>,
     forks: Vec<Fork<'e>>,
     loops: Vec<Loop<'e>>,
+    /// Every copy of the routine, joined, once a label a jump reaches has asked
+    /// ([`routine_copies`]): found once a routine, not once a label.
+    copies: Option<Aliases<'e>>,
 }
 
 impl<'e> Flow<'e> {
@@ -439,6 +442,7 @@ impl<'e> Flow<'e> {
         self.state = State::default();
         self.forks.clear();
         self.loops.clear();
+        self.copies = None;
     }
 
     /// Follows control event `ev`, the `i`th of `events`; returns the index of the event that
@@ -474,7 +478,8 @@ impl<'e> Flow<'e> {
             Event::Label { jumps } if !jumps.is_empty() => {
                 // A jump arrives with what the names copied into held where it was made: any
                 // copy of the routine, joined (rare: a label a `GOTO` names).
-                self.state.aliases.absorb(&routine_copies(events, i));
+                let copies = self.copies.get_or_insert_with(|| routine_copies(events, i));
+                self.state.aliases.absorb(copies);
                 if jumps_keep_state(events, i, jumps, changes) {
                     return i + 1;
                 }
