@@ -166,7 +166,7 @@ pub fn group_inputs(inputs: Vec<PathBuf>) -> Vec<Vec<PathBuf>> {
 /// [`collect_inputs`] then [`group_inputs`], except that files named explicitly together, outside
 /// any program root, form one program where their dialect joins files given together
 /// ([`Dialect::joins_files_given_together`](crate::dialect::Dialect): RAPID modules named
-/// together are one task).
+/// together are one task; KRL modules named together are one program per folder).
 pub fn collect_programs(paths: &[PathBuf]) -> Result<Vec<Vec<PathBuf>>, LoadError> {
     let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
     let given: BTreeSet<PathBuf> = paths
@@ -180,13 +180,22 @@ pub fn collect_programs(paths: &[PathBuf]) -> Result<Vec<Vec<PathBuf>>, LoadErro
 fn group(inputs: Vec<PathBuf>, given: &BTreeSet<PathBuf>) -> Vec<Vec<PathBuf>> {
     let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
     let mut groups: Vec<Vec<PathBuf>> = Vec::new();
-    let mut root_of_group: Vec<Option<(&'static str, Option<PathBuf>)>> = Vec::new();
+    // (dialect, program root, folder of files given together): `None` as the root for the
+    // files given together, with their folder where the dialect joins them per folder.
+    type Root = (&'static str, Option<PathBuf>, Option<PathBuf>);
+    let mut root_of_group: Vec<Option<Root>> = Vec::new();
     for path in inputs {
         let root = crate::dialect::dialect_of(&path).and_then(|d| match d.program_root(&path) {
-            Some(r) => Some((d.name(), Some(r))),
-            // `None` as the root: the files given together.
-            None => (d.joins_files_given_together() && given.contains(&same_file(&path)))
-                .then_some((d.name(), None)),
+            Some(r) => Some((d.name(), Some(r), None)),
+            None => {
+                (d.joins_files_given_together() && given.contains(&same_file(&path))).then(|| {
+                    let folder = d
+                        .joins_given_files_per_folder()
+                        .then(|| same_file(&path).parent().map(Path::to_owned))
+                        .flatten();
+                    (d.name(), None, folder)
+                })
+            }
         });
         match root
             .as_ref()

@@ -110,6 +110,17 @@ impl Dialect for Krl {
         });
     }
 
+    /// Modules named together from one folder are one program, as a KSS tree's `Program`
+    /// folder is: a `GLOBAL` point or routine of one is the other's, where each pair resolved
+    /// alone moved to another module's `GLOBAL` point in a base its own module never saw.
+    fn joins_files_given_together(&self) -> bool {
+        true
+    }
+
+    fn joins_given_files_per_folder(&self) -> bool {
+        true
+    }
+
     /// A KSS robot tree (`KRC/R1`): the nearest of the four folders above the file that holds a
     /// `Program` folder or `System/$config.dat`. Of `System/`, only `$config.dat` joins the
     /// program; the other system files (`$machine.dat`, …) stay files of their own.

@@ -83,6 +83,13 @@ pub trait Dialect: Sync + 'static {
         false
     }
 
+    /// Of the files named together, only those in one folder are one program (KRL: the modules
+    /// of a KSS `Program` folder see each other's `GLOBAL` data and routines; files from two
+    /// folders may be two robots'). Read only where [`Dialect::joins_files_given_together`].
+    fn joins_given_files_per_folder(&self) -> bool {
+        false
+    }
+
     /// One program of several files of this language, resolved together, from their bytes as
     /// [`load_group`](crate::program::load_group) read them (each file is read once: a task of
     /// many modules was read twice, once to find the unreadable ones and once to parse). The

@@ -75,10 +75,12 @@ pub(crate) enum Event {
     },
     /// The end of a loop's body: program order goes back to its top.
     EndLoop,
+    /// `GOTO`: program order does not go on past it (it goes on at the label).
+    Goto,
     /// `EXIT`: program order leaves the innermost loop.
     Exit,
-    /// A label, with where the `GOTO`s of its routine that name it are (`jumps`: the index the
-    /// next event has at each). A jump may arrive with another base and tool than program order
+    /// A label, with where the `GOTO`s of its routine that name it are (`jumps`: the index of
+    /// each one's [`Event::Goto`]). A jump may arrive with another base and tool than program order
     /// brings, so from there on they are unknown until set again, unless every jump is one that
     /// cannot (a retry jumping back over nothing that changes them: `jumps_keep_state` in
     /// resolution); a label no jump names changes nothing.
@@ -185,6 +187,23 @@ pub(crate) struct Facts {
     /// caller's motion to what it gets moves to that value in a base trackfix does not tie to
     /// the name.
     pub handed_back: Vec<HandedBack>,
+    /// Copies a routine makes into a name it does not declare itself (`XC = XP1` with `XC` in
+    /// the data list), which other routines and later runs of it see, and the copies of a
+    /// trigger's or interrupt's `DO XC = XP1`, which run at any time.
+    pub shared_copies: Vec<SharedCopy>,
+}
+
+/// A copy into a name other routines see ([`Facts::shared_copies`]).
+#[derive(Clone, Debug)]
+pub(crate) struct SharedCopy {
+    /// The routine it is made in, upper case; `None` for a trigger's or interrupt's `DO`.
+    pub routine: Option<String>,
+    /// The name copied into, upper case, as written (`XC`, `XC[I]`).
+    pub name: Name,
+    /// What it copies (`XP1`).
+    pub source: Name,
+    /// 1-based line.
+    pub line: usize,
 }
 
 /// A value a routine hands back to its callers ([`Facts::handed_back`]).
@@ -198,6 +217,10 @@ pub(crate) struct HandedBack {
     pub routine: Span,
     /// The parameter written, or `None` for a function's `RETURN`.
     pub param: Option<Span>,
+    /// Not handed back by a routine but copied into a name other modules see (`XC = XP1` with
+    /// `XC` declared `GLOBAL`, or not declared by the module): that name (`routine` is then
+    /// where the copy is made).
+    pub into: Option<Name>,
 }
 
 /// A `DEF`/`DEFFCT` that takes parameters (`DEF Remember(pOut:OUT, nTry:IN)`).
@@ -915,6 +938,10 @@ pub(crate) struct Extractor<'a> {
     current: Option<usize>,
     /// The function (`DEFFCT`) being read: its name.
     function: Option<Span>,
+    /// The routine being read (upper case) and the names it declares itself: a copy into any
+    /// other name is one other routines see ([`Facts::shared_copies`]).
+    routine_name: Option<String>,
+    locals: Vec<Name>,
     out: Extracted,
     /// Notes about what is deliberately not a target (relative motions, computed targets).
     pub diagnostics: Vec<Diagnostic>,
@@ -935,6 +962,8 @@ impl<'a> Extractor<'a> {
             routines: Vec::new(),
             current: None,
             function: None,
+            routine_name: None,
+            locals: Vec::new(),
             out: Extracted {
                 positions: PositionList::new(),
                 frames: Vec::new(),
@@ -1007,6 +1036,8 @@ impl<'a> Extractor<'a> {
                     }
                     self.function =
                         span.filter(|_| function_routine(src, *keyword, name.as_ref(), out));
+                    self.routine_name.clone_from(&name);
+                    self.locals.clear();
                     out.facts.events.push(Event::Reset(name));
                     self.loops.clear();
                 }
@@ -1021,6 +1052,10 @@ impl<'a> Extractor<'a> {
                     .find(|t| is_word(src, *type_name, t.as_bytes()))
                     .and_then(positional_type);
                 let is_fdat = is_word(src, *type_name, b"FDAT");
+                if self.in_routine {
+                    self.locals
+                        .extend(vars.iter().map(|v| upper_name(src, v.name)));
+                }
                 for v in vars {
                     if let Some(kind) = positional {
                         self.declared.insert(upper_name(src, v.name), kind);
@@ -1063,8 +1098,14 @@ impl<'a> Extractor<'a> {
                     .current
                     .and_then(|r| Some((r, self.routines.get(r)?.params.as_slice())));
                 let at = (self.in_routine, routine);
+                let before = out.facts.events.len();
                 let problem = assignment(src, lines, &self.declared, at, target, value, out);
                 self.diagnostics.extend(problem);
+                if self.in_routine && out.facts.events.len() > before {
+                    let line = lines.line(stmt.span.start);
+                    let routine = (self.routine_name.as_deref(), &self.locals[..]);
+                    shared_copies(routine, before, line, out);
+                }
                 if let Some(r) = self.current.and_then(|r| self.routines.get_mut(r)) {
                     copied_parameters(src, r, value);
                 }
@@ -1121,6 +1162,7 @@ impl<'a> Extractor<'a> {
                     String::from_utf8_lossy(target).to_ascii_uppercase(),
                     out.facts.events.len(),
                 ));
+                out.facts.events.push(Event::Goto);
             }
             StmtKind::Return => {
                 if let Some(f) = self.function {
@@ -1131,6 +1173,7 @@ impl<'a> Extractor<'a> {
                 if let Some(name) = handler_routine(stmt.span.slice(src)) {
                     out.facts.unfollowed.push(name);
                 }
+                handler_copy(src, lines, stmt.span, out);
             }
             StmtKind::Motion {
                 keyword,
@@ -1233,6 +1276,150 @@ fn function_arguments(src: &[u8], e: &Expr, out: &mut Vec<Name>) {
     }
 }
 
+/// The names of data a value reads, upper case, into `out`: a plain name or element (`XP1`,
+/// `XA[I]`), the whole of a component read (`XP1` of `XP1.X + 10`), and the same in the
+/// operands and a call's arguments; not a system variable (`$POS_ACT`) nor an index.
+fn value_names(src: &[u8], e: &Expr, out: &mut Vec<Name>) {
+    match &e.kind {
+        ExprKind::Name | ExprKind::Index(..) if src.get(e.span.start) != Some(&b'$') => {
+            out.push(upper_name(src, e.span));
+        }
+        ExprKind::Member(inner, _) | ExprKind::Unary(_, inner) | ExprKind::Paren(inner) => {
+            value_names(src, inner, out);
+        }
+        ExprKind::Binary(l, _, r) => {
+            value_names(src, l, out);
+            value_names(src, r, out);
+        }
+        ExprKind::Call(_, args) => {
+            for a in args.iter().flatten() {
+                value_names(src, a, out);
+            }
+        }
+        _ => {}
+    }
+}
+
+/// Records the copies among `out`'s events from `from` on (an assignment's, in `routine`: its
+/// name and the names it declares) into a name the routine does not declare itself: other
+/// routines, and the routine's next run, see what it may hold ([`Facts::shared_copies`]). Out
+/// of line, as [`param_routine`]: only an assignment that copies gets here.
+#[inline(never)]
+fn shared_copies(
+    (routine, locals): (Option<&str>, &[Name]),
+    from: usize,
+    line: usize,
+    out: &mut Extracted,
+) {
+    let Some(new) = out.facts.events.get(from..) else {
+        return;
+    };
+    for ev in new {
+        let Event::Alias { name, source, .. } = ev else {
+            continue;
+        };
+        let whole = name.split(['[', '.']).next().unwrap_or_default();
+        if name == source || locals.iter().any(|l| l.as_str() == whole) {
+            continue;
+        }
+        out.facts.shared_copies.push(SharedCopy {
+            routine: routine.map(str::to_owned),
+            name: name.clone(),
+            source: source.clone(),
+            line,
+        });
+    }
+}
+
+/// Records the copy a trigger's or interrupt's `DO` makes (`TRIGGER WHEN DISTANCE=1 DELAY=0
+/// DO XC=XP1`): it runs at a time program order does not tell, so each name its value reads
+/// may be what the name holds at any motion ([`Facts::shared_copies`], no routine). Read from
+/// the statement's text, which the parser keeps whole. Out of line, as [`param_routine`].
+#[inline(never)]
+fn handler_copy(src: &[u8], lines: &LineIndex, stmt: Span, out: &mut Extracted) {
+    let text = stmt.slice(src);
+    let is_word = |b: u8| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'$' | b'#') || b >= 0x80;
+    // The words before `DO`, then what follows it.
+    let mut k = 0;
+    let mut after = None;
+    while k < text.len() {
+        if !text.get(k).copied().is_some_and(is_word) {
+            k += 1;
+            continue;
+        }
+        let start = k;
+        while text.get(k).copied().is_some_and(is_word) {
+            k += 1;
+        }
+        if text
+            .get(start..k)
+            .is_some_and(|w| w.eq_ignore_ascii_case(b"DO"))
+        {
+            after = Some(k);
+            break;
+        }
+    }
+    let Some(after) = after else { return };
+    let rest = text.get(after..).unwrap_or_default();
+    let rest = rest.split(|&b| b == b';').next().unwrap_or(rest);
+    let Some(eq) = rest.iter().position(|&b| b == b'=') else {
+        return;
+    };
+    let (target, value) = (
+        rest.get(..eq).unwrap_or_default(),
+        rest.get(eq + 1..).unwrap_or_default(),
+    );
+    let target = target.trim_ascii();
+    // `DO $OUT[1]=TRUE`, `DO X==Y` (no assignment), `DO SETB()`: no copy.
+    if target.is_empty()
+        || target.first() == Some(&b'$')
+        || value.first() == Some(&b'=')
+        || target.contains(&b'(')
+    {
+        return;
+    }
+    let name: String = target
+        .iter()
+        .filter(|b| !b.is_ascii_whitespace())
+        .map(|b| char::from(b.to_ascii_uppercase()))
+        .collect();
+    let name = name.split('.').next().unwrap_or_default().to_owned();
+    let line = lines.line(stmt.start);
+    let mut at = 0;
+    while at < value.len() {
+        let Some(start) = (at..value.len()).find(|&i| value.get(i).copied().is_some_and(is_word))
+        else {
+            break;
+        };
+        let mut end = start;
+        while value.get(end).copied().is_some_and(is_word) {
+            end += 1;
+        }
+        at = end;
+        let Some(word) = value.get(start..end) else {
+            break;
+        };
+        if word
+            .first()
+            .is_some_and(|b| b.is_ascii_digit() || matches!(b, b'$' | b'#'))
+        {
+            continue;
+        }
+        let source: String = word
+            .iter()
+            .map(|b| char::from(b.to_ascii_uppercase()))
+            .collect();
+        if source != name {
+            out.facts.shared_copies.push(SharedCopy {
+                routine: None,
+                name: Name::from(name.as_str()),
+                source: Name::from(source),
+                line,
+            });
+        }
+    }
+}
+
 /// Records the names whose value an assignment in routine `r` writes into one of its
 /// parameters not written `:IN` (`P = XP1`, `P = GETPT(XP1)`): the caller's variable then
 /// holds it ([`Facts::handed_back`]). A parameter given another parameter's value hands back
@@ -1247,12 +1434,18 @@ fn handed_back(
     out: &mut Extracted,
 ) {
     use crate::names::NameKey;
+    let component = matches!(target.kind, ExprKind::Member(..));
     let whole = match &target.kind {
-        ExprKind::Name => target,
-        ExprKind::Index(base, _) => base,
+        ExprKind::Name => target.span,
+        ExprKind::Index(base, _) => base.span,
+        // `P.X = XP1.X`: the caller's variable then holds part of `XP1`.
+        ExprKind::Member(..) => match whole_span(target) {
+            Some(span) => span,
+            None => return,
+        },
         _ => return,
     };
-    let key = NameKey(whole.span.slice(src).trim_ascii());
+    let key = NameKey(whole.slice(src).trim_ascii());
     let is_param = |name: &[u8]| {
         let name = name.split(|&b| b == b'[').next().unwrap_or(name);
         r.params
@@ -1264,7 +1457,9 @@ fn handed_back(
     };
     let mut sources = Vec::new();
     let v = unparenthesized(value);
-    if matches!(v.kind, ExprKind::Name | ExprKind::Index(..)) {
+    if component {
+        value_names(src, v, &mut sources);
+    } else if matches!(v.kind, ExprKind::Name | ExprKind::Index(..)) {
         sources.push(upper_name(src, v.span));
     } else {
         function_arguments(src, v, &mut sources);
@@ -1277,6 +1472,7 @@ fn handed_back(
                 line,
                 routine: r.name,
                 param: Some(param.name),
+                into: None,
             });
         }
     }
@@ -1314,6 +1510,7 @@ fn returned(src: &[u8], lines: &LineIndex, function: Span, stmt: Span, out: &mut
         line: lines.line(stmt.start),
         routine: function,
         param: None,
+        into: None,
     });
 }
 
@@ -1604,6 +1801,9 @@ fn written_in_routine(src: &[u8], target: &Expr, value: &Expr, out: &mut Extract
         written_name(src, target, &mut out.facts.written_in_routines);
     }
     let copy = matches!(value.kind, ExprKind::Name | ExprKind::Index(..));
+    if matches!(target.kind, ExprKind::Member(..)) {
+        component_copy(src, target, value, out);
+    }
     if !copy
         && matches!(target.kind, ExprKind::Name)
         && let Some(name) = whole_name(src, target)
@@ -1629,6 +1829,51 @@ fn written_in_routine(src: &[u8], target: &Expr, value: &Expr, out: &mut Extract
             });
         }
     }
+}
+
+/// A component given a value that reads other data (`XC.X = XP1.X`, `XC.X = XP1.X + 10`,
+/// `S1.P = XP1`): the whole name may then hold part of each, besides what it held (joined
+/// aliases). Out of line, as [`param_routine`].
+#[inline(never)]
+fn component_copy(src: &[u8], target: &Expr, value: &Expr, out: &mut Extracted) {
+    let Some(name) = whole_name(src, target) else {
+        return;
+    };
+    let mut sources = Vec::new();
+    value_names(src, value, &mut sources);
+    // `FP1.TQ_STATE = TRUE`: a constant is no data.
+    sources.retain(|s| !matches!(s.as_str(), "TRUE" | "FALSE"));
+    for source in sources {
+        if source != name && !out.facts.events.last().is_some_and(
+            |e| matches!(e, Event::Alias { name: n, source: s, .. } if *n == name && *s == source),
+        ) {
+            out.facts.events.push(Event::Alias {
+                name: name.clone(),
+                source,
+                joined: true,
+            });
+        }
+    }
+}
+
+/// Whether a name is KSS's active motion data (`LDAT_ACT`, `PDAT_ACT`): no point is copied
+/// there.
+fn active_data(name: &str) -> bool {
+    name.len() > 4
+        && name
+            .get(name.len() - 4..)
+            .is_some_and(|t| t.eq_ignore_ascii_case("_ACT"))
+}
+
+/// Whether a name as written (`XC[I]`) is an element whose index is not a number: chosen when
+/// the program runs.
+pub(crate) fn computed_index(name: &str) -> bool {
+    name.split_once('[').is_some_and(|(_, index)| {
+        !index
+            .trim_end_matches(']')
+            .split(',')
+            .all(|i| !i.is_empty() && i.bytes().all(|b| b.is_ascii_digit()))
+    })
 }
 
 /// Whether an assignment to `target` may change which base, tool or IPO mode an FDAT applies:
@@ -1708,11 +1953,17 @@ fn assignment(
             && matches!(value.kind, ExprKind::Name | ExprKind::Index(..))
         {
             let name = upper_name(src, target.span);
-            if !name.starts_with('$') {
+            let source = upper_name(src, value.span);
+            // `XC = XC` gives it nothing new: what it held, it holds. KSS's active motion data
+            // (`LDAT_ACT = LCPDAT1` before each taught motion) hold no point: no copy to follow
+            // (one per motion would make every loop's body a state of its own).
+            if !name.starts_with('$') && name != source && !active_data(&name) {
                 out.facts.events.push(Event::Alias {
+                    // An element chosen when the program runs (`XC[I] = XP1`) may be any of
+                    // them: what each held, it may still hold.
+                    joined: computed_index(&name),
                     name,
-                    source: upper_name(src, value.span),
-                    joined: false,
+                    source,
                 });
             }
         }
@@ -1889,6 +2140,14 @@ fn target_refs(
             true
         }
         ExprKind::Paren(inner) => target_refs(src, lines, inner, refs, positions, notes),
+        // A member of a structure (`LIN S1.P`): not a target of its own, but it may hold a
+        // copy (`S1.P = XP1`), which the whole name's aliases carry; still warned about.
+        ExprKind::Member(..) => {
+            if let Some(name) = whole_name(src, e) {
+                refs.push(Ref::Named(name));
+            }
+            false
+        }
         _ => false,
     }
 }

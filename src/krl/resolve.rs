@@ -4,14 +4,16 @@
 //! ([`crate::resolve`]), which fills each position's [`Usage`](crate::position::Usage).
 
 use super::positions::{
-    BranchEvent, Event, Facts, Fdat, FrameRef, LoopKind, Ref, Setting, guessed_field_problem,
-    name_key,
+    BranchEvent, Event, Facts, Fdat, FrameRef, HandedBack, LoopKind, Ref, Setting, SharedCopy,
+    computed_index, guessed_field_problem, name_key,
 };
 use crate::position::{
     Config, FrameDecl, FrameName, Name, ParsedFile, PositionKind, RunTimeValue, UnresolvedCause,
     UnresolvedFrame, UseLine,
 };
 use crate::syntax::Diagnostic;
+use std::collections::BTreeMap;
+use std::rc::Rc;
 use std::sync::Arc;
 
 pub(crate) use crate::names::NameMap as HashMap;
@@ -80,7 +82,7 @@ impl FrameLabels {
 }
 
 #[derive(Clone, Default, PartialEq)]
-struct State {
+struct State<'e> {
     base: Option<FrameRef>,
     tool: Option<FrameRef>,
     tcp: bool,
@@ -88,6 +90,148 @@ struct State {
     /// ([`Setting::ApplyFdat`]). `None`: nothing staged on this path since the routine's entry,
     /// so it holds what it held then.
     staged: Option<Staged>,
+    /// What the names copied into may hold on this path.
+    aliases: Aliases<'e>,
+    /// The path has left by a `GOTO`: a join does not take it (the jump goes on at its label,
+    /// which makes what it arrives with unknown).
+    dead: bool,
+}
+
+impl<'e> State<'e> {
+    /// The base, tool, IPO mode and staged FDAT, without the aliases: what a motion's own
+    /// `WITH` is applied to (a copy of the aliases per motion would cost on every motion).
+    fn frames(&self) -> State<'e> {
+        State {
+            base: self.base.clone(),
+            tool: self.tool.clone(),
+            tcp: self.tcp,
+            staged: self.staged.clone(),
+            aliases: Aliases::default(),
+            dead: false,
+        }
+    }
+}
+
+/// What each name a copy was made into may hold on a path (`XC = XP1`: `XC` → `XP1`): the
+/// names it may be a copy of, sorted, itself among them when it may still hold what it held
+/// before (`IF … THEN XC = XP1 ENDIF`). A name not in it holds its own value. Shared between
+/// the states of a fork or loop until one of them copies (`Rc::make_mut`): following an `IF`
+/// costs no copy of the table.
+#[derive(Clone, Default, PartialEq)]
+struct Aliases<'e>(Option<Rc<BTreeMap<&'e str, Vec<&'e str>>>>);
+
+impl<'e> Aliases<'e> {
+    fn is_empty(&self) -> bool {
+        self.0.as_ref().is_none_or(|m| m.is_empty())
+    }
+
+    fn get(&self, name: &str) -> Option<&[&'e str]> {
+        self.0.as_ref()?.get(name).map(Vec::as_slice)
+    }
+
+    fn map_mut(&mut self) -> &mut BTreeMap<&'e str, Vec<&'e str>> {
+        Rc::make_mut(self.0.get_or_insert_with(Default::default))
+    }
+
+    /// `name = source`: it now holds `source` (or, `joined`, may hold it besides what it held).
+    /// A name given itself (`name == source`, not joined) holds its own value again.
+    fn copy(&mut self, name: &'e str, source: &'e str, joined: bool) {
+        if name == source {
+            if !joined && self.get(name).is_some() {
+                self.map_mut().remove(name);
+            }
+            return;
+        }
+        let m = self.map_mut();
+        match m.get_mut(name) {
+            Some(held) if joined => add_sorted(held, source),
+            _ if joined => {
+                let mut held = vec![name];
+                add_sorted(&mut held, source);
+                m.insert(name, held);
+            }
+            Some(held) => {
+                held.clear();
+                held.push(source);
+            }
+            None => {
+                m.insert(name, vec![source]);
+            }
+        }
+    }
+
+    /// What every name may hold on any of `paths`: the union, per name, of what each path
+    /// gives it (its own value, where a path made no copy into it).
+    fn join<'s>(paths: impl Iterator<Item = &'s Aliases<'e>> + Clone) -> Aliases<'e>
+    where
+        'e: 's,
+    {
+        let mut all = paths.clone().filter(|a| !a.is_empty());
+        let Some(first) = all.next() else {
+            return Aliases::default();
+        };
+        if paths.clone().all(|a| a == first) {
+            return first.clone();
+        }
+        let mut out: BTreeMap<&'e str, Vec<&'e str>> = BTreeMap::new();
+        for a in paths.clone() {
+            for &name in a.0.iter().flat_map(|m| m.keys()) {
+                if out.contains_key(name) {
+                    continue;
+                }
+                let mut held: Vec<&'e str> = Vec::new();
+                for b in paths.clone() {
+                    match b.get(name) {
+                        Some(h) => h.iter().for_each(|s| add_sorted(&mut held, s)),
+                        None => add_sorted(&mut held, name),
+                    }
+                }
+                if held.len() > 1 || held.first() != Some(&name) {
+                    out.insert(name, held);
+                }
+            }
+        }
+        Aliases(Some(Rc::new(out)))
+    }
+
+    /// Adds what `more` gives each name to what it may hold here (a call of a routine that
+    /// copies into names other routines see).
+    fn absorb(&mut self, more: &Aliases<'e>) {
+        if more.is_empty() {
+            return;
+        }
+        *self = Aliases::join([&*self, more].into_iter());
+    }
+
+    /// The names `name` may be a copy of: its own entry, and for an element (`XC[1]`) those of
+    /// the elements of the same array written through a computed index (`XC[I] = XP1`), or,
+    /// for one read through a computed index (`XC[I]`), those of every element.
+    fn sources(&self, name: &str, out: &mut Vec<&'e str>) {
+        let Some(m) = self.0.as_deref() else {
+            return;
+        };
+        out.extend(m.get(name).into_iter().flatten().copied());
+        let Some((array, _)) = name.split_once('[') else {
+            return;
+        };
+        let any = computed_index(name);
+        let from = std::ops::Bound::Included(array);
+        for (element, held) in m.range::<str, _>((from, std::ops::Bound::Unbounded)) {
+            let Some(index) = element.strip_prefix(array) else {
+                break;
+            };
+            if index.starts_with('[') && *element != name && (any || computed_index(element)) {
+                out.extend(held.iter().copied());
+            }
+        }
+    }
+}
+
+/// Inserts `name` into the sorted `list` unless it is there.
+fn add_sorted<'e>(list: &mut Vec<&'e str>, name: &'e str) {
+    if let Err(at) = list.binary_search(&name) {
+        list.insert(at, name);
+    }
 }
 
 /// The frame data `FDAT_ACT` holds: the base, tool and IPO mode a `BAS` call applies.
@@ -99,16 +243,16 @@ struct Staged {
 }
 
 /// An open `IF`/`SWITCH` while following program order.
-struct Fork {
+struct Fork<'e> {
     is_if: bool,
-    entry: State,
-    outcomes: Vec<State>,
+    entry: State<'e>,
+    outcomes: Vec<State<'e>>,
     in_branch: bool,
     exhaustive: bool,
 }
 
-impl Fork {
-    fn new(is_if: bool, entry: &State) -> Fork {
+impl<'e> Fork<'e> {
+    fn new(is_if: bool, entry: &State<'e>) -> Fork<'e> {
         Fork {
             is_if,
             entry: entry.clone(),
@@ -121,7 +265,7 @@ impl Fork {
 
     /// The state after the join: what every branch agrees on; a base or tool that differs
     /// between branches is unknown, and #TCP in any branch counts.
-    fn join(mut self, current: State) -> State {
+    fn join(mut self, current: State<'e>) -> State<'e> {
         if self.in_branch {
             self.outcomes.push(current);
         }
@@ -134,9 +278,18 @@ impl Fork {
 
 /// What every state of `states` agrees on: a base or tool that differs between them is
 /// unknown, and #TCP in any counts. `None` for no state.
-fn join(states: &[State]) -> Option<State> {
+fn join<'e>(states: &[State<'e>]) -> Option<State<'e>> {
+    if states.iter().any(|s| s.dead) {
+        // Out of line in effect: only a block a `GOTO` leaves gets here.
+        let live: Vec<State<'e>> = states.iter().filter(|s| !s.dead).cloned().collect();
+        return if live.is_empty() {
+            states.first().cloned()
+        } else {
+            join(&live)
+        };
+    }
     let first = states.first()?;
-    let agree = |f: fn(&State) -> &Option<FrameRef>| {
+    let agree = |f: for<'s> fn(&'s State<'e>) -> &'s Option<FrameRef>| {
         if states.iter().all(|o| f(o) == f(first)) {
             f(first).clone()
         } else {
@@ -148,13 +301,15 @@ fn join(states: &[State]) -> Option<State> {
         tool: agree(|s| &s.tool),
         tcp: states.iter().any(|o| o.tcp),
         staged: join_staged(states),
+        aliases: Aliases::join(states.iter().map(|s| &s.aliases)),
+        dead: false,
     })
 }
 
 /// What `FDAT_ACT` holds after paths that staged `states`' values: the one they agree on, else
 /// a base or tool that differs between them (or that a path left as at the routine's entry) is
 /// unknown, and #TCP in any counts.
-fn join_staged(states: &[State]) -> Option<Staged> {
+fn join_staged(states: &[State<'_>]) -> Option<Staged> {
     let first = states.first()?.staged.as_ref();
     if states.iter().all(|o| o.staged.as_ref() == first) {
         return first.cloned();
@@ -172,11 +327,88 @@ fn join_staged(states: &[State]) -> Option<Staged> {
     })
 }
 
+/// How many names a motion's target is followed back through copies to, itself included.
+const FOLDED: usize = 64;
+
+/// A module's copies into names other routines see ([`Facts::shared_copies`]).
+#[derive(Default)]
+struct Shared<'s> {
+    /// Those a routine program order follows makes: what each routine starts with (an earlier
+    /// call of it or of another may have made them) and may find after a call.
+    entry: Aliases<'s>,
+    /// Those made by what runs at any time (a trigger's or interrupt's `DO`, a function, the
+    /// routine of an interrupt or trigger): name → what it may hold at any motion.
+    anytime: HashMap<String, Vec<String>>,
+}
+
+/// Each module's [`Shared`] copies, from each file's (`copies`, in the order of `facts`). A
+/// copy into a name its module does not declare, or declares `GLOBAL`, may be moved to in
+/// another module, whose motions are not followed with this module's names: its source is
+/// refused as handed back ([`HandedBack::into`]). Out of line: only a program that makes such
+/// copies gets here.
+#[inline(never)]
+fn shared_by_module<'s>(
+    copies: &'s [Vec<SharedCopy>],
+    facts: &mut [Facts],
+    modules: &Modules,
+) -> Vec<Shared<'s>> {
+    let unfollowed: std::collections::HashSet<&str> = facts
+        .iter()
+        .flat_map(|f| f.unfollowed.iter().map(String::as_str))
+        .collect();
+    let mut out: Vec<Shared<'s>> = (0..modules.count).map(|_| Shared::default()).collect();
+    let mut refused: Vec<(usize, HandedBack)> = Vec::new();
+    for (fi, list) in copies.iter().enumerate() {
+        let module = modules.of(fi);
+        for c in list {
+            let whole = c.name.split(['[', '.']).next().unwrap_or_default();
+            let own = facts.iter().enumerate().any(|(fj, g)| {
+                modules.of(fj) == module
+                    && !modules.is_global(fj)
+                    && g.declared.contains_key(whole)
+                    && !g.globals.iter().any(|n| n.as_str() == whole)
+            });
+            if !own {
+                refused.push((
+                    fi,
+                    HandedBack {
+                        source: c.source.clone(),
+                        line: c.line,
+                        routine: crate::syntax::Span::default(),
+                        param: None,
+                        into: Some(Name::from(whole)),
+                    },
+                ));
+            }
+            let Some(s) = out.get_mut(module) else {
+                continue;
+            };
+            match c.routine.as_deref() {
+                Some(r) if !unfollowed.contains(r) => {
+                    s.entry.copy(c.name.as_str(), c.source.as_str(), true);
+                }
+                _ => {
+                    let held = s.anytime.entry(c.name.to_string()).or_default();
+                    if !held.iter().any(|h| h == c.source.as_str()) {
+                        held.push(c.source.to_string());
+                    }
+                }
+            }
+        }
+    }
+    for (fi, h) in refused {
+        if let Some(f) = facts.get_mut(fi) {
+            f.handed_back.push(h);
+        }
+    }
+    out
+}
+
 /// How many states a loop's top is followed from before the rest are joined into one.
 const LOOP_STATES: usize = 8;
 
 /// An open loop while following program order.
-struct Loop {
+struct Loop<'e> {
     kind: LoopKind,
     /// The index of its first event and of its [`Event::EndLoop`].
     start: usize,
@@ -184,10 +416,10 @@ struct Loop {
     /// How many `IF`/`SWITCH` were open at its top.
     forks: usize,
     /// Every state its body has been followed from, the first the one before the loop.
-    tops: Vec<State>,
+    tops: Vec<State<'e>>,
     /// The states at the end of its body, and at each `EXIT`.
-    ends: Vec<State>,
-    exits: Vec<State>,
+    ends: Vec<State<'e>>,
+    exits: Vec<State<'e>>,
 }
 
 /// Program order within a routine: the state, the open `IF`/`SWITCH` and the open loops. A
@@ -196,17 +428,21 @@ struct Loop {
 /// pass: such a motion is used with both), until no new one comes; after the loop, the state
 /// is the join of those it may leave with.
 #[derive(Default)]
-struct Flow {
-    state: State,
-    forks: Vec<Fork>,
-    loops: Vec<Loop>,
+struct Flow<'e> {
+    state: State<'e>,
+    forks: Vec<Fork<'e>>,
+    loops: Vec<Loop<'e>>,
+    /// Every copy of the routine, joined, once a label a jump reaches has asked
+    /// ([`routine_copies`]): found once a routine, not once a label.
+    copies: Option<Aliases<'e>>,
 }
 
-impl Flow {
+impl<'e> Flow<'e> {
     fn reset(&mut self) {
         self.state = State::default();
         self.forks.clear();
         self.loops.clear();
+        self.copies = None;
     }
 
     /// Follows control event `ev`, the `i`th of `events`; returns the index of the event that
@@ -216,7 +452,7 @@ impl Flow {
         &mut self,
         i: usize,
         ev: &Event,
-        events: &[Event],
+        events: &'e [Event],
         changes: &dyn Fn(&str) -> bool,
     ) -> usize {
         match ev {
@@ -233,12 +469,21 @@ impl Flow {
             Event::Exit => {
                 if let Some(l) = self.loops.last_mut() {
                     l.exits.push(self.state.clone());
+                    // The rest of the body is not followed on this path.
+                    self.state.dead = true;
                 }
             }
             Event::EndLoop => return self.end_of_body(i),
-            Event::Label { jumps }
-                if !jumps.is_empty() && !jumps_keep_state(events, i, jumps, changes) =>
-            {
+            Event::Goto => self.state.dead = true,
+            Event::Label { jumps } if !jumps.is_empty() => {
+                // A jump arrives with what the names copied into held where it was made: any
+                // copy of the routine, joined (rare: a label a `GOTO` names).
+                let copies = self.copies.get_or_insert_with(|| routine_copies(events, i));
+                self.state.aliases.absorb(copies);
+                if jumps_keep_state(events, i, jumps, changes) {
+                    return i + 1;
+                }
+                self.state.dead = false;
                 self.state.base = Some(FrameRef::Unknown);
                 self.state.tool = Some(FrameRef::Unknown);
                 // And what `FDAT_ACT` holds: a jump may skip or repeat an `FDAT_ACT = …`.
@@ -265,10 +510,11 @@ impl Flow {
             }
         }
         let end = self.state.clone();
-        if !l.ends.contains(&end) {
+        // A body every path of which leaves by a `GOTO` comes round with nothing.
+        if !end.dead && !l.ends.contains(&end) {
             l.ends.push(end.clone());
         }
-        if !l.tops.contains(&end) && l.tops.len() <= LOOP_STATES {
+        if !end.dead && !l.tops.contains(&end) && l.tops.len() <= LOOP_STATES {
             let next = if l.tops.len() < LOOP_STATES {
                 end
             } else {
@@ -298,6 +544,29 @@ impl Flow {
     }
 }
 
+/// Every copy of the routine event `at` is in, joined (what a name may hold wherever a jump to
+/// a label there is made).
+fn routine_copies(events: &[Event], at: usize) -> Aliases<'_> {
+    let is_reset = |e: &&Event| matches!(e, Event::Reset(_));
+    let before = events.get(..at).unwrap_or_default();
+    let start = before.len() - before.iter().rev().take_while(|e| !is_reset(e)).count();
+    let mut out = Aliases::default();
+    for ev in events
+        .get(start..)
+        .unwrap_or_default()
+        .iter()
+        .take_while(|e| {
+            // The routine's own events: up to the next `DEF`.
+            !is_reset(e)
+        })
+    {
+        if let Event::Alias { name, source, .. } = ev {
+            out.copy(name, source, true);
+        }
+    }
+    out
+}
+
 /// Whether the label at event `at` is reached by its `GOTO`s (`jumps`: the index the next event
 /// has at each) only with the state program order brings there: each jumps back, and the events
 /// between the label and it change no base, tool or staged FDAT (no setting, no call of a
@@ -321,7 +590,7 @@ fn jumps_keep_state(
             Event::Set(_) | Event::Reset(_) => false,
             Event::Call(name) => !changes(name),
             Event::Label { jumps } => jumps.is_empty(),
-            Event::Alias { .. } | Event::Motion { .. } => true,
+            Event::Alias { .. } | Event::Motion { .. } | Event::Goto => true,
             Event::Branch(BranchEvent::If | BranchEvent::Switch) => {
                 blocks += 1;
                 true
@@ -345,7 +614,7 @@ fn jumps_keep_state(
     })
 }
 
-impl State {
+impl State<'_> {
     fn apply(&mut self, s: &Setting, fdats: &HashMap<Name, Fdat>) {
         let data = |n: Option<u32>| n.map_or(FrameRef::Unknown, FrameRef::Data);
         let staged = |f: Option<&Fdat>| Staged {
@@ -403,7 +672,7 @@ impl Exit {
         self.base.is_some() || self.tool.is_some() || self.staged.is_some()
     }
 
-    fn apply_to(&self, state: &mut State) {
+    fn apply_to(&self, state: &mut State<'_>) {
         if let Some(b) = &self.base {
             state.base = Some(b.clone());
         }
@@ -506,7 +775,8 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                     | Event::Loop { .. }
                     | Event::EndLoop
                     | Event::Exit
-                    | Event::Label { .. } => {
+                    | Event::Label { .. }
+                    | Event::Goto => {
                         let changes =
                             |name: &str| exits.of(module, name).is_some_and(Exit::changes);
                         i = flow.control(i, ev, &f.events, &changes);
@@ -664,7 +934,7 @@ impl Modules {
 }
 
 /// Program order at `IF`/`SWITCH`: fork, switch branch, or join.
-fn branch(state: &mut State, forks: &mut Vec<Fork>, b: BranchEvent) {
+fn branch<'e>(state: &mut State<'e>, forks: &mut Vec<Fork<'e>>, b: BranchEvent) {
     match b {
         BranchEvent::If | BranchEvent::Switch => {
             forks.push(Fork::new(b == BranchEvent::If, state));
@@ -702,6 +972,16 @@ fn branch(state: &mut State, forks: &mut Vec<Fork>, b: BranchEvent) {
 /// an assignment in the program may repeat.
 pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_frames: &[FrameDecl]) {
     let modules = Modules::new(files);
+    let shared_copies: Vec<Vec<SharedCopy>> = facts
+        .iter_mut()
+        .map(|f| std::mem::take(&mut f.shared_copies))
+        .collect();
+    let shared = if shared_copies.iter().all(Vec::is_empty) {
+        Vec::new()
+    } else {
+        shared_by_module(&shared_copies, facts, &modules)
+    };
+    let (no_aliases, no_anytime) = (Aliases::default(), HashMap::default());
     // A module's own `FDAT`s, then `$config.dat`'s: `FP1` is in nearly every data list.
     // An FDAT a routine assigns anywhere in the program holds, when a motion applies it, a
     // value trackfix does not follow: it is left out, so the base and tool it sets are unknown.
@@ -802,23 +1082,24 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
         facts.iter().any(|f| !f.calls.is_empty()) && facts.iter().any(|f| !f.routines.is_empty());
     // Each file's copies (`XC = XP1`: name → source), wherever they are: a copy passed to a
     // routine passes what it may hold. Only asked when a call passes names.
-    let copies: Vec<Vec<(String, String)>> = if passes {
-        events
-            .iter()
-            .map(|evs| {
-                evs.iter()
-                    .filter_map(|e| match e {
-                        Event::Alias { name, source, .. } if name != source => {
-                            Some((name.to_string(), source.to_string()))
-                        }
-                        _ => None,
-                    })
-                    .collect()
-            })
-            .collect()
-    } else {
-        Vec::new()
-    };
+    let copies: Vec<Vec<(String, String)>> =
+        if passes || facts.iter().any(|f| !f.handed_back.is_empty()) {
+            events
+                .iter()
+                .map(|evs| {
+                    evs.iter()
+                        .filter_map(|e| match e {
+                            Event::Alias { name, source, .. } if name != source => {
+                                Some((name.to_string(), source.to_string()))
+                            }
+                            _ => None,
+                        })
+                        .collect()
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
     // The candidates go after each file's positions while the motions are bound: a motion may
     // use them.
     let counts: Vec<usize> = files.iter().map(|f| f.positions.len()).collect();
@@ -843,33 +1124,38 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
             // The targets and names of a motion, buffers reused from motion to motion.
             let mut targets: Vec<usize> = Vec::new();
             let mut folded: Vec<&str> = Vec::new();
+            let mut more: Vec<&str> = Vec::new();
             let own = counts.get(fi).copied().unwrap_or_default();
             let mut inline_at: Option<HashMap<crate::syntax::Span, usize>> = None;
             let mut flow = Flow::default();
-            let mut aliases: HashMap<&str, &str> = HashMap::default();
-            // The further names a function's value may hold (`XC = MID(XP3, XP4)`: `XP4`).
-            let mut joined: HashMap<&str, Vec<&str>> = HashMap::default();
             let module = modules.of(fi);
             let fdats = fdats.get(module).unwrap_or(&no_fdats);
+            let (entry, anytime) = shared
+                .get(module)
+                .map_or((&no_aliases, &no_anytime), |s| (&s.entry, &s.anytime));
             let mut i = 0;
             while let Some(ev) = events.get(i) {
                 i += 1;
                 match ev {
                     Event::Reset(_) => {
                         flow.reset();
-                        aliases.clear();
-                        joined.clear();
+                        // What a copy into a name other routines see left there, on an earlier
+                        // call of this routine or of another.
+                        flow.state.aliases = entry.clone();
                     }
                     Event::Call(name) => {
                         if let Some(exit) = exits.of(module, name) {
                             exit.apply_to(&mut flow.state);
                         }
+                        // The routine, or one it calls, may copy into such a name.
+                        flow.state.aliases.absorb(entry);
                     }
                     Event::Branch(_)
                     | Event::Loop { .. }
                     | Event::EndLoop
                     | Event::Exit
-                    | Event::Label { .. } => {
+                    | Event::Label { .. }
+                    | Event::Goto => {
                         let changes =
                             |name: &str| exits.of(module, name).is_some_and(Exit::changes);
                         i = flow.control(i - 1, ev, &events, &changes);
@@ -877,19 +1163,8 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                     Event::Alias {
                         name,
                         source,
-                        joined: false,
-                    } => {
-                        aliases.insert(name.as_str(), source.as_str());
-                        if !joined.is_empty() {
-                            joined.remove(name.as_str());
-                        }
-                    }
-                    Event::Alias { name, source, .. } => {
-                        joined
-                            .entry(name.as_str())
-                            .or_default()
-                            .push(source.as_str());
-                    }
+                        joined,
+                    } => flow.state.aliases.copy(name, source, *joined),
                     Event::Set(s) => flow.state.apply(s, fdats),
                     Event::Motion {
                         span,
@@ -897,7 +1172,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                         refs,
                         with,
                     } => {
-                        let mut local = flow.state.clone();
+                        let mut local = flow.state.frames();
                         for s in with {
                             local.apply(s, fdats);
                         }
@@ -924,19 +1199,29 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                                     targets.extend(at.get(s).copied());
                                 }
                                 Ref::Named(n) => {
-                                    // The name itself, then what it was last copied from
-                                    // (and the further arguments of a function it was
-                                    // given), eight names at most.
+                                    // The name itself, then what it may have been copied
+                                    // from on this path (and what a function it was given
+                                    // reads, and what a copy run at any time puts there),
+                                    // and so on back, `FOLDED` names at most.
                                     let start = folded.len();
                                     folded.push(n.as_str());
+                                    if flow.state.aliases.is_empty() && anytime.is_empty() {
+                                        continue;
+                                    }
                                     let mut at = start;
-                                    while at < folded.len() && folded.len() - start < 8 {
+                                    while at < folded.len() && folded.len() - start < FOLDED {
                                         let name = folded.get(at).copied().unwrap_or_default();
                                         at += 1;
-                                        let more = joined.get(name).map_or(&[][..], Vec::as_slice);
-                                        for &next in aliases.get(name).into_iter().chain(more) {
+                                        more.clear();
+                                        flow.state.aliases.sources(name, &mut more);
+                                        if let Some(then) = anytime.get(name) {
+                                            more.extend(then.iter().map(String::as_str));
+                                        }
+                                        for &next in &more {
                                             let chain = folded.get(start..).unwrap_or_default();
-                                            if !chain.contains(&next) && folded.len() - start < 8 {
+                                            if !chain.contains(&next)
+                                                && folded.len() - start < FOLDED
+                                            {
                                                 folded.push(next);
                                             }
                                         }
@@ -1510,19 +1795,43 @@ fn computed_through_parameters(
         }
         // A value a routine hands back (`P = XP1` into an `:OUT` parameter, `RETURN XP1`):
         // the motions its callers make to what they get are not tied to the name.
+        let mut copied_into: Option<HashMap<&str, Vec<&str>>> = None;
         for h in &f.handed_back {
             passed.clear();
             binder.targets_named(fi, h.source.as_bytes(), &mut passed);
+            // And what the name may hold through the file's copies (`R = XP1; RETURN R`),
+            // looked up by name (a file may copy often and hand back often).
+            let by_name = copied_into.get_or_insert_with(|| {
+                let mut m: HashMap<&str, Vec<&str>> = HashMap::default();
+                for (n, source) in copies.get(fi).into_iter().flatten() {
+                    m.entry(n.as_str()).or_default().push(source.as_str());
+                }
+                m
+            });
+            let mut names = vec![h.source.as_str()];
+            let mut from = 0;
+            while let Some(&name) = names.get(from).filter(|_| names.len() < FOLDED) {
+                from += 1;
+                for &source in by_name.get(name).into_iter().flatten() {
+                    if !names.contains(&source) {
+                        binder.targets_named(fi, source.as_bytes(), &mut passed);
+                        names.push(source);
+                    }
+                }
+            }
             if passed.is_empty() {
                 continue;
             }
             let routine = String::from_utf8_lossy(h.routine.slice(src));
-            let how = match h.param {
-                Some(p) => format!(
+            let how = match (&h.into, h.param) {
+                (Some(name), _) => {
+                    format!("copied into `{name}`, a name other routines or modules may move to")
+                }
+                (None, Some(p)) => format!(
                     "written into `{}`, a parameter of `{routine}`",
                     String::from_utf8_lossy(p.slice(src))
                 ),
-                None => format!("returned by `{routine}`"),
+                (None, None) => format!("returned by `{routine}`"),
             };
             binder.mark(fi, &passed, |elsewhere, usage| {
                 usage.mark_unresolved_frame(UnresolvedFrame {

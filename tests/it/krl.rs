@@ -1795,3 +1795,320 @@ fn a_function_or_interrupt_that_changes_the_base_leaves_it_unknown() {
                     DEFFCT BOOL PREP( )\n  $BASE=BASE_DATA[2]\n  RETURN TRUE\nENDFCT\n";
     assert_eq!(cause_of(uncalled), None);
 }
+
+/// A data list with `XP1` and a copy `XC` of it, whole or an array.
+fn dat_xp1_and(decl: &str) -> String {
+    DAT_XP1.replace("ENDDAT", &format!("{decl}\nENDDAT"))
+}
+
+/// The bases `XP1` is used with: (the first, the others).
+fn bases_of_xp1(src: &str, dat: &str) -> (Option<String>, Vec<String>) {
+    let u = usage_of_xp1(src, dat);
+    (
+        u.wobj.as_deref().map(str::to_owned),
+        u.other_wobjs().iter().map(|w| w.to_string()).collect(),
+    )
+}
+
+/// After an `IF`, a `SWITCH` or a loop (no pass of a `WHILE`, an `EXIT`), a copy may hold what
+/// any path put there: `XP1` copied on one path only, or on a path a later one does not take,
+/// is used in the base of the motion to the copy after the join. Before, the last branch's
+/// copy won, and `XP1` was corrected in its own motion's base while the robot moved to it in
+/// another.
+#[test]
+fn a_copy_made_on_one_path_reaches_its_source_after_the_join() {
+    let bases = |body: &str| {
+        let src = format!(
+            "DEF cell( )\n  DECL E6POS XC\n  DECL INT K\n  $BASE=BASE_DATA[1]\n  LIN XP1\n{body}  \
+             $BASE=BASE_DATA[2]\n  LIN XC\nEND\n"
+        );
+        bases_of_xp1(&src, DAT_XP1)
+    };
+    let two = (
+        Some("BASE_DATA[1]".to_owned()),
+        vec!["BASE_DATA[2]".to_owned()],
+    );
+    for body in [
+        "  XC=XP2\n  IF $IN[1] THEN\n    XC=XP1\n  ENDIF\n",
+        "  IF $IN[1] THEN\n    XC=XP1\n  ELSE\n    XC=XP2\n  ENDIF\n",
+        "  SWITCH K\n  CASE 1\n    XC=XP1\n  DEFAULT\n    XC=XP2\n  ENDSWITCH\n",
+        "  XC=XP2\n  LOOP\n    IF $IN[1] THEN\n      XC=XP1\n      EXIT\n    ENDIF\n    XC=XP2\n  ENDLOOP\n",
+        "  XC=XP1\n  WHILE $IN[1]\n    XC=XP2\n  ENDWHILE\n",
+        "  XC=XP1\n  FOR K=1 TO 3\n    XC=XP2\n  ENDFOR\n",
+    ] {
+        assert_eq!(bases(body), two, "{body}");
+    }
+    // Given another value on every path, or after the join: no longer `XP1`.
+    let one = (Some("BASE_DATA[1]".to_owned()), Vec::new());
+    for body in [
+        "  IF $IN[1] THEN\n    XC=XP1\n  ENDIF\n  XC=XP2\n",
+        "  IF $IN[1] THEN\n    XC=XP1\n  ELSE\n    XC=$POS_ACT\n  ENDIF\n  XC=XP2\n",
+        "  XC=XP1\n  REPEAT\n    XC=XP2\n  UNTIL $IN[1]\n",
+    ] {
+        assert_eq!(bases(body), one, "{body}");
+    }
+}
+
+/// A copy into a name other routines see (the data list's `XC`) made in one routine reaches
+/// the motions to it in another (called after it, calling it, or running at any time: an
+/// interrupt's routine, a function, a trigger's `DO XC=XP1`), and those of the next run of its
+/// own; one into a name another module may see (`GLOBAL`) is refused, naming the name. Before,
+/// each motion to `XC` outside the copying routine reached only `XC`, and `XP1` was corrected
+/// in its own motion's base.
+#[test]
+fn a_copy_into_a_name_other_routines_see_reaches_their_motions() {
+    use trackfix::position::UnresolvedCause;
+    let dat = dat_xp1_and("DECL E6POS XC");
+    let two = (
+        Some("BASE_DATA[1]".to_owned()),
+        vec!["BASE_DATA[2]".to_owned()],
+    );
+    let bases = |main: &str, rest: &str| {
+        let src = format!(
+            "DEF cell( )\n  DECL E6POS D\n  $BASE=BASE_DATA[1]\n  LIN XP1\n{main}END\n{rest}"
+        );
+        bases_of_xp1(&src, &dat)
+    };
+    for (main, rest) in [
+        (
+            "  SETC()\n  $BASE=BASE_DATA[2]\n  LIN XC\n",
+            "DEF SETC( )\n  XC=XP1\nEND\n",
+        ),
+        (
+            "  XC=XP1\n  GO()\n",
+            "DEF GO( )\n  $BASE=BASE_DATA[2]\n  LIN XC\nEND\n",
+        ),
+        (
+            "  A()\n",
+            "DEF A( )\n  XC=XP1\n  B()\nEND\nDEF B( )\n  $BASE=BASE_DATA[2]\n  LIN XC\nEND\n",
+        ),
+        (
+            "  INTERRUPT DECL 5 WHEN $IN[1] DO GRAB()\n  INTERRUPT ON 5\n  XC=XP2\n  $BASE=BASE_DATA[2]\n  LIN XC\n",
+            "DEF GRAB( )\n  XC=XP1\nEND\n",
+        ),
+        (
+            "  $BASE=BASE_DATA[2]\n  D=SETIT()\n  LIN XC\n",
+            "DEFFCT E6POS SETIT( )\n  XC=XP1\n  RETURN XP2\nENDFCT\n",
+        ),
+        (
+            "  TRIGGER WHEN DISTANCE=1 DELAY=0 DO XC=XP1\n  LIN XP2\n  XC=XP2\n  $BASE=BASE_DATA[2]\n  LIN XC\n",
+            "",
+        ),
+        // The next run of the routine: the copy after the motion.
+        ("  $BASE=BASE_DATA[2]\n  LIN XC\n  XC=XP1\n", ""),
+    ] {
+        assert_eq!(bases(main, rest), two, "{main}{rest}");
+    }
+    // Given another value in the routine before its motion, with no call between: not `XP1`.
+    assert_eq!(
+        bases("  XC=XP1\n  XC=XP2\n  $BASE=BASE_DATA[2]\n  LIN XC\n", ""),
+        (Some("BASE_DATA[1]".to_owned()), Vec::new())
+    );
+    // A name other modules see.
+    let global = DAT_XP1.replace("ENDDAT", "DECL GLOBAL E6POS XC\nENDDAT");
+    let src = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  LIN XP1\n  XC=XP1\nEND\n";
+    assert_eq!(
+        usage_of_xp1(src, &global)
+            .unresolved_frame()
+            .map(|u| (u.at.line, u.cause.clone())),
+        Some((
+            4,
+            UnresolvedCause::HandedBack(
+                "copied into `XC`, a name other routines or modules may move to".into()
+            )
+        ))
+    );
+}
+
+/// An element written or read through an index computed when the program runs may be any
+/// element: `XC[I]=XP1` reaches a motion to `XC[1]`, `XC[1]=XP1` one to `XC[I]`, a copy in a
+/// `FOR` loop the motions after it. Before, the element's name as written had to match, and
+/// `XP1` was corrected in its own motion's base. Another literal element is not reached.
+#[test]
+fn an_element_copied_or_moved_to_through_a_computed_index_may_be_any() {
+    let dat = dat_xp1_and("DECL E6POS XC[2]");
+    let bases = |body: &str| {
+        let src = format!(
+            "DEF cell( )\n  DECL INT I\n  I=1\n  $BASE=BASE_DATA[1]\n  LIN XP1\n{body}END\n"
+        );
+        bases_of_xp1(&src, &dat)
+    };
+    let two = (
+        Some("BASE_DATA[1]".to_owned()),
+        vec!["BASE_DATA[2]".to_owned()],
+    );
+    for body in [
+        "  XC[I]=XP1\n  $BASE=BASE_DATA[2]\n  LIN XC[1]\n",
+        "  XC[1]=XP1\n  $BASE=BASE_DATA[2]\n  LIN XC[I]\n",
+        "  FOR I=1 TO 2\n    XC[I]=XP1\n  ENDFOR\n  $BASE=BASE_DATA[2]\n  LIN XC[1]\n",
+    ] {
+        assert_eq!(bases(body), two, "{body}");
+    }
+    assert_eq!(
+        bases("  XC[1]=XP1\n  $BASE=BASE_DATA[2]\n  LIN XC[2]\n"),
+        (Some("BASE_DATA[1]".to_owned()), Vec::new())
+    );
+}
+
+/// A component copied from a point (`XC.X=XP1.X`, `XC.X=XP1.X+10`, `S1.P=XP1` into a
+/// structure's member, `P.X=XP1.X` into an `:OUT` parameter) puts (part of) that point into
+/// the name, which keeps what it held besides: a motion to it is one to each. A copy of a name
+/// into itself (`XC=XC`) leaves what it holds. Before, each of these lost the copy and `XP1`
+/// was corrected in its own motion's base.
+#[test]
+fn a_component_copied_or_a_copy_of_itself_keeps_the_source() {
+    use trackfix::position::UnresolvedCause;
+    let two = (
+        Some("BASE_DATA[1]".to_owned()),
+        vec!["BASE_DATA[2]".to_owned()],
+    );
+    let bases = |body: &str, rest: &str| {
+        let src = format!(
+            "DEF cell( )\n  DECL E6POS XC\n  $BASE=BASE_DATA[1]\n  LIN XP1\n{body}  $BASE=BASE_DATA[2]\n  LIN XC\nEND\n{rest}"
+        );
+        bases_of_xp1(&src, DAT_XP1)
+    };
+    for body in [
+        "  XC.X=XP1.X\n  XC.Y=XP1.Y\n",
+        "  XC=XP2\n  XC.X=XP1.X+10\n",
+        "  XC=XP1\n  XC=XC\n",
+    ] {
+        assert_eq!(bases(body, ""), two, "{body}");
+    }
+    let out = usage_of_xp1(
+        "DEF cell( )\n  DECL E6POS XC\n  $BASE=BASE_DATA[2]\n  SETC(XC)\n  LIN XC\nEND\n\
+         DEF SETC(P:OUT)\n  DECL E6POS P\n  P.X=XP1.X\nEND\n",
+        DAT_XP1,
+    );
+    assert_eq!(
+        out.unresolved_frame().map(|u| u.cause.clone()),
+        Some(UnresolvedCause::HandedBack(
+            "written into `P`, a parameter of `SETC`".into()
+        ))
+    );
+    // A structure's member: refused (the structure is no point of the module's).
+    let dat = DAT_XP1.replace("ENDDAT", "STRUC SPT E6POS P, INT K\nDECL SPT S1\nENDDAT");
+    let src = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  LIN XP1\n  S1.P=XP1\n  $BASE=BASE_DATA[2]\n  LIN S1.P\nEND\n";
+    let u = usage_of_xp1(src, &dat);
+    assert!(
+        u.unresolved_frame().is_some() || !u.other_wobjs().is_empty(),
+        "{u:?}"
+    );
+}
+
+/// A value handed back through the routine's own copy (`R=XP1` then `RETURN R`, or `P=R` into
+/// an `:OUT` parameter) is refused as handing back `XP1` is; before, `R` named no point and
+/// `XP1` was corrected in its own motion's base.
+#[test]
+fn a_value_handed_back_through_a_local_copy_is_refused() {
+    use trackfix::position::UnresolvedCause;
+    let cause = |main: &str, rest: &str| {
+        let src = format!(
+            "DEF cell( )\n  DECL E6POS XC\n  $BASE=BASE_DATA[1]\n  LIN XP1\n  $BASE=BASE_DATA[2]\n{main}END\n{rest}"
+        );
+        usage_of_xp1(&src, DAT_XP1)
+            .unresolved_frame()
+            .map(|u| u.cause.clone())
+    };
+    assert_eq!(
+        cause(
+            "  XC=GETP()\n  LIN XC\n",
+            "DEFFCT E6POS GETP( )\n  DECL E6POS R\n  R=XP1\n  RETURN R\nENDFCT\n"
+        ),
+        Some(UnresolvedCause::HandedBack("returned by `GETP`".into()))
+    );
+    assert_eq!(
+        cause(
+            "  SETC(XC)\n  LIN XC\n",
+            "DEF SETC(P:OUT)\n  DECL E6POS P,R\n  R=XP1\n  P=R\nEND\n"
+        ),
+        Some(UnresolvedCause::HandedBack(
+            "written into `P`, a parameter of `SETC`".into()
+        ))
+    );
+}
+
+/// A `GOTO` leaves its path: at `ENDIF` the join takes only the paths that reach it (a branch
+/// that sets another base and jumps away no longer makes the base after the block unknown, and
+/// refuses nothing), and an `EXIT` leaves the rest of the loop's body. A label a jump reaches
+/// gets what any copy of its routine may have put into a name: a retry jumping back over a
+/// copy (`TOP: LIN XC … XC=XP1 … GOTO TOP`) moves to `XP1` in the base at the label; before,
+/// the motion to `XC` reached only what program order brought, and `XP1` was corrected in its
+/// own motion's base.
+#[test]
+fn a_goto_ends_its_path_and_a_jumped_label_gets_the_routines_copies() {
+    let bases = |body: &str| {
+        let src = format!(
+            "DEF cell( )\n  DECL E6POS XC\n  DECL INT N\n  $BASE=BASE_DATA[1]\n{body}END\n"
+        );
+        bases_of_xp1(&src, DAT_XP1)
+    };
+    let one = (Some("BASE_DATA[1]".to_owned()), Vec::new());
+    assert_eq!(
+        bases(
+            "  IF $IN[1] THEN\n    $BASE=BASE_DATA[2]\n    GOTO SKIP\n  ENDIF\n  LIN XP1\n  SKIP:\n"
+        ),
+        one
+    );
+    assert_eq!(
+        bases(
+            "  LOOP\n    IF $IN[1] THEN\n      $BASE=BASE_DATA[2]\n      EXIT\n    ENDIF\n    LIN XP1\n  ENDLOOP\n"
+        ),
+        one
+    );
+    assert_eq!(
+        bases(
+            "  XC=XP2\n  LIN XP1\n  $BASE=BASE_DATA[2]\n  TOP:\n  LIN XC\n  XC=XP1\n  IF $IN[1] THEN\n    GOTO TOP\n  ENDIF\n"
+        ),
+        (
+            Some("BASE_DATA[1]".to_owned()),
+            vec!["BASE_DATA[2]".to_owned()]
+        )
+    );
+}
+
+/// KRL modules named together from one folder are one program, as a KSS tree's `Program`
+/// folder is: another module's motion to a `GLOBAL` point is one to that point, and a point used
+/// with two bases that way is refused. Before, each pair was a program of its own and the point
+/// was corrected in its own module's base while the other module moved to it in another. Files
+/// from two folders stay programs of their own.
+#[test]
+fn krl_modules_named_together_from_one_folder_are_one_program() {
+    use trackfix::program::{LoadOptions, collect_programs, load_group};
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let main = write(
+        "main.src",
+        "DEF main( )\n  $BASE=BASE_DATA[1]\n  LIN XG\n  mod2()\nEND\n",
+    );
+    write(
+        "main.dat",
+        "DEFDAT main PUBLIC\nDECL GLOBAL E6POS XG={X 100.0,Y 200.0,Z 300.0,A 0.0,B 0.0,C 0.0,S 2,T 2,E1 500.0}\nENDDAT\n",
+    );
+    let mod2 = write(
+        "mod2.src",
+        "DEF mod2( )\n  $BASE=BASE_DATA[2]\n  LIN XG\nEND\n",
+    );
+    write("mod2.dat", "DEFDAT mod2\nENDDAT\n");
+    let other = write("other/mod2.src", "DEF mod2( )\nEND\n");
+    let groups = collect_programs(&[main.clone(), mod2.clone(), other]).unwrap();
+    assert_eq!(groups.len(), 2, "{groups:?}");
+    let program = load_group(&groups[0], &LoadOptions::default())
+        .into_iter()
+        .next()
+        .unwrap()
+        .unwrap();
+    let xg = program
+        .files
+        .iter()
+        .flat_map(|f| (0..f.positions.len()).filter_map(|i| f.position(i)))
+        .find(|p| p.name.as_deref() == Some("XG"))
+        .unwrap();
+    assert_eq!(xg.usage.wobj.as_deref(), Some("BASE_DATA[1]"));
+    assert_eq!(xg.usage.other_wobjs(), ["BASE_DATA[2]"]);
+}
