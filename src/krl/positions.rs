@@ -872,6 +872,7 @@ fn frame_decl(
         oframe: None,
         scope: FrameScope::Program,
         storage: FrameStorage::Persistent,
+        assigned: false,
     }
 }
 
