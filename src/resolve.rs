@@ -164,9 +164,22 @@ impl Routine {
             .position(|p| NameKey(p.slice(src)) == NameKey(name))
     }
 
+    /// The index of its parameter named `name`, required or optional: a required one's
+    /// position, an optional one's after every required one (how [`ParamAt`] numbers them).
+    pub(crate) fn any_named(&self, src: &[u8], name: &[u8]) -> Option<usize> {
+        self.params
+            .iter()
+            .chain(&self.optional)
+            .position(|p| NameKey(p.slice(src)) == NameKey(name))
+    }
+
     /// Whether `name` is one of its parameters, required or optional.
     #[inline]
     pub(crate) fn has_parameter(&self, src: &[u8], name: &[u8]) -> bool {
+        // Asked of every motion's frame and tool: most routines take no parameter.
+        if self.params.is_empty() && self.optional.is_empty() {
+            return false;
+        }
         self.params
             .iter()
             .chain(&self.optional)
@@ -237,9 +250,50 @@ pub(crate) struct FileFacts<'a> {
     pub(crate) routines: &'a [Routine],
     /// Its run-time assignments.
     pub(crate) assignments: &'a [Assignment],
-    /// Its copies of one name's value into another, `(copy, source)` as written (RAPID
-    /// `pv := p10;`, `buf{1} := p10;`): a use of the copy is a use of what the source reaches.
-    pub(crate) copies: &'a [(Span, Span)],
+    /// Its copies of one name's value into another (RAPID `pv := p10;`, `buf{1} := p10;`,
+    /// `pv := Offs(p10, 0, 0, 10);`, a function's `RETURN p;`): a use of the copy is a use of
+    /// what the source reaches.
+    pub(crate) copies: &'a [CopyFact],
+}
+
+/// A name's value copied into another, or computed from it: `copy := …source…`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CopyFact {
+    /// What is written, as written (`pv`, `buf{1}`, `rec.p`, a function's name for its
+    /// `RETURN`).
+    pub(crate) copy: Span,
+    /// A name the value is read from, as written (`p10`, `buf{i}`, a parameter).
+    pub(crate) source: Span,
+    /// The routine the copy is written in: a source naming one of its parameters is what the
+    /// callers pass there.
+    pub(crate) routine: Option<usize>,
+}
+
+/// An argument of a call that the positional binding of [`Use::args`] does not bind: one that
+/// is not a plain name (`mv Offs(p10, 0, 0, 10);`, `mv getP();`) or one given by its
+/// parameter's name (`mv \p:=p10;`). Rare: kept apart from the uses and bound by
+/// [`Binder::bind_passed`].
+#[derive(Clone, Debug)]
+pub(crate) struct PassedArg {
+    /// 1-based line of the call.
+    pub(crate) line: usize,
+    /// The routine the call is written in.
+    pub(crate) routine: Option<usize>,
+    /// The routine called, by name in the file's source.
+    pub(crate) callee: Span,
+    /// The parameter: by position among the required ones, else by name.
+    pub(crate) param: PassedTo,
+    /// The names the argument's value reads (each a copy of it or a part).
+    pub(crate) names: Vec<Span>,
+}
+
+/// Which parameter a [`PassedArg`] is given to.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum PassedTo {
+    /// The required parameter at this position.
+    Position(usize),
+    /// The parameter of this name (in the file's source).
+    Named(Span),
 }
 
 impl FileFacts<'_> {
@@ -275,64 +329,187 @@ fn computed_index_array<'k>(naming: &Naming, key: &'k str) -> Option<&'k str> {
     (!literal).then_some(array)
 }
 
-/// What each module's copies reach: the targets the source of each copy reaches from its file,
-/// by (module, folded name of the copy).
+/// What the program's copies reach, by the folded name they are read under: keyed program-wide
+/// (a copy into a `PERS` in one module moved to in another; two routines' locals of one name
+/// are taken as one, which can only refuse more), by the name before any index or component,
+/// each holding its full names (`buf{1}`, `rec.p`) with what a reference to it reaches.
+#[derive(Debug, Default)]
+struct Copies {
+    by_root: std::collections::HashMap<String, Vec<CopyReach>>,
+}
+
+/// One name copies are written into, and what a reference to it reaches: targets, and the
+/// parameters a copy of a parameter stands for (what every caller passes there).
+#[derive(Debug, Default)]
+struct CopyReach {
+    key: String,
+    targets: Vec<TargetAt>,
+    params: Vec<ParamAt>,
+}
+
+/// The name a folded reference starts with (`BUF` of `BUF{I}.P`).
+fn root_of(key: &str) -> &str {
+    key.split(['{', '.', '[']).next().unwrap_or(key)
+}
+
+/// The parts of a folded reference after its root: `{…}` indexes and `.field` components.
+fn parts_of(key: &str) -> Vec<&str> {
+    let rest = key.get(root_of(key).len()..).unwrap_or_default();
+    let (mut parts, mut depth, mut from) = (Vec::new(), 0usize, 0usize);
+    for (i, c) in rest.char_indices() {
+        match c {
+            '{' | '[' if depth == 0 => {
+                parts.extend(rest.get(from..i).filter(|p| !p.is_empty()));
+                from = i;
+                depth = 1;
+            }
+            '{' | '[' => depth += 1,
+            '}' | ']' => {
+                depth = depth.saturating_sub(1);
+                if depth == 0 {
+                    parts.extend(rest.get(from..=i));
+                    from = i + 1;
+                }
+            }
+            '.' if depth == 0 => {
+                parts.extend(rest.get(from..i).filter(|p| !p.is_empty()));
+                from = i;
+            }
+            _ => {}
+        }
+    }
+    parts.extend(rest.get(from..).filter(|p| !p.is_empty()));
+    parts
+}
+
+/// Whether two folded references of one root may name overlapping data: one is a part of the
+/// other (`rec` and `rec.p`, `arr` and `arr{2}`), or they differ only where an index is
+/// computed at run time (`arr{i}` and `arr{2}`).
+fn may_overlap(a: &str, b: &str) -> bool {
+    let computed = |p: &str| {
+        p.starts_with(['{', '['])
+            && !p
+                .trim_matches(['{', '}', '[', ']'])
+                .bytes()
+                .all(|c| c.is_ascii_digit() || c == b',')
+    };
+    parts_of(a)
+        .into_iter()
+        .zip(parts_of(b))
+        .all(|(x, y)| x == y || (x.starts_with(['{', '[']) && (computed(x) || computed(y))))
+}
+
+impl Copies {
+    /// What a reference written as `key` (folded) reaches through the copies: every copy into
+    /// data it may overlap, added to `targets` and `params`.
+    fn reach(&self, key: &str, targets: &mut Vec<TargetAt>, params: &mut Vec<ParamAt>) {
+        let Some(all) = self.by_root.get(root_of(key)) else {
+            return;
+        };
+        for c in all.iter().filter(|c| may_overlap(key, &c.key)) {
+            targets.extend(&c.targets);
+            params.extend(&c.params);
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.by_root.is_empty()
+    }
+}
+
+/// What the program's copies reach: each source's targets seen from its file, or the
+/// parameter of the copy's routine it names, joined with what the copies it reads reach in
+/// turn (`pw := pv; pv := p10;`, followed to a fixed point, so the order of the statements
+/// does not matter). Copies that reach nothing are dropped: most programs' assignments
+/// (`reg1 := reg1 + 1`) then cost their motions nothing.
 fn copies_reached(
     files: &[FileFacts<'_>],
     naming: &Naming,
     index: &NameIndex<Indexed>,
     modules: &[usize],
-) -> std::collections::HashMap<(usize, String), Vec<TargetAt>> {
-    let mut out: std::collections::HashMap<(usize, String), Vec<TargetAt>> = Default::default();
+) -> Copies {
     let exported = |(m, i): TargetAt| files.get(m).is_some_and(|f| f.exports(i));
     let mut buf = String::new();
+    // (copy, source, what the source reaches itself).
+    let mut all: Vec<(String, String, CopyReach)> = Vec::new();
     for (m, f) in files.iter().enumerate() {
-        for &(copy, source) in f.copies {
-            let mut reached = Vec::new();
-            let key = fold_into(&mut buf, source.slice(f.src));
-            lookup(naming, index, &exported, (m, modules), key, &mut reached);
-            if reached.is_empty() {
-                continue;
+        for c in f.copies {
+            let source = fold_into(&mut buf, c.source.slice(f.src)).to_owned();
+            let mut reach = CopyReach::default();
+            let param = c.routine.and_then(|rt| {
+                let k = f
+                    .routines
+                    .get(rt)?
+                    .any_named(f.src, root_of(&source).as_bytes())?;
+                Some((m, rt, k))
+            });
+            match param {
+                Some(p) => reach.params.push(p),
+                None => lookup(
+                    naming,
+                    index,
+                    &exported,
+                    (m, modules),
+                    &source,
+                    &mut reach.targets,
+                ),
             }
-            let module = modules.get(m).copied().unwrap_or(m);
-            let copy = fold_into(&mut buf, copy.slice(f.src)).to_owned();
-            out.entry((module, copy)).or_default().extend(reached);
+            let copy = fold_into(&mut buf, c.copy.slice(f.src)).to_owned();
+            all.push((copy, source, reach));
+        }
+    }
+    // The copies of each root, so that a source is compared with its own root's only.
+    let mut of_root: std::collections::HashMap<String, Vec<usize>> = Default::default();
+    for (i, (copy, ..)) in all.iter().enumerate() {
+        of_root.entry(root_of(copy).to_owned()).or_default().push(i);
+    }
+    // Each pass carries what one more copy back reaches; a chain of n copies takes n passes.
+    for _ in 0..=all.len() {
+        let mut changed = false;
+        for i in 0..all.len() {
+            let Some((_, source, _)) = all.get(i) else {
+                continue;
+            };
+            let (mut targets, mut params): (Vec<TargetAt>, Vec<ParamAt>) = (Vec::new(), Vec::new());
+            for &j in of_root.get(root_of(source)).into_iter().flatten() {
+                if let Some((copy, _, r)) = all.get(j)
+                    && may_overlap(source, copy)
+                {
+                    targets.extend(&r.targets);
+                    params.extend(&r.params);
+                }
+            }
+            let Some((_, _, r)) = all.get_mut(i) else {
+                continue;
+            };
+            let (nt, np) = (r.targets.len(), r.params.len());
+            r.targets.extend(targets);
+            r.targets.sort_unstable();
+            r.targets.dedup();
+            r.params.extend(params);
+            r.params.sort_unstable();
+            r.params.dedup();
+            changed |= r.targets.len() != nt || r.params.len() != np;
+        }
+        if !changed {
+            break;
+        }
+    }
+    let mut out = Copies::default();
+    for (copy, _, r) in all {
+        if r.targets.is_empty() && r.params.is_empty() {
+            continue;
+        }
+        let same = out.by_root.entry(root_of(&copy).to_owned()).or_default();
+        match same.iter_mut().find(|c| c.key == copy) {
+            Some(c) => {
+                c.targets.extend(r.targets);
+                c.params.extend(r.params);
+            }
+            None => same.push(CopyReach { key: copy, ..r }),
         }
     }
     out
-}
-
-/// Adds to `targets` what the copies of `module` reach for a reference written as `key`
-/// (folded): a copy of that name, or, where `key` indexes an array by something other than a
-/// number (`buf{i}`), every copy into an element of it.
-fn copied_reach(
-    copies: &std::collections::HashMap<(usize, String), Vec<TargetAt>>,
-    module: usize,
-    naming: &Naming,
-    key: &str,
-    targets: &mut Vec<TargetAt>,
-) {
-    if let Some(t) = copies.get(&(module, key.to_owned())) {
-        targets.extend(t);
-        return;
-    }
-    // The whole array (`buf`, not itself a copy), or an element chosen at run time.
-    let array = if key.contains(naming.open) {
-        match computed_index_array(naming, key) {
-            Some(array) => array,
-            None => return,
-        }
-    } else {
-        key
-    };
-    for ((m, name), t) in copies {
-        let element_of = name
-            .split_once(naming.open)
-            .is_some_and(|(a, _)| a == array);
-        if *m == module && element_of {
-            targets.extend(t);
-        }
-    }
 }
 
 /// Where a folded reference in `file` points among `index`'s names, added to `out`
@@ -572,11 +749,10 @@ pub(crate) struct Binder<'f, 'a> {
     /// The callee last looked up (file, name as written) and what it found: a module's motions
     /// call the same instruction one after another.
     last_callee: Option<LastCallee<'a>>,
-    /// What the copies of each module reach ([`FileFacts::copies`]), by (module, folded name of
-    /// the copy); a reference of that module to the copy, or to any element of it through a
-    /// computed index, reaches these too. Empty in nearly every program: then no reference
-    /// is looked up in it.
-    copies: std::collections::HashMap<(usize, String), Vec<TargetAt>>,
+    /// What the program's copies reach ([`FileFacts::copies`], [`copies_reached`]); a
+    /// reference to data a copy may have written reaches these too. Empty in nearly every
+    /// program: then no reference is looked up in it.
+    copies: Copies,
 }
 
 /// A callee's name as written in a file, and the routine it names there (file, index), if any.
@@ -611,7 +787,7 @@ impl<'f, 'a> Binder<'f, 'a> {
                 files
                     .get(m)
                     .and_then(|f| f.routines.get(r))
-                    .is_some_and(|r| !r.params.is_empty())
+                    .is_some_and(|r| !r.params.is_empty() || !r.optional.is_empty())
             })
         });
         let modules: Vec<usize> = files.iter().map(|f| f.module).collect();
@@ -681,20 +857,21 @@ impl<'f, 'a> Binder<'f, 'a> {
                     .or_else(|| all.iter().find(|&&(m2, _, local)| m2 != m && !local))
                     .map(|&(m2, r, _)| (m2, r))
             };
-            // The required parameter of the enclosing routine a reference names, if any.
-            let own_params = u
-                .routine
-                .and_then(|rt| f.routines.get(rt))
-                .map_or(&[][..], |r| &r.params);
+            // The parameter of the enclosing routine a reference names, if any (an optional
+            // one numbered after the required ones).
+            let own = u.routine.and_then(|rt| f.routines.get(rt));
+            let own_params = own.map_or(&[][..], |r| &r.params);
+            let own_optional = own.map_or(&[][..], |r| &r.optional);
             let param_of = |key: &str| -> Option<ParamAt> {
                 // Most routines take no target: nothing to look for.
-                if own_params.is_empty() {
+                if own_params.is_empty() && own_optional.is_empty() {
                     return None;
                 }
                 let rt = u.routine?;
                 let base = index.array_of(key).unwrap_or(key);
                 own_params
                     .iter()
+                    .chain(own_optional)
                     .position(|&name| NameKey(name.slice(src)) == NameKey(base.as_bytes()))
                     .map(|k| (m, rt, k))
             };
@@ -711,7 +888,7 @@ impl<'f, 'a> Binder<'f, 'a> {
                              buf: &mut String,
                              targets: &mut Vec<TargetAt>,
                              params: &mut Vec<ParamAt>| {
-                if !own_params.is_empty()
+                if !(own_params.is_empty() && own_optional.is_empty())
                     && let Some(p) = param_of(fold_into(buf, raw))
                 {
                     params.push(p);
@@ -751,6 +928,14 @@ impl<'f, 'a> Binder<'f, 'a> {
                             None => {
                                 hits.clear();
                                 lookup(naming, index, &exported, (m, modules), key, hits);
+                                // A RAPID component passed (`bump pp.trans.z;`): what the
+                                // routine does with it, it does to the target.
+                                if hits.is_empty()
+                                    && naming.arrays == ArrayReach::WhenUndeclared
+                                    && let Some((whole, _)) = key.split_once('.')
+                                {
+                                    lookup(naming, index, &exported, (m, modules), whole, hits);
+                                }
                                 bindings.extend(hits.iter().map(|&t| (t, to, u.line)));
                             }
                         }
@@ -758,7 +943,9 @@ impl<'f, 'a> Binder<'f, 'a> {
                     // What `reach_raw` would find nothing for (a motion's speed, zone and
                     // tool), told before calling it: the closure is not inlined, and the call
                     // per argument was 0.65 M of `check`'s 95 M.
-                    _ if own_params.is_empty() && !first_letters.may_start(raw) => {}
+                    _ if own_params.is_empty()
+                        && own_optional.is_empty()
+                        && !first_letters.may_start(raw) => {}
                     _ => reach_raw(raw, buf, targets, params),
                 }
             }
@@ -769,7 +956,6 @@ impl<'f, 'a> Binder<'f, 'a> {
                 reach(key, targets, params);
             }
             if !copies.is_empty() && !u.writes {
-                let module = modules.get(m).copied().unwrap_or(m);
                 let written = u
                     .args
                     .iter()
@@ -777,16 +963,10 @@ impl<'f, 'a> Binder<'f, 'a> {
                     .map(|a| a.span())
                     .chain(u.refs.iter().copied());
                 for sp in written {
-                    copied_reach(
-                        copies,
-                        module,
-                        naming,
-                        fold_into(buf, sp.slice(src)),
-                        targets,
-                    );
+                    copies.reach(fold_into(buf, sp.slice(src)), targets, params);
                 }
                 for &key in u.folded {
-                    copied_reach(copies, module, naming, key, targets);
+                    copies.reach(key, targets, params);
                 }
             }
         }
@@ -828,10 +1008,14 @@ impl<'f, 'a> Binder<'f, 'a> {
         let files: &[FileFacts<'a>] = files;
         let exported = |(m, i): TargetAt| files.get(m).is_some_and(|f| f.exports(i));
         lookup_raw(naming, index, &exported, (m, modules), raw, buf, out);
-        // A copy (`pv := p10;`, a function's `RETURN p10;`) reaches what it copies.
+        // A copy (`pv := p10;`, a function's `RETURN p10;`) reaches what it copies; one of a
+        // parameter, what the calls pass there.
+        let mut params = Vec::new();
         if !copies.is_empty() {
-            let module = modules.get(m).copied().unwrap_or(m);
-            copied_reach(copies, module, naming, fold_into(buf, raw), out);
+            copies.reach(fold_into(buf, raw), out, &mut params);
+        }
+        for p in params {
+            self.targets_bound_to(p, out);
         }
     }
 
@@ -884,6 +1068,66 @@ impl<'f, 'a> Binder<'f, 'a> {
         );
         out.sort_unstable();
         out.dedup();
+    }
+
+    /// Binds argument `a` of a call in file `m` that positional binding does not see
+    /// ([`PassedArg`]) to the parameter of the routine called that it is given to: each
+    /// target its names reach (directly or through copies) is used as the routine uses the
+    /// parameter, and a parameter of the caller passed on, a copy of one, is followed there.
+    pub(crate) fn bind_passed(&mut self, m: usize, a: &PassedArg) {
+        let Some(f) = self.files.get(m) else { return };
+        let src = f.src;
+        let routine_of = |name: NameKey<'_>| -> Option<(usize, usize)> {
+            let all = self.routines.get(&name)?;
+            all.iter()
+                .find(|&&(m2, ..)| m2 == m)
+                .or_else(|| all.iter().find(|&&(m2, _, local)| m2 != m && !local))
+                .map(|&(m2, r, _)| (m2, r))
+        };
+        let Some((cm, cr)) = routine_of(NameKey(a.callee.slice(src))) else {
+            return;
+        };
+        let Some(callee) = self.files.get(cm).and_then(|c| c.routines.get(cr)) else {
+            return;
+        };
+        let k = match a.param {
+            PassedTo::Position(i) => Some(i).filter(|&i| i < callee.params.len()),
+            PassedTo::Named(label) => self
+                .files
+                .get(cm)
+                .and_then(|c| callee.any_named(c.src, label.slice(src))),
+        };
+        let Some(k) = k else { return };
+        let to = (cm, cr, k);
+        let own = a.routine.and_then(|rt| f.routines.get(rt).map(|r| (rt, r)));
+        let (mut targets, mut params) = (Vec::new(), Vec::new());
+        for sp in &a.names {
+            let raw = sp.slice(src);
+            let base = raw.split(|&b| b == b'{' || b == b'.').next().unwrap_or(raw);
+            if let Some((rt, r)) = own
+                && let Some(p) = r.any_named(src, base)
+            {
+                params.push((m, rt, p));
+                continue;
+            }
+            let files: &[FileFacts<'a>] = self.files;
+            let exported = |(m, i): TargetAt| files.get(m).is_some_and(|f| f.exports(i));
+            let key = fold_into(&mut self.buf, raw);
+            lookup(
+                &self.naming,
+                &self.index,
+                &exported,
+                (m, &self.modules),
+                key,
+                &mut targets,
+            );
+            self.copies.reach(key, &mut targets, &mut params);
+        }
+        for p in params {
+            self.param_edges.entry(p).or_default().push(to);
+        }
+        self.bindings
+            .extend(targets.into_iter().map(|t| (t, to, a.line)));
     }
 
     /// Binds a computed value given to parameter `param` (its name in file `m`'s source) of

@@ -895,6 +895,7 @@ fn frame_decl(
         oframe: None,
         scope: FrameScope::Program,
         storage: FrameStorage::Persistent,
+        assigned: false,
     }
 }
 

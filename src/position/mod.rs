@@ -475,6 +475,15 @@ pub enum RunTimeValue {
         /// Where it is.
         at: UseLine,
     },
+    /// A call that names its data or routine only when the program runs may read, write or
+    /// move to the target (RAPID `SetDataVal`, `GetDataVal` with a computed name,
+    /// `SetAllDataVal`; a late-bound call `%name% p10;`), in a work object trackfix cannot tell.
+    NamedAtRunTime {
+        /// The call, as written (`SetDataVal`, `%pn%`).
+        call: String,
+        /// Where it is.
+        at: UseLine,
+    },
 }
 
 /// A motion to a target with a work object (base) trackfix cannot tell.
@@ -602,7 +611,8 @@ impl RunTimeValue {
             | RunTimeValue::Frame { at, .. }
             | RunTimeValue::FrameAssigned { at, .. }
             | RunTimeValue::AxesOffset { at, .. }
-            | RunTimeValue::ProgramDisplacement { at, .. } => at,
+            | RunTimeValue::ProgramDisplacement { at, .. }
+            | RunTimeValue::NamedAtRunTime { at, .. } => at,
         }
     }
 
@@ -612,7 +622,8 @@ impl RunTimeValue {
             | RunTimeValue::Frame { at, .. }
             | RunTimeValue::FrameAssigned { at, .. }
             | RunTimeValue::AxesOffset { at, .. }
-            | RunTimeValue::ProgramDisplacement { at, .. } => at,
+            | RunTimeValue::ProgramDisplacement { at, .. }
+            | RunTimeValue::NamedAtRunTime { at, .. } => at,
         }
     }
 
@@ -636,6 +647,9 @@ impl RunTimeValue {
             ),
             RunTimeValue::ProgramDisplacement { instruction, at } => format!(
                 "is moved to by a program that displaces its motions (`{instruction}`, {at}): the frame it is reached in is not its work object's"
+            ),
+            RunTimeValue::NamedAtRunTime { call, at } => format!(
+                "may be read, written or moved to by `{call}` ({at}), whose data or routine the program names only when it runs"
             ),
         }
     }
@@ -1247,6 +1261,9 @@ pub struct FrameDecl {
     pub scope: FrameScope,
     /// How the program keeps its value.
     pub storage: FrameStorage,
+    /// The value is one a routine of the program gives the frame (`wobj1 := [FALSE,…];`),
+    /// which stands for the declaration's (docs/design.md, "Frames the program assigns").
+    pub assigned: bool,
 }
 
 /// Where a declared frame's name is seen, as a motion looks it up: its own module's

@@ -482,7 +482,10 @@ fn frames_written_through(
         let Some(arg) = position.and_then(|i| args.get(i).copied().flatten()) else {
             continue;
         };
-        let name = latin1(trim_latin1(arg.span().slice(caller.0)));
+        // A component passed (`bump wA.uframe.trans.x;`) changes the frame it is part of.
+        let name = latin1(trim_latin1(
+            written_name(caller.0, arg.span()).slice(caller.0),
+        ));
         if scopes.is_empty() || scopes.seen_from(m, None, &name).is_some() {
             out.push((name, k, line));
         }
@@ -533,9 +536,16 @@ pub struct Extractor<'l> {
     /// CRobT();` in `PROC Remember(INOUT robtarget pOut)`): the routine, the parameter's name
     /// as written, the line. The target a call passes there is what the program computes.
     param_assignments: Vec<(usize, Span32, usize)>,
-    /// Copies of one name's value into another (`pv := p10;`, `buf{1} := p10;`): the copy, the
-    /// source. A motion to the copy moves to the source's value.
-    copies: Vec<(Span, Span)>,
+    /// Copies of one name's value into another (`pv := p10;`, `buf{1} := p10;`, `pv :=
+    /// Offs(p10, 0, 0, 10);`, `RETURN p;`). A motion to the copy moves to the source's value.
+    copies: Vec<crate::resolve::CopyFact>,
+    /// Call arguments the positional binding does not see: not a plain name, or given by
+    /// their parameter's name (rare; bound once every use is).
+    passed: Vec<crate::resolve::PassedArg>,
+    /// Calls that name their data or routine only when the program runs: (the call as
+    /// written, its line, whether only the targets its arguments name are at stake (a late
+    /// call `%pn% p10;`: those names) or every target of the program (`None`)).
+    named_at_run_time: Vec<(Span, usize, Option<Vec<Span>>)>,
     /// Target literals whose parts do not have the sizes of their type (`[[1,2,3,4],…]` for a
     /// robtarget): errors, so the file is not transformed (the controller does not load it).
     misshapen: Vec<Diagnostic>,
@@ -793,6 +803,8 @@ impl<'l> Extractor<'l> {
             assigned_literals: Vec::new(),
             param_assignments: Vec::new(),
             copies: Vec::new(),
+            passed: Vec::new(),
+            named_at_run_time: Vec::new(),
             misshapen: Vec::new(),
             computed: Vec::new(),
             routines: Vec::new(),
@@ -1196,6 +1208,7 @@ impl<'l> Extractor<'l> {
             oframe: None,
             scope: FrameScope::Program,
             storage: FrameStorage::Persistent,
+            assigned: false,
         };
         let Some(agg) = agg else {
             return f;
@@ -1242,6 +1255,11 @@ impl<'l> Extractor<'l> {
                 }
                 ExprKind::Call => {
                     let name = n.name_span().slice(src);
+                    if name.eq_ignore_ascii_case(b"StrToVal") {
+                        // `ok := StrToVal(text, pp);` reads a value into its second argument.
+                        self.value_read_into(src, arena, i);
+                        continue;
+                    }
                     if name.eq_ignore_ascii_case(b"CalcJointT") {
                         // The joints that reach the target in the work object given: a use of
                         // the target there, as a motion to it is.
@@ -1380,6 +1398,116 @@ fn is_reference(src: &[u8], span: Span) -> bool {
         && !rest.contains(&b'.')
 }
 
+/// Whether a call statement of this name reads or writes data other than through its
+/// arguments' values (`GetDataVal`, `SetDataVal`, `SetAllDataVal`, `Add`, `Incr`, `Decr`,
+/// `Clear`) or calls a routine named at run time (`%pn%`): told by its first letter first, as
+/// a module's motions (`Move…`) pass here.
+#[inline]
+fn writes_data_by_name(name: &[u8]) -> bool {
+    match name.first().map(u8::to_ascii_uppercase) {
+        Some(b'%') => true,
+        Some(b'G' | b'S' | b'A' | b'I' | b'D' | b'C') => {
+            DATA_WRITERS.iter().any(|w| name.eq_ignore_ascii_case(w))
+        }
+        _ => false,
+    }
+}
+
+const DATA_WRITERS: [&[u8]; 7] = [
+    b"GetDataVal",
+    b"SetDataVal",
+    b"SetAllDataVal",
+    b"Add",
+    b"Incr",
+    b"Decr",
+    b"Clear",
+];
+
+/// The text inside a string literal's quotes (`p10` of `"p10"`).
+fn string_inside(src: &[u8], span: Span) -> Option<Span> {
+    let text = span.slice(src);
+    (text.len() >= 2 && text.first() == Some(&b'"') && text.last() == Some(&b'"'))
+        .then(|| Span::new(span.start + 1, span.end - 1))
+}
+
+/// The name a write into `span` gives a value, without a component (`pp` of `pp.trans.z`,
+/// `arr{i}` of `arr{i}.trans`).
+fn written_name(src: &[u8], span: Span) -> Span {
+    let text = span.slice(src);
+    let end = text.iter().position(|&b| b == b'.').unwrap_or(text.len());
+    let mut end = span.start + end;
+    while end > span.start && src.get(end - 1).is_some_and(u8::is_ascii_whitespace) {
+        end -= 1;
+    }
+    Span::new(span.start, end)
+}
+
+/// Whether `span` is a name with indexes and components (`rec.p`, `arr{i}.where`): data a
+/// value can be written into.
+fn is_path(src: &[u8], span: Span) -> bool {
+    let text = span.slice(src);
+    text.first()
+        .is_some_and(|b| b.is_ascii_alphabetic() || *b == b'_')
+        && !text.contains(&b'(')
+        && !text.contains(&b'"')
+        && !text.contains(&b':')
+}
+
+/// The names an expression's text reads (`Offs(p10,0,0,dz)`: `Offs`, `p10`, `dz`), each
+/// from its start to the end of its word, without components (`.trans`), argument labels
+/// (`\WObj`), numbers or strings, nor what a `CalcJointT` reads: what a value computed from
+/// the expression may copy.
+fn names_in(src: &[u8], span: Span, out: &mut Vec<Span>) {
+    let word = |b: u8| b.is_ascii_alphanumeric() || b == b'_';
+    let mut i = span.start;
+    let mut before = 0u8;
+    while i < span.end {
+        let Some(&b) = src.get(i) else { break };
+        if b == b'"' {
+            i += 1;
+            while i < span.end && src.get(i) != Some(&b'"') {
+                i += 1;
+            }
+            i += 1;
+            before = b'"';
+            continue;
+        }
+        if word(b) {
+            let start = i;
+            while i < span.end && src.get(i).copied().is_some_and(word) {
+                i += 1;
+            }
+            let name = Span::new(start, i);
+            if name.slice(src).eq_ignore_ascii_case(b"CalcJointT") {
+                // Joints, the same whatever the work object a motion to them names: its own
+                // use is recorded where it is written (`Extractor::expression_call_use`).
+                let mut depth = 0usize;
+                while i < span.end {
+                    match src.get(i) {
+                        Some(b'(') => depth += 1,
+                        Some(b')') if depth <= 1 => break,
+                        Some(b')') => depth -= 1,
+                        _ => {}
+                    }
+                    i += 1;
+                }
+                i += 1;
+                before = b')';
+                continue;
+            }
+            if !b.is_ascii_digit() && before != b'.' && before != b'\\' {
+                out.push(name);
+            }
+            before = b'a';
+            continue;
+        }
+        if !b.is_ascii_whitespace() {
+            before = b;
+        }
+        i += 1;
+    }
+}
+
 fn is_literal(src: &[u8], arena: &Arena, id: u32) -> bool {
     let Some(n) = arena.get(id) else {
         return false;
@@ -1432,6 +1560,8 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     let mut param_assignments = Vec::with_capacity(modules.len());
     let mut param_writes = Vec::with_capacity(modules.len());
     let mut offset_refs = Vec::with_capacity(modules.len());
+    let mut passed = Vec::with_capacity(modules.len());
+    let mut named_at_run_time = Vec::with_capacity(modules.len());
     for (m, (x, src, name)) in modules.into_iter().enumerate() {
         if let Some(d) = diagnostics.get_mut(m) {
             d.extend(x.misshapen);
@@ -1441,6 +1571,8 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         param_assignments.push(x.param_assignments);
         param_writes.push(x.param_writes);
         offset_refs.push(x.offset_refs);
+        passed.push(x.passed);
+        named_at_run_time.push(x.named_at_run_time);
         calls.push(Calls {
             uses: x.uses,
             args: x.call_args,
@@ -1625,6 +1757,13 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
             }
         }
     }
+    // Arguments positional binding does not see: composed (`mv Offs(p10, 0, 0, 10);`) or
+    // named (`mv \p:=p10;`).
+    for (m, list) in passed.iter().enumerate() {
+        for a in list {
+            binder.bind_passed(m, a);
+        }
+    }
     // Each offset call's bases: the targets its reference names where the call is written, or,
     // for a parameter of its routine, those the calls pass there.
     let mut offset_bases: Vec<Vec<Vec<(usize, usize)>>> = Vec::with_capacity(rest.len());
@@ -1652,6 +1791,32 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         }
         offset_bases.push(bases);
     }
+    // A late call's arguments go to a routine chosen at run time, in any work object: each
+    // target they name is refused naming the call.
+    let mut every_target: Option<(usize, usize, Span)> = None;
+    for (m, list) in named_at_run_time.iter().enumerate() {
+        let src = rest.get(m).map_or(&[][..], |r| r.6);
+        for (call, line, names) in list {
+            let Some(names) = names else {
+                every_target.get_or_insert((m, *line, *call));
+                continue;
+            };
+            let mut found = Vec::new();
+            for sp in names {
+                binder.targets_named(m, sp.slice(src), &mut found);
+            }
+            let call = latin1(call.slice(src));
+            binder.mark(m, &found, |file, usage| {
+                usage.set_run_time(RunTimeValue::NamedAtRunTime {
+                    call: call.clone(),
+                    at: UseLine {
+                        line: *line,
+                        file: file.cloned(),
+                    },
+                });
+            });
+        }
+    }
     // A computed value given to a parameter: a use of it with that value, which the binder
     // hands on to the targets the routine's calls pass there.
     for (m, list) in param_assignments.iter().enumerate() {
@@ -1670,6 +1835,21 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     }
     share_assigned_usage(&mut facts, &assigned_literals);
     drop(facts);
+    // Data named at run time (`SetDataVal name, …` with `name` computed): any target of the
+    // program may be read or given a value there, and any work object.
+    if let Some((m, line, call)) = every_target
+        && let Some((from, r)) = module_names.get(m).zip(rest.get(m))
+    {
+        let call = latin1(call.slice(r.6));
+        for (tm, ps) in positions.iter_mut().enumerate() {
+            for usage in ps.usages_mut() {
+                usage.set_run_time(RunTimeValue::NamedAtRunTime {
+                    call: call.clone(),
+                    at: UseLine::of(line, m, tm, from),
+                });
+            }
+        }
+    }
     // A frame given a whole value in a routine (docs/design.md, "Frames the program assigns").
     // Each assignment: (the frame's module and index, the assignment's module and index).
     let mut given: Vec<((usize, usize), (usize, usize))> = Vec::new();
@@ -1786,6 +1966,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         let as_frame = |&(m, a): &(usize, &AssignedValue)| {
             let value = FrameDecl {
                 name: f.name.clone(),
+                assigned: true,
                 ..a.as_kind_of(f).clone()
             };
             (m, value)
@@ -2126,14 +2307,14 @@ impl Extractor<'_> {
                         self.assigned_literals.push((target, before));
                     }
                 } else if !literal || !whole {
-                    // A name's value copied whole into another (`pv := p10;`, `buf{1} :=
-                    // p10;`): a motion to the copy moves to the source.
+                    // A name's value copied into another (`pv := p10;`, `buf{1} := p10;`,
+                    // `rec.p := p10;`), or computed from names (`pv := Offs(p10, 0, 0, 10);`,
+                    // `pv := getP();`, a function's value copying what it returns): a motion
+                    // to the copy moves to what they hold, in the copy's work object.
                     if let Some(v) = arena.get(value)
-                        && is_reference(src, target)
-                        && is_reference(src, v.span())
-                        && matches!(v.kind, ExprKind::Ident | ExprKind::Access)
+                        && is_path(src, target)
                     {
-                        self.copies.push((target, v.span()));
+                        self.copy_of(src, target, v);
                     }
                     // `p10.trans.z := 20` changes part of the value: run time as well; a
                     // tool's load (`tGrip.tload := loadPart;`, `.tload.mass`) places nothing.
@@ -2172,8 +2353,27 @@ impl Extractor<'_> {
         }
     }
 
+    /// Records `copy := value` as a copy of each name `value` reads: the name itself when the
+    /// value is one (`buf{1}`, kept whole), else every name in the expression.
+    fn copy_of(&mut self, src: &[u8], copy: Span, value: &ExprNode) {
+        let routine = self.current;
+        let mut sources = Vec::new();
+        if matches!(value.kind, ExprKind::Ident | ExprKind::Access) && is_path(src, value.span()) {
+            sources.push(value.span());
+        } else if !matches!(value.kind, ExprKind::Aggregate) {
+            names_in(src, value.span(), &mut sources);
+        }
+        self.copies
+            .extend(sources.into_iter().map(|source| crate::resolve::CopyFact {
+                copy,
+                source,
+                routine,
+            }));
+    }
+
     /// `RETURN p10;` in a function: a call of the function, `MoveL getP(), …`, moves to what
-    /// `p10` reaches, a copy of it under the function's name.
+    /// `p10` reaches, a copy of it under the function's name; `RETURN Offs(p, 0, 0, 100);`
+    /// returns a copy of each name it reads (a parameter: what the callers pass there).
     fn returned_copy(&mut self, src: &[u8], span: Span) {
         let text = span.slice(src);
         let keyword = b"RETURN";
@@ -2199,10 +2399,24 @@ impl Extractor<'_> {
             end -= 1;
         }
         let value = Span::new(start, end);
-        // `RETURN` followed by a name, not `RETURNS` nor `RETURN;`.
-        if start > span.start + keyword.len() && is_reference(src, value) {
-            self.copies.push((routine.name, value));
+        // `RETURN` followed by a value, not `RETURNS` nor `RETURN;`.
+        if start == span.start + keyword.len() || start >= end {
+            return;
         }
+        let name = routine.name;
+        let mut sources = Vec::new();
+        if is_reference(src, value) {
+            sources.push(value);
+        } else {
+            names_in(src, value, &mut sources);
+        }
+        let routine = self.current;
+        self.copies
+            .extend(sources.into_iter().map(|source| crate::resolve::CopyFact {
+                copy: name,
+                source,
+                routine,
+            }));
     }
 
     /// Records the call `name` at `span` from the call before, which it repeats with its
@@ -2496,11 +2710,21 @@ impl Extractor<'_> {
         let Some(mut u) = self.call_head(name, span) else {
             return;
         };
+        if writes_data_by_name(name.slice(src)) {
+            self.data_call(src, arena, name, args, plain, span);
+        }
         self.call_refs.extend(via_offset);
         self.call_inline.extend(inline);
         match plain {
             Some(plain) => {
                 for a in plain.iter() {
+                    // A named argument other than the frame and tool: rare (`mv \p:=p10;`).
+                    if a.switch
+                        && let Some(v) = a.value
+                        && !a.label.slice(src).eq_ignore_ascii_case(b"WObj")
+                    {
+                        self.composed_arg(&u, src, name, (true, a.label), v, true);
+                    }
                     self.call_arg(&mut u, src, a.switch, a.label, a.value.map(|v| (v, true)));
                 }
             }
@@ -2508,22 +2732,197 @@ impl Extractor<'_> {
                 for a in arena.children(args) {
                     let Some(arg) = arena.get(a) else { continue };
                     let value = arena.arg_value(a).and_then(|v| arena.get(v));
-                    let returned = |v: &&ExprNode| {
-                        let callee = v.name_span().slice(src);
-                        v.kind == ExprKind::Call
-                            && !callee.eq_ignore_ascii_case(b"Offs")
-                            && !callee.eq_ignore_ascii_case(b"RelTool")
-                    };
-                    if let Some(v) = value.filter(returned).filter(|_| !arg.switch) {
-                        // `MoveL getP(), …`: what the function returns, if it returns a copy
-                        // of a target (`Extractor::returned_copy`).
-                        self.call_refs.push(v.name_span());
+                    if let Some(v) = value {
+                        let plain = matches!(v.kind, ExprKind::Ident | ExprKind::Access);
+                        let label = (arg.switch, arg.name_span());
+                        self.composed_arg(&u, src, name, label, v.span(), plain);
                     }
                     self.arena_arg(&mut u, src, arg, value);
                 }
             }
         }
         self.uses.push(u);
+    }
+
+    /// Out of line, a call that writes data by name or through its first argument, or calls a
+    /// routine chosen at run time ([`writes_data_by_name`]): `GetDataVal "p10", pv` copies
+    /// `p10` into `pv`, `SetDataVal "p10", pv` gives `p10` a value (a copy of `pv`), `Add
+    /// pp.trans.z, 10` changes `pp`; a data name computed at run time (or `SetAllDataVal` of a
+    /// type that holds positions or frames) may touch any target, and a late call's arguments
+    /// go to a routine trackfix cannot tell ([`Extractor::named_at_run_time`]).
+    #[inline(never)]
+    fn data_call(
+        &mut self,
+        src: &[u8],
+        arena: &Arena,
+        name: Span,
+        args: u32,
+        plain: Option<&PlainArgs>,
+        span: Span,
+    ) {
+        // The positional arguments: (value, whether a string literal).
+        let mut positional: Vec<(Span, bool)> = Vec::new();
+        match plain {
+            Some(plain) => positional.extend(
+                plain
+                    .iter()
+                    .filter(|a| !a.switch)
+                    .filter_map(|a| Some((a.value?, false))),
+            ),
+            None => {
+                for a in arena.children(args) {
+                    if arena.get(a).is_none_or(|a| a.switch) {
+                        continue;
+                    }
+                    if let Some(v) = arena.arg_value(a).and_then(|v| arena.get(v)) {
+                        positional.push((v.span(), v.kind == ExprKind::Str));
+                    }
+                }
+            }
+        }
+        let line = self.lines.line(span.start);
+        let callee = name.slice(src);
+        let is = |w: &[u8]| callee.eq_ignore_ascii_case(w);
+        let first = positional.first().copied();
+        let second = positional.get(1).map(|&(v, _)| v);
+        let named = first.and_then(|(v, s)| s.then(|| string_inside(src, v)).flatten());
+        if callee.first() == Some(&b'%') {
+            let mut names = Vec::new();
+            for &(v, _) in &positional {
+                names_in(src, v, &mut names);
+            }
+            self.named_at_run_time.push((name, line, Some(names)));
+        } else if is(b"GetDataVal") {
+            match (named, second) {
+                (Some(data), Some(into)) => {
+                    self.copies.push(crate::resolve::CopyFact {
+                        copy: into,
+                        source: data,
+                        routine: self.current,
+                    });
+                }
+                _ => self.named_at_run_time.push((name, line, None)),
+            }
+            if let Some(into) = second {
+                self.computed_write(src, written_name(src, into), line);
+            }
+        } else if is(b"SetDataVal") {
+            match (named, second) {
+                (Some(data), Some(from)) => {
+                    let mut names = Vec::new();
+                    names_in(src, from, &mut names);
+                    self.copies
+                        .extend(names.into_iter().map(|source| crate::resolve::CopyFact {
+                            copy: data,
+                            source,
+                            routine: self.current,
+                        }));
+                    self.computed_write(src, data, line);
+                }
+                _ => self.named_at_run_time.push((name, line, None)),
+            }
+        } else if is(b"SetAllDataVal") {
+            // A type that holds no position nor frame changes none.
+            let harmless = named.is_some_and(|t| {
+                let t = t.slice(src);
+                ![&b"robtarget"[..], b"jointtarget", b"wobjdata", b"tooldata"]
+                    .iter()
+                    .any(|k| t.eq_ignore_ascii_case(k))
+            });
+            if !harmless {
+                self.named_at_run_time.push((name, line, None));
+            }
+        } else if let Some((v, false)) = first {
+            // `Add`, `Incr`, `Decr`, `Clear`: the first argument changes.
+            self.computed_write(src, written_name(src, v), line);
+        }
+    }
+
+    /// Out of line, `StrToVal(text, data)` at node `id`: `data` is given a value the program
+    /// reads when it runs.
+    #[inline(never)]
+    fn value_read_into(&mut self, src: &[u8], arena: &Arena, id: u32) {
+        let into = arena
+            .children(id)
+            .filter(|&a| arena.get(a).is_some_and(|a| !a.switch))
+            .nth(1)
+            .and_then(|a| arena.arg_value(a))
+            .and_then(|v| arena.get(v));
+        if let Some(v) = into {
+            let line = self.lines.line(v.span().start);
+            self.computed_write(src, written_name(src, v.span()), line);
+        }
+    }
+
+    /// A value computed at run time given to `target` (a name, an element) on `line`, as an
+    /// assignment's: the routine's own parameter of that name is the caller's argument.
+    fn computed_write(&mut self, src: &[u8], target: Span, line: usize) {
+        let text = text_of(src, target);
+        let head = text.split(['{', '.']).next().unwrap_or_default().trim();
+        let param = self.current.and_then(|r| {
+            let routine = self.routines.get(r)?;
+            let p = routine
+                .params
+                .get(routine.required_named(src, head.as_bytes())?)?;
+            Some((r, Span32::of(*p)?))
+        });
+        match param {
+            Some((r, p)) => {
+                self.param_writes.push((r, p, line));
+                self.param_assignments.push((r, p, line));
+            }
+            None => self.computed.push(crate::resolve::Assignment {
+                name: text.trim().to_owned(),
+                line,
+                literal: false,
+            }),
+        }
+    }
+
+    /// Out of line, for an argument (written `\label` when a switch; its value `v`, `plain`
+    /// when a name) of call `u` to `name` that is not a
+    /// plain name: the names its value reads are references of the call (`MoveL id(p10), …`,
+    /// `MoveL Offs(getP(), …)`: a function's value is a copy of what it reads and of what it
+    /// returns, reached under its name) and, with a named argument (`mv \p:=p10;`), what
+    /// is passed to the routine's parameter ([`Extractor::passed`]).
+    #[inline(never)]
+    fn composed_arg(
+        &mut self,
+        u: &CallUse,
+        src: &[u8],
+        name: Span,
+        (switch, label): (bool, Span),
+        v: Span,
+        plain: bool,
+    ) {
+        let param = if switch || label.end > label.start {
+            let l = label.slice(src);
+            if l.eq_ignore_ascii_case(b"WObj") || l.eq_ignore_ascii_case(b"Tool") {
+                return;
+            }
+            crate::resolve::PassedTo::Named(label)
+        } else if plain {
+            return;
+        } else {
+            let position = self.call_args.len().saturating_sub(u.args_start as usize);
+            crate::resolve::PassedTo::Position(position)
+        };
+        let mut names = Vec::new();
+        if plain {
+            names.push(v);
+        } else {
+            names_in(src, v, &mut names);
+            if !switch {
+                self.call_refs.extend(names.iter().copied());
+            }
+        }
+        self.passed.push(crate::resolve::PassedArg {
+            line: u.line as usize,
+            routine: self.current,
+            callee: name,
+            param,
+            names,
+        });
     }
 
     /// Records the function call at `id` of the arena (`CalcJointT(p10, tGun \WObj:=wCar)`) as a

@@ -110,6 +110,18 @@ pub(crate) fn resolve_frame(
             ),
             "a stationary-tool target moves with the work piece, not the track: correct it by hand",
         )),
+        // The program gives the frame another value before it moves, which the robot then
+        // moves in: the cell's frame stands for the declaration, not for that value.
+        (Some(d), Some(_)) if d.assigned => Err(Why::new(
+            RefusalKind::RuntimeData,
+            format!(
+                "{frame} `{name}` is given another value by the program (line {}) than the declaration the cell file's entry for it replaces: the robot moves in the program's value",
+                d.line
+            ),
+            format!(
+                "remove `{name}` from the cell file's [robot.NAME.wobj], or declare it with the value the program gives it"
+            ),
+        )),
         // The cell's identified frame stands for the declared one, which still says whether
         // the frame moves with another unit or is held by the robot.
         (_, Some(p)) => Ok(p),
@@ -824,6 +836,7 @@ mod tests {
             oframe: None,
             scope: Default::default(),
             storage: Default::default(),
+            assigned: false,
         };
         if let Some(f) = program.files.first_mut() {
             f.frames.push(decl);

@@ -1152,3 +1152,103 @@ fn a_base_set_late_in_a_loop_holds_at_its_top() {
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("+DECL E6POS XP1={X 410.745,"), "{out}");
 }
+
+/// A copy is followed however it is made: through another copy (`pw := pv; pv := p1;`, in
+/// either order), computed from the target by a function (`Offs`, `RelTool`, `MirPos`, a
+/// function of the program whose `RETURN` names it, nested), into an element chosen at run
+/// time and moved to by a number, through a whole array copied, into a record's component, and
+/// into data of another module moved to there. Each target, also moved to in `wA`, is then used
+/// with two work objects (before, each was corrected in `wA` alone).
+#[test]
+fn copies_are_followed_through_chains_functions_arrays_records_and_modules() {
+    let names = [
+        "p1", "p2", "p3", "p4", "p5", "p6", "p7", "p8", "p9", "p10", "p11",
+    ];
+    let mut data = String::from("MODULE D\n");
+    for n in names {
+        data += &format!("  CONST robtarget {n}:={TARGET};\n");
+    }
+    data += "  PERS robtarget pShared:=[[0,0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n\
+             ENDMODULE\n";
+    let main = "MODULE M\n  RECORD ptrec\n    robtarget p;\n    num n;\n  ENDRECORD\n  \
+        VAR robtarget pv;\n  VAR robtarget pw;\n  VAR robtarget pa;\n  VAR robtarget pb;\n  \
+        VAR robtarget pc;\n  VAR robtarget pd;\n  VAR robtarget arr{2};\n  VAR robtarget a1{2};\n  \
+        VAR robtarget a2{2};\n  VAR ptrec rec;\n  VAR num i := 1;\n  \
+        FUNC robtarget getP()\n    RETURN p5;\n  ENDFUNC\n  \
+        FUNC robtarget id(robtarget p)\n    RETURN p;\n  ENDFUNC\n  \
+        PROC r()\n    pw := pv;\n    pv := p1;\n    MoveL pw,v1,fine,tool0\\WObj:=wB;\n    \
+        pa := Offs(p2,0,0,10);\n    MoveL pa,v1,fine,tool0\\WObj:=wB;\n    \
+        pb := RelTool(MirPos(p3, mp),0,0,10);\n    MoveL pb,v1,fine,tool0\\WObj:=wB;\n    \
+        pc := getP();\n    MoveL pc,v1,fine,tool0\\WObj:=wB;\n    \
+        pd := Offs(id(p4),0,0,10);\n    MoveL pd,v1,fine,tool0\\WObj:=wB;\n    \
+        arr{i} := p6;\n    MoveL arr{2},v1,fine,tool0\\WObj:=wB;\n    \
+        a1{1} := p7;\n    a2 := a1;\n    MoveL a2{1},v1,fine,tool0\\WObj:=wB;\n    \
+        rec.p := p8;\n    MoveL rec.p,v1,fine,tool0\\WObj:=wB;\n    \
+        MoveL RelTool(getP(),0,0,10),v1,fine,tool0\\WObj:=wB;\n    \
+        pShared := p9;\n  ENDPROC\n  \
+        PROC all()\n    MoveL p1,v1,fine,tool0\\WObj:=wA;\n    MoveL p2,v1,fine,tool0\\WObj:=wA;\n    \
+        MoveL p3,v1,fine,tool0\\WObj:=wA;\n    MoveL p4,v1,fine,tool0\\WObj:=wA;\n    \
+        MoveL p5,v1,fine,tool0\\WObj:=wA;\n    MoveL p6,v1,fine,tool0\\WObj:=wA;\n    \
+        MoveL p7,v1,fine,tool0\\WObj:=wA;\n    MoveL p8,v1,fine,tool0\\WObj:=wA;\n    \
+        MoveL p9,v1,fine,tool0\\WObj:=wA;\n    MoveL p10,v1,fine,tool0\\WObj:=wA;\n    \
+        MoveL p11,v1,fine,tool0\\WObj:=wA;\n  ENDPROC\nENDMODULE\n"
+        .to_owned();
+    // A copy into the `PERS` of module M, moved to in module O.
+    let other = "MODULE O\n  PROC o()\n    MoveL pShared,v1,fine,tool0\\WObj:=wB;\n    \
+        arr{1} := p11;\n  ENDPROC\nENDMODULE\n"
+        .to_owned();
+    let (_dir, task) = task(&[
+        ("PROGMOD/D.mod", data),
+        ("PROGMOD/M.mod", main),
+        ("PROGMOD/O.mod", other),
+    ]);
+    let ps = programs(&task);
+    for n in ["p1", "p2", "p3", "p4", "p5", "p6", "p7", "p8", "p9"] {
+        assert_eq!(work_objects(&ps[0], n), ["wA", "wB"], "{n}");
+    }
+    // Moved to by nothing but its own motion.
+    assert_eq!(work_objects(&ps[0], "p10"), ["wA"]);
+    // A copy into `arr{1}` is not what `arr{2}` holds.
+    assert_eq!(work_objects(&ps[0], "p11"), ["wA"]);
+}
+
+/// What a routine does with its parameter reaches what its callers pass: a function's value
+/// (`MoveL id(p1)`, `RETURN Offs(p, …)`, a local copy returned), a composed argument or a
+/// function's value passed to a routine that moves its parameter (`mv Offs(p4,…)`, `mv
+/// getP()`), a copy of the parameter moved to inside the routine or, written into module data,
+/// elsewhere, and an optional parameter given by name (`mv \p:=p8`, or passed on as `inner
+/// \p:=q`). Before, each target was corrected in `wA` alone.
+#[test]
+fn a_routines_use_of_its_parameter_reaches_what_its_callers_pass() {
+    let names = ["p1", "p2", "p3", "p4", "p5", "p6", "p7", "p8", "p9"];
+    let mut data = String::from("MODULE D\n");
+    for n in names {
+        data += &format!("  CONST robtarget {n}:={TARGET};\n");
+    }
+    data += "ENDMODULE\n";
+    let mut main = String::from(
+        "MODULE M\n  VAR robtarget g;\n  \
+        FUNC robtarget id(robtarget p)\n    RETURN p;\n  ENDFUNC\n  \
+        FUNC robtarget above(robtarget p)\n    RETURN Offs(p,0,0,100);\n  ENDFUNC\n  \
+        FUNC robtarget kept(robtarget p)\n    VAR robtarget q;\n    q := p;\n    RETURN q;\n  ENDFUNC\n  \
+        FUNC robtarget getP()\n    RETURN p5;\n  ENDFUNC\n  \
+        PROC mv(robtarget p)\n    MoveL p,v1,fine,tool0\\WObj:=wB;\n  ENDPROC\n  \
+        PROC sub(robtarget p)\n    VAR robtarget pv;\n    pv := p;\n    MoveL pv,v1,fine,tool0\\WObj:=wB;\n  ENDPROC\n  \
+        PROC keep(robtarget p)\n    g := p;\n  ENDPROC\n  \
+        PROC opt(\\robtarget p)\n    IF Present(p) MoveL p,v1,fine,tool0\\WObj:=wB;\n  ENDPROC\n  \
+        PROC outer(robtarget q)\n    opt \\p:=q;\n  ENDPROC\n  \
+        PROC r()\n    MoveL id(p1),v1,fine,tool0\\WObj:=wB;\n    \
+        MoveL above(p2),v1,fine,tool0\\WObj:=wB;\n    MoveL kept(p3),v1,fine,tool0\\WObj:=wB;\n    \
+        mv Offs(p4,0,0,10);\n    mv getP();\n    sub p6;\n    keep p7;\n    \
+        MoveL g,v1,fine,tool0\\WObj:=wB;\n    opt \\p:=p8;\n    outer p9;\n  ENDPROC\n  PROC all()\n",
+    );
+    for n in names {
+        main += &format!("    MoveL {n},v1,fine,tool0\\WObj:=wA;\n");
+    }
+    main += "  ENDPROC\nENDMODULE\n";
+    let (_dir, task) = task(&[("PROGMOD/D.mod", data), ("PROGMOD/M.mod", main)]);
+    let ps = programs(&task);
+    for n in names {
+        assert_eq!(work_objects(&ps[0], n), ["wA", "wB"], "{n}");
+    }
+}

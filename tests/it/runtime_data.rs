@@ -1223,3 +1223,115 @@ fn a_local_frame_the_targets_module_does_not_see_is_named() {
         refused[0].2
     );
 }
+
+/// The work objects target `name` of `f` is used with, sorted.
+fn wobjs_of(f: &ParsedFile, name: &str) -> Vec<String> {
+    let mut all: Vec<String> = f
+        .positions()
+        .find(|p| p.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no target {name}"))
+        .usage
+        .work_objects()
+        .map(str::to_owned)
+        .collect();
+    all.sort();
+    all
+}
+
+/// Data a call names with a literal is that data: `GetDataVal "p1", pv` copies `p1` into `pv`
+/// (a motion to `pv` is one to `p1`) and gives `pv` a value, `SetDataVal "pp", p2` and
+/// `StrToVal(…, pq)` give their data a value, and `Add`, `Incr` or a component passed to a
+/// routine that writes its parameter change a target or work object in part. Before, each
+/// was corrected as written.
+#[test]
+fn rapid_data_written_by_name_or_in_part_is_run_time_data() {
+    let src = format!(
+        "MODULE R\n\
+  PERS wobjdata wC:=[FALSE,TRUE,\"\",[[1000,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n\
+  PERS wobjdata wD:=[FALSE,TRUE,\"\",[[1000,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n\
+  PERS wobjdata wE:=[FALSE,TRUE,\"\",[[1000,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n\
+  CONST robtarget p1:={T};\n\
+  CONST robtarget p2:={T};\n\
+  PERS robtarget pp:={T};\n\
+  PERS robtarget pq:={T};\n\
+  PERS robtarget pr:={T};\n\
+  PERS robtarget ps:={T};\n\
+  PERS robtarget pt:={T};\n\
+  CONST robtarget onC:={T};\n\
+  CONST robtarget onD:={T};\n\
+  CONST robtarget onE:={T};\n\
+  VAR robtarget pv;\n\
+  VAR bool ok;\n\
+  PROC bump(INOUT num z)\n    z := z + 10;\n  ENDPROC\n\
+  PROC main()\n\
+    GetDataVal \"p1\", pv;\n\
+    MoveL pv,v100,fine,tool0\\WObj:=wB;\n\
+    MoveL p1,v100,fine,tool0\\WObj:=wA;\n\
+    SetDataVal \"pp\", p2;\n\
+    ok := StrToVal(\"[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]\", pq);\n\
+    Add pr.trans.z, 10;\n\
+    Incr ps.extax.eax_a;\n\
+    bump pt.trans.z;\n\
+    Add wC.uframe.trans.x, 100;\n\
+    bump wD.uframe.trans.x;\n\
+    GetDataVal \"wB\", wE;\n\
+    MoveL pp,v100,fine,tool0\\WObj:=wA;\n\
+    MoveL pq,v100,fine,tool0\\WObj:=wA;\n\
+    MoveL pr,v100,fine,tool0\\WObj:=wA;\n\
+    MoveL ps,v100,fine,tool0\\WObj:=wA;\n\
+    MoveL pt,v100,fine,tool0\\WObj:=wA;\n\
+    MoveL p2,v100,fine,tool0\\WObj:=wA;\n\
+    MoveL onC,v100,fine,tool0\\WObj:=wC;\n\
+    MoveL onD,v100,fine,tool0\\WObj:=wD;\n\
+    MoveL onE,v100,fine,tool0\\WObj:=wE;\n\
+  ENDPROC\nENDMODULE\n"
+    );
+    let f = rapid::parse_file(Path::new("r.mod"), src.into_bytes());
+    assert_eq!(wobjs_of(&f, "p1"), ["wA", "wB"]);
+    for n in ["pp", "pq", "pr", "ps", "pt", "onC", "onD", "onE"] {
+        assert!(run_time(&f, n).is_some(), "{n}");
+    }
+    // What `SetDataVal` reads is not changed.
+    assert_eq!(run_time(&f, "p2"), None);
+}
+
+/// A data name or routine the program computes when it runs: `GetDataVal s, pv` or
+/// `SetDataVal s, …` may read or write any target (and work object) of the program, every
+/// one refused naming the call; `SetAllDataVal` of a type holding no position or frame
+/// touches none; a late-bound call (`%pn% p1;`) passes its arguments to a routine trackfix
+/// cannot tell, which refuses them, and nothing else.
+#[test]
+fn rapid_data_or_routines_named_at_run_time_refuse_what_they_may_touch() {
+    let module = |body: &str| {
+        let src = format!(
+            "MODULE R\n  CONST robtarget p1:={T};\n  CONST robtarget p2:={T};\n  VAR robtarget pv;\n  \
+             VAR string s:=\"p1\";\n  VAR num n;\n  PROC mvB(robtarget p)\n    \
+             MoveL p,v100,fine,tool0\\WObj:=wB;\n  ENDPROC\n  PROC main()\n    \
+             MoveL p1,v100,fine,tool0\\WObj:=wA;\n    MoveL p2,v100,fine,tool0\\WObj:=wA;\n    \
+             {body}\n  ENDPROC\nENDMODULE\n"
+        );
+        rapid::parse_file(Path::new("r.mod"), src.into_bytes())
+    };
+    let named = |f: &ParsedFile, n: &str| match run_time(f, n) {
+        Some(RunTimeValue::NamedAtRunTime { call, at }) => Some((call, at.line)),
+        _ => None,
+    };
+    for (body, call) in [
+        ("GetDataVal s, pv;", "GetDataVal"),
+        ("SetDataVal s, pv;", "SetDataVal"),
+        (
+            "SetAllDataVal \"robtarget\"\\Object:=\"p.*\", pv;",
+            "SetAllDataVal",
+        ),
+    ] {
+        let f = module(body);
+        for n in ["p1", "p2"] {
+            assert_eq!(named(&f, n), Some((call.to_owned(), 13)), "{body} {n}");
+        }
+    }
+    let f = module("SetAllDataVal \"num\", n;");
+    assert_eq!(run_time(&f, "p1"), None);
+    let f = module("%\"mv\" + \"B\"% p1;");
+    assert_eq!(named(&f, "p1"), Some(("%\"mv\" + \"B\"%".to_owned(), 13)));
+    assert_eq!(run_time(&f, "p2"), None);
+}

@@ -2603,3 +2603,34 @@ fn a_mirror_for_another_kuka_robot_is_written_in_its_own_config_base() {
     );
     assert!(written.contains(&expected), "{expected}\n{written}");
 }
+
+/// A work object the cell file gives (`wobj_car` in samples/cell.toml) that the program gives
+/// another value before it moves: the robot moves in the program's value, not in the one the
+/// cell's entry stands for, so its targets are refused (before, they were corrected in the
+/// cell's frame while a warning said trackfix used the program's).
+#[test]
+fn a_cell_work_object_the_program_gives_another_value_is_refused() {
+    let (dir, path) = scratch_with(
+        "m.mod",
+        "MODULE M\n  PERS wobjdata wobj_car:=[FALSE,TRUE,\"\",[[1670.3,-1850.75,612.4],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n  \
+         CONST robtarget p10:=[[100,200,300],[0,1,0,0],[-1,-1,-2,0],[1500,9E9,9E9,9E9,9E9,9E9]];\n  \
+         PROC main()\n    wobj_car := [FALSE,TRUE,\"\",[[1800,-1900,700],[0.996195,0,0,0.087156]],[[0,0,0],[1,0,0,0]]];\n    \
+         MoveL p10,v100,fine,tool0\\WObj:=wobj_car;\n  ENDPROC\nENDMODULE\n",
+    );
+    let out = dir.path().join("out");
+    let err = refusal_output(&[
+        "correct",
+        path.to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        err.contains("`p10`") && err.contains("`wobj_car` is given another value by the program"),
+        "{err}"
+    );
+    assert!(err.contains("[runtime-data]"), "{err}");
+}
