@@ -1759,15 +1759,8 @@ fn computed_through_parameters(
             }
             if !passed.is_empty() {
                 let routine = String::from_utf8_lossy(call.callee.slice(src)).into_owned();
-                binder.mark(fi, &passed, |elsewhere, usage| {
-                    usage.mark_unresolved_frame(UnresolvedFrame {
-                        at: UseLine {
-                            line: call.line,
-                            file: elsewhere.cloned(),
-                        },
-                        cause: UnresolvedCause::PassedTo(routine.clone()),
-                    });
-                });
+                let cause = UnresolvedCause::PassedTo(routine);
+                mark_unresolved(&mut binder, fi, &passed, call.line, &cause);
             }
             args.clear();
             args.extend(
@@ -1833,18 +1826,36 @@ fn computed_through_parameters(
                 ),
                 (None, None) => format!("returned by `{routine}`"),
             };
-            binder.mark(fi, &passed, |elsewhere, usage| {
-                usage.mark_unresolved_frame(UnresolvedFrame {
-                    at: UseLine {
-                        line: h.line,
-                        file: elsewhere.cloned(),
-                    },
-                    cause: UnresolvedCause::HandedBack(how.clone()),
-                });
-            });
+            mark_unresolved(
+                &mut binder,
+                fi,
+                &passed,
+                h.line,
+                &UnresolvedCause::HandedBack(how),
+            );
         }
     }
     binder.finish();
+}
+
+/// Marks the targets `found` in file `fi` as moved on `line` with a base that cannot be
+/// resolved, for `cause`.
+fn mark_unresolved(
+    binder: &mut crate::resolve::Binder<'_, '_>,
+    fi: usize,
+    found: &[(usize, usize)],
+    line: usize,
+    cause: &UnresolvedCause,
+) {
+    binder.mark(fi, found, |elsewhere, usage| {
+        usage.mark_unresolved_frame(UnresolvedFrame {
+            at: UseLine {
+                line,
+                file: elsewhere.cloned(),
+            },
+            cause: cause.clone(),
+        });
+    });
 }
 
 /// Marks every position of the program written after a geometric operator `:` anywhere in it

@@ -2328,13 +2328,7 @@ impl Extractor<'_> {
                         return;
                     }
                     let line = self.lines.line(span.start);
-                    let param = self.current.and_then(|r| {
-                        let routine = self.routines.get(r)?;
-                        let p = routine
-                            .params
-                            .get(routine.required_named(src, name.as_bytes())?)?;
-                        Some((r, Span32::of(*p)?))
-                    });
+                    let param = self.own_param(src, name.as_bytes());
                     match param {
                         // The routine's own parameter hides module data of its name.
                         Some((r, p)) => self.param_assignments.push((r, p, line)),
@@ -2854,18 +2848,21 @@ impl Extractor<'_> {
         }
     }
 
+    /// The required parameter named `name` of the routine being read, with the routine: the
+    /// caller's argument, which hides module data of its name.
+    fn own_param(&self, src: &[u8], name: &[u8]) -> Option<(usize, Span32)> {
+        let r = self.current?;
+        let routine = self.routines.get(r)?;
+        let p = routine.params.get(routine.required_named(src, name)?)?;
+        Some((r, Span32::of(*p)?))
+    }
+
     /// A value computed at run time given to `target` (a name, an element) on `line`, as an
     /// assignment's: the routine's own parameter of that name is the caller's argument.
     fn computed_write(&mut self, src: &[u8], target: Span, line: usize) {
         let text = text_of(src, target);
         let head = text.split(['{', '.']).next().unwrap_or_default().trim();
-        let param = self.current.and_then(|r| {
-            let routine = self.routines.get(r)?;
-            let p = routine
-                .params
-                .get(routine.required_named(src, head.as_bytes())?)?;
-            Some((r, Span32::of(*p)?))
-        });
+        let param = self.own_param(src, head.as_bytes());
         match param {
             Some((r, p)) => {
                 self.param_writes.push((r, p, line));
