@@ -467,7 +467,7 @@ fn run_fit(a: &FitArgs) -> anyhow::Result<String> {
         fit.profile = fit.profile.with_knot_uncertainties(&u)?;
     }
     let p = &fit.profile;
-    for w in p.sampling_warnings() {
+    for w in p.measurement_warnings() {
         let _ = writeln!(std::io::stderr(), "warning: {}: {w}", a.frames.display());
     }
     p.save(&a.output)?;
@@ -673,7 +673,7 @@ fn run_show(a: &ShowArgs) -> anyhow::Result<String> {
     for w in p
         .consistency_warnings()
         .into_iter()
-        .chain(p.sampling_warnings())
+        .chain(p.measurement_warnings())
     {
         let _ = writeln!(std::io::stderr(), "warning: {}: {w}", a.profile.display());
     }

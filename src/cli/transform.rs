@@ -601,7 +601,7 @@ fn load_profile(cell: &Cell, robot: &Robot) -> anyhow::Result<Profile> {
     for w in profile
         .consistency_warnings()
         .into_iter()
-        .chain(profile.sampling_warnings())
+        .chain(profile.measurement_warnings())
     {
         let _ = writeln!(
             std::io::stderr(),

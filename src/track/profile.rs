@@ -181,7 +181,7 @@ pub enum MeasuredIn {
     Tracker,
 }
 
-/// Fewest knots whose spline can show the track's shape between them ([`Profile::sampling_warnings`]):
+/// Fewest knots whose spline can show the track's shape between them ([`Profile::measurement_warnings`]):
 /// with three, it bends at most once over the whole track.
 pub const FEW_KNOTS: usize = 4;
 
@@ -189,8 +189,12 @@ pub const FEW_KNOTS: usize = 4;
 /// linear track travels metres, so a shorter one was most likely written in metres.
 pub const SHORT_TRACK_MM: f64 = 100.0;
 
+/// How close to a multiple of π/2 a nominal's angle (degrees) must be for
+/// [`Profile::measurement_warnings`] to take it for radians.
+pub const RADIANS_TOLERANCE: f64 = 0.002;
+
 /// The widest knot spacing the uncertainty between knots was calibrated for (500-1333 mm,
-/// docs/design.md §14), rounded up: wider, [`Profile::sampling_warnings`] says what it misses.
+/// docs/design.md §14), rounded up: wider, [`Profile::measurement_warnings`] says what it misses.
 pub const WIDE_KNOT_GAP_MM: f64 = 2000.0;
 
 /// The controller's straight track `N(s) = (R_N, origin + s·step)` in the measurement frame.
@@ -595,13 +599,14 @@ impl Profile {
         data_sha256(&self.file)
     }
 
-    /// What the profile's sampling cannot show: fewer than [`FEW_KNOTS`] knots, or knots more
-    /// than [`WIDE_KNOT_GAP_MM`] apart; and skids over less than [`SHORT_TRACK_MM`], most likely
-    /// written in metres. Between such knots the spline is nearly a straight line
+    /// What the profile's measurements cannot show, or were most likely written in other units
+    /// than they are read in: fewer than [`FEW_KNOTS`] knots, or knots more than
+    /// [`WIDE_KNOT_GAP_MM`] apart; skids over less than [`SHORT_TRACK_MM`] (metres); a nominal
+    /// turned by a quarter turn's value in radians (`rz` 1.5708: radians read as degrees). Between such knots the spline is nearly a straight line
     /// whatever the track does there, and the uncertainty between knots (a leave-one-out
     /// estimate, `track::uncertainty`) sees nothing it missed: a sag or waviness there is in
     /// neither the deviation nor its `u`.
-    pub fn sampling_warnings(&self) -> Vec<String> {
+    pub fn measurement_warnings(&self) -> Vec<String> {
         let skids: Vec<f64> = self.file.knot.iter().map(|k| k.skid).collect();
         let gap = skids.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
         let n = skids.len();
@@ -612,6 +617,19 @@ impl Profile {
                 "profile `{}`: its skids span {s0} .. {s1} mm, shorter than {SHORT_TRACK_MM} mm: skids are read in mm (were they written in metres?)",
                 self.file.name
             ));
+        }
+        // A base turned by 1.5708° or 3.1416° about an axis is a quarter or half turn written
+        // in radians; degrees spelled so are not a turn anyone sets a base to.
+        let [rx, ry, rz] = self.file.nominal.rotation;
+        for (axis, v) in [("rx", rx), ("ry", ry), ("rz", rz)] {
+            let quarter = std::f64::consts::FRAC_PI_2;
+            let k = (v / quarter).round();
+            if k != 0.0 && k.abs() <= 4.0 && (v - k * quarter).abs() < RADIANS_TOLERANCE {
+                out.push(format!(
+                    "profile `{}`: its nominal's {axis} is {v:.4}°, within {RADIANS_TOLERANCE} of {k}·π/2: angles are read in degrees (were they written in radians?)",
+                    self.file.name
+                ));
+            }
         }
         if n < FEW_KNOTS {
             out.push(format!(

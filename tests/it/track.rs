@@ -1150,6 +1150,38 @@ fn sparse_knots_and_extrapolated_rows_are_said() {
         out.to_str().unwrap(),
     ]);
     assert!(err.contains("its skids span 0 .. 8 mm"), "{err}");
+    // Angles written in radians: the base's rz of 90° read as 1.5708°.
+    let radians: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == 0 {
+                return format!("{l}\n");
+            }
+            let cells: Vec<String> = l
+                .split(',')
+                .enumerate()
+                .map(|(c, v)| match c {
+                    4..=6 => v.parse::<f64>().unwrap().to_radians().to_string(),
+                    _ => v.to_owned(),
+                })
+                .collect();
+            cells.join(",") + "\n"
+        })
+        .collect();
+    let in_radians = tmp.path().join("radians.csv");
+    std::fs::write(&in_radians, radians).unwrap();
+    let out = tmp.path().join("radians.toml");
+    let (code, _, err) = trackfix(&[
+        "track",
+        "fit",
+        in_radians.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("its nominal's rz is 1.5708°"), "{err}");
+    assert!(err.contains("(were they written in radians?)"), "{err}");
     let (_, err) = fit("wide", &["0", "2500", "5000", "6000", "8000"], &[]);
     assert!(err.contains("knots up to 2500 mm apart"), "{err}");
     let every_1000: Vec<String> = (0..=8).map(|k| (k * 1000).to_string()).collect();
