@@ -742,6 +742,7 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
         let mut next: std::collections::HashMap<(usize, String), Exit> = Default::default();
         for (fi, f) in facts.iter().enumerate() {
             let module = modules.of(fi);
+            let changes = |name: &str| exits.of(module, name).is_some_and(Exit::changes);
             let fdats = fdats.get(module).unwrap_or(&no_fdats);
             let mut current: Option<&str> = None;
             let mut flow = Flow::default();
@@ -777,8 +778,6 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                     | Event::Exit
                     | Event::Label { .. }
                     | Event::Goto => {
-                        let changes =
-                            |name: &str| exits.of(module, name).is_some_and(Exit::changes);
                         i = flow.control(i, ev, &f.events, &changes);
                         continue;
                     }
@@ -1129,6 +1128,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
             let mut inline_at: Option<HashMap<crate::syntax::Span, usize>> = None;
             let mut flow = Flow::default();
             let module = modules.of(fi);
+            let changes = |name: &str| exits.of(module, name).is_some_and(Exit::changes);
             let fdats = fdats.get(module).unwrap_or(&no_fdats);
             let (entry, anytime) = shared
                 .get(module)
@@ -1156,8 +1156,6 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                     | Event::Exit
                     | Event::Label { .. }
                     | Event::Goto => {
-                        let changes =
-                            |name: &str| exits.of(module, name).is_some_and(Exit::changes);
                         i = flow.control(i - 1, ev, &events, &changes);
                     }
                     Event::Alias {

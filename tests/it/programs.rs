@@ -43,13 +43,7 @@ fn target(program: &Program, name: &str) -> Position {
 
 /// The work objects target `name` of `program` is used with, sorted.
 fn work_objects(program: &Program, name: &str) -> Vec<String> {
-    let mut all: Vec<String> = target(program, name)
-        .usage
-        .work_objects()
-        .map(str::to_owned)
-        .collect();
-    all.sort();
-    all
+    crate::support::sorted_work_objects(&target(program, name).usage)
 }
 
 /// The new user's case: data in one module, the motion in another, the work object declared in
@@ -1086,12 +1080,7 @@ fn a_base_set_late_in_a_loop_holds_at_its_top() {
             ("System/$config.dat", CONFIG),
         ]);
         let ps = programs(&r1);
-        let u = |n: &str| {
-            let u = target(&ps[0], n).usage.clone();
-            let mut all: Vec<String> = u.work_objects().map(str::to_owned).collect();
-            all.sort();
-            all
-        };
+        let u = |n: &str| work_objects(&ps[0], n);
         let bases = (u("XP1"), u("XP2"));
         let (code, out, err) = trackfix(&[
             "correct",

@@ -1226,16 +1226,11 @@ fn a_local_frame_the_targets_module_does_not_see_is_named() {
 
 /// The work objects target `name` of `f` is used with, sorted.
 fn wobjs_of(f: &ParsedFile, name: &str) -> Vec<String> {
-    let mut all: Vec<String> = f
+    let target = f
         .positions()
         .find(|p| p.name.as_deref() == Some(name))
-        .unwrap_or_else(|| panic!("no target {name}"))
-        .usage
-        .work_objects()
-        .map(str::to_owned)
-        .collect();
-    all.sort();
-    all
+        .unwrap_or_else(|| panic!("no target {name}"));
+    crate::support::sorted_work_objects(&target.usage)
 }
 
 /// Data a call names with a literal is that data: `GetDataVal "p1", pv` copies `p1` into `pv`

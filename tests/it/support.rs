@@ -88,3 +88,10 @@ pub(crate) fn with_constant_deviation<R>(
         move |_s: f64| -> Result<trackfix::geometry::Pose, trackfix::track::TrackError> { Ok(d) };
     f(&trackfix::transform::TrackSetup::new(robot, &dev))
 }
+
+/// The work objects (KRL bases) a target's usage records, sorted.
+pub(crate) fn sorted_work_objects(usage: &trackfix::position::Usage) -> Vec<String> {
+    let mut all: Vec<String> = usage.work_objects().map(str::to_owned).collect();
+    all.sort();
+    all
+}

@@ -1120,65 +1120,44 @@ fn sparse_knots_and_extrapolated_rows_are_said() {
         err.contains("3 knots: the deviation between them is not measured"),
         "{err}"
     );
-    // Skids and positions written in metres: the whole track 8 mm long.
-    let metres: String = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| {
-            if i == 0 {
-                return format!("{l}\n");
-            }
-            let cells: Vec<String> = l
-                .split(',')
+    // The sample's frames with `columns` rewritten by `f`, fitted: (exit code, standard error).
+    let fit_rewritten =
+        |name: &str, columns: std::ops::RangeInclusive<usize>, f: fn(f64) -> f64| {
+            let rewritten: String = text
+                .lines()
                 .enumerate()
-                .map(|(c, v)| match c {
-                    0..=3 => (v.parse::<f64>().unwrap() / 1000.0).to_string(),
-                    _ => v.to_owned(),
+                .map(|(i, l)| {
+                    if i == 0 {
+                        return format!("{l}\n");
+                    }
+                    let cells: Vec<String> = l
+                        .split(',')
+                        .enumerate()
+                        .map(|(c, v)| match columns.contains(&c) {
+                            true => f(v.parse::<f64>().unwrap()).to_string(),
+                            false => v.to_owned(),
+                        })
+                        .collect();
+                    cells.join(",") + "\n"
                 })
                 .collect();
-            cells.join(",") + "\n"
-        })
-        .collect();
-    let in_metres = tmp.path().join("metres.csv");
-    std::fs::write(&in_metres, metres).unwrap();
-    let out = tmp.path().join("metres.toml");
-    let (_, _, err) = trackfix(&[
-        "track",
-        "fit",
-        in_metres.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+            let frames = tmp.path().join(format!("{name}.csv"));
+            std::fs::write(&frames, rewritten).unwrap();
+            let out = tmp.path().join(format!("{name}.toml"));
+            let (code, _, err) = trackfix(&[
+                "track",
+                "fit",
+                frames.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ]);
+            (code, err)
+        };
+    // Skids and positions written in metres: the whole track 8 mm long.
+    let (_, err) = fit_rewritten("metres", 0..=3, |v| v / 1000.0);
     assert!(err.contains("its skids span 0 .. 8 mm"), "{err}");
     // Angles written in radians: the base's rz of 90° read as 1.5708°.
-    let radians: String = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| {
-            if i == 0 {
-                return format!("{l}\n");
-            }
-            let cells: Vec<String> = l
-                .split(',')
-                .enumerate()
-                .map(|(c, v)| match c {
-                    4..=6 => v.parse::<f64>().unwrap().to_radians().to_string(),
-                    _ => v.to_owned(),
-                })
-                .collect();
-            cells.join(",") + "\n"
-        })
-        .collect();
-    let in_radians = tmp.path().join("radians.csv");
-    std::fs::write(&in_radians, radians).unwrap();
-    let out = tmp.path().join("radians.toml");
-    let (code, _, err) = trackfix(&[
-        "track",
-        "fit",
-        in_radians.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let (code, err) = fit_rewritten("radians", 4..=6, f64::to_radians);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("its nominal's rz is 1.5708°"), "{err}");
     assert!(err.contains("(were they written in radians?)"), "{err}");
