@@ -283,8 +283,28 @@ pub(crate) struct PassedArg {
     pub(crate) callee: Span,
     /// The parameter: by position among the required ones, else by name.
     pub(crate) param: PassedTo,
-    /// The names the argument's value reads (each a copy of it or a part).
+    /// The names the argument's value reads (each a copy of it or a part): a range of
+    /// [`PassedArgs::names`].
+    pub(crate) names: std::ops::Range<u32>,
+}
+
+/// A file's [`PassedArg`]s and the names they read, in one list shared by all of them: a
+/// module passes a composed argument in every tenth call or so, and a vector of names each
+/// was an allocation per argument.
+#[derive(Debug, Default)]
+pub(crate) struct PassedArgs {
+    pub(crate) args: Vec<PassedArg>,
     pub(crate) names: Vec<Span>,
+}
+
+impl PassedArgs {
+    /// Each argument with the names it reads.
+    pub(crate) fn iter(&self) -> impl Iterator<Item = (&PassedArg, &[Span])> + '_ {
+        self.args.iter().map(|a| {
+            let names = a.names.start as usize..a.names.end as usize;
+            (a, self.names.get(names).unwrap_or_default())
+        })
+    }
 }
 
 /// Which parameter a [`PassedArg`] is given to.
@@ -1074,7 +1094,7 @@ impl<'f, 'a> Binder<'f, 'a> {
     /// ([`PassedArg`]) to the parameter of the routine called that it is given to: each
     /// target its names reach (directly or through copies) is used as the routine uses the
     /// parameter, and a parameter of the caller passed on, a copy of one, is followed there.
-    pub(crate) fn bind_passed(&mut self, m: usize, a: &PassedArg) {
+    pub(crate) fn bind_passed(&mut self, m: usize, a: &PassedArg, names: &[Span]) {
         let Some(f) = self.files.get(m) else { return };
         let src = f.src;
         let routine_of = |name: NameKey<'_>| -> Option<(usize, usize)> {
@@ -1101,7 +1121,7 @@ impl<'f, 'a> Binder<'f, 'a> {
         let to = (cm, cr, k);
         let own = a.routine.and_then(|rt| f.routines.get(rt).map(|r| (rt, r)));
         let (mut targets, mut params) = (Vec::new(), Vec::new());
-        for sp in &a.names {
+        for sp in names {
             let raw = sp.slice(src);
             let base = raw.split(|&b| b == b'{' || b == b'.').next().unwrap_or(raw);
             if let Some((rt, r)) = own

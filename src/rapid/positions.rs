@@ -541,7 +541,7 @@ pub struct Extractor<'l> {
     copies: Vec<crate::resolve::CopyFact>,
     /// Call arguments the positional binding does not see: not a plain name, or given by
     /// their parameter's name (rare; bound once every use is).
-    passed: Vec<crate::resolve::PassedArg>,
+    passed: crate::resolve::PassedArgs,
     /// Calls that name their data or routine only when the program runs: (the call as
     /// written, its line, whether only the targets its arguments name are at stake (a late
     /// call `%pn% p10;`: those names) or every target of the program (`None`)).
@@ -803,7 +803,7 @@ impl<'l> Extractor<'l> {
             assigned_literals: Vec::new(),
             param_assignments: Vec::new(),
             copies: Vec::new(),
-            passed: Vec::new(),
+            passed: crate::resolve::PassedArgs::default(),
             named_at_run_time: Vec::new(),
             misshapen: Vec::new(),
             computed: Vec::new(),
@@ -1760,8 +1760,8 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     // Arguments positional binding does not see: composed (`mv Offs(p10, 0, 0, 10);`) or
     // named (`mv \p:=p10;`).
     for (m, list) in passed.iter().enumerate() {
-        for a in list {
-            binder.bind_passed(m, a);
+        for (a, names) in list.iter() {
+            binder.bind_passed(m, a, names);
         }
     }
     // Each offset call's bases: the targets its reference names where the call is written, or,
@@ -2904,21 +2904,25 @@ impl Extractor<'_> {
             let position = self.call_args.len().saturating_sub(u.args_start as usize);
             crate::resolve::PassedTo::Position(position)
         };
-        let mut names = Vec::new();
+        let names = &mut self.passed.names;
+        let start = names.len();
         if plain {
             names.push(v);
         } else {
-            names_in(src, v, &mut names);
+            names_in(src, v, names);
             if !switch {
-                self.call_refs.extend(names.iter().copied());
+                self.call_refs
+                    .extend_from_slice(names.get(start..).unwrap_or_default());
             }
         }
-        self.passed.push(crate::resolve::PassedArg {
+        // A module's names stay far below 4 G entries (each is a name of its source).
+        let range = start as u32..names.len() as u32;
+        self.passed.args.push(crate::resolve::PassedArg {
             line: u.line as usize,
             routine: self.current,
             callee: name,
             param,
-            names,
+            names: range,
         });
     }
 
