@@ -244,11 +244,38 @@ fn check_stamps(
     prov: &Provenance,
     out: &OutputArgs,
 ) -> anyhow::Result<Option<Exit>> {
-    if out.force || prov.rule == StampRule::Any {
+    if out.force {
         return Ok(None);
     }
     let mut stderr = std::io::stderr().lock();
     let mut refused = 0;
+    // A record of targets kept as written that no longer fits its file says nothing of which
+    // targets carry the stamp's change: every transform reads it (the one undoing the stamp's
+    // leaves them as written, any other refuses them).
+    for p in programs {
+        let mut out_of_step = false;
+        for f in &p.files {
+            let Some((s, span)) = stamp::find(f) else {
+                continue;
+            };
+            let Some(why) = s.kept.out_of_step(f) else {
+                continue;
+            };
+            out_of_step = true;
+            let (line, _) = f.lines.line_col(span.start);
+            writeln!(
+                stderr,
+                "error: {}:{line}: its stamp lists targets left as written, but {}: which targets carry what `{}` did is not known\n  = help: transform the file as that run wrote it, or pass --force to transform every target alike",
+                printable(&f.path.display().to_string()),
+                printable(&why),
+                printable(&s.command)
+            )?;
+        }
+        refused += usize::from(out_of_step);
+    }
+    if refused > 0 || prov.rule == StampRule::Any {
+        return refused_by_stamps(command, refused, &mut stderr);
+    }
     if prov.rule == StampRule::NotCorrectedForAny {
         for p in programs {
             let corrected: Vec<_> = p
@@ -294,9 +321,17 @@ fn check_stamps(
             (StampRule::NotCorrected, Some((f, (s, span)))) => {
                 refused += 1;
                 let (line, _) = f.lines.line_col(span.start);
+                // The targets it left as written lack the correction: the original is where
+                // they are corrected once fixed, with the rest.
+                let but = match s.kept.targets.len() {
+                    0 => String::new(),
+                    n => format!(
+                        ", but for the {n} target(s) it left as written, which the original corrects once they are fixed"
+                    ),
+                };
                 writeln!(
                     stderr,
-                    "error: {}:{line}: already corrected for robot `{robot}` ({}): correcting again would apply the track's deviation twice\n  = help: correct the original, `zero` this one first, or pass --force if the stamp is wrong",
+                    "error: {}:{line}: already corrected for robot `{robot}` ({}): correcting again would apply the track's deviation twice{but}\n  = help: correct the original, `zero` this one first, or pass --force if the stamp is wrong",
                     printable(&f.path.display().to_string()),
                     printable(&s.text())
                 )?;
@@ -347,42 +382,66 @@ fn stamp_results(
     prov: &Provenance,
     out: &OutputArgs,
 ) {
-    for f in results.iter_mut().flat_map(|r| r.files.iter_mut()) {
-        if !f.changed() {
-            continue;
+    for r in results.iter_mut() {
+        // A file whose every target was left as written is stamped all the same where another
+        // file of its program is: unstamped, their stamps would speak for it. And one whose
+        // stamp listed its targets as left as written gets the stamp of the run that read them.
+        let stamped = r.changed();
+        for f in &mut r.files {
+            let lists = || {
+                trackfix::dialect::dialect_of(&f.path)
+                    .and_then(|d| stamp::find_stamp(&f.original, d))
+                    .is_some_and(|(s, _)| !s.kept.is_empty())
+            };
+            if f.changed() || (stamped && (!f.kept.is_empty() || lists())) {
+                stamp_file(lock_splits, f, prov, out);
+            }
         }
-        let Some(d) = trackfix::dialect::dialect_of(&f.path) else {
-            continue;
-        };
-        let carried = stamp::carry_precision_known(
-            &f.original,
-            std::mem::take(&mut f.output),
-            d,
-            f.widened.take(),
-        );
-        f.output = carried.output;
-        if out.no_stamp {
-            continue;
-        }
-        let old = stamp::find_stamp(&f.original, d).map(|(s, _)| s);
-        let undone = prov.stamp.command == "zero"
-            && carried.widened.is_empty()
-            && old.as_ref().is_some_and(|s| {
-                s.command == "correct"
-                    && s.robot == prov.stamp.robot
-                    && s.profile.as_ref().map(|p| &p.1) == prov.stamp.profile.as_ref().map(|p| &p.1)
-            });
-        if undone {
-            stamp::strip_in_place(&mut f.output, d);
-            continue;
-        }
-        let mut s = prov.stamp.clone();
-        s.widened = carried.widened;
-        if let Some((_, splits)) = lock_splits.iter().find(|(p, _)| *p == f.path) {
-            s.gimbal = splits.clone();
-        }
-        stamp::write_in_place(&mut f.output, d, &s);
     }
+}
+
+/// [`stamp_results`] of one file.
+fn stamp_file(
+    lock_splits: &[(PathBuf, stamp::LockSplits)],
+    f: &mut trackfix::transform::FileResult,
+    prov: &Provenance,
+    out: &OutputArgs,
+) {
+    let Some(d) = trackfix::dialect::dialect_of(&f.path) else {
+        return;
+    };
+    let carried = stamp::carry_precision_known(
+        &f.original,
+        std::mem::take(&mut f.output),
+        d,
+        f.widened.take(),
+    );
+    f.output = carried.output;
+    if out.no_stamp {
+        return;
+    }
+    let old = stamp::find_stamp(&f.original, d).map(|(s, _)| s);
+    // Targets this run left as written still carry the correction: the stamp stays to
+    // say so.
+    let undone = prov.stamp.command == "zero"
+        && carried.widened.is_empty()
+        && f.kept.is_empty()
+        && old.as_ref().is_some_and(|s| {
+            s.command == "correct"
+                && s.robot == prov.stamp.robot
+                && s.profile.as_ref().map(|p| &p.1) == prov.stamp.profile.as_ref().map(|p| &p.1)
+        });
+    if undone {
+        stamp::strip_in_place(&mut f.output, d);
+        return;
+    }
+    let mut s = prov.stamp.clone();
+    s.widened = carried.widened;
+    s.kept = stamp::Kept::of(f.kept.clone());
+    if let Some((_, splits)) = lock_splits.iter().find(|(p, _)| *p == f.path) {
+        s.gimbal = splits.clone();
+    }
+    stamp::write_in_place(&mut f.output, d, &s);
 }
 
 impl OutputArgs {
@@ -794,7 +853,13 @@ fn finish_outputs(
         .iter()
         .flat_map(|r| r.files.iter().flat_map(|f| &f.notes))
     {
-        let text = n.located(Severity::Note, "left as written; not a target");
+        // A target its stamp lists as kept says why in its own hint; the others are no
+        // targets.
+        let hint = match n.kind {
+            RefusalKind::KeptAsWritten => n.hint.as_str(),
+            _ => "left as written; not a target",
+        };
+        let text = n.located(Severity::Note, hint);
         messages.show(&mut stderr, Severity::Note, &kind_name(n.kind), &text)?;
     }
     let refused: Vec<_> = results.iter().flat_map(|r| r.refusals()).collect();

@@ -289,6 +289,7 @@ mod tests {
                 notes: Vec::new(),
                 changes: Default::default(),
                 widened: None,
+                kept: Vec::new(),
             }],
         }
     }

@@ -174,6 +174,7 @@ mod tests {
             notes: Vec::new(),
             changes: changes.into_iter().collect(),
             widened: None,
+            kept: Vec::new(),
         }
     }
 

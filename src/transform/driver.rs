@@ -10,8 +10,9 @@ use crate::syntax::Edit;
 
 use super::edits::{ProgramEdits, TargetChange};
 use super::policy::{Why, common_refusal, implausible_result, joint_target};
-use super::refusal::Refusal;
+use super::refusal::{Refusal, RefusalKind};
 use super::rewrite::{OrientationHint, pose_change, push_reversible_pose_edits};
+use super::stamp::{KeptTarget, Stamp};
 
 /// Where a rule is looking: the program (for frames declared in other files) and the file.
 #[derive(Clone, Copy)]
@@ -34,6 +35,19 @@ pub(crate) struct NewPose {
     /// gives back the original text (docs/design.md §5, round trip). Given with the pose: both
     /// come from one evaluation of the track's deviation.
     pub undo: Option<Pose>,
+}
+
+/// What a rule does with the targets a file's provenance stamp lists as left as written by the
+/// transform that wrote the file ([`Kept`](super::stamp::Kept)): those lack what the rest of the
+/// file carries.
+pub(crate) enum KeptByStamp {
+    /// The rule undoes the stamp's transform: they are left as written, with a note whose
+    /// message ends in `said`. `carry`: they are neither side's (a `transfer` left them as its
+    /// source robot's program wrote them), and the stamp the run writes lists them again.
+    Leave { said: String, carry: bool },
+    /// The rule would treat them as it treats the rest, which is wrong for them: refused, each
+    /// with the kind of its first refusal, the message ending in `said`.
+    Refuse { said: String },
 }
 
 /// What one transform does to each target, offset call and frame declaration.
@@ -80,6 +94,13 @@ pub(crate) trait TargetRule {
         true
     }
 
+    /// What the rule does with the targets `stamp` lists as kept as written (`None`: what it does
+    /// with every target).
+    fn kept_by_stamp(&self, stamp: &Stamp) -> Option<KeptByStamp> {
+        let _ = stamp;
+        None
+    }
+
     /// Whether the rule writes KUKA targets at B = ±90° with the split a `correct` recorded in
     /// the file's stamp (`zero`, the inverse of `correct`; docs/design.md §5, round trip).
     fn keeps_lock_splits(&self) -> bool {
@@ -114,22 +135,66 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
     let mut refused = Vec::new();
     for (fi, (file, fe)) in program.files.iter().zip(out.files.iter_mut()).enumerate() {
         let scope = Scope { program, file };
-        let splits = rule
-            .keeps_lock_splits()
-            .then(|| super::stamp::find(file))
-            .flatten()
-            .map(|(s, _)| s.gimbal)
+        let stamp = super::stamp::find(file).map(|(s, _)| s);
+        let splits = stamp
+            .as_ref()
+            .filter(|_| rule.keeps_lock_splits())
+            .map(|s| s.gimbal.clone())
             .unwrap_or_default();
+        // A record out of step with its file says nothing of which targets it lists, and is
+        // not read (the command line refuses such a file before, `Kept::out_of_step`).
+        let kept_by_stamp = stamp
+            .as_ref()
+            .filter(|s| !s.kept.targets.is_empty() && s.kept.out_of_step(file).is_none())
+            .and_then(|s| Some((s, rule.kept_by_stamp(s)?)));
         // One vector for the edits of every target, emptied into the file's edits.
         let mut edits = Vec::new();
         let reading = rule.reading();
         let mut memo = crate::position::DecodeMemo::default();
+        let mut listed = kept_by_stamp
+            .as_ref()
+            .map(|(s, _)| s.kept.targets.as_slice())
+            .unwrap_or_default()
+            .iter()
+            .peekable();
         for i in 0..file.positions.len() {
             let p = file
                 .positions
                 .decoded_with(i, &file.source, reading, &mut memo);
             edits.clear();
-            let step = if let Some(np) = p.usage.non_position() {
+            let by_stamp = listed.next_if(|k| k.index == i);
+            let step = if let (Some(k), Some((s, how))) = (by_stamp, &kept_by_stamp) {
+                let what = super::policy::describe(&p);
+                let by = format!(
+                    "{what} was left as written by the `{}` this file's stamp records (refused as {})",
+                    s.command,
+                    super::stamp::kind_name(k.kind)
+                );
+                match how {
+                    KeptByStamp::Leave { said, carry } => {
+                        refused.push(((fi, i), k.kind));
+                        if *carry {
+                            fe.kept.push(k.clone());
+                        }
+                        let hint = if *carry {
+                            "left as written; the stamp written lists it as kept again"
+                        } else {
+                            "left as written"
+                        };
+                        fe.notes.push(*Why::new(RefusalKind::KeptAsWritten, format!("{by}: {said}"), hint).at(file, &p));
+                        continue;
+                    }
+                    KeptByStamp::Refuse { said } => Err(Why::new(
+                        k.kind,
+                        format!("{by}: {said}"),
+                        format!(
+                            "transform the file that `{}` read, or fix the target and run `{}` on it again",
+                            s.command, s.command
+                        ),
+                    )
+                    .at(file, &p)),
+                }
+            } else if let Some(np) = p.usage.non_position() {
                 Err(super::policy::non_position(np, &p, rule.keeps(np.role)).at(file, &p))
             } else if p.kind.is_cartesian() {
                 cartesian(rule, scope, &p, splits.a_of(i), &mut edits)
@@ -157,6 +222,11 @@ pub(crate) fn apply_rule<R: TargetRule>(program: &Program, rule: &R) -> ProgramE
                 Err(r) if r.kind.is_note() => fe.notes.push(*r),
                 Err(r) => {
                     refused.push(((fi, i), r.kind));
+                    fe.kept.push(KeptTarget {
+                        index: i,
+                        kind: r.kind,
+                        name: file.positions.name(i).map(str::to_owned),
+                    });
                     fe.refusals.push(*r);
                 }
             }

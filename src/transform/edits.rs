@@ -245,6 +245,10 @@ pub struct FileEdits {
     pub notes: Vec<Refusal>,
     /// One entry per target whose text changes.
     pub changes: Changes,
+    /// The targets the stamp of the output is to list as kept as written (see
+    /// [`Kept`](super::stamp::Kept)): those refused, and those a stamp listed that stay
+    /// neither side's.
+    pub kept: Vec<super::stamp::KeptTarget>,
 }
 
 /// The edits of every file of a program, in the program's file order.
@@ -289,6 +293,8 @@ pub struct FileResult {
     /// [`carry_precision_known`](super::stamp::carry_precision_known): `None` where it is not
     /// known, and to be set so by whatever changes `output` after.
     pub widened: Option<super::stamp::Widened>,
+    /// The targets the output's stamp lists as kept as written ([`FileEdits::kept`]).
+    pub kept: Vec<super::stamp::KeptTarget>,
 }
 
 impl FileResult {
@@ -331,6 +337,7 @@ pub fn apply(program: &Program, edits: ProgramEdits) -> Result<ProgramResult, Ed
             notes: fe.notes,
             changes: fe.changes,
             widened: None,
+            kept: fe.kept,
         });
     }
     Ok(ProgramResult { files })
@@ -365,6 +372,7 @@ pub fn apply_owned(program: Program, edits: ProgramEdits) -> Result<ProgramResul
             refusals: fe.refusals,
             notes: fe.notes,
             changes: fe.changes,
+            kept: fe.kept,
         });
     }
     Ok(ProgramResult { files })

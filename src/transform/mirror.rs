@@ -19,7 +19,7 @@ use crate::position::{
 use crate::syntax::Edit;
 
 use super::cell::{Axis, ConfigRule, Plane};
-use super::driver::{NewPose, Scope, Step, TargetRule, apply_rule};
+use super::driver::{KeptByStamp, NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
 use super::kinematic_policy::fmt_joints;
 use super::kinematic_policy::{Arm, config_edits, with_tool};
@@ -30,6 +30,7 @@ use super::refusal::{Refusal, RefusalKind, Remedy};
 use super::rewrite::{
     DEG_DECIMALS, MM_DECIMALS, OrientationHint, QUAT_DECIMALS, number_edit, pose_edits,
 };
+use super::stamp::{Stamp, StampReading};
 use crate::kinematics::{ConfigValue, mirror_config_by_ik, mirrored_joints};
 
 /// Everything `mirror` needs.
@@ -345,6 +346,7 @@ struct MirrorRule<'s> {
     settings: &'s MirrorSettings,
     /// The reflection in the work object (`settings.frame` as `M`).
     own: Reflection,
+    stamps: StampReading,
 }
 
 impl TargetRule for MirrorRule<'_> {
@@ -352,6 +354,25 @@ impl TargetRule for MirrorRule<'_> {
 
     fn keeps(&self, role: NonPositionRole) -> bool {
         matches!(role, NonPositionRole::Tolerance | NonPositionRole::Found)
+    }
+
+    /// A mirror of a file a `mirror` stamped is the way back (mirroring twice gives the
+    /// program back): the targets the stamp lists were never mirrored and are left as written.
+    /// Any other stamp's are refused: they lack what that transform gave the rest.
+    fn kept_by_stamp(&self, stamp: &Stamp) -> Option<KeptByStamp> {
+        if self.stamps == StampReading::Ignore {
+            return None;
+        }
+        Some(match stamp.command.as_str() {
+            "mirror" => KeptByStamp::Leave {
+                said: "it is no mirror image, so mirroring the file back leaves it as written"
+                    .to_owned(),
+                carry: false,
+            },
+            _ => KeptByStamp::Refuse {
+                said: "it lacks what that transform gave the rest of the file, so its mirror image would not be the rest's".to_owned(),
+            },
+        })
     }
 
     fn joint(&self, scope: Scope, p: &Position) -> Step {
@@ -579,13 +600,24 @@ fn mirror_joints_by_ik(arm: &Arm, p: &Position) -> Result<Vec<Edit>, Why> {
     Ok(edits)
 }
 
-/// `mirror` every target (and, if asked, frame) of `program`.
+/// `mirror` every target (and, if asked, frame) of `program` (reading the files' provenance
+/// stamps for the targets they list as kept as written: docs/design.md §4).
 pub fn mirror(program: &Program, settings: &MirrorSettings) -> ProgramEdits {
+    mirror_reading(program, settings, StampReading::Read)
+}
+
+/// [`mirror`], reading the files' stamps or not.
+pub(crate) fn mirror_reading(
+    program: &Program,
+    settings: &MirrorSettings,
+    stamps: StampReading,
+) -> ProgramEdits {
     apply_rule(
         program,
         &MirrorRule {
             settings,
             own: Reflection::new(settings),
+            stamps,
         },
     )
 }

@@ -73,6 +73,11 @@ pub enum RefusalKind {
     /// move would turn axis 4 or 6 by more than 5° (at the wrist singularity); or its tool is
     /// unknown, so it cannot be checked.
     Reach,
+    /// A target the file's provenance stamp lists as left as written by the transform that
+    /// wrote the file, which the transform now undoing that one leaves as written too (it never
+    /// carried what is undone). Reported as a note, never a refusal (so nothing to keep).
+    #[value(skip)]
+    KeptAsWritten,
 }
 
 /// A setting of the transform that gets past a refusal; whoever shows the refusal says how to
@@ -99,7 +104,7 @@ impl RefusalKind {
     pub fn is_note(self) -> bool {
         matches!(
             self,
-            RefusalKind::ZeroQuaternion | RefusalKind::NotAPosition
+            RefusalKind::ZeroQuaternion | RefusalKind::NotAPosition | RefusalKind::KeptAsWritten
         )
     }
 }

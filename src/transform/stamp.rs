@@ -33,9 +33,14 @@
 //! `correct` also records the A of each KUKA target written at B = ±90° (`gimbal=0:0.0,5:30`,
 //! by target index), whose split between A and C the corrected text no longer says; `zero`
 //! writes the split that keeps it ([`LockSplits`]).
+//!
+//! A run that leaves refused targets as written (`--keep`, `--skip-unsupported`) lists them
+//! (`kept=0:reach:p01;2:reach:j03`, [`Kept`]): the stamp then says what the file carries but
+//! for those, and the transform that undoes it leaves them as written.
 
 use crate::position::ParsedFile;
 use crate::syntax::Span;
+use crate::transform::refusal::RefusalKind;
 
 /// The lowest first-written precision a `widened=` entry may hold (`1E+20` resolves -20; an
 /// exponent literal keeps its exponent when rewritten only below 100).
@@ -59,6 +64,9 @@ pub struct Stamp {
     /// The A of each target `correct` found at B = ±90° (see [`LockSplits`]).
     #[serde(skip_serializing_if = "LockSplits::is_empty")]
     pub gimbal: LockSplits,
+    /// The targets the run left as written (see [`Kept`]).
+    #[serde(skip_serializing_if = "Kept::is_empty")]
+    pub kept: Kept,
     /// trackfix's version.
     pub version: String,
 }
@@ -246,6 +254,195 @@ impl LockSplits {
     }
 }
 
+/// The targets a run left as written, refused and kept (`--keep`, `--skip-unsupported`), by
+/// index among the file's targets (file order, as [`LockSplits`]), each with the kind of its
+/// refusal and its name (`kept=0:reach:p01;2:reach:j03;7:skid-not-connected`; an inline target
+/// has none).
+///
+/// The rest of the file carries the run's change and these do not, so a stamp without the list
+/// would claim them too: a `zero` of a partly corrected file would take out of them a
+/// correction they never had. The transform that undoes the stamp's leaves them as written
+/// (docs/design.md §4, "Targets kept as written"). The name is there to tell a record out of
+/// step with its file (a target added, removed or renamed since) from one in step.
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Kept {
+    /// The targets, in index order.
+    pub targets: Vec<KeptTarget>,
+    /// The record as written, when it cannot be read (a hand edit, a later version's kind):
+    /// written back as it was, and nothing is known of which targets it lists.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unreadable: Option<String>,
+}
+
+/// Whether a transform reads what the provenance stamps of its input say of the targets they
+/// list as kept as written ([`Kept`]; docs/design.md §4, "Targets kept as written"): the first
+/// step of a chain does, the later ones do not (their input carries the first's stamp line, but
+/// not what it says).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum StampReading {
+    /// The transform that undoes a stamp's leaves the targets it lists as written, saying so;
+    /// any other refuses them (they lack what the rest of the file carries).
+    Read,
+    /// Every target is transformed alike.
+    Ignore,
+}
+
+/// One target of a [`Kept`] record.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct KeptTarget {
+    /// Its index among the file's targets.
+    pub index: usize,
+    /// Why the run refused it.
+    pub kind: RefusalKind,
+    /// Its name as declared; `None` for an inline target.
+    pub name: Option<String>,
+}
+
+impl Kept {
+    /// True when the record lists nothing and is not unreadable.
+    pub fn is_empty(&self) -> bool {
+        self.targets.is_empty() && self.unreadable.is_none()
+    }
+
+    /// A record of `targets` (sorted by index, one entry per index).
+    pub fn of(mut targets: Vec<KeptTarget>) -> Kept {
+        targets.sort_by_key(|t| t.index);
+        targets.dedup_by_key(|t| t.index);
+        Kept {
+            targets,
+            unreadable: None,
+        }
+    }
+
+    /// The `kept=` value: `0:reach:p01;2:reach:j03;7:skid-not-connected`.
+    fn text(&self) -> String {
+        if let Some(raw) = &self.unreadable {
+            return raw.clone();
+        }
+        let parts: Vec<String> = self
+            .targets
+            .iter()
+            .map(|t| {
+                let mut s = format!("{}:{}", t.index, kind_name(t.kind));
+                if let Some(n) = &t.name {
+                    s.push(':');
+                    s.push_str(&escape_name(n));
+                }
+                s
+            })
+            .collect();
+        parts.join(";")
+    }
+
+    /// Reads a `kept=` value. Unlike the other records, one that cannot be read is kept as
+    /// [`Kept::unreadable`], not dropped: an empty list would say that every target carries
+    /// the run's change. At most `limit` entries, as for `widened=`.
+    fn parse(text: &str, limit: usize) -> Kept {
+        let read = || -> Option<Vec<KeptTarget>> {
+            let mut out: Vec<KeptTarget> = Vec::new();
+            for part in text.split(';') {
+                let mut fields = part.splitn(3, ':');
+                let index: usize = fields.next()?.parse().ok()?;
+                let kind =
+                    <RefusalKind as clap::ValueEnum>::from_str(fields.next()?, false).ok()?;
+                let name = match fields.next() {
+                    Some(text) => Some(unescape_name(text)?),
+                    None => None,
+                };
+                let ordered = out.last().is_none_or(|last| last.index < index);
+                if !ordered || out.len() >= limit || kind.is_note() {
+                    return None;
+                }
+                out.push(KeptTarget { index, kind, name });
+            }
+            Some(out)
+        };
+        match read() {
+            Some(targets) => Kept {
+                targets,
+                unreadable: None,
+            },
+            None => Kept {
+                targets: Vec::new(),
+                unreadable: Some(text.to_owned()),
+            },
+        }
+    }
+
+    /// Why the record does not fit `file`, if it does not: it cannot be read, or a target it
+    /// lists is not where it says (another name there, or none). Such a record says nothing
+    /// of which targets carry the run's change.
+    pub fn out_of_step(&self, file: &ParsedFile) -> Option<String> {
+        if let Some(raw) = &self.unreadable {
+            return Some(format!("its kept= record `{raw}` cannot be read"));
+        }
+        for t in &self.targets {
+            if t.index >= file.positions.len() {
+                return Some(format!(
+                    "its kept= record lists target index {} of a file of {} target(s)",
+                    t.index,
+                    file.positions.len()
+                ));
+            }
+            let here = file.positions.name(t.index);
+            let same = match (here, &t.name) {
+                (Some(a), Some(b)) => crate::names::fold(a) == crate::names::fold(b),
+                (None, None) => true,
+                _ => false,
+            };
+            if !same {
+                let said =
+                    |n: Option<&str>| n.map_or("an inline target".to_owned(), |n| format!("`{n}`"));
+                return Some(format!(
+                    "its kept= record says target index {} is {}, and the file has {} there",
+                    t.index,
+                    said(t.name.as_deref()),
+                    said(here)
+                ));
+            }
+        }
+        None
+    }
+}
+
+/// A refusal kind by the name `--keep` takes.
+pub(crate) fn kind_name(kind: RefusalKind) -> String {
+    clap::ValueEnum::to_possible_value(&kind)
+        .map_or_else(|| format!("{kind:?}"), |v| v.get_name().to_owned())
+}
+
+/// A target's name as one word of the record: `%`, `;`, `"`, blanks and anything outside
+/// printable ASCII as `%XX` (of its UTF-8 bytes).
+fn escape_name(name: &str) -> String {
+    let mut out = String::with_capacity(name.len());
+    for b in name.bytes() {
+        if b.is_ascii_graphic() && !matches!(b, b'%' | b';' | b'"') {
+            out.push(b as char);
+        } else {
+            out.push_str(&format!("%{b:02X}"));
+        }
+    }
+    out
+}
+
+/// [`escape_name`] undone; `None` for a malformed escape.
+fn unescape_name(text: &str) -> Option<String> {
+    let bytes = text.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%' {
+            let hex = std::str::from_utf8(bytes.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(bytes[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok().filter(|s| !s.is_empty())
+}
+
 impl Stamp {
     /// A stamp of this version of trackfix.
     pub fn new(command: &str, robot: Option<&str>, profile: Option<(&str, &str)>) -> Stamp {
@@ -255,6 +452,7 @@ impl Stamp {
             profile: profile.map(|(n, h)| (n.to_owned(), h.chars().take(12).collect())),
             widened: Widened::default(),
             gimbal: LockSplits::default(),
+            kept: Kept::default(),
             version: env!("CARGO_PKG_VERSION").to_owned(),
         }
     }
@@ -274,6 +472,9 @@ impl Stamp {
         if !self.gimbal.is_empty() {
             s.push_str(&format!(" gimbal={}", self.gimbal.text()));
         }
+        if !self.kept.is_empty() {
+            s.push_str(&format!(" kept={}", self.kept.text()));
+        }
         s.push_str(&format!(" version={}", self.version));
         s
     }
@@ -289,6 +490,7 @@ impl Stamp {
             profile: None,
             widened: Widened::default(),
             gimbal: LockSplits::default(),
+            kept: Kept::default(),
             version: String::new(),
         };
         let mut name = None;
@@ -305,6 +507,7 @@ impl Stamp {
                 Some(("gimbal", v)) => {
                     stamp.gimbal = LockSplits::parse(v, limit).unwrap_or_default()
                 }
+                Some(("kept", v)) => stamp.kept = Kept::parse(v, limit),
                 Some(("version", v)) => stamp.version = v.to_owned(),
                 _ => {}
             }
@@ -1478,6 +1681,7 @@ mod tests {
             profile: Some(("r1 track".into(), "0123456789ab".into())),
             widened: Widened::default(),
             gimbal: LockSplits::default(),
+            kept: Kept::default(),
             version: "9.9.9".into(),
         }
     }
@@ -1563,6 +1767,82 @@ mod tests {
         // An ordinary comment after the header is not a stamp.
         assert_eq!(find_in(b"DEF a()\n; trackfix is great\nEND\n", &KRL), None);
     }
+    /// `kept=` reads back what it wrote, names with the record's separators and non-ASCII
+    /// included; a stamp without it (an earlier version's) reads as listing nothing; one that
+    /// cannot be read is kept as written, never read as an empty list.
+    #[test]
+    fn kept_records_each_target_left_as_written_and_reads_back() {
+        let target = |index, kind, name: Option<&str>| KeptTarget {
+            index,
+            kind,
+            name: name.map(str::to_owned),
+        };
+        let kept = Kept::of(vec![
+            target(7, RefusalKind::SkidNotConnected, None),
+            target(0, RefusalKind::Reach, Some("p01")),
+            target(2, RefusalKind::JointTarget, Some("pGrid{1,2}")),
+            target(3, RefusalKind::Reach, Some("a;b c%\"Ä:")),
+        ]);
+        assert_eq!(
+            kept.text(),
+            "0:reach:p01;2:joint-target:pGrid{1,2};3:reach:a%3Bb%20c%25%22%C3%84:;7:skid-not-connected"
+        );
+        let mut s = stamp();
+        s.kept = kept.clone();
+        let out = write(b"MODULE m\nENDMODULE\n", &RAPID, &s).unwrap();
+        let (read, _) = find_in(&out, &RAPID).unwrap();
+        assert_eq!(read, s);
+        assert_eq!(read.kept.targets[2].name.as_deref(), Some("a;b c%\"Ä:"));
+        // Written by a version without the record: nothing listed.
+        let old = b"MODULE m\n! trackfix: correct robot=r1 widened=3:0 version=0.1.0\nENDMODULE\n";
+        let (read, _) = find_in(old, &RAPID).unwrap();
+        assert!(read.kept.is_empty() && !read.widened.is_empty(), "{read:?}");
+        // Unreadable: unknown kind, a note's kind, out of order, a bad escape, beyond the
+        // file's size. Kept as written, and written back as it was.
+        for bad in [
+            "0:rich:p01",
+            "0:kept-as-written:p01",
+            "2:reach;1:reach",
+            "0:reach:p%G1",
+            "0:reach;1:reach;2:reach",
+        ] {
+            let k = Kept::parse(bad, 2);
+            assert_eq!(
+                (k.targets.len(), k.unreadable.as_deref()),
+                (0, Some(bad)),
+                "{bad}"
+            );
+            assert!(!k.is_empty());
+            assert_eq!(k.text(), bad);
+        }
+    }
+
+    /// A record is in step with its file when each target it lists is where it says, by name
+    /// (any case) or as an inline one.
+    #[test]
+    fn a_kept_record_out_of_step_says_where() {
+        let src = "MODULE m\n  CONST robtarget p01:=[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tool0;\n    MoveL p01, v100, fine, tool0;\n  ENDPROC\nENDMODULE\n";
+        let f = crate::rapid::parse_file(std::path::Path::new("m.mod"), src.as_bytes().to_vec());
+        assert_eq!(f.positions.len(), 2);
+        let of = |text: &str| Kept::parse(text, 100).out_of_step(&f);
+        assert_eq!(of("0:reach:P01;1:reach"), None);
+        assert_eq!(
+            of("0:reach:p02").as_deref(),
+            Some("its kept= record says target index 0 is `p02`, and the file has `p01` there")
+        );
+        assert_eq!(
+            of("1:reach:p01").as_deref(),
+            Some(
+                "its kept= record says target index 1 is `p01`, and the file has an inline target there"
+            )
+        );
+        assert_eq!(
+            of("2:reach").as_deref(),
+            Some("its kept= record lists target index 2 of a file of 2 target(s)")
+        );
+        assert!(of("x").unwrap().contains("cannot be read"));
+    }
+
     #[test]
     fn gimbal_records_the_a_of_each_target_at_the_lock_and_reads_back() {
         let src = "{X 1,Y 2,Z 3,A 30,B 45,C 10,S 2,T 35,E1 0}\n\

@@ -15,7 +15,7 @@ use crate::position::{Position, Program, Reading, Skid};
 use crate::track::{Profile, TrackError};
 
 use super::cell::Robot;
-use super::driver::{NewPose, Scope, Step, TargetRule, apply_rule};
+use super::driver::{KeptByStamp, NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
 use super::kinematic_policy::{Arm, joint_edits, with_tool};
 use super::policy::{LastWorkObject, Why, describe, joint_target, offset_bases};
@@ -23,6 +23,7 @@ use super::refusal::Refusal;
 use super::refusal::RefusalKind;
 use super::rewrite::{MM_DECIMALS, number_edit};
 use super::rewrite::{OrientationHint, pose_change};
+use super::stamp::{Stamp, StampReading};
 use crate::position::{NumField, OffsetCall, OffsetKind};
 use crate::syntax::Edit;
 
@@ -86,6 +87,10 @@ pub struct TrackSetup<'a> {
     /// The robot's arm, when the cell gives its kinematics: every target is then checked and
     /// joint targets are moved (docs/design.md §10).
     pub arm: Option<Arm>,
+    /// The robot's name, as provenance stamps give it: a file stamped for this robot has the
+    /// targets its stamp lists as kept as written treated apart ([`StampReading`]); `None`:
+    /// stamps are not read.
+    pub robot: Option<String>,
 }
 
 impl<'a> TrackSetup<'a> {
@@ -100,6 +105,7 @@ impl<'a> TrackSetup<'a> {
             default_wobj: None,
             uncertainty: None,
             arm: Arm::of(robot),
+            robot: Some(robot.name.clone()),
         }
     }
 
@@ -176,6 +182,9 @@ struct TrackRule<'s, 'a> {
     dir: Direction,
     work_objects: LastWorkObject,
     corrections: LastCorrection,
+    stamps: StampReading,
+    /// The first step of a `transfer`, whose later steps move what this one leaves as written.
+    chain: bool,
 }
 
 /// The correction (and its undo) last worked out, with the skid and the work object it was
@@ -371,6 +380,57 @@ impl TargetRule for TrackRule<'_, '_> {
         self.dir == Direction::Zero
     }
 
+    /// A `zero` for robot R of a file stamped as corrected for R (`correct`, or `transfer` to
+    /// R) leaves the targets the stamp lists as written: they carry none of R's correction.
+    /// Those a `transfer` kept are its source robot's as written, neither corrected for R nor
+    /// for no track: listed again, and refused within a `transfer`, whose later steps would
+    /// treat them as zeroed. A `correct` for R of a file a `zero` for R stamped leaves them as
+    /// written: they still carry R's correction. Any other track rule on such a file would
+    /// treat them as it treats the rest, which carries what they lack: refused. (A `correct`
+    /// of a file corrected for the same robot is the command line's to refuse, whole.)
+    fn kept_by_stamp(&self, stamp: &Stamp) -> Option<KeptByStamp> {
+        if self.stamps == StampReading::Ignore {
+            return None;
+        }
+        let robot = self.setup.robot.as_deref()?;
+        let same_robot = stamp.robot.as_deref() == Some(robot);
+        let verb = self.dir.as_str();
+        match (self.dir, stamp.command.as_str()) {
+            (Direction::Zero, "correct" | "transfer") if same_robot => {
+                let carry = stamp.command == "transfer";
+                if carry && self.chain {
+                    return Some(KeptByStamp::Refuse {
+                        said: format!(
+                            "it is the program it was transferred from as written, with none of robot `{robot}`'s correction, and the transfer's later steps would take it for zeroed"
+                        ),
+                    });
+                }
+                let said = if carry {
+                    format!(
+                        "it is the program it was transferred from as written, with none of robot `{robot}`'s correction, so {verb} leaves it as written"
+                    )
+                } else {
+                    format!(
+                        "it carries none of robot `{robot}`'s correction, so {verb} leaves it as written"
+                    )
+                };
+                Some(KeptByStamp::Leave { said, carry })
+            }
+            (Direction::Correct, "zero") if same_robot => Some(KeptByStamp::Leave {
+                said: format!(
+                    "it still carries robot `{robot}`'s correction, so {verb} leaves it as written"
+                ),
+                carry: false,
+            }),
+            (Direction::Correct, "correct" | "transfer") if same_robot => None,
+            _ => Some(KeptByStamp::Refuse {
+                said: format!(
+                    "it lacks what that transform gave the rest of the file, so {verb} for robot `{robot}` cannot treat it as the rest"
+                ),
+            }),
+        }
+    }
+
     /// An `Offs` offset is a vector in the work object: the corrected target `G·T` offset by
     /// `d` is `G·(d + T)`, the target offset by `R_G·d`, so the offset turns with the
     /// correction's rotation. A `RelTool` offset is in the tool frame, which moves with the
@@ -472,13 +532,27 @@ impl TargetRule for TrackRule<'_, '_> {
     }
 }
 
-/// `correct` or `zero` every Cartesian target of `program` with `setup`'s track.
+/// `correct` or `zero` every Cartesian target of `program` with `setup`'s track (reading the
+/// files' provenance stamps for the targets they list as kept as written: docs/design.md §4).
 pub fn track_correction(program: &Program, setup: &TrackSetup, dir: Direction) -> ProgramEdits {
+    track_rule(program, setup, dir, StampReading::Read, false)
+}
+
+/// [`track_correction`] as a step of a chain: `chain` for its first step.
+pub(crate) fn track_rule(
+    program: &Program,
+    setup: &TrackSetup,
+    dir: Direction,
+    stamps: StampReading,
+    chain: bool,
+) -> ProgramEdits {
     let rule = TrackRule {
         setup,
         dir,
         work_objects: LastWorkObject::default(),
         corrections: LastCorrection::default(),
+        stamps,
+        chain,
     };
     apply_rule(program, &rule)
 }
@@ -503,6 +577,7 @@ mod tests {
             default_wobj: None,
             uncertainty: None,
             arm: None,
+            robot: None,
         }
     }
 

@@ -13,11 +13,12 @@ use crate::program::{LoadError, LoadOptions};
 use crate::syntax::{Edit, EditError, Span, apply_edits};
 
 use super::edits::{FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
-use super::mirror::{MirrorSettings, Reflection, mirror, reflection_for};
+use super::mirror::{MirrorSettings, Reflection, mirror_reading, reflection_for};
 use super::policy::KeptTargets;
 use super::refusal::{Refusal, RefusalKind};
 use super::rewrite::{DEG_DECIMALS, MM_DECIMALS, QUAT_DECIMALS, pose_change};
-use super::track_correction::{Direction, TrackSetup, track_correction};
+use super::stamp::StampReading;
+use super::track_correction::{Direction, TrackSetup, track_rule};
 
 /// Why a chain of transforms stopped.
 #[derive(Debug, thiserror::Error)]
@@ -82,11 +83,17 @@ pub enum TransformStep<'a> {
 }
 
 impl TransformStep<'_> {
-    /// The step's edits of `program`.
+    /// The step's edits of `program` (reading the files' provenance stamps for the targets
+    /// they list as kept as written: docs/design.md §4).
     pub fn edits(&self, program: &Program) -> ProgramEdits {
+        self.edits_in_chain(program, StampReading::Read, false)
+    }
+
+    /// The edits of a step of a chain: `chain` for the first step of a `transfer`.
+    fn edits_in_chain(&self, program: &Program, stamps: StampReading, chain: bool) -> ProgramEdits {
         match *self {
-            TransformStep::Track(setup, dir) => track_correction(program, setup, dir),
-            TransformStep::Mirror(settings) => mirror(program, settings),
+            TransformStep::Track(setup, dir) => track_rule(program, setup, dir, stamps, chain),
+            TransformStep::Mirror(settings) => mirror_reading(program, settings, stamps),
         }
     }
 }
@@ -101,7 +108,9 @@ impl TransferPlan<'_> {
     }
 }
 
-/// Runs `zero` with `plan.from`, `mirror` if asked, `correct` with `plan.to`.
+/// Runs `zero` with `plan.from`, `mirror` if asked, `correct` with `plan.to`. The first step
+/// reads the input's provenance stamps for the targets they list as kept as written; the steps
+/// after it do not (their input carries the same stamp line, but not what it says).
 pub fn transfer(
     program: &Program,
     plan: &TransferPlan,
@@ -109,9 +118,13 @@ pub fn transfer(
 ) -> Result<ProgramResult, TransferError> {
     let mut current: Option<Program> = None;
     let mut steps = Vec::new();
-    for step in plan.steps() {
+    for (k, step) in plan.steps().into_iter().enumerate() {
         let input = current.as_ref().unwrap_or(program);
-        let result = apply(input, step.edits(input))?;
+        let edits = match k {
+            0 => step.edits_in_chain(input, StampReading::Read, true),
+            _ => step.edits_in_chain(input, StampReading::Ignore, false),
+        };
+        let result = apply(input, edits)?;
         let refused = refused_targets(input, &result);
         let next = reparse(input, &result, options)?;
         steps.push((result, refused));
@@ -251,6 +264,15 @@ fn combine(
             notes,
             changes,
             widened: None,
+            // The targets kept at the start, which the stamp of the transfer lists.
+            kept: kept
+                .iter()
+                .map(|(&index, &kind)| super::stamp::KeptTarget {
+                    index,
+                    kind,
+                    name: a.positions.name(index).map(str::to_owned),
+                })
+                .collect(),
         });
     }
     Ok(ProgramResult { files })
@@ -503,6 +525,7 @@ mod tests {
             default_wobj: None,
             uncertainty: None,
             arm: None,
+            robot: None,
         }
     }
 

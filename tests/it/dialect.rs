@@ -159,6 +159,7 @@ fn a_third_dialect_joins_with_one_registry_line() {
         default_wobj: None,
         uncertainty: None,
         arm: None,
+        robot: None,
     };
     let result = apply(
         &program,

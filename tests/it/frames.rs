@@ -305,6 +305,7 @@ fn work_object_with_track_compensation() {
         default_wobj: None,
         uncertainty: None,
         arm: None,
+        robot: None,
     };
     let pu = ProfileUncertainty::new(&profile).unwrap();
     let fit = fit_wobj(&rows, &setup, pu.as_ref(), None).unwrap();
@@ -347,6 +348,7 @@ fn work_object_uncertainty_is_calibrated() {
         default_wobj: None,
         uncertainty: None,
         arm: None,
+        robot: None,
     };
     let want = pose_to_xyz_deg(&wobj);
     let (mut inside, mut total) = (0, 0);

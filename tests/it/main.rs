@@ -6,6 +6,7 @@ mod dialect;
 mod frames;
 mod fuzz_bodies;
 mod fuzzed_transforms;
+mod kept_as_written;
 mod kinematics;
 mod krl;
 mod library_text;
