@@ -24,7 +24,7 @@ use super::edits::{ProgramEdits, TargetChange};
 use super::kinematic_policy::fmt_joints;
 use super::kinematic_policy::{Arm, config_edits, with_tool};
 use super::policy::{
-    Why, common_refusal, describe, offset_bases, wobj_of, words_of, work_object_of,
+    Why, common_refusal, describe, offset_bases, stationary_tool, wobj_of, words_of, work_object_of,
 };
 use super::refusal::{Refusal, RefusalKind, Remedy};
 use super::rewrite::{
@@ -415,7 +415,8 @@ impl TargetRule for MirrorRule<'_> {
         // A plane given in the work object mirrors a target used with two work objects the
         // same way in both; a plane in world does not.
         let common = common_refusal(scope.file, p)
-            .filter(|w| w.kind != RefusalKind::TwoWorkObjects || self.settings.world.is_some());
+            .filter(|w| w.kind != RefusalKind::TwoWorkObjects || self.settings.world.is_some())
+            .or_else(|| stationary_tool(scope.program, scope.file, p));
         if common.is_some() || self.settings.arm.is_none() {
             return common;
         }

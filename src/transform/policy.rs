@@ -478,6 +478,27 @@ pub(crate) fn joint_target(p: &Position) -> Why {
     )
 }
 
+/// The refusal of a target moved to with a tool the robot does not hold (RAPID `tooldata`
+/// `robhold FALSE`): a stationary tool, as much as a work object the robot holds
+/// ([`common_refusal`]) makes one. RAPID pairs the two flags, but either says the TCP stands
+/// still while the robot carries the work piece: a program that sets only one is refused all the
+/// same, with or without the robot's kinematics (which otherwise find the tool unresolved).
+pub(crate) fn stationary_tool(program: &Program, own: &ParsedFile, p: &Position) -> Option<Why> {
+    let name = p.usage.tools().find(|name| {
+        program
+            .frame_seen_from(Some(own), name, |k| k == FrameKind::Tool)
+            .is_some_and(|(_, d)| d.held_by_robot == Some(false))
+    })?;
+    Some(Why::new(
+        RefusalKind::StationaryTool,
+        format!(
+            "{} is moved to with tool `{name}`, which the robot does not hold (robhold FALSE: stationary tool)",
+            describe(p)
+        ),
+        "a stationary-tool target moves with the work piece, not the track: correct it by hand",
+    ))
+}
+
 /// Checks that every transform makes before touching a Cartesian target; `None` = go ahead.
 pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
     let what = describe(p);

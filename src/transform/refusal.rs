@@ -28,7 +28,8 @@ pub enum RefusalKind {
     SharedOffset,
     /// The work object is moved by a mechanical unit (`ufprog FALSE`).
     MovingWorkObject,
-    /// Stationary tool (`robhold TRUE`, KRL `IPO_FRAME #TCP`).
+    /// Stationary tool (a work object with `robhold TRUE` or a tool with `robhold FALSE`, KRL
+    /// `IPO_FRAME #TCP`).
     StationaryTool,
     /// The skid axis is `9E9` (not connected).
     #[value(alias = "not-connected-skid")]

@@ -18,7 +18,9 @@ use super::cell::Robot;
 use super::driver::{KeptByStamp, NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
 use super::kinematic_policy::{Arm, joint_edits, with_tool};
-use super::policy::{LastWorkObject, Why, describe, joint_target, offset_bases};
+use super::policy::{
+    LastWorkObject, Why, common_refusal, describe, joint_target, offset_bases, stationary_tool,
+};
 use super::refusal::Refusal;
 use super::refusal::RefusalKind;
 use super::rewrite::{MM_DECIMALS, number_edit};
@@ -241,6 +243,10 @@ impl TargetRule for TrackRule<'_, '_> {
                 skid_axis: self.setup.skid_axis,
             },
         }
+    }
+
+    fn refusal(&self, scope: Scope, p: &Position) -> Option<Why> {
+        common_refusal(scope.file, p).or_else(|| stationary_tool(scope.program, scope.file, p))
     }
 
     fn joint(&self, scope: Scope, p: &Position) -> Step {

@@ -2634,3 +2634,62 @@ fn a_cell_work_object_the_program_gives_another_value_is_refused() {
     );
     assert!(err.contains("[runtime-data]"), "{err}");
 }
+
+/// A tool the robot does not hold (`tooldata` robhold FALSE) makes a stationary-tool target as
+/// much as a work object it holds: refused as `stationary-tool` by `correct` and `mirror`,
+/// with or without the robot's kinematics. Before, the cell without kinematics corrected `pB`
+/// as a point of a tool on the flange (exit 0) and the one with them refused it as `reach`.
+#[test]
+fn a_tool_the_robot_does_not_hold_is_a_stationary_tool_with_or_without_an_arm() {
+    let module = |wobj_robhold: &str| {
+        format!(
+            "MODULE StatTool\n  PERS tooldata tStat:=[FALSE,[[1800,900,1100],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\n  \
+             PERS wobjdata wOdd:=[{wobj_robhold},TRUE,\"\",[[1500,-1500,600],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n  \
+             CONST robtarget pB:=[[0,60,0],[1,0,0,0],[0,0,0,0],[1650,9E9,9E9,9E9,9E9,9E9]];\n  \
+             PROC main()\n    MoveL pB, v100, fine, tStat\\WObj:=wOdd;\n  ENDPROC\nENDMODULE\n"
+        )
+    };
+    // The work object says nothing (FALSE), or says so too (TRUE, as RAPID pairs them).
+    for (wobj_robhold, said) in [
+        (
+            "FALSE",
+            "is moved to with tool `tStat`, which the robot does not hold (robhold FALSE: stationary tool)",
+        ),
+        ("TRUE", "is a stationary-tool point (robhold TRUE)"),
+    ] {
+        let (dir, path) = scratch_with("stat.mod", &module(wobj_robhold));
+        let out = dir.path().join("out.mod");
+        for cell in ["samples/cell.toml", "samples/cell_rules.toml"] {
+            let base = ["--cell", cell, "-o", out.to_str().unwrap()];
+            let robot = ["--robot", "r1"];
+            for command in [&["correct"][..], &["mirror"]] {
+                let args = [
+                    command,
+                    &[path.to_str().unwrap()][..],
+                    &base[..],
+                    &robot[..],
+                ]
+                .concat();
+                let err = refusal_output(&args);
+                assert!(
+                    err.contains("`pB` ") && err.contains(said),
+                    "{args:?}: {err}"
+                );
+                assert!(
+                    err.contains("[stationary-tool]") && !err.contains("[reach]"),
+                    "{args:?}: {err}"
+                );
+                assert!(!out.exists());
+                let kept = [&args[..], &["--keep", "stationary-tool"]].concat();
+                let (code, _, err) = trackfix(&kept);
+                assert_eq!(code, 4, "{kept:?}: {err}");
+                let written = std::fs::read_to_string(&out).unwrap();
+                assert!(
+                    written.contains("pB:=[[0,60,0],[1,0,0,0],[0,0,0,0],[1650,"),
+                    "{written}"
+                );
+                std::fs::remove_file(&out).unwrap();
+            }
+        }
+    }
+}
