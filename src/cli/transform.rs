@@ -1367,7 +1367,8 @@ fn run_mirror_inner(mut a: MirrorArgs) -> anyhow::Result<Exit> {
 
 /// A mirror whose image is for robot `to` (the program being `from`'s): with a plane in world,
 /// the image is written in the work objects as `to` places them — its cell entries, then the
-/// bases of its own `$config.dat` when the cell gives it another one than `from`'s.
+/// bases of its own `$config.dat` when the cell gives it another one than `from`'s — and, when
+/// both robots have kinematics, its configurations and joint targets are solved in `to`'s base.
 fn writes_image_for(
     settings: &mut MirrorSettings,
     from: Option<&Robot>,
@@ -1394,6 +1395,10 @@ fn writes_image_for(
         }
     }
     world.frames_to = Some(frames);
+    // The image's configurations and joint targets are then solved in `to`'s own base.
+    if let Some(arm) = &mut settings.arm {
+        arm.image = trackfix::transform::ImageRobot::of(to);
+    }
     Ok(())
 }
 

@@ -31,6 +31,7 @@ use super::rewrite::{
     DEG_DECIMALS, MM_DECIMALS, OrientationHint, QUAT_DECIMALS, number_edit, pose_edits,
 };
 use super::stamp::{Stamp, StampReading};
+use crate::kinematics::reach::resolve_tool;
 use crate::kinematics::{ConfigValue, mirror_config_by_ik, mirrored_joints};
 
 /// Everything `mirror` needs.
@@ -68,9 +69,11 @@ pub struct MirrorSettings {
 /// What mirroring through kinematics needs: the arm, where the robot base is at each skid, and
 /// how a target's work object resolves.
 ///
-/// The mirror-image robot is assumed to stand as this robot's mirror image in the xz plane of
-/// its base (a symmetric cell: `B' = Sa·B·Sy`): a flange pose `F` in this robot's base is then
-/// `Sy·F·Sy` in the other's, `Sy = diag(1, −1, 1)`.
+/// Without [`MirrorArm::image`] the mirror-image robot is assumed to stand as this robot's
+/// mirror image in the xz plane of its base (a symmetric cell: `B' = Sa·B·Sy`): a flange pose
+/// `F` in this robot's base is then `Sy·F·Sy` in the other's, `Sy = diag(1, −1, 1)`. A real
+/// cell's two bases are measured apart (the sample's by 0.86 mm): with the image robot given,
+/// configurations and joint targets are solved in its own base.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MirrorArm {
     /// The arm being mirrored, with the cell's tools.
@@ -83,6 +86,42 @@ pub struct MirrorArm {
     pub frames: BTreeMap<String, Pose>,
     /// The work object of declared targets no motion uses.
     pub default_wobj: Option<String>,
+    /// The mirror-image robot, when the image is for a robot of the cell with kinematics and the
+    /// plane is given in world (`mirror --to`, `transfer --mirror`).
+    pub image: Option<ImageRobot>,
+}
+
+/// The robot a mirror image is for: its arm and where its base stands on its track. With a
+/// plane in world, the image of a target is a place in the cell; this robot reaches it from its
+/// own base at the mapped skid (`MirrorSettings::skid_map`), `B_to(s')`, which is the mirror
+/// image of the other's only as far as the cell is symmetric.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageRobot {
+    /// Its name in the cell, for messages.
+    pub name: String,
+    /// Its arm, with the cell's tools on its flange.
+    pub arm: Arm,
+    /// `B_0` of its track.
+    pub base0: Pose,
+    /// Its track's unit direction in world.
+    pub track_axis: Vector3<f64>,
+}
+
+impl ImageRobot {
+    /// The image robot `robot`, if the cell gives it kinematics.
+    pub fn of(robot: &super::cell::Robot) -> Option<ImageRobot> {
+        Some(ImageRobot {
+            name: robot.name.clone(),
+            arm: Arm::of(robot)?,
+            base0: robot.base0,
+            track_axis: robot.track_axis,
+        })
+    }
+
+    /// `B(s) = Trans(s·a)·B_0`.
+    fn base_at(&self, skid: f64) -> Pose {
+        Translation3::from(self.track_axis * skid) * self.base0
+    }
 }
 
 impl MirrorArm {
@@ -94,6 +133,7 @@ impl MirrorArm {
             track_axis: robot.track_axis,
             frames: robot.frames.clone(),
             default_wobj: default_wobj.map(str::to_owned),
+            image: None,
         })
     }
 
@@ -394,7 +434,12 @@ impl TargetRule for MirrorRule<'_> {
                     flip_or_value_edit(f, -f.as_ref()?.value(), 0)
                 })
                 .collect(),
-            Some(m) => mirror_joints_by_ik(&m.arm, p).map_err(|why| why.at(scope.file, p))?,
+            Some(m) => match (&m.image, &self.settings.world) {
+                (Some(image), Some(world)) => self
+                    .joints_in_image_base(m, image, world, p)
+                    .map_err(|why| why.at(scope.file, p))?,
+                _ => mirror_joints_by_ik(&m.arm, p).map_err(|why| why.at(scope.file, p))?,
+            },
         };
         if let Some(why) = skid_refusal(p, self.settings) {
             return Err(why.at(scope.file, p));
@@ -484,6 +529,95 @@ impl TargetRule for MirrorRule<'_> {
 }
 
 impl MirrorRule<'_> {
+    /// The tool `name` on the image robot's flange: its cell entry, else the program's
+    /// declaration as the image's program has it (mirrored with `mirror_frames`).
+    fn image_tool(&self, scope: Scope, image: &ImageRobot, name: &str) -> Result<Pose, Why> {
+        let pose = resolve_tool(scope.program, Some(scope.file), &image.arm.tools, name).map_err(
+            |msg| {
+                Why::new(
+                    RefusalKind::Reach,
+                    format!(
+                        "its mirror image on robot `{}` cannot be checked: {msg}",
+                        image.name
+                    ),
+                    "give the tool under [robot.NAME.tool] in the cell file",
+                )
+            },
+        )?;
+        let from_cell = image.arm.tools.contains_key(&super::cell::frame_key(name));
+        Ok(match self.settings.mirror_frames && !from_cell {
+            true => self.own.tool(&pose).0,
+            false => pose,
+        })
+    }
+
+    /// A joint target mirrored for the image robot: `J'` with its flange at the mirror image in
+    /// world of this robot's, `B_to(s')·FK(J') = A·B(s)·FK(J)·Sb`, found as the rule's image
+    /// `(−θ1, θ2, θ3, −θ4, θ5, −θ6)` moved by what the two bases fall short of mirror images
+    /// (so the arm's branch is the rule's, and a wrist at its singularity that would swing is
+    /// refused as a track correction's would be). Before, the image was the rule's alone: on the
+    /// sample cell a joint target and its Cartesian twin, one pose on robot A, ended 0.85 mm
+    /// apart on robot B.
+    fn joints_in_image_base(
+        &self,
+        m: &MirrorArm,
+        image: &ImageRobot,
+        world: &WorldPlane,
+        p: &Position,
+    ) -> Result<Vec<Edit>, Why> {
+        let j = m.arm.joints_of(p)?;
+        let what = describe(p);
+        let skid = match p.skid(self.settings.skid_axis) {
+            Skid::At(s) => s,
+            _ => {
+                return Err(Why::new(
+                    RefusalKind::SkidMissing,
+                    format!(
+                        "{what} has no skid position: where robot `{}` stands to reach its mirror image is not known",
+                        image.name
+                    ),
+                    "write the skid position into the target",
+                ));
+            }
+        };
+        let (scale, offset) = self.settings.skid_map;
+        let skid_to = scale * skid + offset;
+        let flange = m.base_at(skid) * m.arm.kinematics.forward(&j);
+        let mirrored = Reflection::about(&world.frame, self.settings)
+            .target(&flange)
+            .0;
+        let target = image.base_at(skid_to).inverse() * mirrored;
+        let kin = &image.arm.kinematics;
+        let rule = mirrored_joints(&j);
+        let change = target * kin.forward(&rule).inverse();
+        let new = crate::kinematics::joint_target_correction(kin, &rule, &change).map_err(|why| {
+            let after = match &why {
+                crate::kinematics::KinematicRefusal::WristTurn { after, .. } => fmt_joints(after),
+                _ => "none in the same branch".to_owned(),
+            };
+            Why::new(
+                RefusalKind::Reach,
+                format!(
+                    "{what}: its mirror image on robot `{}` at skid {skid_to:.1} mm (its flange {:.1} mm from that robot's base): {why}: joints before {}, of the image {}, after {after}",
+                    image.name,
+                    target.translation.vector.norm(),
+                    fmt_joints(&j),
+                    fmt_joints(&rule),
+                ),
+                "check the mirror plane, the skid map and the mirror-image robot's cell; or re-teach the target",
+            )
+        })?;
+        Ok(p.joints
+            .iter()
+            .zip(new)
+            .zip(rule)
+            .filter_map(|((f, v), r)| match (v - r).abs() < 1e-9 {
+                true => flip_or_value_edit(f, r, 0),
+                false => number_edit(f, v, DEG_DECIMALS),
+            })
+            .collect())
+    }
+
     /// The configuration inverse kinematics finds for the mirrored target (`None` when the
     /// target writes none), or why it is refused: the target does not reach as written, or its
     /// mirror image is out of reach within the limits.
@@ -515,7 +649,19 @@ impl MirrorRule<'_> {
         )?;
         let tools = m.arm.tools(scope.program, scope.file, p)?;
         let language = scope.file.language;
-        let kin = &m.arm.kinematics;
+        // With the image robot and a plane in world, the image of the TCP is a place in the
+        // cell (`A·W·T·Sb`), which that robot reaches from its own base at the mapped skid.
+        let image = match (&m.image, &self.settings.world) {
+            (Some(image), Some(world)) => {
+                let (scale, offset) = self.settings.skid_map;
+                let tcp = Reflection::about(&world.frame, self.settings)
+                    .target(&(w * t))
+                    .0;
+                Some((image, scale * skid + offset, tcp))
+            }
+            _ => None,
+        };
+        let kin = image.map_or(&m.arm.kinematics, |(i, _, _)| &i.arm.kinematics);
         // Each tool puts the flange elsewhere, so each gives the mirror image its own
         // configuration; the one target holds one.
         let mut found: Option<(&str, ConfigValue)> = None;
@@ -525,17 +671,30 @@ impl MirrorRule<'_> {
                 .arm
                 .joints_before(p, &flange, language)
                 .map_err(|why| with_tool(why, p, name))?;
-            let Some((_, solved)) =
-                mirror_config_by_ik(kin, &mirrored_flange(&flange), &before, language)
-            else {
+            let (mirrored, on) = match image {
+                None => (mirrored_flange(&flange), String::new()),
+                Some((image, skid_to, tcp)) => {
+                    let tool = self
+                        .image_tool(scope, image, name)
+                        .map_err(|why| with_tool(why, p, name))?;
+                    let flange = image.base_at(skid_to).inverse() * tcp * tool.inverse();
+                    let on = format!(
+                        " on robot `{}` at skid {skid_to:.1} mm (its flange {:.1} mm from that robot's base)",
+                        image.name,
+                        flange.translation.vector.norm()
+                    );
+                    (flange, on)
+                }
+            };
+            let Some((_, solved)) = mirror_config_by_ik(kin, &mirrored, &before, language) else {
                 return Err(with_tool(
                     Why::new(
                         RefusalKind::Reach,
                         format!(
-                            "{what}: its mirror image is out of reach within the limits: joints before {}, after none",
+                            "{what}: its mirror image is out of reach{on} within the limits: joints before {}, after none",
                             fmt_joints(&before)
                         ),
-                        "check the mirror plane and the mirror-image robot's cell",
+                        "check the mirror plane, the skid map and the mirror-image robot's cell",
                     ),
                     p,
                     name,

@@ -26,7 +26,7 @@ pub use edits::{
     apply_owned,
 };
 pub use kinematic_policy::Arm;
-pub use mirror::{MirrorArm, MirrorSettings, WorldPlane, mirror};
+pub use mirror::{ImageRobot, MirrorArm, MirrorSettings, WorldPlane, mirror};
 pub use refusal::{Refusal, RefusalKind, Remedy};
 pub use stamp::Stamp;
 pub use track_correction::{Deviation, Direction, TrackSetup, track_correction};

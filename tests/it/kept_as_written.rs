@@ -325,10 +325,13 @@ fn transfer_reads_and_writes_the_kept_targets() {
     let stamp = stamp_line(&transferred);
     assert!(
         stamp.starts_with("! trackfix: transfer robot=r2 ")
-            && stamp.contains(" kept=1:reach:j03;3:skid-missing:pNC "),
+            && stamp.contains(" kept=3:skid-missing:pNC "),
         "{stamp}"
     );
-    // zero for r2: j03 and pNC are robot r1's program as written, left so and listed again.
+    // j03 is transferred too: on r2's own base the image of its axis 5 lies inside the limit
+    // (119.988°), where the rule's image was at it (120°) and r2's correction pushed it out.
+    assert_ne!(line_of(&transferred, "j03"), line_of(MODULE, "j03"));
+    // zero for r2: pNC is robot r1's program as written, left so and listed again.
     let (code, _, err) = trackfix(&[
         "zero",
         &d("ct.mod"),
@@ -341,12 +344,12 @@ fn transfer_reads_and_writes_the_kept_targets() {
     ]);
     assert_eq!(code, 0, "{err}");
     let zeroed = read(Path::new(&d("ctz.mod")));
-    assert_eq!(line_of(&zeroed, "j03"), line_of(MODULE, "j03"));
+    assert_eq!(line_of(&zeroed, "pNC"), line_of(MODULE, "pNC"));
     assert!(
-        stamp_line(&zeroed).contains(" kept=1:reach:j03;3:skid-missing:pNC "),
+        stamp_line(&zeroed).contains(" kept=3:skid-missing:pNC "),
         "{zeroed}"
     );
-    // A transfer back refuses them by the kind they were first refused as.
+    // A transfer back refuses it by the kind it was first refused as.
     let (code, _, err) = trackfix(&[
         "transfer",
         &d("ct.mod"),
@@ -361,7 +364,7 @@ fn transfer_reads_and_writes_the_kept_targets() {
         "--mirror",
     ]);
     assert_eq!(code, 3, "{err}");
-    assert!(err.contains("`j03` was left as written by the `transfer` this file's stamp records (refused as reach)"), "{err}");
+    assert!(err.contains("`pNC` was left as written by the `transfer` this file's stamp records (refused as skid-missing)"), "{err}");
     assert!(err.contains("[skid-missing]"), "{err}");
 }
 

@@ -10,6 +10,7 @@ mod kept_as_written;
 mod kinematics;
 mod krl;
 mod library_text;
+mod mirror_image;
 mod non_positions;
 mod output;
 mod parser_data;

@@ -1,0 +1,334 @@
+//! A mirror image for another robot of the cell (`transfer --mirror`, `mirror --robot A --to
+//! B`) is solved in that robot's own base at the mapped skid: joint targets and configurations
+//! (docs/design.md §10, "The transforms with kinematics"). The checks use a forward kinematics
+//! written here, the elementary product of the arm's joint transforms, and a Newton solve on it.
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::{Matrix6, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6};
+
+use crate::support::{root, trackfix};
+
+type Pose = nalgebra::Isometry3<f64>;
+
+/// An OPW arm as the bundled models give it (ROS-Industrial's values): lengths in mm, and the
+/// controller's joint `θ` to the model's `q = sign·θ − offset`, degrees.
+struct Arm {
+    a1: f64,
+    a2: f64,
+    c1: f64,
+    c2: f64,
+    c3: f64,
+    c4: f64,
+    signs: [f64; 6],
+    offsets: [f64; 6],
+}
+
+const IRB4600: Arm = Arm {
+    a1: 175.0,
+    a2: -175.0,
+    c1: 495.0,
+    c2: 1095.0,
+    c3: 1270.0,
+    c4: 135.0,
+    signs: [1.0; 6],
+    offsets: [0.0, 0.0, -90.0, 0.0, 0.0, 0.0],
+};
+
+const KR210: Arm = Arm {
+    a1: 330.0,
+    a2: -115.0,
+    c1: 645.0,
+    c2: 1350.0,
+    c3: 1420.0,
+    c4: 240.0,
+    signs: [-1.0, 1.0, 1.0, -1.0, 1.0, -1.0],
+    offsets: [0.0, -90.0, 0.0, 0.0, 0.0, 0.0],
+};
+
+fn rz(deg: f64) -> Pose {
+    Pose::from_parts(
+        Translation3::identity(),
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), deg.to_radians()),
+    )
+}
+
+fn ry(deg: f64) -> Pose {
+    Pose::from_parts(
+        Translation3::identity(),
+        UnitQuaternion::from_axis_angle(&Vector3::y_axis(), deg.to_radians()),
+    )
+}
+
+fn tr(x: f64, y: f64, z: f64) -> Pose {
+    Pose::translation(x, y, z)
+}
+
+impl Arm {
+    /// The flange in the robot base: `Rz(q1)·T(a1,0,c1)·Ry(q2)·T(0,0,c2)·Ry(q3)·T(a2,0,c3)·
+    /// Rz(q4)·Ry(q5)·Rz(q6)·T(0,0,c4)`.
+    fn forward(&self, j: &[f64; 6]) -> Pose {
+        let q: Vec<f64> = (0..6)
+            .map(|i| self.signs[i] * j[i] - self.offsets[i])
+            .collect();
+        rz(q[0])
+            * tr(self.a1, 0.0, self.c1)
+            * ry(q[1])
+            * tr(0.0, 0.0, self.c2)
+            * ry(q[2])
+            * tr(self.a2, 0.0, self.c3)
+            * rz(q[3])
+            * ry(q[4])
+            * rz(q[5])
+            * tr(0.0, 0.0, self.c4)
+    }
+
+    /// The joints near `start` whose flange is `target`: Newton steps on the position and
+    /// rotation-vector error with a numeric Jacobian.
+    fn solve_near(&self, target: &Pose, start: [f64; 6]) -> [f64; 6] {
+        let error = |j: &[f64; 6]| {
+            let f = self.forward(j);
+            let dp = target.translation.vector - f.translation.vector;
+            let dr = (target.rotation * f.rotation.inverse()).scaled_axis();
+            Vector6::new(
+                dp.x,
+                dp.y,
+                dp.z,
+                dr.x * 1000.0,
+                dr.y * 1000.0,
+                dr.z * 1000.0,
+            )
+        };
+        let mut j = start;
+        for _ in 0..30 {
+            let e = error(&j);
+            if e.norm() < 1e-10 {
+                break;
+            }
+            let mut jac = Matrix6::zeros();
+            for k in 0..6 {
+                let mut h = j;
+                h[k] += 1e-6;
+                jac.set_column(k, &((error(&j) - error(&h)) / 1e-6));
+            }
+            let step = jac.lu().solve(&e).expect("a regular pose");
+            for k in 0..6 {
+                j[k] += step[k];
+            }
+        }
+        j
+    }
+}
+
+/// `R = Rz·Ry·Rx` of degrees, at `(x, y, z)`.
+fn pose_zyx(x: f64, y: f64, z: f64, rx: f64, ry: f64, rz: f64) -> Pose {
+    let r = Rotation3::from_euler_angles(rx.to_radians(), ry.to_radians(), rz.to_radians());
+    Pose::from_parts(
+        Translation3::new(x, y, z),
+        UnitQuaternion::from_rotation_matrix(&r),
+    )
+}
+
+/// A robot base of the sample cell at skid `s`: `Trans(s·a)·B_0` (samples/cell.toml).
+fn base(robot: &str, s: f64) -> Pose {
+    let (b0, a) = match robot {
+        "r1" | "k1" => (
+            pose_zyx(0.016, -3499.087, -1.496, 0.000412, -0.000064, 90.000710),
+            Vector3::new(1.0, -0.0000032, 0.0000014),
+        ),
+        _ => (
+            pose_zyx(0.000, -202.033, -0.720, -0.000745, 0.000196, -89.999828),
+            Vector3::new(1.0, 0.0000003, 0.0000022),
+        ),
+    };
+    Translation3::from(a.normalize() * s) * b0
+}
+
+fn numbers(text: &str) -> Vec<f64> {
+    text.split(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | '-' | 'E' | 'e' | '+')))
+        .filter_map(|t| t.parse().ok())
+        .collect()
+}
+
+/// The numbers of the literal declared as `name` in `text`.
+fn literal(text: &str, name: &str) -> Vec<f64> {
+    let line = text
+        .lines()
+        .find(|l| l.contains(&format!(" {name}:=")) || l.contains(&format!(" {name}=")))
+        .unwrap();
+    let at = line.find(['[', '{']).unwrap();
+    numbers(&line[at..])
+}
+
+fn distance(a: &Pose, b: &Pose) -> (f64, f64) {
+    (
+        (a.translation.vector - b.translation.vector).norm(),
+        a.rotation.angle_to(&b.rotation).to_degrees(),
+    )
+}
+
+/// `jT` and `pT` are one flange pose on r1 at skid 3000 (`pT` = `B1(3000)·FK(jT)`, tool0 in
+/// wobj0), the probe's twins.
+const TWINS: &str = "MODULE Twin
+  CONST jointtarget jT:=[[5,20,10,40,60,-30],[3000.0,9E9,9E9,9E9,9E9,9E9]];
+  CONST robtarget pT:=[[2772.5670,-1761.7710,927.7176],[0.1591504,0.7545567,-0.5855842,-0.2498130],[0,0,-1,0],[3000.0,9E9,9E9,9E9,9E9,9E9]];
+  PROC main()
+    MoveAbsJ jT, v100, fine, tool0;
+    MoveJ pT, v100, fine, tool0;
+  ENDPROC
+ENDMODULE
+";
+
+/// The pose of a RAPID robtarget's numbers `[x, y, z, q1, q2, q3, q4, …]`.
+fn robtarget(n: &[f64]) -> Pose {
+    let q = UnitQuaternion::from_quaternion(Quaternion::new(n[3], n[4], n[5], n[6]));
+    Pose::from_parts(Translation3::new(n[0], n[1], n[2]), q)
+}
+
+fn joints(n: &[f64]) -> [f64; 6] {
+    [n[0], n[1], n[2], n[3], n[4], n[5]]
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// `transfer --mirror` to r2: the joint target and its Cartesian twin, one pose on r1, reach one
+/// pose on r2: `FK(jT') = B2(s)⁻¹·pT'` (the track's deviation at that skid is the same for
+/// both and drops out). Before, the joint target was mirrored as if r2 stood at the mirror
+/// image of r1's base (0.86 mm off on this cell), and the twins ended 0.85 mm apart.
+#[test]
+fn transfer_mirror_keeps_a_joint_target_with_its_cartesian_twin() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "twin.mod", TWINS);
+    let out = dir.path().join("out.mod");
+    // The twins agree on r1 as written.
+    let (j, p) = (literal(TWINS, "jT"), literal(TWINS, "pT"));
+    let (mm, deg) = distance(
+        &IRB4600.forward(&joints(&j)),
+        &(base("r1", 3000.0).inverse() * robtarget(&p)),
+    );
+    assert!(mm < 1e-3 && deg < 1e-5, "{mm} {deg}");
+    let (code, _, err) = trackfix(&[
+        "transfer",
+        input.to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--from",
+        "r1",
+        "--to",
+        "r2",
+        "--mirror",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    let (j, p) = (literal(&text, "jT"), literal(&text, "pT"));
+    let (mm, deg) = distance(
+        &IRB4600.forward(&joints(&j)),
+        &(base("r2", 3000.0).inverse() * robtarget(&p)),
+    );
+    // Within what 4 decimals of a degree on a 2.6 m arm and 4 of a millimetre amount to.
+    assert!(
+        mm < 0.01 && deg < 3e-4,
+        "jT and pT on r2 are {mm:.4} mm / {deg:.5}° apart\n{text}"
+    );
+    // Not the rule's image: that would put them 0.85 mm apart.
+    let rule = [-5.0, 20.0, 10.0, -40.0, 60.0, 30.0];
+    let moved = j
+        .iter()
+        .zip(rule)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(moved > 0.01, "{j:?}");
+}
+
+/// `mirror --robot k1 --to k2` writes the Status and Turn k2 reaches the image with from its own
+/// base. `XA3Z` is the flange of k1 at `[10, -40, 0.01, 30, 45, 60]` (A3 a hundredth of a degree
+/// above 0); on k2, whose base is not quite r1's mirror image, the image is reached with A3 at
+/// -0.25° (Turn bit 2 set, T 47). Before, the Turn of the rule's image robot was written (T 43),
+/// which k2 reaches the target with in no solution.
+#[test]
+fn mirror_to_another_kuka_robot_writes_the_configuration_it_reaches_the_image_with() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = "DEF mir_st( )\n  BAS(#INITMOV,0)\n  BAS(#BASE,0)\n  BAS(#TOOL,0)\n  PTP XA3Z\nEND\n";
+    let dat = "DEFDAT mir_st\nDECL E6POS XA3Z={X 4535.5149,Y -950.7022,Z 2508.4088,A -30.81732,B 7.47249,C -90.85244,S 0,T 2,E1 4000.0,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}\nENDDAT\n";
+    let input = write(dir.path(), "mir_st.src", src);
+    write(dir.path(), "mir_st.dat", dat);
+    let out = dir.path().join("out");
+    let (code, _, err) = trackfix(&[
+        "mirror",
+        input.to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "k1",
+        "--to",
+        "k2",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(out.join("mir_st.dat")).unwrap();
+    let n = literal(&text, "XA3Z");
+    // {X, Y, Z, A, B, C, S, T, E1, …}, base 0 (world) and tool 0 (the flange).
+    let (status, turn, skid) = (n[6] as u32, n[7] as u32, n[8]);
+    let flange = base("k2", skid).inverse() * pose_zyx(n[0], n[1], n[2], n[5], n[4], n[3]);
+    // The joints on k2 near the rule's image of the original ones.
+    let j = KR210.solve_near(&flange, [-10.0, -40.0, 0.01, -30.0, 45.0, -60.0]);
+    let (mm, deg) = distance(&KR210.forward(&j), &flange);
+    assert!(mm < 1e-6 && deg < 1e-6, "{j:?}");
+    // Turn: bit i is axis i+1 below 0 (KSS "Status and Turn").
+    let expected_turn: u32 = (0..6).filter(|&i| j[i] < 0.0).map(|i| 1 << i).sum();
+    assert!((j[2] - -0.246).abs() < 0.01, "{j:?}");
+    assert_eq!((status, turn), (0, expected_turn), "{j:?}\n{text}");
+    assert_eq!(turn, 47);
+}
+
+/// The sample cell with `skid_map = [-1, 8000]`: r2 at the mapped skid 5000 stands 2 m from
+/// where the twins' image lies. Both twins are refused, each saying where it is out of reach;
+/// before, the joint target was written for r2 at skid 5000 without complaint, and the
+/// Cartesian one was "out of reach as written" though r1 reaches it as written.
+#[test]
+fn a_skid_map_that_puts_the_image_robot_elsewhere_refuses_both_twins_saying_where() {
+    let dir = tempfile::tempdir().unwrap();
+    let samples = root().join("samples");
+    let cell = std::fs::read_to_string(samples.join("cell.toml"))
+        .unwrap()
+        .replace("\"track/", &format!("\"{}/track/", samples.display()))
+        .replace("\"krl/", &format!("\"{}/krl/", samples.display()))
+        .replace("skid_map = [1.0, 0.0]", "skid_map = [-1.0, 8000.0]");
+    let cell_map = write(dir.path(), "cell_map.toml", &cell);
+    let input = write(dir.path(), "twin.mod", TWINS);
+    let transfer = |cell: &Path| {
+        trackfix(&[
+            "transfer",
+            input.to_str().unwrap(),
+            "--cell",
+            cell.to_str().unwrap(),
+            "--from",
+            "r1",
+            "--to",
+            "r2",
+            "--mirror",
+            "--diff",
+        ])
+    };
+    let (code, out, err) = transfer(&cell_map);
+    assert_eq!(code, 3, "{err}");
+    assert!(out.is_empty(), "{out}");
+    for name in ["jT", "pT"] {
+        let line = err
+            .lines()
+            .find(|l| l.contains(&format!("`{name}`")))
+            .unwrap_or_else(|| panic!("{err}"));
+        assert!(
+            line.contains("its mirror image") && line.contains("on robot `r2` at skid 5000.0 mm"),
+            "{line}"
+        );
+        assert!(!line.contains("as written"), "{line}");
+    }
+}
