@@ -89,6 +89,17 @@ impl TransformStep<'_> {
         self.edits_in_chain(program, StampReading::Read, false)
     }
 
+    /// What the step is, as a refusal it makes in a chain says it: `` `correct` for robot `r2` ``.
+    fn label(&self) -> String {
+        match *self {
+            TransformStep::Track(setup, dir) => match &setup.robot {
+                Some(robot) => format!("`{}` for robot `{robot}`", dir.as_str()),
+                None => format!("`{}`", dir.as_str()),
+            },
+            TransformStep::Mirror(_) => "`mirror`".to_owned(),
+        }
+    }
+
     /// The edits of a step of a chain: `chain` for the first step of a `transfer`.
     fn edits_in_chain(&self, program: &Program, stamps: StampReading, chain: bool) -> ProgramEdits {
         match *self {
@@ -127,7 +138,11 @@ pub fn transfer(
         let result = apply(input, edits)?;
         let refused = refused_targets(input, &result);
         let next = reparse(input, &result, options)?;
-        steps.push((result, refused));
+        steps.push(Step {
+            result,
+            refused,
+            label: step.label(),
+        });
         current = Some(next);
     }
     let last = current.as_ref().unwrap_or(program);
@@ -182,7 +197,7 @@ fn refused_targets(input: &Program, result: &ProgramResult) -> Vec<Vec<Option<us
 fn combine(
     start: &Program,
     end: &Program,
-    steps: &[(ProgramResult, Vec<Vec<Option<usize>>>)],
+    steps: &[Step],
     skid_axis: usize,
     mirror: Option<&MirrorSettings>,
 ) -> Result<ProgramResult, TransferError> {
@@ -212,7 +227,7 @@ fn combine(
         let mut seen = BTreeSet::new();
         let notes = steps
             .iter()
-            .filter_map(|(s, _)| s.files.get(i))
+            .filter_map(|s| s.result.files.get(i))
             .flat_map(|f| f.notes.iter())
             .filter(|r| seen.insert((r.line, r.target.clone(), r.kind)))
             .cloned()
@@ -278,19 +293,35 @@ fn combine(
     Ok(ProgramResult { files })
 }
 
+/// One step of a chain: its result, the target each of its refusals is about (per file, see
+/// [`refused_targets`]) and what it is.
+struct Step {
+    result: ProgramResult,
+    refused: Vec<Vec<Option<usize>>>,
+    label: String,
+}
+
 /// The refusals of file `i` over a chain's steps, and the targets refused with the kind of
 /// their first refusal: one refusal per target (that one), placed in `start` (a later step's
-/// refusal points into that step's input, whose rewritten numbers moved it), then every other
-/// refusal once.
+/// refusal points into that step's input, whose rewritten numbers moved it, and says which
+/// step: "as written" in it means as the steps before wrote it), then every other refusal once.
 fn chain_refusals(
     start: &ParsedFile,
-    steps: &[(ProgramResult, Vec<Vec<Option<usize>>>)],
+    steps: &[Step],
     i: usize,
 ) -> (Vec<Refusal>, BTreeMap<usize, RefusalKind>) {
     let mut kept = BTreeMap::new();
     let mut seen = BTreeSet::new();
     let mut refusals = Vec::new();
-    for (step, (result, targets)) in steps.iter().enumerate() {
+    for (
+        step,
+        Step {
+            result,
+            refused: targets,
+            label,
+        },
+    ) in steps.iter().enumerate()
+    {
         let Some(file) = result.files.get(i) else {
             continue;
         };
@@ -301,7 +332,14 @@ fn chain_refusals(
                     if let std::collections::btree_map::Entry::Vacant(e) = kept.entry(t) {
                         e.insert(r.kind);
                         refusals.push(match (step, start.positions.span(t)) {
-                            (1.., Some(span)) => r.placed_in(start, span),
+                            (1.., Some(span)) => {
+                                let mut placed = r.placed_in(start, span);
+                                placed.message = format!(
+                                    "{} (in the transfer's {label}, of the target as the steps before it wrote it)",
+                                    placed.message
+                                );
+                                placed
+                            }
                             _ => r.clone(),
                         });
                     }

@@ -332,3 +332,43 @@ fn a_skid_map_that_puts_the_image_robot_elsewhere_refuses_both_twins_saying_wher
         assert!(!line.contains("as written"), "{line}");
     }
 }
+
+/// A refusal a later step of a `transfer` makes says which step it is: its "as written" is that
+/// step's input, not the file. Without r1's kinematics the mirror has no arm to solve the image
+/// with, and r2's `correct` finds it out of reach at the mapped skid; before, the message said
+/// only "out of reach as written", of a target r1 reaches as written.
+#[test]
+fn a_refusal_of_a_later_step_of_a_transfer_says_which_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let samples = root().join("samples");
+    let cell = std::fs::read_to_string(samples.join("cell.toml"))
+        .unwrap()
+        .replace("\"track/", &format!("\"{}/track/", samples.display()))
+        .replace("\"krl/", &format!("\"{}/krl/", samples.display()))
+        .replace("skid_map = [1.0, 0.0]", "skid_map = [-1.0, 8000.0]");
+    let without = cell.replace(
+        "[robot.r1.kinematics]\nmodel = \"abb_irb4600_40_255\"\n",
+        "",
+    );
+    assert_ne!(without, cell);
+    let cell_rules_r1 = write(dir.path(), "cell_r1_rules.toml", &without);
+    let input = write(dir.path(), "twin.mod", TWINS);
+    let (code, _, err) = trackfix(&[
+        "transfer",
+        input.to_str().unwrap(),
+        "--cell",
+        cell_rules_r1.to_str().unwrap(),
+        "--from",
+        "r1",
+        "--to",
+        "r2",
+        "--mirror",
+        "--diff",
+    ]);
+    assert_eq!(code, 3, "{err}");
+    let line = err.lines().find(|l| l.contains("`pT`")).unwrap();
+    assert!(
+        line.contains("(in the transfer's `correct` for robot `r2`, of the target as the steps before it wrote it)"),
+        "{line}"
+    );
+}
