@@ -87,7 +87,7 @@ pub struct MirrorArm {
     /// The work object of declared targets no motion uses.
     pub default_wobj: Option<String>,
     /// The mirror-image robot, when the image is for a robot of the cell with kinematics and the
-    /// plane is given in world (`mirror --to`, `transfer --mirror`).
+    /// plane is given in world (a mirror for another robot, and a transfer's mirror).
     pub image: Option<ImageRobot>,
 }
 

@@ -34,7 +34,7 @@
 //! by target index), whose split between A and C the corrected text no longer says; `zero`
 //! writes the split that keeps it ([`LockSplits`]).
 //!
-//! A run that leaves refused targets as written (`--keep`, `--skip-unsupported`) lists them
+//! A run that leaves refused targets as written (refused, and kept by the caller) lists them
 //! (`kept=0:reach:p01;2:reach:j03`, [`Kept`]): the stamp then says what the file carries but
 //! for those, and the transform that undoes it leaves them as written.
 
@@ -254,7 +254,7 @@ impl LockSplits {
     }
 }
 
-/// The targets a run left as written, refused and kept (`--keep`, `--skip-unsupported`), by
+/// The targets a run left as written, refused and kept by the caller (whole kinds of them), by
 /// index among the file's targets (file order, as [`LockSplits`]), each with the kind of its
 /// refusal and its name (`kept=0:reach:p01;2:reach:j03;7:skid-not-connected`; an inline target
 /// has none).
@@ -405,7 +405,7 @@ impl Kept {
     }
 }
 
-/// A refusal kind by the name `--keep` takes.
+/// A refusal kind by its kebab-case name (its `clap::ValueEnum` name).
 pub(crate) fn kind_name(kind: RefusalKind) -> String {
     clap::ValueEnum::to_possible_value(&kind)
         .map_or_else(|| format!("{kind:?}"), |v| v.get_name().to_owned())
