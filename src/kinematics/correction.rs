@@ -2,7 +2,7 @@
 //! inside the limits and in the same configuration; joint targets moved with the track; and the
 //! configuration of a mirrored target found by IK.
 
-use crate::geometry::Pose;
+use crate::geometry::{Pose, wrap_deg};
 
 use super::opw::distance2;
 use super::{ConfigValue, Joints, Kinematics, select};
@@ -13,7 +13,8 @@ use super::{ConfigValue, Joints, Kinematics, select};
 pub enum KinematicRefusal {
     /// The new pose has no joint solution.
     Unreachable,
-    /// The new pose is reachable in the configuration only with a joint outside its limits.
+    /// The new pose is reached in the configuration, from the original joints, only with a
+    /// joint outside its limits.
     OutsideLimit {
         /// The axis, 1-based.
         axis: usize,
@@ -57,8 +58,10 @@ impl std::fmt::Display for KinematicRefusal {
                 limits,
             } => write!(
                 f,
-                "the transformed target needs axis {axis} = {value:.3}°, outside its limits [{}, {}]",
-                limits[0], limits[1]
+                "the transformed target needs axis {axis} = {}°, outside its limits [{}, {}]",
+                beyond_limit(*value, *limits),
+                limits[0],
+                limits[1]
             ),
             KinematicRefusal::WristTurn { .. } => write!(f, "the target {}", self.wrist_text()),
             KinematicRefusal::ConfigChange { before, after } => write!(
@@ -67,6 +70,16 @@ impl std::fmt::Display for KinematicRefusal {
             ),
         }
     }
+}
+
+/// `value` with the fewest decimals, three or more, that still show it outside `limits`: an
+/// axis 3e-5° beyond its limit of −125° reads `-125.00003`, where three decimals would print
+/// the limit itself.
+fn beyond_limit(value: f64, [lo, hi]: [f64; 2]) -> String {
+    (3..=12)
+        .map(|d| format!("{value:.d$}"))
+        .find(|t| t.parse::<f64>().is_ok_and(|v| v < lo || v > hi))
+        .unwrap_or_else(|| value.to_string())
 }
 
 impl KinematicRefusal {
@@ -140,6 +153,21 @@ fn first_outside(kin: &Kinematics, j: &Joints) -> Option<KinematicRefusal> {
         value: j[axis],
         limits: kin.limits[axis],
     })
+}
+
+/// Each solution with every axis turned by whole turns to lie nearest `from`: where the arm
+/// goes from `from` without winding any axis (limits not applied).
+fn continuations<'a>(
+    solutions: &'a [Joints],
+    from: &'a Joints,
+) -> impl Iterator<Item = Joints> + 'a {
+    solutions
+        .iter()
+        .map(|s| std::array::from_fn(|i| from[i] + wrap_deg(s[i] - from[i])))
+}
+
+fn nearest_to(from: &Joints, c: impl Iterator<Item = Joints>) -> Option<Joints> {
+    c.min_by(|a, b| distance2(a, from).total_cmp(&distance2(b, from)))
 }
 
 /// Checks a Cartesian target moved from flange pose `before` to `after` (both in the robot
@@ -241,31 +269,78 @@ const WRIST_SINGULAR_DEG: f64 = 5.0;
 /// A joint target moved with the track: `J'` with `FK(J') = C·FK(J)`, where `C` is the change
 /// in the robot base frame — `D(s)⁻¹` for `correct`, `D(s)` for `zero` (the Cartesian
 /// correction `B·D⁻¹·B⁻¹` seen from the base; no work object and no tool enter, and `B(s)`
-/// cancels). The solution is the one nearest to `J` in the same arm and wrist choice, turns of
-/// axes 4 and 6 kept; one that turns axis 4 or 6 by more than [`WRIST_TURN_LIMIT_DEG`] is
-/// refused ([`KinematicRefusal::WristTurn`]): at the wrist singularity the exact new pose is
-/// only reached by swinging the wrist, and nothing nearer reaches it.
+/// cancels).
+///
+/// `J'` is the solution in `J`'s arm and wrist that each axis reaches from `J` by its least
+/// turn: axis 4/6 turns are kept, and no axis is moved by a whole turn to stay within its
+/// limits (axis 1 at 180° that the correction takes to 180.007° is refused, not written as
+/// −179.993°, a turn of the whole arm). Refused: a `J'` that turns axis 4 or 6 by more than
+/// [`WRIST_TURN_LIMIT_DEG`] ([`KinematicRefusal::WristTurn`]: at the wrist singularity the
+/// exact new pose is only reached by swinging the wrist, and nothing nearer reaches it), and
+/// one outside the limits. A refusal comes with the joints after where some solution in the
+/// branch reaches the new pose ([`JointRefusal`]).
+///
+/// `written_step` is, per axis, the step of the last decimal the axis will be written with
+/// (1e-4° for four decimals). An axis the correction takes beyond a limit by less than half
+/// of it is set at the limit: written, it could not say the difference (a joint target at its
+/// limit, corrected inward and written to four decimals, comes back from `zero` 3e-5° beyond
+/// it only by that rounding).
 pub fn joint_target_correction(
     kin: &Kinematics,
     joints: &Joints,
     change: &Pose,
-) -> Result<Joints, KinematicRefusal> {
+    written_step: &[f64; 6],
+) -> Result<Joints, Box<JointRefusal>> {
     let target = change * kin.forward(joints);
-    if let Some(j) = kin.nearest(&target, joints, true) {
-        let (a4_turn, a6_turn) = (j[3] - joints[3], j[5] - joints[5]);
-        if a4_turn.abs() > WRIST_TURN_LIMIT_DEG || a6_turn.abs() > WRIST_TURN_LIMIT_DEG {
-            return Err(KinematicRefusal::WristTurn {
-                a5: joints[4],
-                a4_turn,
-                a6_turn,
-                from_singularity: kin.wrist_singularity_deg(joints),
-                after: j,
-            });
-        }
-        return Ok(j);
+    let refused =
+        |after: Option<Joints>, why: KinematicRefusal| Box::new(JointRefusal { why, after });
+    let solutions = kin.inverse(&target, Some(joints[3]));
+    if solutions.is_empty() {
+        return Err(refused(None, KinematicRefusal::Unreachable));
     }
-    let check = check_target(kin, &kin.forward(joints), &target, None);
-    Err(check.refusal.unwrap_or(KinematicRefusal::Unreachable))
+    let followed = nearest_to(
+        joints,
+        continuations(&solutions, joints).filter(|j| kin.same_branch(joints, j)),
+    );
+    let Some(mut j) = followed else {
+        // Only another arm or wrist reaches it.
+        let check = check_target(kin, &kin.forward(joints), &target, None);
+        let why = check.refusal.unwrap_or(KinematicRefusal::Unreachable);
+        return Err(refused(check.after, why));
+    };
+    let (a4_turn, a6_turn) = (j[3] - joints[3], j[5] - joints[5]);
+    if a4_turn.abs() > WRIST_TURN_LIMIT_DEG || a6_turn.abs() > WRIST_TURN_LIMIT_DEG {
+        let why = KinematicRefusal::WristTurn {
+            a5: joints[4],
+            a4_turn,
+            a6_turn,
+            from_singularity: kin.wrist_singularity_deg(joints),
+            after: j,
+        };
+        return Err(refused(Some(j), why));
+    }
+    for ((a, [lo, hi]), step) in j.iter_mut().zip(kin.limits).zip(written_step) {
+        let slack = step / 2.0;
+        if *a < lo && *a > lo - slack {
+            *a = lo;
+        } else if *a > hi && *a < hi + slack {
+            *a = hi;
+        }
+    }
+    match first_outside(kin, &j) {
+        Some(r) => Err(refused(Some(j), r)),
+        None => Ok(j),
+    }
+}
+
+/// Why a joint target cannot be moved ([`joint_target_correction`]), and the joints that would
+/// reach its new pose in its branch, if any (outside the limits, or swung).
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointRefusal {
+    /// Why it is refused.
+    pub why: KinematicRefusal,
+    /// The joints that would reach the new pose, if any.
+    pub after: Option<Joints>,
 }
 
 /// The rule's mirror image of joints about the xz plane of the base (`y → −y`, mirror-image
@@ -300,6 +375,9 @@ mod tests {
         pose_xyz_deg(0.5, 0.0, 0.0, 0.02, 0.0, 0.0)
     }
 
+    /// Four decimals on every axis.
+    const STEP: [f64; 6] = [1e-4; 6];
+
     fn arm() -> Kinematics {
         super::super::model("abb_irb4600_40_255")
             .expect("bundled")
@@ -326,7 +404,15 @@ mod tests {
             [0.0, 0.0, 0.0, 10.0, 1e-6, -10.0],
         ] {
             let target = c * kin.forward(&j);
-            let err = joint_target_correction(&kin, &j, &c).expect_err("refused");
+            let refused = joint_target_correction(&kin, &j, &c, &STEP).expect_err("refused");
+            let err = refused.why;
+            assert_eq!(
+                refused.after,
+                match err {
+                    KinematicRefusal::WristTurn { after, .. } => Some(after),
+                    _ => None,
+                }
+            );
             let KinematicRefusal::WristTurn {
                 a5,
                 a4_turn,
@@ -384,7 +470,7 @@ mod tests {
             [30.0, 10.0, -20.0, -45.0, -30.0, 60.0],
         ] {
             let target = c * kin.forward(&j);
-            let jc = joint_target_correction(&kin, &j, &c).expect("moved");
+            let jc = joint_target_correction(&kin, &j, &c, &STEP).expect("moved");
             assert!(mm_from(&kin, &jc, &target) < 1e-6, "{jc:?}");
             assert!(
                 kin.forward(&jc).rotation.angle_to(&target.rotation) < 1e-9,
@@ -394,6 +480,24 @@ mod tests {
                 assert!((jc[i] - j[i]).abs() < 0.2, "axis {}: {jc:?}", i + 1);
             }
         }
+    }
+
+    /// A limit is printed with the decimals that show the value beyond it.
+    #[test]
+    fn a_value_just_beyond_a_limit_is_printed_beyond_it() {
+        let r = |value| KinematicRefusal::OutsideLimit {
+            axis: 5,
+            value,
+            limits: [-125.0, 120.0],
+        };
+        assert_eq!(
+            r(-125.00003).to_string(),
+            "the transformed target needs axis 5 = -125.00003°, outside its limits [-125, 120]"
+        );
+        assert_eq!(
+            r(120.036).to_string(),
+            "the transformed target needs axis 5 = 120.036°, outside its limits [-125, 120]"
+        );
     }
 
     /// A turn wrapped at the end of axis 4's range is refused too, but not named after the

@@ -15,7 +15,9 @@ use std::collections::BTreeMap;
 
 use crate::geometry::Pose;
 use crate::kinematics::reach::resolve_tool;
-use crate::kinematics::{ConfigValue, Joints, Kinematics, check_target, select};
+use crate::kinematics::{
+    ConfigValue, JointRefusal, Joints, KinematicRefusal, Kinematics, check_target, select,
+};
 use crate::position::{Config, ParsedFile, Position, Program};
 use crate::syntax::Edit;
 
@@ -151,7 +153,7 @@ impl Arm {
             None => Ok(()),
             Some(m) => Err(reach(
                 format!("{}: {m}", describe(p)),
-                "the transform would move the robot through another posture: re-teach the target",
+                check.refusal.as_ref().map_or(String::new(), hint),
             )),
         }
     }
@@ -187,21 +189,24 @@ impl Arm {
         Ok(j)
     }
 
-    /// The refusal of a joint target whose new pose has no solution in its branch.
+    /// The refusal of joint target `p` (joints `before`) that cannot be moved.
     pub(crate) fn joint_refusal(
         &self,
         p: &Position,
         before: &Joints,
-        why: &crate::kinematics::KinematicRefusal,
+        refused: &JointRefusal,
     ) -> Why {
-        if let crate::kinematics::KinematicRefusal::WristTurn { after, .. } = why {
+        let why = &refused.why;
+        let before = fmt_joints(before);
+        let after = refused
+            .after
+            .map_or("none in the same branch".to_owned(), |j| fmt_joints(&j));
+        if let KinematicRefusal::WristTurn { .. } = why {
             return reach(
                 format!(
-                    "{} {}: joints before {}, after {}",
+                    "{} {}: joints before {before}, after {after}",
                     describe(p),
-                    why.wrist_text(),
-                    fmt_joints(before),
-                    fmt_joints(after)
+                    why.wrist_text()
                 ),
                 if why.at_wrist_singularity() {
                     "re-teach it with axis 5 a few degrees away from 0, or write it as a \
@@ -213,13 +218,37 @@ impl Arm {
         }
         reach(
             format!(
-                "{}: {why}: joints before {}, after none in the same branch",
-                describe(p),
-                fmt_joints(before)
+                "{}: {why}: joints before {before}, after {after}",
+                describe(p)
             ),
-            "the transform would move the robot through another posture: re-teach the target",
+            hint(why),
         )
     }
+}
+
+/// The hint for a refusal other than a swing of the wrist.
+fn hint(why: &KinematicRefusal) -> String {
+    match why {
+        KinematicRefusal::OutsideLimit { axis, .. } => {
+            format!("re-teach the target farther inside the range of axis {axis}")
+        }
+        _ => "the transform would move the robot through another posture: re-teach the target"
+            .to_owned(),
+    }
+}
+
+/// The step of the last decimal each axis of joint target `p` is written with (its literal's
+/// decimals, at least [`DEG_DECIMALS`]): within half of it beyond a limit, the written text
+/// reads as the limit ([`joint_target_correction`](crate::kinematics::joint_target_correction)).
+pub(crate) fn written_steps(p: &Position) -> [f64; 6] {
+    std::array::from_fn(|i| {
+        let places = p
+            .joints
+            .get(i)
+            .and_then(Option::as_ref)
+            .map_or(DEG_DECIMALS, |f| f.lit().places(DEG_DECIMALS));
+        10f64.powi(-(places as i32))
+    })
 }
 
 /// `why`, naming the tool it holds with when `p` is used with more than one (a message that

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use nalgebra::{Matrix3, Matrix4, Rotation3, Vector3};
+use nalgebra::{Matrix3, Matrix4, Rotation3, Translation3, UnitQuaternion, Vector3};
 use proptest::prelude::*;
 
 use trackfix::geometry::{Pose, abb_quat, pose_xyz_deg, wrap_deg};
@@ -16,6 +16,9 @@ use trackfix::position::{Language, Program};
 use trackfix::transform::Cell;
 
 use crate::support::trackfix;
+
+/// Joint targets written with four decimals on every axis.
+const FOUR_DECIMALS: [f64; 6] = [1e-4; 6];
 
 fn irb2400() -> Kinematics {
     model("abb_irb2400_10").expect("bundled").kinematics()
@@ -460,7 +463,7 @@ fn joint_targets_follow_the_deformed_track() {
         };
         assert!(k.within_limits(&j), "{}", m.name);
         // correct: FK(J') = D⁻¹·FK(J); zero: FK(J') = D·FK(J) and back.
-        let jc = joint_target_correction(&k, &j, &d.inverse()).expect("reachable");
+        let jc = joint_target_correction(&k, &j, &d.inverse(), &FOUR_DECIMALS).expect("reachable");
         let want = d.inverse() * k.forward(&j);
         let (dp, dr) = pose_error(&k.forward(&jc), &want);
         assert!(dp < 1e-3 && dr < 1e-8, "{}: {dp} mm", m.name);
@@ -473,7 +476,7 @@ fn joint_targets_follow_the_deformed_track() {
             (jc[5] + 200.0).abs() < 1.0,
             "the turn of axis 6 is kept: {jc:?}"
         );
-        let back = joint_target_correction(&k, &jc, &d).expect("reachable");
+        let back = joint_target_correction(&k, &jc, &d, &FOUR_DECIMALS).expect("reachable");
         assert!(
             back.iter().zip(&j).all(|(a, b)| (a - b).abs() < 1e-6),
             "{back:?}"
@@ -839,7 +842,7 @@ fn sample_home_joint_target_on_the_measured_track() {
     let d = profile.deviation(150.0).unwrap();
     let k = model("abb_irb4600_40_255").unwrap().kinematics();
     let j = [0.0, -20.0, 30.0, 0.0, 80.0, 0.0];
-    let jc = joint_target_correction(&k, &j, &d.inverse()).unwrap();
+    let jc = joint_target_correction(&k, &j, &d.inverse(), &FOUR_DECIMALS).unwrap();
     let want = [0.0514, -19.9494, 30.0292, -0.0669, 79.9236, 0.0997];
     assert!(
         jc.iter().zip(&want).all(|(a, b)| (a - b).abs() < 1e-4),
@@ -1478,4 +1481,273 @@ fn correct_refuses_a_target_moved_with_a_tool_parameter_by_name() {
     let line = |text: &str, n: usize| text.lines().nth(n - 1).unwrap().to_owned();
     assert_eq!(line(&written, 4), line(src, 4));
     assert_ne!(line(&written, 5), line(src, 5));
+}
+
+// ---- no axis turned to stay within its limits, no swing, configurations named ----
+
+/// `chain_fk` as a pose.
+fn chain_pose(k: &Kinematics, j: &Joints) -> Pose {
+    let m = chain_fk(k, j);
+    let r = Rotation3::from_matrix_unchecked(m.fixed_view::<3, 3>(0, 0).into_owned());
+    Pose::from_parts(
+        Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]),
+        UnitQuaternion::from_rotation_matrix(&r),
+    )
+}
+
+/// The robot `name` of samples/cell.toml, and its nominal base `B(s) = Trans(s·a)·B0`.
+fn sample_robot(name: &str) -> (Kinematics, impl Fn(f64) -> Pose) {
+    let cell = Cell::load(&crate::support::root().join("samples/cell.toml")).unwrap();
+    let robot = cell.robot(name).unwrap();
+    let (b0, a) = (robot.base0, robot.track_axis);
+    let base = move |s: f64| Translation3::from(a * s) * b0;
+    (robot.kinematics.clone().unwrap(), base)
+}
+
+/// The deviation `D(s)` of the sample track (samples/track/profile.toml, r1's and k1's).
+fn sample_deviation(s: f64) -> Pose {
+    let profile =
+        trackfix::track::Profile::load(&crate::support::root().join("samples/track/profile.toml"))
+            .unwrap();
+    profile.deviation(s).unwrap()
+}
+
+/// Runs `trackfix ARGS --cell samples/cell.toml --out-dir DIR --no-stamp --format json`: the
+/// exit code and the refusals of the JSON report.
+fn transform_json(args: &[&str], dir: &Path) -> (i32, Vec<(String, u64, String, String)>) {
+    let out = dir.join("out");
+    let _ = std::fs::remove_dir_all(&out);
+    let tail = [
+        "--cell",
+        "samples/cell.toml",
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--no-stamp",
+        "--format",
+        "json",
+    ];
+    let (code, stdout, err) = trackfix(&[args, &tail[..]].concat());
+    let doc: serde_json::Value = serde_json::from_str(&stdout).unwrap_or_else(|e| {
+        panic!("{e}: {stdout}\n{err}");
+    });
+    (code, json_refusals(&doc))
+}
+
+/// Writes a KRL pair `name.src`/`name.dat` into `dir` with the declarations `decls`, moving
+/// to each with `PTP` in the order given; the `.src` path.
+fn krl_pair(dir: &Path, name: &str, decls: &[(&str, String)]) -> std::path::PathBuf {
+    let mut src = format!("DEF {name}( )\n  BAS(#INITMOV,0)\n  BAS(#BASE,0)\n  BAS(#TOOL,0)\n");
+    let mut dat = format!("DEFDAT {name}\n");
+    for (target, decl) in decls {
+        src += &format!("  PTP {target}\n");
+        dat += decl;
+    }
+    src += "END\n";
+    dat += "ENDDAT\n";
+    std::fs::write(dir.join(format!("{name}.dat")), dat).unwrap();
+    let path = dir.join(format!("{name}.src"));
+    std::fs::write(&path, src).unwrap();
+    path
+}
+
+/// A joint target at the end of a 360°-wide axis 1 (the IRB 2400's ±180°) that the
+/// correction turns outward is refused with the angle it needs, where it was written a full
+/// turn away (axis 1 swinging across the cell); one turned inward is moved. The deviations are
+/// rotations about the base's z axis, which is axis 1: the corrected joints are the written
+/// ones with axis 1 turned by the rotation, exactly (checked through the elementary chain).
+/// Beyond the limit by less than half a unit of the last decimal written the axis is written
+/// at the limit (its text could not say otherwise); by more, refused with the decimals that
+/// show it.
+#[test]
+fn a_joint_target_at_the_end_of_axis_1_is_refused_not_turned_a_full_turn() {
+    use trackfix::transform::{Direction, RefusalKind, TrackSetup, apply, track_correction};
+    let cell = Cell::parse(Path::new("cell.toml"), CELL).unwrap();
+    let robot = cell.robot("r1").unwrap();
+    let k = robot.kinematics.clone().unwrap();
+    assert_eq!(k.limits[0], [-180.0, 180.0]);
+    // D(s) = Rz(−δ(s)): `correct` applies D⁻¹ = Rz(δ) in the base, turning axis 1 by +δ.
+    let delta = |s: f64| match s {
+        s if s < 1000.0 => 0.01,
+        s if s < 2500.0 => 0.000013,
+        _ => 0.00002,
+    };
+    let dev = move |s: f64| -> Result<Pose, trackfix::track::TrackError> {
+        Ok(pose_xyz_deg(0.0, 0.0, 0.0, 0.0, 0.0, -delta(s)))
+    };
+    let decl = |name: &str, a1: &str, skid: u32| {
+        format!(
+            "  CONST jointtarget {name}:=[[{a1},10,20,30,45,60],[{skid},9E9,9E9,9E9,9E9,9E9]];\n"
+        )
+    };
+    let names = ["jPark", "jBack", "jNear", "jOver"];
+    let mut src = String::from("MODULE M\n");
+    src += &decl("jPark", "180", 500);
+    src += &decl("jBack", "-180", 500);
+    src += &decl("jNear", "179.99999", 2000);
+    src += &decl("jOver", "179.99999", 3000);
+    src += "  PROC main()\n";
+    for n in names {
+        src += &format!("    MoveAbsJ {n},v100,fine,tool0;\n");
+    }
+    src += "  ENDPROC\nENDMODULE\n";
+    let program = parsed(&src);
+    let setup = TrackSetup::new(robot, &dev);
+    let result = apply(
+        &program,
+        track_correction(&program, &setup, Direction::Correct),
+    )
+    .unwrap();
+    let refusals: Vec<_> = result.refusals().collect();
+    let refused: Vec<_> = refusals
+        .iter()
+        .map(|r| (r.target.as_str(), r.kind))
+        .collect();
+    assert_eq!(
+        refused,
+        [("jPark", RefusalKind::Reach), ("jOver", RefusalKind::Reach)]
+    );
+    assert!(
+        refusals[0]
+            .message
+            .contains("needs axis 1 = 180.010°, outside its limits [-180, 180]"),
+        "{}",
+        refusals[0].message
+    );
+    // The joints it would need: axis 1 turned by δ, nothing else.
+    let after = stated_after(&refusals[0].message);
+    let want = [180.01, 10.0, 20.0, 30.0, 45.0, 60.0];
+    assert!(joints_close(&after, &want, 6e-4), "{}", refusals[0].message);
+    // 1e-5° beyond, twice the half unit of 5 decimals: shown with 5.
+    assert!(
+        refusals[1]
+            .message
+            .contains("needs axis 1 = 180.00001°, outside its limits [-180, 180]"),
+        "{}",
+        refusals[1].message
+    );
+    let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+    let corrected = parsed(&out);
+    let j = [-180.0, 10.0, 20.0, 30.0, 45.0, 60.0];
+    let jb = joints_in(&corrected, "jBack");
+    let (dp, dr) = pose_error(
+        &chain_pose(&k, &jb),
+        &(pose_xyz_deg(0.0, 0.0, 0.0, 0.0, 0.0, 0.01) * chain_pose(&k, &j)),
+    );
+    assert!(dp < 1e-6 && dr < 1e-9, "{dp} mm {dr} rad: {jb:?}");
+    assert!((jb[0] + 179.99).abs() < 1e-9, "{jb:?}");
+    // 180.000003: 3e-6° beyond, within half of 1e-5: written at the limit, the other axes'
+    // text kept.
+    assert!(out.contains("jNear:=[[180.00000,10,20,30,45,60],"), "{out}");
+    for n in ["jPark", "jOver"] {
+        let line = |text: &str| text.lines().find(|l| l.contains(n)).unwrap().to_owned();
+        assert_eq!(line(&out), line(&src));
+    }
+}
+
+/// `correct` then `zero` of joint targets at a limit (samples/cell.toml, r1 on the measured
+/// track, skid 4000): A5 at −125° and A1 at −180° are turned inward by `correct` and written
+/// to four decimals; `zero` of those brings them back beyond their limits by a few 1e-5°, the
+/// rounding of the written text: within half its last unit, so they come back to their text.
+/// A1 at +180° is turned outward: refused, kept as written, the angle it needs stated
+/// (the corrected pose, D(s)⁻¹ of the written one, checked through the elementary chain).
+#[test]
+fn correct_then_zero_gives_back_joint_targets_at_their_limits() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("lim.mod");
+    let decls = [
+        "  CONST jointtarget jA5:=[[10,10,20,30,-125,60],[4000,9E9,9E9,9E9,9E9,9E9]];\n",
+        "  CONST jointtarget jA1:=[[-180,10,20,30,45,60],[4000,9E9,9E9,9E9,9E9,9E9]];\n",
+        "  CONST jointtarget jOut:=[[180,10,20,30,45,60],[4000,9E9,9E9,9E9,9E9,9E9]];\n",
+    ];
+    let src = format!(
+        "MODULE Lim\n{}  PROC main()\n    MoveAbsJ jA5,v100,fine,tool0;\n    MoveAbsJ jA1,v100,fine,tool0;\n    MoveAbsJ jOut,v100,fine,tool0;\n  ENDPROC\nENDMODULE\n",
+        decls.concat()
+    );
+    std::fs::write(&file, &src).unwrap();
+    let corrected = dir.path().join("c.mod");
+    let zeroed = dir.path().join("z.mod");
+    let args = |cmd: &str, from: &Path, to: &Path| {
+        [
+            cmd,
+            from.to_str().unwrap(),
+            "--cell",
+            "samples/cell.toml",
+            "--robot",
+            "r1",
+            "-o",
+            to.to_str().unwrap(),
+            "--keep",
+            "reach",
+        ]
+        .map(str::to_owned)
+    };
+    let run = |a: [String; 10]| trackfix(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let (code, _, err) = run(args("correct", &file, &corrected));
+    assert_eq!(code, 4, "{err}");
+    assert!(
+        err.contains("jointtarget `jOut`: the transformed target needs axis 1 = 180.007°, outside its limits [-180, 180]"),
+        "{err}"
+    );
+    let (k, _) = sample_robot("r1");
+    let d = sample_deviation(4000.0);
+    let message = err.lines().find(|l| l.contains("`jOut`")).unwrap();
+    let jout = [180.0, 10.0, 20.0, 30.0, 45.0, 60.0];
+    let after = stated_after(message);
+    assert!(after[0] > 180.0, "{message}");
+    let (dp, dr) = pose_error(
+        &chain_pose(&k, &after),
+        &(d.inverse() * chain_pose(&k, &jout)),
+    );
+    // The stated joints are rounded to 0.0005°.
+    assert!(dp < 0.05 && dr.to_degrees() < 0.002, "{dp} mm {dr} rad");
+    let text = std::fs::read_to_string(&corrected).unwrap();
+    let jc = joints_in(&parsed(&text), "jA5");
+    assert!(jc[4] > -125.0, "{jc:?}");
+    // The corrected joints reach D⁻¹ of the written pose to their written precision.
+    let (dp, dr) = pose_error(
+        &chain_pose(&k, &jc),
+        &(d.inverse() * chain_pose(&k, &[10.0, 10.0, 20.0, 30.0, -125.0, 60.0])),
+    );
+    assert!(dp < 0.01 && dr.to_degrees() < 2e-4, "{dp} mm {dr} rad");
+    assert!(text.contains(decls[2]), "{text}");
+    // Zero the corrected file without the kept jOut, which was never corrected.
+    let kept = text
+        .replace(decls[2], "")
+        .replace("    MoveAbsJ jOut,v100,fine,tool0;\n", "");
+    std::fs::write(&corrected, kept).unwrap();
+    let (code, _, err) = run(args("zero", &corrected, &zeroed));
+    assert_eq!(code, 0, "{err}");
+    let back = std::fs::read_to_string(&zeroed).unwrap();
+    for decl in &decls[..2] {
+        assert!(back.contains(decl), "{decl}{back}");
+    }
+}
+
+/// The same on the KUKA arm: `E6AXIS` with A1 at 185° (the KR 210's limit) at E1 1500 needs
+/// 185.059° after `correct`, and is refused as such, where it was written at −174.94°.
+#[test]
+fn correct_refuses_a_krl_axis_1_beyond_its_limit_instead_of_a_turn() {
+    let dir = tempfile::tempdir().unwrap();
+    let decl = "DECL E6AXIS XPARK={A1 185.0,A2 -80.0,A3 100.0,A4 30.0,A5 45.0,A6 60.0,E1 1500.0}\n";
+    let src = krl_pair(dir.path(), "a1wrap", &[("XPARK", decl.to_owned())]);
+    let (code, refusals) = transform_json(
+        &["correct", src.to_str().unwrap(), "--robot", "k1"],
+        dir.path(),
+    );
+    assert_eq!(code, 3, "{refusals:?}");
+    assert_eq!(targets_lines_kinds(&refusals), [("XPARK", 2, "reach")]);
+    let message = &refusals[0].3;
+    assert!(
+        message.contains("needs axis 1 = 185.059°, outside its limits [-185, 185]"),
+        "{message}"
+    );
+    let (k, _) = sample_robot("k1");
+    let j = [185.0, -80.0, 100.0, 30.0, 45.0, 60.0];
+    let after = stated_after(message);
+    let (dp, dr) = pose_error(
+        &chain_pose(&k, &after),
+        &(sample_deviation(1500.0).inverse() * chain_pose(&k, &j)),
+    );
+    assert!(dp < 0.05 && dr.to_degrees() < 0.002, "{dp} mm {dr} rad");
+    assert!((after[0] - 185.059).abs() < 1e-9, "{message}");
 }
