@@ -1,6 +1,11 @@
 //! Kinematic checks for the transforms: is a corrected or mirrored target still reachable,
 //! inside the limits and in the same configuration; joint targets moved with the track; and the
 //! configuration of a mirrored target found by IK.
+//!
+//! One rule runs through them: a transformed target is where the robot goes *from* the
+//! original joints, each axis by the least it must turn (no axis moved by a whole turn to stay
+//! within its limits). Where that is not possible the target is refused, with what it would
+//! need.
 
 use crate::geometry::{Pose, wrap_deg};
 
@@ -156,7 +161,9 @@ fn first_outside(kin: &Kinematics, j: &Joints) -> Option<KinematicRefusal> {
 }
 
 /// Each solution with every axis turned by whole turns to lie nearest `from`: where the arm
-/// goes from `from` without winding any axis (limits not applied).
+/// goes from `from` without winding any axis (limits not applied). A configuration's sign or
+/// quadrant is then the posture's, never one a full turn buys (axis 5 at −359.97° is `cfx`
+/// 1 by its sign, and no robot reaches it).
 fn continuations<'a>(
     solutions: &'a [Joints],
     from: &'a Joints,
@@ -172,25 +179,23 @@ fn nearest_to(from: &Joints, c: impl Iterator<Item = Joints>) -> Option<Joints> 
 
 /// Checks a Cartesian target moved from flange pose `before` to `after` (both in the robot
 /// base, `B(s)⁻¹·W·T·TOOL⁻¹`). `written` is the target's configuration (ABB confdata, KUKA
-/// Status/Turn), `None` if it writes none: then the solution nearest to the original joints in
-/// the same arm and wrist choice must exist.
+/// Status/Turn), `None` if it writes none: then the same arm and wrist as the original joints
+/// (see [`check_move`]).
 pub fn check_target(
     kin: &Kinematics,
     before: &Pose,
     after: &Pose,
     written: Option<&ConfigValue>,
 ) -> KinematicCheck {
-    let j0 = select(kin, before, written).map(|s| s.joints);
-    let all_after = kin.inverse(after, j0.map(|j| j[3]));
-    if all_after.is_empty() {
-        return KinematicCheck {
-            before: j0,
-            after: None,
-            refusal: Some(KinematicRefusal::Unreachable),
-        };
-    }
-    let Some(j0) = j0 else {
+    let Some(j0) = select(kin, before, written).map(|s| s.joints) else {
         // The original pose itself is out of reach: nothing to compare with.
+        if kin.inverse(after, None).is_empty() {
+            return KinematicCheck {
+                before: None,
+                after: None,
+                refusal: Some(KinematicRefusal::Unreachable),
+            };
+        }
         let a = select(kin, after, written).map(|s| s.joints);
         return KinematicCheck {
             before: None,
@@ -198,55 +203,71 @@ pub fn check_target(
             refusal: a.and_then(|a| first_outside(kin, &a)),
         };
     };
-    let within = kin.solutions_within_limits(after, Some(j0[3]));
-    let nearest = |c: &mut dyn Iterator<Item = Joints>| {
-        c.min_by(|a, b| distance2(a, &j0).total_cmp(&distance2(b, &j0)))
+    check_move(kin, &j0, after, written)
+}
+
+/// Checks the move from joints `from` to flange pose `after` (in the robot base) with the
+/// configuration `config` the target will be written with (`None`: none written, then the
+/// same arm and wrist as `from`, [`Kinematics::same_branch`]):
+///
+/// 1. the solution of `after` in `config` that each axis reaches from `from` by its least turn
+///    is taken; outside the limits it is [`KinematicRefusal::OutsideLimit`] with the angle it
+///    needs (never the same angle a turn away, which the limits would allow but the robot
+///    would wind through);
+/// 2. else what `config` selects within the limits, as the controller does;
+/// 3. else [`KinematicRefusal::ConfigChange`], naming the configuration of the solution
+///    nearest `from` (an axis 5 that crosses 0 needs the other `cfx` / Status bit 2, not a
+///    turn of axis 5).
+pub fn check_move(
+    kin: &Kinematics,
+    from: &Joints,
+    after: &Pose,
+    config: Option<&ConfigValue>,
+) -> KinematicCheck {
+    let solutions = kin.inverse(after, Some(from[3]));
+    let result = |a: Option<Joints>, refusal: Option<KinematicRefusal>| KinematicCheck {
+        before: Some(*from),
+        after: a,
+        refusal,
     };
-    let same_config = |j: &Joints| match written {
-        Some(w) => w.matches(kin, j),
-        None => kin.arm(j) == kin.arm(&j0) && (j[4] >= 0.0) == (j0[4] >= 0.0),
-    };
-    if let Some(a) = nearest(&mut within.iter().copied().filter(|j| same_config(j))) {
-        return KinematicCheck {
-            before: Some(j0),
-            after: Some(a),
-            refusal: None,
-        };
+    if solutions.is_empty() {
+        return result(None, Some(KinematicRefusal::Unreachable));
     }
-    let wide = Kinematics {
-        limits: [[-720.0, 720.0]; 6],
-        ..kin.clone()
+    let same_config = |j: &Joints| match config {
+        Some(c) => c.matches(kin, j),
+        None => kin.same_branch(from, j),
     };
-    let outside = nearest(
-        &mut all_after
-            .iter()
-            .flat_map(|j| wide.turns(j))
+    let followed = nearest_to(
+        from,
+        continuations(&solutions, from).filter(|j| same_config(j)),
+    );
+    if let Some(a) = followed {
+        return result(Some(a), first_outside(kin, &a));
+    }
+    let selected = nearest_to(
+        from,
+        kin.solutions_within_limits(after, Some(from[3]))
+            .into_iter()
             .filter(|j| same_config(j)),
     );
-    if let Some(a) = outside {
-        return KinematicCheck {
-            before: Some(j0),
-            after: Some(a),
-            refusal: first_outside(kin, &a),
-        };
+    if let Some(a) = selected {
+        return result(Some(a), None);
     }
-    let other = nearest(&mut within.iter().copied()).unwrap_or(all_after[0]);
-    let language_of = |c: Option<&ConfigValue>| match c {
+    let other = nearest_to(from, continuations(&solutions, from)).unwrap_or(solutions[0]);
+    let language = match config {
         Some(ConfigValue::StatusTurn { .. }) => crate::position::Language::Krl,
         _ => crate::position::Language::Rapid,
     };
-    let lang = language_of(written);
-    let before_config = written
+    let before = config
         .copied()
-        .unwrap_or_else(|| ConfigValue::of_joints(lang, kin, &j0));
-    KinematicCheck {
-        before: Some(j0),
-        after: Some(other),
-        refusal: Some(KinematicRefusal::ConfigChange {
-            before: before_config,
-            after: before_config.solved(kin, &other),
+        .unwrap_or_else(|| ConfigValue::of_joints(language, kin, from));
+    result(
+        Some(other),
+        Some(KinematicRefusal::ConfigChange {
+            before,
+            after: before.solved(kin, &other),
         }),
-    }
+    )
 }
 
 /// The most moving a joint target with the track may turn axis 4 or axis 6, degrees.
@@ -304,7 +325,7 @@ pub fn joint_target_correction(
     );
     let Some(mut j) = followed else {
         // Only another arm or wrist reaches it.
-        let check = check_target(kin, &kin.forward(joints), &target, None);
+        let check = check_move(kin, joints, &target, None);
         let why = check.refusal.unwrap_or(KinematicRefusal::Unreachable);
         return Err(refused(check.after, why));
     };

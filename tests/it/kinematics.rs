@@ -1533,6 +1533,26 @@ fn transform_json(args: &[&str], dir: &Path) -> (i32, Vec<(String, u64, String, 
     (code, json_refusals(&doc))
 }
 
+/// KUKA `A, B, C` (degrees) of a rotation `Rz(A)·Ry(B)·Rx(C)`, away from `B = ±90°`.
+fn kuka_abc_of(p: &Pose) -> [f64; 3] {
+    let r = p.rotation.to_rotation_matrix().into_inner();
+    [
+        r[(1, 0)].atan2(r[(0, 0)]).to_degrees(),
+        (-r[(2, 0)]).asin().to_degrees(),
+        r[(2, 1)].atan2(r[(2, 2)]).to_degrees(),
+    ]
+}
+
+/// A KRL `E6POS` declaration of world pose `t` with Status/Turn at skid `e1`.
+fn e6pos(name: &str, t: &Pose, s: u32, turn: u32, e1: f64) -> String {
+    let p = t.translation.vector;
+    let [a, b, c] = kuka_abc_of(t);
+    format!(
+        "DECL E6POS {name}={{X {:.4},Y {:.4},Z {:.4},A {a:.5},B {b:.5},C {c:.5},S {s},T {turn},E1 {e1:.1},E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}}\n",
+        p.x, p.y, p.z
+    )
+}
+
 /// Writes a KRL pair `name.src`/`name.dat` into `dir` with the declarations `decls`, moving
 /// to each with `PTP` in the order given; the `.src` path.
 fn krl_pair(dir: &Path, name: &str, decls: &[(&str, String)]) -> std::path::PathBuf {
@@ -1548,6 +1568,26 @@ fn krl_pair(dir: &Path, name: &str, decls: &[(&str, String)]) -> std::path::Path
     let path = dir.join(format!("{name}.src"));
     std::fs::write(&path, src).unwrap();
     path
+}
+
+/// KUKA Turn of joints, worked out here: bit i set when axis i+1 is negative.
+fn turn_bits(j: &Joints) -> u32 {
+    (0..6).map(|i| u32::from(j[i] < 0.0) << i).sum()
+}
+
+/// KUKA Status bits 0-2 of joints on a KR 210, worked out here from the elementary chain:
+/// bit 0 the wrist centre behind axis 1 (negative x in the frame turned by A1), bit 1 A3 at
+/// or above φ = atan2(115, 1420) (the forearm's offset: the wrist in front of the lower arm),
+/// bit 2 A5 negative.
+fn kr210_status(k: &Kinematics, j: &Joints) -> u32 {
+    let m = chain_fk(k, j);
+    let wrist = Vector3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)])
+        - k.geometry.c4 * Vector3::new(m[(0, 2)], m[(1, 2)], m[(2, 2)]);
+    // KUKA's A1 turns the arm clockwise seen from above (sign −1).
+    let a1 = -j[0].to_radians();
+    let x1 = wrist.x * a1.cos() + wrist.y * a1.sin();
+    let phi = 115f64.atan2(1420.0).to_degrees();
+    u32::from(x1 < 0.0) | u32::from(j[2] >= phi) << 1 | u32::from(j[4] < 0.0) << 2
 }
 
 /// A joint target at the end of a 360°-wide axis 1 (the IRB 2400's ±180°) that the
@@ -1750,4 +1790,82 @@ fn correct_refuses_a_krl_axis_1_beyond_its_limit_instead_of_a_turn() {
     );
     assert!(dp < 0.05 && dr.to_degrees() < 0.002, "{dp} mm {dr} rad");
     assert!((after[0] - 185.059).abs() < 1e-9, "{message}");
+}
+
+/// A configuration the corrected pose needs is named as one, not as an axis a turn away:
+/// KUKA points with A1, A3 or A6 a few thousandths of a degree below 0 (their Turn or Status
+/// bit set) that the correction takes above it (k1 at E1 4000, made from the joints by the
+/// elementary chain) "need configuration S … T … instead of S … T …" — the Status and Turn of
+/// the joints stated after, worked out here — where they "needed axis 1 = -359.982°"; an ABB
+/// target with A5 = −0.01° (cfx 1) names the configuration it would need, `[0,0,0,0]`, and
+/// the written `[0,0,0,1]`, where it "needed axis 5 = -359.972°".
+#[test]
+fn a_configuration_change_is_named_as_one_not_as_a_turn() {
+    let dir = tempfile::tempdir().unwrap();
+    let (k, base) = sample_robot("k1");
+    let cases: [(&str, Joints); 3] = [
+        ("XA1N", [-0.005, -80.0, 100.0, 30.0, 45.0, 60.0]),
+        ("XA3ZN", [10.0, -40.0, -0.01, 30.0, 45.0, 60.0]),
+        ("XA6", [10.0, -80.0, 100.0, 30.0, 45.0, -0.005]),
+    ];
+    let decls: Vec<(&str, String)> = cases
+        .iter()
+        .map(|(n, j)| {
+            let t = base(4000.0) * chain_pose(&k, j);
+            (*n, e6pos(n, &t, kr210_status(&k, j), turn_bits(j), 4000.0))
+        })
+        .collect();
+    let src = krl_pair(dir.path(), "cfg", &decls);
+    let (code, refusals) = transform_json(
+        &["correct", src.to_str().unwrap(), "--robot", "k1"],
+        dir.path(),
+    );
+    assert_eq!(code, 3, "{refusals:?}");
+    let names: Vec<&str> = refusals.iter().map(|r| r.0.as_str()).collect();
+    assert_eq!(names, ["XA1N", "XA3ZN", "XA6"]);
+    for ((_, j), (name, _, kind, message)) in cases.iter().zip(&refusals) {
+        assert_eq!(kind, "reach");
+        let after = stated_after(message);
+        let want = format!(
+            "needs configuration S {} T {} instead of S {} T {}",
+            kr210_status(&k, &after),
+            turn_bits(&after),
+            kr210_status(&k, j),
+            turn_bits(j)
+        );
+        assert!(message.contains(&want), "{name}: {want}: {message}");
+        assert_ne!(turn_bits(&after), turn_bits(j), "{message}");
+        assert!(!message.contains("359") && !message.contains("outside its limits"));
+        // The joints stated are where the arm goes: by the correction's own size.
+        assert!(joints_close(&after, j, 0.3), "{message}");
+    }
+    // ABB: cfx 1 (A5 < 0) written, the corrected pose has A5 > 0.
+    let (k, base) = sample_robot("r1");
+    let j = [10.0, 10.0, 20.0, 30.0, -0.01, 60.0];
+    let file = dir.path().join("cfx.mod");
+    let decl = robtarget(
+        "p18",
+        &(base(4000.0) * chain_pose(&k, &j)),
+        [0, 0, 0, 1],
+        4000.0,
+    );
+    std::fs::write(
+        &file,
+        format!("MODULE Cfx\n{decl}  PROC main()\n    MoveJ p18, v100, fine, tool0;\n  ENDPROC\nENDMODULE\n"),
+    )
+    .unwrap();
+    let (code, refusals) = transform_json(
+        &["correct", file.to_str().unwrap(), "--robot", "r1"],
+        dir.path(),
+    );
+    assert_eq!(code, 3, "{refusals:?}");
+    let message = &refusals[0].3;
+    assert!(
+        message.contains("configuration [0,0,0,0]")
+            && message.contains("[0,0,0,1]")
+            && !message.contains("359")
+            && !message.contains("outside its limits"),
+        "{message}"
+    );
+    assert!(stated_after(message)[4] > 0.0, "{message}");
 }
