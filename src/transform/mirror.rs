@@ -530,6 +530,14 @@ impl MirrorRule<'_> {
                 },
                 (_, solved) => solved,
             };
+            // The configuration written must reach the image from the mirror image of the
+            // joints before without a swing (the wrist singularity) or a turn.
+            if written.is_some() {
+                let image = mirrored_flange(&flange);
+                m.arm
+                    .check_from(p, &mirrored_joints(&before), &image, Some(&kept))
+                    .map_err(|why| with_tool(why, p, name))?;
+            }
             match &found {
                 None => found = Some((name, kept)),
                 Some((first, c)) if *c != kept && written.is_some() => {

@@ -1495,6 +1495,16 @@ fn chain_pose(k: &Kinematics, j: &Joints) -> Pose {
     )
 }
 
+/// The joints a reach message states before (`joints before [a1, …, a6]`).
+fn stated_before(message: &str) -> Joints {
+    let list = &message[message.find("joints before [").unwrap() + 15..];
+    let v: Vec<f64> = list[..list.find(']').unwrap()]
+        .split(", ")
+        .map(|a| a.parse().unwrap())
+        .collect();
+    [v[0], v[1], v[2], v[3], v[4], v[5]]
+}
+
 /// The robot `name` of samples/cell.toml, and its nominal base `B(s) = Trans(s·a)·B0`.
 fn sample_robot(name: &str) -> (Kinematics, impl Fn(f64) -> Pose) {
     let cell = Cell::load(&crate::support::root().join("samples/cell.toml")).unwrap();
@@ -1868,4 +1878,180 @@ fn a_configuration_change_is_named_as_one_not_as_a_turn() {
         "{message}"
     );
     assert!(stated_after(message)[4] > 0.0, "{message}");
+}
+
+/// A Cartesian target near the wrist singularity is refused by every transform that would
+/// keep its configuration: ABB A5 = 0.01° with A4 = −100° (`[0,-2,-1,0]`) on the IRB 2400 of
+/// the test cell, corrected and zeroed with a deviation of a few hundredths of a degree,
+/// whose tilt points the wrist elsewhere. `correct`: the written configuration selects joints
+/// with A4 near −157°; `zero` tilts the other way, where only `cfx` 1 reaches the pose, with
+/// the same swing. The joints stated after reach the new pose (checked through the elementary
+/// chain) with the turns stated, and the configuration named is theirs (quadrants and the
+/// sign of A5 worked out here); before this check `correct` wrote the target and the robot
+/// would swing its wrist. The same pose with A5 = 40° is corrected; `mirror` keeps the
+/// singular target (its image is exact, the mirrored joints' configuration by the rule).
+#[test]
+fn a_cartesian_target_at_the_wrist_singularity_is_refused_not_swung() {
+    use trackfix::transform::{
+        Direction, MirrorArm, MirrorSettings, RefusalKind, TrackSetup, apply, mirror,
+        track_correction,
+    };
+    let cell = Cell::parse(Path::new("cell.toml"), CELL).unwrap();
+    let robot = cell.robot("r1").unwrap();
+    let k = robot.kinematics.clone().unwrap();
+    let tool = robot.tools["tgun"];
+    let skid = 500.0;
+    let b = pose_xyz_deg(skid, -1000.0, 0.0, 0.0, 0.0, 90.0);
+    let singular = [10.0, 20.0, -10.0, -100.0, 0.01, -80.0];
+    let bent = [10.0, 20.0, -10.0, -100.0, 40.0, -80.0];
+    // ⌊θ/90°⌋ of axes 1, 4 and 6; the wrist in front of axis 1 and of the lower arm, A5 ≥ 0.
+    let quadrants = |j: &Joints| [0, 3, 5].map(|i| (j[i] / 90.0).floor() as i32);
+    let [cf1, cf4, cf6] = quadrants(&singular);
+    assert_eq!([cf1, cf4, cf6], [0, -2, -1]);
+    let cf = [cf1, cf4, cf6, 0];
+    let mut src = String::from(
+        "MODULE M\n  PERS tooldata tGun:=[TRUE,[[0,0,0],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\n",
+    );
+    src += &robtarget("pSing", &(b * chain_pose(&k, &singular) * tool), cf, skid);
+    src += &robtarget("pBent", &(b * chain_pose(&k, &bent) * tool), cf, skid);
+    src += "  PROC main()\n    MoveJ pSing,v100,fine,tGun;\n    MoveJ pBent,v100,fine,tGun;\n  ENDPROC\nENDMODULE\n";
+    let program = parsed(&src);
+    let d = deviation();
+    let dev = move |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(d) };
+    let setup = TrackSetup::new(robot, &dev);
+    for (dir, change) in [(Direction::Correct, d.inverse()), (Direction::Zero, d)] {
+        let result = apply(&program, track_correction(&program, &setup, dir)).unwrap();
+        let refusals: Vec<_> = result.refusals().collect();
+        assert_eq!(refusals.len(), 1, "{dir:?}: {refusals:?}");
+        let r = &refusals[0];
+        let m = &r.message;
+        assert_eq!((r.target.as_str(), r.kind), ("pSing", RefusalKind::Reach));
+        let head = "robtarget `pSing` is at the wrist singularity (A5 = 0.01°): reaching the \
+                    transformed pose with configuration ";
+        assert!(m.starts_with(head), "{m}");
+        let (a4, a6) = stated_turns(m);
+        assert!(a4.abs() > 5.0 && a6.abs() > 5.0, "{m}");
+        let (before, after) = (stated_before(m), stated_after(m));
+        // The joints before are the written ones (A4/A6 split by the written precision).
+        assert!(joints_close(&before, &singular, 0.05), "{m}");
+        // After: the new pose C·F, turned by what is stated.
+        let (dp, dr) = pose_error(
+            &chain_pose(&k, &after),
+            &(change * chain_pose(&k, &singular)),
+        );
+        assert!(dp < 0.05 && dr.to_degrees() < 0.003, "{dp} mm {dr} rad");
+        assert!((after[3] - before[3] - a4).abs() < 0.06, "{m}");
+        assert!((after[5] - before[5] - a6).abs() < 0.06, "{m}");
+        // The arm axes move by the correction's size (the wrist stays in front of axis 1 and
+        // of the lower arm), so cfx is the sign of A5: the configuration named is the one of
+        // the joints after; the written one is named too where it is not theirs.
+        let arm = |j: &Joints| [j[0], j[1], j[2], 0.0, 0.0, 0.0];
+        assert!(joints_close(&arm(&after), &arm(&singular), 0.5), "{m}");
+        let [c1, c4, c6] = quadrants(&after);
+        let solved = format!("[{c1},{c4},{c6},{}]", i32::from(after[4] < 0.0));
+        assert!(m.starts_with(&format!("{head}{solved} would turn")), "{m}");
+        let also_written = m.contains("(it is written with [0,-2,-1,0], which does not reach it)");
+        assert_eq!(also_written, solved != "[0,-2,-1,0]", "{m}");
+        // `correct` swings in the written configuration, `zero` needs cfx 1 as well.
+        assert_eq!(also_written, dir == Direction::Zero, "{m}");
+        let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+        let line = |text: &str, n: &str| text.lines().find(|l| l.contains(n)).unwrap().to_owned();
+        assert_eq!(line(&out, "pSing:="), line(&src, "pSing:="));
+        assert_ne!(line(&out, "pBent:="), line(&src, "pBent:="));
+    }
+    let settings = MirrorSettings {
+        arm: MirrorArm::of(robot, None),
+        ..MirrorSettings::default()
+    };
+    let result = apply(&program, mirror(&program, &settings)).unwrap();
+    assert!(
+        result.refusals().next().is_none(),
+        "{:?}",
+        result.refusals().collect::<Vec<_>>()
+    );
+    let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+    let p = parsed(&out).files[0]
+        .positions()
+        .find(|p| p.name.as_deref() == Some("pSing"))
+        .unwrap();
+    // (−θ1, θ2, θ3, −θ4, θ5, −θ6) = (−10, 20, −10, 100, 0.01, 80): quadrants −1, 1, 0; cfx 0.
+    assert_eq!(
+        ConfigValue::written(&p.config),
+        Some(ConfigValue::Quadrants([-1, 1, 0, 0]))
+    );
+}
+
+/// The KUKA point of the probe: A5 = −0.01° written `S 6 T 18` on k1 at E1 4000 (made from
+/// the joints by the elementary chain). `correct`, `zero` and `transfer` refuse it with the
+/// turns its written Status/Turn would take the wrist through: the joints stated after reach
+/// D(s)⁻¹·F and carry Turn 18 and A5 < 0 (worked out here), A4 and A6 turned by over 100°.
+/// `mirror` writes it (the image is exact); the bent point beside it is corrected.
+#[test]
+fn a_krl_point_at_the_wrist_singularity_is_refused_by_every_transform() {
+    let dir = tempfile::tempdir().unwrap();
+    let (k, base) = sample_robot("k1");
+    let singular = [10.0, -80.0, 100.0, 30.0, -0.01, 60.0];
+    let bent = [10.0, -80.0, 100.0, 30.0, -40.0, 60.0];
+    // S: A3 above φ (2), A5 negative (4); T: A2 and A5 negative (2 + 16).
+    assert_eq!((kr210_status(&k, &singular), turn_bits(&singular)), (6, 18));
+    let decls = [
+        (
+            "XA5",
+            e6pos(
+                "XA5",
+                &(base(4000.0) * chain_pose(&k, &singular)),
+                6,
+                18,
+                4000.0,
+            ),
+        ),
+        (
+            "XBENT",
+            e6pos(
+                "XBENT",
+                &(base(4000.0) * chain_pose(&k, &bent)),
+                6,
+                18,
+                4000.0,
+            ),
+        ),
+    ];
+    let src = krl_pair(dir.path(), "sing", &decls);
+    let src = src.to_str().unwrap();
+    let (code, refusals) = transform_json(&["correct", src, "--robot", "k1"], dir.path());
+    assert_eq!(code, 3, "{refusals:?}");
+    assert_eq!(targets_lines_kinds(&refusals), [("XA5", 2, "reach")]);
+    let message = &refusals[0].3;
+    assert!(
+        message.starts_with("E6POS `XA5` is at the wrist singularity (A5 = -0.01°): reaching the transformed pose with configuration S 6 T 18 would turn A4 by "),
+        "{message}"
+    );
+    let after = stated_after(message);
+    let (dp, dr) = pose_error(
+        &chain_pose(&k, &after),
+        &(sample_deviation(4000.0).inverse() * chain_pose(&k, &singular)),
+    );
+    assert!(dp < 0.05 && dr.to_degrees() < 0.003, "{dp} mm {dr} rad");
+    assert_eq!(turn_bits(&after), 18, "{message}");
+    assert_eq!(kr210_status(&k, &after), 6, "{message}");
+    let (a4, a6) = stated_turns(message);
+    assert!(a4.abs() > 100.0 && a6.abs() > 100.0, "{message}");
+    for args in [
+        &["zero", src, "--robot", "k1", "--force"][..],
+        &["transfer", src, "--from", "k1", "--to", "k2", "--mirror"][..],
+    ] {
+        let (code, refusals) = transform_json(args, dir.path());
+        assert_eq!(code, 3, "{args:?}: {refusals:?}");
+        assert_eq!(targets_lines_kinds(&refusals), [("XA5", 2, "reach")]);
+        assert!(
+            refusals[0]
+                .3
+                .contains("is at the wrist singularity (A5 = -0.01°)"),
+            "{args:?}: {}",
+            refusals[0].3
+        );
+    }
+    let (code, refusals) =
+        transform_json(&["mirror", src, "--robot", "k1", "--to", "k2"], dir.path());
+    assert_eq!((code, refusals.len()), (0, 0), "{refusals:?}");
 }
