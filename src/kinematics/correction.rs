@@ -1,8 +1,13 @@
 //! Kinematic checks for the transforms: is a corrected or mirrored target still reachable,
-//! inside the limits and in the same configuration; joint targets moved with the track; and the
-//! configuration of a mirrored target found by IK.
+//! inside the limits and in the same configuration, without a swing of its joints; joint
+//! targets moved with the track; and the configuration of a mirrored target found by IK.
+//!
+//! One rule runs through them: a transformed target is where the robot goes *from* the
+//! original joints, each axis by the least it must turn (no axis moved by a whole turn to stay
+//! within its limits, none swung through tens of degrees by a correction of hundredths).
+//! Where that is not possible the target is refused, with what it would need.
 
-use crate::geometry::Pose;
+use crate::geometry::{Pose, wrap_deg};
 
 use super::opw::distance2;
 use super::{ConfigValue, Joints, Kinematics, select};
@@ -13,7 +18,8 @@ use super::{ConfigValue, Joints, Kinematics, select};
 pub enum KinematicRefusal {
     /// The new pose has no joint solution.
     Unreachable,
-    /// The new pose is reachable in the configuration only with a joint outside its limits.
+    /// The new pose is reached in the configuration, from the original joints, only with a
+    /// joint outside its limits.
     OutsideLimit {
         /// The axis, 1-based.
         axis: usize,
@@ -22,17 +28,17 @@ pub enum KinematicRefusal {
         /// Its `[min, max]`, degrees.
         limits: [f64; 2],
     },
-    /// The new pose is reached in the same branch only by turning axis 4 or axis 6 by more than
-    /// [`WRIST_TURN_LIMIT_DEG`]: the wrist is at (or near) its singularity, where the tiny tilt
-    /// a correction adds decides which way axis 4 points and axis 6 makes up for it.
-    WristTurn {
-        /// Axis 5 as written, degrees.
+    /// The new pose is reached (in the written configuration; a joint target in the same arm
+    /// and wrist) only by turning some axis by more than [`WRIST_TURN_LIMIT_DEG`]. At or near
+    /// the wrist singularity these are axes 4 and 6: the tiny tilt a correction adds decides
+    /// which way axis 4 points, and axis 6 makes up for it. Elsewhere it is an arm axis near a
+    /// singular posture of the arm.
+    Swing {
+        /// Axis 5 before, degrees.
         a5: f64,
-        /// How far axis 4 would turn, degrees.
-        a4_turn: f64,
-        /// How far axis 6 would turn, degrees.
-        a6_turn: f64,
-        /// The distance of the written joints from the wrist singularity, degrees
+        /// How far each axis would turn (after − before), degrees.
+        turns: Joints,
+        /// The distance of the joints before from the wrist singularity, degrees
         /// ([`Kinematics::wrist_singularity_deg`]).
         from_singularity: f64,
         /// The joints that reach the new pose.
@@ -57,10 +63,12 @@ impl std::fmt::Display for KinematicRefusal {
                 limits,
             } => write!(
                 f,
-                "the transformed target needs axis {axis} = {value:.3}°, outside its limits [{}, {}]",
-                limits[0], limits[1]
+                "the transformed target needs axis {axis} = {}°, outside its limits [{}, {}]",
+                beyond_limit(*value, *limits),
+                limits[0],
+                limits[1]
             ),
-            KinematicRefusal::WristTurn { .. } => write!(f, "the target {}", self.wrist_text()),
+            KinematicRefusal::Swing { .. } => write!(f, "the target {}", self.swing_text(None)),
             KinematicRefusal::ConfigChange { before, after } => write!(
                 f,
                 "the transformed target needs configuration {after} instead of {before}"
@@ -69,36 +77,66 @@ impl std::fmt::Display for KinematicRefusal {
     }
 }
 
+/// `value` with the fewest decimals, three or more, that still show it outside `limits`: an
+/// axis 3e-5° beyond its limit of −125° reads `-125.00003`, where three decimals would print
+/// the limit itself.
+fn beyond_limit(value: f64, [lo, hi]: [f64; 2]) -> String {
+    (3..=12)
+        .map(|d| format!("{value:.d$}"))
+        .find(|t| t.parse::<f64>().is_ok_and(|v| v < lo || v > hi))
+        .unwrap_or_else(|| value.to_string())
+}
+
+/// An angle with one decimal, or with as many as show that a small one is not zero
+/// (`A5 = -0.01°`, not `-0.0°`).
+fn small_angle(v: f64) -> String {
+    (1..=6)
+        .map(|d| format!("{v:.d$}"))
+        .find(|t| v == 0.0 || t.parse::<f64>().is_ok_and(|r| r != 0.0))
+        .unwrap_or_else(|| format!("{v:e}"))
+}
+
 impl KinematicRefusal {
-    /// The predicate of a [`KinematicRefusal::WristTurn`] for a target's name: `is at the wrist
+    /// The predicate of a [`KinematicRefusal::Swing`] for a target's name: `is at the wrist
     /// singularity (A5 = 0.0°): reaching the transformed pose would turn A4 by 46.6° and A6 by
-    /// -46.7°`; empty for the other refusals.
-    pub fn wrist_text(&self) -> String {
-        let KinematicRefusal::WristTurn {
-            a5,
-            a4_turn,
-            a6_turn,
-            ..
-        } = self
-        else {
+    /// -46.7°`; with `config`, the configuration the pose is reached in is named (`reaching the
+    /// transformed pose with configuration S 6 T 18 would turn …`). Empty for the other
+    /// refusals.
+    pub fn swing_text(&self, config: Option<&ConfigValue>) -> String {
+        let KinematicRefusal::Swing { a5, turns, .. } = self else {
             return String::new();
         };
-        let turns = format!(
-            "reaching the transformed pose would turn A4 by {a4_turn:.1}° and A6 by {a6_turn:.1}°"
-        );
+        let beyond = |i: usize| turns[i].abs() > WRIST_TURN_LIMIT_DEG;
+        // Axes 4 and 6 are named together: at the singularity their turns cancel, which is
+        // what tells the swing from a real move.
+        let wrist = beyond(3) || beyond(5);
+        let named: Vec<String> = (0..6)
+            .filter(|&i| beyond(i) || (wrist && (i == 3 || i == 5)))
+            .map(|i| format!("A{} by {:.1}°", i + 1, turns[i]))
+            .collect();
+        let list = match named.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+            _ => named.join(""),
+        };
+        let with = config.map_or(String::new(), |c| format!(" with configuration {c}"));
+        let turns = format!("reaching the transformed pose{with} would turn {list}");
         if self.at_wrist_singularity() {
-            format!("is at the wrist singularity (A5 = {a5:.1}°): {turns}")
+            format!(
+                "is at the wrist singularity (A5 = {}°): {turns}",
+                small_angle(*a5)
+            )
         } else {
-            format!("has A5 = {a5:.1}°: {turns}")
+            format!("is near a singular posture of the arm: {turns}")
         }
     }
 
-    /// Whether this is a [`KinematicRefusal::WristTurn`] within a few degrees of the wrist
-    /// singularity: there the swing is the singularity's own; farther out (an axis 4 or 6
-    /// wrapped at the end of its range) it is not named after it.
+    /// Whether this is a [`KinematicRefusal::Swing`] of axis 4 or 6 within a few degrees of the
+    /// wrist singularity: there the swing is the singularity's own; an arm axis that jumps is
+    /// not named after it.
     pub fn at_wrist_singularity(&self) -> bool {
-        matches!(self, KinematicRefusal::WristTurn { from_singularity, .. }
-            if *from_singularity < WRIST_SINGULAR_DEG)
+        matches!(self, KinematicRefusal::Swing { from_singularity, turns, .. }
+            if *from_singularity < WRIST_SINGULAR_DEG
+                && (turns[3].abs() > WRIST_TURN_LIMIT_DEG || turns[5].abs() > WRIST_TURN_LIMIT_DEG))
     }
 }
 
@@ -142,27 +180,57 @@ fn first_outside(kin: &Kinematics, j: &Joints) -> Option<KinematicRefusal> {
     })
 }
 
+/// Each solution with every axis turned by whole turns to lie nearest `from`: where the arm
+/// goes from `from` without winding any axis (limits not applied). A configuration's sign or
+/// quadrant is then the posture's, never one a full turn buys (axis 5 at −359.97° is `cfx`
+/// 1 by its sign, and no robot reaches it).
+fn continuations<'a>(
+    solutions: &'a [Joints],
+    from: &'a Joints,
+) -> impl Iterator<Item = Joints> + 'a {
+    solutions
+        .iter()
+        .map(|s| std::array::from_fn(|i| from[i] + wrap_deg(s[i] - from[i])))
+}
+
+fn nearest_to(from: &Joints, c: impl Iterator<Item = Joints>) -> Option<Joints> {
+    c.min_by(|a, b| distance2(a, from).total_cmp(&distance2(b, from)))
+}
+
+/// The [`KinematicRefusal::Swing`] of moving from `before` to `after`, if some axis turns by
+/// more than [`WRIST_TURN_LIMIT_DEG`].
+fn swing(kin: &Kinematics, before: &Joints, after: &Joints) -> Option<KinematicRefusal> {
+    let turns: Joints = std::array::from_fn(|i| after[i] - before[i]);
+    turns
+        .iter()
+        .any(|t| t.abs() > WRIST_TURN_LIMIT_DEG)
+        .then(|| KinematicRefusal::Swing {
+            a5: before[4],
+            turns,
+            from_singularity: kin.wrist_singularity_deg(before),
+            after: *after,
+        })
+}
+
 /// Checks a Cartesian target moved from flange pose `before` to `after` (both in the robot
 /// base, `B(s)⁻¹·W·T·TOOL⁻¹`). `written` is the target's configuration (ABB confdata, KUKA
-/// Status/Turn), `None` if it writes none: then the solution nearest to the original joints in
-/// the same arm and wrist choice must exist.
+/// Status/Turn), `None` if it writes none: then the same arm and wrist as the original joints
+/// (see [`check_move`]).
 pub fn check_target(
     kin: &Kinematics,
     before: &Pose,
     after: &Pose,
     written: Option<&ConfigValue>,
 ) -> KinematicCheck {
-    let j0 = select(kin, before, written).map(|s| s.joints);
-    let all_after = kin.inverse(after, j0.map(|j| j[3]));
-    if all_after.is_empty() {
-        return KinematicCheck {
-            before: j0,
-            after: None,
-            refusal: Some(KinematicRefusal::Unreachable),
-        };
-    }
-    let Some(j0) = j0 else {
+    let Some(j0) = select(kin, before, written).map(|s| s.joints) else {
         // The original pose itself is out of reach: nothing to compare with.
+        if kin.inverse(after, None).is_empty() {
+            return KinematicCheck {
+                before: None,
+                after: None,
+                refusal: Some(KinematicRefusal::Unreachable),
+            };
+        }
         let a = select(kin, after, written).map(|s| s.joints);
         return KinematicCheck {
             before: None,
@@ -170,58 +238,92 @@ pub fn check_target(
             refusal: a.and_then(|a| first_outside(kin, &a)),
         };
     };
-    let within = kin.solutions_within_limits(after, Some(j0[3]));
-    let nearest = |c: &mut dyn Iterator<Item = Joints>| {
-        c.min_by(|a, b| distance2(a, &j0).total_cmp(&distance2(b, &j0)))
+    check_move(kin, &j0, after, written)
+}
+
+/// Checks the move from joints `from` to flange pose `after` (in the robot base) with the
+/// configuration `config` the target will be written with (`None`: none written, then the
+/// same arm and wrist as `from`, [`Kinematics::same_branch`]):
+///
+/// 1. the solution of `after` in `config` that each axis reaches from `from` by its least turn
+///    is taken if no axis turns by more than [`WRIST_TURN_LIMIT_DEG`] (one within the limits
+///    first); outside the limits it is [`KinematicRefusal::OutsideLimit`] with the angle it
+///    needs (never the same angle a turn away, which the limits would allow but the robot
+///    would wind through);
+/// 2. else what `config` selects within the limits, as the controller does, is taken if it
+///    does not swing, and refused as [`KinematicRefusal::Swing`] if it does: near the wrist
+///    singularity KUKA Status/Turn or ABB confdata pins the wrist to a solution tens of
+///    degrees away from the one the correction's tilt leads to;
+/// 3. else, if `config` reaches `after` only outside the limits with a swing, the swing;
+/// 4. else [`KinematicRefusal::ConfigChange`], naming the configuration of the solution
+///    nearest `from` (an axis 5 that crosses 0 needs the other `cfx` / Status bit 2, not a
+///    turn of axis 5) — or, if that solution swings the wrist at its singularity, the swing.
+pub fn check_move(
+    kin: &Kinematics,
+    from: &Joints,
+    after: &Pose,
+    config: Option<&ConfigValue>,
+) -> KinematicCheck {
+    let solutions = kin.inverse(after, Some(from[3]));
+    let result = |a: Option<Joints>, refusal: Option<KinematicRefusal>| KinematicCheck {
+        before: Some(*from),
+        after: a,
+        refusal,
     };
-    let same_config = |j: &Joints| match written {
-        Some(w) => w.matches(kin, j),
-        None => kin.arm(j) == kin.arm(&j0) && (j[4] >= 0.0) == (j0[4] >= 0.0),
-    };
-    if let Some(a) = nearest(&mut within.iter().copied().filter(|j| same_config(j))) {
-        return KinematicCheck {
-            before: Some(j0),
-            after: Some(a),
-            refusal: None,
-        };
+    if solutions.is_empty() {
+        return result(None, Some(KinematicRefusal::Unreachable));
     }
-    let wide = Kinematics {
-        limits: [[-720.0, 720.0]; 6],
-        ..kin.clone()
+    let same_config = |j: &Joints| match config {
+        Some(c) => c.matches(kin, j),
+        None => kin.same_branch(from, j),
     };
-    let outside = nearest(
-        &mut all_after
+    let followed: Vec<Joints> = continuations(&solutions, from)
+        .filter(|j| same_config(j))
+        .collect();
+    let calm = || {
+        followed
             .iter()
-            .flat_map(|j| wide.turns(j))
+            .filter(|a| swing(kin, from, a).is_none())
+            .copied()
+    };
+    let calm = nearest_to(from, calm().filter(|a| kin.within_limits(a)))
+        .or_else(|| nearest_to(from, calm()));
+    if let Some(a) = calm {
+        return result(Some(a), first_outside(kin, &a));
+    }
+    let selected = nearest_to(
+        from,
+        kin.solutions_within_limits(after, Some(from[3]))
+            .into_iter()
             .filter(|j| same_config(j)),
     );
-    if let Some(a) = outside {
-        return KinematicCheck {
-            before: Some(j0),
-            after: Some(a),
-            refusal: first_outside(kin, &a),
-        };
+    if let Some(a) = selected.or_else(|| nearest_to(from, followed.iter().copied())) {
+        return result(Some(a), swing(kin, from, &a));
     }
-    let other = nearest(&mut within.iter().copied()).unwrap_or(all_after[0]);
-    let language_of = |c: Option<&ConfigValue>| match c {
+    let other = nearest_to(from, continuations(&solutions, from)).unwrap_or(solutions[0]);
+    if let Some(s) = swing(kin, from, &other).filter(KinematicRefusal::at_wrist_singularity) {
+        // At the wrist singularity axis 5 crossing 0 flips the configuration and swings the
+        // wrist alike: no configuration reaches the pose calmly, and the swing is what to fix.
+        return result(Some(other), Some(s));
+    }
+    let language = match config {
         Some(ConfigValue::StatusTurn { .. }) => crate::position::Language::Krl,
         _ => crate::position::Language::Rapid,
     };
-    let lang = language_of(written);
-    let before_config = written
+    let before = config
         .copied()
-        .unwrap_or_else(|| ConfigValue::of_joints(lang, kin, &j0));
-    KinematicCheck {
-        before: Some(j0),
-        after: Some(other),
-        refusal: Some(KinematicRefusal::ConfigChange {
-            before: before_config,
-            after: before_config.solved(kin, &other),
+        .unwrap_or_else(|| ConfigValue::of_joints(language, kin, from));
+    result(
+        Some(other),
+        Some(KinematicRefusal::ConfigChange {
+            before,
+            after: before.solved(kin, &other),
         }),
-    }
+    )
 }
 
-/// The most moving a joint target with the track may turn axis 4 or axis 6, degrees.
+/// The most a transform may turn any axis of a target, degrees (named for the wrist, whose
+/// axes are the ones that exceed it).
 ///
 /// A track correction tilts the flange by hundredths of a degree and shifts it by a few mm,
 /// which turns the arm's axes by about a tenth of a degree; the wrist takes up that rotation
@@ -231,7 +333,8 @@ pub fn check_target(
 /// back: tens of degrees (47° and 63° on the samples), a swing of the dress pack and of every
 /// motion after. 5° lies well between the two, and is exceeded by a real correction (≤ 0.1°
 /// of rotation) only within about 1° of the singularity, where the swing is no longer the
-/// correction's own.
+/// correction's own. The same holds for Cartesian targets, whose written configuration then
+/// selects the swung solution.
 pub const WRIST_TURN_LIMIT_DEG: f64 = 5.0;
 
 /// Within this many degrees of the wrist singularity a refused turn is named after it (the
@@ -241,31 +344,72 @@ const WRIST_SINGULAR_DEG: f64 = 5.0;
 /// A joint target moved with the track: `J'` with `FK(J') = C·FK(J)`, where `C` is the change
 /// in the robot base frame — `D(s)⁻¹` for `correct`, `D(s)` for `zero` (the Cartesian
 /// correction `B·D⁻¹·B⁻¹` seen from the base; no work object and no tool enter, and `B(s)`
-/// cancels). The solution is the one nearest to `J` in the same arm and wrist choice, turns of
-/// axes 4 and 6 kept; one that turns axis 4 or 6 by more than [`WRIST_TURN_LIMIT_DEG`] is
-/// refused ([`KinematicRefusal::WristTurn`]): at the wrist singularity the exact new pose is
-/// only reached by swinging the wrist, and nothing nearer reaches it.
+/// cancels).
+///
+/// `J'` is the solution in `J`'s arm and wrist that each axis reaches from `J` by its least
+/// turn: axis 4/6 turns are kept, and no axis is moved by a whole turn to stay within its
+/// limits (axis 1 at 180° that the correction takes to 180.007° is refused, not written as
+/// −179.993°, a turn of the whole arm). Refused: a `J'` that turns some axis by more than
+/// [`WRIST_TURN_LIMIT_DEG`] ([`KinematicRefusal::Swing`]: at the wrist singularity the exact
+/// new pose is only reached by swinging the wrist, and nothing nearer reaches it), and one
+/// outside the limits.
+///
+/// A refusal comes with the joints after where some solution in the branch reaches the new
+/// pose ([`JointRefusal`]).
+///
+/// `written_step` is, per axis, the step of the last decimal the axis will be written with
+/// (1e-4° for four decimals). An axis the correction takes beyond a limit by less than half
+/// of it is set at the limit: written, it could not say the difference (a joint target at its
+/// limit, corrected inward and written to four decimals, comes back from `zero` 3e-5° beyond
+/// it only by that rounding).
 pub fn joint_target_correction(
     kin: &Kinematics,
     joints: &Joints,
     change: &Pose,
-) -> Result<Joints, KinematicRefusal> {
+    written_step: &[f64; 6],
+) -> Result<Joints, Box<JointRefusal>> {
     let target = change * kin.forward(joints);
-    if let Some(j) = kin.nearest(&target, joints, true) {
-        let (a4_turn, a6_turn) = (j[3] - joints[3], j[5] - joints[5]);
-        if a4_turn.abs() > WRIST_TURN_LIMIT_DEG || a6_turn.abs() > WRIST_TURN_LIMIT_DEG {
-            return Err(KinematicRefusal::WristTurn {
-                a5: joints[4],
-                a4_turn,
-                a6_turn,
-                from_singularity: kin.wrist_singularity_deg(joints),
-                after: j,
-            });
-        }
-        return Ok(j);
+    let refused =
+        |after: Option<Joints>, why: KinematicRefusal| Box::new(JointRefusal { why, after });
+    let solutions = kin.inverse(&target, Some(joints[3]));
+    if solutions.is_empty() {
+        return Err(refused(None, KinematicRefusal::Unreachable));
     }
-    let check = check_target(kin, &kin.forward(joints), &target, None);
-    Err(check.refusal.unwrap_or(KinematicRefusal::Unreachable))
+    let followed = nearest_to(
+        joints,
+        continuations(&solutions, joints).filter(|j| kin.same_branch(joints, j)),
+    );
+    let Some(mut j) = followed else {
+        // Only another arm or wrist reaches it.
+        let check = check_move(kin, joints, &target, None);
+        let why = check.refusal.unwrap_or(KinematicRefusal::Unreachable);
+        return Err(refused(check.after, why));
+    };
+    if let Some(s) = swing(kin, joints, &j) {
+        return Err(refused(Some(j), s));
+    }
+    for ((a, [lo, hi]), step) in j.iter_mut().zip(kin.limits).zip(written_step) {
+        let slack = step / 2.0;
+        if *a < lo && *a > lo - slack {
+            *a = lo;
+        } else if *a > hi && *a < hi + slack {
+            *a = hi;
+        }
+    }
+    match first_outside(kin, &j) {
+        Some(r) => Err(refused(Some(j), r)),
+        None => Ok(j),
+    }
+}
+
+/// Why a joint target cannot be moved ([`joint_target_correction`]), and the joints that would
+/// reach its new pose in its branch, if any (outside the limits, or swung).
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointRefusal {
+    /// Why it is refused.
+    pub why: KinematicRefusal,
+    /// The joints that would reach the new pose, if any.
+    pub after: Option<Joints>,
 }
 
 /// The rule's mirror image of joints about the xz plane of the base (`y → −y`, mirror-image
@@ -300,6 +444,9 @@ mod tests {
         pose_xyz_deg(0.5, 0.0, 0.0, 0.02, 0.0, 0.0)
     }
 
+    /// Four decimals on every axis.
+    const STEP: [f64; 6] = [1e-4; 6];
+
     fn arm() -> Kinematics {
         super::super::model("abb_irb4600_40_255")
             .expect("bundled")
@@ -326,17 +473,25 @@ mod tests {
             [0.0, 0.0, 0.0, 10.0, 1e-6, -10.0],
         ] {
             let target = c * kin.forward(&j);
-            let err = joint_target_correction(&kin, &j, &c).expect_err("refused");
-            let KinematicRefusal::WristTurn {
+            let refused = joint_target_correction(&kin, &j, &c, &STEP).expect_err("refused");
+            let err = refused.why;
+            assert_eq!(
+                refused.after,
+                match err {
+                    KinematicRefusal::Swing { after, .. } => Some(after),
+                    _ => None,
+                }
+            );
+            let KinematicRefusal::Swing {
                 a5,
-                a4_turn,
-                a6_turn,
+                turns,
                 from_singularity,
                 after,
             } = err
             else {
                 panic!("{err:?}");
             };
+            let (a4_turn, a6_turn) = (turns[3], turns[5]);
             assert_eq!(a5, j[4]);
             assert!(from_singularity < 1e-5, "{from_singularity}");
             assert!(err.at_wrist_singularity());
@@ -358,8 +513,10 @@ mod tests {
             }
             afters.push(after);
             let text = err.to_string();
+            // A5 with the decimals that show it is not 0 when it is not.
+            let a5 = if j[4] == 0.0 { "0.0" } else { "0.000001" };
             assert!(
-                text.starts_with("the target is at the wrist singularity (A5 = 0.0°): reaching the transformed pose would turn A4 by "),
+                text.starts_with(&format!("the target is at the wrist singularity (A5 = {a5}°): reaching the transformed pose would turn A4 by ")),
                 "{text}"
             );
         }
@@ -384,7 +541,7 @@ mod tests {
             [30.0, 10.0, -20.0, -45.0, -30.0, 60.0],
         ] {
             let target = c * kin.forward(&j);
-            let jc = joint_target_correction(&kin, &j, &c).expect("moved");
+            let jc = joint_target_correction(&kin, &j, &c, &STEP).expect("moved");
             assert!(mm_from(&kin, &jc, &target) < 1e-6, "{jc:?}");
             assert!(
                 kin.forward(&jc).rotation.angle_to(&target.rotation) < 1e-9,
@@ -396,21 +553,58 @@ mod tests {
         }
     }
 
-    /// A turn wrapped at the end of axis 4's range is refused too, but not named after the
-    /// singularity.
+    /// A swing of an arm axis, away from the wrist singularity, is not named after it; the
+    /// wrist's turns are named together even when one of them stays under the limit, with the
+    /// configuration they are reached in and an A5 of hundredths printed as such.
     #[test]
-    fn a_far_turn_away_from_the_singularity_is_not_called_singular() {
-        let r = KinematicRefusal::WristTurn {
+    fn a_swing_away_from_the_wrist_singularity_is_not_called_singular() {
+        let arm_jump = KinematicRefusal::Swing {
             a5: 45.0,
-            a4_turn: -360.0,
-            a6_turn: 0.1,
+            turns: [150.0, 0.1, -0.2, 0.1, 0.0, 0.1],
             from_singularity: 45.0,
             after: [0.0; 6],
         };
-        assert!(!r.at_wrist_singularity());
+        assert!(!arm_jump.at_wrist_singularity());
         assert_eq!(
-            r.to_string(),
-            "the target has A5 = 45.0°: reaching the transformed pose would turn A4 by -360.0° and A6 by 0.1°"
+            arm_jump.to_string(),
+            "the target is near a singular posture of the arm: reaching the transformed pose would turn A1 by 150.0°"
+        );
+        let wrist = KinematicRefusal::Swing {
+            a5: -0.01,
+            turns: [0.03, -0.03, 0.0, 115.61, -0.02, 3.0],
+            from_singularity: 0.01,
+            after: [0.0; 6],
+        };
+        assert!(wrist.at_wrist_singularity());
+        let config = ConfigValue::StatusTurn {
+            status: Some(6),
+            turn: Some(18),
+        };
+        assert_eq!(
+            wrist.swing_text(Some(&config)),
+            "is at the wrist singularity (A5 = -0.01°): reaching the transformed pose with configuration S 6 T 18 would turn A4 by 115.6° and A6 by 3.0°"
+        );
+        // A5 with one decimal, or as many as show that it is not 0.
+        assert_eq!(small_angle(0.0), "0.0");
+        assert_eq!(small_angle(-0.0123), "-0.01");
+        assert_eq!(small_angle(45.04), "45.0");
+    }
+
+    /// A limit is printed with the decimals that show the value beyond it.
+    #[test]
+    fn a_value_just_beyond_a_limit_is_printed_beyond_it() {
+        let r = |value| KinematicRefusal::OutsideLimit {
+            axis: 5,
+            value,
+            limits: [-125.0, 120.0],
+        };
+        assert_eq!(
+            r(-125.00003).to_string(),
+            "the transformed target needs axis 5 = -125.00003°, outside its limits [-125, 120]"
+        );
+        assert_eq!(
+            r(120.036).to_string(),
+            "the transformed target needs axis 5 = 120.036°, outside its limits [-125, 120]"
         );
     }
 }

@@ -15,8 +15,8 @@ pub mod opw;
 pub mod reach;
 
 pub use correction::{
-    KinematicCheck, KinematicRefusal, WRIST_TURN_LIMIT_DEG, check_target, joint_target_correction,
-    mirror_config_by_ik, mirrored_joints,
+    JointRefusal, KinematicCheck, KinematicRefusal, WRIST_TURN_LIMIT_DEG, check_move, check_target,
+    joint_target_correction, mirror_config_by_ik, mirrored_joints,
 };
 pub use models::{MODELS, Model, model, model_names};
 pub use opw::{Arm, Joints, Kinematics, OpwGeometry};

@@ -243,17 +243,19 @@ impl Kinematics {
     /// differences), optionally only among those with `reference`'s arm (see [`Arm`]) and sign
     /// of axis 5. Keeps axis 4/6 turns because every ±360° variant is a candidate.
     pub fn nearest(&self, flange: &Pose, reference: &Joints, same_branch: bool) -> Option<Joints> {
-        let arm = self.arm(reference);
-        let wrist_positive = reference[4] >= 0.0;
-        let wrist_known = reference[4].abs() > 1e-6;
         self.solutions_within_limits(flange, Some(reference[3]))
             .into_iter()
-            .filter(|j| {
-                !same_branch
-                    || (self.arm(j) == arm
-                        && (!wrist_known || j[4].abs() <= 1e-6 || (j[4] >= 0.0) == wrist_positive))
-            })
+            .filter(|j| !same_branch || self.same_branch(reference, j))
             .min_by(|a, b| distance2(a, reference).total_cmp(&distance2(b, reference)))
+    }
+
+    /// Whether `j` has `reference`'s arm (see [`Arm`]) and sign of axis 5. An axis 5 within
+    /// 1e-6° of 0 on either side has both signs: at the singular wrist the sign is the
+    /// arithmetic's, not the posture's.
+    pub fn same_branch(&self, reference: &Joints, j: &Joints) -> bool {
+        let wrist_known = reference[4].abs() > 1e-6 && j[4].abs() > 1e-6;
+        self.arm(j) == self.arm(reference)
+            && (!wrist_known || (j[4] >= 0.0) == (reference[4] >= 0.0))
     }
 
     /// `|axis 5|` in degrees: the distance from the wrist singularity (axes 4 and 6 aligned).

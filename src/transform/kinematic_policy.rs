@@ -6,8 +6,8 @@
 //! - before: the written configuration must reach the target within the limits (a target
 //!   whose `confdata` / Status-Turn selects another solution than the robot would take is a
 //!   wrong program, and "the same configuration after" would mean nothing);
-//! - after: the new pose must be reachable in that configuration within the limits
-//!   ([`check_target`]).
+//! - after: the new pose must be reachable in that configuration within the limits, from the
+//!   joints before without a swing or a turn of any axis ([`check_target`], [`check_move`]).
 //!
 //! Either failure is a [`RefusalKind::Reach`] refusal with the joints before and after.
 
@@ -15,7 +15,10 @@ use std::collections::BTreeMap;
 
 use crate::geometry::Pose;
 use crate::kinematics::reach::resolve_tool;
-use crate::kinematics::{ConfigValue, Joints, Kinematics, check_target, select};
+use crate::kinematics::{
+    ConfigValue, JointRefusal, Joints, KinematicCheck, KinematicRefusal, Kinematics, check_move,
+    check_target, select,
+};
 use crate::position::{Config, ParsedFile, Position, Program};
 use crate::syntax::Edit;
 
@@ -136,7 +139,7 @@ impl Arm {
     }
 
     /// Checks a Cartesian target moved from flange `before` to `after` (both in the robot
-    /// base).
+    /// base), written with its configuration as it is.
     pub(crate) fn check(
         &self,
         p: &Position,
@@ -147,11 +150,57 @@ impl Arm {
         self.joints_before(p, before, language)?;
         let written = ConfigValue::written(&p.config);
         let check = check_target(&self.kinematics, before, after, written.as_ref());
-        match check.message() {
-            None => Ok(()),
-            Some(m) => Err(reach(
-                format!("{}: {m}", describe(p)),
-                "the transform would move the robot through another posture: re-teach the target",
+        self.verdict(p, &check, written.as_ref())
+    }
+
+    /// Checks a Cartesian target whose new pose `after` (in the robot base) will be written
+    /// with configuration `config`, moving from joints `from` (the mirror image of the joints
+    /// before, for `mirror`).
+    pub(crate) fn check_from(
+        &self,
+        p: &Position,
+        from: &Joints,
+        after: &Pose,
+        config: Option<&ConfigValue>,
+    ) -> Result<(), Why> {
+        let check = check_move(&self.kinematics, from, after, config);
+        self.verdict(p, &check, config)
+    }
+
+    /// The refusal of a checked Cartesian target, if it is refused.
+    fn verdict(
+        &self,
+        p: &Position,
+        check: &KinematicCheck,
+        config: Option<&ConfigValue>,
+    ) -> Result<(), Why> {
+        match (&check.refusal, check.before, check.after) {
+            (None, ..) => Ok(()),
+            (Some(why @ KinematicRefusal::Swing { .. }), Some(before), Some(after)) => {
+                // The configuration the swung joints are in: the written one, or (no
+                // configuration reaching the pose calmly) the one nearest.
+                let kin = &self.kinematics;
+                let (shown, unwritten) = match config {
+                    Some(c) if !c.matches(kin, &after) => (
+                        Some(c.solved(kin, &after)),
+                        format!(" (it is written with {c}, which does not reach it)"),
+                    ),
+                    c => (c.copied(), String::new()),
+                };
+                Err(reach(
+                    format!(
+                        "{} {}{unwritten}: joints before {}, after {}",
+                        describe(p),
+                        why.swing_text(shown.as_ref()),
+                        fmt_joints(&before),
+                        fmt_joints(&after)
+                    ),
+                    swing_hint(why, "re-teach it with axis 5 a few degrees away from 0"),
+                ))
+            }
+            (why, ..) => Err(reach(
+                format!("{}: {}", describe(p), check.message().unwrap_or_default()),
+                why.as_ref().map_or(String::new(), hint),
             )),
         }
     }
@@ -187,39 +236,74 @@ impl Arm {
         Ok(j)
     }
 
-    /// The refusal of a joint target whose new pose has no solution in its branch.
+    /// The refusal of joint target `p` (joints `before`) that cannot be moved.
     pub(crate) fn joint_refusal(
         &self,
         p: &Position,
         before: &Joints,
-        why: &crate::kinematics::KinematicRefusal,
+        refused: &JointRefusal,
     ) -> Why {
-        if let crate::kinematics::KinematicRefusal::WristTurn { after, .. } = why {
+        let why = &refused.why;
+        let before = fmt_joints(before);
+        let after = refused
+            .after
+            .map_or("none in the same branch".to_owned(), |j| fmt_joints(&j));
+        if let KinematicRefusal::Swing { .. } = why {
             return reach(
                 format!(
-                    "{} {}: joints before {}, after {}",
+                    "{} {}: joints before {before}, after {after}",
                     describe(p),
-                    why.wrist_text(),
-                    fmt_joints(before),
-                    fmt_joints(after)
+                    why.swing_text(None),
                 ),
-                if why.at_wrist_singularity() {
+                swing_hint(
+                    why,
                     "re-teach it with axis 5 a few degrees away from 0, or write it as a \
-                     Cartesian target (its configuration is then checked)"
-                } else {
-                    "re-teach it away from the ends of axes 4 and 6"
-                },
+                     Cartesian target (its configuration is then checked)",
+                ),
             );
         }
         reach(
             format!(
-                "{}: {why}: joints before {}, after none in the same branch",
-                describe(p),
-                fmt_joints(before)
+                "{}: {why}: joints before {before}, after {after}",
+                describe(p)
             ),
-            "the transform would move the robot through another posture: re-teach the target",
+            hint(why),
         )
     }
+}
+
+/// The hint for a refusal other than a swing.
+fn hint(why: &KinematicRefusal) -> String {
+    match why {
+        KinematicRefusal::OutsideLimit { axis, .. } => {
+            format!("re-teach the target farther inside the range of axis {axis}")
+        }
+        _ => "the transform would move the robot through another posture: re-teach the target"
+            .to_owned(),
+    }
+}
+
+/// The hint for a [`KinematicRefusal::Swing`]: `at_singularity` at the wrist singularity.
+fn swing_hint(why: &KinematicRefusal, at_singularity: &str) -> String {
+    if why.at_wrist_singularity() {
+        at_singularity.to_owned()
+    } else {
+        "re-teach the target away from the singular posture of the arm".to_owned()
+    }
+}
+
+/// The step of the last decimal each axis of joint target `p` is written with (its literal's
+/// decimals, at least [`DEG_DECIMALS`]): within half of it beyond a limit, the written text
+/// reads as the limit ([`joint_target_correction`](crate::kinematics::joint_target_correction)).
+pub(crate) fn written_steps(p: &Position) -> [f64; 6] {
+    std::array::from_fn(|i| {
+        let places = p
+            .joints
+            .get(i)
+            .and_then(Option::as_ref)
+            .map_or(DEG_DECIMALS, |f| f.lit().places(DEG_DECIMALS));
+        10f64.powi(-(places as i32))
+    })
 }
 
 /// `why`, naming the tool it holds with when `p` is used with more than one (a message that

@@ -590,23 +590,29 @@ impl MirrorRule<'_> {
         let kin = &image.arm.kinematics;
         let rule = mirrored_joints(&j);
         let change = target * kin.forward(&rule).inverse();
-        let new = crate::kinematics::joint_target_correction(kin, &rule, &change).map_err(|why| {
-            let after = match &why {
-                crate::kinematics::KinematicRefusal::WristTurn { after, .. } => fmt_joints(after),
-                _ => "none in the same branch".to_owned(),
-            };
-            Why::new(
-                RefusalKind::Reach,
-                format!(
-                    "{what}: its mirror image on robot `{}` at skid {skid_to:.1} mm (its flange {:.1} mm from that robot's base): {why}: joints before {}, of the image {}, after {after}",
-                    image.name,
-                    target.translation.vector.norm(),
-                    fmt_joints(&j),
-                    fmt_joints(&rule),
-                ),
-                "check the mirror plane, the skid map and the mirror-image robot's cell; or re-teach the target",
-            )
-        })?;
+        let steps = super::kinematic_policy::written_steps(p);
+        let new = crate::kinematics::joint_target_correction(kin, &rule, &change, &steps)
+            .map_err(|refused| {
+                let why = &refused.why;
+                let after = refused
+                    .after
+                    .map_or("none in the same branch".to_owned(), |a| fmt_joints(&a));
+                let why = match why {
+                    crate::kinematics::KinematicRefusal::Swing { .. } => why.swing_text(None),
+                    _ => why.to_string(),
+                };
+                Why::new(
+                    RefusalKind::Reach,
+                    format!(
+                        "{what}: its mirror image on robot `{}` at skid {skid_to:.1} mm (its flange {:.1} mm from that robot's base): {why}: joints before {}, of the image {}, after {after}",
+                        image.name,
+                        target.translation.vector.norm(),
+                        fmt_joints(&j),
+                        fmt_joints(&rule),
+                    ),
+                    "check the mirror plane, the skid map and the mirror-image robot's cell; or re-teach the target",
+                )
+            })?;
         Ok(p.joints
             .iter()
             .zip(new)
@@ -711,6 +717,14 @@ impl MirrorRule<'_> {
                 },
                 (_, solved) => solved,
             };
+            // The configuration written must reach the image from the mirror image of the
+            // joints before without a swing (the wrist singularity) or a turn, on the robot
+            // that moves to it: the image robot in its own base where there is one.
+            if written.is_some() {
+                let arm = image.map_or(&m.arm, |(i, _, _)| &i.arm);
+                arm.check_from(p, &mirrored_joints(&before), &mirrored, Some(&kept))
+                    .map_err(|why| with_tool(why, p, name))?;
+            }
             match &found {
                 None => found = Some((name, kept)),
                 Some((first, c)) if *c != kept && written.is_some() => {

@@ -70,9 +70,9 @@ pub enum RefusalKind {
     #[value(skip)]
     NotAPosition,
     /// With the robot's kinematics: the target is out of reach, outside the joint limits or in
-    /// another configuration than written, before or after the transform; a joint target whose
-    /// move would turn axis 4 or 6 by more than 5° (at the wrist singularity); or its tool is
-    /// unknown, so it cannot be checked.
+    /// another configuration than written, before or after the transform; a target whose move
+    /// would turn an axis by more than 5° (axes 4 and 6, near the wrist singularity); or its
+    /// tool is unknown, so it cannot be checked.
     Reach,
     /// A target the file's provenance stamp lists as left as written by the transform that
     /// wrote the file, which the transform now undoing that one leaves as written too (it never

@@ -17,7 +17,7 @@ use crate::track::{Profile, TrackError};
 use super::cell::Robot;
 use super::driver::{KeptByStamp, NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
-use super::kinematic_policy::{Arm, joint_edits, with_tool};
+use super::kinematic_policy::{Arm, joint_edits, with_tool, written_steps};
 use super::policy::{
     LastWorkObject, Why, common_refusal, describe, joint_target, offset_bases, stationary_tool,
 };
@@ -260,8 +260,13 @@ impl TargetRule for TrackRule<'_, '_> {
             .setup
             .base_change(skid, self.dir)
             .map_err(|e| refuse(profile_refusal(&describe(p), skid, e)))?;
-        let new = crate::kinematics::joint_target_correction(&arm.kinematics, &j, &change)
-            .map_err(|why| refuse(arm.joint_refusal(p, &j, &why)))?;
+        let new = crate::kinematics::joint_target_correction(
+            &arm.kinematics,
+            &j,
+            &change,
+            &written_steps(p),
+        )
+        .map_err(|refused| refuse(arm.joint_refusal(p, &j, &refused)))?;
         let kin = &arm.kinematics;
         let (mm, deg) = pose_change(&kin.forward(&j), &kin.forward(&new));
         let change = TargetChange {

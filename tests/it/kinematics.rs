@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use nalgebra::{Matrix3, Matrix4, Rotation3, Vector3};
+use nalgebra::{Matrix3, Matrix4, Rotation3, Translation3, UnitQuaternion, Vector3};
 use proptest::prelude::*;
 
 use trackfix::geometry::{Pose, abb_quat, pose_xyz_deg, wrap_deg};
@@ -16,6 +16,9 @@ use trackfix::position::{Language, Program};
 use trackfix::transform::Cell;
 
 use crate::support::trackfix;
+
+/// Joint targets written with four decimals on every axis.
+const FOUR_DECIMALS: [f64; 6] = [1e-4; 6];
 
 fn irb2400() -> Kinematics {
     model("abb_irb2400_10").expect("bundled").kinematics()
@@ -460,7 +463,7 @@ fn joint_targets_follow_the_deformed_track() {
         };
         assert!(k.within_limits(&j), "{}", m.name);
         // correct: FK(J') = D⁻¹·FK(J); zero: FK(J') = D·FK(J) and back.
-        let jc = joint_target_correction(&k, &j, &d.inverse()).expect("reachable");
+        let jc = joint_target_correction(&k, &j, &d.inverse(), &FOUR_DECIMALS).expect("reachable");
         let want = d.inverse() * k.forward(&j);
         let (dp, dr) = pose_error(&k.forward(&jc), &want);
         assert!(dp < 1e-3 && dr < 1e-8, "{}: {dp} mm", m.name);
@@ -473,7 +476,7 @@ fn joint_targets_follow_the_deformed_track() {
             (jc[5] + 200.0).abs() < 1.0,
             "the turn of axis 6 is kept: {jc:?}"
         );
-        let back = joint_target_correction(&k, &jc, &d).expect("reachable");
+        let back = joint_target_correction(&k, &jc, &d, &FOUR_DECIMALS).expect("reachable");
         assert!(
             back.iter().zip(&j).all(|(a, b)| (a - b).abs() < 1e-6),
             "{back:?}"
@@ -839,7 +842,7 @@ fn sample_home_joint_target_on_the_measured_track() {
     let d = profile.deviation(150.0).unwrap();
     let k = model("abb_irb4600_40_255").unwrap().kinematics();
     let j = [0.0, -20.0, 30.0, 0.0, 80.0, 0.0];
-    let jc = joint_target_correction(&k, &j, &d.inverse()).unwrap();
+    let jc = joint_target_correction(&k, &j, &d.inverse(), &FOUR_DECIMALS).unwrap();
     let want = [0.0514, -19.9494, 30.0292, -0.0669, 79.9236, 0.0997];
     assert!(
         jc.iter().zip(&want).all(|(a, b)| (a - b).abs() < 1e-4),
@@ -1478,4 +1481,573 @@ fn correct_refuses_a_target_moved_with_a_tool_parameter_by_name() {
     let line = |text: &str, n: usize| text.lines().nth(n - 1).unwrap().to_owned();
     assert_eq!(line(&written, 4), line(src, 4));
     assert_ne!(line(&written, 5), line(src, 5));
+}
+
+// ---- no axis turned to stay within its limits, no swing, configurations named ----
+
+/// `chain_fk` as a pose.
+fn chain_pose(k: &Kinematics, j: &Joints) -> Pose {
+    let m = chain_fk(k, j);
+    let r = Rotation3::from_matrix_unchecked(m.fixed_view::<3, 3>(0, 0).into_owned());
+    Pose::from_parts(
+        Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]),
+        UnitQuaternion::from_rotation_matrix(&r),
+    )
+}
+
+/// The joints a reach message states before (`joints before [a1, …, a6]`).
+fn stated_before(message: &str) -> Joints {
+    let list = &message[message.find("joints before [").unwrap() + 15..];
+    let v: Vec<f64> = list[..list.find(']').unwrap()]
+        .split(", ")
+        .map(|a| a.parse().unwrap())
+        .collect();
+    [v[0], v[1], v[2], v[3], v[4], v[5]]
+}
+
+/// The robot `name` of samples/cell.toml, and its nominal base `B(s) = Trans(s·a)·B0`.
+fn sample_robot(name: &str) -> (Kinematics, impl Fn(f64) -> Pose) {
+    let cell = Cell::load(&crate::support::root().join("samples/cell.toml")).unwrap();
+    let robot = cell.robot(name).unwrap();
+    let (b0, a) = (robot.base0, robot.track_axis);
+    let base = move |s: f64| Translation3::from(a * s) * b0;
+    (robot.kinematics.clone().unwrap(), base)
+}
+
+/// The deviation `D(s)` of the sample track (samples/track/profile.toml, r1's and k1's).
+fn sample_deviation(s: f64) -> Pose {
+    let profile =
+        trackfix::track::Profile::load(&crate::support::root().join("samples/track/profile.toml"))
+            .unwrap();
+    profile.deviation(s).unwrap()
+}
+
+/// Runs `trackfix ARGS --cell samples/cell.toml --out-dir DIR --no-stamp --format json`: the
+/// exit code and the refusals of the JSON report.
+fn transform_json(args: &[&str], dir: &Path) -> (i32, Vec<(String, u64, String, String)>) {
+    let out = dir.join("out");
+    let _ = std::fs::remove_dir_all(&out);
+    let tail = [
+        "--cell",
+        "samples/cell.toml",
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--no-stamp",
+        "--format",
+        "json",
+    ];
+    let (code, stdout, err) = trackfix(&[args, &tail[..]].concat());
+    let doc: serde_json::Value = serde_json::from_str(&stdout).unwrap_or_else(|e| {
+        panic!("{e}: {stdout}\n{err}");
+    });
+    (code, json_refusals(&doc))
+}
+
+/// KUKA `A, B, C` (degrees) of a rotation `Rz(A)·Ry(B)·Rx(C)`, away from `B = ±90°`.
+fn kuka_abc_of(p: &Pose) -> [f64; 3] {
+    let r = p.rotation.to_rotation_matrix().into_inner();
+    [
+        r[(1, 0)].atan2(r[(0, 0)]).to_degrees(),
+        (-r[(2, 0)]).asin().to_degrees(),
+        r[(2, 1)].atan2(r[(2, 2)]).to_degrees(),
+    ]
+}
+
+/// A KRL `E6POS` declaration of world pose `t` with Status/Turn at skid `e1`.
+fn e6pos(name: &str, t: &Pose, s: u32, turn: u32, e1: f64) -> String {
+    let p = t.translation.vector;
+    let [a, b, c] = kuka_abc_of(t);
+    format!(
+        "DECL E6POS {name}={{X {:.4},Y {:.4},Z {:.4},A {a:.5},B {b:.5},C {c:.5},S {s},T {turn},E1 {e1:.1},E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}}\n",
+        p.x, p.y, p.z
+    )
+}
+
+/// Writes a KRL pair `name.src`/`name.dat` into `dir` with the declarations `decls`, moving
+/// to each with `PTP` in the order given; the `.src` path.
+fn krl_pair(dir: &Path, name: &str, decls: &[(&str, String)]) -> std::path::PathBuf {
+    let mut src = format!("DEF {name}( )\n  BAS(#INITMOV,0)\n  BAS(#BASE,0)\n  BAS(#TOOL,0)\n");
+    let mut dat = format!("DEFDAT {name}\n");
+    for (target, decl) in decls {
+        src += &format!("  PTP {target}\n");
+        dat += decl;
+    }
+    src += "END\n";
+    dat += "ENDDAT\n";
+    std::fs::write(dir.join(format!("{name}.dat")), dat).unwrap();
+    let path = dir.join(format!("{name}.src"));
+    std::fs::write(&path, src).unwrap();
+    path
+}
+
+/// KUKA Turn of joints, worked out here: bit i set when axis i+1 is negative.
+fn turn_bits(j: &Joints) -> u32 {
+    (0..6).map(|i| u32::from(j[i] < 0.0) << i).sum()
+}
+
+/// KUKA Status bits 0-2 of joints on a KR 210, worked out here from the elementary chain:
+/// bit 0 the wrist centre behind axis 1 (negative x in the frame turned by A1), bit 1 A3 at
+/// or above φ = atan2(115, 1420) (the forearm's offset: the wrist in front of the lower arm),
+/// bit 2 A5 negative.
+fn kr210_status(k: &Kinematics, j: &Joints) -> u32 {
+    let m = chain_fk(k, j);
+    let wrist = Vector3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)])
+        - k.geometry.c4 * Vector3::new(m[(0, 2)], m[(1, 2)], m[(2, 2)]);
+    // KUKA's A1 turns the arm clockwise seen from above (sign −1).
+    let a1 = -j[0].to_radians();
+    let x1 = wrist.x * a1.cos() + wrist.y * a1.sin();
+    let phi = 115f64.atan2(1420.0).to_degrees();
+    u32::from(x1 < 0.0) | u32::from(j[2] >= phi) << 1 | u32::from(j[4] < 0.0) << 2
+}
+
+/// A joint target at the end of a 360°-wide axis 1 (the IRB 2400's ±180°) that the
+/// correction turns outward is refused with the angle it needs, where it was written a full
+/// turn away (axis 1 swinging across the cell); one turned inward is moved. The deviations are
+/// rotations about the base's z axis, which is axis 1: the corrected joints are the written
+/// ones with axis 1 turned by the rotation, exactly (checked through the elementary chain).
+/// Beyond the limit by less than half a unit of the last decimal written the axis is written
+/// at the limit (its text could not say otherwise); by more, refused with the decimals that
+/// show it.
+#[test]
+fn a_joint_target_at_the_end_of_axis_1_is_refused_not_turned_a_full_turn() {
+    use trackfix::transform::{Direction, RefusalKind, TrackSetup, apply, track_correction};
+    let cell = Cell::parse(Path::new("cell.toml"), CELL).unwrap();
+    let robot = cell.robot("r1").unwrap();
+    let k = robot.kinematics.clone().unwrap();
+    assert_eq!(k.limits[0], [-180.0, 180.0]);
+    // D(s) = Rz(−δ(s)): `correct` applies D⁻¹ = Rz(δ) in the base, turning axis 1 by +δ.
+    let delta = |s: f64| match s {
+        s if s < 1000.0 => 0.01,
+        s if s < 2500.0 => 0.000013,
+        _ => 0.00002,
+    };
+    let dev = move |s: f64| -> Result<Pose, trackfix::track::TrackError> {
+        Ok(pose_xyz_deg(0.0, 0.0, 0.0, 0.0, 0.0, -delta(s)))
+    };
+    let decl = |name: &str, a1: &str, skid: u32| {
+        format!(
+            "  CONST jointtarget {name}:=[[{a1},10,20,30,45,60],[{skid},9E9,9E9,9E9,9E9,9E9]];\n"
+        )
+    };
+    let names = ["jPark", "jBack", "jNear", "jOver"];
+    let mut src = String::from("MODULE M\n");
+    src += &decl("jPark", "180", 500);
+    src += &decl("jBack", "-180", 500);
+    src += &decl("jNear", "179.99999", 2000);
+    src += &decl("jOver", "179.99999", 3000);
+    src += "  PROC main()\n";
+    for n in names {
+        src += &format!("    MoveAbsJ {n},v100,fine,tool0;\n");
+    }
+    src += "  ENDPROC\nENDMODULE\n";
+    let program = parsed(&src);
+    let setup = TrackSetup::new(robot, &dev);
+    let result = apply(
+        &program,
+        track_correction(&program, &setup, Direction::Correct),
+    )
+    .unwrap();
+    let refusals: Vec<_> = result.refusals().collect();
+    let refused: Vec<_> = refusals
+        .iter()
+        .map(|r| (r.target.as_str(), r.kind))
+        .collect();
+    assert_eq!(
+        refused,
+        [("jPark", RefusalKind::Reach), ("jOver", RefusalKind::Reach)]
+    );
+    assert!(
+        refusals[0]
+            .message
+            .contains("needs axis 1 = 180.010°, outside its limits [-180, 180]"),
+        "{}",
+        refusals[0].message
+    );
+    // The joints it would need: axis 1 turned by δ, nothing else.
+    let after = stated_after(&refusals[0].message);
+    let want = [180.01, 10.0, 20.0, 30.0, 45.0, 60.0];
+    assert!(joints_close(&after, &want, 6e-4), "{}", refusals[0].message);
+    // 1e-5° beyond, twice the half unit of 5 decimals: shown with 5.
+    assert!(
+        refusals[1]
+            .message
+            .contains("needs axis 1 = 180.00001°, outside its limits [-180, 180]"),
+        "{}",
+        refusals[1].message
+    );
+    let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+    let corrected = parsed(&out);
+    let j = [-180.0, 10.0, 20.0, 30.0, 45.0, 60.0];
+    let jb = joints_in(&corrected, "jBack");
+    let (dp, dr) = pose_error(
+        &chain_pose(&k, &jb),
+        &(pose_xyz_deg(0.0, 0.0, 0.0, 0.0, 0.0, 0.01) * chain_pose(&k, &j)),
+    );
+    assert!(dp < 1e-6 && dr < 1e-9, "{dp} mm {dr} rad: {jb:?}");
+    assert!((jb[0] + 179.99).abs() < 1e-9, "{jb:?}");
+    // 180.000003: 3e-6° beyond, within half of 1e-5: written at the limit, the other axes'
+    // text kept.
+    assert!(out.contains("jNear:=[[180.00000,10,20,30,45,60],"), "{out}");
+    for n in ["jPark", "jOver"] {
+        let line = |text: &str| text.lines().find(|l| l.contains(n)).unwrap().to_owned();
+        assert_eq!(line(&out), line(&src));
+    }
+}
+
+/// `correct` then `zero` of joint targets at a limit (samples/cell.toml, r1 on the measured
+/// track, skid 4000): A5 at −125° and A1 at −180° are turned inward by `correct` and written
+/// to four decimals; `zero` of those brings them back beyond their limits by a few 1e-5°, the
+/// rounding of the written text: within half its last unit, so they come back to their text.
+/// A1 at +180° is turned outward: refused, kept as written, the angle it needs stated
+/// (the corrected pose, D(s)⁻¹ of the written one, checked through the elementary chain).
+#[test]
+fn correct_then_zero_gives_back_joint_targets_at_their_limits() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("lim.mod");
+    let decls = [
+        "  CONST jointtarget jA5:=[[10,10,20,30,-125,60],[4000,9E9,9E9,9E9,9E9,9E9]];\n",
+        "  CONST jointtarget jA1:=[[-180,10,20,30,45,60],[4000,9E9,9E9,9E9,9E9,9E9]];\n",
+        "  CONST jointtarget jOut:=[[180,10,20,30,45,60],[4000,9E9,9E9,9E9,9E9,9E9]];\n",
+    ];
+    let src = format!(
+        "MODULE Lim\n{}  PROC main()\n    MoveAbsJ jA5,v100,fine,tool0;\n    MoveAbsJ jA1,v100,fine,tool0;\n    MoveAbsJ jOut,v100,fine,tool0;\n  ENDPROC\nENDMODULE\n",
+        decls.concat()
+    );
+    std::fs::write(&file, &src).unwrap();
+    let corrected = dir.path().join("c.mod");
+    let zeroed = dir.path().join("z.mod");
+    let args = |cmd: &str, from: &Path, to: &Path| {
+        [
+            cmd,
+            from.to_str().unwrap(),
+            "--cell",
+            "samples/cell.toml",
+            "--robot",
+            "r1",
+            "-o",
+            to.to_str().unwrap(),
+            "--keep",
+            "reach",
+        ]
+        .map(str::to_owned)
+    };
+    let run = |a: [String; 10]| trackfix(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let (code, _, err) = run(args("correct", &file, &corrected));
+    assert_eq!(code, 4, "{err}");
+    assert!(
+        err.contains("jointtarget `jOut`: the transformed target needs axis 1 = 180.007°, outside its limits [-180, 180]"),
+        "{err}"
+    );
+    let (k, _) = sample_robot("r1");
+    let d = sample_deviation(4000.0);
+    let message = err.lines().find(|l| l.contains("`jOut`")).unwrap();
+    let jout = [180.0, 10.0, 20.0, 30.0, 45.0, 60.0];
+    let after = stated_after(message);
+    assert!(after[0] > 180.0, "{message}");
+    let (dp, dr) = pose_error(
+        &chain_pose(&k, &after),
+        &(d.inverse() * chain_pose(&k, &jout)),
+    );
+    // The stated joints are rounded to 0.0005°.
+    assert!(dp < 0.05 && dr.to_degrees() < 0.002, "{dp} mm {dr} rad");
+    let text = std::fs::read_to_string(&corrected).unwrap();
+    let jc = joints_in(&parsed(&text), "jA5");
+    assert!(jc[4] > -125.0, "{jc:?}");
+    // The corrected joints reach D⁻¹ of the written pose to their written precision.
+    let (dp, dr) = pose_error(
+        &chain_pose(&k, &jc),
+        &(d.inverse() * chain_pose(&k, &[10.0, 10.0, 20.0, 30.0, -125.0, 60.0])),
+    );
+    assert!(dp < 0.01 && dr.to_degrees() < 2e-4, "{dp} mm {dr} rad");
+    assert!(text.contains(decls[2]), "{text}");
+    // The stamp lists jOut as kept as written, so zero leaves it as it is.
+    let (code, _, err) = run(args("zero", &corrected, &zeroed));
+    assert_eq!(code, 0, "{err}");
+    let back = std::fs::read_to_string(&zeroed).unwrap();
+    for decl in &decls {
+        assert!(back.contains(decl), "{decl}{back}");
+    }
+}
+
+/// The same on the KUKA arm: `E6AXIS` with A1 at 185° (the KR 210's limit) at E1 1500 needs
+/// 185.059° after `correct`, and is refused as such, where it was written at −174.94°.
+#[test]
+fn correct_refuses_a_krl_axis_1_beyond_its_limit_instead_of_a_turn() {
+    let dir = tempfile::tempdir().unwrap();
+    let decl = "DECL E6AXIS XPARK={A1 185.0,A2 -80.0,A3 100.0,A4 30.0,A5 45.0,A6 60.0,E1 1500.0}\n";
+    let src = krl_pair(dir.path(), "a1wrap", &[("XPARK", decl.to_owned())]);
+    let (code, refusals) = transform_json(
+        &["correct", src.to_str().unwrap(), "--robot", "k1"],
+        dir.path(),
+    );
+    assert_eq!(code, 3, "{refusals:?}");
+    assert_eq!(targets_lines_kinds(&refusals), [("XPARK", 2, "reach")]);
+    let message = &refusals[0].3;
+    assert!(
+        message.contains("needs axis 1 = 185.059°, outside its limits [-185, 185]"),
+        "{message}"
+    );
+    let (k, _) = sample_robot("k1");
+    let j = [185.0, -80.0, 100.0, 30.0, 45.0, 60.0];
+    let after = stated_after(message);
+    let (dp, dr) = pose_error(
+        &chain_pose(&k, &after),
+        &(sample_deviation(1500.0).inverse() * chain_pose(&k, &j)),
+    );
+    assert!(dp < 0.05 && dr.to_degrees() < 0.002, "{dp} mm {dr} rad");
+    assert!((after[0] - 185.059).abs() < 1e-9, "{message}");
+}
+
+/// A configuration the corrected pose needs is named as one, not as an axis a turn away:
+/// KUKA points with A1, A3 or A6 a few thousandths of a degree below 0 (their Turn or Status
+/// bit set) that the correction takes above it (k1 at E1 4000, made from the joints by the
+/// elementary chain) "need configuration S … T … instead of S … T …" — the Status and Turn of
+/// the joints stated after, worked out here — where they "needed axis 1 = -359.982°"; an ABB
+/// target with A5 = −0.01° (cfx 1) names the configuration it would need, `[0,0,0,0]`, and
+/// the written `[0,0,0,1]`, where it "needed axis 5 = -359.972°".
+#[test]
+fn a_configuration_change_is_named_as_one_not_as_a_turn() {
+    let dir = tempfile::tempdir().unwrap();
+    let (k, base) = sample_robot("k1");
+    let cases: [(&str, Joints); 3] = [
+        ("XA1N", [-0.005, -80.0, 100.0, 30.0, 45.0, 60.0]),
+        ("XA3ZN", [10.0, -40.0, -0.01, 30.0, 45.0, 60.0]),
+        ("XA6", [10.0, -80.0, 100.0, 30.0, 45.0, -0.005]),
+    ];
+    let decls: Vec<(&str, String)> = cases
+        .iter()
+        .map(|(n, j)| {
+            let t = base(4000.0) * chain_pose(&k, j);
+            (*n, e6pos(n, &t, kr210_status(&k, j), turn_bits(j), 4000.0))
+        })
+        .collect();
+    let src = krl_pair(dir.path(), "cfg", &decls);
+    let (code, refusals) = transform_json(
+        &["correct", src.to_str().unwrap(), "--robot", "k1"],
+        dir.path(),
+    );
+    assert_eq!(code, 3, "{refusals:?}");
+    let names: Vec<&str> = refusals.iter().map(|r| r.0.as_str()).collect();
+    assert_eq!(names, ["XA1N", "XA3ZN", "XA6"]);
+    for ((_, j), (name, _, kind, message)) in cases.iter().zip(&refusals) {
+        assert_eq!(kind, "reach");
+        let after = stated_after(message);
+        let want = format!(
+            "needs configuration S {} T {} instead of S {} T {}",
+            kr210_status(&k, &after),
+            turn_bits(&after),
+            kr210_status(&k, j),
+            turn_bits(j)
+        );
+        assert!(message.contains(&want), "{name}: {want}: {message}");
+        assert_ne!(turn_bits(&after), turn_bits(j), "{message}");
+        assert!(!message.contains("359") && !message.contains("outside its limits"));
+        // The joints stated are where the arm goes: by the correction's own size.
+        assert!(joints_close(&after, j, 0.3), "{message}");
+    }
+    // ABB: cfx 1 (A5 < 0) written, the corrected pose has A5 > 0.
+    let (k, base) = sample_robot("r1");
+    let j = [10.0, 10.0, 20.0, 30.0, -0.01, 60.0];
+    let file = dir.path().join("cfx.mod");
+    let decl = robtarget(
+        "p18",
+        &(base(4000.0) * chain_pose(&k, &j)),
+        [0, 0, 0, 1],
+        4000.0,
+    );
+    std::fs::write(
+        &file,
+        format!("MODULE Cfx\n{decl}  PROC main()\n    MoveJ p18, v100, fine, tool0;\n  ENDPROC\nENDMODULE\n"),
+    )
+    .unwrap();
+    let (code, refusals) = transform_json(
+        &["correct", file.to_str().unwrap(), "--robot", "r1"],
+        dir.path(),
+    );
+    assert_eq!(code, 3, "{refusals:?}");
+    let message = &refusals[0].3;
+    assert!(
+        message.contains("configuration [0,0,0,0]")
+            && message.contains("[0,0,0,1]")
+            && !message.contains("359")
+            && !message.contains("outside its limits"),
+        "{message}"
+    );
+    assert!(stated_after(message)[4] > 0.0, "{message}");
+}
+
+/// A Cartesian target near the wrist singularity is refused by every transform that would
+/// keep its configuration: ABB A5 = 0.01° with A4 = −100° (`[0,-2,-1,0]`) on the IRB 2400 of
+/// the test cell, corrected and zeroed with a deviation of a few hundredths of a degree,
+/// whose tilt points the wrist elsewhere. `correct`: the written configuration selects joints
+/// with A4 near −157°; `zero` tilts the other way, where only `cfx` 1 reaches the pose, with
+/// the same swing. The joints stated after reach the new pose (checked through the elementary
+/// chain) with the turns stated, and the configuration named is theirs (quadrants and the
+/// sign of A5 worked out here); before this check `correct` wrote the target and the robot
+/// would swing its wrist. The same pose with A5 = 40° is corrected; `mirror` keeps the
+/// singular target (its image is exact, the mirrored joints' configuration by the rule).
+#[test]
+fn a_cartesian_target_at_the_wrist_singularity_is_refused_not_swung() {
+    use trackfix::transform::{
+        Direction, MirrorArm, MirrorSettings, RefusalKind, TrackSetup, apply, mirror,
+        track_correction,
+    };
+    let cell = Cell::parse(Path::new("cell.toml"), CELL).unwrap();
+    let robot = cell.robot("r1").unwrap();
+    let k = robot.kinematics.clone().unwrap();
+    let tool = robot.tools["tgun"];
+    let skid = 500.0;
+    let b = pose_xyz_deg(skid, -1000.0, 0.0, 0.0, 0.0, 90.0);
+    let singular = [10.0, 20.0, -10.0, -100.0, 0.01, -80.0];
+    let bent = [10.0, 20.0, -10.0, -100.0, 40.0, -80.0];
+    // ⌊θ/90°⌋ of axes 1, 4 and 6; the wrist in front of axis 1 and of the lower arm, A5 ≥ 0.
+    let quadrants = |j: &Joints| [0, 3, 5].map(|i| (j[i] / 90.0).floor() as i32);
+    let [cf1, cf4, cf6] = quadrants(&singular);
+    assert_eq!([cf1, cf4, cf6], [0, -2, -1]);
+    let cf = [cf1, cf4, cf6, 0];
+    let mut src = String::from(
+        "MODULE M\n  PERS tooldata tGun:=[TRUE,[[0,0,0],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\n",
+    );
+    src += &robtarget("pSing", &(b * chain_pose(&k, &singular) * tool), cf, skid);
+    src += &robtarget("pBent", &(b * chain_pose(&k, &bent) * tool), cf, skid);
+    src += "  PROC main()\n    MoveJ pSing,v100,fine,tGun;\n    MoveJ pBent,v100,fine,tGun;\n  ENDPROC\nENDMODULE\n";
+    let program = parsed(&src);
+    let d = deviation();
+    let dev = move |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(d) };
+    let setup = TrackSetup::new(robot, &dev);
+    for (dir, change) in [(Direction::Correct, d.inverse()), (Direction::Zero, d)] {
+        let result = apply(&program, track_correction(&program, &setup, dir)).unwrap();
+        let refusals: Vec<_> = result.refusals().collect();
+        assert_eq!(refusals.len(), 1, "{dir:?}: {refusals:?}");
+        let r = &refusals[0];
+        let m = &r.message;
+        assert_eq!((r.target.as_str(), r.kind), ("pSing", RefusalKind::Reach));
+        let head = "robtarget `pSing` is at the wrist singularity (A5 = 0.01°): reaching the \
+                    transformed pose with configuration ";
+        assert!(m.starts_with(head), "{m}");
+        let (a4, a6) = stated_turns(m);
+        assert!(a4.abs() > 5.0 && a6.abs() > 5.0, "{m}");
+        let (before, after) = (stated_before(m), stated_after(m));
+        // The joints before are the written ones (A4/A6 split by the written precision).
+        assert!(joints_close(&before, &singular, 0.05), "{m}");
+        // After: the new pose C·F, turned by what is stated.
+        let (dp, dr) = pose_error(
+            &chain_pose(&k, &after),
+            &(change * chain_pose(&k, &singular)),
+        );
+        assert!(dp < 0.05 && dr.to_degrees() < 0.003, "{dp} mm {dr} rad");
+        assert!((after[3] - before[3] - a4).abs() < 0.06, "{m}");
+        assert!((after[5] - before[5] - a6).abs() < 0.06, "{m}");
+        // The arm axes move by the correction's size (the wrist stays in front of axis 1 and
+        // of the lower arm), so cfx is the sign of A5: the configuration named is the one of
+        // the joints after; the written one is named too where it is not theirs.
+        let arm = |j: &Joints| [j[0], j[1], j[2], 0.0, 0.0, 0.0];
+        assert!(joints_close(&arm(&after), &arm(&singular), 0.5), "{m}");
+        let [c1, c4, c6] = quadrants(&after);
+        let solved = format!("[{c1},{c4},{c6},{}]", i32::from(after[4] < 0.0));
+        assert!(m.starts_with(&format!("{head}{solved} would turn")), "{m}");
+        let also_written = m.contains("(it is written with [0,-2,-1,0], which does not reach it)");
+        assert_eq!(also_written, solved != "[0,-2,-1,0]", "{m}");
+        // `correct` swings in the written configuration, `zero` needs cfx 1 as well.
+        assert_eq!(also_written, dir == Direction::Zero, "{m}");
+        let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+        let line = |text: &str, n: &str| text.lines().find(|l| l.contains(n)).unwrap().to_owned();
+        assert_eq!(line(&out, "pSing:="), line(&src, "pSing:="));
+        assert_ne!(line(&out, "pBent:="), line(&src, "pBent:="));
+    }
+    let settings = MirrorSettings {
+        arm: MirrorArm::of(robot, None),
+        ..MirrorSettings::default()
+    };
+    let result = apply(&program, mirror(&program, &settings)).unwrap();
+    assert!(
+        result.refusals().next().is_none(),
+        "{:?}",
+        result.refusals().collect::<Vec<_>>()
+    );
+    let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+    let p = parsed(&out).files[0]
+        .positions()
+        .find(|p| p.name.as_deref() == Some("pSing"))
+        .unwrap();
+    // (−θ1, θ2, θ3, −θ4, θ5, −θ6) = (−10, 20, −10, 100, 0.01, 80): quadrants −1, 1, 0; cfx 0.
+    assert_eq!(
+        ConfigValue::written(&p.config),
+        Some(ConfigValue::Quadrants([-1, 1, 0, 0]))
+    );
+}
+
+/// The KUKA point of the probe: A5 = −0.01° written `S 6 T 18` on k1 at E1 4000 (made from
+/// the joints by the elementary chain). `correct`, `zero` and `transfer` refuse it with the
+/// turns its written Status/Turn would take the wrist through: the joints stated after reach
+/// D(s)⁻¹·F and carry Turn 18 and A5 < 0 (worked out here), A4 and A6 turned by over 100°.
+/// `mirror` writes it (the image is exact); the bent point beside it is corrected.
+#[test]
+fn a_krl_point_at_the_wrist_singularity_is_refused_by_every_transform() {
+    let dir = tempfile::tempdir().unwrap();
+    let (k, base) = sample_robot("k1");
+    let singular = [10.0, -80.0, 100.0, 30.0, -0.01, 60.0];
+    let bent = [10.0, -80.0, 100.0, 30.0, -40.0, 60.0];
+    // S: A3 above φ (2), A5 negative (4); T: A2 and A5 negative (2 + 16).
+    assert_eq!((kr210_status(&k, &singular), turn_bits(&singular)), (6, 18));
+    let decls = [
+        (
+            "XA5",
+            e6pos(
+                "XA5",
+                &(base(4000.0) * chain_pose(&k, &singular)),
+                6,
+                18,
+                4000.0,
+            ),
+        ),
+        (
+            "XBENT",
+            e6pos(
+                "XBENT",
+                &(base(4000.0) * chain_pose(&k, &bent)),
+                6,
+                18,
+                4000.0,
+            ),
+        ),
+    ];
+    let src = krl_pair(dir.path(), "sing", &decls);
+    let src = src.to_str().unwrap();
+    let (code, refusals) = transform_json(&["correct", src, "--robot", "k1"], dir.path());
+    assert_eq!(code, 3, "{refusals:?}");
+    assert_eq!(targets_lines_kinds(&refusals), [("XA5", 2, "reach")]);
+    let message = &refusals[0].3;
+    assert!(
+        message.starts_with("E6POS `XA5` is at the wrist singularity (A5 = -0.01°): reaching the transformed pose with configuration S 6 T 18 would turn A4 by "),
+        "{message}"
+    );
+    let after = stated_after(message);
+    let (dp, dr) = pose_error(
+        &chain_pose(&k, &after),
+        &(sample_deviation(4000.0).inverse() * chain_pose(&k, &singular)),
+    );
+    assert!(dp < 0.05 && dr.to_degrees() < 0.003, "{dp} mm {dr} rad");
+    assert_eq!(turn_bits(&after), 18, "{message}");
+    assert_eq!(kr210_status(&k, &after), 6, "{message}");
+    let (a4, a6) = stated_turns(message);
+    assert!(a4.abs() > 100.0 && a6.abs() > 100.0, "{message}");
+    for args in [
+        &["zero", src, "--robot", "k1", "--force"][..],
+        &["transfer", src, "--from", "k1", "--to", "k2", "--mirror"][..],
+    ] {
+        let (code, refusals) = transform_json(args, dir.path());
+        assert_eq!(code, 3, "{args:?}: {refusals:?}");
+        assert_eq!(targets_lines_kinds(&refusals), [("XA5", 2, "reach")]);
+        assert!(
+            refusals[0]
+                .3
+                .contains("is at the wrist singularity (A5 = -0.01°)"),
+            "{args:?}: {}",
+            refusals[0].3
+        );
+    }
+    let (code, refusals) =
+        transform_json(&["mirror", src, "--robot", "k1", "--to", "k2"], dir.path());
+    assert_eq!((code, refusals.len()), (0, 0), "{refusals:?}");
 }
