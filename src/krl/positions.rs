@@ -1060,9 +1060,11 @@ impl<'a> Extractor<'a> {
                 for v in vars {
                     if let Some(kind) = positional {
                         self.declared.insert(upper_name(src, v.name), kind);
-                        if *global {
-                            out.facts.globals.push(upper_name(src, v.name));
-                        }
+                    }
+                    // A structure declared `GLOBAL` too: the points its members hold are seen
+                    // from every module.
+                    if *global && !is_fdat {
+                        out.facts.globals.push(upper_name(src, v.name));
                     }
                     let Some(init) = &v.init else { continue };
                     let ExprKind::Aggregate(agg) = &init.kind else {
@@ -1090,6 +1092,9 @@ impl<'a> Extractor<'a> {
                         } else {
                             out.positions.push_checking(p, src, read_elsewhere);
                         }
+                    } else if agg.fields.iter().any(|f| is_aggregate(&f.value)) {
+                        let whole = name_text(v.name.slice(src));
+                        member_points(src, lines, (&whole, &whole), agg, 0, &mut out.positions);
                     }
                 }
             }
@@ -1801,7 +1806,8 @@ fn written_in_routine(src: &[u8], target: &Expr, value: &Expr, out: &mut Extract
     if places_frames(src, target) {
         written_name(src, target, &mut out.facts.written_in_routines);
     }
-    let copy = matches!(value.kind, ExprKind::Name | ExprKind::Index(..));
+    let copy = matches!(value.kind, ExprKind::Name | ExprKind::Index(..))
+        || member_read(src, value).is_some();
     if matches!(target.kind, ExprKind::Member(..)) {
         component_copy(src, target, value, out);
     }
@@ -1837,7 +1843,8 @@ fn written_in_routine(src: &[u8], target: &Expr, value: &Expr, out: &mut Extract
 /// aliases). Out of line, as [`param_routine`].
 #[inline(never)]
 fn component_copy(src: &[u8], target: &Expr, value: &Expr, out: &mut Extracted) {
-    let Some(name) = whole_name(src, target) else {
+    // `SA[1].P = XP1`: the element of an array of structures holds it.
+    let Some(name) = member_read(src, target).map(|w| upper_name(src, w)) else {
         return;
     };
     let mut sources = Vec::new();
@@ -1950,11 +1957,15 @@ fn assignment(
         {
             computed_assignment(src, lines, routine, target, out);
         }
-        if matches!(target.kind, ExprKind::Name | ExprKind::Index(..))
-            && matches!(value.kind, ExprKind::Name | ExprKind::Index(..))
-        {
+        // `XC = S1.P`: a copy of what the structure's member holds, which the structure's
+        // name stands for (a copy into one of its members, `S1.P = XP1`, joins it there).
+        let source = match value.kind {
+            ExprKind::Name | ExprKind::Index(..) => Some(value.span),
+            _ => member_read(src, value),
+        };
+        if let (ExprKind::Name | ExprKind::Index(..), Some(source)) = (&target.kind, source) {
             let name = upper_name(src, target.span);
-            let source = upper_name(src, value.span);
+            let source = upper_name(src, source);
             // `XC = XC` gives it nothing new: what it held, it holds. KSS's active motion data
             // (`LDAT_ACT = LCPDAT1` before each taught motion) hold no point: no copy to follow
             // (one per motion would make every loop's body a state of its own).
@@ -2017,6 +2028,10 @@ fn assignment(
             }));
         return None;
     }
+    if let ExprKind::Member(..) = target.kind {
+        member_assignment(src, lines, target, value, agg, out);
+        return None;
+    }
     let base = base_name(src, target)?;
     if base.starts_with('$') {
         return None;
@@ -2049,10 +2064,130 @@ fn assignment(
                 out.facts
                     .candidates
                     .push(build_position(lines, value.span, kind, Some(name), f));
+            } else if agg.fields.iter().any(|f| is_aggregate(&f.value)) {
+                // A structure's literal (`S1={P {X 100, …}, K 1}`): the points its members hold.
+                member_points(src, lines, (&name, &name), agg, 0, &mut out.positions);
             }
         }
     }
     problem
+}
+
+fn is_aggregate(e: &Expr) -> bool {
+    matches!(e.kind, ExprKind::Aggregate(_))
+}
+
+/// The kind of a structure member's literal that is a point the robot may move to: typed
+/// `E6POS` or `POS` (`{E6POS: X 1, …}`), or writing a position's coordinates (`X`, `Y`, `Z` or an
+/// angle) with a field only a point has (`S`, `T`, an external axis). A frame (`LOAD_DATA`'s
+/// `CM`, a pallet's offset) has the coordinates alone, and an axis-wise limit (`JERK_STRUC`'s
+/// `AX`) the axes alone: neither is a point.
+fn member_point_kind(src: &[u8], agg: &Aggregate, f: &Fields) -> Option<PositionKind> {
+    /// [`field_index`] bits of `S`, `T` and `E1`-`E6`.
+    const POINT_ONLY: u32 = 0x3fc0;
+    match agg.type_name {
+        Some(t) => positional_type(&upper(src, t))
+            .filter(|&k| k == PositionKind::E6Pos || k == PositionKind::Pos),
+        None => (f.cartesian_written && !f.joints_written && f.seen & POINT_ONLY != 0)
+            .then_some(PositionKind::E6Pos),
+    }
+}
+
+/// How deep structures nested in structures are looked into for points.
+const MEMBER_DEPTH: usize = 8;
+
+/// The points held in the members of the literal `agg` of the structure `whole` (as written,
+/// `S1`, `SA[1]`), whose members are named `prefix.FIELD` (`S1.P`; `S1.A.P` a level down):
+/// each a position refused by every transform as held in a structure's member
+/// ([`crate::position::UnresolvedCause::Member`]). Out of line, as [`param_routine`]: only a
+/// declaration or assignment of a structure's literal gets here.
+#[inline(never)]
+fn member_points(
+    src: &[u8],
+    lines: &LineIndex,
+    (whole, prefix): (&str, &str),
+    agg: &Aggregate,
+    depth: usize,
+    positions: &mut PositionList,
+) {
+    for field in &agg.fields {
+        let ExprKind::Aggregate(inner) = &field.value.kind else {
+            continue;
+        };
+        let name = format!("{prefix}.{}", name_text(field.name.slice(src)));
+        let f = read_fields(src, inner);
+        if let Some(kind) = member_point_kind(src, inner, &f) {
+            let read_elsewhere = f.read_elsewhere;
+            let p = build_position(lines, field.value.span, kind, Some(name), f);
+            positions.push_checking(held_in(p, whole), src, read_elsewhere);
+        } else if depth < MEMBER_DEPTH {
+            member_points(src, lines, (whole, &name), inner, depth + 1, positions);
+        }
+    }
+}
+
+/// `p`, marked as held in a member of the structure `whole`.
+fn held_in(mut p: Position, whole: &str) -> Position {
+    p.usage
+        .mark_unresolved_frame(crate::position::UnresolvedFrame {
+            at: crate::position::UseLine::new(p.line),
+            cause: crate::position::UnresolvedCause::Member(whole.to_owned()),
+        });
+    p
+}
+
+/// An aggregate `value` given to a member (`S1.P={X 100, …, E1 500}`, `SA[1].P={…}`,
+/// `S1.A={P {…}}`): the point it is, or the points its own members hold, held in the
+/// structure. Out of line, as [`param_routine`].
+#[inline(never)]
+fn member_assignment(
+    src: &[u8],
+    lines: &LineIndex,
+    target: &Expr,
+    value: &Expr,
+    agg: &Aggregate,
+    out: &mut Extracted,
+) {
+    let Some(whole) = member_whole(target) else {
+        return;
+    };
+    let whole = name_text(whole.slice(src));
+    if whole.starts_with('$') {
+        return;
+    }
+    let name = name_text(target.span.slice(src));
+    let f = read_fields(src, agg);
+    if let Some(kind) = member_point_kind(src, agg, &f) {
+        let read_elsewhere = f.read_elsewhere;
+        let p = build_position(lines, value.span, kind, Some(name), f);
+        out.positions
+            .push_checking(held_in(p, &whole), src, read_elsewhere);
+    } else {
+        member_points(src, lines, (&whole, &name), agg, 1, &mut out.positions);
+    }
+}
+
+/// The structure whose member `value` reads whole (`S1` of `S1.P`, `SA[I]` of `SA[I].P`), when
+/// that is data of the program (not a system variable's, `$POS_ACT.X`).
+fn member_read(src: &[u8], value: &Expr) -> Option<Span> {
+    member_whole(value).filter(|w| w.slice(src).first() != Some(&b'$'))
+}
+
+/// The structure a member (`S1.P`, `SA[I].P`, `S1.A.P`) is part of: the span of `S1`, `SA[I]`;
+/// `None` when `e` is no member of a name or element.
+fn member_whole(e: &Expr) -> Option<Span> {
+    let ExprKind::Member(inner, _) = &e.kind else {
+        return None;
+    };
+    let mut whole: &Expr = inner;
+    while let ExprKind::Member(inner, _) = &whole.kind {
+        whole = inner;
+    }
+    match &whole.kind {
+        ExprKind::Name => Some(whole.span),
+        ExprKind::Index(base, _) if base.kind == ExprKind::Name => Some(whole.span),
+        _ => None,
+    }
 }
 
 /// `e` without the brackets around it: `XB` of `((XB))`.
@@ -2141,14 +2276,17 @@ fn target_refs(
             true
         }
         ExprKind::Paren(inner) => target_refs(src, lines, inner, refs, positions, notes),
-        // A member of a structure (`LIN S1.P`): not a target of its own, but it may hold a
-        // copy (`S1.P = XP1`), which the whole name's aliases carry; still warned about.
-        ExprKind::Member(..) => {
-            if let Some(name) = whole_name(src, e) {
-                refs.push(Ref::Named(name));
+        // A member of a structure (`LIN S1.P`, `LIN SA[I].P`): what a copy put there
+        // (`S1.P = XP1`), which the whole structure's aliases carry, and a literal it holds
+        // (`S1={P {X …}}`, refused as held in a member, `member_points`), which resolution
+        // reaches from the structure's name.
+        ExprKind::Member(..) => match member_read(src, e) {
+            Some(whole) => {
+                refs.push(Ref::Named(upper_name(src, whole)));
+                true
             }
-            false
-        }
+            None => false,
+        },
         _ => false,
     }
 }

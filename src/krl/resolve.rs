@@ -922,7 +922,9 @@ impl Modules {
                         .map(|i| {
                             f.positions.name(i).is_some_and(|name| {
                                 let key = name_key(name);
-                                globals.contains(key.split('[').next().unwrap_or_default())
+                                // `S1.P` is seen where the structure `S1` is.
+                                let whole = key.split(['[', '.']).next();
+                                globals.contains(whole.unwrap_or_default())
                             })
                         })
                         .collect(),
@@ -1106,6 +1108,8 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
         file.positions
             .extend(std::mem::take(&mut fact.candidates), &file.source);
     }
+    // The points held in structures' members, reached from the structure's name.
+    let members = Members::of(files);
     // Per file, the motions to warn about: a Cartesian target and no base.
     let mut unresolved: Vec<Vec<crate::syntax::Span>> = vec![Vec::new(); files.len()];
     {
@@ -1226,6 +1230,9 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                                     }
                                 }
                             }
+                        }
+                        if !members.is_empty() {
+                            members.extend(&mut folded);
                         }
                         let u = crate::resolve::Use {
                             line: *line,
@@ -1371,6 +1378,71 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
     crate::resolve::mark_run_time(&mut shared, &NAMING);
     drop(shared);
     mark_assigned_data(files, facts, config_frames);
+}
+
+/// The points held in structures' members (`S1.P` of `DECL SPT S1={P {X …}, K 1}`,
+/// [`UnresolvedCause::Member`]), by the structure they are in: a motion to the structure's
+/// member (`LIN S1.P`), or to a copy of it (`XC = S1.P`, `S2 = S1`), reaches them through the
+/// structure's name. Every transform refuses them; reached, they are used as the points
+/// motions reach are (their lines and bases shown, a `$config.dat`'s kept).
+#[derive(Default)]
+struct Members {
+    /// Structure (`S1`, `SA[1]`, upper case) → the names of the points its members hold.
+    of: HashMap<String, Vec<String>>,
+    /// Array of structures (`SA`) → the names of the points its elements' members hold.
+    arrays: HashMap<String, Vec<String>>,
+}
+
+impl Members {
+    fn of(files: &[ParsedFile]) -> Members {
+        let mut out = Members::default();
+        for f in files {
+            for (i, u) in f.positions.usages().enumerate() {
+                let Some(UnresolvedCause::Member(whole)) = u.unresolved_frame().map(|u| &u.cause)
+                else {
+                    continue;
+                };
+                let (Some(name), whole) = (f.positions.name(i), name_key(whole)) else {
+                    continue;
+                };
+                let name = name_key(name);
+                if let Some((array, _)) = whole.split_once('[') {
+                    out.arrays
+                        .entry(array.to_owned())
+                        .or_default()
+                        .push(name.clone());
+                }
+                out.of.entry(whole).or_default().push(name);
+            }
+        }
+        out
+    }
+
+    fn is_empty(&self) -> bool {
+        self.of.is_empty()
+    }
+
+    /// Adds to `folded` (a motion's names) the points held in the members of each structure
+    /// among them: of the element named, of every element for one chosen at run time (`SA[I]`)
+    /// or for the whole array (`SA`).
+    fn extend<'m>(&'m self, folded: &mut Vec<&'m str>) {
+        for k in 0..folded.len() {
+            let Some(&name) = folded.get(k) else { break };
+            let key = name_key(name);
+            let array = match key.split_once('[') {
+                Some((array, _)) if computed_index(&key) => Some(array),
+                Some(_) => None,
+                None => Some(key.as_str()),
+            };
+            let found = self.of.get(key.as_str()).into_iter().flatten();
+            let elements = array.and_then(|a| self.arrays.get(a)).into_iter().flatten();
+            for member in found.chain(elements) {
+                if !folded.contains(&member.as_str()) {
+                    folded.push(member);
+                }
+            }
+        }
+    }
 }
 
 /// A Cartesian point the program never names again takes the base and tool of its inline

@@ -1996,6 +1996,132 @@ fn a_component_copied_or_a_copy_of_itself_keeps_the_source() {
     );
 }
 
+/// A copy read out of a structure's member (`XC=S1.P`, `XC=SA[I].P`), or written into a member
+/// of an element of an array of structures (`SA[1].P=XP1`), carries what the member holds: the
+/// point copied there is used in the base of the motion to the copy or to the member. Before,
+/// `XC=S1.P` gave `XC` a value of its own and `SA[1].P=XP1` was no copy, and `XP1` was
+/// corrected in its own motion's base while the robot moved to it in another.
+#[test]
+fn a_copy_through_a_structures_member_reaches_its_source() {
+    let bases = |body: &str, to: &str| {
+        let src = format!(
+            "DEF cell( )\n  DECL SPT S1,S2,SA[2]\n  DECL E6POS XC\n  DECL INT I\n  \
+             $BASE=BASE_DATA[1]\n  LIN XP1\n{body}  $BASE=BASE_DATA[2]\n  LIN {to}\nEND\n"
+        );
+        bases_of_xp1(&src, DAT_XP1)
+    };
+    let two = (
+        Some("BASE_DATA[1]".to_owned()),
+        vec!["BASE_DATA[2]".to_owned()],
+    );
+    for (body, to) in [
+        ("  S1.P=XP1\n  XC=S1.P\n", "XC"),
+        ("  S1.P=XP1\n  S2=S1\n  XC=S2.P\n", "XC"),
+        ("  SA[1].P=XP1\n", "SA[I].P"),
+        ("  SA[1].P=XP1\n  XC=SA[I].P\n", "XC"),
+        ("  SA[I].P=XP1\n  XC=SA[2].P\n", "XC"),
+    ] {
+        assert_eq!(bases(body, to), two, "{body}LIN {to}");
+    }
+    // Another element, or the member given another value after the read: not `XP1`.
+    let one = (Some("BASE_DATA[1]".to_owned()), Vec::new());
+    assert_eq!(bases("  SA[1].P=XP1\n", "SA[2].P"), one);
+    assert_eq!(bases("  S1.P=XP1\n  XC=S1.P\n  XC=$POS_ACT\n", "XC"), one);
+}
+
+/// A point written in a structure's literal (`DECL SPT S1={P {X …, E1 1500.0}, K 1}`, an element
+/// of an array of structures, a member given a literal `S2.P={…}`) is refused by every transform
+/// as `structure-member`, by name at its literal, whether the program moves to the member or to
+/// a copy of it: a structure carries its members where trackfix does not follow them (a copy of
+/// the whole structure, an array of structures chosen at run time, a parameter, another
+/// module). Before, such a point was no target at all: `correct` exited 0 with the files
+/// unchanged and at most a warning that spoke of a composed frame. A member that is a frame
+/// (`CM` of a load) or per-axis values (`AX` of jerk limits) is no point and stays out.
+#[test]
+fn a_point_held_in_a_structures_member_is_refused_by_name() {
+    let point = |fields: &str| {
+        format!("{{X 410.0,Y -95.0,Z 230.0,A 180.0,B 0.0,C 180.0,{fields}E1 1500.0}}")
+    };
+    let dat = format!(
+        "DEFDAT cell\n\
+         STRUC SPT E6POS P, INT K\n\
+         DECL SPT S1={{P {},K 1}}\n\
+         DECL SPT SA[2]\n\
+         SA[2]={{P {},K 2}}\n\
+         DECL SPT S2\n\
+         S2.P={}\n\
+         DECL LOAD L1={{M 5.0,CM {{X 1.0,Y 2.0,Z 3.0,A 0.0,B 0.0,C 0.0}}}}\n\
+         DECL JERK_STRUC J1={{CP 500.0,AX {{A1 1000.0,A2 1000.0,E1 1000.0}}}}\n\
+         DECL E6POS XC\n\
+         DECL E6POS XP8={}\n\
+         ENDDAT\n",
+        point("S 6,T 27,"),
+        point("S 6,T 27,"),
+        point("S 6,T 27,"),
+        point("S 6,T 27,"),
+    );
+    let src = "DEF cell( )\n  DECL INT I\n  BAS(#INITMOV,0)\n  BAS(#BASE,1)\n  BAS(#TOOL,1)\n  \
+               XC=S1.P\n  LIN XC\n  I=2\n  LIN SA[I].P\n  LIN S2.P\n  LIN XP8\nEND\n";
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("cell.dat"), &dat).unwrap();
+    std::fs::write(dir.path().join("cell.src"), src).unwrap();
+    let src = dir.path().join("cell.src");
+    let program = krl::load_program(&src, &LoadOptions::default()).unwrap();
+    let names: Vec<String> = program
+        .files
+        .iter()
+        .flat_map(|f| f.positions())
+        .filter_map(|p| p.name.map(|n| n.to_string()))
+        .collect();
+    assert_eq!(names, ["S1.P", "SA[2].P", "S2.P", "XP8"]);
+
+    let src = src.to_str().unwrap();
+    let args = [
+        "correct",
+        src,
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "k1",
+    ];
+    let (code, _, err) = crate::support::trackfix(&args);
+    assert_eq!(code, 3, "{err}");
+    for (at, name, whole) in [
+        ("3:16", "S1.P", "S1"),
+        ("5:10", "SA[2].P", "SA[2]"),
+        ("7:6", "S2.P", "S2"),
+    ] {
+        assert!(
+            err.contains(&format!(
+                "cell.dat:{at}: error: E6POS `{name}` is held in a member of the structure `{whole}`"
+            )),
+            "{name}: {err}"
+        );
+    }
+    assert_eq!(err.matches("[structure-member]").count(), 3, "{err}");
+    assert!(!err.contains("composed frame"), "{err}");
+
+    let out = dir.path().join("out");
+    let mut kept = args.to_vec();
+    kept.extend([
+        "--keep",
+        "structure-member",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    let (code, _, err) = crate::support::trackfix(&kept);
+    assert_eq!(code, 4, "{err}");
+    let written = std::fs::read_to_string(out.join("cell.dat")).unwrap();
+    let kept_lines: Vec<&str> = dat.lines().filter(|l| !l.contains("XP8")).collect();
+    for line in kept_lines {
+        assert!(written.contains(line), "{line}: {written}");
+    }
+    assert!(
+        !written.contains(&format!("XP8={}", point("S 6,T 27,"))),
+        "{written}"
+    );
+}
+
 /// A value handed back through the routine's own copy (`R=XP1` then `RETURN R`, or `P=R` into
 /// an `:OUT` parameter) is refused as handing back `XP1` is; before, `R` named no point and
 /// `XP1` was corrected in its own motion's base.
