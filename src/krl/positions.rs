@@ -61,8 +61,12 @@ pub(crate) enum Ref {
 pub(crate) enum Event {
     /// A `DEF`/`DEFFCT` (its name, upper case): program order starts again.
     Reset(Option<String>),
-    /// A call of a routine by name (upper case): the base and tool it leaves set apply after it.
-    Call(String),
+    /// A call of a routine by name (upper case), written at `at` (the routine's name): the base
+    /// and tool it leaves set apply after it.
+    Call {
+        name: String,
+        at: Span,
+    },
     Set(Setting),
     /// Program order forks (`IF`, `SWITCH`), switches branch (`ELSE`, `CASE`, `DEFAULT`) or
     /// joins (`ENDIF`, `ENDSWITCH`).
@@ -1130,7 +1134,10 @@ impl<'a> Extractor<'a> {
                     // KUKA's own `BAS` is read by `bas_call`; its other modes set no frame.
                     let name = upper(src, callee.span);
                     if name != "BAS" {
-                        out.facts.events.push(Event::Call(name));
+                        out.facts.events.push(Event::Call {
+                            name,
+                            at: callee.span,
+                        });
                         if !args.is_empty() {
                             let at = (self.current, lines, stmt.span.start);
                             param_call(callee.span, args, at, &mut out.facts.calls);

@@ -588,7 +588,7 @@ fn jumps_keep_state(
         let (mut blocks, mut loops) = (0usize, 0usize);
         let kept = between.iter().all(|ev| match ev {
             Event::Set(_) | Event::Reset(_) => false,
-            Event::Call(name) => !changes(name),
+            Event::Call { name, .. } => !changes(name),
             Event::Label { jumps } => jumps.is_empty(),
             Event::Alias { .. } | Event::Motion { .. } | Event::Goto => true,
             Event::Branch(BranchEvent::If | BranchEvent::Switch) => {
@@ -766,7 +766,7 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                         current = name.as_deref();
                         flow.reset();
                     }
-                    Event::Call(name) => {
+                    Event::Call { name, .. } => {
                         if let Some(exit) = exits.of(module, name) {
                             exit.apply_to(&mut flow.state);
                         }
@@ -793,6 +793,139 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
         exits.by_routine = next;
     }
     exits
+}
+
+/// KSS's own routines, which programs call without defining them and which set no base, tool or
+/// `FDAT_ACT`: messages (`MsgLib`), errors, strings, channels and pulses, torque and collision
+/// monitoring, and what KSS's own `System/` modules call (the PLC handshake `P00`, the torque
+/// monitoring `TQM_…` of `bas.src`, the mastering test `MASREF…` of `masref_main.src`), which
+/// a robot tree's run leaves out. (`BAS` is read for what it sets.) Sorted.
+const KSS_ROUTINES: &[&str] = &[
+    "CAST_FROM",
+    "CAST_TO",
+    "CCLOSE",
+    "CIOCTL",
+    "CLEAR_KRLMSG",
+    "COPEN",
+    "CREAD",
+    "CWAIT",
+    "CWRITE",
+    "ERR_CLEAR",
+    "ERR_RAISE",
+    "MASREFBACKG1",
+    "MASREFBACKG2",
+    "MASREFBACKG3",
+    "MASREFSTARTG1",
+    "MASREFSTARTG2",
+    "MASREFSTARTG3",
+    "MSGDIALOG",
+    "MSGLOOP",
+    "MSGNOTIFY",
+    "MSGQUIT",
+    "MSGSTATE",
+    "ON_ERROR_PROCEED",
+    "P00",
+    "PULSE",
+    "RESET_CD_PARAMS",
+    "RESET_TORQUE_LIMITS",
+    "SET_CD_PARAMS",
+    "SET_KRLDLG",
+    "SET_KRLMSG",
+    "SET_TORQUE_LIMITS",
+    "SREAD",
+    "STRCLEAR",
+    "STRCOPY",
+    "SWRITE",
+    "TQM_FIFO_READ",
+    "TQM_INI",
+];
+
+/// Warns once about each routine the program calls that none of its files defines (and that
+/// is not one of [`KSS_ROUTINES`]), at its first call, with how many calls there are: program
+/// order takes such a call as leaving `$BASE`, `$TOOL` and `FDAT_ACT` as they were, which only
+/// the routine's definition can confirm. A call only matters in a routine that moves, or one
+/// another calls (whose exit its caller applies): one in a routine that does neither (a submit
+/// interpreter's `sps.sub`) is not warned about.
+fn warn_unknown_routines(
+    files: &mut [ParsedFile],
+    events: &[Vec<Event>],
+    exits: &Exits,
+    modules: &Modules,
+) {
+    // Every routine name a call names: its exit matters to the caller.
+    let called: std::collections::HashSet<&str> = events
+        .iter()
+        .flatten()
+        .filter_map(|e| match e {
+            Event::Call { name, .. } => Some(name.as_str()),
+            _ => None,
+        })
+        .collect();
+    // Name → (file, place of the first call, how many calls), in the order first called.
+    let mut unknown: Vec<(&str, usize, crate::syntax::Span, usize)> = Vec::new();
+    for (fi, evs) in events.iter().enumerate() {
+        let module = modules.of(fi);
+        // Each routine's events, and its name (on the `Reset` that starts them).
+        let mut at = 0;
+        while at < evs.len() {
+            let name = match evs.get(at) {
+                Some(Event::Reset(name)) => {
+                    at += 1;
+                    name.as_deref()
+                }
+                _ => None,
+            };
+            let len = evs
+                .get(at..)
+                .unwrap_or_default()
+                .iter()
+                .take_while(|e| !matches!(e, Event::Reset(_)))
+                .count();
+            let routine = evs.get(at..at + len).unwrap_or_default();
+            at += len;
+            let moves = routine.iter().any(|e| matches!(e, Event::Motion { .. }));
+            if !moves && !name.is_some_and(|n| called.contains(n)) {
+                continue;
+            }
+            for ev in routine {
+                let Event::Call { name, at } = ev else {
+                    continue;
+                };
+                if exits.of(module, name).is_some()
+                    || KSS_ROUTINES.binary_search(&name.as_str()).is_ok()
+                {
+                    continue;
+                }
+                match unknown.iter_mut().find(|u| u.0 == name.as_str()) {
+                    Some(u) => u.3 += 1,
+                    None => unknown.push((name.as_str(), fi, *at, 1)),
+                }
+            }
+        }
+    }
+    for (_, fi, at, calls) in unknown {
+        let Some(file) = files.get_mut(fi) else {
+            continue;
+        };
+        let more = match calls {
+            1 => String::new(),
+            n => format!(" (the first of {n} calls)"),
+        };
+        let written = crate::syntax::latin1(at.slice(&file.source));
+        file.diagnostics.push(
+            Diagnostic::warning(
+                at,
+                format!(
+                    "`{written}` is called here{more}, but none of the files given defines it: trackfix takes it as leaving $BASE, $TOOL and FDAT_ACT as they were for the motions after it"
+                ),
+            )
+            .with_hint(format!(
+                "give the module or folder that defines `{written}` with the program (or the robot's whole tree), so that what it sets is followed"
+            ))
+            .shaping_transforms(),
+        );
+        file.diagnostics.sort_by_key(|d| d.span.start);
+    }
 }
 
 /// The [`Exit`] of every routine, by module and name, and the modules whose routines of a
@@ -1078,6 +1211,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
         .iter_mut()
         .map(|f| std::mem::take(&mut f.events))
         .collect();
+    warn_unknown_routines(files, &events, &exits, &modules);
     // A call passes names to a routine of the program that takes parameters.
     let passes =
         facts.iter().any(|f| !f.calls.is_empty()) && facts.iter().any(|f| !f.routines.is_empty());
@@ -1147,7 +1281,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                         // call of this routine or of another.
                         flow.state.aliases = entry.clone();
                     }
-                    Event::Call(name) => {
+                    Event::Call { name, .. } => {
                         if let Some(exit) = exits.of(module, name) {
                             exit.apply_to(&mut flow.state);
                         }
@@ -2019,6 +2153,14 @@ fn shared_facts<'a>(
 mod tests {
     use crate::position::{FrameKind, ParsedFile};
     use std::path::Path;
+
+    /// `KSS_ROUTINES` is searched by bisection.
+    #[test]
+    fn kss_routines_are_sorted_and_upper_case() {
+        let names = super::KSS_ROUTINES;
+        assert!(names.windows(2).all(|w| w[0] < w[1]), "{names:?}");
+        assert!(names.iter().all(|n| *n == n.to_ascii_uppercase()));
+    }
 
     /// Each position's base and tool, as resolved.
     fn bases_and_tools(f: &ParsedFile) -> Vec<(Option<&str>, Option<&str>)> {

@@ -2122,6 +2122,83 @@ fn a_point_held_in_a_structures_member_is_refused_by_name() {
     );
 }
 
+/// A call of a routine none of the files given defines (`setb()`, whose module was not named
+/// with the program) is taken as leaving $BASE, $TOOL and FDAT_ACT as they were: that is said
+/// once per routine, at its first call, with how many calls there are, and `correct` shows it.
+/// Before, nothing was said and `XP1` was corrected in base 1 whatever `setb` sets. KSS's own
+/// routines (`MsgNotify`, `PULSE`), routines the program defines, and a call in a routine that
+/// neither moves nor is called (whose exit nothing applies) are not warned about.
+#[test]
+fn a_call_of_a_routine_no_file_defines_is_warned_about_once() {
+    let src = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  setb()\n  LIN XP1\n  \
+               SETB()\n  MsgNotify(\"done\")\n  PULSE($OUT[1],TRUE,0.5)\n  GRIP()\n  PREP()\nEND\n\
+               DEF GRIP( )\n  $OUT[2]=TRUE\nEND\n\
+               DEF PREP( )\n  settool()\nEND\n\
+               DEF IDLE( )\n  H50()\nEND\n";
+    let program = krl::load_program_from_sources(
+        vec![
+            (PathBuf::from("cell.src"), src.as_bytes().to_vec()),
+            (PathBuf::from("cell.dat"), DAT_XP1.as_bytes().to_vec()),
+        ],
+        &with_sample_config(),
+    )
+    .unwrap();
+    let f = &program.files[0];
+    let warned: Vec<(usize, usize, &str)> = f
+        .diagnostics
+        .iter()
+        .map(|d| {
+            let (line, col) = f.lines.line_col(d.span.start);
+            (line, col, d.message.as_str())
+        })
+        .collect();
+    let said = "but none of the files given defines it: trackfix takes it as leaving $BASE, $TOOL and FDAT_ACT as they were for the motions after it";
+    assert_eq!(
+        warned,
+        [
+            (
+                4,
+                3,
+                format!("`setb` is called here (the first of 2 calls), {said}").as_str()
+            ),
+            (16, 3, format!("`settool` is called here, {said}").as_str()),
+        ]
+    );
+    assert!(f.diagnostics.iter().all(|d| d.shapes_transforms));
+    assert_eq!(xp1_of(&program).usage.wobj.as_deref(), Some("BASE_DATA[1]"));
+
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("cell.src"), src).unwrap();
+    // A point in the sample robot's reach.
+    std::fs::write(
+        dir.path().join("cell.dat"),
+        "DEFDAT cell\nDECL E6POS XP1={X 410.0,Y -95.0,Z 230.0,A 180.0,B 0.0,C 180.0,S 6,T 27,E1 1500.0}\nENDDAT\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let (code, _, err) = crate::support::trackfix(&[
+        "correct",
+        dir.path().join("cell.src").to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "k1",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains(&format!(
+            "cell.src:4:3: warning: `setb` is called here (the first of 2 calls), {said}"
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains("help: give the module or folder that defines `setb` with the program"),
+        "{err}"
+    );
+}
+
 /// A value handed back through the routine's own copy (`R=XP1` then `RETURN R`, or `P=R` into
 /// an `:OUT` parameter) is refused as handing back `XP1` is; before, `R` named no point and
 /// `XP1` was corrected in its own motion's base.
