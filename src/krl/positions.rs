@@ -79,15 +79,19 @@ pub(crate) enum Event {
     },
     /// The end of a loop's body: program order goes back to its top.
     EndLoop,
-    /// `GOTO`: program order does not go on past it (it goes on at the label).
-    Goto,
+    /// `GOTO`: program order does not go on past it (it goes on at the label: the index of
+    /// its [`Event::Label`] in the same list, when its routine has one of that name).
+    Goto {
+        label: Option<usize>,
+    },
     /// `EXIT`: program order leaves the innermost loop.
     Exit,
     /// A label, with where the `GOTO`s of its routine that name it are (`jumps`: the index of
-    /// each one's [`Event::Goto`]). A jump may arrive with another base and tool than program order
-    /// brings, so from there on they are unknown until set again, unless every jump is one that
-    /// cannot (a retry jumping back over nothing that changes them: `jumps_keep_state` in
-    /// resolution); a label no jump names changes nothing.
+    /// each one's [`Event::Goto`]). A jump forward arrives with the state it was made with,
+    /// joined there with the path that falls through; one back may arrive with another base
+    /// and tool than program order brings, so from there on they are unknown until set again,
+    /// unless it cannot (a retry jumping back over nothing that changes them:
+    /// `jumps_keep_state` in resolution); a label no jump names changes nothing.
     Label {
         jumps: Vec<usize>,
     },
@@ -990,13 +994,14 @@ impl<'a> Extractor<'a> {
     #[inline(never)]
     fn close_labels(&mut self) {
         for (at, name) in self.labels.drain(..) {
-            if let Some(Event::Label { jumps }) = self.out.facts.events.get_mut(at) {
-                jumps.extend(
-                    self.gotos
-                        .iter()
-                        .filter(|(to, _)| *to == name)
-                        .map(|&(_, from)| from),
-                );
+            let events = &mut self.out.facts.events;
+            for &(_, from) in self.gotos.iter().filter(|(to, _)| *to == name) {
+                if let Some(Event::Goto { label }) = events.get_mut(from) {
+                    label.get_or_insert(at);
+                }
+                if let Some(Event::Label { jumps }) = events.get_mut(at) {
+                    jumps.push(from);
+                }
             }
         }
         self.gotos.clear();
@@ -1175,7 +1180,7 @@ impl<'a> Extractor<'a> {
                     String::from_utf8_lossy(target).to_ascii_uppercase(),
                     out.facts.events.len(),
                 ));
-                out.facts.events.push(Event::Goto);
+                out.facts.events.push(Event::Goto { label: None });
             }
             StmtKind::Return => {
                 if let Some(f) = self.function {

@@ -432,9 +432,12 @@ struct Flow<'e> {
     state: State<'e>,
     forks: Vec<Fork<'e>>,
     loops: Vec<Loop<'e>>,
-    /// Every copy of the routine, joined, once a label a jump reaches has asked
+    /// Every copy of the routine, joined, once a label a jump back reaches has asked
     /// ([`routine_copies`]): found once a routine, not once a label.
     copies: Option<Aliases<'e>>,
+    /// The state each jump forward was made with, by the index of its label's event: what it
+    /// arrives there with.
+    jumped: Vec<(usize, State<'e>)>,
 }
 
 impl<'e> Flow<'e> {
@@ -443,6 +446,7 @@ impl<'e> Flow<'e> {
         self.forks.clear();
         self.loops.clear();
         self.copies = None;
+        self.jumped.clear();
     }
 
     /// Follows control event `ev`, the `i`th of `events`; returns the index of the event that
@@ -474,13 +478,27 @@ impl<'e> Flow<'e> {
                 }
             }
             Event::EndLoop => return self.end_of_body(i),
-            Event::Goto => self.state.dead = true,
+            Event::Goto { label } => {
+                // Forward, it arrives at its label with this state (from each pass of a loop
+                // it is in); a path already left (a jump after a jump) brings nothing.
+                if let Some(to) = label.filter(|&to| to > i && !self.state.dead) {
+                    self.jumped.push((to, self.state.clone()));
+                }
+                self.state.dead = true;
+            }
             Event::Label { jumps } if !jumps.is_empty() => {
-                // A jump arrives with what the names copied into held where it was made: any
-                // copy of the routine, joined (rare: a label a `GOTO` names).
+                if jumps.iter().any(|&from| from < i) {
+                    self.arrive(i);
+                }
+                // A jump back arrives with what the names copied into held where it was made:
+                // any copy of the routine, joined (rare: a label a `GOTO` names).
+                let back: Vec<usize> = jumps.iter().copied().filter(|&from| from > i).collect();
+                if back.is_empty() {
+                    return i + 1;
+                }
                 let copies = self.copies.get_or_insert_with(|| routine_copies(events, i));
                 self.state.aliases.absorb(copies);
-                if jumps_keep_state(events, i, jumps, changes) {
+                if jumps_keep_state(events, i, &back, changes) {
                     return i + 1;
                 }
                 self.state.dead = false;
@@ -496,6 +514,26 @@ impl<'e> Flow<'e> {
             _ => {}
         }
         i + 1
+    }
+
+    /// At the label of event `i`, which jumps forward reach: the state is the join of what each
+    /// brings and of the path that falls through, when that is not left by a jump (a forward
+    /// jump's state is exactly what arrives: the base, tool and IPO mode it was made with, and
+    /// what its copies hold, where the label made them unknown and took every copy of the
+    /// routine). Unreached, the label stays left.
+    fn arrive(&mut self, i: usize) {
+        let mut arriving: Vec<State<'e>> = self
+            .jumped
+            .iter()
+            .filter(|(to, _)| *to == i)
+            .map(|(_, s)| s.clone())
+            .collect();
+        if !self.state.dead {
+            arriving.push(std::mem::take(&mut self.state));
+        }
+        if let Some(state) = join(&arriving) {
+            self.state = state;
+        }
     }
 
     /// The end of a loop's body at event `i`: back to its top from a new state, or on after it.
@@ -567,8 +605,8 @@ fn routine_copies(events: &[Event], at: usize) -> Aliases<'_> {
     out
 }
 
-/// Whether the label at event `at` is reached by its `GOTO`s (`jumps`: the index the next event
-/// has at each) only with the state program order brings there: each jumps back, and the events
+/// Whether the label at event `at` is reached by its `GOTO`s back (`jumps`: the index the next
+/// event has at each) only with the state program order brings there: each jumps back, and the events
 /// between the label and it change no base, tool or staged FDAT (no setting, no call of a
 /// routine that `changes` them, no other label a jump reaches), close or continue no block
 /// opened before the label, and leave no loop open (a retry: `TOP: … IF NOT OK THEN GOTO TOP
@@ -590,7 +628,7 @@ fn jumps_keep_state(
             Event::Set(_) | Event::Reset(_) => false,
             Event::Call { name, .. } => !changes(name),
             Event::Label { jumps } => jumps.is_empty(),
-            Event::Alias { .. } | Event::Motion { .. } | Event::Goto => true,
+            Event::Alias { .. } | Event::Motion { .. } | Event::Goto { .. } => true,
             Event::Branch(BranchEvent::If | BranchEvent::Switch) => {
                 blocks += 1;
                 true
@@ -777,7 +815,7 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                     | Event::EndLoop
                     | Event::Exit
                     | Event::Label { .. }
-                    | Event::Goto => {
+                    | Event::Goto { .. } => {
                         i = flow.control(i, ev, &f.events, &changes);
                         continue;
                     }
@@ -1293,7 +1331,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                     | Event::EndLoop
                     | Event::Exit
                     | Event::Label { .. }
-                    | Event::Goto => {
+                    | Event::Goto { .. } => {
                         i = flow.control(i - 1, ev, &events, &changes);
                     }
                     Event::Alias {

@@ -1583,11 +1583,12 @@ fn an_fdat_the_program_changes_leaves_the_base_it_applies_unknown() {
     }
 }
 
-/// trackfix does not follow `GOTO`: at a label the base may be whatever the jump brought, so a
-/// point moved to after a label, before the base is set again, is refused as moved with a base
-/// that cannot be resolved (forward: `GOTO SKIP` over `$BASE=BASE_DATA[2]`; backward: a loop
-/// made of a label and a jump back). Set again after the label, the base is known; a label no
-/// `GOTO` of its routine names changes nothing.
+/// A label a jump back reaches may be reached with whatever base the jump brings, so a point
+/// moved to after it, before the base is set again, is refused as moved with a base that
+/// cannot be resolved (a loop made of a label and a jump back); so is one after a label a jump
+/// forward and the path falling through reach with two bases. A jump forward over
+/// `$BASE=BASE_DATA[2]` alone brings its own base. Set again after the label, the base is
+/// known; a label no `GOTO` of its routine names changes nothing.
 #[test]
 fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
     let base_of = |body: &str| {
@@ -1598,7 +1599,10 @@ fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
         )
     };
     let forward = "  $BASE=BASE_DATA[1]\n  GOTO SKIP\n  $BASE=BASE_DATA[2]\n  SKIP:\n  LIN XP1\n";
-    assert_eq!(base_of(forward), (None, Some(6)));
+    assert_eq!(base_of(forward), (Some("BASE_DATA[1]".to_owned()), None));
+    let either = "  $BASE=BASE_DATA[1]\n  IF $IN[1] THEN\n    GOTO SKIP\n  ENDIF\n  \
+                  $BASE=BASE_DATA[2]\n  SKIP:\n  LIN XP1\n";
+    assert_eq!(base_of(either), (None, Some(8)));
     let backward = "  $BASE=BASE_DATA[1]\n  TOP:\n  LIN XP1\n  $BASE=BASE_DATA[2]\n  IF $IN[1] THEN\n    GOTO TOP\n  ENDIF\n";
     assert_eq!(base_of(backward), (None, Some(4)));
     // A label no jump of its routine names changes nothing.
@@ -1627,8 +1631,9 @@ fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
     ] {
         assert!(base_of(jump).1.is_some(), "{jump}");
     }
-    // An FDAT staged before a jump forward over another: the one a `BAS` applies after the
-    // label is not known.
+    // An FDAT staged before a jump forward over another, which the path falling through
+    // stages: the one a `BAS` applies after the label is not known. Jumped over, it is the
+    // one staged before.
     let fdats = DAT_XP1.replace(
         "ENDDAT",
         "DECL FDAT FP1={TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE}\n\
@@ -1641,13 +1646,16 @@ fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
             usage.unresolved_frame().is_some(),
         )
     };
-    let skipped =
-        "  FDAT_ACT=FP1\n  GOTO SKIP\n  FDAT_ACT=FP2\n  SKIP:\n  BAS(#CP_PARAMS,2)\n  LIN XP1\n";
+    let skipped = "  FDAT_ACT=FP1\n  IF $IN[1] THEN\n    GOTO SKIP\n  ENDIF\n  FDAT_ACT=FP2\n  SKIP:\n  \
+                   BAS(#CP_PARAMS,2)\n  LIN XP1\n";
     assert_eq!(staged(skipped), (None, true));
     assert_eq!(
         staged(&skipped.replace("GOTO SKIP", "; no jump")),
         (Some("BASE_DATA[2]".to_owned()), false)
     );
+    let over =
+        "  FDAT_ACT=FP1\n  GOTO SKIP\n  FDAT_ACT=FP2\n  SKIP:\n  BAS(#CP_PARAMS,2)\n  LIN XP1\n";
+    assert_eq!(staged(over), (Some("BASE_DATA[1]".to_owned()), false));
 }
 
 /// A copy (`XC=XP1`) moves to what it copies until the program gives it another whole value
@@ -2268,6 +2276,77 @@ fn a_goto_ends_its_path_and_a_jumped_label_gets_the_routines_copies() {
             vec!["BASE_DATA[2]".to_owned()]
         )
     );
+}
+
+/// A jump forward arrives at its label with the state it was made with: there it is joined with
+/// the path that falls through (not left by a jump of its own), as a block's end joins its
+/// branches. A point copied before the jump and another copied on the way it skips may each be
+/// what the copy holds after the label, and are used in the base the two paths agree on; a
+/// branch that set `$IPO_MODE=#TCP` and jumped brings the stationary tool to the motions
+/// after the label. Before, the label made the base unknown (every point moved to after it
+/// was refused), took every copy of its routine (one made after the label too), and kept the
+/// falling-through path's IPO mode, so a point moved to with the stationary tool that way was
+/// corrected in the base.
+#[test]
+fn a_forward_jump_brings_its_state_to_the_label() {
+    let dat = "DEFDAT cell\n\
+        DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        DECL E6POS XP2={X 410.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        ENDDAT\n";
+    // Per point: (bases, a motion with an unresolved base, a stationary tool).
+    let used = |body: &str| {
+        let src = format!(
+            "DEF cell( )\n  DECL E6POS XC\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  \
+             LIN XP1\n  LIN XP2\n{body}END\n"
+        );
+        let p = krl::load_program_from_sources(
+            vec![
+                (PathBuf::from("cell.src"), src.into_bytes()),
+                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
+            ],
+            &with_sample_config(),
+        )
+        .unwrap();
+        p.files
+            .iter()
+            .flat_map(|f| f.positions())
+            .map(|t| {
+                (
+                    crate::support::sorted_work_objects(&t.usage),
+                    t.usage.unresolved_frame().is_some(),
+                    t.usage.stationary_tool(),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    let base = |n: &[u32], unresolved: bool| {
+        (
+            n.iter()
+                .map(|n| format!("BASE_DATA[{n}]"))
+                .collect::<Vec<_>>(),
+            unresolved,
+            false,
+        )
+    };
+    // Both paths in base 1: each point the copy may hold is used there, and resolved.
+    let skipped = "  XC=XP1\n  IF $IN[1] THEN\n    GOTO L1\n  ENDIF\n  XC=XP2\n  L1:\n  LIN XC\n";
+    assert_eq!(used(skipped), [base(&[1], false), base(&[1], false)]);
+    // Jumped over unconditionally: only what the jump brings (base 1, `XP1`), not the base
+    // and copy of the skipped code.
+    let over = "  XC=XP1\n  GOTO L1\n  XC=XP2\n  $BASE=BASE_DATA[2]\n  L1:\n  LIN XC\n";
+    assert_eq!(used(over), [base(&[1], false), base(&[1], false)]);
+    // In another base after the label: each copy the paths bring is used in both; a copy made
+    // after the label is not what the motion before it moves to.
+    let after = "  XC=XP1\n  IF $IN[1] THEN\n    GOTO L1\n  ENDIF\n  L1:\n  $BASE=BASE_DATA[2]\n  \
+                 LIN XC\n  XC=XP2\n";
+    assert_eq!(used(after), [base(&[1, 2], false), base(&[1], false)]);
+    // The two paths in two bases: unknown after the label.
+    let two = "  IF $IN[1] THEN\n    GOTO L1\n  ENDIF\n  $BASE=BASE_DATA[2]\n  L1:\n  LIN XP1\n";
+    assert_eq!(used(two), [base(&[1], true), base(&[1], false)]);
+    // A stationary tool brought by the jump.
+    let tcp = "  IF $IN[1] THEN\n    $IPO_MODE=#TCP\n    GOTO L1\n  ENDIF\n  L1:\n  \
+               $BASE=BASE_DATA[1]\n  LIN XP1\n";
+    assert_eq!(used(tcp)[0], (vec!["BASE_DATA[1]".to_owned()], false, true));
 }
 
 /// KRL modules named together from one folder are one program, as a KSS tree's `Program`
