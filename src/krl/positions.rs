@@ -150,9 +150,17 @@ pub(crate) struct Facts {
     pub events: Vec<Event>,
     pub fdats: HashMap<Name, Fdat>,
     /// Routines the program runs where trackfix does not follow them, upper case: its
-    /// functions (`DEFFCT`, called inside expressions) and the routines of its interrupts and
-    /// triggers (`… DO SETB()`). One that changes the base or tool leaves every motion's unknown.
+    /// functions (`DEFFCT`, called inside expressions) and the routines of its triggers
+    /// (`TRIGGER … DO SETB()`), and of its interrupts once one is known to be switched on. One
+    /// that changes the base or tool leaves every motion's unknown.
     pub unfollowed: Vec<String>,
+    /// The interrupts declared (`INTERRUPT DECL 3 WHEN … DO SETB()`): the number (`None` when
+    /// it is not a literal) and the routine, upper case. A declared interrupt runs its routine
+    /// only once an `INTERRUPT ON` switches it on.
+    pub interrupts: Vec<(Option<u32>, String)>,
+    /// The interrupts `INTERRUPT ON` switches on: the number, `None` for every one (`INTERRUPT
+    /// ON` alone, or a number computed when the program runs).
+    pub switched_on: Vec<Option<u32>>,
     /// Names a routine assigns, whole or a component (`FP1.BASE_NO = 2`, `FP1 = FP2`), upper
     /// case: an `FDAT` among them does not hold its declared value when a motion applies it.
     pub written_in_routines: Vec<Name>,
@@ -1188,9 +1196,7 @@ impl<'a> Extractor<'a> {
                 }
             }
             StmtKind::Handler => {
-                if let Some(name) = handler_routine(stmt.span.slice(src)) {
-                    out.facts.unfollowed.push(name);
-                }
+                handler(stmt.span.slice(src), &mut out.facts);
                 handler_copy(src, lines, stmt.span, out);
             }
             StmtKind::Motion {
@@ -1910,16 +1916,41 @@ fn places_frames(src: &[u8], target: &Expr) -> bool {
     }
 }
 
-/// The routine an `INTERRUPT DECL … DO NAME(…)` or `TRIGGER … DO NAME(…)` statement runs,
-/// upper case: the name after the word `DO`.
-fn handler_routine(text: &[u8]) -> Option<String> {
+/// Records what an `INTERRUPT …` or `TRIGGER …` statement (`text`) says of the routines run
+/// where program order does not follow them: the routine a `TRIGGER … DO NAME(…)` runs
+/// ([`Facts::unfollowed`]), the number and routine of an `INTERRUPT DECL n WHEN … DO NAME(…)`
+/// ([`Facts::interrupts`]), the number an `INTERRUPT ON n` switches on
+/// ([`Facts::switched_on`]). Out of line, as [`param_routine`].
+#[inline(never)]
+fn handler(text: &[u8], facts: &mut Facts) {
     let words: Vec<&[u8]> = text
         .split(|b| !(b.is_ascii_alphanumeric() || matches!(b, b'_' | b'$' | b'#')))
         .filter(|w| !w.is_empty())
         .collect();
-    let at = words.iter().position(|w| w.eq_ignore_ascii_case(b"DO"))?;
-    let name = words.get(at + 1)?;
-    Some(String::from_utf8_lossy(name).to_ascii_uppercase())
+    let is = |k: usize, word: &[u8]| words.get(k).is_some_and(|w| w.eq_ignore_ascii_case(word));
+    let first = usize::from(is(0, b"GLOBAL"));
+    let number = |k: usize| {
+        words
+            .get(k)
+            .and_then(|w| std::str::from_utf8(w).ok()?.parse().ok())
+    };
+    let routine = words
+        .iter()
+        .position(|w| w.eq_ignore_ascii_case(b"DO"))
+        .and_then(|at| words.get(at + 1))
+        .map(|name| String::from_utf8_lossy(name).to_ascii_uppercase());
+    if is(first, b"INTERRUPT") {
+        if is(first + 1, b"DECL") {
+            facts
+                .interrupts
+                .extend(routine.map(|r| (number(first + 2), r)));
+        } else if is(first + 1, b"ON") {
+            // `INTERRUPT ON` alone, or `INTERRUPT ON nIR`: any of them.
+            facts.switched_on.push(number(first + 2));
+        }
+    } else {
+        facts.unfollowed.extend(routine);
+    }
 }
 
 /// The data name an assignment to `target` gives a value (`XC` of `XC.X`), upper case; `None`

@@ -404,6 +404,33 @@ fn shared_by_module<'s>(
     out
 }
 
+/// Adds to each file's [`Facts::unfollowed`] the routines of its interrupts that an
+/// `INTERRUPT ON` anywhere in the program switches on (by number; `INTERRUPT ON` alone, or a
+/// number or declaration computed when the program runs, any): a declared interrupt is off until
+/// then, so the routine of one the program never switches on never runs there, and changes no
+/// motion's base.
+fn switched_on_interrupts(facts: &mut [Facts]) {
+    if facts.iter().all(|f| f.interrupts.is_empty()) {
+        return;
+    }
+    let on: Vec<Option<u32>> = facts
+        .iter()
+        .flat_map(|f| f.switched_on.iter().copied())
+        .collect();
+    let any = on.iter().any(Option::is_none);
+    for f in facts.iter_mut() {
+        for (number, routine) in std::mem::take(&mut f.interrupts) {
+            let runs = match number {
+                Some(n) => any || on.contains(&Some(n)),
+                None => !on.is_empty(),
+            };
+            if runs {
+                f.unfollowed.push(routine);
+            }
+        }
+    }
+}
+
 /// How many states a loop's top is followed from before the rest are joined into one.
 const LOOP_STATES: usize = 8;
 
@@ -1144,6 +1171,7 @@ fn branch<'e>(state: &mut State<'e>, forks: &mut Vec<Fork<'e>>, b: BranchEvent) 
 /// an assignment in the program may repeat.
 pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_frames: &[FrameDecl]) {
     let modules = Modules::new(files);
+    switched_on_interrupts(facts);
     let shared_copies: Vec<Vec<SharedCopy>> = facts
         .iter_mut()
         .map(|f| std::mem::take(&mut f.shared_copies))

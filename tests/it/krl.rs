@@ -1802,6 +1802,18 @@ fn a_function_or_interrupt_that_changes_the_base_leaves_it_unknown() {
     let uncalled = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  LIN XP1\nEND\n\
                     DEFFCT BOOL PREP( )\n  $BASE=BASE_DATA[2]\n  RETURN TRUE\nENDFCT\n";
     assert_eq!(cause_of(uncalled), None);
+    // Nor does the routine of an interrupt the program declares but never switches on (before,
+    // its point was refused); switched on by its number, or all at once, it runs.
+    let off = interrupt.replace("  INTERRUPT ON 3\n", "  INTERRUPT OFF 3\n");
+    assert_eq!(cause_of(&off), None);
+    assert_eq!(
+        cause_of(&interrupt.replace("INTERRUPT ON 3", "INTERRUPT ON 4")),
+        None
+    );
+    for on in ["INTERRUPT ON", "INTERRUPT ON N"] {
+        let src = interrupt.replace("INTERRUPT ON 3", on);
+        assert_eq!(cause_of(&src), changed("SETB"), "{on}");
+    }
 }
 
 /// A data list with `XP1` and a copy `XC` of it, whole or an array.
