@@ -154,6 +154,9 @@ pub(crate) struct Facts {
     /// (`TRIGGER … DO SETB()`), and of its interrupts once one is known to be switched on. One
     /// that changes the base or tool leaves every motion's unknown.
     pub unfollowed: Vec<String>,
+    /// Some of the file's positions are points held in a structure's member (`S1.P` of `DECL
+    /// SPT S1={P {X …}}`).
+    pub holds_members: bool,
     /// The interrupts declared (`INTERRUPT DECL 3 WHEN … DO SETB()`): the number (`None` when
     /// it is not a literal) and the routine, upper case. A declared interrupt runs its routine
     /// only once an `INTERRUPT ON` switches it on.
@@ -1110,8 +1113,8 @@ impl<'a> Extractor<'a> {
                             out.positions.push_checking(p, src, read_elsewhere);
                         }
                     } else if agg.fields.iter().any(|f| is_aggregate(&f.value)) {
-                        let whole = name_text(v.name.slice(src));
-                        member_points(src, lines, (&whole, &whole), agg, 0, &mut out.positions);
+                        let at = (v.name, v.name);
+                        member_points(src, lines, at, &mut Vec::new(), agg, out);
                     }
                 }
             }
@@ -2109,7 +2112,8 @@ fn assignment(
                     .push(build_position(lines, value.span, kind, Some(name), f));
             } else if agg.fields.iter().any(|f| is_aggregate(&f.value)) {
                 // A structure's literal (`S1={P {X 100, …}, K 1}`): the points its members hold.
-                member_points(src, lines, (&name, &name), agg, 0, &mut out.positions);
+                let at = (target.span, target.span);
+                member_points(src, lines, at, &mut Vec::new(), agg, out);
             }
         }
     }
@@ -2139,33 +2143,44 @@ fn member_point_kind(src: &[u8], agg: &Aggregate, f: &Fields) -> Option<Position
 /// How deep structures nested in structures are looked into for points.
 const MEMBER_DEPTH: usize = 8;
 
-/// The points held in the members of the literal `agg` of the structure `whole` (as written,
-/// `S1`, `SA[1]`), whose members are named `prefix.FIELD` (`S1.P`; `S1.A.P` a level down):
-/// each a position refused by every transform as held in a structure's member
-/// ([`crate::position::UnresolvedCause::Member`]). Out of line, as [`param_routine`]: only a
-/// declaration or assignment of a structure's literal gets here.
+/// The points held in the members of the literal `agg` of the structure `whole` (its name as
+/// written, `S1`, `SA[1]`), whose members are named after `prefix` (`S1.P`; `S1.A.P` a level
+/// down, `path` holding the fields between): each a position refused by every transform as held
+/// in a structure's member ([`crate::position::UnresolvedCause::Member`]). Names are only
+/// written for a point found: a data list's motion data (`LDAT`'s `CB {AUX_PT {…}}`) holds
+/// none. Out of line, as [`param_routine`]: only a declaration or assignment of a structure's
+/// literal gets here.
 #[inline(never)]
 fn member_points(
     src: &[u8],
     lines: &LineIndex,
-    (whole, prefix): (&str, &str),
+    (whole, prefix): (Span, Span),
+    path: &mut Vec<Span>,
     agg: &Aggregate,
-    depth: usize,
-    positions: &mut PositionList,
+    out: &mut Extracted,
 ) {
     for field in &agg.fields {
         let ExprKind::Aggregate(inner) = &field.value.kind else {
             continue;
         };
-        let name = format!("{prefix}.{}", name_text(field.name.slice(src)));
+        path.push(field.name);
         let f = read_fields(src, inner);
         if let Some(kind) = member_point_kind(src, inner, &f) {
+            let mut name = name_text(prefix.slice(src));
+            for p in path.iter() {
+                name.push('.');
+                name.push_str(&name_text(p.slice(src)));
+            }
             let read_elsewhere = f.read_elsewhere;
             let p = build_position(lines, field.value.span, kind, Some(name), f);
-            positions.push_checking(held_in(p, whole), src, read_elsewhere);
-        } else if depth < MEMBER_DEPTH {
-            member_points(src, lines, (whole, &name), inner, depth + 1, positions);
+            let whole = name_text(whole.slice(src));
+            out.positions
+                .push_checking(held_in(p, &whole), src, read_elsewhere);
+            out.facts.holds_members = true;
+        } else if path.len() < MEMBER_DEPTH {
+            member_points(src, lines, (whole, prefix), path, inner, out);
         }
+        path.pop();
     }
 }
 
@@ -2191,22 +2206,21 @@ fn member_assignment(
     agg: &Aggregate,
     out: &mut Extracted,
 ) {
-    let Some(whole) = member_whole(target) else {
+    let Some(whole) = member_read(src, target) else {
         return;
     };
-    let whole = name_text(whole.slice(src));
-    if whole.starts_with('$') {
-        return;
-    }
-    let name = name_text(target.span.slice(src));
     let f = read_fields(src, agg);
     if let Some(kind) = member_point_kind(src, agg, &f) {
         let read_elsewhere = f.read_elsewhere;
+        let name = name_text(target.span.slice(src));
         let p = build_position(lines, value.span, kind, Some(name), f);
+        let whole = name_text(whole.slice(src));
         out.positions
             .push_checking(held_in(p, &whole), src, read_elsewhere);
+        out.facts.holds_members = true;
     } else {
-        member_points(src, lines, (&whole, &name), agg, 1, &mut out.positions);
+        let at = (whole, target.span);
+        member_points(src, lines, at, &mut Vec::new(), agg, out);
     }
 }
 

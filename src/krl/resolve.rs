@@ -1309,7 +1309,11 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
             .extend(std::mem::take(&mut fact.candidates), &file.source);
     }
     // The points held in structures' members, reached from the structure's name.
-    let members = Members::of(files);
+    let members = if facts.iter().any(|f| f.holds_members) {
+        Members::of(files)
+    } else {
+        Members::default()
+    };
     // Per file, the motions to warn about: a Cartesian target and no base.
     let mut unresolved: Vec<Vec<crate::syntax::Span>> = vec![Vec::new(); files.len()];
     {

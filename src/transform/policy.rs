@@ -258,7 +258,7 @@ fn structure_member(p: &Position, whole: &str) -> Why {
     Why::new(
         RefusalKind::StructureMember,
         format!(
-            "{} is held in a member of the structure `{whole}`: trackfix does not follow a structure's members everywhere the program may take them (a copy of the whole structure, an array of structures, a parameter, another module), so the base it is moved to in is not known",
+            "{} is held in a member of the structure `{whole}`: trackfix does not follow a structure's members everywhere the program may take them (a copy of the whole structure, an array of structures, a parameter, another module), so which base the robot moves to it in is not known",
             describe(p)
         ),
         "declare the point as an E6POS of its own and move to it (copy it into the member where the structure needs it), or correct it by hand",

@@ -2050,11 +2050,11 @@ fn a_copy_through_a_structures_member_reaches_its_source() {
 }
 
 /// A point written in a structure's literal (`DECL SPT S1={P {X …, E1 1500.0}, K 1}`, an element
-/// of an array of structures, a member given a literal `S2.P={…}`) is refused by every transform
-/// as `structure-member`, by name at its literal, whether the program moves to the member or to
-/// a copy of it: a structure carries its members where trackfix does not follow them (a copy of
-/// the whole structure, an array of structures chosen at run time, a parameter, another
-/// module). Before, such a point was no target at all: `correct` exited 0 with the files
+/// of an array of structures, a member given a literal `S2.P={…}`, a structure's in a structure)
+/// is refused by every transform as `structure-member`, by name at its literal, whether the
+/// program moves to the member or to a copy of it: a structure carries its members where
+/// trackfix does not follow them (a copy of the whole structure, an array of structures chosen
+/// at run time, a parameter, another module). Before, such a point was no target at all: `correct` exited 0 with the files
 /// unchanged and at most a warning that spoke of a composed frame. A member that is a frame
 /// (`CM` of a load) or per-axis values (`AX` of jerk limits) is no point and stays out.
 #[test]
@@ -2072,12 +2072,14 @@ fn a_point_held_in_a_structures_member_is_refused_by_name() {
          S2.P={}\n\
          DECL LOAD L1={{M 5.0,CM {{X 1.0,Y 2.0,Z 3.0,A 0.0,B 0.0,C 0.0}}}}\n\
          DECL JERK_STRUC J1={{CP 500.0,AX {{A1 1000.0,A2 1000.0,E1 1000.0}}}}\n\
+         DECL OUTER O1={{N 2,A {{P {},K 1}}}}\n\
          DECL E6POS XC\n\
          DECL E6POS XP8={}\n\
          ENDDAT\n",
         point("S 6,T 27,"),
         point("S 6,T 27,"),
         point("S 6,T 27,"),
+        point(""),
         point("S 6,T 27,"),
     );
     let src = "DEF cell( )\n  DECL INT I\n  BAS(#INITMOV,0)\n  BAS(#BASE,1)\n  BAS(#TOOL,1)\n  \
@@ -2093,7 +2095,7 @@ fn a_point_held_in_a_structures_member_is_refused_by_name() {
         .flat_map(|f| f.positions())
         .filter_map(|p| p.name.map(|n| n.to_string()))
         .collect();
-    assert_eq!(names, ["S1.P", "SA[2].P", "S2.P", "XP8"]);
+    assert_eq!(names, ["S1.P", "SA[2].P", "S2.P", "O1.A.P", "XP8"]);
 
     let src = src.to_str().unwrap();
     let args = [
@@ -2103,6 +2105,7 @@ fn a_point_held_in_a_structures_member_is_refused_by_name() {
         "samples/cell.toml",
         "--robot",
         "k1",
+        "-v",
     ];
     let (code, _, err) = crate::support::trackfix(&args);
     assert_eq!(code, 3, "{err}");
@@ -2110,6 +2113,7 @@ fn a_point_held_in_a_structures_member_is_refused_by_name() {
         ("3:16", "S1.P", "S1"),
         ("5:10", "SA[2].P", "SA[2]"),
         ("7:6", "S2.P", "S2"),
+        ("10:25", "O1.A.P", "O1"),
     ] {
         assert!(
             err.contains(&format!(
@@ -2118,7 +2122,7 @@ fn a_point_held_in_a_structures_member_is_refused_by_name() {
             "{name}: {err}"
         );
     }
-    assert_eq!(err.matches("[structure-member]").count(), 3, "{err}");
+    assert_eq!(err.matches("[structure-member]").count(), 4, "{err}");
     assert!(!err.contains("composed frame"), "{err}");
 
     let out = dir.path().join("out");
