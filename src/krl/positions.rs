@@ -61,8 +61,12 @@ pub(crate) enum Ref {
 pub(crate) enum Event {
     /// A `DEF`/`DEFFCT` (its name, upper case): program order starts again.
     Reset(Option<String>),
-    /// A call of a routine by name (upper case): the base and tool it leaves set apply after it.
-    Call(String),
+    /// A call of a routine by name (upper case), written at `at` (the routine's name): the base
+    /// and tool it leaves set apply after it.
+    Call {
+        name: String,
+        at: Span,
+    },
     Set(Setting),
     /// Program order forks (`IF`, `SWITCH`), switches branch (`ELSE`, `CASE`, `DEFAULT`) or
     /// joins (`ENDIF`, `ENDSWITCH`).
@@ -75,15 +79,19 @@ pub(crate) enum Event {
     },
     /// The end of a loop's body: program order goes back to its top.
     EndLoop,
-    /// `GOTO`: program order does not go on past it (it goes on at the label).
-    Goto,
+    /// `GOTO`: program order does not go on past it (it goes on at the label: the index of
+    /// its [`Event::Label`] in the same list, when its routine has one of that name).
+    Goto {
+        label: Option<usize>,
+    },
     /// `EXIT`: program order leaves the innermost loop.
     Exit,
     /// A label, with where the `GOTO`s of its routine that name it are (`jumps`: the index of
-    /// each one's [`Event::Goto`]). A jump may arrive with another base and tool than program order
-    /// brings, so from there on they are unknown until set again, unless every jump is one that
-    /// cannot (a retry jumping back over nothing that changes them: `jumps_keep_state` in
-    /// resolution); a label no jump names changes nothing.
+    /// each one's [`Event::Goto`]). A jump forward arrives with the state it was made with,
+    /// joined there with the path that falls through; one back may arrive with another base
+    /// and tool than program order brings, so from there on they are unknown until set again,
+    /// unless it cannot (a retry jumping back over nothing that changes them:
+    /// `jumps_keep_state` in resolution); a label no jump names changes nothing.
     Label {
         jumps: Vec<usize>,
     },
@@ -142,9 +150,20 @@ pub(crate) struct Facts {
     pub events: Vec<Event>,
     pub fdats: HashMap<Name, Fdat>,
     /// Routines the program runs where trackfix does not follow them, upper case: its
-    /// functions (`DEFFCT`, called inside expressions) and the routines of its interrupts and
-    /// triggers (`… DO SETB()`). One that changes the base or tool leaves every motion's unknown.
+    /// functions (`DEFFCT`, called inside expressions) and the routines of its triggers
+    /// (`TRIGGER … DO SETB()`), and of its interrupts once one is known to be switched on. One
+    /// that changes the base or tool leaves every motion's unknown.
     pub unfollowed: Vec<String>,
+    /// Some of the file's positions are points held in a structure's member (`S1.P` of `DECL
+    /// SPT S1={P {X …}}`).
+    pub holds_members: bool,
+    /// The interrupts declared (`INTERRUPT DECL 3 WHEN … DO SETB()`): the number (`None` when
+    /// it is not a literal) and the routine, upper case. A declared interrupt runs its routine
+    /// only once an `INTERRUPT ON` switches it on.
+    pub interrupts: Vec<(Option<u32>, String)>,
+    /// The interrupts `INTERRUPT ON` switches on: the number, `None` for every one (`INTERRUPT
+    /// ON` alone, or a number computed when the program runs).
+    pub switched_on: Vec<Option<u32>>,
     /// Names a routine assigns, whole or a component (`FP1.BASE_NO = 2`, `FP1 = FP2`), upper
     /// case: an `FDAT` among them does not hold its declared value when a motion applies it.
     pub written_in_routines: Vec<Name>,
@@ -986,13 +1005,14 @@ impl<'a> Extractor<'a> {
     #[inline(never)]
     fn close_labels(&mut self) {
         for (at, name) in self.labels.drain(..) {
-            if let Some(Event::Label { jumps }) = self.out.facts.events.get_mut(at) {
-                jumps.extend(
-                    self.gotos
-                        .iter()
-                        .filter(|(to, _)| *to == name)
-                        .map(|&(_, from)| from),
-                );
+            let events = &mut self.out.facts.events;
+            for &(_, from) in self.gotos.iter().filter(|(to, _)| *to == name) {
+                if let Some(Event::Goto { label }) = events.get_mut(from) {
+                    label.get_or_insert(at);
+                }
+                if let Some(Event::Label { jumps }) = events.get_mut(at) {
+                    jumps.push(from);
+                }
             }
         }
         self.gotos.clear();
@@ -1060,9 +1080,11 @@ impl<'a> Extractor<'a> {
                 for v in vars {
                     if let Some(kind) = positional {
                         self.declared.insert(upper_name(src, v.name), kind);
-                        if *global {
-                            out.facts.globals.push(upper_name(src, v.name));
-                        }
+                    }
+                    // A structure declared `GLOBAL` too: the points its members hold are seen
+                    // from every module.
+                    if *global && !is_fdat {
+                        out.facts.globals.push(upper_name(src, v.name));
                     }
                     let Some(init) = &v.init else { continue };
                     let ExprKind::Aggregate(agg) = &init.kind else {
@@ -1090,6 +1112,9 @@ impl<'a> Extractor<'a> {
                         } else {
                             out.positions.push_checking(p, src, read_elsewhere);
                         }
+                    } else if agg.fields.iter().any(|f| is_aggregate(&f.value)) {
+                        let at = (v.name, v.name);
+                        member_points(src, lines, at, &mut Vec::new(), agg, out);
                     }
                 }
             }
@@ -1125,7 +1150,10 @@ impl<'a> Extractor<'a> {
                     // KUKA's own `BAS` is read by `bas_call`; its other modes set no frame.
                     let name = upper(src, callee.span);
                     if name != "BAS" {
-                        out.facts.events.push(Event::Call(name));
+                        out.facts.events.push(Event::Call {
+                            name,
+                            at: callee.span,
+                        });
                         if !args.is_empty() {
                             let at = (self.current, lines, stmt.span.start);
                             param_call(callee.span, args, at, &mut out.facts.calls);
@@ -1163,7 +1191,7 @@ impl<'a> Extractor<'a> {
                     String::from_utf8_lossy(target).to_ascii_uppercase(),
                     out.facts.events.len(),
                 ));
-                out.facts.events.push(Event::Goto);
+                out.facts.events.push(Event::Goto { label: None });
             }
             StmtKind::Return => {
                 if let Some(f) = self.function {
@@ -1171,9 +1199,7 @@ impl<'a> Extractor<'a> {
                 }
             }
             StmtKind::Handler => {
-                if let Some(name) = handler_routine(stmt.span.slice(src)) {
-                    out.facts.unfollowed.push(name);
-                }
+                handler(stmt.span.slice(src), &mut out.facts);
                 handler_copy(src, lines, stmt.span, out);
             }
             StmtKind::Motion {
@@ -1801,7 +1827,8 @@ fn written_in_routine(src: &[u8], target: &Expr, value: &Expr, out: &mut Extract
     if places_frames(src, target) {
         written_name(src, target, &mut out.facts.written_in_routines);
     }
-    let copy = matches!(value.kind, ExprKind::Name | ExprKind::Index(..));
+    let copy = matches!(value.kind, ExprKind::Name | ExprKind::Index(..))
+        || member_read(src, value).is_some();
     if matches!(target.kind, ExprKind::Member(..)) {
         component_copy(src, target, value, out);
     }
@@ -1837,7 +1864,8 @@ fn written_in_routine(src: &[u8], target: &Expr, value: &Expr, out: &mut Extract
 /// aliases). Out of line, as [`param_routine`].
 #[inline(never)]
 fn component_copy(src: &[u8], target: &Expr, value: &Expr, out: &mut Extracted) {
-    let Some(name) = whole_name(src, target) else {
+    // `SA[1].P = XP1`: the element of an array of structures holds it.
+    let Some(name) = member_read(src, target).map(|w| upper_name(src, w)) else {
         return;
     };
     let mut sources = Vec::new();
@@ -1891,16 +1919,41 @@ fn places_frames(src: &[u8], target: &Expr) -> bool {
     }
 }
 
-/// The routine an `INTERRUPT DECL … DO NAME(…)` or `TRIGGER … DO NAME(…)` statement runs,
-/// upper case: the name after the word `DO`.
-fn handler_routine(text: &[u8]) -> Option<String> {
+/// Records what an `INTERRUPT …` or `TRIGGER …` statement (`text`) says of the routines run
+/// where program order does not follow them: the routine a `TRIGGER … DO NAME(…)` runs
+/// ([`Facts::unfollowed`]), the number and routine of an `INTERRUPT DECL n WHEN … DO NAME(…)`
+/// ([`Facts::interrupts`]), the number an `INTERRUPT ON n` switches on
+/// ([`Facts::switched_on`]). Out of line, as [`param_routine`].
+#[inline(never)]
+fn handler(text: &[u8], facts: &mut Facts) {
     let words: Vec<&[u8]> = text
         .split(|b| !(b.is_ascii_alphanumeric() || matches!(b, b'_' | b'$' | b'#')))
         .filter(|w| !w.is_empty())
         .collect();
-    let at = words.iter().position(|w| w.eq_ignore_ascii_case(b"DO"))?;
-    let name = words.get(at + 1)?;
-    Some(String::from_utf8_lossy(name).to_ascii_uppercase())
+    let is = |k: usize, word: &[u8]| words.get(k).is_some_and(|w| w.eq_ignore_ascii_case(word));
+    let first = usize::from(is(0, b"GLOBAL"));
+    let number = |k: usize| {
+        words
+            .get(k)
+            .and_then(|w| std::str::from_utf8(w).ok()?.parse().ok())
+    };
+    let routine = words
+        .iter()
+        .position(|w| w.eq_ignore_ascii_case(b"DO"))
+        .and_then(|at| words.get(at + 1))
+        .map(|name| String::from_utf8_lossy(name).to_ascii_uppercase());
+    if is(first, b"INTERRUPT") {
+        if is(first + 1, b"DECL") {
+            facts
+                .interrupts
+                .extend(routine.map(|r| (number(first + 2), r)));
+        } else if is(first + 1, b"ON") {
+            // `INTERRUPT ON` alone, or `INTERRUPT ON nIR`: any of them.
+            facts.switched_on.push(number(first + 2));
+        }
+    } else {
+        facts.unfollowed.extend(routine);
+    }
 }
 
 /// The data name an assignment to `target` gives a value (`XC` of `XC.X`), upper case; `None`
@@ -1950,11 +2003,15 @@ fn assignment(
         {
             computed_assignment(src, lines, routine, target, out);
         }
-        if matches!(target.kind, ExprKind::Name | ExprKind::Index(..))
-            && matches!(value.kind, ExprKind::Name | ExprKind::Index(..))
-        {
+        // `XC = S1.P`: a copy of what the structure's member holds, which the structure's
+        // name stands for (a copy into one of its members, `S1.P = XP1`, joins it there).
+        let source = match value.kind {
+            ExprKind::Name | ExprKind::Index(..) => Some(value.span),
+            _ => member_read(src, value),
+        };
+        if let (ExprKind::Name | ExprKind::Index(..), Some(source)) = (&target.kind, source) {
             let name = upper_name(src, target.span);
-            let source = upper_name(src, value.span);
+            let source = upper_name(src, source);
             // `XC = XC` gives it nothing new: what it held, it holds. KSS's active motion data
             // (`LDAT_ACT = LCPDAT1` before each taught motion) hold no point: no copy to follow
             // (one per motion would make every loop's body a state of its own).
@@ -2017,6 +2074,10 @@ fn assignment(
             }));
         return None;
     }
+    if let ExprKind::Member(..) = target.kind {
+        member_assignment(src, lines, target, value, agg, out);
+        return None;
+    }
     let base = base_name(src, target)?;
     if base.starts_with('$') {
         return None;
@@ -2049,10 +2110,141 @@ fn assignment(
                 out.facts
                     .candidates
                     .push(build_position(lines, value.span, kind, Some(name), f));
+            } else if agg.fields.iter().any(|f| is_aggregate(&f.value)) {
+                // A structure's literal (`S1={P {X 100, …}, K 1}`): the points its members hold.
+                let at = (target.span, target.span);
+                member_points(src, lines, at, &mut Vec::new(), agg, out);
             }
         }
     }
     problem
+}
+
+fn is_aggregate(e: &Expr) -> bool {
+    matches!(e.kind, ExprKind::Aggregate(_))
+}
+
+/// The kind of a structure member's literal that is a point the robot may move to: typed
+/// `E6POS` or `POS` (`{E6POS: X 1, …}`), or writing a position's coordinates (`X`, `Y`, `Z` or an
+/// angle) with a field only a point has (`S`, `T`, an external axis). A frame (`LOAD_DATA`'s
+/// `CM`, a pallet's offset) has the coordinates alone, and an axis-wise limit (`JERK_STRUC`'s
+/// `AX`) the axes alone: neither is a point.
+fn member_point_kind(src: &[u8], agg: &Aggregate, f: &Fields) -> Option<PositionKind> {
+    /// [`field_index`] bits of `S`, `T` and `E1`-`E6`.
+    const POINT_ONLY: u32 = 0x3fc0;
+    match agg.type_name {
+        Some(t) => positional_type(&upper(src, t))
+            .filter(|&k| k == PositionKind::E6Pos || k == PositionKind::Pos),
+        None => (f.cartesian_written && !f.joints_written && f.seen & POINT_ONLY != 0)
+            .then_some(PositionKind::E6Pos),
+    }
+}
+
+/// How deep structures nested in structures are looked into for points.
+const MEMBER_DEPTH: usize = 8;
+
+/// The points held in the members of the literal `agg` of the structure `whole` (its name as
+/// written, `S1`, `SA[1]`), whose members are named after `prefix` (`S1.P`; `S1.A.P` a level
+/// down, `path` holding the fields between): each a position refused by every transform as held
+/// in a structure's member ([`crate::position::UnresolvedCause::Member`]). Names are only
+/// written for a point found: a data list's motion data (`LDAT`'s `CB {AUX_PT {…}}`) holds
+/// none. Out of line, as [`param_routine`]: only a declaration or assignment of a structure's
+/// literal gets here.
+#[inline(never)]
+fn member_points(
+    src: &[u8],
+    lines: &LineIndex,
+    (whole, prefix): (Span, Span),
+    path: &mut Vec<Span>,
+    agg: &Aggregate,
+    out: &mut Extracted,
+) {
+    for field in &agg.fields {
+        let ExprKind::Aggregate(inner) = &field.value.kind else {
+            continue;
+        };
+        path.push(field.name);
+        let f = read_fields(src, inner);
+        if let Some(kind) = member_point_kind(src, inner, &f) {
+            let mut name = name_text(prefix.slice(src));
+            for p in path.iter() {
+                name.push('.');
+                name.push_str(&name_text(p.slice(src)));
+            }
+            let read_elsewhere = f.read_elsewhere;
+            let p = build_position(lines, field.value.span, kind, Some(name), f);
+            let whole = name_text(whole.slice(src));
+            out.positions
+                .push_checking(held_in(p, &whole), src, read_elsewhere);
+            out.facts.holds_members = true;
+        } else if path.len() < MEMBER_DEPTH {
+            member_points(src, lines, (whole, prefix), path, inner, out);
+        }
+        path.pop();
+    }
+}
+
+/// `p`, marked as held in a member of the structure `whole`.
+fn held_in(mut p: Position, whole: &str) -> Position {
+    p.usage
+        .mark_unresolved_frame(crate::position::UnresolvedFrame {
+            at: crate::position::UseLine::new(p.line),
+            cause: crate::position::UnresolvedCause::Member(whole.to_owned()),
+        });
+    p
+}
+
+/// An aggregate `value` given to a member (`S1.P={X 100, …, E1 500}`, `SA[1].P={…}`,
+/// `S1.A={P {…}}`): the point it is, or the points its own members hold, held in the
+/// structure. Out of line, as [`param_routine`].
+#[inline(never)]
+fn member_assignment(
+    src: &[u8],
+    lines: &LineIndex,
+    target: &Expr,
+    value: &Expr,
+    agg: &Aggregate,
+    out: &mut Extracted,
+) {
+    let Some(whole) = member_read(src, target) else {
+        return;
+    };
+    let f = read_fields(src, agg);
+    if let Some(kind) = member_point_kind(src, agg, &f) {
+        let read_elsewhere = f.read_elsewhere;
+        let name = name_text(target.span.slice(src));
+        let p = build_position(lines, value.span, kind, Some(name), f);
+        let whole = name_text(whole.slice(src));
+        out.positions
+            .push_checking(held_in(p, &whole), src, read_elsewhere);
+        out.facts.holds_members = true;
+    } else {
+        let at = (whole, target.span);
+        member_points(src, lines, at, &mut Vec::new(), agg, out);
+    }
+}
+
+/// The structure whose member `value` reads whole (`S1` of `S1.P`, `SA[I]` of `SA[I].P`), when
+/// that is data of the program (not a system variable's, `$POS_ACT.X`).
+fn member_read(src: &[u8], value: &Expr) -> Option<Span> {
+    member_whole(value).filter(|w| w.slice(src).first() != Some(&b'$'))
+}
+
+/// The structure a member (`S1.P`, `SA[I].P`, `S1.A.P`) is part of: the span of `S1`, `SA[I]`;
+/// `None` when `e` is no member of a name or element.
+fn member_whole(e: &Expr) -> Option<Span> {
+    let ExprKind::Member(inner, _) = &e.kind else {
+        return None;
+    };
+    let mut whole: &Expr = inner;
+    while let ExprKind::Member(inner, _) = &whole.kind {
+        whole = inner;
+    }
+    match &whole.kind {
+        ExprKind::Name => Some(whole.span),
+        ExprKind::Index(base, _) if base.kind == ExprKind::Name => Some(whole.span),
+        _ => None,
+    }
 }
 
 /// `e` without the brackets around it: `XB` of `((XB))`.
@@ -2141,14 +2333,17 @@ fn target_refs(
             true
         }
         ExprKind::Paren(inner) => target_refs(src, lines, inner, refs, positions, notes),
-        // A member of a structure (`LIN S1.P`): not a target of its own, but it may hold a
-        // copy (`S1.P = XP1`), which the whole name's aliases carry; still warned about.
-        ExprKind::Member(..) => {
-            if let Some(name) = whole_name(src, e) {
-                refs.push(Ref::Named(name));
+        // A member of a structure (`LIN S1.P`, `LIN SA[I].P`): what a copy put there
+        // (`S1.P = XP1`), which the whole structure's aliases carry, and a literal it holds
+        // (`S1={P {X …}}`, refused as held in a member, `member_points`), which resolution
+        // reaches from the structure's name.
+        ExprKind::Member(..) => match member_read(src, e) {
+            Some(whole) => {
+                refs.push(Ref::Named(upper_name(src, whole)));
+                true
             }
-            false
-        }
+            None => false,
+        },
         _ => false,
     }
 }

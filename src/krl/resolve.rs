@@ -404,6 +404,33 @@ fn shared_by_module<'s>(
     out
 }
 
+/// Adds to each file's [`Facts::unfollowed`] the routines of its interrupts that an
+/// `INTERRUPT ON` anywhere in the program switches on (by number; `INTERRUPT ON` alone, or a
+/// number or declaration computed when the program runs, any): a declared interrupt is off until
+/// then, so the routine of one the program never switches on never runs there, and changes no
+/// motion's base.
+fn switched_on_interrupts(facts: &mut [Facts]) {
+    if facts.iter().all(|f| f.interrupts.is_empty()) {
+        return;
+    }
+    let on: Vec<Option<u32>> = facts
+        .iter()
+        .flat_map(|f| f.switched_on.iter().copied())
+        .collect();
+    let any = on.iter().any(Option::is_none);
+    for f in facts.iter_mut() {
+        for (number, routine) in std::mem::take(&mut f.interrupts) {
+            let runs = match number {
+                Some(n) => any || on.contains(&Some(n)),
+                None => !on.is_empty(),
+            };
+            if runs {
+                f.unfollowed.push(routine);
+            }
+        }
+    }
+}
+
 /// How many states a loop's top is followed from before the rest are joined into one.
 const LOOP_STATES: usize = 8;
 
@@ -432,9 +459,12 @@ struct Flow<'e> {
     state: State<'e>,
     forks: Vec<Fork<'e>>,
     loops: Vec<Loop<'e>>,
-    /// Every copy of the routine, joined, once a label a jump reaches has asked
+    /// Every copy of the routine, joined, once a label a jump back reaches has asked
     /// ([`routine_copies`]): found once a routine, not once a label.
     copies: Option<Aliases<'e>>,
+    /// The state each jump forward was made with, by the index of its label's event: what it
+    /// arrives there with.
+    jumped: Vec<(usize, State<'e>)>,
 }
 
 impl<'e> Flow<'e> {
@@ -443,6 +473,7 @@ impl<'e> Flow<'e> {
         self.forks.clear();
         self.loops.clear();
         self.copies = None;
+        self.jumped.clear();
     }
 
     /// Follows control event `ev`, the `i`th of `events`; returns the index of the event that
@@ -474,13 +505,27 @@ impl<'e> Flow<'e> {
                 }
             }
             Event::EndLoop => return self.end_of_body(i),
-            Event::Goto => self.state.dead = true,
+            Event::Goto { label } => {
+                // Forward, it arrives at its label with this state (from each pass of a loop
+                // it is in); a path already left (a jump after a jump) brings nothing.
+                if let Some(to) = label.filter(|&to| to > i && !self.state.dead) {
+                    self.jumped.push((to, self.state.clone()));
+                }
+                self.state.dead = true;
+            }
             Event::Label { jumps } if !jumps.is_empty() => {
-                // A jump arrives with what the names copied into held where it was made: any
-                // copy of the routine, joined (rare: a label a `GOTO` names).
+                if jumps.iter().any(|&from| from < i) {
+                    self.arrive(i);
+                }
+                // A jump back arrives with what the names copied into held where it was made:
+                // any copy of the routine, joined (rare: a label a `GOTO` names).
+                let back: Vec<usize> = jumps.iter().copied().filter(|&from| from > i).collect();
+                if back.is_empty() {
+                    return i + 1;
+                }
                 let copies = self.copies.get_or_insert_with(|| routine_copies(events, i));
                 self.state.aliases.absorb(copies);
-                if jumps_keep_state(events, i, jumps, changes) {
+                if jumps_keep_state(events, i, &back, changes) {
                     return i + 1;
                 }
                 self.state.dead = false;
@@ -496,6 +541,26 @@ impl<'e> Flow<'e> {
             _ => {}
         }
         i + 1
+    }
+
+    /// At the label of event `i`, which jumps forward reach: the state is the join of what each
+    /// brings and of the path that falls through, when that is not left by a jump (a forward
+    /// jump's state is exactly what arrives: the base, tool and IPO mode it was made with, and
+    /// what its copies hold, where the label made them unknown and took every copy of the
+    /// routine). Unreached, the label stays left.
+    fn arrive(&mut self, i: usize) {
+        let mut arriving: Vec<State<'e>> = self
+            .jumped
+            .iter()
+            .filter(|(to, _)| *to == i)
+            .map(|(_, s)| s.clone())
+            .collect();
+        if !self.state.dead {
+            arriving.push(std::mem::take(&mut self.state));
+        }
+        if let Some(state) = join(&arriving) {
+            self.state = state;
+        }
     }
 
     /// The end of a loop's body at event `i`: back to its top from a new state, or on after it.
@@ -567,8 +632,8 @@ fn routine_copies(events: &[Event], at: usize) -> Aliases<'_> {
     out
 }
 
-/// Whether the label at event `at` is reached by its `GOTO`s (`jumps`: the index the next event
-/// has at each) only with the state program order brings there: each jumps back, and the events
+/// Whether the label at event `at` is reached by its `GOTO`s back (`jumps`: the index the next
+/// event has at each) only with the state program order brings there: each jumps back, and the events
 /// between the label and it change no base, tool or staged FDAT (no setting, no call of a
 /// routine that `changes` them, no other label a jump reaches), close or continue no block
 /// opened before the label, and leave no loop open (a retry: `TOP: … IF NOT OK THEN GOTO TOP
@@ -588,9 +653,9 @@ fn jumps_keep_state(
         let (mut blocks, mut loops) = (0usize, 0usize);
         let kept = between.iter().all(|ev| match ev {
             Event::Set(_) | Event::Reset(_) => false,
-            Event::Call(name) => !changes(name),
+            Event::Call { name, .. } => !changes(name),
             Event::Label { jumps } => jumps.is_empty(),
-            Event::Alias { .. } | Event::Motion { .. } | Event::Goto => true,
+            Event::Alias { .. } | Event::Motion { .. } | Event::Goto { .. } => true,
             Event::Branch(BranchEvent::If | BranchEvent::Switch) => {
                 blocks += 1;
                 true
@@ -766,7 +831,7 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                         current = name.as_deref();
                         flow.reset();
                     }
-                    Event::Call(name) => {
+                    Event::Call { name, .. } => {
                         if let Some(exit) = exits.of(module, name) {
                             exit.apply_to(&mut flow.state);
                         }
@@ -777,7 +842,7 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                     | Event::EndLoop
                     | Event::Exit
                     | Event::Label { .. }
-                    | Event::Goto => {
+                    | Event::Goto { .. } => {
                         i = flow.control(i, ev, &f.events, &changes);
                         continue;
                     }
@@ -793,6 +858,139 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
         exits.by_routine = next;
     }
     exits
+}
+
+/// KSS's own routines, which programs call without defining them and which set no base, tool or
+/// `FDAT_ACT`: messages (`MsgLib`), errors, strings, channels and pulses, torque and collision
+/// monitoring, and what KSS's own `System/` modules call (the PLC handshake `P00`, the torque
+/// monitoring `TQM_…` of `bas.src`, the mastering test `MASREF…` of `masref_main.src`), which
+/// a robot tree's run leaves out. (`BAS` is read for what it sets.) Sorted.
+const KSS_ROUTINES: &[&str] = &[
+    "CAST_FROM",
+    "CAST_TO",
+    "CCLOSE",
+    "CIOCTL",
+    "CLEAR_KRLMSG",
+    "COPEN",
+    "CREAD",
+    "CWAIT",
+    "CWRITE",
+    "ERR_CLEAR",
+    "ERR_RAISE",
+    "MASREFBACKG1",
+    "MASREFBACKG2",
+    "MASREFBACKG3",
+    "MASREFSTARTG1",
+    "MASREFSTARTG2",
+    "MASREFSTARTG3",
+    "MSGDIALOG",
+    "MSGLOOP",
+    "MSGNOTIFY",
+    "MSGQUIT",
+    "MSGSTATE",
+    "ON_ERROR_PROCEED",
+    "P00",
+    "PULSE",
+    "RESET_CD_PARAMS",
+    "RESET_TORQUE_LIMITS",
+    "SET_CD_PARAMS",
+    "SET_KRLDLG",
+    "SET_KRLMSG",
+    "SET_TORQUE_LIMITS",
+    "SREAD",
+    "STRCLEAR",
+    "STRCOPY",
+    "SWRITE",
+    "TQM_FIFO_READ",
+    "TQM_INI",
+];
+
+/// Warns once about each routine the program calls that none of its files defines (and that
+/// is not one of [`KSS_ROUTINES`]), at its first call, with how many calls there are: program
+/// order takes such a call as leaving `$BASE`, `$TOOL` and `FDAT_ACT` as they were, which only
+/// the routine's definition can confirm. A call only matters in a routine that moves, or one
+/// another calls (whose exit its caller applies): one in a routine that does neither (a submit
+/// interpreter's `sps.sub`) is not warned about.
+fn warn_unknown_routines(
+    files: &mut [ParsedFile],
+    events: &[Vec<Event>],
+    exits: &Exits,
+    modules: &Modules,
+) {
+    // Every routine name a call names: its exit matters to the caller.
+    let called: std::collections::HashSet<&str> = events
+        .iter()
+        .flatten()
+        .filter_map(|e| match e {
+            Event::Call { name, .. } => Some(name.as_str()),
+            _ => None,
+        })
+        .collect();
+    // Name → (file, place of the first call, how many calls), in the order first called.
+    let mut unknown: Vec<(&str, usize, crate::syntax::Span, usize)> = Vec::new();
+    for (fi, evs) in events.iter().enumerate() {
+        let module = modules.of(fi);
+        // Each routine's events, and its name (on the `Reset` that starts them).
+        let mut at = 0;
+        while at < evs.len() {
+            let name = match evs.get(at) {
+                Some(Event::Reset(name)) => {
+                    at += 1;
+                    name.as_deref()
+                }
+                _ => None,
+            };
+            let len = evs
+                .get(at..)
+                .unwrap_or_default()
+                .iter()
+                .take_while(|e| !matches!(e, Event::Reset(_)))
+                .count();
+            let routine = evs.get(at..at + len).unwrap_or_default();
+            at += len;
+            let moves = routine.iter().any(|e| matches!(e, Event::Motion { .. }));
+            if !moves && !name.is_some_and(|n| called.contains(n)) {
+                continue;
+            }
+            for ev in routine {
+                let Event::Call { name, at } = ev else {
+                    continue;
+                };
+                if exits.of(module, name).is_some()
+                    || KSS_ROUTINES.binary_search(&name.as_str()).is_ok()
+                {
+                    continue;
+                }
+                match unknown.iter_mut().find(|u| u.0 == name.as_str()) {
+                    Some(u) => u.3 += 1,
+                    None => unknown.push((name.as_str(), fi, *at, 1)),
+                }
+            }
+        }
+    }
+    for (_, fi, at, calls) in unknown {
+        let Some(file) = files.get_mut(fi) else {
+            continue;
+        };
+        let more = match calls {
+            1 => String::new(),
+            n => format!(" (the first of {n} calls)"),
+        };
+        let written = crate::syntax::latin1(at.slice(&file.source));
+        file.diagnostics.push(
+            Diagnostic::warning(
+                at,
+                format!(
+                    "`{written}` is called here{more}, but none of the files given defines it: trackfix takes it as leaving $BASE, $TOOL and FDAT_ACT as they were for the motions after it"
+                ),
+            )
+            .with_hint(format!(
+                "give the module or folder that defines `{written}` with the program (or the robot's whole tree), so that what it sets is followed"
+            ))
+            .shaping_transforms(),
+        );
+        file.diagnostics.sort_by_key(|d| d.span.start);
+    }
 }
 
 /// The [`Exit`] of every routine, by module and name, and the modules whose routines of a
@@ -922,7 +1120,9 @@ impl Modules {
                         .map(|i| {
                             f.positions.name(i).is_some_and(|name| {
                                 let key = name_key(name);
-                                globals.contains(key.split('[').next().unwrap_or_default())
+                                // `S1.P` is seen where the structure `S1` is.
+                                let whole = key.split(['[', '.']).next();
+                                globals.contains(whole.unwrap_or_default())
                             })
                         })
                         .collect(),
@@ -971,6 +1171,7 @@ fn branch<'e>(state: &mut State<'e>, forks: &mut Vec<Fork<'e>>, b: BranchEvent) 
 /// an assignment in the program may repeat.
 pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_frames: &[FrameDecl]) {
     let modules = Modules::new(files);
+    switched_on_interrupts(facts);
     let shared_copies: Vec<Vec<SharedCopy>> = facts
         .iter_mut()
         .map(|f| std::mem::take(&mut f.shared_copies))
@@ -1076,6 +1277,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
         .iter_mut()
         .map(|f| std::mem::take(&mut f.events))
         .collect();
+    warn_unknown_routines(files, &events, &exits, &modules);
     // A call passes names to a routine of the program that takes parameters.
     let passes =
         facts.iter().any(|f| !f.calls.is_empty()) && facts.iter().any(|f| !f.routines.is_empty());
@@ -1106,6 +1308,12 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
         file.positions
             .extend(std::mem::take(&mut fact.candidates), &file.source);
     }
+    // The points held in structures' members, reached from the structure's name.
+    let members = if facts.iter().any(|f| f.holds_members) {
+        Members::of(files)
+    } else {
+        Members::default()
+    };
     // Per file, the motions to warn about: a Cartesian target and no base.
     let mut unresolved: Vec<Vec<crate::syntax::Span>> = vec![Vec::new(); files.len()];
     {
@@ -1143,7 +1351,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                         // call of this routine or of another.
                         flow.state.aliases = entry.clone();
                     }
-                    Event::Call(name) => {
+                    Event::Call { name, .. } => {
                         if let Some(exit) = exits.of(module, name) {
                             exit.apply_to(&mut flow.state);
                         }
@@ -1155,7 +1363,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                     | Event::EndLoop
                     | Event::Exit
                     | Event::Label { .. }
-                    | Event::Goto => {
+                    | Event::Goto { .. } => {
                         i = flow.control(i - 1, ev, &events, &changes);
                     }
                     Event::Alias {
@@ -1226,6 +1434,9 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                                     }
                                 }
                             }
+                        }
+                        if !members.is_empty() {
+                            members.extend(&mut folded);
                         }
                         let u = crate::resolve::Use {
                             line: *line,
@@ -1371,6 +1582,71 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
     crate::resolve::mark_run_time(&mut shared, &NAMING);
     drop(shared);
     mark_assigned_data(files, facts, config_frames);
+}
+
+/// The points held in structures' members (`S1.P` of `DECL SPT S1={P {X …}, K 1}`,
+/// [`UnresolvedCause::Member`]), by the structure they are in: a motion to the structure's
+/// member (`LIN S1.P`), or to a copy of it (`XC = S1.P`, `S2 = S1`), reaches them through the
+/// structure's name. Every transform refuses them; reached, they are used as the points
+/// motions reach are (their lines and bases shown, a `$config.dat`'s kept).
+#[derive(Default)]
+struct Members {
+    /// Structure (`S1`, `SA[1]`, upper case) → the names of the points its members hold.
+    of: HashMap<String, Vec<String>>,
+    /// Array of structures (`SA`) → the names of the points its elements' members hold.
+    arrays: HashMap<String, Vec<String>>,
+}
+
+impl Members {
+    fn of(files: &[ParsedFile]) -> Members {
+        let mut out = Members::default();
+        for f in files {
+            for (i, u) in f.positions.usages().enumerate() {
+                let Some(UnresolvedCause::Member(whole)) = u.unresolved_frame().map(|u| &u.cause)
+                else {
+                    continue;
+                };
+                let (Some(name), whole) = (f.positions.name(i), name_key(whole)) else {
+                    continue;
+                };
+                let name = name_key(name);
+                if let Some((array, _)) = whole.split_once('[') {
+                    out.arrays
+                        .entry(array.to_owned())
+                        .or_default()
+                        .push(name.clone());
+                }
+                out.of.entry(whole).or_default().push(name);
+            }
+        }
+        out
+    }
+
+    fn is_empty(&self) -> bool {
+        self.of.is_empty()
+    }
+
+    /// Adds to `folded` (a motion's names) the points held in the members of each structure
+    /// among them: of the element named, of every element for one chosen at run time (`SA[I]`)
+    /// or for the whole array (`SA`).
+    fn extend<'m>(&'m self, folded: &mut Vec<&'m str>) {
+        for k in 0..folded.len() {
+            let Some(&name) = folded.get(k) else { break };
+            let key = name_key(name);
+            let array = match key.split_once('[') {
+                Some((array, _)) if computed_index(&key) => Some(array),
+                Some(_) => None,
+                None => Some(key.as_str()),
+            };
+            let found = self.of.get(key.as_str()).into_iter().flatten();
+            let elements = array.and_then(|a| self.arrays.get(a)).into_iter().flatten();
+            for member in found.chain(elements) {
+                if !folded.contains(&member.as_str()) {
+                    folded.push(member);
+                }
+            }
+        }
+    }
 }
 
 /// A Cartesian point the program never names again takes the base and tool of its inline
@@ -1947,6 +2223,14 @@ fn shared_facts<'a>(
 mod tests {
     use crate::position::{FrameKind, ParsedFile};
     use std::path::Path;
+
+    /// `KSS_ROUTINES` is searched by bisection.
+    #[test]
+    fn kss_routines_are_sorted_and_upper_case() {
+        let names = super::KSS_ROUTINES;
+        assert!(names.windows(2).all(|w| w[0] < w[1]), "{names:?}");
+        assert!(names.iter().all(|n| *n == n.to_ascii_uppercase()));
+    }
 
     /// Each position's base and tool, as resolved.
     fn bases_and_tools(f: &ParsedFile) -> Vec<(Option<&str>, Option<&str>)> {

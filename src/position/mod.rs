@@ -515,6 +515,12 @@ pub enum UnresolvedCause {
     /// not `:IN`, or returned by a function): how, in words (``returned by `GETPT` ``). The
     /// motions that move to what the callers get are not tied to the target.
     HandedBack(String),
+    /// The target is a literal held in a member of a KRL structure (`DECL SPT S1={P {X …}, K
+    /// 1}`, `S1.P={X …}`): the structure's name as written (`S1`, `SA[1]`). A structure's
+    /// values travel where trackfix does not follow a member (a copy of the whole structure,
+    /// an array of structures chosen at run time, a parameter, another module), so the base
+    /// the robot moves to it in is not known.
+    Member(String),
 }
 
 /// The line of a use, and the file it is in when that is not the used target's own (a KRL

@@ -220,6 +220,7 @@ pub(crate) fn wobj_of(
                     "move to it where it is declared, with the {frame} set there, or correct it by hand"
                 ),
             ),
+            UnresolvedCause::Member(whole) => structure_member(p, whole),
             UnresolvedCause::Shadowed(name) => Why::new(
                 RefusalKind::UnresolvedWorkObject,
                 format!(
@@ -248,6 +249,20 @@ pub(crate) fn wobj_of(
             words.frame_of_a_motion,
         )),
     }
+}
+
+/// The refusal of a KRL point held in a member of the structure `whole` (as written): checked
+/// before any other, since whatever the motions trackfix sees say, the structure may carry the
+/// point to one it does not.
+fn structure_member(p: &Position, whole: &str) -> Why {
+    Why::new(
+        RefusalKind::StructureMember,
+        format!(
+            "{} is held in a member of the structure `{whole}`: trackfix does not follow a structure's members everywhere the program may take them (a copy of the whole structure, an array of structures, a parameter, another module), so which base the robot moves to it in is not known",
+            describe(p)
+        ),
+        "declare the point as an E6POS of its own and move to it (copy it into the member where the structure needs it), or correct it by hand",
+    )
 }
 
 /// The words of `program`'s language (an empty program has none: RAPID's, as the cell file's
@@ -506,6 +521,11 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
     let refuse = |kind, msg: String, hint: &str| Some(Why::new(kind, msg, hint));
     if !p.kind.is_cartesian() {
         return Some(joint_target(p));
+    }
+    if let Some(u) = p.usage.unresolved_frame()
+        && let UnresolvedCause::Member(whole) = &u.cause
+    {
+        return Some(structure_member(p, whole));
     }
     let written_q = p.cartesian.as_ref().and_then(|c| c.written_quaternion());
     if written_q.is_some_and(|q| q.iter().all(|v| *v == 0.0)) {

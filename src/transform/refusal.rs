@@ -69,6 +69,11 @@ pub enum RefusalKind {
     /// correction. Reported as a note, never a refusal (so nothing to keep).
     #[value(skip)]
     NotAPosition,
+    /// A KRL point held in a member of a structure (`DECL SPT S1={P {X …, E1 500}, K 1}`): the
+    /// structure's values travel where trackfix does not follow a member (a copy of the whole
+    /// structure, an array of structures, a parameter, another module), so the base the robot
+    /// moves to it in is not known.
+    StructureMember,
     /// With the robot's kinematics: the target is out of reach, outside the joint limits or in
     /// another configuration than written, before or after the transform; a target whose move
     /// would turn an axis by more than 5° (axes 4 and 6, near the wrist singularity); or its

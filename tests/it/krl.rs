@@ -1583,11 +1583,12 @@ fn an_fdat_the_program_changes_leaves_the_base_it_applies_unknown() {
     }
 }
 
-/// trackfix does not follow `GOTO`: at a label the base may be whatever the jump brought, so a
-/// point moved to after a label, before the base is set again, is refused as moved with a base
-/// that cannot be resolved (forward: `GOTO SKIP` over `$BASE=BASE_DATA[2]`; backward: a loop
-/// made of a label and a jump back). Set again after the label, the base is known; a label no
-/// `GOTO` of its routine names changes nothing.
+/// A label a jump back reaches may be reached with whatever base the jump brings, so a point
+/// moved to after it, before the base is set again, is refused as moved with a base that
+/// cannot be resolved (a loop made of a label and a jump back); so is one after a label a jump
+/// forward and the path falling through reach with two bases. A jump forward over
+/// `$BASE=BASE_DATA[2]` alone brings its own base. Set again after the label, the base is
+/// known; a label no `GOTO` of its routine names changes nothing.
 #[test]
 fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
     let base_of = |body: &str| {
@@ -1598,7 +1599,10 @@ fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
         )
     };
     let forward = "  $BASE=BASE_DATA[1]\n  GOTO SKIP\n  $BASE=BASE_DATA[2]\n  SKIP:\n  LIN XP1\n";
-    assert_eq!(base_of(forward), (None, Some(6)));
+    assert_eq!(base_of(forward), (Some("BASE_DATA[1]".to_owned()), None));
+    let either = "  $BASE=BASE_DATA[1]\n  IF $IN[1] THEN\n    GOTO SKIP\n  ENDIF\n  \
+                  $BASE=BASE_DATA[2]\n  SKIP:\n  LIN XP1\n";
+    assert_eq!(base_of(either), (None, Some(8)));
     let backward = "  $BASE=BASE_DATA[1]\n  TOP:\n  LIN XP1\n  $BASE=BASE_DATA[2]\n  IF $IN[1] THEN\n    GOTO TOP\n  ENDIF\n";
     assert_eq!(base_of(backward), (None, Some(4)));
     // A label no jump of its routine names changes nothing.
@@ -1627,8 +1631,9 @@ fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
     ] {
         assert!(base_of(jump).1.is_some(), "{jump}");
     }
-    // An FDAT staged before a jump forward over another: the one a `BAS` applies after the
-    // label is not known.
+    // An FDAT staged before a jump forward over another, which the path falling through
+    // stages: the one a `BAS` applies after the label is not known. Jumped over, it is the
+    // one staged before.
     let fdats = DAT_XP1.replace(
         "ENDDAT",
         "DECL FDAT FP1={TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE}\n\
@@ -1641,13 +1646,16 @@ fn a_label_leaves_the_base_unknown_until_it_is_set_again() {
             usage.unresolved_frame().is_some(),
         )
     };
-    let skipped =
-        "  FDAT_ACT=FP1\n  GOTO SKIP\n  FDAT_ACT=FP2\n  SKIP:\n  BAS(#CP_PARAMS,2)\n  LIN XP1\n";
+    let skipped = "  FDAT_ACT=FP1\n  IF $IN[1] THEN\n    GOTO SKIP\n  ENDIF\n  FDAT_ACT=FP2\n  SKIP:\n  \
+                   BAS(#CP_PARAMS,2)\n  LIN XP1\n";
     assert_eq!(staged(skipped), (None, true));
     assert_eq!(
         staged(&skipped.replace("GOTO SKIP", "; no jump")),
         (Some("BASE_DATA[2]".to_owned()), false)
     );
+    let over =
+        "  FDAT_ACT=FP1\n  GOTO SKIP\n  FDAT_ACT=FP2\n  SKIP:\n  BAS(#CP_PARAMS,2)\n  LIN XP1\n";
+    assert_eq!(staged(over), (Some("BASE_DATA[1]".to_owned()), false));
 }
 
 /// A copy (`XC=XP1`) moves to what it copies until the program gives it another whole value
@@ -1794,6 +1802,18 @@ fn a_function_or_interrupt_that_changes_the_base_leaves_it_unknown() {
     let uncalled = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  LIN XP1\nEND\n\
                     DEFFCT BOOL PREP( )\n  $BASE=BASE_DATA[2]\n  RETURN TRUE\nENDFCT\n";
     assert_eq!(cause_of(uncalled), None);
+    // Nor does the routine of an interrupt the program declares but never switches on (before,
+    // its point was refused); switched on by its number, or all at once, it runs.
+    let off = interrupt.replace("  INTERRUPT ON 3\n", "  INTERRUPT OFF 3\n");
+    assert_eq!(cause_of(&off), None);
+    assert_eq!(
+        cause_of(&interrupt.replace("INTERRUPT ON 3", "INTERRUPT ON 4")),
+        None
+    );
+    for on in ["INTERRUPT ON", "INTERRUPT ON N"] {
+        let src = interrupt.replace("INTERRUPT ON 3", on);
+        assert_eq!(cause_of(&src), changed("SETB"), "{on}");
+    }
 }
 
 /// A data list with `XP1` and a copy `XC` of it, whole or an array.
@@ -1996,6 +2016,213 @@ fn a_component_copied_or_a_copy_of_itself_keeps_the_source() {
     );
 }
 
+/// A copy read out of a structure's member (`XC=S1.P`, `XC=SA[I].P`), or written into a member
+/// of an element of an array of structures (`SA[1].P=XP1`), carries what the member holds: the
+/// point copied there is used in the base of the motion to the copy or to the member. Before,
+/// `XC=S1.P` gave `XC` a value of its own and `SA[1].P=XP1` was no copy, and `XP1` was
+/// corrected in its own motion's base while the robot moved to it in another.
+#[test]
+fn a_copy_through_a_structures_member_reaches_its_source() {
+    let bases = |body: &str, to: &str| {
+        let src = format!(
+            "DEF cell( )\n  DECL SPT S1,S2,SA[2]\n  DECL E6POS XC\n  DECL INT I\n  \
+             $BASE=BASE_DATA[1]\n  LIN XP1\n{body}  $BASE=BASE_DATA[2]\n  LIN {to}\nEND\n"
+        );
+        bases_of_xp1(&src, DAT_XP1)
+    };
+    let two = (
+        Some("BASE_DATA[1]".to_owned()),
+        vec!["BASE_DATA[2]".to_owned()],
+    );
+    for (body, to) in [
+        ("  S1.P=XP1\n  XC=S1.P\n", "XC"),
+        ("  S1.P=XP1\n  S2=S1\n  XC=S2.P\n", "XC"),
+        ("  SA[1].P=XP1\n", "SA[I].P"),
+        ("  SA[1].P=XP1\n  XC=SA[I].P\n", "XC"),
+        ("  SA[I].P=XP1\n  XC=SA[2].P\n", "XC"),
+    ] {
+        assert_eq!(bases(body, to), two, "{body}LIN {to}");
+    }
+    // Another element, or the member given another value after the read: not `XP1`.
+    let one = (Some("BASE_DATA[1]".to_owned()), Vec::new());
+    assert_eq!(bases("  SA[1].P=XP1\n", "SA[2].P"), one);
+    assert_eq!(bases("  S1.P=XP1\n  XC=S1.P\n  XC=$POS_ACT\n", "XC"), one);
+}
+
+/// A point written in a structure's literal (`DECL SPT S1={P {X …, E1 1500.0}, K 1}`, an element
+/// of an array of structures, a member given a literal `S2.P={…}`, a structure's in a structure)
+/// is refused by every transform as `structure-member`, by name at its literal, whether the
+/// program moves to the member or to a copy of it: a structure carries its members where
+/// trackfix does not follow them (a copy of the whole structure, an array of structures chosen
+/// at run time, a parameter, another module). Before, such a point was no target at all: `correct` exited 0 with the files
+/// unchanged and at most a warning that spoke of a composed frame. A member that is a frame
+/// (`CM` of a load) or per-axis values (`AX` of jerk limits) is no point and stays out.
+#[test]
+fn a_point_held_in_a_structures_member_is_refused_by_name() {
+    let point = |fields: &str| {
+        format!("{{X 410.0,Y -95.0,Z 230.0,A 180.0,B 0.0,C 180.0,{fields}E1 1500.0}}")
+    };
+    let dat = format!(
+        "DEFDAT cell\n\
+         STRUC SPT E6POS P, INT K\n\
+         DECL SPT S1={{P {},K 1}}\n\
+         DECL SPT SA[2]\n\
+         SA[2]={{P {},K 2}}\n\
+         DECL SPT S2\n\
+         S2.P={}\n\
+         DECL LOAD L1={{M 5.0,CM {{X 1.0,Y 2.0,Z 3.0,A 0.0,B 0.0,C 0.0}}}}\n\
+         DECL JERK_STRUC J1={{CP 500.0,AX {{A1 1000.0,A2 1000.0,E1 1000.0}}}}\n\
+         DECL OUTER O1={{N 2,A {{P {},K 1}}}}\n\
+         DECL E6POS XC\n\
+         DECL E6POS XP8={}\n\
+         ENDDAT\n",
+        point("S 6,T 27,"),
+        point("S 6,T 27,"),
+        point("S 6,T 27,"),
+        point(""),
+        point("S 6,T 27,"),
+    );
+    let src = "DEF cell( )\n  DECL INT I\n  BAS(#INITMOV,0)\n  BAS(#BASE,1)\n  BAS(#TOOL,1)\n  \
+               XC=S1.P\n  LIN XC\n  I=2\n  LIN SA[I].P\n  LIN S2.P\n  LIN XP8\nEND\n";
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("cell.dat"), &dat).unwrap();
+    std::fs::write(dir.path().join("cell.src"), src).unwrap();
+    let src = dir.path().join("cell.src");
+    let program = krl::load_program(&src, &LoadOptions::default()).unwrap();
+    let names: Vec<String> = program
+        .files
+        .iter()
+        .flat_map(|f| f.positions())
+        .filter_map(|p| p.name.map(|n| n.to_string()))
+        .collect();
+    assert_eq!(names, ["S1.P", "SA[2].P", "S2.P", "O1.A.P", "XP8"]);
+
+    let src = src.to_str().unwrap();
+    let args = [
+        "correct",
+        src,
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "k1",
+        "-v",
+    ];
+    let (code, _, err) = crate::support::trackfix(&args);
+    assert_eq!(code, 3, "{err}");
+    for (at, name, whole) in [
+        ("3:16", "S1.P", "S1"),
+        ("5:10", "SA[2].P", "SA[2]"),
+        ("7:6", "S2.P", "S2"),
+        ("10:25", "O1.A.P", "O1"),
+    ] {
+        assert!(
+            err.contains(&format!(
+                "cell.dat:{at}: error: E6POS `{name}` is held in a member of the structure `{whole}`"
+            )),
+            "{name}: {err}"
+        );
+    }
+    assert_eq!(err.matches("[structure-member]").count(), 4, "{err}");
+    assert!(!err.contains("composed frame"), "{err}");
+
+    let out = dir.path().join("out");
+    let mut kept = args.to_vec();
+    kept.extend([
+        "--keep",
+        "structure-member",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    let (code, _, err) = crate::support::trackfix(&kept);
+    assert_eq!(code, 4, "{err}");
+    let written = std::fs::read_to_string(out.join("cell.dat")).unwrap();
+    let kept_lines: Vec<&str> = dat.lines().filter(|l| !l.contains("XP8")).collect();
+    for line in kept_lines {
+        assert!(written.contains(line), "{line}: {written}");
+    }
+    assert!(
+        !written.contains(&format!("XP8={}", point("S 6,T 27,"))),
+        "{written}"
+    );
+}
+
+/// A call of a routine none of the files given defines (`setb()`, whose module was not named
+/// with the program) is taken as leaving $BASE, $TOOL and FDAT_ACT as they were: that is said
+/// once per routine, at its first call, with how many calls there are, and `correct` shows it.
+/// Before, nothing was said and `XP1` was corrected in base 1 whatever `setb` sets. KSS's own
+/// routines (`MsgNotify`, `PULSE`), routines the program defines, and a call in a routine that
+/// neither moves nor is called (whose exit nothing applies) are not warned about.
+#[test]
+fn a_call_of_a_routine_no_file_defines_is_warned_about_once() {
+    let src = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  setb()\n  LIN XP1\n  \
+               SETB()\n  MsgNotify(\"done\")\n  PULSE($OUT[1],TRUE,0.5)\n  GRIP()\n  PREP()\nEND\n\
+               DEF GRIP( )\n  $OUT[2]=TRUE\nEND\n\
+               DEF PREP( )\n  settool()\nEND\n\
+               DEF IDLE( )\n  H50()\nEND\n";
+    let program = krl::load_program_from_sources(
+        vec![
+            (PathBuf::from("cell.src"), src.as_bytes().to_vec()),
+            (PathBuf::from("cell.dat"), DAT_XP1.as_bytes().to_vec()),
+        ],
+        &with_sample_config(),
+    )
+    .unwrap();
+    let f = &program.files[0];
+    let warned: Vec<(usize, usize, &str)> = f
+        .diagnostics
+        .iter()
+        .map(|d| {
+            let (line, col) = f.lines.line_col(d.span.start);
+            (line, col, d.message.as_str())
+        })
+        .collect();
+    let said = "but none of the files given defines it: trackfix takes it as leaving $BASE, $TOOL and FDAT_ACT as they were for the motions after it";
+    assert_eq!(
+        warned,
+        [
+            (
+                4,
+                3,
+                format!("`setb` is called here (the first of 2 calls), {said}").as_str()
+            ),
+            (16, 3, format!("`settool` is called here, {said}").as_str()),
+        ]
+    );
+    assert!(f.diagnostics.iter().all(|d| d.shapes_transforms));
+    assert_eq!(xp1_of(&program).usage.wobj.as_deref(), Some("BASE_DATA[1]"));
+
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("cell.src"), src).unwrap();
+    // A point in the sample robot's reach.
+    std::fs::write(
+        dir.path().join("cell.dat"),
+        "DEFDAT cell\nDECL E6POS XP1={X 410.0,Y -95.0,Z 230.0,A 180.0,B 0.0,C 180.0,S 6,T 27,E1 1500.0}\nENDDAT\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let (code, _, err) = crate::support::trackfix(&[
+        "correct",
+        dir.path().join("cell.src").to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "k1",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains(&format!(
+            "cell.src:4:3: warning: `setb` is called here (the first of 2 calls), {said}"
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains("help: give the module or folder that defines `setb` with the program"),
+        "{err}"
+    );
+}
+
 /// A value handed back through the routine's own copy (`R=XP1` then `RETURN R`, or `P=R` into
 /// an `:OUT` parameter) is refused as handing back `XP1` is; before, `R` named no point and
 /// `XP1` was corrected in its own motion's base.
@@ -2065,6 +2292,77 @@ fn a_goto_ends_its_path_and_a_jumped_label_gets_the_routines_copies() {
             vec!["BASE_DATA[2]".to_owned()]
         )
     );
+}
+
+/// A jump forward arrives at its label with the state it was made with: there it is joined with
+/// the path that falls through (not left by a jump of its own), as a block's end joins its
+/// branches. A point copied before the jump and another copied on the way it skips may each be
+/// what the copy holds after the label, and are used in the base the two paths agree on; a
+/// branch that set `$IPO_MODE=#TCP` and jumped brings the stationary tool to the motions
+/// after the label. Before, the label made the base unknown (every point moved to after it
+/// was refused), took every copy of its routine (one made after the label too), and kept the
+/// falling-through path's IPO mode, so a point moved to with the stationary tool that way was
+/// corrected in the base.
+#[test]
+fn a_forward_jump_brings_its_state_to_the_label() {
+    let dat = "DEFDAT cell\n\
+        DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        DECL E6POS XP2={X 410.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        ENDDAT\n";
+    // Per point: (bases, a motion with an unresolved base, a stationary tool).
+    let used = |body: &str| {
+        let src = format!(
+            "DEF cell( )\n  DECL E6POS XC\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  \
+             LIN XP1\n  LIN XP2\n{body}END\n"
+        );
+        let p = krl::load_program_from_sources(
+            vec![
+                (PathBuf::from("cell.src"), src.into_bytes()),
+                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
+            ],
+            &with_sample_config(),
+        )
+        .unwrap();
+        p.files
+            .iter()
+            .flat_map(|f| f.positions())
+            .map(|t| {
+                (
+                    crate::support::sorted_work_objects(&t.usage),
+                    t.usage.unresolved_frame().is_some(),
+                    t.usage.stationary_tool(),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    let base = |n: &[u32], unresolved: bool| {
+        (
+            n.iter()
+                .map(|n| format!("BASE_DATA[{n}]"))
+                .collect::<Vec<_>>(),
+            unresolved,
+            false,
+        )
+    };
+    // Both paths in base 1: each point the copy may hold is used there, and resolved.
+    let skipped = "  XC=XP1\n  IF $IN[1] THEN\n    GOTO L1\n  ENDIF\n  XC=XP2\n  L1:\n  LIN XC\n";
+    assert_eq!(used(skipped), [base(&[1], false), base(&[1], false)]);
+    // Jumped over unconditionally: only what the jump brings (base 1, `XP1`), not the base
+    // and copy of the skipped code.
+    let over = "  XC=XP1\n  GOTO L1\n  XC=XP2\n  $BASE=BASE_DATA[2]\n  L1:\n  LIN XC\n";
+    assert_eq!(used(over), [base(&[1], false), base(&[1], false)]);
+    // In another base after the label: each copy the paths bring is used in both; a copy made
+    // after the label is not what the motion before it moves to.
+    let after = "  XC=XP1\n  IF $IN[1] THEN\n    GOTO L1\n  ENDIF\n  L1:\n  $BASE=BASE_DATA[2]\n  \
+                 LIN XC\n  XC=XP2\n";
+    assert_eq!(used(after), [base(&[1, 2], false), base(&[1], false)]);
+    // The two paths in two bases: unknown after the label.
+    let two = "  IF $IN[1] THEN\n    GOTO L1\n  ENDIF\n  $BASE=BASE_DATA[2]\n  L1:\n  LIN XP1\n";
+    assert_eq!(used(two), [base(&[1], true), base(&[1], false)]);
+    // A stationary tool brought by the jump.
+    let tcp = "  IF $IN[1] THEN\n    $IPO_MODE=#TCP\n    GOTO L1\n  ENDIF\n  L1:\n  \
+               $BASE=BASE_DATA[1]\n  LIN XP1\n";
+    assert_eq!(used(tcp)[0], (vec!["BASE_DATA[1]".to_owned()], false, true));
 }
 
 /// KRL modules named together from one folder are one program, as a KSS tree's `Program`
