@@ -558,6 +558,21 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
             "it moves with the work piece, not the track: correct it by hand",
         );
     }
+    // Like two work objects: no one correction serves both values, where a mirror in the
+    // work object's own plane is the same in each.
+    if let Some(t) = p.usage.two_values() {
+        return refuse(
+            RefusalKind::TwoWorkObjects,
+            format!(
+                "{what} is moved to in two values of {} `{}`: as declared ({}) and as the program gives it ({}), since the motion on {} may run before the assignment",
+                words.frame, t.frame, t.declared, t.given, t.motion
+            ),
+            &format!(
+                "give `{}` its value before every motion to the target (or declare it with that value), or move to one target per value",
+                t.frame
+            ),
+        );
+    }
     if !p.usage.other_wobjs().is_empty() {
         let first = p.usage.wobj.as_deref().unwrap_or("?");
         let others = p.usage.other_wobjs();
