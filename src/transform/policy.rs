@@ -123,8 +123,22 @@ pub(crate) fn resolve_frame(
             ),
         )),
         // The cell's identified frame stands for the declared one, which still says whether
-        // the frame moves with another unit or is held by the robot.
-        (_, Some(p)) => Ok(p),
+        // the frame moves with another unit or is held by the robot. It is the user frame: a
+        // RAPID work object's object frame (`oframe`, the part placed in its fixture) is the
+        // program's, which a measurement of the user frame does not change
+        // (`cell::frame_readings` says so at the declaration).
+        (d, Some(p)) => match d.and_then(|d| d.oframe.as_ref()) {
+            None => Ok(p),
+            Some(o) => o.pose().map(|o| p * o).ok_or_else(|| {
+                Why::new(
+                    RefusalKind::UnresolvedWorkObject,
+                    format!(
+                        "{frame} `{name}` has an object frame (oframe) with fields that are not numbers: the cell file's entry gives its user frame only"
+                    ),
+                    format!("write the oframe of `{name}` as numbers"),
+                )
+            }),
+        },
         (Some(d), None) => d.pose().ok_or_else(|| {
             Why::new(
                 RefusalKind::UnresolvedWorkObject,
