@@ -212,6 +212,9 @@ pub(crate) struct Use<'a> {
     /// The frame or tool is a parameter of the use's routine, whatever each caller passes:
     /// every target reached is used with one trackfix cannot tell.
     pub(crate) passed: Option<std::sync::Arc<PassedFrames>>,
+    /// The use may run while its work object holds its declared value, the program giving the
+    /// frame another: every target reached is moved to in both.
+    pub(crate) two_values: Option<std::sync::Arc<TwoValuesAt>>,
     /// Positional arguments, in order, that are plain references (`None` for any other
     /// expression), in the file's source (as a RAPID call record keeps them).
     pub(crate) args: &'a [Option<crate::syntax::Span32>],
@@ -662,6 +665,19 @@ pub(crate) struct PassedFrames {
     pub(crate) tool: Option<String>,
 }
 
+/// A use that may run while its work object holds its declared value, the program giving the
+/// frame another (see [`TwoValues`](crate::position::TwoValues)): each line as (file, line).
+#[derive(Clone, Debug)]
+pub(crate) struct TwoValuesAt {
+    /// The work object's name as declared.
+    pub(crate) frame: String,
+    pub(crate) declared: (usize, usize),
+    /// The (first) assignment of the other value.
+    pub(crate) given: (usize, usize),
+    /// The use.
+    pub(crate) motion: (usize, usize),
+}
+
 /// What a use gives the targets it reaches: the frame and tool it moves with.
 #[derive(Clone, Debug)]
 struct MovesWith {
@@ -672,6 +688,7 @@ struct MovesWith {
     stationary: bool,
     run_time: Option<RunTimeValue>,
     passed: Option<std::sync::Arc<PassedFrames>>,
+    two_values: Option<std::sync::Arc<TwoValuesAt>>,
 }
 
 impl MovesWith {
@@ -683,6 +700,7 @@ impl MovesWith {
             stationary: u.stationary,
             run_time: u.run_time.clone(),
             passed: u.passed.clone(),
+            two_values: u.two_values.clone(),
         }
     }
 }
@@ -694,6 +712,7 @@ struct Recorded<'u> {
     stationary: bool,
     run_time: Option<&'u RunTimeValue>,
     passed: Option<&'u PassedFrames>,
+    two_values: Option<&'u TwoValuesAt>,
     /// 1-based line of the use.
     line: usize,
 }
@@ -706,7 +725,25 @@ fn record(files: &mut [FileFacts<'_>], from: usize, (m, i): TargetAt, u: &Record
         _ if from != m => files.get(from).map(|f| f.name.clone()),
         _ => None,
     };
+    // Each line of the other value's finding, named with its file when not the target's.
+    let two_values = u.two_values.map(|t| {
+        let at = |(file, line): (usize, usize)| UseLine {
+            line,
+            file: (file != m)
+                .then(|| files.get(file).map(|f| f.name.clone()))
+                .flatten(),
+        };
+        crate::position::TwoValues {
+            frame: t.frame.clone(),
+            declared: at(t.declared),
+            given: at(t.given),
+            motion: at(t.motion),
+        }
+    });
     if let Some(usage) = files.get_mut(m).and_then(|f| f.positions.usage_mut(i)) {
+        if let Some(t) = two_values {
+            usage.mark_two_values(t);
+        }
         usage.record_shared(u.frame, u.tool, u.stationary, u.line);
         if let Some(passed) = u.passed {
             let why = |name: &String| crate::position::UnresolvedFrame {
@@ -1001,6 +1038,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             stationary: u.stationary,
             run_time: u.run_time.as_ref(),
             passed: u.passed.as_deref(),
+            two_values: u.two_values.as_deref(),
             line: u.line,
         };
         for &t in targets.iter() {
@@ -1221,6 +1259,7 @@ impl<'f, 'a> Binder<'f, 'a> {
                     stationary: w.stationary,
                     run_time: w.run_time.as_ref(),
                     passed: w.passed.as_deref(),
+                    two_values: w.two_values.as_deref(),
                     line,
                 };
                 record(files, w.from, t, &recorded);

@@ -80,7 +80,17 @@ pub(crate) fn run(a: ReachArgs) -> anyhow::Result<Exit> {
     for group in collect_programs(&a.files)? {
         for loaded in load_group(&group, &options) {
             match loaded {
-                Ok(p) => files.extend(reach_program(&p, robot, kin, &reach_options)),
+                Ok(p) => {
+                    // What the cell's entries make of the program's work objects (an object
+                    // frame kept), as the transforms say it.
+                    let mut stderr = std::io::stderr().lock();
+                    for (fi, d) in trackfix::transform::cell::frame_readings(&p, &[robot]) {
+                        if let Some(file) = p.files.get(fi) {
+                            writeln!(stderr, "{}", file.render(&d).trim_end())?;
+                        }
+                    }
+                    files.extend(reach_program(&p, robot, kin, &reach_options));
+                }
                 Err(e) if e.is_skip() => {
                     let _ = writeln!(std::io::stderr(), "note: {e}");
                 }

@@ -29,7 +29,7 @@ use trackfix::transform::{
 };
 
 use super::Exit;
-use super::messages::{Messages, Verbosity};
+use super::messages::{Messages, Verbosity, shape};
 use super::track::report_located;
 
 /// Where results go and what to do with refusals (shared by all four commands).
@@ -1093,13 +1093,15 @@ fn summarize(
 }
 
 /// The one runner of every transform: load each program (with `robot`'s `$config.dat`), run
-/// `transform` on it in memory, then report, diff, check or write everything at once.
+/// `transform` on it in memory, then report, diff, check or write everything at once. `others`:
+/// the other robots whose cell entries the transform uses (`transfer`'s `--to`), whose
+/// `$config.dat` is written only as `robot`'s is.
 #[allow(clippy::too_many_arguments)]
 fn run_each(
     command: &str,
     files: &[PathBuf],
     robot: Option<&Robot>,
-    other_configs: &[Option<&Path>],
+    others: &[&Robot],
     out: &OutputArgs,
     prov: &Provenance,
     transform: impl Fn(Program) -> anyhow::Result<ProgramResult>,
@@ -1113,7 +1115,8 @@ fn run_each(
         return Ok(exit);
     }
     if !out.verbosity.quiet {
-        show_readings(&programs)?;
+        let robots: Vec<&Robot> = robot.into_iter().chain(others.iter().copied()).collect();
+        show_readings(&programs, &robots, out.verbosity)?;
     }
     if let Some(exit) = check_stamps(command, &programs, prov, out)? {
         return Ok(exit);
@@ -1160,8 +1163,8 @@ fn run_each(
         robot.and_then(|r| r.config_dat.as_deref()),
         &copied_along,
     );
-    for cfg in other_configs {
-        drop_untouched_config(&mut results, *cfg, &copied_along);
+    for other in others {
+        drop_untouched_config(&mut results, other.config_dat.as_deref(), &copied_along);
     }
     let renames = rename_for_output(&mut results, out)?;
     let exit = finish(command, &results, &renames, out, files);
@@ -1196,16 +1199,36 @@ fn refuse_syntax_errors(command: &str, programs: &[Program]) -> anyhow::Result<O
 }
 
 /// Shows the warnings that say what the transforms take the programs to mean where it is not
-/// what is written ([`Diagnostic::shapes_transforms`]): the result depends on them.
+/// what is written ([`Diagnostic::shapes_transforms`]), the program's and those of the cell's
+/// entries for `robots`: the result depends on them.
 ///
 /// [`Diagnostic::shapes_transforms`]: trackfix::syntax::Diagnostic::shapes_transforms
-fn show_readings(programs: &[Program]) -> anyhow::Result<()> {
+fn show_readings(
+    programs: &[Program],
+    robots: &[&Robot],
+    verbosity: Verbosity,
+) -> anyhow::Result<()> {
     let mut stderr = std::io::stderr().lock();
-    for file in programs.iter().flat_map(|p| &p.files) {
-        for d in file.diagnostics.iter().filter(|d| d.shapes_transforms) {
-            writeln!(stderr, "{}", file.render(d).trim_end())?;
+    // A batch of copies of one module says each the same: shown a few times, then counted.
+    let mut messages = Messages::new(verbosity, false);
+    for p in programs {
+        // What the cell's entries for the robots the transform uses make of the declarations.
+        let cell = trackfix::transform::cell::frame_readings(p, robots);
+        for (fi, file) in p.files.iter().enumerate() {
+            let own = file.diagnostics.iter().filter(|d| d.shapes_transforms);
+            let of_cell = cell.iter().filter(|(f, _)| *f == fi).map(|(_, d)| d);
+            for d in own.chain(of_cell) {
+                let text = file.render(d);
+                messages.show(
+                    &mut stderr,
+                    d.severity,
+                    &shape(&d.message),
+                    &text.trim_end(),
+                )?;
+            }
         }
     }
+    messages.finish(&mut stderr)?;
     Ok(())
 }
 
@@ -1470,7 +1493,7 @@ fn run_transfer_inner(mut a: TransferArgs) -> anyhow::Result<Exit> {
         "transfer",
         &a.files,
         Some(from),
-        &[to.config_dat.as_deref()],
+        &[to],
         &a.out,
         &Provenance::new("transfer", Some(to), Some(&to_profile), StampRule::Any),
         |p| Ok(transfer(&p, &plan, &written)?),

@@ -422,6 +422,9 @@ struct RareUsage {
     unresolved_frame: Option<UnresolvedFrame>,
     /// The first motion to the target with a tool its routine is passed.
     unresolved_tool: Option<UnresolvedFrame>,
+    /// The first motion to the target that may run while its work object holds its declared
+    /// value, the program giving the frame another.
+    two_values: Option<TwoValues>,
 }
 
 /// A target's usage is kept for each of 100,000 targets: a layout change that grows it fails
@@ -484,6 +487,34 @@ pub enum RunTimeValue {
         /// Where it is.
         at: UseLine,
     },
+}
+
+/// A work object a target is moved to in with two values: its declaration's, and the one the
+/// program gives it (`wA := [FALSE,TRUE,"",[[…]]…];`), which trackfix takes for the frame
+/// (docs/design.md, "Frames the program assigns"). A motion to the target may run while the
+/// declared value still holds: before the assignment in program order, in a routine called
+/// before it as well as after, in `main` the first time it runs, or in a routine the program
+/// enters from outside.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TwoValues {
+    /// The work object's name as declared.
+    pub frame: String,
+    /// Its declaration.
+    pub declared: UseLine,
+    /// The assignment of the other value (the first, where several give it).
+    pub given: UseLine,
+    /// A motion to the target that may run with the declared value (the first found).
+    pub motion: UseLine,
+}
+
+impl std::fmt::Display for TwoValues {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "`{}` as declared ({}) and as the program gives it ({}): the motion on {} may run before the assignment",
+            self.frame, self.declared, self.given, self.motion
+        )
+    }
 }
 
 /// A motion to a target with a work object (base) trackfix cannot tell.
@@ -749,6 +780,21 @@ impl Usage {
         let rare = self.rare.get_or_insert_with(Box::default);
         if rare.unresolved_tool.is_none() {
             rare.unresolved_tool = Some(why);
+        }
+    }
+
+    /// The target is moved to in two values of one work object (see [`TwoValues`]): a motion
+    /// to it may run while the frame holds its declared value, the program giving it another.
+    pub fn two_values(&self) -> Option<&TwoValues> {
+        self.rare.as_ref()?.two_values.as_ref()
+    }
+
+    /// Records a motion to the target that may run while its work object holds its declared
+    /// value, keeping the first.
+    pub fn mark_two_values(&mut self, why: TwoValues) {
+        let rare = self.rare.get_or_insert_with(Box::default);
+        if rare.two_values.is_none() {
+            rare.two_values = Some(why);
         }
     }
 

@@ -14,6 +14,7 @@
 //! ```
 
 pub(crate) mod expr;
+pub(crate) mod flow;
 pub(crate) mod lexer;
 pub(crate) mod parser;
 pub mod positions;

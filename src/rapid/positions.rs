@@ -493,6 +493,365 @@ fn frames_written_through(
     out
 }
 
+/// The uses of work object `f` (declared at `at`: module, index among its frames) that may run
+/// while it holds its declared value, the program giving it another at `given` (module, first
+/// byte of the name assigned), in module and file order: (module, the use). A use names the
+/// frame where its name means that declaration, not a parameter of the use's routine.
+fn run_before_given<'c>(
+    f: &FrameDecl,
+    at: (usize, usize),
+    given: &[(usize, usize)],
+    calls: &'c [Calls],
+    routines: &[(&[u8], &[crate::resolve::Routine])],
+    scopes: &FrameScopes,
+    task: &super::flow::Task<'_>,
+) -> Vec<(usize, &'c CallUse)> {
+    let frame = NameKey(f.name.as_bytes());
+    let declared = Bound {
+        module: at.0,
+        index: at.1,
+        routine: false,
+    };
+    let mut uses = Vec::new();
+    for (m, (module_calls, &(src, list))) in calls.iter().zip(routines).enumerate() {
+        for u in &module_calls.uses {
+            let Some(w) = u.wobj else { continue };
+            let name = trim_latin1(w.span().slice(src));
+            if NameKey(name) != frame {
+                continue;
+            }
+            let routine = u.routine.map(|r| r.get() as usize - 1);
+            if routine
+                .and_then(|r| list.get(r))
+                .is_some_and(|r| r.has_parameter(src, name))
+            {
+                continue;
+            }
+            if !scopes.is_empty() && scopes.seen_from(m, routine, &latin1(name)) != Some(declared) {
+                continue;
+            }
+            uses.push((m, u));
+        }
+    }
+    let at_uses: Vec<(usize, usize)> = uses
+        .iter()
+        .map(|&(m, u)| (m, u.name.span().start))
+        .collect();
+    let declared = task.declared_may_reach(given, &at_uses);
+    uses.into_iter()
+        .zip(declared)
+        .filter_map(|(u, d)| d.then_some(u))
+        .collect()
+}
+
+/// What the frames given a whole literal value in a routine come to: the warnings and errors at
+/// the assignments (per module), the frames whose value the flow decides (frame, kind, module,
+/// line), the one other value that stands for a frame (module, index, the value), the
+/// assignments of a frame's own value, and the motions that may run while a work object so given
+/// still holds its declared value (docs/design.md, "Frames the program assigns").
+struct FramesGiven {
+    notes: Vec<Vec<Diagnostic>>,
+    reassigned: Vec<(String, FrameKind, usize, usize)>,
+    replaced: Vec<(usize, usize, FrameDecl)>,
+    own_values: Vec<(usize, FrameDecl)>,
+    declared_first: std::collections::HashMap<(usize, usize), Arc<crate::resolve::TwoValuesAt>>,
+}
+
+/// What each module keeps to the end of [`finish_task`]: its frames, offset calls, literal
+/// values given to names, computed assignments, routines, which targets other modules see, its
+/// source and its copies.
+type Kept<'s> = (
+    Vec<FrameDecl>,
+    Vec<OffsetCall>,
+    Vec<AssignedValue>,
+    Vec<crate::resolve::Assignment>,
+    Vec<crate::resolve::Routine>,
+    Vec<bool>,
+    &'s [u8],
+    Vec<crate::resolve::CopyFact>,
+);
+
+/// [`FramesGiven`] of the task's modules (`rest`, with their calls and routines).
+fn frames_given(
+    rest: &[Kept<'_>],
+    calls: &[Calls],
+    routine_lists: &[(&[u8], &[crate::resolve::Routine])],
+    scopes: &FrameScopes,
+    module_names: &[Arc<str>],
+) -> FramesGiven {
+    // The uses that may run while their work object holds its declared value, the program
+    // giving it one other value, by (module, first byte of the instruction); and the modules'
+    // routines as the flow reads them, once some frame needs it.
+    let mut declared_first: std::collections::HashMap<
+        (usize, usize),
+        Arc<crate::resolve::TwoValuesAt>,
+    > = Default::default();
+    let mut flow: Option<super::flow::Task<'_>> = None;
+    let mut buf = String::new();
+    // A frame given a whole value in a routine (docs/design.md, "Frames the program assigns").
+    // Each assignment: (the frame's module and index, the assignment's module and index).
+    let mut given: Vec<((usize, usize), (usize, usize))> = Vec::new();
+    // (element, kind, module, line) of each frame an assignment to its whole array gives a
+    // value.
+    let mut whole_arrays: Vec<(String, FrameKind, usize, usize)> = Vec::new();
+    for (m, r) in rest.iter().enumerate() {
+        for (k, a) in r.2.iter().enumerate() {
+            let key = key_into(&mut buf, r.6, a.name);
+            // The frames matching `named` the assigning module sees: its own first, as a
+            // motion's frame resolves, else those every module sees.
+            let seen = |named: &dyn Fn(&FrameDecl) -> bool| -> Vec<(usize, usize)> {
+                let own = |f: &FrameDecl| !matches!(f.scope, FrameScope::Routine(_));
+                let every = |f: &FrameDecl| f.scope == FrameScope::Program;
+                let matching = |fm: usize, fr: &[FrameDecl], scope: &dyn Fn(&FrameDecl) -> bool| {
+                    let hits = fr.iter().enumerate().filter(|(_, f)| scope(f) && named(f));
+                    hits.map(|(i, _)| (fm, i)).collect::<Vec<_>>()
+                };
+                let mine = matching(m, &r.0, &own);
+                if !mine.is_empty() {
+                    return mine;
+                }
+                rest.iter()
+                    .enumerate()
+                    .flat_map(|(fm, fr)| matching(fm, &fr.0, &every))
+                    .collect()
+            };
+            if let Some(&at) = seen(&|f| f.name.eq_ignore_ascii_case(key)).first() {
+                given.push((at, (m, k)));
+                continue;
+            }
+            // A whole array of frames given a value (`wArr := [w1, w2];`): which element holds
+            // what depends on the literal's shape and the flow; its elements' motions are
+            // refused as given a value (an element's own assignment is read as above).
+            let element = |f: &FrameDecl| {
+                f.name.len() > key.len()
+                    && f.name.as_bytes().get(key.len()) == Some(&b'{')
+                    && f.name
+                        .get(..key.len())
+                        .is_some_and(|n| n.eq_ignore_ascii_case(key))
+            };
+            let elements = seen(&element)
+                .into_iter()
+                .filter_map(|(fm, i)| rest.get(fm)?.0.get(i));
+            for f in elements {
+                whole_arrays.push((f.name.clone(), f.kind, m, a.as_wobj.line));
+            }
+        }
+    }
+    let mut assigned_notes: Vec<Vec<Diagnostic>> = vec![Vec::new(); rest.len()];
+    // (frame, kind, module, line) of each frame whose value the flow decides.
+    let mut reassigned: Vec<(String, FrameKind, usize, usize)> = whole_arrays;
+    // A frame declared in two modules of the task for every module to see, with two values:
+    // one object at run time (a `PERS` keeps the value of the module loaded first; a
+    // `CONST` or `VAR` twice does not load), so which value the motions run with is not in
+    // the text.
+    // (Only when some frame name is declared twice in the task: `scopes` is built then.)
+    for (m, r) in rest.iter().enumerate().filter(|_| !scopes.is_empty()) {
+        for f in r.0.iter().filter(|f| f.scope == FrameScope::Program) {
+            let first = rest.iter().enumerate().take(m).find_map(|(fm, fr)| {
+                let d = fr.0.iter().find(|d| {
+                    d.scope == FrameScope::Program
+                        && d.kind == f.kind
+                        && d.name.eq_ignore_ascii_case(&f.name)
+                })?;
+                Some((fm, d))
+            });
+            let Some((fm, d)) = first.filter(|(_, d)| !d.same_value(f)) else {
+                continue;
+            };
+            let (Some(notes), Some(there)) = (assigned_notes.get_mut(m), module_names.get(fm))
+            else {
+                continue;
+            };
+            notes.push(
+                Diagnostic::warning(
+                    f.span,
+                    format!(
+                        "`{}` is declared here and in {there} (line {}) with another value: the task has one `{}`, whose value the text does not decide",
+                        f.name, d.line, f.name
+                    ),
+                )
+                .with_hint("declare it in one module, or give both declarations one value")
+                // The refusal of its targets names this declaration: say why there too.
+                .shaping_transforms(),
+            );
+            reassigned.push((f.name.clone(), f.kind, m, f.line));
+        }
+    }
+    // (module, index, the value) of each frame the program gives one other value.
+    let mut replaced: Vec<(usize, usize, FrameDecl)> = Vec::new();
+    // (module, the value) of each assignment of a frame's own value.
+    let mut own_values: Vec<(usize, FrameDecl)> = Vec::new();
+    let mut frames_seen: Vec<(usize, usize)> = Vec::new();
+    for &(at, _) in &given {
+        if frames_seen.contains(&at) {
+            continue;
+        }
+        frames_seen.push(at);
+        let Some(f) = rest.get(at.0).and_then(|r| r.0.get(at.1)) else {
+            continue;
+        };
+        let all: Vec<(usize, &AssignedValue)> = given
+            .iter()
+            .filter(|g| g.0 == at)
+            .filter_map(|&(_, (m, k))| Some((m, rest.get(m)?.2.get(k)?)))
+            .collect();
+        let values: Vec<(usize, &AssignedValue)> = all
+            .iter()
+            .copied()
+            .filter(|(_, a)| !f.same_value(a.as_kind_of(f)))
+            .collect();
+        // Each assignment as a frame of its module, named as the frame is.
+        let as_frame = |&(m, a): &(usize, &AssignedValue)| {
+            let value = FrameDecl {
+                name: f.name.clone(),
+                assigned: true,
+                ..a.as_kind_of(f).clone()
+            };
+            (m, value)
+        };
+        let Some(&(first_m, first)) = values.first() else {
+            // Every value given is the declaration's: rewritten with it.
+            own_values.extend(all.iter().map(as_frame));
+            continue;
+        };
+        let what = match f.kind {
+            FrameKind::Tool => "tool",
+            _ => "work object",
+        };
+        let value = first.as_kind_of(f);
+        if f.storage == crate::position::FrameStorage::Constant {
+            for &(m, a) in &values {
+                if let Some(notes) = assigned_notes.get_mut(m) {
+                    notes.push(
+                        Diagnostic::error(
+                            a.name,
+                            format!(
+                                "{what} `{}` is a CONST (line {}): the controller does not let a program give it a value",
+                                f.name, f.line
+                            ),
+                        )
+                        .with_hint("declare it PERS (or VAR), or remove the assignment"),
+                    );
+                }
+            }
+            continue;
+        }
+        // One other value, given in the frame's own module, with numbers, to a PERS: the value
+        // the motions run with once the program has set it (a generated program sets its
+        // frames before it moves; a `PERS` keeps the last value given, where a `VAR` starts
+        // from its declaration whenever the program starts), so the targets are transformed
+        // with it, and a mirror of the frame is written into the assignment.
+        let persistent = f.storage == crate::position::FrameStorage::Persistent;
+        // Whether the robot holds the tool was read from the declaration when the motions were
+        // bound: a value that changes it is not taken.
+        let same_holder = value.held_by_robot == f.held_by_robot;
+        let one = persistent
+            && same_holder
+            && all.iter().all(|&(m, a)| {
+                m == at.0 && value.same_value(a.as_kind_of(f)) && value.pose().is_some()
+            });
+        // The motions with the work object that may run while its declared value still holds:
+        // their targets are moved to in both values.
+        let before = if one && f.kind == FrameKind::WorkObject {
+            let given: Vec<(usize, usize)> = all.iter().map(|&(m, a)| (m, a.name.start)).collect();
+            let task = flow.get_or_insert_with(|| {
+                let sources: Vec<&[u8]> = rest.iter().map(|r| r.6).collect();
+                super::flow::Task::new(&sources)
+            });
+            run_before_given(f, at, &given, calls, routine_lists, scopes, task)
+        } else {
+            Vec::new()
+        };
+        let given_at = (first_m, first.as_wobj.line);
+        for &(m, u) in &before {
+            let why = crate::resolve::TwoValuesAt {
+                frame: f.name.clone(),
+                declared: (at.0, f.line),
+                given: given_at,
+                motion: (m, u.line as usize),
+            };
+            declared_first.insert((m, u.name.span().start), Arc::new(why));
+        }
+        for &(m, a) in &values {
+            let (message, hint) = if let Some(&(bm, u)) = before.first().filter(|_| one) {
+                let motion = module_names.get(bm).map_or_else(
+                    || UseLine::new(u.line as usize),
+                    |name| UseLine::of(u.line as usize, bm, m, name),
+                );
+                let more = match before.len() {
+                    1 => String::new(),
+                    2 => " (and one more)".to_owned(),
+                    n => format!(" (and {} more)", n - 1),
+                };
+                (
+                    format!(
+                        "{what} `{}` is given another value here than its declaration on line {}: trackfix uses this value, but the motion on {motion}{more} may run before it, while the declared one holds: the targets moved there are left as written",
+                        f.name, f.line
+                    ),
+                    "give the work object this value before every motion that moves with it, or declare it with this value, so that one value holds",
+                )
+            } else if one && f.kind == FrameKind::WorkObject {
+                (
+                    format!(
+                        "{what} `{}` is given another value here than its declaration on line {}: trackfix uses this value, which the program gives it before every motion that moves with it",
+                        f.name, f.line
+                    ),
+                    "declare the frame with the value the program gives it, so that one value holds",
+                )
+            } else if one {
+                (
+                    format!(
+                        "{what} `{}` is given another value here than its declaration on line {}: trackfix uses this value, which the program sets before it moves (a motion that runs before it moves with the declared one)",
+                        f.name, f.line
+                    ),
+                    "declare the frame with the value the program gives it, so that one value holds",
+                )
+            } else {
+                (
+                    format!(
+                        "{what} `{}` is given another value here than its declaration on line {}, {}: the targets moved with it are left as written",
+                        f.name,
+                        f.line,
+                        if !persistent {
+                            "a VAR, which starts from its declaration whenever the program starts"
+                        } else if all.iter().any(|&(m, _)| m != at.0) {
+                            "by a module that does not declare it"
+                        } else if value.pose().is_none() {
+                            "with fields that are not numbers"
+                        } else if !same_holder {
+                            "one that changes whether the robot holds the tool (robhold)"
+                        } else {
+                            "and other values elsewhere"
+                        }
+                    ),
+                    "give the frame one value: declare it with the value the program gives it",
+                )
+            };
+            if let Some(notes) = assigned_notes.get_mut(m) {
+                let d = Diagnostic::warning(a.name, message).with_hint(hint);
+                notes.push(if one { d.shaping_transforms() } else { d });
+            }
+        }
+        if one {
+            // The first stands for the frame; the others give its value again.
+            let mut each = all.iter().map(as_frame);
+            if let Some((_, value)) = each.next() {
+                replaced.push((at.0, at.1, value));
+            }
+            own_values.extend(each);
+        } else {
+            reassigned.push((f.name.clone(), f.kind, first_m, first.as_wobj.line));
+        }
+    }
+    FramesGiven {
+        notes: assigned_notes,
+        reassigned,
+        replaced,
+        own_values,
+        declared_first,
+    }
+}
+
 /// A `RECORD` declared in the module: its name and components (type, name).
 #[derive(Clone, Debug)]
 struct RecordDecl {
@@ -1530,7 +1889,6 @@ fn is_literal(src: &[u8], arena: &Arena, id: u32) -> bool {
 /// twice in a module. Returns one [`Extracted`] per module, in order.
 pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extracted> {
     let mut diagnostics: Vec<Vec<Diagnostic>> = vec![Vec::new(); modules.len()];
-    let mut buf = String::new();
     // The types of all names in the task; duplicate module-scope names, per module.
     let (type_of, twice) =
         crate::resolve::declarations(modules.iter().map(|(x, src, _)| (*src, &x.declared)));
@@ -1646,6 +2004,15 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     // of those that ignore the program displacement (every `MoveAbsJ`).
     let mut no_axes_offset: std::collections::HashSet<(usize, u32)> = Default::default();
     let mut joint_moves: std::collections::HashSet<(usize, u32)> = Default::default();
+    // The frames the program gives a whole value (docs/design.md, "Frames the program
+    // assigns"): what each motion's targets are moved to in is known before they are bound.
+    let FramesGiven {
+        notes: mut assigned_notes,
+        reassigned,
+        replaced,
+        own_values,
+        declared_first,
+    } = frames_given(&rest, &calls, &routine_lists, &scopes, &module_names);
     for (m, (module_calls, r)) in calls.iter().zip(&rest).enumerate() {
         let src = r.6;
         let mut own_texts = own_robhold
@@ -1716,6 +2083,9 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                 frame: wobj.map(|w| w.name),
                 tool: tool.map(|t| t.name),
                 run_time: None,
+                two_values: (!declared_first.is_empty())
+                    .then(|| declared_first.get(&(m, u.name.span().start)).cloned())
+                    .flatten(),
                 passed: (wobj_parameter.is_some() || tool_parameter.is_some()).then(|| {
                     let text = |t: &[u8]| String::from_utf8_lossy(t).into_owned();
                     std::sync::Arc::new(crate::resolve::PassedFrames {
@@ -1850,214 +2220,6 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
             }
         }
     }
-    // A frame given a whole value in a routine (docs/design.md, "Frames the program assigns").
-    // Each assignment: (the frame's module and index, the assignment's module and index).
-    let mut given: Vec<((usize, usize), (usize, usize))> = Vec::new();
-    // (element, kind, module, line) of each frame an assignment to its whole array gives a
-    // value.
-    let mut whole_arrays: Vec<(String, FrameKind, usize, usize)> = Vec::new();
-    for (m, r) in rest.iter().enumerate() {
-        for (k, a) in r.2.iter().enumerate() {
-            let key = key_into(&mut buf, r.6, a.name);
-            // The frames matching `named` the assigning module sees: its own first, as a
-            // motion's frame resolves, else those every module sees.
-            let seen = |named: &dyn Fn(&FrameDecl) -> bool| -> Vec<(usize, usize)> {
-                let own = |f: &FrameDecl| !matches!(f.scope, FrameScope::Routine(_));
-                let every = |f: &FrameDecl| f.scope == FrameScope::Program;
-                let matching = |fm: usize, fr: &[FrameDecl], scope: &dyn Fn(&FrameDecl) -> bool| {
-                    let hits = fr.iter().enumerate().filter(|(_, f)| scope(f) && named(f));
-                    hits.map(|(i, _)| (fm, i)).collect::<Vec<_>>()
-                };
-                let mine = matching(m, &r.0, &own);
-                if !mine.is_empty() {
-                    return mine;
-                }
-                rest.iter()
-                    .enumerate()
-                    .flat_map(|(fm, fr)| matching(fm, &fr.0, &every))
-                    .collect()
-            };
-            if let Some(&at) = seen(&|f| f.name.eq_ignore_ascii_case(key)).first() {
-                given.push((at, (m, k)));
-                continue;
-            }
-            // A whole array of frames given a value (`wArr := [w1, w2];`): which element holds
-            // what depends on the literal's shape and the flow; its elements' motions are
-            // refused as given a value (an element's own assignment is read as above).
-            let element = |f: &FrameDecl| {
-                f.name.len() > key.len()
-                    && f.name.as_bytes().get(key.len()) == Some(&b'{')
-                    && f.name
-                        .get(..key.len())
-                        .is_some_and(|n| n.eq_ignore_ascii_case(key))
-            };
-            let elements = seen(&element)
-                .into_iter()
-                .filter_map(|(fm, i)| rest.get(fm)?.0.get(i));
-            for f in elements {
-                whole_arrays.push((f.name.clone(), f.kind, m, a.as_wobj.line));
-            }
-        }
-    }
-    let mut assigned_notes: Vec<Vec<Diagnostic>> = vec![Vec::new(); rest.len()];
-    // (frame, kind, module, line) of each frame whose value the flow decides.
-    let mut reassigned: Vec<(String, FrameKind, usize, usize)> = whole_arrays;
-    // A frame declared in two modules of the task for every module to see, with two values:
-    // one object at run time (a `PERS` keeps the value of the module loaded first; a
-    // `CONST` or `VAR` twice does not load), so which value the motions run with is not in
-    // the text.
-    // (Only when some frame name is declared twice in the task: `scopes` is built then.)
-    for (m, r) in rest.iter().enumerate().filter(|_| !scopes.is_empty()) {
-        for f in r.0.iter().filter(|f| f.scope == FrameScope::Program) {
-            let first = rest.iter().enumerate().take(m).find_map(|(fm, fr)| {
-                let d = fr.0.iter().find(|d| {
-                    d.scope == FrameScope::Program
-                        && d.kind == f.kind
-                        && d.name.eq_ignore_ascii_case(&f.name)
-                })?;
-                Some((fm, d))
-            });
-            let Some((fm, d)) = first.filter(|(_, d)| !d.same_value(f)) else {
-                continue;
-            };
-            let (Some(notes), Some(there)) = (assigned_notes.get_mut(m), module_names.get(fm))
-            else {
-                continue;
-            };
-            notes.push(
-                Diagnostic::warning(
-                    f.span,
-                    format!(
-                        "`{}` is declared here and in {there} (line {}) with another value: the task has one `{}`, whose value the text does not decide",
-                        f.name, d.line, f.name
-                    ),
-                )
-                .with_hint("declare it in one module, or give both declarations one value")
-                // The refusal of its targets names this declaration: say why there too.
-                .shaping_transforms(),
-            );
-            reassigned.push((f.name.clone(), f.kind, m, f.line));
-        }
-    }
-    // (module, index, the value) of each frame the program gives one other value.
-    let mut replaced: Vec<(usize, usize, FrameDecl)> = Vec::new();
-    // (module, the value) of each assignment of a frame's own value.
-    let mut own_values: Vec<(usize, FrameDecl)> = Vec::new();
-    let mut frames_seen: Vec<(usize, usize)> = Vec::new();
-    for &(at, _) in &given {
-        if frames_seen.contains(&at) {
-            continue;
-        }
-        frames_seen.push(at);
-        let Some(f) = rest.get(at.0).and_then(|r| r.0.get(at.1)) else {
-            continue;
-        };
-        let all: Vec<(usize, &AssignedValue)> = given
-            .iter()
-            .filter(|g| g.0 == at)
-            .filter_map(|&(_, (m, k))| Some((m, rest.get(m)?.2.get(k)?)))
-            .collect();
-        let values: Vec<(usize, &AssignedValue)> = all
-            .iter()
-            .copied()
-            .filter(|(_, a)| !f.same_value(a.as_kind_of(f)))
-            .collect();
-        // Each assignment as a frame of its module, named as the frame is.
-        let as_frame = |&(m, a): &(usize, &AssignedValue)| {
-            let value = FrameDecl {
-                name: f.name.clone(),
-                assigned: true,
-                ..a.as_kind_of(f).clone()
-            };
-            (m, value)
-        };
-        let Some(&(first_m, first)) = values.first() else {
-            // Every value given is the declaration's: rewritten with it.
-            own_values.extend(all.iter().map(as_frame));
-            continue;
-        };
-        let what = match f.kind {
-            FrameKind::Tool => "tool",
-            _ => "work object",
-        };
-        let value = first.as_kind_of(f);
-        if f.storage == crate::position::FrameStorage::Constant {
-            for &(m, a) in &values {
-                if let Some(notes) = assigned_notes.get_mut(m) {
-                    notes.push(
-                        Diagnostic::error(
-                            a.name,
-                            format!(
-                                "{what} `{}` is a CONST (line {}): the controller does not let a program give it a value",
-                                f.name, f.line
-                            ),
-                        )
-                        .with_hint("declare it PERS (or VAR), or remove the assignment"),
-                    );
-                }
-            }
-            continue;
-        }
-        // One other value, given in the frame's own module, with numbers, to a PERS: the value
-        // the motions run with once the program has set it (a generated program sets its
-        // frames before it moves; a `PERS` keeps the last value given, where a `VAR` starts
-        // from its declaration whenever the program starts), so the targets are transformed
-        // with it, and a mirror of the frame is written into the assignment.
-        let persistent = f.storage == crate::position::FrameStorage::Persistent;
-        // Whether the robot holds the tool was read from the declaration when the motions were
-        // bound: a value that changes it is not taken.
-        let same_holder = value.held_by_robot == f.held_by_robot;
-        let one = persistent
-            && same_holder
-            && all.iter().all(|&(m, a)| {
-                m == at.0 && value.same_value(a.as_kind_of(f)) && value.pose().is_some()
-            });
-        for &(m, a) in &values {
-            let (message, hint) = if one {
-                (
-                    format!(
-                        "{what} `{}` is given another value here than its declaration on line {}: trackfix uses this value, which the program sets before it moves (a motion that runs before it moves with the declared one)",
-                        f.name, f.line
-                    ),
-                    "declare the frame with the value the program gives it, so that one value holds",
-                )
-            } else {
-                (
-                    format!(
-                        "{what} `{}` is given another value here than its declaration on line {}, {}: the targets moved with it are left as written",
-                        f.name,
-                        f.line,
-                        if !persistent {
-                            "a VAR, which starts from its declaration whenever the program starts"
-                        } else if all.iter().any(|&(m, _)| m != at.0) {
-                            "by a module that does not declare it"
-                        } else if value.pose().is_none() {
-                            "with fields that are not numbers"
-                        } else if !same_holder {
-                            "one that changes whether the robot holds the tool (robhold)"
-                        } else {
-                            "and other values elsewhere"
-                        }
-                    ),
-                    "give the frame one value: declare it with the value the program gives it",
-                )
-            };
-            if let Some(notes) = assigned_notes.get_mut(m) {
-                let d = Diagnostic::warning(a.name, message).with_hint(hint);
-                notes.push(if one { d.shaping_transforms() } else { d });
-            }
-        }
-        if one {
-            // The first stands for the frame; the others give its value again.
-            let mut each = all.iter().map(as_frame);
-            if let Some((_, value)) = each.next() {
-                replaced.push((at.0, at.1, value));
-            }
-            own_values.extend(each);
-        } else {
-            reassigned.push((f.name.clone(), f.kind, first_m, first.as_wobj.line));
-        }
-    }
     for (m, i, value) in replaced {
         if let Some(f) = rest.get_mut(m).and_then(|r| r.0.get_mut(i)) {
             *f = value;
@@ -2148,6 +2310,24 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                     "a transform cannot move it for both; declare one target per work object",
                 ),
             );
+        }
+        for p in ps
+            .usages()
+            .enumerate()
+            .filter(|(_, u)| u.two_values().is_some())
+            .filter_map(|(i, _)| ps.get(i, src))
+        {
+            if let Some(t) = p.usage.two_values() {
+                d.push(
+                    Diagnostic::warning(
+                        p.span,
+                        format!("target `{}` is moved to with {t}", p.label()),
+                    )
+                    .with_hint(
+                        "a transform cannot move it for both values; give the work object its value before every motion to the target",
+                    ),
+                );
+            }
         }
         let frame_values = own_values
             .iter()

@@ -284,6 +284,94 @@ pub struct Cell {
     text: String,
 }
 
+/// What the cell's entries for `robots` make of `program`'s work objects where the program's text
+/// alone does not say: per file (its index), a warning at each declaration of a work object the
+/// entries give whose object frame (RAPID `oframe`) is not the identity. An entry is the work
+/// object's user frame, and the object frame the program's: the targets are transformed in
+/// `entry · oframe` (`policy::resolve_frame`), as a controller composes `uframe · oframe`, where
+/// before the entry stood for both and the object frame was dropped unsaid.
+pub fn frame_readings(
+    program: &crate::position::Program,
+    robots: &[&Robot],
+) -> Vec<(usize, Diagnostic)> {
+    let mut out = Vec::new();
+    if robots.iter().all(|r| r.frames.is_empty()) {
+        return out;
+    }
+    for (fi, file) in program.files.iter().enumerate() {
+        for d in &file.frames {
+            if d.kind != crate::position::FrameKind::WorkObject
+                || matches!(d.scope, crate::position::FrameScope::Routine(_))
+            {
+                continue;
+            }
+            let key = frame_key(&d.name);
+            let named: Vec<String> = robots
+                .iter()
+                .filter(|r| r.frames.contains_key(&key))
+                .map(|r| format!("`{}`", r.name))
+                .collect();
+            let Some(o) = d.oframe.as_ref().filter(|_| !named.is_empty()) else {
+                continue;
+            };
+            let written = match o.pose() {
+                Some(pose) if is_identity(&pose) => continue,
+                Some(pose) => format!("oframe {}", inline_pose(&pose)),
+                None => "an oframe with fields that are not numbers".to_owned(),
+            };
+            let entries = match named.as_slice() {
+                [one] => format!("entry for robot {one} is"),
+                [all @ .., last] => format!("entries for robots {} and {last} are", all.join(", ")),
+                [] => continue,
+            };
+            out.push((
+                fi,
+                Diagnostic::warning(
+                    d.span,
+                    format!(
+                        "work object `{}`: the cell file's {entries} its user frame, and this declaration's object frame ({written}) is kept: the targets are transformed in the cell's uframe · this oframe",
+                        d.name
+                    ),
+                )
+                .with_hint(
+                    "if the cell's entry measures the whole work object (its object frame too), write this oframe as [[0,0,0],[1,0,0,0]]",
+                )
+                .shaping_transforms(),
+            ));
+        }
+    }
+    out
+}
+
+/// Whether `p` moves nothing, to 1e-9 mm and rad.
+fn is_identity(p: &Pose) -> bool {
+    p.translation.vector.norm() < 1e-9 && p.rotation.angle() < 1e-9
+}
+
+/// `{ x = 200, y = 0, z = 0, rx = 0, ry = 0, rz = 10 }`: a pose as the cell file writes one, to
+/// 4 decimals with trailing zeros left off.
+fn inline_pose(p: &Pose) -> String {
+    let [x, y, z, rx, ry, rz] = crate::geometry::pose_to_xyz_deg(p);
+    let short = |v: f64| {
+        let t = format!("{v:.4}");
+        let t = t.trim_end_matches('0').trim_end_matches('.');
+        if t == "-0" {
+            "0".to_owned()
+        } else {
+            t.to_owned()
+        }
+    };
+    format!(
+        "{{ x = {}, y = {}, z = {}, rx = {}, ry = {}, rz = {} }}",
+        short(x),
+        short(y),
+        short(z),
+        short(rx),
+        short(ry),
+        short(rz)
+    )
+}
+
 /// The key a frame or tool is found by in a cell's `[robot.NAME.wobj]` and `[robot.NAME.tool]`
 /// tables: the name case-folded, an array element's index as its number (`"BASE_DATA[ 01 ]"`
 /// → `"base_data[1]"`, `"wArr{ 2 }"` → `"warr{2}"`), which is how the programs' resolvers

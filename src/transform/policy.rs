@@ -123,8 +123,22 @@ pub(crate) fn resolve_frame(
             ),
         )),
         // The cell's identified frame stands for the declared one, which still says whether
-        // the frame moves with another unit or is held by the robot.
-        (_, Some(p)) => Ok(p),
+        // the frame moves with another unit or is held by the robot. It is the user frame: a
+        // RAPID work object's object frame (`oframe`, the part placed in its fixture) is the
+        // program's, which a measurement of the user frame does not change
+        // (`cell::frame_readings` says so at the declaration).
+        (d, Some(p)) => match d.and_then(|d| d.oframe.as_ref()) {
+            None => Ok(p),
+            Some(o) => o.pose().map(|o| p * o).ok_or_else(|| {
+                Why::new(
+                    RefusalKind::UnresolvedWorkObject,
+                    format!(
+                        "{frame} `{name}` has an object frame (oframe) with fields that are not numbers: the cell file's entry gives its user frame only"
+                    ),
+                    format!("write the oframe of `{name}` as numbers"),
+                )
+            }),
+        },
         (Some(d), None) => d.pose().ok_or_else(|| {
             Why::new(
                 RefusalKind::UnresolvedWorkObject,
@@ -597,6 +611,21 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
                 words.stationary_tool
             ),
             "it moves with the work piece, not the track: correct it by hand",
+        );
+    }
+    // Like two work objects: no one correction serves both values, where a mirror in the
+    // work object's own plane is the same in each.
+    if let Some(t) = p.usage.two_values() {
+        return refuse(
+            RefusalKind::TwoWorkObjects,
+            format!(
+                "{what} is moved to in two values of {} `{}`: as declared ({}) and as the program gives it ({}), since the motion on {} may run before the assignment",
+                words.frame, t.frame, t.declared, t.given, t.motion
+            ),
+            &format!(
+                "give `{}` its value before every motion to the target (or declare it with that value), or move to one target per value",
+                t.frame
+            ),
         );
     }
     if !p.usage.other_wobjs().is_empty() {

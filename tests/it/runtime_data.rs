@@ -885,6 +885,17 @@ fn correct_task(
     Vec<String>,
     Vec<(String, trackfix::transform::RefusalKind, String)>,
 ) {
+    correct_task_lines(modules, "p1:=")
+}
+
+/// [`correct_task`], with the first line holding `pattern` in each output module that has one.
+fn correct_task_lines(
+    modules: &[(&str, String)],
+    pattern: &str,
+) -> (
+    Vec<String>,
+    Vec<(String, trackfix::transform::RefusalKind, String)>,
+) {
     use trackfix::geometry::pose_xyz_deg;
     use trackfix::position::Program;
     use trackfix::transform::{Direction, apply, track_correction};
@@ -908,7 +919,7 @@ fn correct_task(
             .iter()
             .filter_map(|f| {
                 let out = String::from_utf8(f.output.clone()).unwrap();
-                Some(out.lines().find(|l| l.contains("p1:="))?.to_owned())
+                Some(out.lines().find(|l| l.contains(pattern))?.to_owned())
             })
             .collect();
         let refused = result
@@ -992,13 +1003,16 @@ fn a_frames_assignments_are_read_where_its_name_means_the_frame() {
             )
         );
     }
-    // A VAR given another value: refused, where a PERS takes the value.
+    // A VAR given another value: refused, where a PERS takes the value (`main` gives it before
+    // it moves, calling `first`).
     let assign = format!("  PROC first()\n    w1:={W_AWAY};\n  ENDPROC\n");
-    let (p1, refused) = correct_task(&[("m.mod", module(&pers(W_ORIGIN), &assign))]);
+    let first_then_move = |m: String| m.replace("PROC main()\n", "PROC main()\n    first;\n");
+    let (p1, refused) =
+        correct_task(&[("m.mod", first_then_move(module(&pers(W_ORIGIN), &assign)))]);
     assert!(refused.is_empty(), "{refused:?}");
     assert_eq!(p1, away);
     let var = format!("VAR wobjdata w1:={W_ORIGIN};");
-    let (_, refused) = correct_task(&[("m.mod", module(&var, &assign))]);
+    let (_, refused) = correct_task(&[("m.mod", first_then_move(module(&var, &assign)))]);
     assert_eq!(refused.len(), 1, "{refused:?}");
     assert!(
         refused[0]
@@ -1098,6 +1112,174 @@ fn local_and_routine_frames_are_seen_only_where_they_are_declared() {
         format!("MODULE M\n  PERS wobjdata w1:={W_ORIGIN};\n{P1}{motion}ENDMODULE\n"),
     )]);
     assert_eq!(p1, plain);
+}
+
+/// A work object the program gives one other value (a PERS, in its module) is taken at that
+/// value for the motions every way to which passes the assignment. A motion that may run while
+/// the declared value holds — before the assignment in its routine (`main` runs again and
+/// again: the first time with the declared value), in a loop that gives the value after it, in
+/// a routine called before and after a routine that gives it, before an `ERROR` handler gives it
+/// and `RETRY` runs the motion again — moves to its targets in both values: they are refused as
+/// a target used with two work objects is, and the `Offs` of one stays as written with it
+/// (before, each was corrected for the value given alone, and a warning said the program gave
+/// it before it moved).
+#[test]
+fn a_motion_that_may_run_before_its_work_object_is_given_a_value_refuses_its_targets() {
+    use trackfix::transform::RefusalKind;
+    const P2: &str = "  CONST robtarget p2:=[[-1500,-300,225],[0,0.707107,0.707107,0],[-1,0,-1,0],[900,9E9,9E9,9E9,9E9,9E9]];\n";
+    let give = format!("w1:={W_AWAY};");
+    let mv = |p: &str| format!("MoveL {p},v100,fine,tool0\\WObj:=w1;");
+    // (A comment on `p2`'s line where it is not moved to: the lines stay where they are.)
+    let module = |routines: &str| {
+        let p2 = if routines.contains("p2") {
+            P2
+        } else {
+            "  ! p2\n"
+        };
+        format!("MODULE M\n  PERS wobjdata w1:={W_ORIGIN};\n{P1}{p2}{routines}ENDMODULE\n")
+    };
+    let (as_given, _) = correct_task(&[(
+        "m.mod",
+        module(&format!("  PROC main()\n    {}\n  ENDPROC\n", mv("p1"))).replace(W_ORIGIN, W_AWAY),
+    )]);
+    // Given before every motion: corrected in the value given, as before.
+    let (p1, refused) = correct_task(&[(
+        "m.mod",
+        module(&format!(
+            "  PROC main()\n    {give}\n    {}\n  ENDPROC\n",
+            mv("p1")
+        )),
+    )]);
+    assert!(refused.is_empty(), "{refused:?}");
+    assert_eq!(p1, as_given);
+    // `p2` is moved to before the assignment, `p1` only after it.
+    let (p1, refused) = correct_task(&[(
+        "m.mod",
+        module(&format!(
+            "  PROC main()\n    {}\n    {give}\n    {}\n  ENDPROC\n",
+            mv("p2"),
+            mv("p1")
+        )),
+    )]);
+    assert_eq!(p1, as_given);
+    assert_eq!(
+        refused,
+        [(
+            "p2".to_owned(),
+            RefusalKind::TwoWorkObjects,
+            "robtarget `p2` is moved to in two values of work object `w1`: as declared (line 2) and as the program gives it (line 7), since the motion on line 6 may run before the assignment".to_owned()
+        )]
+    );
+    for routines in [
+        // The first motion before the assignment, the second after (an `Offs` of it).
+        format!(
+            "  PROC main()\n    {}\n    {give}\n    MoveL Offs(p1,0,0,10),v100,fine,tool0\\WObj:=w1;\n  ENDPROC\n",
+            mv("p1")
+        ),
+        // Given in the error handler, which runs the motion again.
+        format!(
+            "  PROC main()\n    {}\n  ERROR\n    {give}\n    RETRY;\n  ENDPROC\n",
+            mv("p1")
+        ),
+        // Given after the motion in a loop: the first pass moves in the declared value.
+        format!(
+            "  PROC run()\n    WHILE TRUE DO\n      {}\n      {give}\n    ENDWHILE\n  ENDPROC\n  PROC main()\n    run;\n  ENDPROC\n",
+            mv("p1")
+        ),
+        // A routine called before and after the one that gives the value.
+        format!(
+            "  PROC init()\n    {give}\n  ENDPROC\n  PROC go()\n    {}\n  ENDPROC\n  PROC main()\n    go;\n    init;\n    go;\n  ENDPROC\n",
+            mv("p1")
+        ),
+        // A routine nothing calls gives it: it may run before `main` or after it.
+        format!(
+            "  PROC init()\n    {give}\n  ENDPROC\n  PROC main()\n    {}\n  ENDPROC\n",
+            mv("p1")
+        ),
+    ] {
+        let src = module(&routines);
+        let (kept, refused) = correct_task(&[("m.mod", src.clone())]);
+        assert_eq!(kept, [P1.trim_end()], "{src}");
+        assert_eq!(refused.len(), 1, "{src}{refused:?}");
+        assert_eq!(
+            (refused[0].0.as_str(), refused[0].1),
+            ("p1", RefusalKind::TwoWorkObjects),
+            "{src}"
+        );
+        assert!(
+            refused[0].2.starts_with(
+                "robtarget `p1` is moved to in two values of work object `w1`: as declared (line 2) and as the program gives it"
+            ),
+            "{}",
+            refused[0].2
+        );
+    }
+    // Given in a routine called first, and the `Offs` of a target left as written stays so.
+    let (p1, refused) = correct_task(&[(
+        "m.mod",
+        module(&format!(
+            "  PROC init()\n    {give}\n  ENDPROC\n  PROC main()\n    init;\n    {}\n  ENDPROC\n",
+            mv("p1")
+        )),
+    )]);
+    assert!(refused.is_empty(), "{refused:?}");
+    assert_eq!(p1, as_given);
+    let offs = module(&format!(
+        "  PROC main()\n    {}\n    {give}\n    MoveL Offs(p1,0,0,10),v100,fine,tool0\\WObj:=w1;\n  ENDPROC\n",
+        mv("p1")
+    ));
+    let (written, _) = correct_task_lines(&[("m.mod", offs.clone())], "Offs(");
+    assert_eq!(
+        written,
+        ["    MoveL Offs(p1,0,0,10),v100,fine,tool0\\WObj:=w1;"]
+    );
+    // A mirror in the work object's own plane is the same in both values: the target is
+    // mirrored; a plane in world is not, and refuses it.
+    use trackfix::position::Program;
+    use trackfix::transform::{MirrorSettings, WorldPlane, apply, mirror};
+    let program = Program {
+        files: vec![rapid::parse_file(
+            Path::new("m.mod"),
+            offs.as_bytes().to_vec(),
+        )],
+    };
+    let own_plane = apply(&program, mirror(&program, &MirrorSettings::default())).unwrap();
+    assert_eq!(own_plane.refusals().count(), 0);
+    assert_eq!(own_plane.files[0].changes.len(), 1);
+    let world = MirrorSettings {
+        world: Some(WorldPlane {
+            frame: trackfix::geometry::Pose::identity(),
+            frames: Default::default(),
+            frames_to: None,
+            default_wobj: None,
+        }),
+        ..MirrorSettings::default()
+    };
+    let in_world = apply(&program, mirror(&program, &world)).unwrap();
+    let refused: Vec<_> = in_world
+        .refusals()
+        .map(|r| (r.target.as_str(), r.kind))
+        .collect();
+    assert_eq!(refused, [("p1", RefusalKind::TwoWorkObjects)]);
+    let f = rapid::parse_file(Path::new("m.mod"), offs.as_bytes().to_vec());
+    let warned: Vec<(usize, &str)> = f
+        .diagnostics
+        .iter()
+        .map(|d| (f.lines.line(d.span.start), d.message.as_str()))
+        .collect();
+    assert_eq!(
+        warned,
+        [
+            (
+                3,
+                "target `p1` is moved to with `w1` as declared (line 2) and as the program gives it (line 7): the motion on line 6 may run before the assignment"
+            ),
+            (
+                7,
+                "work object `w1` is given another value here than its declaration on line 2: trackfix uses this value, but the motion on line 6 may run before it, while the declared one holds: the targets moved there are left as written"
+            ),
+        ]
+    );
 }
 
 /// A whole array of work objects given a value in a routine (`wArr := [w_away, w_origin];`):

@@ -1925,8 +1925,17 @@ fn batch_reports_group_repeats_end_with_totals_and_speak_json() {
             .concat(),
         )
     };
+    // What the cell's entry makes of each copy's `wobj_car` (its object frame is kept), shown
+    // three times, then counted.
+    let reading =
+        "warning: work object `wobj_car`: the cell file's entry for robot `r1` is its user frame";
     let (code, _, err) = run(&[], "a");
     assert_eq!(code, 4, "{err}");
+    assert_eq!(err.matches(reading).count(), 3, "{err}");
+    assert!(
+        err.contains("warning: … and 2 more like this [work object `…`: the cell file"),
+        "{err}"
+    );
     assert_eq!(
         err.matches("warning: jointtarget `jHome`").count(),
         3,
@@ -1942,6 +1951,7 @@ fn batch_reports_group_repeats_end_with_totals_and_speak_json() {
         "total: 5 programs (5 files): 1130 target(s) changed in 5 files, 5 written, 0 refused, 5 kept as written, 0 notes"
     );
     let (_, _, err) = run(&["-v"], "b");
+    assert_eq!(err.matches(reading).count(), 5, "{err}");
     assert_eq!(
         err.matches("warning: jointtarget `jHome`").count(),
         5,
@@ -1950,9 +1960,12 @@ fn batch_reports_group_repeats_end_with_totals_and_speak_json() {
     assert!(!err.contains("more like this"));
     let (code, out, err) = run(&["-q"], "c");
     assert_eq!((code, out.as_str(), err.as_str()), (4, "", ""));
+    // JSON on standard output; on standard error only what the transform takes the programs
+    // to mean, as in text.
     let (code, out, err) = run(&["--format", "json"], "d");
     assert_eq!(code, 4);
-    assert_eq!(err, "");
+    assert_eq!(err.matches(reading).count(), 3, "{err}");
+    assert!(!err.contains("jHome") && !err.contains("total:"), "{err}");
     let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(doc["exit"], 4);
     assert_eq!(doc["files"].as_array().unwrap().len(), 5);
@@ -2602,6 +2615,97 @@ fn a_mirror_for_another_kuka_robot_is_written_in_its_own_config_base() {
         "DECL E6POS XP1={{X {x:.3},Y {y:.3},Z 210.000,A -14.0000,B 20.0,C -30.0000,S 2,T 2,E1 500.0}}"
     );
     assert!(written.contains(&expected), "{expected}\n{written}");
+}
+
+/// A cell file's entry for a RAPID work object is its user frame: the declaration's object frame
+/// (`oframe`, here 200 mm along x and turned 10°) is kept, as the controller composes
+/// `uframe·oframe`, and a warning at the declaration says so with its value. An entry equal to
+/// the declared user frame then corrects as the declaration alone does (before, the entry stood
+/// for the whole work object and the object frame was dropped unsaid). An object frame that is
+/// the identity says nothing; one with fields that are not numbers refuses the targets.
+#[test]
+fn a_cell_work_object_entry_keeps_the_programs_object_frame() {
+    use trackfix::transform::RefusalKind;
+    use trackfix::transform::cell::frame_readings;
+    let module = |oframe: &str| {
+        format!(
+            "MODULE M\n  PERS wobjdata wobj_car:=[FALSE,TRUE,\"\",[[1670.3,-1850.75,612.4],[1,0,0,0]],{oframe}];\n  \
+             CONST robtarget p10:=[[100,200,300],[0,1,0,0],[-1,-1,-2,0],[1500,9E9,9E9,9E9,9E9,9E9]];\n  \
+             PROC main()\n    MoveL p10,v100,fine,tool0\\WObj:=wobj_car;\n  ENDPROC\nENDMODULE\n"
+        )
+    };
+    let cell = |entry: &str| {
+        Cell::parse(
+            Path::new("cell.toml"),
+            &format!(
+                "[robot.r1]\nprofile = \"track/profile.toml\"\n\
+                 base = {{ x = 0, y = -3500, z = 0, rx = 0, ry = 0, rz = 90 }}\n\
+                 track_axis = [1, 0, 0]\nskid = \"eax_a\"\n{entry}"
+            ),
+        )
+        .unwrap()
+    };
+    let user_frame = "[robot.r1.wobj]\nwobj_car = { x = 1670.3, y = -1850.75, z = 612.4, rx = 0, ry = 0, rz = 0 }\n";
+    let deviation = trackfix::geometry::pose_xyz_deg(0.3, -0.2, 0.5, 0.02, -0.03, 0.05);
+    let dev = move |_s: f64| -> Result<Pose, trackfix::track::TrackError> { Ok(deviation) };
+    // (the line of `p10` written, the refusals, the readings) of `correct` of `src` with `cell`.
+    let correct = |src: &str, cell: &Cell| {
+        let robot = cell.robot("r1").unwrap();
+        let program = Program {
+            files: vec![trackfix::rapid::parse_file(
+                Path::new("m.mod"),
+                src.as_bytes().to_vec(),
+            )],
+        };
+        let setup = TrackSetup::new(robot, &dev);
+        let result = apply(
+            &program,
+            track_correction(&program, &setup, Direction::Correct),
+        )
+        .unwrap();
+        let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+        let p10 = out
+            .lines()
+            .find(|l| l.contains("p10:="))
+            .unwrap()
+            .to_owned();
+        let refused: Vec<_> = result
+            .refusals()
+            .map(|r| (r.kind, r.message.clone()))
+            .collect();
+        let readings: Vec<String> = frame_readings(&program, &[robot])
+            .into_iter()
+            .map(|(_, d)| d.message)
+            .collect();
+        (p10, refused, readings)
+    };
+    let turned = module("[[200,0,0],[0.996195,0,0,0.087156]]");
+    let (declared, refused, readings) = correct(&turned, &cell(""));
+    assert!(
+        refused.is_empty() && readings.is_empty(),
+        "{refused:?} {readings:?}"
+    );
+    let (with_entry, refused, readings) = correct(&turned, &cell(user_frame));
+    assert!(refused.is_empty(), "{refused:?}");
+    assert_eq!(with_entry, declared);
+    assert_eq!(
+        readings,
+        [
+            "work object `wobj_car`: the cell file's entry for robot `r1` is its user frame, and this declaration's object frame (oframe { x = 200, y = 0, z = 0, rx = 0, ry = 0, rz = 10 }) is kept: the targets are transformed in the cell's uframe · this oframe"
+        ]
+    );
+    // The object frame matters here: without it the target is corrected otherwise.
+    let (plain, _, readings) = correct(&module("[[0,0,0],[1,0,0,0]]"), &cell(user_frame));
+    assert_ne!(plain, declared);
+    assert!(readings.is_empty(), "{readings:?}");
+    let (_, refused, _) = correct(&module("[[200,0,0],[q1,0,0,0.087156]]"), &cell(user_frame));
+    assert_eq!(
+        refused,
+        [(
+            RefusalKind::UnresolvedWorkObject,
+            "robtarget `p10`: work object `wobj_car` has an object frame (oframe) with fields that are not numbers: the cell file's entry gives its user frame only".to_owned()
+        )]
+    );
 }
 
 /// A work object the cell file gives (`wobj_car` in samples/cell.toml) that the program gives
