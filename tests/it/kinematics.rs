@@ -1981,7 +1981,9 @@ fn a_cartesian_target_at_the_wrist_singularity_is_refused_not_swung() {
 /// the joints by the elementary chain). `correct`, `zero` and `transfer` refuse it with the
 /// turns its written Status/Turn would take the wrist through: the joints stated after reach
 /// D(s)⁻¹·F and carry Turn 18 and A5 < 0 (worked out here), A4 and A6 turned by over 100°.
-/// `mirror` writes it (the image is exact); the bent point beside it is corrected.
+/// `mirror` for the mirror-image robot writes it (that image is exact); `mirror --to k2`
+/// refuses it, since k2's real base is not the exact image of k1's and the tilt between them
+/// swings the wrist as a correction does; the bent point beside it is corrected.
 #[test]
 fn a_krl_point_at_the_wrist_singularity_is_refused_by_every_transform() {
     let dir = tempfile::tempdir().unwrap();
@@ -2047,7 +2049,17 @@ fn a_krl_point_at_the_wrist_singularity_is_refused_by_every_transform() {
             refusals[0].3
         );
     }
+    let (code, refusals) = transform_json(&["mirror", src, "--robot", "k1"], dir.path());
+    assert_eq!((code, refusals.len()), (0, 0), "{refusals:?}");
     let (code, refusals) =
         transform_json(&["mirror", src, "--robot", "k1", "--to", "k2"], dir.path());
-    assert_eq!((code, refusals.len()), (0, 0), "{refusals:?}");
+    assert_eq!(code, 3, "{refusals:?}");
+    assert_eq!(targets_lines_kinds(&refusals), [("XA5", 2, "reach")]);
+    assert!(
+        refusals[0]
+            .3
+            .contains("is at the wrist singularity (A5 = -0.01°)"),
+        "{}",
+        refusals[0].3
+    );
 }
