@@ -567,19 +567,12 @@ impl MirrorRule<'_> {
     ) -> Result<Vec<Edit>, Why> {
         let j = m.arm.joints_of(p)?;
         let what = describe(p);
-        let skid = match p.skid(self.settings.skid_axis) {
-            Skid::At(s) => s,
-            _ => {
-                return Err(Why::new(
-                    RefusalKind::SkidMissing,
-                    format!(
-                        "{what} has no skid position: where robot `{}` stands to reach its mirror image is not known",
-                        image.name
-                    ),
-                    "write the skid position into the target",
-                ));
-            }
-        };
+        let skid = skid_of(p, self.settings.skid_axis, || {
+            format!(
+                "{what} has no skid position: where robot `{}` stands to reach its mirror image is not known",
+                image.name
+            )
+        })?;
         let (scale, offset) = self.settings.skid_map;
         let skid_to = scale * skid + offset;
         let flange = m.base_at(skid) * m.arm.kinematics.forward(&j);
@@ -636,16 +629,9 @@ impl MirrorRule<'_> {
         };
         let written = ConfigValue::written(&p.config);
         let what = describe(p);
-        let skid = match p.skid(self.settings.skid_axis) {
-            Skid::At(s) => s,
-            _ => {
-                return Err(Why::new(
-                    RefusalKind::SkidMissing,
-                    format!("{what} has no skid position: its joints cannot be checked"),
-                    "write the skid position into the target",
-                ));
-            }
-        };
+        let skid = skid_of(p, self.settings.skid_axis, || {
+            format!("{what} has no skid position: its joints cannot be checked")
+        })?;
         let w = work_object_of(
             scope.program,
             Some(scope.file),
@@ -740,6 +726,18 @@ impl MirrorRule<'_> {
             }
         }
         Ok(written.and(found.map(|(_, c)| c)))
+    }
+}
+
+/// The skid position of `p`, or the refusal `message` says why one is needed.
+fn skid_of(p: &Position, axis: usize, message: impl FnOnce() -> String) -> Result<f64, Why> {
+    match p.skid(axis) {
+        Skid::At(s) => Ok(s),
+        _ => Err(Why::new(
+            RefusalKind::SkidMissing,
+            message(),
+            "write the skid position into the target",
+        )),
     }
 }
 
