@@ -307,7 +307,7 @@ impl TargetRule for TrackRule<'_, '_> {
                 Err(Why::new(
                     RefusalKind::SkidNotConnected,
                     format!(
-                        "{what} has {axis} = {written}, which reads as not connected (9E9 or beyond): no skid position"
+                        "{what} has {axis} = {written}, which reads as not connected (8.9E9 or beyond, read as the 9E9 mark): no skid position"
                     ),
                     format!(
                         "write the skid position into {axis}, or set `skid` for this robot in the cell file"
