@@ -123,7 +123,7 @@ fn correct_keep_then_zero_gives_back_every_target_as_written() {
 #[test]
 fn a_file_whose_every_target_was_kept_is_stamped_beside_its_stamped_pair() {
     let dir = tempfile::tempdir().unwrap();
-    // XA1P is corrected on k1; the inline target (the probe's XA1N, A1 at -0.005°) needs
+    // XA1P is corrected on k1; the inline target (A1 at -0.005°) needs
     // another Turn bit after the correction and is refused.
     let src = "DEF kk( )\n  BAS(#INITMOV,0)\n  BAS(#BASE,0)\n  BAS(#TOOL,0)\n  PTP XA1P\n  PTP {X 4084.6749,Y -1451.7674,Z 1399.2490,A -17.30529,B -13.89205,C -147.34288,S 2,T 3,E1 4000.0}\nEND\n";
     let dat = "DEFDAT kk\nDECL E6POS XA1P={X 4085.0322,Y -1451.7822,Z 1399.2490,A -17.31529,B -13.89205,C -147.34288,S 2,T 2,E1 4000.0,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}\nENDDAT\n";

@@ -168,7 +168,7 @@ fn distance(a: &Pose, b: &Pose) -> (f64, f64) {
 }
 
 /// `jT` and `pT` are one flange pose on r1 at skid 3000 (`pT` = `B1(3000)·FK(jT)`, tool0 in
-/// wobj0), the probe's twins.
+/// wobj0): a joint target and its Cartesian twin.
 const TWINS: &str = "MODULE Twin
   CONST jointtarget jT:=[[5,20,10,40,60,-30],[3000.0,9E9,9E9,9E9,9E9,9E9]];
   CONST robtarget pT:=[[2772.5670,-1761.7710,927.7176],[0.1591504,0.7545567,-0.5855842,-0.2498130],[0,0,-1,0],[3000.0,9E9,9E9,9E9,9E9,9E9]];
