@@ -723,21 +723,28 @@ impl State<'_> {
 }
 
 /// What a routine leaves set when it returns: the base and tool it sets, and what it leaves
-/// staged in `FDAT_ACT`, on every path (`None`: left as the caller had it).
+/// staged in `FDAT_ACT`, on every path (`None`: left as the caller had it); `tcp` when some
+/// path leaves `$IPO_MODE` at `#TCP` (a routine that sets `#BASE` again is not taken to undo
+/// a caller's `#TCP`: the motions after the call are then refused as stationary-tool, never
+/// corrected as if the tool were on the flange).
 #[derive(Clone, Default, PartialEq)]
 struct Exit {
     base: Option<FrameRef>,
     tool: Option<FrameRef>,
     staged: Option<Staged>,
+    tcp: bool,
 }
 
 impl Exit {
-    /// Whether the routine leaves the base, tool or staged FDAT changed.
+    /// Whether the routine leaves the base, tool, IPO mode or staged FDAT changed.
     fn changes(&self) -> bool {
-        self.base.is_some() || self.tool.is_some() || self.staged.is_some()
+        self.base.is_some() || self.tool.is_some() || self.staged.is_some() || self.tcp
     }
 
     fn apply_to(&self, state: &mut State<'_>) {
+        if self.tcp {
+            state.tcp = true;
+        }
         if let Some(b) = &self.base {
             state.base = Some(b.clone());
         }
@@ -820,6 +827,7 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                             base: state.base.clone(),
                             tool: state.tool.clone(),
                             staged: state.staged.clone(),
+                            tcp: state.tcp,
                         });
                     }
                 };

@@ -2365,6 +2365,52 @@ fn a_forward_jump_brings_its_state_to_the_label() {
     assert_eq!(used(tcp)[0], (vec!["BASE_DATA[1]".to_owned()], false, true));
 }
 
+/// A subroutine that leaves `$IPO_MODE` at `#TCP` leaves it so for the motions after its call:
+/// they move with the stationary tool. Before, a routine's exit carried only the base, tool and
+/// staged FDAT it set, so `SETTCP()` then `LIN XP1` was corrected in the base as a tool on the
+/// flange.
+#[test]
+fn a_subroutine_that_sets_the_stationary_tool_leaves_it_set_after_its_call() {
+    let stationary = |sub: &str| {
+        let src = format!(
+            "DEF cell( )\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  LIN XP2\n  SETTCP()\n  \
+             LIN XP1\nEND\nDEF SETTCP( )\n{sub}END\n"
+        );
+        let dat = "DEFDAT cell\n\
+            DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+            DECL E6POS XP2={X 410.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+            ENDDAT\n";
+        let p = krl::load_program_from_sources(
+            vec![
+                (PathBuf::from("cell.src"), src.into_bytes()),
+                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
+            ],
+            &with_sample_config(),
+        )
+        .unwrap();
+        p.files
+            .iter()
+            .flat_map(|f| f.positions())
+            .map(|t| {
+                (
+                    t.name.as_deref().unwrap_or_default().to_owned(),
+                    t.usage.stationary_tool(),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    let named = |a: bool, b: bool| vec![("XP1".to_owned(), a), ("XP2".to_owned(), b)];
+    // XP1, moved to after the call, with the stationary tool; XP2, before it, on the flange.
+    assert_eq!(stationary("  $IPO_MODE=#TCP\n"), named(true, false));
+    // On one path of the routine: may be stationary, so not corrected as on the flange.
+    assert_eq!(
+        stationary("  IF $IN[1] THEN\n    $IPO_MODE=#TCP\n  ENDIF\n"),
+        named(true, false)
+    );
+    // A routine that leaves the IPO mode alone.
+    assert_eq!(stationary("  $OUT[1]=TRUE\n"), named(false, false));
+}
+
 /// KRL modules named together from one folder are one program, as a KSS tree's `Program`
 /// folder is: another module's motion to a `GLOBAL` point is one to that point, and a point used
 /// with two bases that way is refused. Before, each pair was a program of its own and the point
