@@ -152,7 +152,8 @@ pub struct KinematicCheck {
     pub refusal: Option<KinematicRefusal>,
 }
 
-fn fmt_joints(j: &Joints) -> String {
+/// `[10.000, 20.000, …]` degrees.
+pub(crate) fn fmt_joints(j: &Joints) -> String {
     let v: Vec<String> = j.iter().map(|a| format!("{a:.3}")).collect();
     format!("[{}]", v.join(", "))
 }
@@ -410,6 +411,15 @@ pub struct JointRefusal {
     pub why: KinematicRefusal,
     /// The joints that would reach the new pose, if any.
     pub after: Option<Joints>,
+}
+
+impl JointRefusal {
+    /// The joints after, for a message: `[…]`, or that no solution in the branch reaches the
+    /// new pose.
+    pub(crate) fn after_text(&self) -> String {
+        self.after
+            .map_or("none in the same branch".to_owned(), |j| fmt_joints(&j))
+    }
 }
 
 /// The rule's mirror image of joints about the xz plane of the base (`y → −y`, mirror-image

@@ -14,6 +14,7 @@
 use std::collections::BTreeMap;
 
 use crate::geometry::Pose;
+pub(crate) use crate::kinematics::correction::fmt_joints;
 use crate::kinematics::reach::resolve_tool;
 use crate::kinematics::{
     ConfigValue, JointRefusal, Joints, KinematicCheck, KinematicRefusal, Kinematics, check_move,
@@ -245,9 +246,7 @@ impl Arm {
     ) -> Why {
         let why = &refused.why;
         let before = fmt_joints(before);
-        let after = refused
-            .after
-            .map_or("none in the same branch".to_owned(), |j| fmt_joints(&j));
+        let after = refused.after_text();
         if let KinematicRefusal::Swing { .. } = why {
             return reach(
                 format!(
@@ -318,12 +317,6 @@ pub(crate) fn with_tool(mut why: Why, p: &Position, tool: &str) -> Why {
 /// A [`RefusalKind::Reach`] refusal.
 fn reach(message: String, hint: impl Into<String>) -> Why {
     Why::new(RefusalKind::Reach, message, hint)
-}
-
-/// `[10.000, 20.000, …]` degrees.
-pub(crate) fn fmt_joints(j: &Joints) -> String {
-    let v: Vec<String> = j.iter().map(|a| format!("{a:.3}")).collect();
-    format!("[{}]", v.join(", "))
 }
 
 /// Edits that make a joint target's axes say `new` (unchanged axes keep their text).

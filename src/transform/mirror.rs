@@ -586,14 +586,7 @@ impl MirrorRule<'_> {
         let steps = super::kinematic_policy::written_steps(p);
         let new = crate::kinematics::joint_target_correction(kin, &rule, &change, &steps)
             .map_err(|refused| {
-                let why = &refused.why;
-                let after = refused
-                    .after
-                    .map_or("none in the same branch".to_owned(), |a| fmt_joints(&a));
-                let why = match why {
-                    crate::kinematics::KinematicRefusal::Swing { .. } => why.swing_text(None),
-                    _ => why.to_string(),
-                };
+                let (why, after) = (&refused.why, refused.after_text());
                 Why::new(
                     RefusalKind::Reach,
                     format!(
