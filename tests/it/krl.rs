@@ -45,6 +45,18 @@ fn with_sample_config() -> LoadOptions {
     }
 }
 
+/// The program of a `cell.src`/`cell.dat` pair, with the sample `$config.dat`.
+fn load_cell_pair(src: &str, dat: &str) -> Program {
+    krl::load_program_from_sources(
+        vec![
+            (PathBuf::from("cell.src"), src.as_bytes().to_vec()),
+            (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
+        ],
+        &with_sample_config(),
+    )
+    .unwrap()
+}
+
 fn parse_sample(name: &str) -> ParsedFile {
     let path = sample(name);
     krl::parse_file(&path, std::fs::read(&path).unwrap())
@@ -1520,14 +1532,7 @@ fn xp1_of(p: &Program) -> trackfix::position::Position {
 /// The usage of point `XP1` of `dat` in the program of `cell.src` (`src`) and `cell.dat`,
 /// loaded with the sample config.
 fn usage_of_xp1(src: &str, dat: &str) -> trackfix::position::Usage {
-    let p = krl::load_program_from_sources(
-        vec![
-            (PathBuf::from("cell.src"), src.as_bytes().to_vec()),
-            (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
-        ],
-        &with_sample_config(),
-    )
-    .unwrap();
+    let p = load_cell_pair(src, dat);
     xp1_of(&p).usage
 }
 
@@ -2159,14 +2164,7 @@ fn a_call_of_a_routine_no_file_defines_is_warned_about_once() {
                DEF GRIP( )\n  $OUT[2]=TRUE\nEND\n\
                DEF PREP( )\n  settool()\nEND\n\
                DEF IDLE( )\n  H50()\nEND\n";
-    let program = krl::load_program_from_sources(
-        vec![
-            (PathBuf::from("cell.src"), src.as_bytes().to_vec()),
-            (PathBuf::from("cell.dat"), DAT_XP1.as_bytes().to_vec()),
-        ],
-        &with_sample_config(),
-    )
-    .unwrap();
+    let program = load_cell_pair(src, DAT_XP1);
     let f = &program.files[0];
     let warned: Vec<(usize, usize, &str)> = f
         .diagnostics
@@ -2315,14 +2313,7 @@ fn a_forward_jump_brings_its_state_to_the_label() {
             "DEF cell( )\n  DECL E6POS XC\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  \
              LIN XP1\n  LIN XP2\n{body}END\n"
         );
-        let p = krl::load_program_from_sources(
-            vec![
-                (PathBuf::from("cell.src"), src.into_bytes()),
-                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
-            ],
-            &with_sample_config(),
-        )
-        .unwrap();
+        let p = load_cell_pair(&src, dat);
         p.files
             .iter()
             .flat_map(|f| f.positions())
@@ -2380,14 +2371,7 @@ fn a_subroutine_that_sets_the_stationary_tool_leaves_it_set_after_its_call() {
             DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
             DECL E6POS XP2={X 410.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
             ENDDAT\n";
-        let p = krl::load_program_from_sources(
-            vec![
-                (PathBuf::from("cell.src"), src.into_bytes()),
-                (PathBuf::from("cell.dat"), dat.as_bytes().to_vec()),
-            ],
-            &with_sample_config(),
-        )
-        .unwrap();
+        let p = load_cell_pair(&src, dat);
         p.files
             .iter()
             .flat_map(|f| f.positions())
