@@ -189,6 +189,17 @@ fn joints(n: &[f64]) -> [f64; 6] {
     [n[0], n[1], n[2], n[3], n[4], n[5]]
 }
 
+/// The sample cell's text, its paths made absolute (to be written elsewhere), with the skid map
+/// `map` for the mirror-image robot.
+fn sample_cell_with_skid_map(map: &str) -> String {
+    let samples = root().join("samples");
+    std::fs::read_to_string(samples.join("cell.toml"))
+        .unwrap()
+        .replace("\"track/", &format!("\"{}/track/", samples.display()))
+        .replace("\"krl/", &format!("\"{}/krl/", samples.display()))
+        .replace("skid_map = [1.0, 0.0]", &format!("skid_map = {map}"))
+}
+
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
@@ -295,12 +306,7 @@ fn mirror_to_another_kuka_robot_writes_the_configuration_it_reaches_the_image_wi
 #[test]
 fn a_skid_map_that_puts_the_image_robot_elsewhere_refuses_both_twins_saying_where() {
     let dir = tempfile::tempdir().unwrap();
-    let samples = root().join("samples");
-    let cell = std::fs::read_to_string(samples.join("cell.toml"))
-        .unwrap()
-        .replace("\"track/", &format!("\"{}/track/", samples.display()))
-        .replace("\"krl/", &format!("\"{}/krl/", samples.display()))
-        .replace("skid_map = [1.0, 0.0]", "skid_map = [-1.0, 8000.0]");
+    let cell = sample_cell_with_skid_map("[-1.0, 8000.0]");
     let cell_map = write(dir.path(), "cell_map.toml", &cell);
     let input = write(dir.path(), "twin.mod", TWINS);
     let transfer = |cell: &Path| {
@@ -340,12 +346,7 @@ fn a_skid_map_that_puts_the_image_robot_elsewhere_refuses_both_twins_saying_wher
 #[test]
 fn a_refusal_of_a_later_step_of_a_transfer_says_which_step() {
     let dir = tempfile::tempdir().unwrap();
-    let samples = root().join("samples");
-    let cell = std::fs::read_to_string(samples.join("cell.toml"))
-        .unwrap()
-        .replace("\"track/", &format!("\"{}/track/", samples.display()))
-        .replace("\"krl/", &format!("\"{}/krl/", samples.display()))
-        .replace("skid_map = [1.0, 0.0]", "skid_map = [-1.0, 8000.0]");
+    let cell = sample_cell_with_skid_map("[-1.0, 8000.0]");
     let without = cell.replace(
         "[robot.r1.kinematics]\nmodel = \"abb_irb4600_40_255\"\n",
         "",
