@@ -84,6 +84,7 @@ impl NameKey<'_> {
 
     /// The name is `word` (any case). A name without blanks folds to its bytes upper-cased:
     /// its bytes are compared, lengths first (`tGun` is not `tool0`), not folded one by one.
+    #[inline]
     pub(crate) fn is(&self, word: &[u8]) -> bool {
         if self.differs_at_once(word) {
             return false;

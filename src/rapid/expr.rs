@@ -105,6 +105,18 @@ impl Arena {
         self.lits.get(n.lit as usize).copied()
     }
 
+    /// Whether expression `id` is numbers, strings and aggregates of them only: a value that
+    /// reads no name (a literal target).
+    pub(crate) fn reads_no_name(&self, id: u32) -> bool {
+        let Some(n) = self.get(id) else { return false };
+        let subtree = self.nodes.get(id as usize..n.subtree_end as usize);
+        subtree.is_some_and(|nodes| {
+            nodes
+                .iter()
+                .all(|n| matches!(n.kind, ExprKind::Num | ExprKind::Str | ExprKind::Aggregate))
+        })
+    }
+
     pub(crate) fn get(&self, id: u32) -> Option<&ExprNode> {
         self.nodes.get(id as usize)
     }

@@ -1,8 +1,10 @@
 //! Which value a work object holds where a motion uses it, when the program gives the frame one
 //! other value than its declaration (docs/design.md, "Frames the program assigns").
 //!
-//! Asked only of such a frame (most programs give no frame a value), over the modules' trees
-//! parsed again: the streamed parse that reads the targets keeps no tree. Nothing gives the
+//! Asked only of such a frame (most programs give no frame a value), over the modules' skeleton
+//! trees: their branches and statements' leaves ([`walked`]), which the parse that reads the
+//! targets keeps for a module that gives a frame a value (and a module that gives none is
+//! parsed again for it, when another one does). Nothing gives the
 //! frame its declared value back (a program that does is refused before this is asked), so
 //! along one path the frame holds the value given once the path has passed an assignment of
 //! it, and the declared one before. Over every path that may reach a motion, the value given is
@@ -137,6 +139,23 @@ fn routine_head(head: &[u8]) -> Option<(Kind, &[u8], bool)> {
     (!name.is_empty()).then_some((kind, name, local))
 }
 
+/// The leaves a walk reads: statements, the heads and parts of routines and blocks. Gaps and
+/// declarations, most of a module's leaves, are not kept.
+pub(crate) fn walked(kind: NodeKind) -> bool {
+    !matches!(
+        kind,
+        NodeKind::Trivia
+            | NodeKind::Header
+            | NodeKind::ModuleHead
+            | NodeKind::ModuleEnd
+            | NodeKind::DataDecl
+            | NodeKind::RecordHead
+            | NodeKind::RecordField
+            | NodeKind::RecordEnd
+            | NodeKind::RoutineEnd
+    )
+}
+
 /// The children of node `at`: each one's index, stepping over their subtrees.
 fn children(nodes: &[Node], at: usize) -> impl Iterator<Item = usize> + '_ {
     let end = nodes.get(at).map_or(at, |n| n.subtree_end as usize);
@@ -154,11 +173,20 @@ fn children(nodes: &[Node], at: usize) -> impl Iterator<Item = usize> + '_ {
 }
 
 impl<'s> Task<'s> {
-    /// The routines of the modules (each one's source), read from their trees.
-    pub(crate) fn new(sources: &[&'s [u8]]) -> Task<'s> {
+    /// The routines of the modules (each one's source, and its skeleton tree of [`walked`]
+    /// leaves when the first parse kept it), read from their trees.
+    pub(crate) fn new(sources: Vec<(&'s [u8], Option<Vec<Node>>)>) -> Task<'s> {
         let modules: Vec<(&'s [u8], Vec<Node>)> = sources
-            .iter()
-            .map(|&src| (src, crate::rapid::parse_tree(src).tree.nodes))
+            .into_iter()
+            .map(|(src, kept)| {
+                let nodes = kept.unwrap_or_else(|| {
+                    let mut none = crate::syntax::NoSink;
+                    crate::rapid::parser::parse_streamed(src, &mut none, walked)
+                        .tree
+                        .nodes
+                });
+                (src, nodes)
+            })
             .collect();
         let mut routines = Vec::new();
         let mut kinds = Vec::new();
@@ -279,11 +307,12 @@ impl<'s> Task<'s> {
         given: &[(usize, usize)],
         uses: &[(usize, usize)],
     ) -> Vec<bool> {
+        // (A source is below 4 GiB, and so is the count of its uses.)
         let per_module = |list: &[(usize, usize)]| {
-            let mut out: Vec<Vec<(usize, usize)>> = vec![Vec::new(); self.modules.len()];
+            let mut out: Vec<Vec<(u32, u32)>> = vec![Vec::new(); self.modules.len()];
             for (k, &(m, at)) in list.iter().enumerate() {
                 if let Some(v) = out.get_mut(m) {
-                    v.push((at, k));
+                    v.push((at as u32, k as u32));
                 }
             }
             for v in &mut out {
@@ -337,7 +366,7 @@ impl<'s> Task<'s> {
         let mut work: Vec<usize> = (0..n).filter(|&r| queued[r]).rev().collect();
         // Per routine, its uses as its last walk found them: with the entry it keeps, since a
         // routine is walked again whenever its entry is lowered.
-        let mut last_uses: Vec<Option<Vec<(usize, Holds)>>> = vec![None; n];
+        let mut last_uses: Vec<Option<Vec<(u32, Holds)>>> = vec![None; n];
         while let Some(r) = work.pop() {
             if let Some(q) = queued.get_mut(r) {
                 *q = false;
@@ -368,7 +397,7 @@ impl<'s> Task<'s> {
             let walked =
                 walked.unwrap_or_else(|| self.walk(r, Holds::Nothing, &frame, &returns).uses);
             for (k, h) in walked {
-                if let Some(slot) = at_use.get_mut(k) {
+                if let Some(slot) = at_use.get_mut(k as usize) {
                     *slot = Some(slot.map_or(h, |x| x.meet(h)));
                 }
             }
@@ -418,7 +447,8 @@ impl<'s> Task<'s> {
         // Not settled: every use and call of the routine as reached with the declared value.
         let mut out = std::mem::take(&mut w.out);
         out.exit = Holds::Declared;
-        for (_, h) in out.uses.iter_mut().chain(out.calls.iter_mut()) {
+        let uses = out.uses.iter_mut().map(|(_, h)| h);
+        for h in uses.chain(out.calls.iter_mut().map(|(_, h)| h)) {
             *h = Holds::Declared;
         }
         out
@@ -431,8 +461,8 @@ const PASSES: usize = 1000;
 /// The frame's assignments and uses in each module: (first byte, index among all), sorted.
 #[derive(Clone, Copy)]
 struct Frame<'f> {
-    given: &'f [Vec<(usize, usize)>],
-    uses: &'f [Vec<(usize, usize)>],
+    given: &'f [Vec<(u32, u32)>],
+    uses: &'f [Vec<(u32, u32)>],
 }
 
 /// What a walk of a routine finds.
@@ -444,7 +474,7 @@ struct Walked<'s> {
     /// Its calls of routines of the task, with the state before each.
     calls: Vec<(usize, Holds)>,
     /// Its uses (index among all), with the state before each.
-    uses: Vec<(usize, Holds)>,
+    uses: Vec<(u32, Holds)>,
     /// The meet of the states at the `GOTO`s of each label.
     gotos: Vec<(NameKey<'s>, Holds)>,
     /// The meet of the states at the statements of the body that may raise an error.
@@ -458,8 +488,8 @@ struct Walker<'w, 's> {
     module: usize,
     src: &'s [u8],
     nodes: &'w [Node],
-    given: &'w [(usize, usize)],
-    uses: &'w [(usize, usize)],
+    given: &'w [(u32, u32)],
+    uses: &'w [(u32, u32)],
     returns: &'w [Holds],
     /// The state at each label's `GOTO`s, as the last pass found it.
     labels: Vec<(NameKey<'s>, Holds)>,
@@ -485,8 +515,8 @@ impl<'s> Walker<'_, 's> {
     }
 
     /// The indices of the entries of `list` whose first byte lies in leaf `n`.
-    fn within<'a>(n: &Node, list: &'a [(usize, usize)]) -> impl Iterator<Item = usize> + 'a {
-        let (start, end) = (n.start as usize, n.end as usize);
+    fn within<'a>(n: &Node, list: &'a [(u32, u32)]) -> impl Iterator<Item = u32> + 'a {
+        let (start, end) = (n.start, n.end);
         let from = list.partition_point(|&(at, _)| at < start);
         list.get(from..)
             .unwrap_or_default()
@@ -732,6 +762,67 @@ impl<'s> Walker<'_, 's> {
 mod tests {
     use super::Task;
 
+    /// The skeleton the parse keeps is the whole tree's branches and [`super::walked`] leaves,
+    /// each branch's subtree ending where its last kept descendant does: over every RAPID
+    /// sample and test file.
+    #[test]
+    fn the_skeleton_is_the_whole_tree_without_its_gaps_and_declarations() {
+        let mut files = 0;
+        for dir in [
+            "samples/rapid",
+            "samples/robotstudio_backup",
+            "tests/data/rapid",
+        ] {
+            let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
+            let mut stack = vec![root];
+            while let Some(d) = stack.pop() {
+                for e in std::fs::read_dir(&d).into_iter().flatten().flatten() {
+                    let path = e.path();
+                    if path.is_dir() {
+                        stack.push(path);
+                        continue;
+                    }
+                    let ext = path.extension().and_then(|x| x.to_str()).unwrap_or("");
+                    if !["mod", "modx", "sys", "sysx", "prg"].contains(&ext.to_lowercase().as_str())
+                    {
+                        continue;
+                    }
+                    let src = std::fs::read(&path).unwrap();
+                    let whole = crate::rapid::parse_tree(&src).tree.nodes;
+                    // Kept: each node's new index, by its old one (one past the end too).
+                    let kept: Vec<bool> = whole
+                        .iter()
+                        .map(|n| n.kind.is_branch() || super::walked(n.kind))
+                        .collect();
+                    let mut new_index = Vec::with_capacity(whole.len() + 1);
+                    let mut count = 0u32;
+                    for &k in &kept {
+                        new_index.push(count);
+                        count += u32::from(k);
+                    }
+                    new_index.push(count);
+                    let expected: Vec<_> = whole
+                        .iter()
+                        .zip(&kept)
+                        .filter(|(_, k)| **k)
+                        .map(|(n, _)| crate::rapid::Node {
+                            subtree_end: new_index[n.subtree_end as usize],
+                            ..*n
+                        })
+                        .collect();
+                    let mut none = crate::syntax::NoSink;
+                    let skeleton =
+                        crate::rapid::parser::parse_streamed(&src, &mut none, super::walked);
+                    assert!(skeleton.round_trip, "{}", path.display());
+                    assert_eq!(skeleton.tree.nodes, expected, "{}", path.display());
+                    assert!(expected.len() < whole.len(), "{}", path.display());
+                    files += 1;
+                }
+            }
+        }
+        assert!(files >= 20, "{files} files");
+    }
+
     /// For each `MoveL` of the modules, in order, whether the declared value may reach it, the
     /// program giving `wA` its other value at each `wA :=`.
     fn declared_at_motions(modules: &[&str]) -> Vec<bool> {
@@ -743,7 +834,8 @@ mod tests {
                 .flat_map(|(m, src)| src.match_indices(pattern).map(move |(at, _)| (m, at)))
                 .collect()
         };
-        Task::new(&sources).declared_may_reach(&find("wA :="), &find("MoveL"))
+        let sources = sources.into_iter().map(|s| (s, None)).collect();
+        Task::new(sources).declared_may_reach(&find("wA :="), &find("MoveL"))
     }
 
     fn module(body: &str) -> String {

@@ -70,15 +70,16 @@ fn unreachable_empty(path: &Path) -> ParsedFile {
 pub fn parse_task(files: Vec<(PathBuf, InputBytes)>) -> Vec<ParsedFile> {
     let lines: Vec<LineIndex> = files.iter().map(|(_, s)| LineIndex::new(s)).collect();
     // Per module: its round trip, parser diagnostics and opaque count. The tree itself is not
-    // kept (its round trip is checked as it is built): it is not needed after, and on a large
-    // module it is 0.4 times the file at the moment memory peaks.
+    // kept (its round trip is checked as it is built; on a large module it is 0.4 times the
+    // file at the moment memory peaks), only a skeleton of its statements, which the extractor
+    // keeps for a module that gives a frame a value (`flow`).
     let mut parsed = Vec::with_capacity(files.len());
     let mut extractors = Vec::with_capacity(files.len());
     for ((path, source), lines) in files.iter().zip(&lines) {
         let mut extractor = positions::Extractor::new(lines);
-        let p = parser::parse_streamed(source, &mut |s: parser::Statement<'_>| {
-            extractor.statement(s)
-        });
+        let sink = &mut |s: parser::Statement<'_>| extractor.statement(s);
+        let p = parser::parse_streamed(source, sink, flow::walked);
+        extractor.keep_skeleton(p.tree.nodes);
         parsed.push((p.round_trip, p.diagnostics, p.opaque));
         extractors.push((
             extractor,

@@ -574,6 +574,7 @@ type Kept<'s> = (
 /// [`FramesGiven`] of the task's modules (`rest`, with their calls and routines).
 fn frames_given(
     rest: &[Kept<'_>],
+    mut skeletons: Vec<Option<Vec<super::Node>>>,
     calls: &[Calls],
     routine_lists: &[(&[u8], &[crate::resolve::Routine])],
     scopes: &FrameScopes,
@@ -755,8 +756,8 @@ fn frames_given(
         let before = if one && f.kind == FrameKind::WorkObject {
             let given: Vec<(usize, usize)> = all.iter().map(|&(m, a)| (m, a.name.start)).collect();
             let task = flow.get_or_insert_with(|| {
-                let sources: Vec<&[u8]> = rest.iter().map(|r| r.6).collect();
-                super::flow::Task::new(&sources)
+                let kept = std::mem::take(&mut skeletons);
+                super::flow::Task::new(rest.iter().map(|r| r.6).zip(kept).collect())
             });
             run_before_given(f, at, &given, calls, routine_lists, scopes, task)
         } else {
@@ -884,6 +885,9 @@ pub struct Extractor<'l> {
     /// Whole-value assignments `name := [...]` of literal aggregates (a frame given a new
     /// value that is known offline) to module data (not to a routine's parameter or own data).
     assigned: Vec<AssignedValue>,
+    /// The module's skeleton tree ([`super::flow::walked`]), kept when it gives a frame a
+    /// whole value ([`Extractor::keep_skeleton`]).
+    skeleton: Option<Vec<super::Node>>,
     /// Assignments of any value, whole or in part, to a routine's parameter: (routine,
     /// parameter, line). A frame a call passes there is given a value when the program runs.
     param_writes: Vec<(usize, Span32, usize)>,
@@ -1158,6 +1162,7 @@ impl<'l> Extractor<'l> {
             call_refs: Vec::new(),
             call_inline: Vec::new(),
             assigned: Vec::new(),
+            skeleton: None,
             param_writes: Vec::new(),
             assigned_literals: Vec::new(),
             param_assignments: Vec::new(),
@@ -1920,6 +1925,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     let mut offset_refs = Vec::with_capacity(modules.len());
     let mut passed = Vec::with_capacity(modules.len());
     let mut named_at_run_time = Vec::with_capacity(modules.len());
+    let mut skeletons = Vec::with_capacity(modules.len());
     for (m, (x, src, name)) in modules.into_iter().enumerate() {
         if let Some(d) = diagnostics.get_mut(m) {
             d.extend(x.misshapen);
@@ -1931,6 +1937,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         offset_refs.push(x.offset_refs);
         passed.push(x.passed);
         named_at_run_time.push(x.named_at_run_time);
+        skeletons.push(x.skeleton);
         calls.push(Calls {
             uses: x.uses,
             args: x.call_args,
@@ -2012,7 +2019,14 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         replaced,
         own_values,
         declared_first,
-    } = frames_given(&rest, &calls, &routine_lists, &scopes, &module_names);
+    } = frames_given(
+        &rest,
+        skeletons,
+        &calls,
+        &routine_lists,
+        &scopes,
+        &module_names,
+    );
     for (m, (module_calls, r)) in calls.iter().zip(&rest).enumerate() {
         let src = r.6;
         let mut own_texts = own_robhold
@@ -2346,6 +2360,15 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
 }
 
 impl Extractor<'_> {
+    /// Keeps the module's skeleton tree, read by the flow of a frame the program gives a value
+    /// (`rapid::flow`), when the module gives one; a module that gives none drops it before
+    /// the task's usage is resolved, where memory peaks.
+    pub(super) fn keep_skeleton(&mut self, nodes: Vec<super::Node>) {
+        if !self.assigned.is_empty() {
+            self.skeleton = Some(nodes);
+        }
+    }
+
     pub(super) fn statement(&mut self, statement: Statement<'_>) {
         let Statement {
             src,
@@ -2905,8 +2928,12 @@ impl Extractor<'_> {
             None => {
                 for a in arena.children(args) {
                     let Some(arg) = arena.get(a) else { continue };
-                    let value = arena.arg_value(a).and_then(|v| arena.get(v));
-                    if let Some(v) = value {
+                    let value_id = arena.arg_value(a);
+                    let value = value_id.and_then(|v| arena.get(v));
+                    // A literal (a generated program's inline target) passes no name: not
+                    // scanned for names it does not hold.
+                    let literal = value_id.is_some_and(|v| arena.reads_no_name(v));
+                    if let Some(v) = value.filter(|_| !literal) {
                         let plain = matches!(v.kind, ExprKind::Ident | ExprKind::Access);
                         let label = (arg.switch, arg.name_span());
                         self.composed_arg(&u, src, name, label, v.span(), plain);
@@ -3095,6 +3122,11 @@ impl Extractor<'_> {
                     .extend_from_slice(names.get(start..).unwrap_or_default());
             }
         }
+        // A value that reads no name (a literal target, as generated programs pass one to
+        // every motion) hands the routine nothing to bind.
+        if names.len() == start {
+            return;
+        }
         // A module's names stay far below 4 G entries (each is a name of its source).
         let range = start as u32..names.len() as u32;
         self.passed.args.push(crate::resolve::PassedArg {
@@ -3197,10 +3229,11 @@ mod tests {
         let mut x = Extractor::new(&lines);
         let mut sink = |s: Statement<'_>| x.statement(s);
         let parse = if fast {
-            crate::rapid::parser::parse_streamed(src, &mut sink)
+            crate::rapid::parser::parse_streamed(src, &mut sink, crate::rapid::flow::walked)
         } else {
             crate::rapid::parser::parse_streamed_plain(src, &mut sink)
         };
+        x.keep_skeleton(parse.tree.nodes.clone());
         let out = finish_task(vec![(x, src, Arc::from("test.mod"))]).remove(0);
         let targets = (0..out.positions.len())
             .map(|i| {

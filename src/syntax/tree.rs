@@ -191,7 +191,13 @@ pub(crate) struct TreeBuilder<L: Language> {
     /// The nodes, when kept.
     nodes: Vec<Node<L::Kind>>,
     keep: bool,
-    /// Nodes pushed so far, kept or not: the index the next node gets.
+    /// Which leaves are kept, when nodes are (see [`TreeBuilder::skeleton`]).
+    keep_leaf: fn(L::Kind) -> bool,
+    /// Gaps are kept, when nodes are (not in a skeleton: most of a file's leaves, and not
+    /// asked of `keep_leaf` one by one).
+    keep_gaps: bool,
+    /// Nodes pushed so far (when nodes are kept, only those kept): the index the next node
+    /// gets.
     count: u32,
     /// End of the last leaf pushed.
     leaf_end: u32,
@@ -219,6 +225,8 @@ impl<L: Language> TreeBuilder<L> {
         TreeBuilder {
             nodes,
             keep: true,
+            keep_leaf: |_| true,
+            keep_gaps: true,
             count: 1,
             leaf_end: 0,
             in_order: true,
@@ -230,9 +238,23 @@ impl<L: Language> TreeBuilder<L> {
         TreeBuilder {
             nodes: Vec::new(),
             keep: false,
+            keep_leaf: |_| true,
+            keep_gaps: true,
             count: 1,
             leaf_end: 0,
             in_order: true,
+        }
+    }
+
+    /// A builder that keeps every branch and only the leaves `keep_leaf` takes, no gap: a tree that
+    /// does not print back, for a reader that walks a few kinds of statements and need not
+    /// hold a node per gap and declaration (indices are of the nodes kept). The round trip is
+    /// still checked over every leaf.
+    pub(crate) fn skeleton(keep_leaf: fn(L::Kind) -> bool) -> TreeBuilder<L> {
+        TreeBuilder {
+            keep_leaf,
+            keep_gaps: false,
+            ..TreeBuilder::with_capacity(16)
         }
     }
 
@@ -241,6 +263,7 @@ impl<L: Language> TreeBuilder<L> {
         self.count as usize
     }
 
+    /// Pushes a branch, or a leaf the builder keeps ([`TreeBuilder::push_leaf`]).
     #[inline]
     fn push(&mut self, kind: L::Kind, start: u32, end: u32) {
         if self.keep {
@@ -254,11 +277,21 @@ impl<L: Language> TreeBuilder<L> {
         self.count += 1;
     }
 
+    /// Pushes a leaf, when the builder keeps no nodes or keeps one of its kind.
+    #[inline]
+    fn push_leaf(&mut self, kind: L::Kind, start: u32, end: u32) {
+        if !self.keep || (self.keep_leaf)(kind) {
+            self.push(kind, start, end);
+        }
+    }
+
     /// Pushes the bytes from the last leaf up to `upto` as a gap leaf, if there are any.
     #[inline]
     pub(crate) fn gap(&mut self, upto: u32) {
         if upto > self.leaf_end {
-            self.push(L::GAP, self.leaf_end, upto);
+            if self.keep_gaps {
+                self.push(L::GAP, self.leaf_end, upto);
+            }
             self.leaf_end = upto;
         }
     }
@@ -271,7 +304,7 @@ impl<L: Language> TreeBuilder<L> {
         // After the gap the leaf starts at the last one's end, unless it starts before it:
         // bytes the tree would print twice.
         self.in_order &= start == self.leaf_end;
-        self.push(kind, start, end);
+        self.push_leaf(kind, start, end);
         self.leaf_end = end;
     }
 

@@ -1224,6 +1224,18 @@ fn a_motion_that_may_run_before_its_work_object_is_given_a_value_refuses_its_tar
     )]);
     assert!(refused.is_empty(), "{refused:?}");
     assert_eq!(p1, as_given);
+    // The same across modules: the one that gives the value, and one that gives none (whose
+    // statements the flow reads again) and moves before or after the call.
+    let init = module(&format!("  PROC init()\n    {give}\n  ENDPROC\n"));
+    let caller = |body: &str| format!("MODULE B\n  PROC main()\n{body}  ENDPROC\nENDMODULE\n");
+    let after = caller(&format!("    init;\n    {}\n", mv("p1")));
+    let (p1, refused) = correct_task(&[("m.mod", init.clone()), ("b.mod", after)]);
+    assert!(refused.is_empty(), "{refused:?}");
+    assert_eq!(p1, as_given);
+    let before = caller(&format!("    {}\n    init;\n", mv("p1")));
+    let (_, refused) = correct_task(&[("m.mod", init), ("b.mod", before)]);
+    let refused: Vec<_> = refused.iter().map(|r| (r.0.as_str(), r.1)).collect();
+    assert_eq!(refused, [("p1", RefusalKind::TwoWorkObjects)]);
     let offs = module(&format!(
         "  PROC main()\n    {}\n    {give}\n    MoveL Offs(p1,0,0,10),v100,fine,tool0\\WObj:=w1;\n  ENDPROC\n",
         mv("p1")

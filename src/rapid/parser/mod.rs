@@ -447,16 +447,21 @@ pub(crate) fn parse(src: &[u8], sink: &mut StatementSink<'_>) -> Parse {
     parse_into(src, sink, TreeBuilder::with_capacity(src.len() / 40 + 4))
 }
 
-/// [`parse`] for a caller that takes the statements from `sink` and needs only the round trip
-/// of the tree, not its nodes ([`Parse::tree`] stays empty).
-pub(crate) fn parse_streamed(src: &[u8], sink: &mut StatementSink<'_>) -> Parse {
-    parse_into(src, sink, TreeBuilder::verifying())
+/// [`parse`] for a caller that takes the statements from `sink` and needs, of the tree, its
+/// round trip and a skeleton: every branch and only the leaves `keep_leaf` takes
+/// ([`TreeBuilder::skeleton`]).
+pub(crate) fn parse_streamed(
+    src: &[u8],
+    sink: &mut StatementSink<'_>,
+    keep_leaf: fn(NodeKind) -> bool,
+) -> Parse {
+    parse_into(src, sink, TreeBuilder::skeleton(keep_leaf))
 }
 
 /// [`parse_streamed`] on the general paths alone: what the tests hold the fast paths to.
 #[cfg(test)]
 pub(crate) fn parse_streamed_plain(src: &[u8], sink: &mut StatementSink<'_>) -> Parse {
-    let mut p = Parser::new(src, sink, TreeBuilder::verifying());
+    let mut p = Parser::new(src, sink, TreeBuilder::skeleton(super::flow::walked));
     p.fast_paths = false;
     p.file();
     p.finish()
