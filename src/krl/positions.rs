@@ -86,12 +86,15 @@ pub(crate) enum Event {
     },
     /// `EXIT`: program order leaves the innermost loop.
     Exit,
+    /// `RETURN`: program order leaves the routine, with what it has set on this path.
+    Return,
     /// A label, with where the `GOTO`s of its routine that name it are (`jumps`: the index of
     /// each one's [`Event::Goto`]). A jump forward arrives with the state it was made with,
     /// joined there with the path that falls through; one back may arrive with another base
     /// and tool than program order brings, so from there on they are unknown until set again,
     /// unless it cannot (a retry jumping back over nothing that changes them:
-    /// `jumps_keep_state` in resolution); a label no jump names changes nothing.
+    /// `jumps_keep_state` in resolution), and the IPO mode each jump back was made with is
+    /// joined there; a label no jump names changes nothing.
     Label {
         jumps: Vec<usize>,
     },
@@ -1196,6 +1199,9 @@ impl<'a> Extractor<'a> {
             StmtKind::Return => {
                 if let Some(f) = self.function {
                     returned(src, lines, f, stmt.span, out);
+                }
+                if self.in_routine {
+                    out.facts.events.push(Event::Return);
                 }
             }
             StmtKind::Handler => {

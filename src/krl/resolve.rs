@@ -81,11 +81,74 @@ impl FrameLabels {
     }
 }
 
+/// Whether `$IPO_MODE` may be `#TCP` (the tool stationary) at a point of a routine, for each
+/// mode the routine may be entered with: a function of the entry mode, held as its two values,
+/// so that one pass over a routine serves every caller. A point the routine reaches without
+/// setting the mode has it as entered ([`MayTcp::AS_ENTERED`], the default); a call applies its
+/// routine's exit to both ([`MayTcp::then`]); a motion's own is the one for the mode its
+/// routine is entered with ([`MayTcp::given`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct MayTcp {
+    /// Had the routine been entered with `#BASE`.
+    entered_base: bool,
+    /// Had it been entered with `#TCP`.
+    entered_tcp: bool,
+}
+
+impl Default for MayTcp {
+    fn default() -> MayTcp {
+        MayTcp::AS_ENTERED
+    }
+}
+
+impl MayTcp {
+    /// The mode the routine was entered with, not changed since.
+    const AS_ENTERED: MayTcp = MayTcp {
+        entered_base: false,
+        entered_tcp: true,
+    };
+
+    /// Set to `#TCP` (`true`) or `#BASE`, whatever the routine was entered with.
+    fn set(tcp: bool) -> MayTcp {
+        MayTcp {
+            entered_base: tcp,
+            entered_tcp: tcp,
+        }
+    }
+
+    /// Where two paths join: `#TCP` where either may have it.
+    fn or(self, other: MayTcp) -> MayTcp {
+        MayTcp {
+            entered_base: self.entered_base || other.entered_base,
+            entered_tcp: self.entered_tcp || other.entered_tcp,
+        }
+    }
+
+    /// After a call of a routine that leaves `exit` (its mode at its end, by the mode it is
+    /// entered with, which is this one).
+    fn then(self, exit: MayTcp) -> MayTcp {
+        MayTcp {
+            entered_base: exit.given(self.entered_base),
+            entered_tcp: exit.given(self.entered_tcp),
+        }
+    }
+
+    /// Whether it may be `#TCP` when the routine is entered with `#TCP` (`entered_tcp`) or not.
+    fn given(self, entered_tcp: bool) -> bool {
+        if entered_tcp {
+            self.entered_tcp
+        } else {
+            self.entered_base
+        }
+    }
+}
+
 #[derive(Clone, Default, PartialEq)]
 struct State<'e> {
     base: Option<FrameRef>,
     tool: Option<FrameRef>,
-    tcp: bool,
+    /// Whether `$IPO_MODE` may be `#TCP`, by the mode the routine was entered with.
+    tcp: MayTcp,
     /// What `FDAT_ACT` holds, which only a `BAS` call that applies it puts into effect
     /// ([`Setting::ApplyFdat`]). `None`: nothing staged on this path since the routine's entry,
     /// so it holds what it held then.
@@ -299,7 +362,9 @@ fn join<'e>(states: &[State<'e>]) -> Option<State<'e>> {
     Some(State {
         base: agree(|s| &s.base),
         tool: agree(|s| &s.tool),
-        tcp: states.iter().any(|o| o.tcp),
+        tcp: states
+            .iter()
+            .fold(MayTcp::set(false), |tcp, o| tcp.or(o.tcp)),
         staged: join_staged(states),
         aliases: Aliases::join(states.iter().map(|s| &s.aliases)),
         dead: false,
@@ -465,15 +530,38 @@ struct Flow<'e> {
     /// The state each jump forward was made with, by the index of its label's event: what it
     /// arrives there with.
     jumped: Vec<(usize, State<'e>)>,
+    /// The states the routine has returned with at a `RETURN`.
+    returned: Vec<State<'e>>,
+    /// The IPO mode the jumps back to each label (by the index of its event) were made with,
+    /// joined, over every routine of the file (kept by [`Flow::reset`]): what they bring there.
+    /// A jump back is made after its label is passed, so [`routine_exits`] follows a routine
+    /// again while this grows ([`Flow::back_grew`]), and resolution starts with what it found.
+    jumped_back: HashMap<usize, MayTcp>,
+    /// A jump back has brought its label an IPO mode [`Flow::jumped_back`] did not hold.
+    back_grew: bool,
 }
 
 impl<'e> Flow<'e> {
+    /// Program order at the start of a routine. What jumps back bring to labels is kept: the
+    /// labels are the file's, each in one routine.
     fn reset(&mut self) {
         self.state = State::default();
         self.forks.clear();
         self.loops.clear();
         self.copies = None;
         self.jumped.clear();
+        self.returned.clear();
+    }
+
+    /// What the routine leaves set when it returns: the states at its `RETURN`s and at its
+    /// end, joined.
+    fn exit_state(&self) -> State<'e> {
+        if self.returned.is_empty() {
+            return self.state.clone();
+        }
+        let mut all = self.returned.clone();
+        all.push(self.state.clone());
+        join(&all).unwrap_or_default()
     }
 
     /// Follows control event `ev`, the `i`th of `events`; returns the index of the event that
@@ -508,8 +596,23 @@ impl<'e> Flow<'e> {
             Event::Goto { label } => {
                 // Forward, it arrives at its label with this state (from each pass of a loop
                 // it is in); a path already left (a jump after a jump) brings nothing.
-                if let Some(to) = label.filter(|&to| to > i && !self.state.dead) {
-                    self.jumped.push((to, self.state.clone()));
+                match label.filter(|_| !self.state.dead) {
+                    Some(to) if to > i => self.jumped.push((to, self.state.clone())),
+                    Some(to) => {
+                        let had = self.jumped_back.get(&to).copied();
+                        let brings = had.map_or(self.state.tcp, |h| h.or(self.state.tcp));
+                        if had != Some(brings) {
+                            self.jumped_back.insert(to, brings);
+                            self.back_grew = true;
+                        }
+                    }
+                    None => {}
+                }
+                self.state.dead = true;
+            }
+            Event::Return => {
+                if !self.state.dead {
+                    self.returned.push(self.state.clone());
                 }
                 self.state.dead = true;
             }
@@ -517,12 +620,20 @@ impl<'e> Flow<'e> {
                 if jumps.iter().any(|&from| from < i) {
                     self.arrive(i);
                 }
-                // A jump back arrives with what the names copied into held where it was made:
-                // any copy of the routine, joined (rare: a label a `GOTO` names).
                 let back: Vec<usize> = jumps.iter().copied().filter(|&from| from > i).collect();
                 if back.is_empty() {
                     return i + 1;
                 }
+                // A jump back arrives with the IPO mode it was made with: the label's is both
+                // (only that, where no path falls through to it).
+                let brought = self.jumped_back.get(&i).copied();
+                self.state.tcp = match brought {
+                    Some(b) if self.state.dead => b,
+                    Some(b) => self.state.tcp.or(b),
+                    None => self.state.tcp,
+                };
+                // And with what the names copied into held where it was made: any copy of the
+                // routine, joined (rare: a label a `GOTO` names).
                 let copies = self.copies.get_or_insert_with(|| routine_copies(events, i));
                 self.state.aliases.absorb(copies);
                 if jumps_keep_state(events, i, &back, changes) {
@@ -655,7 +766,7 @@ fn jumps_keep_state(
             Event::Set(_) | Event::Reset(_) => false,
             Event::Call { name, .. } => !changes(name),
             Event::Label { jumps } => jumps.is_empty(),
-            Event::Alias { .. } | Event::Motion { .. } | Event::Goto { .. } => true,
+            Event::Alias { .. } | Event::Motion { .. } | Event::Goto { .. } | Event::Return => true,
             Event::Branch(BranchEvent::If | BranchEvent::Switch) => {
                 blocks += 1;
                 true
@@ -690,14 +801,14 @@ impl State<'_> {
         match s {
             Setting::Base(r) => self.base = Some(r.clone()),
             Setting::Tool(r) => self.tool = Some(r.clone()),
-            Setting::Tcp(t) => self.tcp = *t,
+            Setting::Tcp(t) => self.tcp = MayTcp::set(*t),
             Setting::FdatValue(f) => self.staged = Some(staged(Some(f))),
             Setting::Fdat(name) => self.staged = Some(staged(fdats.get(name.as_str()))),
             Setting::ApplyFdat => match &self.staged {
                 Some(f) => {
                     self.base = Some(f.base.clone());
                     self.tool = Some(f.tool.clone());
-                    self.tcp = f.tcp;
+                    self.tcp = MayTcp::set(f.tcp);
                 }
                 // What `FDAT_ACT` held when the routine was entered (staged by a caller, or by a
                 // program run before): not known here.
@@ -713,38 +824,42 @@ impl State<'_> {
                 self.tool = Some(data(fdats.get(name.as_str()).and_then(|f| f.tool)));
             }
             Setting::TcpOfFdat(name) => {
-                self.tcp = fdats
-                    .get(name.as_str())
-                    .and_then(|f| f.tcp)
-                    .unwrap_or(false);
+                self.tcp = MayTcp::set(
+                    fdats
+                        .get(name.as_str())
+                        .and_then(|f| f.tcp)
+                        .unwrap_or(false),
+                );
             }
         }
     }
 }
 
-/// What a routine leaves set when it returns: the base and tool it sets, and what it leaves
-/// staged in `FDAT_ACT`, on every path (`None`: left as the caller had it); `tcp` when some
-/// path leaves `$IPO_MODE` at `#TCP` (a routine that sets `#BASE` again is not taken to undo
-/// a caller's `#TCP`: the motions after the call are then refused as stationary-tool, never
-/// corrected as if the tool were on the flange).
+/// What a routine leaves set when it returns (at its end or a `RETURN`): the base and tool it
+/// sets, and what it leaves staged in `FDAT_ACT`, on every path (`None`: left as the caller had
+/// it); `tcp`, whether `$IPO_MODE` may be `#TCP` then, by the mode the caller had (a routine
+/// that sets `#BASE` on every path takes back a caller's `#TCP`; one that sets it on some
+/// leaves the caller's).
 #[derive(Clone, Default, PartialEq)]
 struct Exit {
     base: Option<FrameRef>,
     tool: Option<FrameRef>,
     staged: Option<Staged>,
-    tcp: bool,
+    tcp: MayTcp,
 }
 
 impl Exit {
-    /// Whether the routine leaves the base, tool, IPO mode or staged FDAT changed.
+    /// Whether the routine leaves the base, tool or staged FDAT changed, or may leave `#TCP`
+    /// for a caller that had `#BASE`: what may make a motion after its call move otherwise than
+    /// program order without it takes it to. Setting `#BASE` again does not count: it only
+    /// takes back a stationary tool, and a motion taken to have one is refused as
+    /// stationary-tool whatever else it may have.
     fn changes(&self) -> bool {
-        self.base.is_some() || self.tool.is_some() || self.staged.is_some() || self.tcp
+        self.base.is_some() || self.tool.is_some() || self.staged.is_some() || self.tcp.entered_base
     }
 
     fn apply_to(&self, state: &mut State<'_>) {
-        if self.tcp {
-            state.tcp = true;
-        }
+        state.tcp = state.tcp.then(self.tcp);
         if let Some(b) = &self.base {
             state.base = Some(b.clone());
         }
@@ -798,11 +913,31 @@ fn written_through_parameters(files: &[ParsedFile], facts: &[Facts]) -> Vec<Stri
     out
 }
 
+/// What program order brings into the routines of a program and to the labels jumps back
+/// reach, found with the routines' exits ([`routine_exits`]).
+#[derive(Default)]
+struct Arrivals {
+    /// The routines a call may enter with `$IPO_MODE` at `#TCP`, by module and name: each may
+    /// run with the stationary tool, whatever else enters it. Any other is taken to be entered
+    /// with `#BASE`, as KSS starts a program: the program's main routine, an interrupt's, one
+    /// only a program not given calls.
+    tcp_entered: std::collections::HashSet<(usize, String)>,
+    /// Per file, what the jumps back to each label bring there ([`Flow::jumped_back`]).
+    jumped_back: Vec<HashMap<usize, MayTcp>>,
+}
+
 /// The [`Exit`] of every routine of the program (a subroutine that runs `BAS(#BASE,2)` or
 /// `$BASE=BASE_DATA[2]` sets the base of the motions after its call), found by following each
 /// routine's program order from an unknown entry; calls inside are followed by repeating this
-/// up to [`CALL_DEPTH`] times (a cycle settles or stops there).
-fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modules) -> Exits {
+/// up to [`CALL_DEPTH`] times (a cycle settles or stops there). With them, the [`Arrivals`]:
+/// the IPO mode each call is made with, by the mode its routine is entered with, gives which
+/// routines are entered with `#TCP` (followed through the calls to a fixed point); a routine
+/// whose jumps back bring a label more than it was followed from is followed again.
+fn routine_exits(
+    facts: &[Facts],
+    fdats: &[HashMap<Name, Fdat>],
+    modules: &Modules,
+) -> (Exits, Arrivals) {
     let mut exits = Exits::default();
     for (fi, f) in facts.iter().enumerate() {
         for name in &f.public_routines {
@@ -810,7 +945,13 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
         }
     }
     let no_fdats = HashMap::default();
+    // Each call (its file, the routine it is made in, the routine called) with the IPO mode
+    // it is made with, and what the jumps back of each file bring: of the last pass.
+    let mut calls: Vec<(usize, Option<&str>, &str, MayTcp)> = Vec::new();
+    let mut jumped_back: Vec<HashMap<usize, MayTcp>> = Vec::new();
     for _ in 0..CALL_DEPTH {
+        calls.clear();
+        jumped_back.clear();
         let mut next: std::collections::HashMap<(usize, String), Exit> = Default::default();
         for (fi, f) in facts.iter().enumerate() {
             let module = modules.of(fi);
@@ -818,28 +959,41 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
             let fdats = fdats.get(module).unwrap_or(&no_fdats);
             let mut current: Option<&str> = None;
             let mut flow = Flow::default();
-            let close =
-                |name: Option<&str>,
-                 state: &State,
-                 next: &mut std::collections::HashMap<(usize, String), Exit>| {
-                    if let Some(n) = name {
+            // The index of the current routine's first event.
+            let mut start = 0;
+            let mut i = 0;
+            loop {
+                let ev = f.events.get(i);
+                if let None | Some(Event::Reset(_)) = ev {
+                    if std::mem::take(&mut flow.back_grew) {
+                        // A jump back brings a label an IPO mode the routine was not followed
+                        // with from there: again, with it.
+                        flow.reset();
+                        i = start;
+                        continue;
+                    }
+                    if let Some(n) = current {
+                        let state = flow.exit_state();
                         next.entry((module, n.to_owned())).or_insert(Exit {
-                            base: state.base.clone(),
-                            tool: state.tool.clone(),
-                            staged: state.staged.clone(),
+                            base: state.base,
+                            tool: state.tool,
+                            staged: state.staged,
                             tcp: state.tcp,
                         });
                     }
-                };
-            let mut i = 0;
-            while let Some(ev) = f.events.get(i) {
+                    let Some(Event::Reset(name)) = ev else {
+                        break;
+                    };
+                    current = name.as_deref();
+                    flow.reset();
+                    i += 1;
+                    start = i;
+                    continue;
+                }
+                let Some(ev) = ev else { break };
                 match ev {
-                    Event::Reset(name) => {
-                        close(current, &flow.state, &mut next);
-                        current = name.as_deref();
-                        flow.reset();
-                    }
                     Event::Call { name, .. } => {
+                        calls.push((fi, current, name.as_str(), flow.state.tcp));
                         if let Some(exit) = exits.of(module, name) {
                             exit.apply_to(&mut flow.state);
                         }
@@ -849,23 +1003,51 @@ fn routine_exits(facts: &[Facts], fdats: &[HashMap<Name, Fdat>], modules: &Modul
                     | Event::Loop { .. }
                     | Event::EndLoop
                     | Event::Exit
+                    | Event::Return
                     | Event::Label { .. }
                     | Event::Goto { .. } => {
                         i = flow.control(i, ev, &f.events, &changes);
                         continue;
                     }
-                    Event::Alias { .. } | Event::Motion { .. } => {}
+                    Event::Reset(_) | Event::Alias { .. } | Event::Motion { .. } => {}
                 }
                 i += 1;
             }
-            close(current, &flow.state, &mut next);
+            jumped_back.push(flow.jumped_back);
         }
         if next == exits.by_routine {
             break;
         }
         exits.by_routine = next;
     }
-    exits
+    // A routine is entered with `#TCP` when a call may be made with it, given the mode the
+    // calling routine is entered with: followed until no routine is added.
+    let mut tcp_entered: std::collections::HashSet<(usize, &str)> = Default::default();
+    loop {
+        let mut added = false;
+        for &(fi, caller, callee, tcp) in &calls {
+            let module = modules.of(fi);
+            let entered = caller.is_some_and(|c| tcp_entered.contains(&(module, c)));
+            if !tcp.given(entered) {
+                continue;
+            }
+            if let Some(key) = exits.routine(module, callee) {
+                added |= tcp_entered.insert(key);
+            }
+        }
+        if !added {
+            break;
+        }
+    }
+    let tcp_entered = tcp_entered
+        .into_iter()
+        .map(|(m, name)| (m, name.to_owned()))
+        .collect();
+    let arrivals = Arrivals {
+        tcp_entered,
+        jumped_back,
+    };
+    (exits, arrivals)
 }
 
 /// KSS's own routines, which programs call without defining them and which set no base, tool or
@@ -1015,10 +1197,21 @@ impl Exits {
     /// else a public one of another module (KRL calls a `DEF` of another module only when it
     /// is that module's own or `GLOBAL`).
     fn of(&self, module: usize, name: &str) -> Option<&Exit> {
-        self.by_routine.get(&(module, name.to_owned())).or_else(|| {
-            let &m = self.public.get(name)?;
-            self.by_routine.get(&(m, name.to_owned()))
-        })
+        self.called(module, name).map(|(_, exit)| exit)
+    }
+
+    /// The routine a call of `name` from `module` runs, by module and name.
+    fn routine<'n>(&self, module: usize, name: &'n str) -> Option<(usize, &'n str)> {
+        self.called(module, name).map(|(m, _)| (m, name))
+    }
+
+    /// The module of the routine a call of `name` from `module` runs, and its exit.
+    fn called(&self, module: usize, name: &str) -> Option<(usize, &Exit)> {
+        if let Some(exit) = self.by_routine.get(&(module, name.to_owned())) {
+            return Some((module, exit));
+        }
+        let &m = self.public.get(name)?;
+        Some((m, self.by_routine.get(&(m, name.to_owned()))?))
     }
 }
 
@@ -1250,7 +1443,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
             }
         }
     }
-    let exits = routine_exits(facts, &fdats, &modules);
+    let (exits, mut arrivals) = routine_exits(facts, &fdats, &modules);
     // A routine run where trackfix does not follow it (a function, an interrupt's or a
     // trigger's) that leaves the base or tool changed: the first, by name.
     let changing: Vec<&str> = facts
@@ -1343,6 +1536,11 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
             let own = counts.get(fi).copied().unwrap_or_default();
             let mut inline_at: Option<HashMap<crate::syntax::Span, usize>> = None;
             let mut flow = Flow::default();
+            if let Some(back) = arrivals.jumped_back.get_mut(fi) {
+                flow.jumped_back = std::mem::take(back);
+            }
+            // Whether the routine followed is entered with `#TCP` by a call.
+            let mut tcp_entered = false;
             let module = modules.of(fi);
             let changes = |name: &str| exits.of(module, name).is_some_and(Exit::changes);
             let fdats = fdats.get(module).unwrap_or(&no_fdats);
@@ -1353,7 +1551,11 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
             while let Some(ev) = events.get(i) {
                 i += 1;
                 match ev {
-                    Event::Reset(_) => {
+                    Event::Reset(name) => {
+                        tcp_entered = !arrivals.tcp_entered.is_empty()
+                            && name.as_ref().is_some_and(|n| {
+                                arrivals.tcp_entered.contains(&(module, n.clone()))
+                            });
                         flow.reset();
                         // What a copy into a name other routines see left there, on an earlier
                         // call of this routine or of another.
@@ -1370,6 +1572,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                     | Event::Loop { .. }
                     | Event::EndLoop
                     | Event::Exit
+                    | Event::Return
                     | Event::Label { .. }
                     | Event::Goto { .. } => {
                         i = flow.control(i - 1, ev, &events, &changes);
@@ -1450,7 +1653,7 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
                             line: *line,
                             frame: local.base.as_ref().and_then(|b| labels.get(b, false)),
                             tool: local.tool.as_ref().and_then(|t| labels.get(t, true)),
-                            stationary: local.tcp,
+                            stationary: local.tcp.given(tcp_entered),
                             run_time: match (&local.base, lines.get(fi)) {
                                 (Some(FrameRef::RunTime(at)), Some(l)) => {
                                     Some(RunTimeValue::Frame {

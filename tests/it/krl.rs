@@ -2356,6 +2356,41 @@ fn a_forward_jump_brings_its_state_to_the_label() {
     assert_eq!(used(tcp)[0], (vec!["BASE_DATA[1]".to_owned()], false, true));
 }
 
+/// Program `src` with a `cell.dat` of `XP1`, `XP2` and `XP3` (and the sample `$config.dat`).
+fn with_three_points(src: &str) -> Program {
+    let dat = "DEFDAT cell\n\
+        DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        DECL E6POS XP2={X 410.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        DECL E6POS XP3={X 420.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        ENDDAT\n";
+    load_cell_pair(src, dat)
+}
+
+/// Whether each point of [`with_three_points`] is moved to with the stationary tool in program
+/// `src`, by name.
+fn stationary_points(src: &str) -> Vec<(String, bool)> {
+    with_three_points(src)
+        .files
+        .iter()
+        .flat_map(|f| f.positions())
+        .map(|t| {
+            (
+                t.name.as_deref().unwrap_or_default().to_owned(),
+                t.usage.stationary_tool(),
+            )
+        })
+        .collect()
+}
+
+/// `XP1`, `XP2` and `XP3` by name, each with whether it is moved to with the stationary tool.
+fn stationary_named(xp1: bool, xp2: bool, xp3: bool) -> Vec<(String, bool)> {
+    vec![
+        ("XP1".to_owned(), xp1),
+        ("XP2".to_owned(), xp2),
+        ("XP3".to_owned(), xp3),
+    ]
+}
+
 /// A subroutine that leaves `$IPO_MODE` at `#TCP` leaves it so for the motions after its call:
 /// they move with the stationary tool. Before, a routine's exit carried only the base, tool and
 /// staged FDAT it set, so `SETTCP()` then `LIN XP1` was corrected in the base as a tool on the
@@ -2363,36 +2398,162 @@ fn a_forward_jump_brings_its_state_to_the_label() {
 #[test]
 fn a_subroutine_that_sets_the_stationary_tool_leaves_it_set_after_its_call() {
     let stationary = |sub: &str| {
-        let src = format!(
+        stationary_points(&format!(
             "DEF cell( )\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  LIN XP2\n  SETTCP()\n  \
              LIN XP1\nEND\nDEF SETTCP( )\n{sub}END\n"
-        );
-        let dat = "DEFDAT cell\n\
-            DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
-            DECL E6POS XP2={X 410.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
-            ENDDAT\n";
-        let p = load_cell_pair(&src, dat);
-        p.files
-            .iter()
-            .flat_map(|f| f.positions())
-            .map(|t| {
-                (
-                    t.name.as_deref().unwrap_or_default().to_owned(),
-                    t.usage.stationary_tool(),
-                )
-            })
-            .collect::<Vec<_>>()
+        ))
     };
-    let named = |a: bool, b: bool| vec![("XP1".to_owned(), a), ("XP2".to_owned(), b)];
     // XP1, moved to after the call, with the stationary tool; XP2, before it, on the flange.
-    assert_eq!(stationary("  $IPO_MODE=#TCP\n"), named(true, false));
+    assert_eq!(
+        stationary("  $IPO_MODE=#TCP\n"),
+        stationary_named(true, false, false)
+    );
     // On one path of the routine: may be stationary, so not corrected as on the flange.
     assert_eq!(
         stationary("  IF $IN[1] THEN\n    $IPO_MODE=#TCP\n  ENDIF\n"),
-        named(true, false)
+        stationary_named(true, false, false)
     );
     // A routine that leaves the IPO mode alone.
-    assert_eq!(stationary("  $OUT[1]=TRUE\n"), named(false, false));
+    assert_eq!(
+        stationary("  $OUT[1]=TRUE\n"),
+        stationary_named(false, false, false)
+    );
+}
+
+/// A routine a call enters with `$IPO_MODE` at `#TCP` moves with the stationary tool until it
+/// sets `#BASE`, whatever other calls enter it with, and passes it on to the routines it calls.
+/// Before, every routine was followed as if entered with `#BASE`, so `$IPO_MODE=#TCP` then
+/// `MOVE_PART()` corrected the routine's `LIN XP1` in the base as a tool on the flange.
+#[test]
+fn a_routine_entered_with_the_stationary_tool_moves_with_it() {
+    let stationary = |main: &str, routines: &str| {
+        stationary_points(&format!(
+            "DEF cell( )\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  LIN XP3\n{main}END\n\
+             DEF MOVE_PART( )\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  LIN XP1\nEND\n\
+             {routines}"
+        ))
+    };
+    // Entered with the stationary tool; the caller's motion before it on the flange.
+    assert_eq!(
+        stationary("  $IPO_MODE=#TCP\n  MOVE_PART()\n", ""),
+        stationary_named(true, false, false)
+    );
+    // Entered with #BASE by one call, with #TCP by another: it may run with the stationary
+    // tool.
+    assert_eq!(
+        stationary("  MOVE_PART()\n  $IPO_MODE=#TCP\n  MOVE_PART()\n", ""),
+        stationary_named(true, false, false)
+    );
+    // Through a routine that calls it: entered with what that one was entered with.
+    assert_eq!(
+        stationary(
+            "  $IPO_MODE=#TCP\n  OUTER()\n",
+            "DEF OUTER( )\n  LIN XP2\n  MOVE_PART()\nEND\n"
+        ),
+        stationary_named(true, true, false)
+    );
+    // The stationary tool set after the call, or only in another routine, reaches no call.
+    assert_eq!(
+        stationary(
+            "  MOVE_PART()\n  $IPO_MODE=#TCP\n",
+            "DEF OTHER( )\n  $IPO_MODE=#TCP\n  LIN XP2\nEND\n"
+        ),
+        stationary_named(false, true, false)
+    );
+    // A routine that sets #BASE before it moves: on the flange, whatever it is entered with.
+    assert_eq!(
+        stationary(
+            "  $IPO_MODE=#TCP\n  OUTER()\n",
+            "DEF OUTER( )\n  $IPO_MODE=#BASE\n  LIN XP2\n  MOVE_PART()\nEND\n"
+        ),
+        stationary_named(false, false, false)
+    );
+}
+
+/// A label a jump back reaches is reached with the IPO mode the jump was made with: after
+/// `M1: LIN XP1 … $IPO_MODE=#TCP … GOTO M1` the second time round `XP1` moves with the
+/// stationary tool. Before, the label kept the IPO mode of the path falling through to it, so
+/// `XP1` was corrected in the base as a tool on the flange.
+#[test]
+fn a_jump_back_brings_its_ipo_mode_to_the_label() {
+    let stationary = |body: &str| {
+        stationary_points(&format!(
+            "DEF cell( )\n  LIN XP3\nM1:\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  \
+             LIN XP1\n{body}END\n"
+        ))
+    };
+    let back = "  IF $IN[1] THEN\n    GOTO M1\n  ENDIF\n";
+    assert_eq!(
+        stationary(&format!("  $IPO_MODE=#TCP\n  LIN XP2\n{back}")),
+        stationary_named(true, true, false)
+    );
+    // Set #BASE again before the jump: the label is reached with #BASE both ways.
+    assert_eq!(
+        stationary(&format!(
+            "  $IPO_MODE=#TCP\n  LIN XP2\n  $IPO_MODE=#BASE\n{back}"
+        )),
+        stationary_named(false, true, false)
+    );
+    // Through a second label: `M2` is reached with #TCP by its own jump back, and the path
+    // from it brings that to the jump back to `M1` (followed round until nothing more comes).
+    assert_eq!(
+        stationary(
+            "M2:\n  LIN XP2\n  IF $IN[2] THEN\n    $IPO_MODE=#TCP\n    GOTO M2\n  ENDIF\n  \
+             IF $IN[3] THEN\n    GOTO M1\n  ENDIF\n"
+        ),
+        stationary_named(true, true, false)
+    );
+}
+
+/// A subroutine that sets `$IPO_MODE=#BASE` on every path takes back a caller's `#TCP`: the
+/// motions after its call are on the flange. One that sets it on some path only leaves the
+/// caller's. Before, a routine was never taken to undo a caller's `#TCP`, and the motions
+/// after the call were refused as stationary-tool.
+#[test]
+fn a_subroutine_that_sets_base_takes_back_the_callers_stationary_tool() {
+    let stationary = |sub: &str| {
+        stationary_points(&format!(
+            "DEF cell( )\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  $IPO_MODE=#TCP\n  \
+             LIN XP2\n  TO_BASE()\n  LIN XP1\nEND\nDEF TO_BASE( )\n{sub}END\n"
+        ))
+    };
+    assert_eq!(
+        stationary("  $IPO_MODE=#BASE\n"),
+        stationary_named(false, true, false)
+    );
+    assert_eq!(
+        stationary("  IF $IN[1] THEN\n    $IPO_MODE=#BASE\n  ENDIF\n"),
+        stationary_named(true, true, false)
+    );
+}
+
+/// A `RETURN` leaves its routine with what it has set on that path: the caller's motions after
+/// the call get it joined with what the routine's end leaves. Before, `RETURN` was not followed,
+/// so a path that set `#TCP` (or another base) and returned was taken over by the `#BASE` (or
+/// base) set after it, and the caller's point was corrected with that.
+#[test]
+fn a_return_leaves_the_routine_with_what_it_set() {
+    // The routine sets `returned` then returns on one path, `at_end` on the other.
+    let src = |returned: &str, at_end: &str| {
+        format!(
+            "DEF cell( )\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  LIN XP2\n  SET()\n  \
+             LIN XP1\nEND\nDEF SET( )\n  IF $IN[1] THEN\n    {returned}\n    RETURN\n  \
+             ENDIF\n  {at_end}\nEND\n"
+        )
+    };
+    assert_eq!(
+        stationary_points(&src("$IPO_MODE=#TCP", "$IPO_MODE=#BASE")),
+        stationary_named(true, false, false)
+    );
+    // The base: 2 on the returning path, 1 at the end; unknown after the call.
+    let p = with_three_points(&src("$BASE=BASE_DATA[2]", "$BASE=BASE_DATA[1]"));
+    let unresolved: Vec<bool> = p
+        .files
+        .iter()
+        .flat_map(|f| f.positions())
+        .map(|t| t.usage.unresolved_frame().is_some())
+        .collect();
+    assert_eq!(unresolved, [true, false, false]);
 }
 
 /// KRL modules named together from one folder are one program, as a KSS tree's `Program`
