@@ -212,9 +212,10 @@ pub(crate) struct Use<'a> {
     /// The frame or tool is a parameter of the use's routine, whatever each caller passes:
     /// every target reached is used with one trackfix cannot tell.
     pub(crate) passed: Option<std::sync::Arc<PassedFrames>>,
-    /// The use may run while its work object holds its declared value, the program giving the
-    /// frame another: every target reached is moved to in both.
-    pub(crate) two_values: Option<std::sync::Arc<TwoValuesAt>>,
+    /// The use may run while its work object (or its tool) holds its declared value, the
+    /// program giving the frame another: every target reached is moved to in both. One for
+    /// each of the two frames at most.
+    pub(crate) two_values: Option<std::sync::Arc<[TwoValuesAt]>>,
     /// Positional arguments, in order, that are plain references (`None` for any other
     /// expression), in the file's source (as a RAPID call record keeps them).
     pub(crate) args: &'a [Option<crate::syntax::Span32>],
@@ -665,11 +666,14 @@ pub(crate) struct PassedFrames {
     pub(crate) tool: Option<String>,
 }
 
-/// A use that may run while its work object holds its declared value, the program giving the
-/// frame another (see [`TwoValues`](crate::position::TwoValues)): each line as (file, line).
+/// A use that may run while its work object or tool holds its declared value, the program
+/// giving the frame another (see [`TwoValues`](crate::position::TwoValues)): each line as
+/// (file, line).
 #[derive(Clone, Debug)]
 pub(crate) struct TwoValuesAt {
-    /// The work object's name as declared.
+    /// A work object's or a tool's.
+    pub(crate) kind: crate::position::FrameKind,
+    /// The frame's name as declared.
     pub(crate) frame: String,
     pub(crate) declared: (usize, usize),
     /// The (first) assignment of the other value.
@@ -688,7 +692,7 @@ struct MovesWith {
     stationary: bool,
     run_time: Option<RunTimeValue>,
     passed: Option<std::sync::Arc<PassedFrames>>,
-    two_values: Option<std::sync::Arc<TwoValuesAt>>,
+    two_values: Option<std::sync::Arc<[TwoValuesAt]>>,
 }
 
 impl MovesWith {
@@ -712,7 +716,7 @@ struct Recorded<'u> {
     stationary: bool,
     run_time: Option<&'u RunTimeValue>,
     passed: Option<&'u PassedFrames>,
-    two_values: Option<&'u TwoValuesAt>,
+    two_values: Option<&'u [TwoValuesAt]>,
     /// 1-based line of the use.
     line: usize,
 }
@@ -726,22 +730,26 @@ fn record(files: &mut [FileFacts<'_>], from: usize, (m, i): TargetAt, u: &Record
         _ => None,
     };
     // Each line of the other value's finding, named with its file when not the target's.
-    let two_values = u.two_values.map(|t| {
-        let at = |(file, line): (usize, usize)| UseLine {
-            line,
-            file: (file != m)
-                .then(|| files.get(file).map(|f| f.name.clone()))
-                .flatten(),
-        };
-        crate::position::TwoValues {
+    let at = |(file, line): (usize, usize)| UseLine {
+        line,
+        file: (file != m)
+            .then(|| files.get(file).map(|f| f.name.clone()))
+            .flatten(),
+    };
+    let two_values: Vec<crate::position::TwoValues> = u
+        .two_values
+        .unwrap_or_default()
+        .iter()
+        .map(|t| crate::position::TwoValues {
+            kind: t.kind,
             frame: t.frame.clone(),
             declared: at(t.declared),
             given: at(t.given),
             motion: at(t.motion),
-        }
-    });
+        })
+        .collect();
     if let Some(usage) = files.get_mut(m).and_then(|f| f.positions.usage_mut(i)) {
-        if let Some(t) = two_values {
+        for t in two_values {
             usage.mark_two_values(t);
         }
         usage.record_shared(u.frame, u.tool, u.stationary, u.line);

@@ -247,6 +247,14 @@ pub(crate) fn run_inspect(args: InspectArgs) -> anyhow::Result<Exit> {
     if let Some(robot) = &cell
         && let Some(kin) = &robot.kinematics
     {
+        // The reach reads the cell's entries as the transforms do: what they make of the
+        // program's declarations is said as the transforms say it.
+        super::transform::show_readings(
+            &batch.programs,
+            &[robot],
+            super::transform::Readings::Cell,
+            Default::default(),
+        )?;
         for p in &batch.programs {
             let reach =
                 trackfix::kinematics::reach::reach_program(p, robot, kin, &Default::default());

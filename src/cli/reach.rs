@@ -83,12 +83,12 @@ pub(crate) fn run(a: ReachArgs) -> anyhow::Result<Exit> {
                 Ok(p) => {
                     // What the cell's entries make of the program's work objects (an object
                     // frame kept), as the transforms say it.
-                    let mut stderr = std::io::stderr().lock();
-                    for (fi, d) in trackfix::transform::cell::frame_readings(&p, &[robot]) {
-                        if let Some(file) = p.files.get(fi) {
-                            writeln!(stderr, "{}", file.render(&d).trim_end())?;
-                        }
-                    }
+                    super::transform::show_readings(
+                        std::slice::from_ref(&p),
+                        &[robot],
+                        super::transform::Readings::Cell,
+                        Default::default(),
+                    )?;
                     files.extend(reach_program(&p, robot, kin, &reach_options));
                 }
                 Err(e) if e.is_skip() => {

@@ -1116,7 +1116,7 @@ fn run_each(
     }
     if !out.verbosity.quiet {
         let robots: Vec<&Robot> = robot.into_iter().chain(others.iter().copied()).collect();
-        show_readings(&programs, &robots, out.verbosity)?;
+        show_readings(&programs, &robots, Readings::ProgramAndCell, out.verbosity)?;
     }
     if let Some(exit) = check_stamps(command, &programs, prov, out)? {
         return Ok(exit);
@@ -1198,14 +1198,26 @@ fn refuse_syntax_errors(command: &str, programs: &[Program]) -> anyhow::Result<O
     Ok(Some(Exit::Usage))
 }
 
+/// Which warnings [`show_readings`] shows.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) enum Readings {
+    /// The program's and the cell's: a transform, whose result depends on both.
+    ProgramAndCell,
+    /// The cell's alone: a command that reads the cell and lists the program's own findings
+    /// elsewhere (`inspect`'s report) or not at all (`reach`).
+    Cell,
+}
+
 /// Shows the warnings that say what the transforms take the programs to mean where it is not
-/// what is written ([`Diagnostic::shapes_transforms`]), the program's and those of the cell's
-/// entries for `robots`: the result depends on them.
+/// what is written ([`Diagnostic::shapes_transforms`]), the program's (`which` says whether)
+/// and those of the cell's entries for `robots`: the result depends on them, and on what
+/// reads the cell as they do (`reach`, `inspect` with a robot).
 ///
 /// [`Diagnostic::shapes_transforms`]: trackfix::syntax::Diagnostic::shapes_transforms
-fn show_readings(
+pub(super) fn show_readings(
     programs: &[Program],
     robots: &[&Robot],
+    which: Readings,
     verbosity: Verbosity,
 ) -> anyhow::Result<()> {
     let mut stderr = std::io::stderr().lock();
@@ -1215,7 +1227,10 @@ fn show_readings(
         // What the cell's entries for the robots the transform uses make of the declarations.
         let cell = trackfix::transform::cell::frame_readings(p, robots);
         for (fi, file) in p.files.iter().enumerate() {
-            let own = file.diagnostics.iter().filter(|d| d.shapes_transforms);
+            let own = file
+                .diagnostics
+                .iter()
+                .filter(|d| which == Readings::ProgramAndCell && d.shapes_transforms);
             let of_cell = cell.iter().filter(|(f, _)| *f == fi).map(|(_, d)| d);
             for d in own.chain(of_cell) {
                 let text = file.render(d);

@@ -130,6 +130,15 @@ fn is_flange(name: &str) -> bool {
     matches!(n.as_str(), "tool0" | "$nullframe" | "tool_data[0]")
 }
 
+/// Why a tool cannot be put on the flange ([`resolve_tool`]), and what to do, in words.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ToolUnresolved {
+    /// What is wrong with the tool.
+    pub message: String,
+    /// What to do.
+    pub hint: String,
+}
+
 /// The tool `name` on the flange: the cell's `[robot.NAME.tool]` entry, else the program's
 /// declaration (RAPID `tooldata` `tframe`, KRL `TOOL_DATA[n]`), else the flange for `tool0`.
 pub fn resolve_tool<'a>(
@@ -137,27 +146,46 @@ pub fn resolve_tool<'a>(
     own: Option<&'a ParsedFile>,
     overrides: &BTreeMap<String, Pose>,
     name: &str,
-) -> Result<Pose, String> {
-    if let Some(p) = overrides.get(&crate::transform::cell::frame_key(name)) {
-        return Ok(*p);
-    }
+) -> Result<Pose, ToolUnresolved> {
+    let unresolved = |message: String| ToolUnresolved {
+        message,
+        hint: "give the tool under [robot.NAME.tool] in the cell file".to_owned(),
+    };
     // The declaration of `own`, the target's file, first: two RAPID modules may each declare
     // a `LOCAL` tool of one name.
-    let decl = program
-        .frame_seen_from(own, name, |k| k == FrameKind::Tool)
-        .map(|(_, d)| d);
-    match decl {
-        Some(d) if d.held_by_robot == Some(false) => Err(format!(
+    let decl = || {
+        program
+            .frame_seen_from(own, name, |k| k == FrameKind::Tool)
+            .map(|(_, d)| d)
+    };
+    if let Some(p) = overrides.get(&crate::transform::cell::frame_key(name)) {
+        // The program gives the tool another value, which the robot then moves with: the
+        // cell's entry stands for the declaration, not for that value (as for a work object).
+        return match decl() {
+            Some(d) if d.assigned => Err(ToolUnresolved {
+                message: format!(
+                    "tool `{name}` is given another value by the program (line {}) than the declaration the cell file's entry for it replaces: the robot moves with the program's value",
+                    d.line
+                ),
+                hint: format!(
+                    "remove `{name}` from the cell file's [robot.NAME.tool], or declare it with the value the program gives it"
+                ),
+            }),
+            _ => Ok(*p),
+        };
+    }
+    match decl() {
+        Some(d) if d.held_by_robot == Some(false) => Err(unresolved(format!(
             "tool `{name}` is stationary (robhold FALSE): the robot holds the work piece"
-        )),
+        ))),
         Some(d) => d
             .pose()
-            .ok_or_else(|| format!("tool `{name}` has fields that are not numbers")),
+            .ok_or_else(|| unresolved(format!("tool `{name}` has fields that are not numbers"))),
         None if is_flange(name) => Ok(Pose::identity()),
-        None => Err(format!(
+        None => Err(unresolved(format!(
             "tool not resolved: `{name}` is not declared in the program; give it under \
              [robot.NAME.tool] in the cell file"
-        )),
+        ))),
     }
 }
 
@@ -285,6 +313,11 @@ fn cartesian(
             r.reachable = Some(false);
         }
     }
+    // The declaration's value of the tool is not kept once the program's stands for it.
+    if let Some(t) = p.usage.two_values(FrameKind::Tool) {
+        r.warnings
+            .push(format!("with tool {t}: checked with the value given only"));
+    }
     r
 }
 
@@ -319,7 +352,7 @@ fn cartesian_with(
     };
     let tool = match resolve_tool(program, Some(file), &robot.tools, tool_name) {
         Ok(t) => t,
-        Err(msg) => return r.not_checked(msg),
+        Err(e) => return r.not_checked(e.message),
     };
     let skid = match p.skid(robot.skid_axis) {
         Skid::At(s) => s,

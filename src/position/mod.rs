@@ -423,8 +423,9 @@ struct RareUsage {
     /// The first motion to the target with a tool its routine is passed.
     unresolved_tool: Option<UnresolvedFrame>,
     /// The first motion to the target that may run while its work object holds its declared
-    /// value, the program giving the frame another.
-    two_values: Option<TwoValues>,
+    /// value, the program giving the frame another; and the first that may while its tool
+    /// does (at most one of each kind).
+    two_values: Vec<TwoValues>,
 }
 
 /// A target's usage is kept for each of 100,000 targets: a layout change that grows it fails
@@ -489,15 +490,17 @@ pub enum RunTimeValue {
     },
 }
 
-/// A work object a target is moved to in with two values: its declaration's, and the one the
-/// program gives it (`wA := [FALSE,TRUE,"",[[…]]…];`), which trackfix takes for the frame
-/// (docs/design.md, "Frames the program assigns"). A motion to the target may run while the
-/// declared value still holds: before the assignment in program order, in a routine called
+/// A work object or tool a target is moved to with in two values: its declaration's, and the
+/// one the program gives it (`wA := [FALSE,TRUE,"",[[…]]…];`), which trackfix takes for the
+/// frame (docs/design.md, "Frames the program assigns"). A motion to the target may run while
+/// the declared value still holds: before the assignment in program order, in a routine called
 /// before it as well as after, in `main` the first time it runs, or in a routine the program
 /// enters from outside.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct TwoValues {
-    /// The work object's name as declared.
+    /// A work object's or a tool's.
+    pub kind: FrameKind,
+    /// The frame's name as declared.
     pub frame: String,
     /// Its declaration.
     pub declared: UseLine,
@@ -783,18 +786,25 @@ impl Usage {
         }
     }
 
-    /// The target is moved to in two values of one work object (see [`TwoValues`]): a motion
-    /// to it may run while the frame holds its declared value, the program giving it another.
-    pub fn two_values(&self) -> Option<&TwoValues> {
-        self.rare.as_ref()?.two_values.as_ref()
+    /// The target is moved to in two values of its work object or of its tool (see
+    /// [`TwoValues`]): a motion to it may run while the frame holds its declared value, the
+    /// program giving it another. The first motion found for each kind of frame.
+    pub fn two_values(&self, kind: FrameKind) -> Option<&TwoValues> {
+        let rare = self.rare.as_ref()?;
+        rare.two_values.iter().find(|t| t.kind == kind)
     }
 
-    /// Records a motion to the target that may run while its work object holds its declared
-    /// value, keeping the first.
+    /// Every [`two_values`](Usage::two_values) of the target, in the order found.
+    pub fn every_two_values(&self) -> &[TwoValues] {
+        self.rare.as_ref().map_or(&[], |r| r.two_values.as_slice())
+    }
+
+    /// Records a motion to the target that may run while its work object or tool holds its
+    /// declared value, keeping the first of each kind.
     pub fn mark_two_values(&mut self, why: TwoValues) {
         let rare = self.rare.get_or_insert_with(Box::default);
-        if rare.two_values.is_none() {
-            rare.two_values = Some(why);
+        if rare.two_values.iter().all(|t| t.kind != why.kind) {
+            rare.two_values.push(why);
         }
     }
 

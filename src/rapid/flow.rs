@@ -1,5 +1,6 @@
-//! Which value a work object holds where a motion uses it, when the program gives the frame one
-//! other value than its declaration (docs/design.md, "Frames the program assigns").
+//! Which value a frame (a work object or a tool) holds where a motion uses it, when the program
+//! gives the frame one other value than its declaration (docs/design.md, "Frames the program
+//! assigns").
 //!
 //! Asked only of such a frame (most programs give no frame a value), over the modules' skeleton
 //! trees: their branches and statements' leaves ([`walked`]), which the parse that reads the

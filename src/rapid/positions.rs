@@ -493,17 +493,20 @@ fn frames_written_through(
     out
 }
 
-/// The uses of work object `f` (declared at `at`: module, index among its frames) that may run
-/// while it holds its declared value, the program giving it another at `given` (module, first
-/// byte of the name assigned), in module and file order: (module, the use). A use names the
-/// frame where its name means that declaration, not a parameter of the use's routine.
-fn run_before_given<'c>(
+/// The uses of work object or tool `f` (declared at `at`: module, index among its frames) that
+/// may run while it holds its declared value, the program giving it another at `given`
+/// (module, first byte of the name assigned), in module and file order: (module, the use). A
+/// use names the frame where its name means that declaration, not a parameter of the use's
+/// routine: as its `\WObj:=`, or as its tool (`kinds` finds it).
+#[allow(clippy::too_many_arguments)]
+fn run_before_given<'c, 's>(
     f: &FrameDecl,
     at: (usize, usize),
     given: &[(usize, usize)],
     calls: &'c [Calls],
-    routines: &[(&[u8], &[crate::resolve::Routine])],
+    routines: &[(&'s [u8], &[crate::resolve::Routine])],
     scopes: &FrameScopes,
+    kinds: &ArgKinds<'_, 's>,
     task: &super::flow::Task<'_>,
 ) -> Vec<(usize, &'c CallUse)> {
     let frame = NameKey(f.name.as_bytes());
@@ -514,9 +517,12 @@ fn run_before_given<'c>(
     };
     let mut uses = Vec::new();
     for (m, (module_calls, &(src, list))) in calls.iter().zip(routines).enumerate() {
-        for u in &module_calls.uses {
-            let Some(w) = u.wobj else { continue };
-            let name = trim_latin1(w.span().slice(src));
+        for (u, args, ..) in module_calls.iter() {
+            let named = match f.kind {
+                FrameKind::Tool => kinds.tool_of(u, args, src),
+                _ => u.wobj.map(|w| trim_latin1(w.span().slice(src))),
+            };
+            let Some(name) = named else { continue };
             if NameKey(name) != frame {
                 continue;
             }
@@ -547,14 +553,14 @@ fn run_before_given<'c>(
 /// What the frames given a whole literal value in a routine come to: the warnings and errors at
 /// the assignments (per module), the frames whose value the flow decides (frame, kind, module,
 /// line), the one other value that stands for a frame (module, index, the value), the
-/// assignments of a frame's own value, and the motions that may run while a work object so given
-/// still holds its declared value (docs/design.md, "Frames the program assigns").
+/// assignments of a frame's own value, and the motions that may run while a work object or tool
+/// so given still holds its declared value (docs/design.md, "Frames the program assigns").
 struct FramesGiven {
     notes: Vec<Vec<Diagnostic>>,
     reassigned: Vec<(String, FrameKind, usize, usize)>,
     replaced: Vec<(usize, usize, FrameDecl)>,
     own_values: Vec<(usize, FrameDecl)>,
-    declared_first: std::collections::HashMap<(usize, usize), Arc<crate::resolve::TwoValuesAt>>,
+    declared_first: std::collections::HashMap<(usize, usize), Arc<[crate::resolve::TwoValuesAt]>>,
 }
 
 /// What each module keeps to the end of [`finish_task`]: its frames, offset calls, literal
@@ -571,21 +577,23 @@ type Kept<'s> = (
     Vec<crate::resolve::CopyFact>,
 );
 
-/// [`FramesGiven`] of the task's modules (`rest`, with their calls and routines).
-fn frames_given(
-    rest: &[Kept<'_>],
+/// [`FramesGiven`] of the task's modules (`rest`, with their skeleton trees when kept, their
+/// calls and routines; `kinds` finds a call's tool).
+fn frames_given<'s>(
+    rest: &[Kept<'s>],
     mut skeletons: Vec<Option<Vec<super::Node>>>,
     calls: &[Calls],
-    routine_lists: &[(&[u8], &[crate::resolve::Routine])],
+    routine_lists: &[(&'s [u8], &[crate::resolve::Routine])],
     scopes: &FrameScopes,
+    kinds: &ArgKinds<'_, 's>,
     module_names: &[Arc<str>],
 ) -> FramesGiven {
-    // The uses that may run while their work object holds its declared value, the program
-    // giving it one other value, by (module, first byte of the instruction); and the modules'
-    // routines as the flow reads them, once some frame needs it.
+    // The uses that may run while their work object or tool holds its declared value, the
+    // program giving it one other value, by (module, first byte of the instruction); and the
+    // modules' routines as the flow reads them, once some frame needs it.
     let mut declared_first: std::collections::HashMap<
         (usize, usize),
-        Arc<crate::resolve::TwoValuesAt>,
+        Vec<crate::resolve::TwoValuesAt>,
     > = Default::default();
     let mut flow: Option<super::flow::Task<'_>> = None;
     let mut buf = String::new();
@@ -751,30 +759,42 @@ fn frames_given(
             && all.iter().all(|&(m, a)| {
                 m == at.0 && value.same_value(a.as_kind_of(f)) && value.pose().is_some()
             });
-        // The motions with the work object that may run while its declared value still holds:
-        // their targets are moved to in both values.
-        let before = if one && f.kind == FrameKind::WorkObject {
+        // The motions with the work object or tool that may run while its declared value still
+        // holds: their targets are moved to in both values.
+        let before = if one {
             let given: Vec<(usize, usize)> = all.iter().map(|&(m, a)| (m, a.name.start)).collect();
             let task = flow.get_or_insert_with(|| {
                 let kept = std::mem::take(&mut skeletons);
                 super::flow::Task::new(rest.iter().map(|r| r.6).zip(kept).collect())
             });
-            run_before_given(f, at, &given, calls, routine_lists, scopes, task)
+            run_before_given(f, at, &given, calls, routine_lists, scopes, kinds, task)
         } else {
             Vec::new()
         };
         let given_at = (first_m, first.as_wobj.line);
         for &(m, u) in &before {
             let why = crate::resolve::TwoValuesAt {
+                kind: f.kind,
                 frame: f.name.clone(),
                 declared: (at.0, f.line),
                 given: given_at,
                 motion: (m, u.line as usize),
             };
-            declared_first.insert((m, u.name.span().start), Arc::new(why));
+            let whys = declared_first.entry((m, u.name.span().start)).or_default();
+            // A motion names one work object and one tool.
+            if whys.iter().all(|w| w.kind != why.kind) {
+                whys.push(why);
+            }
         }
+        // What trackfix does with a target moved to in both values.
+        let left = match f.kind {
+            FrameKind::Tool => {
+                "left as written where the tool matters (the robot's kinematics, a mirror of the frames)"
+            }
+            _ => "left as written",
+        };
         for &(m, a) in &values {
-            let (message, hint) = if let Some(&(bm, u)) = before.first().filter(|_| one) {
+            let (message, hint) = if let Some(&(bm, u)) = before.first() {
                 let motion = module_names.get(bm).map_or_else(
                     || UseLine::new(u.line as usize),
                     |name| UseLine::of(u.line as usize, bm, m, name),
@@ -786,26 +806,21 @@ fn frames_given(
                 };
                 (
                     format!(
-                        "{what} `{}` is given another value here than its declaration on line {}: trackfix uses this value, but the motion on {motion}{more} may run before it, while the declared one holds: the targets moved there are left as written",
+                        "{what} `{}` is given another value here than its declaration on line {}: trackfix uses this value, but the motion on {motion}{more} may run before it, while the declared one holds: the targets moved there are {left}",
                         f.name, f.line
                     ),
-                    "give the work object this value before every motion that moves with it, or declare it with this value, so that one value holds",
+                    format!(
+                        "give the {what} this value before every motion that moves with it, or declare it with this value, so that one value holds"
+                    ),
                 )
-            } else if one && f.kind == FrameKind::WorkObject {
+            } else if one {
                 (
                     format!(
                         "{what} `{}` is given another value here than its declaration on line {}: trackfix uses this value, which the program gives it before every motion that moves with it",
                         f.name, f.line
                     ),
-                    "declare the frame with the value the program gives it, so that one value holds",
-                )
-            } else if one {
-                (
-                    format!(
-                        "{what} `{}` is given another value here than its declaration on line {}: trackfix uses this value, which the program sets before it moves (a motion that runs before it moves with the declared one)",
-                        f.name, f.line
-                    ),
-                    "declare the frame with the value the program gives it, so that one value holds",
+                    "declare the frame with the value the program gives it, so that one value holds"
+                        .to_owned(),
                 )
             } else {
                 (
@@ -825,7 +840,8 @@ fn frames_given(
                             "and other values elsewhere"
                         }
                     ),
-                    "give the frame one value: declare it with the value the program gives it",
+                    "give the frame one value: declare it with the value the program gives it"
+                        .to_owned(),
                 )
             };
             if let Some(notes) = assigned_notes.get_mut(m) {
@@ -849,7 +865,10 @@ fn frames_given(
         reassigned,
         replaced,
         own_values,
-        declared_first,
+        declared_first: declared_first
+            .into_iter()
+            .map(|(at, whys)| (at, Arc::from(whys)))
+            .collect(),
     }
 }
 
@@ -1101,6 +1120,23 @@ impl<'t, 's> ArgKinds<'t, 's> {
             }
         };
         found == Some(kind)
+    }
+
+    /// The tool call `u` (of a module with source `src`, `args` its positional arguments)
+    /// names, as written: its `\Tool:=` argument, else the positional one [`tool_index`]
+    /// finds.
+    ///
+    /// [`tool_index`]: ArgKinds::tool_index
+    fn tool_of(&self, u: &CallUse, args: &[Option<Span32>], src: &'s [u8]) -> Option<&'s [u8]> {
+        match u.tool {
+            Some(sp) => Some(trim_latin1(sp.span().slice(src))),
+            None => {
+                let call = NameKey(u.name.span().slice(src));
+                let i = self.tool_index(&call, args, src)?;
+                let sp = args.get(i).copied().flatten()?;
+                Some(sp.span().slice(src))
+            }
+        }
     }
 
     fn is_tool(&self, n: NameKey<'s>) -> bool {
@@ -2025,6 +2061,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         &calls,
         &routine_lists,
         &scopes,
+        &kinds,
         &module_names,
     );
     for (m, (module_calls, r)) in calls.iter().zip(&rest).enumerate() {
@@ -2055,13 +2092,7 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
             // a frame that cannot be resolved).
             let routine = u.routine.and_then(|rt| r.4.get(rt.get() as usize - 1));
             let a_parameter = |text: &[u8]| routine.is_some_and(|rt| rt.has_parameter(src, text));
-            let tool = match u.tool {
-                Some(sp) => Some(trim_latin1(sp.span().slice(src))),
-                None => kinds.tool_index(&call, call_args, src).and_then(|i| {
-                    let sp = call_args.get(i).copied().flatten()?;
-                    Some(sp.span().slice(src))
-                }),
-            };
+            let tool = kinds.tool_of(u, call_args, src);
             let tool_named = tool.is_some();
             // (Each asked once: a motion's routine is asked for every motion.)
             let (tool, tool_parameter) = match tool {
@@ -2328,18 +2359,26 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         for p in ps
             .usages()
             .enumerate()
-            .filter(|(_, u)| u.two_values().is_some())
+            .filter(|(_, u)| !u.every_two_values().is_empty())
             .filter_map(|(i, _)| ps.get(i, src))
         {
-            if let Some(t) = p.usage.two_values() {
+            for t in p.usage.every_two_values() {
+                // A track correction is the same in both values of a tool; what the tool
+                // places is the flange, so the joints.
+                let hint = match t.kind {
+                    FrameKind::Tool => {
+                        "its joints differ in the two values, so a transform that checks them or mirrors the tool cannot take it for both; give the tool its value before every motion to the target"
+                    }
+                    _ => {
+                        "a transform cannot move it for both values; give the work object its value before every motion to the target"
+                    }
+                };
                 d.push(
                     Diagnostic::warning(
                         p.span,
                         format!("target `{}` is moved to with {t}", p.label()),
                     )
-                    .with_hint(
-                        "a transform cannot move it for both values; give the work object its value before every motion to the target",
-                    ),
+                    .with_hint(hint),
                 );
             }
         }

@@ -24,7 +24,7 @@ use crate::position::{Config, ParsedFile, Position, Program};
 use crate::syntax::Edit;
 
 use super::cell::Robot;
-use super::policy::{Why, describe};
+use super::policy::{Why, describe, tool_in_two_values};
 use super::refusal::RefusalKind;
 use super::rewrite::{DEG_DECIMALS, bits_edit, integer_edit, number_edit};
 
@@ -56,6 +56,12 @@ impl Arm {
         p: &Position,
     ) -> Result<Vec<Pose>, Why> {
         let what = describe(p);
+        if let Some(why) = tool_in_two_values(
+            p,
+            "its joints depend on the tool, which puts the flange elsewhere in each",
+        ) {
+            return Err(why);
+        }
         if let Some(u) = p.usage.unresolved_tool() {
             // (A tool is only ever unknown as a routine's parameter.)
             let name = match &u.cause {
@@ -72,10 +78,10 @@ impl Arm {
         }
         let mut tools = Vec::with_capacity(1);
         for name in p.usage.tools() {
-            let pose = resolve_tool(program, Some(own), &self.tools, name).map_err(|msg| {
+            let pose = resolve_tool(program, Some(own), &self.tools, name).map_err(|e| {
                 reach(
-                    format!("{what}: its joints cannot be checked: {msg}"),
-                    "give the tool under [robot.NAME.tool] in the cell file",
+                    format!("{what}: its joints cannot be checked: {}", e.message),
+                    e.hint,
                 )
             })?;
             tools.push(pose);

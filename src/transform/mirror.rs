@@ -24,7 +24,8 @@ use super::edits::{ProgramEdits, TargetChange};
 use super::kinematic_policy::fmt_joints;
 use super::kinematic_policy::{Arm, config_edits, with_tool};
 use super::policy::{
-    Why, common_refusal, describe, offset_bases, stationary_tool, wobj_of, words_of, work_object_of,
+    Why, common_refusal, describe, offset_bases, stationary_tool, tool_in_two_values, wobj_of,
+    words_of, work_object_of,
 };
 use super::refusal::{Refusal, RefusalKind, Remedy};
 use super::rewrite::{
@@ -461,7 +462,17 @@ impl TargetRule for MirrorRule<'_> {
         // same way in both; a plane in world does not.
         let common = common_refusal(scope.file, p)
             .filter(|w| w.kind != RefusalKind::TwoWorkObjects || self.settings.world.is_some())
-            .or_else(|| stationary_tool(scope.program, scope.file, p));
+            .or_else(|| stationary_tool(scope.program, scope.file, p))
+            .or_else(|| {
+                // The mirror of a tool the program gives a value is written into the
+                // assignment: its declaration, which the motion may run with, stays.
+                self.settings.mirror_frames.then(|| {
+                    tool_in_two_values(
+                        p,
+                        "the tool's mirror image is written where the program gives it its value, and the motion may run with the declaration's, as written",
+                    )
+                })?
+            });
         if common.is_some() || self.settings.arm.is_none() {
             return common;
         }
@@ -532,18 +543,17 @@ impl MirrorRule<'_> {
     /// The tool `name` on the image robot's flange: its cell entry, else the program's
     /// declaration as the image's program has it (mirrored with `mirror_frames`).
     fn image_tool(&self, scope: Scope, image: &ImageRobot, name: &str) -> Result<Pose, Why> {
-        let pose = resolve_tool(scope.program, Some(scope.file), &image.arm.tools, name).map_err(
-            |msg| {
+        let pose =
+            resolve_tool(scope.program, Some(scope.file), &image.arm.tools, name).map_err(|e| {
                 Why::new(
                     RefusalKind::Reach,
                     format!(
-                        "its mirror image on robot `{}` cannot be checked: {msg}",
-                        image.name
+                        "its mirror image on robot `{}` cannot be checked: {}",
+                        image.name, e.message
                     ),
-                    "give the tool under [robot.NAME.tool] in the cell file",
+                    e.hint,
                 )
-            },
-        )?;
+            })?;
         let from_cell = image.arm.tools.contains_key(&super::cell::frame_key(name));
         Ok(match self.settings.mirror_frames && !from_cell {
             true => self.own.tool(&pose).0,

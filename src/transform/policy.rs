@@ -5,7 +5,9 @@ use std::collections::BTreeMap;
 
 use crate::dialect::Vocabulary;
 use crate::geometry::Pose;
-use crate::position::{FrameKind, FrameName, ParsedFile, Position, Program, UnresolvedCause};
+use crate::position::{
+    FrameKind, FrameName, ParsedFile, Position, Program, TwoValues, UnresolvedCause,
+};
 
 use super::refusal::{Refusal, RefusalKind, Remedy};
 
@@ -528,6 +530,37 @@ pub(crate) fn stationary_tool(program: &Program, own: &ParsedFile, p: &Position)
     ))
 }
 
+/// The refusal of target `p`, moved to in two values `t` of its `frame` (the language's word
+/// for a work object, or "tool"), with what that does to the transform (`why`, from ": …", or
+/// nothing).
+fn two_values(p: &Position, frame: &str, t: &TwoValues, why: &str) -> Why {
+    Why::new(
+        RefusalKind::TwoWorkObjects,
+        format!(
+            "{} is moved to in two values of {frame} `{}`: as declared ({}) and as the program gives it ({}), since the motion on {} may run before the assignment{why}",
+            describe(p),
+            t.frame,
+            t.declared,
+            t.given,
+            t.motion
+        ),
+        format!(
+            "give `{}` its value before every motion to the target (or declare it with that value), or move to one target per value",
+            t.frame
+        ),
+    )
+}
+
+/// The refusal of target `p` where a transform reads or writes its tool (the robot's
+/// kinematics check its joints, a mirror of the frames writes the tool), `why` that matters,
+/// when a motion to it may run with the tool's declared value, the program giving it another.
+/// A track correction alone does not read the tool (`B·D⁻¹·B⁻¹` acts on the TCP, the same in
+/// both values), nor does a mirror that leaves the frames as written.
+pub(crate) fn tool_in_two_values(p: &Position, why: &str) -> Option<Why> {
+    let t = p.usage.two_values(FrameKind::Tool)?;
+    Some(two_values(p, "tool", t, &format!(": {why}")))
+}
+
 /// Checks that every transform makes before touching a Cartesian target; `None` = go ahead.
 pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
     let what = describe(p);
@@ -615,18 +648,8 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
     }
     // Like two work objects: no one correction serves both values, where a mirror in the
     // work object's own plane is the same in each.
-    if let Some(t) = p.usage.two_values() {
-        return refuse(
-            RefusalKind::TwoWorkObjects,
-            format!(
-                "{what} is moved to in two values of {} `{}`: as declared ({}) and as the program gives it ({}), since the motion on {} may run before the assignment",
-                words.frame, t.frame, t.declared, t.given, t.motion
-            ),
-            &format!(
-                "give `{}` its value before every motion to the target (or declare it with that value), or move to one target per value",
-                t.frame
-            ),
-        );
+    if let Some(t) = p.usage.two_values(FrameKind::WorkObject) {
+        return Some(two_values(p, words.frame, t, ""));
     }
     if !p.usage.other_wobjs().is_empty() {
         let first = p.usage.wobj.as_deref().unwrap_or("?");

@@ -19,7 +19,9 @@ pub enum RefusalKind {
     JointTarget,
     /// A field of the target is an expression, not a numeric literal.
     Expression,
-    /// The target is used with two different work objects / bases.
+    /// The target is used with two different work objects / bases, or with a work object or
+    /// tool in two values (the program gives it another while a motion may still run with the
+    /// declared one).
     #[value(alias = "two-wobjs")]
     TwoWorkObjects,
     /// An `Offs` offset that stands for several targets (an array's elements through a computed

@@ -1193,6 +1193,55 @@ fn inspect_with_a_robot_adds_reach_columns() {
     assert!(plain.lines().next().unwrap().ends_with(",frame,tool"));
 }
 
+/// `inspect --cell --robot` reads the cell's work objects for the reach as the transforms do,
+/// and says what it makes of them as they say it: the warning that `wobj_car`'s object frame is
+/// kept under the cell's user frame, word for word and with its snippet and help as `correct`
+/// prints it (one code path), on standard error beside any format. Before, `inspect` printed
+/// nothing of it.
+#[test]
+fn inspect_with_a_robot_says_what_the_cell_makes_of_the_work_objects() {
+    let cell = ["--cell", "samples/cell.toml", "--robot", "r1"];
+    let file = "samples/rapid/spot_line.mod";
+    // The object-frame warning as a block: its line and the snippet and help under it.
+    let reading = |err: &str| -> String {
+        let mut block = Vec::new();
+        for l in err.lines() {
+            if block.is_empty()
+                && !l.contains(
+                    "is kept: the targets are transformed in the cell's uframe · this oframe",
+                )
+            {
+                continue;
+            }
+            // The snippet's lines (`13 |`, `   |`) and the help under it.
+            let under = l.find('|').is_some_and(|i| i < 6) || l.trim_start().starts_with("= ");
+            if !block.is_empty() && !under {
+                break;
+            }
+            block.push(l);
+        }
+        block.join("\n")
+    };
+    let (code, _, err) = trackfix(&[&["correct", file, "--check"][..], &cell].concat());
+    assert_eq!(code, 1, "{err}");
+    let said = reading(&err);
+    assert!(
+        said.starts_with("samples/rapid/spot_line.mod:13:32: warning: work object `wobj_car`: the cell file's entry for robot `r1` is its user frame")
+            && said.ends_with("= help: if the cell's entry measures the whole work object (its object frame too), write this oframe as [[0,0,0],[1,0,0,0]]"),
+        "{err}"
+    );
+    for format in ["table", "json"] {
+        let (code, out, err) =
+            trackfix(&[&["inspect", file, "--format", format][..], &cell].concat());
+        assert_eq!(code, 0, "{err}");
+        assert_eq!(reading(&err), said, "{format}: {err}");
+        assert!(!out.contains("oframe {"), "{out}");
+    }
+    // Without the cell nothing reads its entries.
+    let (_, _, err) = trackfix(&["inspect", file]);
+    assert_eq!(reading(&err), "", "{err}");
+}
+
 /// Runs `trackfix correct FILE --cell samples/cell.toml --robot ROBOT --out-dir DIR/out
 /// --no-stamp --format json` with `extra`: the exit code, the JSON report and the output text (if written).
 fn correct_json(file: &Path, robot: &str, extra: &[&str]) -> (i32, serde_json::Value, String) {

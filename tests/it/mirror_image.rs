@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Matrix6, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6};
 
-use crate::support::{root, trackfix};
+use crate::support::trackfix;
 
 type Pose = nalgebra::Isometry3<f64>;
 
@@ -192,12 +192,7 @@ fn joints(n: &[f64]) -> [f64; 6] {
 /// The sample cell's text, its paths made absolute (to be written elsewhere), with the skid map
 /// `map` for the mirror-image robot.
 fn sample_cell_with_skid_map(map: &str) -> String {
-    let samples = root().join("samples");
-    std::fs::read_to_string(samples.join("cell.toml"))
-        .unwrap()
-        .replace("\"track/", &format!("\"{}/track/", samples.display()))
-        .replace("\"krl/", &format!("\"{}/krl/", samples.display()))
-        .replace("skid_map = [1.0, 0.0]", &format!("skid_map = {map}"))
+    crate::support::sample_cell().replace("skid_map = [1.0, 0.0]", &format!("skid_map = {map}"))
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {

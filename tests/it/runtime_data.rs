@@ -1294,6 +1294,210 @@ fn a_motion_that_may_run_before_its_work_object_is_given_a_value_refuses_its_tar
     );
 }
 
+/// The sample tool `tGun1` (on r1 of the sample cell it puts `Sp001` and `Sp002` in the
+/// configuration they are written with), and the same turned half a turn about its z axis,
+/// which puts axis 6 half a turn away: the targets' written configuration does not reach them.
+const TOOL_WRITTEN: &str =
+    "[TRUE,[[12.5,-3.2,412.8],[0.965926,0,0.258819,0]],[48.5,[0,0,180],[1,0,0,0],0.9,1.1,0.6]]";
+const TOOL_TURNED: &str =
+    "[TRUE,[[12.5,-3.2,412.8],[0,0.258819,0,0.965926]],[48.5,[0,0,180],[1,0,0,0],0.9,1.1,0.6]]";
+
+/// A module of the sample's `wobj_car` and two of its welds (declared on lines 4 and 5), moved
+/// to with tool `tGun` declared `declared`, `Sp001` first; `give` (`tGun:=…;`) between the two
+/// motions (line 8, after `Sp001`'s on line 7), or on line 7 before both when `first`.
+fn tool_module(declared: &str, give: Option<&str>, first: bool) -> String {
+    let give = give.map_or("    ! tGun as declared\n".to_owned(), |v| {
+        format!("    tGun:={v};\n")
+    });
+    let (before, after) = if first {
+        (give.as_str(), "    ! (given above)\n")
+    } else {
+        ("", give.as_str())
+    };
+    format!(
+        "MODULE ToolGiven\n  PERS tooldata tGun:={declared};\n  \
+         TASK PERS wobjdata wobj_car:=[FALSE,TRUE,\"\",[[1520.3,-1850.75,612.4],[1,0,0,0]],[[150,0,0],[0.999962,0,0,0.008727]]];\n  \
+         CONST robtarget Sp001:=[[-1499.39,-722.85,251.51],[0.001394,-0.982620,-0.185474,-0.007385],[-1,0,-2,0],[150.0,9E+09,9E+09,9E+09,9E+09,9E+09]];\n  \
+         CONST robtarget Sp002:=[[-1442.86,-646.25,295.65],[0.003079,0.983580,0.179657,-0.016858],[-1,0,-2,0],[185.8,9E+09,9E+09,9E+09,9E+09,9E+09]];\n  \
+         PROC main()\n{before}    MoveL Sp001, v1000, fine, tGun\\WObj:=wobj_car;\n{after}    MoveL Sp002, v1000, fine, tGun\\WObj:=wobj_car;\n  ENDPROC\nENDMODULE\n"
+    )
+}
+
+/// Runs `trackfix` on module `src` written to a file, with `args` and `-o`: the exit code, the
+/// messages and the lines declaring `Sp001` and `Sp002` in the output (none where nothing is
+/// written).
+fn run_on_module(src: &str, args: &[&str]) -> (i32, String, Vec<String>) {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, out) = (dir.path().join("tool.mod"), dir.path().join("out.mod"));
+    std::fs::write(&input, src).unwrap();
+    let mut all = args.to_vec();
+    all.extend([input.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    let (code, _, err) = crate::support::trackfix(&all);
+    let written = std::fs::read_to_string(&out).unwrap_or_default();
+    let welds = written
+        .lines()
+        .filter(|l| l.contains("robtarget Sp00"))
+        .map(str::to_owned)
+        .collect();
+    (code, err, welds)
+}
+
+/// A tool the program gives one other value is taken at that value, and a motion that may run
+/// while the tool still holds its declared value moves to its targets with both. A track
+/// correction does not depend on the tool (it acts on the TCP: `B·D⁻¹·B⁻¹`), so without the
+/// robot's kinematics the targets are corrected as before, to the same numbers as with either
+/// value; but the joints do: with the robot's kinematics such a target is refused as one moved
+/// to in two values of its work object is, and so is it under a mirror of the frames, which
+/// writes the tool's mirror image into the assignment only. Before, `Sp001` (moved to before the
+/// assignment with the turned tool, in which its written configuration does not reach it) was
+/// checked with the value given alone, and corrected.
+#[test]
+fn a_motion_that_may_run_before_its_tool_is_given_a_value_refuses_its_targets_where_the_tool_matters()
+ {
+    let correct = ["correct", "--cell", "samples/cell.toml", "--robot", "r1"];
+    let (code, err, as_declared) = run_on_module(&tool_module(TOOL_WRITTEN, None, false), &correct);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        as_declared,
+        [
+            "  CONST robtarget Sp001:=[[-1499.759,-722.058,250.090],[0.001257,-0.982675,-0.185160,-0.007945],[-1,0,-2,0],[150.0,9E+09,9E+09,9E+09,9E+09,9E+09]];",
+            "  CONST robtarget Sp002:=[[-1443.265,-645.477,294.280],[0.003215,0.983644,0.179355,-0.016293],[-1,0,-2,0],[185.8,9E+09,9E+09,9E+09,9E+09,9E+09]];",
+        ]
+    );
+    // The turned tool alone: the written configurations do not reach the welds.
+    let (code, err, _) = run_on_module(&tool_module(TOOL_TURNED, None, false), &correct);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains(
+            "robtarget `Sp001` is written with configuration [-1,0,-2,0], which does not reach it"
+        ),
+        "{err}"
+    );
+
+    // Given before every motion: the motions run with the value given, and are checked with it.
+    let given_first = tool_module(TOOL_TURNED, Some(TOOL_WRITTEN), true);
+    let (code, err, welds) = run_on_module(&given_first, &correct);
+    assert_eq!((code, &welds), (0, &as_declared), "{err}");
+
+    // Given between the motions: `Sp001` runs with either value.
+    let between = tool_module(TOOL_TURNED, Some(TOOL_WRITTEN), false);
+    let (code, err, welds) = run_on_module(&between, &correct);
+    assert_eq!(code, 3, "{err}");
+    assert!(welds.is_empty());
+    assert!(
+        err.contains(
+            "tool.mod:4:26: error: robtarget `Sp001` is moved to in two values of tool `tGun`: as declared (line 2) and as the program gives it (line 8), since the motion on line 7 may run before the assignment: its joints depend on the tool, which puts the flange elsewhere in each"
+        ),
+        "{err}"
+    );
+    assert!(
+        err.contains("--keep two-work-objects to leave it as written [two-work-objects]"),
+        "{err}"
+    );
+    assert!(!err.contains("`Sp002`"), "{err}");
+    assert!(
+        err.contains(
+            "tool.mod:8:5: warning: tool `tGun` is given another value here than its declaration on line 2: trackfix uses this value, but the motion on line 7 may run before it, while the declared one holds: the targets moved there are left as written where the tool matters (the robot's kinematics, a mirror of the frames)"
+        ),
+        "{err}"
+    );
+    let mut keep = correct.to_vec();
+    keep.extend(["--keep", "two-work-objects"]);
+    let (code, err, welds) = run_on_module(&between, &keep);
+    assert_eq!(code, 4, "{err}");
+    assert_eq!(
+        welds,
+        [between.lines().nth(3).unwrap(), as_declared[1].as_str()]
+    );
+
+    // Without the robot's kinematics nothing reads the tool: corrected as before, the
+    // numbers the tool's declared value gives.
+    let rules = [
+        "correct",
+        "--cell",
+        "samples/cell_rules.toml",
+        "--robot",
+        "r1",
+    ];
+    let (code, err, welds) = run_on_module(&between, &rules);
+    assert_eq!((code, &welds), (0, &as_declared), "{err}");
+
+    // A mirror writes the tool's image into the assignment with the frames; without them it
+    // reads no tool.
+    let mirror = ["mirror", "--cell", "samples/cell_rules.toml"];
+    let (code, err, welds) = run_on_module(&between, &mirror);
+    assert_eq!((code, welds.len()), (0, 2), "{err}");
+    let mut frames = mirror.to_vec();
+    frames.push("--mirror-frames");
+    let (code, err, _) = run_on_module(&between, &frames);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains(
+            "robtarget `Sp001` is moved to in two values of tool `tGun`: as declared (line 2) and as the program gives it (line 8), since the motion on line 7 may run before the assignment: the tool's mirror image is written where the program gives it its value, and the motion may run with the declaration's, as written"
+        ),
+        "{err}"
+    );
+    assert!(!err.contains("`Sp002`"), "{err}");
+
+    // `reach` says which value it checked.
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("tool.mod");
+    std::fs::write(&input, &between).unwrap();
+    let (_, out, err) = crate::support::trackfix(&[
+        "reach",
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        input.to_str().unwrap(),
+    ]);
+    let warned: Vec<&str> = out.lines().filter(|l| l.contains("warning:")).collect();
+    assert_eq!(
+        warned,
+        [
+            "      warning: with tool `tGun` as declared (line 2) and as the program gives it (line 8): the motion on line 7 may run before the assignment: checked with the value given only"
+        ],
+        "{out}{err}"
+    );
+}
+
+/// A tool the cell file gives (`[robot.NAME.tool]`) stands for its declaration: where the
+/// program gives the tool one other value, the robot moves with that value, which the entry does
+/// not describe, so the joints of the targets moved with it cannot be checked. Before, they were
+/// checked with the cell's entry (here the declared value, in which the welds' written
+/// configuration reaches them) and corrected, while the robot moves with the turned tool.
+#[test]
+fn a_cell_tool_entry_does_not_stand_for_a_value_the_program_gives_the_tool() {
+    let dir = tempfile::tempdir().unwrap();
+    let cell = dir.path().join("cell.toml");
+    std::fs::write(
+        &cell,
+        format!(
+            "{}\n[robot.r1.tool]\ntGun = {{ x = 12.5, y = -3.2, z = 412.8, rx = 0, ry = 30, rz = 0 }}\n",
+            crate::support::sample_cell()
+        ),
+    )
+    .unwrap();
+    let correct = ["correct", "--cell", cell.to_str().unwrap(), "--robot", "r1"];
+    let (code, err, welds) = run_on_module(&tool_module(TOOL_WRITTEN, None, false), &correct);
+    assert_eq!((code, welds.len()), (0, 2), "{err}");
+    let given = tool_module(TOOL_WRITTEN, Some(TOOL_TURNED), true);
+    let (code, err, _) = run_on_module(&given, &correct);
+    assert_eq!(code, 3, "{err}");
+    for (weld, line) in [("Sp001", 4), ("Sp002", 5)] {
+        assert!(
+            err.contains(&format!(
+                "tool.mod:{line}:26: error: robtarget `{weld}`: its joints cannot be checked: tool `tGun` is given another value by the program (line 7) than the declaration the cell file's entry for it replaces: the robot moves with the program's value"
+            )),
+            "{err}"
+        );
+    }
+    assert!(
+        err.contains("help: remove `tGun` from the cell file's [robot.NAME.tool], or declare it with the value the program gives it"),
+        "{err}"
+    );
+}
+
 /// A whole array of work objects given a value in a routine (`wArr := [w_away, w_origin];`):
 /// the targets moved with its elements are refused by name as given another value, where they
 /// were corrected in the declared elements. One element given a value is read as a frame is.

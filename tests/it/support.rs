@@ -11,6 +11,16 @@ pub(crate) fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The text of `samples/cell.toml` with the files it names made absolute, to be written
+/// elsewhere (changed).
+pub(crate) fn sample_cell() -> String {
+    let samples = root().join("samples");
+    std::fs::read_to_string(samples.join("cell.toml"))
+        .unwrap()
+        .replace("\"track/", &format!("\"{}/track/", samples.display()))
+        .replace("\"krl/", &format!("\"{}/krl/", samples.display()))
+}
+
 /// Every file under `dir`, in any depth, sorted.
 pub(crate) fn files_under(dir: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();
