@@ -153,6 +153,96 @@ pub fn mirrored_flange(f: &Pose) -> Pose {
     )
 }
 
+/// Largest distance along its track between the mirror-image robot's base at the mapped skid
+/// and the mirror image of the mirrored robot's base, mm (docs/design.md §10). Across the track
+/// and in rotation the two bases fall short of mirror images by what the cell is built off
+/// (the sample's by 0.86 mm), which the image solved in the other robot's base takes up; along
+/// the track the skid map alone places the robot, and a map within 1 mm of the bases' is as
+/// good as that. A map farther off stands the robot where the mirror image is not, turning its
+/// arm (≈ 0.04° per mm on the bundled arms) to reach the image: not the mirror image.
+pub const SKID_MAP_TOLERANCE_MM: f64 = 1.0;
+
+/// A skid map that does not put the mirror-image robot's base where the mirror image of the
+/// mirrored robot's stands ([`check_skid_map`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkidMapMismatch {
+    /// The mirrored robot.
+    pub from: String,
+    /// The mirror-image robot.
+    pub to: String,
+    /// The map checked, `s' = scale·s + offset`.
+    pub map: (f64, f64),
+    /// The map the two bases give: at `scale·s + offset` the image robot's base is level, along
+    /// its track, with the mirror image of the other's base at `s`.
+    pub implied: (f64, f64),
+    /// At each end of the mirrored robot's skid range: its skid, the mapped skid and how far
+    /// along its track (mm, in the direction of its `track_axis`) the image robot's base
+    /// stands there from the mirror image of the other's.
+    pub ends: [(f64, f64, f64); 2],
+}
+
+impl std::fmt::Display for SkidMapMismatch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let number = super::cell::short_number;
+        let map =
+            |(scale, offset): (f64, f64)| format!("[{}, {}]", number(scale, 6), number(offset, 3));
+        let (to, from) = (&self.to, &self.from);
+        let [(s0, t0, e0), (s1, t1, e1)] = self.ends;
+        write!(
+            f,
+            "skid map {} puts robot `{to}`'s base {e0:.3} mm along its track from the mirror image of robot `{from}`'s at `{from}`'s skid {s0:.1} (`{to}` at {t0:.1}), and {e1:.3} mm at {s1:.1} (at {t1:.1}): more than {SKID_MAP_TOLERANCE_MM} mm; the bases give {}",
+            map(self.map),
+            map(self.implied)
+        )
+    }
+}
+
+impl std::error::Error for SkidMapMismatch {}
+
+/// Whether the skid map of `settings` puts robot `to` at the mirror image of robot `from` along
+/// its track, over `from`'s skid range `range` (its track's measured range), within
+/// [`SKID_MAP_TOLERANCE_MM`].
+///
+/// The map means: at skid `s` of `from`, `to` stands at `s' = scale·s + offset` as its mirror
+/// image (docs/design.md §6, §10). With bases `B(s) = Trans(s·a)·B_0` and the plane's
+/// reflection `A`, the image robot's base is level with `A·B_from(s)` at
+/// `s'* = a_to·(A·p_from0 − p_to0) + s·(a_to·A·a_from)` (`A` acting on the vector `a_from` as a
+/// reflection of directions): a line in `s`, so the map's miss is the largest at the range's
+/// ends. Only a plane in world has a place in the cell to check the bases against; with the
+/// plane in each target's work object (no `world`) there is nothing to check and this is `Ok`.
+pub fn check_skid_map(
+    settings: &MirrorSettings,
+    from: &super::cell::Robot,
+    to: &super::cell::Robot,
+    range: (f64, f64),
+) -> Result<(), Box<SkidMapMismatch>> {
+    let Some(world) = &settings.world else {
+        return Ok(());
+    };
+    let reflection = Reflection::about(&world.frame, settings);
+    let axis = to.track_axis;
+    let implied = (
+        axis.dot(&reflection.vector(&from.track_axis)),
+        axis.dot(&(reflection.point(&from.base0.translation.vector) - to.base0.translation.vector)),
+    );
+    let (scale, offset) = settings.skid_map;
+    let end = |s: f64| {
+        let mapped = scale * s + offset;
+        (s, mapped, mapped - (implied.0 * s + implied.1))
+    };
+    let ends = [end(range.0), end(range.1)];
+    if ends.iter().all(|e| e.2.abs() <= SKID_MAP_TOLERANCE_MM) {
+        return Ok(());
+    }
+    Err(Box::new(SkidMapMismatch {
+        from: from.name.clone(),
+        to: to.name.clone(),
+        map: settings.skid_map,
+        implied,
+        ends,
+    }))
+}
+
 /// A mirror plane given in world, and what resolves each target's work object.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WorldPlane {
@@ -1222,6 +1312,85 @@ mod tests {
         let (m, _) = refl.target(&t);
         let expected = kuka_abc(47.3, 61.2, 118.9);
         assert!(m.rotation.angle_to(&expected) < 1e-12);
+    }
+
+    /// A robot of a cell on a straight track, for [`check_skid_map`].
+    fn robot_on_track(name: &str, base0: Pose, track_axis: Vector3<f64>) -> super::super::Robot {
+        super::super::Robot {
+            name: name.to_owned(),
+            profile: Default::default(),
+            profile_span: Default::default(),
+            base0,
+            track_axis,
+            skid_axis: 0,
+            frames: BTreeMap::new(),
+            config_dat: None,
+            kinematics: None,
+            tools: BTreeMap::new(),
+        }
+    }
+
+    /// Two robots either side of the plane y = 500 in world, b's track running against a's: a
+    /// at skid s stands at x = 100 + s, b at skid s' at x = 8300 − s', so b is a's mirror image
+    /// at s' = 8200 − s, the map [-1, 8200]. Within 1 mm along the track a map passes; the
+    /// across-track 2 mm (b's base at y = 1002 where a's image is at 1000) is the cell's own.
+    #[test]
+    fn a_skid_map_is_checked_along_the_image_robots_track_at_the_ends_of_the_range() {
+        let a = robot_on_track(
+            "a",
+            pose_xyz_deg(100.0, 0.0, 0.0, 0.0, 0.0, 90.0),
+            Vector3::x(),
+        );
+        let b = robot_on_track(
+            "b",
+            pose_xyz_deg(8300.0, 1002.0, 0.0, 0.0, 0.0, -90.0),
+            -Vector3::x(),
+        );
+        let settings = |map| MirrorSettings {
+            skid_map: map,
+            world: Some(WorldPlane {
+                frame: pose_xyz_deg(0.0, 500.0, 0.0, 0.0, 0.0, 0.0),
+                frames: BTreeMap::new(),
+                frames_to: None,
+                default_wobj: None,
+            }),
+            ..MirrorSettings::default()
+        };
+        let range = (0.0, 6000.0);
+        assert_eq!(
+            check_skid_map(&settings((-1.0, 8200.0)), &a, &b, range),
+            Ok(())
+        );
+        assert_eq!(
+            check_skid_map(&settings((-1.0, 8201.0)), &a, &b, range),
+            Ok(())
+        );
+        let off = check_skid_map(&settings((-1.0, 8201.5)), &a, &b, range).unwrap_err();
+        assert_eq!((off.from.as_str(), off.to.as_str()), ("a", "b"));
+        let implied = off.implied;
+        assert!(
+            (implied.0 + 1.0).abs() < 1e-12 && (implied.1 - 8200.0).abs() < 1e-9,
+            "{implied:?}"
+        );
+        // The tracks taken as running the same way: 8200 mm off at skid 0, 3800 the other way
+        // at 6000.
+        let wrong = check_skid_map(&settings((1.0, 0.0)), &a, &b, range).unwrap_err();
+        let [(s0, t0, e0), (s1, t1, e1)] = wrong.ends;
+        assert_eq!((s0, t0, s1, t1), (0.0, 0.0, 6000.0, 6000.0));
+        assert!(
+            (e0 + 8200.0).abs() < 1e-9 && (e1 - 3800.0).abs() < 1e-9,
+            "{e0} {e1}"
+        );
+        assert_eq!(
+            wrong.to_string(),
+            "skid map [1, 0] puts robot `b`'s base -8200.000 mm along its track from the mirror image of robot `a`'s at `a`'s skid 0.0 (`b` at 0.0), and 3800.000 mm at 6000.0 (at 6000.0): more than 1 mm; the bases give [-1, 8200]"
+        );
+        // A plane in each target's work object has no place in the cell to check against.
+        let per_wobj = MirrorSettings {
+            world: None,
+            ..settings((1.0, 0.0))
+        };
+        assert_eq!(check_skid_map(&per_wobj, &a, &b, range), Ok(()));
     }
 
     #[test]
