@@ -32,7 +32,9 @@ use super::rewrite::{
 };
 use super::stamp::{Stamp, StampReading};
 use crate::kinematics::reach::resolve_tool;
-use crate::kinematics::{ConfigValue, mirror_config_by_ik, mirrored_joints};
+use crate::kinematics::{
+    ConfigValue, Joints, KinematicRefusal, mirror_config_by_ik, mirrored_joints,
+};
 
 /// Everything `mirror` needs.
 #[derive(Clone, Debug, PartialEq)]
@@ -121,6 +123,16 @@ impl ImageRobot {
     /// `B(s) = Trans(s·a)·B_0`.
     fn base_at(&self, skid: f64) -> Pose {
         Translation3::from(self.track_axis * skid) * self.base0
+    }
+
+    /// ` on robot `r2` at skid 3000.0 mm (its flange 1729.3 mm from that robot's base)`: where
+    /// a refused image was to be reached, for its message.
+    fn where_it_stands(&self, skid: f64, flange: &Pose) -> String {
+        format!(
+            " on robot `{}` at skid {skid:.1} mm (its flange {:.1} mm from that robot's base)",
+            self.name,
+            flange.translation.vector.norm()
+        )
     }
 }
 
@@ -670,34 +682,15 @@ impl MirrorRule<'_> {
             .target(&flange)
             .0;
         let target = image.base_at(skid_to).inverse() * mirrored;
-        let kin = &image.arm.kinematics;
-        let rule = mirrored_joints(&j);
-        let change = target * kin.forward(&rule).inverse();
-        let steps = super::kinematic_policy::written_steps(p);
-        let new = crate::kinematics::joint_target_correction(kin, &rule, &change, &steps)
-            .map_err(|refused| {
-                let (why, after) = (&refused.why, refused.after_text());
-                Why::new(
-                    RefusalKind::Reach,
-                    format!(
-                        "{what}: its mirror image on robot `{}` at skid {skid_to:.1} mm (its flange {:.1} mm from that robot's base): {why}: joints before {}, of the image {}, after {after}",
-                        image.name,
-                        target.translation.vector.norm(),
-                        fmt_joints(&j),
-                        fmt_joints(&rule),
-                    ),
-                    "check the mirror plane, the skid map and the mirror-image robot's cell; or re-teach the target",
-                )
-            })?;
-        Ok(p.joints
-            .iter()
-            .zip(new)
-            .zip(rule)
-            .filter_map(|((f, v), r)| match (v - r).abs() < 1e-9 {
-                true => flip_or_value_edit(f, r, 0),
-                false => number_edit(f, v, DEG_DECIMALS),
-            })
-            .collect())
+        let on = image.where_it_stands(skid_to, &target);
+        image_joint_edits(
+            &image.arm.kinematics,
+            p,
+            &j,
+            &target,
+            &on,
+            "check the mirror plane, the skid map and the mirror-image robot's cell; or re-teach the target",
+        )
     }
 
     /// The configuration inverse kinematics finds for the mirrored target (`None` when the
@@ -753,27 +746,35 @@ impl MirrorRule<'_> {
                         .image_tool(scope, image, name)
                         .map_err(|why| with_tool(why, p, name))?;
                     let flange = image.base_at(skid_to).inverse() * tcp * tool.inverse();
-                    let on = format!(
-                        " on robot `{}` at skid {skid_to:.1} mm (its flange {:.1} mm from that robot's base)",
-                        image.name,
-                        flange.translation.vector.norm()
-                    );
+                    let on = image.where_it_stands(skid_to, &flange);
                     (flange, on)
                 }
             };
-            let Some((_, solved)) = mirror_config_by_ik(kin, &mirrored, &before, language) else {
-                return Err(with_tool(
-                    Why::new(
-                        RefusalKind::Reach,
-                        format!(
+            let solved = match mirror_config_by_ik(kin, &mirrored, &before, language) {
+                Ok((_, solved)) => solved,
+                Err(refused) => {
+                    let message = match &refused.why {
+                        KinematicRefusal::Unreachable => format!(
                             "{what}: its mirror image is out of reach{on} within the limits: joints before {}, after none",
                             fmt_joints(&before)
                         ),
+                        why => format!(
+                            "{what}: its mirror image{on}: {why}: joints before {}, of the image {}, after {}",
+                            fmt_joints(&before),
+                            fmt_joints(&mirrored_joints(&before)),
+                            refused.after_text()
+                        ),
+                    };
+                    let hint = image_hint(
+                        &refused.why,
                         "check the mirror plane, the skid map and the mirror-image robot's cell",
-                    ),
-                    p,
-                    name,
-                ));
+                    );
+                    return Err(with_tool(
+                        Why::new(RefusalKind::Reach, message, hint),
+                        p,
+                        name,
+                    ));
+                }
             };
             // KUKA programs may write only one of Status and Turn: keep to what is written.
             let kept = match (&written, solved) {
@@ -824,35 +825,81 @@ fn skid_of(p: &Position, axis: usize, message: impl FnOnce() -> String) -> Resul
     }
 }
 
-/// A joint target mirrored through kinematics: `FK(J')` = the mirror image of `FK(J)` (see
-/// [`MirrorArm`]), the solution within the limits nearest to the rule's
-/// `(−θ1, θ2, θ3, −θ4, θ5, −θ6)`. Where IK agrees with the rule to 1e-9° the rule's text is
-/// written (a flip keeps the literal's decimals).
+/// A joint target mirrored through kinematics for the mirror-image robot standing as this
+/// one's mirror image (see [`MirrorArm`]): `FK(J')` = the mirror image of `FK(J)`.
 fn mirror_joints_by_ik(arm: &Arm, p: &Position) -> Result<Vec<Edit>, Why> {
     let j = arm.joints_of(p)?;
     let kin = &arm.kinematics;
-    let rule = mirrored_joints(&j);
-    let Some(new) = kin.nearest(&mirrored_flange(&kin.forward(&j)), &rule, false) else {
-        return Err(Why::new(
-            RefusalKind::Reach,
-            format!(
-                "{}: its mirror image is out of reach within the limits: joints before {}, after none",
-                describe(p),
-                fmt_joints(&j)
-            ),
-            "check the mirror-image robot's limits",
-        ));
-    };
-    let mut edits = Vec::new();
-    for (i, (f, v)) in p.joints.iter().zip(new).enumerate() {
-        let edit = if (v - rule[i]).abs() < 1e-9 {
-            flip_or_value_edit(f, rule[i], 0)
-        } else {
-            number_edit(f, v, DEG_DECIMALS)
-        };
-        edits.extend(edit);
+    image_joint_edits(
+        kin,
+        p,
+        &j,
+        &mirrored_flange(&kin.forward(&j)),
+        "",
+        "check the mirror-image robot's kinematics; or re-teach the target",
+    )
+}
+
+/// The edits of joint target `p` (joints `j`) mirrored to `J'` whose flange is `target`, in the
+/// base of the robot it is for (kinematics `kin`): the rule's image
+/// `(−θ1, θ2, θ3, −θ4, θ5, −θ6)` moved by what it falls short of `target`, as a track correction
+/// moves a joint target ([`joint_target_correction`](crate::kinematics::joint_target_correction)
+/// with the change `target·FK(rule)⁻¹`, the identity where the rule is exact): the rule's arm and
+/// wrist, each axis by its least turn. Refused, saying so with `on` (where the image is) and
+/// `hint`: an image outside the limits, with the angle it needs (before, the solution within
+/// the limits nearest to the rule's was written: an axis 1 limited to [−170°, 185°] took the
+/// image of 178° as the arm behind itself, `[2, −27.3, −162, …]`, and an axis 4 limited to
+/// [−200°, 300°] the image of 250° as the flipped wrist), a swing (the wrist singularity), or
+/// no solution in the branch. Where `J'` agrees with the rule to 1e-9° the rule's text is
+/// written (a flip keeps the literal's decimals).
+fn image_joint_edits(
+    kin: &crate::kinematics::Kinematics,
+    p: &Position,
+    j: &Joints,
+    target: &Pose,
+    on: &str,
+    hint: &str,
+) -> Result<Vec<Edit>, Why> {
+    let rule = mirrored_joints(j);
+    let change = target * kin.forward(&rule).inverse();
+    let steps = super::kinematic_policy::written_steps(p);
+    let new = crate::kinematics::joint_target_correction(kin, &rule, &change, &steps).map_err(
+        |refused| {
+            Why::new(
+                RefusalKind::Reach,
+                format!(
+                    "{}: its mirror image{on}: {}: joints before {}, of the image {}, after {}",
+                    describe(p),
+                    refused.why,
+                    fmt_joints(j),
+                    fmt_joints(&rule),
+                    refused.after_text()
+                ),
+                image_hint(&refused.why, hint),
+            )
+        },
+    )?;
+    Ok(p.joints
+        .iter()
+        .zip(new)
+        .zip(rule)
+        .filter_map(|((f, v), r)| match (v - r).abs() < 1e-9 {
+            true => flip_or_value_edit(f, r, 0),
+            false => number_edit(f, v, DEG_DECIMALS),
+        })
+        .collect())
+}
+
+/// The hint for a mirror image the robot it is for cannot take: an axis outside its limits
+/// names the axis; anything else gets `otherwise`.
+fn image_hint(why: &KinematicRefusal, otherwise: &str) -> String {
+    match why {
+        KinematicRefusal::OutsideLimit { axis, limits, .. } => format!(
+            "the mirror-image robot cannot take the mirror-image posture: re-teach the target so that its mirror image lies inside the range of axis {axis} ([{}, {}])",
+            limits[0], limits[1]
+        ),
+        _ => otherwise.to_owned(),
     }
-    Ok(edits)
 }
 
 /// `mirror` every target (and, if asked, frame) of `program` (reading the files' provenance
