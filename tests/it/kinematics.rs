@@ -1897,6 +1897,89 @@ fn correct_then_zero_gives_back_joint_targets_at_their_limits() {
     }
 }
 
+/// `correct` then `zero` of joint targets half a degree from the wrist singularity (r1 on the
+/// measured track) gives back their text. `zero` turns axes 4 and 6 by 3.4 times the rounding
+/// of the corrected axis 5 there: `jW05` corrected is A4 38.26132, A5 0.52665, A6 61.72262, and
+/// its plain rounding (38.2613, 0.5267, 61.7226) came back as A4 39.9998 and A6 60.0001. It is
+/// now written with `zero` in view, A4 and A6 stepped by what `zero` misses (38.2615, 61.7225),
+/// which reaches the corrected pose to the text's precision as plain rounding does. The same
+/// with six decimals (39.999999 and 60.000001 before) and on the other side of the singularity.
+#[test]
+fn correct_then_zero_gives_back_joint_targets_near_the_wrist_singularity() {
+    let dir = tempfile::tempdir().unwrap();
+    let decls = [
+        "  CONST jointtarget jW05:=[[10,20,30,40,0.5,60],[4000,9E9,9E9,9E9,9E9,9E9]];\n",
+        "  CONST jointtarget jW6:=[[10.000000,20.000000,30.000000,40.000000,0.500000,60.000000],[4000,9E9,9E9,9E9,9E9,9E9]];\n",
+        "  CONST jointtarget jWn:=[[-35,10,5,-120,-0.5,170],[1500,9E9,9E9,9E9,9E9,9E9]];\n",
+    ];
+    let src = format!(
+        "MODULE Wrist\n{}  PROC main()\n    MoveAbsJ jW05,v100,fine,tool0;\n    MoveAbsJ jW6,v100,fine,tool0;\n    MoveAbsJ jWn,v100,fine,tool0;\n  ENDPROC\nENDMODULE\n",
+        decls.concat()
+    );
+    let file = dir.path().join("wrist.mod");
+    std::fs::write(&file, &src).unwrap();
+    let (corrected, zeroed) = (dir.path().join("c.mod"), dir.path().join("z.mod"));
+    let run = |cmd: &str, from: &Path, to: &Path| {
+        let (from, to) = (from.to_str().unwrap(), to.to_str().unwrap());
+        trackfix(&[
+            cmd,
+            from,
+            "--cell",
+            "samples/cell.toml",
+            "--robot",
+            "r1",
+            "-o",
+            to,
+        ])
+    };
+    let (code, _, err) = run("correct", &file, &corrected);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&corrected).unwrap();
+    assert!(
+        text.contains("jW05:=[[9.9738,19.9348,30.0358,38.2615,0.5267,61.7225],"),
+        "{text}"
+    );
+    // The written joints reach D⁻¹ of the original pose to their written precision, as plain
+    // rounding does (2.1e-3 mm and 7.5e-5° for jW05 plainly, 8.9e-5° so).
+    let (k, _) = sample_robot("r1");
+    for (name, skid, j, mm, deg) in [
+        (
+            "jW05",
+            4000.0,
+            [10.0, 20.0, 30.0, 40.0, 0.5, 60.0],
+            0.005,
+            2e-4,
+        ),
+        (
+            "jW6",
+            4000.0,
+            [10.0, 20.0, 30.0, 40.0, 0.5, 60.0],
+            5e-5,
+            2e-6,
+        ),
+        (
+            "jWn",
+            1500.0,
+            [-35.0, 10.0, 5.0, -120.0, -0.5, 170.0],
+            0.005,
+            2e-4,
+        ),
+    ] {
+        let d = sample_deviation(skid);
+        let jc = joints_in(&parsed(&text), name);
+        let (dp, dr) = pose_error(&chain_pose(&k, &jc), &(d.inverse() * chain_pose(&k, &j)));
+        assert!(
+            dp < mm && dr.to_degrees() < deg,
+            "{name}: {dp} mm {} deg",
+            dr.to_degrees()
+        );
+    }
+    let (code, _, err) = run("zero", &corrected, &zeroed);
+    assert_eq!(code, 0, "{err}");
+    let back = std::fs::read_to_string(&zeroed).unwrap();
+    assert_eq!(back, src);
+}
+
 /// The same on the KUKA arm: `E6AXIS` with A1 at 185° (the KR 210's limit) at E1 1500 needs
 /// 185.059° after `correct`, and is refused as such, where it was written at −174.94°.
 #[test]
