@@ -19,7 +19,7 @@ use trackfix::syntax::{Severity, printable};
 use trackfix::track::cell_nominal::check_cell_nominal;
 use trackfix::track::uncertainty::ProfileUncertainty;
 use trackfix::track::{Profile, TrackError};
-use trackfix::transform::cell::skid_axis_index;
+use trackfix::transform::cell::{SKID_MAP_HINT, skid_axis_index};
 use trackfix::transform::rename::{Renamed, rename_program};
 use trackfix::transform::stamp;
 use trackfix::transform::{
@@ -640,15 +640,21 @@ fn load_cell(path: &Path) -> anyhow::Result<Cell> {
     Ok(Cell::load(path)?)
 }
 
+/// The robot's profile as its file gives it; a file that cannot be read is an error at the
+/// cell's `profile = …`.
+fn read_profile(cell: &Cell, robot: &Robot) -> anyhow::Result<Profile> {
+    match Profile::load(&robot.profile) {
+        Err(TrackError::Io { error, .. }) => Err(cell.profile_error(robot, &error).into()),
+        r => r.with_context(|| format!("profile of robot `{}`", robot.name)),
+    }
+}
+
 /// The robot's profile, checked against the cell: a cell whose track axis (or, for a profile
 /// measured in the cell's frame, whose base) disagrees with the profile's nominal would apply the
 /// profile in the wrong place, so it is an error; a profile that disagrees with its own
 /// statistics (a hand edit) is a warning.
 fn load_profile(cell: &Cell, robot: &Robot) -> anyhow::Result<Profile> {
-    let profile = match Profile::load(&robot.profile) {
-        Err(TrackError::Io { error, .. }) => return Err(cell.profile_error(robot, &error).into()),
-        r => r.with_context(|| format!("profile of robot `{}`", robot.name))?,
-    };
+    let profile = read_profile(cell, robot)?;
     check_cell_nominal(&robot.base0, &robot.track_axis, &profile).with_context(|| {
         format!(
             "{}: robot `{}` does not match its profile {}",
@@ -1391,7 +1397,13 @@ fn run_mirror_inner(mut a: MirrorArgs) -> anyhow::Result<Exit> {
         )
     };
     if let (Some(c), Some(name)) = (&cell, &a.to_robot) {
-        writes_image_for(&mut settings, robot, c.robot(name)?)?;
+        let to = c.robot(name)?;
+        writes_image_for(&mut settings, robot, to)?;
+        if let Some(from) = robot {
+            // The skid range of its track: where the map is checked.
+            let range = read_profile(c, from)?.skid_range();
+            check_skid_map(c, &a.mirror, &settings, from, to, range)?;
+        }
     }
     run_step(
         "mirror",
@@ -1438,6 +1450,32 @@ fn writes_image_for(
         arm.image = trackfix::transform::ImageRobot::of(to);
     }
     Ok(())
+}
+
+/// The skid map against the bases of the robot mirrored and the mirror-image robot over the
+/// first's track (`mirror::check_skid_map`): a map that does not put `to` at the mirror image of
+/// `from` is an error at the cell's `skid_map`, or naming where the map came from, never used.
+fn check_skid_map(
+    cell: &Cell,
+    o: &MirrorOptions,
+    settings: &MirrorSettings,
+    from: &Robot,
+    to: &Robot,
+    range: (f64, f64),
+) -> anyhow::Result<()> {
+    let Err(mismatch) = trackfix::transform::mirror::check_skid_map(settings, from, to, range)
+    else {
+        return Ok(());
+    };
+    let given = match (o.skid_map, cell.skid_map_error(&mismatch)) {
+        (None, Some(located)) => return Err(located.into()),
+        (Some(_), _) => "--skid-map".to_owned(),
+        (None, None) => format!(
+            "{}: no skid_map in the [mirror] table, so the default",
+            cell.path.display()
+        ),
+    };
+    bail!("{given}: {mismatch}\n  = help: {SKID_MAP_HINT}")
 }
 
 /// A mirror needs a plane: from `--plane` or the cell's `[mirror]` table, never a silent
@@ -1495,6 +1533,14 @@ fn run_transfer_inner(mut a: TransferArgs) -> anyhow::Result<Exit> {
                 )
             };
             writes_image_for(&mut settings, Some(from), to)?;
+            check_skid_map(
+                &cell,
+                &a.mirror_options,
+                &settings,
+                from,
+                to,
+                from_profile.skid_range(),
+            )?;
             Some(settings)
         } else {
             None

@@ -429,19 +429,42 @@ pub fn mirrored_joints(j: &Joints) -> Joints {
     [-j[0], j[1], j[2], -j[3], j[4], -j[5]]
 }
 
-/// The joints and configuration IK finds for a mirrored target: the solution of the mirrored
-/// flange pose (in the mirror robot's base) within the limits nearest to the rule's mirror
-/// image of the original joints. `None` when the mirrored pose is out of reach within the
-/// limits.
+/// The joints and configuration IK finds for a mirrored target: the mirrored flange pose (in
+/// the mirror robot's base) reached from the rule's mirror image of the original joints
+/// ([`mirrored_joints`]) in its arm and wrist, each axis by its least turn ([`check_move`]
+/// without a configuration) — the rule's image itself where the image is exact.
+///
+/// That image outside the limits is refused ([`KinematicRefusal::OutsideLimit`], with the
+/// joints): the mirror-image robot cannot take the mirror-image posture, and the solution
+/// within the limits nearest to it is then the same pose a turn of an axis away, or another
+/// arm or wrist (an axis 1 limited to [−170°, 185°] reaches the image of 178° as 182°, or
+/// behind itself at 2°). Where only a swing or another branch reaches the pose, the solution
+/// within the limits nearest to the rule's image is given, for the written configuration's
+/// check to name the swing ([`check_move`]); no solution at all is
+/// [`KinematicRefusal::Unreachable`].
 pub fn mirror_config_by_ik(
     kin: &Kinematics,
     mirrored_flange: &Pose,
     original: &Joints,
     language: crate::position::Language,
-) -> Option<(Joints, ConfigValue)> {
+) -> Result<(Joints, ConfigValue), Box<JointRefusal>> {
     let reference = mirrored_joints(original);
-    let j = kin.nearest(mirrored_flange, &reference, false)?;
-    Some((j, ConfigValue::of_joints(language, kin, &j)))
+    let check = check_move(kin, &reference, mirrored_flange, None);
+    let j = match (check.refusal, check.after) {
+        (None, Some(j)) => j,
+        (Some(why @ KinematicRefusal::OutsideLimit { .. }), after) => {
+            return Err(Box::new(JointRefusal { why, after }));
+        }
+        _ => kin
+            .nearest(mirrored_flange, &reference, false)
+            .ok_or_else(|| {
+                Box::new(JointRefusal {
+                    why: KinematicRefusal::Unreachable,
+                    after: None,
+                })
+            })?,
+    };
+    Ok((j, ConfigValue::of_joints(language, kin, &j)))
 }
 
 #[cfg(test)]

@@ -68,6 +68,10 @@ impl CellError {
     }
 }
 
+/// What to do about a skid map that does not place the mirror-image robot (for a map from the
+/// cell file or from elsewhere alike).
+pub const SKID_MAP_HINT: &str = "write the map the bases give, or check both robots' base and track_axis and the mirror plane: the map is from the robot mirrored to the mirror-image robot, so mirroring the other way round needs its inverse";
+
 /// A pose written as `{ x, y, z, rx, ry, rz }` (mm, degrees, `R = Rz·Ry·Rx`).
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -225,7 +229,7 @@ struct MirrorToml {
     frame_in: Option<FrameIn>,
     tool_flip: Option<Axis>,
     config: Option<ConfigRule>,
-    skid_map: Option<[f64; 2]>,
+    skid_map: Option<Spanned<[f64; 2]>>,
 }
 
 /// One robot of the cell, validated.
@@ -269,6 +273,8 @@ pub struct MirrorTable {
     pub config: Option<ConfigRule>,
     /// `skid_map = [scale, offset]`: the mirrored skid `s' = scale·s + offset`.
     pub skid_map: Option<(f64, f64)>,
+    /// Where the cell file writes `skid_map`, for an error about it.
+    pub skid_map_span: Option<Span>,
 }
 
 /// A validated cell file.
@@ -352,15 +358,7 @@ fn is_identity(p: &Pose) -> bool {
 /// 4 decimals with trailing zeros left off.
 fn inline_pose(p: &Pose) -> String {
     let [x, y, z, rx, ry, rz] = crate::geometry::pose_to_xyz_deg(p);
-    let short = |v: f64| {
-        let t = format!("{v:.4}");
-        let t = t.trim_end_matches('0').trim_end_matches('.');
-        if t == "-0" {
-            "0".to_owned()
-        } else {
-            t.to_owned()
-        }
-    };
+    let short = |v: f64| short_number(v, 4);
     format!(
         "{{ x = {}, y = {}, z = {}, rx = {}, ry = {}, rz = {} }}",
         short(x),
@@ -370,6 +368,20 @@ fn inline_pose(p: &Pose) -> String {
         short(ry),
         short(rz)
     )
+}
+
+/// `v` to `decimals` decimals with trailing zeros left off, as a cell file is written by hand
+/// (`1.000000` → `1`, `-0.0001` to 3 → `0`).
+pub(crate) fn short_number(v: f64, decimals: usize) -> String {
+    let t = format!("{v:.decimals$}");
+    let t = match t.contains('.') {
+        true => t.trim_end_matches('0').trim_end_matches('.'),
+        false => &t,
+    };
+    match t {
+        "-0" => "0".to_owned(),
+        t => t.to_owned(),
+    }
 }
 
 /// The key a frame or tool is found by in a cell's `[robot.NAME.wobj]` and `[robot.NAME.tool]`
@@ -506,7 +518,11 @@ impl Cell {
                 frame_in: m.frame_in.unwrap_or_default(),
                 tool_flip: m.tool_flip,
                 config: m.config,
-                skid_map: m.skid_map.map(|[a, b]| (a, b)),
+                skid_map: m.skid_map.as_ref().map(|m| {
+                    let [scale, offset] = *m.get_ref();
+                    (scale, offset)
+                }),
+                skid_map_span: m.skid_map.as_ref().map(|m| m.span().into()),
             })
             .unwrap_or_default();
         Ok(Cell {
@@ -532,6 +548,20 @@ impl Cell {
             "the path is relative to the cell file; make a profile with \
              `trackfix track identify` and `trackfix track fit FRAMES.csv -o PROFILE.toml`",
         )
+    }
+
+    /// The error that the `[mirror]` table's `skid_map` does not put robot `to` where the
+    /// mirror image of robot `from` stands, at the entry; `None` when the table has no
+    /// `skid_map` (the map checked came from elsewhere).
+    pub fn skid_map_error(&self, mismatch: &super::mirror::SkidMapMismatch) -> Option<CellError> {
+        let span = self.mirror.skid_map_span?;
+        Some(CellError::invalid(
+            &self.path,
+            &self.text,
+            span,
+            mismatch.to_string(),
+            SKID_MAP_HINT,
+        ))
     }
 
     /// The robot called `name`, or an error listing the known ones.

@@ -33,7 +33,9 @@ use super::rewrite::{
 };
 use super::stamp::{Stamp, StampReading};
 use crate::kinematics::reach::resolve_tool;
-use crate::kinematics::{ConfigValue, mirror_config_by_ik, mirrored_joints};
+use crate::kinematics::{
+    ConfigValue, Joints, KinematicRefusal, mirror_config_by_ik, mirrored_joints,
+};
 
 /// Everything `mirror` needs.
 #[derive(Clone, Debug, PartialEq)]
@@ -123,6 +125,16 @@ impl ImageRobot {
     fn base_at(&self, skid: f64) -> Pose {
         Translation3::from(self.track_axis * skid) * self.base0
     }
+
+    /// ` on robot `r2` at skid 3000.0 mm (its flange 1729.3 mm from that robot's base)`: where
+    /// a refused image was to be reached, for its message.
+    fn where_it_stands(&self, skid: f64, flange: &Pose) -> String {
+        format!(
+            " on robot `{}` at skid {skid:.1} mm (its flange {:.1} mm from that robot's base)",
+            self.name,
+            flange.translation.vector.norm()
+        )
+    }
 }
 
 impl MirrorArm {
@@ -152,6 +164,96 @@ pub fn mirrored_flange(f: &Pose) -> Pose {
         Translation3::new(t.x, -t.y, t.z),
         UnitQuaternion::from_quaternion(q),
     )
+}
+
+/// Largest distance along its track between the mirror-image robot's base at the mapped skid
+/// and the mirror image of the mirrored robot's base, mm (docs/design.md §10). Across the track
+/// and in rotation the two bases fall short of mirror images by what the cell is built off
+/// (the sample's by 0.86 mm), which the image solved in the other robot's base takes up; along
+/// the track the skid map alone places the robot, and a map within 1 mm of the bases' is as
+/// good as that. A map farther off stands the robot where the mirror image is not, turning its
+/// arm (≈ 0.04° per mm on the bundled arms) to reach the image: not the mirror image.
+pub const SKID_MAP_TOLERANCE_MM: f64 = 1.0;
+
+/// A skid map that does not put the mirror-image robot's base where the mirror image of the
+/// mirrored robot's stands ([`check_skid_map`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkidMapMismatch {
+    /// The mirrored robot.
+    pub from: String,
+    /// The mirror-image robot.
+    pub to: String,
+    /// The map checked, `s' = scale·s + offset`.
+    pub map: (f64, f64),
+    /// The map the two bases give: at `scale·s + offset` the image robot's base is level, along
+    /// its track, with the mirror image of the other's base at `s`.
+    pub implied: (f64, f64),
+    /// At each end of the mirrored robot's skid range: its skid, the mapped skid and how far
+    /// along its track (mm, in the direction of its `track_axis`) the image robot's base
+    /// stands there from the mirror image of the other's.
+    pub ends: [(f64, f64, f64); 2],
+}
+
+impl std::fmt::Display for SkidMapMismatch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let number = super::cell::short_number;
+        let map =
+            |(scale, offset): (f64, f64)| format!("[{}, {}]", number(scale, 6), number(offset, 3));
+        let (to, from) = (&self.to, &self.from);
+        let [(s0, t0, e0), (s1, t1, e1)] = self.ends;
+        write!(
+            f,
+            "skid map {} puts robot `{to}`'s base {e0:.3} mm along its track from the mirror image of robot `{from}`'s at `{from}`'s skid {s0:.1} (`{to}` at {t0:.1}), and {e1:.3} mm at {s1:.1} (at {t1:.1}): more than {SKID_MAP_TOLERANCE_MM} mm; the bases give {}",
+            map(self.map),
+            map(self.implied)
+        )
+    }
+}
+
+impl std::error::Error for SkidMapMismatch {}
+
+/// Whether the skid map of `settings` puts robot `to` at the mirror image of robot `from` along
+/// its track, over `from`'s skid range `range` (its track's measured range), within
+/// [`SKID_MAP_TOLERANCE_MM`].
+///
+/// The map means: at skid `s` of `from`, `to` stands at `s' = scale·s + offset` as its mirror
+/// image (docs/design.md §6, §10). With bases `B(s) = Trans(s·a)·B_0` and the plane's
+/// reflection `A`, the image robot's base is level with `A·B_from(s)` at
+/// `s'* = a_to·(A·p_from0 − p_to0) + s·(a_to·A·a_from)` (`A` acting on the vector `a_from` as a
+/// reflection of directions): a line in `s`, so the map's miss is the largest at the range's
+/// ends. Only a plane in world has a place in the cell to check the bases against; with the
+/// plane in each target's work object (no `world`) there is nothing to check and this is `Ok`.
+pub fn check_skid_map(
+    settings: &MirrorSettings,
+    from: &super::cell::Robot,
+    to: &super::cell::Robot,
+    range: (f64, f64),
+) -> Result<(), Box<SkidMapMismatch>> {
+    let Some(world) = &settings.world else {
+        return Ok(());
+    };
+    let reflection = Reflection::about(&world.frame, settings);
+    let axis = to.track_axis;
+    let implied = (
+        axis.dot(&reflection.vector(&from.track_axis)),
+        axis.dot(&(reflection.point(&from.base0.translation.vector) - to.base0.translation.vector)),
+    );
+    let (scale, offset) = settings.skid_map;
+    let end = |s: f64| {
+        let mapped = scale * s + offset;
+        (s, mapped, mapped - (implied.0 * s + implied.1))
+    };
+    let ends = [end(range.0), end(range.1)];
+    if ends.iter().all(|e| e.2.abs() <= SKID_MAP_TOLERANCE_MM) {
+        return Ok(());
+    }
+    Err(Box::new(SkidMapMismatch {
+        from: from.name.clone(),
+        to: to.name.clone(),
+        map: settings.skid_map,
+        implied,
+        ends,
+    }))
 }
 
 /// A mirror plane given in world, and what resolves each target's work object.
@@ -590,34 +692,15 @@ impl MirrorRule<'_> {
             .target(&flange)
             .0;
         let target = image.base_at(skid_to).inverse() * mirrored;
-        let kin = &image.arm.kinematics;
-        let rule = mirrored_joints(&j);
-        let change = target * kin.forward(&rule).inverse();
-        let steps = super::kinematic_policy::written_steps(p);
-        let new = crate::kinematics::joint_target_correction(kin, &rule, &change, &steps)
-            .map_err(|refused| {
-                let (why, after) = (&refused.why, refused.after_text());
-                Why::new(
-                    RefusalKind::Reach,
-                    format!(
-                        "{what}: its mirror image on robot `{}` at skid {skid_to:.1} mm (its flange {:.1} mm from that robot's base): {why}: joints before {}, of the image {}, after {after}",
-                        image.name,
-                        target.translation.vector.norm(),
-                        fmt_joints(&j),
-                        fmt_joints(&rule),
-                    ),
-                    "check the mirror plane, the skid map and the mirror-image robot's cell; or re-teach the target",
-                )
-            })?;
-        Ok(p.joints
-            .iter()
-            .zip(new)
-            .zip(rule)
-            .filter_map(|((f, v), r)| match (v - r).abs() < 1e-9 {
-                true => flip_or_value_edit(f, r, 0),
-                false => number_edit(f, v, DEG_DECIMALS),
-            })
-            .collect())
+        let on = image.where_it_stands(skid_to, &target);
+        image_joint_edits(
+            &image.arm.kinematics,
+            p,
+            &j,
+            &target,
+            &on,
+            "check the mirror plane, the skid map and the mirror-image robot's cell; or re-teach the target",
+        )
     }
 
     /// The configuration inverse kinematics finds for the mirrored target (`None` when the
@@ -673,27 +756,35 @@ impl MirrorRule<'_> {
                         .image_tool(scope, image, name)
                         .map_err(|why| with_tool(why, p, name))?;
                     let flange = image.base_at(skid_to).inverse() * tcp * tool.inverse();
-                    let on = format!(
-                        " on robot `{}` at skid {skid_to:.1} mm (its flange {:.1} mm from that robot's base)",
-                        image.name,
-                        flange.translation.vector.norm()
-                    );
+                    let on = image.where_it_stands(skid_to, &flange);
                     (flange, on)
                 }
             };
-            let Some((_, solved)) = mirror_config_by_ik(kin, &mirrored, &before, language) else {
-                return Err(with_tool(
-                    Why::new(
-                        RefusalKind::Reach,
-                        format!(
+            let solved = match mirror_config_by_ik(kin, &mirrored, &before, language) {
+                Ok((_, solved)) => solved,
+                Err(refused) => {
+                    let message = match &refused.why {
+                        KinematicRefusal::Unreachable => format!(
                             "{what}: its mirror image is out of reach{on} within the limits: joints before {}, after none",
                             fmt_joints(&before)
                         ),
+                        why => format!(
+                            "{what}: its mirror image{on}: {why}: joints before {}, of the image {}, after {}",
+                            fmt_joints(&before),
+                            fmt_joints(&mirrored_joints(&before)),
+                            refused.after_text()
+                        ),
+                    };
+                    let hint = image_hint(
+                        &refused.why,
                         "check the mirror plane, the skid map and the mirror-image robot's cell",
-                    ),
-                    p,
-                    name,
-                ));
+                    );
+                    return Err(with_tool(
+                        Why::new(RefusalKind::Reach, message, hint),
+                        p,
+                        name,
+                    ));
+                }
             };
             // KUKA programs may write only one of Status and Turn: keep to what is written.
             let kept = match (&written, solved) {
@@ -744,35 +835,81 @@ fn skid_of(p: &Position, axis: usize, message: impl FnOnce() -> String) -> Resul
     }
 }
 
-/// A joint target mirrored through kinematics: `FK(J')` = the mirror image of `FK(J)` (see
-/// [`MirrorArm`]), the solution within the limits nearest to the rule's
-/// `(−θ1, θ2, θ3, −θ4, θ5, −θ6)`. Where IK agrees with the rule to 1e-9° the rule's text is
-/// written (a flip keeps the literal's decimals).
+/// A joint target mirrored through kinematics for the mirror-image robot standing as this
+/// one's mirror image (see [`MirrorArm`]): `FK(J')` = the mirror image of `FK(J)`.
 fn mirror_joints_by_ik(arm: &Arm, p: &Position) -> Result<Vec<Edit>, Why> {
     let j = arm.joints_of(p)?;
     let kin = &arm.kinematics;
-    let rule = mirrored_joints(&j);
-    let Some(new) = kin.nearest(&mirrored_flange(&kin.forward(&j)), &rule, false) else {
-        return Err(Why::new(
-            RefusalKind::Reach,
-            format!(
-                "{}: its mirror image is out of reach within the limits: joints before {}, after none",
-                describe(p),
-                fmt_joints(&j)
-            ),
-            "check the mirror-image robot's limits",
-        ));
-    };
-    let mut edits = Vec::new();
-    for (i, (f, v)) in p.joints.iter().zip(new).enumerate() {
-        let edit = if (v - rule[i]).abs() < 1e-9 {
-            flip_or_value_edit(f, rule[i], 0)
-        } else {
-            number_edit(f, v, DEG_DECIMALS)
-        };
-        edits.extend(edit);
+    image_joint_edits(
+        kin,
+        p,
+        &j,
+        &mirrored_flange(&kin.forward(&j)),
+        "",
+        "check the mirror-image robot's kinematics; or re-teach the target",
+    )
+}
+
+/// The edits of joint target `p` (joints `j`) mirrored to `J'` whose flange is `target`, in the
+/// base of the robot it is for (kinematics `kin`): the rule's image
+/// `(−θ1, θ2, θ3, −θ4, θ5, −θ6)` moved by what it falls short of `target`, as a track correction
+/// moves a joint target ([`joint_target_correction`](crate::kinematics::joint_target_correction)
+/// with the change `target·FK(rule)⁻¹`, the identity where the rule is exact): the rule's arm and
+/// wrist, each axis by its least turn. Refused, saying so with `on` (where the image is) and
+/// `hint`: an image outside the limits, with the angle it needs (before, the solution within
+/// the limits nearest to the rule's was written: an axis 1 limited to [−170°, 185°] took the
+/// image of 178° as the arm behind itself, `[2, −27.3, −162, …]`, and an axis 4 limited to
+/// [−200°, 300°] the image of 250° as the flipped wrist), a swing (the wrist singularity), or
+/// no solution in the branch. Where `J'` agrees with the rule to 1e-9° the rule's text is
+/// written (a flip keeps the literal's decimals).
+fn image_joint_edits(
+    kin: &crate::kinematics::Kinematics,
+    p: &Position,
+    j: &Joints,
+    target: &Pose,
+    on: &str,
+    hint: &str,
+) -> Result<Vec<Edit>, Why> {
+    let rule = mirrored_joints(j);
+    let change = target * kin.forward(&rule).inverse();
+    let steps = super::kinematic_policy::written_steps(p);
+    let new = crate::kinematics::joint_target_correction(kin, &rule, &change, &steps).map_err(
+        |refused| {
+            Why::new(
+                RefusalKind::Reach,
+                format!(
+                    "{}: its mirror image{on}: {}: joints before {}, of the image {}, after {}",
+                    describe(p),
+                    refused.why,
+                    fmt_joints(j),
+                    fmt_joints(&rule),
+                    refused.after_text()
+                ),
+                image_hint(&refused.why, hint),
+            )
+        },
+    )?;
+    Ok(p.joints
+        .iter()
+        .zip(new)
+        .zip(rule)
+        .filter_map(|((f, v), r)| match (v - r).abs() < 1e-9 {
+            true => flip_or_value_edit(f, r, 0),
+            false => number_edit(f, v, DEG_DECIMALS),
+        })
+        .collect())
+}
+
+/// The hint for a mirror image the robot it is for cannot take: an axis outside its limits
+/// names the axis; anything else gets `otherwise`.
+fn image_hint(why: &KinematicRefusal, otherwise: &str) -> String {
+    match why {
+        KinematicRefusal::OutsideLimit { axis, limits, .. } => format!(
+            "the mirror-image robot cannot take the mirror-image posture: re-teach the target so that its mirror image lies inside the range of axis {axis} ([{}, {}])",
+            limits[0], limits[1]
+        ),
+        _ => otherwise.to_owned(),
     }
-    Ok(edits)
 }
 
 /// `mirror` every target (and, if asked, frame) of `program` (reading the files' provenance
@@ -1232,6 +1369,85 @@ mod tests {
         let (m, _) = refl.target(&t);
         let expected = kuka_abc(47.3, 61.2, 118.9);
         assert!(m.rotation.angle_to(&expected) < 1e-12);
+    }
+
+    /// A robot of a cell on a straight track, for [`check_skid_map`].
+    fn robot_on_track(name: &str, base0: Pose, track_axis: Vector3<f64>) -> super::super::Robot {
+        super::super::Robot {
+            name: name.to_owned(),
+            profile: Default::default(),
+            profile_span: Default::default(),
+            base0,
+            track_axis,
+            skid_axis: 0,
+            frames: BTreeMap::new(),
+            config_dat: None,
+            kinematics: None,
+            tools: BTreeMap::new(),
+        }
+    }
+
+    /// Two robots either side of the plane y = 500 in world, b's track running against a's: a
+    /// at skid s stands at x = 100 + s, b at skid s' at x = 8300 − s', so b is a's mirror image
+    /// at s' = 8200 − s, the map [-1, 8200]. Within 1 mm along the track a map passes; the
+    /// across-track 2 mm (b's base at y = 1002 where a's image is at 1000) is the cell's own.
+    #[test]
+    fn a_skid_map_is_checked_along_the_image_robots_track_at_the_ends_of_the_range() {
+        let a = robot_on_track(
+            "a",
+            pose_xyz_deg(100.0, 0.0, 0.0, 0.0, 0.0, 90.0),
+            Vector3::x(),
+        );
+        let b = robot_on_track(
+            "b",
+            pose_xyz_deg(8300.0, 1002.0, 0.0, 0.0, 0.0, -90.0),
+            -Vector3::x(),
+        );
+        let settings = |map| MirrorSettings {
+            skid_map: map,
+            world: Some(WorldPlane {
+                frame: pose_xyz_deg(0.0, 500.0, 0.0, 0.0, 0.0, 0.0),
+                frames: BTreeMap::new(),
+                frames_to: None,
+                default_wobj: None,
+            }),
+            ..MirrorSettings::default()
+        };
+        let range = (0.0, 6000.0);
+        assert_eq!(
+            check_skid_map(&settings((-1.0, 8200.0)), &a, &b, range),
+            Ok(())
+        );
+        assert_eq!(
+            check_skid_map(&settings((-1.0, 8201.0)), &a, &b, range),
+            Ok(())
+        );
+        let off = check_skid_map(&settings((-1.0, 8201.5)), &a, &b, range).unwrap_err();
+        assert_eq!((off.from.as_str(), off.to.as_str()), ("a", "b"));
+        let implied = off.implied;
+        assert!(
+            (implied.0 + 1.0).abs() < 1e-12 && (implied.1 - 8200.0).abs() < 1e-9,
+            "{implied:?}"
+        );
+        // The tracks taken as running the same way: 8200 mm off at skid 0, 3800 the other way
+        // at 6000.
+        let wrong = check_skid_map(&settings((1.0, 0.0)), &a, &b, range).unwrap_err();
+        let [(s0, t0, e0), (s1, t1, e1)] = wrong.ends;
+        assert_eq!((s0, t0, s1, t1), (0.0, 0.0, 6000.0, 6000.0));
+        assert!(
+            (e0 + 8200.0).abs() < 1e-9 && (e1 - 3800.0).abs() < 1e-9,
+            "{e0} {e1}"
+        );
+        assert_eq!(
+            wrong.to_string(),
+            "skid map [1, 0] puts robot `b`'s base -8200.000 mm along its track from the mirror image of robot `a`'s at `a`'s skid 0.0 (`b` at 0.0), and 3800.000 mm at 6000.0 (at 6000.0): more than 1 mm; the bases give [-1, 8200]"
+        );
+        // A plane in each target's work object has no place in the cell to check against.
+        let per_wobj = MirrorSettings {
+            world: None,
+            ..settings((1.0, 0.0))
+        };
+        assert_eq!(check_skid_map(&per_wobj, &a, &b, range), Ok(()));
     }
 
     #[test]

@@ -149,7 +149,7 @@ pub(crate) fn push_reversible_pose_edits(
     let undo = undo.filter(|_| old.is_some());
     let t = new.translation.vector;
     let texts = match (undo, present(&fields.trans)) {
-        (Some(undo), Some(trans)) => reversible(trans, [t.x, t.y, t.z], MM_DECIMALS, |w| {
+        (Some(undo), Some(trans)) => reversible(trans, [t.x, t.y, t.z], MM_DECIMALS, 0, |w| {
             // `(undo · Trans(w)).translation`, the same sums, without the product of the
             // rotations.
             let back = undo.transform_point(&Point3::new(w[0], w[1], w[2]));
@@ -179,7 +179,7 @@ pub(crate) fn push_reversible_pose_edits(
             let s = scale(written(q));
             let c = abb_quat_components(&new.rotation, like).map(|v| v * s);
             let texts = match (undo, present(q)) {
-                (Some(undo), Some(q)) => reversible(q, c, QUAT_DECIMALS, |w| {
+                (Some(undo), Some(q)) => reversible(q, c, QUAT_DECIMALS, 0, |w| {
                     // The inverse reads the written quaternion normalised, and writes its
                     // result with the sign nearest the written one, at the written norm.
                     let read = abb_quat(w)?;
@@ -209,7 +209,7 @@ pub(crate) fn push_reversible_pose_edits(
                 angles = kept;
             }
             let texts = match (undo, present(abc)) {
-                (Some(undo), Some(abc)) => reversible(abc, angles, DEG_DECIMALS, |w| {
+                (Some(undo), Some(abc)) => reversible(abc, angles, DEG_DECIMALS, 0, |w| {
                     let read = kuka_abc(w[0], w[1], w[2]);
                     let back = undo.rotation * read;
                     debug_assert!(!(undo_turns && same_rotation(&read, &back)));
@@ -299,6 +299,30 @@ fn present<const N: usize>(fields: &[Option<NumField>; N]) -> Option<[&NumField;
     Some(out)
 }
 
+/// Edits that make `fields` say `exact`, written so that the inverse transform gives back
+/// their original text where it can (docs/design.md §5, round trip): `inverse` is what the
+/// inverse makes of the values read back from the written text. As [`reversible_pose_edits`]
+/// writes a field group: plain rounding if its inverse gives back every original literal at its
+/// written places, else the nearest choice within one unit of each field's last written place
+/// that does, else (up to `steps` times) plain rounding moved field by field by what the
+/// inverse misses, in whole units, if that does; else plain rounding. A group with a field that
+/// is no literal is written plainly.
+pub(crate) fn reversible_edits<const N: usize>(
+    fields: &[Option<NumField>; N],
+    exact: [f64; N],
+    house: usize,
+    steps: usize,
+    inverse: impl Fn([f64; N]) -> Option<[f64; N]>,
+) -> Vec<Edit> {
+    let texts = match present(fields) {
+        Some(present) => reversible(present, exact, house, steps, inverse),
+        None => plain(fields, exact, house),
+    };
+    let mut edits = Vec::with_capacity(N);
+    push_edits(&mut edits, fields, texts);
+    edits
+}
+
 /// Each field's text for `values` by plain rounding (`None`: kept as written).
 fn plain<const N: usize>(
     fields: &[Option<NumField>; N],
@@ -343,6 +367,7 @@ fn reversible<const N: usize>(
     fields: [&NumField; N],
     exact: [f64; N],
     house: usize,
+    steps: usize,
     inverse: impl Fn([f64; N]) -> Option<[f64; N]>,
 ) -> [Option<EditText>; N] {
     if exact.iter().any(|v| !v.is_finite()) {
@@ -397,6 +422,30 @@ fn reversible<const N: usize>(
     for (pick, _) in combos {
         if gives_back(std::array::from_fn(|i| options[i][pick[i]].1)) {
             return std::array::from_fn(|i| options[i][pick[i]].0.clone());
+        }
+    }
+    // Stepped, `steps` times at most: from plain rounding, each field moved by what the
+    // inverse misses its original by, in whole units of its last written place. Where the
+    // inverse turns one field's rounding into several units of another's (a wrist near its
+    // singularity: `reversible_edits`), no choice within one unit gives it back, and the
+    // inverse is still near the identity field by field, so the misses close in a step or two.
+    let mut read = first.each_ref().map(|(_, v)| *v);
+    for _ in 0..steps {
+        let Some(back) = inverse(read) else { break };
+        let mut moved = false;
+        for i in 0..N {
+            let unit = 10f64.powi(-(rounded[i].places() as i32));
+            let miss = ((back[i] - rounded[i].value()) / unit).round();
+            if miss != 0.0 && miss.is_finite() {
+                read[i] = write_one(&rounded[i], read[i] - miss * unit).1;
+                moved = true;
+            }
+        }
+        if !moved {
+            break;
+        }
+        if gives_back(read) {
+            return std::array::from_fn(|i| write_one(&rounded[i], read[i]).0);
         }
     }
     first.map(|(t, _)| t)
@@ -562,6 +611,39 @@ mod tests {
             }
             out
         })
+    }
+
+    /// A field whose rounding the inverse turns into several units of another's (a wrist half
+    /// a degree from its singularity: 3.44 units of A4 for a unit of A5, worked from the sample
+    /// cell's r1): the plain rounding of A4 38.261318, A5 0.526654 comes back as A4 39.99982,
+    /// and no choice within one unit gives 40 back (A4's units move it by 1.05, A5's by 3.44
+    /// and A5's own by one). Stepped by what the inverse misses (−1.78 units: A4 two units up),
+    /// it does, and the written values stay within 2 units of the exact ones.
+    #[test]
+    fn a_rounding_the_inverse_amplifies_is_stepped_back() {
+        let texts = ["40.0000".to_owned(), "0.5000".to_owned()];
+        let fields = [field(&texts[0], 0), field(&texts[1], 8)];
+        let exact = [38.261318491, 0.526653862];
+        let inverse = |w: [f64; 2]| {
+            let d = [w[0] - exact[0], w[1] - exact[1]];
+            Some([40.0 + 1.05 * d[0] - 3.44 * d[1], 0.5 + d[1]])
+        };
+        let written = |steps| {
+            edited(
+                &texts,
+                &reversible_edits(&fields, exact, DEG_DECIMALS, steps, inverse),
+            )
+        };
+        assert_eq!(written(0), ["38.2613", "0.5267"]);
+        let back = inverse([38.2613, 0.5267]).unwrap();
+        assert!((back[0] - 39.99982).abs() < 1e-5, "{back:?}");
+        assert_eq!(written(3), ["38.2615", "0.5267"]);
+        let back = inverse([38.2615, 0.5267]).unwrap();
+        assert!(
+            (back[0] - 40.0).abs() < 5e-5 && (back[1] - 0.5).abs() < 5e-5,
+            "{back:?}"
+        );
+        assert!(within(&written(3), &exact, 2.0));
     }
 
     /// Values within `units` units of the last written place of `exact` (each field).

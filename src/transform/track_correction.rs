@@ -17,7 +17,7 @@ use crate::track::{Profile, TrackError};
 use super::cell::Robot;
 use super::driver::{KeptByStamp, NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
-use super::kinematic_policy::{Arm, joint_edits, with_tool, written_steps};
+use super::kinematic_policy::{Arm, joint_edits, reversible_joint_edits, with_tool, written_steps};
 use super::policy::{
     LastWorkObject, Why, common_refusal, describe, joint_target, offset_bases, stationary_tool,
 };
@@ -260,14 +260,24 @@ impl TargetRule for TrackRule<'_, '_> {
             .setup
             .base_change(skid, self.dir)
             .map_err(|e| refuse(profile_refusal(&describe(p), skid, e)))?;
-        let new = crate::kinematics::joint_target_correction(
-            &arm.kinematics,
-            &j,
-            &change,
-            &written_steps(p),
-        )
-        .map_err(|refused| refuse(arm.joint_refusal(p, &j, &refused)))?;
         let kin = &arm.kinematics;
+        let steps = written_steps(p);
+        let new = crate::kinematics::joint_target_correction(kin, &j, &change, &steps)
+            .map_err(|refused| refuse(arm.joint_refusal(p, &j, &refused)))?;
+        // `correct` is written so that `zero` gives back the text it read, as a pose is
+        // (`new_pose`); the corrected text has the original's places, at least four.
+        let edits = match self.dir {
+            Direction::Correct => {
+                let undo = self
+                    .setup
+                    .base_change(skid, Direction::Zero)
+                    .map_err(|e| refuse(profile_refusal(&describe(p), skid, e)))?;
+                reversible_joint_edits(p, &new, |written| {
+                    crate::kinematics::joint_target_correction(kin, &written, &undo, &steps).ok()
+                })
+            }
+            Direction::Zero => joint_edits(p, &new),
+        };
         let (mm, deg) = pose_change(&kin.forward(&j), &kin.forward(&new));
         let change = TargetChange {
             mm,
@@ -279,7 +289,7 @@ impl TargetRule for TrackRule<'_, '_> {
             // here, so no uncertainty is stated for it.
             uncertainty_mm: None,
         };
-        Ok(Some((joint_edits(p, &new), change)))
+        Ok(Some((edits, change)))
     }
 
     fn skid(&self, scope: Scope, p: &Position) -> Result<Option<f64>, Why> {

@@ -1495,6 +1495,134 @@ fn mirror_keeps_the_axis_4_and_6_split_of_a_singular_wrist() {
     }
 }
 
+/// An arm whose axes 1 and 4 have asymmetric limits (axis 1 [−170°, 185°], axis 4 [−200°,
+/// 300°]): the mirror image of A1 = 178° is −178°, of A4 = 250° is −250°, both outside. The
+/// solution within the limits nearest to the image is then another posture: for `jA1` axis 1
+/// a full turn away (182°), for `jA4` the flipped wrist (A5 negated, axes 4 and 6 half a turn
+/// away). Before, `mirror` wrote those silently, exit 0 (on the IRB 4600 of the sample cell
+/// with these limits `jA1` became the arm behind axis 1,
+/// `[2.0000,-27.3155,-161.9866,156.7462,63.5747,-71.3814]`). Now the joint target and its
+/// Cartesian twin are refused, naming the axis and the angle the image needs, and the target
+/// whose image lies within the limits is mirrored by the rule.
+#[test]
+fn a_mirror_image_outside_asymmetric_limits_is_refused_not_taken_in_another_posture() {
+    use trackfix::transform::mirror::mirrored_flange;
+    use trackfix::transform::{MirrorArm, MirrorSettings, RefusalKind, apply, mirror};
+    let asymmetric = CELL.replace(
+        "model = \"abb_irb2400_10\"\n",
+        "model = \"abb_irb2400_10\"\nlimits = [[-170, 185], [-100, 110], [-60, 65], [-200, 300], [-120, 120], [-400, 400]]\n",
+    );
+    let cell = Cell::parse(Path::new("cell.toml"), &asymmetric).unwrap();
+    let robot = cell.robot("r1").unwrap();
+    let k = robot.kinematics.clone().unwrap();
+    let tool = robot.tools["tgun"];
+    let skid = 500.0;
+    let b = pose_xyz_deg(skid, -1000.0, 0.0, 0.0, 0.0, 90.0);
+    let (j_a1, j_a4) = (
+        [178.0, 10.0, 20.0, 30.0, 45.0, 60.0],
+        [10.0, 10.0, 20.0, 250.0, 45.0, 60.0],
+    );
+    // The case: the rule's image is outside the limits, and the solution within them nearest
+    // to it is the same pose with axis 1 a full turn away (182°), or the flipped wrist (axis 4
+    // at −250° + 180°, axis 5 negated, axis 6 at −60° − 180°).
+    let nearest = |j: &Joints| {
+        let image = mirrored_joints(j);
+        assert!(!k.within_limits(&image), "{image:?}");
+        k.nearest(&mirrored_flange(&k.forward(j)), &image, false)
+            .unwrap()
+    };
+    let turned = [182.0, 10.0, 20.0, -30.0, 45.0, -60.0];
+    let flipped = [-10.0, 10.0, 20.0, -70.0, -45.0, -240.0];
+    assert!(
+        joints_close(&nearest(&j_a1), &turned, 1e-9),
+        "{:?}",
+        nearest(&j_a1)
+    );
+    assert!(
+        joints_close(&nearest(&j_a4), &flipped, 1e-9),
+        "{:?}",
+        nearest(&j_a4)
+    );
+    let mut src = String::from(
+        "MODULE M\n  PERS tooldata tGun:=[TRUE,[[0,0,0],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\n",
+    );
+    src += "  CONST jointtarget jA1:=[[178,10,20,30,45,60],[500,9E9,9E9,9E9,9E9,9E9]];\n";
+    src += "  CONST jointtarget jA4:=[[10,10,20,250,45,60],[500,9E9,9E9,9E9,9E9,9E9]];\n";
+    src += "  CONST jointtarget jOk:=[[10,10,20,30,45,60],[500,9E9,9E9,9E9,9E9,9E9]];\n";
+    src += &robtarget(
+        "pA1",
+        &(b * k.forward(&j_a1) * tool),
+        abb::config_of(&k, &j_a1),
+        skid,
+    );
+    src += "  PROC main()\n    MoveAbsJ jA1,v100,fine,tGun;\n    MoveAbsJ jA4,v100,fine,tGun;\n    MoveAbsJ jOk,v100,fine,tGun;\n    MoveL pA1,v100,fine,tGun;\n  ENDPROC\nENDMODULE\n";
+    let program = parsed(&src);
+    let settings = MirrorSettings {
+        arm: MirrorArm::of(robot, None),
+        ..MirrorSettings::default()
+    };
+    let result = apply(&program, mirror(&program, &settings)).unwrap();
+    let refused: Vec<(&str, RefusalKind, &str)> = result
+        .refusals()
+        .map(|r| (r.target.as_str(), r.kind, r.message.as_str()))
+        .collect();
+    assert_eq!(refused.len(), 3, "{refused:#?}");
+    for (name, axis, angle, limits, image) in [
+        (
+            "jA1",
+            1,
+            "-178.000",
+            "[-170, 185]",
+            "[-178.000, 10.000, 20.000, -30.000, 45.000, -60.000]",
+        ),
+        (
+            "jA4",
+            4,
+            "-250.000",
+            "[-200, 300]",
+            "[-10.000, 10.000, 20.000, -250.000, 45.000, -60.000]",
+        ),
+        (
+            "pA1",
+            1,
+            "-178.000",
+            "[-170, 185]",
+            "[-178.000, 10.000, 20.000, -30.000, 45.000, -60.000]",
+        ),
+    ] {
+        let (_, kind, message) = refused
+            .iter()
+            .find(|r| r.0 == name)
+            .unwrap_or_else(|| panic!("{name}: {refused:#?}"));
+        assert_eq!(*kind, RefusalKind::Reach);
+        assert!(
+            message.contains(&format!(
+                "`{name}`: its mirror image: the transformed target needs axis {axis} = {angle}°, outside its limits {limits}"
+            )),
+            "{message}"
+        );
+        assert!(
+            message.contains(&format!("of the image {image}")),
+            "{message}"
+        );
+    }
+    let hint = &result.refusals().next().unwrap().hint;
+    assert!(
+        hint.contains("inside the range of axis 1 ([-170, 185])"),
+        "{hint}"
+    );
+    // The one whose image lies within the limits is mirrored by the rule; the refused ones
+    // keep their text.
+    let out = String::from_utf8(result.files[0].output.clone()).unwrap();
+    assert!(out.contains("jOk:=[[-10,10,20,-30,45,-60],"), "{out}");
+    for line in src
+        .lines()
+        .filter(|l| l.contains("jA1:=") || l.contains("jA4:=") || l.contains("pA1:="))
+    {
+        assert!(out.contains(line), "{line}\n{out}");
+    }
+}
+
 /// A target a routine moves to with its tool parameter (`PROC Weld(robtarget p, PERS
 /// tooldata t)`) is reached with whichever tool each caller passes: its joints cannot be
 /// checked, and it is refused as such by name and line, not as "not used with a tool". The
@@ -1816,6 +1944,89 @@ fn correct_then_zero_gives_back_joint_targets_at_their_limits() {
     for decl in &decls {
         assert!(back.contains(decl), "{decl}{back}");
     }
+}
+
+/// `correct` then `zero` of joint targets half a degree from the wrist singularity (r1 on the
+/// measured track) gives back their text. `zero` turns axes 4 and 6 by 3.4 times the rounding
+/// of the corrected axis 5 there: `jW05` corrected is A4 38.26132, A5 0.52665, A6 61.72262, and
+/// its plain rounding (38.2613, 0.5267, 61.7226) came back as A4 39.9998 and A6 60.0001. It is
+/// now written with `zero` in view, A4 and A6 stepped by what `zero` misses (38.2615, 61.7225),
+/// which reaches the corrected pose to the text's precision as plain rounding does. The same
+/// with six decimals (39.999999 and 60.000001 before) and on the other side of the singularity.
+#[test]
+fn correct_then_zero_gives_back_joint_targets_near_the_wrist_singularity() {
+    let dir = tempfile::tempdir().unwrap();
+    let decls = [
+        "  CONST jointtarget jW05:=[[10,20,30,40,0.5,60],[4000,9E9,9E9,9E9,9E9,9E9]];\n",
+        "  CONST jointtarget jW6:=[[10.000000,20.000000,30.000000,40.000000,0.500000,60.000000],[4000,9E9,9E9,9E9,9E9,9E9]];\n",
+        "  CONST jointtarget jWn:=[[-35,10,5,-120,-0.5,170],[1500,9E9,9E9,9E9,9E9,9E9]];\n",
+    ];
+    let src = format!(
+        "MODULE Wrist\n{}  PROC main()\n    MoveAbsJ jW05,v100,fine,tool0;\n    MoveAbsJ jW6,v100,fine,tool0;\n    MoveAbsJ jWn,v100,fine,tool0;\n  ENDPROC\nENDMODULE\n",
+        decls.concat()
+    );
+    let file = dir.path().join("wrist.mod");
+    std::fs::write(&file, &src).unwrap();
+    let (corrected, zeroed) = (dir.path().join("c.mod"), dir.path().join("z.mod"));
+    let run = |cmd: &str, from: &Path, to: &Path| {
+        let (from, to) = (from.to_str().unwrap(), to.to_str().unwrap());
+        trackfix(&[
+            cmd,
+            from,
+            "--cell",
+            "samples/cell.toml",
+            "--robot",
+            "r1",
+            "-o",
+            to,
+        ])
+    };
+    let (code, _, err) = run("correct", &file, &corrected);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&corrected).unwrap();
+    assert!(
+        text.contains("jW05:=[[9.9738,19.9348,30.0358,38.2615,0.5267,61.7225],"),
+        "{text}"
+    );
+    // The written joints reach D⁻¹ of the original pose to their written precision, as plain
+    // rounding does (2.1e-3 mm and 7.5e-5° for jW05 plainly, 8.9e-5° so).
+    let (k, _) = sample_robot("r1");
+    for (name, skid, j, mm, deg) in [
+        (
+            "jW05",
+            4000.0,
+            [10.0, 20.0, 30.0, 40.0, 0.5, 60.0],
+            0.005,
+            2e-4,
+        ),
+        (
+            "jW6",
+            4000.0,
+            [10.0, 20.0, 30.0, 40.0, 0.5, 60.0],
+            5e-5,
+            2e-6,
+        ),
+        (
+            "jWn",
+            1500.0,
+            [-35.0, 10.0, 5.0, -120.0, -0.5, 170.0],
+            0.005,
+            2e-4,
+        ),
+    ] {
+        let d = sample_deviation(skid);
+        let jc = joints_in(&parsed(&text), name);
+        let (dp, dr) = pose_error(&chain_pose(&k, &jc), &(d.inverse() * chain_pose(&k, &j)));
+        assert!(
+            dp < mm && dr.to_degrees() < deg,
+            "{name}: {dp} mm {} deg",
+            dr.to_degrees()
+        );
+    }
+    let (code, _, err) = run("zero", &corrected, &zeroed);
+    assert_eq!(code, 0, "{err}");
+    let back = std::fs::read_to_string(&zeroed).unwrap();
+    assert_eq!(back, src);
 }
 
 /// The same on the KUKA arm: `E6AXIS` with A1 at 185° (the KR 210's limit) at E1 1500 needs

@@ -189,10 +189,21 @@ fn joints(n: &[f64]) -> [f64; 6] {
     [n[0], n[1], n[2], n[3], n[4], n[5]]
 }
 
-/// The sample cell's text, its paths made absolute (to be written elsewhere), with the skid map
-/// `map` for the mirror-image robot.
-fn sample_cell_with_skid_map(map: &str) -> String {
-    crate::support::sample_cell().replace("skid_map = [1.0, 0.0]", &format!("skid_map = {map}"))
+/// The sample cell's text, its paths made absolute (to be written elsewhere), with its text
+/// `old` (which it has) replaced by `new`.
+fn sample_cell_with(old: &str, new: &str) -> String {
+    let text = crate::support::sample_cell();
+    assert!(text.contains(old), "{old}");
+    text.replace(old, new)
+}
+
+/// The sample cell with its mirror plane 3 m from the car's: r2's base stands 6 m from the
+/// mirror image of r1's, across the track.
+fn sample_cell_with_the_plane_elsewhere() -> String {
+    sample_cell_with(
+        "frame = { x = 0.0, y = -1850.75,",
+        "frame = { x = 0.0, y = 1149.25,",
+    )
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
@@ -294,15 +305,18 @@ fn mirror_to_another_kuka_robot_writes_the_configuration_it_reaches_the_image_wi
     assert_eq!(turn, 47);
 }
 
-/// The sample cell with `skid_map = [-1, 8000]`: r2 at the mapped skid 5000 stands 2 m from
-/// where the twins' image lies. Both twins are refused, each saying where it is out of reach;
-/// before, the joint target was written for r2 at skid 5000 without complaint, and the
-/// Cartesian one was "out of reach as written" though r1 reaches it as written.
+/// The sample cell with the mirror plane elsewhere: r2 at skid 3000 stands 6 m from where the
+/// twins' image lies. Both twins are refused, each saying where it is out of reach; before, the
+/// joint target was written for r2 without complaint, and the Cartesian one was "out of reach
+/// as written" though r1 reaches it as written.
 #[test]
-fn a_skid_map_that_puts_the_image_robot_elsewhere_refuses_both_twins_saying_where() {
+fn an_image_robot_that_stands_elsewhere_refuses_both_twins_saying_where() {
     let dir = tempfile::tempdir().unwrap();
-    let cell = sample_cell_with_skid_map("[-1.0, 8000.0]");
-    let cell_map = write(dir.path(), "cell_map.toml", &cell);
+    let cell_map = write(
+        dir.path(),
+        "cell_plane.toml",
+        &sample_cell_with_the_plane_elsewhere(),
+    );
     let input = write(dir.path(), "twin.mod", TWINS);
     let transfer = |cell: &Path| {
         trackfix(&[
@@ -327,7 +341,7 @@ fn a_skid_map_that_puts_the_image_robot_elsewhere_refuses_both_twins_saying_wher
             .find(|l| l.contains(&format!("`{name}`")))
             .unwrap_or_else(|| panic!("{err}"));
         assert!(
-            line.contains("its mirror image") && line.contains("on robot `r2` at skid 5000.0 mm"),
+            line.contains("its mirror image") && line.contains("on robot `r2` at skid 3000.0 mm"),
             "{line}"
         );
         assert!(!line.contains("as written"), "{line}");
@@ -336,12 +350,12 @@ fn a_skid_map_that_puts_the_image_robot_elsewhere_refuses_both_twins_saying_wher
 
 /// A refusal a later step of a `transfer` makes says which step it is: its "as written" is that
 /// step's input, not the file. Without r1's kinematics the mirror has no arm to solve the image
-/// with, and r2's `correct` finds it out of reach at the mapped skid; before, the message said
+/// with, and r2's `correct` finds its image out of reach (the plane is elsewhere); before, the message said
 /// only "out of reach as written", of a target r1 reaches as written.
 #[test]
 fn a_refusal_of_a_later_step_of_a_transfer_says_which_step() {
     let dir = tempfile::tempdir().unwrap();
-    let cell = sample_cell_with_skid_map("[-1.0, 8000.0]");
+    let cell = sample_cell_with_the_plane_elsewhere();
     let without = cell.replace(
         "[robot.r1.kinematics]\nmodel = \"abb_irb4600_40_255\"\n",
         "",
@@ -366,5 +380,90 @@ fn a_refusal_of_a_later_step_of_a_transfer_says_which_step() {
     assert!(
         line.contains("(in the transfer's `correct` for robot `r2`, of the target as the steps before it wrote it)"),
         "{line}"
+    );
+}
+
+/// A skid map that does not put the mirror-image robot at the mirror image of the robot is an
+/// error at the cell's `skid_map`, with the map the bases give, for `transfer --mirror` and
+/// `mirror --to` alike, and the map is not used. The sample's bases are mirror images along the
+/// track to 0.016 mm: `[1, 20]` stands r2 20 mm down its track from r1's image, and r2 then
+/// reached the mirrored targets from there (a silent change of its posture, exit 0); `[-1, 8000]`
+/// runs the tracks against each other. A map within 1 mm passes, and the way back (r2 to r1)
+/// takes its inverse.
+#[test]
+fn a_skid_map_that_does_not_put_the_image_robot_at_the_mirror_image_is_an_error_at_the_entry() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "twin.mod", TWINS);
+    let run = |input: &Path, cell: &Path, command: &[&str], out: &[&str]| {
+        let mut args = vec![command[0], input.to_str().unwrap(), "--cell"];
+        args.push(cell.to_str().unwrap());
+        args.extend(&command[1..]);
+        args.extend(out);
+        trackfix(&args)
+    };
+    let transfer = ["transfer", "--from", "r1", "--to", "r2", "--mirror"];
+    let mirror = ["mirror", "--robot", "r1", "--to", "r2"];
+    for (map, line, along) in [
+        (
+            "[1.0, 20.0]",
+            "19.984 mm along its track",
+            "and 19.984 mm at 8000.0 (at 8020.0)",
+        ),
+        (
+            "[-1.0, 8000.0]",
+            "7999.984 mm along its track",
+            "and -8000.016 mm at 8000.0 (at 0.0)",
+        ),
+    ] {
+        let cell = write(
+            dir.path(),
+            "cell_map.toml",
+            &sample_cell_with("skid_map = [1.0, 0.0]", &format!("skid_map = {map}")),
+        );
+        for command in [&transfer[..], &mirror[..]] {
+            let (code, out, err) = run(&input, &cell, command, &["--diff"]);
+            assert_eq!(code, 2, "{map} {command:?}: {err}");
+            assert!(out.is_empty(), "{out}");
+            let first = err.lines().next().unwrap();
+            // At the entry: line 71, column 12 of the cell file.
+            assert!(
+                first.contains("cell_map.toml:71:12: error: skid map "),
+                "{first}"
+            );
+            assert!(
+                first.contains(&format!("puts robot `r2`'s base {line} from the mirror image of robot `r1`'s at `r1`'s skid 0.0")),
+                "{first}"
+            );
+            assert!(first.contains(along), "{first}");
+            assert!(first.ends_with("the bases give [1, 0.016]"), "{first}");
+        }
+    }
+    // A map within the tolerance of the bases' passes (0.984 mm off), and mirrors back with its
+    // inverse, not with itself (1.016 mm off that way).
+    let cell = write(
+        dir.path(),
+        "cell_map.toml",
+        &sample_cell_with("skid_map = [1.0, 0.0]", "skid_map = [1.0, 1.0]"),
+    );
+    let there = dir.path().join("there.mod");
+    let (code, _, err) = run(&input, &cell, &mirror, &["-o", there.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let back = ["mirror", "--robot", "r2", "--to", "r1", "--diff"];
+    let (code, _, err) = run(&there, &cell, &back, &["--skid-map", "1,-1"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = run(&there, &cell, &back, &[]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("puts robot `r1`'s base 1.016 mm along")
+            && err.contains("the bases give [1, -0.016]"),
+        "{err}"
+    );
+    let (code, _, err) = run(&there, &cell, &back, &["--skid-map", "1,-5"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.starts_with(
+            "error: --skid-map: skid map [1, -5] puts robot `r1`'s base -4.984 mm along"
+        ),
+        "{err}"
     );
 }
