@@ -730,28 +730,29 @@ fn record(files: &mut [FileFacts<'_>], from: usize, (m, i): TargetAt, u: &Record
         _ => None,
     };
     // Each line of the other value's finding, named with its file when not the target's.
-    let at = |(file, line): (usize, usize)| UseLine {
-        line,
-        file: (file != m)
-            .then(|| files.get(file).map(|f| f.name.clone()))
-            .flatten(),
-    };
-    let two_values: Vec<crate::position::TwoValues> = u
-        .two_values
-        .unwrap_or_default()
-        .iter()
-        .map(|t| crate::position::TwoValues {
+    // (Rare: most uses have none, and pass here once for every target they reach.)
+    if let Some(list) = u.two_values {
+        let at = |(file, line): (usize, usize)| UseLine {
+            line,
+            file: (file != m)
+                .then(|| files.get(file).map(|f| f.name.clone()))
+                .flatten(),
+        };
+        let value = |t: &TwoValuesAt| crate::position::TwoValues {
             kind: t.kind,
             frame: t.frame.clone(),
             declared: at(t.declared),
             given: at(t.given),
             motion: at(t.motion),
-        })
-        .collect();
-    if let Some(usage) = files.get_mut(m).and_then(|f| f.positions.usage_mut(i)) {
-        for t in two_values {
-            usage.mark_two_values(t);
+        };
+        let values: Vec<crate::position::TwoValues> = list.iter().map(value).collect();
+        if let Some(usage) = files.get_mut(m).and_then(|f| f.positions.usage_mut(i)) {
+            for t in values {
+                usage.mark_two_values(t);
+            }
         }
+    }
+    if let Some(usage) = files.get_mut(m).and_then(|f| f.positions.usage_mut(i)) {
         usage.record_shared(u.frame, u.tool, u.stationary, u.line);
         if let Some(passed) = u.passed {
             let why = |name: &String| crate::position::UnresolvedFrame {
