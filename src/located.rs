@@ -5,7 +5,7 @@
 use std::ops::Range;
 use std::path::PathBuf;
 
-use crate::syntax::{Diagnostic, Excerpt, LineIndex, Severity, Span};
+use crate::syntax::{Diagnostic, Encoding, Excerpt, LineIndex, Severity, Span};
 
 /// A diagnostic located in one source.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -19,6 +19,8 @@ pub struct Located {
     pub diagnostic: Diagnostic,
     /// Set when `source` is a piece of one line rather than the file.
     pub at: Option<LineAt>,
+    /// How `source`'s bytes are text: Latin-1 for a program, UTF-8 for a TOML file.
+    pub encoding: Encoding,
 }
 
 /// Where a one-line excerpt sits in its file (see [`Excerpt`]).
@@ -65,6 +67,7 @@ impl Located {
             source,
             diagnostic,
             at: None,
+            encoding: Encoding::Latin1,
         }
     }
 
@@ -81,6 +84,7 @@ impl Located {
             source: text,
             diagnostic,
             at: Some(at),
+            encoding: Encoding::Latin1,
         }
     }
 
@@ -89,6 +93,13 @@ impl Located {
     pub fn in_line(path: impl Into<PathBuf>, source: &[u8], diagnostic: Diagnostic) -> Located {
         let (at, shown) = LineAt::of(source, &LineIndex::new(source), diagnostic.span);
         Located::excerpt(path, source[shown].to_vec(), at, diagnostic)
+    }
+
+    /// The same diagnostic about a source whose text is in `encoding` (a program's is Latin-1,
+    /// the default).
+    pub fn in_encoding(mut self, encoding: Encoding) -> Located {
+        self.encoding = encoding;
+        self
     }
 
     /// The same message at another severity (a refusal the run skips is a warning).
@@ -119,11 +130,13 @@ impl std::fmt::Display for Located {
                     start: at.start,
                     cut_before: at.cut_before,
                     cut_after: at.cut_after,
+                    encoding: self.encoding,
                 },
             ),
             None => {
                 let index = LineIndex::new(&self.source);
-                self.diagnostic.render(&path, &self.source, &index)
+                self.diagnostic
+                    .render_in(&path, &self.source, &index, self.encoding)
             }
         };
         f.write_str(text.trim_end())

@@ -918,9 +918,10 @@ fn written_through_parameters(files: &[ParsedFile], facts: &[Facts]) -> Vec<Stri
 #[derive(Default)]
 struct Arrivals {
     /// The routines a call may enter with `$IPO_MODE` at `#TCP`, by module and name: each may
-    /// run with the stationary tool, whatever else enters it. Any other is taken to be entered
-    /// with `#BASE`, as KSS starts a program: the program's main routine, an interrupt's, one
-    /// only a program not given calls.
+    /// run with the stationary tool, whatever else enters it; so may a routine run at any time
+    /// (an interrupt's, a trigger's, a function) when the program may set `#TCP` anywhere. Any
+    /// other is taken to be entered with `#BASE`, as KSS starts a program: the program's main
+    /// routine, one only a program not given calls.
     tcp_entered: std::collections::HashSet<(usize, String)>,
     /// Per file, what the jumps back to each label bring there ([`Flow::jumped_back`]).
     jumped_back: Vec<HashMap<usize, MayTcp>>,
@@ -949,9 +950,13 @@ fn routine_exits(
     // it is made with, and what the jumps back of each file bring: of the last pass.
     let mut calls: Vec<(usize, Option<&str>, &str, MayTcp)> = Vec::new();
     let mut jumped_back: Vec<HashMap<usize, MayTcp>> = Vec::new();
+    // Whether `$IPO_MODE` may be `#TCP` anywhere in the program (of the last pass): a routine
+    // run at any time (an interrupt's, a trigger's, a function) may then be entered with it.
+    let mut tcp_somewhere = false;
     for _ in 0..CALL_DEPTH {
         calls.clear();
         jumped_back.clear();
+        tcp_somewhere = false;
         let mut next: std::collections::HashMap<(usize, String), Exit> = Default::default();
         for (fi, f) in facts.iter().enumerate() {
             let module = modules.of(fi);
@@ -991,14 +996,29 @@ fn routine_exits(
                     continue;
                 }
                 let Some(ev) = ev else { break };
+                // Only a setting or a call makes the mode `#TCP` (a join keeps what its
+                // paths had), and a routine entered with it is so because a call was made with
+                // it: asked there, and of a motion's own `WITH`, for a routine entered with
+                // `#BASE`.
                 match ev {
                     Event::Call { name, .. } => {
                         calls.push((fi, current, name.as_str(), flow.state.tcp));
                         if let Some(exit) = exits.of(module, name) {
                             exit.apply_to(&mut flow.state);
                         }
+                        tcp_somewhere |= flow.state.tcp.given(false);
                     }
-                    Event::Set(s) => flow.state.apply(s, fdats),
+                    Event::Set(s) => {
+                        flow.state.apply(s, fdats);
+                        tcp_somewhere |= flow.state.tcp.given(false);
+                    }
+                    Event::Motion { with, .. } if !with.is_empty() => {
+                        let mut local = flow.state.frames();
+                        for s in with {
+                            local.apply(s, fdats);
+                        }
+                        tcp_somewhere |= local.tcp.given(false);
+                    }
                     Event::Branch(_)
                     | Event::Loop { .. }
                     | Event::EndLoop
@@ -1021,8 +1041,18 @@ fn routine_exits(
         exits.by_routine = next;
     }
     // A routine is entered with `#TCP` when a call may be made with it, given the mode the
-    // calling routine is entered with: followed until no routine is added.
+    // calling routine is entered with: followed until no routine is added. A routine the
+    // program runs at any time (an interrupt's once switched on, a trigger's, a function) is
+    // entered with whatever mode holds where it fires: `#TCP` when the program may set it
+    // anywhere (the join over every point it may fire at, taken whole).
     let mut tcp_entered: std::collections::HashSet<(usize, &str)> = Default::default();
+    if tcp_somewhere {
+        for (fi, f) in facts.iter().enumerate() {
+            for name in &f.unfollowed {
+                tcp_entered.extend(exits.routine(modules.of(fi), name));
+            }
+        }
+    }
     loop {
         let mut added = false;
         for &(fi, caller, callee, tcp) in &calls {

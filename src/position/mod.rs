@@ -1435,7 +1435,9 @@ pub struct ParsedFile {
     /// Whole values the program gives a frame in a routine that are the frame's own value (its
     /// declaration's, or that of the one assignment that stands for it in `frames`): a
     /// transform that rewrites the frames rewrites these too, or the program would set the old
-    /// value again when it runs.
+    /// value again when it runs. For a frame that one assignment stands for, its declaration
+    /// (`assigned` false) is here too: the motions that may run before the assignment move
+    /// with it.
     pub frame_values: Vec<FrameDecl>,
     /// The `Offs`/`RelTool` calls with numeric offsets.
     pub offsets: Vec<OffsetCall>,

@@ -856,6 +856,10 @@ fn frames_given<'s>(
                 replaced.push((at.0, at.1, value));
             }
             own_values.extend(each);
+            // The declaration is rewritten as the value is: a motion that may run before the
+            // assignment moves with it, and a mirror in the work object's own plane moves such
+            // a motion's targets (the same in both values) rather than refusing them.
+            own_values.push((at.0, f.clone()));
         } else {
             reassigned.push((f.name.clone(), f.kind, first_m, first.as_wobj.line));
         }

@@ -85,12 +85,24 @@ impl Diagnostic {
         self
     }
 
-    /// `path:line:column: severity: message`, the source line, a caret line and the hint.
+    /// `path:line:column: severity: message`, the source line, a caret line and the hint, for a
+    /// program file (Latin-1, see [`Encoding`]).
     ///
     /// Bytes are shown as Latin-1 so that a Windows-125x comment never breaks the caret's column;
     /// control characters (ESC, OSC, C0 and C1) are shown escaped (`\x1b`), never sent to the
     /// terminal; a long line is cut to a window of [`WINDOW`] characters around the span.
     pub fn render(&self, path: &str, src: &[u8], index: &LineIndex) -> String {
+        self.render_in(path, src, index, Encoding::Latin1)
+    }
+
+    /// [`render`](Self::render) for a source whose text is in `encoding`.
+    pub fn render_in(
+        &self,
+        path: &str,
+        src: &[u8],
+        index: &LineIndex,
+        encoding: Encoding,
+    ) -> String {
         let (line, col) = index.line_col(self.span.start);
         let text_span = index.line_span(src, line);
         let excerpt = Excerpt {
@@ -100,6 +112,7 @@ impl Diagnostic {
             start: text_span.start,
             cut_before: false,
             cut_after: false,
+            encoding,
         };
         self.render_excerpt(path, &excerpt)
     }
@@ -136,18 +149,27 @@ impl Diagnostic {
             shown.push('…');
             pad.push(' ');
         }
-        for (i, &b) in text[from..to].iter().enumerate() {
-            let width = push_byte(&mut shown, b);
-            if from + i < at {
-                let fill = if b == b'\t' { '\t' } else { ' ' };
+        // The caret covers the characters of the span, however many bytes each takes.
+        let mut caret_len = 0;
+        for (offset, piece) in x.encoding.decode(&text[from..to]) {
+            let width = push_piece(&mut shown, piece);
+            let offset = from + offset;
+            if offset < at {
+                let fill = if piece == Piece::Char('\t') {
+                    '\t'
+                } else {
+                    ' '
+                };
                 pad.extend(std::iter::repeat_n(fill, width));
+            } else if offset < end {
+                caret_len += 1;
             }
         }
         if to < text.len() || x.cut_after {
             shown.push('…');
         }
         let _ = writeln!(out, "{line} | {shown}");
-        let caret_len = end.min(to).saturating_sub(at).max(1);
+        let caret_len = caret_len.max(1);
         let _ = writeln!(out, "{:gutter$} | {pad}{}", "", "^".repeat(caret_len));
         if let Some(hint) = &self.hint {
             let _ = writeln!(out, "{:gutter$} = help: {}", "", printable(hint));
@@ -172,15 +194,80 @@ pub fn window(len: usize, at: usize, end: usize) -> (usize, usize) {
     (from, to)
 }
 
-/// One source byte for the terminal: Latin-1, a control character escaped; its width.
-fn push_byte(out: &mut String, b: u8) -> usize {
-    let c = b as char;
-    if b == b'\t' || !c.is_control() {
-        out.push(c);
-        1
-    } else {
-        let _ = write!(out, "\\x{b:02x}");
-        4
+/// How a source's bytes are text. Program files (RAPID, KRL) are Latin-1, the controllers'
+/// character set (and any byte is a char, so a Windows-125x comment never breaks a column);
+/// TOML files (the cell file, a profile) are UTF-8 by the TOML specification, so a `·` in a
+/// comment is one character, not the two `Â·` of its bytes read as Latin-1.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Encoding {
+    /// One byte, one char.
+    #[default]
+    Latin1,
+    /// UTF-8; a byte that is no UTF-8 is shown escaped.
+    Utf8,
+}
+
+/// One shown unit of a source line: a character, or a byte that is no character of the
+/// encoding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Piece {
+    Char(char),
+    Byte(u8),
+}
+
+impl Encoding {
+    /// The pieces of `text` with the byte offset each starts at.
+    fn decode(self, text: &[u8]) -> Vec<(usize, Piece)> {
+        match self {
+            Encoding::Latin1 => latin1_pieces(text),
+            Encoding::Utf8 => utf8_pieces(text),
+        }
+    }
+}
+
+/// Latin-1: every byte is the char of the same number.
+fn latin1_pieces(text: &[u8]) -> Vec<(usize, Piece)> {
+    text.iter()
+        .enumerate()
+        .map(|(i, &b)| (i, Piece::Char(b as char)))
+        .collect()
+}
+
+/// UTF-8: the chars of its valid runs, and each byte that is none on its own (a line cut inside
+/// a character, or a Latin-1 byte in a UTF-8 file).
+fn utf8_pieces(text: &[u8]) -> Vec<(usize, Piece)> {
+    let mut out = Vec::with_capacity(text.len());
+    let mut offset = 0;
+    for chunk in text.utf8_chunks() {
+        for (i, c) in chunk.valid().char_indices() {
+            out.push((offset + i, Piece::Char(c)));
+        }
+        offset += chunk.valid().len();
+        for &b in chunk.invalid() {
+            out.push((offset, Piece::Byte(b)));
+            offset += 1;
+        }
+    }
+    out
+}
+
+/// One piece of a source line for the terminal: a control character or a stray byte escaped;
+/// its width.
+fn push_piece(out: &mut String, piece: Piece) -> usize {
+    match piece {
+        Piece::Char(c) if c == '\t' || !c.is_control() => {
+            out.push(c);
+            1
+        }
+        // Control characters (C0, DEL, C1) all are below U+0100: two hex digits say them.
+        Piece::Char(c) => {
+            let _ = write!(out, "\\x{:02x}", c as u32);
+            4
+        }
+        Piece::Byte(b) => {
+            let _ = write!(out, "\\x{b:02x}");
+            4
+        }
     }
 }
 
@@ -199,6 +286,8 @@ pub struct Excerpt<'a> {
     pub cut_before: bool,
     /// Whether the line goes on after `text`.
     pub cut_after: bool,
+    /// How `text`'s bytes are characters.
+    pub encoding: Encoding,
 }
 
 /// Bytes as Latin-1 text: every byte is one char, so columns stay columns.
@@ -273,5 +362,30 @@ mod tests {
             "m\\x07.mod:1:10: warning: bad\\x1b[2J\n  |\n1 | a \\x1b]0;x\\x07 p1\n  |                ^^\n"
         );
         assert_eq!(printable("tab\tok"), "tab\tok");
+    }
+
+    #[test]
+    fn a_utf8_source_shows_characters_and_the_caret_counts_them() {
+        // `é` and `·` are 2 bytes each in UTF-8; `p1` starts at byte 12, character 10.
+        let src = "a é·b · p1 q".as_bytes();
+        let idx = LineIndex::new(src);
+        let d = Diagnostic::error(Span::new(12, 14), "here");
+        let utf8 = d.render_in("c.toml", src, &idx, Encoding::Utf8);
+        assert_eq!(
+            utf8,
+            "c.toml:1:13: error: here\n  |\n1 | a é·b · p1 q\n  |          ^^\n"
+        );
+        // The same bytes as Latin-1 (a program's convention): one character a byte.
+        let latin1 = d.render("m.mod", src, &idx);
+        assert!(
+            latin1.contains("1 | a Ã©Â·b Â· p1 q\n  |             ^^\n"),
+            "{latin1}"
+        );
+        // A byte that is no UTF-8 (a cut character, a Latin-1 byte) is shown escaped, its
+        // width in the caret's padding.
+        let src = b"\xe9 p1";
+        let d = Diagnostic::error(Span::new(2, 4), "here");
+        let text = d.render_in("c.toml", src, &LineIndex::new(src), Encoding::Utf8);
+        assert!(text.contains("1 | \\xe9 p1\n  |      ^^\n"), "{text}");
     }
 }

@@ -17,7 +17,7 @@ pub(crate) mod packed;
 mod span;
 mod tree;
 
-pub use diagnostic::{Diagnostic, Excerpt, Severity, WINDOW, latin1, printable, window};
+pub use diagnostic::{Diagnostic, Encoding, Excerpt, Severity, WINDOW, latin1, printable, window};
 pub use edit::{Edit, EditError, EditList, EditText, apply_edits};
 pub use line_index::{LineCursor, LineIndex};
 pub use number::{NumLit, Rounded, fixed, same_at};

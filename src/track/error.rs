@@ -50,6 +50,13 @@ impl LocatedError {
         self
     }
 
+    /// The same error about a UTF-8 file (a TOML profile): its excerpt decodes so, not as
+    /// Latin-1.
+    pub fn in_utf8(mut self) -> LocatedError {
+        self.located = self.located.in_encoding(crate::syntax::Encoding::Utf8);
+        self
+    }
+
     /// The same error, in the CSV column `name`.
     pub fn in_column(mut self, name: &str) -> LocatedError {
         self.column_name = Some(name.to_owned());

@@ -432,7 +432,7 @@ impl Profile {
     fn from_toml_bytes(bytes: &[u8], path: &Path) -> Result<Profile, TrackError> {
         let source: Arc<[u8]> = Arc::from(bytes);
         let located = |span: Span, message: String, hint: &str| {
-            LocatedError::new(path, source.clone(), span, message, hint)
+            LocatedError::new(path, source.clone(), span, message, hint).in_utf8()
         };
         let not_a_profile = |at: usize| -> TrackError {
             located(
@@ -1028,5 +1028,18 @@ mod tests {
         let missing = text.replace("extrapolate = \"error\"\n", "");
         let e = Profile::from_toml_str(&missing, Path::new("p.toml")).unwrap_err();
         assert!(e.to_string().contains("extrapolate"), "{e}");
+    }
+
+    #[test]
+    fn an_error_line_shows_its_utf8_comment_as_written() {
+        // TOML is UTF-8: the `·` (2 bytes) is one character, and the caret under `x` stays
+        // under it.
+        let text = sample().to_toml_string().unwrap();
+        let bad = text.replace("extrapolate = \"error\"", "extrapolate = 7 # 1.0·s");
+        let e = Profile::from_toml_str(&bad, Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(" | extrapolate = 7 # 1.0·s\n"), "{e}");
+        assert!(!e.contains('Â'), "{e}");
     }
 }

@@ -28,8 +28,8 @@ use toml::Spanned;
 
 use crate::geometry::{Pose, pose_xyz_deg};
 use crate::located::Located;
-use crate::syntax::Diagnostic;
 use crate::syntax::Span;
+use crate::syntax::{Diagnostic, Encoding};
 
 /// Why a cell file could not be used.
 #[derive(Debug, thiserror::Error)]
@@ -64,7 +64,9 @@ impl CellError {
         if !hint.is_empty() {
             d = d.with_hint(hint);
         }
-        CellError::Invalid(Box::new(Located::new(path, text.as_bytes().to_vec(), d)))
+        // TOML is UTF-8: its excerpts decode so, not as a program's Latin-1.
+        let located = Located::new(path, text.as_bytes().to_vec(), d).in_encoding(Encoding::Utf8);
+        CellError::Invalid(Box::new(located))
     }
 }
 
@@ -642,6 +644,27 @@ skid_map = [1.0, 5.0]
         assert!(e.contains("cell.toml:") && e.contains("track_axis"), "{e}");
         let e = err(&CELL.replace("rz = 90", "rw = 90"));
         assert!(e.starts_with("cell.toml:4:"), "{e}");
+    }
+
+    #[test]
+    fn an_error_line_shows_its_utf8_comment_as_written() {
+        // TOML is UTF-8: `·` is one character, not `Â·` (its two bytes as Latin-1).
+        let e = err(&CELL.replace("[1.0, 5.0]", "[1.0, 5.0x]  # s' = 1.0·s + 5.0"));
+        assert_eq!(
+            e.lines().skip(2).take(2).collect::<Vec<_>>(),
+            [
+                "12 | skid_map = [1.0, 5.0x]  # s' = 1.0·s + 5.0",
+                "   |                     ^"
+            ],
+            "{e}"
+        );
+        // The caret covers a value's characters, not its bytes.
+        let e = err(&CELL.replace("plane = \"xz\"", "plane = \"x·z\""));
+        assert_eq!(
+            e.lines().skip(2).take(2).collect::<Vec<_>>(),
+            ["11 | plane = \"x·z\"", "   |         ^^^^^"],
+            "{e}"
+        );
     }
 
     #[test]

@@ -1544,7 +1544,8 @@ mod tests {
                  PROC other()\n    wCar:={second};\n  ENDPROC\nENDMODULE\n"
             );
             let p0 = parse(&text);
-            assert_eq!(p0.files[0].frame_values.len(), own + 1, "{text}");
+            let given = |f: &ParsedFile| f.frame_values.iter().filter(|v| v.assigned).count();
+            assert_eq!(given(&p0.files[0]), own + 1, "{text}");
             let edits = mirror(&p0, &s);
             assert!(edits.refusals().next().is_none());
             let out = apply(&p0, edits).unwrap();
@@ -1559,7 +1560,7 @@ mod tests {
                 "{:?}\n{mirrored}",
                 f1.diagnostics
             );
-            assert_eq!(f1.frame_values.len(), own + 1, "{mirrored}");
+            assert_eq!(given(f1), own + 1, "{mirrored}");
             let (want, _) = refl.frame(&frame(f0, "wCar"));
             let got = frame(f1, "wCar");
             assert!(
@@ -1567,10 +1568,70 @@ mod tests {
                     && want.rotation.angle_to(&got.rotation) < 1e-5,
                 "{want:?} {got:?}\n{mirrored}"
             );
-            for v in &f1.frame_values {
+            // (The declaration of a frame an assignment stands for is rewritten too, with its
+            // own value.)
+            for v in f1.frame_values.iter().filter(|v| v.assigned) {
                 let (a, b) = (v.pose().unwrap(), frame(f1, &v.name));
                 assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
             }
+        }
+    }
+
+    /// Mirroring the frames of a work object the program gives one other value after a motion:
+    /// the first motion runs with the declared value, the second with the one given, and a
+    /// mirror in the work object's own plane mirrors both targets. Both values mirror, so each
+    /// motion's TCP lands on the mirror image of where it was (`Sa·W·T·Sb`). Before, the
+    /// declaration stayed as written: `p1` ran with it and landed 693 mm and 20° (twice the
+    /// frame's 10° turn) away from its image.
+    #[test]
+    fn the_declaration_of_a_frame_given_another_value_mirrors_too() {
+        let declared =
+            "[FALSE,TRUE,\"\",[[1500,-400,600],[0.996195,0,0,0.087156]],[[0,0,0],[1,0,0,0]]]";
+        let given =
+            "[FALSE,TRUE,\"\",[[1600,-300,600],[0.996195,0,0,0.087156]],[[0,0,0],[1,0,0,0]]]";
+        let assignment = format!("    wCar:={given};\n");
+        let text = format!(
+            "MODULE m\n  PERS wobjdata wCar:={declared};\n  \
+             CONST robtarget p1:=[[310.5,-120.25,80],[0,0.707107,0.707107,0],[0,-1,2,1],[2500,9E9,9E9,9E9,9E9,9E9]];\n  \
+             CONST robtarget p2:=[[410.5,-20.25,80],[0,0.707107,0.707107,0],[0,-1,2,1],[2500,9E9,9E9,9E9,9E9,9E9]];\n  \
+             PROC main()\n    MoveL p1, v1000, fine, tool0\\WObj:=wCar;\n{assignment}    \
+             MoveL p2, v1000, fine, tool0\\WObj:=wCar;\n  ENDPROC\nENDMODULE\n"
+        );
+        let s = MirrorSettings {
+            mirror_frames: true,
+            ..MirrorSettings::default()
+        };
+        let refl = Reflection::new(&s);
+        let p0 = parse(&text);
+        let edits = mirror(&p0, &s);
+        assert!(edits.refusals().next().is_none());
+        let out = apply(&p0, edits).unwrap();
+        let mirrored = String::from_utf8(out.files[0].output.clone()).unwrap();
+        // The work object each motion runs with: the declaration's (read with the assignment
+        // left out), then the value given.
+        let without_assignment = |t: &str| {
+            let kept: String = t
+                .lines()
+                .filter(|l| !l.trim_start().starts_with("wCar:="))
+                .map(|l| format!("{l}\n"))
+                .collect();
+            parse(&kept).files[0].clone()
+        };
+        let with_assignment = |t: &str| parse(t).files[0].clone();
+        let before_assignment = without_assignment(&text);
+        let declared_mirrored = without_assignment(&mirrored);
+        let assigned_mirrored = with_assignment(&mirrored);
+        for (target, f0, f1) in [
+            ("p1", &before_assignment, &declared_mirrored),
+            ("p2", &with_assignment(&text), &assigned_mirrored),
+        ] {
+            let (want, _) = refl.target(&(frame(f0, "wCar") * pose_of(f0, target)));
+            let got = frame(f1, "wCar") * pose_of(f1, target);
+            assert!(
+                (want.translation.vector - got.translation.vector).norm() < 2e-3
+                    && want.rotation.angle_to(&got.rotation) < 1e-5,
+                "{target}: {want:?} {got:?}\n{mirrored}"
+            );
         }
     }
 

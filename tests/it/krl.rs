@@ -2601,3 +2601,36 @@ fn krl_modules_named_together_from_one_folder_are_one_program() {
     assert_eq!(xg.usage.wobj.as_deref(), Some("BASE_DATA[1]"));
     assert_eq!(xg.usage.other_wobjs(), ["BASE_DATA[2]"]);
 }
+
+/// An interrupt's routine runs whenever the interrupt fires once switched on, so it may be
+/// entered with `$IPO_MODE` at `#TCP` wherever the program sets it: its points may move with
+/// the stationary tool. Before, it was taken to start with `#BASE`, so with `$IPO_MODE=#TCP`
+/// in the main routine `CATCH`'s `LIN XP1 WITH $BASE=…` was corrected in the base as a tool on
+/// the flange. (The frames are set in each motion's `WITH`: a routine run at any time that
+/// sets `$BASE` leaves every motion's base unknown.)
+#[test]
+fn an_interrupts_routine_may_start_with_the_stationary_tool() {
+    let stationary = |main: &str| {
+        stationary_points(&format!(
+            "DEF cell( )\n  INTERRUPT DECL 5 WHEN $IN[10]==TRUE DO CATCH( )\n  INTERRUPT ON 5\n  \
+             $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  LIN XP3\n{main}END\n\
+             DEF CATCH( )\n  LIN XP1 WITH $BASE=BASE_DATA[1], $TOOL=TOOL_DATA[1]\n  SUB()\nEND\n\
+             DEF SUB( )\n  LIN XP2 WITH $BASE=BASE_DATA[1], $TOOL=TOOL_DATA[1]\nEND\n"
+        ))
+    };
+    // #TCP set while the interrupt may fire: `CATCH` and the routine it calls may run with it.
+    assert_eq!(
+        stationary("  $IPO_MODE=#TCP\n  LIN XP3\n"),
+        stationary_named(true, true, true)
+    );
+    // Set in a motion's own `WITH` alone: the interrupt may fire during that motion.
+    assert_eq!(
+        stationary("  LIN XP3 WITH $IPO_MODE=#TCP\n"),
+        stationary_named(true, true, true)
+    );
+    // Never #TCP: on the flange.
+    assert_eq!(
+        stationary("  LIN XP3\n"),
+        stationary_named(false, false, false)
+    );
+}
