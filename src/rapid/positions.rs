@@ -791,7 +791,8 @@ fn frames_given<'s>(
             FrameKind::Tool => {
                 "left as written where the tool matters (the robot's kinematics, a mirror of the frames)"
             }
-            _ => "left as written",
+            // A mirror in the work object's own plane is the same in both values: it goes ahead.
+            _ => "left as written, but by a mirror in the work object's own plane",
         };
         for &(m, a) in &values {
             let (message, hint) = if let Some(&(bm, u)) = before.first() {

@@ -1288,7 +1288,7 @@ fn a_motion_that_may_run_before_its_work_object_is_given_a_value_refuses_its_tar
             ),
             (
                 7,
-                "work object `w1` is given another value here than its declaration on line 2: trackfix uses this value, but the motion on line 6 may run before it, while the declared one holds: the targets moved there are left as written"
+                "work object `w1` is given another value here than its declaration on line 2: trackfix uses this value, but the motion on line 6 may run before it, while the declared one holds: the targets moved there are left as written, but by a mirror in the work object's own plane"
             ),
         ]
     );
