@@ -1171,7 +1171,7 @@ fn warn_unknown_routines(
             Diagnostic::warning(
                 at,
                 format!(
-                    "`{written}` is called here{more}, but none of the files given defines it: trackfix takes it as leaving $BASE, $TOOL and FDAT_ACT as they were for the motions after it"
+                    "`{written}` is called here{more}, but none of the files given defines it: trackfix takes it as leaving $BASE, $TOOL, $IPO_MODE and FDAT_ACT as they were for the motions after it"
                 ),
             )
             .with_hint(format!(

@@ -2152,7 +2152,7 @@ fn a_point_held_in_a_structures_member_is_refused_by_name() {
 }
 
 /// A call of a routine none of the files given defines (`setb()`, whose module was not named
-/// with the program) is taken as leaving $BASE, $TOOL and FDAT_ACT as they were: that is said
+/// with the program) is taken as leaving $BASE, $TOOL, $IPO_MODE and FDAT_ACT as they were: that is said
 /// once per routine, at its first call, with how many calls there are, and `correct` shows it.
 /// Before, nothing was said and `XP1` was corrected in base 1 whatever `setb` sets. KSS's own
 /// routines (`MsgNotify`, `PULSE`), routines the program defines, and a call in a routine that
@@ -2174,7 +2174,7 @@ fn a_call_of_a_routine_no_file_defines_is_warned_about_once() {
             (line, col, d.message.as_str())
         })
         .collect();
-    let said = "but none of the files given defines it: trackfix takes it as leaving $BASE, $TOOL and FDAT_ACT as they were for the motions after it";
+    let said = "but none of the files given defines it: trackfix takes it as leaving $BASE, $TOOL, $IPO_MODE and FDAT_ACT as they were for the motions after it";
     assert_eq!(
         warned,
         [
