@@ -802,6 +802,7 @@ impl State<'_> {
             Setting::Base(r) => self.base = Some(r.clone()),
             Setting::Tool(r) => self.tool = Some(r.clone()),
             Setting::Tcp(t) => self.tcp = MayTcp::set(*t),
+            Setting::TcpUnevaluated(_) => self.tcp = MayTcp::set(true),
             Setting::FdatValue(f) => self.staged = Some(staged(Some(f))),
             Setting::Fdat(name) => self.staged = Some(staged(fdats.get(name.as_str()))),
             Setting::ApplyFdat => match &self.staged {

@@ -2420,6 +2420,33 @@ fn a_subroutine_that_sets_the_stationary_tool_leaves_it_set_after_its_call() {
     );
 }
 
+/// `$IPO_MODE` given a value trackfix does not evaluate (a variable, a function of a literal, an
+/// FDAT's field) may be `#TCP`: the motions it reaches are taken as moving with the stationary
+/// tool, and a warning at the value says so. Before, such a value was passed over: `$IPO_MODE=
+/// MODE` then `LIN XP1` corrected `XP1` as a tool on the flange, exit 0, whatever `MODE` held.
+#[test]
+fn an_ipo_mode_trackfix_does_not_evaluate_may_be_the_stationary_tool() {
+    let src = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  LIN XP3\n  \
+               LIN XP2 WITH $IPO_MODE=SIPO_MODE(#TCP)\n  $IPO_MODE=MODE\n  LIN XP1\nEND\n";
+    // XP2 with its own WITH only; XP1 after the assignment; XP3 before both, on the flange.
+    assert_eq!(stationary_points(src), stationary_named(true, true, false));
+    let program = with_three_points(src);
+    let warned: Vec<&str> = program.files[0]
+        .diagnostics
+        .iter()
+        .map(|d| d.message.as_str())
+        .filter(|m| m.starts_with("`$IPO_MODE` is given"))
+        .collect();
+    let taken = "which trackfix does not evaluate: the motions it reaches may move with the stationary tool (#TCP), and are taken so";
+    assert_eq!(
+        warned,
+        [
+            format!("`$IPO_MODE` is given `SIPO_MODE(#TCP)`, {taken}"),
+            format!("`$IPO_MODE` is given `MODE`, {taken}"),
+        ]
+    );
+}
+
 /// A routine a call enters with `$IPO_MODE` at `#TCP` moves with the stationary tool until it
 /// sets `#BASE`, whatever other calls enter it with, and passes it on to the routines it calls.
 /// Before, every routine was followed as if entered with `#BASE`, so `$IPO_MODE=#TCP` then
