@@ -790,13 +790,21 @@ fn jumps_keep_state(
     })
 }
 
+/// Whether an FDAT's `IPO_FRAME` may be `#TCP`: one that says `#BASE` is not; one no file given
+/// declares (`FDAT_ACT = FPX` of a data list not given, `FDAT_ACT = PICK(I)`), or that does not
+/// say, may be. Before, both were taken as `#BASE`: `$IPO_MODE = SIPO_MODE(FPX.IPO_FRAME)` then
+/// `LIN XP1` corrected `XP1` as a tool on the flange, exit 0, whatever `FPX` holds.
+fn may_be_tcp(f: Option<&Fdat>) -> bool {
+    f.and_then(|f| f.tcp).unwrap_or(true)
+}
+
 impl State<'_> {
     fn apply(&mut self, s: &Setting, fdats: &HashMap<Name, Fdat>) {
         let data = |n: Option<u32>| n.map_or(FrameRef::Unknown, FrameRef::Data);
         let staged = |f: Option<&Fdat>| Staged {
             base: data(f.and_then(|f| f.base)),
             tool: data(f.and_then(|f| f.tool)),
-            tcp: f.and_then(|f| f.tcp).unwrap_or(false),
+            tcp: may_be_tcp(f),
         };
         match s {
             Setting::Base(r) => self.base = Some(r.clone()),
@@ -812,10 +820,11 @@ impl State<'_> {
                     self.tcp = MayTcp::set(f.tcp);
                 }
                 // What `FDAT_ACT` held when the routine was entered (staged by a caller, or by a
-                // program run before): not known here.
+                // program run before): not known here, its IPO frame neither.
                 None => {
                     self.base = Some(FrameRef::Unknown);
                     self.tool = Some(FrameRef::Unknown);
+                    self.tcp = MayTcp::set(true);
                 }
             },
             Setting::BaseOfFdat(name) => {
@@ -825,12 +834,7 @@ impl State<'_> {
                 self.tool = Some(data(fdats.get(name.as_str()).and_then(|f| f.tool)));
             }
             Setting::TcpOfFdat(name) => {
-                self.tcp = MayTcp::set(
-                    fdats
-                        .get(name.as_str())
-                        .and_then(|f| f.tcp)
-                        .unwrap_or(false),
-                );
+                self.tcp = MayTcp::set(may_be_tcp(fdats.get(name.as_str())))
             }
         }
     }

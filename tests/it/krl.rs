@@ -1202,7 +1202,8 @@ fn krl_fdat_act_takes_effect_at_the_next_bas_call() {
             at("XG", None, &[], false),
             at("XH", base(2), &[], false),
             at("XI", base(2), &["BASE_DATA[7]"], false),
-            at("XJ", None, &[], false),
+            // Nor what IPO frame it held: it may have been #TCP.
+            at("XJ", None, &[], true),
         ]
     );
     let tools: Vec<_> = program.files[1]
@@ -2445,6 +2446,20 @@ fn an_ipo_mode_trackfix_does_not_evaluate_may_be_the_stationary_tool() {
             format!("`$IPO_MODE` is given `MODE`, {taken}"),
         ]
     );
+}
+
+/// An FDAT no file given declares (its data list not given) may hold `IPO_FRAME #TCP`: the
+/// motions its IPO frame reaches, through `SIPO_MODE(FPX.IPO_FRAME)` or `FDAT_ACT = FPX` and a
+/// `BAS` call, are taken as moving with the stationary tool, even where the base and tool are
+/// set again after it. Before, its IPO frame was taken as `#BASE`, and `XP1`, `XP2` were
+/// corrected as a tool on the flange, exit 0.
+#[test]
+fn the_ipo_frame_of_an_fdat_no_file_declares_may_be_the_stationary_tool() {
+    let src = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  LIN XP3\n  \
+               $IPO_MODE=SIPO_MODE(FPX.IPO_FRAME)\n  LIN XP1\n  $IPO_MODE=#BASE\n  \
+               FDAT_ACT=FPX\n  BAS(#CP_PARAMS,0.2)\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  \
+               LIN XP2\nEND\n";
+    assert_eq!(stationary_points(src), stationary_named(true, true, false));
 }
 
 /// A routine a call enters with `$IPO_MODE` at `#TCP` moves with the stationary tool until it
