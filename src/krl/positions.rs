@@ -195,6 +195,9 @@ pub(crate) struct Facts {
     pub offsets: Vec<(Name, usize, OffsetUse)>,
     /// Names this file declares `GLOBAL` (upper case): seen from every module of the program.
     pub globals: Vec<Name>,
+    /// The FDATs of [`Facts::fdats`] it declares `GLOBAL`: what `FDAT_ACT = FPG` and
+    /// `SIPO_MODE(FPG.IPO_FRAME)` read in every module.
+    pub global_fdats: Vec<Name>,
     /// Routines other modules may call (upper case): the file's first `DEF` (the module's own,
     /// named as the file) and every `GLOBAL DEF`; another `DEF` is the module's alone.
     pub public_routines: Vec<String>,
@@ -1089,8 +1092,13 @@ impl<'a> Extractor<'a> {
                     }
                     // A structure declared `GLOBAL` too: the points its members hold are seen
                     // from every module.
-                    if *global && !is_fdat {
-                        out.facts.globals.push(upper_name(src, v.name));
+                    if *global {
+                        let name = upper_name(src, v.name);
+                        if is_fdat {
+                            out.facts.global_fdats.push(name);
+                        } else {
+                            out.facts.globals.push(name);
+                        }
                     }
                     let Some(init) = &v.init else { continue };
                     let ExprKind::Aggregate(agg) = &init.kind else {

@@ -1405,7 +1405,24 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
             f.retain(|name, _| !written.contains(name.as_str()));
         }
     }
-    let fdats = modules.gathered(own_fdats);
+    // A module's `GLOBAL` FDATs are every module's too, after its own and `$config.dat`'s.
+    let exported: Vec<(Name, Fdat)> = facts
+        .iter()
+        .zip(&own_fdats)
+        .flat_map(|(f, own)| {
+            let found = f
+                .global_fdats
+                .iter()
+                .filter_map(|n| own.get_key_value(n.as_str()));
+            found.map(|(k, v)| (k.clone(), v.clone()))
+        })
+        .collect();
+    let mut fdats = modules.gathered(own_fdats);
+    for all in fdats.iter_mut().filter(|_| !exported.is_empty()) {
+        for (k, v) in &exported {
+            all.entry(k.clone()).or_insert_with(|| v.clone());
+        }
+    }
     // Candidates that are positions whether or not a motion uses them.
     let mut kept: Vec<Vec<bool>> = facts
         .iter()

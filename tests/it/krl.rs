@@ -2462,6 +2462,42 @@ fn the_ipo_frame_of_an_fdat_no_file_declares_may_be_the_stationary_tool() {
     assert_eq!(stationary_points(src), stationary_named(true, true, false));
 }
 
+/// An FDAT another module's data list declares `GLOBAL` is read where a module stages or
+/// reads it: its base, tool and IPO frame. Before, only `$config.dat`'s FDATs were seen from
+/// other modules, so `FDAT_ACT = FPG` of `b.dat`'s `GLOBAL` FDAT left `XP1`'s base unknown
+/// (refused) and `FPT`'s `#TCP` was not seen.
+#[test]
+fn an_fdat_another_module_declares_global_is_read_there() {
+    let src = "DEF a( )\n  FDAT_ACT=FPG\n  BAS(#PTP_PARAMS,100)\n  PTP XP1\n  \
+               $IPO_MODE=SIPO_MODE(FPT.IPO_FRAME)\n  LIN XP2\nEND\n";
+    let dat = "DEFDAT a\n\
+        DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        DECL E6POS XP2={X 410.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        ENDDAT\n";
+    let other = "DEFDAT b PUBLIC\n\
+        DECL GLOBAL FDAT FPG={TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE,POINT2[] \" \"}\n\
+        DECL GLOBAL FDAT FPT={TOOL_NO 1,BASE_NO 1,IPO_FRAME #TCP,POINT2[] \" \"}\n\
+        ENDDAT\n";
+    let program = krl::load_program_from_sources(
+        vec![
+            (PathBuf::from("a.src"), src.as_bytes().to_vec()),
+            (PathBuf::from("a.dat"), dat.as_bytes().to_vec()),
+            (PathBuf::from("b.src"), b"DEF b( )\nEND\n".to_vec()),
+            (PathBuf::from("b.dat"), other.as_bytes().to_vec()),
+        ],
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let base1 = Some("BASE_DATA[1]".to_owned());
+    assert_eq!(
+        frames_by_name(&program),
+        [
+            ("XP1".to_owned(), base1.clone(), vec![], false),
+            ("XP2".to_owned(), base1, vec![], true),
+        ]
+    );
+}
+
 /// A routine a call enters with `$IPO_MODE` at `#TCP` moves with the stationary tool until it
 /// sets `#BASE`, whatever other calls enter it with, and passes it on to the routines it calls.
 /// Before, every routine was followed as if entered with `#BASE`, so `$IPO_MODE=#TCP` then
