@@ -1493,6 +1493,29 @@ fn require_plane(cell: Option<&Cell>, o: &MirrorOptions) -> anyhow::Result<()> {
     })
 }
 
+/// The mirror's options given to a `transfer` without `--mirror` would change nothing (a skid
+/// map of `1,250` left every skid where it was, exit 0): an error naming them, never ignored.
+fn refuse_mirror_options_alone(o: &MirrorOptions) -> anyhow::Result<()> {
+    let given: Vec<&str> = [
+        (o.plane.is_some(), "--plane"),
+        (o.tool_flip.is_some(), "--tool-flip"),
+        (o.config.is_some(), "--config"),
+        (o.skid_map.is_some(), "--skid-map"),
+        (o.mirror_frames, "--mirror-frames"),
+        (o.mirror_joints, "--mirror-joints"),
+    ]
+    .into_iter()
+    .filter_map(|(set, flag)| set.then_some(flag))
+    .collect();
+    if given.is_empty() {
+        return Ok(());
+    }
+    bail!(
+        "{} only apply to a mirror: add --mirror to mirror between the two robots, or leave them out",
+        given.join(", ")
+    )
+}
+
 fn plane_name(p: Plane) -> &'static str {
     match p {
         Plane::Xy => "xy",
@@ -1518,6 +1541,8 @@ fn run_transfer_inner(mut a: TransferArgs) -> anyhow::Result<Exit> {
     ];
     if a.mirror {
         require_plane(Some(&cell), &a.mirror_options)?;
+    } else {
+        refuse_mirror_options_alone(&a.mirror_options)?;
     }
     let mut plan = TransferPlan {
         from: TrackSetup::new(from, &from_profile),

@@ -35,6 +35,9 @@ pub(crate) enum Setting {
     Tool(FrameRef),
     /// `$IPO_MODE = #TCP` (true) or `#BASE`.
     Tcp(bool),
+    /// `$IPO_MODE` given a value trackfix does not evaluate (`$IPO_MODE = MODE`,
+    /// `SIPO_MODE(#TCP)`, `FP1.IPO_FRAME`), at that value's span: it may be `#TCP`.
+    TcpUnevaluated(Span),
     /// `FDAT_ACT = FP1`: stages base, tool and IPO mode of that FDAT for [`Setting::ApplyFdat`].
     Fdat(Name),
     /// `FDAT_ACT = {TOOL_NO 1, BASE_NO 2, IPO_FRAME #BASE}` written inline.
@@ -192,6 +195,9 @@ pub(crate) struct Facts {
     pub offsets: Vec<(Name, usize, OffsetUse)>,
     /// Names this file declares `GLOBAL` (upper case): seen from every module of the program.
     pub globals: Vec<Name>,
+    /// The FDATs of [`Facts::fdats`] it declares `GLOBAL`: what `FDAT_ACT = FPG` and
+    /// `SIPO_MODE(FPG.IPO_FRAME)` read in every module.
+    pub global_fdats: Vec<Name>,
     /// Routines other modules may call (upper case): the file's first `DEF` (the module's own,
     /// named as the file) and every `GLOBAL DEF`; another `DEF` is the module's alone.
     pub public_routines: Vec<String>,
@@ -1086,8 +1092,13 @@ impl<'a> Extractor<'a> {
                     }
                     // A structure declared `GLOBAL` too: the points its members hold are seen
                     // from every module.
-                    if *global && !is_fdat {
-                        out.facts.globals.push(upper_name(src, v.name));
+                    if *global {
+                        let name = upper_name(src, v.name);
+                        if is_fdat {
+                            out.facts.global_fdats.push(name);
+                        } else {
+                            out.facts.globals.push(name);
+                        }
                     }
                     let Some(init) = &v.init else { continue };
                     let ExprKind::Aggregate(agg) = &init.kind else {
@@ -1172,6 +1183,11 @@ impl<'a> Extractor<'a> {
                     .iter()
                     .filter_map(|(l, r)| setting(src, l, r))
                     .collect();
+                let warned = self
+                    .block_with
+                    .iter()
+                    .filter_map(|s| unevaluated_mode(src, s));
+                self.diagnostics.extend(warned);
             }
             StmtKind::EndSpline => self.block_with.clear(),
             StmtKind::Label => {
@@ -1251,12 +1267,13 @@ impl<'a> Extractor<'a> {
                     moved_parameters(src, r, targets);
                 }
                 // The spline block's settings first: the motion's own are written after them.
-                let with = self
-                    .block_with
+                let own: Vec<Setting> = with
                     .iter()
-                    .cloned()
-                    .chain(with.iter().filter_map(|(l, r)| setting(src, l, r)))
+                    .filter_map(|(l, r)| setting(src, l, r))
                     .collect();
+                let warned = own.iter().filter_map(|s| unevaluated_mode(src, s));
+                self.diagnostics.extend(warned);
+                let with = self.block_with.iter().cloned().chain(own).collect();
                 out.facts.events.push(Event::Motion {
                     span: stmt.span,
                     line,
@@ -1724,8 +1741,12 @@ fn setting(src: &[u8], target: &Expr, value: &Expr) -> Option<Setting> {
         }),
         "$IPO_MODE" => match &value.kind {
             ExprKind::Enum => Some(Setting::Tcp(upper_is(src, value.span, "#TCP"))),
-            ExprKind::Call(..) => fdat_of().map(Setting::TcpOfFdat),
-            _ => None,
+            ExprKind::Call(..) => Some(
+                fdat_of()
+                    .map(Setting::TcpOfFdat)
+                    .unwrap_or(Setting::TcpUnevaluated(value.span)),
+            ),
+            _ => Some(Setting::TcpUnevaluated(value.span)),
         },
         "FDAT_ACT" => match &value.kind {
             ExprKind::Name => Some(Setting::Fdat(upper_name(src, value.span))),
@@ -1735,6 +1756,27 @@ fn setting(src: &[u8], target: &Expr, value: &Expr) -> Option<Setting> {
         },
         _ => None,
     }
+}
+
+/// The warning at a `$IPO_MODE` value trackfix does not evaluate ([`Setting::TcpUnevaluated`]):
+/// the motions it reaches are taken as moving with the stationary tool. Before, such a value
+/// was passed over and `$IPO_MODE = MODE` (`MODE` holding `#TCP`) then `LIN XP1` corrected
+/// `XP1` as a tool on the flange, exit 0.
+fn unevaluated_mode(src: &[u8], s: &Setting) -> Option<Diagnostic> {
+    let Setting::TcpUnevaluated(at) = s else {
+        return None;
+    };
+    Some(
+        Diagnostic::warning(
+            *at,
+            format!(
+                "`$IPO_MODE` is given `{}`, which trackfix does not evaluate: the motions it reaches may move with the stationary tool (#TCP), and are taken so",
+                crate::syntax::latin1(at.slice(src))
+            ),
+        )
+        .with_hint("write the mode itself (`$IPO_MODE=#BASE` or `#TCP`) where the program sets it")
+        .shaping_transforms(),
+    )
 }
 
 /// Records that `target` is given a value computed at run time, in `routine` (when that takes
@@ -1998,8 +2040,9 @@ fn assignment(
     }
     let ExprKind::Aggregate(agg) = &value.kind else {
         if let Some(s) = setting(src, target, value) {
+            let warning = unevaluated_mode(src, &s);
             out.facts.events.push(Event::Set(s));
-            return None;
+            return warning;
         }
         // A whole base or tool (`BASE_DATA[1] = BASE_DATA[2]`) is the controller's to change
         // as its components are: `BAS(#BASE,1)` after it reads the new value.

@@ -790,18 +790,27 @@ fn jumps_keep_state(
     })
 }
 
+/// Whether an FDAT's `IPO_FRAME` may be `#TCP`: one that says `#BASE` is not; one no file given
+/// declares (`FDAT_ACT = FPX` of a data list not given, `FDAT_ACT = PICK(I)`), or that does not
+/// say, may be. Before, both were taken as `#BASE`: `$IPO_MODE = SIPO_MODE(FPX.IPO_FRAME)` then
+/// `LIN XP1` corrected `XP1` as a tool on the flange, exit 0, whatever `FPX` holds.
+fn may_be_tcp(f: Option<&Fdat>) -> bool {
+    f.and_then(|f| f.tcp).unwrap_or(true)
+}
+
 impl State<'_> {
     fn apply(&mut self, s: &Setting, fdats: &HashMap<Name, Fdat>) {
         let data = |n: Option<u32>| n.map_or(FrameRef::Unknown, FrameRef::Data);
         let staged = |f: Option<&Fdat>| Staged {
             base: data(f.and_then(|f| f.base)),
             tool: data(f.and_then(|f| f.tool)),
-            tcp: f.and_then(|f| f.tcp).unwrap_or(false),
+            tcp: may_be_tcp(f),
         };
         match s {
             Setting::Base(r) => self.base = Some(r.clone()),
             Setting::Tool(r) => self.tool = Some(r.clone()),
             Setting::Tcp(t) => self.tcp = MayTcp::set(*t),
+            Setting::TcpUnevaluated(_) => self.tcp = MayTcp::set(true),
             Setting::FdatValue(f) => self.staged = Some(staged(Some(f))),
             Setting::Fdat(name) => self.staged = Some(staged(fdats.get(name.as_str()))),
             Setting::ApplyFdat => match &self.staged {
@@ -811,10 +820,11 @@ impl State<'_> {
                     self.tcp = MayTcp::set(f.tcp);
                 }
                 // What `FDAT_ACT` held when the routine was entered (staged by a caller, or by a
-                // program run before): not known here.
+                // program run before): not known here, its IPO frame neither.
                 None => {
                     self.base = Some(FrameRef::Unknown);
                     self.tool = Some(FrameRef::Unknown);
+                    self.tcp = MayTcp::set(true);
                 }
             },
             Setting::BaseOfFdat(name) => {
@@ -824,12 +834,7 @@ impl State<'_> {
                 self.tool = Some(data(fdats.get(name.as_str()).and_then(|f| f.tool)));
             }
             Setting::TcpOfFdat(name) => {
-                self.tcp = MayTcp::set(
-                    fdats
-                        .get(name.as_str())
-                        .and_then(|f| f.tcp)
-                        .unwrap_or(false),
-                );
+                self.tcp = MayTcp::set(may_be_tcp(fdats.get(name.as_str())))
             }
         }
     }
@@ -1201,7 +1206,7 @@ fn warn_unknown_routines(
             Diagnostic::warning(
                 at,
                 format!(
-                    "`{written}` is called here{more}, but none of the files given defines it: trackfix takes it as leaving $BASE, $TOOL and FDAT_ACT as they were for the motions after it"
+                    "`{written}` is called here{more}, but none of the files given defines it: trackfix takes it as leaving $BASE, $TOOL, $IPO_MODE and FDAT_ACT as they were for the motions after it"
                 ),
             )
             .with_hint(format!(
@@ -1430,7 +1435,24 @@ pub(crate) fn resolve(files: &mut [ParsedFile], facts: &mut [Facts], config_fram
             f.retain(|name, _| !written.contains(name.as_str()));
         }
     }
-    let fdats = modules.gathered(own_fdats);
+    // A module's `GLOBAL` FDATs are every module's too, after its own and `$config.dat`'s.
+    let exported: Vec<(Name, Fdat)> = facts
+        .iter()
+        .zip(&own_fdats)
+        .flat_map(|(f, own)| {
+            let found = f
+                .global_fdats
+                .iter()
+                .filter_map(|n| own.get_key_value(n.as_str()));
+            found.map(|(k, v)| (k.clone(), v.clone()))
+        })
+        .collect();
+    let mut fdats = modules.gathered(own_fdats);
+    for all in fdats.iter_mut().filter(|_| !exported.is_empty()) {
+        for (k, v) in &exported {
+            all.entry(k.clone()).or_insert_with(|| v.clone());
+        }
+    }
     // Candidates that are positions whether or not a motion uses them.
     let mut kept: Vec<Vec<bool>> = facts
         .iter()

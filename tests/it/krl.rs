@@ -1202,7 +1202,8 @@ fn krl_fdat_act_takes_effect_at_the_next_bas_call() {
             at("XG", None, &[], false),
             at("XH", base(2), &[], false),
             at("XI", base(2), &["BASE_DATA[7]"], false),
-            at("XJ", None, &[], false),
+            // Nor what IPO frame it held: it may have been #TCP.
+            at("XJ", None, &[], true),
         ]
     );
     let tools: Vec<_> = program.files[1]
@@ -2152,7 +2153,7 @@ fn a_point_held_in_a_structures_member_is_refused_by_name() {
 }
 
 /// A call of a routine none of the files given defines (`setb()`, whose module was not named
-/// with the program) is taken as leaving $BASE, $TOOL and FDAT_ACT as they were: that is said
+/// with the program) is taken as leaving $BASE, $TOOL, $IPO_MODE and FDAT_ACT as they were: that is said
 /// once per routine, at its first call, with how many calls there are, and `correct` shows it.
 /// Before, nothing was said and `XP1` was corrected in base 1 whatever `setb` sets. KSS's own
 /// routines (`MsgNotify`, `PULSE`), routines the program defines, and a call in a routine that
@@ -2174,7 +2175,7 @@ fn a_call_of_a_routine_no_file_defines_is_warned_about_once() {
             (line, col, d.message.as_str())
         })
         .collect();
-    let said = "but none of the files given defines it: trackfix takes it as leaving $BASE, $TOOL and FDAT_ACT as they were for the motions after it";
+    let said = "but none of the files given defines it: trackfix takes it as leaving $BASE, $TOOL, $IPO_MODE and FDAT_ACT as they were for the motions after it";
     assert_eq!(
         warned,
         [
@@ -2417,6 +2418,83 @@ fn a_subroutine_that_sets_the_stationary_tool_leaves_it_set_after_its_call() {
     assert_eq!(
         stationary("  $OUT[1]=TRUE\n"),
         stationary_named(false, false, false)
+    );
+}
+
+/// `$IPO_MODE` given a value trackfix does not evaluate (a variable, a function of a literal, an
+/// FDAT's field) may be `#TCP`: the motions it reaches are taken as moving with the stationary
+/// tool, and a warning at the value says so. Before, such a value was passed over: `$IPO_MODE=
+/// MODE` then `LIN XP1` corrected `XP1` as a tool on the flange, exit 0, whatever `MODE` held.
+#[test]
+fn an_ipo_mode_trackfix_does_not_evaluate_may_be_the_stationary_tool() {
+    let src = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  LIN XP3\n  \
+               LIN XP2 WITH $IPO_MODE=SIPO_MODE(#TCP)\n  $IPO_MODE=MODE\n  LIN XP1\nEND\n";
+    // XP2 with its own WITH only; XP1 after the assignment; XP3 before both, on the flange.
+    assert_eq!(stationary_points(src), stationary_named(true, true, false));
+    let program = with_three_points(src);
+    let warned: Vec<&str> = program.files[0]
+        .diagnostics
+        .iter()
+        .map(|d| d.message.as_str())
+        .filter(|m| m.starts_with("`$IPO_MODE` is given"))
+        .collect();
+    let taken = "which trackfix does not evaluate: the motions it reaches may move with the stationary tool (#TCP), and are taken so";
+    assert_eq!(
+        warned,
+        [
+            format!("`$IPO_MODE` is given `SIPO_MODE(#TCP)`, {taken}"),
+            format!("`$IPO_MODE` is given `MODE`, {taken}"),
+        ]
+    );
+}
+
+/// An FDAT no file given declares (its data list not given) may hold `IPO_FRAME #TCP`: the
+/// motions its IPO frame reaches, through `SIPO_MODE(FPX.IPO_FRAME)` or `FDAT_ACT = FPX` and a
+/// `BAS` call, are taken as moving with the stationary tool, even where the base and tool are
+/// set again after it. Before, its IPO frame was taken as `#BASE`, and `XP1`, `XP2` were
+/// corrected as a tool on the flange, exit 0.
+#[test]
+fn the_ipo_frame_of_an_fdat_no_file_declares_may_be_the_stationary_tool() {
+    let src = "DEF cell( )\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  LIN XP3\n  \
+               $IPO_MODE=SIPO_MODE(FPX.IPO_FRAME)\n  LIN XP1\n  $IPO_MODE=#BASE\n  \
+               FDAT_ACT=FPX\n  BAS(#CP_PARAMS,0.2)\n  $BASE=BASE_DATA[1]\n  $TOOL=TOOL_DATA[1]\n  \
+               LIN XP2\nEND\n";
+    assert_eq!(stationary_points(src), stationary_named(true, true, false));
+}
+
+/// An FDAT another module's data list declares `GLOBAL` is read where a module stages or
+/// reads it: its base, tool and IPO frame. Before, only `$config.dat`'s FDATs were seen from
+/// other modules, so `FDAT_ACT = FPG` of `b.dat`'s `GLOBAL` FDAT left `XP1`'s base unknown
+/// (refused) and `FPT`'s `#TCP` was not seen.
+#[test]
+fn an_fdat_another_module_declares_global_is_read_there() {
+    let src = "DEF a( )\n  FDAT_ACT=FPG\n  BAS(#PTP_PARAMS,100)\n  PTP XP1\n  \
+               $IPO_MODE=SIPO_MODE(FPT.IPO_FRAME)\n  LIN XP2\nEND\n";
+    let dat = "DEFDAT a\n\
+        DECL E6POS XP1={X 400.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        DECL E6POS XP2={X 410.0,Y -300.0,Z 500.0,A 10.0,B 80.0,C 5.0,S 2,T 10,E1 1500.0}\n\
+        ENDDAT\n";
+    let other = "DEFDAT b PUBLIC\n\
+        DECL GLOBAL FDAT FPG={TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE,POINT2[] \" \"}\n\
+        DECL GLOBAL FDAT FPT={TOOL_NO 1,BASE_NO 1,IPO_FRAME #TCP,POINT2[] \" \"}\n\
+        ENDDAT\n";
+    let program = krl::load_program_from_sources(
+        vec![
+            (PathBuf::from("a.src"), src.as_bytes().to_vec()),
+            (PathBuf::from("a.dat"), dat.as_bytes().to_vec()),
+            (PathBuf::from("b.src"), b"DEF b( )\nEND\n".to_vec()),
+            (PathBuf::from("b.dat"), other.as_bytes().to_vec()),
+        ],
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let base1 = Some("BASE_DATA[1]".to_owned());
+    assert_eq!(
+        frames_by_name(&program),
+        [
+            ("XP1".to_owned(), base1.clone(), vec![], false),
+            ("XP2".to_owned(), base1, vec![], true),
+        ]
     );
 }
 

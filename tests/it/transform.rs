@@ -1592,6 +1592,38 @@ fn identity_is_byte_identical_for_every_sample() {
     }
 }
 
+/// The mirror's options given to `transfer` without `--mirror` are a usage error: they changed
+/// nothing. Before, `--skid-map 1,250` wrote every target at the skid it was written with,
+/// exit 0, as if it had been taken.
+#[test]
+fn transfer_without_mirror_refuses_the_mirror_options() {
+    let transfer = |extra: &[&str]| {
+        let mut args = vec![
+            "transfer",
+            "samples/rapid/spot_line.mod",
+            "--cell",
+            "samples/cell_rules.toml",
+            "--from",
+            "r1",
+            "--to",
+            "r2",
+            "--skip-unsupported",
+            "--check",
+        ];
+        args.extend(extra);
+        trackfix(&args)
+    };
+    let (code, _, err) = transfer(&["--skid-map=1,250", "--mirror-joints"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("--skid-map, --mirror-joints only apply to a mirror: add --mirror"),
+        "{err}"
+    );
+    // Without them, the transfer runs (exit 1: --check, something would change).
+    let (code, _, err) = transfer(&[]);
+    assert_eq!(code, 1, "{err}");
+}
+
 /// `mirror` needs a plane: no --plane and no cell [mirror] is a usage error (it used to mirror
 /// in xz silently); `--cell` without `--robot` says which frames it used.
 #[test]
