@@ -48,6 +48,7 @@ const VOCABULARY: Vocabulary = Vocabulary {
     moved_frame: "MACHINE_FRAME_DAT: an external kinematic",
     tool_kind: "tool",
     stationary_tool: "IPO_FRAME #TCP",
+    stationary_point: "$IPO_MODE or its FDAT's IPO_FRAME is #TCP on some path to the motion, or may be",
     world_frames: &["base_data[0]", "$nullframe", "$world"],
     frame_of_a_motion: "set the base before each motion to it (BAS(#BASE,n), $BASE = BASE_DATA[n] or the point's FDAT), the same on every path",
 };

@@ -36,6 +36,10 @@ pub struct Vocabulary {
     /// The setting that makes a target a stationary-tool point: `robhold TRUE`,
     /// `IPO_FRAME #TCP`.
     pub stationary_tool: &'static str,
+    /// Why a point is a stationary-tool point: its work object's setting (`robhold TRUE`), or
+    /// (KRL) the interpolation mode a path to the motion may set, which the program's flow
+    /// decides (see docs/design.md, KRL stationary tool).
+    pub stationary_point: &'static str,
     /// Frame names that mean world when the program does not declare them (lower case).
     pub world_frames: &'static [&'static str],
     /// How a program names the frame of a motion on every path to it, for a target whose

@@ -37,6 +37,7 @@ const VOCABULARY: Vocabulary = Vocabulary {
     moved_frame: "ufprog FALSE",
     tool_kind: "tooldata",
     stationary_tool: "robhold TRUE",
+    stationary_point: "robhold TRUE",
     world_frames: &["wobj0"],
     frame_of_a_motion: "name the work object in each motion to it (\\WObj:=…), the same on every path",
 };

@@ -641,7 +641,7 @@ pub(crate) fn common_refusal(file: &ParsedFile, p: &Position) -> Option<Why> {
             RefusalKind::StationaryTool,
             format!(
                 "{what} is a stationary-tool point ({})",
-                words.stationary_tool
+                words.stationary_point
             ),
             "it moves with the work piece, not the track: correct it by hand",
         );

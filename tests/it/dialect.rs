@@ -30,6 +30,7 @@ const VOCABULARY: Vocabulary = Vocabulary {
     moved_frame: "moving frame",
     tool_kind: "tool",
     stationary_tool: "fixed tool",
+    stationary_point: "fixed tool",
     world_frames: &["world"],
     frame_of_a_motion: "name the frame in each motion to it",
 };
