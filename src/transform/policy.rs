@@ -221,7 +221,7 @@ pub(crate) fn wobj_of(
             UnresolvedCause::ChangedBy(routine) => Why::new(
                 RefusalKind::UnresolvedWorkObject,
                 format!(
-                    "{what} is moved to on {at}, and `{routine}` changes the {frame} when it runs (a function, or the routine of an interrupt or trigger), which trackfix does not follow"
+                    "{what} is moved to on {at}, and `{routine}` changes the {frame}, the tool or the interpolation mode when it runs (a function, or the routine of an interrupt or trigger), which trackfix does not follow"
                 ),
                 format!(
                     "set the {frame} in the routines that move, not in `{routine}`, or correct the targets by hand"

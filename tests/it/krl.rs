@@ -1820,6 +1820,25 @@ fn a_function_or_interrupt_that_changes_the_base_leaves_it_unknown() {
         let src = interrupt.replace("INTERRUPT ON 3", on);
         assert_eq!(cause_of(&src), changed("SETB"), "{on}");
     }
+    // A function that sets the interpolation mode only: its refusal says so, where it said the
+    // function changes the base.
+    let mode = function.replace("$BASE=BASE_DATA[2]\n  RETURN", "$IPO_MODE=#TCP\n  RETURN");
+    assert_eq!(cause_of(&mode), changed("PREP"));
+    let p = load_cell_pair(&mode, DAT_XP1);
+    crate::support::with_constant_deviation(
+        trackfix::geometry::pose_xyz_deg(0.3, -0.2, 0.5, 0.02, -0.03, 0.05),
+        |setup| {
+            use trackfix::transform::{Direction, apply, track_correction};
+            let r = apply(&p, track_correction(&p, setup, Direction::Correct)).unwrap();
+            let why: Vec<String> = r.refusals().map(|r| r.message.clone()).collect();
+            assert_eq!(why.len(), 1, "{why:?}");
+            assert!(
+                why[0].contains("`PREP` changes the base, the tool or the interpolation mode"),
+                "{}",
+                why[0]
+            );
+        },
+    );
 }
 
 /// A data list with `XP1` and a copy `XC` of it, whole or an array.
