@@ -26,7 +26,9 @@ use crate::syntax::Edit;
 use super::cell::Robot;
 use super::policy::{Why, describe, tool_in_two_values};
 use super::refusal::RefusalKind;
-use super::rewrite::{DEG_DECIMALS, bits_edit, integer_edit, number_edit, reversible_edits};
+use super::rewrite::{
+    DEG_DECIMALS, bits_edit, integer_edit, number_edit, pose_change, reversible_edits,
+};
 
 /// A robot arm as the transforms need it: its kinematics and the cell's tools on its flange.
 #[derive(Clone, Debug, PartialEq)]
@@ -295,6 +297,19 @@ fn swing_hint(why: &KinematicRefusal, at_singularity: &str) -> String {
     } else {
         "re-teach the target away from the singular posture of the arm".to_owned()
     }
+}
+
+/// The size of a joint target's change, as a Cartesian target's is its written pose's: the
+/// translation (mm) and rotation (°) between the flange of `before` (on the arm `kin_before`)
+/// and of `after` (on `kin_after`), each in its own robot's base. A mirror's image is for
+/// another robot, whose base the mirrored joints are written in.
+pub(crate) fn flange_move(
+    kin_before: &Kinematics,
+    before: &Joints,
+    kin_after: &Kinematics,
+    after: &Joints,
+) -> (f64, f64) {
+    pose_change(&kin_before.forward(before), &kin_after.forward(after))
 }
 
 /// The step of the last decimal each axis of joint target `p` is written with (its literal's

@@ -21,8 +21,8 @@ use crate::syntax::Edit;
 use super::cell::{Axis, ConfigRule, Plane};
 use super::driver::{KeptByStamp, NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
-use super::kinematic_policy::fmt_joints;
 use super::kinematic_policy::{Arm, config_edits, with_tool};
+use super::kinematic_policy::{flange_move, fmt_joints};
 use super::policy::{
     Why, common_refusal, describe, offset_bases, stationary_tool, tool_in_two_values, wobj_of,
     words_of, work_object_of,
@@ -529,28 +529,28 @@ impl TargetRule for MirrorRule<'_> {
             .with_remedy(Remedy::MirrorJoints)
             .at(scope.file, p));
         }
-        let mut edits: Vec<Edit> = match &self.settings.arm {
-            None => [0, 3, 5]
-                .iter()
-                .filter_map(|&i| {
-                    let f = p.joints.get(i)?;
-                    flip_or_value_edit(f, -f.as_ref()?.value(), 0)
-                })
-                .collect(),
-            Some(m) => match (&m.image, &self.settings.world) {
-                (Some(image), Some(world)) => self
-                    .joints_in_image_base(m, image, world, p)
-                    .map_err(|why| why.at(scope.file, p))?,
-                _ => mirror_joints_by_ik(&m.arm, p).map_err(|why| why.at(scope.file, p))?,
-            },
+        // The flange's move is the size of the change; without the arm's kinematics it is
+        // not known, and the axes are only negated.
+        let (mut edits, (mm, deg)): (Vec<Edit>, _) = match &self.settings.arm {
+            None => (
+                [0, 3, 5]
+                    .iter()
+                    .filter_map(|&i| {
+                        let f = p.joints.get(i)?;
+                        flip_or_value_edit(f, -f.as_ref()?.value(), 0)
+                    })
+                    .collect(),
+                (0.0, 0.0),
+            ),
+            Some(m) => mirror_joints(self.settings, m, p).map_err(|why| why.at(scope.file, p))?,
         };
         if let Some(why) = skid_refusal(p, self.settings) {
             return Err(why.at(scope.file, p));
         }
         edits.extend(skid_edits(scope.file, p, self.settings));
         let change = TargetChange {
-            mm: 0.0,
-            deg: 0.0,
+            mm,
+            deg,
             skid: None,
             name: p.name.clone(),
             line: p.line,
@@ -661,46 +661,6 @@ impl MirrorRule<'_> {
             true => self.own.tool(&pose).0,
             false => pose,
         })
-    }
-
-    /// A joint target mirrored for the image robot: `J'` with its flange at the mirror image in
-    /// world of this robot's, `B_to(s')·FK(J') = A·B(s)·FK(J)·Sb`, found as the rule's image
-    /// `(−θ1, θ2, θ3, −θ4, θ5, −θ6)` moved by what the two bases fall short of mirror images
-    /// (so the arm's branch is the rule's, and a wrist at its singularity that would swing is
-    /// refused as a track correction's would be). Before, the image was the rule's alone: on the
-    /// sample cell a joint target and its Cartesian twin, one pose on robot A, ended 0.85 mm
-    /// apart on robot B.
-    fn joints_in_image_base(
-        &self,
-        m: &MirrorArm,
-        image: &ImageRobot,
-        world: &WorldPlane,
-        p: &Position,
-    ) -> Result<Vec<Edit>, Why> {
-        let j = m.arm.joints_of(p)?;
-        let what = describe(p);
-        let skid = skid_of(p, self.settings.skid_axis, || {
-            format!(
-                "{what} has no skid position: where robot `{}` stands to reach its mirror image is not known",
-                image.name
-            )
-        })?;
-        let (scale, offset) = self.settings.skid_map;
-        let skid_to = scale * skid + offset;
-        let flange = m.base_at(skid) * m.arm.kinematics.forward(&j);
-        let mirrored = Reflection::about(&world.frame, self.settings)
-            .target(&flange)
-            .0;
-        let target = image.base_at(skid_to).inverse() * mirrored;
-        let on = image.where_it_stands(skid_to, &target);
-        image_joint_edits(
-            &image.arm.kinematics,
-            p,
-            &j,
-            &target,
-            &on,
-            "check the mirror plane, the skid map and the mirror-image robot's cell; or re-teach the target",
-        )
     }
 
     /// The configuration inverse kinematics finds for the mirrored target (`None` when the
@@ -835,19 +795,60 @@ fn skid_of(p: &Position, axis: usize, message: impl FnOnce() -> String) -> Resul
     }
 }
 
-/// A joint target mirrored through kinematics for the mirror-image robot standing as this
-/// one's mirror image (see [`MirrorArm`]): `FK(J')` = the mirror image of `FK(J)`.
-fn mirror_joints_by_ik(arm: &Arm, p: &Position) -> Result<Vec<Edit>, Why> {
-    let j = arm.joints_of(p)?;
-    let kin = &arm.kinematics;
-    image_joint_edits(
-        kin,
-        p,
-        &j,
-        &mirrored_flange(&kin.forward(&j)),
-        "",
-        "check the mirror-image robot's kinematics; or re-teach the target",
-    )
+/// The flange of joint target `p`'s mirror image (joints `j` on `m`'s arm), in the base of the
+/// robot it is for, with that robot's kinematics and where it stands (for a refusal to say).
+/// For the image robot with the plane in world: `B_to(s')⁻¹·A·B(s)·FK(J)·Sb`, the mirror image
+/// in world of this robot's flange, so that the joints found for it take up what the two bases
+/// fall short of mirror images (before, the image was the rule `(−θ1, θ2, θ3, −θ4, θ5, −θ6)`
+/// alone: on the sample cell a joint target and its Cartesian twin, one pose on robot A, ended
+/// 0.85 mm apart on robot B). Otherwise the robot's own mirror image (see [`MirrorArm`]):
+/// `Sy·FK(J)·Sy`.
+pub(crate) fn joint_image_flange<'m>(
+    settings: &MirrorSettings,
+    m: &'m MirrorArm,
+    p: &Position,
+    j: &Joints,
+) -> Result<(Pose, &'m crate::kinematics::Kinematics, String), Why> {
+    let (Some(image), Some(world)) = (&m.image, &settings.world) else {
+        let kin = &m.arm.kinematics;
+        return Ok((mirrored_flange(&kin.forward(j)), kin, String::new()));
+    };
+    let what = describe(p);
+    let skid = skid_of(p, settings.skid_axis, || {
+        format!(
+            "{what} has no skid position: where robot `{}` stands to reach its mirror image is not known",
+            image.name
+        )
+    })?;
+    let (scale, offset) = settings.skid_map;
+    let skid_to = scale * skid + offset;
+    let flange = m.base_at(skid) * m.arm.kinematics.forward(j);
+    let mirrored = Reflection::about(&world.frame, settings).target(&flange).0;
+    let target = image.base_at(skid_to).inverse() * mirrored;
+    let on = image.where_it_stands(skid_to, &target);
+    Ok((target, &image.arm.kinematics, on))
+}
+
+/// A joint target mirrored through kinematics: `J'` with its flange at
+/// [`joint_image_flange`], found as the rule's image moved by what it falls short of it (so the
+/// arm's branch is the rule's, and a wrist at its singularity that would swing is refused as a
+/// track correction's would be). With the edits, the flange's move ([`flange_move`]), each
+/// flange in its own robot's base as the joints are written.
+fn mirror_joints(
+    settings: &MirrorSettings,
+    m: &MirrorArm,
+    p: &Position,
+) -> Result<(Vec<Edit>, (f64, f64)), Why> {
+    let j = m.arm.joints_of(p)?;
+    let (target, kin, on) = joint_image_flange(settings, m, p, &j)?;
+    let hint = match (&m.image, &settings.world) {
+        (Some(_), Some(_)) => {
+            "check the mirror plane, the skid map and the mirror-image robot's cell; or re-teach the target"
+        }
+        _ => "check the mirror-image robot's kinematics; or re-teach the target",
+    };
+    let (edits, new) = image_joint_edits(kin, p, &j, &target, &on, hint)?;
+    Ok((edits, flange_move(&m.arm.kinematics, &j, kin, &new)))
 }
 
 /// The edits of joint target `p` (joints `j`) mirrored to `J'` whose flange is `target`, in the
@@ -861,7 +862,7 @@ fn mirror_joints_by_ik(arm: &Arm, p: &Position) -> Result<Vec<Edit>, Why> {
 /// image of 178° as the arm behind itself, `[2, −27.3, −162, …]`, and an axis 4 limited to
 /// [−200°, 300°] the image of 250° as the flipped wrist), a swing (the wrist singularity), or
 /// no solution in the branch. Where `J'` agrees with the rule to 1e-9° the rule's text is
-/// written (a flip keeps the literal's decimals).
+/// written (a flip keeps the literal's decimals). With the edits, `J'`.
 fn image_joint_edits(
     kin: &crate::kinematics::Kinematics,
     p: &Position,
@@ -869,7 +870,7 @@ fn image_joint_edits(
     target: &Pose,
     on: &str,
     hint: &str,
-) -> Result<Vec<Edit>, Why> {
+) -> Result<(Vec<Edit>, Joints), Why> {
     let rule = mirrored_joints(j);
     let change = target * kin.forward(&rule).inverse();
     let steps = super::kinematic_policy::written_steps(p);
@@ -889,7 +890,8 @@ fn image_joint_edits(
             )
         },
     )?;
-    Ok(p.joints
+    let edits = p
+        .joints
         .iter()
         .zip(new)
         .zip(rule)
@@ -897,7 +899,8 @@ fn image_joint_edits(
             true => flip_or_value_edit(f, r, 0),
             false => number_edit(f, v, DEG_DECIMALS),
         })
-        .collect())
+        .collect();
+    Ok((edits, new))
 }
 
 /// The hint for a mirror image the robot it is for cannot take: an axis outside its limits

@@ -17,14 +17,16 @@ use crate::track::{Profile, TrackError};
 use super::cell::Robot;
 use super::driver::{KeptByStamp, NewPose, Scope, Step, TargetRule, apply_rule};
 use super::edits::{ProgramEdits, TargetChange};
-use super::kinematic_policy::{Arm, joint_edits, reversible_joint_edits, with_tool, written_steps};
+use super::kinematic_policy::{
+    Arm, flange_move, joint_edits, reversible_joint_edits, with_tool, written_steps,
+};
 use super::policy::{
     LastWorkObject, Why, common_refusal, describe, joint_target, offset_bases, stationary_tool,
 };
 use super::refusal::Refusal;
 use super::refusal::RefusalKind;
+use super::rewrite::OrientationHint;
 use super::rewrite::{MM_DECIMALS, number_edit};
-use super::rewrite::{OrientationHint, pose_change};
 use super::stamp::{Stamp, StampReading};
 use crate::position::{NumField, OffsetCall, OffsetKind};
 use crate::syntax::Edit;
@@ -278,7 +280,7 @@ impl TargetRule for TrackRule<'_, '_> {
             }
             Direction::Zero => joint_edits(p, &new),
         };
-        let (mm, deg) = pose_change(&kin.forward(&j), &kin.forward(&new));
+        let (mm, deg) = flange_move(kin, &j, kin, &new);
         let change = TargetChange {
             mm,
             deg,

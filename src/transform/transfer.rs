@@ -13,7 +13,10 @@ use crate::program::{LoadError, LoadOptions};
 use crate::syntax::{Edit, EditError, Span, apply_edits};
 
 use super::edits::{FileResult, ProgramEdits, ProgramResult, TargetChange, apply};
-use super::mirror::{MirrorSettings, Reflection, mirror_reading, reflection_for};
+use super::kinematic_policy::flange_move;
+use super::mirror::{
+    MirrorSettings, Reflection, joint_image_flange, mirror_reading, reflection_for,
+};
 use super::policy::KeptTargets;
 use super::refusal::{Refusal, RefusalKind};
 use super::rewrite::{DEG_DECIMALS, MM_DECIMALS, QUAT_DECIMALS, pose_change};
@@ -146,13 +149,7 @@ pub fn transfer(
         current = Some(next);
     }
     let last = current.as_ref().unwrap_or(program);
-    combine(
-        program,
-        last,
-        &steps,
-        plan.from.skid_axis,
-        plan.mirror.as_ref(),
-    )
+    combine(program, last, &steps, plan)
 }
 
 /// Per file of `input` and refusal of `result`'s file (in order), the index of the target the
@@ -198,9 +195,9 @@ fn combine(
     start: &Program,
     end: &Program,
     steps: &[Step],
-    skid_axis: usize,
-    mirror: Option<&MirrorSettings>,
+    plan: &TransferPlan,
 ) -> Result<ProgramResult, TransferError> {
+    let (skid_axis, mirror) = (plan.from.skid_axis, plan.mirror.as_ref());
     let own = mirror.map(Reflection::new);
     let mut refused = Vec::with_capacity(start.files.len());
     for (i, (a, b)) in start.files.iter().zip(&end.files).enumerate() {
@@ -256,7 +253,10 @@ fn combine(
                         _ => x,
                     })
                     .zip(q.cartesian.as_ref().and_then(|c| c.pose()));
-                let (mm, deg) = poses.map_or((0.0, 0.0), |(x, y)| pose_change(&x, &y));
+                let (mm, deg) = match poses {
+                    Some((x, y)) => pose_change(&x, &y),
+                    None => joint_correction(plan, &p, &q).unwrap_or_default(),
+                };
                 let skid = match p.skid(skid_axis) {
                     crate::position::Skid::At(s) => Some(s),
                     _ => None,
@@ -291,6 +291,29 @@ fn combine(
         });
     }
     Ok(ProgramResult { files })
+}
+
+/// The track correction of joint target `p` transferred to `q`, as a Cartesian target's: the
+/// move of the flange beyond the mirror itself, in the base of robot B, from the mirror image of
+/// `p`'s flange ([`joint_image_flange`]), or without a mirror from `p`'s flange on robot A, to
+/// `q`'s. `None` where the cell gives the robots no kinematics or the joints do not read (the
+/// steps refuse such a target).
+fn joint_correction(plan: &TransferPlan, p: &Position, q: &Position) -> Option<(f64, f64)> {
+    let to = plan.to.arm.as_ref()?;
+    let end = to.joints_of(q).ok()?;
+    match &plan.mirror {
+        None => {
+            let from = plan.from.arm.as_ref()?;
+            let start = from.joints_of(p).ok()?;
+            Some(flange_move(&from.kinematics, &start, &to.kinematics, &end))
+        }
+        Some(settings) => {
+            let m = settings.arm.as_ref()?;
+            let start = m.arm.joints_of(p).ok()?;
+            let (image, _, _) = joint_image_flange(settings, m, p, &start).ok()?;
+            Some(pose_change(&image, &to.kinematics.forward(&end)))
+        }
+    }
 }
 
 /// One step of a chain: its result, the target each of its refusals is about (per file, see

@@ -467,3 +467,100 @@ fn a_skid_map_that_does_not_put_the_image_robot_at_the_mirror_image_is_an_error_
         "{err}"
     );
 }
+
+/// The module of `TWINS`' target `name` alone: a run whose only change is that target's.
+fn twin_alone(name: &str) -> String {
+    let (motion, other) = match name {
+        "jT" => ("MoveAbsJ jT", "pT:="),
+        _ => ("MoveJ pT", "jT:="),
+    };
+    TWINS
+        .lines()
+        .filter(|l| !l.contains(other) && (!l.contains("Move") || l.contains(motion)))
+        .map(|l| format!("{l}\n"))
+        .collect()
+}
+
+/// The `mm` and `°` of the summary's largest change, `what` (`largest move` or `largest
+/// correction`): `… largest move 531.470 mm / 104.3917° → …`.
+fn summary_largest(summary: &str, what: &str) -> (f64, f64) {
+    let rest = summary
+        .split(&format!("{what} "))
+        .nth(1)
+        .unwrap_or_else(|| panic!("no {what} in {summary}"));
+    let n = numbers(rest.split('°').next().unwrap());
+    (n[0], n[1])
+}
+
+/// `mirror --robot r1 --to r2 --mirror-joints` of a joint target alone: the summary's largest
+/// move is its flange's, each flange in the base of the robot its joints are written for:
+/// `FK(jT)` on r1 to `FK(jT')` on r2, to the printed decimals. Before, a joint target's change
+/// was recorded as none: "largest move 0.000 mm / 0.0000°".
+#[test]
+fn mirror_summary_gives_a_joint_targets_flange_move() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "joint.mod", &twin_alone("jT"));
+    let out = dir.path().join("out.mod");
+    let (code, stdout, err) = trackfix(&[
+        "mirror",
+        input.to_str().unwrap(),
+        "--cell",
+        "samples/cell.toml",
+        "--robot",
+        "r1",
+        "--to",
+        "r2",
+        "--mirror-joints",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    let (mm, deg) = distance(
+        &IRB4600.forward(&joints(&literal(TWINS, "jT"))),
+        &IRB4600.forward(&joints(&literal(&text, "jT"))),
+    );
+    // A1 5° to about -5° swings the flange by some 400 mm: far from the recorded 0.
+    assert!(mm > 100.0 && deg > 10.0, "{mm} {deg}\n{text}");
+    let (said_mm, said_deg) = summary_largest(&format!("{stdout}{err}"), "largest move");
+    assert!(
+        (said_mm - mm).abs() <= 0.0005 + 1e-9 && (said_deg - deg).abs() <= 0.00005 + 1e-9,
+        "summary {said_mm} mm / {said_deg}°, flange moved {mm:.4} mm / {deg:.5}°\n{err}"
+    );
+}
+
+/// `transfer --mirror` of a joint target alone reports the correction of its Cartesian twin (one
+/// pose on r1, see `TWINS`): what the two tracks and bases add beyond the mirror, the same
+/// change of one flange whichever frame it is measured in. Before, a joint target's correction
+/// was recorded as none: "largest correction 0.000 mm / 0.0000°".
+#[test]
+fn transfer_mirror_summary_gives_a_joint_targets_correction_as_its_twins() {
+    let dir = tempfile::tempdir().unwrap();
+    let largest = |name: &str| {
+        let input = write(dir.path(), &format!("{name}.mod"), &twin_alone(name));
+        let out = dir.path().join(format!("{name}.out.mod"));
+        let (code, stdout, err) = trackfix(&[
+            "transfer",
+            input.to_str().unwrap(),
+            "--cell",
+            "samples/cell.toml",
+            "--from",
+            "r1",
+            "--to",
+            "r2",
+            "--mirror",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        summary_largest(&format!("{stdout}{err}"), "largest correction")
+    };
+    let (joint, cartesian) = (largest("jT"), largest("pT"));
+    assert!(cartesian.0 > 0.1, "{cartesian:?}");
+    // The twins end within 0.01 mm / 3e-4° of each other on r2
+    // (`transfer_mirror_keeps_a_joint_target_with_its_cartesian_twin`).
+    assert!(
+        (joint.0 - cartesian.0).abs() < 0.01 && (joint.1 - cartesian.1).abs() < 3e-4,
+        "joint target {joint:?}, its Cartesian twin {cartesian:?}"
+    );
+}
