@@ -788,9 +788,7 @@ fn frames_given<'s>(
         }
         // What trackfix does with a target moved to in both values.
         let left = match f.kind {
-            FrameKind::Tool => {
-                "left as written where the tool matters (the robot's kinematics, a mirror of the frames)"
-            }
+            FrameKind::Tool => "left as written where the tool matters (the robot's kinematics)",
             // A mirror in the work object's own plane is the same in both values: it goes ahead.
             _ => "left as written, but by a mirror in the work object's own plane",
         };

@@ -24,8 +24,7 @@ use super::edits::{ProgramEdits, TargetChange};
 use super::kinematic_policy::{Arm, config_edits, with_tool};
 use super::kinematic_policy::{flange_move, fmt_joints};
 use super::policy::{
-    Why, common_refusal, describe, offset_bases, stationary_tool, tool_in_two_values, wobj_of,
-    words_of, work_object_of,
+    Why, common_refusal, describe, offset_bases, stationary_tool, wobj_of, words_of, work_object_of,
 };
 use super::refusal::{Refusal, RefusalKind, Remedy};
 use super::rewrite::{
@@ -564,17 +563,9 @@ impl TargetRule for MirrorRule<'_> {
         // same way in both; a plane in world does not.
         let common = common_refusal(scope.file, p)
             .filter(|w| w.kind != RefusalKind::TwoWorkObjects || self.settings.world.is_some())
-            .or_else(|| stationary_tool(scope.program, scope.file, p))
-            .or_else(|| {
-                // The mirror of a tool the program gives a value is written into the
-                // assignment: its declaration, which the motion may run with, stays.
-                self.settings.mirror_frames.then(|| {
-                    tool_in_two_values(
-                        p,
-                        "the tool's mirror image is written where the program gives it its value, and the motion may run with the declaration's, as written",
-                    )
-                })?
-            });
+            // (A tool the program gives another value is mirrored in its declaration and in
+            // the assignment alike: a motion with either value reaches the image.)
+            .or_else(|| stationary_tool(scope.program, scope.file, p));
         if common.is_some() || self.settings.arm.is_none() {
             return common;
         }
