@@ -190,12 +190,7 @@ impl<L: Language> Tree<L> {
 pub(crate) struct TreeBuilder<L: Language> {
     /// The nodes, when kept.
     nodes: Vec<Node<L::Kind>>,
-    keep: bool,
-    /// Which leaves are kept, when nodes are (see [`TreeBuilder::skeleton`]).
-    keep_leaf: fn(L::Kind) -> bool,
-    /// Gaps are kept, when nodes are (not in a skeleton: most of a file's leaves, and not
-    /// asked of `keep_leaf` one by one).
-    keep_gaps: bool,
+    keeps: Keeps<L>,
     /// Nodes pushed so far (when nodes are kept, only those kept): the index the next node
     /// gets.
     count: u32,
@@ -203,6 +198,17 @@ pub(crate) struct TreeBuilder<L: Language> {
     leaf_end: u32,
     /// Every leaf so far started where the one before it ended.
     in_order: bool,
+}
+
+/// Which nodes a [`TreeBuilder`] keeps.
+enum Keeps<L: Language> {
+    /// Every node: the whole tree.
+    All,
+    /// Every branch and the leaves the function takes, no gap ([`TreeBuilder::skeleton`]):
+    /// gaps are most of a file's leaves, and not asked of the function one by one.
+    Skeleton(fn(L::Kind) -> bool),
+    /// None ([`TreeBuilder::verifying`]).
+    Nothing,
 }
 
 /// What a [`TreeBuilder`] built: the tree (empty for a verifying builder) and whether its
@@ -224,9 +230,7 @@ impl<L: Language> TreeBuilder<L> {
         });
         TreeBuilder {
             nodes,
-            keep: true,
-            keep_leaf: |_| true,
-            keep_gaps: true,
+            keeps: Keeps::All,
             count: 1,
             leaf_end: 0,
             in_order: true,
@@ -237,9 +241,7 @@ impl<L: Language> TreeBuilder<L> {
     pub(crate) fn verifying() -> TreeBuilder<L> {
         TreeBuilder {
             nodes: Vec::new(),
-            keep: false,
-            keep_leaf: |_| true,
-            keep_gaps: true,
+            keeps: Keeps::Nothing,
             count: 1,
             leaf_end: 0,
             in_order: true,
@@ -252,8 +254,7 @@ impl<L: Language> TreeBuilder<L> {
     /// still checked over every leaf.
     pub(crate) fn skeleton(keep_leaf: fn(L::Kind) -> bool) -> TreeBuilder<L> {
         TreeBuilder {
-            keep_leaf,
-            keep_gaps: false,
+            keeps: Keeps::Skeleton(keep_leaf),
             ..TreeBuilder::with_capacity(16)
         }
     }
@@ -266,7 +267,7 @@ impl<L: Language> TreeBuilder<L> {
     /// Pushes a branch, or a leaf the builder keeps ([`TreeBuilder::push_leaf`]).
     #[inline]
     fn push(&mut self, kind: L::Kind, start: u32, end: u32) {
-        if self.keep {
+        if !matches!(self.keeps, Keeps::Nothing) {
             self.nodes.push(Node {
                 kind,
                 start,
@@ -277,11 +278,12 @@ impl<L: Language> TreeBuilder<L> {
         self.count += 1;
     }
 
-    /// Pushes a leaf, when the builder keeps no nodes or keeps one of its kind.
+    /// Pushes a leaf, unless the builder is a skeleton's that does not keep its kind.
     #[inline]
     fn push_leaf(&mut self, kind: L::Kind, start: u32, end: u32) {
-        if !self.keep || (self.keep_leaf)(kind) {
-            self.push(kind, start, end);
+        match self.keeps {
+            Keeps::Skeleton(keep_leaf) if !keep_leaf(kind) => {}
+            _ => self.push(kind, start, end),
         }
     }
 
@@ -289,15 +291,16 @@ impl<L: Language> TreeBuilder<L> {
     #[inline]
     pub(crate) fn gap(&mut self, upto: u32) {
         if upto > self.leaf_end {
-            if self.keep_gaps {
+            if !matches!(self.keeps, Keeps::Skeleton(_)) {
                 self.push(L::GAP, self.leaf_end, upto);
             }
             self.leaf_end = upto;
         }
     }
 
-    /// Pushes a leaf of bytes `start..end` (after the gap before it).
-    #[inline]
+    /// Pushes a leaf of bytes `start..end` (after the gap before it). (Always inlined: each
+    /// parser's line loop calls it for nearly every statement.)
+    #[inline(always)]
     pub(crate) fn leaf(&mut self, kind: L::Kind, start: u32, end: u32) {
         let end = end.max(start);
         self.gap(start);
