@@ -206,6 +206,24 @@ fn sample_cell_with_the_plane_elsewhere() -> String {
     )
 }
 
+/// `trackfix transfer INPUT --cell CELL --from r1 --to r2 --mirror`, then `more` (where it
+/// writes, `--diff`): (exit code, stdout, stderr).
+fn transfer_mirrored(input: &Path, cell: &str, more: &[&str]) -> (i32, String, String) {
+    let mut args = vec![
+        "transfer",
+        input.to_str().unwrap(),
+        "--cell",
+        cell,
+        "--from",
+        "r1",
+        "--to",
+        "r2",
+        "--mirror",
+    ];
+    args.extend_from_slice(more);
+    trackfix(&args)
+}
+
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
@@ -228,19 +246,8 @@ fn transfer_mirror_keeps_a_joint_target_with_its_cartesian_twin() {
         &(base("r1", 3000.0).inverse() * robtarget(&p)),
     );
     assert!(mm < 1e-3 && deg < 1e-5, "{mm} {deg}");
-    let (code, _, err) = trackfix(&[
-        "transfer",
-        input.to_str().unwrap(),
-        "--cell",
-        "samples/cell.toml",
-        "--from",
-        "r1",
-        "--to",
-        "r2",
-        "--mirror",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let (code, _, err) =
+        transfer_mirrored(&input, "samples/cell.toml", &["-o", out.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     let text = std::fs::read_to_string(&out).unwrap();
     let (j, p) = (literal(&text, "jT"), literal(&text, "pT"));
@@ -318,20 +325,7 @@ fn an_image_robot_that_stands_elsewhere_refuses_both_twins_saying_where() {
         &sample_cell_with_the_plane_elsewhere(),
     );
     let input = write(dir.path(), "twin.mod", TWINS);
-    let transfer = |cell: &Path| {
-        trackfix(&[
-            "transfer",
-            input.to_str().unwrap(),
-            "--cell",
-            cell.to_str().unwrap(),
-            "--from",
-            "r1",
-            "--to",
-            "r2",
-            "--mirror",
-            "--diff",
-        ])
-    };
+    let transfer = |cell: &Path| transfer_mirrored(&input, cell.to_str().unwrap(), &["--diff"]);
     let (code, out, err) = transfer(&cell_map);
     assert_eq!(code, 3, "{err}");
     assert!(out.is_empty(), "{out}");
@@ -363,18 +357,7 @@ fn a_refusal_of_a_later_step_of_a_transfer_says_which_step() {
     assert_ne!(without, cell);
     let cell_rules_r1 = write(dir.path(), "cell_r1_rules.toml", &without);
     let input = write(dir.path(), "twin.mod", TWINS);
-    let (code, _, err) = trackfix(&[
-        "transfer",
-        input.to_str().unwrap(),
-        "--cell",
-        cell_rules_r1.to_str().unwrap(),
-        "--from",
-        "r1",
-        "--to",
-        "r2",
-        "--mirror",
-        "--diff",
-    ]);
+    let (code, _, err) = transfer_mirrored(&input, cell_rules_r1.to_str().unwrap(), &["--diff"]);
     assert_eq!(code, 3, "{err}");
     let line = err.lines().find(|l| l.contains("`pT`")).unwrap();
     assert!(
@@ -539,19 +522,8 @@ fn transfer_mirror_summary_gives_a_joint_targets_correction_as_its_twins() {
     let largest = |name: &str| {
         let input = write(dir.path(), &format!("{name}.mod"), &twin_alone(name));
         let out = dir.path().join(format!("{name}.out.mod"));
-        let (code, stdout, err) = trackfix(&[
-            "transfer",
-            input.to_str().unwrap(),
-            "--cell",
-            "samples/cell.toml",
-            "--from",
-            "r1",
-            "--to",
-            "r2",
-            "--mirror",
-            "-o",
-            out.to_str().unwrap(),
-        ]);
+        let (code, stdout, err) =
+            transfer_mirrored(&input, "samples/cell.toml", &["-o", out.to_str().unwrap()]);
         assert_eq!(code, 0, "{err}");
         summary_largest(&format!("{stdout}{err}"), "largest correction")
     };
