@@ -8,6 +8,7 @@
 use std::path::{Path, PathBuf};
 
 use super::error::{AccuracyError, Located};
+use crate::syntax::Encoding;
 
 /// Which file column holds a role (`point`, `cycle`, `x`, …): `point=Name,cycle=Run`. Columns
 /// a map names are matched case-insensitively; with a map, the file's other columns are ignored
@@ -70,6 +71,8 @@ pub(crate) struct Table {
     header: Row,
     pub rows: Vec<Row>,
     source: Vec<u8>,
+    /// How the file's bytes are text: a tracker's software writes UTF-8 or a Windows code page.
+    encoding: Encoding,
     delimiter: u8,
     map: ColumnMap,
 }
@@ -94,8 +97,8 @@ fn split_fields(src: &[u8], start: usize, end: usize, delimiter: u8) -> Vec<(usi
 }
 
 /// The field's text without surrounding blanks and quotes.
-fn clean(bytes: &[u8]) -> String {
-    let text: String = bytes.iter().map(|&b| b as char).collect();
+fn clean(bytes: &[u8], encoding: Encoding) -> String {
+    let text = encoding.text(bytes);
     let text = text.trim();
     let text = text
         .strip_prefix('"')
@@ -171,10 +174,11 @@ impl Table {
             fields: split_fields(bytes, s, e, delimiter),
         };
         let header = row((header_line, hs, he));
+        let encoding = Encoding::of_text(bytes);
         let headers: Vec<String> = header
             .fields
             .iter()
-            .map(|&(a, b)| clean(&bytes[a..b]).to_ascii_lowercase())
+            .map(|&(a, b)| clean(&bytes[a..b], encoding).to_ascii_lowercase())
             .collect();
         let mut table = Table {
             path: path.to_path_buf(),
@@ -182,6 +186,7 @@ impl Table {
             header,
             rows: Vec::new(),
             source: bytes.to_vec(),
+            encoding,
             delimiter,
             map: map.clone(),
         };
@@ -283,9 +288,9 @@ impl Table {
 
     /// The text of field `index` of `row`.
     pub(crate) fn text(&self, row: &Row, index: usize) -> String {
-        row.fields
-            .get(index)
-            .map_or_else(String::new, |&(a, b)| clean(&self.source[a..b]))
+        row.fields.get(index).map_or_else(String::new, |&(a, b)| {
+            clean(&self.source[a..b], self.encoding)
+        })
     }
 
     /// The number in field `index` of `row`; with `;` between fields a decimal comma is read.
@@ -323,7 +328,9 @@ impl Table {
         hint: String,
     ) -> AccuracyError {
         let line_bytes = &self.source[row.start..row.end];
-        let line_text: String = line_bytes.iter().map(|&b| b as char).collect();
+        let line_text = self.encoding.text(line_bytes);
+        // The caret counts characters, which are bytes only in Latin-1.
+        let chars = |bytes: &[u8]| self.encoding.text(bytes).chars().count();
         let (mut a, mut b) = field
             .and_then(|f| row.fields.get(f).copied())
             .unwrap_or((row.start, row.end));
@@ -336,8 +343,8 @@ impl Table {
         AccuracyError::Input(Box::new(Located {
             path: self.path.clone(),
             line: row.line,
-            column: a - row.start + 1,
-            width: (b - a).max(1),
+            column: chars(&self.source[row.start..a]) + 1,
+            width: chars(&self.source[a..b]).max(1),
             line_text,
             message,
             hint,
@@ -385,6 +392,28 @@ mod tests {
         assert!(
             e.to_string()
                 .starts_with("c.csv:1:11: error: unknown column `z`")
+        );
+    }
+
+    #[test]
+    fn an_error_shows_the_line_in_the_files_encoding_with_the_caret_under_its_characters() {
+        // UTF-8 (`°` is two bytes): one character each, the caret under the field.
+        let src = "point,x,y,z\nPunkt°1,1,zwei,3\n";
+        let t = Table::parse(Path::new("c.csv"), src.as_bytes(), &ColumnMap::default()).unwrap();
+        assert_eq!(t.text(&t.rows[0], 0), "Punkt°1");
+        let e = t.number(&t.rows[0], 2).unwrap_err();
+        assert_eq!(
+            e.to_string().lines().take(4).collect::<Vec<_>>().join("\n"),
+            "c.csv:2:11: error: `zwei` in column `y` is not a number\n  |\n2 | Punkt°1,1,zwei,3\n  |           ^^^^"
+        );
+        // Latin-1 (a Windows export): the same text from one byte each.
+        let src = b"point,x,y,z\nPunkt\xb01,1,zwei,3\n";
+        let t = Table::parse(Path::new("c.csv"), src, &ColumnMap::default()).unwrap();
+        assert_eq!(t.text(&t.rows[0], 0), "Punkt°1");
+        let e = t.number(&t.rows[0], 2).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("2 | Punkt°1,1,zwei,3\n  |           ^^^^")
         );
     }
 

@@ -216,6 +216,24 @@ enum Piece {
 }
 
 impl Encoding {
+    /// The encoding of a text file that names none (a measurement table from a tracker's
+    /// software): UTF-8 where every byte decodes so, which no Latin-1 text with a letter above
+    /// ASCII does by chance; Latin-1 (Windows-1252's letters) otherwise.
+    pub fn of_text(bytes: &[u8]) -> Encoding {
+        match std::str::from_utf8(bytes) {
+            Ok(_) => Encoding::Utf8,
+            Err(_) => Encoding::Latin1,
+        }
+    }
+
+    /// `bytes` as text in this encoding (a byte that is no UTF-8 becomes U+FFFD).
+    pub fn text(self, bytes: &[u8]) -> String {
+        match self {
+            Encoding::Latin1 => latin1(bytes),
+            Encoding::Utf8 => String::from_utf8_lossy(bytes).into_owned(),
+        }
+    }
+
     /// The pieces of `text` with the byte offset each starts at.
     fn decode(self, text: &[u8]) -> Vec<(usize, Piece)> {
         match self {

@@ -105,7 +105,8 @@ impl Source<'_> {
         hint: &str,
     ) -> TrackError {
         let span = field_span(self.bytes, self.delimiter, line, field);
-        let mut e = LocatedError::new(self.path, self.bytes.clone(), span, message, hint);
+        // The csv reader takes UTF-8 only: a file it reads this far is UTF-8.
+        let mut e = LocatedError::new(self.path, self.bytes.clone(), span, message, hint).in_utf8();
         if !column.is_empty() {
             e = e.in_column(column);
         }
@@ -322,5 +323,24 @@ impl NumericCsv {
     /// The value at `index` (validated by [`NumericCsv::columns`]).
     pub fn get(row: &NumericRow, index: usize) -> f64 {
         row.values.get(index).copied().unwrap_or(f64::NAN)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_error_shows_the_utf8_line_it_read() {
+        let src = "skid,x\n100,1.5°\n";
+        let e = NumericCsv::parse(Path::new("t.csv"), src.as_bytes(), &["skid", "x"])
+            .err()
+            .expect("`1.5°` is no number");
+        let text = e.to_string();
+        assert!(
+            text.contains("2 | 100,1.5°\n"),
+            "the line as written, `°` one character: {text}"
+        );
+        assert!(!text.contains('Â'), "{text}");
     }
 }

@@ -186,7 +186,10 @@ pub fn parse_point_export(
         Span::new(start, start + len)
     };
     let err = |span: Span, message: String, hint: &str| -> TrackError {
-        LocatedError::new(path, source.clone(), span, message, hint).into()
+        // Read only once it is known to be UTF-8 (below): its excerpts decode so.
+        LocatedError::new(path, source.clone(), span, message, hint)
+            .in_utf8()
+            .into()
     };
     let Ok(text) = std::str::from_utf8(bytes) else {
         let text = String::from_utf8_lossy(bytes);
@@ -296,7 +299,7 @@ pub fn parse_point_export(
     for &(line, l) in lines.iter().skip(usize::from(has_header)) {
         let quote = claims_export || !points.is_empty();
         let err = |span: Span, message: String, hint: &str| -> TrackError {
-            let e = LocatedError::new(path, source.clone(), span, message, hint);
+            let e = LocatedError::new(path, source.clone(), span, message, hint).in_utf8();
             if quote { e } else { e.without_quote() }.into()
         };
         let fields = split(l, sep);
