@@ -529,19 +529,31 @@ impl TargetRule for MirrorRule<'_> {
             .at(scope.file, p));
         }
         // The flange's move is the size of the change; without the arm's kinematics it is
-        // not known, and the axes are only negated.
-        let (mut edits, (mm, deg)): (Vec<Edit>, _) = match &self.settings.arm {
-            None => (
-                [0, 3, 5]
-                    .iter()
-                    .filter_map(|&i| {
-                        let f = p.joints.get(i)?;
-                        flip_or_value_edit(f, -f.as_ref()?.value(), 0)
-                    })
-                    .collect(),
-                (0.0, 0.0),
-            ),
-            Some(m) => mirror_joints(self.settings, m, p).map_err(|why| why.at(scope.file, p))?,
+        // not known, and the axes are only negated: the largest axis change (2·|θ|) stands
+        // for it, said as such, never as a move of 0 mm.
+        let (mut edits, (mm, deg), axes_deg): (Vec<Edit>, _, _) = match &self.settings.arm {
+            None => {
+                let flipped = [0, 3, 5].iter().filter_map(|&i| {
+                    let f = p.joints.get(i)?;
+                    Some((f, f.as_ref()?.value()))
+                });
+                let largest = flipped
+                    .clone()
+                    .map(|(_, v)| 2.0 * v.abs())
+                    .fold(0.0, f64::max);
+                (
+                    flipped
+                        .filter_map(|(f, v)| flip_or_value_edit(f, -v, 0))
+                        .collect(),
+                    (0.0, 0.0),
+                    Some(largest),
+                )
+            }
+            Some(m) => {
+                let (edits, size) =
+                    mirror_joints(self.settings, m, p).map_err(|why| why.at(scope.file, p))?;
+                (edits, size, None)
+            }
         };
         if let Some(why) = skid_refusal(p, self.settings) {
             return Err(why.at(scope.file, p));
@@ -554,6 +566,7 @@ impl TargetRule for MirrorRule<'_> {
             name: p.name.clone(),
             line: p.line,
             uncertainty_mm: None,
+            axes_deg,
         };
         Ok(Some((edits, change)))
     }

@@ -536,3 +536,33 @@ fn transfer_mirror_summary_gives_a_joint_targets_correction_as_its_twins() {
         "joint target {joint:?}, its Cartesian twin {cartesian:?}"
     );
 }
+
+/// `mirror --mirror-joints` without the arm's kinematics negates axes 1, 4 and 6: the joint
+/// target's flange, and so its move in mm, is not known, and the summary says so with its
+/// largest axis change (axis 4: 40° to −40°). Before: "largest move 0.000 mm / 0.0000°".
+#[test]
+fn mirror_summary_says_a_joint_targets_move_is_not_known_without_kinematics() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "joint.mod", &twin_alone("jT"));
+    let out = dir.path().join("out.mod");
+    let (code, stdout, err) = trackfix(&[
+        "mirror",
+        input.to_str().unwrap(),
+        "--plane",
+        "xz",
+        "--mirror-joints",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(
+        literal(&text, "jT")[..6],
+        [-5.0, 20.0, 10.0, -40.0, 60.0, 30.0]
+    );
+    let summary = format!("{stdout}{err}").replace(dir.path().to_str().unwrap(), "<tmp>");
+    assert_eq!(
+        summary.trim_end(),
+        "<tmp>/joint.mod: 1 target(s) changed, 1 joint target(s) with axes changed by up to 80.0000° (their move in mm is not known without the arm's kinematics) → <tmp>/out.mod"
+    );
+}
