@@ -19,7 +19,8 @@ use trackfix::syntax::{Severity, printable};
 use trackfix::track::cell_nominal::check_cell_nominal;
 use trackfix::track::uncertainty::ProfileUncertainty;
 use trackfix::track::{Profile, TrackError};
-use trackfix::transform::cell::{SKID_MAP_HINT, skid_axis_index};
+use trackfix::transform::cell::{SkidMapWay, skid_axis_index, skid_map_hint};
+use trackfix::transform::mirror::{SkidMapMismatch, inverse_skid_map};
 use trackfix::transform::rename::{Renamed, rename_program};
 use trackfix::transform::stamp;
 use trackfix::transform::{
@@ -1311,12 +1312,13 @@ fn run_zero_inner(a: ZeroArgs) -> anyhow::Result<Exit> {
     run_track(a.inner, Direction::Zero)
 }
 
-/// The mirror from the cell's `[mirror]` table, overridden by the command line. A plane given
-/// in world (`frame_in = "world"`) resolves work objects with `robot`'s cell entries, then the
-/// program's declarations.
+/// The mirror from the cell's `[mirror]` table, overridden by the command line, with the run's
+/// skid map ([`skid_map_of`]). A plane given in world (`frame_in = "world"`) resolves work
+/// objects with `robot`'s cell entries, then the program's declarations.
 fn mirror_settings(
     cell: Option<&Cell>,
     o: &MirrorOptions,
+    skid_map: (f64, f64),
     skid_axis: usize,
     robot: Option<&Robot>,
     default_wobj: Option<&str>,
@@ -1338,7 +1340,7 @@ fn mirror_settings(
         plane: o.plane.or(table.plane).unwrap_or(d.plane),
         tool_flip: o.tool_flip.or(table.tool_flip).unwrap_or(d.tool_flip),
         config: o.config.or(table.config).unwrap_or(d.config),
-        skid_map: o.skid_map.or(table.skid_map).unwrap_or(d.skid_map),
+        skid_map,
         skid_axis,
         skid_axis_to: None,
         mirror_frames: o.mirror_frames,
@@ -1382,6 +1384,11 @@ fn run_mirror_inner(mut a: MirrorArgs) -> anyhow::Result<Exit> {
         };
         let _ = writeln!(std::io::stderr(), "note: mirror: plane {plane} of {frames}");
     }
+    let to = match (&cell, &a.to_robot) {
+        (Some(c), Some(name)) => Some(c.robot(name)?),
+        _ => None,
+    };
+    let (skid_map, source) = skid_map_of(cell.as_ref(), &a.mirror, robot, to)?;
     let mut settings = MirrorSettings {
         skid_axis_to: a
             .skid_to
@@ -1391,27 +1398,44 @@ fn run_mirror_inner(mut a: MirrorArgs) -> anyhow::Result<Exit> {
         ..mirror_settings(
             cell.as_ref(),
             &a.mirror,
+            skid_map,
             skid_axis,
             robot,
             a.default_wobj.as_deref(),
         )
     };
-    if let (Some(c), Some(name)) = (&cell, &a.to_robot) {
-        let to = c.robot(name)?;
+    let mut check = None;
+    if let (Some(c), Some(to)) = (&cell, to) {
         writes_image_for(&mut settings, robot, to)?;
         if let Some(from) = robot {
             // The skid range of its track: where the map is checked.
             let range = read_profile(c, from)?.skid_range();
-            check_skid_map(c, &a.mirror, &settings, from, to, range)?;
+            let map = SkidMapCheck {
+                cell: c,
+                source,
+                from,
+                to,
+                range,
+            };
+            map.in_world(&settings)?;
+            check = Some(map);
         }
     }
-    run_step(
+    let step = TransformStep::Mirror(&settings);
+    run_each(
         "mirror",
         &a.files,
         robot,
-        TransformStep::Mirror(&settings),
+        &[],
         &a.out,
         &Provenance::new("mirror", robot, None, StampRule::NotCorrectedForAny),
+        |p| {
+            if let Some(check) = &check {
+                check.in_work_objects(&settings, &p, a.default_wobj.as_deref(), true)?;
+            }
+            let edits = step.edits(&p);
+            Ok(apply_owned(p, edits)?)
+        },
     )
 }
 
@@ -1452,30 +1476,136 @@ fn writes_image_for(
     Ok(())
 }
 
-/// The skid map against the bases of the robot mirrored and the mirror-image robot over the
-/// first's track (`mirror::check_skid_map`): a map that does not put `to` at the mirror image of
-/// `from` is an error at the cell's `skid_map`, or naming where the map came from, never used.
-fn check_skid_map(
-    cell: &Cell,
+/// Where a run's skid map comes from, for an error about it.
+#[derive(Clone, Copy, Debug)]
+enum SkidMapSource {
+    /// `--skid-map`, the run's own direction.
+    Flag,
+    /// The cell's `[mirror]` table, taken the way the run goes.
+    Cell(SkidMapWay),
+    /// Neither: the identity.
+    Default,
+}
+
+/// The run's skid map: `--skid-map` as given (the run's own direction), else the cell's taken
+/// the way a mirror of `from`'s program for `to` goes (its inverse to a robot `skid_map_from`
+/// names: `Cell::skid_map_for`), else the identity.
+fn skid_map_of(
+    cell: Option<&Cell>,
     o: &MirrorOptions,
-    settings: &MirrorSettings,
-    from: &Robot,
-    to: &Robot,
+    from: Option<&Robot>,
+    to: Option<&Robot>,
+) -> anyhow::Result<((f64, f64), SkidMapSource)> {
+    if let Some(map) = o.skid_map {
+        return Ok((map, SkidMapSource::Flag));
+    }
+    let (from, to) = (from.map(|r| r.name.as_str()), to.map(|r| r.name.as_str()));
+    Ok(
+        match cell
+            .map(|c| c.skid_map_for(from, to))
+            .transpose()?
+            .flatten()
+        {
+            Some(directed) => (directed.map, SkidMapSource::Cell(directed.way)),
+            None => (MirrorSettings::default().skid_map, SkidMapSource::Default),
+        },
+    )
+}
+
+/// What checks a run's skid map against the bases of the robot mirrored and the mirror-image
+/// robot over the first's track (`mirror::check_skid_map`): a map that does not put `to` at
+/// the mirror image of `from` is an error at the cell's entry, or naming where the map came
+/// from, never used.
+struct SkidMapCheck<'c> {
+    cell: &'c Cell,
+    source: SkidMapSource,
+    from: &'c Robot,
+    to: &'c Robot,
+    /// `from`'s skid range (its profile's knots).
     range: (f64, f64),
-) -> anyhow::Result<()> {
-    let Err(mismatch) = trackfix::transform::mirror::check_skid_map(settings, from, to, range)
-    else {
-        return Ok(());
-    };
-    let given = match (o.skid_map, cell.skid_map_error(&mismatch)) {
-        (None, Some(located)) => return Err(located.into()),
-        (Some(_), _) => "--skid-map".to_owned(),
-        (None, None) => format!(
-            "{}: no skid_map in the [mirror] table, so the default",
-            cell.path.display()
-        ),
-    };
-    bail!("{given}: {mismatch}\n  = help: {SKID_MAP_HINT}")
+}
+
+impl SkidMapCheck<'_> {
+    /// With the plane in world, before any program.
+    fn in_world(&self, settings: &MirrorSettings) -> anyhow::Result<()> {
+        trackfix::transform::mirror::check_skid_map(settings, self.from, self.to, self.range)
+            .map_err(|m| self.error(&m))
+    }
+
+    /// With the plane in each target's work object (`frame_in = "wobj"`), before `program` is
+    /// mirrored: in the plane of each work object its targets use, placed in the cell by
+    /// `from`'s entries or the program's declarations. A work object that places it nowhere
+    /// (not declared, given at run time, moved by a unit…) is a warning that the map was not
+    /// checked for its targets, where they are mirrored (`warn_unplaced`: a transfer refuses
+    /// them, its first step needing the work object in the cell too). Before, the map was never
+    /// checked with the plane in the work objects.
+    fn in_work_objects(
+        &self,
+        settings: &MirrorSettings,
+        program: &Program,
+        default_wobj: Option<&str>,
+        warn_unplaced: bool,
+    ) -> anyhow::Result<()> {
+        if settings.world.is_some() {
+            return Ok(());
+        }
+        let planes = trackfix::transform::mirror::work_object_planes(
+            program,
+            settings,
+            &self.from.frames,
+            default_wobj,
+        );
+        for (name, plane) in &planes.placed {
+            trackfix::transform::mirror::check_skid_map_in(
+                plane,
+                Some(name),
+                settings,
+                self.from,
+                self.to,
+                self.range,
+            )
+            .map_err(|m| self.error(&m))?;
+        }
+        if let Some(first) = planes.unplaced.first().filter(|_| warn_unplaced) {
+            let path = program.files.first().map(|f| f.path.display().to_string());
+            let _ = writeln!(
+                std::io::stderr(),
+                "warning: {}: skid map not checked for the targets of {} work object(s) that place the mirror plane nowhere in the cell (with frame_in = \"wobj\" each target mirrors about the plane in its own work object): {first}\n  = help: give the plane in world (frame_in = \"world\" in the [mirror] table) to have the map checked for every target",
+                path.unwrap_or_default(),
+                planes.unplaced.len()
+            );
+        }
+        Ok(())
+    }
+
+    /// The error for `mismatch`: at the cell's entry, or naming where the map came from.
+    fn error(&self, mismatch: &SkidMapMismatch) -> anyhow::Error {
+        let (from, to) = (&self.from.name, &self.to.name);
+        match self.source {
+            SkidMapSource::Cell(way) => match self.cell.skid_map_error(mismatch, way) {
+                Some(located) => located.into(),
+                None => anyhow::anyhow!("{mismatch}\n  = help: {}", skid_map_hint(mismatch)),
+            },
+            SkidMapSource::Flag if mismatch.inverse_fits => {
+                let (scale, offset) = inverse_skid_map(mismatch.map);
+                let number = trackfix::transform::cell::short_number;
+                anyhow::anyhow!(
+                    "--skid-map: {mismatch}\n  = help: --skid-map is this run's map, from robot `{from}`'s skids to robot `{to}`'s: pass its inverse, --skid-map {},{}",
+                    number(scale, 6),
+                    number(offset, 3)
+                )
+            }
+            SkidMapSource::Flag => anyhow::anyhow!(
+                "--skid-map: {mismatch}\n  = help: {}",
+                skid_map_hint(mismatch)
+            ),
+            SkidMapSource::Default => anyhow::anyhow!(
+                "{}: no skid_map in the [mirror] table, so the default: {mismatch}\n  = help: {}",
+                self.cell.path.display(),
+                skid_map_hint(mismatch)
+            ),
+        }
+    }
 }
 
 /// A mirror needs a plane: from `--plane` or the cell's `[mirror]` table, never a silent
@@ -1544,28 +1674,33 @@ fn run_transfer_inner(mut a: TransferArgs) -> anyhow::Result<Exit> {
     } else {
         refuse_mirror_options_alone(&a.mirror_options)?;
     }
+    let mut check = None;
     let mut plan = TransferPlan {
         from: TrackSetup::new(from, &from_profile),
         mirror: if a.mirror {
+            let (skid_map, source) =
+                skid_map_of(Some(&cell), &a.mirror_options, Some(from), Some(to))?;
             let mut settings = MirrorSettings {
                 skid_axis_to: Some(to.skid_axis),
                 ..mirror_settings(
                     Some(&cell),
                     &a.mirror_options,
+                    skid_map,
                     from.skid_axis,
                     Some(from),
                     a.default_wobj.as_deref(),
                 )
             };
             writes_image_for(&mut settings, Some(from), to)?;
-            check_skid_map(
-                &cell,
-                &a.mirror_options,
-                &settings,
+            let map = SkidMapCheck {
+                cell: &cell,
+                source,
                 from,
                 to,
-                from_profile.skid_range(),
-            )?;
+                range: from_profile.skid_range(),
+            };
+            map.in_world(&settings)?;
+            check = Some(map);
             Some(settings)
         } else {
             None
@@ -1582,6 +1717,11 @@ fn run_transfer_inner(mut a: TransferArgs) -> anyhow::Result<Exit> {
         &[to],
         &a.out,
         &Provenance::new("transfer", Some(to), Some(&to_profile), StampRule::Any),
-        |p| Ok(transfer(&p, &plan, &written)?),
+        |p| {
+            if let (Some(check), Some(settings)) = (&check, &plan.mirror) {
+                check.in_work_objects(settings, &p, a.default_wobj.as_deref(), false)?;
+            }
+            Ok(transfer(&p, &plan, &written)?)
+        },
     )
 }

@@ -71,6 +71,9 @@ pub struct RunTarget {
     pub mm: f64,
     /// Rotation change, degrees.
     pub deg: f64,
+    /// A joint target whose move is not known (no arm kinematics): its largest axis change,
+    /// degrees; `mm` and `deg` are then no move.
+    pub axes_deg: Option<f64>,
 }
 
 impl From<ChangeRef<'_>> for RunTarget {
@@ -81,6 +84,7 @@ impl From<ChangeRef<'_>> for RunTarget {
             skid: c.skid,
             mm: c.mm,
             deg: c.deg,
+            axes_deg: c.axes_deg,
         }
     }
 }
@@ -349,7 +353,10 @@ fn inputs_section(r: &RunReport) -> Section {
 
 fn along_skid_section(r: &RunReport) -> Section {
     let mut sec = Section::new("along-skid", headings::ALONG_SKID);
-    let with_skid: Vec<&RunTarget> = all_targets(r).filter(|t| t.skid.is_some()).collect();
+    // A target whose move is not known has no point to plot.
+    let with_skid: Vec<&RunTarget> = all_targets(r)
+        .filter(|t| t.skid.is_some() && t.axes_deg.is_none())
+        .collect();
     let without = all_targets(r).count() - with_skid.len();
     if with_skid.is_empty() {
         sec.para("No changed target has a skid value: nothing to plot along the track.");
@@ -390,7 +397,7 @@ fn along_skid_section(r: &RunReport) -> Section {
     if without > 0 {
         sec.para_class(
             "note",
-            &format!("{without} changed target(s) have no skid value and are not plotted."),
+            &format!("{without} changed target(s) have no skid value or no known move and are not plotted."),
         );
     }
     sec
@@ -421,10 +428,17 @@ fn file_section(i: usize, f: &RunFile) -> Section {
                 if lines {
                     cells.push(Cell::num(t.line.map(|l| l.to_string()).unwrap_or_default()));
                 }
+                let (mm, deg) = match t.axes_deg {
+                    None => (format!("{:.3}", t.mm), format!("{:.4}", t.deg)),
+                    Some(a) => (
+                        "not known (no kinematics)".to_owned(),
+                        format!("axes up to {a:.4}"),
+                    ),
+                };
                 cells.extend([
                     Cell::num(t.skid.map(|s| format!("{s}")).unwrap_or_default()),
-                    Cell::num(format!("{:.3}", t.mm)),
-                    Cell::num(format!("{:.4}", t.deg)),
+                    Cell::num(mm),
+                    Cell::num(deg),
                 ]);
                 Row::new(cells)
             })
@@ -577,6 +591,7 @@ mod tests {
                     skid: Some(500.0),
                     mm: 0.5,
                     deg: 0.01,
+                    axes_deg: None,
                 }],
                 vec![RunRefusal {
                     line: 3,

@@ -13,10 +13,15 @@ pub struct FileSummary {
     pub path: PathBuf,
     /// Targets whose text changed.
     pub changed: usize,
-    /// Largest translation change of any target, mm.
+    /// Largest translation change of any target whose move is known, mm.
     pub largest_mm: f64,
-    /// Largest rotation change of any target, degrees.
+    /// Largest rotation change of any target whose move is known, degrees.
     pub largest_deg: f64,
+    /// Joint targets changed whose move is not known (mirrored without the arm's kinematics),
+    /// left out of `largest_mm` and `largest_deg`.
+    pub moves_not_known: usize,
+    /// Their largest change of one axis, degrees.
+    pub largest_axes_deg: Option<f64>,
     /// Smallest and largest skid of the changed targets.
     pub skid_range: Option<(f64, f64)>,
     /// Targets left unchanged because the transform refused them.
@@ -52,8 +57,18 @@ impl FileSummary {
         let mut skid_range: Option<(f64, f64)> = None;
         let mut largest_uncertainty_mm: Option<f64> = None;
         let mut below_uncertainty = Vec::new();
+        let (mut moves_not_known, mut largest_axes_deg) = (0, None);
         for c in file.changes.iter() {
-            (largest_mm, largest_deg) = (f64::max(largest_mm, c.mm), f64::max(largest_deg, c.deg));
+            match c.axes_deg {
+                None => {
+                    (largest_mm, largest_deg) =
+                        (f64::max(largest_mm, c.mm), f64::max(largest_deg, c.deg));
+                }
+                Some(a) => {
+                    moves_not_known += 1;
+                    largest_axes_deg = Some(largest_axes_deg.map_or(a, |m| f64::max(m, a)));
+                }
+            }
             if let Some(s) = c.skid {
                 skid_range = Some(match skid_range {
                     None => (s, s),
@@ -75,6 +90,8 @@ impl FileSummary {
             changed: file.changes.len(),
             largest_mm,
             largest_deg,
+            moves_not_known,
+            largest_axes_deg,
             skid_range,
             refused: file.refusals.len(),
             written_to: None,
@@ -129,13 +146,26 @@ impl fmt::Display for FileSummary {
             Some(u) => format!(", U (k=2) up to {} mm", mm(u)),
             None => String::new(),
         };
+        let mut sizes = Vec::new();
+        if self.changed > self.moves_not_known {
+            sizes.push(format!(
+                "{largest} {} mm / {:.4}°{uncertainty}",
+                mm(self.largest_mm),
+                self.largest_deg
+            ));
+        }
+        // Never a move of 0 mm for what is not known.
+        if let (n @ 1.., Some(a)) = (self.moves_not_known, self.largest_axes_deg) {
+            sizes.push(format!(
+                "{n} joint target(s) with axes changed by up to {a:.4}° (their move in mm is not known without the arm's kinematics)"
+            ));
+        }
         write!(
             f,
-            "{}: {} target(s) changed, {largest} {} mm / {:.4}°{uncertainty}{skid}{refused}{target}",
+            "{}: {} target(s) changed, {}{skid}{refused}{target}",
             self.path.display(),
             self.changed,
-            mm(self.largest_mm),
-            self.largest_deg,
+            sizes.join(", "),
         )?;
         if let Some(first) = self.below_uncertainty.first() {
             write!(
@@ -187,6 +217,7 @@ mod tests {
             name: None,
             line: 1,
             uncertainty_mm: None,
+            axes_deg: None,
         };
         let f = result(vec![
             c(0.25, 0.001, Some(3000.0)),
@@ -224,6 +255,35 @@ mod tests {
         );
     }
 
+    /// A joint target mirrored without the arm's kinematics has no known move: the summary
+    /// says so with its largest axis change, and leaves it out of the largest move, where it
+    /// was a move of 0 mm ("largest move 0.000 mm / 0.0000°" for joint targets alone).
+    #[test]
+    fn a_joint_target_whose_move_is_not_known_is_said_so_not_as_0_mm() {
+        let c = |mm, deg, axes_deg| TargetChange {
+            mm,
+            deg,
+            skid: None,
+            name: None,
+            line: 1,
+            uncertainty_mm: None,
+            axes_deg,
+        };
+        let joints = result(vec![c(0.0, 0.0, Some(10.0)), c(0.0, 0.0, Some(60.5))]);
+        let mut s = FileSummary::new(&joints, true);
+        s.written_to = Some(PathBuf::from("b.mod"));
+        assert_eq!(
+            s.to_string(),
+            "a.mod: 2 target(s) changed, 2 joint target(s) with axes changed by up to 60.5000° (their move in mm is not known without the arm's kinematics) → b.mod"
+        );
+        assert_eq!((s.moves_not_known, s.largest_axes_deg), (2, Some(60.5)));
+        let both = result(vec![c(0.0, 0.0, Some(10.0)), c(531.47, 104.39181, None)]);
+        assert_eq!(
+            FileSummary::new(&both, true).to_string(),
+            "a.mod: 2 target(s) changed, largest move 531.470 mm / 104.3918°, 1 joint target(s) with axes changed by up to 10.0000° (their move in mm is not known without the arm's kinematics)"
+        );
+    }
+
     /// The one reading of the records gives what the separate folds over them give: the
     /// largest change and the skid range, the largest uncertainty by `reduce`,
     /// the targets below theirs by a filter; with NaNs, negative zeros and absent parts.
@@ -239,6 +299,7 @@ mod tests {
                 name: (i % 3 == 0).then(|| format!("p{i}").into()),
                 line: i + 1,
                 uncertainty_mm: (i % 5 != 2).then(|| pick(i, 11)),
+                axes_deg: None,
             })
             .collect();
         for n in [0, 1, 2, 7, 50, 200] {
@@ -288,6 +349,7 @@ mod tests {
             name: Some(name.into()),
             line: 3,
             uncertainty_mm: Some(u),
+            axes_deg: None,
         };
         let f = result(vec![c(0.5, "p1", 0.2), c(0.1, "p2", 0.25)]);
         let s = FileSummary::new(&f, false);

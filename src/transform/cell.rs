@@ -17,6 +17,7 @@
 //! tool_flip = "y"
 //! config = "mirror"
 //! skid_map = [1.0, 0.0]
+//! skid_map_from = "r1"                    # or ["r1", "k1"]: whose skids the map takes
 //! ```
 
 use std::collections::BTreeMap;
@@ -72,7 +73,19 @@ impl CellError {
 
 /// What to do about a skid map that does not place the mirror-image robot (for a map from the
 /// cell file or from elsewhere alike).
-pub const SKID_MAP_HINT: &str = "write the map the bases give, or check both robots' base and track_axis and the mirror plane: the map is from the robot mirrored to the mirror-image robot, so mirroring the other way round needs its inverse";
+pub const SKID_MAP_HINT: &str =
+    "write the map the bases give, or check both robots' base and track_axis and the mirror plane";
+
+/// [`SKID_MAP_HINT`] for `mismatch`: with the plane in each work object, each work object's
+/// plane needs the map to fit, and the plane in world is one for all.
+pub fn skid_map_hint(mismatch: &super::mirror::SkidMapMismatch) -> String {
+    match mismatch.work_object {
+        None => SKID_MAP_HINT.to_owned(),
+        Some(_) => format!(
+            "{SKID_MAP_HINT}; or give the plane in world (frame_in = \"world\"), one plane for the targets of every work object"
+        ),
+    }
+}
 
 /// A pose written as `{ x, y, z, rx, ry, rz }` (mm, degrees, `R = Rz·Ry·Rx`).
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
@@ -232,6 +245,36 @@ struct MirrorToml {
     tool_flip: Option<Axis>,
     config: Option<ConfigRule>,
     skid_map: Option<Spanned<[f64; 2]>>,
+    skid_map_from: Option<Spanned<RobotNames>>,
+}
+
+/// A robot's name or a list of them (`"r1"`, `["r1", "k1"]`).
+struct RobotNames(Vec<String>);
+
+impl<'de> Deserialize<'de> for RobotNames {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<RobotNames, D::Error> {
+        struct Names;
+        impl<'de> serde::de::Visitor<'de> for Names {
+            type Value = RobotNames;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a robot's name or a list of them, e.g. \"r1\" or [\"r1\", \"k1\"]")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<RobotNames, E> {
+                Ok(RobotNames(vec![v.to_owned()]))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<RobotNames, A::Error> {
+                let mut names = Vec::new();
+                while let Some(n) = seq.next_element::<String>()? {
+                    names.push(n);
+                }
+                Ok(RobotNames(names))
+            }
+        }
+        d.deserialize_any(Names)
+    }
 }
 
 /// One robot of the cell, validated.
@@ -273,10 +316,35 @@ pub struct MirrorTable {
     pub tool_flip: Option<Axis>,
     /// `config`: what happens to the robot configuration.
     pub config: Option<ConfigRule>,
-    /// `skid_map = [scale, offset]`: the mirrored skid `s' = scale·s + offset`.
+    /// `skid_map = [scale, offset]`: the mirrored skid `s' = scale·s + offset` (`scale` finite
+    /// and not 0, so the map has an inverse).
     pub skid_map: Option<(f64, f64)>,
     /// Where the cell file writes `skid_map`, for an error about it.
     pub skid_map_span: Option<Span>,
+    /// `skid_map_from`: the robots whose skids `skid_map` takes (its `s`), robots of the cell;
+    /// a mirror from another robot to one of them takes its inverse. Empty when not given:
+    /// the map is then taken as written whichever way a mirror goes.
+    pub skid_map_from: Vec<String>,
+    /// Where the cell file writes `skid_map_from`.
+    pub skid_map_from_span: Option<Span>,
+}
+
+/// Which way a mirror takes the `[mirror]` table's skid map.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SkidMapWay {
+    /// As written: the mirror is from a robot `skid_map_from` names, or the table does not say.
+    AsWritten,
+    /// Its inverse, `s = (s' − offset)/scale`: the mirror is to a robot `skid_map_from` names.
+    Inverse,
+}
+
+/// The `[mirror]` table's skid map as one mirror takes it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectedSkidMap {
+    /// `(scale, offset)`, `s' = scale·s + offset` from the mirrored robot's skid.
+    pub map: (f64, f64),
+    /// Whether that is the table's map or its inverse.
+    pub way: SkidMapWay,
 }
 
 /// A validated cell file.
@@ -372,9 +440,96 @@ fn inline_pose(p: &Pose) -> String {
     )
 }
 
+/// The `[mirror]` table, its skid map checked: a scale that is a number and not 0 (a map with an
+/// inverse), and `skid_map_from` naming robots of the cell, beside a `skid_map`, and not all of
+/// them (the map takes the skids of one side of the mirror).
+fn mirror_table(
+    m: MirrorToml,
+    robots: &BTreeMap<String, Robot>,
+    located: &dyn Fn(Span, String, &str) -> CellError,
+) -> Result<MirrorTable, CellError> {
+    let skid_map = match &m.skid_map {
+        None => None,
+        Some(map) => {
+            let [scale, offset] = *map.get_ref();
+            let span = map.span().into();
+            if !scale.is_finite() || !offset.is_finite() {
+                return Err(located(
+                    span,
+                    format!("skid_map [{scale}, {offset}] is not two numbers"),
+                    "write [scale, offset] for s' = scale·s + offset, e.g. [1.0, 0.0]",
+                ));
+            }
+            if scale == 0.0 {
+                return Err(located(
+                    span,
+                    format!(
+                        "skid_map [0, {offset}] stands the mirror-image robot at skid {offset} whatever the skid, and has no inverse"
+                    ),
+                    "write the mirror-image robot's mm of skid per mm of the other's as the scale: 1 for tracks that run the same way, -1 for tracks that run opposite ways",
+                ));
+            }
+            Some((scale, offset))
+        }
+    };
+    let mut skid_map_from = Vec::new();
+    if let Some(from) = &m.skid_map_from {
+        let span = from.span().into();
+        let names = &from.get_ref().0;
+        let known = || robots.keys().cloned().collect::<Vec<_>>().join(", ");
+        let hint = "name the robots whose skids the map takes, its s in s' = scale·s + offset (those on one side of the mirror), e.g. skid_map_from = \"r1\"";
+        if skid_map.is_none() {
+            return Err(located(
+                span,
+                "skid_map_from without a skid_map: it says whose skids the map takes".to_owned(),
+                "write the skid_map it is about beside it, or leave skid_map_from out",
+            ));
+        }
+        if names.is_empty() {
+            return Err(located(
+                span,
+                "skid_map_from names no robot".to_owned(),
+                hint,
+            ));
+        }
+        if let Some(unknown) = names.iter().find(|n| !robots.contains_key(n.as_str())) {
+            return Err(located(
+                span,
+                format!(
+                    "skid_map_from: no robot `{unknown}` in the cell file (robots: {})",
+                    known()
+                ),
+                hint,
+            ));
+        }
+        if robots.keys().all(|r| names.contains(r)) {
+            return Err(located(
+                span,
+                format!(
+                    "skid_map_from names every robot of the cell ({}): the map takes the skids of one side of the mirror, and a mirror the other way its inverse",
+                    known()
+                ),
+                hint,
+            ));
+        }
+        skid_map_from = names.clone();
+    }
+    Ok(MirrorTable {
+        plane: m.plane,
+        frame: m.frame.map(|f| f.pose()),
+        frame_in: m.frame_in.unwrap_or_default(),
+        tool_flip: m.tool_flip,
+        config: m.config,
+        skid_map,
+        skid_map_span: m.skid_map.as_ref().map(|m| m.span().into()),
+        skid_map_from,
+        skid_map_from_span: m.skid_map_from.as_ref().map(|m| m.span().into()),
+    })
+}
+
 /// `v` to `decimals` decimals with trailing zeros left off, as a cell file is written by hand
 /// (`1.000000` → `1`, `-0.0001` to 3 → `0`).
-pub(crate) fn short_number(v: f64, decimals: usize) -> String {
+pub fn short_number(v: f64, decimals: usize) -> String {
     let t = format!("{v:.decimals$}");
     let t = match t.contains('.') {
         true => t.trim_end_matches('0').trim_end_matches('.'),
@@ -512,21 +667,10 @@ impl Cell {
                 },
             );
         }
-        let mirror = raw
-            .mirror
-            .map(|m| MirrorTable {
-                plane: m.plane,
-                frame: m.frame.map(|f| f.pose()),
-                frame_in: m.frame_in.unwrap_or_default(),
-                tool_flip: m.tool_flip,
-                config: m.config,
-                skid_map: m.skid_map.as_ref().map(|m| {
-                    let [scale, offset] = *m.get_ref();
-                    (scale, offset)
-                }),
-                skid_map_span: m.skid_map.as_ref().map(|m| m.span().into()),
-            })
-            .unwrap_or_default();
+        let mirror = match raw.mirror {
+            Some(m) => mirror_table(m, &robots, &located)?,
+            None => MirrorTable::default(),
+        };
         Ok(Cell {
             path: path.to_owned(),
             robots,
@@ -552,17 +696,103 @@ impl Cell {
         )
     }
 
-    /// The error that the `[mirror]` table's `skid_map` does not put robot `to` where the
-    /// mirror image of robot `from` stands, at the entry; `None` when the table has no
-    /// `skid_map` (the map checked came from elsewhere).
-    pub fn skid_map_error(&self, mismatch: &super::mirror::SkidMapMismatch) -> Option<CellError> {
-        let span = self.mirror.skid_map_span?;
-        Some(CellError::invalid(
+    /// The `[mirror]` table's skid map for a mirror of robot `from`'s program for robot `to`
+    /// (`None`: the run does not say), and which way it is taken: as written from a robot
+    /// `skid_map_from` names, its inverse to one; as written when the table does not say.
+    /// `None` without a `skid_map`. A map that is its own inverse (`[1, 0]`, `[-1, L]`) goes
+    /// either way. Otherwise an error at `skid_map_from` where it does not tell the way: it
+    /// names both robots or neither, or the run names only one it does not name (whose image
+    /// could be for a robot on either side).
+    pub fn skid_map_for(
+        &self,
+        from: Option<&str>,
+        to: Option<&str>,
+    ) -> Result<Option<DirectedSkidMap>, CellError> {
+        let Some(map) = self.mirror.skid_map else {
+            return Ok(None);
+        };
+        let directed = |map, way| Ok(Some(DirectedSkidMap { map, way }));
+        let names = &self.mirror.skid_map_from;
+        let inverse = super::mirror::inverse_skid_map(map);
+        let own_inverse = (inverse.0 - map.0).abs() <= 1e-12 && (inverse.1 - map.1).abs() <= 1e-9;
+        let Some(span) = self.mirror.skid_map_from_span.filter(|_| !own_inverse) else {
+            return directed(map, SkidMapWay::AsWritten);
+        };
+        let named = |r: Option<&str>| r.map(|r| names.iter().any(|n| n == r));
+        let message = match (named(from), named(to)) {
+            (Some(true), Some(false) | None) => return directed(map, SkidMapWay::AsWritten),
+            (Some(false) | None, Some(true)) => return directed(inverse, SkidMapWay::Inverse),
+            (Some(true), Some(true)) => format!(
+                "skid_map_from names both robot `{}` and robot `{}`, which this mirror is between: which way the skid map goes between them is not known",
+                from.unwrap_or_default(),
+                to.unwrap_or_default()
+            ),
+            (Some(false), Some(false)) => format!(
+                "skid_map_from names neither robot `{}` nor robot `{}`, which this mirror is between: which way the skid map goes between them is not known",
+                from.unwrap_or_default(),
+                to.unwrap_or_default()
+            ),
+            (Some(false), None) => format!(
+                "this mirror is of robot `{}`'s program, which skid_map_from does not name, for a robot not said: which way the skid map goes is not known",
+                from.unwrap_or_default()
+            ),
+            (None, Some(false)) => format!(
+                "this mirror is for robot `{}`, which skid_map_from does not name, of a robot's program not said: which way the skid map goes is not known",
+                to.unwrap_or_default()
+            ),
+            (None, None) => "this mirror names neither the robot whose program it is nor the robot the image is for: which way the skid map goes is not known".to_owned(),
+        };
+        Err(CellError::invalid(
             &self.path,
             &self.text,
             span,
-            mismatch.to_string(),
-            SKID_MAP_HINT,
+            message,
+            "name the robots the mirror is between, one of them in skid_map_from (the map takes its skids; the way back its inverse)",
+        ))
+    }
+
+    /// The error that the `[mirror]` table's `skid_map`, taken the `way` a run took it, does
+    /// not put robot `to` where the mirror image of robot `from` stands: at `skid_map`, or at
+    /// `skid_map_from` when the map fits the other way round (so it names the wrong side);
+    /// where it fits the other way and the table does not say whose skids the map takes, the
+    /// hint gives the key to add. `None` when the table has no `skid_map` (the map checked came
+    /// from elsewhere).
+    pub fn skid_map_error(
+        &self,
+        mismatch: &super::mirror::SkidMapMismatch,
+        way: SkidMapWay,
+    ) -> Option<CellError> {
+        let map_span = self.mirror.skid_map_span?;
+        let (from, to) = (&mismatch.from, &mismatch.to);
+        let mut message = mismatch.to_string();
+        if way == SkidMapWay::Inverse {
+            message = format!(
+                "skid_map_from names robot `{to}`, so this mirror takes the skid map the other way round, as its inverse: {message}"
+            );
+        }
+        let (span, hint) = match (mismatch.inverse_fits, self.mirror.skid_map_from_span) {
+            (false, _) => (map_span, skid_map_hint(mismatch)),
+            (true, None) => (
+                map_span,
+                format!(
+                    "the map takes robot `{to}`'s skids: say so with skid_map_from = \"{to}\" in the [mirror] table, and a mirror from robot `{from}` then takes its inverse"
+                ),
+            ),
+            (true, Some(from_span)) => {
+                let (named, other) = match way {
+                    SkidMapWay::AsWritten => (from, to),
+                    SkidMapWay::Inverse => (to, from),
+                };
+                (
+                    from_span,
+                    format!(
+                        "skid_map_from names the wrong side of the mirror: name robot `{other}` in it, not `{named}`"
+                    ),
+                )
+            }
+        };
+        Some(CellError::invalid(
+            &self.path, &self.text, span, message, &hint,
         ))
     }
 
@@ -697,6 +927,160 @@ skid_map = [1.0, 5.0]
             );
             assert!(e.contains("not a plausible value"), "{bad}: {e}");
         }
+    }
+
+    /// Two robots and a map that is not its own inverse, with `skid_map_from` = `from`.
+    fn two_robots(from: &str) -> String {
+        let robot = |name: &str| {
+            format!(
+                "[robot.{name}]\nprofile = \"p.toml\"\nbase = {{ x = 0, y = 0, z = 0, rx = 0, ry = 0, rz = 0 }}\ntrack_axis = [1, 0, 0]\n"
+            )
+        };
+        format!(
+            "{}{}{}[mirror]\nplane = \"xz\"\nskid_map = [2.0, 20.0]\nskid_map_from = {from}\n",
+            robot("r1"),
+            robot("k1"),
+            robot("r2")
+        )
+    }
+
+    /// The error's first line and its help line.
+    fn said(e: &str) -> (String, String) {
+        let first = e.lines().next().unwrap_or_default().to_owned();
+        let help = e
+            .lines()
+            .find(|l| l.contains("= help:"))
+            .unwrap_or_default();
+        (first, help.trim().to_owned())
+    }
+
+    /// `skid_map_from` names the robots whose skids the map takes: a mirror from one of them
+    /// takes the map as written, to one of them its inverse `s = (s' − offset)/scale`; where
+    /// the run does not tell the way, an error at the entry. A map that is its own inverse goes
+    /// either way, and without the key the map is taken as written (as before).
+    #[test]
+    fn skid_map_from_gives_the_way_a_mirror_takes_the_map() {
+        let cell = Cell::parse(Path::new("cell.toml"), &two_robots("[\"r1\", \"k1\"]")).unwrap();
+        assert_eq!(cell.mirror.skid_map_from, ["r1", "k1"]);
+        let way = |from: Option<&str>, to: Option<&str>| {
+            cell.skid_map_for(from, to).map_err(|e| e.to_string())
+        };
+        // s' = 2·s + 20, so s = (s' − 20)/2 = 0.5·s' − 10.
+        let directed = |map, way| Ok(Some(DirectedSkidMap { map, way }));
+        let written = directed((2.0, 20.0), SkidMapWay::AsWritten);
+        let inverse = directed((0.5, -10.0), SkidMapWay::Inverse);
+        assert_eq!(way(Some("r1"), Some("r2")), written);
+        assert_eq!(way(Some("k1"), None), written);
+        assert_eq!(way(Some("r2"), Some("r1")), inverse);
+        assert_eq!(way(None, Some("k1")), inverse);
+        for (from, to, message) in [
+            (
+                Some("r1"),
+                Some("k1"),
+                "skid_map_from names both robot `r1` and robot `k1`, which this mirror is between: which way the skid map goes between them is not known",
+            ),
+            (
+                Some("r2"),
+                None,
+                "this mirror is of robot `r2`'s program, which skid_map_from does not name, for a robot not said: which way the skid map goes is not known",
+            ),
+            (
+                None,
+                None,
+                "this mirror names neither the robot whose program it is nor the robot the image is for: which way the skid map goes is not known",
+            ),
+        ] {
+            let e = way(from, to).unwrap_err();
+            assert_eq!(
+                said(&e),
+                (
+                    format!("cell.toml:16:17: error: {message}"),
+                    "= help: name the robots the mirror is between, one of them in skid_map_from (the map takes its skids; the way back its inverse)".to_owned()
+                ),
+                "{e}"
+            );
+        }
+        // Its own inverse: either way, whoever the robots are.
+        for map in ["[1.0, 0.0]", "[-1.0, 8000.0]"] {
+            let text = two_robots("\"r1\"").replace("[2.0, 20.0]", map);
+            let own = Cell::parse(Path::new("cell.toml"), &text).unwrap();
+            let written = own.mirror.skid_map.map(|map| DirectedSkidMap {
+                map,
+                way: SkidMapWay::AsWritten,
+            });
+            assert_eq!(own.skid_map_for(Some("r2"), Some("r1")).ok(), Some(written));
+            assert_eq!(own.skid_map_for(None, None).ok(), Some(written));
+        }
+        // Without the key: as written, whichever way.
+        let text = two_robots("\"r1\"").replace("skid_map_from = \"r1\"\n", "");
+        let plain = Cell::parse(Path::new("cell.toml"), &text).unwrap();
+        assert_eq!(
+            plain.skid_map_for(Some("r2"), Some("r1")).ok(),
+            Some(Some(DirectedSkidMap {
+                map: (2.0, 20.0),
+                way: SkidMapWay::AsWritten
+            }))
+        );
+    }
+
+    /// A `skid_map_from` that names no robot of the cell, every robot, or is beside no map, and
+    /// a map with no inverse, are errors at the entry, saying what to write.
+    #[test]
+    fn skid_map_and_skid_map_from_are_checked_at_load() {
+        let hint = "= help: name the robots whose skids the map takes, its s in s' = scale·s + offset (those on one side of the mirror), e.g. skid_map_from = \"r1\"";
+        for (from, first, help) in [
+            (
+                "\"r3\"",
+                "cell.toml:16:17: error: skid_map_from: no robot `r3` in the cell file (robots: k1, r1, r2)",
+                hint,
+            ),
+            (
+                "[\"r1\", \"r3\"]",
+                "cell.toml:16:17: error: skid_map_from: no robot `r3` in the cell file (robots: k1, r1, r2)",
+                hint,
+            ),
+            (
+                "[]",
+                "cell.toml:16:17: error: skid_map_from names no robot",
+                hint,
+            ),
+            (
+                "[\"r1\", \"k1\", \"r2\"]",
+                "cell.toml:16:17: error: skid_map_from names every robot of the cell (k1, r1, r2): the map takes the skids of one side of the mirror, and a mirror the other way its inverse",
+                hint,
+            ),
+            (
+                "1",
+                "cell.toml:16:17: error: invalid type: integer `1`, expected a robot's name or a list of them, e.g. \"r1\" or [\"r1\", \"k1\"]",
+                "= help: see docs/design.md §6 or samples/cell.toml for the keys a cell file takes",
+            ),
+        ] {
+            let e = err(&two_robots(from));
+            assert_eq!(said(&e), (first.to_owned(), help.to_owned()), "{e}");
+        }
+        let e = err(&two_robots("\"r1\"").replace("skid_map = [2.0, 20.0]\n", ""));
+        assert_eq!(
+            said(&e),
+            (
+                "cell.toml:15:17: error: skid_map_from without a skid_map: it says whose skids the map takes".to_owned(),
+                "= help: write the skid_map it is about beside it, or leave skid_map_from out".to_owned()
+            ),
+            "{e}"
+        );
+        let e = err(&two_robots("\"r1\"").replace("[2.0, 20.0]", "[0.0, 20.0]"));
+        assert_eq!(
+            said(&e),
+            (
+                "cell.toml:15:12: error: skid_map [0, 20] stands the mirror-image robot at skid 20 whatever the skid, and has no inverse".to_owned(),
+                "= help: write the mirror-image robot's mm of skid per mm of the other's as the scale: 1 for tracks that run the same way, -1 for tracks that run opposite ways".to_owned()
+            ),
+            "{e}"
+        );
+        let e = err(&two_robots("\"r1\"").replace("[2.0, 20.0]", "[1.0, nan]"));
+        assert!(
+            e.starts_with("cell.toml:15:12: error: skid_map [1, NaN] is not two numbers"),
+            "{e}"
+        );
     }
 
     #[test]

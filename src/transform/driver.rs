@@ -298,6 +298,7 @@ fn cartesian<R: TargetRule>(
         skid,
         name: p.name.clone(),
         line: p.line,
+        axes_deg: None,
         uncertainty_mm,
     }))
 }

@@ -26,6 +26,10 @@ pub struct TargetChange {
     /// uncertainties (docs/design.md §14): a correction smaller than this is within the
     /// measurement's own doubt.
     pub uncertainty_mm: Option<f64>,
+    /// A joint target changed without the arm's kinematics (`mirror` negating axes 1, 4 and 6):
+    /// the largest change of one of its axes, degrees. Its flange, and so its move, is not
+    /// known: `mm` and `deg` are then 0 and no move.
+    pub axes_deg: Option<f64>,
 }
 
 /// The change records of one file, packed: what a transform keeps of each changed target for
@@ -51,6 +55,7 @@ pub struct Changes {
 const HAS_SKID: u8 = 1;
 const HAS_UNCERTAINTY: u8 = 2;
 const HAS_NAME: u8 = 4;
+const HAS_AXES: u8 = 8;
 
 impl Changes {
     /// No changes.
@@ -65,16 +70,23 @@ impl Changes {
             (c.skid.is_some(), HAS_SKID),
             (c.uncertainty_mm.is_some(), HAS_UNCERTAINTY),
             (name.is_some(), HAS_NAME),
+            (c.axes_deg.is_some(), HAS_AXES),
         ]
         .into_iter()
         .filter(|&(present, _)| present)
         .fold(0, |flags, (_, bit)| flags | bit);
-        let mut head = [0; 1 + 4 * 8 + 2 * VARINT_MAX];
+        let mut head = [0; 1 + 5 * 8 + 2 * VARINT_MAX];
         head[0] = flags;
         let mut n = 1;
-        for v in [Some(c.mm), Some(c.deg), c.skid, c.uncertainty_mm]
-            .into_iter()
-            .flatten()
+        for v in [
+            Some(c.mm),
+            Some(c.deg),
+            c.skid,
+            c.uncertainty_mm,
+            c.axes_deg,
+        ]
+        .into_iter()
+        .flatten()
         {
             head[n..n + 8].copy_from_slice(&v.to_le_bytes());
             n += 8;
@@ -144,6 +156,8 @@ pub struct ChangeRef<'a> {
     pub line: usize,
     /// Expanded uncertainty (k = 2, mm) of the corrected TCP, when known.
     pub uncertainty_mm: Option<f64>,
+    /// A joint target's largest change of one axis (°), where its move is not known.
+    pub axes_deg: Option<f64>,
 }
 
 impl ChangeRef<'_> {
@@ -156,6 +170,7 @@ impl ChangeRef<'_> {
             name: self.name.map(Name::from),
             line: self.line,
             uncertainty_mm: self.uncertainty_mm,
+            axes_deg: self.axes_deg,
         }
     }
 }
@@ -181,6 +196,10 @@ fn read_change<'a>(
         0 => None,
         _ => Some(f64_at(bytes, at)?),
     };
+    let axes_deg = match flags & HAS_AXES {
+        0 => None,
+        _ => Some(f64_at(bytes, at)?),
+    };
     let line = usize::try_from(read_varint(bytes, at)?).ok()?;
     let name = if flags & HAS_NAME != 0 {
         let n = usize::try_from(read_varint(bytes, at)?).ok()?;
@@ -197,6 +216,7 @@ fn read_change<'a>(
         name,
         line,
         uncertainty_mm,
+        axes_deg,
     })
 }
 
@@ -398,6 +418,7 @@ mod tests {
                 },
                 line: if i == 7 { usize::MAX } else { i * 3 + 1 },
                 uncertainty_mm: (i % 5 == 0).then_some(f64::NAN),
+                axes_deg: (i % 7 == 0).then_some(i as f64 * 0.5),
             })
             .collect();
         let packed: Changes = all.iter().cloned().collect();
@@ -412,6 +433,7 @@ mod tests {
                     c.deg.to_bits(),
                     c.skid.map(f64::to_bits),
                     c.uncertainty_mm.map(f64::to_bits),
+                    c.axes_deg.map(f64::to_bits),
                 )
             };
             assert_eq!(bits(a), bits(b));
@@ -423,7 +445,9 @@ mod tests {
         let want: usize = all
             .iter()
             .map(|c| {
-                let optional = c.skid.is_some() as usize + c.uncertainty_mm.is_some() as usize;
+                let optional = c.skid.is_some() as usize
+                    + c.uncertainty_mm.is_some() as usize
+                    + c.axes_deg.is_some() as usize;
                 let name = c.name.as_deref().map_or(0, |n| varint(n.len()) + n.len());
                 1 + 16 + 8 * optional + varint(c.line) + name
             })

@@ -174,6 +174,12 @@ pub fn mirrored_flange(f: &Pose) -> Pose {
 /// arm (≈ 0.04° per mm on the bundled arms) to reach the image: not the mirror image.
 pub const SKID_MAP_TOLERANCE_MM: f64 = 1.0;
 
+/// The inverse of skid map `(scale, offset)`: `s = (s' − offset)/scale`, the map of a mirror the
+/// other way round (`scale` not 0).
+pub fn inverse_skid_map((scale, offset): (f64, f64)) -> (f64, f64) {
+    (1.0 / scale, -offset / scale)
+}
+
 /// A skid map that does not put the mirror-image robot's base where the mirror image of the
 /// mirrored robot's stands ([`check_skid_map`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -191,6 +197,12 @@ pub struct SkidMapMismatch {
     /// along its track (mm, in the direction of its `track_axis`) the image robot's base
     /// stands there from the mirror image of the other's.
     pub ends: [(f64, f64, f64); 2],
+    /// The map's inverse fits where the map does not: it takes the image robot's skids to the
+    /// mirrored robot's (it is written for a mirror the other way round).
+    pub inverse_fits: bool,
+    /// With the plane in each target's work object (`frame_in = "wobj"`), the work object whose
+    /// plane the map was checked in.
+    pub work_object: Option<String>,
 }
 
 impl std::fmt::Display for SkidMapMismatch {
@@ -200,12 +212,25 @@ impl std::fmt::Display for SkidMapMismatch {
             |(scale, offset): (f64, f64)| format!("[{}, {}]", number(scale, 6), number(offset, 3));
         let (to, from) = (&self.to, &self.from);
         let [(s0, t0, e0), (s1, t1, e1)] = self.ends;
+        let plane = match &self.work_object {
+            Some(w) => format!(" in the plane of work object `{w}`"),
+            None => String::new(),
+        };
         write!(
             f,
-            "skid map {} puts robot `{to}`'s base {e0:.3} mm along its track from the mirror image of robot `{from}`'s at `{from}`'s skid {s0:.1} (`{to}` at {t0:.1}), and {e1:.3} mm at {s1:.1} (at {t1:.1}): more than {SKID_MAP_TOLERANCE_MM} mm; the bases give {}",
+            "skid map {} puts robot `{to}`'s base {e0:.3} mm along its track from the mirror image of robot `{from}`'s{plane} at `{from}`'s skid {s0:.1} (`{to}` at {t0:.1}), and {e1:.3} mm at {s1:.1} (at {t1:.1}): more than {SKID_MAP_TOLERANCE_MM} mm; the bases give {}",
             map(self.map),
             map(self.implied)
-        )
+        )?;
+        if self.inverse_fits {
+            write!(
+                f,
+                "; its inverse {} fits, so {} is a map from robot `{to}`'s skids to robot `{from}`'s",
+                map(inverse_skid_map(self.map)),
+                map(self.map)
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -213,37 +238,55 @@ impl std::error::Error for SkidMapMismatch {}
 
 /// Whether the skid map of `settings` puts robot `to` at the mirror image of robot `from` along
 /// its track, over `from`'s skid range `range` (its track's measured range), within
-/// [`SKID_MAP_TOLERANCE_MM`].
-///
-/// The map means: at skid `s` of `from`, `to` stands at `s' = scale·s + offset` as its mirror
-/// image (docs/design.md §6, §10). With bases `B(s) = Trans(s·a)·B_0` and the plane's
-/// reflection `A`, the image robot's base is level with `A·B_from(s)` at
-/// `s'* = a_to·(A·p_from0 − p_to0) + s·(a_to·A·a_from)` (`A` acting on the vector `a_from` as a
-/// reflection of directions): a line in `s`, so the map's miss is the largest at the range's
-/// ends. Only a plane in world has a place in the cell to check the bases against; with the
-/// plane in each target's work object (no `world`) there is nothing to check and this is `Ok`.
+/// [`SKID_MAP_TOLERANCE_MM`], where the mirror plane has a place in the cell: given in world.
+/// With the plane in each target's work object (no `world`) each work object places it
+/// ([`work_object_planes`], [`check_skid_map_in`]) and this is `Ok`.
 pub fn check_skid_map(
     settings: &MirrorSettings,
     from: &super::cell::Robot,
     to: &super::cell::Robot,
     range: (f64, f64),
 ) -> Result<(), Box<SkidMapMismatch>> {
-    let Some(world) = &settings.world else {
-        return Ok(());
-    };
-    let reflection = Reflection::about(&world.frame, settings);
+    match &settings.world {
+        Some(world) => check_skid_map_in(&world.frame, None, settings, from, to, range),
+        None => Ok(()),
+    }
+}
+
+/// [`check_skid_map`] about the mirror plane of `settings` in frame `plane` in world (the
+/// plane's own in world, or a work object's `W·M`, named `work_object`).
+///
+/// The map means: at skid `s` of `from`, `to` stands at `s' = scale·s + offset` as its mirror
+/// image (docs/design.md §6, §10). With bases `B(s) = Trans(s·a)·B_0` and the plane's
+/// reflection `A`, the image robot's base is level with `A·B_from(s)` at
+/// `s'* = a_to·(A·p_from0 − p_to0) + s·(a_to·A·a_from)` (`A` acting on the vector `a_from` as a
+/// reflection of directions): a line in `s`, so the map's miss is the largest at the range's
+/// ends. Where the map misses and its inverse would not, the mismatch says so.
+pub fn check_skid_map_in(
+    plane: &Pose,
+    work_object: Option<&str>,
+    settings: &MirrorSettings,
+    from: &super::cell::Robot,
+    to: &super::cell::Robot,
+    range: (f64, f64),
+) -> Result<(), Box<SkidMapMismatch>> {
+    let reflection = Reflection::about(plane, settings);
     let axis = to.track_axis;
     let implied = (
         axis.dot(&reflection.vector(&from.track_axis)),
         axis.dot(&(reflection.point(&from.base0.translation.vector) - to.base0.translation.vector)),
     );
-    let (scale, offset) = settings.skid_map;
-    let end = |s: f64| {
-        let mapped = scale * s + offset;
-        (s, mapped, mapped - (implied.0 * s + implied.1))
+    let ends_of = |(scale, offset): (f64, f64)| {
+        let end = |s: f64| {
+            let mapped = scale * s + offset;
+            (s, mapped, mapped - (implied.0 * s + implied.1))
+        };
+        [end(range.0), end(range.1)]
     };
-    let ends = [end(range.0), end(range.1)];
-    if ends.iter().all(|e| e.2.abs() <= SKID_MAP_TOLERANCE_MM) {
+    let fits =
+        |ends: &[(f64, f64, f64); 2]| ends.iter().all(|e| e.2.abs() <= SKID_MAP_TOLERANCE_MM);
+    let ends = ends_of(settings.skid_map);
+    if fits(&ends) {
         return Ok(());
     }
     Err(Box::new(SkidMapMismatch {
@@ -252,7 +295,63 @@ pub fn check_skid_map(
         map: settings.skid_map,
         implied,
         ends,
+        inverse_fits: settings.skid_map.0 != 0.0
+            && fits(&ends_of(inverse_skid_map(settings.skid_map))),
+        work_object: work_object.map(str::to_owned),
     }))
+}
+
+/// With the mirror plane in each target's work object (`frame_in = "wobj"`): where the work
+/// objects of a program's Cartesian targets place it in the cell ([`work_object_planes`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WorkObjectPlanes {
+    /// Each work object that places it, once, and the plane's frame in world, `W·M`.
+    pub placed: Vec<(String, Pose)>,
+    /// Why the others place it nowhere (the program gives the work object at run time, a unit
+    /// moves it…), one message per work object (per target where it has none).
+    pub unplaced: Vec<String>,
+}
+
+/// [`WorkObjectPlanes`] of `program`, its work objects `W` as `frames` (the mirrored robot's
+/// cell entries) override the program's declarations, for [`check_skid_map_in`]. Joint targets
+/// have no work object. The plane of the targets in one work object is one plane in the cell,
+/// but two work objects (the sample's `wobj_car` is turned by 1°, `wobj0` is world) place it
+/// apart: one map need not fit them all.
+pub fn work_object_planes(
+    program: &Program,
+    settings: &MirrorSettings,
+    frames: &BTreeMap<String, Pose>,
+    default_wobj: Option<&str>,
+) -> WorkObjectPlanes {
+    let mut out = WorkObjectPlanes::default();
+    let mut seen: Vec<String> = Vec::new();
+    for file in &program.files {
+        for p in file.positions().filter(|p| p.cartesian.is_some()) {
+            let name = match wobj_of(&p, default_wobj, words_of(program)) {
+                Ok(name) => name,
+                Err(why) => {
+                    out.unplaced.push(why.message);
+                    continue;
+                }
+            };
+            let key = super::cell::frame_key(&name);
+            if seen.contains(&key) {
+                continue;
+            }
+            seen.push(key);
+            // With the frames mirrored, a declared work object mirrors in world with its
+            // targets, about `M` read in world (`mirror_frame`, `reflection_for`).
+            if settings.mirror_frames && declares_work_object_of(program, &p, default_wobj) {
+                out.placed.push((name, settings.frame));
+                continue;
+            }
+            match work_object_of(program, Some(file), &p, frames, default_wobj) {
+                Ok(w) => out.placed.push((name, w * settings.frame)),
+                Err(why) => out.unplaced.push(why.message),
+            }
+        }
+    }
+    out
 }
 
 /// A mirror plane given in world, and what resolves each target's work object.
@@ -529,19 +628,31 @@ impl TargetRule for MirrorRule<'_> {
             .at(scope.file, p));
         }
         // The flange's move is the size of the change; without the arm's kinematics it is
-        // not known, and the axes are only negated.
-        let (mut edits, (mm, deg)): (Vec<Edit>, _) = match &self.settings.arm {
-            None => (
-                [0, 3, 5]
-                    .iter()
-                    .filter_map(|&i| {
-                        let f = p.joints.get(i)?;
-                        flip_or_value_edit(f, -f.as_ref()?.value(), 0)
-                    })
-                    .collect(),
-                (0.0, 0.0),
-            ),
-            Some(m) => mirror_joints(self.settings, m, p).map_err(|why| why.at(scope.file, p))?,
+        // not known, and the axes are only negated: the largest axis change (2·|θ|) stands
+        // for it, said as such, never as a move of 0 mm.
+        let (mut edits, (mm, deg), axes_deg): (Vec<Edit>, _, _) = match &self.settings.arm {
+            None => {
+                let flipped = [0, 3, 5].iter().filter_map(|&i| {
+                    let f = p.joints.get(i)?;
+                    Some((f, f.as_ref()?.value()))
+                });
+                let largest = flipped
+                    .clone()
+                    .map(|(_, v)| 2.0 * v.abs())
+                    .fold(0.0, f64::max);
+                (
+                    flipped
+                        .filter_map(|(f, v)| flip_or_value_edit(f, -v, 0))
+                        .collect(),
+                    (0.0, 0.0),
+                    Some(largest),
+                )
+            }
+            Some(m) => {
+                let (edits, size) =
+                    mirror_joints(self.settings, m, p).map_err(|why| why.at(scope.file, p))?;
+                (edits, size, None)
+            }
         };
         if let Some(why) = skid_refusal(p, self.settings) {
             return Err(why.at(scope.file, p));
@@ -554,6 +665,7 @@ impl TargetRule for MirrorRule<'_> {
             name: p.name.clone(),
             line: p.line,
             uncertainty_mm: None,
+            axes_deg,
         };
         Ok(Some((edits, change)))
     }
@@ -1436,12 +1548,64 @@ mod tests {
             wrong.to_string(),
             "skid map [1, 0] puts robot `b`'s base -8200.000 mm along its track from the mirror image of robot `a`'s at `a`'s skid 0.0 (`b` at 0.0), and 3800.000 mm at 6000.0 (at 6000.0): more than 1 mm; the bases give [-1, 8200]"
         );
-        // A plane in each target's work object has no place in the cell to check against.
+        // A plane in each target's work object is placed by each work object, and checked in
+        // those (`check_skid_map_in`), not here.
         let per_wobj = MirrorSettings {
             world: None,
             ..settings((1.0, 0.0))
         };
         assert_eq!(check_skid_map(&per_wobj, &a, &b, range), Ok(()));
+    }
+
+    /// b stands at x = 80 + s' beside a at x = 100 + s (tracks running the same way, either side
+    /// of y = 500): b is a's mirror image at s' = s + 20. The map written for the way back,
+    /// [1, -20], misses by 40 mm, and its inverse fits: the mismatch says so. In the plane of a
+    /// work object turned by 5° about z through (0, 500), a's track mirrors to a direction 10°
+    /// off b's: the bases give the scale cos 10°, and the plane is named.
+    #[test]
+    fn a_skid_map_written_the_other_way_round_is_said_to_fit_inverted() {
+        let a = robot_on_track(
+            "a",
+            pose_xyz_deg(100.0, 0.0, 0.0, 0.0, 0.0, 90.0),
+            Vector3::x(),
+        );
+        let b = robot_on_track(
+            "b",
+            pose_xyz_deg(80.0, 1000.0, 0.0, 0.0, 0.0, -90.0),
+            Vector3::x(),
+        );
+        let plane = pose_xyz_deg(0.0, 500.0, 0.0, 0.0, 0.0, 0.0);
+        let settings = |map| MirrorSettings {
+            skid_map: map,
+            ..MirrorSettings::default()
+        };
+        let range = (0.0, 6000.0);
+        let check =
+            |map, plane: &Pose, wobj| check_skid_map_in(plane, wobj, &settings(map), &a, &b, range);
+        assert_eq!(check((1.0, 20.0), &plane, None), Ok(()));
+        let back = check((1.0, -20.0), &plane, None).unwrap_err();
+        assert!(back.inverse_fits);
+        assert_eq!(inverse_skid_map((1.0, -20.0)), (1.0, 20.0));
+        assert_eq!(
+            back.to_string(),
+            "skid map [1, -20] puts robot `b`'s base -40.000 mm along its track from the mirror image of robot `a`'s at `a`'s skid 0.0 (`b` at -20.0), and -40.000 mm at 6000.0 (at 5980.0): more than 1 mm; the bases give [1, 20]; its inverse [1, 20] fits, so [1, -20] is a map from robot `b`'s skids to robot `a`'s"
+        );
+        // Off both ways: no inverse is offered.
+        assert!(!check((1.0, 60.0), &plane, None).unwrap_err().inverse_fits);
+        let turned = pose_xyz_deg(0.0, 500.0, 0.0, 0.0, 0.0, 5.0);
+        let off = check((1.0, 20.0), &turned, Some("wTurned")).unwrap_err();
+        assert!(
+            (off.implied.0 - 10f64.to_radians().cos()).abs() < 1e-12,
+            "{:?}",
+            off.implied
+        );
+        let text = off.to_string();
+        assert!(
+            text.contains(
+                "from the mirror image of robot `a`'s in the plane of work object `wTurned` at"
+            ),
+            "{text}"
+        );
     }
 
     #[test]

@@ -290,6 +290,7 @@ impl TargetRule for TrackRule<'_, '_> {
             // A joint target has no work object or tool: its TCP in the world is not known
             // here, so no uncertainty is stated for it.
             uncertainty_mm: None,
+            axes_deg: None,
         };
         Ok(Some((edits, change)))
     }

@@ -253,9 +253,15 @@ fn combine(
                         _ => x,
                     })
                     .zip(q.cartesian.as_ref().and_then(|c| c.pose()));
-                let (mm, deg) = match poses {
-                    Some((x, y)) => pose_change(&x, &y),
-                    None => joint_correction(plan, &p, &q).unwrap_or_default(),
+                // A joint target's correction is its flange's; where the cell gives no
+                // kinematics that is not known, and its largest axis change is said instead
+                // (the steps refuse such a target today, so none is expected here).
+                let ((mm, deg), axes_deg) = match poses {
+                    Some((x, y)) => (pose_change(&x, &y), None),
+                    None => match joint_correction(plan, &p, &q) {
+                        Some(size) => (size, None),
+                        None => ((0.0, 0.0), Some(largest_axis_change(&p, &q))),
+                    },
                 };
                 let skid = match p.skid(skid_axis) {
                     crate::position::Skid::At(s) => Some(s),
@@ -268,6 +274,7 @@ fn combine(
                     name: p.name.clone(),
                     line: p.line,
                     uncertainty_mm: None,
+                    axes_deg,
                 }
             })
             .collect();
@@ -314,6 +321,16 @@ fn joint_correction(plan: &TransferPlan, p: &Position, q: &Position) -> Option<(
             Some(pose_change(&image, &to.kinematics.forward(&end)))
         }
     }
+}
+
+/// The largest change of one axis from joint target `p` to `q`, degrees (an axis that is not a
+/// number in either is left out).
+fn largest_axis_change(p: &Position, q: &Position) -> f64 {
+    p.joints
+        .iter()
+        .zip(&q.joints)
+        .filter_map(|(a, b)| Some((b.as_ref()?.value() - a.as_ref()?.value()).abs()))
+        .fold(0.0, f64::max)
 }
 
 /// One step of a chain: its result, the target each of its refusals is about (per file, see

@@ -372,7 +372,7 @@ fn a_refusal_of_a_later_step_of_a_transfer_says_which_step() {
 /// track to 0.016 mm: `[1, 20]` stands r2 20 mm down its track from r1's image, and r2 then
 /// reached the mirrored targets from there (a silent change of its posture, exit 0); `[-1, 8000]`
 /// runs the tracks against each other. A map within 1 mm passes, and the way back (r2 to r1)
-/// takes its inverse.
+/// takes its inverse (the sample's `skid_map_from` names r1).
 #[test]
 fn a_skid_map_that_does_not_put_the_image_robot_at_the_mirror_image_is_an_error_at_the_entry() {
     let dir = tempfile::tempdir().unwrap();
@@ -422,7 +422,8 @@ fn a_skid_map_that_does_not_put_the_image_robot_at_the_mirror_image_is_an_error_
         }
     }
     // A map within the tolerance of the bases' passes (0.984 mm off), and mirrors back with its
-    // inverse, not with itself (1.016 mm off that way).
+    // inverse, not with itself (1.016 mm off that way): the sample's skid_map_from names r1, so
+    // the way back takes the inverse; without it the map is taken as written, an error.
     let cell = write(
         dir.path(),
         "cell_map.toml",
@@ -432,13 +433,21 @@ fn a_skid_map_that_does_not_put_the_image_robot_at_the_mirror_image_is_an_error_
     let (code, _, err) = run(&input, &cell, &mirror, &["-o", there.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     let back = ["mirror", "--robot", "r2", "--to", "r1", "--diff"];
+    let (code, _, err) = run(&there, &cell, &back, &[]);
+    assert_eq!(code, 0, "{err}");
     let (code, _, err) = run(&there, &cell, &back, &["--skid-map", "1,-1"]);
     assert_eq!(code, 0, "{err}");
-    let (code, _, err) = run(&there, &cell, &back, &[]);
+    let as_written = write(
+        dir.path(),
+        "cell_as_written.toml",
+        &sample_cell_with("skid_map = [1.0, 0.0]", "skid_map = [1.0, 1.0]")
+            .replace("skid_map_from = [\"r1\", \"k1\"]", "#"),
+    );
+    let (code, _, err) = run(&there, &as_written, &back, &[]);
     assert_eq!(code, 2, "{err}");
     assert!(
         err.contains("puts robot `r1`'s base 1.016 mm along")
-            && err.contains("the bases give [1, -0.016]"),
+            && err.contains("the bases give [1, -0.016]; its inverse [1, -1] fits"),
         "{err}"
     );
     let (code, _, err) = run(&there, &cell, &back, &["--skid-map", "1,-5"]);
@@ -534,5 +543,409 @@ fn transfer_mirror_summary_gives_a_joint_targets_correction_as_its_twins() {
     assert!(
         (joint.0 - cartesian.0).abs() < 0.01 && (joint.1 - cartesian.1).abs() < 3e-4,
         "joint target {joint:?}, its Cartesian twin {cartesian:?}"
+    );
+}
+
+/// `samples/cell_rules.toml` (the sample cell without kinematics), its paths made absolute, with
+/// each `(old, new)` of `changes` (which it has) replaced.
+fn rules_cell_with(changes: &[(&str, &str)]) -> String {
+    let samples = crate::support::root().join("samples");
+    let mut text = std::fs::read_to_string(samples.join("cell_rules.toml"))
+        .unwrap()
+        .replace("\"track/", &format!("\"{}/track/", samples.display()))
+        .replace("\"krl/", &format!("\"{}/krl/", samples.display()));
+    for (old, new) in changes {
+        assert!(text.contains(old), "{old}");
+        text = text.replace(old, new);
+    }
+    text
+}
+
+/// The skid position (`eax_a`) of the RAPID target `name` in `text`.
+fn skid_of(text: &str, name: &str) -> f64 {
+    let n = literal(text, name);
+    // A robtarget: x y z, q1…q4, cf1 cf4 cf6 cfx, then eax_a; a jointtarget: six axes.
+    n[if n.len() > 12 { 11 } else { 6 }]
+}
+
+/// The sample cell with r2 and k2 standing `dx` mm farther along world x (their base at skid 0
+/// and r2's profile, measured in world, moved with them), its `[mirror]` skid map lines
+/// replaced by `map`, written as `name`. r2 is then r1's mirror image at `s' = s − dx`.
+fn cell_with_r2_moved(dir: &Path, name: &str, dx: f64, map: &str) -> PathBuf {
+    let samples = crate::support::root().join("samples");
+    let profile = std::fs::read_to_string(samples.join("track/r2/profile.toml")).unwrap();
+    // Its knots' hash is of the nominal too: left out, as a profile may.
+    let moved: String = profile
+        .replace(
+            "origin = [0.000449,",
+            &format!("origin = [{},", 0.000449 + dx),
+        )
+        .lines()
+        .filter(|l| !l.starts_with("data_sha256"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert!(moved.contains(&format!("origin = [{},", 0.000449 + dx)));
+    let profile_path = write(dir, "r2_moved.toml", &moved);
+    let lines = "skid_map = [1.0, 0.0]    # s' = 1.0·s + 0.0: the tracks are aligned\nskid_map_from = [\"r1\", \"k1\"]  # whose skids s are; a mirror to r1 or k1 takes s = (s' - offset)/scale\n";
+    let text = sample_cell_with(lines, &format!("{map}\n"))
+        .replace(
+            "base = { x = 0.000, y = -202.033,",
+            &format!("base = {{ x = {dx:.3}, y = -202.033,"),
+        )
+        .replace(
+            &format!("\"{}\"", samples.join("track/r2/profile.toml").display()),
+            &format!("\"{}\"", profile_path.display()),
+        );
+    write(dir, name, &text)
+}
+
+/// A skid map that is not its own inverse takes the skids of the robots `skid_map_from` names:
+/// a mirror from one of them takes it as written, a mirror to one its inverse
+/// `s = (s' − offset)/scale`. r2 stands 20 mm farther along its track than on the sample cell,
+/// so r2 is r1's mirror image at `s' = s − 20`: `[1, -20]` from r1, and on the way back its
+/// inverse `[1, 20]`, so the twins' skids go 3000 → 2980 → 3000 and their text comes back.
+/// Before, the way back took `[1, -20]` as written (an error at the entry: r1 40 mm off), and
+/// only `--skid-map 1,20` passed. Without the key the map is taken as written, and the error
+/// the way back says that its inverse fits and which key to add; a key naming the wrong side,
+/// a `--skid-map` given the other way round and a mirror whose way is not known are errors
+/// saying what to write.
+#[test]
+fn a_skid_map_goes_the_way_back_inverted_for_the_robots_skid_map_from_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "twin.mod", TWINS);
+    let run = |cell: &Path, args: &[&str]| {
+        let mut all = vec![args[0], args[1], "--cell", cell.to_str().unwrap()];
+        all.extend(&args[2..]);
+        trackfix(&all)
+    };
+    let (there, back) = (dir.path().join("there.mod"), dir.path().join("back.mod"));
+    let (there, back) = (there.to_str().unwrap(), back.to_str().unwrap());
+    let input = input.to_str().unwrap();
+    let to_r2 = ["transfer", input, "--from", "r1", "--to", "r2", "--mirror"];
+    let to_r1 = ["transfer", there, "--from", "r2", "--to", "r1", "--mirror"];
+    let keyed = cell_with_r2_moved(
+        dir.path(),
+        "keyed.toml",
+        20.0,
+        "skid_map = [1.0, -20.0]\nskid_map_from = \"r1\"",
+    );
+    let (code, _, err) = run(&keyed, &[&to_r2[..], &["-o", there]].concat());
+    assert_eq!(code, 0, "{err}");
+    let there_text = std::fs::read_to_string(there).unwrap();
+    for name in ["jT", "pT"] {
+        assert_eq!(skid_of(&there_text, name), 2980.0, "{name}\n{there_text}");
+    }
+    let (code, _, err) = run(&keyed, &[&to_r1[..], &["-o", back]].concat());
+    assert_eq!(code, 0, "{err}");
+    let back_text = std::fs::read_to_string(back).unwrap();
+    for name in ["jT", "pT"] {
+        assert_eq!(skid_of(&back_text, name), 3000.0, "{name}\n{back_text}");
+        // Back where they were: the transfer writes a target its steps bring back as written.
+        let line = |text: &str| {
+            let at = format!(" {name}:=");
+            text.lines().find(|l| l.contains(&at)).unwrap().to_owned()
+        };
+        assert_eq!(line(&back_text), line(TWINS), "{back_text}");
+    }
+
+    // Without the key: the same image, and the way back is an error that names the key.
+    let plain = cell_with_r2_moved(dir.path(), "plain.toml", 20.0, "skid_map = [1.0, -20.0]");
+    let plain_there = dir.path().join("plain.mod");
+    let (code, _, err) = run(
+        &plain,
+        &[&to_r2[..], &["-o", plain_there.to_str().unwrap()]].concat(),
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(std::fs::read_to_string(&plain_there).unwrap(), there_text);
+    let mut said = String::new();
+    let mut record = |what: &str, (code, out, err): (i32, String, String)| {
+        assert_eq!(code, 2, "{what}: {err}");
+        assert!(out.is_empty(), "{what}: {out}");
+        let err = err.replace(dir.path().to_str().unwrap(), "<tmp>");
+        said.push_str(&format!("$ {what}\n{err}\n"));
+    };
+    record(
+        "transfer --from r2 --to r1 --mirror, no skid_map_from",
+        run(&plain, &[&to_r1[..], &["--diff"]].concat()),
+    );
+    let wrong = cell_with_r2_moved(
+        dir.path(),
+        "wrong.toml",
+        20.0,
+        "skid_map = [1.0, -20.0]\nskid_map_from = \"r2\"",
+    );
+    record(
+        "transfer --from r1 --to r2 --mirror, skid_map_from = \"r2\"",
+        run(&wrong, &[&to_r2[..], &["--diff"]].concat()),
+    );
+    record(
+        "transfer --from r2 --to r1 --mirror --skid-map 1,-20",
+        run(
+            &keyed,
+            &[&to_r1[..], &["--skid-map", "1,-20", "--diff"]].concat(),
+        ),
+    );
+    record(
+        "mirror --robot r2 (no --to), skid_map_from = \"r1\"",
+        run(&keyed, &["mirror", there, "--robot", "r2", "--diff"]),
+    );
+    insta::assert_snapshot!("skid_map_direction_errors", said);
+}
+
+/// The declared targets of RAPID `text`, each by name with its literal's numbers.
+fn numbers_of_targets(text: &str) -> Vec<(String, Vec<f64>)> {
+    text.lines()
+        .filter(|l| l.contains("robtarget ") || l.contains("jointtarget "))
+        .filter_map(|l| {
+            let name = l.split(":=").next()?.split_whitespace().last()?.to_owned();
+            Some((name.clone(), literal(text, &name)))
+        })
+        .collect()
+}
+
+/// Tracks that run opposite ways: r2's skid counted from the far end, its base at skid 0 at
+/// x = 8000 and its track axis −x (its profile the sample's knots at `8000 − s`, its nominal
+/// from there along −x), with the map `[-1, 8000]`. The physical cell is the sample's, so
+/// `transfer --mirror` of spot_line writes every target's numbers as the sample cell does (to
+/// 1e-4, a joint's last decimal) and its skid at `8000 − s`, and the way back gives the bytes
+/// the sample cell's way back gives. The map is its own inverse: it needs no skid_map_from.
+#[test]
+fn tracks_that_run_opposite_ways_mirror_with_the_map_minus_one() {
+    const L: f64 = 8000.0;
+    let dir = tempfile::tempdir().unwrap();
+    let samples = crate::support::root().join("samples");
+    let profile = std::fs::read_to_string(samples.join("track/r2/profile.toml")).unwrap();
+    let (head, knots) = profile.split_once("[[knot]]").unwrap();
+    let numbers_in = |key: &str| -> Vec<f64> {
+        let line = head.lines().find(|l| l.starts_with(key)).unwrap();
+        numbers(line.split_once('=').unwrap().1)
+    };
+    let (origin, direction) = (numbers_in("origin"), numbers_in("direction"));
+    let far: Vec<f64> = (0..3).map(|i| origin[i] + L * direction[i]).collect();
+    let list = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:.12}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let head: String = head
+        .lines()
+        .filter(|l| !l.starts_with("data_sha256"))
+        .map(|l| match l {
+            l if l.starts_with("origin") => format!("origin = [{}]\n", list(&far)),
+            l if l.starts_with("direction") => {
+                let back: Vec<f64> = direction.iter().map(|d| -d).collect();
+                format!("direction = [{}]\n", list(&back))
+            }
+            l => format!("{l}\n"),
+        })
+        .collect();
+    // D'(s') = D(L − s'): the same deviation where the robot stands.
+    let mut knots: Vec<(f64, String)> = format!("[[knot]]{knots}")
+        .split("[[knot]]")
+        .skip(1)
+        .map(|k| {
+            let skid = numbers(k.lines().nth(1).unwrap())[0];
+            let k = k.replacen(
+                &format!("skid = {skid:.1}"),
+                &format!("skid = {:.1}", L - skid),
+                1,
+            );
+            (L - skid, format!("[[knot]]{}\n", k.trim_end()))
+        })
+        .collect();
+    knots.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let reversed = format!(
+        "{head}{}",
+        knots.iter().map(|k| k.1.as_str()).collect::<String>()
+    );
+    let profile_path = write(dir.path(), "r2_reversed.toml", &reversed);
+    let base_far = format!(
+        "base = {{ x = {:.3}, y = {:.3}, z = {:.3},",
+        far[0], far[1], far[2]
+    );
+    let cell = write(
+        dir.path(),
+        "reversed.toml",
+        &sample_cell_with("skid_map = [1.0, 0.0]", "skid_map = [-1.0, 8000.0]")
+            .replace("base = { x = 0.000, y = -202.033, z = -0.720,", &base_far)
+            .replace(
+                "track_axis = [1.0, 0.0000003, 0.0000022]",
+                "track_axis = [-1.0, -0.0000003, -0.0000022]",
+            )
+            .replace(
+                &format!("\"{}\"", samples.join("track/r2/profile.toml").display()),
+                &format!("\"{}\"", profile_path.display()),
+            ),
+    );
+    let transfer = |input: &Path, cell: &Path, from: &str, to: &str, out: &str| {
+        let out = dir.path().join(out);
+        let (code, _, err) = trackfix(&[
+            "transfer",
+            input.to_str().unwrap(),
+            "--cell",
+            cell.to_str().unwrap(),
+            "--from",
+            from,
+            "--to",
+            to,
+            "--mirror",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        // The reversed profile reads as one `track fit` wrote: no warning about it.
+        assert!(!err.contains("r2_reversed.toml"), "{err}");
+        out
+    };
+    let spot_line = samples.join("rapid/spot_line.mod");
+    let sample_cell = samples.join("cell.toml");
+    let aligned = transfer(&spot_line, &sample_cell, "r1", "r2", "aligned.mod");
+    let opposite = transfer(&spot_line, &cell, "r1", "r2", "opposite.mod");
+    let read = |p: &Path| trackfix::syntax::latin1(&std::fs::read(p).unwrap());
+    let (a, b) = (
+        numbers_of_targets(&read(&aligned)),
+        numbers_of_targets(&read(&opposite)),
+    );
+    assert_eq!(a.len(), 218);
+    for ((name, a), (_, b)) in a.iter().zip(&b) {
+        let skid = if a.len() > 12 { 11 } else { 6 };
+        assert!(
+            (b[skid] - (L - a[skid])).abs() < 1e-9,
+            "{name}: {a:?} {b:?}"
+        );
+        let off = (0..skid).map(|i| (a[i] - b[i]).abs()).fold(0.0, f64::max);
+        assert!(off <= 1e-4 + 1e-9, "{name}: {off}: {a:?} {b:?}");
+    }
+    let aligned_back = transfer(&aligned, &sample_cell, "r2", "r1", "aligned_back.mod");
+    let opposite_back = transfer(&opposite, &cell, "r2", "r1", "opposite_back.mod");
+    assert_eq!(read(&aligned_back), read(&opposite_back));
+}
+
+/// A module with a target in a work object turned by 5° about z (its plane then crosses the
+/// tracks' mirror at 5°), one in world and one in a work object the program does not declare.
+const WOBJS: &str = "MODULE Wobjs
+  TASK PERS wobjdata wTurned:=[FALSE,TRUE,\"\",[[1500,-1850.75,600],[0.999048,0,0,0.043619]],[[0,0,0],[1,0,0,0]]];
+  CONST robtarget pTurned:=[[100,200,50],[0,0,1,0],[0,0,0,0],[3000.0,9E9,9E9,9E9,9E9,9E9]];
+  CONST robtarget pWorld:=[[1500,-2500,600],[0,0,1,0],[0,0,0,0],[3000.0,9E9,9E9,9E9,9E9,9E9]];
+  CONST robtarget pElse:=[[100,-200,50],[0,0,1,0],[0,0,0,0],[3000.0,9E9,9E9,9E9,9E9,9E9]];
+  PROC main()
+    MoveL pTurned, v100, fine, tool0 \\WObj:=wTurned;
+    MoveL pWorld, v100, fine, tool0;
+    MoveL pElse, v100, fine, tool0 \\WObj:=wElse;
+  ENDPROC
+ENDMODULE
+";
+
+/// With the mirror plane in each target's work object (`frame_in = "wobj"`), the skid map is
+/// checked in the plane of each work object the targets use, placed in the cell: the sample
+/// cell's tracks (its map [1, 0]) are mirror images in world's xz plane, not in one turned by 5°,
+/// whose image of r1's track runs 10° off r2's (the bases give the scale cos 10° = 0.984808).
+/// A work object the cell cannot place (not declared) leaves its targets' map unchecked, said
+/// in a warning. Before, with the plane in the work objects the map was never checked, and all
+/// three targets were written, exit 0, without a word.
+#[test]
+fn a_skid_map_is_checked_in_the_plane_of_each_work_object() {
+    let dir = tempfile::tempdir().unwrap();
+    let cell = write(
+        dir.path(),
+        "per_wobj.toml",
+        &rules_cell_with(&[
+            (
+                "frame = { x = 0.0, y = -1850.75, z = 0.0, rx = 0.0, ry = 0.0, rz = 0.0 }\n",
+                "",
+            ),
+            ("frame_in = \"world\"\n", ""),
+        ]),
+    );
+    let module = |skip: &str| -> String {
+        WOBJS
+            .lines()
+            .filter(|l| skip.is_empty() || !l.contains(skip))
+            .map(|l| format!("{l}\n"))
+            .collect()
+    };
+    let run = |text: &str, command: &[&str]| {
+        let input = write(dir.path(), "wobjs.mod", text);
+        let mut args = vec![command[0], input.to_str().unwrap(), "--cell"];
+        args.push(cell.to_str().unwrap());
+        args.extend(&command[1..]);
+        args.push("--diff");
+        let (code, out, err) = trackfix(&args);
+        (
+            code,
+            out,
+            err.replace(dir.path().to_str().unwrap(), "<tmp>"),
+        )
+    };
+    let transfer = ["transfer", "--from", "r1", "--to", "r2", "--mirror"];
+    let mirror = ["mirror", "--robot", "r1", "--to", "r2"];
+    for command in [&transfer[..], &mirror[..]] {
+        let (code, out, err) = run(&module(""), command);
+        assert_eq!(code, 2, "{command:?}: {err}");
+        assert!(out.is_empty(), "{out}");
+        let first = err.lines().next().unwrap();
+        assert!(
+            first.starts_with(
+                "<tmp>/per_wobj.toml:50:12: error: skid map [1, 0] puts robot `r2`'s base "
+            ) && first.contains(
+                "from the mirror image of robot `r1`'s in the plane of work object `wTurned` at"
+            ) && first.contains("the bases give [0.984808, "),
+            "{command:?}: {first}"
+        );
+        assert!(
+            err.contains("= help: write the map the bases give, or check both robots' base and track_axis and the mirror plane; or give the plane in world (frame_in = \"world\"), one plane for the targets of every work object"),
+            "{err}"
+        );
+    }
+    // Without the turned work object: world's plane fits; `mirror` writes pElse in wElse, for
+    // which the map is not checked, and says so (a transfer refuses it: its `zero` needs wElse
+    // in the cell as much).
+    let (code, out, err) = run(&module("Turned"), &mirror);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("+  CONST robtarget pElse"), "{out}");
+    assert_eq!(
+        err.lines().find(|l| l.contains("not checked")),
+        Some(
+            "warning: <tmp>/wobjs.mod: skid map not checked for the targets of 1 work object(s) that place the mirror plane nowhere in the cell (with frame_in = \"wobj\" each target mirrors about the plane in its own work object): robtarget `pElse`: work object `wElse` is not declared in the program"
+        ),
+        "{err}"
+    );
+    let (code, _, err) = run(&module("Turned"), &transfer);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("work object `wElse` is not declared in the program")
+            && !err.contains("not checked"),
+        "{err}"
+    );
+}
+
+/// `mirror --mirror-joints` without the arm's kinematics negates axes 1, 4 and 6: the joint
+/// target's flange, and so its move in mm, is not known, and the summary says so with its
+/// largest axis change (axis 4: 40° to −40°). Before: "largest move 0.000 mm / 0.0000°".
+#[test]
+fn mirror_summary_says_a_joint_targets_move_is_not_known_without_kinematics() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "joint.mod", &twin_alone("jT"));
+    let out = dir.path().join("out.mod");
+    let (code, stdout, err) = trackfix(&[
+        "mirror",
+        input.to_str().unwrap(),
+        "--plane",
+        "xz",
+        "--mirror-joints",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(
+        literal(&text, "jT")[..6],
+        [-5.0, 20.0, 10.0, -40.0, 60.0, 30.0]
+    );
+    let summary = format!("{stdout}{err}").replace(dir.path().to_str().unwrap(), "<tmp>");
+    assert_eq!(
+        summary.trim_end(),
+        "<tmp>/joint.mod: 1 target(s) changed, 1 joint target(s) with axes changed by up to 80.0000° (their move in mm is not known without the arm's kinematics) → <tmp>/out.mod"
     );
 }
