@@ -819,7 +819,14 @@ pub(crate) struct Binder<'f, 'a> {
     /// reference to data a copy may have written reaches these too. Empty in nearly every
     /// program: then no reference is looked up in it.
     copies: Copies,
+    /// While collecting ([`Binder::collect_reached`]), the targets and routine parameters the
+    /// uses bound since reached directly.
+    collected: Option<Reached>,
 }
+
+/// What uses reached directly: targets (file, index) and parameters of their routines (file,
+/// routine, index).
+pub(crate) type Reached = (Vec<TargetAt>, Vec<ParamAt>);
 
 /// A callee's name as written in a file, and the routine it names there (file, index), if any.
 type LastCallee<'a> = (usize, &'a [u8], Option<(usize, usize)>);
@@ -874,6 +881,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             first_letters,
             last_callee: None,
             copies,
+            collected: None,
         }
     }
 
@@ -902,6 +910,7 @@ impl<'f, 'a> Binder<'f, 'a> {
             first_letters,
             last_callee,
             copies,
+            collected,
         } = self;
         let naming = &*naming;
         targets.clear();
@@ -1041,6 +1050,10 @@ impl<'f, 'a> Binder<'f, 'a> {
         }
         targets.sort_unstable();
         targets.dedup();
+        if let Some((t, p)) = collected {
+            t.extend_from_slice(targets);
+            p.extend_from_slice(params);
+        }
         let recorded = Recorded {
             frame: u.frame.as_ref(),
             tool: u.tool.as_ref(),
@@ -1231,6 +1244,18 @@ impl<'f, 'a> Binder<'f, 'a> {
                 .get(m)
                 .is_some_and(|f| f.positions.has_cartesian(i))
         })
+    }
+
+    /// Collects, until [`Binder::collected`], the targets and routine parameters every use
+    /// bound reaches directly (a statement may be bound as several uses).
+    pub(crate) fn collect_reached(&mut self) {
+        self.collected = Some(Default::default());
+    }
+
+    /// What the uses bound since [`Binder::collect_reached`] reached directly: targets
+    /// (file, index) and parameters of their routines (file, routine, index); collecting ends.
+    pub(crate) fn collected(&mut self) -> Reached {
+        self.collected.take().unwrap_or_default()
     }
 
     /// The targets the use last bound reached directly: (file, index).

@@ -1,61 +1,122 @@
-//! Which value a frame (a work object or a tool) holds where a motion uses it, when the program
-//! gives the frame one other value than its declaration (docs/design.md, "Frames the program
-//! assigns").
+//! What may hold where a statement runs, asked of the modules' routines with their calls
+//! followed: whether a frame (a work object or a tool) the program gives one other value than
+//! its declaration may still hold its declared value where a motion uses it (docs/design.md,
+//! "Frames the program assigns"), and whether a program displacement or an external axes
+//! offset may be active there ("Program displacement and axes offset").
 //!
-//! Asked only of such a frame (most programs give no frame a value), over the modules' skeleton
-//! trees: their branches and statements' leaves ([`walked`]), which the parse that reads the
-//! targets keeps for a module that gives a frame a value (and a module that gives none is
-//! parsed again for it, when another one does). Nothing gives the
-//! frame its declared value back (a program that does is refused before this is asked), so
-//! along one path the frame holds the value given once the path has passed an assignment of
-//! it, and the declared one before. Over every path that may reach a motion, the value given is
-//! the only one there when every such path passes an assignment first: a must-analysis, the
-//! meet of two paths being the lesser [`Holds`].
+//! Asked only of such a program (most give no frame a value and displace nothing), over the
+//! modules' skeleton trees: their branches and statements' leaves ([`walked`]), which the parse
+//! that reads the targets keeps for a module that gives a frame a value (any other module is
+//! parsed again for it).
+//!
+//! One question: the condition holds from a statement that sets it (`PDispSet`, `PDispOn`) to
+//! one that clears it (`PDispOff`; for a frame, the assignment of its value given: nothing gives
+//! the declared value back, a program that does being refused before this is asked), and at the
+//! start of a routine the program may start or enter from outside when the question says so
+//! (a frame holds its declared value there; no displacement is active when the program starts).
+//! Over every path that may reach a statement, it may hold there when it holds on one of them: a
+//! may-analysis, the meet of two paths being the lesser [`Holds`], which also names one
+//! instruction whose setting may reach the statement.
 //!
 //! What may reach a point: program order in the routine, with its `IF`, `TEST`, loops (which
 //! may run no pass or come round again), `GOTO` and its labels, `RETURN`, `EXIT` and `RAISE`;
-//! the `ERROR` handler, entered from any statement of the body that may raise an error (a call
-//! included: an error of a routine without a handler of its own goes to its caller's), and left
-//! by `RETRY` (back to that statement, with at least the value it raised with: nothing lowers
-//! it) or `TRYNEXT` (to the one after it, skipping what that statement would have given); a
-//! call, after which the value given holds if it held before or the routine called gives it on
-//! every way back. A routine starts with the meet of its calls' states. One the program may
-//! start or enter from outside starts with the declared value possible: `main` (which the
-//! controller runs again and again: a motion before the assignment runs with the declared value
-//! the first time only, and with the value given after), a routine no statement calls (or only
-//! routines that no such one reaches), a `TRAP` or a `FUNC` (called from expressions, which are
-//! not followed), and every `PROC` when a call names its routine only at run time (`%name%`,
-//! `CallByVar`).
+//! the `ERROR` handler, entered from any statement of the body that may raise an error, with
+//! what held there (a call included, with whatever held anywhere in the routine called: an
+//! error of a routine without a handler of its own goes to its caller's), and left by `RETRY`
+//! (back to that statement, with what the handler leaves) or `TRYNEXT` (to the one after it,
+//! likewise); a call, after which holds what the routine called leaves entered with what held
+//! before; a call of a routine no module given defines (an instruction of the controller, or a
+//! routine of a module not given), which changes nothing (a displacement active before it stays
+//! active; docs/design.md says why none is taken to start there); a call that names its routine
+//! only at run time (`%name%`, `CallByVar`), which may run any `PROC` of the task or one no
+//! module given defines, so it leaves the meet of what each leaves; and `ExitCycle`, which
+//! starts `main` again with what holds there. A routine starts with the meet
+//! of its calls' states; `main` also with what holds at its end (the controller runs it again
+//! and again). One the program may start or enter from outside: `main`, a routine no statement
+//! calls (or only routines that no such one reaches), every `PROC` once a call names its
+//! routine at run time, a `TRAP` (an interrupt runs it between any two statements) or a `FUNC`
+//! (called from expressions, which are not followed): the last two start with the condition
+//! possible.
 
 use crate::names::{NameKey, NameMap};
 use crate::rapid::tree::NodeKind;
 
 type Node = crate::rapid::Node;
 
-/// What the frame may hold at a point, ordered for the meet of two paths (the lesser).
+/// What may hold at a point, ordered for the meet of two paths (the lesser).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
 enum Holds {
-    /// Its declared value, on some path: the program may not have given it the other yet.
-    Declared,
-    /// The value the program gives it, on every path.
-    Given,
+    /// On some path the condition holds: the frame may hold its declared value; the
+    /// displacement set by the question's set `k` (an index, [`ENTRY`] while a routine is
+    /// walked for what it leaves: whatever set its caller's) may be active.
+    Maybe(u32),
+    /// On every path reaching the point, it does not hold.
+    No,
     /// No path reaches the point.
     #[default]
-    Nothing,
+    Unreached,
 }
+
+/// In `Holds::Maybe(ENTRY)`: the set that held where the routine walked was entered.
+const ENTRY: u32 = u32::MAX;
+
+/// In [`Points::changes`], a statement that clears the condition (another is a set: its index).
+const CLEARS: u32 = u32::MAX;
 
 impl Holds {
     fn meet(self, other: Holds) -> Holds {
         self.min(other)
     }
+}
 
-    /// After a call of a routine that returns with `callee` when entered with the declared
-    /// value: nothing gives the declared value back, so the value given holds after the call
-    /// if it held before or the routine gives it.
-    fn after_call(self, callee: Holds) -> Holds {
-        match (self, callee) {
-            (Holds::Nothing, _) | (_, Holds::Nothing) => Holds::Nothing,
-            (a, b) => a.max(b),
+/// What a routine (or its error handler) leaves as a function of what it is entered with.
+/// Each statement leaves what it was entered with or a value of its own, and the meet of such
+/// functions is one too, so what it leaves entered with `No` and with `Maybe(ENTRY)` gives it
+/// for every entry.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Effect {
+    /// What it leaves entered with `Maybe(ENTRY)`.
+    maybe: Holds,
+    /// What it leaves entered with `No`.
+    no: Holds,
+}
+
+impl Effect {
+    /// What it leaves entered with `s`: with `Maybe(k)`, `Maybe(k)` where the entry's set
+    /// reaches the end, else the set that does.
+    fn of(self, s: Holds) -> Holds {
+        match s {
+            Holds::Unreached => Holds::Unreached,
+            Holds::No => self.no,
+            Holds::Maybe(k) => match self.maybe {
+                Holds::Maybe(ENTRY) => Holds::Maybe(k),
+                left => left,
+            },
+        }
+    }
+
+    fn meet(self, other: Effect) -> Effect {
+        Effect {
+            maybe: self.maybe.meet(other.maybe),
+            no: self.no.meet(other.no),
+        }
+    }
+}
+
+/// What a routine leaves as a function of its entry: at its returns, and the meet of
+/// everything that holds anywhere in it while it runs (what an error it passes on to its
+/// caller is raised with).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Summary {
+    exit: Effect,
+    seen: Effect,
+}
+
+impl Summary {
+    fn meet(self, other: Summary) -> Summary {
+        Summary {
+            exit: self.exit.meet(other.exit),
+            seen: self.seen.meet(other.seen),
         }
     }
 }
@@ -73,6 +134,9 @@ struct Routine {
     module: usize,
     /// Its `Routine` node in the module's tree.
     node: usize,
+    kind: Kind,
+    /// It is `main`, which the controller starts and runs again once it ends.
+    main: bool,
     /// The routine may run without a call the program makes (see the module's comment).
     from_outside: bool,
 }
@@ -86,6 +150,8 @@ pub(crate) struct Task<'s> {
     by_name: NameMap<NameKey<'s>, Vec<(usize, usize, bool)>>,
     /// Per routine, the routines that call it.
     callers: Vec<Vec<usize>>,
+    /// The routines with a call that names its routine at run time.
+    late_callers: Vec<usize>,
 }
 
 /// The first word of `text` (letters, digits and `_`), its case as written.
@@ -173,6 +239,25 @@ fn children(nodes: &[Node], at: usize) -> impl Iterator<Item = usize> + '_ {
     })
 }
 
+/// Whether call statement `n`, its first word `word`, names its routine only at run time:
+/// `%name%`, `CallByVar`.
+fn is_late_call(n: &Node, word: &[u8]) -> bool {
+    n.kind == NodeKind::LateCall
+        || (n.kind == NodeKind::Call && word.eq_ignore_ascii_case(b"CallByVar"))
+}
+
+/// One question asked of the task: where its condition starts and stops holding, where it is
+/// asked, and what a `PROC` the program may start or enter from outside starts with.
+struct Question<'q> {
+    /// Each (module, first byte of the statement), in task order: a statement that sets it.
+    sets: &'q [(usize, usize)],
+    /// A statement that clears it.
+    clears: &'q [(usize, usize)],
+    /// A statement it is asked at.
+    uses: &'q [(usize, usize)],
+    outside_proc: Holds,
+}
+
 impl<'s> Task<'s> {
     /// The routines of the modules (each one's source, and its skeleton tree of [`walked`]
     /// leaves when the first parse kept it), read from their trees.
@@ -190,8 +275,6 @@ impl<'s> Task<'s> {
             })
             .collect();
         let mut routines = Vec::new();
-        let mut kinds = Vec::new();
-        let mut names: Vec<&'s [u8]> = Vec::new();
         let mut by_name: NameMap<NameKey<'s>, Vec<(usize, usize, bool)>> = NameMap::default();
         for (m, (src, nodes)) in modules.iter().enumerate() {
             for (i, n) in nodes.iter().enumerate() {
@@ -213,10 +296,10 @@ impl<'s> Task<'s> {
                 routines.push(Routine {
                     module: m,
                     node: i,
+                    kind,
+                    main: kind == Kind::Proc && name.eq_ignore_ascii_case(b"main"),
                     from_outside: false,
                 });
-                kinds.push(kind);
-                names.push(name);
             }
         }
         let mut task = Task {
@@ -224,10 +307,11 @@ impl<'s> Task<'s> {
             routines,
             by_name,
             callers: Vec::new(),
+            late_callers: Vec::new(),
         };
-        // Who calls whom, as written; and whether a call names its routine at run time.
+        // Who calls whom, as written; and which routines call one named at run time.
         let mut callers = vec![Vec::new(); task.routines.len()];
-        let mut late = false;
+        let mut late_callers = Vec::new();
         for (r, routine) in task.routines.iter().enumerate() {
             let Some((src, nodes)) = task.modules.get(routine.module) else {
                 continue;
@@ -236,30 +320,25 @@ impl<'s> Task<'s> {
                 .get(routine.node)
                 .map_or(routine.node, |n| n.subtree_end as usize);
             for n in nodes.get(routine.node..end).unwrap_or_default() {
-                match n.kind {
-                    NodeKind::LateCall => late = true,
-                    NodeKind::Call => {
-                        let name = first_word(n.span().slice(src));
-                        if name.eq_ignore_ascii_case(b"CallByVar") {
-                            late = true;
-                        } else if let Some(list) = task
-                            .callee(routine.module, name)
-                            .and_then(|callee| callers.get_mut(callee))
-                            && !list.contains(&r)
-                        {
-                            list.push(r);
-                        }
+                if is_late_call(n, first_word(n.span().slice(src))) {
+                    if late_callers.last() != Some(&r) {
+                        late_callers.push(r);
                     }
-                    _ => {}
+                } else if n.kind == NodeKind::Call
+                    && let Some(list) = task
+                        .callee(routine.module, first_word(n.span().slice(src)))
+                        .and_then(|callee| callers.get_mut(callee))
+                    && !list.contains(&r)
+                {
+                    list.push(r);
                 }
             }
         }
+        let late = !late_callers.is_empty();
         for (r, routine) in task.routines.iter_mut().enumerate() {
-            let kind = kinds.get(r).copied().unwrap_or(Kind::Trap);
-            let name = names.get(r).copied().unwrap_or_default();
-            routine.from_outside = kind != Kind::Proc
+            routine.from_outside = routine.kind != Kind::Proc
                 || late
-                || name.eq_ignore_ascii_case(b"main")
+                || routine.main
                 || callers.get(r).is_none_or(|c| c.iter().all(|&c| c == r));
         }
         // Routines that call only each other, none of them reached from a routine the program
@@ -286,6 +365,7 @@ impl<'s> Task<'s> {
             routine.from_outside |= !reached;
         }
         task.callers = callers;
+        task.late_callers = late_callers;
         task
     }
 
@@ -308,7 +388,58 @@ impl<'s> Task<'s> {
         given: &[(usize, usize)],
         uses: &[(usize, usize)],
     ) -> Vec<bool> {
-        // (A source is below 4 GiB, and so is the count of its uses.)
+        let question = Question {
+            sets: &[],
+            clears: given,
+            uses,
+            outside_proc: Holds::Maybe(0),
+        };
+        self.ask(&question)
+            .0
+            .into_iter()
+            .map(|h| matches!(h, Holds::Maybe(_)))
+            .collect()
+    }
+
+    /// For each of `uses` (module, first byte of the instruction), the displacement that may
+    /// be active where it runs: the index among `sets` (module, first byte of each instruction
+    /// that activates it, in task order) of one whose displacement may reach it, the program
+    /// deactivating it at `clears`; `None` where no path reaches it with one active. A use in
+    /// no routine may run with the first; every use does when a `TRAP` or a `FUNC` may leave
+    /// one active (neither's callers are followed).
+    pub(crate) fn active_at(
+        &self,
+        sets: &[(usize, usize)],
+        clears: &[(usize, usize)],
+        uses: &[(usize, usize)],
+    ) -> Vec<Option<usize>> {
+        let question = Question {
+            sets,
+            clears,
+            uses,
+            outside_proc: Holds::No,
+        };
+        let (at_uses, summaries) = self.ask(&question);
+        let anywhere = self
+            .routines
+            .iter()
+            .zip(&summaries)
+            .filter(|(r, _)| r.kind != Kind::Proc)
+            .map(|(_, s)| s.exit.no)
+            .min()
+            .filter(|h| matches!(h, Holds::Maybe(_)));
+        at_uses
+            .into_iter()
+            .map(|h| match h.meet(anywhere.unwrap_or(Holds::Unreached)) {
+                Holds::Maybe(k) => Some(if k == ENTRY { 0 } else { k as usize }),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// What holds at each of the question's uses, and what each routine leaves.
+    fn ask(&self, q: &Question<'_>) -> (Vec<Holds>, Vec<Summary>) {
+        // (A source is below 4 GiB, and so is the count of its statements.)
         let per_module = |list: &[(usize, usize)]| {
             let mut out: Vec<Vec<(u32, u32)>> = vec![Vec::new(); self.modules.len()];
             for (k, &(m, at)) in list.iter().enumerate() {
@@ -321,31 +452,81 @@ impl<'s> Task<'s> {
             }
             out
         };
-        let given = per_module(given);
-        let use_at = per_module(uses);
-        let frame = Frame {
-            given: &given,
+        // What each statement that sets or clears it gives, in one list (a set its index).
+        let mut changes = per_module(q.sets);
+        for (v, clears) in changes.iter_mut().zip(per_module(q.clears)) {
+            v.extend(clears.into_iter().map(|(at, _)| (at, CLEARS)));
+            v.sort_unstable();
+        }
+        let use_at = per_module(q.uses);
+        let points = Points {
+            changes: &changes,
             uses: &use_at,
         };
         let n = self.routines.len();
-        // What each routine returns with when entered with the declared value: a greatest
-        // fixpoint, every routine first taken to return with nothing, one walked again when a
-        // routine it calls turns out to return with less.
-        let mut returns = vec![Holds::Nothing; n];
-        let mut queued = vec![true; n];
-        let mut work: Vec<usize> = (0..n).rev().collect();
+        let is_proc = |r: usize| self.routines.get(r).is_some_and(|x| x.kind == Kind::Proc);
+        // What each routine leaves: a greatest fixpoint, every routine first taken to return
+        // with nothing, one walked again when a routine it calls turns out to leave less.
+        let mut summaries = vec![Summary::default(); n];
+        // What a call named at run time leaves: the meet of every `PROC`'s, and of nothing
+        // changed (a routine no module given defines).
+        let identity = Effect {
+            maybe: Holds::Maybe(ENTRY),
+            no: Holds::No,
+        };
+        let mut late = Summary {
+            exit: identity,
+            seen: identity,
+        };
+        // Only what a call leaves is asked for: of a routine some statement calls, of every
+        // `PROC` when a call names its routine at run time, of a `TRAP` or `FUNC` (whether it
+        // leaves the condition holding wherever it runs): a large `main`, which nothing calls,
+        // is walked for what holds in it only.
+        let late_calls = !self.late_callers.is_empty();
+        let needed: Vec<bool> = (0..n)
+            .map(|r| {
+                self.callers.get(r).is_some_and(|c| !c.is_empty()) || late_calls || !is_proc(r)
+            })
+            .collect();
+        let mut queued = needed.clone();
+        let mut work: Vec<usize> = (0..n).filter(|&r| needed[r]).rev().collect();
+        // (Its uses are not asked for here: a summary only.)
+        let summary_points = Points {
+            uses: &[],
+            ..points
+        };
         while let Some(r) = work.pop() {
             if let Some(q) = queued.get_mut(r) {
                 *q = false;
             }
-            // (Its uses are not asked for here: a summary only.)
-            let summary = Frame { uses: &[], ..frame };
-            let exit = self.walk(r, Holds::Declared, &summary, &returns).exit;
-            if returns.get(r).is_some_and(|&x| x != exit) {
-                if let Some(x) = returns.get_mut(r) {
-                    *x = exit;
+            let walks = [Holds::Maybe(ENTRY), Holds::No]
+                .map(|entry| self.walk(r, entry, &summary_points, &summaries, late));
+            let [maybe, no] = walks;
+            let summary = Summary {
+                exit: Effect {
+                    maybe: maybe.exit,
+                    no: no.exit,
+                },
+                seen: Effect {
+                    maybe: maybe.seen,
+                    no: no.seen,
+                },
+            };
+            if summaries.get(r).is_some_and(|&x| x != summary) {
+                if let Some(x) = summaries.get_mut(r) {
+                    *x = summary;
                 }
-                for &c in self.callers.get(r).into_iter().flatten() {
+                let late_callers = if is_proc(r) {
+                    late = late.meet(summary);
+                    self.late_callers.as_slice()
+                } else {
+                    &[]
+                };
+                let callers = self.callers.get(r).map_or(&[][..], Vec::as_slice);
+                for &c in callers.iter().chain(late_callers) {
+                    if !needed.get(c).copied().unwrap_or(false) {
+                        continue;
+                    }
                     if let Some(q) = queued.get_mut(c).filter(|q| !**q) {
                         *q = true;
                         work.push(c);
@@ -353,18 +534,20 @@ impl<'s> Task<'s> {
                 }
             }
         }
-        // What each routine starts with: the meet of the states its calls are made in, and the
-        // declared value for one the program may start or enter from outside.
-        let outside = |r: usize| {
-            if self.routines.get(r).is_some_and(|x| x.from_outside) {
-                Holds::Declared
-            } else {
-                Holds::Nothing
-            }
+        // What each routine starts with: the meet of the states its calls are made in, and
+        // what the question says for one the program may start or enter from outside.
+        let outside = |r: usize| match self.routines.get(r) {
+            Some(x) if !x.from_outside => Holds::Unreached,
+            Some(x) if x.kind == Kind::Proc => q.outside_proc,
+            _ => Holds::Maybe(0),
         };
         let mut entry: Vec<Holds> = (0..n).map(outside).collect();
-        let mut queued: Vec<bool> = entry.iter().map(|&e| e != Holds::Nothing).collect();
+        let mut queued: Vec<bool> = entry.iter().map(|&e| e != Holds::Unreached).collect();
         let mut work: Vec<usize> = (0..n).filter(|&r| queued[r]).rev().collect();
+        let mains: Vec<usize> = (0..n)
+            .filter(|&r| self.routines.get(r).is_some_and(|x| x.main))
+            .collect();
+        let procs: Vec<usize> = (0..n).filter(|&r| is_proc(r)).collect();
         // Per routine, its uses as its last walk found them: with the entry it keeps, since a
         // routine is walked again whenever its entry is lowered.
         let mut last_uses: Vec<Option<Vec<(u32, Holds)>>> = vec![None; n];
@@ -372,10 +555,33 @@ impl<'s> Task<'s> {
             if let Some(q) = queued.get_mut(r) {
                 *q = false;
             }
-            let e = entry.get(r).copied().unwrap_or(Holds::Declared);
-            let walked = self.walk(r, e, &frame, &returns);
-            // The states only ever get lower: a callee's entry is lowered by each call.
-            for (callee, h) in walked.calls {
+            let e = entry.get(r).copied().unwrap_or(Holds::Maybe(0));
+            let walked = self.walk(r, e, &points, &summaries, late);
+            // The states only ever get lower: a callee's entry is lowered by each call; every
+            // `PROC`'s by a call named at run time; `main`'s by its own end and `ExitCycle`.
+            let main_again = if self.routines.get(r).is_some_and(|x| x.main) {
+                walked.exit.meet(walked.restart)
+            } else {
+                walked.restart
+            };
+            let late_calls = walked.late;
+            let lowered = walked
+                .calls
+                .iter()
+                .copied()
+                .chain(
+                    procs
+                        .iter()
+                        .filter(|_| late_calls != Holds::Unreached)
+                        .map(|&p| (p, late_calls)),
+                )
+                .chain(
+                    mains
+                        .iter()
+                        .filter(|_| main_again != Holds::Unreached)
+                        .map(|&m| (m, main_again)),
+                );
+            for (callee, h) in lowered {
                 let Some(x) = entry.get_mut(callee) else {
                     continue;
                 };
@@ -392,26 +598,36 @@ impl<'s> Task<'s> {
             }
         }
         // Each use as every path reaches it (a routine never walked above is reached by none);
-        // a use in no routine, as the declared value.
-        let mut at_use: Vec<Option<Holds>> = vec![None; uses.len()];
+        // a use in no routine, as the condition possible.
+        let mut at_use: Vec<Option<Holds>> = vec![None; q.uses.len()];
         for (r, walked) in last_uses.into_iter().enumerate() {
-            let walked =
-                walked.unwrap_or_else(|| self.walk(r, Holds::Nothing, &frame, &returns).uses);
+            let walked = walked.unwrap_or_else(|| {
+                self.walk(r, Holds::Unreached, &points, &summaries, late)
+                    .uses
+            });
             for (k, h) in walked {
                 if let Some(slot) = at_use.get_mut(k as usize) {
                     *slot = Some(slot.map_or(h, |x| x.meet(h)));
                 }
             }
         }
-        at_use
+        let at_use = at_use
             .into_iter()
-            .map(|h| h.is_none_or(|h| h == Holds::Declared))
-            .collect()
+            .map(|h| h.unwrap_or(Holds::Maybe(0)))
+            .collect();
+        (at_use, summaries)
     }
 
     /// Walks routine `r` entered with `entry`, to a fixpoint of its labels and its error
     /// handler's ways back into the body.
-    fn walk(&self, r: usize, entry: Holds, frame: &Frame<'_>, returns: &[Holds]) -> Walked<'s> {
+    fn walk(
+        &self,
+        r: usize,
+        entry: Holds,
+        points: &Points<'_>,
+        summaries: &[Summary],
+        late: Summary,
+    ) -> Walked<'s> {
         let Some(routine) = self.routines.get(r) else {
             return Walked::default();
         };
@@ -423,18 +639,23 @@ impl<'s> Task<'s> {
             module: routine.module,
             src,
             nodes,
-            given: frame.given.get(routine.module).map_or(&[], Vec::as_slice),
-            uses: frame.uses.get(routine.module).map_or(&[], Vec::as_slice),
-            returns,
+            changes: in_module(points.changes, routine.module),
+            uses: in_module(points.uses, routine.module),
+            summaries,
+            late,
             labels: Vec::new(),
-            trynext: Holds::Nothing,
+            trynext: Effect::default(),
+            retry: Effect::default(),
+            handled: false,
             in_handler: false,
             out: Walked::default(),
             last_callee: None,
         };
-        w.trynext = w.skipped(routine.node);
-        // Each pass but the last lowers the state at a label (three states each), so the passes
-        // are bounded; the bound is only a guard.
+        if let Some((trynext, retry)) = w.handler_effects(routine.node) {
+            (w.trynext, w.retry, w.handled) = (trynext, retry, true);
+        }
+        // Each pass but the last lowers the state at a label, so the passes are bounded; the
+        // bound is only a guard.
         for _ in 0..PASSES {
             w.out = Walked::default();
             w.routine(routine.node, entry);
@@ -445,12 +666,14 @@ impl<'s> Task<'s> {
             }
             w.labels = w.out.gotos.clone();
         }
-        // Not settled: every use and call of the routine as reached with the declared value.
+        // Not settled: the condition taken to hold at every use and call of the routine, and
+        // wherever it leaves.
         let mut out = std::mem::take(&mut w.out);
-        out.exit = Holds::Declared;
+        let possible = Holds::Maybe(0);
+        (out.exit, out.seen, out.late, out.restart) = (possible, possible, possible, possible);
         let uses = out.uses.iter_mut().map(|(_, h)| h);
         for h in uses.chain(out.calls.iter_mut().map(|(_, h)| h)) {
-            *h = Holds::Declared;
+            *h = possible;
         }
         out
     }
@@ -459,21 +682,33 @@ impl<'s> Task<'s> {
 /// Passes over one routine before its labels are taken as not settling.
 const PASSES: usize = 1000;
 
-/// The frame's assignments and uses in each module: (first byte, index among all), sorted.
+/// The question's statements in each module: (first byte, index among all), sorted.
 #[derive(Clone, Copy)]
-struct Frame<'f> {
-    given: &'f [Vec<(u32, u32)>],
+struct Points<'f> {
+    /// The statements that set it ([`CLEARS`]: that clear it).
+    changes: &'f [Vec<(u32, u32)>],
     uses: &'f [Vec<(u32, u32)>],
+}
+
+/// Module `m`'s part of one of [`Points`]' lists.
+fn in_module(list: &[Vec<(u32, u32)>], m: usize) -> &[(u32, u32)] {
+    list.get(m).map_or(&[], Vec::as_slice)
 }
 
 /// What a walk of a routine finds.
 #[derive(Default)]
 struct Walked<'s> {
-    /// The frame as the routine returns (at `ENDPROC`, a `RETURN`, or the end of its `ERROR`
+    /// What holds as the routine returns (at `ENDPROC`, a `RETURN`, or the end of its `ERROR`
     /// handler).
     exit: Holds,
+    /// The meet of what holds anywhere in it.
+    seen: Holds,
     /// Its calls of routines of the task, with the state before each.
     calls: Vec<(usize, Holds)>,
+    /// The meet of the states before its calls named at run time.
+    late: Holds,
+    /// The meet of the states at its `ExitCycle`s.
+    restart: Holds,
     /// Its uses (index among all), with the state before each.
     uses: Vec<(u32, Holds)>,
     /// The meet of the states at the `GOTO`s of each label.
@@ -482,6 +717,21 @@ struct Walked<'s> {
     raised: Holds,
     /// The meet of the states at the error handler's `TRYNEXT`s.
     trynext: Holds,
+    /// The meet of the states at the error handler's `RETRY`s.
+    retry: Holds,
+}
+
+/// What a call statement runs.
+#[derive(Clone, Copy)]
+enum Runs {
+    /// A routine of the task.
+    Routine(usize),
+    /// A routine named at run time.
+    Late,
+    /// `ExitCycle`: `main` again, from its start.
+    Restart,
+    /// An instruction (or a routine no module given defines).
+    Other,
 }
 
 struct Walker<'w, 's> {
@@ -489,14 +739,18 @@ struct Walker<'w, 's> {
     module: usize,
     src: &'s [u8],
     nodes: &'w [Node],
-    given: &'w [(u32, u32)],
+    changes: &'w [(u32, u32)],
     uses: &'w [(u32, u32)],
-    returns: &'w [Holds],
+    summaries: &'w [Summary],
+    late: Summary,
     /// The state at each label's `GOTO`s, as the last pass found it.
     labels: Vec<(NameKey<'s>, Holds)>,
-    /// What the error handler leaves at its `TRYNEXT`s when it starts with the declared value
-    /// (`Nothing`: it has none).
-    trynext: Holds,
+    /// What the error handler leaves at its `TRYNEXT`s, and at its `RETRY`s (`Unreached`: it
+    /// has none).
+    trynext: Effect,
+    retry: Effect,
+    /// The routine has an `ERROR` handler: what its statements raise with matters.
+    handled: bool,
     in_handler: bool,
     out: Walked<'s>,
     /// The last callee looked up, as written, and the routine it names.
@@ -512,7 +766,7 @@ impl<'s> Walker<'_, 's> {
         self.labels
             .iter()
             .find(|(l, _)| *l == name)
-            .map_or(Holds::Nothing, |&(_, h)| h)
+            .map_or(Holds::Unreached, |&(_, h)| h)
     }
 
     /// The indices of the entries of `list` whose first byte lies in leaf `n`.
@@ -524,6 +778,17 @@ impl<'s> Walker<'_, 's> {
             .iter()
             .take_while(move |&&(at, _)| at < end)
             .map(|&(_, k)| k)
+    }
+
+    /// Records the uses written in leaf `n`, run with `s`.
+    fn record_uses(&mut self, n: &Node, s: Holds) {
+        for k in Self::within(n, self.uses) {
+            self.out.uses.push((k, s));
+        }
+    }
+
+    fn saw(&mut self, h: Holds) {
+        self.out.seen = self.out.seen.meet(h);
     }
 
     fn routine(&mut self, node: usize, entry: Holds) {
@@ -549,8 +814,12 @@ impl<'s> Walker<'_, 's> {
         for h in handlers {
             let error = self.is_error_handler(h);
             // An error handler starts with the state of whatever raised the error; `UNDO` and
-            // `BACKWARD` run with whatever the routine held, its entry's at the least.
-            let mut s = if error { raised } else { entry };
+            // `BACKWARD` run with whatever the routine held.
+            let mut s = if error {
+                raised
+            } else {
+                entry.meet(self.out.seen)
+            };
             self.in_handler = true;
             for c in children(nodes, h) {
                 s = self.statement(c, s);
@@ -584,12 +853,11 @@ impl<'s> Walker<'_, 's> {
             NodeKind::CompactIf => {
                 let mut then = s;
                 for c in children(self.nodes, at) {
-                    if self
-                        .nodes
-                        .get(c)
-                        .is_some_and(|n| n.kind != NodeKind::CompactIfHead)
-                    {
-                        then = self.statement(c, then);
+                    match self.nodes.get(c).copied() {
+                        Some(head) if head.kind == NodeKind::CompactIfHead => {
+                            self.record_uses(&head, s);
+                        }
+                        _ => then = self.statement(c, then),
                     }
                 }
                 s.meet(then)
@@ -599,94 +867,169 @@ impl<'s> Walker<'_, 's> {
         }
     }
 
+    /// What call statement `n` (its first word `word`) runs.
+    fn runs(&mut self, n: &Node, word: &'s [u8]) -> Runs {
+        if is_late_call(n, word) {
+            return Runs::Late;
+        }
+        if n.kind != NodeKind::Call {
+            return Runs::Other;
+        }
+        // Call after call names one instruction (`MoveL`): its lookup is kept.
+        let callee = match self.last_callee {
+            Some((name, found)) if name == word => found,
+            _ => {
+                let found = self.task.callee(self.module, word);
+                self.last_callee = Some((word, found));
+                found
+            }
+        };
+        match callee {
+            Some(r) => Runs::Routine(r),
+            None if word.eq_ignore_ascii_case(b"ExitCycle") => Runs::Restart,
+            None => Runs::Other,
+        }
+    }
+
+    /// What statement `runs` raises an error with, run with `s`: a routine's error is raised
+    /// wherever it runs.
+    fn raised_by(&self, runs: Runs, s: Holds) -> Holds {
+        let seen = match runs {
+            Runs::Routine(r) => self
+                .summaries
+                .get(r)
+                .map_or(Holds::Maybe(0), |x| x.seen.of(s)),
+            Runs::Late => self.late.seen.of(s),
+            Runs::Restart | Runs::Other => s,
+        };
+        s.meet(seen)
+    }
+
     /// A statement that is one leaf.
     fn leaf(&mut self, n: &Node, s: Holds) -> Holds {
-        // The assignment of the value given (which raises no error).
-        if n.kind == NodeKind::Assign && Self::within(n, self.given).next().is_some() {
-            return if s == Holds::Nothing { s } else { Holds::Given };
-        }
-        let mut s = s;
-        if !self.in_handler && s != Holds::Nothing {
-            self.out.raised = self.out.raised.meet(s);
-        }
-        let before = s;
-        for k in Self::within(n, self.uses) {
-            self.out.uses.push((k, s));
-        }
-        if s == Holds::Nothing {
+        if s == Holds::Unreached {
+            self.record_uses(n, s);
             return s;
+        }
+        // What the statement gives the condition, if anything.
+        let given = Self::within(n, self.changes).next().map(|k| match k {
+            CLEARS => Holds::No,
+            k => Holds::Maybe(k),
+        });
+        // The assignment of a frame's value given raises no error.
+        if n.kind == NodeKind::Assign
+            && let Some(to) = given
+        {
+            self.saw(s);
+            self.saw(to);
+            return to;
         }
         let text = self.text(n);
         let word = first_word(text);
-        match n.kind {
-            NodeKind::Call => {
-                // Call after call names one instruction (`MoveL`): its lookup is kept.
-                let callee = match self.last_callee {
-                    Some((name, found)) if name == word => found,
-                    _ => {
-                        let found = self.task.callee(self.module, word);
-                        self.last_callee = Some((word, found));
-                        found
-                    }
-                };
-                if let Some(callee) = callee {
-                    self.out.calls.push((callee, s));
-                    let returns = self.returns.get(callee).copied();
-                    s = s.after_call(returns.unwrap_or(Holds::Declared));
+        let runs = match n.kind {
+            NodeKind::Call | NodeKind::LateCall => self.runs(n, word),
+            _ => Runs::Other,
+        };
+        let mut s = s;
+        if self.handled && !self.in_handler {
+            // `RETRY` runs the statement that raised again, with what the handler leaves.
+            loop {
+                let again = s.meet(self.retry.of(self.raised_by(runs, s)));
+                if again == s {
+                    break;
                 }
+                s = again;
             }
-            NodeKind::Jump => match word.to_ascii_uppercase().as_slice() {
+            self.out.raised = self.out.raised.meet(self.raised_by(runs, s));
+        }
+        self.record_uses(n, s);
+        self.saw(s);
+        let mut after = match (given, runs) {
+            (Some(to), _) => to,
+            (None, Runs::Routine(callee)) => {
+                self.out.calls.push((callee, s));
+                let summary = self.summaries.get(callee).copied().unwrap_or_default();
+                self.saw(summary.seen.of(s));
+                summary.exit.of(s)
+            }
+            (None, Runs::Late) => {
+                self.out.late = self.out.late.meet(s);
+                self.saw(self.late.seen.of(s));
+                s.meet(self.late.exit.of(s))
+            }
+            (None, Runs::Restart) => {
+                self.out.restart = self.out.restart.meet(s);
+                s
+            }
+            (None, Runs::Other) => s,
+        };
+        if n.kind == NodeKind::Jump {
+            match word.to_ascii_uppercase().as_slice() {
                 b"GOTO" => {
                     let label = NameKey(first_word(after_first_word(text)));
                     match self.out.gotos.iter_mut().find(|(l, _)| *l == label) {
                         Some((_, h)) => *h = h.meet(s),
                         None => self.out.gotos.push((label, s)),
                     }
-                    return Holds::Nothing;
+                    return Holds::Unreached;
                 }
                 b"RETURN" => {
                     self.out.exit = self.out.exit.meet(s);
-                    return Holds::Nothing;
+                    return Holds::Unreached;
                 }
-                // `RAISE` goes to the error handler (the body's state is met above) or, from
-                // the handler, to the caller's; `EXIT` ends the program.
-                b"EXIT" | b"RAISE" => return Holds::Nothing,
-                // Back to the statement that raised, with at least what it raised with.
-                b"RETRY" => return Holds::Nothing,
+                // `RAISE` goes to the error handler (the body's state is met above), which may
+                // go on after it, or, from the handler, to the caller's; `EXIT` ends the
+                // program.
+                b"RAISE" => after = Holds::Unreached,
+                b"EXIT" => return Holds::Unreached,
+                b"RETRY" => {
+                    self.out.retry = self.out.retry.meet(s);
+                    return Holds::Unreached;
+                }
                 b"TRYNEXT" => {
                     self.out.trynext = self.out.trynext.meet(s);
-                    return Holds::Nothing;
+                    return Holds::Unreached;
                 }
                 _ => {}
-            },
-            _ => {}
+            }
         }
-        if !self.in_handler {
-            // `TRYNEXT` goes on after the statement that raised, with what it raised with and
-            // what the handler gives.
-            s = s.meet(before.after_call(self.trynext));
+        if self.handled && !self.in_handler {
+            // `TRYNEXT` goes on after the statement that raised, with what the handler leaves.
+            after = after.meet(self.trynext.of(self.raised_by(runs, s)));
         }
-        s
+        self.saw(after);
+        after
     }
 
-    /// What the error handlers of routine `node` leave at their `TRYNEXT`s when they start with
-    /// the declared value.
-    fn skipped(&mut self, node: usize) -> Holds {
+    /// What the error handler of routine `node` leaves at its `TRYNEXT`s and its `RETRY`s, if
+    /// it has one.
+    fn handler_effects(&mut self, node: usize) -> Option<(Effect, Effect)> {
         let nodes = self.nodes;
+        let h = children(nodes, node).find(|&h| self.is_error_handler(h))?;
         let kept = std::mem::take(&mut self.out);
         self.in_handler = true;
-        for h in children(nodes, node) {
-            if !self.is_error_handler(h) {
-                continue;
-            }
-            let mut s = Holds::Declared;
+        let mut left = [(Holds::Unreached, Holds::Unreached); 2];
+        for (entry, out) in [Holds::Maybe(ENTRY), Holds::No].into_iter().zip(&mut left) {
+            self.out = Walked::default();
+            let mut s = entry;
             for c in children(nodes, h) {
                 s = self.statement(c, s);
             }
+            *out = (self.out.trynext, self.out.retry);
         }
         self.in_handler = false;
-        let out = std::mem::replace(&mut self.out, kept);
-        out.trynext
+        self.out = kept;
+        let [(trynext_maybe, retry_maybe), (trynext_no, retry_no)] = left;
+        Some((
+            Effect {
+                maybe: trynext_maybe,
+                no: trynext_no,
+            },
+            Effect {
+                maybe: retry_maybe,
+                no: retry_no,
+            },
+        ))
     }
 
     /// Whether node `at` is an `ERROR` handler.
@@ -703,7 +1046,7 @@ impl<'s> Walker<'_, 's> {
     /// `ENDTEST`): the meet of its branches, and of the state before when no `ELSE` or
     /// `DEFAULT` catches the rest.
     fn branches(&mut self, at: usize, s: Holds, part: NodeKind) -> Holds {
-        let mut out = Holds::Nothing;
+        let mut out = Holds::Unreached;
         let mut branch: Option<Holds> = None;
         let mut catches_all = false;
         for c in children(self.nodes, at) {
@@ -719,6 +1062,8 @@ impl<'s> Walker<'_, 's> {
             if let Some(b) = branch.take() {
                 out = out.meet(b);
             }
+            // Its conditions and cases are read with the state before it.
+            self.record_uses(&n, s);
             let word = first_word(self.text(&n)).to_ascii_uppercase();
             match word.as_slice() {
                 b"ENDIF" | b"ENDTEST" | b"TEST" => {}
@@ -742,12 +1087,12 @@ impl<'s> Walker<'_, 's> {
         loop {
             let mut body = top;
             for c in children(self.nodes, at) {
-                let part = self
-                    .nodes
-                    .get(c)
-                    .is_some_and(|n| matches!(n.kind, NodeKind::WhilePart | NodeKind::ForPart));
-                if !part {
-                    body = self.statement(c, body);
+                match self.nodes.get(c).copied() {
+                    // Its condition (or bounds) read with the state at the top.
+                    Some(part) if matches!(part.kind, NodeKind::WhilePart | NodeKind::ForPart) => {
+                        self.record_uses(&part, top);
+                    }
+                    _ => body = self.statement(c, body),
                 }
             }
             let next = s.meet(body);
@@ -824,19 +1169,33 @@ mod tests {
         assert!(files >= 20, "{files} files");
     }
 
-    /// For each `MoveL` of the modules, in order, whether the declared value may reach it, the
-    /// program giving `wA` its other value at each `wA :=`.
-    fn declared_at_motions(modules: &[&str]) -> Vec<bool> {
-        let sources: Vec<&[u8]> = modules.iter().map(|m| m.as_bytes()).collect();
-        let find = |pattern: &str| -> Vec<(usize, usize)> {
+    /// The task of the modules, and where each of the patterns asked is written in them
+    /// (module, first byte), in order.
+    fn task_of<'s>(modules: &[&'s str]) -> (Task<'s>, impl Fn(&str) -> Vec<(usize, usize)>) {
+        let sources = modules.iter().map(|m| (m.as_bytes(), None)).collect();
+        let modules = modules.to_vec();
+        let find = move |pattern: &str| -> Vec<(usize, usize)> {
             modules
                 .iter()
                 .enumerate()
                 .flat_map(|(m, src)| src.match_indices(pattern).map(move |(at, _)| (m, at)))
                 .collect()
         };
-        let sources = sources.into_iter().map(|s| (s, None)).collect();
-        Task::new(sources).declared_may_reach(&find("wA :="), &find("MoveL"))
+        (Task::new(sources), find)
+    }
+
+    /// For each `MoveL` of the modules, in order, whether the declared value may reach it, the
+    /// program giving `wA` its other value at each `wA :=`.
+    fn declared_at_motions(modules: &[&str]) -> Vec<bool> {
+        let (task, find) = task_of(modules);
+        task.declared_may_reach(&find("wA :="), &find("MoveL"))
+    }
+
+    /// For each `MoveL` of the modules, in order, the `PDispSet` (its index among them) whose
+    /// displacement may be active where it runs, `PDispOff` ending it.
+    fn displaced_at_motions(modules: &[&str]) -> Vec<Option<usize>> {
+        let (task, find) = task_of(modules);
+        task.active_at(&find("PDispSet"), &find("PDispOff"), &find("MoveL"))
     }
 
     fn module(body: &str) -> String {
@@ -958,5 +1317,44 @@ mod tests {
             "  PROC main()\n    TEST k\n    CASE 1:\n      {GIVE}\n    CASE 2:\n      {GIVE}\n    ENDTEST\n    MoveL p1;\n    TEST k\n    CASE 1:\n      {GIVE}\n    DEFAULT:\n      {GIVE}\n    ENDTEST\n    MoveL p2;\n  ENDPROC\n"
         ));
         assert_eq!(declared_at_motions(&[&m]), [true, false]);
+    }
+
+    #[test]
+    fn a_displacement_is_active_from_its_set_to_its_end_on_every_path() {
+        // Each motion named with the set that reaches it.
+        let m = module(
+            "  PROC a()\n    PDispSet d1;\n    MoveL p1;\n    PDispOff;\n  ENDPROC\n  PROC b()\n    PDispSet d2;\n    MoveL p2;\n    PDispOff;\n  ENDPROC\n  PROC main()\n    MoveL p3;\n    a;\n    b;\n  ENDPROC\n",
+        );
+        assert_eq!(displaced_at_motions(&[&m]), [Some(0), Some(1), None]);
+        // Jumping back above the set: the motion there may run displaced.
+        let m = module(
+            "  PROC main()\n  again:\n    MoveL p1;\n    PDispSet d;\n    MoveL p2;\n    IF x GOTO again;\n    PDispOff;\n  ENDPROC\n",
+        );
+        assert_eq!(displaced_at_motions(&[&m]), [Some(0), Some(0)]);
+        let m = m.replace("    IF x GOTO again;\n", "");
+        assert_eq!(displaced_at_motions(&[&m]), [None, Some(0)]);
+        // `ExitCycle` starts `main` again with what is active there.
+        let m = m.replace("    PDispOff;", "    IF x ExitCycle;\n    PDispOff;");
+        assert_eq!(displaced_at_motions(&[&m]), [Some(0), Some(0)]);
+    }
+
+    #[test]
+    fn the_error_handler_may_displace_what_it_goes_back_to() {
+        // Set in the handler, then RETRY: the statement that raised runs again displaced;
+        // TRYNEXT: the one after it.
+        let m = module(
+            "  PROC other()\n    MoveL p1;\n    MoveL p2;\n  ERROR\n    PDispSet d;\n    RETRY;\n  ENDPROC\n  PROC main()\n    other;\n    PDispOff;\n    MoveL p3;\n  ENDPROC\n",
+        );
+        assert_eq!(displaced_at_motions(&[&m]), [Some(0), Some(0), None]);
+        let trynext = m.replace("RETRY", "TRYNEXT");
+        assert_eq!(displaced_at_motions(&[&trynext]), [None, Some(0), None]);
+        // An error a routine raises while its displacement is active goes to its caller's
+        // handler with it active, and TRYNEXT goes on after the call so.
+        let m = module(
+            "  PROC inner()\n    PDispSet d;\n    MoveL p1;\n    PDispOff;\n  ENDPROC\n  PROC main()\n    inner;\n    MoveL p2;\n  ENDPROC\n",
+        );
+        assert_eq!(displaced_at_motions(&[&m]), [Some(0), None]);
+        let m = m.replace("    MoveL p2;\n", "    MoveL p2;\n  ERROR\n    TRYNEXT;\n");
+        assert_eq!(displaced_at_motions(&[&m]), [Some(0), Some(0)]);
     }
 }

@@ -125,6 +125,11 @@ const DISPLACING: [(&str, Displacement); 4] = [
     ("PDispSet", Displacement::Program),
     ("PDispOn", Displacement::Program),
 ];
+/// The instructions that end what a [`DISPLACING`] one activates.
+const ENDING: [(&str, Displacement); 2] = [
+    ("EOffsOff", Displacement::Axes),
+    ("PDispOff", Displacement::Program),
+];
 
 /// What a [`DISPLACING`] instruction moves.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -167,26 +172,161 @@ impl Displacement {
             Displacement::Program => RunTimeValue::ProgramDisplacement { instruction, at },
         }
     }
+
+    /// Whether a motion written as `name` (its text after the name `args`) ignores the
+    /// displacement: every `MoveAbsJ` the program displacement, a `MoveAbsJ …\NoEOffs` the
+    /// axes offset.
+    fn ignored_by(self, name: &[u8], args: impl FnOnce() -> bool) -> bool {
+        name.eq_ignore_ascii_case(b"MoveAbsJ")
+            && match self {
+                Displacement::Program => true,
+                Displacement::Axes => args(),
+            }
+    }
 }
 
-/// Marks every target a motion of the task uses as moved with the displacement `what`, the
-/// first such instruction (`instruction` on `line` of module `from`) named: the program does
-/// not say in which order its routines run, so any motion may run while it holds. A target
-/// whose every use is a motion of its own module that ignores it (`unaffected`: module and
-/// line of each such `MoveAbsJ`) is not marked.
+/// The [`DISPLACING`] or [`ENDING`] instruction a call names (`name`, its name in `src`): its
+/// name as RAPID spells it, what it displaces, and whether it displaces (rather than ends).
+#[inline]
+fn displacing_call(src: &[u8], name: Span) -> Option<(&'static str, Displacement, bool)> {
+    // Most calls are motions (`MoveL`): told apart by their length and first letter, before
+    // their name is read.
+    if !matches!(name.end.wrapping_sub(name.start), 7 | 8)
+        || !matches!(src.get(name.start), Some(b'P' | b'p' | b'E' | b'e'))
+    {
+        return None;
+    }
+    let name = name.slice(src);
+    let found = |list: &[(&'static str, Displacement)], sets: bool| {
+        list.iter()
+            .find(|(n, _)| name.eq_ignore_ascii_case(n.as_bytes()))
+            .map(|&(n, what)| (n, what, sets))
+    };
+    found(&DISPLACING, true).or_else(|| found(&ENDING, false))
+}
+
+/// A call of the task that activates or ends a displacement.
+struct Displacing {
+    what: Displacement,
+    name: &'static str,
+    /// Its module, and the first byte of its name there.
+    at: (usize, usize),
+    line: usize,
+    /// It activates a displacement that moves something: not an [`ENDING`] instruction, nor
+    /// a literal that moves nothing (which ends any displacement active before it, as one of
+    /// its kind).
+    moves: bool,
+}
+
+/// The calls of the task that activate or end a displacement, in task order.
+fn displacing(calls: &[Calls], rest: &[Kept<'_>]) -> Vec<Displacing> {
+    let mut out = Vec::new();
+    for (m, (module_calls, r)) in calls.iter().zip(rest).enumerate() {
+        let src = r.6;
+        for u in &module_calls.uses {
+            let name = u.name.span();
+            let Some((instruction, what, sets)) = displacing_call(src, name) else {
+                continue;
+            };
+            out.push(Displacing {
+                what,
+                name: instruction,
+                at: (m, name.start),
+                line: u.line as usize,
+                moves: sets && !what.moves_nothing(statement_text(src, name.end)),
+            });
+        }
+    }
+    out
+}
+
+/// The calls of the task that may run while a displacement is active (docs/design.md,
+/// "Program displacement and axes offset"), by (module, first byte of the callee's name): for
+/// each kind displaced, the instruction (an index into `instructions`) whose displacement may
+/// be active there. A call that ignores a kind (a `MoveAbsJ`) is not displaced by it; one that
+/// activates a displacement is, by itself (its targets give the displacement's value).
+fn displaced_calls(
+    instructions: &[Displacing],
+    calls: &[Calls],
+    rest: &[Kept<'_>],
+    task: &super::flow::Task<'_>,
+) -> std::collections::HashMap<(usize, usize), Vec<usize>> {
+    let mut out: std::collections::HashMap<(usize, usize), Vec<usize>> = Default::default();
+    // The kinds in the order their first displacement is written: a target both move is
+    // named with the first.
+    let mut kinds: Vec<Displacement> = Vec::new();
+    for d in instructions.iter().filter(|d| d.moves) {
+        if !kinds.contains(&d.what) {
+            kinds.push(d.what);
+        }
+    }
+    for what in kinds {
+        let of_kind = || {
+            instructions
+                .iter()
+                .enumerate()
+                .filter(|(_, d)| d.what == what)
+        };
+        let sets: Vec<usize> = of_kind().filter(|(_, d)| d.moves).map(|(i, _)| i).collect();
+        let at = |list: &[usize]| -> Vec<(usize, usize)> {
+            list.iter()
+                .filter_map(|&i| instructions.get(i))
+                .map(|d| d.at)
+                .collect()
+        };
+        let clears: Vec<usize> = of_kind()
+            .filter(|(_, d)| !d.moves)
+            .map(|(i, _)| i)
+            .collect();
+        let mut uses: Vec<(usize, usize)> = Vec::new();
+        for (m, (module_calls, r)) in calls.iter().zip(rest).enumerate() {
+            let src = r.6;
+            for u in &module_calls.uses {
+                let name = u.name.span();
+                let args = || contains_ignoring_case(statement_text(src, name.end), b"\\NoEOffs");
+                if !what.ignored_by(name.slice(src), args) {
+                    uses.push((m, name.start));
+                }
+            }
+        }
+        let active = task.active_at(&at(&sets), &at(&clears), &uses);
+        let by_itself = sets
+            .iter()
+            .filter_map(|&i| Some((instructions.get(i)?.at, i)));
+        let displaced = uses.into_iter().zip(active).filter_map(|(call, k)| {
+            let set = sets.get(k?)?;
+            Some((call, *set))
+        });
+        for (call, i) in by_itself.chain(displaced) {
+            let list = out.entry(call).or_default();
+            let of_this_kind = |&j: &usize| instructions.get(j).is_some_and(|d| d.what == what);
+            if !list.iter().any(of_this_kind) {
+                list.push(i);
+            }
+        }
+    }
+    out
+}
+
+/// Marks each target a displaced call reaches as moved with the displacement of the
+/// instruction named with it (an index into `instructions`), the instruction and its line
+/// named.
 fn mark_displaced(
     facts: &mut [crate::resolve::FileFacts<'_>],
-    (what, from, line, instruction): (Displacement, usize, usize, &'static str),
-    unaffected: &std::collections::HashSet<(usize, u32)>,
+    instructions: &[Displacing],
+    reached: &[(usize, Vec<(usize, usize)>)],
 ) {
-    let Some(name) = facts.get(from).map(|f| f.name.clone()) else {
-        return;
-    };
-    for (m, f) in facts.iter_mut().enumerate() {
-        for usage in f.positions.usages_mut() {
-            let ignores = usage.lines.iter().all(|&l| unaffected.contains(&(m, l)));
-            if !usage.lines.is_empty() && !ignores {
-                usage.set_run_time(what.why(instruction, UseLine::of(line, from, m, &name)));
+    for (i, targets) in reached {
+        let Some(d) = instructions.get(*i) else {
+            continue;
+        };
+        let (from, _) = d.at;
+        let Some(name) = facts.get(from).map(|f| f.name.clone()) else {
+            continue;
+        };
+        for &(m, t) in targets {
+            if let Some(usage) = facts.get_mut(m).and_then(|f| f.positions.usage_mut(t)) {
+                usage.set_run_time(d.what.why(d.name, UseLine::of(d.line, from, m, &name)));
             }
         }
     }
@@ -577,11 +717,27 @@ type Kept<'s> = (
     Vec<crate::resolve::CopyFact>,
 );
 
-/// [`FramesGiven`] of the task's modules (`rest`, with their skeleton trees when kept, their
-/// calls and routines; `kinds` finds a call's tool).
+/// The task's routines as `rapid::flow` reads them, built from the modules' skeleton trees
+/// (kept by the first parse, or parsed again) when a question first needs them.
+struct Flow<'s> {
+    skeletons: Vec<Option<Vec<super::Node>>>,
+    task: Option<super::flow::Task<'s>>,
+}
+
+impl<'s> Flow<'s> {
+    fn task(&mut self, rest: &[Kept<'s>]) -> &super::flow::Task<'s> {
+        self.task.get_or_insert_with(|| {
+            let kept = std::mem::take(&mut self.skeletons);
+            super::flow::Task::new(rest.iter().map(|r| r.6).zip(kept).collect())
+        })
+    }
+}
+
+/// [`FramesGiven`] of the task's modules (`rest`, with their routines' flow, their calls and
+/// routines; `kinds` finds a call's tool).
 fn frames_given<'s>(
     rest: &[Kept<'s>],
-    mut skeletons: Vec<Option<Vec<super::Node>>>,
+    flow: &mut Flow<'s>,
     calls: &[Calls],
     routine_lists: &[(&'s [u8], &[crate::resolve::Routine])],
     scopes: &FrameScopes,
@@ -589,13 +745,11 @@ fn frames_given<'s>(
     module_names: &[Arc<str>],
 ) -> FramesGiven {
     // The uses that may run while their work object or tool holds its declared value, the
-    // program giving it one other value, by (module, first byte of the instruction); and the
-    // modules' routines as the flow reads them, once some frame needs it.
+    // program giving it one other value, by (module, first byte of the instruction).
     let mut declared_first: std::collections::HashMap<
         (usize, usize),
         Vec<crate::resolve::TwoValuesAt>,
     > = Default::default();
-    let mut flow: Option<super::flow::Task<'_>> = None;
     let mut buf = String::new();
     // A frame given a whole value in a routine (docs/design.md, "Frames the program assigns").
     // Each assignment: (the frame's module and index, the assignment's module and index).
@@ -763,10 +917,7 @@ fn frames_given<'s>(
         // holds: their targets are moved to in both values.
         let before = if one {
             let given: Vec<(usize, usize)> = all.iter().map(|&(m, a)| (m, a.name.start)).collect();
-            let task = flow.get_or_insert_with(|| {
-                let kept = std::mem::take(&mut skeletons);
-                super::flow::Task::new(rest.iter().map(|r| r.6).zip(kept).collect())
-            });
+            let task = flow.task(rest);
             run_before_given(f, at, &given, calls, routine_lists, scopes, kinds, task)
         } else {
             Vec::new()
@@ -2044,12 +2195,10 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
     // routine gives a value.
     let mut written_through_parameters: Vec<(String, usize, usize)> = Vec::new();
     let any_param_writes = param_writes.iter().any(|w| !w.is_empty());
-    // The first instruction of each displacement: (what, module, line, its name).
-    let mut displaced: Vec<(Displacement, usize, usize, &'static str)> = Vec::new();
-    // (module, line) of the motions that ignore the axes offset (`MoveAbsJ …\NoEOffs`), and
-    // of those that ignore the program displacement (every `MoveAbsJ`).
-    let mut no_axes_offset: std::collections::HashSet<(usize, u32)> = Default::default();
-    let mut joint_moves: std::collections::HashSet<(usize, u32)> = Default::default();
+    let mut flow = Flow {
+        skeletons,
+        task: None,
+    };
     // The frames the program gives a whole value (docs/design.md, "Frames the program
     // assigns"): what each motion's targets are moved to in is known before they are bound.
     let FramesGiven {
@@ -2060,13 +2209,25 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         declared_first,
     } = frames_given(
         &rest,
-        skeletons,
+        &mut flow,
         &calls,
         &routine_lists,
         &scopes,
         &kinds,
         &module_names,
     );
+    // The instructions that activate or end a displacement, and the calls that may run while
+    // one is active (docs/design.md, "Program displacement and axes offset"); per displaced
+    // call, the instruction named and the targets and routine parameters its binding reaches.
+    let displacements = displacing(&calls, &rest);
+    let displaced = if displacements.iter().any(|d| d.moves) {
+        displaced_calls(&displacements, &calls, &rest, flow.task(&rest))
+    } else {
+        Default::default()
+    };
+    // (The routines' trees are read no further.)
+    drop(flow);
+    let mut displaced_reach: Vec<(usize, crate::resolve::Reached)> = Vec::new();
     for (m, (module_calls, r)) in calls.iter().zip(&rest).enumerate() {
         let src = r.6;
         let mut own_texts = own_robhold
@@ -2076,20 +2237,6 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
         let frame_texts = own_texts.as_mut().unwrap_or(&mut frame_texts);
         for (u, call_args, refs, inline) in module_calls.iter() {
             let call = NameKey(u.name.span().slice(src));
-            if let Some(&(name, what)) = DISPLACING
-                .iter()
-                .find(|(n, _)| call.0.eq_ignore_ascii_case(n.as_bytes()))
-            {
-                let text = statement_text(src, u.name.span().end);
-                if !displaced.iter().any(|d| d.0 == what) && !what.moves_nothing(text) {
-                    displaced.push((what, m, u.line as usize, name));
-                }
-            } else if call.0.eq_ignore_ascii_case(b"MoveAbsJ") {
-                joint_moves.insert((m, u.line));
-                if contains_ignoring_case(statement_text(src, u.name.span().end), b"\\NoEOffs") {
-                    no_axes_offset.insert((m, u.line));
-                }
-            }
             // A frame or tool named by a parameter of the motion's routine is the caller's: no
             // declaration of that name is it (the motion's targets are refused as used with
             // a frame that cannot be resolved).
@@ -2147,9 +2294,21 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
                 targets: inline,
                 writes: false,
             };
+            let displacements = (!displaced.is_empty())
+                .then(|| displaced.get(&(m, u.name.span().start)))
+                .flatten();
+            if displacements.is_some() {
+                binder.collect_reached();
+            }
             match non_position_arguments(call.0) {
                 None => binder.bind(m, &call_use),
                 Some(zone) => bind_non_positions(&mut binder, m, &call_use, zone),
+            }
+            if let Some(list) = displacements {
+                let reached = binder.collected();
+                for &i in list {
+                    displaced_reach.push((i, reached.clone()));
+                }
             }
             if !scopes.is_empty() {
                 let routine = call_use.routine;
@@ -2242,15 +2401,19 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
             binder.bind_computed_parameter(m, routine, param, line);
         }
     }
+    // A displaced motion to a routine's parameter moves to the targets its calls pass there.
+    let displaced_reach: Vec<(usize, Vec<(usize, usize)>)> = displaced_reach
+        .into_iter()
+        .map(|(i, (mut targets, params))| {
+            for p in params {
+                binder.targets_bound_to(p, &mut targets);
+            }
+            (i, targets)
+        })
+        .collect();
     binder.finish();
     crate::resolve::mark_run_time(&mut facts, &NAMING);
-    for d in displaced {
-        let unaffected = match d.0 {
-            Displacement::Axes => &no_axes_offset,
-            Displacement::Program => &joint_moves,
-        };
-        mark_displaced(&mut facts, d, unaffected);
-    }
+    mark_displaced(&mut facts, &displacements, &displaced_reach);
     share_assigned_usage(&mut facts, &assigned_literals);
     drop(facts);
     // Data named at run time (`SetDataVal name, …` with `name` computed): any target of the
@@ -2404,7 +2567,8 @@ pub fn finish_task(modules: Vec<(Extractor<'_>, &[u8], Arc<str>)>) -> Vec<Extrac
 impl Extractor<'_> {
     /// Keeps the module's skeleton tree, read by the flow of a frame the program gives a value
     /// (`rapid::flow`), when the module gives one; a module that gives none drops it before
-    /// the task's usage is resolved, where memory peaks.
+    /// the task's usage is resolved, where memory peaks (and is parsed again for the flow of a
+    /// displacement: looking for one here cost every module 0.3 % of `check`).
     pub(super) fn keep_skeleton(&mut self, nodes: Vec<super::Node>) {
         if !self.assigned.is_empty() {
             self.skeleton = Some(nodes);

@@ -317,8 +317,9 @@ fn a_use_in_another_module_of_a_task_is_named_with_its_module() {
 }
 
 /// A program that offsets the external axes (`EOffsSet`) moves the track to the written
-/// position plus an offset known only when it runs: every target its motions use is refused
-/// as runtime data, the instruction and its line named; one no motion uses is not marked.
+/// position plus an offset known only when it runs: every target a motion uses while the
+/// offset may be active is refused as runtime data, the instruction and its line named; one
+/// moved to before it (`main` ending with the offset ended) or no motion uses is not marked.
 #[test]
 fn a_program_that_offsets_the_external_axes_has_its_targets_refused_by_name() {
     let src = format!(
@@ -340,9 +341,8 @@ fn a_program_that_offsets_the_external_axes_has_its_targets_refused_by_name() {
         at: UseLine::new(8),
     };
     let offset = Some(why.clone());
-    // Before the instruction in the routine too: which runs first is not the program's text.
     assert_eq!(run_time(&f, "pa"), offset);
-    assert_eq!(run_time(&f, "jHome"), offset);
+    assert_eq!(run_time(&f, "jHome"), None);
     assert_eq!(run_time(&f, "pIdle"), None);
     assert_eq!(
         why.describe(),
@@ -474,6 +474,162 @@ fn a_program_displacement_marks_the_cartesian_targets_it_moves() {
         module("PDispSet [[0,0,50],[1,0,0,0]];").into_bytes(),
     );
     assert!(run_time(&f, "pa").is_some());
+}
+
+/// Which of `targets` a module moving to them in `routines` refuses as displaced (a program
+/// displacement or an axes offset): for each, the instruction named and its line, `None` where
+/// it is not refused. A name starting with `j` is a jointtarget, any other a robtarget; the
+/// module declares the displacement `dWeld` and the axes offset `eShift`. And the module's
+/// text.
+fn displaced(targets: &[&str], routines: &str) -> (Vec<Option<(&'static str, usize)>>, String) {
+    let mut src = String::from(
+        "MODULE pd\n  CONST pose dWeld:=[[0,0,50],[1,0,0,0]];\n  CONST extjoint eShift:=[2000,9E9,9E9,9E9,9E9,9E9];\n",
+    );
+    for t in targets {
+        src += &match t.starts_with('j') {
+            true => {
+                format!("  CONST jointtarget {t}:=[[0,0,0,0,90,0],[1500,9E9,9E9,9E9,9E9,9E9]];\n")
+            }
+            false => format!("  CONST robtarget {t}:={T};\n"),
+        };
+    }
+    src += routines;
+    src += "ENDMODULE\n";
+    let f = rapid::parse_file(Path::new("pd.mod"), src.clone().into_bytes());
+    let found = targets
+        .iter()
+        .map(|t| match run_time(&f, t) {
+            None => None,
+            Some(
+                RunTimeValue::ProgramDisplacement { instruction, at }
+                | RunTimeValue::AxesOffset { instruction, at },
+            ) => {
+                assert_eq!(at.file, None, "{t}");
+                Some((instruction, at.line))
+            }
+            Some(other) => panic!("{t}: {other:?}"),
+        })
+        .collect();
+    (found, src)
+}
+
+/// The 1-based number of the first line of `src` that holds `needle`.
+fn line_of(src: &str, needle: &str) -> usize {
+    src.lines().position(|l| l.contains(needle)).unwrap() + 1
+}
+
+/// A routine that sets a displacement and ends it (`PDispSet … PDispOff`) refuses the targets
+/// of the motions between, its own and those of the routines it calls there, and not those of
+/// the rest of the task (before, every Cartesian target of the task was refused); a
+/// `MoveAbsJ`, which no program displacement moves, is not refused either.
+#[test]
+fn a_displacement_refuses_only_the_motions_that_may_run_while_it_is_active() {
+    let targets = ["pBefore", "pIn", "pSeam", "jIn", "pAfter", "pOther"];
+    let (found, src) = displaced(
+        &targets,
+        "  PROC main()\n    MoveL pBefore,v200,fine,tool0;\n    weld;\n    MoveL pAfter,v200,fine,tool0;\n    other;\n  ENDPROC\n  PROC weld()\n    PDispSet dWeld;\n    MoveL pIn,v200,fine,tool0;\n    seam;\n    MoveAbsJ jIn,v200,fine,tool0;\n    PDispOff;\n  ENDPROC\n  PROC seam()\n    MoveL pSeam,v200,fine,tool0;\n  ENDPROC\n  PROC other()\n    MoveL pOther,v200,fine,tool0;\n  ENDPROC\n",
+    );
+    let set = Some(("PDispSet", line_of(&src, "PDispSet dWeld")));
+    assert_eq!(found, [None, set, set, None, None, None]);
+}
+
+/// A routine called both while a displacement is active and while none is moves to its
+/// targets displaced once: they are refused. A target passed to a routine's parameter is
+/// refused when the routine's motion may be displaced, whichever call passed it; one passed to
+/// a routine only called undisplaced is not.
+#[test]
+fn a_routine_called_while_displaced_once_has_its_targets_refused_for_every_call() {
+    let targets = ["pApp", "pA", "pB", "pC"];
+    let (found, src) = displaced(
+        &targets,
+        "  PROC main()\n    approach;\n    go pA;\n    stay pC;\n    PDispSet dWeld;\n    approach;\n    go pB;\n    PDispOff;\n  ENDPROC\n  PROC approach()\n    MoveL pApp,v200,fine,tool0;\n  ENDPROC\n  PROC go(robtarget p)\n    MoveL p,v200,fine,tool0;\n  ENDPROC\n  PROC stay(robtarget p)\n    MoveL p,v200,fine,tool0;\n  ENDPROC\n",
+    );
+    let set = Some(("PDispSet", line_of(&src, "PDispSet dWeld")));
+    assert_eq!(found, [set, set, set, None]);
+}
+
+/// A routine that returns with the displacement it set still active displaces its caller's
+/// motions after the call, up to the `PDispOff`; and since `main` runs again once it ends, a
+/// `main` that never ends it displaces its first motions too (from the second cycle on).
+#[test]
+fn a_displacement_left_active_by_a_routine_displaces_its_callers_motions_after_the_call() {
+    let routines = "  PROC main()\n    MoveL p1,v200,fine,tool0;\n    setDisp;\n    MoveL p2,v200,fine,tool0;\n    PDispOff;\n    MoveL p3,v200,fine,tool0;\n  ENDPROC\n  PROC setDisp()\n    PDispSet dWeld;\n  ENDPROC\n";
+    let (found, src) = displaced(&["p1", "p2", "p3"], routines);
+    let set = Some(("PDispSet", line_of(&src, "PDispSet dWeld")));
+    assert_eq!(found, [None, set, None]);
+    let never_ended = routines.replace("    PDispOff;\n", "");
+    let (found, src) = displaced(&["p1", "p2", "p3"], &never_ended);
+    let set = Some(("PDispSet", line_of(&src, "PDispSet dWeld")));
+    assert_eq!(found, [set, set, set]);
+}
+
+/// A loop that sets the displacement after its first motion and ends it at the bottom of its
+/// body: every way to that motion (into the loop, or round again past the `PDispOff`) has none
+/// active, so its target is not refused; when the end is only on one branch, the next pass
+/// may start displaced.
+#[test]
+fn a_loop_that_ends_its_displacement_at_the_bottom_starts_each_pass_undisplaced() {
+    let routines = "  PROC main()\n    WHILE TRUE DO\n      MoveL p1,v200,fine,tool0;\n      PDispSet dWeld;\n      MoveL p2,v200,fine,tool0;\n      PDispOff;\n    ENDWHILE\n  ENDPROC\n";
+    let (found, src) = displaced(&["p1", "p2"], routines);
+    let set = Some(("PDispSet", line_of(&src, "PDispSet dWeld")));
+    assert_eq!(found, [None, set]);
+    let sometimes = routines.replace("PDispOff;", "IF bDone PDispOff;");
+    let (found, src) = displaced(&["p1", "p2"], &sometimes);
+    let set = Some(("PDispSet", line_of(&src, "PDispSet dWeld")));
+    assert_eq!(found, [set, set]);
+}
+
+/// The external axes offset likewise: the track's targets moved to while `EOffsSet` may hold,
+/// a joint target's too, are refused naming it; those moved to before it, and a `MoveAbsJ
+/// …\NoEOffs` (which moves the axes to the values written), are not.
+#[test]
+fn an_axes_offset_refuses_only_the_motions_that_may_run_while_it_is_active() {
+    let targets = ["jPark", "pFree", "pShifted", "jShifted", "jOwn"];
+    let (found, src) = displaced(
+        &targets,
+        "  PROC main()\n    MoveAbsJ jPark,v200,fine,tool0;\n    MoveL pFree,v200,fine,tool0;\n    shift;\n  ENDPROC\n  PROC shift()\n    EOffsSet eShift;\n    MoveL pShifted,v200,fine,tool0;\n    MoveAbsJ jShifted,v200,fine,tool0;\n    MoveAbsJ jOwn\\NoEOffs,v200,fine,tool0;\n    EOffsOff;\n  ENDPROC\n",
+    );
+    let set = Some(("EOffsSet", line_of(&src, "EOffsSet eShift")));
+    assert_eq!(found, [None, None, set, set, None]);
+}
+
+/// An interrupt runs its `TRAP` between any two statements of the task: a `TRAP` that returns
+/// with a displacement active displaces every motion of the task after it (refused naming
+/// the `TRAP`'s instruction, as every target was before); one that ends it before it returns
+/// displaces its own motions only.
+#[test]
+fn a_trap_that_leaves_a_displacement_active_displaces_the_whole_task() {
+    let routines = "  PROC main()\n    MoveL pMain,v200,fine,tool0;\n    MoveAbsJ jMain,v200,fine,tool0;\n  ENDPROC\n  TRAP service\n    PDispSet dWeld;\n    MoveL pTrap,v200,fine,tool0;\n  ENDTRAP\n";
+    let targets = ["pMain", "jMain", "pTrap"];
+    let (found, src) = displaced(&targets, routines);
+    let set = Some(("PDispSet", line_of(&src, "PDispSet dWeld")));
+    assert_eq!(found, [set, None, set]);
+    let ended = routines.replace("  ENDTRAP", "    PDispOff;\n  ENDTRAP");
+    let (found, src) = displaced(&targets, &ended);
+    let set = Some(("PDispSet", line_of(&src, "PDispSet dWeld")));
+    assert_eq!(found, [None, None, set]);
+}
+
+/// Calls trackfix cannot follow to a routine: one no module given defines (an instruction of
+/// the controller, or a routine of a module not given) neither sets nor ends a displacement,
+/// so one active before stays active after it and none becomes active; one that names its
+/// routine at run time (`%"set" + "Disp"%`) may run any `PROC` of the task, so it leaves the
+/// displacement `setDisp` sets possibly active, and a `PROC` it may run while one is active is
+/// displaced.
+#[test]
+fn calls_to_routines_not_given_or_named_at_run_time() {
+    let (found, src) = displaced(
+        &["p1", "p2", "p3", "p4"],
+        "  PROC main()\n    MoveL p1,v200,fine,tool0;\n    PDispSet dWeld;\n    Unknown;\n    MoveL p2,v200,fine,tool0;\n    PDispOff;\n    Unknown;\n    MoveL p3,v200,fine,tool0;\n    %\"set\" + \"Disp\"%;\n    MoveL p4,v200,fine,tool0;\n    PDispOff;\n  ENDPROC\n  PROC setDisp()\n    PDispSet dFar;\n  ENDPROC\n",
+    );
+    let in_main = Some(("PDispSet", line_of(&src, "PDispSet dWeld")));
+    let in_set_disp = Some(("PDispSet", line_of(&src, "PDispSet dFar")));
+    assert_eq!(found, [None, in_main, None, in_set_disp]);
+    let (found, src) = displaced(
+        &["p5"],
+        "  PROC main()\n    PDispSet dWeld;\n    %\"m\" + \"v\"%;\n    PDispOff;\n  ENDPROC\n  PROC mv()\n    MoveL p5,v200,fine,tool0;\n  ENDPROC\n",
+    );
+    assert_eq!(found, [Some(("PDispSet", line_of(&src, "PDispSet dWeld")))]);
 }
 
 /// A KRL point taught in the `.dat` with the track at 1500 mm, as `DECL E6POS {name}={…}`.
