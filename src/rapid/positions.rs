@@ -882,6 +882,64 @@ struct RecordDecl {
     fields: Vec<(Span, Span)>,
 }
 
+/// How long the lists a call's record adds to are ([`Extractor::recorded_as_general`]).
+#[cfg(debug_assertions)]
+struct RecordLens {
+    uses: usize,
+    call_args: usize,
+    call_refs: usize,
+    call_inline: usize,
+    positions: usize,
+    passed_args: usize,
+    passed_names: usize,
+    misshapen: usize,
+    copies: usize,
+    computed: usize,
+    named_at_run_time: usize,
+    param_writes: usize,
+    param_assignments: usize,
+}
+
+#[cfg(debug_assertions)]
+impl RecordLens {
+    fn of(e: &Extractor<'_>) -> RecordLens {
+        RecordLens {
+            uses: e.uses.len(),
+            call_args: e.call_args.len(),
+            call_refs: e.call_refs.len(),
+            call_inline: e.call_inline.len(),
+            positions: e.positions.len(),
+            passed_args: e.passed.args.len(),
+            passed_names: e.passed.names.len(),
+            misshapen: e.misshapen.len(),
+            copies: e.copies.len(),
+            computed: e.computed.len(),
+            named_at_run_time: e.named_at_run_time.len(),
+            param_writes: e.param_writes.len(),
+            param_assignments: e.param_assignments.len(),
+        }
+    }
+
+    /// Cuts every list of `e` back to these lengths.
+    fn cut_back(&self, e: &mut Extractor<'_>) {
+        e.uses.truncate(self.uses);
+        e.call_args.truncate(self.call_args);
+        e.call_refs.truncate(self.call_refs);
+        e.call_inline.truncate(self.call_inline);
+        while e.positions.len() > self.positions {
+            e.positions.remove(e.positions.len() - 1);
+        }
+        e.passed.args.truncate(self.passed_args);
+        e.passed.names.truncate(self.passed_names);
+        e.misshapen.truncate(self.misshapen);
+        e.copies.truncate(self.copies);
+        e.computed.truncate(self.computed);
+        e.named_at_run_time.truncate(self.named_at_run_time);
+        e.param_writes.truncate(self.param_writes);
+        e.param_assignments.truncate(self.param_assignments);
+    }
+}
+
 /// Collects positions, frames, offsets and usage from the parsed statements.
 pub struct Extractor<'l> {
     records: Vec<RecordDecl>,
@@ -1508,13 +1566,55 @@ impl<'l> Extractor<'l> {
 
     /// Packs robtarget `literal` declared as `name` (ASCII).
     fn push_literal(&mut self, src: &[u8], literal: &RobtargetLiteral, name: Span) {
+        self.push_literal_named(literal, Some(name.slice(src)));
+    }
+
+    /// The robtarget `literal` the parser read as a call's first argument: packed as a
+    /// declaration's is, with no name, and one of the call's inline targets when it has a
+    /// record (`of_call`, as the general path finds it in the call's expressions). Debug
+    /// builds hold it to what the general path reads of the arena's aggregate of its span
+    /// (the parser's reading of the call again).
+    fn push_inline_literal(
+        &mut self,
+        src: &[u8],
+        arena: &Arena,
+        literal: &RobtargetLiteral,
+        of_call: bool,
+    ) {
+        if of_call {
+            self.call_inline.push(self.positions.len());
+        }
+        self.push_literal_named(literal, None);
+        #[cfg(debug_assertions)]
+        {
+            let id = arena
+                .nodes
+                .iter()
+                .position(|n| n.kind == ExprKind::Aggregate && n.span() == literal.span);
+            let id = id.expect("a debug build's arena holds the general path's reading");
+            assert_eq!(
+                Self::literal_kind(arena, id as u32),
+                Some(PositionKind::Robtarget)
+            );
+            assert_eq!(
+                Self::shape_problem(arena, id as u32, PositionKind::Robtarget),
+                None
+            );
+            self.assert_read_as_general_named(src, arena, id as u32, None);
+        }
+        #[cfg(not(debug_assertions))]
+        let _ = (src, arena);
+    }
+
+    /// Packs robtarget `literal`, declared as `name` (ASCII) or written inline.
+    fn push_literal_named(&mut self, literal: &RobtargetLiteral, name: Option<&[u8]>) {
         let (line, column) = self
             .lines
             .line_col_from(&mut self.line_cursor, literal.span.start);
         self.positions.push_read_again(&ReadAgainTarget {
             span: literal.span,
             kind: PositionKind::Robtarget,
-            name: Some(name.slice(src)),
+            name,
             line,
             column,
             trans: literal.trans,
@@ -1531,13 +1631,21 @@ impl<'l> Extractor<'l> {
     /// at `id` declared as `name`.
     #[cfg(debug_assertions)]
     fn assert_read_as_general(&mut self, src: &[u8], arena: &Arena, id: u32, name: Span) {
-        let general = self.position(
-            src,
-            arena,
-            id,
-            PositionKind::Robtarget,
-            Some(text_of(src, name)),
-        );
+        self.assert_read_as_general_named(src, arena, id, Some(name));
+    }
+
+    /// [`Extractor::assert_read_as_general`] of a robtarget declared as `name` or, `None`,
+    /// written inline.
+    #[cfg(debug_assertions)]
+    fn assert_read_as_general_named(
+        &mut self,
+        src: &[u8],
+        arena: &Arena,
+        id: u32,
+        name: Option<Span>,
+    ) {
+        let name = name.map(|n| text_of(src, n));
+        let general = self.position(src, arena, id, PositionKind::Robtarget, name);
         assert!(!self.read_elsewhere.replace(false));
         let last = self.positions.len() - 1;
         assert_eq!(self.positions.get(last, src), general);
@@ -2503,8 +2611,22 @@ impl Extractor<'_> {
                     self.assert_recorded_as_read(src, arena, name, args, plain_args, span);
                     return;
                 }
-                self.statement_call(src, arena, name, args, plain_args, span);
-                self.last_plain_call = plain_args.is_some().then_some(span.start);
+                // Every test run records a call with a literal the general way first, and
+                // holds the fast path's record to it (a debug build's `args` are the general
+                // path's reading).
+                #[cfg(debug_assertions)]
+                let general =
+                    literal.map(|_| self.recorded_as_general(src, arena, name, args, span));
+                self.statement_call(src, arena, name, args, plain_args, literal, span);
+                #[cfg(debug_assertions)]
+                if let Some((since, general)) = general {
+                    let fast = self.recorded_since(src, &since);
+                    assert_eq!(fast, general, "a call with an inline literal");
+                }
+                // A call with a literal is none a call read from it repeats (the parser moves
+                // no call's arguments from it).
+                self.last_plain_call =
+                    (plain_args.is_some() && literal.is_none()).then_some(span.start);
             }
             Stmt::Assign { target, value } => {
                 let before = self.positions.len();
@@ -2720,10 +2842,59 @@ impl Extractor<'_> {
             format!("{:?}", (u.name, u.line, u.routine, u.wobj, u.tool, args))
         };
         let taken = of(self, uses - 1);
-        self.statement_call(src, arena, name, args, plain, span);
+        self.statement_call(src, arena, name, args, plain, None, span);
         assert_eq!(taken, of(self, uses), "a call recorded as the one before");
         self.uses.truncate(uses);
         self.call_args.truncate(n_args);
+    }
+
+    /// What recording the call `name` at `span` from its general reading (`args`) records, and
+    /// how long the lists were before it, to which they are cut back.
+    #[cfg(debug_assertions)]
+    fn recorded_as_general(
+        &mut self,
+        src: &[u8],
+        arena: &Arena,
+        name: Span,
+        args: u32,
+        span: Span,
+    ) -> (RecordLens, String) {
+        let since = RecordLens::of(self);
+        self.statement_call(src, arena, name, args, None, None, span);
+        let record = self.recorded_since(src, &since);
+        since.cut_back(self);
+        (since, record)
+    }
+
+    /// Everything a call's record added to the lists since `since`, as text.
+    #[cfg(debug_assertions)]
+    fn recorded_since(&self, src: &[u8], since: &RecordLens) -> String {
+        let uses: Vec<_> = self.uses[since.uses..]
+            .iter()
+            .map(|u| (u.name, u.line, u.routine, u.wobj, u.tool))
+            .collect();
+        let targets: Vec<_> = (since.positions..self.positions.len())
+            .map(|i| self.positions.get(i, src))
+            .collect();
+        let inline: Vec<_> = self.call_inline[since.call_inline..]
+            .iter()
+            .map(|&i| i.checked_sub(since.positions))
+            .collect();
+        format!(
+            "{uses:?}\n{:?}\n{:?}\n{inline:?}\n{targets:?}\n{:?}\n{:?}\n{:?}\n{:?}\n{:?}\n{:?}\n{:?}",
+            &self.call_args[since.call_args..],
+            &self.call_refs[since.call_refs..],
+            &self.passed.args[since.passed_args..],
+            &self.passed.names[since.passed_names..],
+            &self.misshapen[since.misshapen..],
+            &self.copies[since.copies..],
+            &self.computed[since.computed..],
+            &self.named_at_run_time[since.named_at_run_time..],
+            (
+                &self.param_writes[since.param_writes..],
+                &self.param_assignments[since.param_assignments..]
+            ),
+        )
     }
 
     /// The record of the call `name` at `span` before its arguments are read: its line and
@@ -2932,7 +3103,9 @@ impl Extractor<'_> {
     /// A call's use: its callee, line and routine, its tool and work object, its positional
     /// arguments, and the targets written in it or reached through an offset (`Offs(p10, ..)`).
     /// Arguments the parser read as plain names (`plain`) hold neither: no expression of
-    /// theirs is looked at.
+    /// theirs is looked at; the robtarget literal the parser read as the first of them
+    /// (`literal`) is the call's inline target, packed as it was read.
+    #[allow(clippy::too_many_arguments)]
     fn statement_call(
         &mut self,
         src: &[u8],
@@ -2940,17 +3113,23 @@ impl Extractor<'_> {
         name: Span,
         args: u32,
         plain: Option<&PlainArgs>,
+        literal: Option<&RobtargetLiteral>,
         span: Span,
     ) {
         let (inline, via_offset) = match plain {
             Some(_) => (Vec::new(), Vec::new()),
             None => self.scan(src, arena, true),
         };
-        let Some(mut u) = self.call_head(name, span) else {
+        let head = self.call_head(name, span);
+        if let Some(literal) = literal {
+            self.push_inline_literal(src, arena, literal, head.is_some());
+        }
+        let Some(mut u) = head else {
             return;
         };
         if writes_data_by_name(name.slice(src)) {
-            self.data_call(src, arena, name, args, plain, span);
+            let literal = literal.map(|l| l.span);
+            self.data_call(src, arena, name, args, plain, literal, span);
         }
         self.call_refs.extend(via_offset);
         self.call_inline.extend(inline);
@@ -2993,7 +3172,9 @@ impl Extractor<'_> {
     /// pp.trans.z, 10` changes `pp`; a data name computed at run time (or `SetAllDataVal` of a
     /// type that holds positions or frames) may touch any target, and a late call's arguments
     /// go to a routine trackfix cannot tell ([`Extractor::named_at_run_time`]).
+    /// The first of `plain` may be a robtarget `literal` (its span), which has no value there.
     #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
     fn data_call(
         &mut self,
         src: &[u8],
@@ -3001,6 +3182,7 @@ impl Extractor<'_> {
         name: Span,
         args: u32,
         plain: Option<&PlainArgs>,
+        literal: Option<Span>,
         span: Span,
     ) {
         // The positional arguments: (value, whether a string literal).
@@ -3010,7 +3192,7 @@ impl Extractor<'_> {
                 plain
                     .iter()
                     .filter(|a| !a.switch)
-                    .filter_map(|a| Some((a.value?, false))),
+                    .filter_map(|a| Some((a.value.or(literal)?, false))),
             ),
             None => {
                 for a in arena.children(args) {
@@ -3315,6 +3497,114 @@ mod tests {
             let fast = extracted(&src, true);
             let plain = extracted(&src, false);
             proptest::prop_assert_eq!(fast, plain);
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig {
+            cases: 256, ..proptest::prelude::ProptestConfig::default()
+        })]
+        /// Calls with a target written inline, of the fast path's shape and of others, among
+        /// motions to declared targets (which a call may repeat with a name changed), a
+        /// compact `IF`, data writers and a routine that takes a target: the same targets,
+        /// usage and reports either way.
+        #[test]
+        fn inline_targets_read_alike_with_and_without_the_fast_paths(
+            lines in proptest::collection::vec(motion_line(), 1..12),
+        ) {
+            let mut src = b"MODULE M\r\n\
+                PERS tooldata tGun:=[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\r\n\
+                TASK PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1,2,3],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\r\n\
+                CONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[10,9E9,9E9,9E9,9E9,9E9]];\r\n\
+                PROC main()\r\n"
+                .to_vec();
+            for l in &lines {
+                src.extend_from_slice(l);
+            }
+            src.extend_from_slice(b"ENDPROC\r\n\
+                PROC mv(robtarget p \\num d)\r\n  MoveL p, v10, fine, tGun\\WObj:=wCar;\r\nENDPROC\r\n\
+                ENDMODULE\r\n");
+            let fast = extracted(&src, true);
+            let plain = extracted(&src, false);
+            proptest::prop_assert_eq!(fast, plain);
+        }
+    }
+
+    /// A line of a routine: mostly a call with a target written inline
+    /// ([`crate::rapid::parser::inline_robtarget`]), else a motion to a declared target (alike
+    /// but for a name, as a program's runs are), an approach through `Offs`, or a compact `IF`.
+    fn motion_line() -> impl proptest::strategy::Strategy<Value = Vec<u8>> {
+        use proptest::prelude::*;
+        let callee = prop_oneof![
+            8 => proptest::sample::select(vec!["MoveL", "MoveJ", "MoveLDO", "TriggL"]),
+            1 => proptest::sample::select(vec!["MoveC", "Incr", "SetDataVal", "GetDataVal", "mv"]),
+        ];
+        let rest = proptest::sample::select(vec![
+            ", v1000, z10, tGun\\WObj:=wCar",
+            ",rdkSpeed,rdkZone,tGun,\\WObj:=wCar",
+            ", v10, fine, tool:=tGun",
+            ", v10, z1, tGun \\WObj := wCar \\Tool:=tGun",
+            "\\Conc, v10, z1, tGun",
+            " \\d:=dd",
+            ", p1",
+            "",
+            ", v10, z1, tGun\\WObj:=Offs(p1,0,0,1)",
+        ]);
+        let blank = proptest::sample::select(vec![" ", "\t", "\r\n    ", ""]);
+        let inline = (
+            callee,
+            blank,
+            crate::rapid::parser::inline_robtarget(),
+            rest,
+        )
+            .prop_map(|(c, b, t, r)| format!("  {c}{b}{t}{r};\r\n"));
+        let named = (
+            proptest::sample::select(vec!["MoveL", "MoveJ"]),
+            proptest::sample::select(vec!["p1", "p2", "p10"]),
+            proptest::sample::select(vec!["wCar", "wTable"]),
+        )
+            .prop_map(|(c, p, w)| format!("  {c} {p}, v1000, z10, tGun\\WObj:={w};\r\n"));
+        let other = proptest::sample::select(vec![
+            "  MoveL Offs(p1,0,0,10), v10, z1, tGun;\r\n",
+            "  IF di1 = 1 MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v10, fine, tGun;\r\n",
+            "  IF di1 = 1 MoveL p1, v10, fine, tGun;\r\n",
+        ])
+        .prop_map(str::to_owned);
+        prop_oneof![6 => inline, 3 => named, 1 => other]
+            .prop_map(|l| crate::rapid::parser::latin1_bytes(&l))
+    }
+
+    #[test]
+    fn a_motion_to_a_target_written_inline_is_recorded_as_the_general_path_records_it() {
+        let target = "[[1520.3,-850.1,612.4],[0.0,0.707107,0.707107,0.0],[0,0,-1,0],\
+            [1650.0,9E+09,9E+09,9E+09,9E+09,9E+09]]";
+        let src = format!(
+            "MODULE M\r\n\
+            PERS tooldata tGun:=[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\r\n\
+            TASK PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1,2,3],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\r\n\
+            PROC main()\r\n\
+              MoveL {target},v1000,z10,tGun\\WObj:=wCar;\r\n\
+              MoveL {target},v1000,z10,tGun\\WObj:=wCar;\r\n\
+              MoveJ {target}, v1000, fine, tool:=tGun;\r\n\
+              MoveL p1, v1000, z10, tGun\\WObj:=wCar;\r\n\
+              MoveL {target},v1000,z10,tGun\\WObj:=wCar;\r\n\
+              MoveL p2, v1000, z10, tGun\\WObj:=wCar;\r\n\
+            ENDPROC\r\n\
+            ENDMODULE\r\n"
+        );
+        let fast = extracted(src.as_bytes(), true);
+        assert_eq!(fast, extracted(src.as_bytes(), false));
+        // The four inline targets, unnamed, each used by its motion with its frame and tool.
+        assert_eq!(fast.0.len(), 4);
+        for (k, line) in [(0, 5), (1, 6), (2, 7), (3, 9)] {
+            let (p, usage) = &fast.0[k];
+            let p = p.as_ref().unwrap();
+            assert_eq!((p.name.is_none(), p.line), (true, line));
+            let wobj = if k == 2 { "wobj0" } else { "wCar" };
+            assert!(
+                usage.contains(wobj) && usage.contains("tGun"),
+                "{k}: {usage}"
+            );
         }
     }
 
