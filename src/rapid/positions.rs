@@ -1118,10 +1118,22 @@ struct ArgKinds<'t, 's> {
     /// no kind, and its speed and zone no tool: each is told by one load, where asking each
     /// argument whether it is `tool0`, then a declared tool, was half of finding a tool.
     may_be: [u8; 256],
-    /// The last argument looked up in `type_of`, as written, and its kind there: call after
-    /// call passes the same tool, which is then one compare of its bytes, not a hash.
-    last: std::cell::Cell<Option<(&'s [u8], Option<DeclKind>)>>,
+    /// The last arguments looked up in `type_of`, as written, and their kinds there: call
+    /// after call passes the same tool, which is then one compare of its bytes, not a hash.
+    /// A few are kept because a speed, a zone and a tool declared with the same first byte
+    /// (RoboDK's `rdkSpeed, rdkZone, rdkTool`) all pass [`ArgKinds::may_be`] and are looked
+    /// up in turn, where one remembered was a hash each, every call. Each is taken in turn
+    /// ([`ArgKinds::next`]), so a program's one tool stays in the first.
+    last: [std::cell::Cell<Option<ArgKind<'s>>>; RECENT_ARGS],
+    /// The entry of [`ArgKinds::last`] the next name looked up takes.
+    next: std::cell::Cell<usize>,
 }
+
+/// How many names [`ArgKinds::last`] remembers.
+const RECENT_ARGS: usize = 4;
+
+/// A name as written and its kind in [`ArgKinds::type_of`] (`None`: not declared there).
+type ArgKind<'s> = (&'s [u8], Option<DeclKind>);
 
 /// The kinds of [`ArgKinds::may_be`].
 const TOOL: u8 = 1;
@@ -1156,7 +1168,8 @@ impl<'t, 's> ArgKinds<'t, 's> {
         ArgKinds {
             type_of,
             may_be,
-            last: std::cell::Cell::new(None),
+            last: Default::default(),
+            next: std::cell::Cell::new(0),
         }
     }
 
@@ -1172,11 +1185,19 @@ impl<'t, 's> ArgKinds<'t, 's> {
     }
 
     fn declared(&self, n: NameKey<'s>, kind: DeclKind) -> bool {
-        let found = match self.last.get() {
-            Some((bytes, found)) if same_bytes(bytes, n.0) => found,
-            _ => {
+        let seen = self
+            .last
+            .iter()
+            .find_map(|l| l.get().filter(|&(bytes, _)| same_bytes(bytes, n.0)));
+        let found = match seen {
+            Some((_, found)) => found,
+            None => {
                 let found = self.type_of.get(&n).copied();
-                self.last.set(Some((n.0, found)));
+                let k = self.next.get();
+                if let Some(l) = self.last.get(k) {
+                    l.set(Some((n.0, found)));
+                }
+                self.next.set((k + 1) % RECENT_ARGS);
                 found
             }
         };
@@ -3442,6 +3463,48 @@ mod tests {
             assert_eq!(&*fast.name, latin1(bytes));
         }
         assert!(texts.get(b"wHeld").robhold && !texts.get(b"wCar").robhold);
+    }
+
+    #[test]
+    fn recent_argument_kinds_are_the_kinds_the_map_gives() {
+        use crate::resolve::DeclKind;
+        let type_of: NameMap<NameKey, DeclKind> = [
+            (NameKey(b"rdkSpeed"), DeclKind::Speed),
+            (NameKey(b"rdkZone"), DeclKind::Zone),
+            (NameKey(b"rdkTool"), DeclKind::Tool),
+            (NameKey(b"tGun"), DeclKind::Tool),
+            (NameKey(b"rdkTarget"), DeclKind::Other),
+        ]
+        .into_iter()
+        .collect();
+        let kinds = ArgKinds::new(&type_of);
+        let names: [&[u8]; 7] = [
+            b"rdkSpeed",
+            b"rdkZone",
+            b"rdkTool",
+            b"tGun",
+            b"rdkTarget",
+            b"rdkNone",
+            b"RDKTOOL",
+        ];
+        // A call's three in turn, again and again; then more distinct names than are kept,
+        // repeated, alternating and out of order.
+        let order = [
+            0, 1, 2, 0, 1, 2, 0, 1, 2, 3, 4, 5, 6, 0, 6, 2, 2, 5, 3, 1, 4, 0, 2,
+        ];
+        for &k in &order {
+            let n = NameKey(names[k]);
+            let want = type_of.get(&n).copied();
+            for kind in [
+                DeclKind::Tool,
+                DeclKind::Zone,
+                DeclKind::Speed,
+                DeclKind::Other,
+            ] {
+                assert_eq!(kinds.declared(n, kind), want == Some(kind), "{k} {kind:?}");
+            }
+        }
+        assert!(kinds.declared(NameKey(b"RDKTOOL"), DeclKind::Tool));
     }
 
     /// Targets with their usage (as `Debug` text), and the parser's and extractor's reports.
