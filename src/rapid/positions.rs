@@ -882,7 +882,7 @@ struct RecordDecl {
     fields: Vec<(Span, Span)>,
 }
 
-/// How long the lists a call's record adds to are ([`Extractor::recorded_as_general`]).
+/// How long the lists a call's record adds to are ([`Extractor::recorded_as_read`]).
 #[cfg(debug_assertions)]
 struct RecordLens {
     uses: usize,
@@ -1006,7 +1006,8 @@ pub struct Extractor<'l> {
     /// The line of the last statement or target placed: they come in file order.
     line_cursor: LineCursor,
     /// Where the call the last of [`Extractor::uses`] records starts, when it had plain
-    /// arguments (see [`Extractor::call_like_last`]).
+    /// arguments and its record is that use alone: no argument passed by name, no data
+    /// written by name (see [`Extractor::call_like_last`]).
     last_plain_call: Option<usize>,
 }
 
@@ -1934,7 +1935,7 @@ fn is_reference(src: &[u8], span: Span) -> bool {
 /// arguments' values (`GetDataVal`, `SetDataVal`, `SetAllDataVal`, `Add`, `Incr`, `Decr`,
 /// `Clear`) or calls a routine named at run time (`%pn%`): told by its first letter first, as
 /// a module's motions (`Move…`) pass here.
-#[inline]
+#[inline(always)]
 fn writes_data_by_name(name: &[u8]) -> bool {
     match name.first().map(u8::to_ascii_uppercase) {
         Some(b'%') => true,
@@ -2625,29 +2626,29 @@ impl Extractor<'_> {
                 }
             }
             Stmt::Call { name, args } => {
-                if let Some(m) = moved
-                    && self.call_like_last(name, &m, span)
-                {
-                    #[cfg(debug_assertions)]
-                    self.assert_recorded_as_read(src, arena, name, args, plain_args, span);
-                    return;
-                }
-                // Every test run records a call with a literal the general way first, and
-                // holds the fast path's record to it (a debug build's `args` are the general
-                // path's reading).
+                // Every test run records a call a fast path read (taken from the call before,
+                // or with a literal) from its arguments first, plain or (with a literal, a
+                // debug build's `args`) the general path's reading, and holds the fast path's
+                // record to that one: everything the record adds to any list.
                 #[cfg(debug_assertions)]
-                let general =
-                    literal.map(|_| self.recorded_as_general(src, arena, name, args, span));
-                self.statement_call(src, arena, name, args, plain_args, literal, span);
+                let read = (moved.is_some() || literal.is_some()).then(|| {
+                    let plain = plain_args.filter(|_| literal.is_none());
+                    self.recorded_as_read(src, arena, name, args, plain, span)
+                });
+                // A call taken from the one before records its use alone, as that one did.
+                let use_alone = moved.is_some_and(|m| self.call_like_last(src, name, &m, span))
+                    || self.statement_call(src, arena, name, args, plain_args, literal, span);
                 #[cfg(debug_assertions)]
-                if let Some((since, general)) = general {
+                if let Some((since, read)) = read {
                     let fast = self.recorded_since(src, &since);
-                    assert_eq!(fast, general, "a call with an inline literal");
+                    assert_eq!(fast, read, "a call a fast path read");
                 }
-                // A call with a literal is none a call read from it repeats (the parser moves
-                // no call's arguments from it).
+                // A call read as this one copies its use and its arguments: only a call whose
+                // record is those alone may be copied, not one that passes an argument by
+                // name or writes data by name. A call with a literal is none a call read from
+                // it repeats (the parser moves no call's arguments from it).
                 self.last_plain_call =
-                    (plain_args.is_some() && literal.is_none()).then_some(span.start);
+                    (plain_args.is_some() && literal.is_none() && use_alone).then_some(span.start);
             }
             Stmt::Assign { target, value } => {
                 let before = self.positions.len();
@@ -2804,8 +2805,10 @@ impl Extractor<'_> {
     /// Records the call `name` at `span` from the call before, which it repeats with its
     /// offsets moved as `m` says (the parser took its arguments from that call's, with no
     /// label changed): the frame, the tool and the positional references are that call's,
-    /// moved. `false`, recording nothing, unless the last call recorded is that one.
-    fn call_like_last(&mut self, name: Span, m: &MovedCall, span: Span) -> bool {
+    /// moved. `false`, recording nothing, unless the last call recorded is that one and its
+    /// record was its use alone ([`Extractor::last_plain_call`]), and this one writes no data
+    /// by name (its callee may be the name changed).
+    fn call_like_last(&mut self, src: &[u8], name: Span, m: &MovedCall, span: Span) -> bool {
         let Some(last) = self
             .uses
             .last()
@@ -2814,6 +2817,11 @@ impl Extractor<'_> {
         else {
             return false;
         };
+        // The last call wrote no data by name: this one neither, unless its callee is the
+        // name changed.
+        if m.changed_by(last.name.span().end) && writes_data_by_name(name.slice(src)) {
+            return false;
+        }
         let moved = |s: Span32| {
             let s = s.span();
             Span32::of(Span::new(m.moved(s.start), m.moved(s.end)))
@@ -2836,14 +2844,13 @@ impl Extractor<'_> {
             tool: last.tool.and_then(moved),
             ..u
         });
-        self.last_plain_call = Some(span.start);
         true
     }
 
-    /// Asserts that the call [`Extractor::call_like_last`] just recorded is what reading its
-    /// arguments records.
+    /// What recording the call `name` at `span` from its arguments records (`plain`, else the
+    /// arena's `args`), and how long the lists were before it, to which they are cut back.
     #[cfg(debug_assertions)]
-    fn assert_recorded_as_read(
+    fn recorded_as_read(
         &mut self,
         src: &[u8],
         arena: &Arena,
@@ -2851,37 +2858,9 @@ impl Extractor<'_> {
         args: u32,
         plain: Option<&PlainArgs>,
         span: Span,
-    ) {
-        let (uses, n_args) = (self.uses.len(), self.call_args.len());
-        let of = |e: &Extractor<'_>, k: usize| {
-            let u = e.uses[k];
-            let end = e
-                .uses
-                .get(k + 1)
-                .map_or(e.call_args.len(), |n| n.args_start as usize);
-            let args = e.call_args[u.args_start as usize..end].to_vec();
-            format!("{:?}", (u.name, u.line, u.routine, u.wobj, u.tool, args))
-        };
-        let taken = of(self, uses - 1);
-        self.statement_call(src, arena, name, args, plain, None, span);
-        assert_eq!(taken, of(self, uses), "a call recorded as the one before");
-        self.uses.truncate(uses);
-        self.call_args.truncate(n_args);
-    }
-
-    /// What recording the call `name` at `span` from its general reading (`args`) records, and
-    /// how long the lists were before it, to which they are cut back.
-    #[cfg(debug_assertions)]
-    fn recorded_as_general(
-        &mut self,
-        src: &[u8],
-        arena: &Arena,
-        name: Span,
-        args: u32,
-        span: Span,
     ) -> (RecordLens, String) {
         let since = RecordLens::of(self);
-        self.statement_call(src, arena, name, args, None, None, span);
+        self.statement_call(src, arena, name, args, plain, None, span);
         let record = self.recorded_since(src, &since);
         since.cut_back(self);
         (since, record)
@@ -3125,7 +3104,9 @@ impl Extractor<'_> {
     /// arguments, and the targets written in it or reached through an offset (`Offs(p10, ..)`).
     /// Arguments the parser read as plain names (`plain`) hold neither: no expression of
     /// theirs is looked at; the robtarget literal the parser read as the first of them
-    /// (`literal`) is the call's inline target, packed as it was read.
+    /// (`literal`) is the call's inline target, packed as it was read. Whether the record is
+    /// the call's use alone: no argument passed by name, no data written by name (see
+    /// [`Extractor::last_plain_call`]).
     #[allow(clippy::too_many_arguments)]
     fn statement_call(
         &mut self,
@@ -3136,7 +3117,7 @@ impl Extractor<'_> {
         plain: Option<&PlainArgs>,
         literal: Option<&RobtargetLiteral>,
         span: Span,
-    ) {
+    ) -> bool {
         let (inline, via_offset) = match plain {
             Some(_) => (Vec::new(), Vec::new()),
             None => self.scan(src, arena, true),
@@ -3146,9 +3127,11 @@ impl Extractor<'_> {
             self.push_inline_literal(src, arena, literal, head.is_some());
         }
         let Some(mut u) = head else {
-            return;
+            return false;
         };
-        if writes_data_by_name(name.slice(src)) {
+        let passed = self.passed.args.len();
+        let writes = writes_data_by_name(name.slice(src));
+        if writes {
             let literal = literal.map(|l| l.span);
             self.data_call(src, arena, name, args, plain, literal, span);
         }
@@ -3157,12 +3140,13 @@ impl Extractor<'_> {
         match plain {
             Some(plain) => {
                 for a in plain.iter() {
-                    // A named argument other than the frame and tool: rare (`mv \p:=p10;`).
-                    if a.switch
+                    // A named argument other than the frame and tool: rare (`mv \p:=p10;`,
+                    // `mv d, p:=p10;`).
+                    if a.label.end > a.label.start
                         && let Some(v) = a.value
                         && !a.label.slice(src).eq_ignore_ascii_case(b"WObj")
                     {
-                        self.composed_arg(&u, src, name, (true, a.label), v, true);
+                        self.composed_arg(&u, src, name, (a.switch, a.label), v, true);
                     }
                     self.call_arg(&mut u, src, a.switch, a.label, a.value.map(|v| (v, true)));
                 }
@@ -3185,6 +3169,7 @@ impl Extractor<'_> {
             }
         }
         self.uses.push(u);
+        !writes && self.passed.args.len() == passed
     }
 
     /// Out of line, a call that writes data by name or through its first argument, or calls a
@@ -3827,6 +3812,37 @@ mod tests {
             "{}",
             usage[3]
         );
+    }
+
+    /// A call read as the one before it (`mv \\p:=p11;` after `mv \\p:=p10;`), and a required
+    /// argument given by name (`mr p:=p12, d:=n1;`), pass their targets to the routine's
+    /// parameter as the general path does: each moves with the routine's motion. A call that
+    /// writes data by name is recorded as such after one alike that does not (`Incr n1;` after
+    /// `Show n1;`; the test build's record of the fast paths holds it to the plain one).
+    #[test]
+    fn arguments_passed_by_name_reach_the_routine_on_the_fast_paths() {
+        let src = b"MODULE M\r\n\
+            CONST robtarget p10:=[[1,2,3],[1,0,0,0],[0,0,0,0],[10,9E9,9E9,9E9,9E9,9E9]];\r\n\
+            CONST robtarget p11:=[[1,2,3],[1,0,0,0],[0,0,0,0],[11,9E9,9E9,9E9,9E9,9E9]];\r\n\
+            CONST robtarget p12:=[[1,2,3],[1,0,0,0],[0,0,0,0],[12,9E9,9E9,9E9,9E9,9E9]];\r\n\
+            CONST robtarget p13:=[[1,2,3],[1,0,0,0],[0,0,0,0],[13,9E9,9E9,9E9,9E9,9E9]];\r\n\
+            TASK PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1,2,3],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\r\n\
+            PROC main()\r\n\
+              mv \\p:=p10;\r\n\
+              mv \\p:=p11;\r\n\
+              mr p:=p12, d:=n1;\r\n\
+              mr p:=p13, d:=n1;\r\n\
+              Show n1;\r\n\
+              Incr n1;\r\n\
+            ENDPROC\r\n\
+            PROC mv(\\robtarget p)\r\n  MoveL p, v10, z1, tool0\\WObj:=wCar;\r\nENDPROC\r\n\
+            PROC mr(num d, robtarget p)\r\n  MoveL p, v10, z1, tool0\\WObj:=wCar;\r\nENDPROC\r\n\
+            ENDMODULE\r\n";
+        let fast = extracted(src, true);
+        assert_eq!(fast, extracted(src, false));
+        for (k, (_, usage)) in fast.0.iter().enumerate() {
+            assert!(usage.contains("\"wCar\""), "p1{k}: {usage}");
+        }
     }
 
     #[test]

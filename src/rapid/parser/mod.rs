@@ -99,6 +99,12 @@ pub(crate) struct MovedCall {
 }
 
 impl MovedCall {
+    /// Whether the name changed, if any, ends at or before the offset `at` of the call before
+    /// (at its callee's end: the callee changed, `MoveJ` for `MoveL`).
+    pub(crate) fn changed_by(&self, at: usize) -> bool {
+        self.pivot <= at
+    }
+
     /// Where the offset `at` of the call before lies in this one.
     #[inline(always)]
     pub(crate) fn moved(&self, at: usize) -> usize {
