@@ -1033,6 +1033,64 @@ struct RecordDecl {
     fields: Vec<(Span, Span)>,
 }
 
+/// How long the lists a call's record adds to are ([`Extractor::recorded_as_read`]).
+#[cfg(debug_assertions)]
+struct RecordLens {
+    uses: usize,
+    call_args: usize,
+    call_refs: usize,
+    call_inline: usize,
+    positions: usize,
+    passed_args: usize,
+    passed_names: usize,
+    misshapen: usize,
+    copies: usize,
+    computed: usize,
+    named_at_run_time: usize,
+    param_writes: usize,
+    param_assignments: usize,
+}
+
+#[cfg(debug_assertions)]
+impl RecordLens {
+    fn of(e: &Extractor<'_>) -> RecordLens {
+        RecordLens {
+            uses: e.uses.len(),
+            call_args: e.call_args.len(),
+            call_refs: e.call_refs.len(),
+            call_inline: e.call_inline.len(),
+            positions: e.positions.len(),
+            passed_args: e.passed.args.len(),
+            passed_names: e.passed.names.len(),
+            misshapen: e.misshapen.len(),
+            copies: e.copies.len(),
+            computed: e.computed.len(),
+            named_at_run_time: e.named_at_run_time.len(),
+            param_writes: e.param_writes.len(),
+            param_assignments: e.param_assignments.len(),
+        }
+    }
+
+    /// Cuts every list of `e` back to these lengths.
+    fn cut_back(&self, e: &mut Extractor<'_>) {
+        e.uses.truncate(self.uses);
+        e.call_args.truncate(self.call_args);
+        e.call_refs.truncate(self.call_refs);
+        e.call_inline.truncate(self.call_inline);
+        while e.positions.len() > self.positions {
+            e.positions.remove(e.positions.len() - 1);
+        }
+        e.passed.args.truncate(self.passed_args);
+        e.passed.names.truncate(self.passed_names);
+        e.misshapen.truncate(self.misshapen);
+        e.copies.truncate(self.copies);
+        e.computed.truncate(self.computed);
+        e.named_at_run_time.truncate(self.named_at_run_time);
+        e.param_writes.truncate(self.param_writes);
+        e.param_assignments.truncate(self.param_assignments);
+    }
+}
+
 /// Collects positions, frames, offsets and usage from the parsed statements.
 pub struct Extractor<'l> {
     records: Vec<RecordDecl>,
@@ -1099,7 +1157,8 @@ pub struct Extractor<'l> {
     /// The line of the last statement or target placed: they come in file order.
     line_cursor: LineCursor,
     /// Where the call the last of [`Extractor::uses`] records starts, when it had plain
-    /// arguments (see [`Extractor::call_like_last`]).
+    /// arguments and its record is that use alone: no argument passed by name, no data
+    /// written by name (see [`Extractor::call_like_last`]).
     last_plain_call: Option<usize>,
 }
 
@@ -1211,10 +1270,22 @@ struct ArgKinds<'t, 's> {
     /// no kind, and its speed and zone no tool: each is told by one load, where asking each
     /// argument whether it is `tool0`, then a declared tool, was half of finding a tool.
     may_be: [u8; 256],
-    /// The last argument looked up in `type_of`, as written, and its kind there: call after
-    /// call passes the same tool, which is then one compare of its bytes, not a hash.
-    last: std::cell::Cell<Option<(&'s [u8], Option<DeclKind>)>>,
+    /// The last arguments looked up in `type_of`, as written, and their kinds there: call
+    /// after call passes the same tool, which is then one compare of its bytes, not a hash.
+    /// A few are kept because a speed, a zone and a tool declared with the same first byte
+    /// (RoboDK's `rdkSpeed, rdkZone, rdkTool`) all pass [`ArgKinds::may_be`] and are looked
+    /// up in turn, where one remembered was a hash each, every call. Each is taken in turn
+    /// ([`ArgKinds::next`]), so a program's one tool stays in the first.
+    last: [std::cell::Cell<Option<ArgKind<'s>>>; RECENT_ARGS],
+    /// The entry of [`ArgKinds::last`] the next name looked up takes.
+    next: std::cell::Cell<usize>,
 }
+
+/// How many names [`ArgKinds::last`] remembers.
+const RECENT_ARGS: usize = 4;
+
+/// A name as written and its kind in [`ArgKinds::type_of`] (`None`: not declared there).
+type ArgKind<'s> = (&'s [u8], Option<DeclKind>);
 
 /// The kinds of [`ArgKinds::may_be`].
 const TOOL: u8 = 1;
@@ -1249,7 +1320,8 @@ impl<'t, 's> ArgKinds<'t, 's> {
         ArgKinds {
             type_of,
             may_be,
-            last: std::cell::Cell::new(None),
+            last: Default::default(),
+            next: std::cell::Cell::new(0),
         }
     }
 
@@ -1265,11 +1337,19 @@ impl<'t, 's> ArgKinds<'t, 's> {
     }
 
     fn declared(&self, n: NameKey<'s>, kind: DeclKind) -> bool {
-        let found = match self.last.get() {
-            Some((bytes, found)) if same_bytes(bytes, n.0) => found,
-            _ => {
+        let seen = self
+            .last
+            .iter()
+            .find_map(|l| l.get().filter(|&(bytes, _)| same_bytes(bytes, n.0)));
+        let found = match seen {
+            Some((_, found)) => found,
+            None => {
                 let found = self.type_of.get(&n).copied();
-                self.last.set(Some((n.0, found)));
+                let k = self.next.get();
+                if let Some(l) = self.last.get(k) {
+                    l.set(Some((n.0, found)));
+                }
+                self.next.set((k + 1) % RECENT_ARGS);
                 found
             }
         };
@@ -1659,13 +1739,55 @@ impl<'l> Extractor<'l> {
 
     /// Packs robtarget `literal` declared as `name` (ASCII).
     fn push_literal(&mut self, src: &[u8], literal: &RobtargetLiteral, name: Span) {
+        self.push_literal_named(literal, Some(name.slice(src)));
+    }
+
+    /// The robtarget `literal` the parser read as a call's first argument: packed as a
+    /// declaration's is, with no name, and one of the call's inline targets when it has a
+    /// record (`of_call`, as the general path finds it in the call's expressions). Debug
+    /// builds hold it to what the general path reads of the arena's aggregate of its span
+    /// (the parser's reading of the call again).
+    fn push_inline_literal(
+        &mut self,
+        src: &[u8],
+        arena: &Arena,
+        literal: &RobtargetLiteral,
+        of_call: bool,
+    ) {
+        if of_call {
+            self.call_inline.push(self.positions.len());
+        }
+        self.push_literal_named(literal, None);
+        #[cfg(debug_assertions)]
+        {
+            let id = arena
+                .nodes
+                .iter()
+                .position(|n| n.kind == ExprKind::Aggregate && n.span() == literal.span);
+            let id = id.expect("a debug build's arena holds the general path's reading");
+            assert_eq!(
+                Self::literal_kind(arena, id as u32),
+                Some(PositionKind::Robtarget)
+            );
+            assert_eq!(
+                Self::shape_problem(arena, id as u32, PositionKind::Robtarget),
+                None
+            );
+            self.assert_read_as_general_named(src, arena, id as u32, None);
+        }
+        #[cfg(not(debug_assertions))]
+        let _ = (src, arena);
+    }
+
+    /// Packs robtarget `literal`, declared as `name` (ASCII) or written inline.
+    fn push_literal_named(&mut self, literal: &RobtargetLiteral, name: Option<&[u8]>) {
         let (line, column) = self
             .lines
             .line_col_from(&mut self.line_cursor, literal.span.start);
         self.positions.push_read_again(&ReadAgainTarget {
             span: literal.span,
             kind: PositionKind::Robtarget,
-            name: Some(name.slice(src)),
+            name,
             line,
             column,
             trans: literal.trans,
@@ -1682,13 +1804,21 @@ impl<'l> Extractor<'l> {
     /// at `id` declared as `name`.
     #[cfg(debug_assertions)]
     fn assert_read_as_general(&mut self, src: &[u8], arena: &Arena, id: u32, name: Span) {
-        let general = self.position(
-            src,
-            arena,
-            id,
-            PositionKind::Robtarget,
-            Some(text_of(src, name)),
-        );
+        self.assert_read_as_general_named(src, arena, id, Some(name));
+    }
+
+    /// [`Extractor::assert_read_as_general`] of a robtarget declared as `name` or, `None`,
+    /// written inline.
+    #[cfg(debug_assertions)]
+    fn assert_read_as_general_named(
+        &mut self,
+        src: &[u8],
+        arena: &Arena,
+        id: u32,
+        name: Option<Span>,
+    ) {
+        let name = name.map(|n| text_of(src, n));
+        let general = self.position(src, arena, id, PositionKind::Robtarget, name);
         assert!(!self.read_elsewhere.replace(false));
         let last = self.positions.len() - 1;
         assert_eq!(self.positions.get(last, src), general);
@@ -1956,7 +2086,7 @@ fn is_reference(src: &[u8], span: Span) -> bool {
 /// arguments' values (`GetDataVal`, `SetDataVal`, `SetAllDataVal`, `Add`, `Incr`, `Decr`,
 /// `Clear`) or calls a routine named at run time (`%pn%`): told by its first letter first, as
 /// a module's motions (`Move…`) pass here.
-#[inline]
+#[inline(always)]
 fn writes_data_by_name(name: &[u8]) -> bool {
     match name.first().map(u8::to_ascii_uppercase) {
         Some(b'%') => true,
@@ -2660,15 +2790,29 @@ impl Extractor<'_> {
                 }
             }
             Stmt::Call { name, args } => {
-                if let Some(m) = moved
-                    && self.call_like_last(name, &m, span)
-                {
-                    #[cfg(debug_assertions)]
-                    self.assert_recorded_as_read(src, arena, name, args, plain_args, span);
-                    return;
+                // Every test run records a call a fast path read (taken from the call before,
+                // or with a literal) from its arguments first, plain or (with a literal, a
+                // debug build's `args`) the general path's reading, and holds the fast path's
+                // record to that one: everything the record adds to any list.
+                #[cfg(debug_assertions)]
+                let read = (moved.is_some() || literal.is_some()).then(|| {
+                    let plain = plain_args.filter(|_| literal.is_none());
+                    self.recorded_as_read(src, arena, name, args, plain, span)
+                });
+                // A call taken from the one before records its use alone, as that one did.
+                let use_alone = moved.is_some_and(|m| self.call_like_last(src, name, &m, span))
+                    || self.statement_call(src, arena, name, args, plain_args, literal, span);
+                #[cfg(debug_assertions)]
+                if let Some((since, read)) = read {
+                    let fast = self.recorded_since(src, &since);
+                    assert_eq!(fast, read, "a call a fast path read");
                 }
-                self.statement_call(src, arena, name, args, plain_args, span);
-                self.last_plain_call = plain_args.is_some().then_some(span.start);
+                // A call read as this one copies its use and its arguments: only a call whose
+                // record is those alone may be copied, not one that passes an argument by
+                // name or writes data by name. A call with a literal is none a call read from
+                // it repeats (the parser moves no call's arguments from it).
+                self.last_plain_call =
+                    (plain_args.is_some() && literal.is_none() && use_alone).then_some(span.start);
             }
             Stmt::Assign { target, value } => {
                 let before = self.positions.len();
@@ -2825,8 +2969,10 @@ impl Extractor<'_> {
     /// Records the call `name` at `span` from the call before, which it repeats with its
     /// offsets moved as `m` says (the parser took its arguments from that call's, with no
     /// label changed): the frame, the tool and the positional references are that call's,
-    /// moved. `false`, recording nothing, unless the last call recorded is that one.
-    fn call_like_last(&mut self, name: Span, m: &MovedCall, span: Span) -> bool {
+    /// moved. `false`, recording nothing, unless the last call recorded is that one and its
+    /// record was its use alone ([`Extractor::last_plain_call`]), and this one writes no data
+    /// by name (its callee may be the name changed).
+    fn call_like_last(&mut self, src: &[u8], name: Span, m: &MovedCall, span: Span) -> bool {
         let Some(last) = self
             .uses
             .last()
@@ -2835,6 +2981,11 @@ impl Extractor<'_> {
         else {
             return false;
         };
+        // The last call wrote no data by name: this one neither, unless its callee is the
+        // name changed.
+        if m.changed_by(last.name.span().end) && writes_data_by_name(name.slice(src)) {
+            return false;
+        }
         let moved = |s: Span32| {
             let s = s.span();
             Span32::of(Span::new(m.moved(s.start), m.moved(s.end)))
@@ -2857,14 +3008,13 @@ impl Extractor<'_> {
             tool: last.tool.and_then(moved),
             ..u
         });
-        self.last_plain_call = Some(span.start);
         true
     }
 
-    /// Asserts that the call [`Extractor::call_like_last`] just recorded is what reading its
-    /// arguments records.
+    /// What recording the call `name` at `span` from its arguments records (`plain`, else the
+    /// arena's `args`), and how long the lists were before it, to which they are cut back.
     #[cfg(debug_assertions)]
-    fn assert_recorded_as_read(
+    fn recorded_as_read(
         &mut self,
         src: &[u8],
         arena: &Arena,
@@ -2872,22 +3022,43 @@ impl Extractor<'_> {
         args: u32,
         plain: Option<&PlainArgs>,
         span: Span,
-    ) {
-        let (uses, n_args) = (self.uses.len(), self.call_args.len());
-        let of = |e: &Extractor<'_>, k: usize| {
-            let u = e.uses[k];
-            let end = e
-                .uses
-                .get(k + 1)
-                .map_or(e.call_args.len(), |n| n.args_start as usize);
-            let args = e.call_args[u.args_start as usize..end].to_vec();
-            format!("{:?}", (u.name, u.line, u.routine, u.wobj, u.tool, args))
-        };
-        let taken = of(self, uses - 1);
-        self.statement_call(src, arena, name, args, plain, span);
-        assert_eq!(taken, of(self, uses), "a call recorded as the one before");
-        self.uses.truncate(uses);
-        self.call_args.truncate(n_args);
+    ) -> (RecordLens, String) {
+        let since = RecordLens::of(self);
+        self.statement_call(src, arena, name, args, plain, None, span);
+        let record = self.recorded_since(src, &since);
+        since.cut_back(self);
+        (since, record)
+    }
+
+    /// Everything a call's record added to the lists since `since`, as text.
+    #[cfg(debug_assertions)]
+    fn recorded_since(&self, src: &[u8], since: &RecordLens) -> String {
+        let uses: Vec<_> = self.uses[since.uses..]
+            .iter()
+            .map(|u| (u.name, u.line, u.routine, u.wobj, u.tool))
+            .collect();
+        let targets: Vec<_> = (since.positions..self.positions.len())
+            .map(|i| self.positions.get(i, src))
+            .collect();
+        let inline: Vec<_> = self.call_inline[since.call_inline..]
+            .iter()
+            .map(|&i| i.checked_sub(since.positions))
+            .collect();
+        format!(
+            "{uses:?}\n{:?}\n{:?}\n{inline:?}\n{targets:?}\n{:?}\n{:?}\n{:?}\n{:?}\n{:?}\n{:?}\n{:?}",
+            &self.call_args[since.call_args..],
+            &self.call_refs[since.call_refs..],
+            &self.passed.args[since.passed_args..],
+            &self.passed.names[since.passed_names..],
+            &self.misshapen[since.misshapen..],
+            &self.copies[since.copies..],
+            &self.computed[since.computed..],
+            &self.named_at_run_time[since.named_at_run_time..],
+            (
+                &self.param_writes[since.param_writes..],
+                &self.param_assignments[since.param_assignments..]
+            ),
+        )
     }
 
     /// The record of the call `name` at `span` before its arguments are read: its line and
@@ -3096,7 +3267,11 @@ impl Extractor<'_> {
     /// A call's use: its callee, line and routine, its tool and work object, its positional
     /// arguments, and the targets written in it or reached through an offset (`Offs(p10, ..)`).
     /// Arguments the parser read as plain names (`plain`) hold neither: no expression of
-    /// theirs is looked at.
+    /// theirs is looked at; the robtarget literal the parser read as the first of them
+    /// (`literal`) is the call's inline target, packed as it was read. Whether the record is
+    /// the call's use alone: no argument passed by name, no data written by name (see
+    /// [`Extractor::last_plain_call`]).
+    #[allow(clippy::too_many_arguments)]
     fn statement_call(
         &mut self,
         src: &[u8],
@@ -3104,29 +3279,38 @@ impl Extractor<'_> {
         name: Span,
         args: u32,
         plain: Option<&PlainArgs>,
+        literal: Option<&RobtargetLiteral>,
         span: Span,
-    ) {
+    ) -> bool {
         let (inline, via_offset) = match plain {
             Some(_) => (Vec::new(), Vec::new()),
             None => self.scan(src, arena, true),
         };
-        let Some(mut u) = self.call_head(name, span) else {
-            return;
+        let head = self.call_head(name, span);
+        if let Some(literal) = literal {
+            self.push_inline_literal(src, arena, literal, head.is_some());
+        }
+        let Some(mut u) = head else {
+            return false;
         };
-        if writes_data_by_name(name.slice(src)) {
-            self.data_call(src, arena, name, args, plain, span);
+        let passed = self.passed.args.len();
+        let writes = writes_data_by_name(name.slice(src));
+        if writes {
+            let literal = literal.map(|l| l.span);
+            self.data_call(src, arena, name, args, plain, literal, span);
         }
         self.call_refs.extend(via_offset);
         self.call_inline.extend(inline);
         match plain {
             Some(plain) => {
                 for a in plain.iter() {
-                    // A named argument other than the frame and tool: rare (`mv \p:=p10;`).
-                    if a.switch
+                    // A named argument other than the frame and tool: rare (`mv \p:=p10;`,
+                    // `mv d, p:=p10;`).
+                    if a.label.end > a.label.start
                         && let Some(v) = a.value
                         && !a.label.slice(src).eq_ignore_ascii_case(b"WObj")
                     {
-                        self.composed_arg(&u, src, name, (true, a.label), v, true);
+                        self.composed_arg(&u, src, name, (a.switch, a.label), v, true);
                     }
                     self.call_arg(&mut u, src, a.switch, a.label, a.value.map(|v| (v, true)));
                 }
@@ -3149,6 +3333,7 @@ impl Extractor<'_> {
             }
         }
         self.uses.push(u);
+        !writes && self.passed.args.len() == passed
     }
 
     /// Out of line, a call that writes data by name or through its first argument, or calls a
@@ -3157,7 +3342,9 @@ impl Extractor<'_> {
     /// pp.trans.z, 10` changes `pp`; a data name computed at run time (or `SetAllDataVal` of a
     /// type that holds positions or frames) may touch any target, and a late call's arguments
     /// go to a routine trackfix cannot tell ([`Extractor::named_at_run_time`]).
+    /// The first of `plain` may be a robtarget `literal` (its span), which has no value there.
     #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
     fn data_call(
         &mut self,
         src: &[u8],
@@ -3165,6 +3352,7 @@ impl Extractor<'_> {
         name: Span,
         args: u32,
         plain: Option<&PlainArgs>,
+        literal: Option<Span>,
         span: Span,
     ) {
         // The positional arguments: (value, whether a string literal).
@@ -3174,7 +3362,7 @@ impl Extractor<'_> {
                 plain
                     .iter()
                     .filter(|a| !a.switch)
-                    .filter_map(|a| Some((a.value?, false))),
+                    .filter_map(|a| Some((a.value.or(literal)?, false))),
             ),
             None => {
                 for a in arena.children(args) {
@@ -3426,6 +3614,48 @@ mod tests {
         assert!(texts.get(b"wHeld").robhold && !texts.get(b"wCar").robhold);
     }
 
+    #[test]
+    fn recent_argument_kinds_are_the_kinds_the_map_gives() {
+        use crate::resolve::DeclKind;
+        let type_of: NameMap<NameKey, DeclKind> = [
+            (NameKey(b"rdkSpeed"), DeclKind::Speed),
+            (NameKey(b"rdkZone"), DeclKind::Zone),
+            (NameKey(b"rdkTool"), DeclKind::Tool),
+            (NameKey(b"tGun"), DeclKind::Tool),
+            (NameKey(b"rdkTarget"), DeclKind::Other),
+        ]
+        .into_iter()
+        .collect();
+        let kinds = ArgKinds::new(&type_of);
+        let names: [&[u8]; 7] = [
+            b"rdkSpeed",
+            b"rdkZone",
+            b"rdkTool",
+            b"tGun",
+            b"rdkTarget",
+            b"rdkNone",
+            b"RDKTOOL",
+        ];
+        // A call's three in turn, again and again; then more distinct names than are kept,
+        // repeated, alternating and out of order.
+        let order = [
+            0, 1, 2, 0, 1, 2, 0, 1, 2, 3, 4, 5, 6, 0, 6, 2, 2, 5, 3, 1, 4, 0, 2,
+        ];
+        for &k in &order {
+            let n = NameKey(names[k]);
+            let want = type_of.get(&n).copied();
+            for kind in [
+                DeclKind::Tool,
+                DeclKind::Zone,
+                DeclKind::Speed,
+                DeclKind::Other,
+            ] {
+                assert_eq!(kinds.declared(n, kind), want == Some(kind), "{k} {kind:?}");
+            }
+        }
+        assert!(kinds.declared(NameKey(b"RDKTOOL"), DeclKind::Tool));
+    }
+
     /// Targets with their usage (as `Debug` text), and the parser's and extractor's reports.
     type Read = (Vec<(Option<crate::position::Position>, String)>, String);
 
@@ -3479,6 +3709,114 @@ mod tests {
             let fast = extracted(&src, true);
             let plain = extracted(&src, false);
             proptest::prop_assert_eq!(fast, plain);
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig {
+            cases: 256, ..proptest::prelude::ProptestConfig::default()
+        })]
+        /// Calls with a target written inline, of the fast path's shape and of others, among
+        /// motions to declared targets (which a call may repeat with a name changed), a
+        /// compact `IF`, data writers and a routine that takes a target: the same targets,
+        /// usage and reports either way.
+        #[test]
+        fn inline_targets_read_alike_with_and_without_the_fast_paths(
+            lines in proptest::collection::vec(motion_line(), 1..12),
+        ) {
+            let mut src = b"MODULE M\r\n\
+                PERS tooldata tGun:=[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\r\n\
+                TASK PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1,2,3],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\r\n\
+                CONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[10,9E9,9E9,9E9,9E9,9E9]];\r\n\
+                PROC main()\r\n"
+                .to_vec();
+            for l in &lines {
+                src.extend_from_slice(l);
+            }
+            src.extend_from_slice(b"ENDPROC\r\n\
+                PROC mv(robtarget p \\num d)\r\n  MoveL p, v10, fine, tGun\\WObj:=wCar;\r\nENDPROC\r\n\
+                ENDMODULE\r\n");
+            let fast = extracted(&src, true);
+            let plain = extracted(&src, false);
+            proptest::prop_assert_eq!(fast, plain);
+        }
+    }
+
+    /// A line of a routine: mostly a call with a target written inline
+    /// ([`crate::rapid::parser::inline_robtarget`]), else a motion to a declared target (alike
+    /// but for a name, as a program's runs are), an approach through `Offs`, or a compact `IF`.
+    fn motion_line() -> impl proptest::strategy::Strategy<Value = Vec<u8>> {
+        use proptest::prelude::*;
+        let callee = prop_oneof![
+            8 => proptest::sample::select(vec!["MoveL", "MoveJ", "MoveLDO", "TriggL"]),
+            1 => proptest::sample::select(vec!["MoveC", "Incr", "SetDataVal", "GetDataVal", "mv"]),
+        ];
+        let rest = proptest::sample::select(vec![
+            ", v1000, z10, tGun\\WObj:=wCar",
+            ",rdkSpeed,rdkZone,tGun,\\WObj:=wCar",
+            ", v10, fine, tool:=tGun",
+            ", v10, z1, tGun \\WObj := wCar \\Tool:=tGun",
+            "\\Conc, v10, z1, tGun",
+            " \\d:=dd",
+            ", p1",
+            "",
+            ", v10, z1, tGun\\WObj:=Offs(p1,0,0,1)",
+        ]);
+        let blank = proptest::sample::select(vec![" ", "\t", "\r\n    ", ""]);
+        let inline = (
+            callee,
+            blank,
+            crate::rapid::parser::inline_robtarget(),
+            rest,
+        )
+            .prop_map(|(c, b, t, r)| format!("  {c}{b}{t}{r};\r\n"));
+        let named = (
+            proptest::sample::select(vec!["MoveL", "MoveJ"]),
+            proptest::sample::select(vec!["p1", "p2", "p10"]),
+            proptest::sample::select(vec!["wCar", "wTable"]),
+        )
+            .prop_map(|(c, p, w)| format!("  {c} {p}, v1000, z10, tGun\\WObj:={w};\r\n"));
+        let other = proptest::sample::select(vec![
+            "  MoveL Offs(p1,0,0,10), v10, z1, tGun;\r\n",
+            "  IF di1 = 1 MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v10, fine, tGun;\r\n",
+            "  IF di1 = 1 MoveL p1, v10, fine, tGun;\r\n",
+        ])
+        .prop_map(str::to_owned);
+        prop_oneof![6 => inline, 3 => named, 1 => other]
+            .prop_map(|l| crate::rapid::parser::latin1_bytes(&l))
+    }
+
+    #[test]
+    fn a_motion_to_a_target_written_inline_is_recorded_as_the_general_path_records_it() {
+        let target = "[[1520.3,-850.1,612.4],[0.0,0.707107,0.707107,0.0],[0,0,-1,0],\
+            [1650.0,9E+09,9E+09,9E+09,9E+09,9E+09]]";
+        let src = format!(
+            "MODULE M\r\n\
+            PERS tooldata tGun:=[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\r\n\
+            TASK PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1,2,3],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\r\n\
+            PROC main()\r\n\
+              MoveL {target},v1000,z10,tGun\\WObj:=wCar;\r\n\
+              MoveL {target},v1000,z10,tGun\\WObj:=wCar;\r\n\
+              MoveJ {target}, v1000, fine, tool:=tGun;\r\n\
+              MoveL p1, v1000, z10, tGun\\WObj:=wCar;\r\n\
+              MoveL {target},v1000,z10,tGun\\WObj:=wCar;\r\n\
+              MoveL p2, v1000, z10, tGun\\WObj:=wCar;\r\n\
+            ENDPROC\r\n\
+            ENDMODULE\r\n"
+        );
+        let fast = extracted(src.as_bytes(), true);
+        assert_eq!(fast, extracted(src.as_bytes(), false));
+        // The four inline targets, unnamed, each used by its motion with its frame and tool.
+        assert_eq!(fast.0.len(), 4);
+        for (k, line) in [(0, 5), (1, 6), (2, 7), (3, 9)] {
+            let (p, usage) = &fast.0[k];
+            let p = p.as_ref().unwrap();
+            assert_eq!((p.name.is_none(), p.line), (true, line));
+            let wobj = if k == 2 { "wobj0" } else { "wCar" };
+            assert!(
+                usage.contains(wobj) && usage.contains("tGun"),
+                "{k}: {usage}"
+            );
         }
     }
 
@@ -3638,6 +3976,37 @@ mod tests {
             "{}",
             usage[3]
         );
+    }
+
+    /// A call read as the one before it (`mv \\p:=p11;` after `mv \\p:=p10;`), and a required
+    /// argument given by name (`mr p:=p12, d:=n1;`), pass their targets to the routine's
+    /// parameter as the general path does: each moves with the routine's motion. A call that
+    /// writes data by name is recorded as such after one alike that does not (`Incr n1;` after
+    /// `Show n1;`; the test build's record of the fast paths holds it to the plain one).
+    #[test]
+    fn arguments_passed_by_name_reach_the_routine_on_the_fast_paths() {
+        let src = b"MODULE M\r\n\
+            CONST robtarget p10:=[[1,2,3],[1,0,0,0],[0,0,0,0],[10,9E9,9E9,9E9,9E9,9E9]];\r\n\
+            CONST robtarget p11:=[[1,2,3],[1,0,0,0],[0,0,0,0],[11,9E9,9E9,9E9,9E9,9E9]];\r\n\
+            CONST robtarget p12:=[[1,2,3],[1,0,0,0],[0,0,0,0],[12,9E9,9E9,9E9,9E9,9E9]];\r\n\
+            CONST robtarget p13:=[[1,2,3],[1,0,0,0],[0,0,0,0],[13,9E9,9E9,9E9,9E9,9E9]];\r\n\
+            TASK PERS wobjdata wCar:=[FALSE,TRUE,\"\",[[1,2,3],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\r\n\
+            PROC main()\r\n\
+              mv \\p:=p10;\r\n\
+              mv \\p:=p11;\r\n\
+              mr p:=p12, d:=n1;\r\n\
+              mr p:=p13, d:=n1;\r\n\
+              Show n1;\r\n\
+              Incr n1;\r\n\
+            ENDPROC\r\n\
+            PROC mv(\\robtarget p)\r\n  MoveL p, v10, z1, tool0\\WObj:=wCar;\r\nENDPROC\r\n\
+            PROC mr(num d, robtarget p)\r\n  MoveL p, v10, z1, tool0\\WObj:=wCar;\r\nENDPROC\r\n\
+            ENDMODULE\r\n";
+        let fast = extracted(src, true);
+        assert_eq!(fast, extracted(src, false));
+        for (k, (_, usage)) in fast.0.iter().enumerate() {
+            assert!(usage.contains("\"wCar\""), "p1{k}: {usage}");
+        }
     }
 
     #[test]

@@ -104,6 +104,18 @@ impl Parser<'_, '_> {
     /// parser stands, and without moving it (nothing is read on anything else): a `;` follows
     /// the literal past blanks.
     pub(super) fn robtarget_literal_at(&mut self, start: usize) -> bool {
+        self.robtarget_literal_then(start, |next| next == b';')
+    }
+
+    /// [`Parser::robtarget_literal_at`] of a literal followed, past blanks, by a byte `follows`
+    /// takes (`;` after a declaration's value; `,`, `\\` or `;` after a call's argument, which
+    /// [`Parser::literal_call_args`] reads).
+    #[inline(always)]
+    pub(super) fn robtarget_literal_then(
+        &mut self,
+        start: usize,
+        follows: impl FnOnce(u8) -> bool,
+    ) -> bool {
         let src = self.src;
         if src.get(start) != Some(&b'[') {
             return false;
@@ -120,8 +132,9 @@ impl Parser<'_, '_> {
             let i = SeenPart::take_or_read(cf_part, src, cf_at, cf, values)?;
             let (axes, i) = literal_axes(src, literal_comma(src, i)?, &mut lit.extax, ex_tail)?;
             let i = blanks_end(src, i);
-            (src.get(i) == Some(&b']') && src.get(blanks_end(src, i + 1)) == Some(&b';'))
-                .then_some((axes, i + 1))
+            (src.get(i) == Some(&b']')
+                && src.get(blanks_end(src, i + 1)).is_some_and(|&b| follows(b)))
+            .then_some((axes, i + 1))
         })();
         let Some((axes, end)) = read else {
             return false;

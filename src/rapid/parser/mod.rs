@@ -72,10 +72,13 @@ pub(crate) struct Statement<'e> {
     pub stmt: &'e Stmt,
     pub span: Span,
     /// A [`Stmt::Decl`]'s robtarget value, when the declaration fast path read it: then the
-    /// value is not in the arena (release builds give no `init`).
+    /// value is not in the arena (release builds give no `init`). Of a [`Stmt::Call`], its
+    /// first argument, when [`Parser::literal_call_args`] read it: the first of
+    /// [`Statement::plain_args`], which has no value there.
     pub literal: Option<&'e RobtargetLiteral>,
-    /// A [`Stmt::Call`]'s arguments, when each is a plain name (see [`PlainArgs`]): then they
-    /// are not in the arena (the call's `args` is [`NONE`]).
+    /// A [`Stmt::Call`]'s arguments, when each is a plain name (see [`PlainArgs`]) or the
+    /// first is [`Statement::literal`]: then they are not in the arena (the call's `args` is
+    /// [`NONE`]; with a literal, a debug build's `args` are the general path's reading).
     pub plain_args: Option<&'e PlainArgs>,
     /// A call with [`Statement::plain_args`] that [`Parser::call_like_last`] took from the
     /// call before with no label changed: how its offsets moved from that call's.
@@ -96,6 +99,12 @@ pub(crate) struct MovedCall {
 }
 
 impl MovedCall {
+    /// Whether the name changed, if any, ends at or before the offset `at` of the call before
+    /// (at its callee's end: the callee changed, `MoveJ` for `MoveL`).
+    pub(crate) fn changed_by(&self, at: usize) -> bool {
+        self.pivot <= at
+    }
+
     /// Where the offset `at` of the call before lies in this one.
     #[inline(always)]
     pub(crate) fn moved(&self, at: usize) -> usize {
@@ -214,7 +223,8 @@ pub(crate) struct PlainArg {
     pub label: Span,
     /// Written `\name`.
     pub switch: bool,
-    /// The name given as its value; `None` for a switch without one.
+    /// The name given as its value; `None` for a switch without one, and for the robtarget
+    /// literal [`Parser::literal_call_args`] read as a call's first argument.
     pub value: Option<Span>,
 }
 
@@ -518,6 +528,9 @@ struct Parser<'a, 's> {
     /// How the call [`Parser::plain`] holds moved from the one before, when it took that
     /// call's arguments and no label changed.
     moved: Option<MovedCall>,
+    /// The call [`Parser::plain`] holds was read by [`Parser::literal_call_args`]: its first
+    /// argument is [`Parser::literal`] (handed on, and cleared, with the call's statement).
+    call_literal: bool,
     sink: &'s mut StatementSink<'s>,
 }
 
@@ -875,6 +888,7 @@ impl<'a, 's> Parser<'a, 's> {
             first: Token::NONE,
             last_call: None,
             moved: None,
+            call_literal: false,
             seen_parts: [PartMemo::EMPTY; 3],
             sink,
         };
@@ -1071,15 +1085,17 @@ impl<'a, 's> Parser<'a, 's> {
     }
 
     /// Hands `stmt` to the sink; a call whose arguments [`Parser::plain_args_from`] read (its
-    /// `args` is [`NONE`]) with them.
+    /// `args` is [`NONE`]) with them, and one [`Parser::literal_call_args`] read with them and
+    /// its literal.
     fn emit(&mut self, stmt: Stmt, start: u32) {
-        let plain = matches!(stmt, Stmt::Call { args: NONE, .. });
+        let literal = std::mem::take(&mut self.call_literal);
+        let plain = literal || matches!(stmt, Stmt::Call { args: NONE, .. });
         self.sink.accept(Statement {
             src: self.src,
             arena: &self.arena,
             stmt: &stmt,
             span: Span::new(start as usize, self.prev_end as usize),
-            literal: None,
+            literal: literal.then_some(&self.literal),
             plain_args: plain.then_some(&self.plain),
             moved: if plain { self.moved } else { None },
         });
@@ -1227,6 +1243,123 @@ impl<'a, 's> Parser<'a, 's> {
         self.diagnostics.push(diagnostic);
         self.leaf(NodeKind::Opaque, start);
     }
+}
+
+/// Robtarget literals as generated programs write them inline, for the property tests: mostly
+/// of the fast paths' shape (signs, exponents, the spellings of `9E9`, blanks, CRLF), some with
+/// one thing they leave to the general path (another count of external axes, a joint target's
+/// shape, a name for the external axes, a comment or a Latin-1 byte between two numbers, a
+/// number `NumLit` does not read whole, a sign apart). `\u{1}` stands for the Latin-1 byte `Ä`
+/// ([`latin1_bytes`]).
+#[cfg(test)]
+pub(crate) fn inline_robtarget() -> impl proptest::strategy::Strategy<Value = String> {
+    use proptest::prelude::*;
+    let number = proptest::sample::select(vec![
+        "0",
+        "0.5",
+        "-0.5",
+        ".5",
+        "5.",
+        "+1",
+        "9E+09",
+        "9E9",
+        "9e+9",
+        "9E09",
+        "9E+9",
+        "1.50E+2",
+        "2.5e-3",
+        "0.707107",
+        "-0.707107",
+        "1520.3",
+        "-1520.30",
+        "0.000000",
+        "1",
+        "-1",
+        "0.3826834323650898",
+        "-850.123456",
+        "1234567.1234567",
+        "+0.0",
+    ]);
+    let odd_number = proptest::sample::select(vec![
+        "12345678901234567890",
+        "1E",
+        "1.2.3",
+        "x",
+        "1E-9000",
+        "-0.38268343236508977",
+        "- 5",
+        "\u{1}",
+        "0x1F",
+        "1E+123",
+    ]);
+    let sep = proptest::sample::select(vec![",", " , ", ",\r\n    ", ",\t", ", ", ",\n"]);
+    let odd_sep = proptest::sample::select(vec![" ! c\r\n,", ",\u{1}", ",\u{c}", ",,"]);
+    // The four parts' counts of a robtarget (mostly six external axes), a joint target's,
+    // or any others.
+    let lengths = prop_oneof![
+        12 => Just(vec![3, 4, 4, 6]),
+        2 => (1usize..=13).prop_map(|axes| vec![3, 4, 4, axes]),
+        1 => Just(vec![6, 6]),
+        1 => proptest::collection::vec(0usize..8, 1..6),
+    ];
+    let numbers = proptest::collection::vec(number, 40);
+    let once = |s| proptest::option::weighted(0.1, (any::<proptest::sample::Index>(), s));
+    (
+        lengths,
+        numbers,
+        sep,
+        once(odd_number),
+        once(odd_sep),
+        proptest::bool::weighted(0.05),
+    )
+        .prop_map(|(lengths, numbers, sep, odd_number, odd_sep, axes_named)| {
+            let count: usize = lengths.iter().sum();
+            let mut numbers: Vec<&str> = numbers.into_iter().cycle().take(count).collect();
+            if let (Some((at, n)), false) = (odd_number, numbers.is_empty()) {
+                let k = at.index(numbers.len());
+                numbers[k] = n;
+            }
+            let mut seps = vec![sep; count + lengths.len()];
+            if let Some((at, s)) = odd_sep {
+                let k = at.index(seps.len());
+                seps[k] = s;
+            }
+            let (mut numbers, mut seps) = (numbers.into_iter(), seps.into_iter());
+            let last = lengths.len() - 1;
+            let parts: Vec<String> = lengths
+                .iter()
+                .enumerate()
+                .map(|(k, &n)| {
+                    let mut part = "[".to_owned();
+                    for j in 0..n {
+                        if j > 0 {
+                            part.push_str(seps.next().unwrap_or(","));
+                        }
+                        part.push_str(numbers.next().unwrap_or("0"));
+                    }
+                    part.push(']');
+                    match k == last && axes_named {
+                        true => "rdkExtJoints".to_owned(),
+                        false => part,
+                    }
+                })
+                .collect();
+            let mut literal = "[".to_owned();
+            for (k, part) in parts.iter().enumerate() {
+                if k > 0 {
+                    literal.push_str(seps.next().unwrap_or(","));
+                }
+                literal.push_str(part);
+            }
+            literal + "]"
+        })
+}
+
+/// The bytes of a test input written with `\u{1}` for the Latin-1 byte `Ä` (0xC4, the way a
+/// controller writes it; not UTF-8).
+#[cfg(test)]
+pub(crate) fn latin1_bytes(s: &str) -> Vec<u8> {
+    s.bytes().map(|b| if b == 1 { 0xc4 } else { b }).collect()
 }
 
 #[cfg(test)]

@@ -104,17 +104,37 @@ impl Parser<'_, '_> {
         // argument was lexed here only for the fast path to read it again).
         if self.fast_paths && !t.keyword {
             let after = blanks_end(self.src, t.end as usize);
-            if matches!(
-                self.src.get(after),
+            match self.src.get(after) {
                 Some(b'a'..=b'z' | b'A'..=b'Z' | b'_' | b'\\' | b';')
-            ) && (self.call_like_last(t) || self.plain_args_from(after))
-            {
-                self.last_call = Some(Span::new(t.start as usize, self.prev_end as usize));
-                let call = Stmt::Call {
-                    name: t.span(),
-                    args: NONE,
-                };
-                return Ok((NodeKind::Call, call));
+                    if self.call_like_last(t) || self.plain_args_from(after) =>
+                {
+                    self.last_call = Some(Span::new(t.start as usize, self.prev_end as usize));
+                    let call = Stmt::Call {
+                        name: t.span(),
+                        args: NONE,
+                    };
+                    return Ok((NodeKind::Call, call));
+                }
+                // `MoveL [[1520.3,-850.1,612.4],[0,0.707107,0.707107,0],…],v1000,…;`: the
+                // target written inline, as generated programs write every motion. No call
+                // is read as this one: the literal's numbers are no names to put in place.
+                Some(b'[') if self.literal_call_args(after) => {
+                    // Every test run holds the fast path to the general one, and hands the
+                    // extractor the general path's arguments to compare with.
+                    #[cfg(debug_assertions)]
+                    let args = self.literal_call_read_again(t, after);
+                    #[cfg(not(debug_assertions))]
+                    let args = NONE;
+                    self.call_literal = true;
+                    return Ok((
+                        NodeKind::Call,
+                        Stmt::Call {
+                            name: t.span(),
+                            args,
+                        },
+                    ));
+                }
+                _ => {}
             }
         }
         // `label:` — a colon, not `:=`.
@@ -211,6 +231,40 @@ impl Parser<'_, '_> {
     /// does, into [`Parser::plain`] instead of expression nodes, and ends after the `;`. On
     /// anything else (a function call in an argument too) it reads nothing and says `false`.
     fn plain_args_from(&mut self, start: usize) -> bool {
+        self.plain_args_after(start, None)
+    }
+
+    /// Fast path of a call statement's arguments whose first is a robtarget literal, at its
+    /// `[` (`start`), written as a declaration's value is ([`Parser::robtarget_literal_at`],
+    /// six external axes) and followed by `,`, `\` or `;`, every other argument one that
+    /// [`Parser::plain_args_from`] reads: the literal into [`Parser::literal`], the arguments
+    /// into [`Parser::plain`] (the literal the first, with no value), no expression nodes,
+    /// and the parser goes on after the `;`. A generated program writes every motion's target
+    /// so (`MoveL [[…],[…],[…],[…]],v1000,z10,tGun\WObj:=wCar;`), where the general path
+    /// built a node per number and lexed every other argument. On anything else (another
+    /// shape, a comment inside, a joint target, a blank the fast path does not step over) it
+    /// reads nothing and says `false`, and the general path reads the call.
+    fn literal_call_args(&mut self, start: usize) -> bool {
+        // The general path reads each argument one level deeper; past the limit it refuses.
+        if self.depth > MAX_DEPTH
+            || !self.robtarget_literal_then(start, |next| matches!(next, b',' | b'\\' | b';'))
+            || self.literal.axes != 6
+        {
+            return false;
+        }
+        let literal = PlainArg {
+            span: self.literal.span,
+            label: Span::new(start, start),
+            switch: false,
+            value: None,
+        };
+        self.plain_args_after(blanks_end(self.src, self.literal.span.end), Some(literal))
+    }
+
+    /// [`Parser::plain_args_from`] at `start`, after `first` when given: the arguments read
+    /// into [`Parser::plain`] after it.
+    #[inline(always)]
+    fn plain_args_after(&mut self, start: usize, first: Option<PlainArg>) -> bool {
         // What [`Parser::plain`] holds is no longer the last call's (the caller says again).
         (self.last_call, self.moved) = (None, None);
         // The general path reads each argument one level deeper; past the limit it refuses.
@@ -220,6 +274,12 @@ impl Parser<'_, '_> {
         let src = self.src;
         let mut i = start;
         let mut len = 0;
+        if let Some(first) = first {
+            if !self.plain.set(0, first) {
+                return false;
+            }
+            len = 1;
+        }
         loop {
             match src.get(i) {
                 Some(b';') => break,
@@ -328,6 +388,55 @@ impl Parser<'_, '_> {
         );
         self.resume_at_statement_end(end);
         true
+    }
+
+    /// Reads the call [`Parser::literal_call_args`] just read again, its arguments from the
+    /// literal's `[` at `start` (the callee `callee`), with the general path, and asserts that
+    /// it ends where that one did and reads the same arguments: the literal an aggregate of its
+    /// span, each other argument of the span, label and name that [`Parser::plain`] holds.
+    /// The arena's node of the arguments, for the extractor to compare its record with.
+    #[cfg(debug_assertions)]
+    fn literal_call_read_again(&mut self, callee: Token, start: usize) -> u32 {
+        let (plain, literal) = (self.plain, self.literal);
+        let after = (self.tok, self.prev_end, self.lex, self.peeked);
+        self.resume_at(start);
+        let args = self.call_args(callee.end);
+        assert_eq!((self.tok, self.prev_end), (after.0, after.1));
+        let args = args.unwrap_or_else(|e| panic!("the general path refused {e:?}"));
+        let read: Vec<PlainArg> = self
+            .arena
+            .children(args)
+            .filter_map(|a| {
+                let arg = self.arena.get(a)?;
+                let value = self.arena.arg_value(a).and_then(|v| self.arena.get(v));
+                let value = match value.map(|v| (v.kind, v.span())) {
+                    Some((ExprKind::Aggregate, v)) => {
+                        assert_eq!(v, literal.span, "the inline literal");
+                        None
+                    }
+                    Some((kind, v)) => {
+                        assert_eq!(kind, ExprKind::Ident);
+                        Some(v)
+                    }
+                    None => None,
+                };
+                Some(PlainArg {
+                    span: arg.span(),
+                    label: arg.name_span(),
+                    switch: arg.switch,
+                    value,
+                })
+            })
+            .collect();
+        assert_eq!(
+            read,
+            plain.iter().collect::<Vec<_>>(),
+            "a call with a literal"
+        );
+        (self.plain, self.literal) = (plain, literal);
+        (self.tok, self.prev_end, self.lex, self.peeked) = after;
+        (self.last_call, self.moved) = (None, None);
+        args
     }
 
     /// Fast path of `call_args` for the arguments nearly every motion line has: plain names,
@@ -752,35 +861,54 @@ mod tests {
         read_next(&mut p)
     }
 
-    /// [`read`] of the statement `p` stands at.
+    /// [`read`] of the statement `p` stands at. The nodes without the literals the numeric
+    /// scan hands on (the general path hands none on).
     fn read_next(p: &mut Parser<'_, '_>) -> Read {
         p.arena.clear();
         let result = p.simple_statement();
-        let mut arena = p.arena.clone();
+        // A call with a literal: what the fast path read is the literal and `p.plain` (a debug
+        // build's arena holds the general path's reading, which is not what is compared).
+        let literal = std::mem::take(&mut p.call_literal);
+        let mut arena = match literal {
+            true => Arena::default(),
+            false => p.arena.clone(),
+        };
         let result = result
             .map(|(kind, stmt)| match stmt {
-                Stmt::Call { name, args: NONE } => {
+                Stmt::Call { name, args } if args == NONE || literal => {
                     // Read at the statement, the callee is no node either.
                     if arena.nodes.is_empty() {
                         let callee = arena.open(ExprKind::Ident, name.start as u32);
                         arena.close(callee, name.end as u32);
                     }
-                    let args = plain_args_as_nodes(&mut arena, &p.plain, name.end, p.prev_end);
+                    let args = plain_args_as_nodes(p, &mut arena, literal, name.end);
                     (kind, format!("{:?}", Stmt::Call { name, args }))
                 }
                 stmt => (kind, format!("{stmt:?}")),
             })
             .map_err(|e| e.expected);
-        (result, arena.nodes, p.tok, p.prev_end)
+        let nodes = arena
+            .nodes
+            .iter()
+            .map(|n| crate::rapid::expr::ExprNode { lit: NONE, ..*n })
+            .collect();
+        (result, nodes, p.tok, p.prev_end)
     }
 
-    /// The nodes the general path builds for the arguments `plain` holds, from `start` (the
-    /// callee's end) to `end` (after the `;`), appended to `arena`: what the plain-argument
-    /// path stands for.
-    fn plain_args_as_nodes(arena: &mut Arena, plain: &PlainArgs, start: usize, end: u32) -> u32 {
+    /// The nodes the general path builds for the arguments `p.plain` holds, from `start` (the
+    /// callee's end) to after the `;`, appended to `arena`: what the plain-argument path
+    /// stands for. With `literal`, the first is `p.literal`, whose nodes the general path
+    /// reads (token by token) where it stands.
+    fn plain_args_as_nodes(
+        p: &mut Parser<'_, '_>,
+        arena: &mut Arena,
+        literal: bool,
+        start: usize,
+    ) -> u32 {
         let args = arena.open(ExprKind::Args, start as u32);
         let mut last = NONE;
-        for a in plain.iter() {
+        let plain = p.plain;
+        for (k, a) in plain.iter().enumerate() {
             let arg = arena.open(ExprKind::Arg, a.span.start as u32);
             if a.label.end > a.label.start {
                 let n = arena.set_mut(arg).unwrap();
@@ -793,11 +921,24 @@ mod tests {
                 arena.close(id, v.end as u32);
                 arena.link(arg, NONE, id);
             }
+            if literal && k == 0 {
+                assert_eq!(a.span, p.literal.span);
+                let after = (p.tok, p.prev_end, p.lex, p.peeked);
+                std::mem::swap(&mut p.arena, arena);
+                p.fast_paths = false;
+                p.resume_at(a.span.start);
+                let id = p.primary().expect("the literal read by tokens");
+                assert_eq!(p.prev_end as usize, a.span.end);
+                p.fast_paths = true;
+                std::mem::swap(&mut p.arena, arena);
+                (p.tok, p.prev_end, p.lex, p.peeked) = after;
+                arena.link(arg, NONE, id);
+            }
             arena.close(arg, a.span.end as u32);
             arena.link(args, last, arg);
             last = arg;
         }
-        arena.close(args, end);
+        arena.close(args, p.prev_end);
         args
     }
 
@@ -812,6 +953,11 @@ mod tests {
         ];
         let arg = prop_oneof![
             4 => name.clone(),
+            3 => (
+                crate::rapid::parser::inline_robtarget(),
+                proptest::sample::select(vec!["", "", "", "", ".trans", "+p1", "{1}", " ! c\r\n"]),
+            )
+                .prop_map(|(literal, after)| format!("{literal}{after}")),
             2 => (name.clone(), "[ ]{0,1}", name.clone()).prop_map(|(s, b, v)| format!("\\{s}{b}:={b}{v}")),
             1 => name.clone().prop_map(|s| format!("\\{s}")),
             1 => (name.clone(), name.clone()).prop_map(|(n, v)| format!("{n}:={v}")),
@@ -900,6 +1046,60 @@ mod tests {
             })
     }
 
+    /// A call whose first argument is a robtarget written inline (mostly of the fast path's
+    /// shape, [`crate::rapid::parser::inline_robtarget`]), then arguments mostly of the plain
+    /// path's shape, with odd ones now and then: what follows the literal, a function's call,
+    /// a number, a second literal (`MoveC`'s), a data writer's callee.
+    fn literal_call() -> impl Strategy<Value = String> {
+        let callee = proptest::sample::select(vec![
+            "MoveL ",
+            "MoveJ ",
+            "MoveC ",
+            "MoveLDO ",
+            "MoveL",
+            "MoveL\r\n  ",
+            "TriggL ",
+            "Incr ",
+        ]);
+        let after = prop_oneof![
+            8 => proptest::sample::select(vec![",", " ,", ", ", ",\r\n      ", "\t,\t"]),
+            1 => proptest::sample::select(vec![
+                "", " ", ".trans,", "+p1,", " ! c\r\n,", "\\", ",,", ";", "{1},", "\u{1},",
+            ]),
+        ];
+        let arg = prop_oneof![
+            8 => proptest::sample::select(vec!["v1000", "z10", "tGun", "rdkSpeed", "fine", "tool0"]),
+            3 => proptest::sample::select(vec![
+                "\\WObj:=wCar", "\\WObj := rdkWObj", "\\Conc", "\\V:=vmax", "tool:=tGun",
+                "\\Tool:=tGun", "\\T:=timer",
+            ]),
+            1 => proptest::sample::select(vec!["Offs(p1,0,0,10)", "-5", "a.b", "\"s\"", "", "AND"]),
+        ]
+        .prop_map(str::to_owned);
+        let arg = prop_oneof![12 => arg, 1 => crate::rapid::parser::inline_robtarget()];
+        let sep = prop_oneof![
+            8 => proptest::sample::select(vec![", ", ",", ",\r\n  "]),
+            1 => proptest::sample::select(vec!["", " ", ",,"]),
+        ];
+        (
+            callee,
+            crate::rapid::parser::inline_robtarget(),
+            after,
+            proptest::collection::vec((sep, arg), 0..6),
+            prop_oneof![8 => Just(";"), 1 => Just(" ;"), 1 => Just("")],
+        )
+            .prop_map(|(callee, literal, after, args, end)| {
+                let mut s = format!("{callee}{literal}{after}");
+                for (k, (sep, arg)) in args.iter().enumerate() {
+                    if k > 0 || after.is_empty() || after.ends_with(' ') {
+                        s.push_str(sep);
+                    }
+                    s.push_str(arg);
+                }
+                format!("{s}{end}\r\n  next")
+            })
+    }
+
     /// An argument of a function called in an argument: mostly what the fast path reads
     /// (names, numbers with a sign), some it leaves to the general path.
     fn call_arg() -> impl Strategy<Value = String> {
@@ -919,10 +1119,10 @@ mod tests {
     /// ([`Parser::call_like_last`]) and without, and whether the first was a call read at its
     /// statement's first byte.
     fn read_second(first: &str, second: &str) -> (Read, Read, bool) {
-        let src = format!("{first}\r\n  {second}\r\n  next");
+        let src = crate::rapid::parser::latin1_bytes(&format!("{first}\r\n  {second}\r\n  next"));
         let read = |like_last: bool| {
             let mut sink = crate::syntax::NoSink;
-            let mut p = Parser::new(src.as_bytes(), &mut sink, TreeBuilder::with_capacity(4));
+            let mut p = Parser::new(&src, &mut sink, TreeBuilder::with_capacity(4));
             let _first = read_next(&mut p);
             let was_call = p.last_call.is_some();
             if !like_last {
@@ -956,7 +1156,8 @@ mod tests {
             "p1 ",
             "a.b",
         ]);
-        let first = call().prop_map(|c| c.trim_end_matches("\r\n  next").to_owned());
+        let first = prop_oneof![3 => call(), 1 => literal_call()]
+            .prop_map(|c| c.trim_end_matches("\r\n  next").to_owned());
         (
             first,
             any::<proptest::sample::Index>(),
@@ -998,7 +1199,16 @@ mod tests {
 
         #[test]
         fn fast_call_args_path_builds_what_the_general_path_builds(c in call()) {
-            prop_assert_eq!(read(c.as_bytes(), true), read(c.as_bytes(), false));
+            let c = crate::rapid::parser::latin1_bytes(&c);
+            prop_assert_eq!(read(&c, true), read(&c, false));
+        }
+
+        /// A motion's target written inline, then mostly plain names: the literal and the names
+        /// read without nodes, or the general path's reading of anything else.
+        #[test]
+        fn an_inline_target_builds_what_the_general_path_builds(c in literal_call()) {
+            let c = crate::rapid::parser::latin1_bytes(&c);
+            prop_assert_eq!(read(&c, true), read(&c, false));
         }
 
         /// The node path's own shape: every argument one the fast paths read, a function's
@@ -1135,6 +1345,114 @@ mod tests {
         // Args; the first Arg, its Call and the Call's four Args with their values; then an
         // Arg and its Ident for each of the other four arguments.
         assert_eq!(fast_path_read(src), (1 + 2 + 4 * 2 + 4 * 2, src.len() - 1));
+    }
+
+    #[test]
+    fn a_motion_to_a_target_written_inline_takes_the_fast_path() {
+        let literal = "[[1520.3,-850.1,612.4],[0.0,0.707107,0.707107,0.0],[0,0,-1,0],\
+            [1650.0,9E+09,9E+09,9E+09,9E+09,9E+09]]";
+        let src = format!("MoveL {literal},v1000,z10,tGun\\WObj:=wCar;\nx");
+        let src = src.as_bytes();
+        assert_eq!(read(src, true), read(src, false));
+        let mut sink = crate::syntax::NoSink;
+        let mut p = Parser::new(src, &mut sink, TreeBuilder::with_capacity(4));
+        let (kind, _) = p.simple_statement().expect("a call");
+        assert_eq!(kind, NodeKind::Call);
+        assert!(p.call_literal);
+        let l = p.literal;
+        assert_eq!(l.span, Span::new(6, 6 + literal.len()));
+        let text = |at: usize| {
+            let rest = &src[at..];
+            let end = rest.iter().position(|&b| b == b',' || b == b']').unwrap();
+            std::str::from_utf8(&rest[..end]).unwrap()
+        };
+        assert_eq!(l.trans.map(text), ["1520.3", "-850.1", "612.4"]);
+        assert_eq!(
+            l.quaternion.map(text),
+            ["0.0", "0.707107", "0.707107", "0.0"]
+        );
+        assert_eq!(l.quadrants.map(text), ["0", "0", "-1", "0"]);
+        assert_eq!(l.axes, 6);
+        assert_eq!(
+            l.extax[..6].iter().map(|&a| text(a)).collect::<Vec<_>>(),
+            ["1650.0", "9E+09", "9E+09", "9E+09", "9E+09", "9E+09"]
+        );
+        // The values as the standard library reads the texts.
+        let value = |t: &str| t.parse::<f64>().unwrap();
+        assert_eq!(l.q, ["0.0", "0.707107", "0.707107", "0.0"].map(value));
+        assert_eq!(l.cf, [0.0, 0.0, -1.0, 0.0]);
+        let args: Vec<_> = p
+            .plain
+            .iter()
+            .map(|a| (a.span.slice(src), a.value.map(|v| v.slice(src))))
+            .collect();
+        let arg = |s: &'static str, v: Option<&'static str>| (s.as_bytes(), v.map(str::as_bytes));
+        assert_eq!(
+            args,
+            [
+                arg(literal, None),
+                arg("v1000", Some("v1000")),
+                arg("z10", Some("z10")),
+                arg("tGun", Some("tGun")),
+                arg("\\WObj:=wCar", Some("wCar")),
+            ]
+        );
+        // Past the `;`, with no call to repeat: the literal's numbers are no names.
+        assert_eq!(p.tok.start as usize, src.len() - 1);
+        assert_eq!(p.last_call, None);
+    }
+
+    #[test]
+    fn an_inline_target_of_another_shape_is_left_to_the_general_path() {
+        let target = "[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]";
+        let five = "[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9]]";
+        let joints = "[[0,0,0,0,90,0],[9E9,9E9,9E9,9E9,9E9,9E9]]";
+        let named = "[[1,2,3],[1,0,0,0],[0,0,0,0],rdkExtJoints]";
+        let comment = "[[1,2,3],[1,0,0,0] ! c\r\n,[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]";
+        let form_feed = "[[1,2,3],[1,0,0,0],\u{c}[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]";
+        let latin1 = "[[1,2,3],[1,0,0,0],[0,0,0,0]\u{1},[9E9,9E9,9E9,9E9,9E9,9E9]]";
+        let apart = "[[1,2,3],[1,0,0,0],[0,0,- 1,0],[9E9,9E9,9E9,9E9,9E9,9E9]]";
+        let unread = "[[1,2,3],[1,0,0,0],[0,0,0,0],[1E,9E9,9E9,9E9,9E9,9E9]]";
+        for call in [
+            format!("MoveL {five},v10,z1,tool0;"),
+            format!("MoveAbsJ {joints},v10,z1,tool0;"),
+            format!("MoveL {named},v10,z1,tool0;"),
+            format!("MoveL {comment},v10,z1,tool0;"),
+            format!("MoveL {form_feed},v10,z1,tool0;"),
+            format!("MoveL {latin1},v10,z1,tool0;"),
+            format!("MoveL {apart},v10,z1,tool0;"),
+            format!("MoveL {unread},v10,z1,tool0;"),
+            format!("MoveL {target}.trans,v10,z1,tool0;"),
+            format!("MoveL {target}+p1,v10,z1,tool0;"),
+            format!("MoveL {target} v10,z1,tool0;"),
+            format!("MoveL {target},v10,z1,tool0 ! c\r\n;"),
+            format!("MoveL {target},Offs(p1,0,0,10),z1,tool0;"),
+            format!("MoveC {target},{target},v10,z1,tool0;"),
+        ] {
+            let src = crate::rapid::parser::latin1_bytes(&format!("{call}\r\nx"));
+            let mut sink = crate::syntax::NoSink;
+            let mut p = Parser::new(&src, &mut sink, TreeBuilder::with_capacity(4));
+            let _ = p.simple_statement();
+            assert!(!p.call_literal, "{call}");
+            assert_eq!(read(&src, true), read(&src, false), "{call}");
+        }
+        // The same target with six axes, before `;`, `\` or a blank and `,` takes it.
+        for call in [
+            format!("MoveL {target};"),
+            format!("MoveL {target}\\Conc,v10,z1,tool0;"),
+            format!("MoveL\t{target}\r\n  ,\tv10 ,z1,tool0 \\WObj := wCar ;"),
+        ] {
+            let src = format!("{call}\r\nx");
+            let mut sink = crate::syntax::NoSink;
+            let mut p = Parser::new(src.as_bytes(), &mut sink, TreeBuilder::with_capacity(4));
+            let _ = p.simple_statement();
+            assert!(p.call_literal, "{call}");
+            assert_eq!(
+                read(src.as_bytes(), true),
+                read(src.as_bytes(), false),
+                "{call}"
+            );
+        }
     }
 
     #[test]
