@@ -333,9 +333,9 @@ mod tests {
     #[test]
     fn an_error_shows_the_utf8_line_it_read() {
         let src = "skid,x\n100,1.5°\n";
-        let e = NumericCsv::parse(Path::new("t.csv"), src.as_bytes(), &["skid", "x"])
-            .err()
-            .expect("`1.5°` is no number");
+        let Err(e) = NumericCsv::parse(Path::new("t.csv"), src.as_bytes(), &["skid", "x"]) else {
+            panic!("`1.5°` is no number");
+        };
         let text = e.to_string();
         assert!(
             text.contains("2 | 100,1.5°\n"),
