@@ -209,15 +209,26 @@ fn sample_cell_with_the_plane_elsewhere() -> String {
 /// `trackfix transfer INPUT --cell CELL --from r1 --to r2 --mirror`, then `more` (where it
 /// writes, `--diff`): (exit code, stdout, stderr).
 fn transfer_mirrored(input: &Path, cell: &str, more: &[&str]) -> (i32, String, String) {
+    transfer_mirrored_between(input, cell, "r1", "r2", more)
+}
+
+/// [`transfer_mirrored`] from robot `from` to robot `to`.
+fn transfer_mirrored_between(
+    input: &Path,
+    cell: &str,
+    from: &str,
+    to: &str,
+    more: &[&str],
+) -> (i32, String, String) {
     let mut args = vec![
         "transfer",
         input.to_str().unwrap(),
         "--cell",
         cell,
         "--from",
-        "r1",
+        from,
         "--to",
-        "r2",
+        to,
         "--mirror",
     ];
     args.extend_from_slice(more);
@@ -780,19 +791,13 @@ fn tracks_that_run_opposite_ways_mirror_with_the_map_minus_one() {
     );
     let transfer = |input: &Path, cell: &Path, from: &str, to: &str, out: &str| {
         let out = dir.path().join(out);
-        let (code, _, err) = trackfix(&[
-            "transfer",
-            input.to_str().unwrap(),
-            "--cell",
+        let (code, _, err) = transfer_mirrored_between(
+            input,
             cell.to_str().unwrap(),
-            "--from",
             from,
-            "--to",
             to,
-            "--mirror",
-            "-o",
-            out.to_str().unwrap(),
-        ]);
+            &["-o", out.to_str().unwrap()],
+        );
         assert_eq!(code, 0, "{err}");
         // The reversed profile reads as one `track fit` wrote: no warning about it.
         assert!(!err.contains("r2_reversed.toml"), "{err}");
