@@ -28,15 +28,17 @@
 //! before; a call of a routine no module given defines (an instruction of the controller, or a
 //! routine of a module not given), which changes nothing (a displacement active before it stays
 //! active; docs/design.md says why none is taken to start there); a call that names its routine
-//! only at run time (`%name%`, `CallByVar`), which may run any `PROC` of the task or one no
-//! module given defines, so it leaves the meet of what each leaves; and `ExitCycle`, which
-//! starts `main` again with what holds there. A routine starts with the meet
-//! of its calls' states; `main` also with what holds at its end (the controller runs it again
-//! and again). One the program may start or enter from outside: `main`, a routine no statement
-//! calls (or only routines that no such one reaches), every `PROC` once a call names its
-//! routine at run time, a `TRAP` (an interrupt runs it between any two statements) or a `FUNC`
-//! (called from expressions, which are not followed): the last two start with the condition
-//! possible.
+//! only at run time (`%name%`, `CallByVar`), which may run the `PROC` its name written whole
+//! names (`%"Seam_2"%`), one whose name starts with the literal that begins it
+//! (`%"Seam_"+ValToStr(n)%`, `CallByVar "Seam_",n`) or, its name not written so, any `PROC` of
+//! the task, and (but for a whole name given) one no module given defines, so it leaves the
+//! meet of what each leaves; and `ExitCycle`, which starts `main` again with what holds there.
+//! A routine starts with the meet of its calls' states; `main` also with what holds at its end
+//! (the controller runs it again and again). One the program may start or enter from outside:
+//! `main`, a routine no statement calls (or only routines that no such one reaches), a `PROC` a
+//! call naming its routine at run time may run, a `TRAP` (an interrupt runs it between any two
+//! statements) or a `FUNC` (called from expressions, which are not followed): the last two
+//! start with the condition possible.
 
 use crate::names::{NameKey, NameMap};
 use crate::rapid::tree::NodeKind;
@@ -150,8 +152,30 @@ pub(crate) struct Task<'s> {
     by_name: NameMap<NameKey<'s>, Vec<(usize, usize, bool)>>,
     /// Per routine, the routines that call it.
     callers: Vec<Vec<usize>>,
-    /// The routines with a call that names its routine at run time.
+    /// The routines with a call that names its routine at run time and may run any `PROC`.
     late_callers: Vec<usize>,
+    /// Per module, its calls that name their routine at run time (first byte, what each may
+    /// run), in order.
+    late_calls: Vec<Vec<(u32, LateRuns)>>,
+}
+
+/// What a call that names its routine at run time may run, read from how it writes the name.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum LateRuns {
+    /// Any `PROC` of the task, or a routine no module given defines: the name is not read.
+    Any,
+    /// The routine of that name (`%"Seam_2"%`); `None`: one no module given defines.
+    Named(Option<usize>),
+    /// One of the `PROC`s whose names start with a literal (`%"Seam_"+ValToStr(n)%`,
+    /// `CallByVar "Seam_",n`), or one no module given defines.
+    Among(Vec<usize>),
+}
+
+/// How a call that names its routine at run time writes the name, where a string literal
+/// begins it: the whole name, or its start.
+enum Written<'s> {
+    Name(&'s [u8]),
+    Prefix(&'s [u8]),
 }
 
 /// The first word of `text` (letters, digits and `_`), its case as written.
@@ -246,6 +270,34 @@ fn is_late_call(n: &Node, word: &[u8]) -> bool {
         || (n.kind == NodeKind::Call && word.eq_ignore_ascii_case(b"CallByVar"))
 }
 
+/// How late call `n` (its text `text`) writes its routine's name, where it reads: `%"name"%`;
+/// `%"start" + …%`; `CallByVar "start", …` (which runs the procedure named by the string
+/// followed by the number). A literal that is not a plain name (a doubled quote, an escape) is
+/// not read.
+fn written_name<'s>(n: &Node, text: &'s [u8]) -> Option<Written<'s>> {
+    let late = n.kind == NodeKind::LateCall;
+    let rest = if late {
+        text.trim_ascii_start().strip_prefix(b"%")?
+    } else {
+        after_first_word(text)
+    };
+    let rest = rest.trim_ascii_start().strip_prefix(b"\"")?;
+    let end = rest.iter().position(|&b| b == b'"')?;
+    let literal = rest.get(..end)?;
+    if !literal
+        .iter()
+        .all(|b| b.is_ascii_alphanumeric() || *b == b'_')
+    {
+        return None;
+    }
+    match rest.get(end + 1..)?.trim_ascii_start().first()? {
+        b'+' => Some(Written::Prefix(literal)),
+        b'%' if late => Some(Written::Name(literal)),
+        b',' if !late => Some(Written::Prefix(literal)),
+        _ => None,
+    }
+}
+
 /// One question asked of the task: where its condition starts and stops holding, where it is
 /// asked, and what a `PROC` the program may start or enter from outside starts with.
 struct Question<'q> {
@@ -308,10 +360,15 @@ impl<'s> Task<'s> {
             by_name,
             callers: Vec::new(),
             late_callers: Vec::new(),
+            late_calls: Vec::new(),
         };
-        // Who calls whom, as written; and which routines call one named at run time.
-        let mut callers = vec![Vec::new(); task.routines.len()];
+        // Who calls whom, as written; which routines call one named at run time, and which
+        // routines such a call may run (a call that may run one of them is taken as a call of
+        // each).
+        let mut callers: Vec<Vec<usize>> = vec![Vec::new(); task.routines.len()];
         let mut late_callers = Vec::new();
+        let mut late_calls = vec![Vec::new(); task.modules.len()];
+        let mut run_late = vec![false; task.routines.len()];
         for (r, routine) in task.routines.iter().enumerate() {
             let Some((src, nodes)) = task.modules.get(routine.module) else {
                 continue;
@@ -320,9 +377,29 @@ impl<'s> Task<'s> {
                 .get(routine.node)
                 .map_or(routine.node, |n| n.subtree_end as usize);
             for n in nodes.get(routine.node..end).unwrap_or_default() {
-                if is_late_call(n, first_word(n.span().slice(src))) {
-                    if late_callers.last() != Some(&r) {
-                        late_callers.push(r);
+                let text = n.span().slice(src);
+                if is_late_call(n, first_word(text)) {
+                    let runs = task.late_runs(routine.module, n, text);
+                    let callees = match &runs {
+                        LateRuns::Any => {
+                            if late_callers.last() != Some(&r) {
+                                late_callers.push(r);
+                            }
+                            &[][..]
+                        }
+                        LateRuns::Named(named) => named.as_slice(),
+                        LateRuns::Among(among) => among.as_slice(),
+                    };
+                    for &callee in callees {
+                        if let Some(seen) = run_late.get_mut(callee) {
+                            *seen = true;
+                        }
+                        if let Some(list) = callers.get_mut(callee).filter(|l| !l.contains(&r)) {
+                            list.push(r);
+                        }
+                    }
+                    if let Some(list) = late_calls.get_mut(routine.module) {
+                        list.push((n.start, runs));
                     }
                 } else if n.kind == NodeKind::Call
                     && let Some(list) = task
@@ -334,10 +411,11 @@ impl<'s> Task<'s> {
                 }
             }
         }
-        let late = !late_callers.is_empty();
+        let late_any = !late_callers.is_empty();
         for (r, routine) in task.routines.iter_mut().enumerate() {
             routine.from_outside = routine.kind != Kind::Proc
-                || late
+                || late_any
+                || run_late.get(r).copied().unwrap_or(false)
                 || routine.main
                 || callers.get(r).is_none_or(|c| c.iter().all(|&c| c == r));
         }
@@ -366,7 +444,39 @@ impl<'s> Task<'s> {
         }
         task.callers = callers;
         task.late_callers = late_callers;
+        task.late_calls = late_calls;
         task
+    }
+
+    /// What late call `n` (its text `text`) in module `m` may run: by a name written whole, the
+    /// routine a call of it runs, if a `PROC`; by the start of one, the `PROC`s it sees (its
+    /// module's, the others' not `LOCAL`) whose names start so, ignoring case as names do.
+    fn late_runs(&self, m: usize, n: &Node, text: &[u8]) -> LateRuns {
+        let is_proc = |r: &usize| self.routines.get(*r).is_some_and(|x| x.kind == Kind::Proc);
+        match written_name(n, text) {
+            None => LateRuns::Any,
+            Some(Written::Name(name)) => LateRuns::Named(self.callee(m, name).filter(is_proc)),
+            Some(Written::Prefix(prefix)) => {
+                let mut among: Vec<usize> = self
+                    .by_name
+                    .iter()
+                    .filter(|(name, _)| name.starts_with(prefix))
+                    .flat_map(|(_, all)| all)
+                    .filter(|&&(_, rm, local)| rm == m || !local)
+                    .map(|&(r, ..)| r)
+                    .filter(is_proc)
+                    .collect();
+                among.sort_unstable();
+                LateRuns::Among(among)
+            }
+        }
+    }
+
+    /// What the late call at first byte `at` of module `m` may run.
+    fn late_runs_at(&self, m: usize, at: u32) -> Option<&LateRuns> {
+        let calls = self.late_calls.get(m)?;
+        let k = calls.binary_search_by_key(&at, |&(start, _)| start).ok()?;
+        calls.get(k).map(|(_, runs)| runs)
     }
 
     /// The routine a call named `name` in module `m` runs: the module's own, else one of
@@ -468,8 +578,8 @@ impl<'s> Task<'s> {
         // What each routine leaves: a greatest fixpoint, every routine first taken to return
         // with nothing, one walked again when a routine it calls turns out to leave less.
         let mut summaries = vec![Summary::default(); n];
-        // What a call named at run time leaves: the meet of every `PROC`'s, and of nothing
-        // changed (a routine no module given defines).
+        // What a call named at run time, its name not read, leaves: the meet of every `PROC`'s,
+        // and of nothing changed (a routine no module given defines).
         let identity = Effect {
             maybe: Holds::Maybe(ENTRY),
             no: Holds::No,
@@ -478,10 +588,10 @@ impl<'s> Task<'s> {
             exit: identity,
             seen: identity,
         };
-        // Only what a call leaves is asked for: of a routine some statement calls, of every
-        // `PROC` when a call names its routine at run time, of a `TRAP` or `FUNC` (whether it
-        // leaves the condition holding wherever it runs): a large `main`, which nothing calls,
-        // is walked for what holds in it only.
+        // Only what a call leaves is asked for: of a routine some statement calls (a call
+        // named at run time, of each it may run), of every `PROC` when such a call's name is
+        // not read, of a `TRAP` or `FUNC` (whether it leaves the condition holding wherever it
+        // runs): a large `main`, which nothing calls, is walked for what holds in it only.
         let late_calls = !self.late_callers.is_empty();
         let needed: Vec<bool> = (0..n)
             .map(|r| {
@@ -723,10 +833,13 @@ struct Walked<'s> {
 
 /// What a call statement runs.
 #[derive(Clone, Copy)]
-enum Runs {
+enum Runs<'w> {
     /// A routine of the task.
     Routine(usize),
-    /// A routine named at run time.
+    /// One of these routines of the task, or one no module given defines: named at run time,
+    /// by a name that starts with a literal.
+    Among(&'w [usize]),
+    /// A routine named at run time: any `PROC`, or one no module given defines.
     Late,
     /// `ExitCycle`: `main` again, from its start.
     Restart,
@@ -757,7 +870,7 @@ struct Walker<'w, 's> {
     last_callee: Option<(&'s [u8], Option<usize>)>,
 }
 
-impl<'s> Walker<'_, 's> {
+impl<'w, 's> Walker<'w, 's> {
     fn text(&self, n: &Node) -> &'s [u8] {
         n.span().slice(self.src)
     }
@@ -868,9 +981,15 @@ impl<'s> Walker<'_, 's> {
     }
 
     /// What call statement `n` (its first word `word`) runs.
-    fn runs(&mut self, n: &Node, word: &'s [u8]) -> Runs {
+    fn runs(&mut self, n: &Node, word: &'s [u8]) -> Runs<'w> {
         if is_late_call(n, word) {
-            return Runs::Late;
+            let task = self.task;
+            return match task.late_runs_at(self.module, n.start) {
+                Some(LateRuns::Named(Some(r))) => Runs::Routine(*r),
+                Some(LateRuns::Named(None)) => Runs::Other,
+                Some(LateRuns::Among(among)) => Runs::Among(among),
+                Some(LateRuns::Any) | None => Runs::Late,
+            };
         }
         if n.kind != NodeKind::Call {
             return Runs::Other;
@@ -893,12 +1012,15 @@ impl<'s> Walker<'_, 's> {
 
     /// What statement `runs` raises an error with, run with `s`: a routine's error is raised
     /// wherever it runs.
-    fn raised_by(&self, runs: Runs, s: Holds) -> Holds {
-        let seen = match runs {
-            Runs::Routine(r) => self
-                .summaries
+    fn raised_by(&self, runs: Runs<'_>, s: Holds) -> Holds {
+        let seen_in = |r: usize| {
+            self.summaries
                 .get(r)
-                .map_or(Holds::Maybe(0), |x| x.seen.of(s)),
+                .map_or(Holds::Maybe(0), |x| x.seen.of(s))
+        };
+        let seen = match runs {
+            Runs::Routine(r) => seen_in(r),
+            Runs::Among(among) => among.iter().fold(s, |h, &r| h.meet(seen_in(r))),
             Runs::Late => self.late.seen.of(s),
             Runs::Restart | Runs::Other => s,
         };
@@ -951,6 +1073,18 @@ impl<'s> Walker<'_, 's> {
                 let summary = self.summaries.get(callee).copied().unwrap_or_default();
                 self.saw(summary.seen.of(s));
                 summary.exit.of(s)
+            }
+            (None, Runs::Among(among)) => {
+                // Each entered with what holds here, and nothing changed where it runs a
+                // routine no module given defines.
+                let mut left = s;
+                for &callee in among {
+                    self.out.calls.push((callee, s));
+                    let summary = self.summaries.get(callee).copied().unwrap_or_default();
+                    self.saw(summary.seen.of(s));
+                    left = left.meet(summary.exit.of(s));
+                }
+                left
             }
             (None, Runs::Late) => {
                 self.out.late = self.out.late.meet(s);
@@ -1253,21 +1387,34 @@ mod tests {
     #[test]
     fn routines_entered_from_outside_start_with_the_declared_value() {
         // A routine nothing calls, a TRAP, and any PROC once a call names its routine at run
-        // time.
+        // time by a name not written as a literal; by one that is, the PROCs it names.
         let m = module(&format!(
             "  PROC main()\n    {GIVE}\n    mv;\n  ENDPROC\n  PROC mv()\n    MoveL p1;\n  ENDPROC\n  PROC lone()\n    MoveL p2;\n  ENDPROC\n  TRAP t\n    MoveL p3;\n  ENDTRAP\n"
         ));
         assert_eq!(declared_at_motions(&[&m]), [false, true, true]);
-        let late = m.replace(
-            "    mv;\n  ENDPROC\n  PROC mv",
-            "    mv;\n    %\"lo\"+\"ne\"%;\n  ENDPROC\n  PROC mv",
-        );
-        assert_eq!(declared_at_motions(&[&late]), [true, true, true]);
-        let by_var = m.replace(
-            "    mv;\n  ENDPROC\n  PROC mv",
-            "    mv;\n    CallByVar \"lo\", 1;\n  ENDPROC\n  PROC mv",
-        );
-        assert_eq!(declared_at_motions(&[&by_var]), [true, true, true]);
+        let late = |call: &str| {
+            m.replace(
+                "    mv;\n  ENDPROC\n  PROC mv",
+                &format!("    mv;\n    {call};\n  ENDPROC\n  PROC mv"),
+            )
+        };
+        for any in ["%pname%", "CallByVar pname, 1"] {
+            assert_eq!(
+                declared_at_motions(&[&late(any)]),
+                [true, true, true],
+                "{any}"
+            );
+        }
+        for named in ["%\"lo\"+\"ne\"%", "%\"LONE\"%", "CallByVar \"lo\", 1"] {
+            assert_eq!(
+                declared_at_motions(&[&late(named)]),
+                [false, true, true],
+                "{named}"
+            );
+        }
+        // A routine a late call runs by its whole name is entered from outside too.
+        let only_late = late("%\"mv\"%").replace("    mv;\n    %", "    %");
+        assert_eq!(declared_at_motions(&[&only_late]), [true, true, true]);
         // Two routines that call only each other: whatever runs them runs them from outside.
         let m = module(&format!(
             "  PROC main()\n    {GIVE}\n  ENDPROC\n  PROC a()\n    MoveL p1;\n    b;\n  ENDPROC\n  PROC b()\n    a;\n  ENDPROC\n"

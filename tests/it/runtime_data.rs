@@ -613,9 +613,9 @@ fn a_trap_that_leaves_a_displacement_active_displaces_the_whole_task() {
 /// Calls trackfix cannot follow to a routine: one no module given defines (an instruction of
 /// the controller, or a routine of a module not given) neither sets nor ends a displacement,
 /// so one active before stays active after it and none becomes active; one that names its
-/// routine at run time (`%"set" + "Disp"%`) may run any `PROC` of the task, so it leaves the
-/// displacement `setDisp` sets possibly active, and a `PROC` it may run while one is active is
-/// displaced.
+/// routine at run time (`%"set" + "Disp"%`) may run any `PROC` whose name starts so, so it
+/// leaves the displacement `setDisp` sets possibly active, and a `PROC` it may run while one is
+/// active is displaced.
 #[test]
 fn calls_to_routines_not_given_or_named_at_run_time() {
     let (found, src) = displaced(
@@ -1878,4 +1878,64 @@ fn rapid_data_or_routines_named_at_run_time_refuse_what_they_may_touch() {
     let f = module("%\"mv\" + \"B\"% p1;");
     assert_eq!(named(&f, "p1"), Some(("%\"mv\" + \"B\"%".to_owned(), 13)));
     assert_eq!(run_time(&f, "p2"), None);
+}
+
+/// The weld job of the example: `main` runs `Job 1` and `Job 2` with the axes offset possibly
+/// active, and `Job` runs its seam by a name written `{late}` at run time; `Seam_1` displaces
+/// its own middle motion, and `Unused` is run by nothing.
+fn weld_job(late: &str) -> String {
+    format!(
+        "  PROC main()\n    MoveL pA,v200,fine,tool0;\n    IF bOffs THEN\n      EOffsSet eShift;\n    ENDIF\n    Job 1;\n    Job 2;\n    EOffsOff;\n    MoveL pH,v200,fine,tool0;\n  ENDPROC\n  PROC Job(num n)\n    {late};\n  ENDPROC\n  PROC Seam_1()\n    MoveL pB,v200,fine,tool0;\n    PDispSet dWeld;\n    MoveL pC,v200,fine,tool0;\n    PDispOff;\n    MoveL pD,v200,fine,tool0;\n  UNDO\n    PDispOff;\n  ENDPROC\n  PROC Seam_2()\n    MoveL pE,v200,fine,tool0;\n  ENDPROC\n  PROC Unused()\n    MoveL pF,v200,fine,tool0;\n  ENDPROC\n"
+    )
+}
+
+const WELD_TARGETS: [&str; 7] = ["pA", "pB", "pC", "pD", "pE", "pF", "pH"];
+
+/// A call that names its routine at run time by a name starting with a literal
+/// (`%"Seam_"+ValToStr(n)%`, `CallByVar "Seam_",n`) runs only the `PROC`s whose names start
+/// so (ignoring case): the seams' motions, reached while the axes offset may be active, are
+/// refused naming it (the displaced one too: the offset is written first), while `main`'s
+/// motions outside the offset and a `PROC` nothing runs are not (`pA` and `pF` were, when such
+/// a call could run any `PROC`).
+#[test]
+fn a_late_call_by_a_literal_start_runs_only_the_procs_named_so() {
+    for late in [
+        "%\"Seam_\"+ValToStr(n)%",
+        "%\"seam_\" + ValToStr(n)%",
+        "CallByVar \"Seam_\",n",
+    ] {
+        let (found, src) = displaced(&WELD_TARGETS, &weld_job(late));
+        let offset = Some(("EOffsSet", line_of(&src, "EOffsSet eShift")));
+        assert_eq!(
+            found,
+            [None, offset, offset, offset, offset, None, None],
+            "{late}"
+        );
+    }
+}
+
+/// A name written whole (`%"Seam_2"%`) runs that `PROC` only; a start no `PROC` has runs a
+/// routine no module given defines (which changes nothing: the offset stays active after it);
+/// a name not written as a literal (`%sSeam%`) may still run any `PROC` of the task, `main`
+/// and `Unused` included.
+#[test]
+fn a_late_call_by_a_whole_name_runs_that_proc_and_one_by_a_variable_any() {
+    let (found, src) = displaced(&WELD_TARGETS, &weld_job("%\"Seam_2\"%"));
+    let offset = Some(("EOffsSet", line_of(&src, "EOffsSet eShift")));
+    let own = Some(("PDispSet", line_of(&src, "PDispSet dWeld")));
+    assert_eq!(found, [None, None, own, None, offset, None, None]);
+    let none_so = weld_job("%\"Weld_\"+ValToStr(n)%").replace(
+        "    EOffsOff;\n    MoveL pH,v200,fine,tool0;\n",
+        "    MoveL pH,v200,fine,tool0;\n    EOffsOff;\n",
+    );
+    let (found, src) = displaced(&WELD_TARGETS, &none_so);
+    let offset = Some(("EOffsSet", line_of(&src, "EOffsSet eShift")));
+    let own = Some(("PDispSet", line_of(&src, "PDispSet dWeld")));
+    assert_eq!(found, [None, None, own, None, None, None, offset]);
+    let (found, src) = displaced(&WELD_TARGETS, &weld_job("%sSeam%"));
+    let offset = Some(("EOffsSet", line_of(&src, "EOffsSet eShift")));
+    assert_eq!(
+        found,
+        [offset, offset, offset, offset, offset, offset, None]
+    );
 }
