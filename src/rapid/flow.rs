@@ -30,7 +30,7 @@
 //! active; docs/design.md says why none is taken to start there); a call that names its routine
 //! only at run time (`%name%`, `CallByVar`), which may run the `PROC` its name written whole
 //! names (`%"Seam_2"%`), one whose name starts with the literal that begins it
-//! (`%"Seam_"+ValToStr(n)%`, `CallByVar "Seam_",n`) or, its name not written so, any `PROC` of
+//! (`%"Seam_"+ValToStr(n)%`; `CallByVar "Seam_",n` if digits follow it) or, its name not written so, any `PROC` of
 //! the task, and (but for a whole name given) one no module given defines, so it leaves the
 //! meet of what each leaves; and `ExitCycle`, which starts `main` again with what holds there.
 //! A routine starts with the meet of its calls' states; `main` also with what holds at its end
@@ -166,8 +166,8 @@ enum LateRuns {
     Any,
     /// The routine of that name (`%"Seam_2"%`); `None`: one no module given defines.
     Named(Option<usize>),
-    /// One of the `PROC`s whose names start with a literal (`%"Seam_"+ValToStr(n)%`,
-    /// `CallByVar "Seam_",n`), or one no module given defines.
+    /// One of the `PROC`s whose names start with a literal (`%"Seam_"+ValToStr(n)%`;
+    /// `CallByVar "Seam_",n`: then digits), or one no module given defines.
     Among(Vec<usize>),
 }
 
@@ -176,6 +176,8 @@ enum LateRuns {
 enum Written<'s> {
     Name(&'s [u8]),
     Prefix(&'s [u8]),
+    /// `CallByVar`'s: the start, then the number's digits.
+    PrefixAndNumber(&'s [u8]),
 }
 
 /// The first word of `text` (letters, digits and `_`), its case as written.
@@ -293,7 +295,7 @@ fn written_name<'s>(n: &Node, text: &'s [u8]) -> Option<Written<'s>> {
     match rest.get(end + 1..)?.trim_ascii_start().first()? {
         b'+' => Some(Written::Prefix(literal)),
         b'%' if late => Some(Written::Name(literal)),
-        b',' if !late => Some(Written::Prefix(literal)),
+        b',' if !late => Some(Written::PrefixAndNumber(literal)),
         _ => None,
     }
 }
@@ -456,11 +458,20 @@ impl<'s> Task<'s> {
         match written_name(n, text) {
             None => LateRuns::Any,
             Some(Written::Name(name)) => LateRuns::Named(self.callee(m, name).filter(is_proc)),
-            Some(Written::Prefix(prefix)) => {
+            Some(written @ (Written::Prefix(prefix) | Written::PrefixAndNumber(prefix))) => {
+                // A procedure's name has no sign or point: `CallByVar`'s number adds digits.
+                let number = matches!(written, Written::PrefixAndNumber(_));
+                let rest_fits = |name: &NameKey| {
+                    !number
+                        || name
+                            .0
+                            .get(prefix.len()..)
+                            .is_some_and(|d| !d.is_empty() && d.iter().all(u8::is_ascii_digit))
+                };
                 let mut among: Vec<usize> = self
                     .by_name
                     .iter()
-                    .filter(|(name, _)| name.starts_with(prefix))
+                    .filter(|(name, _)| name.starts_with(prefix) && rest_fits(name))
                     .flat_map(|(_, all)| all)
                     .filter(|&&(_, rm, local)| rm == m || !local)
                     .map(|&(r, ..)| r)

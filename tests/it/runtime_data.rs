@@ -1914,6 +1914,26 @@ fn a_late_call_by_a_literal_start_runs_only_the_procs_named_so() {
     }
 }
 
+/// `CallByVar "Seam_",n` runs a procedure named by the start and a number's digits: not
+/// `Seam_1Old`, which `%"Seam_"+ValToStr(n)%` (any text after the start) may run.
+#[test]
+fn call_by_var_runs_only_the_procs_named_by_its_start_and_digits() {
+    for (late, old) in [
+        ("CallByVar \"Seam_\",n", false),
+        ("%\"Seam_\"+ValToStr(n)%", true),
+    ] {
+        let job = weld_job(late).replace("PROC Unused()", "PROC Seam_1Old()");
+        let (found, src) = displaced(&WELD_TARGETS, &job);
+        let offset = Some(("EOffsSet", line_of(&src, "EOffsSet eShift")));
+        let f = if old { offset } else { None };
+        assert_eq!(
+            found,
+            [None, offset, offset, offset, offset, f, None],
+            "{late}"
+        );
+    }
+}
+
 /// A name written whole (`%"Seam_2"%`) runs that `PROC` only; a start no `PROC` has runs a
 /// routine no module given defines (which changes nothing: the offset stays active after it);
 /// a name not written as a literal (`%sSeam%`) may still run any `PROC` of the task, `main`
