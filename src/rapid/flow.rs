@@ -30,15 +30,15 @@
 //! active; docs/design.md says why none is taken to start there); a call that names its routine
 //! only at run time (`%name%`, `CallByVar`), which may run the `PROC` its name written whole
 //! names (`%"Seam_2"%`), one whose name starts with the literal that begins it
-//! (`%"Seam_"+ValToStr(n)%`; `CallByVar "Seam_",n` if digits follow it) or, its name not written so, any `PROC` of
-//! the task, and (but for a whole name given) one no module given defines, so it leaves the
-//! meet of what each leaves; and `ExitCycle`, which starts `main` again with what holds there.
-//! A routine starts with the meet of its calls' states; `main` also with what holds at its end
-//! (the controller runs it again and again). One the program may start or enter from outside:
-//! `main`, a routine no statement calls (or only routines that no such one reaches), a `PROC` a
-//! call naming its routine at run time may run, a `TRAP` (an interrupt runs it between any two
-//! statements) or a `FUNC` (called from expressions, which are not followed): the last two
-//! start with the condition possible.
+//! (`%"Seam_"+ValToStr(n)%`; `CallByVar "Seam_",n` if digits follow it) or, its name not
+//! written so, any `PROC` of the task, and (but for a whole name given) one no module given
+//! defines, so it leaves the meet of what each leaves; and `ExitCycle`, which starts `main`
+//! again with what holds there. A routine starts with the meet of its calls' states; `main`
+//! also with what holds at its end (the controller runs it again and again). One the program
+//! may start or enter from outside: `main`, a routine no statement calls (or only routines that
+//! no such one reaches), a `PROC` a call naming its routine at run time may run, a `TRAP` (an
+//! interrupt runs it between any two statements) or a `FUNC` (called from expressions, which
+//! are not followed): the last two start with the condition possible.
 
 use crate::names::{NameKey, NameMap};
 use crate::rapid::tree::NodeKind;
