@@ -495,30 +495,30 @@ fn summary_largest(summary: &str, what: &str) -> (f64, f64) {
     (n[0], n[1])
 }
 
+/// `mirror … --mirror-joints` (with `options` besides) of the joint target `jT` alone, written
+/// to `out.mod` in a new folder, the run succeeding: the folder, standard output and error,
+/// and the output's text.
+fn mirror_joint_target_alone(options: &[&str]) -> (tempfile::TempDir, String, String, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "joint.mod", &twin_alone("jT"));
+    let out = dir.path().join("out.mod");
+    let mut args = vec!["mirror", input.to_str().unwrap()];
+    args.extend_from_slice(options);
+    args.extend(["--mirror-joints", "-o", out.to_str().unwrap()]);
+    let (code, stdout, err) = trackfix(&args);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    (dir, stdout, err, text)
+}
+
 /// `mirror --robot r1 --to r2 --mirror-joints` of a joint target alone: the summary's largest
 /// move is its flange's, each flange in the base of the robot its joints are written for:
 /// `FK(jT)` on r1 to `FK(jT')` on r2, to the printed decimals. Before, a joint target's change
 /// was recorded as none: "largest move 0.000 mm / 0.0000°".
 #[test]
 fn mirror_summary_gives_a_joint_targets_flange_move() {
-    let dir = tempfile::tempdir().unwrap();
-    let input = write(dir.path(), "joint.mod", &twin_alone("jT"));
-    let out = dir.path().join("out.mod");
-    let (code, stdout, err) = trackfix(&[
-        "mirror",
-        input.to_str().unwrap(),
-        "--cell",
-        "samples/cell.toml",
-        "--robot",
-        "r1",
-        "--to",
-        "r2",
-        "--mirror-joints",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let text = std::fs::read_to_string(&out).unwrap();
+    let (_dir, stdout, err, text) =
+        mirror_joint_target_alone(&["--cell", "samples/cell.toml", "--robot", "r1", "--to", "r2"]);
     let (mm, deg) = distance(
         &IRB4600.forward(&joints(&literal(TWINS, "jT"))),
         &IRB4600.forward(&joints(&literal(&text, "jT"))),
@@ -930,20 +930,7 @@ fn a_skid_map_is_checked_in_the_plane_of_each_work_object() {
 /// largest axis change (axis 4: 40° to −40°). Before: "largest move 0.000 mm / 0.0000°".
 #[test]
 fn mirror_summary_says_a_joint_targets_move_is_not_known_without_kinematics() {
-    let dir = tempfile::tempdir().unwrap();
-    let input = write(dir.path(), "joint.mod", &twin_alone("jT"));
-    let out = dir.path().join("out.mod");
-    let (code, stdout, err) = trackfix(&[
-        "mirror",
-        input.to_str().unwrap(),
-        "--plane",
-        "xz",
-        "--mirror-joints",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let text = std::fs::read_to_string(&out).unwrap();
+    let (dir, stdout, err, text) = mirror_joint_target_alone(&["--plane", "xz"]);
     assert_eq!(
         literal(&text, "jT")[..6],
         [-5.0, 20.0, 10.0, -40.0, 60.0, 30.0]
